@@ -1,0 +1,79 @@
+"""The ``nbst`` command line.
+
+Exit codes: 0 success, 1 a check failed (e.g. ``validate --strict``), 2 bad input
+or usage (one line on stderr, never a traceback), 130 interrupted.
+
+Each feature registers its own subcommands: a module listed in ``COMMAND_MODULES``
+defines ``register(subparsers)``, which adds parsers whose ``func(args) -> int``
+does the work. Registration must stay light (no mujoco/moderngl/numba import):
+heavy imports go inside ``func``.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+
+from ._version import __version__
+from .problem import ProblemError
+
+#: Modules whose ``register(subparsers)`` adds subcommands, in ``--help`` order.
+COMMAND_MODULES = (
+    "nbst.cli_core",
+    "nbst.cli_solve",
+    "nbst.models.cli",
+    "nbst.render.cli",
+)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but usage errors exit 2 with one line naming the command."""
+
+    def error(self, message):
+        self.print_usage(sys.stderr)
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="nbst",
+        description="N-body spacetime constraints: find initial velocities that bring N colliding disks "
+                    "to their targets at t_final, check the motion in MuJoCo, render it to video.",
+        epilog="Problems are given by built-in name (see `nbst problems`) or by path to a JSON file. "
+               "Run `nbst COMMAND --help` for each command.",
+    )
+    parser.add_argument("--version", action="version", version=f"nbst {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    for name in COMMAND_MODULES:
+        if importlib.util.find_spec(name) is None:  # feature not built yet
+            continue
+        importlib.import_module(name).register(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except ProblemError as e:
+        print(f"nbst: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("nbst: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+
+
+def print_json(obj) -> None:
+    json.dump(obj, sys.stdout, indent=1)
+    sys.stdout.write("\n")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

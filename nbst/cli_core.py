@@ -1,0 +1,91 @@
+"""Core subcommands: ``nbst problems`` and ``nbst simulate``."""
+from __future__ import annotations
+
+import argparse
+
+from .problem import builtin_names, load_problem
+from .solution import load_solution
+
+
+def register(sub) -> None:
+    p = sub.add_parser("problems", help="list the built-in problems, or show one",
+                       description="List the built-in problems (name, disks, cueable, radius, box, t_final, R), "
+                                   "or print one as JSON with `nbst problems show NAME`.")
+    p.add_argument("action", nargs="?", choices=["show"], help="`show NAME`: print the problem's JSON")
+    p.add_argument("name", nargs="?", help="built-in name or path to a problem JSON file")
+    p.set_defaults(func=cmd_problems)
+
+    p = sub.add_parser("simulate", help="simulate a solution exactly and report where the disks end",
+                       description="Simulate PROBLEM with the initial velocities in SOLUTION (a solution JSON "
+                                   "file, e.g. from `nbst solve`) and report final positions, L2 cost, signature "
+                                   "(1 = disk ends within R of its target), order and event counts. Cost, "
+                                   "signature and order stored in the file are ignored and recomputed.",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("problem", help="built-in name or path to a problem JSON file")
+    p.add_argument("solution", help="path to a solution JSON file")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object: final, cost, signature, order, events {disk_disk, wall}")
+    p.set_defaults(func=cmd_simulate)
+
+
+def cmd_problems(args) -> int:
+    from .cli import print_json
+
+    if args.action == "show":
+        if not args.name:
+            raise SystemExit("nbst problems show: error: give a problem NAME (see `nbst problems`)") from None
+        print_json(load_problem(args.name).to_dict())
+        return 0
+    if args.name:
+        print(f"nbst problems: error: unexpected {args.name!r}; did you mean `nbst problems show {args.name}`?",
+              file=__import__("sys").stderr)
+        return 2
+    rows = [("name", "disks", "cueable", "radius", "box", "t_final", "R", "description")]
+    for name in builtin_names():
+        p = load_problem(name)
+        radii = sorted(set(float(r) for r in p.radius))
+        rows.append((name, str(p.n), str(int(p.cueable.sum())), "/".join(f"{r:g}" for r in radii),
+                     f"{p.width:g}x{p.height:g}", f"{p.t_final:g}", f"{p.target_radius:g}",
+                     _clip(p.description, 60)))
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]) - 1)]
+    for r in rows:
+        print("  ".join(x.ljust(w) for x, w in zip(r, widths)) + "  " + r[-1])
+    return 0
+
+
+def _clip(s: str, n: int) -> str:
+    return s if len(s) <= n else s[: n - 1] + "…"
+
+
+def cmd_simulate(args) -> int:
+    from .cli import print_json
+    from .sim import simulate
+
+    problem = load_problem(args.problem)
+    sol = load_solution(args.solution, problem)
+    tr = simulate(problem, sol.velocities)
+    if args.json:
+        print_json({
+            "problem": problem.name,
+            "final": tr.final_positions.tolist(),
+            "cost": tr.cost,
+            "signature": tr.signature_string,
+            "order": tr.order,
+            "events": {"disk_disk": tr.n_disk_disk, "wall": tr.n_wall},
+            "truncated": tr.truncated,
+        })
+        return 0
+    print(f"problem    {problem.name}  ({problem.n} disks, t_final = {problem.t_final:g} s)")
+    print(f"cost       {tr.cost:.6g}  (sum of squared distances to targets)")
+    print(f"signature  {tr.signature_string}  order {tr.order}/{problem.n}")
+    print(f"events     {tr.n_disk_disk} disk-disk, {tr.n_wall} wall")
+    if tr.truncated:
+        print("warning    the event limit was reached before t_final; the motion is truncated")
+    print("disk  final x     final y     target x    target y    distance  within R")
+    d = ((tr.final_positions - problem.target) ** 2).sum(axis=1) ** 0.5
+    for i in range(problem.n):
+        fx, fy = tr.final_positions[i]
+        tx, ty = problem.target[i]
+        ok = "yes" if d[i] <= problem.target_radius else "no"
+        print(f"{i:4d}  {fx:10.4f}  {fy:10.4f}  {tx:10.4f}  {ty:10.4f}  {d[i]:8.4f}  {ok}")
+    return 0

@@ -1,0 +1,283 @@
+"""The problem model: N disks in a box, their starts and targets.
+
+Format: ``shared/problems/README.md`` (copied in ``docs/formats.md``). Every
+invalid input raises :class:`ProblemError`, which names the file, the field as a
+path (``disks[3].radius``) and the reason, so the CLI can print one line.
+"""
+from __future__ import annotations
+
+import difflib
+import json
+import math
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .constants import MAX_DISKS, OVERLAP_RTOL
+
+SCHEMA_VERSION = 1
+
+
+class ProblemError(ValueError):
+    """Bad input: a problem or solution file (or dict) that nbst refuses.
+
+    Attributes: ``source`` (file path or a label), ``field`` (a path such as
+    ``disks[3].radius``, or ``""`` for the whole file) and ``reason``.
+    """
+
+    def __init__(self, source: str, field: str, reason: str):
+        self.source, self.field, self.reason = str(source), field, reason
+        where = f"{self.source}: {field}" if field else self.source
+        super().__init__(f"{where}: {reason}")
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """A validated problem. Arrays are read-only.
+
+    start, target : (N, 2) float, units
+    radius, mass  : (N,) float, units and mass units
+    cueable       : (N,) bool
+    box           : (W, H), the box spans [0, W] x [0, H]
+    t_final       : seconds
+    target_radius : R, units; disk i is acceptable iff |final_i - target_i| <= R
+    """
+
+    name: str
+    box: tuple[float, float]
+    t_final: float
+    target_radius: float
+    start: np.ndarray
+    target: np.ndarray
+    radius: np.ndarray
+    mass: np.ndarray
+    cueable: np.ndarray
+    description: str = ""
+    source: str = "<dict>"
+    raw: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def n(self) -> int:
+        return int(self.start.shape[0])
+
+    @property
+    def width(self) -> float:
+        return self.box[0]
+
+    @property
+    def height(self) -> float:
+        return self.box[1]
+
+    def straight_velocities(self) -> np.ndarray:
+        """(N, 2) velocities that carry each cueable disk straight to its target
+        (the paper's *directed randomize*); zero for noncueable disks."""
+        v = (self.target - self.start) / self.t_final
+        v[~self.cueable] = 0.0
+        return v
+
+    def to_dict(self) -> dict:
+        """The problem in its JSON format (round-trips through ``problem_from_dict``)."""
+        disks = []
+        for i in range(self.n):
+            disks.append({
+                "start": [float(x) for x in self.start[i]],
+                "target": [float(x) for x in self.target[i]],
+                "radius": float(self.radius[i]),
+                "cueable": bool(self.cueable[i]),
+                "mass": float(self.mass[i]),
+            })
+        out = {"name": self.name, "box": list(self.box), "t_final": self.t_final,
+               "target_radius": self.target_radius, "disks": disks}
+        if self.description:
+            out["description"] = self.description
+        return out
+
+
+# --------------------------------------------------------------------------- built-ins
+
+def builtin_names() -> list[str]:
+    """Names of the built-in problems, sorted."""
+    files = resources.files("nbst.problems")
+    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".json"))
+
+
+def _builtin_text(name: str) -> str:
+    return resources.files("nbst.problems").joinpath(f"{name}.json").read_text(encoding="utf-8")
+
+
+# --------------------------------------------------------------------------- loading
+
+def read_json(path: str | Path) -> Any:
+    """Read a JSON file, turning every failure into a one-line ProblemError."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ProblemError(p, "", "no such file") from None
+    except IsADirectoryError:
+        raise ProblemError(p, "", "is a directory, not a JSON file") from None
+    except PermissionError:
+        raise ProblemError(p, "", "permission denied") from None
+    except UnicodeDecodeError:
+        raise ProblemError(p, "", "not a text file (not UTF-8)") from None
+    except OSError as e:
+        raise ProblemError(p, "", f"cannot read: {e.strerror or e}") from None
+    return parse_json(text, str(p))
+
+
+def parse_json(text: str, source: str) -> Any:
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ProblemError(source, "", f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+
+
+def load_problem(name_or_path: str | Path) -> Problem:
+    """Load a problem by built-in name (``diamond-s14``) or by path to a JSON file.
+
+    An existing file wins over a built-in of the same name.
+    """
+    s = str(name_or_path)
+    p = Path(s)
+    if p.is_file() or isinstance(name_or_path, Path):
+        return problem_from_dict(read_json(p), source=str(p), default_name=p.stem)
+    names = builtin_names()
+    if s in names:
+        return problem_from_dict(parse_json(_builtin_text(s), f"<built-in {s}>"), source=f"<built-in {s}>")
+    if p.suffix.lower() == ".json" or "/" in s or "\\" in s or p.exists():
+        return problem_from_dict(read_json(p), source=str(p), default_name=p.stem)
+    close = difflib.get_close_matches(s, names, n=3, cutoff=0.4)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    raise ProblemError(s, "", f"no such file and no built-in problem of that name "
+                              f"(built-ins: {', '.join(names)}){hint}")
+
+
+# --------------------------------------------------------------------------- validation
+
+class _Checker:
+    """Typed field access with error paths."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, path: str, reason: str):
+        raise ProblemError(self.source, path, reason)
+
+    def obj(self, v, path: str) -> dict:
+        if not isinstance(v, dict):
+            self.fail(path, f"must be a JSON object, got {_jtype(v)}")
+        return v
+
+    def get(self, d: dict, key: str, path: str):
+        if key not in d:
+            self.fail(_join(path, key), "missing (required field)")
+        return d[key]
+
+    def number(self, v, path: str, *, positive: bool = False) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.fail(path, f"must be a number, got {_jtype(v)}")
+        x = float(v)
+        if not math.isfinite(x):
+            self.fail(path, f"must be finite, got {v}")
+        if positive and x <= 0:
+            self.fail(path, f"must be > 0, got {_fmt(x)}")
+        return x
+
+    def pair(self, v, path: str) -> tuple[float, float]:
+        if not isinstance(v, list) or len(v) != 2:
+            got = f"a list of {len(v)}" if isinstance(v, list) else _jtype(v)
+            self.fail(path, f"must be a list of 2 numbers [x, y], got {got}")
+        return self.number(v[0], f"{path}[0]"), self.number(v[1], f"{path}[1]")
+
+    def boolean(self, v, path: str) -> bool:
+        if not isinstance(v, bool):
+            self.fail(path, f"must be true or false, got {_jtype(v)}")
+        return v
+
+    def string(self, v, path: str) -> str:
+        if not isinstance(v, str):
+            self.fail(path, f"must be a string, got {_jtype(v)}")
+        return v
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
+
+
+def _jtype(v) -> str:
+    if v is None:
+        return "null"
+    if isinstance(v, bool):
+        return "a boolean"
+    if isinstance(v, (int, float)):
+        return f"the number {v}"
+    if isinstance(v, str):
+        return f"the string {v!r}" if len(v) < 40 else "a string"
+    if isinstance(v, list):
+        return "a list"
+    if isinstance(v, dict):
+        return "an object"
+    return type(v).__name__
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def problem_from_dict(d: Any, *, source: str = "<dict>", default_name: str = "problem") -> Problem:
+    """Validate a decoded problem JSON object and build a :class:`Problem`."""
+    c = _Checker(source)
+    c.obj(d, "")
+    name = c.string(d["name"], "name") if "name" in d else default_name
+    description = c.string(d.get("description", ""), "description")
+    W, H = c.pair(c.get(d, "box", ""), "box")
+    if W <= 0 or H <= 0:
+        c.fail("box", f"width and height must be > 0, got [{_fmt(W)}, {_fmt(H)}]")
+    t_final = c.number(c.get(d, "t_final", ""), "t_final", positive=True)
+    R = c.number(c.get(d, "target_radius", ""), "target_radius", positive=True)
+    disks = c.get(d, "disks", "")
+    if not isinstance(disks, list):
+        c.fail("disks", f"must be a list of disk objects, got {_jtype(disks)}")
+    if not disks:
+        c.fail("disks", "must hold at least one disk")
+    if len(disks) > MAX_DISKS:
+        c.fail("disks", f"{len(disks)} disks; nbst supports at most {MAX_DISKS} (signatures are 64-bit masks)")
+    n = len(disks)
+    start = np.empty((n, 2))
+    target = np.empty((n, 2))
+    radius = np.empty(n)
+    mass = np.empty(n)
+    cue = np.empty(n, dtype=bool)
+    for i, disk in enumerate(disks):
+        p = f"disks[{i}]"
+        c.obj(disk, p)
+        radius[i] = c.number(c.get(disk, "radius", p), f"{p}.radius", positive=True)
+        mass[i] = c.number(disk.get("mass", 1.0), f"{p}.mass", positive=True)
+        cue[i] = c.boolean(disk.get("cueable", True), f"{p}.cueable")
+        for key, arr in (("start", start), ("target", target)):
+            x, y = c.pair(c.get(disk, key, p), f"{p}.{key}")
+            r = radius[i]
+            if not (r <= x <= W - r and r <= y <= H - r):
+                c.fail(f"{p}.{key}", f"[{_fmt(x)}, {_fmt(y)}] is not at least the disk's radius {_fmt(r)} "
+                                     f"inside the walls of the {_fmt(W)} x {_fmt(H)} box")
+            arr[i] = (x, y)
+    if 2 * radius.max() > min(W, H):
+        i = int(radius.argmax())
+        c.fail(f"disks[{i}].radius", f"{_fmt(radius[i])} is too large for the {_fmt(W)} x {_fmt(H)} box")
+    for i in range(n):
+        d2 = ((start[i + 1:] - start[i]) ** 2).sum(axis=1)
+        s = radius[i + 1:] + radius[i]
+        bad = np.nonzero(d2 < (s * (1.0 - OVERLAP_RTOL)) ** 2)[0]
+        if bad.size:
+            j = i + 1 + int(bad[0])
+            c.fail(f"disks[{j}].start", f"overlaps disks[{i}] (centre distance {_fmt(math.sqrt(d2[bad[0]]))} "
+                                        f"< sum of radii {_fmt(s[bad[0]])})")
+    if not cue.any():
+        c.fail("disks", "no disk is cueable: at least one disk must be able to move at t = 0")
+    for a in (start, target, radius, mass, cue):
+        a.setflags(write=False)
+    return Problem(name=name, box=(W, H), t_final=t_final, target_radius=R, start=start, target=target,
+                   radius=radius, mass=mass, cueable=cue, description=description, source=source, raw=d)
