@@ -1,0 +1,361 @@
+"""The paper's signature search (Ngo & Marks style), its variants B-H, and ``solve``.
+
+    from nbst import load_problem
+    from nbst.search import solve
+    sol = solve(load_problem("diamond-s14"), seed=1, max_trials=200_000)
+    sol.velocities, sol.meta["cost"], sol.meta["order"]
+
+Layout: operators in ``nbst.search_ops`` (small numba kernels, tested one by one
+on hand-built populations), the compiled initialize / generate-insert loop in
+``nbst.search_loop``, parameters, variants and the Python driver here.
+
+Choices the paper leaves open (each is a :class:`SearchParams` field or a run
+option; ``docs/search.md`` has the same list with the reasoning):
+
+* creep: normal perturbation of one cueable disk's velocity, std per axis
+  ``creep_fraction * R / t_final`` (default 0.1: the free-flight end point moves
+  ~R/10 = 7.5 units per axis on the benchmark problems); R is the problem's, in
+  every variant.
+* uniform randomize: the free-flight end point is uniform over the box (centre
+  region [r, W-r] x [r, H-r]) and the mirror image it is reached through is
+  uniform over the 61 images with |kx| + |ky| <= ``max_bounces`` = 5, i.e. the
+  unfolded end point is uniform over the union of those 61 image boxes.
+* directed randomize is deterministic (the straight velocity is unique).
+* within a signature, the parent is a uniformly chosen member.
+* second crossover parent: never the first parent itself (its signature is
+  allowed when another member holds it); Senate-like among the signatures that
+  maximize popcount(s1 | s2).
+* crossover with a single member is replaced by creep (never happens after a
+  normal initialize).
+* "best" means lowest L2 cost among accepted (order >= 1) solutions; an
+  improvement is a strictly lower cost.
+* generate rejects order-0 children too (Senate selection ranges over orders
+  1..N, so the population holds none); truncated simulations (``max_events``)
+  score cost inf, signature 0, and are rejected.
+* initialize: the diversity criterion counts every disk (noncueable ones too),
+  stops after ``init_max_tries`` = 1000 trials if unmet (and goes on past it until
+  at least one solution is accepted); initialize's trials count towards the trial
+  budget; elitism protects the best already during initialize.
+* culling: among the subsumed solutions outside the best's signature, the lowest
+  order is found and every subsumed solution of that order deleted (one round per
+  insertion). If nothing is subsumed and the population exceeds ``hard_limit`` =
+  400, the worst member outside the best's signature is deleted (counted in
+  ``meta["fallback_deletions"]``).
+* insert's per-signature limit is checked before the population limit; "worst"
+  = highest cost, ties to the lowest index.
+* stopping: ``patience`` K counts trials since the last improvement (default
+  100,000; 0 disables), ``max_trials`` (default 1,000,000; includes initialize),
+  ``target_cost`` (stop once the best cost <= C; default off).
+* variants: B both parents uniform over members (second != first, no popcount
+  rule); C weights 1/3 creep, directed, uniform; D crossover coin per disk; E
+  signature radius = box width, initialize until 60 members, per-signature limit
+  60 (else one signature could hold only 10); F after every addition the worst
+  member is deleted (the per-signature limit still applies first); G no elitism
+  anywhere (displacement, limits, culling); H initialize uses uniform randomize
+  only and generate weights 1/3 creep, uniform, crossover.
+* random numbers: xoshiro256** seeded from ``np.random.SeedSequence(seed)``.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ._version import __version__
+from .constants import MAX_EVENTS
+from .problem import Problem, ProblemError
+
+VARIANTS = {
+    "A": "the full algorithm",
+    "B": "uniform probability for parent selection",
+    "C": "no crossover operation",
+    "D": "no genetically engineered crossover",
+    "E": "no signature information (R = box width, initial population 60)",
+    "F": "no culling of subsumed solutions (delete the worst on every insertion)",
+    "G": "no elitism",
+    "H": "no directed randomization",
+}
+
+ALGORITHM = "paper-signature-search"
+
+
+@dataclass(frozen=True, kw_only=True)
+class SearchParams:
+    """Every knob of the signature search. Defaults are the paper's (A).
+
+    pop_limit        : population limit (paper: 200)
+    sig_limit        : members per signature (paper: 10)
+    diversity        : initialize until every disk is acceptable in this many members (paper: 5)
+    init_max_tries   : cap on initialize's trials if the diversity target is never met (open)
+    init_population  : > 0: initialize until the population has this many members instead (E: 60)
+    signature_radius : R used for signatures, None = the problem's (E: the box width)
+    max_bounces      : uniform randomize reaches images with |kx| + |ky| <= this (paper: 5)
+    creep_fraction   : creep std per axis = creep_fraction * R / t_final, units/s (open)
+    op_weights       : (creep, directed, uniform, crossover) probabilities (paper: 1/4 each)
+    p_directed_init  : initialize's chance of directed (vs uniform) randomize per disk (paper: 1/2)
+    senate           : Senate-like parent selection (B: off, uniform over members)
+    engineered       : genetically engineered crossover (D: off)
+    cull             : "subsumed" (paper) or "worst" (F)
+    elitism          : the best member is never deleted (G: off)
+    hard_limit       : culling fallback: above this size the worst member goes (open)
+    max_events       : per-simulation event cap (a truncated run scores cost inf)
+    """
+
+    variant: str = "A"
+    pop_limit: int = 200
+    sig_limit: int = 10
+    diversity: int = 5
+    init_max_tries: int = 1000
+    init_population: int = 0
+    signature_radius: float | None = None
+    max_bounces: int = 5
+    creep_fraction: float = 0.1
+    op_weights: tuple[float, float, float, float] = (0.25, 0.25, 0.25, 0.25)
+    p_directed_init: float = 0.5
+    senate: bool = True
+    engineered: bool = True
+    cull: str = "subsumed"
+    elitism: bool = True
+    hard_limit: int = 400
+    max_events: int = MAX_EVENTS
+
+    def to_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["op_weights"] = list(self.op_weights)
+        return d
+
+
+def variant_params(variant: str = "A", problem: Problem | None = None) -> SearchParams:
+    """The paper's variant A (full algorithm) or B-H (one simplification each).
+
+    E needs ``problem`` (its signature radius is the box width)."""
+    v = variant.upper()
+    if v not in VARIANTS:
+        raise ValueError(f"unknown variant {variant!r}; choose one of {', '.join(VARIANTS)}")
+    base = SearchParams(variant=v)
+    third = 1.0 / 3.0
+    if v == "B":
+        return dataclasses.replace(base, senate=False)
+    if v == "C":
+        return dataclasses.replace(base, op_weights=(third, third, third, 0.0))
+    if v == "D":
+        return dataclasses.replace(base, engineered=False)
+    if v == "E":
+        if problem is None:
+            raise ValueError("variant E needs the problem (R = box width)")
+        return dataclasses.replace(base, signature_radius=float(problem.width), init_population=60, sig_limit=60)
+    if v == "F":
+        return dataclasses.replace(base, cull="worst")
+    if v == "G":
+        return dataclasses.replace(base, elitism=False)
+    if v == "H":
+        return dataclasses.replace(base, op_weights=(third, 0.0, third, third), p_directed_init=0.0)
+    return base
+
+
+def mirror_images(max_bounces: int) -> np.ndarray:
+    """(M, 2) int64 image indices (kx, ky) with |kx| + |ky| <= max_bounces (M = 61 for 5)."""
+    b = int(max_bounces)
+    return np.array([(kx, ky) for kx in range(-b, b + 1) for ky in range(-b, b + 1) if abs(kx) + abs(ky) <= b],
+                    dtype=np.int64).reshape(-1, 2)
+
+
+@dataclass(frozen=True)
+class SearchProgress:
+    """What a callback sees after each chunk of trials."""
+
+    trials: int
+    best_cost: float
+    best_order: int
+    elapsed: float
+    population: int
+    phase: str
+
+
+@dataclass
+class _State:
+    """The arrays a search carries between chunks (mutable by design: the kernel writes them)."""
+
+    pop: tuple
+    st: np.ndarray
+    best_cost: np.ndarray
+    best_v: np.ndarray
+    rng: np.ndarray
+    hist_t: np.ndarray
+    hist_c: np.ndarray
+    hist_o: np.ndarray
+    op_count: np.ndarray = field(default_factory=lambda: np.zeros((4, 2), np.int64))
+
+
+def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: int, target_cost: float | None):
+    from . import search_loop as L
+
+    pi = np.zeros(L.N_PI, np.int64)
+    pi[L.PI_POP_LIMIT] = params.pop_limit
+    pi[L.PI_SIG_LIMIT] = params.sig_limit
+    pi[L.PI_DIVERSITY] = params.diversity
+    pi[L.PI_INIT_MAX_TRIES] = params.init_max_tries
+    pi[L.PI_INIT_POPULATION] = params.init_population
+    pi[L.PI_SENATE] = int(params.senate)
+    pi[L.PI_ENGINEERED] = int(params.engineered)
+    pi[L.PI_CULL] = {"subsumed": 0, "worst": 1}[params.cull]
+    pi[L.PI_ELITISM] = int(params.elitism)
+    pi[L.PI_HARD_LIMIT] = params.hard_limit
+    pi[L.PI_MAX_TRIALS] = max_trials
+    pi[L.PI_PATIENCE] = patience
+    pi[L.PI_MAX_EVENTS] = params.max_events
+    pf = np.zeros(L.N_PF)
+    pf[L.PF_R] = params.signature_radius if params.signature_radius is not None else problem.target_radius
+    pf[L.PF_CREEP_SIGMA] = params.creep_fraction * problem.target_radius / problem.t_final
+    pf[L.PF_TARGET_COST] = -math.inf if target_cost is None else target_cost
+    pf[L.PF_P_DIRECTED_INIT] = params.p_directed_init
+    w = np.asarray(params.op_weights, float)
+    pf[L.PF_W_CREEP:L.PF_W_CROSSOVER + 1] = w / w.sum()
+    return pi, pf
+
+
+def _check(params: SearchParams, max_trials: int, patience: int) -> None:
+    def bad(name, why):
+        raise ProblemError("<search parameters>", name, why)
+
+    if max_trials < 1:
+        bad("max_trials", f"must be >= 1, got {max_trials}")
+    if patience < 0:
+        bad("patience", f"must be >= 0 (0 = no patience limit), got {patience}")
+    if params.pop_limit < 2 or params.sig_limit < 1 or params.diversity < 1:
+        bad("pop_limit", "pop_limit >= 2, sig_limit >= 1 and diversity >= 1 are required")
+    if params.hard_limit < params.pop_limit:
+        bad("hard_limit", f"must be >= pop_limit ({params.pop_limit})")
+    if params.cull not in ("subsumed", "worst"):
+        bad("cull", f"must be 'subsumed' or 'worst', got {params.cull!r}")
+    w = np.asarray(params.op_weights, float)
+    if w.shape != (4,) or np.any(w < 0) or w.sum() <= 0:
+        bad("op_weights", "must be 4 non-negative weights (creep, directed, uniform, crossover), not all 0")
+    if params.max_bounces < 0 or params.creep_fraction < 0:
+        bad("max_bounces", "max_bounces and creep_fraction must be >= 0")
+
+
+def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
+          target_cost: float | None = None, variant: str = "A", params: SearchParams | None = None,
+          callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048):
+    """Run the paper's signature search on ``problem``; return the best :class:`~nbst.solution.Solution`.
+
+    seed        : int >= 0; None draws one (recorded in ``meta["seed"]``). Same seed, same
+                  parameters -> the same solution, bit for bit (chunking does not matter).
+    max_trials  : trial budget (one trial = one simulated candidate, initialize included)
+    patience    : stop after this many trials without improvement (0: never)
+    target_cost : stop once the best cost is <= this (None: never)
+    variant     : "A" (the full algorithm) .. "H"; ignored when ``params`` is given
+    callback    : called with a :class:`SearchProgress` after every chunk; a truthy return
+                  stops the search. A KeyboardInterrupt (Ctrl-C, or raised by the callback)
+                  stops it too: ``solve`` then returns the best so far with
+                  ``meta["stopped"] == "interrupted"``.
+    chunk       : trials per compiled call (progress / Ctrl-C granularity only)
+
+    ``meta`` holds cost, signature, order, trials, seed, variant, params, wall_time,
+    nbst_version, history ([trial, cost, order] per improvement) and run statistics.
+    """
+    from . import search_loop as L
+    from .search_ops import SIZE, new_population, seed_state
+    from .solution import make_solution, signature_string
+
+    if params is None:
+        params = variant_params(variant, problem)
+    max_trials, patience = int(max_trials), int(patience)
+    _check(params, max_trials, patience)
+    if seed is None:
+        seed = int(np.random.default_rng().integers(2**63))
+    seed = int(seed)
+    if seed < 0:
+        raise ProblemError("<search parameters>", "seed", f"must be >= 0, got {seed}")
+    pi, pf = _pack(problem, params, max_trials=max_trials, patience=patience, target_cost=target_cost)
+    n = problem.n
+    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
+    target = np.ascontiguousarray(problem.target, dtype=np.float64)
+    radius = np.ascontiguousarray(problem.radius, dtype=np.float64)
+    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    cue_idx = np.flatnonzero(problem.cueable).astype(np.int64)
+    images = mirror_images(params.max_bounces)
+    W, H = (float(x) for x in problem.box)
+    cap = params.hard_limit + 2
+    st = np.zeros(L.N_ST, np.int64)
+    st[L.ST_FIRST_FULL] = -1
+    s = _State(pop=new_population(cap, n), st=st, best_cost=np.array([np.inf]), best_v=np.zeros((n, 2)),
+               rng=seed_state(seed), hist_t=np.zeros(1024, np.int64), hist_c=np.zeros(1024),
+               hist_o=np.zeros(1024, np.int64))
+    stopped = None
+    t0 = time.perf_counter()
+    reasons = {L.RC_MAX_TRIALS: "max_trials", L.RC_PATIENCE: "patience", L.RC_TARGET_COST: "target_cost"}
+    try:
+        while stopped is None:
+            rc = L.run_chunk(x0, target, radius, mass, cue_idx, W, H, float(problem.t_final), images, pi, pf,
+                             s.pop, s.st, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o, s.op_count,
+                             int(chunk))
+            if rc == L.RC_HISTORY_FULL:
+                k = len(s.hist_t)
+                s.hist_t = np.concatenate([s.hist_t, np.zeros(k, np.int64)])
+                s.hist_c = np.concatenate([s.hist_c, np.zeros(k)])
+                s.hist_o = np.concatenate([s.hist_o, np.zeros(k, np.int64)])
+                continue
+            stopped = reasons.get(rc)
+            if callback is not None:
+                prog = SearchProgress(trials=int(s.st[L.ST_TRIALS]), best_cost=float(s.best_cost[0]),
+                                      best_order=_popcount(int(s.st[L.ST_BEST_SIG])),
+                                      elapsed=time.perf_counter() - t0, population=int(s.pop[5][SIZE]),
+                                      phase="initialize" if s.st[L.ST_PHASE] == L.PHASE_INIT else "generate")
+                if callback(prog) and stopped is None:
+                    stopped = "callback"
+    except KeyboardInterrupt:
+        stopped = "interrupted"
+    wall = time.perf_counter() - t0
+
+    st = s.st
+    best_v = s.best_v.copy()
+    cost = float(s.best_cost[0])
+    sig = int(st[L.ST_BEST_SIG])
+    if not math.isfinite(cost):  # nothing accepted yet: report the motionless start
+        from .sim import evaluate
+
+        best_v = np.zeros((n, 2))
+        _, c, sg = evaluate(problem, best_v[None])
+        cost, sig = float(c[0]), int(sg[0])
+    nh = int(st[L.ST_NHIST])
+    trials = int(st[L.ST_TRIALS])
+    meta = {
+        "algorithm": ALGORITHM,
+        "cost": cost,
+        "signature": signature_string(sig, n),
+        "order": _popcount(sig),
+        "trials": trials,
+        "init_trials": int(st[L.ST_INIT_TRIALS]),
+        "seed": seed,
+        "variant": params.variant,
+        "variant_description": VARIANTS.get(params.variant, ""),
+        "params": params.to_dict(),
+        "max_trials": max_trials,
+        "patience": patience,
+        "target_cost": target_cost,
+        "stopped": stopped,
+        "wall_time": wall,
+        "trials_per_s": trials / wall if wall > 0 else None,
+        "nbst_version": __version__,
+        "first_full_order_trial": int(st[L.ST_FIRST_FULL]) if st[L.ST_FIRST_FULL] >= 0 else None,
+        "max_order_seen": int(st[L.ST_MAX_ORDER]),
+        "population_size": int(s.pop[5][SIZE]),
+        "rejected_order0": int(st[L.ST_REJECTED]),
+        "truncated_runs": int(st[L.ST_TRUNCATED]),
+        "cull_rounds": int(st[L.ST_CULLS]),
+        "fallback_deletions": int(st[L.ST_FALLBACK]),
+        "operators": {name: {"children": int(s.op_count[k, 0]), "improvements": int(s.op_count[k, 1])}
+                      for k, name in enumerate(L.OP_NAMES)},
+        "history": [[int(s.hist_t[k]), float(s.hist_c[k]), int(s.hist_o[k])] for k in range(nh)],
+    }
+    return make_solution(problem, best_v, **meta)
+
+
+def _popcount(x: int) -> int:
+    return bin(x).count("1")
