@@ -1,0 +1,44 @@
+"""One import name is installed: ``nbst``. models/ and render/ arrive as nbst.models / nbst.render."""
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_installed_mapping_from_outside_the_checkout(tmp_path):
+    # run from a folder that is not the checkout, so the checkout is not on sys.path
+    code = ("import importlib.util as u, nbst, nbst.models, nbst.render, os;"
+            "print(os.path.dirname(nbst.models.__file__)); print(os.path.dirname(nbst.render.__file__));"
+            "print(u.find_spec('models'), u.find_spec('render'))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert r.returncode == 0, r.stderr
+    models_dir, render_dir, tops = r.stdout.splitlines()
+    assert Path(models_dir).name in ("models",) and Path(render_dir).name == "render"
+    assert tops == "None None"
+
+
+def test_import_nbst_is_light(tmp_path):
+    code = "import sys, nbst; print(sorted(m for m in ('numba', 'mujoco', 'moderngl', 'imageio') if m in sys.modules))"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "[]"
+
+
+@pytest.mark.skipif(not (ROOT / "pyproject.toml").is_file(), reason="needs the source checkout")
+def test_wheel_holds_only_nbst(tmp_path):
+    # the wheel is what `pip install .` installs
+    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                        "-w", str(tmp_path), str(ROOT)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    (whl,) = tmp_path.glob("nbst-*.whl")
+    names = zipfile.ZipFile(whl).namelist()
+    tops = {n.split("/")[0] for n in names}
+    assert {t for t in tops if not t.endswith(".dist-info")} == {"nbst"}
+    for must in ("nbst/models/__init__.py", "nbst/render/__init__.py", "nbst/problems/diamond-s14.json",
+                 "nbst/problems/over5.json", "nbst/problems/diamond-s14-tiny.json", "nbst/sim.py"):
+        assert must in names
+    assert not any(n.startswith(("tests/", "benchmarks/", "models/", "render/")) for n in names)
