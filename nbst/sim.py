@@ -102,9 +102,15 @@ def wall_tau(x, y, vx, vy, r, W, H):
 
 @njit(cache=True, error_model="numpy")
 def alloc_work(n):
-    """Scratch arrays for ``run`` (opaque to callers: allocate once, reuse for many runs)."""
-    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty((n, n)),
-            np.empty(n, np.int64), np.empty(n), np.empty(n, np.int64), np.empty(n), np.empty(n))
+    """Scratch arrays for ``run`` (opaque to callers: allocate once, reuse for many runs).
+
+    Per-disk arrays are padded to a multiple of 16 lanes so the vectorized
+    prediction loop has no scalar remainder; padding lanes have wall time -inf,
+    which makes their horizon negative, so they never produce a prediction.
+    """
+    m = (n + 15) // 16 * 16
+    return (np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.empty((n, n)),
+            np.empty(n, np.int64), np.empty(n), np.empty(n, np.int64), np.full(m, -np.inf), np.empty(m), np.zeros(m))
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -120,7 +126,7 @@ def _rescan(T, rowmin, rowarg, i, n):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _update_row(i, skip, t, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp):
+def _update_row(i, skip, t, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp, rad):
     """Disk i (at time t, tl[i] == t) has a new velocity: re-predict row i.
     ``skip`` is a disk whose pair entry with i was already set (or -1).
 
@@ -139,13 +145,13 @@ def _update_row(i, skip, t, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius,
     ui = vx[i]
     wi = vy[i]
     ri = radius[i]
-    for k in range(n):
+    for k in range(tmp.shape[0]):
         dt = t - tl[k]
         dx = px[k] + vx[k] * dt - xi
         dy = py[k] + vy[k] * dt - yi
         dvx = vx[k] - ui
         dvy = vy[k] - wi
-        s = ri + radius[k]
+        s = ri + rad[k]
         b = dx * dvx + dy * dvy
         a = dvx * dvx + dvy * dvy
         c = dx * dx + dy * dy - s * s
@@ -153,18 +159,27 @@ def _update_row(i, skip, t, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius,
         tau = max(c / (-b + math.sqrt(max(disc, 0.0))), 0.0)  # stable root; 0 if round-off overlap
         ok = (b < 0.0) & (disc >= 0.0) & (tau <= min(hi, tw[k]) - t)
         tmp[k] = t + tau if ok else INF
+    m = T[i, i]
+    am = i
     for k in range(n):
-        if k == i or k == skip:
+        if k == i:
             continue
-        tk = tmp[k]
-        T[i, k] = tk
-        T[k, i] = tk
-        if tk < rowmin[k]:
-            rowmin[k] = tk
-            rowarg[k] = i
-        elif rowarg[k] == i:
-            _rescan(T, rowmin, rowarg, k, n)
-    _rescan(T, rowmin, rowarg, i, n)
+        if k == skip:
+            tk = T[i, k]
+        else:
+            tk = tmp[k]
+            T[i, k] = tk
+            T[k, i] = tk
+            if tk < rowmin[k]:
+                rowmin[k] = tk
+                rowarg[k] = i
+            elif rowarg[k] == i:
+                _rescan(T, rowmin, rowarg, k, n)
+        if tk < m:
+            m = tk
+            am = k
+    rowmin[i] = m
+    rowarg[i] = am
 
 
 @njit(cache=True, error_model="numpy")
@@ -181,8 +196,10 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
                   event), ev_state[e] = (xi, yi, vxi, vyi, xj, yj, vxj, vyj) after it.
     returns (status, n_events, n_disk_disk, n_wall)
     """
-    px, py, vx, vy, tl, T, wall, rowmin, rowarg, tw, tmp = work
+    px, py, vx, vy, tl, T, wall, rowmin, rowarg, tw, tmp, rad = work
     n = x0.shape[0]
+    for i in range(n):
+        rad[i] = radius[i]
     cap = ev_t.shape[0]
     for i in range(n):
         px[i] = x0[i, 0]
@@ -237,7 +254,7 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
                 py[i] = r if w == WALL_BOTTOM else H - r
             n_wall += 1
             jj = -1 - w
-            _update_row(i, -1, te, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp)
+            _update_row(i, -1, te, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp, rad)
         else:
             px[j] += vx[j] * (te - tl[j])
             py[j] += vy[j] * (te - tl[j])
@@ -264,8 +281,8 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
                                 radius[i] + radius[j], t_final - te)
             T[i, j] = tij
             T[j, i] = tij
-            _update_row(i, j, te, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp)
-            _update_row(j, i, te, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp)
+            _update_row(i, j, te, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp, rad)
+            _update_row(j, i, te, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp, rad)
         if cap > 0:
             if n_ev >= cap:
                 status = STATUS_OVERFLOW
