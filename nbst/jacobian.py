@@ -1,0 +1,146 @@
+"""Derivatives of the final positions with respect to the initial velocities.
+
+Within a fixed sequence of collisions the final positions are a smooth function
+of the initial velocities; this module carries the tangent map through the event
+chain in closed form (no finite differences), over the events ``nbst.sim.run``
+records.
+
+Each disk's motion between its events is written in *intercept form*
+``p_i(t) = Q_i + V_i t`` (Q_i: where the current straight line was at t = 0).
+Per parameter theta we carry dQ_i and dV_i:
+
+* start: Q_i = start_i, V_i = v0_i, so dQ = 0 and dV_i = e_theta for the
+  cueable components;
+* wall bounce (x wall): V_x' = -V_x and, by continuity at the bounce,
+  Q_x' = 2 (W - r) - Q_x (or -Q_x at x = r, up to a constant): so
+  dQ_x' = -dQ_x and dV_x' = -dV_x, whatever the bounce time;
+* disk-disk contact of i and j at tau: with D = Q_j - Q_i + (V_j - V_i) tau,
+  |D| = s gives d tau = -n.(dDQ + tau dDV) / (n.w), n = D / s, w = V_j - V_i;
+  the normal turns by dn = (dDQ + tau dDV + w d tau) / s; the impulse
+  u = (V_i - V_j).n changes by du = -(dw.n + w.dn); then
+  V_i' = V_i - (2 m_j / M) u n,  V_j' = V_j + (2 m_i / M) u n, and continuity
+  Q' = Q + (V - V') tau gives dQ' = dQ + (dV - dV') tau + (V - V') d tau;
+* end: d final_i = dQ_i + dV_i t_final.
+
+Kernels take arrays (numba); ``final_jacobian(problem, velocities)`` is the
+Python wrapper.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .problem import Problem
+from .sim import STATUS_OK, alloc_work, run
+
+
+@njit(cache=True, error_model="numpy")
+def jacobian_from_events(x0, v0, mass, t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_state, J):
+    """Fill J (2N, 2C) with d final[i, c] / d v0[cue[k], d] (row 2i + c, column 2k + d).
+
+    cue : (C,) int64 indices of the cueable disks (the parameters)
+    ev_* : the event record of ``run`` for these velocities (n_ev events)
+    """
+    n = x0.shape[0]
+    P = 2 * cue.shape[0]
+    dQ = np.zeros((n, 2, P))
+    dV = np.zeros((n, 2, P))
+    V = v0.copy()
+    for k in range(cue.shape[0]):
+        dV[cue[k], 0, 2 * k] = 1.0
+        dV[cue[k], 1, 2 * k + 1] = 1.0
+    dDQ = np.empty((2, P))
+    dDV = np.empty((2, P))
+    dn = np.empty((2, P))
+    for e in range(n_ev):
+        i = ev_i[e]
+        j = ev_j[e]
+        tau = ev_t[e]
+        if j < 0:
+            c = 0 if (-1 - j) <= 1 else 1  # walls 0, 1: x; walls 2, 3: y
+            for q in range(P):
+                dQ[i, c, q] = -dQ[i, c, q]
+                dV[i, c, q] = -dV[i, c, q]
+            V[i, c] = -V[i, c]
+            continue
+        # contact geometry at tau from the recorded post-event positions (positions are continuous)
+        Dx = ev_state[e, 4] - ev_state[e, 0]
+        Dy = ev_state[e, 5] - ev_state[e, 1]
+        s = np.sqrt(Dx * Dx + Dy * Dy)
+        nx = Dx / s
+        ny = Dy / s
+        wx = V[j, 0] - V[i, 0]
+        wy = V[j, 1] - V[i, 1]
+        nw = nx * wx + ny * wy  # < 0: approaching
+        if nw >= 0.0:
+            continue  # a touch without approach: the simulator changed nothing
+        u = -nw
+        mi = mass[i]
+        mj = mass[j]
+        M = mi + mj
+        for c in range(2):
+            for q in range(P):
+                dDQ[c, q] = dQ[j, c, q] - dQ[i, c, q]
+                dDV[c, q] = dV[j, c, q] - dV[i, c, q]
+        for q in range(P):
+            # d tau
+            a0 = dDQ[0, q] + tau * dDV[0, q]
+            a1 = dDQ[1, q] + tau * dDV[1, q]
+            dtau = -(nx * a0 + ny * a1) / nw if nw != 0.0 else 0.0
+            dn[0, q] = (a0 + wx * dtau) / s
+            dn[1, q] = (a1 + wy * dtau) / s
+            du = -(dDV[0, q] * nx + dDV[1, q] * ny + wx * dn[0, q] + wy * dn[1, q])
+            for c in range(2):
+                nc = nx if c == 0 else ny
+                Vic = V[i, c]
+                Vjc = V[j, c]
+                Vi2 = Vic - 2.0 * mj / M * u * nc
+                Vj2 = Vjc + 2.0 * mi / M * u * nc
+                dVi2 = dV[i, c, q] - 2.0 * mj / M * (du * nc + u * dn[c, q])
+                dVj2 = dV[j, c, q] + 2.0 * mi / M * (du * nc + u * dn[c, q])
+                dQ[i, c, q] = dQ[i, c, q] + (dV[i, c, q] - dVi2) * tau + (Vic - Vi2) * dtau
+                dQ[j, c, q] = dQ[j, c, q] + (dV[j, c, q] - dVj2) * tau + (Vjc - Vj2) * dtau
+                dV[i, c, q] = dVi2
+                dV[j, c, q] = dVj2
+        # the velocities after the event (as the simulator computed them)
+        V[i, 0] = ev_state[e, 2]
+        V[i, 1] = ev_state[e, 3]
+        V[j, 0] = ev_state[e, 6]
+        V[j, 1] = ev_state[e, 7]
+    for i in range(n):
+        for c in range(2):
+            for q in range(P):
+                J[2 * i + c, q] = dQ[i, c, q] + dV[i, c, q] * t_final
+
+
+def final_jacobian(problem: Problem, velocities, *, max_events: int = 100_000):
+    """(final positions (N, 2), J (2N, 2C)) for the cueable velocity components.
+
+    Row 2i + c is final coordinate c of disk i; column 2k + d is component d of
+    the k-th cueable disk's initial velocity. Exact for the collision sequence
+    these velocities produce (one-sided at a change of sequence).
+    """
+    v0 = np.ascontiguousarray(velocities, dtype=np.float64)
+    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
+    radius = np.ascontiguousarray(problem.radius, dtype=np.float64)
+    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    cue = np.flatnonzero(problem.cueable).astype(np.int64)
+    n = problem.n
+    cap = 4096
+    while True:
+        ev_t = np.empty(cap)
+        ev_i = np.empty(cap, np.int64)
+        ev_j = np.empty(cap, np.int64)
+        ev_s = np.empty((cap, 8))
+        final = np.empty((n, 2))
+        fvel = np.empty((n, 2))
+        st, n_ev, _, _ = run(x0, v0, radius, mass, float(problem.box[0]), float(problem.box[1]),
+                             float(problem.t_final), alloc_work(n), final, fvel, max_events, ev_t, ev_i, ev_j, ev_s)
+        if st == STATUS_OK:
+            break
+        if n_ev < cap:  # truncated by max_events, not by the buffer
+            raise RuntimeError("the motion needs more events than max_events; no Jacobian")
+        cap *= 4
+    J = np.empty((2 * n, 2 * cue.size))
+    jacobian_from_events(x0, v0, mass, float(problem.t_final), cue, n_ev, ev_t, ev_i, ev_j, ev_s, J)
+    return final, J
