@@ -22,6 +22,7 @@ from .problem import ProblemError
 COMMAND_MODULES = (
     "nbst.cli_core",
     "nbst.cli_solve",
+    "nbst.cli_generate",
     "nbst.models.cli",
     "nbst.render.cli",
 )
