@@ -6,9 +6,10 @@ target bounces |kx| + |ky| times and lands on the target itself. A *bank shot*
 is the straight velocity ``(image - start) / t_final``.
 
 Path clearance. A bank shot is only as good as its path: ``path_conflicts``
-samples the disk's folded flight and counts the other disks (on their current
-free flights, collisions ignored) that come within contact distance;
-``choose_bank`` prefers images with the fewest conflicts.
+counts the other disks that, on their current free flights (wall bounces, no
+disk-disk contact), come within contact distance of it, exactly (piecewise-linear
+between bounces, closed-form contact times); ``choose_bank`` prefers images with
+the fewest conflicts.
 
 Strikes. A cueable disk c can send a resting disk s towards a point T (a target
 or an image of it) so that s arrives exactly at t_final: s leaves along the line
@@ -25,9 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-#: Samples per unit of t_final/|path| used by path_conflicts (at least this many samples).
-CLEARANCE_SAMPLES = 48
-
+from .sim import pair_tau
 
 @njit(cache=True, inline="always")
 def mirror(u, k, lo, hi):
@@ -54,24 +53,80 @@ def bank_velocity(start, target, r, W, H, t_final, kx, ky, out):
 
 
 @njit(cache=True, error_model="numpy")
-def path_conflicts(i, vi, x0, V, radius, W, H, t_final, samples):
-    """How many other disks come within contact of disk i flying at vi, all on free
-    (folded) flights with velocities V, over ``samples`` instants in (0, t_final]."""
-    n = x0.shape[0]
-    count = 0
-    for k in range(n):
-        if k == i:
+def _breaks(x0, v, lo, hi, t_final, out, m):
+    """Append to out[m:] the times in (0, t_final) at which a free flight x0 + v t
+    (folded into [lo, hi]) bounces; return the new count."""
+    if v == 0.0:
+        return m
+    L = hi - lo
+    x1 = x0 + v * t_final
+    a = min(x0, x1)
+    b = max(x0, x1)
+    k0 = math.ceil((a - lo) / L)
+    k1 = math.floor((b - lo) / L)
+    for k in range(k0, k1 + 1):
+        t = (lo + k * L - x0) / v
+        if 0.0 < t < t_final and m < out.shape[0]:
+            out[m] = t
+            m += 1
+    return m
+
+
+@njit(cache=True, inline="always")
+def _fold_state(x0, v, lo, hi, t, tm):
+    """Folded position at t and folded velocity over (t, tm] of the free flight x0 + v t."""
+    L = hi - lo
+    u = (x0 + v * tm - lo) % (2.0 * L)
+    sign = 1.0 if u <= L else -1.0
+    return fold(x0 + v * t, lo, hi), sign * v
+
+
+@njit(cache=True, error_model="numpy")
+def flights_conflict(xi, yi, vxi, vyi, ri, xk, yk, vxk, vyk, rk, W, H, t_final):
+    """Exactly: do two disks on free flights (wall bounces only, no disk-disk contact)
+    come within contact distance at some t in [0, t_final]?
+
+    Between consecutive bounces of either disk both move in straight lines, so each
+    piece is checked with the closed-form contact time."""
+    br = np.empty(64)
+    m = 0
+    m = _breaks(xi, vxi, ri, W - ri, t_final, br, m)
+    m = _breaks(yi, vyi, ri, H - ri, t_final, br, m)
+    m = _breaks(xk, vxk, rk, W - rk, t_final, br, m)
+    m = _breaks(yk, vyk, rk, H - rk, t_final, br, m)
+    br[m] = t_final
+    m += 1
+    br[:m].sort()
+    s = ri + rk
+    ta = 0.0
+    for q in range(m):
+        tb = br[q]
+        if tb <= ta:
             continue
-        s2 = (radius[i] + radius[k]) ** 2
-        for m in range(1, samples + 1):
-            t = t_final * m / samples
-            xi = fold(x0[i, 0] + vi[0] * t, radius[i], W - radius[i])
-            yi = fold(x0[i, 1] + vi[1] * t, radius[i], H - radius[i])
-            xk = fold(x0[k, 0] + V[k, 0] * t, radius[k], W - radius[k])
-            yk = fold(x0[k, 1] + V[k, 1] * t, radius[k], H - radius[k])
-            if (xi - xk) ** 2 + (yi - yk) ** 2 < s2:
-                count += 1
-                break
+        tm = 0.5 * (ta + tb)
+        pxi, uxi = _fold_state(xi, vxi, ri, W - ri, ta, tm)
+        pyi, uyi = _fold_state(yi, vyi, ri, H - ri, ta, tm)
+        pxk, uxk = _fold_state(xk, vxk, rk, W - rk, ta, tm)
+        pyk, uyk = _fold_state(yk, vyk, rk, H - rk, ta, tm)
+        dx = pxk - pxi
+        dy = pyk - pyi
+        if dx * dx + dy * dy < s * s:
+            return True
+        if pair_tau(dx, dy, uxk - uxi, uyk - uyi, s, tb - ta) < math.inf:
+            return True
+        ta = tb
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def path_conflicts(i, vi, x0, V, radius, W, H, t_final):
+    """How many other disks come within contact of disk i flying at vi, all on free
+    (folded) flights with velocities V (disk-disk collisions ignored), over [0, t_final]."""
+    count = 0
+    for k in range(x0.shape[0]):
+        if k != i and flights_conflict(x0[i, 0], x0[i, 1], vi[0], vi[1], radius[i], x0[k, 0], x0[k, 1],
+                                       V[k, 0], V[k, 1], radius[k], W, H, t_final):
+            count += 1
     return count
 
 
@@ -83,14 +138,13 @@ def choose_bank(i, x0, V, radius, target, W, H, t_final, max_bounces, out):
     best = 1 << 30
     nbest = 0
     v = np.empty(2)
-    samples = CLEARANCE_SAMPLES
     for kx in range(-max_bounces, max_bounces + 1):
         for ky in range(-max_bounces, max_bounces + 1):
             b = abs(kx) + abs(ky)
             if b == 0 or b > max_bounces:
                 continue
             bank_velocity(x0[i], target[i], radius[i], W, H, t_final, kx, ky, v)
-            c = path_conflicts(i, v, x0, V, radius, W, H, t_final, samples)
+            c = path_conflicts(i, v, x0, V, radius, W, H, t_final)
             if c < best:
                 best = c
                 nbest = 1

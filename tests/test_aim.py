@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import make_problem
-from nbst.aim import bank_shot, choose_bank, path_conflicts, strike
+from nbst.aim import bank_shot, choose_bank, flights_conflict, path_conflicts, strike
 from nbst.planted import planted
 from nbst.sim import simulate
 
@@ -35,13 +35,34 @@ def test_choose_bank_avoids_a_blocker():
                     np.ascontiguousarray(p.target), 800.0, 800.0, 5.0, 3, out)
     assert c == 0
     assert path_conflicts(0, out, np.ascontiguousarray(p.start), V, np.ascontiguousarray(p.radius),
-                          800.0, 800.0, 5.0, 200) == 0
+                          800.0, 800.0, 5.0) == 0
     tr = simulate(p, np.array([out, [0.0, 0.0]]))
     assert tr.n_disk_disk == 0
     np.testing.assert_allclose(tr.final_positions, p.target, atol=1e-9)
     # the straight shot would have hit it
     assert path_conflicts(0, bank_shot(p, 0, 0, 0), np.ascontiguousarray(p.start), V,
-                          np.ascontiguousarray(p.radius), 800.0, 800.0, 5.0, 48) == 1
+                          np.ascontiguousarray(p.radius), 800.0, 800.0, 5.0) == 1
+
+
+def test_flights_conflict_iff_the_simulator_sees_a_collision():
+    # two disks alone in a box: their free flights conflict exactly when the exact
+    # simulation has a disk-disk event
+    rng = np.random.default_rng(4)
+    both = 0
+    for _ in range(400):
+        r = rng.uniform(5, 30, 2)
+        a = rng.uniform([r[0], r[0]], [300 - r[0], 200 - r[0]])
+        b = rng.uniform([r[1], r[1]], [300 - r[1], 200 - r[1]])
+        if np.hypot(*(a - b)) < r.sum() + 1e-6:
+            continue
+        v = rng.uniform(-300, 300, (2, 2))
+        p = make_problem([a, b], r, box=(300, 200), t_final=2.0)
+        hit = simulate(p, v).n_disk_disk > 0
+        got = flights_conflict(a[0], a[1], v[0, 0], v[0, 1], r[0], b[0], b[1], v[1, 0], v[1, 1], r[1],
+                               300.0, 200.0, 2.0)
+        assert got == hit
+        both += hit
+    assert 40 < both < 360  # both outcomes well represented
 
 
 @pytest.mark.parametrize("masses", [(1.0, 1.0), (2.5, 1.0), (1.0, 3.0)])
