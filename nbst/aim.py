@@ -52,33 +52,80 @@ def bank_velocity(start, target, r, W, H, t_final, kx, ky, out):
     out[1] = (mirror(target[1], ky, r, H - r) - start[1]) / t_final
 
 
+#: Most pieces (straight stretches between bounces) a free flight may have in
+#: clearance checks; a faster flight is treated as conflicting with everything.
+MAX_PIECES = 64
+
+
 @njit(cache=True, error_model="numpy")
-def _breaks(x0, v, lo, hi, t_final, out, m):
-    """Append to out[m:] the times in (0, t_final) at which a free flight x0 + v t
-    (folded into [lo, hi]) bounces; return the new count."""
-    if v == 0.0:
-        return m
-    L = hi - lo
-    x1 = x0 + v * t_final
-    a = min(x0, x1)
-    b = max(x0, x1)
-    k0 = math.ceil((a - lo) / L)
-    k1 = math.floor((b - lo) / L)
-    for k in range(k0, k1 + 1):
-        t = (lo + k * L - x0) / v
-        if 0.0 < t < t_final and m < out.shape[0]:
-            out[m] = t
-            m += 1
+def flight_pieces(x0, y0, vx, vy, r, W, H, t_final, pt, ps):
+    """Split a free flight (wall bounces only) into straight pieces.
+
+    Writes piece start times to pt[0:m] (pt[0] = 0; pt[m] = t_final) and the
+    state at each start (x, y, vx, vy) to ps[0:m]; returns m, or -1 if the
+    flight has more than MAX_PIECES - 1 pieces."""
+    m = 1
+    pt[0] = 0.0
+    for axis in range(2):
+        p0 = x0 if axis == 0 else y0
+        v = vx if axis == 0 else vy
+        lo = r
+        hi = (W if axis == 0 else H) - r
+        if v == 0.0:
+            continue
+        L = hi - lo
+        p1 = p0 + v * t_final
+        k0 = math.ceil((min(p0, p1) - lo) / L)
+        k1 = math.floor((max(p0, p1) - lo) / L)
+        for k in range(k0, k1 + 1):
+            t = (lo + k * L - p0) / v
+            if 0.0 < t < t_final:
+                if m >= pt.shape[0] - 1:
+                    return -1
+                q = m  # insertion into the sorted list
+                while q > 0 and pt[q - 1] > t:
+                    pt[q] = pt[q - 1]
+                    q -= 1
+                pt[q] = t
+                m += 1
+    pt[m] = t_final
+    for q in range(m):
+        ta = pt[q]
+        tm = 0.5 * (ta + pt[q + 1])
+        for axis in range(2):
+            p0 = x0 if axis == 0 else y0
+            v = vx if axis == 0 else vy
+            lo = r
+            L = (W if axis == 0 else H) - r - lo
+            u = (p0 + v * tm - lo) % (2.0 * L)
+            ps[q, axis] = fold(p0 + v * ta, lo, lo + L)
+            ps[q, 2 + axis] = v if u <= L else -v
     return m
 
 
-@njit(cache=True, inline="always")
-def _fold_state(x0, v, lo, hi, t, tm):
-    """Folded position at t and folded velocity over (t, tm] of the free flight x0 + v t."""
-    L = hi - lo
-    u = (x0 + v * tm - lo) % (2.0 * L)
-    sign = 1.0 if u <= L else -1.0
-    return fold(x0 + v * t, lo, hi), sign * v
+@njit(cache=True, error_model="numpy")
+def pieces_conflict(ti, si, mi, tk, sk, mk, s):
+    """Do two piecewise-straight flights come within distance s? (exact, closed form per overlap)"""
+    a = 0
+    b = 0
+    ta = 0.0
+    while a < mi and b < mk:
+        tb = min(ti[a + 1], tk[b + 1])
+        if tb > ta:
+            dti = ta - ti[a]
+            dtk = ta - tk[b]
+            dx = (sk[b, 0] + sk[b, 2] * dtk) - (si[a, 0] + si[a, 2] * dti)
+            dy = (sk[b, 1] + sk[b, 3] * dtk) - (si[a, 1] + si[a, 3] * dti)
+            if dx * dx + dy * dy < s * s:
+                return True
+            if pair_tau(dx, dy, sk[b, 2] - si[a, 2], sk[b, 3] - si[a, 3], s, tb - ta) < math.inf:
+                return True
+            ta = tb
+        if ti[a + 1] <= tb:
+            a += 1
+        if tk[b + 1] <= tb:
+            b += 1
+    return False
 
 
 @njit(cache=True, error_model="numpy")
@@ -88,63 +135,77 @@ def flights_conflict(xi, yi, vxi, vyi, ri, xk, yk, vxk, vyk, rk, W, H, t_final):
 
     Between consecutive bounces of either disk both move in straight lines, so each
     piece is checked with the closed-form contact time."""
-    br = np.empty(64)
-    m = 0
-    m = _breaks(xi, vxi, ri, W - ri, t_final, br, m)
-    m = _breaks(yi, vyi, ri, H - ri, t_final, br, m)
-    m = _breaks(xk, vxk, rk, W - rk, t_final, br, m)
-    m = _breaks(yk, vyk, rk, H - rk, t_final, br, m)
-    br[m] = t_final
-    m += 1
-    br[:m].sort()
-    s = ri + rk
-    ta = 0.0
-    for q in range(m):
-        tb = br[q]
-        if tb <= ta:
+    ti = np.empty(MAX_PIECES)
+    si = np.empty((MAX_PIECES, 4))
+    tk = np.empty(MAX_PIECES)
+    sk = np.empty((MAX_PIECES, 4))
+    mi = flight_pieces(xi, yi, vxi, vyi, ri, W, H, t_final, ti, si)
+    mk = flight_pieces(xk, yk, vxk, vyk, rk, W, H, t_final, tk, sk)
+    if mi < 0 or mk < 0:
+        return True
+    return pieces_conflict(ti, si, mi, tk, sk, mk, ri + rk)
+
+
+@njit(cache=True)
+def alloc_clearance(n):
+    """Scratch for ``choose_bank`` / ``count_conflicts``: every disk's pieces, plus one candidate's."""
+    return (np.empty((n, MAX_PIECES)), np.empty((n, MAX_PIECES, 4)), np.empty(n, np.int64),
+            np.empty(MAX_PIECES), np.empty((MAX_PIECES, 4)))
+
+
+@njit(cache=True, error_model="numpy")
+def all_pieces(x0, V, radius, W, H, t_final, scr):
+    """Precompute every disk's free-flight pieces (for ``count_conflicts``)."""
+    PT, PS, PM, _, _ = scr
+    for k in range(x0.shape[0]):
+        PM[k] = flight_pieces(x0[k, 0], x0[k, 1], V[k, 0], V[k, 1], radius[k], W, H, t_final, PT[k], PS[k])
+
+
+@njit(cache=True, error_model="numpy")
+def count_conflicts(i, vi, x0, radius, W, H, t_final, scr, limit):
+    """Conflicts of disk i flying at vi with every other disk's pieces (from
+    ``all_pieces``); stops counting above ``limit``."""
+    PT, PS, PM, ct, cs = scr
+    mi = flight_pieces(x0[i, 0], x0[i, 1], vi[0], vi[1], radius[i], W, H, t_final, ct, cs)
+    if mi < 0:
+        return 1 << 30
+    count = 0
+    for k in range(x0.shape[0]):
+        if k == i:
             continue
-        tm = 0.5 * (ta + tb)
-        pxi, uxi = _fold_state(xi, vxi, ri, W - ri, ta, tm)
-        pyi, uyi = _fold_state(yi, vyi, ri, H - ri, ta, tm)
-        pxk, uxk = _fold_state(xk, vxk, rk, W - rk, ta, tm)
-        pyk, uyk = _fold_state(yk, vyk, rk, H - rk, ta, tm)
-        dx = pxk - pxi
-        dy = pyk - pyi
-        if dx * dx + dy * dy < s * s:
-            return True
-        if pair_tau(dx, dy, uxk - uxi, uyk - uyi, s, tb - ta) < math.inf:
-            return True
-        ta = tb
-    return False
+        if PM[k] < 0 or pieces_conflict(ct, cs, mi, PT[k], PS[k], PM[k], radius[i] + radius[k]):
+            count += 1
+            if count > limit:
+                return count
+    return count
 
 
 @njit(cache=True, error_model="numpy")
 def path_conflicts(i, vi, x0, V, radius, W, H, t_final):
     """How many other disks come within contact of disk i flying at vi, all on free
     (folded) flights with velocities V (disk-disk collisions ignored), over [0, t_final]."""
-    count = 0
-    for k in range(x0.shape[0]):
-        if k != i and flights_conflict(x0[i, 0], x0[i, 1], vi[0], vi[1], radius[i], x0[k, 0], x0[k, 1],
-                                       V[k, 0], V[k, 1], radius[k], W, H, t_final):
-            count += 1
-    return count
+    scr = alloc_clearance(x0.shape[0])
+    all_pieces(x0, V, radius, W, H, t_final, scr)
+    return count_conflicts(i, vi, x0, radius, W, H, t_final, scr, 1 << 30)
 
 
 @njit(cache=True, error_model="numpy")
-def choose_bank(i, x0, V, radius, target, W, H, t_final, max_bounces, out):
-    """Bank shot for disk i (1..max_bounces bounces) whose path meets the fewest
-    other disks' current paths; ties broken uniformly at random (numba's RNG).
-    Writes the velocity to out; returns the number of conflicts of the chosen path."""
+def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounces, scr, out):
+    """Bank shot for disk i (min_bounces..max_bounces bounces) whose path meets the
+    fewest other disks' current free flights (velocities V); ties broken uniformly
+    at random (numba's RNG). ``scr`` from ``alloc_clearance(N)``. Writes the velocity
+    to out; returns the number of conflicts of the chosen path."""
+    all_pieces(x0, V, radius, W, H, t_final, scr)
     best = 1 << 30
     nbest = 0
     v = np.empty(2)
     for kx in range(-max_bounces, max_bounces + 1):
         for ky in range(-max_bounces, max_bounces + 1):
             b = abs(kx) + abs(ky)
-            if b == 0 or b > max_bounces:
+            if b < min_bounces or b > max_bounces:
                 continue
             bank_velocity(x0[i], target[i], radius[i], W, H, t_final, kx, ky, v)
-            c = path_conflicts(i, v, x0, V, radius, W, H, t_final)
+            c = count_conflicts(i, v, x0, radius, W, H, t_final, scr, best)
             if c < best:
                 best = c
                 nbest = 1

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import make_problem
-from nbst.aim import bank_shot, choose_bank, flights_conflict, path_conflicts, strike
+from nbst.aim import alloc_clearance, bank_shot, choose_bank, flights_conflict, path_conflicts, strike
 from nbst.planted import planted
 from nbst.sim import simulate
 
@@ -32,7 +32,7 @@ def test_choose_bank_avoids_a_blocker():
     out = np.empty(2)
     np.random.seed(0)
     c = choose_bank(0, np.ascontiguousarray(p.start), V, np.ascontiguousarray(p.radius),
-                    np.ascontiguousarray(p.target), 800.0, 800.0, 5.0, 3, out)
+                    np.ascontiguousarray(p.target), 800.0, 800.0, 5.0, 1, 3, alloc_clearance(2), out)
     assert c == 0
     assert path_conflicts(0, out, np.ascontiguousarray(p.start), V, np.ascontiguousarray(p.radius),
                           800.0, 800.0, 5.0) == 0
