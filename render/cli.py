@@ -1,0 +1,227 @@
+"""``nbst render`` (video or still) and ``nbst plot`` (the paper's figures).
+
+Registration is light: moderngl, imageio, matplotlib and the simulator load
+inside the command functions.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from . import style
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "render", help="render a solution's motion to MP4, GIF or a PNG still (headless OpenGL)",
+        description="Render the motion of PROBLEM under the initial velocities in SOLUTION: disks "
+                    "(amber cueable, blue noncueable), target markers, target rings of radius R that light "
+                    "up while their disk is inside, a time readout. Positions are exact at every frame "
+                    "(the event-driven simulator). The output's extension picks the format: .mp4 (H.264, "
+                    "yuv420p, plays everywhere) or .gif; with --still T, a .png of the frame at time T.",
+        epilog="examples:\n  nbst render diamond-s14 sol.json -o out/diamond.mp4 --trails\n"
+               "  nbst render over5 sol.json -o out/over5.gif\n"
+               "  nbst render diamond-s14 sol.json --still 0 -o out/start.png\n"
+               "  nbst render diamond-s14 sol.json -o out/check.mp4 --source both   # MuJoCo replay as rings",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("problem", help="built-in name or path to a problem JSON file")
+    p.add_argument("solution", help="path to a solution JSON file (e.g. from `nbst solve`)")
+    p.add_argument("-o", "--output", required=True, metavar="PATH", help="output file: .mp4, .gif, or .png with --still")
+    p.add_argument("--fps", type=float, default=None,
+                   help=f"frames per second (default {style.DEFAULT_FPS}; {style.GIF_FPS} for .gif)")
+    p.add_argument("--size", default=None, metavar="WxH",
+                   help="frame size in pixels (default %dx%d; %dx%d for .gif)" % (*style.DEFAULT_SIZE, *style.GIF_SIZE))
+    p.add_argument("--speed", type=float, default=1.0,
+                   help="simulated seconds per second of video (default 1.0; 0.5 = slow motion)")
+    p.add_argument("--hold", type=float, default=1.0, metavar="SECONDS",
+                   help="seconds of video holding the final frame (default 1.0)")
+    p.add_argument("--trails", action="store_true", help="draw each disk's recent path, fading with age")
+    p.add_argument("--view", choices=["2d", "3d"], default="2d",
+                   help="2d: the box from above (default); 3d: pucks on a table, perspective camera, lighting")
+    p.add_argument("--source", choices=["analytic", "mujoco", "both"], default="analytic",
+                   help="positions from the exact simulator (default), from a MuJoCo replay, or both "
+                        "(MuJoCo drawn as white rings over the exact disks)")
+    p.add_argument("--still", type=float, default=None, metavar="T",
+                   help="write only the frame at time T (seconds) to a .png")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("plot", help="draw the paper's figures (problem; trajectories) with matplotlib",
+                       description="Figures in the manner of the paper: `plot problem` as its Figures 1-2 (disks "
+                                   "at their starts, small circles at the targets, arrows start -> target, broken "
+                                   "for noncueable disks); `plot trajectories` as its Figures 3-4 (each disk's path, "
+                                   "wall bounces and disk-disk collisions marked). The extension picks the format "
+                                   "(.png, .pdf, .svg).")
+    psub = p.add_subparsers(dest="what", metavar="WHAT", required=True)
+    q = psub.add_parser("problem", help="starts, targets and arrows (the paper's Figures 1-2)")
+    q.add_argument("problem", help="built-in name or path to a problem JSON file")
+    q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
+    q.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    q.set_defaults(func=cmd_plot_problem)
+    q = psub.add_parser("trajectories", help="the disks' paths with bounces and collisions (Figures 3-4)")
+    q.add_argument("problem", help="built-in name or path to a problem JSON file")
+    q.add_argument("solution", help="path to a solution JSON file")
+    q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
+    q.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    q.set_defaults(func=cmd_plot_trajectories)
+
+
+def _err(cmd: str, msg: str) -> int:
+    print(f"nbst {cmd}: error: {msg}", file=sys.stderr)
+    return 2
+
+
+def parse_size(s: str) -> tuple[int, int]:
+    """'1280x720' -> (1280, 720); ValueError with a one-line reason otherwise."""
+    parts = s.lower().replace("*", "x").split("x")
+    if len(parts) != 2 or not all(x.strip().isdigit() for x in parts):
+        raise ValueError(f"--size {s!r}: expected WIDTHxHEIGHT in pixels, e.g. 1280x720")
+    w, h = int(parts[0]), int(parts[1])
+    if not (16 <= w <= 8192 and 16 <= h <= 8192):
+        raise ValueError(f"--size {s}: width and height must be 16..8192 pixels")
+    return w, h
+
+
+def cmd_render(args) -> int:
+    from pathlib import Path
+
+    from nbst.problem import load_problem
+    from nbst.solution import load_solution
+
+    from .gl import RenderError
+
+    out = Path(args.output)
+    ext = out.suffix.lower()
+    if args.still is not None:
+        if ext != ".png":
+            return _err("render", f"--still writes a PNG image; give -o with a .png name, not {out.name!r}")
+        kind = "png"
+    elif ext == ".png":
+        return _err("render", f"{out.name}: a .png output needs --still T (the time of the frame)")
+    elif ext not in (".mp4", ".m4v", ".mov", ".gif"):
+        return _err("render", f"{out.name}: unknown output format {ext or '(no extension)'!r}; use .mp4, .gif, "
+                              "or .png with --still T")
+    else:
+        kind = "gif" if ext == ".gif" else "mp4"
+    try:
+        size = parse_size(args.size) if args.size else (style.GIF_SIZE if kind == "gif" else style.DEFAULT_SIZE)
+    except ValueError as e:
+        return _err("render", str(e))
+    if kind == "mp4" and (size[0] % 2 or size[1] % 2):
+        return _err("render", f"--size {size[0]}x{size[1]}: H.264 (yuv420p) needs an even width and height")
+    fps = args.fps if args.fps is not None else (style.GIF_FPS if kind == "gif" else style.DEFAULT_FPS)
+    if not (0 < fps <= 240):
+        return _err("render", f"--fps {fps:g}: must be in (0, 240]")
+    if not (args.speed > 0 and args.speed < 1e6):
+        return _err("render", f"--speed {args.speed:g}: must be > 0")
+    if not (0 <= args.hold <= 60):
+        return _err("render", f"--hold {args.hold:g}: must be in [0, 60] seconds")
+
+    problem = load_problem(args.problem)
+    sol = load_solution(args.solution, problem)
+    if args.still is not None and not (0 <= args.still <= problem.t_final):
+        return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
+    try:
+        return _render(args, problem, sol, out, kind, size, fps)
+    except RenderError as e:
+        return _err("render", str(e))
+
+
+def _render(args, problem, sol, out, kind, size, fps) -> int:
+    import time
+
+    import numpy as np
+
+    from nbst.sim import simulate
+
+    from .gl import create_context
+    from .video import frame_times, render_video, write_png
+
+    tr = simulate(problem, sol.velocities)
+    if kind == "png":
+        times = np.array([float(args.still)])
+    else:
+        times = frame_times(problem.t_final, fps, speed=args.speed, hold=args.hold)
+    motion, ghost = tr, None
+    if args.source in ("mujoco", "both"):
+        from .scene2d import SampledMotion
+        sample_t = np.unique(np.concatenate((times, frame_times(problem.t_final, 120.0))))
+        mj = SampledMotion(sample_t, mujoco_positions(problem, sol.velocities, sample_t))
+        motion, ghost = (mj, None) if args.source == "mujoco" else (tr, mj)
+    ctx = create_context()
+    try:
+        renderer = make_renderer(ctx, problem, motion, view=args.view, size=size, trails=args.trails, ghost=ghost)
+        if kind == "png":
+            write_png(out, renderer.render(float(args.still)))
+            if not args.quiet:
+                print(f"wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s)", file=sys.stderr)
+            return 0
+        progress = None
+        if not args.quiet:
+            from tqdm import tqdm
+            progress = tqdm(total=len(times), unit="frame", desc=f"render {out.name}", file=sys.stderr,
+                            leave=False)
+        t0 = time.perf_counter()
+        try:
+            n = render_video(renderer, times, out, fps=fps, progress=progress)
+        finally:
+            if progress is not None:
+                progress.close()
+        dt = time.perf_counter() - t0
+        if not args.quiet:
+            print(f"wrote {out}: {n} frames, {size[0]}x{size[1]}, {fps:g} fps, {n / fps:.2f} s of video "
+                  f"({dt:.1f} s, {n / dt:.0f} frames/s)", file=sys.stderr)
+        return 0
+    finally:
+        ctx.release()
+
+
+def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None):
+    """A 2D or 3D renderer with ``render(t, out=None) -> (H, W, 3) uint8`` and ``size``."""
+    if view == "3d":
+        from .scene3d import Renderer3D
+        return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost)
+    from .scene2d import Renderer2D
+    return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost)
+
+
+def mujoco_positions(problem, velocities, times):
+    """Disk centres (T, N, 2) from the MuJoCo replay, or a one-line RenderError."""
+    from .gl import RenderError
+    try:
+        from nbst.models import rollout
+    except ImportError:
+        raise RenderError("--source mujoco/both needs the MuJoCo replay (nbst.models.rollout), which this "
+                          "install does not have yet; use --source analytic") from None
+    return rollout(problem, velocities, times)
+
+
+def cmd_plot_problem(args) -> int:
+    from nbst.problem import load_problem
+
+    from .figures import plot_problem, save_figure
+    problem = load_problem(args.problem)
+    fig = plot_problem(problem)
+    return _save(fig, args, save_figure)
+
+
+def cmd_plot_trajectories(args) -> int:
+    from nbst.problem import load_problem
+    from nbst.sim import simulate
+    from nbst.solution import load_solution
+
+    from .figures import plot_trajectories, save_figure
+    problem = load_problem(args.problem)
+    sol = load_solution(args.solution, problem)
+    fig = plot_trajectories(problem, simulate(problem, sol.velocities))
+    return _save(fig, args, save_figure)
+
+
+def _save(fig, args, save_figure) -> int:
+    from pathlib import Path
+    ext = Path(args.output).suffix.lower()
+    if ext not in (".png", ".pdf", ".svg"):
+        return _err("plot", f"{Path(args.output).name}: unknown figure format {ext or '(no extension)'!r}; "
+                            "use .png, .pdf or .svg")
+    save_figure(fig, args.output, dpi=args.dpi)
+    return 0

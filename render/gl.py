@@ -1,0 +1,92 @@
+"""Headless GL: the one place nbst.render creates a moderngl context, and the
+frame target (an FBO read into caller-owned buffers).
+
+Mesa's llvmpipe renders off-screen through EGL with no display server once
+``libegl1 libgl1 libgl1-mesa-dri`` are installed; plain ``standalone=True``
+(GLX) needs an X display and fails on a headless machine.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+class RenderError(RuntimeError):
+    """Rendering cannot proceed (no GL, bad size, encoder failure): one line for the CLI."""
+
+
+def create_context():
+    """A standalone moderngl context on EGL (headless). Caller releases it."""
+    try:
+        import moderngl
+    except ImportError as e:  # pragma: no cover - a dependency
+        raise RenderError(f"moderngl is not installed ({e}); run `pip install moderngl`") from None
+    try:
+        ctx = moderngl.create_context(standalone=True, backend="egl", require=330)
+    except Exception as e:
+        raise RenderError(f"cannot create a headless OpenGL context through EGL ({_first_line(e)}); "
+                          f"install libegl1 libgl1 libgl1-mesa-dri (`bash scripts/setup.sh`)") from None
+    return ctx
+
+
+def _first_line(e: BaseException) -> str:
+    s = str(e).strip().splitlines()
+    return s[0] if s else type(e).__name__
+
+
+def check_size(size) -> tuple[int, int]:
+    w, h = (int(size[0]), int(size[1]))
+    if w < 16 or h < 16 or w > 8192 or h > 8192:
+        raise RenderError(f"frame size {w}x{h} is out of range: width and height must be 16..8192")
+    return w, h
+
+
+class FrameTarget:
+    """An RGBA8 framebuffer of ``size`` (optionally multisampled, resolved into a
+    plain one) that reads frames as (H, W, 3) uint8 arrays, top row first.
+
+    Row order: scenes map image row 0 (top) to GL's bottom row in their
+    projection, so ``read_into`` needs no flip (no per-frame copy).
+    """
+
+    def __init__(self, ctx, size, *, samples: int = 0, depth: bool = False):
+        self.ctx = ctx
+        self.size = check_size(size)
+        self.samples = int(samples)
+        color = ctx.renderbuffer(self.size, 4)
+        self.fbo = ctx.framebuffer(color_attachments=[color],
+                                   depth_attachment=ctx.depth_renderbuffer(self.size) if depth and not samples else None)
+        self.msaa = None
+        if samples:
+            mc = ctx.renderbuffer(self.size, 4, samples=samples)
+            md = ctx.depth_renderbuffer(self.size, samples=samples) if depth else None
+            self.msaa = ctx.framebuffer(color_attachments=[mc], depth_attachment=md)
+
+    @property
+    def draw_fbo(self):
+        """The framebuffer to draw into."""
+        return self.msaa if self.msaa is not None else self.fbo
+
+    def new_frame(self) -> np.ndarray:
+        w, h = self.size
+        return np.empty((h, w, 3), np.uint8)
+
+    def read(self, out: np.ndarray | None = None) -> np.ndarray:
+        """The drawn frame into ``out`` (a fresh array if None): (H, W, 3) uint8."""
+        if self.msaa is not None:
+            self.ctx.copy_framebuffer(self.fbo, self.msaa)
+        if out is None:
+            out = self.new_frame()
+        w, h = self.size
+        if out.shape != (h, w, 3) or out.dtype != np.uint8 or not out.flags.c_contiguous:
+            raise ValueError(f"frame buffer must be a C-contiguous ({h}, {w}, 3) uint8 array")
+        self.fbo.read_into(out, components=3, alignment=1)
+        return out
+
+    def release(self) -> None:
+        for f in (self.fbo, self.msaa):
+            if f is not None:
+                for a in f.color_attachments:
+                    a.release()
+                if f.depth_attachment is not None:
+                    f.depth_attachment.release()
+                f.release()

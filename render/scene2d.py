@@ -1,0 +1,277 @@
+"""The 2D view: the box from above, disks, targets, lit target rings, trails, a
+time readout. ``Renderer2D.render(t)`` returns one frame, (H, W, 3) uint8.
+
+Motions: anything with ``at(t) -> (N, 2)``. An exact :class:`nbst.sim.Trajectory`
+gives exact positions at every frame and exact trail corners (its keyframes);
+:class:`SampledMotion` wraps positions known only at sample times (a MuJoCo
+rollout) and interpolates linearly between them.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import style
+from .gl import FrameTarget
+from .shapes import CAPSULE_DTYPE, CIRCLE_DTYPE, Capsules, Circles, Rect, Text
+
+
+class SampledMotion:
+    """Positions known at sample times: times (T,) increasing, positions (T, N, 2).
+
+    ``at(t)`` is exact at the sample times and linear in between.
+    """
+
+    def __init__(self, times, positions):
+        self.times = np.asarray(times, float)
+        self.positions = np.asarray(positions, float)
+        if self.positions.ndim != 3 or self.positions.shape[0] != self.times.shape[0]:
+            raise ValueError("positions must have shape (T, N, 2) matching times (T,)")
+
+    def at(self, t):
+        ts = np.asarray(t, float)
+        k = np.clip(np.searchsorted(self.times, ts, side="right") - 1, 0, len(self.times) - 1)
+        k1 = np.minimum(k + 1, len(self.times) - 1)
+        span = self.times[k1] - self.times[k]
+        w = np.where(span > 0, (ts - self.times[k]) / np.where(span > 0, span, 1.0), 0.0)
+        w = np.clip(w, 0.0, 1.0)[..., None, None]
+        return self.positions[k] * (1 - w) + self.positions[k1] * w
+
+
+class Layout:
+    """World (problem units, y up) to image pixels (x right, y down): the box fitted
+    into the frame with a margin, centred.
+
+    scale : px per unit; origin : image position of world (0, H).
+    """
+
+    def __init__(self, box, size):
+        W, H = float(box[0]), float(box[1])
+        fw, fh = size
+        short = min(fw, fh)
+        self.margin = style.MARGIN_FRAC * short
+        self.wall = max(1.5, style.BOX_WALL_FRAC * short)
+        inner = self.margin + self.wall
+        self.scale = min((fw - 2 * inner) / W, (fh - 2 * inner) / H)
+        self.box = (W, H)
+        self.size = (fw, fh)
+        self.x0 = 0.5 * (fw - W * self.scale)
+        self.y0 = 0.5 * (fh - H * self.scale)
+
+    def to_image(self, xy) -> np.ndarray:
+        """(..., 2) world points -> (..., 2) image px (x, y down); pixel (c, r) covers [c, c+1) x [r, r+1)."""
+        xy = np.asarray(xy, float)
+        out = np.empty(xy.shape, float)
+        out[..., 0] = self.x0 + xy[..., 0] * self.scale
+        out[..., 1] = self.y0 + (self.box[1] - xy[..., 1]) * self.scale
+        return out
+
+    @property
+    def box_rect(self) -> tuple[float, float, float, float]:
+        """The box interior in image px: x0, y0, x1, y1."""
+        W, H = self.box
+        return (self.x0, self.y0, self.x0 + W * self.scale, self.y0 + H * self.scale)
+
+
+def trail_points(motion, t: float, seconds: float):
+    """The path of every disk over [max(0, t - seconds), t]: points (M, N, 2), times (M,).
+
+    For a Trajectory the points are its keyframes inside the window plus both
+    ends, so the polyline is the exact path (straight between events). Otherwise,
+    or when the window holds more than MAX_TRAIL_POINTS keyframes, uniform samples.
+    """
+    t0 = max(0.0, t - seconds)
+    kt = getattr(motion, "times", None)
+    kp = getattr(motion, "positions", None)
+    if kt is not None and kp is not None and hasattr(motion, "velocities"):
+        lo = int(np.searchsorted(kt, t0, side="right"))
+        hi = int(np.searchsorted(kt, t, side="left"))
+        if hi - lo <= style.MAX_TRAIL_POINTS:
+            times = np.concatenate(([t0], kt[lo:hi], [t]))
+            pts = np.concatenate((motion.at(t0)[None], kp[lo:hi], motion.at(t)[None]))
+            return pts, times
+    times = np.linspace(t0, t, min(style.MAX_TRAIL_POINTS, 64) + 1)
+    return np.asarray(motion.at(times)), times
+
+
+class Renderer2D:
+    """Renders ``motion`` of ``problem`` at any time to an (H, W, 3) uint8 frame.
+
+    ctx     : a moderngl context (see :func:`nbst.render.gl.create_context`)
+    motion  : the disks' motion, ``at(t) -> (N, 2)`` (a Trajectory, or SampledMotion)
+    ghost   : optional second motion drawn as rings on top (MuJoCo replay)
+    trails  : draw the last TRAIL_SECONDS of every path, fading with age
+    """
+
+    def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
+                 title: str | None = None):
+        import moderngl
+
+        self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
+        self.trails = bool(trails)
+        self.target = FrameTarget(ctx, size)
+        self.size = self.target.size
+        self.layout = L = Layout(problem.box, self.size)
+        self.title = problem.name if title is None else title
+        self._mgl = moderngl
+        self.circles = Circles(ctx)
+        self.capsules = Capsules(ctx)
+        self.rect = Rect(ctx)
+        text_px = max(8, int(round(style.TEXT_FRAC * min(self.size))))
+        self.text = Text(ctx, text_px)
+        for prog in (self.circles, self.capsules):
+            prog.set_view(self.size)
+        self.capsules.prog["u_floor"].value = style.BOX_FLOOR
+
+        n = problem.n
+        s = L.scale
+        self.colors = np.array(style.disk_colors(problem.cueable), "f4")
+        self.rpx = np.maximum(problem.radius * s, style.MIN_DISK_PX).astype("f4")
+        self.target_px = L.to_image(problem.target).astype("f4")
+        self.R_px = float(problem.target_radius * s)
+        # per-frame instance arrays, allocated once
+        self._disks = np.zeros(n, CIRCLE_DTYPE)
+        self._disks["radius"] = self.rpx
+        self._disks["stroke"] = np.maximum(1.0, style.DISK_RIM_FRAC * self.rpx)
+        self._disks["fill"][:, :3] = self.colors
+        self._disks["fill"][:, 3] = 1.0
+        self._disks["rim"][:, :3] = self.colors * style.DISK_RIM_SHADE
+        self._disks["rim"][:, 3] = 1.0
+        self._lit = np.zeros(n, CIRCLE_DTYPE)
+        self._lit["center"] = self.target_px
+        self._lit["radius"] = self.R_px
+        self._lit["stroke"] = style.RING_LIT_PX
+        self._lit["fill"][:, :3] = self.colors
+        self._lit["fill"][:, 3] = style.RING_LIT_FILL_ALPHA
+        self._lit["rim"][:, :3] = self.colors
+        self._lit["rim"][:, 3] = style.RING_LIT_ALPHA
+        self._ghosts = np.zeros(n, CIRCLE_DTYPE)
+        self._ghosts["radius"] = self.rpx
+        self._ghosts["stroke"] = style.GHOST_PX
+        self._ghosts["rim"] = style.GHOST
+        self.trail_half = np.maximum(style.MIN_TRAIL_PX, style.TRAIL_WIDTH_FRAC * self.rpx).astype("f4") * 0.5
+        self._text_y = None
+        self.static = FrameTarget(ctx, self.size)
+        self._draw_static()
+
+    # ------------------------------------------------------------------ static layer
+
+    def _readout_origin(self) -> tuple[float, float]:
+        L = self.layout
+        pad = L.margin * 0.5
+        return (pad, pad)
+
+    def _draw_static(self) -> None:
+        """Background, box, dim target rings, target markers, title and legend: drawn once."""
+        ctx, mgl, L, p = self.ctx, self._mgl, self.layout, self.problem
+        self.static.fbo.use()
+        ctx.viewport = (0, 0, *self.size)
+        self.static.fbo.clear(*style.BACKGROUND, 1.0)
+        ctx.enable(mgl.BLEND)
+        ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
+        ctx.blend_equation = mgl.FUNC_ADD
+        x0, y0, x1, y1 = L.box_rect
+        w = L.wall
+        self.rect.draw(self.size, (x0 - w, y0 - w, x1 + w, y1 + w), fill=style.BOX_FLOOR, rim=style.BOX_WALL,
+                       stroke=w)
+        n = p.n
+        rings = np.zeros(n, CIRCLE_DTYPE)
+        rings["center"] = self.target_px
+        rings["radius"] = self.R_px
+        rings["stroke"] = style.RING_DIM_PX
+        rings["rim"] = style.RING_DIM
+        markers = np.zeros(n, CIRCLE_DTYPE)
+        markers["center"] = self.target_px
+        markers["radius"] = np.maximum(style.MARKER_FRAC * self.rpx, style.MIN_MARKER_PX)
+        markers["stroke"] = 1.5
+        markers["rim"] = style.MARKER
+        self.circles.draw(rings)
+        self.circles.draw(markers)
+        self._draw_legend()
+
+    def _draw_legend(self) -> None:
+        """Legend in the right margin, when the margin is wide enough for it."""
+        L, p = self.layout, self.problem
+        entries = [("cueable", style.CUEABLE)]
+        if (~p.cueable).any():
+            entries.append(("noncueable", style.NONCUEABLE))
+        if self.ghost is not None:
+            entries.append(("MuJoCo", None))
+        cw, ch = self.text.cell
+        need = 3 * ch + max(len(e[0]) for e in entries) * cw
+        right = self.size[0] - L.box_rect[2] - L.wall
+        if right < need + L.margin:
+            return
+        x = L.box_rect[2] + L.wall + 0.5 * L.margin
+        y = self.size[1] - L.margin * 0.5 - len(entries) * ch * 1.4
+        dots = np.zeros(len(entries), CIRCLE_DTYPE)
+        texts = []
+        for k, (label, col) in enumerate(entries):
+            cy = y + k * ch * 1.4
+            dots[k]["center"] = (x + 0.6 * ch, cy + 0.5 * ch)
+            dots[k]["radius"] = 0.45 * ch
+            if col is None:
+                dots[k]["stroke"] = style.GHOST_PX
+                dots[k]["rim"] = style.GHOST
+            else:
+                dots[k]["stroke"] = max(1.0, style.DISK_RIM_FRAC * 0.45 * ch)
+                dots[k]["fill"] = (*col, 1.0)
+                dots[k]["rim"] = (*(np.array(col) * style.DISK_RIM_SHADE), 1.0)
+            texts.append(self.text.layout([label], x + 1.6 * ch, cy))
+        self.circles.draw(dots)
+        self.text.draw(self.size, np.concatenate(texts), style.TEXT_DIM)
+
+    # ------------------------------------------------------------------ frames
+
+    def to_pixels(self, xy) -> np.ndarray:
+        """World points -> image px (x = column, y = row, fractional)."""
+        return self.layout.to_image(xy)
+
+    def readout(self, t: float, inside: np.ndarray) -> list[str]:
+        return [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{self.problem.n}"]
+
+    def render(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
+        """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given."""
+        ctx, mgl, p = self.ctx, self._mgl, self.problem
+        t = float(min(max(t, 0.0), p.t_final))
+        pos = np.asarray(self.motion.at(t), float)
+        fbo = self.target.fbo
+        ctx.copy_framebuffer(fbo, self.static.fbo)
+        fbo.use()
+        ctx.viewport = (0, 0, *self.size)
+        ctx.enable(mgl.BLEND)
+        if self.trails and t > 0:
+            ctx.blend_equation = mgl.MAX
+            self.capsules.draw(self._trail_instances(t))
+        ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
+        ctx.blend_equation = mgl.FUNC_ADD
+        inside = ((pos - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
+        if inside.any():
+            self.circles.draw(self._lit[inside])
+        self._disks["center"] = self.layout.to_image(pos)
+        self.circles.draw(self._disks)
+        if self.ghost is not None:
+            self._ghosts["center"] = self.layout.to_image(np.asarray(self.ghost.at(t), float))
+            self.circles.draw(self._ghosts)
+        x, y = self._readout_origin()
+        self.text.draw(self.size, self.text.layout(self.readout(t, inside), x, y), style.TEXT)
+        return self.target.read(out)
+
+    def _trail_instances(self, t: float) -> np.ndarray:
+        pts, times = trail_points(self.motion, t, style.TRAIL_SECONDS)
+        img = self.layout.to_image(pts)  # (M, N, 2)
+        age = np.clip(1.0 - (t - times) / style.TRAIL_SECONDS, 0.0, 1.0) * style.TRAIL_ALPHA  # (M,)
+        a, b = img[:-1], img[1:]
+        keep = ((b - a) ** 2).sum(axis=2) > 1e-6  # (M-1, N): skip disks at rest
+        m_idx, n_idx = np.nonzero(keep)
+        data = np.empty(len(m_idx), CAPSULE_DTYPE)
+        data["p0"] = a[m_idx, n_idx]
+        data["p1"] = b[m_idx, n_idx]
+        data["alpha"][:, 0] = age[m_idx]
+        data["alpha"][:, 1] = age[m_idx + 1]
+        data["half"] = self.trail_half[n_idx]
+        data["color"] = self.colors[n_idx]
+        return data
+
+    def release(self) -> None:
+        for o in (self.circles, self.capsules, self.rect, self.text, self.target, self.static):
+            o.release()

@@ -1,0 +1,323 @@
+"""Anti-aliased 2D primitives for moderngl: instanced quads shaded by signed
+distance (circles with rim, rings, capsules, a rectangle) and monospace text
+from a glyph atlas.
+
+All coordinates are *image pixels*: x right, y down, (0, 0) the top-left corner
+of the frame, pixel (c, r) covering [c, c+1) x [r, r+1). The vertex shaders map
+image row 0 to GL's bottom row, so ``Framebuffer.read_into`` returns the top row
+first with no flip. Colours are premultiplied in the shaders; blending is
+``ONE, ONE_MINUS_SRC_ALPHA`` unless said otherwise.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+_NDC = """
+uniform vec2 u_view;  // frame size in px
+vec4 to_ndc(vec2 img) { return vec4(img / u_view * 2.0 - 1.0, 0.0, 1.0); }
+"""
+
+_QUAD = np.array([[-1, -1], [1, -1], [-1, 1], [1, 1]], dtype="f4")  # triangle strip
+
+CIRCLE_VS = "#version 330\n" + _NDC + """
+in vec2 in_corner;
+in vec2 in_center;   // px
+in float in_radius;  // px, outer edge
+in float in_stroke;  // px, rim width inside the outer edge
+in vec4 in_fill;     // straight alpha
+in vec4 in_rim;
+out vec2 v_off;
+flat out float v_radius;
+flat out float v_stroke;
+flat out vec4 v_fill;
+flat out vec4 v_rim;
+void main() {
+    float ext = in_radius + 1.5;
+    v_off = in_corner * ext;
+    v_radius = in_radius; v_stroke = in_stroke; v_fill = in_fill; v_rim = in_rim;
+    gl_Position = to_ndc(in_center + v_off);
+}
+"""
+
+CIRCLE_FS = """#version 330
+in vec2 v_off;
+flat in float v_radius;
+flat in float v_stroke;
+flat in vec4 v_fill;
+flat in vec4 v_rim;
+out vec4 f_color;
+void main() {
+    float d = length(v_off) - v_radius;          // signed distance to the outer edge, px
+    float a_out = clamp(0.5 - d, 0.0, 1.0);      // coverage of the whole disk
+    float a_in = clamp(0.5 - (d + v_stroke), 0.0, 1.0);  // coverage of the fill inside the rim
+    vec4 rim = vec4(v_rim.rgb * v_rim.a, v_rim.a);
+    vec4 fill = vec4(v_fill.rgb * v_fill.a, v_fill.a);
+    f_color = mix(rim, fill, a_in) * a_out;
+    if (f_color.a <= 0.0) discard;
+}
+"""
+
+CAPSULE_VS = "#version 330\n" + _NDC + """
+in vec2 in_corner;
+in vec2 in_p0;
+in vec2 in_p1;
+in vec2 in_alpha;   // alpha at p0, at p1
+in float in_half;   // half width, px
+in vec3 in_color;
+out vec2 v_pos;
+flat out vec2 v_p0;
+flat out vec2 v_p1;
+flat out vec2 v_alpha;
+flat out float v_half;
+flat out vec3 v_color;
+void main() {
+    vec2 d = in_p1 - in_p0;
+    float len = length(d);
+    vec2 u = len > 1e-6 ? d / len : vec2(1.0, 0.0);
+    vec2 n = vec2(-u.y, u.x);
+    float ext = in_half + 1.5;
+    vec2 mid = 0.5 * (in_p0 + in_p1);
+    v_pos = mid + u * in_corner.x * (0.5 * len + ext) + n * in_corner.y * ext;
+    v_p0 = in_p0; v_p1 = in_p1; v_alpha = in_alpha; v_half = in_half; v_color = in_color;
+    gl_Position = to_ndc(v_pos);
+}
+"""
+
+# Trails are drawn with MAX blending over a uniform dark floor: overlapping
+# segments of one path (joints, self-crossings) take the max, never the sum,
+# so a trail has no dark or bright seams.
+CAPSULE_FS = """#version 330
+uniform vec3 u_floor;
+in vec2 v_pos;
+flat in vec2 v_p0;
+flat in vec2 v_p1;
+flat in vec2 v_alpha;
+flat in float v_half;
+flat in vec3 v_color;
+out vec4 f_color;
+void main() {
+    vec2 pa = v_pos - v_p0, ba = v_p1 - v_p0;
+    float bb = dot(ba, ba);
+    float h = bb > 1e-12 ? clamp(dot(pa, ba) / bb, 0.0, 1.0) : 0.0;
+    float d = length(pa - ba * h) - v_half;
+    float a = mix(v_alpha.x, v_alpha.y, h) * clamp(0.5 - d, 0.0, 1.0);
+    if (a <= 0.0) discard;
+    f_color = vec4(mix(u_floor, v_color, a), 1.0);
+}
+"""
+
+RECT_VS = "#version 330\n" + _NDC + """
+uniform vec4 u_rect;   // x0, y0, x1, y1 (px) of the outer edge
+in vec2 in_corner;
+out vec2 v_pos;
+void main() {
+    vec2 c = 0.5 * (u_rect.xy + u_rect.zw), h = 0.5 * (u_rect.zw - u_rect.xy) + 1.5;
+    v_pos = c + in_corner * h;
+    gl_Position = to_ndc(v_pos);
+}
+"""
+
+RECT_FS = """#version 330
+uniform vec4 u_rect;
+uniform float u_stroke;
+uniform vec4 u_fill;
+uniform vec4 u_rim;
+in vec2 v_pos;
+out vec4 f_color;
+void main() {
+    vec2 c = 0.5 * (u_rect.xy + u_rect.zw), h = 0.5 * (u_rect.zw - u_rect.xy);
+    vec2 q = abs(v_pos - c) - h;
+    float d = length(max(q, 0.0)) + min(max(q.x, q.y), 0.0);
+    float a_out = clamp(0.5 - d, 0.0, 1.0);
+    float a_in = clamp(0.5 - (d + u_stroke), 0.0, 1.0);
+    vec4 rim = vec4(u_rim.rgb * u_rim.a, u_rim.a);
+    vec4 fill = vec4(u_fill.rgb * u_fill.a, u_fill.a);
+    f_color = mix(rim, fill, a_in) * a_out;
+}
+"""
+
+TEXT_VS = "#version 330\n" + _NDC + """
+uniform vec2 u_cell;    // glyph cell, px
+uniform vec2 u_atlas;   // atlas size, px
+uniform float u_cols;   // cells per atlas row
+in vec2 in_corner;
+in vec2 in_pos;         // top-left of the cell, px
+in float in_glyph;
+out vec2 v_uv;
+void main() {
+    vec2 c = 0.5 * (in_corner + 1.0);  // 0..1, y down
+    float col = mod(in_glyph, u_cols), row = floor(in_glyph / u_cols);
+    v_uv = (vec2(col, row) + c) * u_cell / u_atlas;
+    gl_Position = to_ndc(in_pos + c * u_cell);
+}
+"""
+
+TEXT_FS = """#version 330
+uniform sampler2D u_tex;
+uniform vec3 u_color;
+in vec2 v_uv;
+out vec4 f_color;
+void main() {
+    float a = texture(u_tex, v_uv).r;
+    if (a <= 0.0) discard;
+    f_color = vec4(u_color * a, a);
+}
+"""
+
+CIRCLE_DTYPE = np.dtype([("center", "f4", 2), ("radius", "f4"), ("stroke", "f4"), ("fill", "f4", 4),
+                         ("rim", "f4", 4)])
+CAPSULE_DTYPE = np.dtype([("p0", "f4", 2), ("p1", "f4", 2), ("alpha", "f4", 2), ("half", "f4"),
+                          ("color", "f4", 3)])
+TEXT_DTYPE = np.dtype([("pos", "f4", 2), ("glyph", "f4")])
+
+
+class _Instanced:
+    """A program drawing one quad per instance from a growable instance buffer."""
+
+    def __init__(self, ctx, vs, fs, dtype, fmt, attrs, capacity=64):
+        self.ctx = ctx
+        self.prog = ctx.program(vertex_shader=vs, fragment_shader=fs)
+        self.dtype = dtype
+        self.fmt, self.attrs = fmt, attrs
+        self.quad = ctx.buffer(_QUAD.tobytes())
+        self.capacity = 0
+        self.inst = None
+        self.vao = None
+        self._grow(capacity)
+
+    def _grow(self, n):
+        if n <= self.capacity:
+            return
+        self.capacity = max(n, 2 * self.capacity)
+        if self.inst is not None:
+            self.vao.release()
+            self.inst.release()
+        self.inst = self.ctx.buffer(reserve=self.capacity * self.dtype.itemsize, dynamic=True)
+        self.vao = self.ctx.vertex_array(self.prog, [(self.quad, "2f", "in_corner"),
+                                                     (self.inst, self.fmt + "/i", *self.attrs)])
+
+    def set_view(self, size):
+        self.prog["u_view"].value = tuple(float(x) for x in size)
+
+    def draw(self, data: np.ndarray) -> None:
+        n = len(data)
+        if n == 0:
+            return
+        self._grow(n)
+        self.inst.write(np.ascontiguousarray(data, self.dtype).tobytes())
+        import moderngl
+        self.vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=n)
+
+    def release(self):
+        for o in (self.vao, self.inst, self.quad, self.prog):
+            o.release()
+
+
+class Circles(_Instanced):
+    def __init__(self, ctx):
+        super().__init__(ctx, CIRCLE_VS, CIRCLE_FS, CIRCLE_DTYPE, "2f 1f 1f 4f 4f",
+                         ("in_center", "in_radius", "in_stroke", "in_fill", "in_rim"))
+
+
+class Capsules(_Instanced):
+    def __init__(self, ctx):
+        super().__init__(ctx, CAPSULE_VS, CAPSULE_FS, CAPSULE_DTYPE, "2f 2f 2f 1f 3f",
+                         ("in_p0", "in_p1", "in_alpha", "in_half", "in_color"), capacity=1024)
+
+
+class Rect:
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self.prog = ctx.program(vertex_shader=RECT_VS, fragment_shader=RECT_FS)
+        self.quad = ctx.buffer(_QUAD.tobytes())
+        self.vao = ctx.vertex_array(self.prog, [(self.quad, "2f", "in_corner")])
+
+    def draw(self, size, rect, *, fill, rim, stroke):
+        import moderngl
+        p = self.prog
+        p["u_view"].value = tuple(float(x) for x in size)
+        p["u_rect"].value = tuple(float(x) for x in rect)
+        p["u_stroke"].value = float(stroke)
+        p["u_fill"].value = tuple(fill) if len(fill) == 4 else (*fill, 1.0)
+        p["u_rim"].value = tuple(rim) if len(rim) == 4 else (*rim, 1.0)
+        self.vao.render(moderngl.TRIANGLE_STRIP)
+
+    def release(self):
+        for o in (self.vao, self.quad, self.prog):
+            o.release()
+
+
+# --------------------------------------------------------------------------- text
+
+FIRST_CHAR, LAST_CHAR = 32, 126  # printable ASCII
+ATLAS_COLS = 16
+
+
+def glyph_atlas(px: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """Rasterize printable ASCII in DejaVu Sans Mono (shipped with matplotlib) at
+    ``px`` pixels: returns the (rows*ch, 16*cw) uint8 coverage atlas and the cell
+    (cw, ch). Made once per size with Pillow; no font dependency beyond matplotlib."""
+    import os
+
+    import matplotlib
+    from PIL import Image, ImageDraw, ImageFont
+
+    path = os.path.join(matplotlib.get_data_path(), "fonts", "ttf", "DejaVuSansMono.ttf")
+    font = ImageFont.truetype(path, max(6, int(px)))
+    ascent, descent = font.getmetrics()
+    cw = int(np.ceil(font.getlength("M")))
+    ch = ascent + descent
+    n = LAST_CHAR - FIRST_CHAR + 1
+    rows = (n + ATLAS_COLS - 1) // ATLAS_COLS
+    img = Image.new("L", (ATLAS_COLS * cw, rows * ch), 0)
+    draw = ImageDraw.Draw(img)
+    for k in range(n):
+        r, c = divmod(k, ATLAS_COLS)
+        draw.text((c * cw, r * ch), chr(FIRST_CHAR + k), font=font, fill=255)
+    return np.asarray(img, dtype=np.uint8), (cw, ch)
+
+
+class Text:
+    """Monospace text at integer pixel positions (nearest sampling: crisp, exact)."""
+
+    def __init__(self, ctx, px: int):
+        self.ctx = ctx
+        atlas, self.cell = glyph_atlas(px)
+        h, w = atlas.shape
+        self.tex = ctx.texture((w, h), 1, np.ascontiguousarray(atlas).tobytes(), alignment=1)
+        import moderngl
+        self.tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.batch = _Instanced(ctx, TEXT_VS, TEXT_FS, TEXT_DTYPE, "2f 1f", ("in_pos", "in_glyph"), capacity=128)
+        p = self.batch.prog
+        p["u_cell"].value = tuple(float(x) for x in self.cell)
+        p["u_atlas"].value = (float(w), float(h))
+        p["u_cols"].value = float(ATLAS_COLS)
+
+    def layout(self, lines, x: float, y: float) -> np.ndarray:
+        """Instance data for ``lines`` (list of str) with the first cell's top-left at (x, y)."""
+        cw, ch = self.cell
+        out = []
+        for li, s in enumerate(lines):
+            for ci, c in enumerate(s):
+                k = ord(c)
+                if c == " " or not FIRST_CHAR <= k <= LAST_CHAR:
+                    continue
+                out.append(((round(x + ci * cw), round(y + li * ch)), k - FIRST_CHAR))
+        data = np.zeros(len(out), TEXT_DTYPE)
+        for i, (pos, g) in enumerate(out):
+            data[i] = (pos, g)
+        return data
+
+    def draw(self, size, data: np.ndarray, color) -> None:
+        self.batch.set_view(size)
+        self.batch.prog["u_color"].value = tuple(float(c) for c in color[:3])
+        self.tex.use(0)
+        self.batch.prog["u_tex"].value = 0
+        self.batch.draw(data)
+
+    def width(self, s: str) -> int:
+        return len(s) * self.cell[0]
+
+    def release(self):
+        self.batch.release()
+        self.tex.release()

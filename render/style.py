@@ -1,0 +1,118 @@
+"""Every colour, size and rendering choice of nbst.render in one place, each with why.
+
+Colours are linear 0..1 RGB(A) floats, as GL takes them; ``rgb8`` gives the
+8-bit values a frame holds (tests look for them).
+"""
+from __future__ import annotations
+
+#: Frame background outside the box. Dark, so trails can be drawn with MAX
+#: blending (a trail colour must exceed the background in every channel).
+BACKGROUND = (0.055, 0.063, 0.078)
+
+#: Floor of the box: a shade lighter than the background so the walls read.
+BOX_FLOOR = (0.098, 0.110, 0.133)
+
+#: Walls (the box outline).
+BOX_WALL = (0.62, 0.66, 0.72)
+
+#: Wall thickness, as a fraction of the frame's shorter side (4 px at 720p).
+BOX_WALL_FRAC = 0.0055
+
+#: Cueable disks: warm amber; the paper's cue can strike them.
+CUEABLE = (0.97, 0.62, 0.18)
+
+#: Noncueable disks: cool blue; they move only when struck. Distinct from
+#: CUEABLE in hue and in every channel, so a pixel tells the class.
+NONCUEABLE = (0.30, 0.62, 0.96)
+
+#: Disk rim: the disk's colour times this, so touching disks stay separable.
+DISK_RIM_SHADE = 0.55
+
+#: Rim width, as a fraction of the on-screen disk radius (at least 1 px).
+DISK_RIM_FRAC = 0.12
+
+#: Smallest on-screen disk radius in px: a radius-1 disk (diamond-s14-tiny)
+#: would be under a pixel at 720p; drawn disks are never smaller than this.
+MIN_DISK_PX = 3.0
+
+#: Target marker: a small hollow circle (the paper's Figure 1), radius as a
+#: fraction of the disk radius, at least MIN_MARKER_PX.
+MARKER_FRAC = 0.35
+MIN_MARKER_PX = 3.0
+MARKER = (0.85, 0.87, 0.90, 0.9)
+
+#: Target neighbourhood ring of radius R while its disk is outside: faint.
+RING_DIM = (0.55, 0.58, 0.64, 0.22)
+RING_DIM_PX = 1.2
+
+#: ... and while its disk is inside (lit): the disk's colour, thicker, with a
+#: faint fill of the neighbourhood so a lit ring reads at a glance.
+RING_LIT_ALPHA = 0.95
+RING_LIT_FILL_ALPHA = 0.10
+RING_LIT_PX = 2.6
+
+#: Trails: how many seconds of path stay visible, the alpha at the disk, and
+#: the width as a fraction of the on-screen disk radius (at least 1.5 px).
+TRAIL_SECONDS = 1.2
+TRAIL_ALPHA = 0.9
+TRAIL_WIDTH_FRAC = 0.36
+MIN_TRAIL_PX = 1.5
+
+#: Most keyframes in a trail window; beyond it the path is sampled uniformly
+#: (a jammed cluster can have thousands of events in TRAIL_SECONDS).
+MAX_TRAIL_POINTS = 256
+
+#: MuJoCo ghosts (``--source both``): a white ring at the disk's radius, on top
+#: of the analytic disk, so any drift between the two shows as an offset ring.
+GHOST = (0.95, 0.97, 1.0, 0.9)
+GHOST_PX = 2.0
+
+#: Text (time readout, legend).
+TEXT = (0.90, 0.92, 0.95)
+TEXT_DIM = (0.60, 0.64, 0.70)
+
+#: Text height as a fraction of the frame's shorter side (20 px at 720p).
+TEXT_FRAC = 0.028
+
+#: Margin around the box, as a fraction of the frame's shorter side.
+MARGIN_FRAC = 0.04
+
+#: Defaults of ``nbst render``.
+DEFAULT_FPS = 60
+DEFAULT_SIZE = (1280, 720)
+
+#: GIFs store frame delays in centiseconds and browsers slow delays under 2 cs
+#: down to 10 cs, so 60 fps cannot play as 60 fps: GIFs default to 25 fps (4 cs)
+#: and a smaller frame (GIFs are stored uncompressed-ish and palette-limited).
+GIF_FPS = 25
+GIF_SIZE = (640, 360)
+
+#: H.264 settings: x264 ``veryfast`` keeps encoding ahead of rendering on a
+#: laptop CPU; CRF 20 is visually lossless for flat-shaded graphics.
+X264_PRESET = "veryfast"
+X264_CRF = 20
+
+#: Frames in flight between the renderer and the encoder thread: enough to
+#: absorb jitter, few enough to bound memory (4 x 2.7 MB at 720p).
+QUEUE_FRAMES = 4
+
+#: 3D view: table colours, camera and light.
+TABLE = (0.10, 0.30, 0.20)
+RAIL = (0.36, 0.22, 0.12)
+PUCK_HEIGHT_FRAC = 0.6  # puck height as a fraction of its radius
+RAIL_HEIGHT_FRAC = 0.05  # rail height as a fraction of the box's shorter side
+CAMERA_FOV_DEG = 38.0
+CAMERA_ELEVATION_DEG = 52.0  # above the table plane
+LIGHT_DIR = (-0.35, -0.5, 0.8)  # towards the light, world axes (z up)
+AMBIENT = 0.35
+MSAA_SAMPLES = 4
+
+
+def rgb8(c) -> tuple[int, int, int]:
+    """The 8-bit RGB a frame holds for an opaque colour ``c``."""
+    return tuple(int(round(max(0.0, min(1.0, x)) * 255)) for x in c[:3])
+
+
+def disk_colors(cueable) -> list[tuple[float, float, float]]:
+    """One fill colour per disk: CUEABLE or NONCUEABLE."""
+    return [CUEABLE if bool(c) else NONCUEABLE for c in cueable]

@@ -1,0 +1,206 @@
+"""Writers: frames in, files out. MP4 (H.264, yuv420p) and GIF through
+imageio-ffmpeg on a background thread; PNG stills through Pillow.
+
+Frames travel in reusable buffers: ``VideoWriter.acquire()`` hands out one of a
+few preallocated (H, W, 3) arrays, the renderer reads the GL frame into it,
+``submit`` queues it, and the encoder thread returns it to the pool once
+ffmpeg has it. Rendering and encoding overlap; no per-frame allocation.
+"""
+from __future__ import annotations
+
+import math
+import queue
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from . import style
+from .gl import RenderError
+
+
+def video_kind(path) -> str:
+    """'mp4' or 'gif' from the file extension (.mp4/.m4v/.mov -> mp4)."""
+    ext = Path(path).suffix.lower()
+    if ext == ".gif":
+        return "gif"
+    if ext in (".mp4", ".m4v", ".mov"):
+        return "mp4"
+    raise RenderError(f"{path}: unknown video extension {ext or '(none)'!r}; use .mp4 or .gif (or --still T with .png)")
+
+
+def frame_times(t_final: float, fps: float, *, speed: float = 1.0, hold: float = 0.0) -> np.ndarray:
+    """Simulation times of the frames: k * speed / fps for k = 0, 1, ... up to and
+    including t_final (the last frame is at t_final exactly), then ``hold`` seconds
+    of video at t_final."""
+    if not (fps > 0 and speed > 0 and hold >= 0):
+        raise ValueError("fps and speed must be > 0, hold >= 0")
+    step = speed / fps
+    n = int(math.floor(t_final / step + 1e-9)) + 1
+    t = np.arange(n) * step
+    if t[-1] < t_final - 1e-12:
+        t = np.append(t, t_final)
+    t[-1] = min(t[-1], t_final)
+    extra = int(round(hold * fps))
+    return np.concatenate((t, np.full(extra, t_final))) if extra else t
+
+
+class VideoWriter:
+    """Encode (H, W, 3) uint8 frames to ``path`` (.mp4: H.264 yuv420p; .gif) on a
+    background thread. Use as a context manager; ``close()`` waits for ffmpeg.
+
+    size : (W, H) px; fps : frames per second of the file.
+    """
+
+    def __init__(self, path, size, fps, *, buffers: int = style.QUEUE_FRAMES, crf: int = style.X264_CRF,
+                 preset: str = style.X264_PRESET):
+        import imageio_ffmpeg
+
+        self.path = str(path)
+        self.kind = video_kind(path)
+        self.size = (int(size[0]), int(size[1]))
+        self.fps = float(fps)
+        w, h = self.size
+        if self.kind == "mp4" and (w % 2 or h % 2):
+            raise RenderError(f"H.264 in yuv420p needs an even width and height, got {w}x{h}")
+        if self.kind == "mp4":
+            kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None,
+                      output_params=["-preset", preset, "-crf", str(int(crf)), "-movflags", "+faststart"])
+        else:
+            kw = dict(codec="gif", pix_fmt_out="pal8", quality=None,
+                      output_params=["-vf", "split[a][b];[a]palettegen=stats_mode=diff[p];[b][p]paletteuse=dither=bayer",
+                                     "-loop", "0"])
+        Path(self.path).parent.mkdir(parents=True, exist_ok=True)
+        self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps, pix_fmt_in="rgb24",
+                                                macro_block_size=1, ffmpeg_log_level="error", **kw)
+        self._gen.send(None)  # starts ffmpeg
+        self._pool = [np.empty((h, w, 3), np.uint8) for _ in range(max(1, buffers))]
+        self._ids = {id(b) for b in self._pool}
+        self._free: queue.Queue = queue.Queue()
+        for b in self._pool:
+            self._free.put(b)
+        self._todo: queue.Queue = queue.Queue(maxsize=max(1, buffers))
+        self._error: BaseException | None = None
+        self.frames = 0
+        self._closed = False
+        self._thread = threading.Thread(target=self._run, name="nbst-encoder", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while True:
+            buf = self._todo.get()
+            if buf is None:
+                return
+            try:
+                if self._error is None:
+                    self._gen.send(buf)
+            except BaseException as e:  # ffmpeg died: report on the next call
+                self._error = e
+            finally:
+                if id(buf) in self._ids:
+                    self._free.put(buf)
+
+    def _check(self) -> None:
+        if self._error is not None:
+            msg = str(self._error).strip().splitlines()
+            raise RenderError(f"{self.path}: the encoder failed ({msg[0] if msg else type(self._error).__name__})")
+
+    def acquire(self) -> np.ndarray:
+        """A free frame buffer, (H, W, 3) uint8 (blocks while all are queued)."""
+        while True:
+            self._check()
+            try:
+                return self._free.get(timeout=0.5)
+            except queue.Empty:
+                if not self._thread.is_alive():
+                    raise RenderError(f"{self.path}: the encoder thread stopped") from None
+
+    def submit(self, frame: np.ndarray) -> None:
+        """Queue one frame. A buffer from ``acquire`` is recycled once written;
+        any other array is copied into one first."""
+        self._check()
+        if id(frame) not in self._ids:
+            w, h = self.size
+            if frame.shape != (h, w, 3):
+                raise ValueError(f"frame shape {frame.shape}, expected {(h, w, 3)}")
+            buf = self.acquire()
+            np.copyto(buf, frame, casting="unsafe")
+            frame = buf
+        self._todo.put(frame)
+        self.frames += 1
+
+    def close(self) -> None:
+        """Flush the queue and finish the file (waits for ffmpeg)."""
+        if self._closed:
+            return
+        self._closed = True
+        self._todo.put(None)
+        self._thread.join()
+        try:
+            self._gen.close()
+        except Exception as e:
+            if self._error is None:
+                self._error = e
+        self._check()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.close()
+        else:  # do not mask the original error
+            try:
+                self.close()
+            except Exception:
+                pass
+
+
+def encode(frames, writer: VideoWriter, *, progress=None) -> int:
+    """Render-and-encode loop: ``frames`` is a callable ``f(k, out) -> frame``
+    drawing frame k into the buffer ``out``, or an iterable of arrays.
+    Returns the number of frames written."""
+    n = 0
+    if callable(frames):
+        k = 0
+        while True:
+            buf = writer.acquire()
+            fr = frames(k, buf)
+            if fr is None:
+                writer._free.put(buf)
+                break
+            writer.submit(buf)
+            k += 1
+            n += 1
+            if progress is not None:
+                progress.update(1)
+    else:
+        for fr in frames:
+            writer.submit(fr)
+            n += 1
+            if progress is not None:
+                progress.update(1)
+    return n
+
+
+def render_video(renderer, times, path, *, fps, progress=None) -> int:
+    """Render ``renderer.render(t, out=buf)`` at each of ``times`` and encode to
+    ``path`` (.mp4 or .gif). Returns the number of frames."""
+    times = np.asarray(times, float)
+
+    def draw(k, out):
+        if k >= len(times):
+            return None
+        return renderer.render(times[k], out=out)
+
+    with VideoWriter(path, renderer.size, fps) as w:
+        n = encode(draw, w, progress=progress)
+    return n
+
+
+def write_png(path, frame: np.ndarray) -> None:
+    """Write one (H, W, 3) uint8 frame as PNG."""
+    from PIL import Image
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(np.ascontiguousarray(frame)).save(str(path))

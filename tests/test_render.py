@@ -1,0 +1,327 @@
+"""Frames of the 2D and 3D renderers: properties a user sees, not golden pixels.
+
+The GL context is made in exactly one place, the ``gl`` fixture below.
+Disk positions come from the exact simulator (``Trajectory.at``); where a
+frame is checked against positions, the world-to-pixel mapping is recovered
+from the frame itself (its walls), not taken from the renderer.
+"""
+import numpy as np
+import pytest
+
+from nbst import load_problem, simulate
+from nbst.render import style
+from nbst.render.scene2d import Layout, Renderer2D, SampledMotion, trail_points
+
+SIZE = (480, 360)
+
+
+@pytest.fixture(scope="module")
+def gl():
+    """The only place a GL context is created in the tests (EGL, headless)."""
+    from nbst.render.gl import create_context
+    ctx = create_context()
+    yield ctx
+    ctx.release()
+
+
+@pytest.fixture(scope="module")
+def diamond():
+    p = load_problem("diamond-s14")
+    return p, simulate(p, p.straight_velocities())
+
+
+def over5_motion():
+    """over5 with two shots that strike noncueable disks (so they move)."""
+    p = load_problem("over5")
+    v = np.zeros((p.n, 2))
+    v[0] = (45.0, 3.0)  # disk 0 drives into noncueable disk 2, right beside it
+    v[1] = (90.0, 20.0)
+    tr = simulate(p, v)
+    assert tr.n_disk_disk >= 1  # the test needs a struck noncueable disk
+    return p, tr
+
+
+def close(a, b, tol):
+    return np.abs(np.asarray(a, int) - np.asarray(b, int)).max() <= tol
+
+
+def box_from_walls(frame):
+    """Inner edges of the box (x0, y0, x1, y1 in px) found from wall-coloured
+    pixels along the middle row and column, independent of the renderer's layout."""
+    wall = np.array(style.rgb8(style.BOX_WALL))
+    h, w, _ = frame.shape
+
+    def inner(line):
+        hit = np.nonzero(np.abs(line.astype(int) - wall).max(axis=1) <= 24)[0]
+        assert hit.size >= 2, "no walls found"
+        left = hit[0]
+        while left + 1 < len(line) and left + 1 in hit:
+            left += 1
+        right = hit[-1]
+        while right - 1 in hit:
+            right -= 1
+        return left + 1.0, float(right)  # first floor pixel .. first wall pixel of the far side
+
+    x0, x1 = inner(frame[h // 2])
+    y0, y1 = inner(frame[:, w // 2])
+    return x0, y0, x1, y1
+
+
+def world_to_px(problem, box_px, xy):
+    x0, y0, x1, y1 = box_px
+    W, H = problem.box
+    xy = np.asarray(xy, float)
+    return np.stack([x0 + xy[..., 0] / W * (x1 - x0), y0 + (H - xy[..., 1]) / H * (y1 - y0)], axis=-1)
+
+
+def pixel(frame, pt):
+    c, r = int(np.floor(pt[0])), int(np.floor(pt[1]))
+    return frame[r, c]
+
+
+# --------------------------------------------------------------------------- 2D frames
+
+@pytest.mark.parametrize("t", [0.0, 1.3, 2.71, 5.0])
+def test_each_disk_has_its_colour_at_its_simulated_centre(gl, diamond, t):
+    p, tr = diamond
+    r = Renderer2D(gl, p, tr, size=SIZE, trails=True)
+    try:
+        f = r.render(t)
+    finally:
+        r.release()
+    assert f.shape == (SIZE[1], SIZE[0], 3) and f.dtype == np.uint8
+    box = box_from_walls(f)
+    centres = world_to_px(p, box, tr.at(t))
+    amber = style.rgb8(style.CUEABLE)
+    for i, c in enumerate(centres):
+        # 3x3 around the centre: all fill colour (disk radius ~8 px here, rim 1 px)
+        for dc in (-1, 0, 1):
+            for dr in (-1, 0, 1):
+                assert close(pixel(f, c + (dc, dr)), amber, 3), (i, t, pixel(f, c + (dc, dr)))
+
+
+def test_noncueable_disks_have_a_distinct_colour_where_simulated(gl):
+    p, tr = over5_motion()
+    r = Renderer2D(gl, p, tr, size=SIZE)
+    try:
+        for t in (0.0, 2.5, 5.0):
+            f = r.render(t)
+            box = box_from_walls(f)
+            for i, c in enumerate(world_to_px(p, box, tr.at(t))):
+                want = style.CUEABLE if p.cueable[i] else style.NONCUEABLE
+                other = style.NONCUEABLE if p.cueable[i] else style.CUEABLE
+                assert close(pixel(f, c), style.rgb8(want), 3), (i, t)
+                assert not close(pixel(f, c), style.rgb8(other), 60)
+    finally:
+        r.release()
+    # the struck noncueable disk really moved, so the check followed a moving disk
+    assert np.abs(tr.final_positions[~p.cueable] - p.start[~p.cueable]).max() > 20
+
+
+def test_background_where_no_disk_is(gl, diamond):
+    p, tr = diamond
+    t = 2.0
+    r = Renderer2D(gl, p, tr, size=SIZE)
+    try:
+        f = r.render(t)
+    finally:
+        r.release()
+    box = box_from_walls(f)
+    pos = tr.at(t)
+    gx, gy = np.meshgrid(np.linspace(15, p.width - 15, 40), np.linspace(15, p.height - 15, 40))
+    pts = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    d_disk = np.linalg.norm(pts[:, None] - pos[None], axis=2).min(axis=1)
+    d_tgt = np.linalg.norm(pts[:, None] - p.target[None], axis=2)
+    far = (d_disk > p.radius.max() + 12) & (np.abs(d_tgt - p.target_radius).min(axis=1) > 10) \
+        & (d_tgt.min(axis=1) > 20)
+    assert far.sum() > 500
+    floor = style.rgb8(style.BOX_FLOOR)
+    px = world_to_px(p, box, pts[far])
+    bad = [tuple(pixel(f, q)) for q in px if not close(pixel(f, q), floor, 2)]
+    assert not bad, bad[:5]
+    # outside the box, away from the readout (top-left) and legend (bottom-right): background
+    bg = style.rgb8(style.BACKGROUND)
+    h, w, _ = f.shape
+    assert close(f[h - 3, 2], bg, 2) and close(f[2, w - 3], bg, 2)
+
+
+def test_target_rings_light_up_while_their_disk_is_inside(gl, diamond):
+    p, tr = diamond
+    t = p.t_final
+    inside = np.linalg.norm(tr.at(t) - p.target, axis=1) <= p.target_radius
+    assert 0 < inside.sum() < p.n  # straight shots: 3 of 14 end inside
+    r = Renderer2D(gl, p, tr, size=SIZE)
+    try:
+        f = r.render(t)
+    finally:
+        r.release()
+    box = box_from_walls(f)
+    s = (box[2] - box[0]) / p.width
+    amber = np.array(style.rgb8(style.CUEABLE))
+    pos = tr.at(t)
+    for i in range(p.n):
+        # a ring pixel (1 px inside radius R) away from every disk and every other ring
+        best = None
+        for ang in np.linspace(0, 2 * np.pi, 72, endpoint=False):
+            q = p.target[i] + (p.target_radius - 1.0 / s) * np.array([np.cos(ang), np.sin(ang)])
+            if np.linalg.norm(pos - q, axis=1).min() < p.radius.max() + 6:
+                continue
+            others = np.abs(np.linalg.norm(p.target - q, axis=1) - p.target_radius)
+            others[i] = np.inf
+            if others.min() > 8 and np.linalg.norm(p.target - q, axis=1).min() > 12:
+                best = q
+                break
+        assert best is not None
+        c = pixel(f, world_to_px(p, box, best)).astype(int)
+        if inside[i]:
+            assert np.abs(c - amber).max() < 40, (i, c)
+        else:
+            assert np.abs(c - amber).max() > 100, (i, c)
+
+
+def test_still_at_t0_shows_the_starts_not_the_targets(gl, diamond):
+    p, tr = diamond
+    r = Renderer2D(gl, p, tr, size=SIZE)
+    try:
+        f = r.render(0.0)
+    finally:
+        r.release()
+    box = box_from_walls(f)
+    amber = style.rgb8(style.CUEABLE)
+    for c in world_to_px(p, box, p.start):
+        assert close(pixel(f, c), amber, 3)
+    far = np.linalg.norm(p.target[:, None] - p.start[None], axis=2).min(axis=1) > 2 * p.radius.max()
+    assert far.sum() >= 5
+    for c in world_to_px(p, box, p.target[far]):
+        assert not close(pixel(f, c), amber, 60)
+
+
+def test_time_readout_changes_with_time(gl, diamond):
+    p, tr = diamond
+    r = Renderer2D(gl, p, tr, size=SIZE)
+    try:
+        a, b = r.render(1.0).copy(), r.render(3.0).copy()
+        a2 = r.render(1.0)
+    finally:
+        r.release()
+    box = box_from_walls(a)
+    x0 = int(box[0]) - 8  # the readout lives in the left margin
+    top = slice(0, SIZE[1] // 3)
+    text = np.array(style.rgb8(style.TEXT))
+    lit_a = np.abs(a[top, :x0].astype(int) - text).max(axis=2) < 40
+    assert lit_a.sum() > 30  # there is text
+    assert (a[top, :x0] != b[top, :x0]).any()  # and it says something else at t = 3
+    assert np.array_equal(a, a2)  # rendering is a pure function of t
+
+
+def test_trails_fade_behind_a_moving_disk(gl, mk):
+    p = mk([[100.0, 400.0]], radii=20.0, targets=[[700.0, 400.0]])
+    tr = simulate(p, [[200.0, 0.0]])
+    r = Renderer2D(gl, p, tr, size=SIZE, trails=True)
+    r0 = Renderer2D(gl, p, tr, size=SIZE, trails=False)
+    try:
+        f, g = r.render(2.0), r0.render(2.0)
+    finally:
+        r.release()
+        r0.release()
+    box = box_from_walls(f)
+    x_now = tr.at(2.0)[0, 0]
+    floor = np.array(style.rgb8(style.BOX_FLOOR))
+    amber = np.array(style.rgb8(style.CUEABLE))
+
+    def sample(frame, dx):
+        return pixel(frame, world_to_px(p, box, np.array([x_now - dx, 400.0]))).astype(int)
+
+    near, far = sample(f, 40.0), sample(f, 200.0)  # 0.2 s and 1.0 s old
+    assert np.abs(sample(g, 40.0) - floor).max() <= 2  # no trail without --trails
+    assert np.abs(near - floor).max() > 40  # a trail behind the disk ...
+    assert np.abs(near - amber).max() < np.abs(far - amber).max()  # ... fading with age
+    ahead = sample(f, -60.0)
+    assert np.abs(ahead - floor).max() <= 2  # and none in front of it
+
+
+def test_ghost_rings_follow_the_second_motion(gl, diamond):
+    p, tr = diamond
+    ts = np.linspace(0, p.t_final, 51)
+    shifted = SampledMotion(ts, tr.at(ts) + np.array([60.0, 0.0]))  # a deliberately wrong replay
+    r = Renderer2D(gl, p, tr, size=SIZE, ghost=shifted)
+    try:
+        f = r.render(1.0)
+    finally:
+        r.release()
+    box = box_from_walls(f)
+    ghost = np.array(style.rgb8(style.GHOST))
+    amber = style.rgb8(style.CUEABLE)
+    s = (box[2] - box[0]) / p.width
+    hits = 0
+    pos = tr.at(1.0)
+    for i, c in enumerate(world_to_px(p, box, pos)):
+        on_ring = np.abs(np.linalg.norm(pos[i] - (pos + (60.0, 0.0)), axis=1) - p.radius).min() < 8
+        if not on_ring:  # the exact disk is unchanged where no ghost ring crosses it
+            assert close(pixel(f, c), amber, 3)
+        q = world_to_px(p, box, tr.at(1.0)[i] + (60.0 + p.radius[i] - 1.0 / s, 0.0))
+        hits += np.abs(pixel(f, q).astype(int) - ghost).max() < 60
+    assert hits >= p.n - 3  # ring pixels at the shifted positions (a few hidden by other disks)
+
+
+def test_sampled_motion_is_exact_at_samples_and_linear_between():
+    ts = np.array([0.0, 1.0, 3.0])
+    pos = np.array([[[0.0, 0.0]], [[10.0, 0.0]], [[10.0, 20.0]]])
+    m = SampledMotion(ts, pos)
+    assert np.allclose(m.at(1.0), [[10.0, 0.0]])
+    assert np.allclose(m.at(2.0), [[10.0, 10.0]])
+    assert np.allclose(m.at(np.array([0.5, 3.0])), [[[5.0, 0.0]], [[10.0, 20.0]]])
+
+
+def test_trail_points_are_the_exact_path(diamond):
+    p, tr = diamond
+    pts, times = trail_points(tr, 3.0, 1.0)
+    assert times[0] == pytest.approx(2.0) and times[-1] == 3.0
+    assert np.all(np.diff(times) >= 0)
+    assert np.allclose(pts, tr.at(times), atol=1e-9)
+    # between consecutive points each disk moves in a straight line: midpoints agree
+    mid = 0.5 * (times[1:] + times[:-1])
+    assert np.allclose(0.5 * (pts[1:] + pts[:-1]), tr.at(mid), atol=1e-9)
+
+
+def test_layout_fits_the_box_centred():
+    L = Layout((800.0, 400.0), (1280, 720))
+    x0, y0, x1, y1 = L.box_rect
+    assert x0 > 0 and y0 > 0 and x1 < 1280 and y1 < 720
+    assert (x1 - x0) / (y1 - y0) == pytest.approx(2.0)
+    assert (x0 + x1) / 2 == pytest.approx(640) and (y0 + y1) / 2 == pytest.approx(360)
+    assert np.allclose(L.to_image([[0.0, 400.0], [800.0, 0.0]]), [[x0, y0], [x1, y1]])
+
+
+def test_tiny_disks_stay_visible(gl):
+    p = load_problem("diamond-s14-tiny")
+    tr = simulate(p, p.straight_velocities())
+    r = Renderer2D(gl, p, tr, size=SIZE)
+    try:
+        f = r.render(0.0)
+    finally:
+        r.release()
+    box = box_from_walls(f)
+    amber = style.rgb8(style.CUEABLE)
+    assert all(close(pixel(f, c), amber, 3) for c in world_to_px(p, box, p.start))
+
+
+# --------------------------------------------------------------------------- 3D frames
+
+def test_3d_pucks_sit_where_simulated(gl):
+    Renderer3D = pytest.importorskip("nbst.render.scene3d").Renderer3D  # TEMP until scene3d lands
+    p, tr = over5_motion()
+    r = Renderer3D(gl, p, tr, size=SIZE)
+    try:
+        for t in (0.0, 3.0):
+            f = r.render(t)
+            assert f.shape == (SIZE[1], SIZE[0], 3)
+            tops = r.to_pixels(tr.at(t))  # projected centres of the pucks' top faces
+            for i, c in enumerate(tops):
+                px = pixel(f, c).astype(int)
+                if p.cueable[i]:  # amber: red > green > blue
+                    assert px[0] > px[1] > px[2] and px[0] > 120, (i, t, px)
+                else:  # blue: blue > red
+                    assert px[2] > px[0] + 40, (i, t, px)
+    finally:
+        r.release()

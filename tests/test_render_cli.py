@@ -1,0 +1,203 @@
+"""``nbst render`` and ``nbst plot`` end to end, and the video writer.
+
+Videos are decoded back with imageio-ffmpeg: frame count, size, fps and what
+a decoded frame shows. Small sizes and low fps keep this fast.
+"""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from nbst import load_problem, simulate
+from nbst.cli import main
+from nbst.render import style
+from nbst.render.video import VideoWriter, frame_times
+from nbst.solution import make_solution, save_solution
+
+
+@pytest.fixture(scope="module")
+def straight(tmp_path_factory):
+    p = load_problem("diamond-s14")
+    path = tmp_path_factory.mktemp("sol") / "straight.json"
+    save_solution(path, make_solution(p, p.straight_velocities()))
+    return p, str(path)
+
+
+def decode(path):
+    import imageio_ffmpeg
+    gen = imageio_ffmpeg.read_frames(str(path))
+    meta = next(gen)
+    w, h = meta["size"]
+    frames = [np.frombuffer(f, np.uint8).reshape(h, w, 3) for f in gen]
+    return meta, frames
+
+
+def test_frame_times_cover_zero_to_t_final_inclusive():
+    t = frame_times(5.0, 60)
+    assert len(t) == 301 and t[0] == 0.0 and t[-1] == 5.0
+    assert np.allclose(np.diff(t), 1 / 60)
+    t = frame_times(5.0, 30, speed=0.5, hold=1.0)
+    assert len(t) == 301 + 30 and np.all(t[301:] == 5.0)
+    t = frame_times(1.0, 3)  # 1/3 s steps end exactly at 1.0
+    assert len(t) == 4 and t[-1] == 1.0
+    t = frame_times(1.0, 4, speed=0.3)  # 0.075 s steps do not land on 1.0: t_final appended
+    assert t[-1] == 1.0 and t[-2] < 1.0
+
+
+def test_mp4_decodes_with_expected_count_size_fps(tmp_path, straight, capsys):
+    p, sol = straight
+    out = tmp_path / "v.mp4"
+    rc = main(["render", "diamond-s14", sol, "-o", str(out), "--fps", "20", "--size", "320x240", "--hold", "0.5",
+               "--trails", "-q"])
+    assert rc == 0, capsys.readouterr().err
+    meta, frames = decode(out)
+    assert meta["codec"] == "h264" and meta["pix_fmt"].startswith("yuv420p")
+    assert meta["size"] == (320, 240) and meta["fps"] == pytest.approx(20.0)
+    assert len(frames) == 5 * 20 + 1 + 10
+    # a decoded frame shows the disks where simulated (lossy: loose tolerance)
+    from test_render import box_from_walls, pixel, world_to_px  # same mapping helpers
+    tr = simulate(p, p.straight_velocities())
+    k = 60
+    f = frames[k]
+    box = box_from_walls(f)
+    amber = np.array(style.rgb8(style.CUEABLE))
+    for c in world_to_px(p, box, tr.at(k / 20)):
+        assert np.abs(pixel(f, c).astype(int) - amber).max() < 40
+    assert capsys.readouterr().err == ""  # -q: silent
+
+
+def test_gif_by_extension(tmp_path, straight):
+    p, sol = straight
+    out = tmp_path / "v.gif"
+    assert main(["render", "diamond-s14", sol, "-o", str(out), "--fps", "10", "--size", "96x64", "--hold", "0",
+                 "-q"]) == 0
+    from PIL import Image
+    with Image.open(out) as im:
+        assert im.format == "GIF" and im.size == (96, 64)
+        assert im.n_frames == 51
+        assert im.info.get("duration") == 100  # ms per frame at 10 fps
+
+
+def test_still_png_at_t0_shows_the_starts(tmp_path, straight):
+    p, sol = straight
+    out = tmp_path / "s.png"
+    assert main(["render", "diamond-s14", sol, "--still", "0", "-o", str(out), "--size", "400x300", "-q"]) == 0
+    from PIL import Image
+
+    from test_render import box_from_walls, pixel, world_to_px
+    f = np.asarray(Image.open(out).convert("RGB"))
+    assert f.shape == (300, 400, 3)
+    box = box_from_walls(f)
+    amber = style.rgb8(style.CUEABLE)
+    for c in world_to_px(p, box, p.start):
+        assert np.abs(pixel(f, c).astype(int) - amber).max() <= 3
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["--still", "1", "-o", "x.mp4"], "--still writes a PNG"),
+    (["-o", "x.png"], "needs --still"),
+    (["-o", "x.avi"], "unknown output format"),
+    (["-o", "x.mp4", "--size", "321x240"], "even width and height"),
+    (["-o", "x.mp4", "--size", "big"], "WIDTHxHEIGHT"),
+    (["-o", "x.mp4", "--fps", "0"], "--fps"),
+    (["-o", "x.mp4", "--speed", "-1"], "--speed"),
+    (["--still", "9", "-o", "x.png"], "t_final"),
+])
+def test_bad_options_give_one_line_and_exit_2(tmp_path, straight, capsys, argv, msg):
+    p, sol = straight
+    argv = [a if not a.startswith("x.") else str(tmp_path / a) for a in argv]
+    rc = main(["render", "diamond-s14", sol, *argv, "-q"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and msg in err and len(err.splitlines()) == 1, err
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+def test_bad_solution_is_a_one_line_error(tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"velocities": [[1, 2]]}')
+    rc = main(["render", "diamond-s14", str(bad), "-o", str(tmp_path / "v.mp4"), "-q"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "velocities" in err and len(err.splitlines()) == 1
+
+
+def test_mujoco_source_renders_or_says_why(tmp_path, straight, capsys):
+    p, sol = straight
+    out = tmp_path / "m.png"
+    rc = main(["render", "diamond-s14", sol, "--still", "2", "-o", str(out), "--size", "160x120",
+               "--source", "both", "-q"])
+    err = capsys.readouterr().err.strip()
+    try:
+        from nbst.models import rollout  # noqa: F401
+    except ImportError:
+        assert rc == 2 and "nbst.models.rollout" in err and len(err.splitlines()) == 1
+        return
+    assert rc == 0 and out.stat().st_size > 0, err
+
+
+def test_video_writer_recycles_its_buffers_and_copies_foreign_frames(tmp_path):
+    out = tmp_path / "w.mp4"
+    with VideoWriter(out, (64, 48), 10, buffers=2) as w:
+        seen = set()
+        for k in range(6):
+            b = w.acquire()
+            seen.add(id(b))
+            b[:] = k * 40
+            w.submit(b)
+        w.submit(np.full((48, 64, 3), 255, np.uint8))  # not from the pool: copied
+    assert len(seen) <= 2 and w.frames == 7
+    meta, frames = decode(out)
+    assert len(frames) == 7
+    assert [int(f.mean() + 0.5) for f in frames[:6]] == pytest.approx([k * 40 for k in range(6)], abs=3)
+    assert frames[-1].mean() > 250
+
+
+# --------------------------------------------------------------------------- figures
+
+def test_plot_problem_arrows_broken_for_noncueable_disks(tmp_path):
+    from matplotlib.patches import FancyArrowPatch
+
+    from nbst.render.figures import plot_problem
+    p = load_problem("over5")
+    fig = plot_problem(p)
+    arrows = [a for a in fig.axes[0].patches if isinstance(a, FancyArrowPatch)]
+    assert len(arrows) == p.n
+    dashed = [a for a in arrows if a.get_linestyle() not in ("-", "solid")]
+    assert len(dashed) == int((~p.cueable).sum())
+    out = tmp_path / "fig.png"
+    assert main(["plot", "problem", "over5", "-o", str(out), "--dpi", "60"]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plot_trajectories_marks_every_collision_and_bounce(tmp_path, straight):
+    from nbst.render.figures import plot_trajectories
+    p, sol = straight
+    tr = simulate(p, p.straight_velocities())
+    fig = plot_trajectories(p, tr)
+    lines = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    coll = [ln for k, ln in lines.items() if k.startswith("disk-disk")]
+    wall = [ln for k, ln in lines.items() if k.startswith("wall")]
+    assert len(coll[0].get_xdata()) == tr.n_disk_disk == 17
+    assert len(wall[0].get_xdata()) == tr.n_wall
+    # each path starts at the start and ends at the simulated final position
+    paths = [ln for ln in fig.axes[0].get_lines() if ln.get_linestyle() == "-"]
+    assert len(paths) == p.n
+    for i, ln in enumerate(paths):
+        xy = np.c_[ln.get_xdata(), ln.get_ydata()]
+        assert np.allclose(xy[0], p.start[i]) and np.allclose(xy[-1], tr.final_positions[i])
+    out = tmp_path / "traj.svg"
+    assert main(["plot", "trajectories", "diamond-s14", sol, "-o", str(out)]) == 0
+    assert b"<svg" in out.read_bytes()[:500]
+
+
+def test_plot_rejects_unknown_format(tmp_path, capsys):
+    assert main(["plot", "problem", "over5", "-o", str(tmp_path / "f.bmpx")]) == 2
+    assert "unknown figure format" in capsys.readouterr().err
+
+
+def test_registration_and_import_stay_light():
+    code = ("import sys, nbst, nbst.render, nbst.render.cli; from nbst.cli import build_parser; build_parser(); "
+            "heavy = [m for m in ('moderngl', 'imageio', 'imageio_ffmpeg', 'matplotlib', 'trimesh', 'PIL') "
+            "if m in sys.modules]; print(heavy); sys.exit(1 if heavy else 0)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
