@@ -309,7 +309,7 @@ def test_tiny_disks_stay_visible(gl):
 # --------------------------------------------------------------------------- 3D frames
 
 def test_3d_pucks_sit_where_simulated(gl):
-    Renderer3D = pytest.importorskip("nbst.render.scene3d").Renderer3D  # TEMP until scene3d lands
+    from nbst.render.scene3d import Renderer3D
     p, tr = over5_motion()
     r = Renderer3D(gl, p, tr, size=SIZE)
     try:

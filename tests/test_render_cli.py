@@ -201,3 +201,22 @@ def test_registration_and_import_stay_light():
             "if m in sys.modules]; print(heavy); sys.exit(1 if heavy else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_3d_view_writes_a_still_and_a_short_video(tmp_path, straight):
+    p, sol = straight
+    out = tmp_path / "s3.png"
+    assert main(["render", "diamond-s14", sol, "--view", "3d", "--still", "2.5", "-o", str(out),
+                 "--size", "320x180", "-q"]) == 0
+    from PIL import Image
+    f = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    amber = np.array(style.rgb8(style.CUEABLE))
+    # lit pucks: many pixels of the puck colour family (red > green > blue, bright)
+    puck = (f[..., 0] > f[..., 1] + 20) & (f[..., 1] > f[..., 2] + 20) & (f[..., 0] > 150)
+    assert puck.sum() > 14 * 20
+    assert np.abs(f[puck].mean(axis=0) - amber).max() < 70
+    out = tmp_path / "v3.mp4"
+    assert main(["render", "diamond-s14", sol, "--view", "3d", "-o", str(out), "--size", "160x96", "--fps", "4",
+                 "--hold", "0", "-q"]) == 0
+    meta, frames = decode(out)
+    assert len(frames) == 21 and meta["size"] == (160, 96)

@@ -1,0 +1,281 @@
+"""The 3D view (``--view 3d``): pucks as cylinders on a table inside rails, seen
+by a perspective camera, lit by one directional light; target markers and
+target rings lie on the felt, rings lit in the puck's colour while it is inside.
+
+Meshes come from trimesh (cylinder, box, annulus) and are drawn instanced by one
+Blinn-Phong program. ``Renderer3D.render(t)`` returns one frame, (H, W, 3) uint8,
+antialiased by MSAA. World axes: x, y the problem's (units), z up, table top z = 0.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import style
+from .gl import FrameTarget
+from .shapes import Text
+
+MESH_VS = """#version 330
+uniform mat4 u_mvp;
+in vec3 in_pos;
+in vec3 in_normal;
+in vec3 in_offset;
+in vec3 in_scale;
+in vec3 in_color;
+out vec3 v_normal;
+out vec3 v_world;
+flat out vec3 v_color;
+void main() {
+    vec3 w = in_pos * in_scale + in_offset;
+    v_world = w;
+    v_normal = in_normal / in_scale;  // inverse-transpose of an axis-aligned scale
+    v_color = in_color;
+    gl_Position = u_mvp * vec4(w, 1.0);
+}
+"""
+
+MESH_FS = """#version 330
+uniform vec3 u_light;   // unit vector towards the light
+uniform vec3 u_eye;
+uniform float u_ambient;
+in vec3 v_normal;
+in vec3 v_world;
+flat in vec3 v_color;
+out vec4 f_color;
+void main() {
+    vec3 n = normalize(v_normal);
+    vec3 v = normalize(u_eye - v_world);
+    if (dot(n, v) < 0.0) n = -n;  // two-sided (culling is off: the projection flips winding)
+    float diff = max(dot(n, u_light), 0.0);
+    vec3 h = normalize(u_light + v);
+    float spec = pow(max(dot(n, h), 0.0), 48.0) * 0.35;
+    f_color = vec4(v_color * (u_ambient + (1.0 - u_ambient) * diff) + vec3(spec), 1.0);
+}
+"""
+
+INST_DTYPE = np.dtype([("offset", "f4", 3), ("scale", "f4", 3), ("color", "f4", 3)])
+
+
+def _mesh_arrays(mesh) -> np.ndarray:
+    """Unshared vertices with per-face-corner normals: flat caps, smooth sides for
+    shapes of revolution about z (cylinder, annulus), flat faces for boxes.
+    Returns (V, 6) float32: position, normal."""
+    tris = mesh.vertices[mesh.faces]  # (F, 3, 3)
+    fn = mesh.face_normals  # (F, 3)
+    normals = np.repeat(fn[:, None, :], 3, axis=1).copy()
+    side = np.abs(fn[:, 2]) < 0.5
+    if side.any():
+        radial = tris[side].copy()
+        radial[..., 2] = 0.0
+        L = np.linalg.norm(radial, axis=2, keepdims=True)
+        radial = np.where(L > 1e-9, radial / np.maximum(L, 1e-9), normals[side])
+        # outward or inward surface (an annulus's inner wall): follow the face normal's side
+        sign = np.sign((radial * fn[side][:, None, :]).sum(axis=2, keepdims=True))
+        normals[side] = radial * np.where(sign == 0, 1.0, sign)
+    return np.concatenate([tris, normals], axis=2).reshape(-1, 6).astype("f4")
+
+
+def look_at(eye, target, up) -> np.ndarray:
+    f = np.asarray(target, float) - eye
+    f /= np.linalg.norm(f)
+    s = np.cross(f, up)
+    s /= np.linalg.norm(s)
+    u = np.cross(s, f)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+    m[:3, 3] = -m[:3, :3] @ eye
+    return m
+
+
+def perspective(fov_y_deg, aspect, near, far) -> np.ndarray:
+    f = 1.0 / math.tan(math.radians(fov_y_deg) / 2)
+    m = np.zeros((4, 4))
+    m[0, 0], m[1, 1] = f / aspect, f
+    m[2, 2], m[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
+    m[3, 2] = -1.0
+    return m
+
+
+class Renderer3D:
+    """Renders ``motion`` of ``problem`` in 3D at any time: (H, W, 3) uint8 frames.
+
+    Same interface as :class:`nbst.render.scene2d.Renderer2D`. ``trails`` is
+    accepted and ignored in 3D (the paths are drawn in 2D and in the figures).
+    """
+
+    def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
+                 title: str | None = None):
+        import moderngl
+        import trimesh
+
+        self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
+        self._mgl = moderngl
+        self.target = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
+        self.size = self.target.size
+        self.title = problem.name if title is None else title
+        p = problem
+        W, H = p.box
+        short = min(W, H)
+        self.rail_h = style.RAIL_HEIGHT_FRAC * short
+        self.puck_h = style.PUCK_HEIGHT_FRAC * p.radius  # (N,)
+        self.prog = ctx.program(vertex_shader=MESH_VS, fragment_shader=MESH_FS)
+        self._setup_camera()
+        self._vbos = []
+
+        def mesh_vao(mesh, capacity):
+            vbo = ctx.buffer(_mesh_arrays(mesh).tobytes())
+            inst = ctx.buffer(reserve=capacity * INST_DTYPE.itemsize, dynamic=True)
+            vao = ctx.vertex_array(self.prog, [(vbo, "3f 3f", "in_pos", "in_normal"),
+                                               (inst, "3f 3f 3f/i", "in_offset", "in_scale", "in_color")])
+            self._vbos += [vao, vbo, inst]
+            return vao, inst
+
+        n = p.n
+        self.cyl = mesh_vao(trimesh.creation.cylinder(radius=1.0, height=1.0, sections=48), 2 * n)
+        self.cube = mesh_vao(trimesh.creation.box(extents=(1.0, 1.0, 1.0)), 8)
+        R = p.target_radius
+        ring_w = max(2.0, 0.02 * R)
+        self.ring_dim = mesh_vao(trimesh.creation.annulus(r_min=R - ring_w, r_max=R, height=0.6, sections=96), n)
+        self.ring_lit = mesh_vao(trimesh.creation.annulus(r_min=R - 2.5 * ring_w, r_max=R, height=1.0,
+                                                          sections=96), n)
+        self.marker = mesh_vao(trimesh.creation.annulus(r_min=0.55, r_max=1.0, height=1.0, sections=32), n)
+        self.ghost_ring = mesh_vao(trimesh.creation.annulus(r_min=0.88, r_max=1.06, height=1.0, sections=48), n)
+
+        self.colors = np.array(style.disk_colors(p.cueable), "f4")
+        # static instances
+        t = 0.04 * short  # table slab thickness
+        rw = max(6.0, 0.02 * short)  # rail width
+        cubes = np.zeros(5, INST_DTYPE)
+        cubes[0] = ((W / 2, H / 2, -t / 2), (W + 2 * rw, H + 2 * rw, t), style.TABLE)
+        rh = self.rail_h
+        cubes[1] = ((-rw / 2, H / 2, rh / 2), (rw, H + 2 * rw, rh), style.RAIL)
+        cubes[2] = ((W + rw / 2, H / 2, rh / 2), (rw, H + 2 * rw, rh), style.RAIL)
+        cubes[3] = ((W / 2, -rw / 2, rh / 2), (W, rw, rh), style.RAIL)
+        cubes[4] = ((W / 2, H + rw / 2, rh / 2), (W, rw, rh), style.RAIL)
+        self._cubes = cubes
+        felt = np.array(style.TABLE)
+        self._rings = np.zeros(n, INST_DTYPE)
+        self._rings["offset"][:, :2] = p.target
+        self._rings["offset"][:, 2] = 0.3
+        self._rings["scale"] = 1.0
+        self._rings["color"] = felt + 0.30 * (np.array(style.RING_DIM[:3]) - felt)
+        self._markers = np.zeros(n, INST_DTYPE)
+        self._markers["offset"][:, :2] = p.target
+        self._markers["offset"][:, 2] = 0.5
+        mr = np.maximum(style.MARKER_FRAC * p.radius, 3.0)
+        self._markers["scale"] = np.stack([mr, mr, np.ones(n)], axis=1)
+        self._markers["color"] = style.MARKER[:3]
+        self._lit = self._rings.copy()
+        self._lit["offset"][:, 2] = 0.6
+        self._lit["color"] = self.colors
+        self._pucks = np.zeros(n, INST_DTYPE)
+        self._pucks["scale"] = np.stack([p.radius, p.radius, self.puck_h], axis=1)
+        self._pucks["color"] = self.colors
+        self._ghosts = np.zeros(n, INST_DTYPE)
+        self._ghosts["scale"] = np.stack([p.radius, p.radius, np.ones(n)], axis=1)
+        self._ghosts["color"] = style.GHOST[:3]
+        self.static = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
+        self._static_done = False
+        self.text = Text(ctx, max(8, int(round(style.TEXT_FRAC * min(self.size)))))
+
+    def _setup_camera(self) -> None:
+        p = self.problem
+        W, H = p.box
+        fw, fh = self.size
+        aspect = fw / fh
+        el = math.radians(style.CAMERA_ELEVATION_DEG)
+        centre = np.array([W / 2, H / 2 * 0.92, 0.0])
+        # distance: fit the table's bounding sphere (with the rails) in the narrower field of view
+        radius = 0.5 * math.hypot(W, H) * 1.02
+        fov_y = math.radians(style.CAMERA_FOV_DEG)
+        fov_x = 2 * math.atan(math.tan(fov_y / 2) * aspect)
+        d = radius / math.sin(min(fov_x, fov_y) / 2) * 0.74
+        self.eye = centre + d * np.array([0.0, -math.cos(el), math.sin(el)])
+        view = look_at(self.eye, centre, np.array([0.0, 0.0, 1.0]))
+        proj = perspective(style.CAMERA_FOV_DEG, aspect, d * 0.2, d * 3.0)
+        flip = np.diag([1.0, -1.0, 1.0, 1.0])  # image row 0 (top) -> GL bottom row: read_into needs no flip
+        self.mvp_unflipped = proj @ view
+        self.mvp = flip @ self.mvp_unflipped
+        self.prog["u_mvp"].write(self.mvp.T.astype("f4").tobytes())  # GL is column-major
+        L = np.array(style.LIGHT_DIR, float)
+        self.prog["u_light"].value = tuple(L / np.linalg.norm(L))
+        self.prog["u_eye"].value = tuple(self.eye)
+        self.prog["u_ambient"].value = style.AMBIENT
+
+    def to_pixels(self, xy, z=None) -> np.ndarray:
+        """World points (..., 2) on the pucks' top faces (or at height z) -> image px (column, row)."""
+        xy = np.asarray(xy, float)
+        if z is None:
+            z = np.broadcast_to(self.puck_h, xy.shape[:-1]) if xy.shape[:-1] == self.puck_h.shape else 0.0
+        pts = np.concatenate([xy, np.broadcast_to(np.asarray(z, float), xy.shape[:-1])[..., None],
+                              np.ones(xy.shape[:-1] + (1,))], axis=-1)
+        clip = pts @ self.mvp_unflipped.T
+        ndc = clip[..., :3] / clip[..., 3:4]
+        fw, fh = self.size
+        return np.stack([(ndc[..., 0] + 1) / 2 * fw, (1 - ndc[..., 1]) / 2 * fh], axis=-1)
+
+    def _draw(self, vao_inst, data) -> None:
+        vao, inst = vao_inst
+        if len(data):
+            inst.write(np.ascontiguousarray(data).tobytes())
+            vao.render(self._mgl.TRIANGLES, instances=len(data))
+
+    def _draw_static(self) -> None:
+        """Table, rails, dim rings and markers: drawn once (the big table quad is
+        most of the fill cost under MSAA), copied into each frame."""
+        ctx, mgl = self.ctx, self._mgl
+        fbo = self.static.draw_fbo
+        fbo.use()
+        ctx.viewport = (0, 0, *self.size)
+        fbo.clear(*style.BACKGROUND, 1.0, depth=1.0)
+        ctx.disable(mgl.BLEND | mgl.CULL_FACE)
+        ctx.enable(mgl.DEPTH_TEST)
+        self._draw(self.cube, self._cubes)
+        self._draw(self.ring_dim, self._rings)
+        self._draw(self.marker, self._markers)
+        self._static_done = True
+
+    def render(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
+        """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given."""
+        ctx, mgl, p = self.ctx, self._mgl, self.problem
+        t = float(min(max(t, 0.0), p.t_final))
+        pos = np.asarray(self.motion.at(t), float)
+        fbo = self.target.draw_fbo
+        if not self._static_done:
+            self._draw_static()
+        ctx.copy_framebuffer(fbo, self.static.draw_fbo)
+        fbo.color_mask = (False, False, False, False)
+        fbo.clear(depth=1.0)  # depth only: the static layer's colour stays
+        fbo.color_mask = (True, True, True, True)
+        fbo.use()  # applies the restored colour mask (the setter alone does not reach GL)
+        ctx.viewport = (0, 0, *self.size)
+        ctx.disable(mgl.BLEND | mgl.CULL_FACE)
+        ctx.enable(mgl.DEPTH_TEST)
+        self._draw(self.cube, self._cubes[1:])  # rails again, for depth: they can hide pucks
+        inside = ((pos - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
+        self._draw(self.ring_lit, self._lit[inside])
+        self._pucks["offset"][:, :2] = pos
+        self._pucks["offset"][:, 2] = self.puck_h / 2
+        self._draw(self.cyl, self._pucks)
+        if self.ghost is not None:
+            g = np.asarray(self.ghost.at(t), float)
+            self._ghosts["offset"][:, :2] = g
+            self._ghosts["offset"][:, 2] = self.puck_h + 0.8
+            self._draw(self.ghost_ring, self._ghosts)
+        ctx.disable(mgl.DEPTH_TEST)
+        ctx.enable(mgl.BLEND)
+        ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
+        ctx.blend_equation = mgl.FUNC_ADD
+        pad = style.MARGIN_FRAC * min(self.size) * 0.5
+        lines = [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{p.n}"]
+        self.text.draw(self.size, self.text.layout(lines, pad, pad), style.TEXT)
+        return self.target.read(out)
+
+    def release(self) -> None:
+        for o in self._vbos:
+            o.release()
+        self.prog.release()
+        self.text.release()
+        self.target.release()
+        self.static.release()
