@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .search_ops import rng_uniform
 from .sim import pair_tau
 
 @njit(cache=True, inline="always")
@@ -190,11 +191,12 @@ def path_conflicts(i, vi, x0, V, radius, W, H, t_final):
 
 
 @njit(cache=True, error_model="numpy")
-def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounces, scr, out):
+def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounces, scr, rng, out):
     """Bank shot for disk i (min_bounces..max_bounces bounces) whose path meets the
     fewest other disks' current free flights (velocities V); ties broken uniformly
-    at random (numba's RNG). ``scr`` from ``alloc_clearance(N)``. Writes the velocity
-    to out; returns the number of conflicts of the chosen path."""
+    at random with ``rng`` (a xoshiro256** state, ``nbst.search_ops.seed_state``).
+    ``scr`` from ``alloc_clearance(N)``. Writes the velocity to out; returns the
+    number of conflicts of the chosen path."""
     all_pieces(x0, V, radius, W, H, t_final, scr)
     best = 1 << 30
     nbest = 0
@@ -213,7 +215,7 @@ def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounce
                 out[1] = v[1]
             elif c == best:
                 nbest += 1
-                if np.random.random() * nbest < 1.0:  # reservoir: uniform among the ties
+                if rng_uniform(rng) * nbest < 1.0:  # reservoir: uniform among the ties
                     out[0] = v[0]
                     out[1] = v[1]
     return best
@@ -265,3 +267,51 @@ def strike(problem, c, s, T=None):
     if t_hit < 0:
         raise ValueError(f"disk {c} cannot strike disk {s} towards {tuple(T)}: it would come from the far side")
     return out, t_hit
+
+
+@njit(cache=True, error_model="numpy")
+def chain_strike_velocity(pc, rc, mc, p1, r1, m1, p2, r2, m2, T, t_final, out):
+    """Velocity of cue disk c that strikes resting disk 1 so that disk 1, flying
+    straight, strikes resting disk 2, which then flies straight to T arriving at
+    t_final. Returns the time disk 1 strikes disk 2, or -1 if impossible.
+
+    Disk 2 must leave along n2 = (T - p2)/|T - p2| with speed D2/(t_final - t2):
+    disk 1 touches it at q2 = p2 - (r1 + r2) n2 moving along d = (q2 - p1)/L2 at
+    speed sigma with sigma (d.n2) k2 = D2/(t_final - t2); c touches disk 1 at
+    q1 = p1 - (rc + r1) d with normal speed sigma k1 at t1 = A1/(sigma k1),
+    A1 = (q1 - pc).d; and t2 = t1 + L2/sigma. With G = A1/k1 + L2 and c2 = d.n2
+    these solve to t2 = G c2 t_final / (G c2 + k2 D2), sigma = G / t2.
+    (k = (m_a + m_b) / (2 m_a) for striker a and struck b.)"""
+    dx = T[0] - p2[0]
+    dy = T[1] - p2[1]
+    D2 = math.sqrt(dx * dx + dy * dy)
+    if D2 == 0.0:
+        return -1.0
+    n2x = dx / D2
+    n2y = dy / D2
+    q2x = p2[0] - (r1 + r2) * n2x
+    q2y = p2[1] - (r1 + r2) * n2y
+    ex = q2x - p1[0]
+    ey = q2y - p1[1]
+    L2 = math.sqrt(ex * ex + ey * ey)
+    if L2 == 0.0:
+        return -1.0
+    ddx = ex / L2
+    ddy = ey / L2
+    c2 = ddx * n2x + ddy * n2y
+    if c2 <= 0.0:
+        return -1.0
+    q1x = p1[0] - (rc + r1) * ddx
+    q1y = p1[1] - (rc + r1) * ddy
+    A1 = (q1x - pc[0]) * ddx + (q1y - pc[1]) * ddy
+    if A1 <= 0.0:
+        return -1.0
+    k1 = (mc + m1) / (2.0 * mc)
+    k2 = (m1 + m2) / (2.0 * m1)
+    G = A1 / k1 + L2
+    t2 = G * c2 * t_final / (G * c2 + k2 * D2)
+    sigma = G / t2
+    t1 = A1 / (sigma * k1)
+    out[0] = (q1x - pc[0]) / t1
+    out[1] = (q1y - pc[1]) / t1
+    return t2

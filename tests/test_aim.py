@@ -10,6 +10,7 @@ import pytest
 from conftest import make_problem
 from nbst.aim import alloc_clearance, bank_shot, choose_bank, flights_conflict, path_conflicts, strike
 from nbst.planted import planted
+from nbst.search_ops import seed_state
 from nbst.sim import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -30,9 +31,8 @@ def test_choose_bank_avoids_a_blocker():
     p = make_problem([(100, 400), (400, 400)], 20.0, targets=[(700, 400), (400, 400)])
     V = np.zeros((2, 2))
     out = np.empty(2)
-    np.random.seed(0)
     c = choose_bank(0, np.ascontiguousarray(p.start), V, np.ascontiguousarray(p.radius),
-                    np.ascontiguousarray(p.target), 800.0, 800.0, 5.0, 1, 3, alloc_clearance(2), out)
+                    np.ascontiguousarray(p.target), 800.0, 800.0, 5.0, 1, 3, alloc_clearance(2), seed_state(0), out)
     assert c == 0
     assert path_conflicts(0, out, np.ascontiguousarray(p.start), V, np.ascontiguousarray(p.radius),
                           800.0, 800.0, 5.0) == 0
@@ -107,3 +107,17 @@ def test_generate_cli(tmp_path):
     r = subprocess.run([sys.executable, str(ROOT / "cli.py"), "generate", "--planted", "4", "--noncue", "4",
                         "-o", str(out)], capture_output=True, text=True)
     assert r.returncode == 2 and "--noncue" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_chain_strike_sends_the_second_struck_disk_to_its_target():
+    from nbst.aim import chain_strike_velocity
+    p = make_problem([(100, 150), (250, 220), (420, 300)], 12.0, masses=[1.0, 1.5, 0.8],
+                     cueable=[True, False, False], targets=[(100, 150), (250, 220), (700, 560)])
+    out = np.empty(2)
+    t2 = chain_strike_velocity(p.start[0], 12.0, 1.0, p.start[1], 12.0, 1.5, p.start[2], 12.0, 0.8,
+                               np.ascontiguousarray(p.target[2]), 5.0, out)
+    assert 0 < t2 < 5
+    tr = simulate(p, np.array([out, [0, 0], [0, 0]]))
+    assert [(e["i"], e["j"]) for e in tr.events[:2]] == [(0, 1), (1, 2)]
+    assert tr.events[1]["time"] == pytest.approx(t2, abs=1e-9)
+    np.testing.assert_allclose(tr.final_positions[2], p.target[2], atol=1e-6)

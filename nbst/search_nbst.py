@@ -1,0 +1,342 @@
+"""nbst's own search (variant ``nbst``): the paper's signature machinery plus the
+structure it leaves unused.
+
+What is added to the paper's algorithm (each can be switched off, for ablation):
+
+* **polish** (``nbst.polish``): Levenberg-Marquardt with the analytic Jacobian,
+  run on promising children -- a new best, or a child of the best order whose
+  cost is within ``polish_ratio`` of the best -- and charged as the simulations
+  it runs. The polished child is what gets inserted.
+* **bank** operator (footnote 5): one disk of the parent is re-aimed straight at
+  a mirror image of its target (0..``bank_bounces`` bounces), choosing among the
+  images whose unfolded path meets the fewest other disks' current free flights
+  (exact clearance, ``nbst.aim.choose_bank``; ties at random). Disks that are not
+  acceptable in the parent are picked first half of the time. Repeated by the
+  search, this is a min-conflicts walk towards a collision-free routing.
+* **strike** operator (footnote 5, overconstrained problems only): a cueable disk
+  is aimed to strike a noncueable disk so that the struck disk leaves towards its
+  target or a one-bounce image of it and arrives at t_final; half of the time
+  (with two or more noncueable disks) through a chain: the cue strikes a first
+  noncueable disk, which strikes the second towards its target.
+* **schedule**: operator probabilities adapt during the run: each operator's
+  success (its child beats its parent, or raises the order) is an exponential
+  moving average with rate ``adapt_rate``; probabilities are proportional to it,
+  with a floor ``adapt_floor`` each.
+* **straight start**: initialize's first trial sends every cueable disk straight
+  at its target.
+* **restarts**: after ``restart`` trials without improving the best found since
+  the last restart, the population is re-initialized around the best so far
+  (kept, elitism); polish's trigger is relative to the best since the restart,
+  so a new basin gets polished too. The paper's stopping rule (patience) still
+  counts trials since the overall best last improved.
+
+Everything else -- Senate-like selection, engineered crossover, insert, culling,
+elitism, stopping -- is the paper's, from ``nbst.search_ops``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .aim import alloc_clearance, chain_strike_velocity, choose_bank, mirror, strike_velocity
+from .polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
+from .search_loop import (PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
+                          PI_DIVERSITY, PI_ELITISM, PI_ENGINEERED, PI_HARD_LIMIT, PI_INIT_MAX_TRIES,
+                          PI_INIT_POPULATION, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_PATIENCE, PI_POP_LIMIT, PI_SENATE,
+                          PI_SIG_LIMIT, PI_CULL, PF_CREEP_SIGMA, RC_CHUNK_DONE, RC_HISTORY_FULL, RC_MAX_TRIALS,
+                          RC_PATIENCE, RC_TARGET_COST, ST_BEST_SIG, ST_CULLS, ST_FALLBACK, ST_FIRST_FULL,
+                          ST_INIT_TRIALS, ST_MAX_ORDER, ST_NHIST, ST_PHASE, ST_REJECTED, ST_SINCE, ST_TRIALS,
+                          ST_TRUNCATED, evaluate_one)
+from .search_ops import (BEST, INS_CULLED, INS_FALLBACK, NTAB, SIZE, acceptable_counts, creep_velocity, crossover,
+                         directed_velocity, insert, insert_initial, popcount, rng_int, rng_uniform, select_senate,
+                         select_uniform, uniform_velocity)
+from .sim import alloc_work
+
+# operators of the nbst variant
+OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER, OP_BANK, OP_STRIKE = range(6)
+N_OPS = 6
+OP_NAMES = ("creep", "directed", "uniform", "crossover", "bank", "strike")
+
+# extra parameters (qi: int64, qf: float64)
+QI_POLISH, QI_POLISH_SIMS, QI_BANK_BOUNCES, QI_ADAPT, QI_STRAIGHT_START, QI_STRIKE_BOUNCES, QI_RESTART, \
+    QI_POLISH_STRIKES = range(8)
+N_QI = 8
+QF_POLISH_RATIO, QF_ADAPT_RATE, QF_ADAPT_FLOOR = range(3)
+N_QF = 3
+
+# extra state (qs: int64)
+QS_POLISH_RUNS, QS_POLISH_SIMS, QS_POLISH_GAINS, QS_RESTARTS, QS_LOCAL_SIG, QS_LOCAL_SINCE = range(6)
+N_QS = 6
+
+
+@njit(cache=True, error_model="numpy")
+def _pick_op(rng, weights):
+    tot = 0.0
+    for k in range(weights.shape[0]):
+        tot += weights[k]
+    u = rng_uniform(rng) * tot
+    acc = 0.0
+    for k in range(weights.shape[0]):
+        acc += weights[k]
+        if u < acc and weights[k] > 0.0:
+            return k
+    for k in range(weights.shape[0] - 1, -1, -1):
+        if weights[k] > 0.0:
+            return k
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def _adapt(weights, base, reward, op, success, rate, floor):
+    """Probability matching: reward[op] <- EMA of success; weights proportional to
+    reward over the enabled operators (base > 0), each at least ``floor``."""
+    reward[op] = (1.0 - rate) * reward[op] + rate * (1.0 if success else 0.0)
+    tot = 0.0
+    k_on = 0
+    for k in range(weights.shape[0]):
+        if base[k] > 0.0:
+            tot += reward[k]
+            k_on += 1
+    for k in range(weights.shape[0]):
+        if base[k] > 0.0:
+            share = reward[k] / tot if tot > 0.0 else 1.0 / k_on
+            weights[k] = floor + (1.0 - k_on * floor) * share
+        else:
+            weights[k] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _pick_disk(idx, sig, rng, prefer_bad):
+    """A disk from idx: half of the time (if prefer_bad) one not acceptable in sig."""
+    m = idx.shape[0]
+    if prefer_bad and rng_uniform(rng) < 0.5:
+        nbad = 0
+        for q in range(m):
+            if (sig >> idx[q]) & 1 == 0:
+                nbad += 1
+        if nbad > 0:
+            r = rng_int(rng, nbad)
+            for q in range(m):
+                if (sig >> idx[q]) & 1 == 0:
+                    if r == 0:
+                        return idx[q]
+                    r -= 1
+    return idx[rng_int(rng, m)]
+
+
+@njit(cache=True, error_model="numpy")
+def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, images, pi, pf, qi, qf,
+                   pop, st, qs, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, weights, base, reward,
+                   n_steps):
+    """Advance the nbst search by about n_steps trials (a polish may overrun by its
+    budget, never past max_trials). Same contract as ``search_loop.run_chunk``,
+    plus qi/qf (QI_*, QF_* parameters), qs (QS_* state and statistics), the
+    operator schedule arrays (weights, base, reward; each (N_OPS,)), and
+    best_cost of shape (2,): [best overall, best since the last restart]."""
+    n = x0.shape[0]
+    cap = pop[0].shape[0]
+    ist = pop[5]
+    work = alloc_work(n)
+    child = np.zeros((n, 2))
+    fin = np.empty((n, 2))
+    vel = np.empty((n, 2))
+    no_t = np.empty(0)
+    no_i = np.empty(0, np.int64)
+    no_s = np.empty((0, 8))
+    scr_ord = np.empty(n + 2, np.int64)
+    scr_ok = np.empty(cap, np.bool_)
+    acc = np.empty(n, np.int64)
+    clear = alloc_clearance(n)
+    pscr = alloc_polish(n, cue_idx.shape[0], POLISH_EVENT_CAP)
+    out2 = np.empty(2)
+    T = np.empty(2)
+    R = pf[PF_R]
+    max_events = pi[PI_MAX_EVENTS]
+    elitism = pi[PI_ELITISM] != 0
+    ncue = cue_idx.shape[0]
+    nnon = non_idx.shape[0]
+    tol = max(pf[PF_TARGET_COST], 0.0)
+
+    for _ in range(n_steps):
+        if st[ST_TRIALS] >= pi[PI_MAX_TRIALS]:
+            return RC_MAX_TRIALS
+        if best_cost[0] <= pf[PF_TARGET_COST]:
+            return RC_TARGET_COST
+        if st[ST_PHASE] == PHASE_GENERATE and pi[PI_PATIENCE] > 0 and st[ST_SINCE] >= pi[PI_PATIENCE]:
+            return RC_PATIENCE
+        if st[ST_NHIST] >= hist_t.shape[0] - 1:
+            return RC_HISTORY_FULL
+        if (qi[QI_RESTART] > 0 and st[ST_PHASE] == PHASE_GENERATE and qs[QS_LOCAL_SINCE] >= qi[QI_RESTART]
+                and best_cost[0] < np.inf):
+            # restart: a fresh population around nothing but the best so far
+            ist[SIZE] = 0
+            ist[NTAB] = 0
+            ist[BEST] = -1
+            insert_initial(pop, best_v, best_cost[0], st[ST_BEST_SIG], True, elitism, pi[PI_SIG_LIMIT],
+                           pi[PI_POP_LIMIT])
+            st[ST_PHASE] = PHASE_INIT
+            st[ST_INIT_TRIALS] = 1  # not the straight start again
+            best_cost[1] = np.inf
+            qs[QS_LOCAL_SIG] = 0
+            qs[QS_LOCAL_SINCE] = 0
+            qs[QS_RESTARTS] += 1
+
+        p1 = -1
+        p2 = -1
+        op = -1
+        parent_cost = np.inf
+        parent_order = 0
+        if st[ST_PHASE] == PHASE_INIT:
+            child[:, :] = 0.0
+            straight = qi[QI_STRAIGHT_START] != 0 and st[ST_INIT_TRIALS] == 0
+            for q in range(ncue):
+                i = cue_idx[q]
+                if straight or rng_uniform(rng) < pf[PF_P_DIRECTED_INIT]:
+                    directed_velocity(x0, target, t_final, i, child)
+                else:
+                    uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
+        else:
+            op = _pick_op(rng, weights)
+            if op == OP_CROSSOVER and ist[SIZE] < 2:
+                op = OP_CREEP
+            if pi[PI_SENATE] != 0:
+                p1 = select_senate(pop, n, rng, -1, scr_ord, scr_ok)
+            else:
+                p1 = select_uniform(pop, rng, -1)
+            parent_cost = pop[1][p1]
+            parent_order = popcount(pop[2][p1])
+            if op == OP_CROSSOVER:
+                if pi[PI_SENATE] != 0:
+                    p2 = select_senate(pop, n, rng, p1, scr_ord, scr_ok)
+                else:
+                    p2 = select_uniform(pop, rng, p1)
+                parent_cost = min(parent_cost, pop[1][p2])
+                parent_order = max(parent_order, popcount(pop[2][p2]))
+                crossover(pop[0][p1], pop[0][p2], pop[2][p1], pop[2][p2], cue_idx, pi[PI_ENGINEERED] != 0,
+                          rng, child)
+            else:
+                child[:, :] = pop[0][p1]
+                if op == OP_STRIKE and nnon > 0:
+                    s = _pick_disk(non_idx, pop[2][p1], rng, True)
+                    c = cue_idx[rng_int(rng, ncue)]
+                    b = qi[QI_STRIKE_BOUNCES]
+                    kx = rng_int(rng, 2 * b + 1) - b
+                    ky = rng_int(rng, 2 * b + 1) - b
+                    if abs(kx) + abs(ky) > b:
+                        kx = 0
+                        ky = 0
+                    T[0] = mirror(target[s, 0], kx, radius[s], W - radius[s])
+                    T[1] = mirror(target[s, 1], ky, radius[s], H - radius[s])
+                    if nnon >= 2 and rng_uniform(rng) < 0.5:
+                        s1 = non_idx[rng_int(rng, nnon)]
+                        while s1 == s:
+                            s1 = non_idx[rng_int(rng, nnon)]
+                        th = chain_strike_velocity(x0[c], radius[c], mass[c], x0[s1], radius[s1], mass[s1],
+                                                   x0[s], radius[s], mass[s], T, t_final, out2)
+                    else:
+                        th = strike_velocity(x0[c], radius[c], mass[c], x0[s], radius[s], mass[s], T, t_final,
+                                             out2)
+                    if th > 0.0:
+                        child[c, 0] = out2[0]
+                        child[c, 1] = out2[1]
+                    else:
+                        creep_velocity(pf[PF_CREEP_SIGMA], c, rng, child)
+                else:
+                    i = _pick_disk(cue_idx, pop[2][p1], rng, op == OP_BANK)
+                    if op == OP_CREEP or op == OP_STRIKE:
+                        creep_velocity(pf[PF_CREEP_SIGMA], i, rng, child)
+                    elif op == OP_DIRECTED:
+                        directed_velocity(x0, target, t_final, i, child)
+                    elif op == OP_UNIFORM:
+                        uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
+                    else:
+                        choose_bank(i, x0, child, radius, target, W, H, t_final, 0, qi[QI_BANK_BOUNCES], clear,
+                                    rng, out2)
+                        child[i, 0] = out2[0]
+                        child[i, 1] = out2[1]
+            op_count[op, 0] += 1
+
+        cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, R, max_events, work,
+                                        fin, vel, no_t, no_i, no_s)
+        st[ST_TRIALS] += 1
+        st[ST_SINCE] += 1
+        qs[QS_LOCAL_SINCE] += 1
+        if st[ST_PHASE] == PHASE_INIT:
+            st[ST_INIT_TRIALS] += 1
+        if trunc:
+            st[ST_TRUNCATED] += 1
+        order = popcount(sig)
+        if op >= 0 and qi[QI_ADAPT] != 0:
+            _adapt(weights, base, reward, op, cost < parent_cost or order > parent_order, qf[QF_ADAPT_RATE],
+                   qf[QF_ADAPT_FLOOR])
+
+        # polish promising children (relative to this restart's best), charged as the simulations they run
+        local_order = popcount(qs[QS_LOCAL_SIG])
+        if (qi[QI_POLISH] != 0 and order > 0 and not trunc and cost > tol
+                and (cost < best_cost[1] or (order >= local_order and cost < qf[QF_POLISH_RATIO] * best_cost[1])
+                     or (op == OP_STRIKE and qi[QI_POLISH_STRIKES] != 0))):
+            budget = min(qi[QI_POLISH_SIMS], pi[PI_MAX_TRIALS] - st[ST_TRIALS] + 1)
+            if budget >= 2:
+                c2, s2, sims = polish_kernel(x0, child, radius, mass, target, W, H, t_final, R, cue_idx, budget,
+                                             tol, work, pscr)
+                extra = sims - 1  # its first simulation repeats the child's
+                st[ST_TRIALS] += extra
+                st[ST_SINCE] += extra
+                qs[QS_LOCAL_SINCE] += extra
+                qs[QS_POLISH_RUNS] += 1
+                qs[QS_POLISH_SIMS] += extra
+                if c2 < cost:
+                    qs[QS_POLISH_GAINS] += 1
+                    cost = c2
+                    sig = s2
+                    order = popcount(sig)
+
+        if order > st[ST_MAX_ORDER]:
+            st[ST_MAX_ORDER] = order
+        if order == n and st[ST_FIRST_FULL] < 0:
+            st[ST_FIRST_FULL] = st[ST_TRIALS]
+        if order == 0:
+            st[ST_REJECTED] += 1
+        else:
+            if cost < best_cost[1]:
+                best_cost[1] = cost
+                qs[QS_LOCAL_SIG] = sig
+                qs[QS_LOCAL_SINCE] = 0
+            improvement = cost < best_cost[0]
+            if improvement:
+                best_cost[0] = cost
+                best_v[:, :] = child
+                st[ST_BEST_SIG] = sig
+                st[ST_SINCE] = 0
+                k = st[ST_NHIST]
+                hist_t[k] = st[ST_TRIALS]
+                hist_c[k] = cost
+                hist_o[k] = order
+                st[ST_NHIST] = k + 1
+                if op >= 0:
+                    op_count[op, 1] += 1
+            if st[ST_PHASE] == PHASE_INIT:
+                insert_initial(pop, child, cost, sig, improvement, elitism, pi[PI_SIG_LIMIT], pi[PI_POP_LIMIT])
+            else:
+                code = insert(pop, child, cost, sig, p1, p2, improvement, elitism, pi[PI_SIG_LIMIT],
+                              pi[PI_POP_LIMIT], pi[PI_HARD_LIMIT], pi[PI_CULL], n, rng, scr_ord)
+                if code == INS_CULLED:
+                    st[ST_CULLS] += 1
+                elif code == INS_FALLBACK:
+                    st[ST_FALLBACK] += 1
+
+        if st[ST_PHASE] == PHASE_INIT and ist[SIZE] > 0:
+            done = st[ST_INIT_TRIALS] >= pi[PI_INIT_MAX_TRIES]
+            if pi[PI_INIT_POPULATION] > 0:
+                done = done or ist[SIZE] >= pi[PI_INIT_POPULATION]
+            else:
+                acceptable_counts(pop, n, acc)
+                ok = True
+                for i in range(n):
+                    if acc[i] < pi[PI_DIVERSITY]:
+                        ok = False
+                        break
+                done = done or ok
+            if done:
+                st[ST_PHASE] = PHASE_GENERATE
+    return RC_CHUNK_DONE
