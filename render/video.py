@@ -66,9 +66,9 @@ class VideoWriter:
         if self.kind == "mp4":
             kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None,
                       output_params=["-preset", preset, "-crf", str(int(crf)), "-movflags", "+faststart"])
-        else:
+        else:  # palette from all frames (a static floor must be in it exactly), ordered dither: no flicker
             kw = dict(codec="gif", pix_fmt_out="pal8", quality=None,
-                      output_params=["-vf", "split[a][b];[a]palettegen=stats_mode=diff[p];[b][p]paletteuse=dither=bayer",
+                      output_params=["-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse=dither=bayer:bayer_scale=4",
                                      "-loop", "0"])
         Path(self.path).parent.mkdir(parents=True, exist_ok=True)
         self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps, pix_fmt_in="rgb24",

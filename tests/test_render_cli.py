@@ -70,13 +70,21 @@ def test_mp4_decodes_with_expected_count_size_fps(tmp_path, straight, capsys):
 def test_gif_by_extension(tmp_path, straight):
     p, sol = straight
     out = tmp_path / "v.gif"
-    assert main(["render", "diamond-s14", sol, "-o", str(out), "--fps", "10", "--size", "96x64", "--hold", "0",
+    assert main(["render", "diamond-s14", sol, "-o", str(out), "--fps", "10", "--size", "160x120", "--hold", "0",
                  "-q"]) == 0
     from PIL import Image
+
+    from test_render import box_from_walls
     with Image.open(out) as im:
-        assert im.format == "GIF" and im.size == (96, 64)
+        assert im.format == "GIF" and im.size == (160, 120)
         assert im.n_frames == 51
         assert im.info.get("duration") == 100  # ms per frame at 10 fps
+        im.seek(25)
+        f = np.asarray(im.convert("RGB"))
+    # colours survive the palette: the floor within 3 levels
+    x0, y0, x1, y1 = box_from_walls(f)
+    corner = f[int(y1) - 8:int(y1) - 2, int(x0) + 2:int(x0) + 8].reshape(-1, 3)  # bottom left: no text
+    assert np.abs(corner.astype(int) - style.rgb8(style.BOX_FLOOR)).max() <= 3
 
 
 def test_still_png_at_t0_shows_the_starts(tmp_path, straight):
