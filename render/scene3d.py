@@ -54,6 +54,68 @@ void main() {
 }
 """
 
+# Trails lie on the felt as capsules in world units, blended with MAX against the
+# felt's own lit colour (computed here, per fragment, by the same lighting), so
+# overlapping segments never add up into beads at the joints.
+TRAIL_VS = """#version 330
+uniform mat4 u_mvp;
+uniform float u_z;
+in vec2 in_corner;
+in vec2 in_p0;
+in vec2 in_p1;
+in vec2 in_alpha;
+in float in_half;
+in vec3 in_color;
+out vec2 v_pos;
+flat out vec2 v_p0;
+flat out vec2 v_p1;
+flat out vec2 v_alpha;
+flat out float v_half;
+flat out vec3 v_color;
+void main() {
+    vec2 d = in_p1 - in_p0;
+    float len = length(d);
+    vec2 u = len > 1e-6 ? d / len : vec2(1.0, 0.0);
+    vec2 n = vec2(-u.y, u.x);
+    float ext = in_half * 1.6 + 1.0;
+    v_pos = 0.5 * (in_p0 + in_p1) + u * in_corner.x * (0.5 * len + ext) + n * in_corner.y * ext;
+    v_p0 = in_p0; v_p1 = in_p1; v_alpha = in_alpha; v_half = in_half; v_color = in_color;
+    gl_Position = u_mvp * vec4(v_pos, u_z, 1.0);
+}
+"""
+
+TRAIL_FS = """#version 330
+uniform vec3 u_light;
+uniform vec3 u_eye;
+uniform float u_ambient;
+uniform float u_z;
+uniform vec3 u_felt;
+in vec2 v_pos;
+flat in vec2 v_p0;
+flat in vec2 v_p1;
+flat in vec2 v_alpha;
+flat in float v_half;
+flat in vec3 v_color;
+out vec4 f_color;
+vec3 shade(vec3 c, vec3 w) {
+    vec3 n = vec3(0.0, 0.0, 1.0), v = normalize(u_eye - w);
+    float diff = max(dot(n, u_light), 0.0);
+    float spec = pow(max(dot(n, normalize(u_light + v)), 0.0), 48.0) * 0.35;
+    return c * (u_ambient + (1.0 - u_ambient) * diff) + vec3(spec);
+}
+void main() {
+    vec2 pa = v_pos - v_p0, ba = v_p1 - v_p0;
+    float bb = dot(ba, ba);
+    float h = bb > 1e-12 ? clamp(dot(pa, ba) / bb, 0.0, 1.0) : 0.0;
+    float d = length(pa - ba * h) - v_half;         // world units
+    float px = max(fwidth(d), 1e-6);                 // world units per pixel here
+    float a = mix(v_alpha.x, v_alpha.y, h) * clamp(0.5 - d / px, 0.0, 1.0);
+    if (a <= 0.0) discard;
+    vec3 w = vec3(v_pos, u_z);
+    f_color = vec4(mix(shade(u_felt, w), shade(v_color, w), a), 1.0);
+}
+"""
+
 INST_DTYPE = np.dtype([("offset", "f4", 3), ("scale", "f4", 3), ("color", "f4", 3)])
 
 
@@ -100,8 +162,7 @@ def perspective(fov_y_deg, aspect, near, far) -> np.ndarray:
 class Renderer3D:
     """Renders ``motion`` of ``problem`` in 3D at any time: (H, W, 3) uint8 frames.
 
-    Same interface as :class:`nbst.render.scene2d.Renderer2D`. ``trails`` is
-    accepted and ignored in 3D (the paths are drawn in 2D and in the figures).
+    Same interface as :class:`nbst.render.scene2d.Renderer2D`; trails lie on the felt.
     """
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
@@ -110,6 +171,7 @@ class Renderer3D:
         import trimesh
 
         self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
+        self.trails = bool(trails)
         self._mgl = moderngl
         self.target = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
         self.size = self.target.size
@@ -175,6 +237,20 @@ class Renderer3D:
         self._ghosts = np.zeros(n, INST_DTYPE)
         self._ghosts["scale"] = np.stack([p.radius, p.radius, np.ones(n)], axis=1)
         self._ghosts["color"] = style.GHOST[:3]
+        self.trail_prog = None
+        if self.trails:
+            from .shapes import CAPSULE_DTYPE, _Instanced
+            self.trail = _Instanced(ctx, TRAIL_VS, TRAIL_FS, CAPSULE_DTYPE, "2f 2f 2f 1f 3f",
+                                    ("in_p0", "in_p1", "in_alpha", "in_half", "in_color"), capacity=1024)
+            self.trail_prog = tp = self.trail.prog
+            tp["u_mvp"].write(self.mvp.T.astype("f4").tobytes())
+            L = np.array(style.LIGHT_DIR, float)
+            tp["u_light"].value = tuple(L / np.linalg.norm(L))
+            tp["u_eye"].value = tuple(self.eye)
+            tp["u_ambient"].value = style.AMBIENT
+            tp["u_z"].value = 0.4
+            tp["u_felt"].value = style.TABLE
+            self.trail_half = np.maximum(0.5 * style.TRAIL_WIDTH_FRAC * p.radius, 1.0).astype("f4")
         self.static = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
         self._static_done = False
         self.text = Text(ctx, max(8, int(round(style.TEXT_FRAC * min(self.size)))))
@@ -255,6 +331,12 @@ class Renderer3D:
         self._draw(self.cube, self._cubes[1:])  # rails again, for depth: they can hide pucks
         inside = ((pos - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
         self._draw(self.ring_lit, self._lit[inside])
+        if self.trails and t > 0:
+            ctx.enable(mgl.BLEND)
+            ctx.blend_equation = mgl.MAX
+            self.trail.draw(self._trail_instances(t))
+            ctx.blend_equation = mgl.FUNC_ADD
+            ctx.disable(mgl.BLEND)
         self._pucks["offset"][:, :2] = pos
         self._pucks["offset"][:, 2] = self.puck_h / 2
         self._draw(self.cyl, self._pucks)
@@ -272,7 +354,25 @@ class Renderer3D:
         self.text.draw(self.size, self.text.layout(lines, pad, pad), style.TEXT)
         return self.target.read(out)
 
+    def _trail_instances(self, t: float) -> np.ndarray:
+        from .scene2d import trail_points
+        from .shapes import CAPSULE_DTYPE
+        pts, times = trail_points(self.motion, t, style.TRAIL_SECONDS)
+        age = np.clip(1.0 - (t - times) / style.TRAIL_SECONDS, 0.0, 1.0) * style.TRAIL_ALPHA
+        a, b = pts[:-1], pts[1:]
+        m_idx, n_idx = np.nonzero(((b - a) ** 2).sum(axis=2) > 1e-9)
+        data = np.empty(len(m_idx), CAPSULE_DTYPE)
+        data["p0"] = a[m_idx, n_idx]
+        data["p1"] = b[m_idx, n_idx]
+        data["alpha"][:, 0] = age[m_idx]
+        data["alpha"][:, 1] = age[m_idx + 1]
+        data["half"] = self.trail_half[n_idx]
+        data["color"] = self.colors[n_idx]
+        return data
+
     def release(self) -> None:
+        if self.trail_prog is not None:
+            self.trail.release()
         for o in self._vbos:
             o.release()
         self.prog.release()

@@ -214,7 +214,7 @@ def test_registration_and_import_stay_light():
 def test_3d_view_writes_a_still_and_a_short_video(tmp_path, straight):
     p, sol = straight
     out = tmp_path / "s3.png"
-    assert main(["render", "diamond-s14", sol, "--view", "3d", "--still", "2.5", "-o", str(out),
+    assert main(["render", "diamond-s14", sol, "--view", "3d", "--trails", "--still", "2.5", "-o", str(out),
                  "--size", "320x180", "-q"]) == 0
     from PIL import Image
     f = np.asarray(Image.open(out).convert("RGB")).astype(int)
