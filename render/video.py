@@ -9,6 +9,7 @@ ffmpeg has it. Rendering and encoding overlap; no per-frame allocation.
 from __future__ import annotations
 
 import math
+import os
 import queue
 import threading
 from pathlib import Path
@@ -56,8 +57,14 @@ class VideoWriter:
                  preset: str = style.X264_PRESET):
         import imageio_ffmpeg
 
-        self.path = str(path)
+        self.final_path = str(path)
         self.kind = video_kind(path)
+        # ffmpeg writes a hidden temporary file beside the target (same extension: it picks the
+        # muxer); close() renames it over the target, so a failed or interrupted run leaves no
+        # half-written video under the requested name.
+        final = Path(self.final_path)
+        final.parent.mkdir(parents=True, exist_ok=True)
+        self.path = str(final.with_name(f".{final.stem}.partial-{os.getpid()}{final.suffix}"))
         self.size = (int(size[0]), int(size[1]))
         self.fps = float(fps)
         w, h = self.size
@@ -70,7 +77,6 @@ class VideoWriter:
             kw = dict(codec="gif", pix_fmt_out="pal8", quality=None,
                       output_params=["-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse=dither=bayer:bayer_scale=4",
                                      "-loop", "0"])
-        Path(self.path).parent.mkdir(parents=True, exist_ok=True)
         self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps, pix_fmt_in="rgb24",
                                                 macro_block_size=1, ffmpeg_log_level="error", **kw)
         self._gen.send(None)  # starts ffmpeg
@@ -103,7 +109,8 @@ class VideoWriter:
     def _check(self) -> None:
         if self._error is not None:
             msg = str(self._error).strip().splitlines()
-            raise RenderError(f"{self.path}: the encoder failed ({msg[0] if msg else type(self._error).__name__})")
+            raise RenderError(f"{self.final_path}: the encoder failed "
+                              f"({msg[0] if msg else type(self._error).__name__})")
 
     def acquire(self) -> np.ndarray:
         """A free frame buffer, (H, W, 3) uint8 (blocks while all are queued)."""
@@ -129,8 +136,9 @@ class VideoWriter:
         self._todo.put(frame)
         self.frames += 1
 
-    def close(self) -> None:
-        """Flush the queue and finish the file (waits for ffmpeg)."""
+    def close(self, *, discard: bool = False) -> None:
+        """Flush the queue and finish the file (waits for ffmpeg), then rename it
+        to ``path``; with ``discard`` (or on an encoder error) delete it instead."""
         if self._closed:
             return
         self._closed = True
@@ -141,19 +149,21 @@ class VideoWriter:
         except Exception as e:
             if self._error is None:
                 self._error = e
-        self._check()
+        if discard or self._error is not None:
+            try:
+                os.unlink(self.path)
+            except FileNotFoundError:
+                pass
+        if not discard:
+            self._check()
+            os.replace(self.path, self.final_path)
 
     def __enter__(self):
         return self
 
     def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            self.close()
-        else:  # do not mask the original error
-            try:
-                self.close()
-            except Exception:
-                pass
+        # on an error in the render loop (Ctrl-C included) leave no half-written video
+        self.close(discard=exc_type is not None)
 
 
 def encode(frames, writer: VideoWriter, *, progress=None) -> int:

@@ -228,3 +228,51 @@ def test_3d_view_writes_a_still_and_a_short_video(tmp_path, straight):
                  "--hold", "0", "-q"]) == 0
     meta, frames = decode(out)
     assert len(frames) == 21 and meta["size"] == (160, 96)
+
+
+def test_a_failed_render_leaves_no_video(tmp_path):
+    out = tmp_path / "fail.mp4"
+    with pytest.raises(RuntimeError, match="boom"):
+        with VideoWriter(out, (64, 48), 10) as w:
+            for k in range(3):
+                w.submit(np.zeros((48, 64, 3), np.uint8))
+            raise RuntimeError("boom")
+    assert list(tmp_path.iterdir()) == []  # neither the video nor its temporary file
+
+
+@pytest.mark.parametrize("source", ["mujoco", "both"])
+def test_mujoco_sources_use_the_replay(tmp_path, straight, monkeypatch, source):
+    """The MuJoCo plumbing with a stand-in replay: the exact motion shifted by 40 units
+    in x, so frames tell which motion was drawn."""
+    import nbst.render.cli as rcli
+    p, sol = straight
+    tr = simulate(p, p.straight_velocities())
+    calls = []
+
+    def fake(problem, velocities, times):
+        calls.append(np.asarray(times))
+        return tr.at(np.asarray(times)) + np.array([40.0, 0.0])
+
+    monkeypatch.setattr(rcli, "mujoco_positions", fake)
+    out = tmp_path / "m.png"
+    assert main(["render", "diamond-s14", sol, "--still", "1.5", "-o", str(out), "--size", "480x360",
+                 "--source", source, "-q"]) == 0
+    assert calls and 1.5 in calls[0]  # sampled at the frame's time
+    from PIL import Image
+
+    from test_render import box_from_walls, pixel, world_to_px
+    f = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    box = box_from_walls(f)
+    amber = np.array(style.rgb8(style.CUEABLE))
+    exact = world_to_px(p, box, tr.at(1.5))
+    shifted = world_to_px(p, box, tr.at(1.5) + (40.0, 0.0))
+    on_exact = sum(np.abs(pixel(f, c) - amber).max() <= 3 for c in exact)
+    on_shifted = sum(np.abs(pixel(f, c) - amber).max() <= 3 for c in shifted)
+    if source == "mujoco":  # disks drawn at the replay's positions
+        assert on_shifted == p.n and on_exact < p.n
+    else:  # exact disks, replay as rings
+        assert on_exact >= p.n - 3
+    out = tmp_path / "m.mp4"
+    assert main(["render", "diamond-s14", sol, "-o", str(out), "--size", "160x120", "--fps", "10", "--hold", "0",
+                 "--source", source, "-q"]) == 0
+    assert len(decode(out)[1]) == 51
