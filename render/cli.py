@@ -14,11 +14,12 @@ from . import style
 def register(sub) -> None:
     p = sub.add_parser(
         "render", help="render a solution's motion to MP4, GIF or a PNG still (headless OpenGL)",
-        description="Render the motion of PROBLEM under the initial velocities in SOLUTION: disks "
-                    "(amber cueable, blue noncueable), target markers, target rings of radius R that light "
-                    "up while their disk is inside, a time readout. Positions are exact at every frame "
-                    "(the event-driven simulator). The output's extension picks the format: .mp4 (H.264, "
-                    "yuv420p, plays everywhere) or .gif; with --still T, a .png of the frame at time T.",
+        description="Render the motion of PROBLEM under the initial velocities in SOLUTION: disks\n"
+                    "(amber cueable, blue noncueable), target markers, target rings of radius R that\n"
+                    "light up while their disk is inside, a time readout. Positions are exact at every\n"
+                    "frame (the event-driven simulator). The output's extension picks the format:\n"
+                    ".mp4 (H.264, yuv420p, plays everywhere) or .gif; with --still T, a .png of the\n"
+                    "frame at time T. Headless: OpenGL through EGL, no display or GPU needed.",
         epilog="examples:\n  nbst render diamond-s14 sol.json -o out/diamond.mp4 --trails\n"
                "  nbst render over5 sol.json -o out/over5.gif\n"
                "  nbst render diamond-s14 sol.json --still 0 -o out/start.png\n"
@@ -219,6 +220,8 @@ def cmd_plot_trajectories(args) -> int:
 
 def _save(fig, args, save_figure) -> int:
     from pathlib import Path
+    if not 10 <= args.dpi <= 1200:
+        return _err("plot", f"--dpi {args.dpi}: must be in 10..1200")
     ext = Path(args.output).suffix.lower()
     if ext not in (".png", ".pdf", ".svg"):
         return _err("plot", f"{Path(args.output).name}: unknown figure format {ext or '(no extension)'!r}; "
