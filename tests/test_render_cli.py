@@ -274,5 +274,5 @@ def test_mujoco_sources_use_the_replay(tmp_path, straight, monkeypatch, source):
         assert on_exact >= p.n - 3
     out = tmp_path / "m.mp4"
     assert main(["render", "diamond-s14", sol, "-o", str(out), "--size", "160x120", "--fps", "10", "--hold", "0",
-                 "--source", source, "-q"]) == 0
+                 "--source", source, "--trails", "-q"]) == 0  # trails of a sampled motion: uniform samples
     assert len(decode(out)[1]) == 51
