@@ -328,15 +328,23 @@ class Renderer3D:
         ctx.viewport = (0, 0, *self.size)
         ctx.disable(mgl.BLEND | mgl.CULL_FACE)
         ctx.enable(mgl.DEPTH_TEST)
-        self._draw(self.cube, self._cubes[1:])  # rails again, for depth: they can hide pucks
+        # the near rail again, for depth: seen from the south, only it can hide a puck
+        # (the far rail is behind them, the side rails lie outside their sight lines)
+        self._draw(self.cube, self._cubes[3:4])
         inside = ((pos - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
         self._draw(self.ring_lit, self._lit[inside])
         if self.trails and t > 0:
+            # depth test on (the near rail hides trails), depth writes off: segments meet in one
+            # plane, and a segment's anti-aliased fringe must not reject its neighbour there
+            fbo.depth_mask = False
+            fbo.use()
             ctx.enable(mgl.BLEND)
             ctx.blend_equation = mgl.MAX
             self.trail.draw(self._trail_instances(t))
             ctx.blend_equation = mgl.FUNC_ADD
             ctx.disable(mgl.BLEND)
+            fbo.depth_mask = True
+            fbo.use()
         self._pucks["offset"][:, :2] = pos
         self._pucks["offset"][:, 2] = self.puck_h / 2
         self._draw(self.cyl, self._pucks)

@@ -325,3 +325,29 @@ def test_3d_pucks_sit_where_simulated(gl):
                     assert px[2] > px[0] + 40, (i, t, px)
     finally:
         r.release()
+
+
+@pytest.mark.parametrize("view", ["2d", "3d"])
+def test_trails_fade_smoothly_through_keyframes(gl, mk, view):
+    """Keyframes are global (every event of any disk), so a straight trail is made of
+    many segments; its colour must still fall steadily with age, with no seams at
+    the joints (3D once had dark seams where a segment's depth hid its neighbour)."""
+    from nbst.render.scene3d import Renderer3D
+    p = mk([[100.0, 400.0], [700.0, 100.0], [760.0, 700.0]], radii=10.0)
+    tr = simulate(p, [[200.0, 0.0], [0.0, 4100.0], [0.0, -3300.0]])  # two fast bouncers: many keyframes
+    t = 2.0
+    lo, hi = np.searchsorted(tr.times, [t - style.TRAIL_SECONDS, t])
+    assert hi - lo >= 10  # the trail window holds many joints
+    R = Renderer3D if view == "3d" else Renderer2D
+    r = R(gl, p, tr, size=SIZE, trails=True)
+    try:
+        f = r.render(t).astype(int)
+        x_now = tr.at(t)[0, 0]
+        xs = np.linspace(x_now - 16.0, x_now - 200.0 * (style.TRAIL_SECONDS - 0.1), 80)  # ages 0.08 .. 1.1 s
+        pts = np.stack([xs, np.full_like(xs, 400.0)], axis=1)
+        px = r.to_pixels(pts, z=0.4) if view == "3d" else r.to_pixels(pts)
+    finally:
+        r.release()
+    red = np.array([f[int(q[1]), int(q[0]), 0] for q in px])
+    assert red[0] > red[-1] + 40  # it fades ...
+    assert np.all(np.diff(red) <= 3), red  # ... steadily: no dip or bead at any joint
