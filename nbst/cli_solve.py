@@ -1,0 +1,100 @@
+"""``nbst solve``: run the paper's signature search and write a solution file."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+VARIANT_HELP = ("A full algorithm (default); B uniform parent selection; C no crossover; D no genetically "
+                "engineered crossover; E no signature information (R = box width, initial population 60); "
+                "F no culling of subsumed solutions; G no elitism; H no directed randomization")
+
+
+def _int_at_least(lo: int, what: str):
+    def parse(text: str) -> int:
+        try:
+            v = int(text.replace("_", ""))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be an integer, got {text!r}") from None
+        if v < lo:
+            raise argparse.ArgumentTypeError(f"{what} must be >= {lo}, got {v}")
+        return v
+    return parse
+
+
+def _cost(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"target cost must be a number, got {text!r}") from None
+    if not v >= 0.0:
+        raise argparse.ArgumentTypeError(f"target cost must be >= 0, got {text!r}")
+    return v
+
+
+def _variant(text: str) -> str:
+    v = text.strip().upper()
+    if v not in tuple("ABCDEFGH"):
+        raise argparse.ArgumentTypeError(f"unknown variant {text!r}; choose one of A B C D E F G H")
+    return v
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "solve", help="find initial velocities with the paper's signature search",
+        description="Search for initial velocities that bring every disk of PROBLEM to its target at t_final "
+                    "(the paper's signature-based evolutionary search, or one of its simplified variants), "
+                    "and write the best solution found to a JSON file. Ctrl-C stops the search and still writes "
+                    "the best solution so far (exit 130). The same --seed gives the same solution, bit for bit.",
+        epilog="Variants: " + VARIANT_HELP + ". Every choice the paper leaves open is listed in docs/search.md.")
+    p.add_argument("problem", help="built-in name or path to a problem JSON file")
+    p.add_argument("-o", "--output", required=True, metavar="SOLUTION.json", help="where to write the solution")
+    p.add_argument("--seed", type=_int_at_least(0, "seed"), default=None,
+                   help="random seed (default: drawn, and recorded in the file)")
+    p.add_argument("--max-trials", type=_int_at_least(1, "max trials"), default=1_000_000, metavar="N",
+                   help="trial budget, initialization included (default 1000000)")
+    p.add_argument("--patience", type=_int_at_least(0, "patience"), default=100_000, metavar="K",
+                   help="stop after K trials without improvement; 0 = never (default 100000)")
+    p.add_argument("--variant", type=_variant, default="A", metavar="X", help=VARIANT_HELP)
+    p.add_argument("--target-cost", type=_cost, default=None, metavar="C",
+                   help="stop as soon as the best cost is <= C (default: never)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary line")
+    p.set_defaults(func=cmd_solve)
+
+
+def cmd_solve(args) -> int:
+    from .problem import load_problem
+    from .solution import save_solution
+
+    problem = load_problem(args.problem)
+    bar = None
+    if not args.quiet:
+        from tqdm import tqdm
+
+        bar = tqdm(total=args.max_trials, unit="trial", unit_scale=True, file=sys.stderr, dynamic_ncols=True,
+                   desc=f"solve {problem.name} ({args.variant})", smoothing=0.1)
+    done = [0]
+
+    def progress(p) -> None:
+        if bar is not None:
+            bar.update(p.trials - done[0])
+            done[0] = p.trials
+            bar.set_postfix_str(f"best {p.best_cost:.6g}  order {p.best_order}/{problem.n}", refresh=False)
+
+    from .search import solve
+
+    try:
+        sol = solve(problem, seed=args.seed, max_trials=args.max_trials, patience=args.patience,
+                    target_cost=args.target_cost, variant=args.variant, callback=progress)
+    finally:
+        if bar is not None:
+            bar.close()
+    save_solution(args.output, sol)
+    m = sol.meta
+    line = (f"cost {m['cost']:.6g}, order {m['order']}/{problem.n} ({m['signature']}) after {m['trials']} trials "
+            f"in {m['wall_time']:.1f} s, seed {m['seed']}, stopped by {m['stopped']} -> {args.output}")
+    if m["stopped"] == "interrupted":
+        print(f"nbst solve: interrupted; best so far written: {line}", file=sys.stderr)
+        return 130
+    if not args.quiet:
+        print(f"nbst solve: {line}", file=sys.stderr)
+    return 0

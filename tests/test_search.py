@@ -1,0 +1,167 @@
+"""solve(), the variants and `nbst solve`: determinism, stopping, Ctrl-C, the file it writes."""
+import dataclasses
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nbst import load_problem
+from nbst.cli import main
+from nbst.search import VARIANTS, SearchParams, solve, variant_params
+from nbst.sim import simulate
+from nbst.solution import load_solution
+
+ROOT = Path(__file__).resolve().parents[1]
+VOLATILE = {"wall_time", "trials_per_s"}
+
+
+@pytest.fixture(scope="module")
+def s14():
+    return load_problem("diamond-s14")
+
+
+def same(a, b):
+    np.testing.assert_array_equal(a.velocities, b.velocities)
+    assert {k: v for k, v in a.meta.items() if k not in VOLATILE} == \
+        {k: v for k, v in b.meta.items() if k not in VOLATILE}
+
+
+def test_same_seed_same_solution_whatever_the_chunking(s14):
+    a = solve(s14, seed=11, max_trials=6000, patience=0)
+    b = solve(s14, seed=11, max_trials=6000, patience=0, chunk=7)
+    c = solve(s14, seed=11, max_trials=6000, patience=0, chunk=100_000)
+    same(a, b)
+    same(a, c)
+    d = solve(s14, seed=12, max_trials=6000, patience=0)
+    assert not np.array_equal(a.velocities, d.velocities)
+
+
+def test_meta_is_complete_and_true(s14):
+    sol = solve(s14, seed=1, max_trials=3000)
+    m = sol.meta
+    for key in ("cost", "signature", "order", "trials", "seed", "variant", "params", "wall_time", "nbst_version",
+                "history", "stopped", "init_trials", "first_full_order_trial"):
+        assert key in m
+    tr = simulate(s14, sol.velocities)
+    assert tr.cost == m["cost"] and tr.signature_string == m["signature"] and tr.order == m["order"]
+    assert m["trials"] == 3000 and m["stopped"] == "max_trials" and m["seed"] == 1
+    hist = np.array(m["history"])
+    assert hist[-1, 1] == m["cost"] and np.all(np.diff(hist[:, 1]) < 0) and np.all(np.diff(hist[:, 0]) > 0)
+    assert m["params"] == dataclasses.asdict(SearchParams()) | {"op_weights": [0.25] * 4}
+
+
+def test_tiny_problem_solved_quickly():
+    # footnote 4: near-zero radius disks are solved in a few dozen generate-insert iterations
+    sol = solve(load_problem("diamond-s14-tiny"), seed=3, max_trials=5000, target_cost=1e-6)
+    assert sol.meta["stopped"] == "target_cost" and sol.meta["cost"] < 1e-6
+    assert sol.meta["trials"] - sol.meta["init_trials"] < 500
+
+
+def test_noncueable_disks_never_move_and_patience_stops():
+    p = load_problem("over5")
+    sol = solve(p, seed=2, max_trials=200_000, patience=2000)
+    assert np.all(sol.velocities[~p.cueable] == 0.0)
+    assert sol.meta["stopped"] == "patience"
+    last_improvement = sol.meta["history"][-1][0]
+    assert sol.meta["trials"] == last_improvement + 2000
+
+
+def test_callback_can_stop_and_interrupt(s14):
+    seen = []
+
+    def cb(p):
+        seen.append(p.trials)
+        return len(seen) == 3
+
+    sol = solve(s14, seed=4, max_trials=100_000, patience=0, chunk=500, callback=cb)
+    assert sol.meta["stopped"] == "callback" and sol.meta["trials"] == 1500 and seen == [500, 1000, 1500]
+
+    def ctrl_c(p):
+        if p.trials >= 1000:
+            raise KeyboardInterrupt
+
+    sol = solve(s14, seed=4, max_trials=100_000, patience=0, chunk=500, callback=ctrl_c)
+    assert sol.meta["stopped"] == "interrupted" and sol.meta["trials"] == 1000
+    assert simulate(s14, sol.velocities).cost == sol.meta["cost"]
+
+
+# --------------------------------------------------------------------------- variants
+
+EXPECTED_CHANGES = {
+    "A": {},
+    "B": {"senate": False},
+    "C": {"op_weights": (1 / 3, 1 / 3, 1 / 3, 0.0)},
+    "D": {"engineered": False},
+    "E": {"signature_radius": 800.0, "init_population": 60, "sig_limit": 60},
+    "F": {"cull": "worst"},
+    "G": {"elitism": False},
+    "H": {"op_weights": (1 / 3, 0.0, 1 / 3, 1 / 3), "p_directed_init": 0.0},
+}
+
+
+@pytest.mark.parametrize("v", sorted(VARIANTS))
+def test_each_variant_changes_what_it_should_and_nothing_else(v, s14):
+    a = dataclasses.asdict(variant_params("A", s14))
+    x = dataclasses.asdict(variant_params(v, s14))
+    changed = {k: x[k] for k in a if a[k] != x[k] and k != "variant"}
+    assert changed == EXPECTED_CHANGES[v]
+    assert x["variant"] == v
+
+
+def test_variants_behave(s14):
+    runs = {v: solve(s14, seed=5, max_trials=8000, patience=0, variant=v).meta for v in "ACEH"}
+    ops = {v: m["operators"] for v, m in runs.items()}
+    assert ops["C"]["crossover"]["children"] == 0 and ops["A"]["crossover"]["children"] > 1000
+    assert ops["H"]["directed"]["children"] == 0 and ops["H"]["uniform"]["children"] > 1000
+    assert runs["E"]["init_trials"] >= 60 and runs["E"]["population_size"] == 60
+    assert runs["A"]["population_size"] <= 200 and runs["A"]["cull_rounds"] > 0
+    assert runs["A"]["fallback_deletions"] == 0
+
+
+# --------------------------------------------------------------------------- the command
+
+def test_cli_writes_a_file_that_simulate_accepts(tmp_path, capsys):
+    out = tmp_path / "sol.json"
+    assert main(["solve", "diamond-s14", "-o", str(out), "--seed", "7", "--max-trials", "4000", "--quiet"]) == 0
+    d = json.loads(out.read_text())
+    assert d["seed"] == 7 and d["trials"] == 4000 and d["variant"] == "A" and d["problem"] == "diamond-s14"
+    assert main(["simulate", "diamond-s14", str(out), "--json"]) == 0
+    sim = json.loads(capsys.readouterr().out)
+    assert sim["cost"] == d["cost"] and sim["signature"] == d["signature"]
+    out2 = tmp_path / "sol2.json"
+    assert main(["solve", "diamond-s14", "-o", str(out2), "--seed", "7", "--max-trials", "4000", "--quiet"]) == 0
+    assert json.loads(out2.read_text())["velocities"] == d["velocities"]
+
+
+def test_cli_bad_values_exit_2(tmp_path):
+    for args in (["--max-trials", "0"], ["--variant", "Z"], ["--patience", "-1"], ["--seed", "x"],
+                 ["--target-cost", "-1"]):
+        with pytest.raises(SystemExit) as e:
+            main(["solve", "over5", "-o", str(tmp_path / "x.json"), *args])
+        assert e.value.code == 2
+    assert not (tmp_path / "x.json").exists()
+
+
+def test_ctrl_c_writes_the_best_so_far(tmp_path):
+    out = tmp_path / "int.json"
+    proc = subprocess.Popen([sys.executable, str(ROOT / "cli.py"), "solve", "diamond-s14", "-o", str(out),
+                             "--seed", "8", "--patience", "0", "--max-trials", "1000000000"],
+                            stderr=subprocess.PIPE, text=True)
+    buf = ""
+    t0 = time.time()
+    while "best" not in buf and time.time() - t0 < 60:  # the search is under way
+        buf += proc.stderr.read(1)
+    proc.send_signal(signal.SIGINT)
+    err = buf + proc.communicate(timeout=60)[1]
+    assert proc.returncode == 130, err
+    assert "interrupted" in err.splitlines()[-1] and "Traceback" not in err
+    d = json.loads(out.read_text())
+    assert d["stopped"] == "interrupted" and 0 < d["trials"] < 1_000_000_000
+    p = load_problem("diamond-s14")
+    assert simulate(p, load_solution(out, p).velocities).cost == d["cost"]
+    assert not list(tmp_path.glob(".*tmp"))  # no temporary file left behind
