@@ -276,3 +276,17 @@ def test_mujoco_sources_use_the_replay(tmp_path, straight, monkeypatch, source):
     assert main(["render", "diamond-s14", sol, "-o", str(out), "--size", "160x120", "--fps", "10", "--hold", "0",
                  "--source", source, "--trails", "-q"]) == 0  # trails of a sampled motion: uniform samples
     assert len(decode(out)[1]) == 51
+
+
+def test_no_egl_is_a_one_line_error_naming_the_packages(tmp_path, straight, monkeypatch, capsys):
+    import moderngl
+
+    def broken(*a, **k):
+        raise Exception("eglGetDisplay failed\nmore detail")
+
+    monkeypatch.setattr(moderngl, "create_context", broken)
+    p, sol = straight
+    rc = main(["render", "diamond-s14", sol, "--still", "0", "-o", str(tmp_path / "s.png"), "-q"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and len(err.splitlines()) == 1
+    assert "eglGetDisplay failed" in err and "libegl1 libgl1 libgl1-mesa-dri" in err
