@@ -37,6 +37,7 @@ def register(sub) -> None:
     p.add_argument("--hold", type=float, default=1.0, metavar="SECONDS",
                    help="seconds of video holding the final frame (default 1.0)")
     p.add_argument("--trails", action="store_true", help="draw each disk's recent path, fading with age")
+    p.add_argument("--labels", action="store_true", help="write each disk's index on it")
     p.add_argument("--view", choices=["2d", "3d"], default="2d",
                    help="2d: the box from above (default); 3d: pucks on a table, perspective camera, lighting")
     p.add_argument("--source", choices=["analytic", "mujoco", "both"], default="analytic",
@@ -151,7 +152,8 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
         motion, ghost = (mj, None) if args.source == "mujoco" else (tr, mj)
     ctx = create_context()
     try:
-        renderer = make_renderer(ctx, problem, motion, view=args.view, size=size, trails=args.trails, ghost=ghost)
+        renderer = make_renderer(ctx, problem, motion, view=args.view, size=size, trails=args.trails, ghost=ghost,
+                                 labels=args.labels)
         if kind == "png":
             write_png(out, renderer.render(float(args.still)))
             if not args.quiet:
@@ -177,13 +179,14 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
         ctx.release()
 
 
-def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None):
+def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None,
+                  labels=False):
     """A 2D or 3D renderer with ``render(t, out=None) -> (H, W, 3) uint8`` and ``size``."""
     if view == "3d":
         from .scene3d import Renderer3D
-        return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost)
+        return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels)
     from .scene2d import Renderer2D
-    return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost)
+    return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels)
 
 
 def mujoco_positions(problem, velocities, times):

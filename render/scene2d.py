@@ -93,6 +93,26 @@ def trail_points(motion, t: float, seconds: float):
     return np.asarray(motion.at(times)), times
 
 
+class Labels:
+    """Disk indices written on the disks (dark digits, centred), sized to the disks."""
+
+    def __init__(self, ctx, problem, rpx):
+        px = int(np.clip(np.median(rpx) * style.LABEL_FRAC, style.MIN_LABEL_PX, style.MAX_LABEL_PX))
+        self.text = Text(ctx, px)
+        self.strings = [str(i) for i in range(problem.n)]
+        self.visible = np.asarray(rpx) >= style.MIN_LABEL_DISK_PX
+
+    def draw(self, size, centers_px) -> None:
+        cw, ch = self.text.cell
+        parts = [self.text.layout([s], c[0] - 0.5 * cw * len(s), c[1] - 0.5 * ch)
+                 for s, c, v in zip(self.strings, centers_px, self.visible) if v]
+        if parts:
+            self.text.draw(size, np.concatenate(parts), style.LABEL)
+
+    def release(self) -> None:
+        self.text.release()
+
+
 class Renderer2D:
     """Renders ``motion`` of ``problem`` at any time to an (H, W, 3) uint8 frame.
 
@@ -100,10 +120,11 @@ class Renderer2D:
     motion  : the disks' motion, ``at(t) -> (N, 2)`` (a Trajectory, or SampledMotion)
     ghost   : optional second motion drawn as rings on top (MuJoCo replay)
     trails  : draw the last TRAIL_SECONDS of every path, fading with age
+    labels  : write each disk's index on it (as in ``nbst simulate``'s table)
     """
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
-                 title: str | None = None):
+                 labels: bool = False, title: str | None = None):
         import moderngl
 
         self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
@@ -149,7 +170,7 @@ class Renderer2D:
         self._ghosts["stroke"] = style.GHOST_PX
         self._ghosts["rim"] = style.GHOST
         self.trail_half = np.maximum(style.MIN_TRAIL_PX, style.TRAIL_WIDTH_FRAC * self.rpx).astype("f4") * 0.5
-        self._text_y = None
+        self.labels = Labels(ctx, problem, self.rpx) if labels else None
         self.static = FrameTarget(ctx, self.size)
         self._draw_static()
 
@@ -252,6 +273,8 @@ class Renderer2D:
         if self.ghost is not None:
             self._ghosts["center"] = self.layout.to_image(np.asarray(self.ghost.at(t), float))
             self.circles.draw(self._ghosts)
+        if self.labels is not None:
+            self.labels.draw(self.size, self._disks["center"])
         x, y = self._readout_origin()
         self.text.draw(self.size, self.text.layout(self.readout(t, inside), x, y), style.TEXT)
         return self.target.read(out)
@@ -273,5 +296,6 @@ class Renderer2D:
         return data
 
     def release(self) -> None:
-        for o in (self.circles, self.capsules, self.rect, self.text, self.target, self.static):
-            o.release()
+        for o in (self.circles, self.capsules, self.rect, self.text, self.target, self.static, self.labels):
+            if o is not None:
+                o.release()

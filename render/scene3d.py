@@ -166,7 +166,7 @@ class Renderer3D:
     """
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
-                 title: str | None = None):
+                 labels: bool = False, title: str | None = None):
         import moderngl
         import trimesh
 
@@ -253,6 +253,12 @@ class Renderer3D:
             self.trail_half = np.maximum(0.5 * style.TRAIL_WIDTH_FRAC * p.radius, 1.0).astype("f4")
         self.static = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
         self._static_done = False
+        self.labels = None
+        if labels:
+            from .scene2d import Labels
+            c = np.array([[W / 2, H / 2], [W / 2 + 1.0, H / 2]])
+            px_per_unit = float(np.linalg.norm(np.diff(self.to_pixels(c, z=0.0), axis=0)))
+            self.labels = Labels(ctx, p, p.radius * px_per_unit)
         self.text = Text(ctx, max(8, int(round(style.TEXT_FRAC * min(self.size)))))
 
     def _setup_camera(self) -> None:
@@ -357,6 +363,8 @@ class Renderer3D:
         ctx.enable(mgl.BLEND)
         ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
         ctx.blend_equation = mgl.FUNC_ADD
+        if self.labels is not None:
+            self.labels.draw(self.size, self.to_pixels(pos, z=self.puck_h))
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
         lines = [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{p.n}"]
         self.text.draw(self.size, self.text.layout(lines, pad, pad), style.TEXT)
@@ -387,3 +395,5 @@ class Renderer3D:
         self.text.release()
         self.target.release()
         self.static.release()
+        if self.labels is not None:
+            self.labels.release()

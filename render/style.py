@@ -71,6 +71,14 @@ GHOST_PX = 2.0
 TEXT = (0.90, 0.92, 0.95)
 TEXT_DIM = (0.60, 0.64, 0.70)
 
+#: Disk labels (``--labels``): dark digits on the disk, text height as a fraction
+#: of the disk's on-screen radius, clamped; disks smaller than MIN_LABEL_DISK_PX
+#: get none (the digits would not fit).
+LABEL = (0.08, 0.08, 0.10)
+LABEL_FRAC = 0.95
+MIN_LABEL_PX, MAX_LABEL_PX = 8, 22
+MIN_LABEL_DISK_PX = 6.0
+
 #: Text height as a fraction of the frame's shorter side (20 px at 720p).
 TEXT_FRAC = 0.028
 

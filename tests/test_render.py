@@ -351,3 +351,25 @@ def test_trails_fade_smoothly_through_keyframes(gl, mk, view):
     red = np.array([f[int(q[1]), int(q[0]), 0] for q in px])
     assert red[0] > red[-1] + 40  # it fades ...
     assert np.all(np.diff(red) <= 3), red  # ... steadily: no dip or bead at any joint
+
+
+def test_labels_write_dark_digits_on_the_disks_only_when_asked(gl, diamond):
+    p, tr = diamond
+    size = (800, 600)  # disks ~13 px in radius: room for two digits
+    frames = {}
+    for labels in (False, True):
+        r = Renderer2D(gl, p, tr, size=size, labels=labels)
+        try:
+            frames[labels] = r.render(1.0).astype(int)
+        finally:
+            r.release()
+    f = frames[True]
+    box = box_from_walls(f)
+    s = (box[2] - box[0]) / p.width
+    label = np.array(style.rgb8(style.LABEL))
+    for i, c in enumerate(world_to_px(p, box, tr.at(1.0))):
+        k = int(0.6 * p.radius[i] * s)
+        win = lambda fr: fr[int(c[1]) - k:int(c[1]) + k, int(c[0]) - k:int(c[0]) + k]  # noqa: E731
+        dark = lambda fr: (np.abs(win(fr) - label).max(axis=2) < 60).sum()  # noqa: E731
+        assert dark(f) >= 4, i  # digits inside the disk
+        assert dark(frames[False]) == 0  # none without --labels
