@@ -239,6 +239,19 @@ def _check(params: SearchParams, max_trials: int, patience: int) -> None:
         bad("max_bounces", "max_bounces and creep_fraction must be >= 0")
 
 
+@dataclass(frozen=True, eq=False)
+class SearchRun:
+    """A finished search: the best solution and the final population.
+
+    velocities : (P, N, 2) float, units/s; costs : (P,) float; signatures : (P,) int64 bitmasks
+    """
+
+    solution: object
+    velocities: np.ndarray
+    costs: np.ndarray
+    signatures: np.ndarray
+
+
 def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
           target_cost: float | None = None, variant: str = "A", params: SearchParams | None = None,
           callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048):
@@ -259,6 +272,14 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_
     ``meta`` holds cost, signature, order, trials, seed, variant, params, wall_time,
     nbst_version, history ([trial, cost, order] per improvement) and run statistics.
     """
+    return run_search(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                      variant=variant, params=params, callback=callback, chunk=chunk).solution
+
+
+def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
+               target_cost: float | None = None, variant: str = "A", params: SearchParams | None = None,
+               callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048) -> SearchRun:
+    """:func:`solve`, also returning the final population (for benchmarks and analysis)."""
     from . import search_loop as L
     from .search_ops import SIZE, new_population, seed_state
     from .solution import make_solution, signature_string
@@ -354,7 +375,9 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_
                       for k, name in enumerate(L.OP_NAMES)},
         "history": [[int(s.hist_t[k]), float(s.hist_c[k]), int(s.hist_o[k])] for k in range(nh)],
     }
-    return make_solution(problem, best_v, **meta)
+    size = int(s.pop[5][SIZE])
+    return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop[0][:size].copy(),
+                     costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy())
 
 
 def _popcount(x: int) -> int:
