@@ -83,19 +83,22 @@ def plot_problem(problem, *, rings: bool = True):
 
 def plot_trajectories(problem, trajectory):
     """The motion as the paper's Figures 3-4: paths from start (faint disk) to
-    final position (solid disk), wall bounces (black dots) and disk-disk
-    collisions (red stars, at the contact point), targets as small circles."""
+    final position (solid disk; broken paths for noncueable disks), wall bounces
+    (black dots) and disk-disk collisions (red stars, at the contact point),
+    targets as small circles. Each path line is labelled ``_path i``."""
     from matplotlib import colormaps
 
     p, tr = problem, trajectory
     fig, ax = _figure(p)
-    cmap = colormaps["tab20"]
+    cmap = colormaps["tab10"] if p.n <= 10 else colormaps["tab20"]  # tab20's pairs look alike: only past 10
     paths = np.concatenate((tr.positions, tr.final_positions[None]), axis=0)  # (K+1, N, 2)
     for i in range(p.n):
         _target(ax, p.target[i], p.radius[i], p.target_radius, ring=False)
     for i in range(p.n):
-        col = cmap(i % 20)
-        ax.plot(paths[:, i, 0], paths[:, i, 1], "-", color=col, lw=1.4, zorder=3, solid_joinstyle="miter")
+        col = cmap(i % cmap.N)
+        # noncueable paths broken, as their arrows in Figure 2; "_" labels stay out of the legend
+        ax.plot(paths[:, i, 0], paths[:, i, 1], "-" if p.cueable[i] else "--", color=col, lw=1.4, zorder=3,
+                solid_joinstyle="miter", label=f"_path {i}")
         _disk(ax, p.start[i], p.radius[i], p.cueable[i], alpha=0.25, zorder=2)
         _disk(ax, tr.final_positions[i], p.radius[i], p.cueable[i], label=str(i), zorder=5)
     ev = tr.events

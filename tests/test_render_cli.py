@@ -188,7 +188,7 @@ def test_plot_trajectories_marks_every_collision_and_bounce(tmp_path, straight):
     assert len(coll[0].get_xdata()) == tr.n_disk_disk == 17
     assert len(wall[0].get_xdata()) == tr.n_wall
     # each path starts at the start and ends at the simulated final position
-    paths = [ln for ln in fig.axes[0].get_lines() if ln.get_linestyle() == "-"]
+    paths = [ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("_path")]
     assert len(paths) == p.n
     for i, ln in enumerate(paths):
         xy = np.c_[ln.get_xdata(), ln.get_ydata()]
@@ -196,6 +196,14 @@ def test_plot_trajectories_marks_every_collision_and_bounce(tmp_path, straight):
     out = tmp_path / "traj.svg"
     assert main(["plot", "trajectories", "diamond-s14", sol, "-o", str(out)]) == 0
     assert b"<svg" in out.read_bytes()[:500]
+
+
+def test_plot_trajectories_breaks_noncueable_paths():
+    from nbst.render.figures import plot_trajectories
+    p = load_problem("over5")
+    fig = plot_trajectories(p, simulate(p, np.zeros((p.n, 2)) + np.where(p.cueable[:, None], 30.0, 0.0)))
+    paths = [ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("_path")]
+    assert [ln.get_linestyle() == "-" for ln in paths] == list(p.cueable)
 
 
 def test_plot_rejects_unknown_format(tmp_path, capsys):
