@@ -122,6 +122,11 @@ class VideoWriter:
                 if not self._thread.is_alive():
                     raise RenderError(f"{self.path}: the encoder thread stopped") from None
 
+    def unused(self, buf: np.ndarray) -> None:
+        """Return a buffer from ``acquire`` that will not be submitted."""
+        if id(buf) in self._ids:
+            self._free.put(buf)
+
     def submit(self, frame: np.ndarray) -> None:
         """Queue one frame. A buffer from ``acquire`` is recycled once written;
         any other array is copied into one first."""
@@ -177,7 +182,7 @@ def encode(frames, writer: VideoWriter, *, progress=None) -> int:
             buf = writer.acquire()
             fr = frames(k, buf)
             if fr is None:
-                writer._free.put(buf)
+                writer.unused(buf)
                 break
             writer.submit(buf)
             k += 1
