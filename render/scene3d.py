@@ -116,6 +116,10 @@ void main() {
 }
 """
 
+#: Height of the trails above the felt: over the dim rings and markers (tops at 0.6
+#: and 1.0), under the lit rings (top 1.1) and the pucks.
+TRAIL_Z = 1.05
+
 INST_DTYPE = np.dtype([("offset", "f4", 3), ("scale", "f4", 3), ("color", "f4", 3)])
 
 
@@ -248,7 +252,7 @@ class Renderer3D:
             tp["u_light"].value = tuple(L / np.linalg.norm(L))
             tp["u_eye"].value = tuple(self.eye)
             tp["u_ambient"].value = style.AMBIENT
-            tp["u_z"].value = 0.4
+            tp["u_z"].value = TRAIL_Z
             tp["u_felt"].value = style.TABLE
             self.trail_half = np.maximum(0.5 * style.TRAIL_WIDTH_FRAC * p.radius, 1.0).astype("f4")
         self.static = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
@@ -326,17 +330,13 @@ class Renderer3D:
         fbo = self.target.draw_fbo
         if not self._static_done:
             self._draw_static()
+        # colour and depth of the static layer (the blit copies both), so the rails hide
+        # pucks and trails behind them without being drawn again
         ctx.copy_framebuffer(fbo, self.static.draw_fbo)
-        fbo.color_mask = (False, False, False, False)
-        fbo.clear(depth=1.0)  # depth only: the static layer's colour stays
-        fbo.color_mask = (True, True, True, True)
-        fbo.use()  # applies the restored colour mask (the setter alone does not reach GL)
+        fbo.use()
         ctx.viewport = (0, 0, *self.size)
         ctx.disable(mgl.BLEND | mgl.CULL_FACE)
         ctx.enable(mgl.DEPTH_TEST)
-        # the near rail again, for depth: seen from the south, only it can hide a puck
-        # (the far rail is behind them, the side rails lie outside their sight lines)
-        self._draw(self.cube, self._cubes[3:4])
         inside = ((pos - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
         self._draw(self.ring_lit, self._lit[inside])
         if self.trails and t > 0:

@@ -345,7 +345,7 @@ def test_trails_fade_smoothly_through_keyframes(gl, mk, view):
         x_now = tr.at(t)[0, 0]
         xs = np.linspace(x_now - 16.0, x_now - 200.0 * (style.TRAIL_SECONDS - 0.1), 80)  # ages 0.08 .. 1.1 s
         pts = np.stack([xs, np.full_like(xs, 400.0)], axis=1)
-        px = r.to_pixels(pts, z=0.4) if view == "3d" else r.to_pixels(pts)
+        px = r.to_pixels(pts, z=1.05) if view == "3d" else r.to_pixels(pts)
     finally:
         r.release()
     red = np.array([f[int(q[1]), int(q[0]), 0] for q in px])
