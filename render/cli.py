@@ -140,6 +140,9 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
     from .video import frame_times, render_video, write_png
 
     tr = simulate(problem, sol.velocities)
+    if tr.truncated:
+        print("nbst render: warning: the simulation hit its event limit before t_final; frames after the "
+              f"last event (t = {tr.times[-1]:.4g} s) are extrapolated", file=sys.stderr)
     if kind == "png":
         times = np.array([float(args.still)])
     else:
