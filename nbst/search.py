@@ -54,6 +54,9 @@ option; ``docs/search.md`` has the same list with the reasoning):
   anywhere (displacement, limits, culling); H initialize uses uniform randomize
   only and generate weights 1/3 creep, uniform, crossover.
 * random numbers: xoshiro256** seeded from ``np.random.SeedSequence(seed)``.
+* ``meta`` cost / signature / order use the problem's R (as ``nbst simulate``);
+  ``search_signature``, history orders and ``first_full_order_trial`` use the
+  search's R (they differ only in variant E).
 """
 from __future__ import annotations
 
@@ -338,12 +341,14 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     best_v = s.best_v.copy()
     cost = float(s.best_cost[0])
     sig = int(st[L.ST_BEST_SIG])
-    if not math.isfinite(cost):  # nothing accepted yet: report the motionless start
-        from .sim import evaluate
+    from .sim import evaluate
 
+    if not math.isfinite(cost):  # nothing accepted yet: report the motionless start
         best_v = np.zeros((n, 2))
-        _, c, sg = evaluate(problem, best_v[None])
-        cost, sig = float(c[0]), int(sg[0])
+    # cost, signature and order as `nbst simulate` sees them (the problem's R, also for variant E)
+    search_sig = sig
+    _, c, sg = evaluate(problem, best_v[None], max_events=params.max_events)
+    cost, sig = float(c[0]), int(sg[0])
     nh = int(st[L.ST_NHIST])
     trials = int(st[L.ST_TRIALS])
     meta = {
@@ -354,6 +359,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
         "trials": trials,
         "init_trials": int(st[L.ST_INIT_TRIALS]),
         "seed": seed,
+        "search_signature": signature_string(search_sig, n),
         "variant": params.variant,
         "variant_description": VARIANTS.get(params.variant, ""),
         "params": params.to_dict(),

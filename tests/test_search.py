@@ -119,6 +119,10 @@ def test_variants_behave(s14):
     assert ops["C"]["crossover"]["children"] == 0 and ops["A"]["crossover"]["children"] > 1000
     assert ops["H"]["directed"]["children"] == 0 and ops["H"]["uniform"]["children"] > 1000
     assert runs["E"]["init_trials"] >= 60 and runs["E"]["population_size"] == 60
+    assert runs["E"]["params"]["signature_radius"] == 800.0 and runs["E"]["search_signature"] == "1" * 14
+    e = runs["E"]
+    sol_e = solve(s14, seed=5, max_trials=8000, patience=0, variant="E")
+    assert simulate(s14, sol_e.velocities).signature_string == e["signature"]  # the problem's R in the file
     assert runs["A"]["population_size"] <= 200 and runs["A"]["cull_rounds"] > 0
     assert runs["A"]["fallback_deletions"] == 0
 
