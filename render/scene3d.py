@@ -323,7 +323,18 @@ class Renderer3D:
         self._static_done = True
 
     def render(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
-        """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given."""
+        """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given: (H, W, 3) uint8."""
+        self.draw(t)
+        return self.target.read(out)
+
+    def render_rgba(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
+        """The frame at time ``t`` as (H, W, 4) uint8 RGBA, alpha 255 (the cheapest
+        readback; what the video writer takes), into ``out`` if given."""
+        self.draw(t)
+        return self.target.read(out, components=4)
+
+    def draw(self, t: float) -> None:
+        """Draw the frame at time ``t`` into the frame target (no readback)."""
         ctx, mgl, p = self.ctx, self._mgl, self.problem
         t = float(min(max(t, 0.0), p.t_final))
         pos = np.asarray(self.motion.at(t), float)
@@ -368,7 +379,6 @@ class Renderer3D:
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
         lines = [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{p.n}"]
         self.text.draw(self.size, self.text.layout(lines, pad, pad), style.TEXT)
-        return self.target.read(out)
 
     def _trail_instances(self, t: float) -> np.ndarray:
         from .scene2d import trail_points

@@ -2,9 +2,11 @@
 imageio-ffmpeg on a background thread; PNG stills through Pillow.
 
 Frames travel in reusable buffers: ``VideoWriter.acquire()`` hands out one of a
-few preallocated (H, W, 3) arrays, the renderer reads the GL frame into it,
-``submit`` queues it, and the encoder thread returns it to the pool once
-ffmpeg has it. Rendering and encoding overlap; no per-frame allocation.
+few preallocated arrays, the renderer reads the GL frame into it, ``submit``
+queues it, and the encoder thread returns it to the pool once ffmpeg has it.
+Rendering and encoding overlap; no per-frame allocation. Frames go as RGBA
+(the framebuffer's layout: the cheapest readback); ffmpeg converts them to
+yuv420p with a bilinear scaler (its default bicubic one cost ~5 ms a frame).
 """
 from __future__ import annotations
 
@@ -47,14 +49,15 @@ def frame_times(t_final: float, fps: float, *, speed: float = 1.0, hold: float =
 
 
 class VideoWriter:
-    """Encode (H, W, 3) uint8 frames to ``path`` (.mp4: H.264 yuv420p; .gif) on a
-    background thread. Use as a context manager; ``close()`` waits for ffmpeg.
+    """Encode frames to ``path`` (.mp4: H.264 yuv420p; .gif) on a background
+    thread. Use as a context manager; ``close()`` waits for ffmpeg.
 
-    size : (W, H) px; fps : frames per second of the file.
+    size : (W, H) px; fps : frames per second of the file
+    rgba : frames are (H, W, 4) uint8 RGBA (alpha ignored), else (H, W, 3) RGB
     """
 
-    def __init__(self, path, size, fps, *, buffers: int = style.QUEUE_FRAMES, crf: int = style.X264_CRF,
-                 preset: str = style.X264_PRESET):
+    def __init__(self, path, size, fps, *, rgba: bool = False, buffers: int = style.QUEUE_FRAMES,
+                 crf: int = style.X264_CRF, preset: str = style.X264_PRESET):
         import imageio_ffmpeg
 
         self.final_path = str(path)
@@ -70,17 +73,20 @@ class VideoWriter:
         w, h = self.size
         if self.kind == "mp4" and (w % 2 or h % 2):
             raise RenderError(f"H.264 in yuv420p needs an even width and height, got {w}x{h}")
+        self.frame_shape = (h, w, 4 if rgba else 3)
         if self.kind == "mp4":
             kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None,
-                      output_params=["-preset", preset, "-crf", str(int(crf)), "-movflags", "+faststart"])
+                      output_params=["-sws_flags", style.SWS_FLAGS, "-preset", preset, "-crf", str(int(crf)),
+                                     "-movflags", "+faststart"])
         else:  # palette from all frames (a static floor must be in it exactly), ordered dither: no flicker
             kw = dict(codec="gif", pix_fmt_out="pal8", quality=None,
                       output_params=["-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse=dither=bayer:bayer_scale=4",
                                      "-loop", "0"])
-        self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps, pix_fmt_in="rgb24",
+        self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps,
+                                                pix_fmt_in="rgba" if rgba else "rgb24",
                                                 macro_block_size=1, ffmpeg_log_level="error", **kw)
         self._gen.send(None)  # starts ffmpeg
-        self._pool = [np.empty((h, w, 3), np.uint8) for _ in range(max(1, buffers))]
+        self._pool = [np.empty(self.frame_shape, np.uint8) for _ in range(max(1, buffers))]
         self._ids = {id(b) for b in self._pool}
         self._free: queue.Queue = queue.Queue()
         for b in self._pool:
@@ -113,7 +119,7 @@ class VideoWriter:
                               f"({msg[0] if msg else type(self._error).__name__})")
 
     def acquire(self) -> np.ndarray:
-        """A free frame buffer, (H, W, 3) uint8 (blocks while all are queued)."""
+        """A free frame buffer of ``frame_shape``, uint8 (blocks while all are queued)."""
         while True:
             self._check()
             try:
@@ -132,9 +138,8 @@ class VideoWriter:
         any other array is copied into one first."""
         self._check()
         if id(frame) not in self._ids:
-            w, h = self.size
-            if frame.shape != (h, w, 3):
-                raise ValueError(f"frame shape {frame.shape}, expected {(h, w, 3)}")
+            if frame.shape != self.frame_shape:
+                raise ValueError(f"frame shape {frame.shape}, expected {self.frame_shape}")
             buf = self.acquire()
             np.copyto(buf, frame, casting="unsafe")
             frame = buf
@@ -199,16 +204,20 @@ def encode(frames, writer: VideoWriter, *, progress=None) -> int:
 
 
 def render_video(renderer, times, path, *, fps, progress=None) -> int:
-    """Render ``renderer.render(t, out=buf)`` at each of ``times`` and encode to
-    ``path`` (.mp4 or .gif). Returns the number of frames."""
+    """Render the frame at each of ``times`` and encode to ``path`` (.mp4 or .gif).
+    For MP4 frames go to the encoder as RGBA (``renderer.render_rgba``), for GIF
+    as RGB (``renderer.render``: no alpha for the palette to reserve a slot for).
+    Returns the number of frames."""
     times = np.asarray(times, float)
+    rgba = video_kind(path) == "mp4" and hasattr(renderer, "render_rgba")
+    render = renderer.render_rgba if rgba else renderer.render
 
     def draw(k, out):
         if k >= len(times):
             return None
-        return renderer.render(times[k], out=out)
+        return render(times[k], out=out)
 
-    with VideoWriter(path, renderer.size, fps) as w:
+    with VideoWriter(path, renderer.size, fps, rgba=rgba) as w:
         n = encode(draw, w, progress=progress)
     return n
 

@@ -373,3 +373,20 @@ def test_labels_write_dark_digits_on_the_disks_only_when_asked(gl, diamond):
         dark = lambda fr: (np.abs(win(fr) - label).max(axis=2) < 60).sum()  # noqa: E731
         assert dark(f) >= 4, i  # digits inside the disk
         assert dark(frames[False]) == 0  # none without --labels
+
+
+@pytest.mark.parametrize("view", ["2d", "3d"])
+def test_rgba_frames_are_the_rgb_frames_plus_opaque_alpha(gl, diamond, view):
+    """Videos read frames as RGBA (the cheap readback): the same pixels, alpha 255."""
+    from nbst.render.scene3d import Renderer3D
+    p, tr = diamond
+    R = Renderer3D if view == "3d" else Renderer2D
+    r = R(gl, p, tr, size=(320, 240), trails=True)
+    try:
+        rgb = r.render(2.2).copy()
+        rgba = r.render_rgba(2.2).copy()
+    finally:
+        r.release()
+    assert rgba.shape == (240, 320, 4)
+    assert np.array_equal(rgba[..., :3], rgb)
+    assert (rgba[..., 3] == 255).all()

@@ -64,6 +64,12 @@ def test_mp4_decodes_with_expected_count_size_fps(tmp_path, straight, capsys):
     amber = np.array(style.rgb8(style.CUEABLE))
     for c in world_to_px(p, box, tr.at(k / 20)):
         assert np.abs(pixel(f, c).astype(int) - amber).max() < 40
+    # flat colours survive the RGBA -> yuv420p conversion, H.264 and decoding closely
+    x0, y0, x1, y1 = box
+    floor = f[int(y1) - 10:int(y1) - 4, int(x0) + 4:int(x0) + 10].reshape(-1, 3).astype(int)
+    assert np.abs(floor - style.rgb8(style.BOX_FLOOR)).max() <= 4
+    bg = f[-6:, :6].reshape(-1, 3).astype(int)
+    assert np.abs(bg - style.rgb8(style.BACKGROUND)).max() <= 4
     assert capsys.readouterr().err == ""  # -q: silent
 
 
