@@ -182,7 +182,7 @@ class Renderer2D:
         return (pad, pad)
 
     def _draw_static(self) -> None:
-        """Background, box, dim target rings, target markers, title and legend: drawn once."""
+        """Background, box, dim target rings, target markers and legend: drawn once."""
         ctx, mgl, L, p = self.ctx, self._mgl, self.layout, self.problem
         self.static.fbo.use()
         ctx.viewport = (0, 0, *self.size)
