@@ -104,13 +104,20 @@ def rng_normal(s):
 
 # --------------------------------------------------------------------------- bits
 
+_M1 = np.uint64(0x5555555555555555)
+_M2 = np.uint64(0x3333333333333333)
+_M4 = np.uint64(0x0F0F0F0F0F0F0F0F)
+_H01 = np.uint64(0x0101010101010101)
+
+
 @njit(cache=True, inline="always")
 def popcount(x):
-    c = 0
-    while x:
-        x &= x - 1
-        c += 1
-    return c
+    """Number of set bits of a non-negative int64 (branch-free SWAR; LLVM emits popcnt)."""
+    u = np.uint64(x)
+    u = u - ((u >> np.uint64(1)) & _M1)
+    u = (u & _M2) + ((u >> np.uint64(2)) & _M2)
+    u = (u + (u >> np.uint64(4))) & _M4
+    return np.int64((u * _H01) >> np.uint64(56))
 
 
 # --------------------------------------------------------------------------- population storage

@@ -312,3 +312,10 @@ def test_rng_is_reproducible():
     xa = [rng_uniform(a) for _ in range(5)]
     xb = [rng_uniform(b) for _ in range(5)]
     assert xa == xb and len(set(xa)) == 5 and all(0 <= x < 1 for x in xa)
+
+
+def test_popcount_matches_python():
+    from nbst.search_ops import popcount
+    rng = np.random.default_rng(10)
+    for x in [0, 1, 0b1011, 2**62 + 5, 2**63 - 1, *rng.integers(0, 2**63, 200).tolist()]:
+        assert popcount(np.int64(x)) == bin(int(x)).count("1")
