@@ -194,7 +194,8 @@ class _State:
     op_count: np.ndarray = field(default_factory=lambda: np.zeros((4, 2), np.int64))
 
 
-def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: int, target_cost: float | None):
+def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: int, target_cost: float | None,
+          record_every: int = 0):
     from . import search_loop as L
 
     pi = np.zeros(L.N_PI, np.int64)
@@ -211,6 +212,7 @@ def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: 
     pi[L.PI_MAX_TRIALS] = max_trials
     pi[L.PI_PATIENCE] = patience
     pi[L.PI_MAX_EVENTS] = params.max_events
+    pi[L.PI_RECORD_EVERY] = record_every
     pf = np.zeros(L.N_PF)
     pf[L.PF_R] = params.signature_radius if params.signature_radius is not None else problem.target_radius
     pf[L.PF_CREEP_SIGMA] = params.creep_fraction * problem.target_radius / problem.t_final
@@ -253,6 +255,7 @@ class SearchRun:
     velocities: np.ndarray
     costs: np.ndarray
     signatures: np.ndarray
+    recorded: np.ndarray  # (M, N, 2) candidates of every record_every-th trial (empty unless asked)
 
 
 def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
@@ -281,8 +284,10 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_
 
 def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
                target_cost: float | None = None, variant: str = "A", params: SearchParams | None = None,
-               callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048) -> SearchRun:
-    """:func:`solve`, also returning the final population (for benchmarks and analysis)."""
+               callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048,
+               record_every: int = 0) -> SearchRun:
+    """:func:`solve`, also returning the final population (for benchmarks and analysis) and, with
+    ``record_every`` = k > 0, the candidate velocities of trials k, 2k, ... (the loop's exact mix)."""
     from . import search_loop as L
     from .search_ops import SIZE, new_population, seed_state
     from .solution import make_solution, signature_string
@@ -296,7 +301,8 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     seed = int(seed)
     if seed < 0:
         raise ProblemError("<search parameters>", "seed", f"must be >= 0, got {seed}")
-    pi, pf = _pack(problem, params, max_trials=max_trials, patience=patience, target_cost=target_cost)
+    pi, pf = _pack(problem, params, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                   record_every=int(record_every))
     n = problem.n
     x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
     target = np.ascontiguousarray(problem.target, dtype=np.float64)
@@ -311,6 +317,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     s = _State(pop=new_population(cap, n), st=st, best_cost=np.array([np.inf]), best_v=np.zeros((n, 2)),
                rng=seed_state(seed), hist_t=np.zeros(1024, np.int64), hist_c=np.zeros(1024),
                hist_o=np.zeros(1024, np.int64))
+    rec_v = np.zeros((max_trials // record_every if record_every > 0 else 0, n, 2))
     stopped = None
     t0 = time.perf_counter()
     reasons = {L.RC_MAX_TRIALS: "max_trials", L.RC_PATIENCE: "patience", L.RC_TARGET_COST: "target_cost"}
@@ -318,7 +325,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
         while stopped is None:
             rc = L.run_chunk(x0, target, radius, mass, cue_idx, W, H, float(problem.t_final), images, pi, pf,
                              s.pop, s.st, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o, s.op_count,
-                             int(chunk))
+                             rec_v, int(chunk))
             if rc == L.RC_HISTORY_FULL:
                 k = len(s.hist_t)
                 s.hist_t = np.concatenate([s.hist_t, np.zeros(k, np.int64)])
@@ -383,7 +390,8 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     }
     size = int(s.pop[5][SIZE])
     return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop[0][:size].copy(),
-                     costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy())
+                     costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy(),
+                     recorded=rec_v[:trials // record_every] if record_every > 0 else rec_v)
 
 
 def _popcount(x: int) -> int:

@@ -18,8 +18,8 @@ from .sim import alloc_work, cost_signature, run
 
 # integer parameters (pi)
 PI_POP_LIMIT, PI_SIG_LIMIT, PI_DIVERSITY, PI_INIT_MAX_TRIES, PI_INIT_POPULATION, PI_SENATE, PI_ENGINEERED, \
-    PI_CULL, PI_ELITISM, PI_HARD_LIMIT, PI_MAX_TRIALS, PI_PATIENCE, PI_MAX_EVENTS = range(13)
-N_PI = 13
+    PI_CULL, PI_ELITISM, PI_HARD_LIMIT, PI_MAX_TRIALS, PI_PATIENCE, PI_MAX_EVENTS, PI_RECORD_EVERY = range(14)
+N_PI = 14
 # float parameters (pf)
 PF_R, PF_CREEP_SIGMA, PF_TARGET_COST, PF_P_DIRECTED_INIT, PF_W_CREEP, PF_W_DIRECTED, PF_W_UNIFORM, \
     PF_W_CROSSOVER = range(8)
@@ -51,7 +51,7 @@ def evaluate_one(x0, v, radius, mass, target, W, H, t_final, R, max_events, work
 
 @njit(cache=True, error_model="numpy")
 def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
-              pop, st, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, n_steps):
+              pop, st, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, rec_v, n_steps):
     """Advance the search by at most n_steps trials. Returns an RC_* code.
 
     x0, target : (N, 2); radius, mass : (N,); cue_idx : indices of cueable disks
@@ -60,6 +60,9 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
     best_v     : (N, 2) best velocities so far; rng : (4,) uint64
     hist_*     : improvement history (trial, cost, order), st[ST_NHIST] entries used
     op_count   : (4, 2) int64 per operator: children made, improvements
+    rec_v      : (M, N, 2): with pi[PI_RECORD_EVERY] = k > 0, the candidate of every k-th trial
+                 (trial k, 2k, ...) is copied to rec_v[trial / k - 1] while there is room
+                 (for benchmarks: the exact mix of velocities the loop simulates)
     """
     n = x0.shape[0]
     cap = pop[0].shape[0]
@@ -135,6 +138,9 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
                                         fin, vel, no_t, no_i, no_s)
         st[ST_TRIALS] += 1
         st[ST_SINCE] += 1
+        rec_k = pi[PI_RECORD_EVERY]
+        if rec_k > 0 and st[ST_TRIALS] % rec_k == 0 and st[ST_TRIALS] // rec_k <= rec_v.shape[0]:
+            rec_v[st[ST_TRIALS] // rec_k - 1, :, :] = child
         if st[ST_PHASE] == PHASE_INIT:
             st[ST_INIT_TRIALS] += 1
         if trunc:

@@ -169,3 +169,16 @@ def test_ctrl_c_writes_the_best_so_far(tmp_path):
     p = load_problem("diamond-s14")
     assert simulate(p, load_solution(out, p).velocities).cost == d["cost"]
     assert not list(tmp_path.glob(".*tmp"))  # no temporary file left behind
+
+
+def test_recorded_candidates_are_what_the_loop_simulated(s14):
+    from nbst import evaluate
+    from nbst.search import run_search
+
+    r = run_search(s14, seed=9, max_trials=1500, patience=0, record_every=1)
+    assert r.recorded.shape == (1500, 14, 2)
+    _, cost, _ = evaluate(s14, r.recorded)
+    for t, c, _ in r.solution.meta["history"]:
+        assert cost[t - 1] == c  # the improvement at trial t is the candidate simulated at trial t
+    same(r.solution, solve(s14, seed=9, max_trials=1500, patience=0))  # recording changes nothing
+    assert len(r.costs) == r.solution.meta["population_size"] and np.all(np.isfinite(r.costs))
