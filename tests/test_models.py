@@ -1,0 +1,110 @@
+"""MuJoCo scenes (nbst.models): the generated MJCF and its physics against the exact simulator.
+
+Measured facts these tests pin (MuJoCo 4.0.0, Euler, solref = (-2/h^2, 0)):
+* a wall bounce or a head-on collision reverses/exchanges the normal velocity exactly
+  (to round-off), but one step late: the MuJoCo motion is the exact one with each
+  impact delayed by one timestep h, i.e. a disk ends 2 * v_n * h further along the
+  normal per wall bounce, independent of the phase of the impact within the step;
+* oblique collisions err in direction by ~0.1 deg at h = 0.25 ms.
+"""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from conftest import make_problem  # noqa: E402
+
+mujoco = pytest.importorskip("mujoco")
+
+from nbst import simulate  # noqa: E402
+from nbst.models.mjrun import rollout, run_mujoco  # noqa: E402
+from nbst.models.scene import scene_xml  # noqa: E402
+
+H = 0.00025
+
+
+def test_import_is_light():
+    import subprocess
+    code = "import nbst.models, sys; assert 'mujoco' not in sys.modules; print(callable(nbst.models.rollout))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "True"
+
+
+def test_generated_mjcf_loads(tmp_path):
+    from nbst import load_problem
+    p = load_problem("over5")
+    path = tmp_path / "scene.xml"
+    path.write_text(scene_xml(p, p.straight_velocities()), encoding="utf-8")
+    m = mujoco.MjModel.from_xml_path(str(path))
+    assert m.nq == 2 * p.n and m.nkey == 1
+    assert np.allclose(m.opt.gravity, 0.0)
+    # the keyframe holds the velocities in m/s (1 unit = 1 mm); XML keeps 6 significant digits
+    assert np.allclose(m.key_qvel[0].reshape(-1, 2), p.straight_velocities() * 1e-3, rtol=1e-5, atol=1e-9)
+    # masses from the problem (the visual puck adds none)
+    assert np.allclose(m.body_mass[1:], p.mass)
+
+
+@pytest.mark.parametrize("name", ['x"/><geom name="evil', "</mujoco><!--", "a--b & <c> 'é' \n\t", ""])
+def test_hostile_problem_name_cannot_break_xml(name):
+    p = make_problem([[100, 100]], 10.0, name=name or "x")
+    xml = scene_xml(p, [[1.0, 2.0]])
+    m = mujoco.MjModel.from_xml_string(xml)
+    assert m.ngeom == 1 + 4 + 2  # floor, 4 walls, one disk's sphere and puck: nothing injected
+
+
+def test_wall_bounces_are_exact_reflections_one_step_late():
+    # A bounce delayed by one step h is an exact reflection off a wall v*h further out. So the
+    # MuJoCo motion of one disk must equal, to 1e-6 units (round-off over 20,000 steps), the exact
+    # motion in a box widened by v*h on each side; and its speed must survive to 1e-9 (relative).
+    vx, vy = 333.3, 121.7
+    p = make_problem([[400.0, 300.0]], 10.0, t_final=5.0)
+    v = np.array([[vx, vy]])
+    r = run_mujoco(p, v, timestep=H)
+    dx, dy = vx * H, vy * H
+    wide = make_problem([[400.0 + dx, 300.0 + dy]], 10.0, t_final=5.0, box=(800 + 2 * dx, 800 + 2 * dy))
+    tr = simulate(wide, v)
+    assert tr.n_wall >= 3 and len(r.events) == tr.n_wall
+    assert abs(r.energy[-1] / r.energy[0] - 1) < 1e-9
+    ts = np.linspace(0, 5.0, 101)
+    assert np.abs(r.at(ts) - (tr.at(ts) - [dx, dy])).max() < 1e-6
+    # and against the true box the error is 2*v*h per bounce at most
+    assert np.abs(r.final_positions - simulate(p, v).final_positions).max() <= 2 * vx * H * tr.n_wall
+
+
+def test_head_on_collision_exact_velocities():
+    # unequal masses, head-on: the exchanged velocities must match the exact ones to 1e-8 units/s
+    p = make_problem([[300, 400], [500, 400]], 10.0, t_final=2.0, masses=[1.0, 2.0])
+    v = np.array([[100.0, 0], [-50.0, 0]])
+    tr = simulate(p, v)
+    r = run_mujoco(p, v, timestep=H)
+    vm = (r.positions[-1] - r.positions[-2]) / H
+    assert np.abs(vm - tr.final_velocities).max() < 1e-8
+    assert abs(r.energy[-1] / r.energy[0] - 1) < 1e-9
+    # the impact is one step late: each disk ends |dv| * h from its exact position (to 1e-9)
+    dv = np.abs(tr.final_velocities - v).max(axis=1)
+    assert np.abs(np.hypot(*(r.final_positions - tr.final_positions).T) - dv * H).max() < 1e-9
+
+
+def test_oblique_collision_direction():
+    # impact parameter = radius (30 deg): direction within 0.2 deg, speed within 0.5% at h = 0.25 ms
+    p = make_problem([[300, 400], [500, 410]], 10.0, t_final=2.0)
+    v = np.array([[100.0, 0], [0, 0]])
+    tr = simulate(p, v)
+    r = run_mujoco(p, v, timestep=H)
+    vm = (r.positions[-1] - r.positions[-2]) / H
+    va = tr.final_velocities
+    ang = np.degrees(np.arctan2(vm[:, 1], vm[:, 0]) - np.arctan2(va[:, 1], va[:, 0]))
+    assert np.abs(ang).max() < 0.2
+    assert np.abs(np.hypot(*vm.T) / np.hypot(*va.T) - 1).max() < 5e-3
+
+
+def test_rollout_shape_and_free_flight():
+    # no events: MuJoCo free flight is exact (to 1e-9 units) at any requested time
+    p = make_problem([[100, 100], [600, 600]], 10.0, t_final=1.0)
+    v = np.array([[50.0, 20.0], [-30.0, 10.0]])
+    ts = np.array([0.0, 0.1, 0.33333, 1.0])
+    x = rollout(p, v, ts)
+    assert x.shape == (4, 2, 2)
+    assert np.abs(x - simulate(p, v).at(ts)).max() < 1e-9
