@@ -151,6 +151,9 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
     if args.source in ("mujoco", "both"):
         from .scene2d import SampledMotion
         sample_t = np.unique(np.concatenate((times, frame_times(problem.t_final, 120.0))))
+        if not args.quiet:
+            print(f"nbst render: replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo ...",
+                  file=sys.stderr, flush=True)
         mj = SampledMotion(sample_t, mujoco_positions(problem, sol.velocities, sample_t))
         motion, ghost = (mj, None) if args.source == "mujoco" else (tr, mj)
     ctx = create_context()
