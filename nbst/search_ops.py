@@ -286,16 +286,14 @@ def select_senate(pop, n, rng, first, scratch_ord, scratch_ok):
             r -= 1
     r = rng_int(rng, scratch_ord[o_pick])
     s_pick = np.int64(-1)
+    cnt = 0
     for k in range(ntab):
         if scratch_ok[k] and popcount(ts[k]) == o_pick:
             if r == 0:
                 s_pick = ts[k]
+                cnt = tc[k] - (1 if (first >= 0 and ts[k] == s1) else 0)
                 break
             r -= 1
-    cnt = 0
-    for j in range(ist[SIZE]):
-        if ps[j] == s_pick and j != first:
-            cnt += 1
     r = rng_int(rng, cnt)
     for j in range(ist[SIZE]):
         if ps[j] == s_pick and j != first:
