@@ -109,7 +109,8 @@ def build_spec(problem: Problem, velocities=None, *, timestep: float = DEFAULT_T
 
     solref = [-opt.stiffness, 0.0]
     wb = spec.worldbody
-    wb.add_light(name="top", pos=[W / 2, H / 2, 2 * max(W, H)], dir=[0, 0, -1], type=int(mujoco.mjtLightType.mjLIGHT_DIRECTIONAL))
+    wb.add_light(name="top", pos=[W / 2, H / 2, 2 * max(W, H)], dir=[0, 0, -1],
+                 type=int(mujoco.mjtLightType.mjLIGHT_DIRECTIONAL), castshadow=0)
     wb.add_camera(name="top", pos=[W / 2, H / 2, 1.2 * max(W, H)], fovy=50.0)
 
     floor = wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, pos=[W / 2, H / 2, 0.0],

@@ -1,0 +1,144 @@
+"""Subcommands ``nbst mjcf``, ``nbst validate`` and ``nbst gallery`` (MuJoCo).
+
+Registration is light: mujoco and matplotlib are imported inside the commands.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+
+def _positive(what):
+    def parse(text):
+        try:
+            x = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be a number, got {text!r}") from None
+        if not (math.isfinite(x) and x > 0):
+            raise argparse.ArgumentTypeError(f"{what} must be a finite number > 0, got {text!r}")
+        return x
+    return parse
+
+
+def _timestep(text):
+    h = _positive("timestep")(text)
+    if h > 0.01:
+        raise argparse.ArgumentTypeError(f"timestep {h:g} s is too coarse for contacts; use <= 0.01 (default 0.00025)")
+    return h
+
+
+def _add_scene_options(p) -> None:
+    p.add_argument("--timestep", type=_timestep, default=0.00025, metavar="H",
+                   help="MuJoCo timestep in seconds (default 0.00025; contact stiffness is 2/H^2)")
+    p.add_argument("--unit", type=_positive("unit"), default=1e-3, metavar="M",
+                   help="metres per problem unit (default 0.001: 1 unit = 1 mm)")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("mjcf", help="write the MuJoCo scene (MJCF XML) of a problem and solution",
+                       description="Write PROBLEM (and the initial velocities of SOLUTION, as keyframe `initial`) "
+                                   "as a MuJoCo MJCF scene built with mujoco.MjSpec: zero gravity, four walls, "
+                                   "each disk a body with x/y slide joints and a frictionless elastic sphere, "
+                                   "targets as non-colliding sites. Open it with `python -m mujoco.viewer "
+                                   "--mjcf=scene.xml` and load keyframe `initial` to play the motion. "
+                                   "The XML keeps 6 significant digits (MuJoCo's writer).")
+    p.add_argument("problem", help="built-in name or path to a problem JSON file")
+    p.add_argument("solution", nargs="?", help="solution JSON file (default: all disks at rest)")
+    p.add_argument("-o", "--output", default="-", metavar="scene.xml", help="output file (default: stdout)")
+    _add_scene_options(p)
+    p.set_defaults(func=cmd_mjcf)
+
+    p = sub.add_parser("validate", help="run a solution in MuJoCo and compare it with the exact simulator",
+                       description="Run SOLUTION in MuJoCo to t_final and compare with nbst's exact simulator: "
+                                   "per-disk final position error, cost and signature under each, the collision "
+                                   "sequences matched in order (time offsets), kinetic energy drift, and the first "
+                                   "time any disk's two paths part by more than --tol units, with the event that "
+                                   "caused it. Prints a summary; --report DIR writes report.json and a "
+                                   "self-contained report.html with figures.",
+                       epilog="Exit status: 0, or 1 with --strict when the signatures differ; 2 on bad input.")
+    p.add_argument("problem", help="built-in name or path to a problem JSON file")
+    p.add_argument("solution", help="solution JSON file")
+    p.add_argument("--report", metavar="DIR", help="write DIR/report.json and DIR/report.html")
+    _add_scene_options(p)
+    p.add_argument("--tol", type=_positive("tol"), default=1.0, metavar="D",
+                   help="divergence tolerance in problem units (default 1)")
+    p.add_argument("--strict", action="store_true", help="exit 1 if the signature under MuJoCo differs")
+    p.add_argument("--json", action="store_true", help="print report.json's content instead of the summary")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("gallery", help="regenerate the MuJoCo scene gallery (models/scenes/NAME/)",
+                       description="For each built-in problem (or the NAMEs given) write "
+                                   "DIR/NAME/{problem.json, solution.json, scene.xml, preview.png}. The solution is "
+                                   "the better of DIR/NAME/solution.json (if present) and a fresh `nbst.search."
+                                   "solve` run (skipped with --no-search).")
+    p.add_argument("names", nargs="*", metavar="NAME", help="built-in problems (default: all)")
+    p.add_argument("--dir", default=None, metavar="DIR", help="gallery folder (default: models/scenes of nbst)")
+    p.add_argument("--seed", type=int, default=1, help="search seed (default 1)")
+    p.add_argument("--max-trials", type=int, default=1_000_000, metavar="N", help="search budget per problem")
+    p.add_argument("--no-search", action="store_true", help="only re-render scenes from the stored solutions")
+    p.set_defaults(func=cmd_gallery)
+
+
+def _velocities(problem, solution):
+    from nbst.solution import load_solution
+    return load_solution(solution, problem).velocities if solution else None
+
+
+def cmd_mjcf(args) -> int:
+    from nbst.problem import load_problem
+
+    from .scene import scene_xml
+
+    problem = load_problem(args.problem)
+    v = _velocities(problem, args.solution)
+    xml = scene_xml(problem, v, timestep=args.timestep, unit=args.unit)
+    if args.output == "-":
+        sys.stdout.write(xml)
+    else:
+        from pathlib import Path
+        Path(args.output).write_text(xml, encoding="utf-8")
+        print(f"wrote {args.output} ({problem.n} disks; view: python -m mujoco.viewer --mjcf={args.output})",
+              file=sys.stderr)
+    return 0
+
+
+def cmd_validate(args) -> int:
+    from nbst.problem import load_problem
+
+    from .validate import validate
+
+    problem = load_problem(args.problem)
+    v = _velocities(problem, args.solution)
+    val = validate(problem, v, timestep=args.timestep, unit=args.unit, tol=args.tol)
+    if args.report:
+        from pathlib import Path
+
+        from nbst.solution import write_json_atomic
+
+        from .report import report_html
+        out = Path(args.report)
+        out.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(out / "report.json", val.to_dict())
+        (out / "report.html").write_text(report_html(val), encoding="utf-8")
+    if args.json:
+        from nbst.cli import print_json
+        from nbst.solution import _json_safe
+        print_json(_json_safe(val.to_dict()))
+    else:
+        print(val.summary())
+        if args.report:
+            print(f"report     {args.report}/report.html, {args.report}/report.json")
+    if args.strict and not val.signatures_agree:
+        return 1
+    return 0
+
+
+def cmd_gallery(args) -> int:
+    from .gallery import main as gallery_main
+    argv = list(args.names) + ["--seed", str(args.seed), "--max-trials", str(args.max_trials)]
+    if args.dir:
+        argv += ["--dir", args.dir]
+    if args.no_search:
+        argv.append("--no-search")
+    return gallery_main(argv)

@@ -1,0 +1,124 @@
+"""The MuJoCo scene gallery: ``models/scenes/NAME/`` for each built-in problem.
+
+Regenerate (documented in ``models/scenes/README.md`` and ``docs/mujoco.md``)::
+
+    python -m nbst.models.gallery            # or: nbst gallery
+    python -m nbst.models.gallery over5 --max-trials 2000000
+    python -m nbst.models.gallery --no-search   # re-render scenes from the stored solutions
+
+Each folder holds ``problem.json`` (the built-in problem), ``solution.json`` (the best
+solution nbst has found: the stored one unless a fresh ``nbst.search.solve`` run has a
+lower cost), ``scene.xml`` (``nbst mjcf``) and ``preview.png`` (top view at t = 0,
+rendered by MuJoCo). No search module, no stored solution: the folder gets the scene with
+the disks at rest and no solution.json (never a placeholder).
+"""
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+#: Default gallery folder: models/scenes next to this file.
+GALLERY_DIR = Path(__file__).resolve().parent / "scenes"
+#: Preview size (pixels).
+PREVIEW_SIZE = 640
+
+
+def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
+    """A top view of the scene at t = 0 as PNG bytes (MuJoCo's renderer, EGL when headless)."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    import io
+
+    import mujoco
+    from matplotlib import image as mpimg
+
+    from .scene import build_model
+
+    model = build_model(problem, velocities)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    mujoco.mj_forward(model, data)
+    with mujoco.Renderer(model, size, size) as r:
+        r.update_scene(data, camera="top")
+        rgb = r.render()
+    buf = io.BytesIO()
+    mpimg.imsave(buf, rgb, format="png")
+    return buf.getvalue()
+
+
+def _stored(folder: Path, problem):
+    from nbst.sim import simulate
+    from nbst.solution import load_solution
+    path = folder / "solution.json"
+    if not path.is_file():
+        return None, np.inf
+    sol = load_solution(path, problem)
+    return sol, simulate(problem, sol.velocities).cost
+
+
+def build_entry(name: str, folder: Path, *, seed: int, max_trials: int, search: bool, log=print) -> dict:
+    """Regenerate one gallery folder; returns what was done."""
+    from nbst.problem import load_problem
+    from nbst.sim import simulate
+    from nbst.solution import make_solution, save_solution, write_json_atomic
+
+    from .scene import scene_xml
+
+    problem = load_problem(name)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(folder / "problem.json", problem.to_dict())
+    best, best_cost = _stored(folder, problem)
+    source = "stored" if best is not None else None
+    if search and importlib.util.find_spec("nbst.search") is not None:
+        from nbst.search import solve
+        log(f"{name}: searching (seed {seed}, up to {max_trials} trials) ...")
+        sol = solve(problem, seed=seed, max_trials=max_trials)
+        cost = simulate(problem, sol.velocities).cost
+        log(f"{name}: search cost {cost:.6g}; stored {best_cost:.6g}")
+        if cost < best_cost:
+            best, best_cost, source = sol, cost, "search"
+    elif search:
+        log(f"{name}: nbst.search is not available; keeping the stored solution")
+    v = None
+    if best is not None:
+        v = best.velocities
+        tr = simulate(problem, v)
+        if source == "search":
+            meta = dict(best.meta)
+            meta.update(cost=tr.cost, signature=tr.signature_string, order=tr.order)
+            save_solution(folder / "solution.json", make_solution(problem, v, **meta))
+    (folder / "scene.xml").write_text(scene_xml(problem, v), encoding="utf-8")
+    (folder / "preview.png").write_bytes(preview_png(problem, v))
+    return {"name": name, "source": source, "cost": best_cost}
+
+
+def main(argv=None) -> int:
+    os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported: headless rendering
+    from nbst.problem import builtin_names
+
+    ap = argparse.ArgumentParser(prog="python -m nbst.models.gallery", description=__doc__.split("\n\n")[0])
+    ap.add_argument("names", nargs="*", metavar="NAME", help="built-in problems (default: all)")
+    ap.add_argument("--dir", default=str(GALLERY_DIR), help="gallery folder (default: models/scenes)")
+    ap.add_argument("--seed", type=int, default=1, help="search seed (default 1)")
+    ap.add_argument("--max-trials", type=int, default=1_000_000, help="search budget per problem (default 1e6)")
+    ap.add_argument("--no-search", action="store_true", help="only re-render scenes from the stored solutions")
+    args = ap.parse_args(argv)
+    names = args.names or list(builtin_names())
+    unknown = [n for n in names if n not in builtin_names()]
+    if unknown:
+        print(f"gallery: error: not built-in: {', '.join(unknown)} (see `nbst problems`)", file=sys.stderr)
+        return 2
+    for name in names:
+        r = build_entry(name, Path(args.dir) / name, seed=args.seed, max_trials=args.max_trials,
+                        search=not args.no_search)
+        what = "no solution" if r["source"] is None else f"{r['source']} solution, cost {r['cost']:.6g}"
+        print(f"{name}: {Path(args.dir) / name} ({what})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

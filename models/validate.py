@@ -1,0 +1,252 @@
+"""Cross-validation: a solution run in MuJoCo against nbst's exact simulator.
+
+``validate(problem, velocities) -> Validation`` (compute only); ``Validation.to_dict()``
+is ``report.json``; :mod:`nbst.models.report` draws ``report.html``.
+
+What is compared:
+* per-disk final position error (units), cost / signature / order under each;
+* the collision sequences (disk-disk and wall), aligned in order by their (kind, i, j)
+  keys; each matched pair gets a time offset (MuJoCo time - exact time). MuJoCo sees a
+  contact at the end of the first step with penetration, and resolves an impact one step
+  late (measured: an exact reflection delayed by h), so offsets of 0 .. 2h are normal;
+* energy drift: kinetic energy relative to the start, over the steps with no contact
+  (while a contact spring is compressed the kinetic energy dips, which is not drift);
+* divergence: the first time any disk's two trajectories part by more than ``tol``
+  units, the disk, and the event that caused it (the last event involving that disk at
+  or before that time, in either motion). Chaos makes late divergence normal: a 0.1 deg
+  error at one collision grows at every later one.
+"""
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+
+import numpy as np
+
+from nbst.problem import Problem
+
+from .scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
+
+SCHEMA_VERSION = 1
+#: Default divergence tolerance (units): a tenth of the benchmark disks' radius of 10-20,
+#: far above MuJoCo's one-step impact lag (|dv| h ~ 0.05-0.2 units) for a few impacts.
+DIVERGE_TOL = 1.0
+#: Samples of the per-disk error curve kept in the report (the divergence is found on every step).
+CURVE_SAMPLES = 600
+_WALL_NAMES = ("left", "right", "bottom", "top")
+
+
+def describe(kind: int, i: int, j: int, t: float | None = None) -> str:
+    at = "" if t is None else f"t={t:.4f}s "
+    if kind == 1:
+        return f"{at}disk {i} hits the {_WALL_NAMES[j]} wall"
+    return f"{at}disks {i} and {j} collide"
+
+
+def _keys(events) -> list:
+    out = []
+    for e in events:
+        i, j = int(e["i"]), int(e["j"])
+        if e["kind"] == 0 and i > j:
+            i, j = j, i
+        out.append((int(e["kind"]), i, j))
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Validation:
+    """Everything ``nbst validate`` reports. Positions in problem units, times in s."""
+
+    problem: Problem
+    velocities: np.ndarray
+    timestep: float
+    unit: float
+    tol: float
+    exact: object  # nbst.sim.Trajectory
+    mujoco: object  # nbst.models.mjrun.MujocoRun
+    final_error: np.ndarray  # (N,) units
+    mj_cost: float
+    mj_signature: int
+    matches: list  # [(exact index, mujoco index)]
+    error_curve_t: np.ndarray  # (S,)
+    error_curve: np.ndarray  # (S, N)
+    diverge: dict | None
+    energy_drift_free: float  # max |E/E0 - 1| over contact-free steps
+    energy_drift_final: float
+    wall_time: float
+
+    @property
+    def mj_signature_string(self) -> str:
+        return "".join("1" if (self.mj_signature >> i) & 1 else "0" for i in range(self.problem.n))
+
+    @property
+    def signatures_agree(self) -> bool:
+        return self.mj_signature == self.exact.signature
+
+    @property
+    def matched_offsets(self) -> np.ndarray:
+        ex, mj = self.exact.events, self.mujoco.events
+        return np.array([mj["time"][b] - ex["time"][a] for a, b in self.matches])
+
+    def to_dict(self) -> dict:
+        p, ex, mj = self.problem, self.exact, self.mujoco
+        off = self.matched_offsets
+        matched_ex = {a for a, _ in self.matches}
+        matched_mj = {b for _, b in self.matches}
+
+        def ev_list(evs, matched):
+            return [{"time": float(e["time"]), "kind": "disk" if e["kind"] == 0 else "wall", "i": int(e["i"]),
+                     "j": int(e["j"]), "matched": k in matched,
+                     "text": describe(int(e["kind"]), int(e["i"]), int(e["j"]), float(e["time"]))}
+                    for k, e in enumerate(evs)]
+
+        return {
+            "schema_version": SCHEMA_VERSION,
+            "problem": p.name,
+            "n": p.n,
+            "t_final": p.t_final,
+            "velocities": self.velocities.tolist(),
+            "mujoco": {"version": _mujoco_version(), "timestep": self.timestep, "unit_m": self.unit,
+                       "steps": mj.steps, "wall_time_s": self.wall_time},
+            "tolerance": self.tol,
+            "final_error": {"per_disk": self.final_error.tolist(), "max": float(self.final_error.max()),
+                            "exact_final": ex.final_positions.tolist(), "mujoco_final": mj.final_positions.tolist()},
+            "exact": {"cost": ex.cost, "signature": ex.signature_string, "order": ex.order,
+                      "disk_disk": ex.n_disk_disk, "wall": ex.n_wall, "truncated": bool(ex.truncated)},
+            "mujoco_result": {"cost": self.mj_cost, "signature": self.mj_signature_string,
+                              "order": bin(self.mj_signature).count("1"),
+                              "disk_disk": int(np.count_nonzero(mj.events["kind"] == 0)),
+                              "wall": int(np.count_nonzero(mj.events["kind"] == 1))},
+            "signatures_agree": self.signatures_agree,
+            "events": {
+                "matched": len(self.matches),
+                "exact_only": len(ex.events) - len(self.matches),
+                "mujoco_only": len(mj.events) - len(self.matches),
+                "offset_s": {"min": float(off.min()) if off.size else None,
+                             "max": float(off.max()) if off.size else None,
+                             "mean_abs": float(np.abs(off).mean()) if off.size else None},
+                "first_mismatch": self._first_mismatch(),
+                "exact": ev_list(ex.events, matched_ex),
+                "mujoco": ev_list(mj.events, matched_mj),
+            },
+            "energy": {"drift_max_contact_free": self.energy_drift_free, "drift_final": self.energy_drift_final},
+            "divergence": self.diverge,
+        }
+
+    def _first_mismatch(self):
+        """The earliest event (by time) that has no partner in the other motion, or None."""
+        ex, mj = self.exact.events, self.mujoco.events
+        me = {a for a, _ in self.matches}
+        mm = {b for _, b in self.matches}
+        cands = [(float(ex["time"][k]), "exact only", k, ex) for k in range(len(ex)) if k not in me]
+        cands += [(float(mj["time"][k]), "mujoco only", k, mj) for k in range(len(mj)) if k not in mm]
+        if not cands:
+            return None
+        t, side, k, evs = min(cands, key=lambda c: c[0])
+        e = evs[k]
+        return {"time": t, "side": side, "text": describe(int(e["kind"]), int(e["i"]), int(e["j"]), t)}
+
+    def summary(self) -> str:
+        d = self.to_dict()
+        ev = d["events"]
+        lines = [
+            f"problem    {self.problem.name}  ({self.problem.n} disks, t_final = {self.problem.t_final:g} s); "
+            f"MuJoCo {d['mujoco']['version']}, h = {self.timestep * 1e3:g} ms, {self.mujoco.steps} steps "
+            f"in {self.wall_time:.2f} s",
+            f"final      max error {self.final_error.max():.4g} units (disk {int(self.final_error.argmax())}); "
+            f"mean {self.final_error.mean():.4g}",
+            f"exact      cost {self.exact.cost:.6g}  signature {self.exact.signature_string}  order {self.exact.order}",
+            f"mujoco     cost {self.mj_cost:.6g}  signature {self.mj_signature_string}  "
+            f"order {d['mujoco_result']['order']}  ({'same' if self.signatures_agree else 'DIFFERENT'} signature)",
+            f"events     {ev['matched']} matched in order, {ev['exact_only']} exact only, {ev['mujoco_only']} "
+            f"MuJoCo only" + (f"; offsets {ev['offset_s']['min'] * 1e3:.3g} .. {ev['offset_s']['max'] * 1e3:.3g} ms"
+                              if ev["matched"] else ""),
+            f"energy     drift {self.energy_drift_free:.3g} (max, contact-free steps), "
+            f"{self.energy_drift_final:+.3g} at t_final",
+        ]
+        if ev["first_mismatch"]:
+            lines.append(f"mismatch   first: {ev['first_mismatch']['text']} ({ev['first_mismatch']['side']})")
+        if self.diverge:
+            dv = self.diverge
+            lines.append(f"diverge    disk {dv['disk']} parts by > {self.tol:g} units at t={dv['time']:.4f}s; "
+                         f"cause: {dv['cause']}")
+        else:
+            lines.append(f"diverge    never: every disk stays within {self.tol:g} units of its exact path")
+        return "\n".join(lines)
+
+
+def _mujoco_version() -> str:
+    import mujoco
+    return str(mujoco.__version__)
+
+
+def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP, unit: float = DEFAULT_UNIT,
+             tol: float = DIVERGE_TOL) -> Validation:
+    """Run ``velocities`` (N, 2, units/s) in MuJoCo and in the exact simulator; compare (see module doc)."""
+    import time
+
+    from nbst.sim import simulate
+
+    from .mjrun import run_mujoco
+
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be > 0, got {tol!r}")
+    t0 = time.perf_counter()
+    v = np.asarray(velocities, dtype=float)
+    ex = simulate(problem, v)
+    mj = run_mujoco(problem, v, timestep=timestep, unit=unit)
+
+    final_err = np.hypot(*(mj.final_positions - ex.final_positions).T)
+    d = np.hypot(*(mj.final_positions - problem.target).T)
+    mj_cost = float((d**2).sum())
+    mj_sig = int(sum(1 << i for i in range(problem.n) if d[i] <= problem.target_radius))
+
+    # event sequences aligned in order by their keys
+    ka, kb = _keys(ex.events), _keys(mj.events)
+    sm = difflib.SequenceMatcher(a=ka, b=kb, autojunk=False)
+    matches = [(blk.a + k, blk.b + k) for blk in sm.get_matching_blocks() for k in range(blk.size)]
+
+    # per-disk error at every MuJoCo step (t <= t_final)
+    ts = mj.times[mj.times <= problem.t_final * (1 + 1e-12)]
+    err = np.hypot(*(mj.positions[: ts.size] - ex.at(ts)).transpose(2, 0, 1))  # (S, N)
+    diverge = None
+    over = np.flatnonzero((err > tol).any(axis=1))
+    if over.size:
+        s = int(over[0])
+        disk = int(np.argmax(err[s]))
+        diverge = {"time": float(ts[s]), "disk": disk, "error": float(err[s, disk])}
+        diverge.update(_cause(ex, mj, disk, float(ts[s]), matches))
+    stride = max(1, ts.size // CURVE_SAMPLES)
+    E = mj.energy
+    free = ~mj.in_contact
+    E0 = E[0] if E[0] > 0 else 1.0
+    drift_free = float(np.abs(E[free] / E0 - 1).max()) if E[0] > 0 else 0.0
+    drift_final = float(E[-1] / E0 - 1) if E[0] > 0 else 0.0
+    return Validation(problem=problem, velocities=v, timestep=float(timestep), unit=float(unit), tol=float(tol),
+                      exact=ex, mujoco=mj, final_error=final_err, mj_cost=mj_cost, mj_signature=mj_sig,
+                      matches=matches, error_curve_t=ts[::stride], error_curve=err[::stride], diverge=diverge,
+                      energy_drift_free=drift_free, energy_drift_final=drift_final,
+                      wall_time=time.perf_counter() - t0)
+
+
+def _cause(ex, mj, disk: int, t: float, matches) -> dict:
+    """The last event involving ``disk`` at or before t in either motion, described."""
+    best = None
+    for side, evs in (("exact", ex.events), ("mujoco", mj.events)):
+        for k in range(len(evs) - 1, -1, -1):
+            e = evs[k]
+            if e["time"] <= t + 1e-12 and (e["i"] == disk or (e["kind"] == 0 and e["j"] == disk)):
+                if best is None or e["time"] > best[0]:
+                    best = (float(e["time"]), side, k, e)
+                break
+    if best is None:
+        return {"cause": "no event: free flight drifted (unexpected; check the timestep)", "cause_event": None}
+    t_e, side, k, e = best
+    matched = {a for a, _ in matches} if side == "exact" else {b for _, b in matches}
+    text = describe(int(e["kind"]), int(e["i"]), int(e["j"]), t_e)
+    if k in matched:
+        why = f"{text} (in both motions; its small MuJoCo error grew until here)"
+    else:
+        other = "MuJoCo" if side == "exact" else "the exact simulator"
+        why = f"{text} ({side} motion only: {other} has no such event here)"
+    return {"cause": why, "cause_event": {"time": t_e, "side": side, "index": int(k), "matched": k in matched}}

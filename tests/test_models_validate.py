@@ -1,0 +1,111 @@
+"""nbst validate / nbst mjcf: cross-validation against the exact simulator, reports, CLI."""
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from conftest import make_problem  # noqa: E402
+
+mujoco = pytest.importorskip("mujoco")
+
+from nbst import simulate  # noqa: E402
+from nbst.cli import main  # noqa: E402
+from nbst.models.validate import validate  # noqa: E402
+
+
+def _write_solution(path, problem, v):
+    path.write_text(json.dumps({"problem": problem.name, "velocities": np.asarray(v).tolist()}))
+    return str(path)
+
+
+def _problem_file(path, problem):
+    path.write_text(json.dumps(problem.to_dict()))
+    return str(path)
+
+
+def test_collision_free_solution_validates_within_a_tenth_of_a_unit():
+    # four disks in free flight, one wall bounce at 80 units/s: MuJoCo's only error is the
+    # bounce's one-step lag 2 v h = 0.04 units, so every disk must end within 0.1 units.
+    p = make_problem([[100, 100], [300, 700], [600, 200], [700, 600]], 15.0, t_final=5.0)
+    v = np.array([[60.0, 80.0], [50.0, -40.0], [-80.0, 20.0], [0.0, -60.0]])
+    tr = simulate(p, v)
+    assert tr.n_disk_disk == 0
+    val = validate(p, v)
+    assert val.final_error.max() < 0.1
+    assert val.signatures_agree and val.diverge is None
+    d = val.to_dict()
+    assert d["events"]["matched"] == tr.n_wall and d["events"]["exact_only"] == 0 == d["events"]["mujoco_only"]
+    # no contact-free step may lose kinetic energy beyond round-off (free flight and exact bounces)
+    assert d["energy"]["drift_max_contact_free"] < 1e-9
+
+
+def test_planted_overconstrained_motion_keeps_its_signature():
+    # over5's own planted velocities are not stored, so build its kind by simulation
+    # (nbst.planted: 5 disks of radius 10, 3 noncueable, each struck by a cueable disk; seed 4 has
+    # 3 disk-disk collisions). The zero-cost motion must keep its full signature under MuJoCo and
+    # every collision must be matched in order, within 2 ms (a few steps of lag).
+    from nbst.planted import planted
+    p, v = planted(5, noncue=3, radius=10.0, seed=4)
+    tr = simulate(p, v)
+    assert tr.order == 5 and tr.n_disk_disk >= 3 and tr.cost < 1e-12
+    val = validate(p, v)
+    assert val.mj_signature_string == "11111"
+    off = val.matched_offsets
+    assert len(val.matches) == len(tr.events) == len(val.mujoco.events)
+    assert np.abs(off).max() < 2e-3
+    assert val.final_error.max() < 5.0  # R = 75: far inside
+
+
+def test_divergence_names_the_disk_and_event():
+    # A 30-degree glancing collision errs ~0.1 deg; over 4 s of flight at 100 units/s the struck
+    # disks part from their exact paths by about 1 unit: with tol = 0.2 the divergence must be
+    # reported after the collision and blamed on it.
+    p = make_problem([[300, 400], [500, 410]], 10.0, t_final=5.0)
+    v = np.array([[100.0, 0], [0, 0]])
+    val = validate(p, v, tol=0.2)
+    assert val.diverge is not None
+    assert val.diverge["time"] > val.exact.events["time"][0]
+    assert "disks 0 and 1 collide" in val.diverge["cause"]
+
+
+def test_cli_mjcf_and_validate_report(tmp_path, capsys):
+    from nbst import load_problem
+    p = load_problem("over5")
+    sol = _write_solution(tmp_path / "s.json", p, p.straight_velocities())
+    out = tmp_path / "scene.xml"
+    assert main(["mjcf", "over5", sol, "-o", str(out)]) == 0
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert m.nkey == 1 and m.nbody == 1 + p.n
+    rep = tmp_path / "rep"
+    assert main(["validate", "over5", sol, "--report", str(rep), "--strict"]) in (0, 1)
+    text = capsys.readouterr().out
+    assert "signature" in text and "events" in text and "diverge" in text
+    d = json.loads((rep / "report.json").read_text())
+    assert d["problem"] == "over5" and len(d["final_error"]["per_disk"]) == p.n
+    html = (rep / "report.html").read_text()
+    assert html.count("data:image/png;base64,") == 3
+    assert "http://" not in html and "https://" not in html  # self-contained
+
+
+def test_cli_strict_exits_1_when_signature_differs(tmp_path, capsys):
+    # one wall bounce at 300 units/s: MuJoCo ends 2 v h = 0.15 units off; a target radius of
+    # 0.05 around the exact end makes the signatures 1 (exact) and 0 (MuJoCo)
+    p0 = make_problem([[700.0, 400.0]], 10.0, t_final=1.0, name="strict")
+    v = np.array([[300.0, 0.0]])
+    end = simulate(p0, v).final_positions
+    p = make_problem([[700.0, 400.0]], 10.0, t_final=1.0, name="strict", targets=end, R=0.05)
+    prob = _problem_file(tmp_path / "p.json", p)
+    sol = _write_solution(tmp_path / "s.json", p, v)
+    assert main(["validate", prob, sol]) == 0
+    assert main(["validate", prob, sol, "--strict"]) == 1
+    assert "DIFFERENT" in capsys.readouterr().out
+
+
+def test_cli_bad_input_exits_2(tmp_path, capsys):
+    assert main(["validate", "over5", str(tmp_path / "missing.json")]) == 2
+    with pytest.raises(SystemExit) as e:
+        main(["mjcf", "over5", "--timestep", "-1"])
+    assert e.value.code == 2
