@@ -1,10 +1,12 @@
-"""``nbst solve``: run the paper's signature search and write a solution file."""
+"""``nbst solve``: run nbst's search (or the paper's, or one of its variants) and write a solution file."""
 from __future__ import annotations
 
 import argparse
 import sys
 
-VARIANT_HELP = ("A full algorithm (default); B uniform parent selection; C no crossover; D no genetically "
+VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, strikes, an adaptive operator schedule "
+                "and restarts (default); A the paper's full algorithm; B uniform parent selection; C no crossover; "
+                "D no genetically "
                 "engineered crossover; E no signature information (R = box width, initial population 60); "
                 "F no culling of subsumed solutions; G no elitism; H no directed randomization")
 
@@ -32,17 +34,20 @@ def _cost(text: str) -> float:
 
 
 def _variant(text: str) -> str:
+    if text.strip().lower() == "nbst":
+        return "nbst"
     v = text.strip().upper()
     if v not in tuple("ABCDEFGH"):
-        raise argparse.ArgumentTypeError(f"unknown variant {text!r}; choose one of A B C D E F G H")
+        raise argparse.ArgumentTypeError(f"unknown variant {text!r}; choose one of nbst A B C D E F G H")
     return v
 
 
 def register(sub) -> None:
     p = sub.add_parser(
-        "solve", help="find initial velocities with the paper's signature search",
+        "solve", help="find initial velocities that bring every disk to its target",
         description="Search for initial velocities that bring every disk of PROBLEM to its target at t_final "
-                    "(the paper's signature-based evolutionary search, or one of its simplified variants), "
+                    "(nbst's search by default; the paper's signature-based evolutionary search with --variant A, "
+                    "or one of its simplified variants B-H), "
                     "and write the best solution found to a JSON file. Ctrl-C stops the search and still writes "
                     "the best solution so far (exit 130). The same --seed gives the same solution, bit for bit.",
         epilog="Variants: " + VARIANT_HELP + ". Every choice the paper leaves open is listed in docs/search.md.")
@@ -54,7 +59,7 @@ def register(sub) -> None:
                    help="trial budget, initialization included (default 1000000)")
     p.add_argument("--patience", type=_int_at_least(0, "patience"), default=100_000, metavar="K",
                    help="stop after K trials without improvement; 0 = never (default 100000)")
-    p.add_argument("--variant", type=_variant, default="A", metavar="X", help=VARIANT_HELP)
+    p.add_argument("--variant", type=_variant, default="nbst", metavar="X", help=VARIANT_HELP)
     p.add_argument("--target-cost", type=_cost, default=None, metavar="C",
                    help="stop as soon as the best cost is <= C (default: never)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary line")

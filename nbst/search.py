@@ -81,9 +81,11 @@ VARIANTS = {
     "F": "no culling of subsumed solutions (delete the worst on every insertion)",
     "G": "no elitism",
     "H": "no directed randomization",
+    "nbst": "nbst's default: the paper's search plus polish, bank shots, strikes, adaptive schedule, restarts",
 }
 
 ALGORITHM = "paper-signature-search"
+ALGORITHM_NBST = "nbst-signature-search"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -106,6 +108,21 @@ class SearchParams:
     elitism          : the best member is never deleted (G: off)
     hard_limit       : culling fallback: above this size the worst member goes (open)
     max_events       : per-simulation event cap (a truncated run scores cost inf)
+
+    nbst's additions (``nbst.search_nbst``; all off in A-H, on in variant "nbst"):
+    polish           : Levenberg-Marquardt polish of promising children
+    polish_sims      : simulation budget of one polish
+    polish_ratio     : polish children of the best order within this factor of the best cost
+    bank_weight      : generate probability weight of the bank-shot operator
+    bank_bounces     : bank shots use images with at most this many bounces
+    strike_weight    : weight of the strike operator (used only if some disk is noncueable)
+    strike_bounces   : strikes aim at images of the target with at most this many bounces
+    adapt            : adapt operator probabilities from their recent success
+    adapt_rate       : rate of the success moving average
+    adapt_floor      : least probability of an enabled operator
+    straight_start   : initialize's first trial sends every cueable disk straight at its target
+    restart          : re-initialize around the best after this many trials without a
+                       local improvement (0: never)
     """
 
     variant: str = "A"
@@ -125,6 +142,24 @@ class SearchParams:
     elitism: bool = True
     hard_limit: int = 400
     max_events: int = MAX_EVENTS
+    polish: bool = False
+    polish_sims: int = 30
+    polish_ratio: float = 4.0
+    bank_weight: float = 0.0
+    bank_bounces: int = 3
+    strike_weight: float = 0.0
+    strike_bounces: int = 1
+    adapt: bool = False
+    adapt_rate: float = 0.01
+    adapt_floor: float = 0.03
+    straight_start: bool = False
+    restart: int = 0
+
+    @property
+    def nbst_loop(self) -> bool:
+        """Whether any of nbst's additions is on (they run in ``search_nbst``'s loop)."""
+        return (self.polish or self.bank_weight > 0 or self.strike_weight > 0 or self.adapt
+                or self.straight_start or self.restart > 0)
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
@@ -132,13 +167,21 @@ class SearchParams:
         return d
 
 
-def variant_params(variant: str = "A", problem: Problem | None = None) -> SearchParams:
-    """The paper's variant A (full algorithm) or B-H (one simplification each).
+#: Variant "nbst": the paper's A plus every addition of ``nbst.search_nbst`` (see docs/search.md
+#: and the ablation in docs/results.md for what each contributes).
+NBST_DEFAULTS = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_weight=0.3, strike_weight=0.1, polish=True, adapt=True,
+                     straight_start=True, restart=20_000)
+
+
+def variant_params(variant: str = "nbst", problem: Problem | None = None) -> SearchParams:
+    """nbst's search ("nbst"), the paper's variant A (full algorithm) or B-H (one simplification each).
 
     E needs ``problem`` (its signature radius is the box width)."""
-    v = variant.upper()
+    v = "nbst" if variant.lower() == "nbst" else variant.upper()
     if v not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; choose one of {', '.join(VARIANTS)}")
+    if v == "nbst":
+        return SearchParams(variant="nbst", **NBST_DEFAULTS)
     base = SearchParams(variant=v)
     third = 1.0 / 3.0
     if v == "B":
@@ -242,6 +285,12 @@ def _check(params: SearchParams, max_trials: int, patience: int) -> None:
         bad("op_weights", "must be 4 non-negative weights (creep, directed, uniform, crossover), not all 0")
     if params.max_bounces < 0 or params.creep_fraction < 0:
         bad("max_bounces", "max_bounces and creep_fraction must be >= 0")
+    if params.bank_weight < 0 or params.strike_weight < 0:
+        bad("bank_weight", "bank_weight and strike_weight must be >= 0")
+    if params.polish_sims < 2 or params.polish_ratio < 1 or params.bank_bounces < 0 or params.strike_bounces < 0:
+        bad("polish_sims", "polish_sims >= 2, polish_ratio >= 1, bank_bounces >= 0 and strike_bounces >= 0 are required")
+    if not 0 < params.adapt_rate <= 1 or not 0 <= params.adapt_floor < 1.0 / 6 or params.restart < 0:
+        bad("adapt_rate", "0 < adapt_rate <= 1, 0 <= adapt_floor < 1/6 and restart >= 0 are required")
 
 
 @dataclass(frozen=True, eq=False)
@@ -259,16 +308,17 @@ class SearchRun:
 
 
 def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
-          target_cost: float | None = None, variant: str = "A", params: SearchParams | None = None,
+          target_cost: float | None = None, variant: str = "nbst", params: SearchParams | None = None,
           callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048):
-    """Run the paper's signature search on ``problem``; return the best :class:`~nbst.solution.Solution`.
+    """Run the signature search on ``problem``; return the best :class:`~nbst.solution.Solution`.
 
     seed        : int >= 0; None draws one (recorded in ``meta["seed"]``). Same seed, same
                   parameters -> the same solution, bit for bit (chunking does not matter).
     max_trials  : trial budget (one trial = one simulated candidate, initialize included)
     patience    : stop after this many trials without improvement (0: never)
     target_cost : stop once the best cost is <= this (None: never)
-    variant     : "A" (the full algorithm) .. "H"; ignored when ``params`` is given
+    variant     : "nbst" (nbst's search, the default), "A" (the paper's full algorithm) .. "H"
+                  (its simplified variants); ignored when ``params`` is given
     callback    : called with a :class:`SearchProgress` after every chunk; a truthy return
                   stops the search. A KeyboardInterrupt (Ctrl-C, or raised by the callback)
                   stops it too: ``solve`` then returns the best so far with
@@ -283,7 +333,7 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_
 
 
 def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
-               target_cost: float | None = None, variant: str = "A", params: SearchParams | None = None,
+               target_cost: float | None = None, variant: str = "nbst", params: SearchParams | None = None,
                callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048,
                record_every: int = 0) -> SearchRun:
     """:func:`solve`, also returning the final population (for benchmarks and analysis) and, with
@@ -318,14 +368,20 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
                rng=seed_state(seed), hist_t=np.zeros(1024, np.int64), hist_c=np.zeros(1024),
                hist_o=np.zeros(1024, np.int64))
     rec_v = np.zeros((max_trials // record_every if record_every > 0 else 0, n, 2))
+    advance = _nbst_stepper(problem, params, s, pi, pf) if params.nbst_loop else None
+    if advance is not None and record_every > 0:
+        raise ValueError("record_every is supported by the paper's loop only (variants A-H)")
     stopped = None
     t0 = time.perf_counter()
     reasons = {L.RC_MAX_TRIALS: "max_trials", L.RC_PATIENCE: "patience", L.RC_TARGET_COST: "target_cost"}
     try:
         while stopped is None:
-            rc = L.run_chunk(x0, target, radius, mass, cue_idx, W, H, float(problem.t_final), images, pi, pf,
-                             s.pop, s.st, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o, s.op_count,
-                             rec_v, int(chunk))
+            if advance is not None:
+                rc = advance(int(chunk))
+            else:
+                rc = L.run_chunk(x0, target, radius, mass, cue_idx, W, H, float(problem.t_final), images, pi, pf,
+                                 s.pop, s.st, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o,
+                                 s.op_count, rec_v, int(chunk))
             if rc == L.RC_HISTORY_FULL:
                 k = len(s.hist_t)
                 s.hist_t = np.concatenate([s.hist_t, np.zeros(k, np.int64)])
@@ -358,8 +414,9 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     cost, sig = float(c[0]), int(sg[0])
     nh = int(st[L.ST_NHIST])
     trials = int(st[L.ST_TRIALS])
+    op_names = advance.op_names if advance is not None else L.OP_NAMES
     meta = {
-        "algorithm": ALGORITHM,
+        "algorithm": ALGORITHM_NBST if advance is not None else ALGORITHM,
         "cost": cost,
         "signature": signature_string(sig, n),
         "order": _popcount(sig),
@@ -385,13 +442,58 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
         "cull_rounds": int(st[L.ST_CULLS]),
         "fallback_deletions": int(st[L.ST_FALLBACK]),
         "operators": {name: {"children": int(s.op_count[k, 0]), "improvements": int(s.op_count[k, 1])}
-                      for k, name in enumerate(L.OP_NAMES)},
+                      for k, name in enumerate(op_names)},
         "history": [[int(s.hist_t[k]), float(s.hist_c[k]), int(s.hist_o[k])] for k in range(nh)],
     }
+    if advance is not None:
+        meta.update(advance.stats())
     size = int(s.pop[5][SIZE])
     return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop[0][:size].copy(),
                      costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy(),
                      recorded=rec_v[:trials // record_every] if record_every > 0 else rec_v)
+
+
+def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf):
+    """A chunk-advancing closure over ``search_nbst.run_chunk_nbst`` and its extra state."""
+    from . import search_nbst as S
+
+    qi = np.zeros(S.N_QI, np.int64)
+    qi[S.QI_POLISH] = int(params.polish)
+    qi[S.QI_POLISH_SIMS] = params.polish_sims
+    qi[S.QI_BANK_BOUNCES] = params.bank_bounces
+    qi[S.QI_ADAPT] = int(params.adapt)
+    qi[S.QI_STRAIGHT_START] = int(params.straight_start)
+    qi[S.QI_STRIKE_BOUNCES] = params.strike_bounces
+    qi[S.QI_RESTART] = params.restart
+    qf = np.zeros(S.N_QF)
+    qf[S.QF_POLISH_RATIO] = params.polish_ratio
+    qf[S.QF_ADAPT_RATE] = params.adapt_rate
+    qf[S.QF_ADAPT_FLOOR] = params.adapt_floor
+    qs = np.zeros(S.N_QS, np.int64)
+    non_idx = np.flatnonzero(~problem.cueable).astype(np.int64)
+    base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if non_idx.size else 0.0])
+    base = base / base.sum()
+    weights, reward = base.copy(), base.copy()
+    s.op_count = np.zeros((S.N_OPS, 2), np.int64)
+    s.best_cost = np.array([np.inf, np.inf])  # [overall, since the last restart]
+    args = (np.ascontiguousarray(problem.start, dtype=np.float64), np.ascontiguousarray(problem.target, dtype=np.float64),
+            np.ascontiguousarray(problem.radius, dtype=np.float64), np.ascontiguousarray(problem.mass, dtype=np.float64),
+            np.flatnonzero(problem.cueable).astype(np.int64), non_idx, float(problem.box[0]), float(problem.box[1]),
+            float(problem.t_final), mirror_images(params.max_bounces), pi, pf, qi, qf)
+
+    def advance(n_steps: int) -> int:
+        return S.run_chunk_nbst(*args, s.pop, s.st, qs, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o,
+                                s.op_count, weights, base, reward, n_steps)
+
+    def stats() -> dict:
+        return {"polish": {"runs": int(qs[S.QS_POLISH_RUNS]), "simulations": int(qs[S.QS_POLISH_SIMS]),
+                           "improved": int(qs[S.QS_POLISH_GAINS])},
+                "restarts": int(qs[S.QS_RESTARTS]),
+                "operator_probabilities": {name: float(w) for name, w in zip(S.OP_NAMES, weights)}}
+
+    advance.op_names = S.OP_NAMES
+    advance.stats = stats
+    return advance
 
 
 def _popcount(x: int) -> int:

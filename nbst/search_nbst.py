@@ -58,9 +58,8 @@ N_OPS = 6
 OP_NAMES = ("creep", "directed", "uniform", "crossover", "bank", "strike")
 
 # extra parameters (qi: int64, qf: float64)
-QI_POLISH, QI_POLISH_SIMS, QI_BANK_BOUNCES, QI_ADAPT, QI_STRAIGHT_START, QI_STRIKE_BOUNCES, QI_RESTART, \
-    QI_POLISH_STRIKES = range(8)
-N_QI = 8
+QI_POLISH, QI_POLISH_SIMS, QI_BANK_BOUNCES, QI_ADAPT, QI_STRAIGHT_START, QI_STRIKE_BOUNCES, QI_RESTART = range(7)
+N_QI = 7
 QF_POLISH_RATIO, QF_ADAPT_RATE, QF_ADAPT_FLOOR = range(3)
 N_QF = 3
 
@@ -273,8 +272,7 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
         # polish promising children (relative to this restart's best), charged as the simulations they run
         local_order = popcount(qs[QS_LOCAL_SIG])
         if (qi[QI_POLISH] != 0 and order > 0 and not trunc and cost > tol
-                and (cost < best_cost[1] or (order >= local_order and cost < qf[QF_POLISH_RATIO] * best_cost[1])
-                     or (op == OP_STRIKE and qi[QI_POLISH_STRIKES] != 0))):
+                and (cost < best_cost[1] or (order >= local_order and cost < qf[QF_POLISH_RATIO] * best_cost[1]))):
             budget = min(qi[QI_POLISH_SIMS], pi[PI_MAX_TRIALS] - st[ST_TRIALS] + 1)
             if budget >= 2:
                 c2, s2, sims = polish_kernel(x0, child, radius, mass, target, W, H, t_final, R, cue_idx, budget,

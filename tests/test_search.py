@@ -31,18 +31,19 @@ def same(a, b):
         {k: v for k, v in b.meta.items() if k not in VOLATILE}
 
 
-def test_same_seed_same_solution_whatever_the_chunking(s14):
-    a = solve(s14, seed=11, max_trials=6000, patience=0)
-    b = solve(s14, seed=11, max_trials=6000, patience=0, chunk=7)
-    c = solve(s14, seed=11, max_trials=6000, patience=0, chunk=100_000)
+@pytest.mark.parametrize("variant", ["A", "nbst"])
+def test_same_seed_same_solution_whatever_the_chunking(s14, variant):
+    a = solve(s14, seed=11, max_trials=6000, patience=0, variant=variant)
+    b = solve(s14, seed=11, max_trials=6000, patience=0, chunk=7, variant=variant)
+    c = solve(s14, seed=11, max_trials=6000, patience=0, chunk=100_000, variant=variant)
     same(a, b)
     same(a, c)
-    d = solve(s14, seed=12, max_trials=6000, patience=0)
+    d = solve(s14, seed=12, max_trials=6000, patience=0, variant=variant)
     assert not np.array_equal(a.velocities, d.velocities)
 
 
 def test_meta_is_complete_and_true(s14):
-    sol = solve(s14, seed=1, max_trials=3000)
+    sol = solve(s14, seed=1, max_trials=3000, variant="A")
     m = sol.meta
     for key in ("cost", "signature", "order", "trials", "seed", "variant", "params", "wall_time", "nbst_version",
                 "history", "stopped", "init_trials", "first_full_order_trial"):
@@ -57,14 +58,14 @@ def test_meta_is_complete_and_true(s14):
 
 def test_tiny_problem_solved_quickly():
     # footnote 4: near-zero radius disks are solved in a few dozen generate-insert iterations
-    sol = solve(load_problem("diamond-s14-tiny"), seed=3, max_trials=5000, target_cost=1e-6)
+    sol = solve(load_problem("diamond-s14-tiny"), seed=3, max_trials=5000, target_cost=1e-6, variant="A")
     assert sol.meta["stopped"] == "target_cost" and sol.meta["cost"] < 1e-6
     assert sol.meta["trials"] - sol.meta["init_trials"] < 500
 
 
 def test_noncueable_disks_never_move_and_patience_stops():
     p = load_problem("over5")
-    sol = solve(p, seed=2, max_trials=200_000, patience=2000)
+    sol = solve(p, seed=2, max_trials=200_000, patience=2000, variant="A")
     assert np.all(sol.velocities[~p.cueable] == 0.0)
     assert sol.meta["stopped"] == "patience"
     last_improvement = sol.meta["history"][-1][0]
@@ -78,14 +79,14 @@ def test_callback_can_stop_and_interrupt(s14):
         seen.append(p.trials)
         return len(seen) == 3
 
-    sol = solve(s14, seed=4, max_trials=100_000, patience=0, chunk=500, callback=cb)
+    sol = solve(s14, seed=4, max_trials=100_000, patience=0, chunk=500, callback=cb, variant="A")
     assert sol.meta["stopped"] == "callback" and sol.meta["trials"] == 1500 and seen == [500, 1000, 1500]
 
     def ctrl_c(p):
         if p.trials >= 1000:
             raise KeyboardInterrupt
 
-    sol = solve(s14, seed=4, max_trials=100_000, patience=0, chunk=500, callback=ctrl_c)
+    sol = solve(s14, seed=4, max_trials=100_000, patience=0, chunk=500, callback=ctrl_c, variant="A")
     assert sol.meta["stopped"] == "interrupted" and sol.meta["trials"] == 1000
     assert simulate(s14, sol.velocities).cost == sol.meta["cost"]
 
@@ -101,6 +102,8 @@ EXPECTED_CHANGES = {
     "F": {"cull": "worst"},
     "G": {"elitism": False},
     "H": {"op_weights": (1 / 3, 0.0, 1 / 3, 1 / 3), "p_directed_init": 0.0},
+    "nbst": {"op_weights": (0.2, 0.1, 0.1, 0.2), "bank_weight": 0.3, "strike_weight": 0.1, "polish": True,
+             "adapt": True, "straight_start": True, "restart": 20_000},
 }
 
 
@@ -131,15 +134,20 @@ def test_variants_behave(s14):
 
 def test_cli_writes_a_file_that_simulate_accepts(tmp_path, capsys):
     out = tmp_path / "sol.json"
-    assert main(["solve", "diamond-s14", "-o", str(out), "--seed", "7", "--max-trials", "4000", "--quiet"]) == 0
+    assert main(["solve", "diamond-s14", "-o", str(out), "--seed", "7", "--max-trials", "4000", "--quiet",
+                 "--variant", "A"]) == 0
     d = json.loads(out.read_text())
     assert d["seed"] == 7 and d["trials"] == 4000 and d["variant"] == "A" and d["problem"] == "diamond-s14"
     assert main(["simulate", "diamond-s14", str(out), "--json"]) == 0
     sim = json.loads(capsys.readouterr().out)
     assert sim["cost"] == d["cost"] and sim["signature"] == d["signature"]
     out2 = tmp_path / "sol2.json"
-    assert main(["solve", "diamond-s14", "-o", str(out2), "--seed", "7", "--max-trials", "4000", "--quiet"]) == 0
+    assert main(["solve", "diamond-s14", "-o", str(out2), "--seed", "7", "--max-trials", "4000", "--quiet",
+                 "--variant", "a"]) == 0
     assert json.loads(out2.read_text())["velocities"] == d["velocities"]
+    out3 = tmp_path / "sol3.json"  # the default is nbst's search
+    assert main(["solve", "diamond-s14", "-o", str(out3), "--seed", "7", "--max-trials", "4000", "--quiet"]) == 0
+    assert json.loads(out3.read_text())["variant"] == "nbst"
 
 
 def test_cli_bad_values_exit_2(tmp_path):
@@ -175,10 +183,10 @@ def test_recorded_candidates_are_what_the_loop_simulated(s14):
     from nbst import evaluate
     from nbst.search import run_search
 
-    r = run_search(s14, seed=9, max_trials=1500, patience=0, record_every=1)
+    r = run_search(s14, seed=9, max_trials=1500, patience=0, record_every=1, variant="A")
     assert r.recorded.shape == (1500, 14, 2)
     _, cost, _ = evaluate(s14, r.recorded)
     for t, c, _ in r.solution.meta["history"]:
         assert cost[t - 1] == c  # the improvement at trial t is the candidate simulated at trial t
-    same(r.solution, solve(s14, seed=9, max_trials=1500, patience=0))  # recording changes nothing
+    same(r.solution, solve(s14, seed=9, max_trials=1500, patience=0, variant="A"))  # recording changes nothing
     assert len(r.costs) == r.solution.meta["population_size"] and np.all(np.isfinite(r.costs))
