@@ -125,6 +125,7 @@ class Validation:
                 "offset_s": {"min": float(off.min()) if off.size else None,
                              "max": float(off.max()) if off.size else None,
                              "mean_abs": float(np.abs(off).mean()) if off.size else None},
+                "offset_s_before_divergence": self._offsets_before_divergence(),
                 "first_mismatch": self._first_mismatch(),
                 "exact": ev_list(ex.events, matched_ex),
                 "mujoco": ev_list(mj.events, matched_mj),
@@ -132,6 +133,17 @@ class Validation:
             "energy": {"drift_max_contact_free": self.energy_drift_free, "drift_final": self.energy_drift_final},
             "divergence": self.diverge,
         }
+
+    def _offsets_before_divergence(self):
+        """min/max of the matched offsets of exact events before the divergence (all if none)."""
+        off = self.matched_offsets
+        if not off.size:
+            return None
+        t_ex = np.array([self.exact.events["time"][a] for a, _ in self.matches])
+        keep = off if self.diverge is None else off[t_ex <= self.diverge["time"]]
+        if not keep.size:
+            return None
+        return {"min": float(keep.min()), "max": float(keep.max()), "count": int(keep.size)}
 
     def _first_mismatch(self):
         """The earliest event (by time) that has no partner in the other motion, or None."""
@@ -160,7 +172,9 @@ class Validation:
             f"order {d['mujoco_result']['order']}  ({'same' if self.signatures_agree else 'DIFFERENT'} signature)",
             f"events     {ev['matched']} matched in order, {ev['exact_only']} exact only, {ev['mujoco_only']} "
             f"MuJoCo only" + (f"; offsets {ev['offset_s']['min'] * 1e3:.3g} .. {ev['offset_s']['max'] * 1e3:.3g} ms"
-                              if ev["matched"] else ""),
+                              if ev["matched"] else "")
+            + (f" ({pre['min'] * 1e3:.3g} .. {pre['max'] * 1e3:.3g} ms before the divergence)"
+               if self.diverge and (pre := ev["offset_s_before_divergence"]) else ""),
             f"energy     drift {self.energy_drift_free:.3g} (max, contact-free steps), "
             f"{self.energy_drift_final:+.3g} at t_final",
         ]

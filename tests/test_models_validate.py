@@ -109,3 +109,30 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         main(["mjcf", "over5", "--timestep", "-1"])
     assert e.value.code == 2
+
+
+#: report.json's layout (golden): the keys at each level. A change here is a format change:
+#: bump SCHEMA_VERSION in nbst/models/validate.py and say so in docs/mujoco.md.
+REPORT_KEYS = {
+    "": ["divergence", "energy", "events", "exact", "final_error", "mujoco", "mujoco_result", "n", "problem",
+         "schema_version", "signatures_agree", "t_final", "tolerance", "velocities"],
+    "mujoco": ["steps", "timestep", "unit_m", "version", "wall_time_s"],
+    "final_error": ["exact_final", "max", "mujoco_final", "per_disk"],
+    "exact": ["cost", "disk_disk", "order", "signature", "truncated", "wall"],
+    "mujoco_result": ["cost", "disk_disk", "order", "signature", "wall"],
+    "events": ["exact", "exact_only", "first_mismatch", "matched", "mujoco", "mujoco_only", "offset_s",
+               "offset_s_before_divergence"],
+    "energy": ["drift_final", "drift_max_contact_free"],
+}
+
+
+def test_report_json_layout_is_golden():
+    from nbst import load_problem
+    from nbst.models.validate import SCHEMA_VERSION
+    p = load_problem("over5")
+    d = validate(p, p.straight_velocities(), timestep=1e-3).to_dict()
+    assert d["schema_version"] == SCHEMA_VERSION == 1
+    for level, keys in REPORT_KEYS.items():
+        node = d if not level else d[level]
+        assert sorted(node) == keys, level
+    json.dumps(d, allow_nan=False)  # plain JSON
