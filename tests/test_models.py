@@ -46,6 +46,20 @@ def test_generated_mjcf_loads(tmp_path):
     assert np.allclose(m.body_mass[1:], p.mass)
 
 
+@pytest.mark.parametrize("h", [1e-3, 2.5e-4])
+def test_contact_stiffness_follows_the_timestep(h):
+    # k = 2/h^2 must be computed from h (a k off by 1% changes the speed ~1.6% per bounce):
+    # every colliding geom carries solref (-2/h^2, 0), condim 1 and zero margin and gap
+    from nbst.models.scene import build_model
+    p = make_problem([[100, 100], [300, 300]], 10.0)
+    m = build_model(p, timestep=h)
+    hit = m.geom_contype > 0
+    assert hit.sum() == 4 + 2
+    assert np.allclose(m.geom_solref[hit], [-2 / h**2, 0.0], rtol=1e-12)
+    assert np.all(m.geom_condim[hit] == 1) and np.all(m.geom_margin == 0) and np.all(m.geom_gap == 0)
+    assert m.opt.timestep == h and m.opt.integrator == mujoco.mjtIntegrator.mjINT_EULER
+
+
 @pytest.mark.parametrize("name", ['x"/><geom name="evil', "</mujoco><!--", "a--b & <c> 'é' \n\t", ""])
 def test_hostile_problem_name_cannot_break_xml(name):
     p = make_problem([[100, 100]], 10.0, name=name or "x")
