@@ -1,16 +1,14 @@
 #!/usr/bin/env bash
-# The main job on a built-in problem (default diamond-s14); results go to out/.
+# The main job on a built-in problem (default diamond-s14): solve it, check the
+# solution exactly and under MuJoCo, and film it. Everything goes to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PROBLEM="${1:-diamond-s14}"
 OUT="out"
 mkdir -p "$OUT"
-# straight-line shots (the paper's directed randomize for every disk), simulated exactly
-python3 - "$PROBLEM" "$OUT/$PROBLEM-straight.json" <<'PY'
-import sys
-from nbst import load_problem
-from nbst.solution import make_solution, save_solution
-p = load_problem(sys.argv[1])
-save_solution(sys.argv[2], make_solution(p, p.straight_velocities(), note="straight-line shots"))
-PY
-nbst simulate "$PROBLEM" "$OUT/$PROBLEM-straight.json"
+set -x
+nbst solve "$PROBLEM" -o "$OUT/$PROBLEM.json" --seed 1 --target-cost 1e-9
+nbst simulate "$PROBLEM" "$OUT/$PROBLEM.json"
+nbst validate "$PROBLEM" "$OUT/$PROBLEM.json" --report "$OUT/$PROBLEM-validation"
+nbst render "$PROBLEM" "$OUT/$PROBLEM.json" -o "$OUT/$PROBLEM.mp4" --trails --labels
+nbst plot trajectories "$PROBLEM" "$OUT/$PROBLEM.json" -o "$OUT/$PROBLEM-paths.png"
