@@ -27,8 +27,8 @@ class MujocoRun:
     positions : (S+1, N, 2) disk centres, units
     energy    : (S+1,) kinetic energy, mass units x units^2/s^2
     in_contact: (S+1,) bool, any contact active in the step that ended there
-    events    : structured (E,): time (s, the end of the first step of a contact episode
-                with penetration), kind, i, j (i < j for disk pairs)
+    events    : structured (E,): time (s: the first step state in which the pair overlaps; MuJoCo
+                detects it there and resolves it during the next step), kind, i, j (i < j for disk pairs)
     final_positions : (N, 2) at t_final (linear between the two steps around it)
     """
 
@@ -90,7 +90,6 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
     active: set = set()
     events = []
     step = mujoco.mj_step
-    contact = data.contact
     t0 = _time.perf_counter()
     for s in range(1, steps + 1):
         step(model, data)
@@ -101,7 +100,7 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
             now = set()
             if nc:
                 in_contact[s] = True
-                geoms = contact.geom[:nc] if nc else ()
+                geoms = data.contact.geom[:nc]  # a fresh view: the contact list is rebuilt every step
                 for g1, g2 in geoms:
                     a, b = owner[g1], owner[g2]
                     if a == -100 or b == -100:
@@ -113,9 +112,9 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
             for key in now - active:
                 a, b = key
                 if b >= 0:
-                    events.append((s * timestep, EVENT_DISK, a, b))
+                    events.append(((s - 1) * timestep, EVENT_DISK, a, b))
                 else:
-                    events.append((s * timestep, EVENT_WALL, a, -1 - b))
+                    events.append(((s - 1) * timestep, EVENT_WALL, a, -1 - b))
             active = now
     wall = _time.perf_counter() - t0
     times = np.arange(steps + 1) * timestep

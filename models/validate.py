@@ -7,8 +7,9 @@ What is compared:
 * per-disk final position error (units), cost / signature / order under each;
 * the collision sequences (disk-disk and wall), aligned in order by their (kind, i, j)
   keys; each matched pair gets a time offset (MuJoCo time - exact time). MuJoCo sees a
-  contact at the end of the first step with penetration, and resolves an impact one step
-  late (measured: an exact reflection delayed by h), so offsets of 0 .. 2h are normal;
+  contact in the first step state with overlap (offset 0 .. h for a first impact) and
+  resolves it one step late (measured: an exact reflection delayed by h), so the lags of
+  earlier impacts add up: offsets of a few h are normal;
 * energy drift: kinetic energy relative to the start, over the steps with no contact
   (while a contact spring is compressed the kinetic energy dips, which is not drift);
 * divergence: the first time any disk's two trajectories part by more than ``tol``
