@@ -110,6 +110,7 @@ def write_json_atomic(path: str | Path, obj: Any) -> None:
     text = json.dumps(_json_safe(obj), indent=1, allow_nan=False) + "\n"
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual permissions
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
             f.flush()
@@ -121,6 +122,12 @@ def write_json_atomic(path: str | Path, obj: Any) -> None:
         except FileNotFoundError:
             pass
         raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def save_solution(path: str | Path, solution: Solution) -> None:

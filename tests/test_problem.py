@@ -168,6 +168,13 @@ def test_solution_roundtrip_and_extra_keys(tmp_path):
     assert np.array_equal(back.velocities, v)
     assert back.meta["seed"] == 3 and back.problem == "over5"
     assert json.loads((tmp_path / "s.json").read_text())["schema_version"] == 1
+    old = os.umask(0o022)
+    try:
+        save_solution(tmp_path / "s2.json", sol)
+    finally:
+        os.umask(old)
+    assert (tmp_path / "s2.json").stat().st_mode & 0o777 == 0o644  # not mkstemp's 0600
+    assert not list(tmp_path.glob(".*.tmp"))
 
 
 def test_solution_errors(tmp_path):
