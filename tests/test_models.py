@@ -96,6 +96,9 @@ def test_head_on_collision_exact_velocities():
     vm = (r.positions[-1] - r.positions[-2]) / H
     assert np.abs(vm - tr.final_velocities).max() < 1e-8
     assert abs(r.energy[-1] / r.energy[0] - 1) < 1e-9
+    # MuJoCo reports the contact at the first overlapping step state: within [0, h] after the exact time
+    # (h exactly here: the disks touch, distance 0, at the step state t = 1.2 s and overlap one step later)
+    assert len(r.events) == 1 and 0 <= r.events["time"][0] - tr.events["time"][0] <= H * (1 + 1e-9)
     # the impact is one step late: each disk ends |dv| * h from its exact position (to 1e-9)
     dv = np.abs(tr.final_velocities - v).max(axis=1)
     assert np.abs(np.hypot(*(r.final_positions - tr.final_positions).T) - dv * H).max() < 1e-9
