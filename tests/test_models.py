@@ -125,3 +125,23 @@ def test_rollout_shape_and_free_flight():
     x = rollout(p, v, ts)
     assert x.shape == (4, 2, 2)
     assert np.abs(x - simulate(p, v).at(ts)).max() < 1e-9
+
+
+def test_gallery_scenes_load_and_match_their_solutions():
+    # every gallery folder: scene.xml loads; its keyframe holds solution.json's velocities (m/s; the
+    # XML keeps 6 significant digits, so rtol 1e-5); problem.json is the built-in problem
+    import json
+
+    from nbst import load_problem
+    from nbst.models.gallery import GALLERY_DIR
+    from nbst.solution import load_solution
+    folders = sorted(p for p in GALLERY_DIR.iterdir() if p.is_dir())
+    assert folders, "the gallery is empty: run python -m nbst.models.gallery"
+    for f in folders:
+        p = load_problem(f.name)
+        assert json.loads((f / "problem.json").read_text()) == json.loads(json.dumps(p.to_dict()))
+        m = mujoco.MjModel.from_xml_path(str(f / "scene.xml"))
+        assert m.nkey == 1 and m.nbody == 1 + p.n
+        sol = load_solution(f / "solution.json", p)
+        assert np.allclose(m.key_qvel[0].reshape(-1, 2), sol.velocities * 1e-3, rtol=1e-5, atol=1e-9)
+        assert (f / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
