@@ -135,6 +135,8 @@ def test_gallery_scenes_load_and_match_their_solutions():
     from nbst import load_problem
     from nbst.models.gallery import GALLERY_DIR
     from nbst.solution import load_solution
+    if not GALLERY_DIR.is_dir():
+        pytest.skip("no models/scenes here (an installed wheel without the gallery)")
     folders = sorted(p for p in GALLERY_DIR.iterdir() if p.is_dir())
     assert folders, "the gallery is empty: run python -m nbst.models.gallery"
     for f in folders:
