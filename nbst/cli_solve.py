@@ -42,6 +42,13 @@ def _variant(text: str) -> str:
     return v
 
 
+def _algorithm(text: str) -> str:
+    a = text.strip().lower()
+    if a not in ("signature", "cma", "de", "ga", "random"):
+        raise argparse.ArgumentTypeError(f"unknown algorithm {text!r}; choose one of signature cma de ga random")
+    return a
+
+
 def register(sub) -> None:
     p = sub.add_parser(
         "solve", help="find initial velocities that bring every disk to its target",
@@ -59,6 +66,10 @@ def register(sub) -> None:
                    help="trial budget, initialization included (default 1000000)")
     p.add_argument("--patience", type=_int_at_least(0, "patience"), default=100_000, metavar="K",
                    help="stop after K trials without improvement; 0 = never (default 100000)")
+    p.add_argument("--algorithm", type=_algorithm, default="signature", metavar="NAME",
+                   help="signature: nbst's signature search (default; --variant picks it); baselines (docs/experiments.md): "
+                        "cma (CMA-ES, IPOP restarts from the straight-line velocities), de (differential evolution), "
+                        "ga (a standard steady-state GA), random (directed/uniform randomize)")
     p.add_argument("--variant", type=_variant, default="nbst", metavar="X", help=VARIANT_HELP)
     p.add_argument("--target-cost", type=_cost, default=None, metavar="C",
                    help="stop as soon as the best cost is <= C (default: never)")
@@ -71,12 +82,18 @@ def cmd_solve(args) -> int:
     from .solution import save_solution
 
     problem = load_problem(args.problem)
+    algorithm = getattr(args, "algorithm", "signature")
+    if algorithm != "signature" and args.variant != "nbst":
+        from .problem import ProblemError
+
+        raise ProblemError("<arguments>", "--variant", f"applies to --algorithm signature only, not {algorithm}")
+    label = args.variant if algorithm == "signature" else algorithm
     bar = None
     if not args.quiet:
         from tqdm import tqdm
 
         bar = tqdm(total=args.max_trials, unit="trial", unit_scale=True, file=sys.stderr, dynamic_ncols=True,
-                   desc=f"solve {problem.name} ({args.variant})", smoothing=0.1)
+                   desc=f"solve {problem.name} ({label})", smoothing=0.1)
     done = [0]
 
     def progress(p) -> None:
@@ -85,11 +102,12 @@ def cmd_solve(args) -> int:
             done[0] = p.trials
             bar.set_postfix_str(f"best {p.best_cost:.6g}  order {p.best_order}/{problem.n}", refresh=False)
 
-    from .search import solve
+    from .baselines import solve_with
 
+    kw = {"variant": args.variant} if algorithm == "signature" else {}
     try:
-        sol = solve(problem, seed=args.seed, max_trials=args.max_trials, patience=args.patience,
-                    target_cost=args.target_cost, variant=args.variant, callback=progress)
+        sol = solve_with(algorithm, problem, seed=args.seed, max_trials=args.max_trials, patience=args.patience,
+                         target_cost=args.target_cost, callback=progress, **kw)
     finally:
         if bar is not None:
             bar.close()

@@ -1,0 +1,132 @@
+"""Baselines (nbst.baselines): exact trial accounting, improvement on a trivial problem,
+cueable-only search, determinism, the dispatcher."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from nbst.baselines import ALGORITHMS, solve_with
+from nbst.planted import planted
+from nbst.problem import ProblemError, problem_from_dict
+
+BASELINES = ("cma", "de", "ga", "random")
+
+#: Two disks that must swap places: the straight paths meet head-on, so the
+#: straight-line velocities score 96,800 (each disk bounces back), and order 0.
+SWAP = {"name": "swap", "box": [400.0, 400.0], "t_final": 2.0, "target_radius": 30.0, "disks": [
+    {"start": [100.0, 200.0], "target": [300.0, 200.0], "radius": 10.0},
+    {"start": [300.0, 200.0], "target": [100.0, 200.0], "radius": 10.0}]}
+SWAP_STRAIGHT_COST = 96_800.0
+
+
+@pytest.fixture(scope="module")
+def swap():
+    return problem_from_dict(SWAP)
+
+
+@pytest.fixture(scope="module")
+def with_noncue():
+    return planted(3, noncue=1, seed=5)[0]
+
+
+@pytest.fixture
+def sim_counter(monkeypatch):
+    """Counts every candidate simulated through nbst.sim.evaluate."""
+    import nbst.sim
+
+    count = [0]
+    real = nbst.sim.evaluate
+
+    def counting(problem, V, **kw):
+        count[0] += np.asarray(V).shape[0]
+        return real(problem, V, **kw)
+
+    monkeypatch.setattr(nbst.sim, "evaluate", counting)
+    return count
+
+
+@pytest.mark.parametrize("algorithm", BASELINES)
+def test_budget_is_exact(algorithm, swap, sim_counter):
+    # 1,003 is no multiple of any batch or population size: the last batch must be cut
+    sol = solve_with(algorithm, swap, seed=1, max_trials=1003)
+    m = sol.meta
+    assert m["trials"] == 1003
+    assert sim_counter[0] == 1003  # never simulates a candidate that is not counted
+    assert m["stopped"] == "max_trials"
+    assert all(1 <= t <= 1003 for t, _, _ in m["history"])
+
+
+@pytest.mark.parametrize("algorithm", BASELINES)
+def test_meta_and_history(algorithm, swap):
+    m = solve_with(algorithm, swap, seed=2, max_trials=1500).meta
+    for key in ("cost", "signature", "order", "trials", "seed", "algorithm", "wall_time", "nbst_version", "stopped",
+                "history"):
+        assert key in m
+    assert m["seed"] == 2
+    costs = [c for _, c, _ in m["history"]]
+    trials = [t for t, _, _ in m["history"]]
+    assert costs == sorted(costs, reverse=True) and len(set(costs)) == len(costs)  # strict improvements
+    assert trials == sorted(trials)
+    assert math.isclose(costs[-1], m["cost"])
+    assert m["order"] == m["signature"].count("1") == m["history"][-1][2]
+
+
+@pytest.mark.parametrize("algorithm", BASELINES)
+def test_improves_on_a_trivial_problem(algorithm, swap):
+    from nbst.sim import evaluate
+
+    sol = solve_with(algorithm, swap, seed=3, max_trials=3000)
+    # both disks within R, and at least 10x better than the straight-line start
+    assert sol.meta["order"] == 2
+    assert sol.meta["cost"] < SWAP_STRAIGHT_COST / 10
+    _, cost, _ = evaluate(swap, sol.velocities[None])
+    assert math.isclose(float(cost[0]), sol.meta["cost"], rel_tol=1e-12)  # the velocities give that cost
+
+
+@pytest.mark.parametrize("algorithm", BASELINES)
+def test_noncueable_disks_stay_at_rest(algorithm, with_noncue):
+    sol = solve_with(algorithm, with_noncue, seed=4, max_trials=800)
+    assert not with_noncue.cueable[2]
+    assert np.all(sol.velocities[2] == 0.0)
+    assert sol.meta["trials"] == 800
+
+
+@pytest.mark.parametrize("algorithm", BASELINES)
+def test_same_seed_same_result(algorithm, swap):
+    a = solve_with(algorithm, swap, seed=7, max_trials=600)
+    b = solve_with(algorithm, swap, seed=7, max_trials=600)
+    assert np.array_equal(a.velocities, b.velocities)  # bitwise determinism is the claim
+    assert a.meta["history"] == b.meta["history"]
+
+
+@pytest.mark.parametrize("algorithm", BASELINES)
+def test_stopping_rules(algorithm, swap):
+    m = solve_with(algorithm, swap, seed=1, max_trials=100_000, target_cost=1e9).meta
+    assert m["stopped"] == "target_cost" and m["trials"] <= 1024  # the first batch (generation) meets it
+    m = solve_with(algorithm, swap, seed=1, max_trials=100_000, patience=300).meta
+    assert m["stopped"] in ("patience", "converged") and m["trials"] < 100_000
+    calls = []
+    m = solve_with(algorithm, swap, seed=1, max_trials=100_000, callback=lambda p: calls.append(p.trials) or True).meta
+    assert m["stopped"] == "callback" and len(calls) == 1 and m["trials"] == calls[0]
+
+
+def test_dispatcher(swap):
+    assert set(ALGORITHMS) == {"signature", "cma", "de", "ga", "random"}
+    m = solve_with("signature", swap, seed=1, max_trials=500, variant="A").meta
+    assert m["variant"] == "A" and m["trials"] <= 500
+    with pytest.raises(ProblemError, match="unknown algorithm"):
+        solve_with("pso", swap, seed=1, max_trials=10)
+    with pytest.raises(ProblemError, match="variant"):
+        solve_with("cma", swap, seed=1, max_trials=10, variant="B")
+    with pytest.raises(ProblemError, match="max_trials"):
+        solve_with("ga", swap, seed=1, max_trials=0)
+
+
+def test_cma_restarts_double_the_population(swap):
+    m = solve_with("cma", swap, seed=1, max_trials=4000).meta
+    pops = [e["population"] for e in m["restart_ends"]]
+    assert m["restarts"] == len(pops) - 1 >= 1
+    assert pops == [pops[0] * 2**k for k in range(len(pops))]
+    assert m["params"]["sigma0"] == pytest.approx(1.0 * 30.0 / 2.0)  # CMA_SIGMA0_FRACTION * R / t_final
