@@ -143,8 +143,8 @@ class SearchParams:
     hard_limit: int = 400
     max_events: int = MAX_EVENTS
     polish: bool = False
-    polish_sims: int = 30
-    polish_ratio: float = 4.0
+    polish_sims: int = 20
+    polish_ratio: float = 2.0
     bank_weight: float = 0.0
     bank_bounces: int = 3
     strike_weight: float = 0.0
