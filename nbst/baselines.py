@@ -113,6 +113,8 @@ class _Budget:
         self.best_sig = 0
         self.best_x = self.x0 = problem.straight_velocities()[self.cue].ravel()
         self.best_trial = 0
+        self.full = (1 << problem.n) - 1
+        self.first_full: int | None = None
         self.history: list[list] = []
         self.stopped: str | None = None
         self.phase = phase
@@ -141,6 +143,10 @@ class _Budget:
         _, cost, sig = self._evaluate(self.problem, self.velocities(X))
         start = self.trials
         self.trials += b
+        if self.first_full is None:
+            hit = np.flatnonzero(sig == self.full)
+            if hit.size:
+                self.first_full = start + int(hit[0]) + 1
         k = int(np.argmin(cost))
         if cost[k] < self.best_cost:
             self.best_cost, self.best_sig, self.best_x = float(cost[k]), int(sig[k]), X[k].copy()
@@ -210,7 +216,7 @@ def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: 
         "wall_time": wall,
         "trials_per_s": b.trials / wall if wall > 0 else None,
         "nbst_version": __version__,
-        "first_full_order_trial": next((t for t, _, o in b.history if o == problem.n), None),
+        "first_full_order_trial": b.first_full,
         "history": b.history,
     }
     return make_solution(problem, b.velocities(np.asarray(xbest)[None])[0], **meta)
@@ -450,9 +456,13 @@ def solve_de(problem: Problem, *, seed: int | None = None, max_trials: int = 1_0
         b.progress()
         return b.stopped is not None
 
+    import inspect
+
+    gen = np.random.default_rng(seed)
+    rng_kw = {"rng": gen} if "rng" in inspect.signature(differential_evolution).parameters else {"seed": gen}
     try:
         differential_evolution(objective, de_bounds(problem), strategy=strategy, maxiter=10**9, popsize=popsize,
-                               tol=0.0, atol=0.0, rng=np.random.default_rng(seed), callback=on_generation,
+                               tol=0.0, atol=0.0, callback=on_generation, **rng_kw,
                                polish=False, x0=np.clip(b.x0, *np.array(de_bounds(problem)).T), vectorized=True,
                                updating="deferred")
     except KeyboardInterrupt:

@@ -1,0 +1,131 @@
+"""Tables and figures of ``nbst experiment``: the thin writers (CSV, Markdown, PNG + SVG).
+
+The rows come from ``nbst.experiments`` (pure summaries); here they are only drawn or
+written. matplotlib is imported lazily, with the Agg backend (no display needed).
+"""
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+from .experiments import BASELINE_ENTRIES, fmt
+
+#: Figure size (inches) and raster resolution: small files for the docs (tens of kB).
+FIG_SIZE = (7.0, 4.2)
+DPI = 110
+COLORS = {"variant": "#4472c4", "nbst": "#2e8b57", "baseline": "#e07b39"}
+
+
+def write_csv(path: str | Path, rows: list[dict], columns: list[str]) -> None:
+    """Write rows (dicts) with the given columns; missing values as empty cells."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for r in rows:
+        w.writerow(["" if r.get(c) is None else r.get(c) for c in columns])
+    _write_text(path, buf.getvalue())
+
+
+def _write_text(path: str | Path, text: str) -> None:
+    import os
+    import tempfile
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600; give the file the usual permissions
+    with os.fdopen(fd, "w", encoding="utf-8") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+def markdown_table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
+    """A Markdown table: columns = [(key, header)]; numbers right-aligned."""
+    head = "| " + " | ".join(h for _, h in columns) + " |"
+    align = "|" + "|".join("---" if k in ("entry", "problem") else "---:" for k, _ in columns) + "|"
+    body = ["| " + " | ".join(fmt(r.get(k)) for k, _ in columns) + " |" for r in rows]
+    return "\n".join([head, align, *body]) + "\n"
+
+
+def write_markdown(path: str | Path, text: str) -> None:
+    _write_text(path, text)
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update({"svg.fonttype": "none", "path.simplify": True, "font.size": 9})
+    return plt
+
+
+def _kind(entry: str) -> str:
+    return "baseline" if entry in BASELINE_ENTRIES else ("nbst" if entry == "nbst" else "variant")
+
+
+def save_figure(fig, stem: str | Path) -> list[Path]:
+    """Write ``stem.png`` and ``stem.svg``; returns the paths."""
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    out = []
+    for ext in ("png", "svg"):
+        p = stem.with_suffix(f".{ext}")
+        fig.savefig(p, dpi=DPI, bbox_inches="tight", metadata={"Date": None} if ext == "svg" else None)
+        out.append(p)
+    _plt().close(fig)
+    return out
+
+
+def plot_curves(rows: list[dict], *, title: str):
+    """Best-so-far cost (log) against trials, one step line per run, one colour per entry."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=FIG_SIZE)
+    cmap = plt.get_cmap("tab10")
+    entries = list(dict.fromkeys(r["entry"] for r in rows))
+    for k, e in enumerate(entries):
+        runs = list(dict.fromkeys(r["run"] for r in rows if r["entry"] == e))
+        for j, run in enumerate(runs):
+            pts = [(r["trial"], r["best_cost"]) for r in rows if r["entry"] == e and r["run"] == run]
+            xs, ys = zip(*pts)
+            ax.step(xs, [max(y, 1e-3) for y in ys], where="post", color=cmap(k % 10), lw=1.0, alpha=0.85,
+                    label=f"{e} ({len(runs)} runs)" if j == 0 else None)
+    ax.set_yscale("log")
+    ax.set_xlabel("trials (simulations)")
+    ax.set_ylabel("best L2 cost so far")
+    ax.set_title(title)
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(loc="upper right", frameon=False)
+    ax.set_xlim(left=0)
+    return fig
+
+
+def plot_ablation(rows: list[dict], *, title: str):
+    """Bars: mean final cost per entry, whiskers from the best to the worst run (log scale)."""
+    import numpy as np
+
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=FIG_SIZE)
+    x = np.arange(len(rows))
+    mean = np.array([r["mean"] for r in rows])
+    lo = np.array([r["best"] for r in rows])
+    hi = np.array([r["worst"] for r in rows])
+    floor = 1e-3  # log axis: a zero cost is drawn at the floor
+    mean_d, lo_d, hi_d = (np.maximum(a, floor) for a in (mean, lo, hi))
+    ax.bar(x, mean_d, color=[COLORS[_kind(r["entry"])] for r in rows], width=0.7)
+    ax.errorbar(x, mean_d, yerr=[mean_d - lo_d, hi_d - mean_d], fmt="none", ecolor="black", capsize=3, lw=0.9)
+    ax.set_yscale("log")
+    ax.set_xticks(x, [r["entry"] for r in rows])
+    ax.set_ylabel("final L2 cost (mean; whiskers best..worst)")
+    ax.set_title(title)
+    ax.grid(True, axis="y", which="major", alpha=0.3)
+    for xi, r in zip(x, rows):
+        ax.annotate(f"{r['full_order']}/{r['runs']}", (xi, hi_d[xi]), textcoords="offset points", xytext=(0, 3),
+                    ha="center", fontsize=7)
+    ax.text(0.99, 0.98, "n/m above a bar: runs ending with every disk within R", transform=ax.transAxes,
+            ha="right", va="top", fontsize=7)
+    return fig

@@ -1,0 +1,328 @@
+"""Experiments: many independent runs of the search and the baselines, and their summaries.
+
+A run is a pure function of its :class:`RunSpec` (problem, entry, seed, trial budget):
+:func:`run_one` returns a JSON-ready dict. :func:`run_specs` executes specs locally in a
+process pool or on a Dask cluster and writes each finished run to its own JSON file
+(atomically) as soon as it finishes, so a crash loses no finished run and running the
+same specs again skips the finished ones. The summaries (:func:`curves_rows`,
+:func:`ablation_rows`, :func:`compare_rows`) are pure functions of the results; plots
+and tables are drawn by ``nbst.exp_plots``.
+
+Entries name what runs: ``A`` .. ``H`` and ``nbst`` are the signature search's variants
+(``nbst.search.solve``), ``cma``, ``de``, ``ga``, ``random`` the baselines
+(``nbst.baselines``). Every run uses its whole budget (patience off) unless a target
+cost is given.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import statistics
+import sys
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Callable, Iterable
+
+from .problem import Problem, ProblemError, problem_from_dict
+
+SCHEMA_VERSION = 1
+VARIANT_ENTRIES = ("A", "B", "C", "D", "E", "F", "G", "H", "nbst")
+BASELINE_ENTRIES = ("cma", "de", "ga", "random")
+ENTRIES = VARIANT_ENTRIES + BASELINE_ENTRIES
+#: The ablation's default bars: the paper's Figures 7/8 (A-H) plus nbst's default and each baseline.
+ABLATION_ENTRIES = ENTRIES
+#: Run files live under this folder of the output folder.
+RUNS_DIR = "runs"
+
+
+def parse_entry(text: str) -> str:
+    """"a" -> "A", "NBST" -> "nbst", "CMA" -> "cma"; ProblemError for an unknown name."""
+    t = text.strip()
+    if t.upper() in VARIANT_ENTRIES[:-1]:
+        return t.upper()
+    if t.lower() in ("nbst",) + BASELINE_ENTRIES:
+        return t.lower()
+    raise ProblemError("<arguments>", "--algorithms",
+                       f"unknown entry {text!r}; choose from {', '.join(ENTRIES)} (A-H and nbst are variants of the "
+                       f"signature search; 'signature' means nbst)")
+
+
+def parse_entries(text: str) -> tuple[str, ...]:
+    """A comma-separated list of entries ("signature" means the default search, nbst)."""
+    out = []
+    for part in text.split(","):
+        if not part.strip():
+            continue
+        e = "nbst" if part.strip().lower() == "signature" else parse_entry(part)
+        if e not in out:
+            out.append(e)
+    if not out:
+        raise ProblemError("<arguments>", "--algorithms", "no entry given")
+    return tuple(out)
+
+
+def problem_digest(problem: Problem) -> str:
+    """Short hash of the problem's content (so a changed file is never confused with a cached run)."""
+    text = json.dumps(problem.to_dict(), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunSpec:
+    """One run: entry (variant A-H / nbst, or a baseline) on a problem with a seed and budget.
+
+    problem     : the problem's JSON dict (self-contained: workers need no file)
+    target_cost : stop once the best cost is <= this (None: use the whole budget)
+    """
+
+    problem: dict
+    entry: str
+    seed: int
+    trials: int
+    target_cost: float | None = None
+
+    @property
+    def problem_name(self) -> str:
+        return str(self.problem.get("name", "problem"))
+
+    def key(self) -> dict:
+        """What identifies the run (stored in its file; a file whose key differs is rerun)."""
+        return {"problem": self.problem_name, "problem_sha": problem_digest(problem_from_dict(self.problem)),
+                "entry": self.entry, "seed": self.seed, "trials": self.trials, "target_cost": self.target_cost}
+
+    def relpath(self) -> str:
+        tc = "" if self.target_cost is None else f"-c{self.target_cost:g}"
+        return f"{RUNS_DIR}/{_safe(self.problem_name)}/{self.entry}/t{self.trials}{tc}-s{self.seed}.json"
+
+
+def _safe(name: str) -> str:
+    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name) or "problem"
+
+
+def make_specs(problems: Iterable[Problem], entries: Iterable[str], *, runs: int, trials: int, seed: int = 1,
+               target_cost: float | None = None) -> list[RunSpec]:
+    """runs x entries x problems specs; run k uses seed ``seed + k`` (the same seeds for every entry)."""
+    problems, entries = list(problems), list(entries)
+    return [RunSpec(problem=p.to_dict(), entry=e, seed=seed + k, trials=int(trials), target_cost=target_cost)
+            for p in problems for e in entries for k in range(int(runs))]
+
+
+def run_one(spec: RunSpec) -> dict:
+    """Run one spec (pure: the same spec gives the same result, except wall time)."""
+    from .baselines import solve_with
+
+    problem = problem_from_dict(spec.problem, source=f"<experiment {spec.problem_name}>")
+    if spec.entry in VARIANT_ENTRIES:
+        sol = solve_with("signature", problem, seed=spec.seed, max_trials=spec.trials, patience=0,
+                         target_cost=spec.target_cost, variant=spec.entry)
+    else:
+        sol = solve_with(spec.entry, problem, seed=spec.seed, max_trials=spec.trials, patience=0,
+                         target_cost=spec.target_cost)
+    m = sol.meta
+    keep = ("algorithm", "cost", "signature", "order", "trials", "seed", "stopped", "wall_time", "trials_per_s",
+            "first_full_order_trial", "nbst_version", "history", "restarts")
+    return {"schema_version": SCHEMA_VERSION, "kind": "nbst-experiment-run", "key": spec.key(), "n": problem.n,
+            **{k: m[k] for k in keep if k in m}, "velocities": sol.velocities.tolist()}
+
+
+def _load_finished(path: Path, spec: RunSpec) -> dict | None:
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(d, dict) or d.get("kind") != "nbst-experiment-run" or d.get("key") != spec.key():
+        return None
+    return d
+
+
+def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None = None, cluster=None,
+              progress: bool = True, desc: str = "runs",
+              on_result: Callable[[RunSpec, dict], None] | None = None) -> list[dict]:
+    """Execute ``specs``; each finished run is written to ``out_dir/spec.relpath()`` at once.
+
+    Finished runs (a file that parses and has the same key) are loaded, not rerun.
+    workers : local processes (default: the machine's cores); 1 runs in this process
+    cluster : a Dask scheduler address (``tcp://host:8786``) or a ``dask.distributed.Client``;
+              results come back to this process, which writes them
+    Returns the results in the order of ``specs``.
+    """
+    from .solution import write_json_atomic
+
+    out = Path(out_dir)
+    results: list[dict | None] = [None] * len(specs)
+    todo = []
+    for i, spec in enumerate(specs):
+        d = _load_finished(out / spec.relpath(), spec)
+        if d is not None:
+            results[i] = d
+        else:
+            todo.append(i)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="run", file=sys.stderr, desc=desc,
+                   dynamic_ncols=True)
+
+    def done(i: int, res: dict) -> None:
+        if res.get("stopped") == "interrupted":  # Ctrl-C reached the worker: not a finished run
+            raise KeyboardInterrupt
+        write_json_atomic(out / specs[i].relpath(), res)
+        results[i] = res
+        if on_result is not None:
+            on_result(specs[i], res)
+        if bar is not None:
+            bar.update(1)
+            bar.set_postfix_str(f"{specs[i].entry} seed {specs[i].seed}: cost {res['cost']:.6g}", refresh=False)
+
+    try:
+        if not todo:
+            pass
+        elif cluster is not None:
+            _run_dask(specs, todo, cluster, done)
+        elif (workers or os.cpu_count() or 1) <= 1 or len(todo) == 1:
+            for i in todo:
+                done(i, run_one(specs[i]))
+        else:
+            _run_pool(specs, todo, workers or os.cpu_count() or 1, done)
+    finally:
+        if bar is not None:
+            bar.close()
+    return results  # type: ignore[return-value]
+
+
+def _run_pool(specs, todo, workers: int, done) -> None:
+    import multiprocessing as mp
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    # spawn: numba's compiled state and fork do not mix; workers load the cached kernels
+    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=mp.get_context("spawn")) as ex:
+        pending = {ex.submit(run_one, specs[i]): i for i in todo}
+        try:
+            while pending:
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for f in finished:
+                    done(pending.pop(f), f.result())
+        except BaseException:
+            for f in pending:
+                f.cancel()
+            raise
+
+
+def _run_dask(specs, todo, cluster, done) -> None:
+    from dask.distributed import Client, as_completed
+
+    client = cluster if isinstance(cluster, Client) else Client(cluster)
+    try:
+        futures = client.map(run_one, [specs[i] for i in todo], pure=False)
+        index = {f.key: i for f, i in zip(futures, todo)}
+        for f in as_completed(futures):
+            done(index[f.key], f.result())
+    finally:
+        if client is not cluster:
+            client.close()
+
+
+# --------------------------------------------------------------------------- summaries (pure)
+
+def best_so_far(history: list, trials: int) -> list[tuple[int, float]]:
+    """The step curve [(trial, best cost)] from a run's history, ending at its last trial."""
+    pts = [(int(t), float(c)) for t, c, _ in history]
+    if pts and pts[-1][0] < trials:
+        pts.append((int(trials), pts[-1][1]))
+    return pts
+
+
+def curves_rows(results: list[dict]) -> list[dict]:
+    """CSV rows of the best-so-far curves: entry, run, seed, trial, best_cost, order (one per improvement,
+    plus the run's last trial)."""
+    rows = []
+    counters: dict[str, int] = {}
+    for r in results:
+        e = r["key"]["entry"]
+        k = counters[e] = counters.get(e, 0) + 1
+        orders = {int(t): int(o) for t, _, o in r["history"]}
+        for t, c in best_so_far(r["history"], r["trials"]):
+            last = max((tt for tt in orders if tt <= t), default=None)
+            rows.append({"problem": r["key"]["problem"], "entry": e, "run": k, "seed": r["seed"], "trial": t,
+                         "best_cost": c, "order": orders[last] if last is not None else 0})
+    return rows
+
+
+def _median(xs):
+    return statistics.median(xs) if xs else None
+
+
+def ablation_rows(results: list[dict], entries: Iterable[str]) -> list[dict]:
+    """Per entry: runs, mean / best / worst final cost, runs reaching order N, median trials/s."""
+    rows = []
+    for e in entries:
+        rs = [r for r in results if r["key"]["entry"] == e]
+        if not rs:
+            continue
+        costs = [float(r["cost"]) for r in rs]
+        rows.append({"entry": e, "runs": len(rs), "mean": statistics.fmean(costs), "best": min(costs),
+                     "worst": max(costs), "full_order": sum(1 for r in rs if r["order"] == r["n"]),
+                     "median_trials": _median([r["trials"] for r in rs]),
+                     "median_trials_per_s": _median([r["trials_per_s"] for r in rs if r.get("trials_per_s")])})
+    return rows
+
+
+def solved_at(r: dict, target_cost: float | None) -> int | None:
+    """The trial at which a run counts as solved: the first with cost <= target_cost (when given),
+    else the first with every disk within R (order N)."""
+    if target_cost is None:
+        return r.get("first_full_order_trial")
+    return next((int(t) for t, c, _ in r["history"] if c <= target_cost), None)
+
+
+def compare_rows(results: list[dict], entries: Iterable[str], *, target_cost: float | None = None) -> list[dict]:
+    """Per entry over every problem and run: success rate, trials to solve (median, mean over the
+    solved runs; a failed run counts as its budget in ``mean_trials_budget``), median final cost."""
+    rows = []
+    for e in entries:
+        rs = [r for r in results if r["key"]["entry"] == e]
+        if not rs:
+            continue
+        at = [solved_at(r, target_cost) for r in rs]
+        ok = [t for t in at if t is not None]
+        rows.append({"entry": e, "problems": len({r["key"]["problem_sha"] for r in rs}), "runs": len(rs),
+                     "solved": len(ok), "success_rate": len(ok) / len(rs),
+                     "median_trials_to_solve": _median(ok),
+                     "mean_trials_to_solve": statistics.fmean(ok) if ok else None,
+                     "mean_trials_budget": statistics.fmean([t if t is not None else r["key"]["trials"]
+                                                            for t, r in zip(at, rs)]),
+                     "median_cost": _median([float(r["cost"]) for r in rs]),
+                     "median_trials_per_s": _median([r["trials_per_s"] for r in rs if r.get("trials_per_s")])})
+    return rows
+
+
+def compare_detail_rows(results: list[dict], *, target_cost: float | None = None) -> list[dict]:
+    """One row per run: problem, entry, seed, cost, order, solved_at."""
+    return [{"problem": r["key"]["problem"], "entry": r["key"]["entry"], "seed": r["seed"], "cost": r["cost"],
+             "order": r["order"], "n": r["n"], "trials": r["trials"], "solved_at": solved_at(r, target_cost)}
+            for r in results]
+
+
+def fmt(x, digits: int = 6) -> str:
+    """A table cell: numbers with ``digits`` significant digits, None as an em dash."""
+    if x is None:
+        return "—"
+    if isinstance(x, float):
+        if not math.isfinite(x):
+            return str(x)
+        if x == int(x) and abs(x) < 1e15:
+            return f"{int(x):,}"
+        return f"{x:.{digits}g}"
+    if isinstance(x, int):
+        return f"{x:,}"
+    return str(x)
+
+
+def spec_dict(spec: RunSpec) -> dict:
+    d = asdict(spec)
+    d.pop("problem")
+    d["problem"] = spec.problem_name
+    return d
