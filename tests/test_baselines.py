@@ -129,4 +129,4 @@ def test_cma_restarts_double_the_population(swap):
     pops = [e["population"] for e in m["restart_ends"]]
     assert m["restarts"] == len(pops) - 1 >= 1
     assert pops == [pops[0] * 2**k for k in range(len(pops))]
-    assert m["params"]["sigma0"] == pytest.approx(1.0 * 30.0 / 2.0)  # CMA_SIGMA0_FRACTION * R / t_final
+    assert m["params"]["sigma0"] == pytest.approx(3.0 * 30.0 / 2.0)  # CMA_SIGMA0_FRACTION * R / t_final
