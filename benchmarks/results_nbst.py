@@ -24,14 +24,14 @@ from nbst import load_problem
 from nbst.planted import planted
 from nbst.search import solve, variant_params
 
-OFF = {  # ablation: each addition off alone
+OFF = {  # ablation: each addition off alone (and the two that are off by default, on)
     "nbst (all on)": {},
     "no polish": {"polish": False},
     "no bank shots": {"bank_weight": 0.0},
     "no strikes": {"strike_weight": 0.0},
-    "no adaptive schedule": {"adapt": False},
     "no straight start": {"straight_start": False},
-    "no restarts": {"restart": 0},
+    "+ adaptive schedule (off by default)": {"adapt": True},
+    "+ restarts every 20k (off by default)": {"restart": 20_000},
 }
 
 

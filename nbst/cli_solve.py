@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, strikes, an adaptive operator schedule "
-                "and restarts (default); A the paper's full algorithm; B uniform parent selection; C no crossover; "
+VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes and a straight start "
+                "(default); A the paper's full algorithm; B uniform parent selection; C no crossover; "
                 "D no genetically "
                 "engineered crossover; E no signature information (R = box width, initial population 60); "
                 "F no culling of subsumed solutions; G no elitism; H no directed randomization")
