@@ -23,6 +23,7 @@ COMMAND_MODULES = (
     "nbst.cli_core",
     "nbst.cli_solve",
     "nbst.cli_generate",
+    "nbst.cli_experiment",
     "nbst.models.cli",
     "nbst.render.cli",
 )
