@@ -130,3 +130,19 @@ def test_cma_restarts_double_the_population(swap):
     assert m["restarts"] == len(pops) - 1 >= 1
     assert pops == [pops[0] * 2**k for k in range(len(pops))]
     assert m["params"]["sigma0"] == pytest.approx(3.0 * 30.0 / 2.0)  # CMA_SIGMA0_FRACTION * R / t_final
+
+
+def test_cli_solve_algorithm(tmp_path, capsys):
+    import json
+
+    from nbst.cli import main
+
+    prob = tmp_path / "swap.json"
+    prob.write_text(json.dumps(SWAP))
+    out = tmp_path / "sol.json"
+    assert main(["solve", str(prob), "-o", str(out), "--algorithm", "ga", "--max-trials", "500", "--seed", "3",
+                 "--quiet"]) == 0
+    d = json.loads(out.read_text())
+    assert d["algorithm"] == "steady-state-ga" and d["trials"] == 500 and d["seed"] == 3
+    assert main(["solve", str(prob), "-o", str(out), "--algorithm", "cma", "--variant", "B", "--quiet"]) == 2
+    assert "--variant" in capsys.readouterr().err
