@@ -255,6 +255,11 @@ def _median(xs):
     return statistics.median(xs) if xs else None
 
 
+def _median_rate(rs: list[dict]):
+    m = _median([r["trials_per_s"] for r in rs if r.get("trials_per_s")])
+    return None if m is None else round(m)
+
+
 def ablation_rows(results: list[dict], entries: Iterable[str]) -> list[dict]:
     """Per entry: runs, mean / best / worst final cost, runs reaching order N, median trials/s."""
     rows = []
@@ -266,7 +271,7 @@ def ablation_rows(results: list[dict], entries: Iterable[str]) -> list[dict]:
         rows.append({"entry": e, "runs": len(rs), "mean": statistics.fmean(costs), "best": min(costs),
                      "worst": max(costs), "full_order": sum(1 for r in rs if r["order"] == r["n"]),
                      "median_trials": _median([r["trials"] for r in rs]),
-                     "median_trials_per_s": _median([r["trials_per_s"] for r in rs if r.get("trials_per_s")])})
+                     "median_trials_per_s": _median_rate(rs)})
     return rows
 
 
@@ -295,7 +300,7 @@ def compare_rows(results: list[dict], entries: Iterable[str], *, target_cost: fl
                      "mean_trials_budget": statistics.fmean([t if t is not None else r["key"]["trials"]
                                                             for t, r in zip(at, rs)]),
                      "median_cost": _median([float(r["cost"]) for r in rs]),
-                     "median_trials_per_s": _median([r["trials_per_s"] for r in rs if r.get("trials_per_s")])})
+                     "median_trials_per_s": _median_rate(rs)})
     return rows
 
 
