@@ -102,7 +102,7 @@ def plot_curves(rows: list[dict], *, title: str):
     ax.set_ylabel(f"best L2 cost so far (below {CURVE_FLOOR:g} drawn at {CURVE_FLOOR:g})")
     ax.set_title(title)
     ax.grid(True, which="major", alpha=0.3)
-    ax.legend(loc="upper right", frameon=False)
+    ax.legend(loc="lower left", frameon=True, framealpha=0.85)
     ax.set_xlim(left=1)
     return fig
 
