@@ -50,6 +50,60 @@ def evaluate_one(x0, v, radius, mass, target, W, H, t_final, R, max_events, work
 
 
 @njit(cache=True, error_model="numpy")
+def settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng,
+           scr_ord, acc, n):
+    """Book one simulated candidate (after the trial counters): order statistics, an
+    improvement of the best (and the history), the insert of initialize or generate,
+    and the end of initialize. Shared by this loop and ``search_nbst``'s."""
+    ist = pop[5]
+    elitism = pi[PI_ELITISM] != 0
+    order = popcount(sig)
+    if order > st[ST_MAX_ORDER]:
+        st[ST_MAX_ORDER] = order
+    if order == n and st[ST_FIRST_FULL] < 0:
+        st[ST_FIRST_FULL] = st[ST_TRIALS]
+    if order == 0:  # rejected: initialize rejects order 0; generate does too (see docs/search.md)
+        st[ST_REJECTED] += 1
+    else:
+        improvement = cost < best_cost[0]
+        if improvement:
+            best_cost[0] = cost
+            best_v[:, :] = child
+            st[ST_BEST_SIG] = sig
+            st[ST_SINCE] = 0
+            k = st[ST_NHIST]
+            hist_t[k] = st[ST_TRIALS]
+            hist_c[k] = cost
+            hist_o[k] = order
+            st[ST_NHIST] = k + 1
+            if op >= 0:
+                op_count[op, 1] += 1
+        if st[ST_PHASE] == PHASE_INIT:
+            insert_initial(pop, child, cost, sig, improvement, elitism, pi[PI_SIG_LIMIT], pi[PI_POP_LIMIT])
+        else:
+            code = insert(pop, child, cost, sig, p1, p2, improvement, elitism, pi[PI_SIG_LIMIT],
+                          pi[PI_POP_LIMIT], pi[PI_HARD_LIMIT], pi[PI_CULL], n, rng, scr_ord)
+            if code == INS_CULLED:
+                st[ST_CULLS] += 1
+            elif code == INS_FALLBACK:
+                st[ST_FALLBACK] += 1
+    if st[ST_PHASE] == PHASE_INIT and ist[SIZE] > 0:
+        done = st[ST_INIT_TRIALS] >= pi[PI_INIT_MAX_TRIES]
+        if pi[PI_INIT_POPULATION] > 0:
+            done = done or ist[SIZE] >= pi[PI_INIT_POPULATION]
+        else:
+            acceptable_counts(pop, n, acc)
+            ok = True
+            for i in range(n):
+                if acc[i] < pi[PI_DIVERSITY]:
+                    ok = False
+                    break
+            done = done or ok
+        if done:
+            st[ST_PHASE] = PHASE_GENERATE
+
+
+@njit(cache=True, error_model="numpy")
 def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
               pop, st, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, rec_v, n_steps):
     """Advance the search by at most n_steps trials. Returns an RC_* code.
@@ -79,7 +133,6 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
     acc = np.empty(n, np.int64)
     R = pf[PF_R]
     max_events = pi[PI_MAX_EVENTS]
-    elitism = pi[PI_ELITISM] != 0
     w_c = pf[PF_W_CREEP]
     w_d = w_c + pf[PF_W_DIRECTED]
     w_u = w_d + pf[PF_W_UNIFORM]
@@ -145,50 +198,7 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
             st[ST_INIT_TRIALS] += 1
         if trunc:
             st[ST_TRUNCATED] += 1
-        order = popcount(sig)
-        if order > st[ST_MAX_ORDER]:
-            st[ST_MAX_ORDER] = order
-        if order == n and st[ST_FIRST_FULL] < 0:
-            st[ST_FIRST_FULL] = st[ST_TRIALS]
-        if order == 0:  # rejected: initialize rejects order 0; generate does too (see docs/search.md)
-            st[ST_REJECTED] += 1
-        else:
-            improvement = cost < best_cost[0]
-            if improvement:
-                best_cost[0] = cost
-                best_v[:, :] = child
-                st[ST_BEST_SIG] = sig
-                st[ST_SINCE] = 0
-                k = st[ST_NHIST]
-                hist_t[k] = st[ST_TRIALS]
-                hist_c[k] = cost
-                hist_o[k] = order
-                st[ST_NHIST] = k + 1
-                if op >= 0:
-                    op_count[op, 1] += 1
-            if st[ST_PHASE] == PHASE_INIT:
-                insert_initial(pop, child, cost, sig, improvement, elitism, pi[PI_SIG_LIMIT], pi[PI_POP_LIMIT])
-            else:
-                code = insert(pop, child, cost, sig, p1, p2, improvement, elitism, pi[PI_SIG_LIMIT],
-                              pi[PI_POP_LIMIT], pi[PI_HARD_LIMIT], pi[PI_CULL], n, rng, scr_ord)
-                if code == INS_CULLED:
-                    st[ST_CULLS] += 1
-                elif code == INS_FALLBACK:
-                    st[ST_FALLBACK] += 1
-
-        if st[ST_PHASE] == PHASE_INIT and ist[SIZE] > 0:
-            done = st[ST_INIT_TRIALS] >= pi[PI_INIT_MAX_TRIES]
-            if pi[PI_INIT_POPULATION] > 0:
-                done = done or ist[SIZE] >= pi[PI_INIT_POPULATION]
-            else:
-                acceptable_counts(pop, n, acc)
-                ok = True
-                for i in range(n):
-                    if acc[i] < pi[PI_DIVERSITY]:
-                        ok = False
-                        break
-                done = done or ok
-            if done:
-                st[ST_PHASE] = PHASE_GENERATE
+        settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng,
+               scr_ord, acc, n)
     return RC_CHUNK_DONE
 

@@ -40,16 +40,13 @@ from numba import njit
 
 from .aim import alloc_clearance, chain_strike_velocity, choose_bank, mirror, strike_velocity
 from .polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
-from .search_loop import (PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
-                          PI_DIVERSITY, PI_ELITISM, PI_ENGINEERED, PI_HARD_LIMIT, PI_INIT_MAX_TRIES,
-                          PI_INIT_POPULATION, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_PATIENCE, PI_POP_LIMIT, PI_SENATE,
-                          PI_SIG_LIMIT, PI_CULL, PF_CREEP_SIGMA, RC_CHUNK_DONE, RC_HISTORY_FULL, RC_MAX_TRIALS,
-                          RC_PATIENCE, RC_TARGET_COST, ST_BEST_SIG, ST_CULLS, ST_FALLBACK, ST_FIRST_FULL,
-                          ST_INIT_TRIALS, ST_MAX_ORDER, ST_NHIST, ST_PHASE, ST_REJECTED, ST_SINCE, ST_TRIALS,
-                          ST_TRUNCATED, evaluate_one)
-from .search_ops import (BEST, INS_CULLED, INS_FALLBACK, NTAB, SIZE, acceptable_counts, creep_velocity, crossover,
-                         directed_velocity, insert, insert_initial, popcount, rng_int, rng_uniform, select_senate,
-                         select_uniform, uniform_velocity)
+from .search_loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
+                          PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_PATIENCE, PI_POP_LIMIT,
+                          PI_SENATE, PI_SIG_LIMIT, RC_CHUNK_DONE, RC_HISTORY_FULL, RC_MAX_TRIALS, RC_PATIENCE,
+                          RC_TARGET_COST, ST_BEST_SIG, ST_INIT_TRIALS, ST_NHIST, ST_PHASE, ST_SINCE, ST_TRIALS,
+                          ST_TRUNCATED, evaluate_one, settle)
+from .search_ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
+                         rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 from .sim import alloc_work
 
 # operators of the nbst variant
@@ -289,52 +286,10 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
                     sig = s2
                     order = popcount(sig)
 
-        if order > st[ST_MAX_ORDER]:
-            st[ST_MAX_ORDER] = order
-        if order == n and st[ST_FIRST_FULL] < 0:
-            st[ST_FIRST_FULL] = st[ST_TRIALS]
-        if order == 0:
-            st[ST_REJECTED] += 1
-        else:
-            if cost < best_cost[1]:
-                best_cost[1] = cost
-                qs[QS_LOCAL_SIG] = sig
-                qs[QS_LOCAL_SINCE] = 0
-            improvement = cost < best_cost[0]
-            if improvement:
-                best_cost[0] = cost
-                best_v[:, :] = child
-                st[ST_BEST_SIG] = sig
-                st[ST_SINCE] = 0
-                k = st[ST_NHIST]
-                hist_t[k] = st[ST_TRIALS]
-                hist_c[k] = cost
-                hist_o[k] = order
-                st[ST_NHIST] = k + 1
-                if op >= 0:
-                    op_count[op, 1] += 1
-            if st[ST_PHASE] == PHASE_INIT:
-                insert_initial(pop, child, cost, sig, improvement, elitism, pi[PI_SIG_LIMIT], pi[PI_POP_LIMIT])
-            else:
-                code = insert(pop, child, cost, sig, p1, p2, improvement, elitism, pi[PI_SIG_LIMIT],
-                              pi[PI_POP_LIMIT], pi[PI_HARD_LIMIT], pi[PI_CULL], n, rng, scr_ord)
-                if code == INS_CULLED:
-                    st[ST_CULLS] += 1
-                elif code == INS_FALLBACK:
-                    st[ST_FALLBACK] += 1
-
-        if st[ST_PHASE] == PHASE_INIT and ist[SIZE] > 0:
-            done = st[ST_INIT_TRIALS] >= pi[PI_INIT_MAX_TRIES]
-            if pi[PI_INIT_POPULATION] > 0:
-                done = done or ist[SIZE] >= pi[PI_INIT_POPULATION]
-            else:
-                acceptable_counts(pop, n, acc)
-                ok = True
-                for i in range(n):
-                    if acc[i] < pi[PI_DIVERSITY]:
-                        ok = False
-                        break
-                done = done or ok
-            if done:
-                st[ST_PHASE] = PHASE_GENERATE
+        if order > 0 and cost < best_cost[1]:  # the best since the last restart (polish's reference)
+            best_cost[1] = cost
+            qs[QS_LOCAL_SIG] = sig
+            qs[QS_LOCAL_SINCE] = 0
+        settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng,
+               scr_ord, acc, n)
     return RC_CHUNK_DONE
