@@ -62,7 +62,7 @@ def _plt():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    plt.rcParams.update({"svg.fonttype": "none", "path.simplify": True, "font.size": 9})
+    plt.rcParams.update({"svg.fonttype": "none", "svg.hashsalt": "nbst", "path.simplify": True, "font.size": 9})
     return plt
 
 
