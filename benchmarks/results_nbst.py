@@ -99,7 +99,8 @@ def planted_set(a):
         algos["CMA-ES (IPOP)"] = lambda p, s: solve_cma(p, seed=s, max_trials=a.trials, target_cost=1e-6).meta
     except ImportError:
         print("(nbst.baselines.solve_cma not available: CMA-ES column omitted)\n")
-    for noncue_frac, title in ((0.0, "all cueable: cost < 1e-6"), (0.3, "30% noncueable")):
+    sets = ((0.0, "all cueable: cost < 1e-6"), (0.3, "30% noncueable"))
+    for noncue_frac, title in (s for s, name in zip(sets, ("cueable", "noncue")) if a.set in (name, "both")):
         print(f"#### {title}\n")
         print("| N | " + " | ".join(f"{k}: solved / order N / median cost / median trials" for k in algos) + " |")
         print("|---|" + "---|" * len(algos))
@@ -135,6 +136,8 @@ def main():
     ap.add_argument("what", choices=["targets", "ablation", "planted", "speed"])
     ap.add_argument("--trials", type=int, default=1_000_000)
     ap.add_argument("--sizes", type=int, nargs="+", default=[6, 10, 14, 20, 30])
+    ap.add_argument("--set", choices=["cueable", "noncue", "both"], default="both",
+                    help="planted: which set (all cueable, or 30%% noncueable)")
     a = ap.parse_args()
     {"targets": targets, "ablation": ablation, "planted": planted_set, "speed": speed}[a.what](a)
     sys.stdout.flush()
