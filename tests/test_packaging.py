@@ -42,3 +42,36 @@ def test_wheel_holds_only_nbst(tmp_path):
                  "nbst/problems/over5.json", "nbst/problems/diamond-s14-tiny.json", "nbst/sim.py"):
         assert must in names
     assert not any(n.startswith(("tests/", "benchmarks/", "models/", "render/")) for n in names)
+
+
+CHECK = ("import importlib.util as u, os, nbst, nbst.models, nbst.render;"
+         "print(nbst.__file__); print(nbst.models.__file__); print(nbst.render.__file__);"
+         "print(u.find_spec('models'), u.find_spec('render'))")
+
+
+@pytest.mark.skipif(not (ROOT / "pyproject.toml").is_file(), reason="needs the source checkout")
+@pytest.mark.parametrize("editable", [False, True], ids=["pip-install", "pip-install-e"])
+def test_pip_install_into_a_fresh_venv(tmp_path, editable):
+    # a throwaway venv gets nbst by `pip install .` or `pip install -e .`; imported from outside
+    # the checkout it must give nbst.models / nbst.render and no top-level models / render.
+    # The dependencies come from this interpreter's site-packages, appended to the venv's path
+    # by a plain .pth (so this interpreter's own nbst install, editable or not, is not seen first).
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=120)
+    py = venv / "bin" / "python"
+    (site,) = venv.glob("lib/python*/site-packages")
+    (site / "zz_outer.pth").write_text("\n".join(p for p in sys.path if p.endswith("-packages")) + "\n")
+    cmd = [str(py), "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation"] + (["-e"] if editable else [])
+    r = subprocess.run(cmd + [str(ROOT)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    r = subprocess.run([str(py), "-c", CHECK], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert r.returncode == 0, r.stderr
+    init, models, render, tops = r.stdout.splitlines()
+    assert tops == "None None"
+    assert list(venv.glob("lib/python*/site-packages/nbst-*.dist-info")), "nbst not installed in the venv"
+    if editable:  # the checkout's folders, through the package-dir mapping
+        assert Path(init) == ROOT / "nbst" / "__init__.py"
+        assert Path(models) == ROOT / "models" / "__init__.py" and Path(render) == ROOT / "render" / "__init__.py"
+    else:  # copies inside the venv's site-packages
+        for f, sub in ((init, ""), (models, "models"), (render, "render")):
+            assert Path(f).is_relative_to(venv) and Path(f).parent == Path(init).parent / sub
