@@ -92,6 +92,9 @@ def cmd_mjcf(args) -> int:
 
     problem = load_problem(args.problem)
     v = _velocities(problem, args.solution)
+    if args.output != "-":
+        from nbst.outputs import prepare_output
+        prepare_output(args.output)
     xml = scene_xml(problem, v, timestep=args.timestep, unit=args.unit)
     if args.output == "-":
         sys.stdout.write(xml)
@@ -110,6 +113,9 @@ def cmd_validate(args) -> int:
 
     problem = load_problem(args.problem)
     v = _velocities(problem, args.solution)
+    if args.report:
+        from nbst.outputs import prepare_output
+        prepare_output(args.report, directory=True, option="--report")
     val = validate(problem, v, timestep=args.timestep, unit=args.unit, tol=args.tol)
     if args.report:
         from pathlib import Path
@@ -138,6 +144,8 @@ def cmd_gallery(args) -> int:
     from .gallery import main as gallery_main
     argv = list(args.names) + ["--seed", str(args.seed), "--max-trials", str(args.max_trials)]
     if args.dir:
+        from nbst.outputs import prepare_output
+        prepare_output(args.dir, directory=True, option="--dir")
         argv += ["--dir", args.dir]
     if args.no_search:
         argv.append("--no-search")

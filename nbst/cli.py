@@ -16,6 +16,7 @@ import json
 import sys
 
 from ._version import __version__
+from .outputs import OutputError
 from .problem import ProblemError
 
 #: Modules whose ``register(subparsers)`` adds subcommands, in ``--help`` order.
@@ -62,7 +63,7 @@ def main(argv=None) -> int:
         return 2
     try:
         return int(args.func(args) or 0)
-    except ProblemError as e:
+    except (ProblemError, OutputError) as e:
         print(f"nbst: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
@@ -70,6 +71,11 @@ def main(argv=None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except OSError as e:  # an I/O failure after the up-front checks (disk full, folder removed)
+        if e.filename is None:
+            raise
+        print(f"nbst: error: {e.filename}: {e.strerror or e}", file=sys.stderr)
+        return 1
 
 
 def print_json(obj) -> None:

@@ -116,7 +116,9 @@ def _cluster(args):
 
 def _run(args, specs, desc: str):
     from .experiments import run_specs
+    from .outputs import prepare_output
 
+    prepare_output(args.out, directory=True, option="--out")
     client = _cluster(args)
     try:
         return run_specs(specs, args.out, workers=args.workers, cluster=client, progress=not args.quiet, desc=desc)

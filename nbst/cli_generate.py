@@ -29,8 +29,13 @@ def register(sub) -> None:
 def cmd_generate(args) -> int:
     import numpy as np
 
+    from .outputs import prepare_output
     from .planted import planted
     from .solution import make_solution, save_solution, write_json_atomic
+
+    prepare_output(args.output)
+    if args.solution:
+        prepare_output(args.solution, option="--solution")
 
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
     for flag, value in (("--t-final", args.t_final), ("--target-radius", args.target_radius),

@@ -81,7 +81,10 @@ def cmd_solve(args) -> int:
     from .problem import load_problem
     from .solution import save_solution
 
+    from .outputs import prepare_output
+
     problem = load_problem(args.problem)
+    prepare_output(args.output)  # before the search: a long solve must not end unable to write
     algorithm = getattr(args, "algorithm", "signature")
     if algorithm != "signature" and args.variant != "nbst":
         from .problem import ProblemError

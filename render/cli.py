@@ -123,6 +123,8 @@ def cmd_render(args) -> int:
     sol = load_solution(args.solution, problem)
     if args.still is not None and not (0 <= args.still <= problem.t_final):
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
+    from nbst.outputs import prepare_output
+    prepare_output(out)
     try:
         return _render(args, problem, sol, out, kind, size, fps)
     except RenderError as e:
@@ -235,5 +237,7 @@ def _save(fig, args, save_figure) -> int:
     if ext not in (".png", ".pdf", ".svg"):
         return _err("plot", f"{Path(args.output).name}: unknown figure format {ext or '(no extension)'!r}; "
                             "use .png, .pdf or .svg")
+    from nbst.outputs import prepare_output
+    prepare_output(args.output)
     save_figure(fig, args.output, dpi=args.dpi)
     return 0

@@ -99,3 +99,33 @@ def test_checkout_shim_runs(over5_solution, tmp_path):
     r = run("simulate", "over5", str(f), "--json", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["order"] >= 0
+
+
+@pytest.mark.parametrize("cmd", [
+    ["solve", "over5", "-o", "{bad}/s.json", "--max-trials", "100", "--quiet"],
+    ["generate", "--planted", "5", "--seed", "1", "-o", "{bad}/p.json"],
+    ["generate", "--planted", "5", "--seed", "1", "-o", "{ok}/p.json", "--solution", "{bad}/s.json"],
+    ["mjcf", "over5", "{sol}", "-o", "{bad}/scene.xml"],
+    ["validate", "over5", "{sol}", "--report", "{bad}/report"],
+    ["render", "over5", "{sol}", "-o", "{bad}/v.mp4"],
+    ["render", "over5", "{sol}", "--still", "1", "-o", "{bad}/f.png"],
+    ["plot", "problem", "over5", "-o", "{bad}/f.png"],
+    ["experiment", "compare", "over5", "--runs", "1", "--trials", "100", "--algorithms", "random",
+     "--out", "{bad}/exp", "--quiet"],
+    ["gallery", "over5", "--no-search", "--dir", "{bad}/gallery"],
+], ids=lambda c: " ".join(c[:2]))
+def test_unwritable_output_exits_2_before_the_work(cmd, over5_solution, tmp_path, capsys):
+    # {bad} is a path under a regular file: no folder can be made there, even by root
+    (tmp_path / "file").write_text("x")
+    bad = tmp_path / "file" / "sub"
+    args = [a.format(bad=bad, ok=tmp_path, sol=over5_solution[2]) for a in cmd]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err and err[-1].startswith("nbst: error: ") and str(bad) in err[-1] and "cannot write there" in err[-1]
+    assert "Traceback" not in "\n".join(err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "sol.json"]  # nothing else was written
+
+
+def test_output_that_is_a_folder_is_refused(tmp_path, capsys):
+    assert main(["solve", "over5", "-o", str(tmp_path), "--max-trials", "10", "--quiet"]) == 2
+    assert "is a folder; expected a file name" in capsys.readouterr().err
