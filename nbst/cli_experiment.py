@@ -8,46 +8,25 @@ are the curves' A runs when seeds and budgets agree).
 """
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
+
+from .cli_solve import int_at_least, nonnegative_cost
 
 ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst (nbst's default search; "
               "'signature' means the same), cma, de, ga, random (baselines)")
 
 
-def _int_at_least(lo: int, what: str):
-    def parse(text: str) -> int:
-        try:
-            v = int(text.replace("_", ""))
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be an integer, got {text!r}") from None
-        if v < lo:
-            raise argparse.ArgumentTypeError(f"{what} must be >= {lo}, got {v}")
-        return v
-    return parse
-
-
-def _cost(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"target cost must be a number, got {text!r}") from None
-    if not v >= 0.0:
-        raise argparse.ArgumentTypeError(f"target cost must be >= 0, got {text!r}")
-    return v
-
-
 def _common(p, *, runs: int, trials: int, entries: str) -> None:
-    p.add_argument("--runs", type=_int_at_least(1, "runs"), default=runs, metavar="R",
+    p.add_argument("--runs", type=int_at_least(1, "runs"), default=runs, metavar="R",
                    help=f"runs per entry (and problem); run k uses seed SEED+k (default {runs})")
-    p.add_argument("--trials", type=_int_at_least(1, "trials"), default=trials, metavar="N",
+    p.add_argument("--trials", type=int_at_least(1, "trials"), default=trials, metavar="N",
                    help=f"trial budget of each run (one trial = one simulation; default {trials})")
     p.add_argument("--algorithms", default=entries, metavar="LIST", help=f"{ENTRY_HELP} (default {entries})")
-    p.add_argument("--seed", type=_int_at_least(0, "seed"), default=1, help="first seed (default 1)")
+    p.add_argument("--seed", type=int_at_least(0, "seed"), default=1, help="first seed (default 1)")
     p.add_argument("--out", default="nbst-experiments", metavar="DIR",
                    help="output folder: tables, figures and runs/ (default ./nbst-experiments)")
-    p.add_argument("--workers", type=_int_at_least(1, "workers"), default=None, metavar="W",
+    p.add_argument("--workers", type=int_at_least(1, "workers"), default=None, metavar="W",
                    help="local worker processes (default: all cores; 1 = in this process)")
     p.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help="run on a Dask distributed scheduler (e.g. tcp://head:8786) instead of local processes; "
@@ -87,7 +66,7 @@ def register(sub) -> None:
                                  "OUT/compare-NAME.{csv,md} and OUT/compare-NAME-runs.csv.")
     m.add_argument("problems", nargs="+", help="problems: built-in names, JSON files or folders of them")
     _common(m, runs=1, trials=100_000, entries="nbst,A,cma,de,ga,random")
-    m.add_argument("--target-cost", type=_cost, default=None, metavar="C",
+    m.add_argument("--target-cost", type=nonnegative_cost, default=None, metavar="C",
                    help="solved = cost <= C, and each run stops there (default: solved = order N, full budget)")
     m.add_argument("--name", default="compare", help="name of the output files (default compare)")
     m.set_defaults(func=cmd_compare)

@@ -11,7 +11,8 @@ VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed s
                 "F no culling of subsumed solutions; G no elitism; H no directed randomization")
 
 
-def _int_at_least(lo: int, what: str):
+def int_at_least(lo: int, what: str):
+    """argparse type: an integer >= lo (underscores allowed); ``what`` names it in errors."""
     def parse(text: str) -> int:
         try:
             v = int(text.replace("_", ""))
@@ -23,7 +24,8 @@ def _int_at_least(lo: int, what: str):
     return parse
 
 
-def _cost(text: str) -> float:
+def nonnegative_cost(text: str) -> float:
+    """argparse type: a target cost, a number >= 0."""
     try:
         v = float(text)
     except ValueError:
@@ -60,18 +62,18 @@ def register(sub) -> None:
         epilog="Variants: " + VARIANT_HELP + ". Every choice the paper leaves open is listed in docs/search.md.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("-o", "--output", required=True, metavar="SOLUTION.json", help="where to write the solution")
-    p.add_argument("--seed", type=_int_at_least(0, "seed"), default=None,
+    p.add_argument("--seed", type=int_at_least(0, "seed"), default=None,
                    help="random seed (default: drawn, and recorded in the file)")
-    p.add_argument("--max-trials", type=_int_at_least(1, "max trials"), default=1_000_000, metavar="N",
+    p.add_argument("--max-trials", type=int_at_least(1, "max trials"), default=1_000_000, metavar="N",
                    help="trial budget, initialization included (default 1000000)")
-    p.add_argument("--patience", type=_int_at_least(0, "patience"), default=100_000, metavar="K",
+    p.add_argument("--patience", type=int_at_least(0, "patience"), default=100_000, metavar="K",
                    help="stop after K trials without improvement; 0 = never (default 100000)")
     p.add_argument("--algorithm", type=_algorithm, default="signature", metavar="NAME",
                    help="signature: nbst's signature search (default; --variant picks it); baselines (docs/experiments.md): "
                         "cma (CMA-ES, IPOP restarts from the straight-line velocities), de (differential evolution), "
                         "ga (a standard steady-state GA), random (directed/uniform randomize)")
     p.add_argument("--variant", type=_variant, default="nbst", metavar="X", help=VARIANT_HELP)
-    p.add_argument("--target-cost", type=_cost, default=None, metavar="C",
+    p.add_argument("--target-cost", type=nonnegative_cost, default=None, metavar="C",
                    help="stop as soon as the best cost is <= C (default: never)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary line")
     p.set_defaults(func=cmd_solve)

@@ -40,6 +40,30 @@ RC_CHUNK_DONE, RC_MAX_TRIALS, RC_PATIENCE, RC_TARGET_COST, RC_HISTORY_FULL = ran
 
 
 @njit(cache=True, error_model="numpy")
+def loop_scratch(n, cap):
+    """Scratch of one chunk of a search loop (N disks, population capacity cap):
+    (work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc)."""
+    return (alloc_work(n), np.zeros((n, 2)), np.empty((n, 2)), np.empty((n, 2)), np.empty(0),
+            np.empty(0, np.int64), np.empty((0, 8)), np.empty(n + 2, np.int64), np.empty(cap, np.bool_),
+            np.empty(n, np.int64))
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def stop_code(pi, pf, st, best_cost, hist_room):
+    """Why a search loop must stop before its next trial (RC_*), or RC_CHUNK_DONE to go on.
+    ``hist_room``: how many history entries the loop may fill."""
+    if st[ST_TRIALS] >= pi[PI_MAX_TRIALS]:
+        return RC_MAX_TRIALS
+    if best_cost[0] <= pf[PF_TARGET_COST]:
+        return RC_TARGET_COST
+    if st[ST_PHASE] == PHASE_GENERATE and pi[PI_PATIENCE] > 0 and st[ST_SINCE] >= pi[PI_PATIENCE]:
+        return RC_PATIENCE
+    if st[ST_NHIST] >= hist_room:
+        return RC_HISTORY_FULL
+    return RC_CHUNK_DONE
+
+
+@njit(cache=True, error_model="numpy")
 def evaluate_one(x0, v, radius, mass, target, W, H, t_final, R, max_events, work, fin, vel, no_t, no_i, no_s):
     """Simulate one candidate: (cost, signature, truncated); a truncated run scores inf, 0."""
     st, _, _, _ = run(x0, v, radius, mass, W, H, t_final, work, fin, vel, max_events, no_t, no_i, no_i, no_s)
@@ -121,16 +145,7 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
     n = x0.shape[0]
     cap = pop[0].shape[0]
     ist = pop[5]
-    work = alloc_work(n)
-    child = np.zeros((n, 2))
-    fin = np.empty((n, 2))
-    vel = np.empty((n, 2))
-    no_t = np.empty(0)
-    no_i = np.empty(0, np.int64)
-    no_s = np.empty((0, 8))
-    scr_ord = np.empty(n + 2, np.int64)
-    scr_ok = np.empty(cap, np.bool_)
-    acc = np.empty(n, np.int64)
+    work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = loop_scratch(n, cap)
     R = pf[PF_R]
     max_events = pi[PI_MAX_EVENTS]
     w_c = pf[PF_W_CREEP]
@@ -140,14 +155,9 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
     ncue = cue_idx.shape[0]
 
     for _ in range(n_steps):
-        if st[ST_TRIALS] >= pi[PI_MAX_TRIALS]:
-            return RC_MAX_TRIALS
-        if best_cost[0] <= pf[PF_TARGET_COST]:
-            return RC_TARGET_COST
-        if st[ST_PHASE] == PHASE_GENERATE and pi[PI_PATIENCE] > 0 and st[ST_SINCE] >= pi[PI_PATIENCE]:
-            return RC_PATIENCE
-        if st[ST_NHIST] >= hist_t.shape[0]:
-            return RC_HISTORY_FULL
+        rc = stop_code(pi, pf, st, best_cost, hist_t.shape[0])
+        if rc != RC_CHUNK_DONE:
+            return rc
 
         p1 = -1
         p2 = -1

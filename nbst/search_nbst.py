@@ -41,13 +41,11 @@ from numba import njit
 from .aim import alloc_clearance, chain_strike_velocity, choose_bank, mirror, strike_velocity
 from .polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
 from .search_loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
-                          PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_PATIENCE, PI_POP_LIMIT,
-                          PI_SENATE, PI_SIG_LIMIT, RC_CHUNK_DONE, RC_HISTORY_FULL, RC_MAX_TRIALS, RC_PATIENCE,
-                          RC_TARGET_COST, ST_BEST_SIG, ST_INIT_TRIALS, ST_NHIST, ST_PHASE, ST_SINCE, ST_TRIALS,
-                          ST_TRUNCATED, evaluate_one, settle)
+                          PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_POP_LIMIT, PI_SENATE,
+                          PI_SIG_LIMIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE, ST_SINCE, ST_TRIALS,
+                          ST_TRUNCATED, evaluate_one, loop_scratch, settle, stop_code)
 from .search_ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
-from .sim import alloc_work
 
 # operators of the nbst variant
 OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER, OP_BANK, OP_STRIKE = range(6)
@@ -132,16 +130,7 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
     n = x0.shape[0]
     cap = pop[0].shape[0]
     ist = pop[5]
-    work = alloc_work(n)
-    child = np.zeros((n, 2))
-    fin = np.empty((n, 2))
-    vel = np.empty((n, 2))
-    no_t = np.empty(0)
-    no_i = np.empty(0, np.int64)
-    no_s = np.empty((0, 8))
-    scr_ord = np.empty(n + 2, np.int64)
-    scr_ok = np.empty(cap, np.bool_)
-    acc = np.empty(n, np.int64)
+    work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = loop_scratch(n, cap)
     clear = alloc_clearance(n)
     pscr = alloc_polish(n, cue_idx.shape[0], POLISH_EVENT_CAP)
     out2 = np.empty(2)
@@ -154,14 +143,9 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
     tol = max(pf[PF_TARGET_COST], 0.0)
 
     for _ in range(n_steps):
-        if st[ST_TRIALS] >= pi[PI_MAX_TRIALS]:
-            return RC_MAX_TRIALS
-        if best_cost[0] <= pf[PF_TARGET_COST]:
-            return RC_TARGET_COST
-        if st[ST_PHASE] == PHASE_GENERATE and pi[PI_PATIENCE] > 0 and st[ST_SINCE] >= pi[PI_PATIENCE]:
-            return RC_PATIENCE
-        if st[ST_NHIST] >= hist_t.shape[0] - 1:
-            return RC_HISTORY_FULL
+        rc = stop_code(pi, pf, st, best_cost, hist_t.shape[0] - 1)
+        if rc != RC_CHUNK_DONE:
+            return rc
         if (qi[QI_RESTART] > 0 and st[ST_PHASE] == PHASE_GENERATE and qs[QS_LOCAL_SINCE] >= qi[QI_RESTART]
                 and best_cost[0] < np.inf):
             # restart: a fresh population around nothing but the best so far

@@ -213,14 +213,15 @@ def pop_remove(pop, j):
 
 
 @njit(cache=True)
-def worst_member(pop, sig, protect):
+def worst_member(pop, sig, protect, skip_sig=-1):
     """Index of the highest-cost member (of signature ``sig``, or of all if sig < 0),
-    never ``protect``; ties go to the lowest index; -1 if there is none."""
+    never ``protect`` nor a member of signature ``skip_sig`` (if >= 0); ties go to the
+    lowest index; -1 if there is none."""
     pc, ps = pop[1], pop[2]
     w = -1
     wc = -np.inf
     for j in range(pop[5][SIZE]):
-        if j == protect or (sig >= 0 and ps[j] != sig):
+        if j == protect or (sig >= 0 and ps[j] != sig) or (skip_sig >= 0 and ps[j] == skip_sig):
             continue
         if w < 0 or pc[j] > wc:
             w = j
@@ -458,26 +459,13 @@ def insert(pop, child, cost, sig, p1, p2, improvement, elitism, sig_limit, pop_l
         if cull_subsumed(pop, n, elitism, scratch_or) > 0:
             return INS_CULLED
         if ist[SIZE] > hard_limit:
-            w = _worst_outside_best_sig(pop, elitism)
+            # the hard-limit fallback: the worst member outside the best's signature (elitism)
+            bs = pop[2][ist[BEST]] if (elitism and ist[BEST] >= 0) else np.int64(-1)
+            w = worst_member(pop, -1, -1, bs)
             if w >= 0:
                 pop_remove(pop, w)
                 return INS_FALLBACK
     return INS_ADDED
-
-
-@njit(cache=True)
-def _worst_outside_best_sig(pop, elitism):
-    pc, ps, ist = pop[1], pop[2], pop[5]
-    bs = ps[ist[BEST]] if (elitism and ist[BEST] >= 0) else np.int64(-1)
-    w = -1
-    wc = -np.inf
-    for j in range(ist[SIZE]):
-        if ps[j] == bs:
-            continue
-        if w < 0 or pc[j] > wc:
-            w = j
-            wc = pc[j]
-    return w
 
 
 @njit(cache=True)

@@ -40,6 +40,26 @@ def check_size(size) -> tuple[int, int]:
     return w, h
 
 
+class FrameRenderer:
+    """What both views share: a subclass has ``draw(t)`` (draw the frame at time t into
+    ``self.target``, a FrameTarget), ``problem`` and ``title``."""
+
+    def render(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
+        """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given: (H, W, 3) uint8."""
+        self.draw(t)
+        return self.target.read(out)
+
+    def render_rgba(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
+        """The frame at time ``t`` as (H, W, 4) uint8 RGBA, alpha 255 (the cheapest
+        readback; what the video writer takes), into ``out`` if given."""
+        self.draw(t)
+        return self.target.read(out, components=4)
+
+    def readout(self, t: float, inside: np.ndarray) -> list[str]:
+        """The text lines of the time readout (``inside``: which disks are within R)."""
+        return [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{self.problem.n}"]
+
+
 class FrameTarget:
     """An RGBA8 framebuffer of ``size`` (optionally multisampled, resolved into a
     plain one) that reads frames as (H, W, 3) uint8 arrays, top row first.

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import style
-from .gl import FrameTarget
+from .gl import FrameRenderer, FrameTarget
 from .shapes import CAPSULE_DTYPE, CIRCLE_DTYPE, Capsules, Circles, Rect, Text
 
 
@@ -93,6 +93,27 @@ def trail_points(motion, t: float, seconds: float):
     return np.asarray(motion.at(times)), times
 
 
+def trail_capsules(motion, t: float, half, colors, *, to_view=None, min_step: float) -> np.ndarray:
+    """The trails at time ``t`` as capsule instances (CAPSULE_DTYPE): one per step of every
+    disk's path over the last TRAIL_SECONDS (``trail_points``), mapped by ``to_view`` (default:
+    world units kept), alpha fading with age; steps shorter than ``min_step`` (disks at rest)
+    are left out. ``half`` and ``colors``: per-disk half width and colour."""
+    pts, times = trail_points(motion, t, style.TRAIL_SECONDS)
+    if to_view is not None:
+        pts = to_view(pts)  # (M, N, 2)
+    age = np.clip(1.0 - (t - times) / style.TRAIL_SECONDS, 0.0, 1.0) * style.TRAIL_ALPHA  # (M,)
+    a, b = pts[:-1], pts[1:]
+    m_idx, n_idx = np.nonzero(((b - a) ** 2).sum(axis=2) > min_step * min_step)
+    data = np.empty(len(m_idx), CAPSULE_DTYPE)
+    data["p0"] = a[m_idx, n_idx]
+    data["p1"] = b[m_idx, n_idx]
+    data["alpha"][:, 0] = age[m_idx]
+    data["alpha"][:, 1] = age[m_idx + 1]
+    data["half"] = half[n_idx]
+    data["color"] = colors[n_idx]
+    return data
+
+
 class Labels:
     """Disk indices written on the disks (dark digits, centred), sized to the disks."""
 
@@ -113,7 +134,7 @@ class Labels:
         self.text.release()
 
 
-class Renderer2D:
+class Renderer2D(FrameRenderer):
     """Renders ``motion`` of ``problem`` at any time to an (H, W, 3) uint8 frame.
 
     ctx     : a moderngl context (see :func:`nbst.render.gl.create_context`)
@@ -247,20 +268,6 @@ class Renderer2D:
         """World points -> image px (x = column, y = row, fractional)."""
         return self.layout.to_image(xy)
 
-    def readout(self, t: float, inside: np.ndarray) -> list[str]:
-        return [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{self.problem.n}"]
-
-    def render(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
-        """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given: (H, W, 3) uint8."""
-        self.draw(t)
-        return self.target.read(out)
-
-    def render_rgba(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
-        """The frame at time ``t`` as (H, W, 4) uint8 RGBA, alpha 255 (the cheapest
-        readback; what the video writer takes), into ``out`` if given."""
-        self.draw(t)
-        return self.target.read(out, components=4)
-
     def draw(self, t: float) -> None:
         """Draw the frame at time ``t`` into the frame target (no readback)."""
         ctx, mgl, p = self.ctx, self._mgl, self.problem
@@ -290,20 +297,8 @@ class Renderer2D:
         self.text.draw(self.size, self.text.layout(self.readout(t, inside), x, y), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
-        pts, times = trail_points(self.motion, t, style.TRAIL_SECONDS)
-        img = self.layout.to_image(pts)  # (M, N, 2)
-        age = np.clip(1.0 - (t - times) / style.TRAIL_SECONDS, 0.0, 1.0) * style.TRAIL_ALPHA  # (M,)
-        a, b = img[:-1], img[1:]
-        keep = ((b - a) ** 2).sum(axis=2) > 1e-6  # (M-1, N): skip disks at rest
-        m_idx, n_idx = np.nonzero(keep)
-        data = np.empty(len(m_idx), CAPSULE_DTYPE)
-        data["p0"] = a[m_idx, n_idx]
-        data["p1"] = b[m_idx, n_idx]
-        data["alpha"][:, 0] = age[m_idx]
-        data["alpha"][:, 1] = age[m_idx + 1]
-        data["half"] = self.trail_half[n_idx]
-        data["color"] = self.colors[n_idx]
-        return data
+        return trail_capsules(self.motion, t, self.trail_half, self.colors, to_view=self.layout.to_image,
+                              min_step=1e-3)  # px
 
     def release(self) -> None:
         for o in (self.circles, self.capsules, self.rect, self.text, self.target, self.static, self.labels):

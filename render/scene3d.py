@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from . import style
-from .gl import FrameTarget
+from .gl import FrameRenderer, FrameTarget
 from .shapes import Text
 
 MESH_VS = """#version 330
@@ -163,7 +163,7 @@ def perspective(fov_y_deg, aspect, near, far) -> np.ndarray:
     return m
 
 
-class Renderer3D:
+class Renderer3D(FrameRenderer):
     """Renders ``motion`` of ``problem`` in 3D at any time: (H, W, 3) uint8 frames.
 
     Same interface as :class:`nbst.render.scene2d.Renderer2D`; trails lie on the felt.
@@ -322,17 +322,6 @@ class Renderer3D:
         self._draw(self.marker, self._markers)
         self._static_done = True
 
-    def render(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
-        """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given: (H, W, 3) uint8."""
-        self.draw(t)
-        return self.target.read(out)
-
-    def render_rgba(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
-        """The frame at time ``t`` as (H, W, 4) uint8 RGBA, alpha 255 (the cheapest
-        readback; what the video writer takes), into ``out`` if given."""
-        self.draw(t)
-        return self.target.read(out, components=4)
-
     def draw(self, t: float) -> None:
         """Draw the frame at time ``t`` into the frame target (no readback)."""
         ctx, mgl, p = self.ctx, self._mgl, self.problem
@@ -377,24 +366,11 @@ class Renderer3D:
         if self.labels is not None:
             self.labels.draw(self.size, self.to_pixels(pos, z=self.puck_h))
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
-        lines = [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{p.n}"]
-        self.text.draw(self.size, self.text.layout(lines, pad, pad), style.TEXT)
+        self.text.draw(self.size, self.text.layout(self.readout(t, inside), pad, pad), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
-        from .scene2d import trail_points
-        from .shapes import CAPSULE_DTYPE
-        pts, times = trail_points(self.motion, t, style.TRAIL_SECONDS)
-        age = np.clip(1.0 - (t - times) / style.TRAIL_SECONDS, 0.0, 1.0) * style.TRAIL_ALPHA
-        a, b = pts[:-1], pts[1:]
-        m_idx, n_idx = np.nonzero(((b - a) ** 2).sum(axis=2) > 1e-9)
-        data = np.empty(len(m_idx), CAPSULE_DTYPE)
-        data["p0"] = a[m_idx, n_idx]
-        data["p1"] = b[m_idx, n_idx]
-        data["alpha"][:, 0] = age[m_idx]
-        data["alpha"][:, 1] = age[m_idx + 1]
-        data["half"] = self.trail_half[n_idx]
-        data["color"] = self.colors[n_idx]
-        return data
+        from .scene2d import trail_capsules
+        return trail_capsules(self.motion, t, self.trail_half, self.colors, min_step=np.sqrt(1e-9))  # world units
 
     def release(self) -> None:
         if self.trail_prog is not None:

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from nbst.search import mirror_images
-from nbst.search_ops import (BEST, CULL_SUBSUMED, CULL_WORST, INS_ADDED, INS_CULLED, INS_DISPLACED, INS_SIG_LIMIT,
+from nbst.search_ops import (BEST, CULL_SUBSUMED, CULL_WORST, INS_ADDED, INS_CULLED, INS_DISPLACED, INS_FALLBACK,
+                             INS_SIG_LIMIT,
                              INS_WORST, NTAB, SIZE, crossover, cull_subsumed, insert, insert_initial, new_population,
                              pop_append, pop_remove, rng_uniform, seed_state, select_senate, select_uniform,
                              sig_count, uniform_velocity)
@@ -196,6 +197,19 @@ def test_elitism_never_deletes_the_best_under_random_inserts():
         assert pop[1][pop[5][BEST]] == best
         assert np.min(pop[1][:size]) == best
         assert size <= 25
+    check_table(pop)
+
+
+def test_hard_limit_fallback_deletes_the_worst_outside_the_best_signature():
+    # over the hard limit with nothing subsumed (every member has order 1): the worst member
+    # outside the best's signature goes (with elitism), else the worst of all
+    mem = [(0b01, 1.0), (0b01, 90.0), (0b10, 5.0), (0b10, 7.0)]
+    pop = build(mem, best=0)
+    assert ins(pop, 0b100, 3.0, pop_limit=2, hard_limit=4) == INS_FALLBACK
+    assert members(pop) == sorted([(0b01, 1.0), (0b01, 90.0), (0b10, 5.0), (0b100, 3.0)])
+    pop = build(mem, best=0)
+    assert ins(pop, 0b100, 3.0, pop_limit=2, hard_limit=4, elitism=False) == INS_FALLBACK
+    assert members(pop) == sorted([(0b01, 1.0), (0b10, 5.0), (0b10, 7.0), (0b100, 3.0)])
     check_table(pop)
 
 
