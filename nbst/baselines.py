@@ -279,11 +279,14 @@ def solve_random(problem: Problem, *, seed: int | None = None, max_trials: int =
 
 def solve_cma(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 0,
               target_cost: float | None = None, callback: Callable | None = None,
-              sigma0_fraction: float = CMA_SIGMA0_FRACTION, incpopsize: int = CMA_INCPOPSIZE):
+              sigma0_fraction: float = CMA_SIGMA0_FRACTION, incpopsize: int = CMA_INCPOPSIZE,
+              cma_options: dict | None = None):
     """CMA-ES (pycma) with IPOP restarts from the straight-line velocities (see module doc).
 
     sigma0 = sigma0_fraction * R / t_final units/s; population 4 + 3 ln D, times
-    ``incpopsize`` per restart. ``meta["restarts"]`` counts the restarts begun."""
+    ``incpopsize`` per restart. ``meta["restarts"]`` counts the restarts begun.
+    ``cma_options``: extra pycma options for every restart (e.g. ``{"maxiter": 5}``,
+    a stopping rule that ends each restart after 5 generations)."""
     import cma
 
     seed = _check_args(max_trials, patience, seed)
@@ -300,7 +303,7 @@ def solve_cma(problem: Problem, *, seed: int | None = None, max_trials: int = 1_
 
     try:
         with blas_single_thread():
-            _cma_loop(b, cma, sigma0, lam0, incpopsize, randn, ends)
+            _cma_loop(b, cma, sigma0, lam0, incpopsize, randn, ends, dict(cma_options or {}))
     except KeyboardInterrupt:
         b.stopped = "interrupted"
     restarts = len(ends) - 1
@@ -312,13 +315,13 @@ def solve_cma(problem: Problem, *, seed: int | None = None, max_trials: int = 1_
     return sol
 
 
-def _cma_loop(b: _Budget, cma, sigma0: float, lam: int, incpopsize: int, randn, ends: list) -> None:
+def _cma_loop(b: _Budget, cma, sigma0: float, lam: int, incpopsize: int, randn, ends: list, extra: dict) -> None:
     """IPOP: restarts of CMA-ES from b.x0 until the budget (or another rule) stops the run."""
     while b.stopped is None:
         b.phase = f"restart {len(ends)}"
         b.population = lam
         opts = {"popsize": lam, "seed": np.nan, "randn": randn, "verbose": -9, "verb_log": 0, "verb_disp": 0,
-                "verb_filenameprefix": "", "maxfevals": math.inf}
+                "verb_filenameprefix": "", "maxfevals": math.inf, **extra}
         es = cma.CMAEvolutionStrategy(b.x0, sigma0, opts)
         while b.stopped is None and not es.stop():
             X = np.asarray(es.ask())

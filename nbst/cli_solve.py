@@ -4,6 +4,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .warmup import COLD_COMPILE_SECONDS
+
 VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes and a straight start "
                 "(default); A the paper's full algorithm; B uniform parent selection; C no crossover; "
                 "D no genetically "
@@ -59,7 +61,11 @@ def register(sub) -> None:
                     "or one of its simplified variants B-H), "
                     "and write the best solution found to a JSON file. Ctrl-C stops the search and still writes "
                     "the best solution so far (exit 130). The same --seed gives the same solution, bit for bit.",
-        epilog="Variants: " + VARIANT_HELP + ". Every choice the paper leaves open is listed in docs/search.md.")
+        epilog="By default a solve stops at the first of: --max-trials, --patience, or a cost at round-off level "
+               "(every disk within 1e-9 of the box size of its target; --target-cost 0 turns that off). "
+               "The first run on a new install also compiles the numba kernels (one time, about "
+               f"{COLD_COMPILE_SECONDS} s; scripts/setup.sh does it ahead). "
+               "Every choice the paper leaves open is listed in docs/search.md.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("-o", "--output", required=True, metavar="SOLUTION.json", help="where to write the solution")
     p.add_argument("--seed", type=int_at_least(0, "seed"), default=None,
@@ -74,8 +80,9 @@ def register(sub) -> None:
                         "ga (a standard steady-state GA), random (directed/uniform randomize)")
     p.add_argument("--variant", type=_variant, default="nbst", metavar="X", help=VARIANT_HELP)
     p.add_argument("--target-cost", type=nonnegative_cost, default=None, metavar="C",
-                   help="stop as soon as the best cost is <= C (default: never)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary line")
+                   help="stop as soon as the best cost (sum of squared distances to the targets, units^2) is <= C "
+                        "(default: round-off level, N x (1e-9 x box size)^2; 0: only an exact zero stops)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
     p.set_defaults(func=cmd_solve)
 
 
@@ -93,33 +100,46 @@ def cmd_solve(args) -> int:
 
         raise ProblemError("<arguments>", "--variant", f"applies to --algorithm signature only, not {algorithm}")
     label = args.variant if algorithm == "signature" else algorithm
-    bar = None
-    if not args.quiet:
-        from tqdm import tqdm
+    from .search import roundoff_cost
 
-        bar = tqdm(total=args.max_trials, unit="trial", unit_scale=True, file=sys.stderr, dynamic_ncols=True,
-                   desc=f"solve {problem.name} ({label})", smoothing=0.1)
+    target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
+    if not args.quiet:
+        from .warmup import announce, search_kernels
+
+        announce(search_kernels())
+    bar = []  # made at the first progress report: no rate or ETA while numba compiles
     done = [0]
 
     def progress(p) -> None:
-        if bar is not None:
-            bar.update(p.trials - done[0])
-            done[0] = p.trials
-            bar.set_postfix_str(f"best {p.best_cost:.6g}  order {p.best_order}/{problem.n}", refresh=False)
+        if args.quiet:
+            return
+        if not bar:
+            from tqdm import tqdm
+
+            bar.append(tqdm(total=args.max_trials, unit="trial", unit_scale=True, file=sys.stderr,
+                            dynamic_ncols=True, desc=f"solve {problem.name} ({label})", smoothing=0.1))
+        bar[0].update(p.trials - done[0])
+        done[0] = p.trials
+        bar[0].set_postfix_str(f"best cost {p.best_cost:.6g}, {p.best_order}/{problem.n} disks on target",
+                               refresh=False)
 
     from .baselines import solve_with
 
     kw = {"variant": args.variant} if algorithm == "signature" else {}
     try:
         sol = solve_with(algorithm, problem, seed=args.seed, max_trials=args.max_trials, patience=args.patience,
-                         target_cost=args.target_cost, callback=progress, **kw)
+                         target_cost=target_cost, callback=progress, **kw)
     finally:
-        if bar is not None:
-            bar.close()
+        if bar:
+            bar[0].close()
     save_solution(args.output, sol)
     m = sol.meta
-    line = (f"cost {m['cost']:.6g}, order {m['order']}/{problem.n} ({m['signature']}) after {m['trials']} trials "
-            f"in {m['wall_time']:.1f} s, seed {m['seed']}, stopped by {m['stopped']} -> {args.output}")
+    why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
+           "max_trials": "trial budget spent", "patience": f"no improvement in {args.patience} trials",
+           "interrupted": "interrupted"}.get(m["stopped"], str(m["stopped"]))
+    line = (f"cost {m['cost']:.6g}, {m['order']}/{problem.n} disks on target (signature {m['signature']}) "
+            f"after {m['trials']} trials in {m['wall_time']:.1f} s, seed {m['seed']}; stopped: {why}; "
+            f"wrote {args.output}")
     if m["stopped"] == "interrupted":
         print(f"nbst solve: interrupted; best so far written: {line}", file=sys.stderr)
         return 130

@@ -27,3 +27,9 @@ WALL_NAMES = ("left", "right", "bottom", "top")
 
 #: Event kinds in event records.
 EVENT_DISK, EVENT_WALL = 0, 1
+
+#: Round-off level of a solution, relative to the box: a disk within
+#: ROUNDOFF_REL x max(W, H) of its target is as exact as float64 event chains
+#: get (positions carry ~1e-13 relative error per event, amplified along a
+#: chain); ``nbst solve`` stops there by default (``nbst.search.roundoff_cost``).
+ROUNDOFF_REL = 1e-9

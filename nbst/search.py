@@ -69,7 +69,7 @@ from typing import Callable
 import numpy as np
 
 from ._version import __version__
-from .constants import MAX_EVENTS
+from .constants import MAX_EVENTS, ROUNDOFF_REL
 from .problem import Problem, ProblemError
 
 VARIANTS = {
@@ -307,6 +307,13 @@ class SearchRun:
     costs: np.ndarray
     signatures: np.ndarray
     recorded: np.ndarray  # (M, N, 2) candidates of every record_every-th trial (empty unless asked)
+
+
+def roundoff_cost(problem: Problem) -> float:
+    """The cost of a solution whose every disk ends ROUNDOFF_REL x max(W, H) from its
+    target: N (ROUNDOFF_REL max(W, H))^2, units^2. Below it a search has nothing left to
+    gain (``nbst solve``'s default target cost)."""
+    return problem.n * (ROUNDOFF_REL * max(problem.box)) ** 2
 
 
 def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,

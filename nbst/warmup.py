@@ -1,0 +1,119 @@
+"""Compile nbst's numba kernels ahead of use, and tell when a command will compile.
+
+numba compiles each kernel on its first call and caches the machine code on disk
+(``__pycache__/*.nbi``, ``*.nbc`` beside the sources, or numba's user cache
+when that folder is not writable). A cold cache costs tens of seconds on the
+first solve; later runs load the cached code in about a second.
+
+* ``python -m nbst.warmup`` (run by ``scripts/setup.sh``) compiles every kernel
+  the main job uses (simulate, evaluate, both search loops, polish, Jacobian)
+  by running each once on a built-in problem, and fills the cache.
+* :func:`is_cold` tells whether a kernel has nothing in the cache yet, so a
+  command can say ``compiling numba kernels (one time, ~N s)`` before it waits.
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+#: Measured cold compile of everything :func:`warm_all` touches, on a quiet
+#: 2-core machine (numba 0.68, Python 3.11): what the one-time message quotes.
+COLD_COMPILE_SECONDS = 45
+
+
+def is_cold(*dispatchers) -> bool:
+    """True if any of these ``njit(cache=True)`` dispatchers has no compiled code,
+    neither in this process nor in numba's on-disk cache (an index stale for the
+    source file counts as empty). numba's cache is private API: if it cannot be
+    read, the answer is False (say nothing rather than something wrong)."""
+    try:
+        for d in dispatchers:
+            if d.overloads:
+                continue
+            cache = d._cache
+            index = cache._cache_file._load_index()
+            if not index:
+                return True
+        return False
+    except Exception:  # noqa: BLE001 - a numba internals change must not break a command
+        return False
+
+
+def search_kernels() -> tuple:
+    """The dispatchers a search runs (nbst's loop and the paper's)."""
+    from .search_loop import run_chunk
+    from .search_nbst import run_chunk_nbst
+    from .sim import evaluate_kernel, run
+
+    return (run, evaluate_kernel, run_chunk, run_chunk_nbst)
+
+
+def sim_kernels() -> tuple:
+    """The dispatchers ``simulate``/``evaluate`` run."""
+    from .sim import evaluate_kernel, run
+
+    return (run, evaluate_kernel)
+
+
+def other_kernels() -> tuple:
+    """The dispatchers of the polish and the Jacobian."""
+    from .jacobian import jacobian_from_events
+    from .polish import polish_kernel
+
+    return (jacobian_from_events, polish_kernel)
+
+
+def announce(kernels, *, stream=None, what: str = "numba kernels") -> bool:
+    """If ``kernels`` are cold, write the one-time compile message to ``stream``
+    (stderr by default) and return True."""
+    if not is_cold(*kernels):
+        return False
+    stream = sys.stderr if stream is None else stream
+    print(f"nbst: compiling {what} (one time, ~{COLD_COMPILE_SECONDS} s on 2 cores; "
+          "`python -m nbst.warmup` does it ahead)", file=stream, flush=True)
+    return True
+
+
+def warm_all(log=None) -> float:
+    """Compile (or load from the cache) every kernel the main job uses; returns seconds.
+    ``log(str)`` gets one line per stage."""
+    import numpy as np
+
+    from .baselines import solve_with
+    from .jacobian import final_jacobian
+    from .problem import load_problem
+    from .sim import evaluate, simulate
+
+    log = log or (lambda s: None)
+    t0 = time.perf_counter()
+    p = load_problem("over5")  # cueable and noncueable disks: every branch's types
+    V = p.straight_velocities()
+    simulate(p, V)
+    evaluate(p, np.stack([V, V]))
+    log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
+    final_jacobian(p, V)
+    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst")
+    log(f"nbst search ready ({time.perf_counter() - t0:.0f} s)")
+    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="A")
+    log(f"paper search ready ({time.perf_counter() - t0:.0f} s)")
+    return time.perf_counter() - t0
+
+
+def main(argv=None) -> int:
+    """``python -m nbst.warmup [--quiet]``: compile what is not in the cache yet. Says so
+    (and how long it took) only when there was something to compile."""
+    argv = sys.argv[1:] if argv is None else argv
+    quiet = "-q" in argv or "--quiet" in argv
+    cold = is_cold(*search_kernels(), *other_kernels())
+    talk = cold and not quiet
+    if talk:
+        print(f"nbst: compiling numba kernels (one time, ~{COLD_COMPILE_SECONDS} s on 2 cores)", file=sys.stderr,
+              flush=True)
+    secs = warm_all((lambda s: print(f"nbst:   {s}", file=sys.stderr, flush=True)) if talk else None)
+    if talk:
+        print(f"nbst: numba kernels compiled and cached in {secs:.0f} s", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
