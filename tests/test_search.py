@@ -162,7 +162,8 @@ def test_cli_bad_values_exit_2(tmp_path):
 def test_ctrl_c_writes_the_best_so_far(tmp_path):
     out = tmp_path / "int.json"
     proc = subprocess.Popen([sys.executable, str(ROOT / "cli.py"), "solve", "diamond-s14", "-o", str(out),
-                             "--seed", "8", "--patience", "0", "--max-trials", "1000000000"],
+                             "--seed", "8", "--patience", "0", "--max-trials", "1000000000",
+                             "--target-cost", "0"],
                             stderr=subprocess.PIPE, text=True)
     buf = ""
     t0 = time.time()
