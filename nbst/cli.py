@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import json
 import sys
 
 from ._version import __version__
+from .domain import plain
 from .outputs import OutputError
 from .problem import ProblemError
 
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     try:
         return int(args.func(args) or 0)
     except (ProblemError, OutputError) as e:
-        print(f"nbst: error: {e}", file=sys.stderr)
+        print(f"nbst: error: {plain(e)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("nbst: interrupted", file=sys.stderr)
@@ -74,13 +74,14 @@ def main(argv=None) -> int:
     except OSError as e:  # an I/O failure after the up-front checks (disk full, folder removed)
         if e.filename is None:
             raise
-        print(f"nbst: error: {e.filename}: {e.strerror or e}", file=sys.stderr)
+        print(f"nbst: error: {plain(e.filename)}: {plain(e.strerror or e)}", file=sys.stderr)
         return 1
 
 
 def print_json(obj) -> None:
-    json.dump(obj, sys.stdout, indent=1)
-    sys.stdout.write("\n")
+    """Print ``obj`` as strict JSON: NaN -> null, +/-inf -> "inf"/"-inf" (``docs/formats.md``)."""
+    from .solution import dumps_strict
+    sys.stdout.write(dumps_strict(obj, indent=1) + "\n")
 
 
 if __name__ == "__main__":

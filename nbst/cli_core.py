@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 
+from .domain import plain
 from .problem import builtin_names, load_problem
 from .solution import load_solution
 
@@ -46,7 +47,7 @@ def cmd_problems(args) -> int:
         radii = sorted(set(float(r) for r in p.radius))
         rows.append((name, str(p.n), str(int(p.cueable.sum())), "/".join(f"{r:g}" for r in radii),
                      f"{p.width:g}x{p.height:g}", f"{p.t_final:g}", f"{p.target_radius:g}",
-                     _clip(p.description, 60)))
+                     _clip(plain(p.description), 60)))
     widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]) - 1)]
     for r in rows:
         print("  ".join(x.ljust(w) for x, w in zip(r, widths)) + "  " + r[-1])

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from .cli_solve import int_at_least, nonnegative_cost
+from .problem import display_name
 
 ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst (nbst's default search; "
               "'signature' means the same), cma, de, ga, random (baselines)")
@@ -95,12 +96,14 @@ def _cluster(args):
 
 def _run(args, specs, desc: str):
     from .experiments import run_specs
-    from .outputs import prepare_output
+    from .outputs import prepare_output, sigterm_as_interrupt
 
     prepare_output(args.out, directory=True, option="--out")
     client = _cluster(args)
     try:
-        return run_specs(specs, args.out, workers=args.workers, cluster=client, progress=not args.quiet, desc=desc)
+        with sigterm_as_interrupt():  # kill: workers stopped, finished runs kept, exit 130 as on Ctrl-C
+            return run_specs(specs, args.out, workers=args.workers, cluster=client, progress=not args.quiet,
+                             desc=desc)
     finally:
         if client is not None:
             client.close()
@@ -129,7 +132,7 @@ def cmd_curves(args) -> int:
     rows = curves_rows(results)
     stem = Path(args.out) / f"curves-{_safe(problem.name)}"
     P.write_csv(stem.with_suffix(".csv"), rows, ["problem", "entry", "run", "seed", "trial", "best_cost", "order"])
-    fig = P.plot_curves(rows, title=f"{problem.name}: best cost so far, {args.runs} runs x {args.trials:,} trials")
+    fig = P.plot_curves(rows, title=f"{display_name(problem.name)}: best cost so far, {args.runs} runs x {args.trials:,} trials")
     files = [stem.with_suffix(".csv"), *P.save_figure(fig, stem)]
     final = [{"entry": r["key"]["entry"], "seed": r["seed"], "cost": r["cost"], "order": r["order"],
               "trials": r["trials"], "first_full_order_trial": r.get("first_full_order_trial")} for r in results]
@@ -159,7 +162,7 @@ def cmd_ablation(args) -> int:
     P.write_markdown(stem.with_suffix(".md"),
                      f"**{problem.name}**: final L2 cost of {args.runs} runs x {args.trials:,} trials "
                      f"(seeds {args.seed}..{args.seed + args.runs - 1})\n\n" + table)
-    fig = P.plot_ablation(rows, title=f"{problem.name}: final cost, {args.runs} runs x {args.trials:,} trials")
+    fig = P.plot_ablation(rows, title=f"{display_name(problem.name)}: final cost, {args.runs} runs x {args.trials:,} trials")
     files = [stem.with_suffix(".csv"), stem.with_suffix(".md"), *P.save_figure(fig, stem)]
     _emit(args, rows, table, files)
     return 0

@@ -29,13 +29,13 @@ def register(sub) -> None:
 def cmd_generate(args) -> int:
     import numpy as np
 
-    from .outputs import prepare_output
+    from .outputs import prepare_output, write_json_atomic
     from .planted import planted
-    from .solution import make_solution, save_solution, write_json_atomic
+    from .solution import make_solution
 
     prepare_output(args.output)
     if args.solution:
-        prepare_output(args.solution, option="--solution")
+        prepare_output(args.solution, option="--solution", outputs=(args.output,))
 
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
     for flag, value in (("--t-final", args.t_final), ("--target-radius", args.target_radius),
@@ -55,6 +55,7 @@ def cmd_generate(args) -> int:
           f"{info['struck_noncueable']} of them struck), seed {seed}, planted motion with "
           f"{info['disk_disk_collisions']} disk-disk collisions and {info['wall_bounces']} wall bounces")
     if args.solution:
-        save_solution(args.solution, make_solution(problem, v, algorithm="planted", seed=seed, cost=0.0))
+        write_json_atomic(args.solution, make_solution(problem, v, algorithm="planted", seed=seed, cost=0.0).to_dict(),
+                          option="--solution")
         print(f"wrote {args.solution}: the planted velocities")
     return 0

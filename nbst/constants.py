@@ -18,6 +18,18 @@ OVERLAP_RTOL = 1e-9
 #: scored with cost = inf by ``evaluate``.
 MAX_EVENTS = 200_000
 
+#: A jam: more than this many events per disk within one instant (a window of
+#: ``STALL_RTOL * t_final`` seconds) stops a run as stalled (``Trajectory.stalled``, cost
+#: inf) instead of spending ``MAX_EVENTS`` on it. Rigid disks pinned between opposite
+#: walls (a disk exactly as wide as the box, a row of touching disks spanning it) bounce
+#: infinitely often at one instant; a legitimate simultaneous cascade (a rack of touching
+#: disks struck at t = 0) takes a few events per disk.
+STALL_EVENTS_PER_DISK = 1000
+
+#: Width of "one instant" for the stall test, relative to t_final: a few thousand ulps,
+#: so round-off that nudges the time of a pinned disk's bounces forward still counts.
+STALL_RTOL = 1e-12
+
 #: Event-buffer size that ``simulate`` starts with; doubled on overflow.
 EVENT_BUFFER = 1024
 
@@ -33,3 +45,7 @@ EVENT_DISK, EVENT_WALL = 0, 1
 #: get (positions carry ~1e-13 relative error per event, amplified along a
 #: chain); ``nbst solve`` stops there by default (``nbst.search.roundoff_cost``).
 ROUNDOFF_REL = 1e-9
+
+#: ``nbst.evaluate`` splits a batch over threads only from this many candidates per
+#: thread: a thread costs ~0.1 ms to start, a candidate ~5-50 us to simulate.
+PARALLEL_BATCH = 2048

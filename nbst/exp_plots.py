@@ -30,18 +30,9 @@ def write_csv(path: str | Path, rows: list[dict], columns: list[str]) -> None:
 
 
 def _write_text(path: str | Path, text: str) -> None:
-    import os
-    import tempfile
+    from .outputs import write_text_atomic
 
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600; give the file the usual permissions
-    with os.fdopen(fd, "w", encoding="utf-8") as f:
-        f.write(text)
-    os.replace(tmp, path)
+    write_text_atomic(path, text, option="--out")
 
 
 def markdown_table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
@@ -72,12 +63,15 @@ def _kind(entry: str) -> str:
 
 def save_figure(fig, stem: str | Path) -> list[Path]:
     """Write ``stem.png`` and ``stem.svg``; returns the paths."""
+    from .outputs import atomic_path
+
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     out = []
     for ext in ("png", "svg"):
         p = stem.with_suffix(f".{ext}")
-        fig.savefig(p, dpi=DPI, bbox_inches="tight", metadata={"Date": None} if ext == "svg" else None)
+        with atomic_path(p, option="--out") as tmp:  # whole figure or the previous one (a full disk)
+            fig.savefig(tmp, dpi=DPI, bbox_inches="tight", metadata={"Date": None} if ext == "svg" else None)
         out.append(p)
     _plt().close(fig)
     return out

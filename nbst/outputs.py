@@ -1,37 +1,310 @@
-"""Output paths, checked before the work that fills them.
+"""Output paths and the one way nbst writes a file.
 
-A long solve or render must not end in a traceback because ``-o`` names a folder that
-cannot be written: commands call ``prepare_output`` first, which creates missing parent
-folders and proves the folder writable by creating (and removing) a scratch file there.
-The CLI turns ``OutputError`` into one line and exit status 2.
+Checked before the work (``prepare_output``): a long solve or render must not end in a
+traceback because ``-o`` names a folder that cannot be written, a special file, or the
+command's own input. ``prepare_output`` creates missing parent folders and proves the
+folder writable by creating (and removing) a scratch file there.
+
+Written atomically (``atomic_path``, ``write_bytes_atomic``, ``write_text_atomic``,
+``write_json_atomic``): every writer fills a hidden partial file beside the target,
+fsyncs it and renames it over the target, so ``path`` holds the old file or the whole
+new one, never a truncated one (a full disk leaves the previous file byte-identical).
+
+* A symlink is written through: the new file replaces the symlink's *target* (the
+  partial file lives beside the target), the link stays a link.
+* A special file (FIFO, device, socket) is refused, never replaced: rename would swap
+  ``/dev/null`` for a regular file.
+* Partial files are named ``.STEM.partial-PID[-TAG]SUFFIX``; one whose PID is no longer
+  alive (a writer killed by SIGKILL) is removed by the next write to the same target.
+
+The CLI turns ``OutputError`` into one line and exit status 2. This module also holds
+the signal helpers the writers need: ``sigterm_as_interrupt`` (SIGTERM handled like
+Ctrl-C, so partial files are cleaned up) and ``signals_deferred`` (Ctrl-C held while a
+result file is written).
 """
 from __future__ import annotations
 
 import os
-import tempfile
+import re
+import secrets
+import signal
+import stat
+import threading
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any, Iterator
 
 
 class OutputError(Exception):
     """An output path that cannot be written; the message names the path and the reason."""
 
 
-def prepare_output(path, *, directory: bool = False, option: str = "-o") -> Path:
+_SPECIAL = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
+            (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def _special_kind(path) -> str | None:
+    """What special file ``path`` is (following symlinks), or None for a regular file, folder or nothing."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return None
+    for test, name in _SPECIAL:
+        if test(mode):
+            return name
+    return None
+
+
+def _why(e: OSError) -> str:
+    return e.strerror or str(e)
+
+
+def refuse_special(path, *, option: str = "-o") -> None:
+    """OutputError if ``path`` (through symlinks) is a FIFO, device or socket: nbst writes regular files only."""
+    kind = _special_kind(path)
+    if kind is not None:
+        raise OutputError(f"{option} {path}: is {kind}, not a regular file; nbst writes regular files only "
+                          f"(it never replaces special files): give a file name")
+
+
+def refuse_same_file(path, inputs=(), *, option: str = "-o", outputs=()) -> None:
+    """OutputError if output ``path`` is the same file as one of ``inputs`` (files the command
+    reads; a name that is not an existing file, such as a built-in problem name, is skipped) or
+    of ``outputs`` (the command's other output files, existing or not). None entries are skipped.
+
+    Compared by ``os.path.samefile`` when both exist (so symlinks and hard links count), else
+    by resolved path.
+    """
+    for other, must_exist in [(x, True) for x in inputs] + [(x, False) for x in outputs]:
+        if other is None or (must_exist and not os.path.isfile(other)):
+            continue
+        try:
+            same = (os.path.samefile(path, other) if os.path.exists(path) and os.path.exists(other)
+                    else os.path.realpath(path) == os.path.realpath(other))
+        except OSError:
+            same = False
+        if same:
+            raise OutputError(f"{option} {path}: is the same file as {other}, which this command also reads or "
+                              f"writes; give another file name")
+
+
+def prepare_output(path, *, directory: bool = False, option: str = "-o", inputs=(), outputs=()) -> Path:
     """Make ``path``'s folder (or ``path`` itself with ``directory=True``) exist and be writable.
 
-    Returns ``path`` as a Path; raises OutputError naming ``option``, the path and the reason.
+    Refuses (OutputError naming ``option``, the path and the reason) a folder where a file
+    is expected and vice versa, a special file, and an output that is the same file as one of
+    ``inputs`` (files the command reads) or ``outputs`` (its other outputs): see ``refuse_same_file``.
+    For a symlink the folder checked is the target's (that is where the file is written).
+    Returns ``path`` as a Path.
     """
     p = Path(path)
-    folder = p if directory else (p.parent if str(p.parent) else Path("."))
+    if not directory:
+        refuse_special(p, option=option)
+        refuse_same_file(p, inputs, option=option, outputs=outputs)
+        target = Path(os.path.realpath(p))
+        folder = target.parent
+    else:
+        folder = p
     try:
         if p.is_dir() and not directory:
             raise OutputError(f"{option} {path}: is a folder; expected a file name")
         if p.exists() and directory and not p.is_dir():
-            raise OutputError(f"{option} {path}: is a file; expected a folder")
+            raise OutputError(f"{option} {path}: is {_special_kind(p) or 'a file'}; expected a folder")
         folder.mkdir(parents=True, exist_ok=True)
-        fd, scratch = tempfile.mkstemp(prefix=".nbst-write-test.", dir=folder)
+        fd, scratch = _mkpartial(folder / ".nbst-write-test")
         os.close(fd)
         os.unlink(scratch)
     except OSError as e:
-        raise OutputError(f"{option} {path}: cannot write there ({e.strerror or e})") from None
+        raise OutputError(f"{option} {path}: cannot write there ({_why(e)})") from None
     return p
+
+
+# --------------------------------------------------------------------------- partial files
+
+def partial_path(target, *, tag: str = "") -> Path:
+    """The hidden partial file for ``target`` written by this process: ``.STEM.partial-PID[-TAG]SUFFIX``."""
+    t = Path(target)
+    return t.with_name(f".{t.stem}.partial-{os.getpid()}{'-' + tag if tag else ''}{t.suffix}")
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # exists (someone else's) or cannot tell: leave its file alone
+    return True
+
+
+def remove_stale_partials(target) -> list[Path]:
+    """Remove partial files of ``target`` left by writers that no longer run (killed by SIGKILL);
+    returns the removed paths. Files of live processes are left alone."""
+    t = Path(target)
+    pat = re.compile(r"\." + re.escape(t.stem) + r"\.partial-(\d+)(?:-[0-9A-Za-z]+)?" + re.escape(t.suffix) + "$")
+    removed = []
+    try:
+        names = os.listdir(t.parent if str(t.parent) else ".")
+    except OSError:
+        return removed
+    for name in names:
+        m = pat.match(name)
+        if m and not _pid_alive(int(m.group(1))):
+            f = t.with_name(name)
+            try:
+                if stat.S_ISREG(os.lstat(f).st_mode):
+                    os.unlink(f)
+                    removed.append(f)
+            except OSError:
+                pass
+    return removed
+
+
+def _mkpartial(target):
+    """Create a fresh partial file for ``target`` (O_EXCL): (fd, path)."""
+    for _ in range(100):
+        p = partial_path(target, tag=secrets.token_hex(3))
+        try:
+            return os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), str(p)
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no free partial file name beside {target}")
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _fsync_dir(folder) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+@contextmanager
+def atomic_path(path, *, option: str = "-o") -> Iterator[str]:
+    """Yield a partial file's path for a writer that wants a file name (savefig, ffmpeg, PIL).
+
+    The partial file sits beside the target (a symlink's target), has ``path``'s suffix (so
+    writers that pick the format by extension still do), and exists, empty, when yielded.
+    When the block ends it is fsynced and renamed over the target; if the block raises it
+    is removed, and an OSError (a full disk) becomes one-line OutputError. Stale partial
+    files of dead writers of the same target are removed first.
+    """
+    refuse_special(path, option=option)
+    target = Path(os.path.realpath(path))
+    existed = target.exists()
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_partials(target)
+        fd, tmp = _mkpartial(target)
+        os.close(fd)
+    except OSError as e:
+        raise OutputError(f"{option} {path}: cannot write there ({_why(e)})") from None
+    try:
+        yield tmp
+        try:
+            mode = stat.S_IMODE(os.stat(target).st_mode)
+        except OSError:
+            mode = 0o666 & ~_umask()
+        os.chmod(tmp, mode)  # the partial file is 0600; the result gets the old file's or the usual mode
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, target)
+        _fsync_dir(target.parent)
+    except BaseException as e:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(e, OSError):
+            kept = "the previous file is unchanged" if existed else "nothing was written"
+            raise OutputError(f"{option} {path}: cannot write ({_why(e)}); {kept}") from None
+        raise
+
+
+def write_bytes_atomic(path, data: bytes, *, option: str = "-o") -> None:
+    """Write ``data`` to ``path`` atomically (see the module doc); OutputError on failure."""
+    with atomic_path(path, option=option) as tmp:
+        fd = os.open(tmp, os.O_WRONLY)
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+        finally:
+            os.close(fd)
+
+
+def write_text_atomic(path, text: str, *, option: str = "-o") -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically; OutputError on failure."""
+    write_bytes_atomic(path, text.encode("utf-8"), option=option)
+
+
+def write_json_atomic(path, obj: Any, *, option: str = "-o") -> None:
+    """Write ``obj`` as strict JSON (indent 1; ``nbst.solution.dumps_strict``) atomically; OutputError on failure."""
+    from .solution import dumps_strict
+
+    write_text_atomic(path, dumps_strict(obj, indent=1) + "\n", option=option)
+
+
+# --------------------------------------------------------------------------- signals
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """While the block runs, SIGTERM raises KeyboardInterrupt (like Ctrl-C), so the cleanup that
+    Ctrl-C gets (partial files removed, worker processes stopped) runs on ``kill`` too; the CLI
+    then exits 130. A no-op outside the main thread."""
+    if not _main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+@contextmanager
+def signals_deferred(*, reraise: bool = True) -> Iterator[list]:
+    """Hold SIGINT and SIGTERM while the block runs (e.g. writing the best solution after a first
+    Ctrl-C), so a second Ctrl-C cannot leave the file unwritten. Yields the list of signals that
+    arrived; after the block, if any arrived and ``reraise``, KeyboardInterrupt is raised (the
+    CLI exits 130, with the file written). A no-op outside the main thread."""
+    got: list = []
+    if not _main_thread():
+        yield got
+        return
+
+    def handler(signum, frame):
+        got.append(signum)
+
+    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield got
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+    if got and reraise:
+        raise KeyboardInterrupt

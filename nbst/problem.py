@@ -16,7 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from . import domain as D
 from .constants import MAX_DISKS, OVERLAP_RTOL
+from .domain import bad_text, plain
 
 SCHEMA_VERSION = 1
 
@@ -31,7 +33,7 @@ class ProblemError(ValueError):
     def __init__(self, source: str, field: str, reason: str):
         self.source, self.field, self.reason = str(source), field, reason
         where = f"{self.source}: {field}" if field else self.source
-        super().__init__(f"{where}: {reason}")
+        super().__init__(plain(f"{where}: {reason}"))  # one printable line, whatever the file held
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,7 +116,12 @@ def read_json(path: str | Path) -> Any:
     """Read a JSON file, turning every failure into a one-line ProblemError."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        with open(p, "rb") as f:  # bounded: a huge file, /dev/zero or an endless pipe stops here
+            data = f.read(D.MAX_JSON_BYTES + 1)
+        if len(data) > D.MAX_JSON_BYTES:
+            raise ProblemError(p, "", f"larger than {D.MAX_JSON_BYTES:,} bytes; nbst reads JSON files of at "
+                                      f"most {D.MAX_JSON_BYTES:,} bytes")
+        text = data.decode("utf-8")
     except FileNotFoundError:
         raise ProblemError(p, "", "no such file") from None
     except IsADirectoryError:
@@ -128,11 +135,57 @@ def read_json(path: str | Path) -> Any:
     return parse_json(text, str(p))
 
 
+class _LongInt(Exception):
+    pass
+
+
+def _parse_int(s: str) -> int:
+    if len(s) > D.MAX_INT_DIGITS:  # before int(): long literals are slow and may pass Python's own limit
+        raise _LongInt(len(s.lstrip("-")))
+    return int(s)
+
+
 def parse_json(text: str, source: str) -> Any:
+    """Decode JSON text with nbst's limits (``nbst.domain``): at most MAX_JSON_DEPTH
+    levels of nesting and MAX_INT_DIGITS digits per integer. Every failure, the
+    parser's own limits included, is a one-line ProblemError naming ``source``."""
+    if len(text) > D.MAX_JSON_BYTES:
+        raise ProblemError(source, "", f"{len(text):,} characters; nbst reads JSON of at most "
+                                       f"{D.MAX_JSON_BYTES:,}")
     try:
-        return json.loads(text)
+        obj = json.loads(text, parse_int=_parse_int)
     except json.JSONDecodeError as e:
         raise ProblemError(source, "", f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+    except _LongInt as e:
+        raise ProblemError(source, "", f"an integer literal of {e.args[0]} digits; at most {D.MAX_INT_DIGITS} "
+                                       f"are read (write large numbers as floats, e.g. 1e300)") from None
+    except RecursionError:
+        raise ProblemError(source, "", f"nested too deeply for the JSON parser; at most {D.MAX_JSON_DEPTH} "
+                                       f"levels of lists/objects are read") from None
+    except (ValueError, OverflowError) as e:  # any other parser limit
+        raise ProblemError(source, "", f"not valid JSON: {e}") from None
+    depth = _depth(obj)
+    if depth > D.MAX_JSON_DEPTH:
+        raise ProblemError(source, "", f"nested {depth} levels deep; at most {D.MAX_JSON_DEPTH} levels of "
+                                       f"lists/objects are read")
+    return obj
+
+
+def _depth(obj: Any) -> int:
+    """Nesting depth of decoded JSON (a scalar is 0), without recursion."""
+    best = 0
+    stack = [(obj, 1)]
+    while stack:
+        o, k = stack.pop()
+        if isinstance(o, dict):
+            o = o.values()
+        elif not isinstance(o, list):
+            continue
+        best = max(best, k)
+        if k > D.MAX_JSON_DEPTH:
+            return k
+        stack.extend((v, k + 1) for v in o if isinstance(v, (list, dict)))
+    return best
 
 
 def load_problem(name_or_path: str | Path) -> Problem:
@@ -179,7 +232,10 @@ class _Checker:
     def number(self, v, path: str, *, positive: bool = False) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             self.fail(path, f"must be a number, got {_jtype(v)}")
-        x = float(v)
+        try:
+            x = float(v)
+        except OverflowError:  # an integer beyond float64
+            self.fail(path, f"is too large ({len(str(abs(v)))} digits); numbers must be finite float64 values")
         if not math.isfinite(x):
             self.fail(path, f"must be finite, got {v}")
         if positive and x <= 0:
@@ -201,6 +257,21 @@ class _Checker:
         if not isinstance(v, str):
             self.fail(path, f"must be a string, got {_jtype(v)}")
         return v
+
+    def text(self, v, path: str, *, max_chars: int, allow_newlines: bool = False) -> str:
+        """A string shown to people (titles, terminal, HTML): bounded, no control characters."""
+        s = self.string(v, path)
+        if len(s) > max_chars:
+            self.fail(path, f"{len(s):,} characters; at most {max_chars:,}")
+        why = bad_text(s, allow_newlines=allow_newlines)
+        if why:
+            self.fail(path, why)
+        return s
+
+    def within(self, x: float, lo: float, hi: float, path: str, why: str) -> float:
+        if not lo <= x <= hi:
+            self.fail(path, f"{_fmt(x)} is outside [{_fmt(lo)}, {_fmt(hi)}] ({why})")
+        return x
 
 
 def _join(path: str, key: str) -> str:
@@ -228,16 +299,30 @@ def _fmt(x: float) -> str:
 
 
 def problem_from_dict(d: Any, *, source: str = "<dict>", default_name: str = "problem") -> Problem:
-    """Validate a decoded problem JSON object and build a :class:`Problem`."""
+    """Validate a decoded problem JSON object and build a :class:`Problem`.
+
+    Checks the format's rules and the accepted domain of ``nbst.domain``.
+    """
     c = _Checker(source)
     c.obj(d, "")
-    name = c.string(d["name"], "name") if "name" in d else default_name
-    description = c.string(d.get("description", ""), "description")
+    if "name" in d:
+        name = c.text(d["name"], "name", max_chars=D.MAX_NAME_CHARS)
+    else:  # a file's stem: not the user's JSON, so made printable rather than refused
+        name = plain(str(default_name))[: D.MAX_NAME_CHARS]
+    description = c.text(d.get("description", ""), "description", max_chars=D.MAX_DESCRIPTION_CHARS,
+                         allow_newlines=True)
     W, H = c.pair(c.get(d, "box", ""), "box")
     if W <= 0 or H <= 0:
         c.fail("box", f"width and height must be > 0, got [{_fmt(W)}, {_fmt(H)}]")
+    c.within(W, D.BOX_MIN, D.BOX_MAX, "box[0]", "box sides must lie in this range; rescale the length unit")
+    c.within(H, D.BOX_MIN, D.BOX_MAX, "box[1]", "box sides must lie in this range; rescale the length unit")
     t_final = c.number(c.get(d, "t_final", ""), "t_final", positive=True)
+    c.within(t_final, D.T_FINAL_MIN, D.T_FINAL_MAX, "t_final", "seconds; rescale the time unit")
     R = c.number(c.get(d, "target_radius", ""), "target_radius", positive=True)
+    diag = math.hypot(W, H)
+    if R > diag:
+        c.fail("target_radius", f"{_fmt(R)} exceeds the box diagonal {_fmt(diag)}: every position would be "
+                                f"acceptable; use at most the diagonal")
     disks = c.get(d, "disks", "")
     if not isinstance(disks, list):
         c.fail("disks", f"must be a list of disk objects, got {_jtype(disks)}")
@@ -251,22 +336,30 @@ def problem_from_dict(d: Any, *, source: str = "<dict>", default_name: str = "pr
     radius = np.empty(n)
     mass = np.empty(n)
     cue = np.empty(n, dtype=bool)
+    r_min = D.RADIUS_MIN_FRACTION * max(W, H)
     for i, disk in enumerate(disks):
         p = f"disks[{i}]"
         c.obj(disk, p)
-        radius[i] = c.number(c.get(disk, "radius", p), f"{p}.radius", positive=True)
+        radius[i] = r = c.number(c.get(disk, "radius", p), f"{p}.radius", positive=True)
+        if r < r_min:
+            c.fail(f"{p}.radius", f"{_fmt(r)} is below {_fmt(D.RADIUS_MIN_FRACTION)} x the box's longer side "
+                                  f"({_fmt(r_min)}): collisions would drown in round-off; use a larger radius")
+        if 2 * r > min(W, H):
+            c.fail(f"{p}.radius", f"{_fmt(r)} is too large for the {_fmt(W)} x {_fmt(H)} box")
         mass[i] = c.number(disk.get("mass", 1.0), f"{p}.mass", positive=True)
+        c.within(mass[i], D.MASS_MIN, D.MASS_MAX, f"{p}.mass", "masses must lie in this range; rescale the unit")
         cue[i] = c.boolean(disk.get("cueable", True), f"{p}.cueable")
         for key, arr in (("start", start), ("target", target)):
             x, y = c.pair(c.get(disk, key, p), f"{p}.{key}")
-            r = radius[i]
             if not (r <= x <= W - r and r <= y <= H - r):
                 c.fail(f"{p}.{key}", f"[{_fmt(x)}, {_fmt(y)}] is not at least the disk's radius {_fmt(r)} "
                                      f"inside the walls of the {_fmt(W)} x {_fmt(H)} box")
             arr[i] = (x, y)
-    if 2 * radius.max() > min(W, H):
-        i = int(radius.argmax())
-        c.fail(f"disks[{i}].radius", f"{_fmt(radius[i])} is too large for the {_fmt(W)} x {_fmt(H)} box")
+    ratio = mass.max() / mass.min()
+    if ratio > D.MAX_MASS_RATIO:
+        c.fail(f"disks[{int(mass.argmax())}].mass", f"{_fmt(mass.max())} is {_fmt(ratio)} x the lightest "
+                                                    f"disk's mass (disks[{int(mass.argmin())}]); the ratio "
+                                                    f"may be at most {_fmt(D.MAX_MASS_RATIO)}")
     for i in range(n):
         d2 = ((start[i + 1:] - start[i]) ** 2).sum(axis=1)
         s = radius[i + 1:] + radius[i]
@@ -281,3 +374,21 @@ def problem_from_dict(d: Any, *, source: str = "<dict>", default_name: str = "pr
         a.setflags(write=False)
     return Problem(name=name, box=(W, H), t_final=t_final, target_radius=R, start=start, target=target,
                    radius=radius, mass=mass, cueable=cue, description=description, source=source, raw=d)
+
+
+def box_crossings(problem: Problem, velocities) -> np.ndarray:
+    """(N,) how many times each disk would cross the box in t_final if it met no
+    other disk: |vx| t / (W - 2r) + |vy| t / (H - 2r) (inf for motion along an
+    axis the disk fills). Each crossing is one wall event."""
+    gaps = np.stack([problem.width - 2 * problem.radius, problem.height - 2 * problem.radius], axis=1)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        v = np.abs(np.asarray(velocities, dtype=float)) * problem.t_final
+        k = np.where(v == 0.0, 0.0, v / gaps)
+    k[(v > 0) & (gaps <= 0)] = math.inf
+    return k.sum(axis=1)
+
+
+def display_name(text: str) -> str:
+    """User text (a problem's name) for matplotlib: ``$`` escaped so it is never
+    read as mathtext, control characters written as escapes."""
+    return plain(text).replace("$", r"\$")

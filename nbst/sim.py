@@ -27,6 +27,11 @@ predicted, so a pair that just collided is never re-predicted at tau = 0, and a
 wall is predicted only for the wall a disk moves towards, so a disk pushed back
 into the wall it just left (or bouncing into the opposite wall) is still caught.
 A contact time that round-off makes negative is clamped to "now".
+
+A run that stops early (``MAX_EVENTS`` reached, or stalled: a jam of rigid disks pinned
+between opposite walls bouncing infinitely often at one instant) is exact up to its last
+event; its final positions are those at that event's time, never extrapolated past it
+(straight flight beyond the last event would cross walls).
 """
 from __future__ import annotations
 
@@ -36,8 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, MAX_EVENTS, WALL_BOTTOM, WALL_LEFT,
-                        WALL_NAMES, WALL_RIGHT, WALL_TOP)
+from .constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, MAX_EVENTS, PARALLEL_BATCH, STALL_EVENTS_PER_DISK, STALL_RTOL,
+                        WALL_BOTTOM, WALL_LEFT, WALL_NAMES, WALL_RIGHT, WALL_TOP)
 from .problem import Problem
 
 INF = math.inf
@@ -45,6 +50,7 @@ INF = math.inf
 STATUS_OK = 0
 STATUS_TRUNCATED = 1  # MAX_EVENTS reached before t_final
 STATUS_OVERFLOW = 2  # event record buffer full (simulate() retries with a larger one)
+STATUS_STALLED = 3  # a jam: STALL_EVENTS_PER_DISK * N events within one instant
 
 
 # --------------------------------------------------------------------------- closed forms
@@ -189,12 +195,15 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
 
     x0, v0      : (N, 2) start positions and velocities
     work        : from ``alloc_work(N)``
-    out_final   : (N, 2) filled with positions at t_final
-    out_vel     : (N, 2) filled with velocities at t_final
+    out_final   : (N, 2) filled with positions at t_final (a run that stops early: at its
+                  last event's time, inside the box)
+    out_vel     : (N, 2) filled with velocities at t_final (or after the last event)
     ev_*        : event record buffers of equal length (length 0: record nothing).
                   ev_t time, ev_i / ev_j participants (ev_j = -1 - wall for a wall
                   event), ev_state[e] = (xi, yi, vxi, vyi, xj, yj, vxj, vyj) after it.
-    returns (status, n_events, n_disk_disk, n_wall)
+    returns (status, n_events, n_disk_disk, n_wall); status STATUS_TRUNCATED: max_events
+    reached before t_final, STATUS_STALLED: more than STALL_EVENTS_PER_DISK * N events
+    within STALL_RTOL * t_final seconds (a jam that would never end)
     """
     px, py, vx, vy, tl, T, wall, rowmin, rowarg, tw, tmp, rad = work
     n = x0.shape[0]
@@ -226,6 +235,11 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
     n_ev = 0
     n_dd = 0
     n_wall = 0
+    t_last = 0.0  # time of the last processed event
+    t_inst = 0.0  # start of the current "instant" (stall test)
+    n_inst = 0
+    stall_events = STALL_EVENTS_PER_DISK * n
+    stall_dt = STALL_RTOL * t_final
     while True:
         i = 0
         te = rowmin[0]
@@ -238,6 +252,14 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
         if n_ev >= max_events:
             status = STATUS_TRUNCATED
             break
+        if te > t_inst + stall_dt:
+            t_inst = te
+            n_inst = 0
+        n_inst += 1
+        if n_inst > stall_events:
+            status = STATUS_STALLED
+            break
+        t_last = te
         j = rowarg[i]
         # advance i (and j) to the event time
         px[i] += vx[i] * (te - tl[i])
@@ -300,9 +322,10 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
                 ev_state[n_ev, 6] = vx[jj]
                 ev_state[n_ev, 7] = vy[jj]
         n_ev += 1
+    t_stop = t_final if status == STATUS_OK else t_last  # never extrapolate past the last event
     for i in range(n):
-        out_final[i, 0] = px[i] + vx[i] * (t_final - tl[i])
-        out_final[i, 1] = py[i] + vy[i] * (t_final - tl[i])
+        out_final[i, 0] = px[i] + vx[i] * (t_stop - tl[i])
+        out_final[i, 1] = py[i] + vy[i] * (t_stop - tl[i])
         out_vel[i, 0] = vx[i]
         out_vel[i, 1] = vy[i]
     return status, n_ev, n_dd, n_wall
@@ -324,7 +347,7 @@ def cost_signature(final, target, R):
     return cost, sig
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def evaluate_kernel(x0, V, radius, mass, target, W, H, t_final, R, max_events, final, cost, sig, n_events):
     """Batch: V (B, N, 2) -> final (B, N, 2), cost (B,), sig (B,), n_events (B,).
     A run that hits max_events gets cost = inf and signature 0."""
@@ -365,13 +388,17 @@ def _check_velocities(problem: Problem, V: np.ndarray) -> None:
         raise ValueError("noncueable disks must have zero initial velocity")
 
 
-def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, return_events: bool = False):
+def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, return_events: bool = False,
+             jobs: int | None = None):
     """Simulate a batch of candidate velocity sets (no per-trial Python).
 
     V : (B, N, 2) float, units/s
     returns final (B, N, 2), cost (B,) float, signature (B,) int64 bitmask
     [, n_events (B,) int64]. cost is inf (signature 0) for a run that needed more
     than ``max_events`` events.
+    jobs : threads for a batch of at least PARALLEL_BATCH candidates (the kernel releases
+           the GIL; each thread takes a contiguous slice); None: every core; 1: this thread.
+           The results do not depend on it: each candidate is simulated alone.
     """
     V = np.ascontiguousarray(V, dtype=np.float64)
     if V.ndim != 3:
@@ -384,8 +411,28 @@ def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, return_events
     sig = np.empty(B, np.int64)
     n_events = np.empty(B, np.int64)
     W, H = problem.box
-    evaluate_kernel(x0, V, radius, mass, target, float(W), float(H), float(problem.t_final),
-                    float(problem.target_radius), int(max_events), final, cost, sig, n_events)
+    args = (x0, radius, mass, target, float(W), float(H), float(problem.t_final), float(problem.target_radius),
+            int(max_events))
+
+    def run_slice(a: int, b: int) -> None:
+        x0_, radius_, mass_, target_, W_, H_, tf_, R_, me_ = args
+        evaluate_kernel(x0_, V[a:b], radius_, mass_, target_, W_, H_, tf_, R_, me_, final[a:b], cost[a:b],
+                        sig[a:b], n_events[a:b])
+
+    if jobs is None:
+        from .islands import default_jobs
+
+        jobs = default_jobs()
+    k = max(1, min(int(jobs), B // PARALLEL_BATCH))
+    if k == 1:
+        run_slice(0, B)
+    else:
+        from concurrent.futures import ThreadPoolExecutor
+
+        cuts = np.linspace(0, B, k + 1).astype(np.int64)
+        with ThreadPoolExecutor(k) as ex:
+            for f in [ex.submit(run_slice, int(cuts[i]), int(cuts[i + 1])) for i in range(k)]:
+                f.result()
     if return_events:
         return final, cost, sig, n_events
     return final, cost, sig
@@ -401,6 +448,13 @@ class Trajectory:
     events     : structured (E,) array: time, kind (0 disk-disk, 1 wall), i, j
                  (j = partner disk, or the wall 0 left, 1 right, 2 bottom, 3 top)
     final_positions / final_velocities : (N, 2) at t_final
+    truncated  : the run stopped before t_final (``max_events`` reached, or ``stalled``);
+                 the motion is exact up to ``t_end`` (its last event) and is held there:
+                 ``final_positions`` and ``at(t)`` for t > t_end are the positions at
+                 t_end, inside the box (never extrapolated through the walls)
+    stalled    : it stopped because of a jam (disks pinned between opposite walls
+                 bouncing infinitely often at one instant), not the event cap
+    t_end      : t_final, or the time of the last event of a truncated run
     """
 
     problem: Problem
@@ -414,6 +468,13 @@ class Trajectory:
     cost: float
     signature: int
     truncated: bool
+    stalled: bool = False
+    t_end: float | None = None
+
+    @property
+    def end_time(self) -> float:
+        """Time up to which the motion is exact: t_final, or ``t_end`` for a truncated run."""
+        return float(self.problem.t_final if self.t_end is None else self.t_end)
 
     @property
     def order(self) -> int:
@@ -436,11 +497,14 @@ class Trajectory:
         """Positions at time(s) t in [0, t_final]: (N, 2) for a scalar, (T, N, 2) for an array.
 
         Exact: the keyframe before t plus straight flight. At an event time the
-        state after the event is used (positions are continuous anyway).
+        state after the event is used (positions are continuous anyway). A truncated
+        run holds its positions at ``t_end`` for later t.
         """
         ts = np.asarray(t, dtype=float)
         if np.any(ts < 0.0) or np.any(ts > self.problem.t_final * (1 + 1e-12)):
             raise ValueError(f"t must lie in [0, t_final = {self.problem.t_final}]")
+        if self.truncated:
+            ts = np.minimum(ts, self.end_time)
         k = np.searchsorted(self.times, ts, side="right") - 1
         dt = (ts - self.times[k])[..., None, None]
         return self.positions[k] + self.velocities[k] * dt
@@ -465,6 +529,8 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
     """Simulate one motion exactly and keep its events (for rendering, MuJoCo checks, reports).
 
     velocities : (N, 2) float, units/s (zero rows for noncueable disks)
+    A run that stops early (``max_events``, or a jam) comes back with ``truncated`` (and
+    ``stalled``) set, cost inf, positions held at its last event (see ``Trajectory``).
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
     if v0.ndim != 2:
@@ -518,7 +584,8 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
     events["kind"] = np.where(wall_ev, EVENT_WALL, EVENT_DISK)
     events["i"] = ev_i[:n_ev]
     events["j"] = np.where(wall_ev, -1 - ev_j[:n_ev], ev_j[:n_ev])
-    truncated = status == STATUS_TRUNCATED
+    truncated = status in (STATUS_TRUNCATED, STATUS_STALLED)
+    t_end = float(times[-1]) if truncated else float(problem.t_final)
     if truncated:
         cost, sig = INF, 0
     else:
@@ -527,4 +594,4 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
         a.setflags(write=False)
     return Trajectory(problem=problem, initial_velocities=v0, times=times, positions=pos, velocities=vel,
                       events=events, final_positions=final, final_velocities=fvel, cost=float(cost),
-                      signature=int(sig), truncated=truncated)
+                      signature=int(sig), truncated=truncated, stalled=status == STATUS_STALLED, t_end=t_end)

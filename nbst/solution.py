@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from .problem import Problem, ProblemError, _Checker, read_json
+from .domain import MAX_BOX_CROSSINGS
+from .problem import Problem, ProblemError, _Checker, box_crossings, read_json
 
 SCHEMA_VERSION = 1
 
@@ -66,6 +67,12 @@ def solution_from_dict(d: Any, problem: Problem, *, source: str = "<dict>") -> S
         if not problem.cueable[i] and (v[i, 0] != 0.0 or v[i, 1] != 0.0):
             c.fail(f"velocities[{i}]", f"disk {i} is noncueable and must start at rest, got "
                                        f"[{v[i, 0]:g}, {v[i, 1]:g}]")
+    k = box_crossings(problem, v)
+    i = int(np.argmax(k))
+    if k[i] > MAX_BOX_CROSSINGS:
+        c.fail(f"velocities[{i}]", f"[{v[i, 0]:g}, {v[i, 1]:g}] crosses the box {k[i]:.3g} times in t_final = "
+                                   f"{problem.t_final:g} s; at most {MAX_BOX_CROSSINGS:,} fit the simulator's "
+                                   f"event cap: lower this velocity")
     v.setflags(write=False)
     meta = {k: val for k, val in d.items() if k not in ("velocities", "problem", "schema_version")}
     return Solution(problem=problem.name, velocities=v, meta=meta)
@@ -85,18 +92,29 @@ def make_solution(problem: Problem, velocities, **meta) -> Solution:
     return Solution(problem=problem.name, velocities=solution_from_dict(d, problem).velocities, meta=dict(meta))
 
 
-def _json_safe(x):
+def json_safe(x):
+    """``x`` with every non-finite float made strict-JSON: NaN -> null, +/-inf ->
+    the strings "inf" / "-inf" (numpy scalars and arrays become Python values).
+    Every JSON nbst writes or prints goes through this (``docs/formats.md``)."""
     if isinstance(x, float) and not math.isfinite(x):
         return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
     if isinstance(x, dict):
-        return {k: _json_safe(v) for k, v in x.items()}
+        return {k: json_safe(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [_json_safe(v) for v in x]
+        return [json_safe(v) for v in x]
     if isinstance(x, np.generic):
-        return _json_safe(x.item())
+        return json_safe(x.item())
     if isinstance(x, np.ndarray):
-        return _json_safe(x.tolist())
+        return json_safe(x.tolist())
     return x
+
+
+_json_safe = json_safe  # the name models/cli.py imports
+
+
+def dumps_strict(obj: Any, **kw) -> str:
+    """JSON text that any strict parser reads (see :func:`json_safe`)."""
+    return json.dumps(json_safe(obj), allow_nan=False, **kw)
 
 
 def write_json_atomic(path: str | Path, obj: Any) -> None:
@@ -107,7 +125,7 @@ def write_json_atomic(path: str | Path, obj: Any) -> None:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(_json_safe(obj), indent=1, allow_nan=False) + "\n"
+    text = dumps_strict(obj, indent=1) + "\n"
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     except OSError as e:  # name the file the caller asked for, not the scratch file

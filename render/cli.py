@@ -37,7 +37,8 @@ def register(sub) -> None:
     p.add_argument("--hold", type=float, default=1.0, metavar="SECONDS",
                    help="seconds of video holding the final frame (default 1.0)")
     p.add_argument("--trails", action="store_true", help="draw each disk's recent path, fading with age")
-    p.add_argument("--labels", action="store_true", help="write each disk's index on it")
+    p.add_argument("--labels", action="store_true",
+                   help="write each disk's index on it, and beside each target the index of its disk")
     p.add_argument("--view", choices=["2d", "3d"], default="2d",
                    help="2d: the box from above (default); 3d: pucks on a table, perspective camera, lighting")
     p.add_argument("--source", choices=["analytic", "mujoco", "both"], default="analytic",
@@ -45,6 +46,8 @@ def register(sub) -> None:
                         "(MuJoCo drawn as white rings over the exact disks)")
     p.add_argument("--still", type=float, default=None, metavar="T",
                    help="write only the frame at time T (seconds) to a .png")
+    p.add_argument("--max-frames", type=int, default=None, metavar="N",
+                   help="refuse a video of more than N frames (default 108,000: 30 minutes at 60 fps)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=cmd_render)
 
@@ -52,19 +55,23 @@ def register(sub) -> None:
                        description="Figures in the manner of the paper: `plot problem` as its Figures 1-2 (disks "
                                    "at their starts, small circles at the targets, arrows start -> target, broken "
                                    "for noncueable disks); `plot trajectories` as its Figures 3-4 (each disk's path, "
-                                   "wall bounces and disk-disk collisions marked). The extension picks the format "
-                                   "(.png, .pdf, .svg).")
+                                   "wall bounces and disk-disk collisions marked). The marks mean what they mean in "
+                                   "the video: amber cueable, blue noncueable; numbers are disk indices, on each disk "
+                                   "at its start and beside its target; a legend below the box says the rest. The "
+                                   "extension picks the format (.png, .pdf, .svg).")
     psub = p.add_subparsers(dest="what", metavar="WHAT", required=True)
     q = psub.add_parser("problem", help="starts, targets and arrows (the paper's Figures 1-2)")
     q.add_argument("problem", help="built-in name or path to a problem JSON file")
     q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
     q.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    q.add_argument("-q", "--quiet", action="store_true", help="no summary line")
     q.set_defaults(func=cmd_plot_problem)
     q = psub.add_parser("trajectories", help="the disks' paths with bounces and collisions (Figures 3-4)")
     q.add_argument("problem", help="built-in name or path to a problem JSON file")
     q.add_argument("solution", help="path to a solution JSON file")
     q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
     q.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    q.add_argument("-q", "--quiet", action="store_true", help="no summary line")
     q.set_defaults(func=cmd_plot_trajectories)
 
 
@@ -123,10 +130,27 @@ def cmd_render(args) -> int:
     sol = load_solution(args.solution, problem)
     if args.still is not None and not (0 <= args.still <= problem.t_final):
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
-    from nbst.outputs import prepare_output
-    prepare_output(out)
+    try:  # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
+        if kind != "png":
+            from .video import MAX_FRAMES, check_frames
+            if args.max_frames is not None and args.max_frames < 1:
+                return _err("render", f"--max-frames {args.max_frames}: must be >= 1")
+            check_frames(problem.t_final, fps, speed=args.speed, hold=args.hold,
+                         max_frames=args.max_frames or MAX_FRAMES)
+        if args.source != "analytic":
+            from nbst.models.mjrun import check_steps
+            from nbst.models.scene import DEFAULT_TIMESTEP
+            check_steps(problem.t_final, DEFAULT_TIMESTEP, hint="the MuJoCo replay cannot cover it: use "
+                        "--source analytic")
+    except ValueError as e:
+        return _err("render", str(e))
+    except ImportError:
+        pass  # no MuJoCo replay in this install: mujoco_positions says so
+    from nbst.outputs import prepare_output, sigterm_as_interrupt
+    prepare_output(out, inputs=(args.problem, args.solution))
     try:
-        return _render(args, problem, sol, out, kind, size, fps)
+        with sigterm_as_interrupt():  # kill: the partial video is removed as on Ctrl-C
+            return _render(args, problem, sol, out, kind, size, fps)
     except RenderError as e:
         return _err("render", str(e))
 
@@ -143,8 +167,9 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
 
     tr = simulate(problem, sol.velocities)
     if tr.truncated:
-        print("nbst render: warning: the simulation hit its event limit before t_final; frames after the "
-              f"last event (t = {tr.times[-1]:.4g} s) are extrapolated", file=sys.stderr)
+        print("nbst render: warning: the simulation stopped before t_final (" + ("a jam: disks pinned between "
+              "opposite walls" if tr.stalled else "its event limit") + f"); frames after its last event "
+              f"(t = {tr.end_time:.4g} s) hold the disks there", file=sys.stderr)
     if kind == "png":
         times = np.array([float(args.still)])
     else:
@@ -237,7 +262,11 @@ def _save(fig, args, save_figure) -> int:
     if ext not in (".png", ".pdf", ".svg"):
         return _err("plot", f"{Path(args.output).name}: unknown figure format {ext or '(no extension)'!r}; "
                             "use .png, .pdf or .svg")
-    from nbst.outputs import prepare_output
-    prepare_output(args.output)
-    save_figure(fig, args.output, dpi=args.dpi)
+    from nbst.outputs import atomic_path, prepare_output
+    prepare_output(args.output, inputs=(getattr(args, "problem", None), getattr(args, "solution", None)))
+    with atomic_path(args.output) as tmp:  # a full disk leaves the previous figure, not a 0-byte one
+        save_figure(fig, tmp, dpi=args.dpi)
+    if not getattr(args, "quiet", False):
+        kind = f"PNG, {args.dpi} dpi" if ext == ".png" else ext[1:].upper()
+        print(f"nbst plot: wrote {args.output} ({kind})", file=sys.stderr)
     return 0

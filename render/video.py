@@ -32,6 +32,36 @@ def video_kind(path) -> str:
     raise RenderError(f"{path}: unknown video extension {ext or '(none)'!r}; use .mp4 or .gif (or --still T with .png)")
 
 
+#: Most frames one video may have unless ``--max-frames`` says otherwise: 30 minutes at
+#: 60 fps, hours of rendering and gigabytes of MP4. A t_final of 1e6 s at 60 fps would be
+#: 60 million frames (days of rendering, a 480 MB time array before the first frame).
+MAX_FRAMES = 108_000
+
+
+def frame_count(t_final: float, fps: float, *, speed: float = 1.0, hold: float = 0.0) -> int:
+    """How many frames ``frame_times`` returns, computed without building them (may be huge)."""
+    if not (fps > 0 and speed > 0 and hold >= 0):
+        raise ValueError("fps and speed must be > 0, hold >= 0")
+    x = t_final / (speed / fps) + 1e-9
+    if not math.isfinite(x) or x > 2**62:
+        return 2**62
+    n = int(math.floor(x)) + 1
+    if (n - 1) * (speed / fps) < t_final - 1e-12:
+        n += 1
+    return n + int(round(hold * fps))
+
+
+def check_frames(t_final: float, fps: float, *, speed: float = 1.0, hold: float = 0.0,
+                 max_frames: int = MAX_FRAMES) -> int:
+    """The frame count, or ValueError (one line: why, and which options change it) above ``max_frames``."""
+    n = frame_count(t_final, fps, speed=speed, hold=hold)
+    if n > max_frames:
+        raise ValueError(f"t_final = {t_final:g} s at {fps:g} fps and --speed {speed:g} is {n:,} frames, over the "
+                         f"limit of {max_frames:,}; raise it with --max-frames N, or shorten the video with a "
+                         f"higher --speed (simulated seconds per second of video) or a lower --fps")
+    return n
+
+
 def frame_times(t_final: float, fps: float, *, speed: float = 1.0, hold: float = 0.0) -> np.ndarray:
     """Simulation times of the frames: k * speed / fps for k = 0, 1, ... up to and
     including t_final (the last frame is at t_final exactly), then ``hold`` seconds
@@ -60,14 +90,20 @@ class VideoWriter:
                  crf: int = style.X264_CRF, preset: str = style.X264_PRESET):
         import imageio_ffmpeg
 
+        from nbst.outputs import partial_path, refuse_special, remove_stale_partials
+
         self.final_path = str(path)
         self.kind = video_kind(path)
-        # ffmpeg writes a hidden temporary file beside the target (same extension: it picks the
-        # muxer); close() renames it over the target, so a failed or interrupted run leaves no
-        # half-written video under the requested name.
-        final = Path(self.final_path)
+        # ffmpeg writes a hidden partial file beside the target (a symlink's target; same
+        # extension: it picks the muxer); close() renames it over the target, so a failed or
+        # interrupted run (Ctrl-C, or SIGTERM under the CLI) leaves no half-written video under
+        # the requested name. Partial files of killed (SIGKILL) earlier runs are removed here.
+        refuse_special(path)
+        final = Path(os.path.realpath(path))
         final.parent.mkdir(parents=True, exist_ok=True)
-        self.path = str(final.with_name(f".{final.stem}.partial-{os.getpid()}{final.suffix}"))
+        remove_stale_partials(final)
+        self._target = str(final)
+        self.path = str(partial_path(final))
         self.size = (int(size[0]), int(size[1]))
         self.fps = float(fps)
         w, h = self.size
@@ -85,7 +121,7 @@ class VideoWriter:
         self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps,
                                                 pix_fmt_in="rgba" if rgba else "rgb24",
                                                 macro_block_size=1, ffmpeg_log_level="error", **kw)
-        self._gen.send(None)  # starts ffmpeg
+        self._log = _start_quietly(self._gen)  # ffmpeg's stderr, read back for a one-line reason
         self._pool = [np.empty(self.frame_shape, np.uint8) for _ in range(max(1, buffers))]
         self._ids = {id(b) for b in self._pool}
         self._free: queue.Queue = queue.Queue()
@@ -114,9 +150,12 @@ class VideoWriter:
 
     def _check(self) -> None:
         if self._error is not None:
-            msg = str(self._error).strip().splitlines()
+            msg = _ffmpeg_reason(self._log) or str(self._error).strip().splitlines()[:1]
             raise RenderError(f"{self.final_path}: the encoder failed "
-                              f"({msg[0] if msg else type(self._error).__name__})")
+                              f"({msg[0] if msg else type(self._error).__name__}); {self._kept()}")
+
+    def _kept(self) -> str:
+        return "the previous file is unchanged" if os.path.exists(self._target) else "nothing was written"
 
     def acquire(self) -> np.ndarray:
         """A free frame buffer of ``frame_shape``, uint8 (blocks while all are queued)."""
@@ -159,14 +198,34 @@ class VideoWriter:
         except Exception as e:
             if self._error is None:
                 self._error = e
-        if discard or self._error is not None:
+        try:
+            if discard or self._error is not None:
+                try:
+                    os.unlink(self.path)
+                except FileNotFoundError:
+                    pass
+            if not discard:
+                self._check()
+                self._publish()
+        finally:
+            if self._log is not None:
+                self._log.close()
+
+    def _publish(self) -> None:
+        """fsync the finished partial file and rename it over the target (RenderError if that fails)."""
+        try:
+            fd = os.open(self.path, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+            os.replace(self.path, self._target)
+        except OSError as e:
             try:
                 os.unlink(self.path)
-            except FileNotFoundError:
+            except OSError:
                 pass
-        if not discard:
-            self._check()
-            os.replace(self.path, self.final_path)
+            raise RenderError(f"{self.final_path}: cannot write ({e.strerror or e}); {self._kept()}") from None
 
     def __enter__(self):
         return self
@@ -174,6 +233,51 @@ class VideoWriter:
     def __exit__(self, exc_type, exc, tb):
         # on an error in the render loop (Ctrl-C included) leave no half-written video
         self.close(discard=exc_type is not None)
+
+
+def _start_quietly(gen):
+    """Start imageio-ffmpeg's writer (its first ``send``) with ffmpeg's stderr going to a
+    temporary file instead of ours: ffmpeg reports a failure (a full disk) in several lines
+    of its own; ``_ffmpeg_reason`` turns them into one. Returns the file (None if it could
+    not be made: then ffmpeg writes to our stderr as before)."""
+    import sys
+    import tempfile
+
+    try:
+        log = tempfile.TemporaryFile()
+        saved = os.dup(2)
+    except OSError:
+        gen.send(None)
+        return None
+    try:
+        sys.stderr.flush()
+        os.dup2(log.fileno(), 2)
+        gen.send(None)  # starts ffmpeg, which inherits fd 2
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+    return log
+
+
+def _ffmpeg_reason(log) -> list[str]:
+    """The most telling line of ffmpeg's log (a system error if any), without its '[muxer @ 0x..]' tag."""
+    import re
+
+    if log is None:
+        return []
+    try:
+        log.seek(0)
+        lines = [re.sub(r"^\[[^]]*\]\s*", "", ln).strip()
+                 for ln in log.read(1 << 16).decode("utf-8", "replace").splitlines()]
+    except OSError:
+        return []
+    lines = [ln for ln in lines if ln]
+    for ln in lines:
+        m = re.search(r"(No space left on device|Disk quota exceeded|Permission denied|Read-only file system|"
+                      r"Input/output error|File too large)", ln)
+        if m:
+            return [m.group(1)]
+    return lines[:1]
 
 
 def encode(frames, writer: VideoWriter, *, progress=None) -> int:
@@ -226,5 +330,7 @@ def write_png(path, frame: np.ndarray) -> None:
     """Write one (H, W, 3) uint8 frame as PNG."""
     from PIL import Image
 
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(np.ascontiguousarray(frame)).save(str(path))
+    from nbst.outputs import atomic_path
+
+    with atomic_path(path) as tmp:  # whole PNG or the previous file, never a truncated one
+        Image.fromarray(np.ascontiguousarray(frame)).save(tmp, format="PNG")

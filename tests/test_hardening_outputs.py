@@ -1,0 +1,272 @@
+"""Hardening of the command line: bounded work, output paths, full disks, signals.
+
+Each class of failure a tester found has one test here: special files and symlinks as
+``-o``, a full disk (ENOSPC simulated by monkeypatching the write), an output that is
+the command's own input, a huge t_final for ``validate`` / ``render``, and cleanup after
+SIGTERM / SIGKILL (render's partial video, experiment's worker processes).
+"""
+from __future__ import annotations
+
+import errno
+import json
+import os
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nbst.cli import main
+from nbst.outputs import (OutputError, partial_path, refuse_same_file, remove_stale_partials, signals_deferred,
+                          write_text_atomic)
+
+NBST = [sys.executable, "-m", "nbst.cli"]
+#: Problem with slow disks: a huge t_final stays within the simulator's event cap.
+SLOW = {"name": "slow", "box": [400.0, 400.0], "t_final": 2.0, "target_radius": 30.0, "disks": [
+    {"start": [100.0, 200.0], "target": [300.0, 200.0], "radius": 10.0},
+    {"start": [300.0, 100.0], "target": [100.0, 200.0], "radius": 10.0}]}
+
+
+def _files(tmp_path, t_final=2.0, speed=1.0):
+    d = dict(SLOW, t_final=t_final)
+    p = tmp_path / "p.json"
+    p.write_text(json.dumps(d))
+    s = tmp_path / "s.json"
+    s.write_text(json.dumps({"problem": "slow", "velocities": [[speed, 0.0], [0.0, speed]]}))
+    return str(p), str(s)
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert err and "\n" not in err and "Traceback" not in err, err
+    return err
+
+
+def _dead_pid() -> int:
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+# --------------------------------------------------------------------------- special files, symlinks
+
+def test_fifo_and_device_outputs_are_refused_never_replaced(tmp_path, capsys):
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    assert main(["generate", "--planted", "2", "--seed", "1", "-o", str(fifo)]) == 2
+    assert "FIFO" in _one_line_error(capsys)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    with pytest.raises(OutputError, match="character device"):
+        write_text_atomic(os.devnull, "x")
+    assert main(["generate", "--planted", "2", "--seed", "1", "-o", os.devnull]) == 2
+    assert "character device" in _one_line_error(capsys)
+    assert stat.S_ISCHR(os.lstat(os.devnull).st_mode)
+
+
+def test_symlink_output_is_written_through(tmp_path, capsys):
+    target = tmp_path / "real" / "problem.json"
+    target.parent.mkdir()
+    target.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    assert main(["generate", "--planted", "2", "--seed", "1", "-o", str(link)]) == 0
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert json.loads(target.read_text())["disks"]
+    assert not [f for f in target.parent.iterdir() if f.name.startswith(".")]  # no partial file left
+
+
+# --------------------------------------------------------------------------- full disk
+
+@pytest.fixture
+def full_disk(monkeypatch):
+    """Every os.write to a regular file fails with ENOSPC, as on a full disk (pipes still work)."""
+    real = os.write
+
+    def write(fd, data):
+        if stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(fd, data)
+
+    monkeypatch.setattr(os, "write", write)
+
+
+def test_full_disk_is_one_line_exit_2_and_keeps_the_previous_file(tmp_path, capsys, full_disk, monkeypatch):
+    out = tmp_path / "prob.json"
+    out.write_bytes(b"previous\n")
+    assert main(["generate", "--planted", "2", "--seed", "1", "-o", str(out)]) == 2
+    assert "No space left on device" in _one_line_error(capsys)
+    assert out.read_bytes() == b"previous\n"
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["prob.json"]  # no partial file left
+
+    # a writer that wants a file name (matplotlib): a half-written figure must not replace the old one
+    import nbst.render.figures as figures
+
+    def savefig_then_fail(fig, path, dpi=None):
+        Path(path).write_bytes(b"\x89PNG half")
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(figures, "save_figure", savefig_then_fail)
+    png = tmp_path / "fig.png"
+    png.write_bytes(b"old png")
+    assert main(["plot", "problem", "over5", "-o", str(png)]) == 2
+    assert "No space left on device" in _one_line_error(capsys)
+    assert png.read_bytes() == b"old png"
+
+
+def test_full_disk_mjcf_keeps_the_previous_scene(tmp_path, capsys, full_disk):
+    pytest.importorskip("mujoco")
+    out = tmp_path / "scene.xml"
+    out.write_bytes(b"<mujoco/>\n")
+    assert main(["mjcf", "over5", "-o", str(out)]) == 2
+    assert "No space left on device" in _one_line_error(capsys)
+    assert out.read_bytes() == b"<mujoco/>\n"
+
+
+# --------------------------------------------------------------------------- output == input
+
+def test_output_equal_to_input_is_refused(tmp_path, capsys):
+    x = tmp_path / "x.json"
+    assert main(["generate", "--planted", "2", "--seed", "1", "-o", str(x), "--solution", str(x)]) == 2
+    assert "same file" in _one_line_error(capsys)
+    assert not x.exists()
+    p, s = _files(tmp_path)
+    before = Path(s).read_bytes()
+    alias = tmp_path / "alias.json"
+    alias.symlink_to(s)
+    pytest.importorskip("mujoco")
+    for target in (s, str(alias)):
+        assert main(["mjcf", p, s, "-o", target]) == 2
+        assert "same file" in _one_line_error(capsys)
+    assert Path(s).read_bytes() == before
+    refuse_same_file(tmp_path / "over5", ["over5"])  # a built-in problem name is not a file: no clash
+    before_p = Path(p).read_bytes()
+    assert main(["solve", p, "-o", p, "--max-trials", "10", "-q"]) == 2  # solve P.json -o P.json
+    assert "same file" in _one_line_error(capsys)
+    assert Path(p).read_bytes() == before_p
+
+
+def test_solve_full_disk_is_one_line_and_keeps_the_previous_file(tmp_path, capsys, full_disk):
+    out = tmp_path / "sol.json"
+    out.write_bytes(b"previous\n")
+    assert main(["solve", "diamond-s14-tiny", "-o", str(out), "--seed", "1", "-q"]) == 2
+    assert "No space left on device" in _one_line_error(capsys)
+    assert out.read_bytes() == b"previous\n"
+
+
+# --------------------------------------------------------------------------- bounded work
+
+def test_huge_t_final_is_refused_up_front(tmp_path, capsys):
+    p, s = _files(tmp_path, t_final=1e6, speed=1e-3)
+    t0 = time.perf_counter()
+    assert main(["render", p, s, "-o", str(tmp_path / "v.mp4")]) == 2
+    err = _one_line_error(capsys)
+    assert "--max-frames" in err and "60,000,061 frames" in err
+    assert not list(tmp_path.glob("*.mp4")) and not list(tmp_path.glob(".v.*"))
+    pytest.importorskip("mujoco")
+    assert main(["validate", p, s]) == 2
+    assert "--max-steps" in _one_line_error(capsys)
+    assert time.perf_counter() - t0 < 30.0  # refused before any simulation (was: 298 GiB, 60M frames)
+
+
+# --------------------------------------------------------------------------- signals and leftovers
+
+def test_stale_partial_files_of_dead_writers_are_removed(tmp_path):
+    target = tmp_path / "out.json"
+    dead = _dead_pid()
+    stale = [tmp_path / f".out.partial-{dead}.json", tmp_path / f".out.partial-{dead}-a1b2c3.json"]
+    live = partial_path(target)  # this process's: alive, kept
+    other = tmp_path / f".other.partial-{dead}.json"  # another target's: not ours to judge here
+    for f in (*stale, live, other):
+        f.write_text("x")
+    write_text_atomic(target, "new")
+    assert target.read_text() == "new"
+    assert not any(f.exists() for f in stale) and live.exists() and other.exists()
+    assert remove_stale_partials(tmp_path / "other.json") == [other]
+
+
+def test_video_writer_removes_stale_partial_videos(tmp_path):
+    from nbst.render.video import VideoWriter
+
+    stale = tmp_path / f".v.partial-{_dead_pid()}.mp4"
+    stale.write_bytes(b"half a video")
+    with VideoWriter(tmp_path / "v.mp4", (16, 16), 10) as w:
+        w.submit(np.zeros((16, 16, 3), np.uint8))
+    assert not stale.exists() and (tmp_path / "v.mp4").stat().st_size > 0
+
+
+def test_signals_deferred_holds_ctrl_c_until_the_write_is_done(tmp_path):
+    out = tmp_path / "best.json"
+    with pytest.raises(KeyboardInterrupt):
+        with signals_deferred() as got:
+            os.kill(os.getpid(), signal.SIGINT)
+            write_text_atomic(out, "written")
+            assert got == [signal.SIGINT]
+    assert out.read_text() == "written"
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def _wait_for(cond, timeout):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if cond():
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def test_render_sigterm_removes_its_partial_video(tmp_path):
+    p, s = _files(tmp_path, t_final=2.0, speed=20.0)
+    proc = subprocess.Popen([*NBST, "render", p, s, "-o", "v.mp4", "--speed", "0.002", "--size", "32x32", "-q"],
+                            cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    started = _wait_for(lambda: list(tmp_path.glob(".v.partial-*.mp4")) or proc.poll() is not None, 60)
+    if proc.poll() is not None:
+        pytest.skip(f"render did not start here (no OpenGL?): {proc.stderr.read()[-300:]}")
+    assert started
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(30) == 130
+    assert "interrupted" in proc.stderr.read()
+    assert not list(tmp_path.glob(".v.*")) and not (tmp_path / "v.mp4").exists()
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                fields = Path(f"/proc/{d}/stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid:
+                out.append(int(d))
+    return out
+
+
+def _running(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the process table from /proc")
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
+def test_experiment_workers_die_with_their_parent(tmp_path, sig):
+    p, _ = _files(tmp_path, speed=20.0)
+    proc = subprocess.Popen([*NBST, "experiment", "curves", p, "--runs", "3", "--trials", "1000000000",
+                             "--workers", "2", "--out", str(tmp_path / "exp"), "--quiet"],
+                            stderr=subprocess.PIPE, text=True)
+    assert _wait_for(lambda: len(_children(proc.pid)) >= 2, 60), "the worker pool did not start"
+    kids = _children(proc.pid)
+    time.sleep(0.5)  # let the workers get into their initializer and the search
+    proc.send_signal(sig)
+    rc = proc.wait(30)
+    assert rc == (130 if sig == signal.SIGTERM else -signal.SIGKILL)
+    # PR_SET_PDEATHSIG kills them at once; the getppid watchdog within a second
+    assert _wait_for(lambda: not any(_running(k) for k in kids), 10), [k for k in kids if _running(k)]
+    if sig == signal.SIGTERM:
+        err = proc.stderr.read()
+        assert err.strip() == "nbst: interrupted", err
