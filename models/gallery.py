@@ -26,10 +26,18 @@ import numpy as np
 GALLERY_DIR = Path(__file__).resolve().parent / "scenes"
 #: Preview size (pixels).
 PREVIEW_SIZE = 640
+#: Preview lighting: MuJoCo's default headlight plus the scene's top light add up to
+#: more than 1 and add a white specular highlight, which turns amber pucks yellow and
+#: blue ones cyan. For the preview (only: scene.xml keeps its lights) ambient + diffuse
+#: sum to 1 with no specular, so a puck's top face, lit straight from above, shows its
+#: rgba exactly: nbst's class colours (nbst.palette), as in every other picture.
+PREVIEW_AMBIENT = 0.35
+PREVIEW_DIFFUSE = 0.65
 
 
 def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
-    """A top view of the scene at t = 0 as PNG bytes (MuJoCo's renderer, EGL when headless)."""
+    """A top view of the scene at t = 0 as PNG bytes (MuJoCo's renderer, EGL when headless),
+    lit so that the pucks show their class colours exactly (PREVIEW_AMBIENT)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     import io
 
@@ -39,6 +47,12 @@ def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
     from .scene import build_model
 
     model = build_model(problem, velocities)
+    model.vis.headlight.ambient[:] = PREVIEW_AMBIENT
+    model.vis.headlight.diffuse[:] = 0.0
+    model.vis.headlight.specular[:] = 0.0
+    model.light_ambient[:] = 0.0
+    model.light_diffuse[:] = PREVIEW_DIFFUSE
+    model.light_specular[:] = 0.0
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, 0)
     mujoco.mj_forward(model, data)
@@ -78,7 +92,8 @@ def build_entry(name: str, folder: Path, *, seed: int, max_trials: int, search: 
         log(f"{name}: searching (seed {seed}, up to {max_trials} trials) ...")
         sol = solve(problem, seed=seed, max_trials=max_trials)
         cost = simulate(problem, sol.velocities).cost
-        log(f"{name}: search cost {cost:.6g}; stored {best_cost:.6g}")
+        kept = f"the gallery's solution has cost {best_cost:.6g}" if best is not None else "no solution stored yet"
+        log(f"{name}: search found cost {cost:.6g}; {kept}")
         if cost < best_cost:
             best, best_cost, source = sol, cost, "search"
     elif search:

@@ -6,23 +6,46 @@
   between events), wall bounces and disk-disk collisions marked.
 
 Both return a ``matplotlib.figure.Figure``; :func:`save_figure` writes it.
+
+Every mark means what it means in the video and the validation report
+(:mod:`nbst.palette`): colour = class, number = disk index (on the disk at its
+start; small beside its target), filled disk = start, hollow small circle =
+target, dotted ring = neighbourhood of radius R, thin outline circle = final
+position, solid / dashed paths = cueable / noncueable. The helpers below
+(:func:`draw_start`, :func:`draw_target`, :func:`legend_below`, ...) are shared
+with the validation report (``nbst.models.report``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from . import style
+from nbst import palette
+from nbst.problem import display_name
 
 #: Figure size in inches for a square box; scaled to the box's aspect.
 FIG_INCHES = 6.0
+#: Font sizes (points): disk numbers on the disks, target numbers, legends, titles.
+DISK_NUMBER_PT = (5.0, 8.0)  # smallest, largest
+TARGET_NUMBER_PT = 6.5
+LEGEND_PT = 7.5
+TITLE_PT = 9.0
+#: Smallest drawn disk radius (points): smaller disks are drawn as a marker this size.
+MIN_DISK_PT = 2.5
+#: Disk numbers sit above everything (paths, disks, event marks).
+NUMBER_Z = 9
+#: Target marker radius: this fraction of the disk radius, at least TARGET_MIN (units).
+TARGET_FRAC, TARGET_MIN = 0.3, 3.0
 
 
 def _figure(problem):
+    """A figure with one equal-aspect axes showing the box and room for a title;
+    :func:`legend_below` makes the figure taller for its legend; constrained layout
+    keeps everything inside the figure."""
     from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
 
     W, H = problem.box
-    aspect = H / W
-    fig = Figure(figsize=(FIG_INCHES, FIG_INCHES * aspect + 0.5))
+    fig = Figure(figsize=(FIG_INCHES, FIG_INCHES * H / W + 0.45), layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
     ax.set_aspect("equal")
     pad = 0.02 * max(W, H)
@@ -32,36 +55,167 @@ def _figure(problem):
     ax.set_yticks([])
     for s in ax.spines.values():
         s.set_visible(False)
-    from matplotlib.patches import Rectangle
     ax.add_patch(Rectangle((0, 0), W, H, fill=False, lw=1.6, ec="black", zorder=1))
     return fig, ax
 
 
-def _disk(ax, xy, r, cueable, *, alpha=1.0, label=None, zorder=4, fill=True):
-    from matplotlib.patches import Circle
-    col = style.CUEABLE if cueable else style.NONCUEABLE
-    ax.add_patch(Circle(xy, r, fc=col if fill else "none", ec="black", lw=0.9, alpha=alpha, zorder=zorder))
-    if label is not None and r > 6:
-        ax.text(xy[0], xy[1], label, ha="center", va="center", fontsize=max(5.0, min(8.0, r * 0.35)),
-                zorder=zorder + 1, color="black")
+# --------------------------------------------------------------------------- marks
+
+def target_marker_radius(r) -> float:
+    return max(TARGET_FRAC * float(r), TARGET_MIN)
 
 
-def _target(ax, xy, r, R, *, ring=True):
+def _points_per_unit(ax) -> float:
+    """Points per data unit of an equal-aspect axes, from its current size (an estimate
+    before the final layout; used only to choose font sizes and offsets)."""
+    fig = ax.figure
+    pos = ax.get_position()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    return 72.0 * min(fig.get_figwidth() * pos.width / abs(x1 - x0), fig.get_figheight() * pos.height / abs(y1 - y0))
+
+
+def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5):
+    """The disk at its start: filled in its class colour (or ``color``), black edge,
+    its number on it; beside it, upper right, where the number does not fit."""
+    from matplotlib import patheffects
     from matplotlib.patches import Circle
-    ax.add_patch(Circle(xy, max(0.3 * r, 3.0), fill=False, ec="black", lw=0.9, zorder=3))
+
+    col = palette.hex_color(color if color is not None else palette.class_color(cueable))
+    r_pt = r * _points_per_unit(ax)
+    label = str(i)
+    # digits are about 0.6 em wide and 0.73 em tall: the size whose digits fill ~80% of
+    # the disk's width; written on the disk only if that is at least the smallest size
+    raw = 1.6 * r_pt / max(0.6 * len(label), 0.73)
+    on_disk = raw >= DISK_NUMBER_PT[0]
+    if r_pt >= MIN_DISK_PT:
+        ax.add_patch(Circle(xy, r, fc=col, ec="black", lw=0.8, zorder=zorder))
+    else:  # a disk too small to see (diamond-s14-tiny): a marker of MIN_DISK_PT radius
+        ax.plot([xy[0]], [xy[1]], "o", ms=2 * MIN_DISK_PT, mfc=col, mec="black", mew=0.6, zorder=zorder)
+        r_pt, on_disk = MIN_DISK_PT, False
+    if on_disk:
+        ax.text(xy[0], xy[1], label, ha="center", va="center_baseline", fontsize=min(raw, DISK_NUMBER_PT[1]),
+                color="black", zorder=NUMBER_Z)
+    else:  # too small to write on: beside it, with a white halo
+        ax.annotate(label, xy, xytext=(r_pt * 0.7 + 1, r_pt * 0.7 + 1), textcoords="offset points",
+                    fontsize=DISK_NUMBER_PT[0] + 1.5, fontweight="bold", color="black", ha="left", va="bottom",
+                    zorder=NUMBER_Z,
+                    path_effects=[patheffects.withStroke(linewidth=2, foreground="white")])
+
+
+def draw_target(ax, xy, r, i, *, R=None, zorder=4):
+    """A target: a hollow small circle, its disk's number beside it (upper right) and,
+    given R, its dotted neighbourhood ring."""
+    from matplotlib import patheffects
+    from matplotlib.patches import Circle
+
+    ink = palette.hex_color(palette.TARGET_INK)
+    m = target_marker_radius(r)
+    ax.add_patch(Circle(xy, m, fill=False, ec=ink, lw=0.9, zorder=zorder))
+    if R is not None:
+        ax.add_patch(Circle(xy, R, fill=False, ec=palette.hex_color(palette.RING_INK), lw=0.7, ls=":", zorder=2))
+    off = m * _points_per_unit(ax) * 0.72 + 0.8
+    ax.annotate(str(i), xy, xytext=(off, off), textcoords="offset points", fontsize=TARGET_NUMBER_PT, color=ink,
+                ha="left", va="bottom", zorder=zorder + 2,
+                path_effects=[patheffects.withStroke(linewidth=1.8, foreground="white")])
+
+
+def draw_final(ax, xy, r, color, *, ls="-", zorder=4):
+    """The final position: a thin outline circle of the disk's radius."""
+    from matplotlib.patches import Circle
+    ax.add_patch(Circle(xy, r, fill=False, ec=palette.hex_color(color) if not isinstance(color, str) else color,
+                        lw=1.0, ls=ls, zorder=zorder))
+
+
+# --------------------------------------------------------------------------- legends
+
+class _HandlerCircle:
+    """Legend handler drawing a Circle handle as a circle (not matplotlib's default
+    rectangle), scaled by the handle's radius: 1 = the legend row's height."""
+
+    def legend_artist(self, legend, orig_handle, fontsize, handlebox):
+        from matplotlib.patches import Circle
+        w, h = handlebox.width, handlebox.height
+        r = 0.5 * h * 1.3 * float(orig_handle.get_radius())
+        c = Circle((w / 2 - handlebox.xdescent, h / 2 - handlebox.ydescent), r,
+                   fc=orig_handle.get_facecolor() if orig_handle.get_fill() else "none",
+                   fill=orig_handle.get_fill(), ec=orig_handle.get_edgecolor(), lw=orig_handle.get_linewidth(),
+                   ls=orig_handle.get_linestyle(), transform=handlebox.get_transform())
+        handlebox.add_artist(c)
+        return c
+
+
+def circle_handle(*, radius=1.0, fc=None, ec="black", lw=0.8, ls="-"):
+    """A legend handle drawn as a circle (radius 1 = the row's height)."""
+    from matplotlib.patches import Circle
+    return Circle((0, 0), radius, fc=fc if fc is not None else "none", fill=fc is not None, ec=ec, lw=lw, ls=ls)
+
+
+def line_handle(color, ls="-", *, lw=1.4, **marker):
+    """A legend handle drawn as a line (and/or a marker: ``marker=``, ``ms=``, ``mec=``, ...)."""
+    from matplotlib.lines import Line2D
+    return Line2D([], [], color=color, ls=ls, lw=lw, **marker)
+
+
+def mark_handles(problem, *, paths: bool, final: bool, ring: bool, final_label=None,
+                 path_prefix: str = "") -> list[tuple]:
+    """(handle, words) of the marks a figure of ``problem`` uses: start disks by class,
+    target, ring, final position, paths by class (their words after ``path_prefix``)."""
+    cue = bool(problem.cueable.any())
+    non = bool((~problem.cueable).any())
+    out = []
+    if cue:
+        out.append((circle_handle(fc=palette.hex_color(palette.CUEABLE)),
+                    f"{palette.LEGEND_CUEABLE} {palette.LEGEND_START}"))
+    if non:
+        out.append((circle_handle(fc=palette.hex_color(palette.NONCUEABLE)),
+                    f"{palette.LEGEND_NONCUEABLE} {palette.LEGEND_START}"))
+    out.append((circle_handle(radius=0.45, ec=palette.hex_color(palette.TARGET_INK), lw=0.9),
+                palette.LEGEND_TARGET))
     if ring:
-        ax.add_patch(Circle(xy, R, fill=False, ec="0.75", lw=0.6, ls=":", zorder=2))
+        out.append((circle_handle(radius=1.15, ec=palette.hex_color(palette.RING_INK), lw=0.9, ls=":"),
+                    palette.LEGEND_RING))
+    if final:
+        out.append((circle_handle(ec="0.25", lw=1.0), final_label or palette.LEGEND_FINAL))
+    if paths:
+        if cue:
+            out.append((line_handle(palette.hex_color(palette.CUEABLE), palette.PATH_CUEABLE),
+                        path_prefix + palette.LEGEND_PATH_CUEABLE + " (solid)"))
+        if non:
+            out.append((line_handle(palette.hex_color(palette.NONCUEABLE), palette.PATH_NONCUEABLE),
+                        path_prefix + palette.LEGEND_PATH_NONCUEABLE + " (dashed)"))
+    return out
 
+
+def legend_below(fig, entries, *, ncol: int = 2, fontsize: float = LEGEND_PT, grow: bool = True,
+                 title: str | None = None):
+    """The legend of ``entries`` [(handle, words)] below the axes, outside them
+    (constrained layout makes room), so it never covers data. ``grow``: make the
+    figure taller by the legend's height, so the axes keep their size."""
+    from matplotlib.patches import Circle
+    handles = [h for h, _ in entries]
+    labels = [w for _, w in entries]
+    if grow:
+        rows = -(-len(entries) // ncol) + (title is not None)
+        w, h = fig.get_size_inches()
+        fig.set_size_inches(w, h + rows * fontsize * 1.55 / 72 + 0.15)
+    return fig.legend(handles, labels, loc="outside lower center", ncol=ncol, fontsize=fontsize, frameon=False,
+                      handler_map={Circle: _HandlerCircle()}, handlelength=2.2, columnspacing=1.6,
+                      title=title, title_fontsize=fontsize)
+
+
+# --------------------------------------------------------------------------- figures
 
 def plot_problem(problem, *, rings: bool = True):
-    """The problem as the paper's Figures 1-2. rings: also draw each target's
-    neighbourhood of radius R (dotted)."""
+    """The problem as the paper's Figures 1-2: numbered disks at their starts,
+    numbered targets, arrows start -> target (broken for noncueable disks).
+    rings: also draw each target's neighbourhood of radius R (dotted)."""
     from matplotlib.patches import FancyArrowPatch
 
-    fig, ax = _figure(problem)
     p = problem
+    fig, ax = _figure(p)
     for i in range(p.n):
-        _target(ax, p.target[i], p.radius[i], p.target_radius, ring=rings)
+        draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius if rings else None)
     for i in range(p.n):
         a, b = p.start[i], p.target[i]
         d = b - a
@@ -69,57 +223,64 @@ def plot_problem(problem, *, rings: bool = True):
         if L > p.radius[i] + 1e-9:  # arrow from the disk's edge to the target's small circle
             u = d / L
             tail = a + u * p.radius[i]
-            head = b - u * max(0.3 * p.radius[i], 3.0)
-            ax.add_patch(FancyArrowPatch(tail, head, arrowstyle="-|>", mutation_scale=9, lw=0.9, color="black",
+            head = b - u * target_marker_radius(p.radius[i])
+            ax.add_patch(FancyArrowPatch(tail, head, arrowstyle="-|>", mutation_scale=9, lw=0.9, color="0.2",
                                          ls="-" if p.cueable[i] else (0, (4, 3)), zorder=3))
-        _disk(ax, a, p.radius[i], p.cueable[i], label=str(i))
+        draw_start(ax, a, p.radius[i], p.cueable[i], i)
     ncue = int(p.cueable.sum())
-    kinds = f"{ncue} cueable" + (f", {p.n - ncue} noncueable (broken arrows)" if ncue < p.n else "")
-    ax.set_title(f"{p.name}: {p.n} disks, {kinds}; t_final = {p.t_final:g} s, R = {p.target_radius:g}",
-                 fontsize=9)
-    fig.tight_layout()
+    kinds = f"{ncue} cueable" + (f", {p.n - ncue} noncueable" if ncue < p.n else "")
+    ax.set_title(f"{display_name(p.name)}: {p.n} disks, {kinds}; t_final = {p.t_final:g} s, R = {p.target_radius:g}",
+                 fontsize=TITLE_PT)
+    entries = mark_handles(p, paths=False, final=False, ring=rings)
+    entries.append((line_handle("0.2", "-", lw=0.9, marker=">", ms=4), "start -> target"
+                    + (" (dashed: noncueable)" if ncue < p.n else "")))
+    legend_below(fig, entries)
     return fig
 
 
-def plot_trajectories(problem, trajectory):
-    """The motion as the paper's Figures 3-4: paths from start (faint disk) to
-    final position (solid disk; broken paths for noncueable disks), wall bounces
-    (black dots) and disk-disk collisions (red stars, at the contact point),
-    targets as small circles. Each path line is labelled ``_path i``."""
-    from matplotlib import colormaps
-
+def plot_trajectories(problem, trajectory, *, rings: bool = True):
+    """The motion as the paper's Figures 3-4: each disk's exact path (a shade of its
+    class colour; dashed for noncueable disks) from its start (filled, numbered) to
+    its final position (thin outline circle), wall bounces (black dots) and disk-disk
+    collisions (red stars, at the contact point), numbered targets (small circles)
+    and, with ``rings``, their dotted neighbourhoods. Each path line is labelled
+    ``_path i``; the legend sits below the box."""
     p, tr = problem, trajectory
     fig, ax = _figure(p)
-    cmap = colormaps["tab10"] if p.n <= 10 else colormaps["tab20"]  # tab20's pairs look alike: only past 10
+    shades = palette.disk_shades(p.cueable)
     paths = np.concatenate((tr.positions, tr.final_positions[None]), axis=0)  # (K+1, N, 2)
     for i in range(p.n):
-        _target(ax, p.target[i], p.radius[i], p.target_radius, ring=False)
+        draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius if rings else None)
     for i in range(p.n):
-        col = cmap(i % cmap.N)
+        col = palette.hex_color(shades[i])
         # noncueable paths broken, as their arrows in Figure 2; "_" labels stay out of the legend
-        ax.plot(paths[:, i, 0], paths[:, i, 1], "-" if p.cueable[i] else "--", color=col, lw=1.4, zorder=3,
+        ax.plot(paths[:, i, 0], paths[:, i, 1], palette.path_style(p.cueable[i]), color=col, lw=1.4, zorder=3,
                 solid_joinstyle="miter", label=f"_path {i}")
-        _disk(ax, p.start[i], p.radius[i], p.cueable[i], alpha=0.25, zorder=2)
-        _disk(ax, tr.final_positions[i], p.radius[i], p.cueable[i], label=str(i), zorder=5)
+        draw_final(ax, tr.final_positions[i], p.radius[i], shades[i], zorder=4)
+        draw_start(ax, p.start[i], p.radius[i], p.cueable[i], i, zorder=5)
     ev = tr.events
     wall = ev["kind"] == 1
+    entries = mark_handles(p, paths=True, final=True, ring=rings)
+    wall_ink, coll_ink = palette.hex_color(palette.WALL_BOUNCE), palette.hex_color(palette.COLLISION)
     if wall.any():
         k = np.nonzero(wall)[0]
         pts = tr.positions[k + 1, ev["i"][k]]
-        ax.plot(pts[:, 0], pts[:, 1], "o", ms=3.2, color="black", zorder=6, label=f"wall bounce ({len(k)})")
+        label = f"{palette.LEGEND_WALL_BOUNCE} ({len(k)})"
+        ax.plot(pts[:, 0], pts[:, 1], palette.WALL_BOUNCE_MARKER, ms=3.2, color=wall_ink, zorder=7, label=label)
+        entries.append((line_handle(wall_ink, "none", marker=palette.WALL_BOUNCE_MARKER, ms=3.2), label))
     if (~wall).any():
         k = np.nonzero(~wall)[0]
         i, j = ev["i"][k], ev["j"][k]
         pi, pj = tr.positions[k + 1, i], tr.positions[k + 1, j]
         w = (p.radius[i] / (p.radius[i] + p.radius[j]))[:, None]
         c = pi + (pj - pi) * w
-        ax.plot(c[:, 0], c[:, 1], "*", ms=8, color="#d62728", mec="black", mew=0.4, zorder=7,
-                label=f"disk-disk collision ({len(k)})")
-    if len(ev):
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=2, fontsize=7, frameon=False)
-    ax.set_title(f"{p.name}: cost {tr.cost:.4g}, signature {tr.signature_string} "
-                 f"(order {tr.order}/{p.n})", fontsize=9)
-    fig.tight_layout()
+        label = f"{palette.LEGEND_COLLISION} ({len(k)})"
+        ax.plot(c[:, 0], c[:, 1], palette.COLLISION_MARKER, ms=8, color=coll_ink, mec="black", mew=0.4, zorder=7,
+                label=label)
+        entries.append((line_handle(coll_ink, "none", marker=palette.COLLISION_MARKER, ms=8, mec="black"), label))
+    legend_below(fig, entries)
+    ax.set_title(f"{display_name(p.name)}: cost {tr.cost:.4g}, signature {tr.signature_string} "
+                 f"(order {tr.order}/{p.n})", fontsize=TITLE_PT)
     return fig
 
 

@@ -57,7 +57,7 @@ class FrameRenderer:
 
     def readout(self, t: float, inside: np.ndarray) -> list[str]:
         """The text lines of the time readout (``inside``: which disks are within R)."""
-        return [self.title, f"t = {t:5.2f} s", f"in R {int(inside.sum()):2d}/{self.problem.n}"]
+        return [self.title, f"t = {t:5.2f} s", "on target", f"  {int(inside.sum()):2d}/{self.problem.n}"]
 
 
 class FrameTarget:

@@ -1,5 +1,6 @@
 """The 2D view: the box from above, disks, targets, lit target rings, trails, a
-time readout. ``Renderer2D.render(t)`` returns one frame, (H, W, 3) uint8.
+time readout and a legend (marks and colours: :mod:`nbst.palette`).
+``Renderer2D.render(t)`` returns one frame, (H, W, 3) uint8.
 
 Motions: anything with ``at(t) -> (N, 2)``. An exact :class:`nbst.sim.Trajectory`
 gives exact positions at every frame and exact trail corners (its keyframes);
@@ -9,6 +10,8 @@ rollout) and interpolates linearly between them.
 from __future__ import annotations
 
 import numpy as np
+
+from nbst import palette
 
 from . import style
 from .gl import FrameRenderer, FrameTarget
@@ -44,7 +47,10 @@ class Layout:
     scale : px per unit; origin : image position of world (0, H).
     """
 
-    def __init__(self, box, size):
+    def __init__(self, box, size, *, keep_left: float = 0.0):
+        """keep_left: px at the left that the box must leave free (the time readout); the
+        box stays centred if the centred box leaves them free, else it moves right (and
+        shrinks if it must)."""
         W, H = float(box[0]), float(box[1])
         fw, fh = size
         short = min(fw, fh)
@@ -52,9 +58,13 @@ class Layout:
         self.wall = max(1.5, style.BOX_WALL_FRAC * short)
         inner = self.margin + self.wall
         self.scale = min((fw - 2 * inner) / W, (fh - 2 * inner) / H)
+        self.x0 = 0.5 * (fw - W * self.scale)
+        if keep_left > 0 and self.x0 - self.wall < keep_left:
+            self.scale = min((fw - keep_left - self.wall - inner) / W, (fh - 2 * inner) / H)
+            # on a whole pixel, as the centred box (thin walls stay crisp through video encoding)
+            self.x0 = float(round(keep_left + self.wall + 0.5 * (fw - keep_left - self.wall - inner - W * self.scale)))
         self.box = (W, H)
         self.size = (fw, fh)
-        self.x0 = 0.5 * (fw - W * self.scale)
         self.y0 = 0.5 * (fh - H * self.scale)
 
     def to_image(self, xy) -> np.ndarray:
@@ -134,6 +144,77 @@ class Labels:
         self.text.release()
 
 
+def target_label_px(size) -> int:
+    """Text height of the target numbers for a frame of ``size``."""
+    return int(np.clip(round(style.TARGET_LABEL_FRAC * min(size)), style.MIN_TARGET_LABEL_PX,
+                       style.MAX_TARGET_LABEL_PX))
+
+
+def target_label_instances(text, centers_px, marker_px) -> np.ndarray:
+    """Text instances numbering each target with its disk's index, just above and
+    right of its marker (centres (N, 2) px, marker radii (N,) px)."""
+    cw, ch = text.cell
+    centers_px = np.asarray(centers_px, float)
+    marker_px = np.broadcast_to(np.asarray(marker_px, float), (len(centers_px),))
+    parts = [text.layout([str(i)], c[0] + 0.75 * m + 1.0, c[1] - 0.75 * m - 0.8 * ch)
+             for i, (c, m) in enumerate(zip(centers_px, marker_px))]
+    return np.concatenate(parts) if parts else text.layout([], 0, 0)
+
+
+def legend_entries(problem, *, ghost: bool, labels: bool, long: bool = True) -> list[tuple]:
+    """The legend's lines as (words, swatch kind, colour): a filled disk per class
+    present, the hollow target mark (saying that its number names its disk when
+    targets are numbered), the MuJoCo ring when one is drawn. ``long=False``: the
+    short words, for narrow margins."""
+    out = []
+    if problem.cueable.any():
+        out.append((palette.LEGEND_CUEABLE, "disk", style.CUEABLE))
+    if (~problem.cueable).any():
+        out.append((palette.LEGEND_NONCUEABLE, "disk", style.NONCUEABLE))
+    out.append((palette.LEGEND_TARGET if labels and long else "target", "target", None))
+    if ghost:
+        out.append(("MuJoCo" + (" (ring)" if long else ""), "ghost", None))
+    return out
+
+
+def draw_legend(circles, text, size, x: float, y: float, max_w: float, max_h: float, entries_for) -> bool:
+    """Draw the legend with its top-left at (x, y) px if it fits in max_w x max_h px:
+    ``entries_for(long)`` gives the lines (:func:`legend_entries`); the long words
+    are tried first, then the short. Returns whether a legend was drawn."""
+    cw, ch = text.cell
+    pitch = style.LEGEND_PITCH * ch
+    for long in (True, False):
+        entries = entries_for(long)
+        w = 1.6 * ch + max(len(e[0]) for e in entries) * cw
+        if w <= max_w and len(entries) * pitch <= max_h:
+            break
+    else:
+        return False
+    dots = np.zeros(len(entries), CIRCLE_DTYPE)
+    texts = []
+    for k, (words, kind, col) in enumerate(entries):
+        cy = y + k * pitch
+        d = dots[k]
+        d["center"] = (x + 0.6 * ch, cy + 0.5 * ch)
+        if kind == "disk":
+            d["radius"] = 0.45 * ch
+            d["stroke"] = max(1.0, style.DISK_RIM_FRAC * 0.45 * ch)
+            d["fill"] = (*col, 1.0)
+            d["rim"] = (*(np.array(col) * style.DISK_RIM_SHADE), 1.0)
+        elif kind == "target":
+            d["radius"] = max(style.MIN_MARKER_PX, 0.22 * ch)
+            d["stroke"] = 1.5
+            d["rim"] = style.MARKER
+        else:
+            d["radius"] = 0.45 * ch
+            d["stroke"] = style.GHOST_PX
+            d["rim"] = style.GHOST
+        texts.append(text.layout([words], x + 1.6 * ch, cy))
+    circles.draw(dots)
+    text.draw(size, np.concatenate(texts), style.TEXT_DIM)
+    return True
+
+
 class Renderer2D(FrameRenderer):
     """Renders ``motion`` of ``problem`` at any time to an (H, W, 3) uint8 frame.
 
@@ -141,7 +222,8 @@ class Renderer2D(FrameRenderer):
     motion  : the disks' motion, ``at(t) -> (N, 2)`` (a Trajectory, or SampledMotion)
     ghost   : optional second motion drawn as rings on top (MuJoCo replay)
     trails  : draw the last TRAIL_SECONDS of every path, fading with age
-    labels  : write each disk's index on it (as in ``nbst simulate``'s table)
+    labels  : write each disk's index on it (as in ``nbst simulate``'s table) and
+              beside each target the index of the disk it belongs to
     """
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
@@ -152,14 +234,14 @@ class Renderer2D(FrameRenderer):
         self.trails = bool(trails)
         self.target = FrameTarget(ctx, size)
         self.size = self.target.size
-        self.layout = L = Layout(problem.box, self.size)
         self.title = problem.name if title is None else title
+        text_px = max(8, int(round(style.TEXT_FRAC * min(self.size))))
+        self.text = Text(ctx, text_px)
+        self.layout = L = Layout(problem.box, self.size)
         self._mgl = moderngl
         self.circles = Circles(ctx)
         self.capsules = Capsules(ctx)
         self.rect = Rect(ctx)
-        text_px = max(8, int(round(style.TEXT_FRAC * min(self.size))))
-        self.text = Text(ctx, text_px)
         for prog in (self.circles, self.capsules):
             prog.set_view(self.size)
         self.capsules.prog["u_floor"].value = style.BOX_FLOOR
@@ -192,6 +274,9 @@ class Renderer2D(FrameRenderer):
         self._ghosts["rim"] = style.GHOST
         self.trail_half = np.maximum(style.MIN_TRAIL_PX, style.TRAIL_WIDTH_FRAC * self.rpx).astype("f4") * 0.5
         self.labels = Labels(ctx, problem, self.rpx) if labels else None
+        self.marker_px = np.maximum(style.MARKER_FRAC * self.rpx, style.MIN_MARKER_PX)
+        self.legend_text = Text(ctx, max(8, int(round(style.LEGEND_TEXT_FRAC * min(self.size)))))
+        self.target_text = Text(ctx, target_label_px(self.size)) if labels else None
         self.static = FrameTarget(ctx, self.size)
         self._draw_static()
 
@@ -203,7 +288,8 @@ class Renderer2D(FrameRenderer):
         return (pad, pad)
 
     def _draw_static(self) -> None:
-        """Background, box, dim target rings, target markers and legend: drawn once."""
+        """Background, box, dim target rings, target markers (numbered with --labels)
+        and the legend: drawn once."""
         ctx, mgl, L, p = self.ctx, self._mgl, self.layout, self.problem
         self.static.fbo.use()
         ctx.viewport = (0, 0, *self.size)
@@ -223,44 +309,27 @@ class Renderer2D(FrameRenderer):
         rings["rim"] = style.RING_DIM
         markers = np.zeros(n, CIRCLE_DTYPE)
         markers["center"] = self.target_px
-        markers["radius"] = np.maximum(style.MARKER_FRAC * self.rpx, style.MIN_MARKER_PX)
+        markers["radius"] = self.marker_px
         markers["stroke"] = 1.5
         markers["rim"] = style.MARKER
         self.circles.draw(rings)
         self.circles.draw(markers)
+        if self.target_text is not None:
+            self.target_text.draw(self.size, target_label_instances(self.target_text, self.target_px,
+                                                                    self.marker_px), style.TARGET_LABEL)
         self._draw_legend()
 
     def _draw_legend(self) -> None:
-        """Legend in the right margin, when the margin is wide enough for it."""
-        L, p = self.layout, self.problem
-        entries = [("cueable", style.CUEABLE)]
-        if (~p.cueable).any():
-            entries.append(("noncueable", style.NONCUEABLE))
-        if self.ghost is not None:
-            entries.append(("MuJoCo", None))
-        cw, ch = self.text.cell
-        need = 3 * ch + max(len(e[0]) for e in entries) * cw
-        right = self.size[0] - L.box_rect[2] - L.wall
-        if right < need + L.margin:
-            return
-        x = L.box_rect[2] + L.wall + 0.5 * L.margin
-        y = self.size[1] - L.margin * 0.5 - len(entries) * ch * 1.4
-        dots = np.zeros(len(entries), CIRCLE_DTYPE)
-        texts = []
-        for k, (label, col) in enumerate(entries):
-            cy = y + k * ch * 1.4
-            dots[k]["center"] = (x + 0.6 * ch, cy + 0.5 * ch)
-            dots[k]["radius"] = 0.45 * ch
-            if col is None:
-                dots[k]["stroke"] = style.GHOST_PX
-                dots[k]["rim"] = style.GHOST
-            else:
-                dots[k]["stroke"] = max(1.0, style.DISK_RIM_FRAC * 0.45 * ch)
-                dots[k]["fill"] = (*col, 1.0)
-                dots[k]["rim"] = (*(np.array(col) * style.DISK_RIM_SHADE), 1.0)
-            texts.append(self.text.layout([label], x + 1.6 * ch, cy))
-        self.circles.draw(dots)
-        self.text.draw(self.size, np.concatenate(texts), style.TEXT_DIM)
+        """Legend under the readout, in the left margin, when the margin is wide enough."""
+        L = self.layout
+        x, y = self._readout_origin()
+        y += (len(self.readout(0.0, np.zeros(self.problem.n, bool))) + 0.6) * self.text.cell[1]  # below the readout
+        max_w = L.box_rect[0] - L.wall - 0.5 * L.margin - x
+        max_h = self.size[1] - 0.5 * L.margin - y
+        self.legend_drawn = draw_legend(
+            self.circles, self.legend_text, self.size, x, y, max_w, max_h,
+            lambda long: legend_entries(self.problem, ghost=self.ghost is not None,
+                                        labels=self.target_text is not None, long=long))
 
     # ------------------------------------------------------------------ frames
 
@@ -301,6 +370,7 @@ class Renderer2D(FrameRenderer):
                               min_step=1e-3)  # px
 
     def release(self) -> None:
-        for o in (self.circles, self.capsules, self.rect, self.text, self.target, self.static, self.labels):
+        for o in (self.circles, self.capsules, self.rect, self.text, self.target, self.static, self.labels,
+                  self.legend_text, self.target_text):
             if o is not None:
                 o.release()

@@ -1,6 +1,8 @@
 """The 3D view (``--view 3d``): pucks as cylinders on a table inside rails, seen
 by a perspective camera, lit by one directional light; target markers and
 target rings lie on the felt, rings lit in the puck's colour while it is inside.
+With ``labels``, pucks carry their index and each target its disk's index, as in
+the 2D view; a legend sits under the readout when there is room left of the table.
 
 Meshes come from trimesh (cylinder, box, annulus) and are drawn instanced by one
 Blinn-Phong program. ``Renderer3D.render(t)`` returns one frame, (H, W, 3) uint8,
@@ -14,7 +16,7 @@ import numpy as np
 
 from . import style
 from .gl import FrameRenderer, FrameTarget
-from .shapes import Text
+from .shapes import Circles, Text
 
 MESH_VS = """#version 330
 uniform mat4 u_mvp;
@@ -257,13 +259,18 @@ class Renderer3D(FrameRenderer):
             self.trail_half = np.maximum(0.5 * style.TRAIL_WIDTH_FRAC * p.radius, 1.0).astype("f4")
         self.static = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
         self._static_done = False
-        self.labels = None
+        self.labels = self.target_text = None
+        self.rail_w = rw
         if labels:
-            from .scene2d import Labels
+            from .scene2d import Labels, target_label_px
             c = np.array([[W / 2, H / 2], [W / 2 + 1.0, H / 2]])
             px_per_unit = float(np.linalg.norm(np.diff(self.to_pixels(c, z=0.0), axis=0)))
             self.labels = Labels(ctx, p, p.radius * px_per_unit)
+            self.target_text = Text(ctx, target_label_px(self.size))
         self.text = Text(ctx, max(8, int(round(style.TEXT_FRAC * min(self.size)))))
+        self.legend_text = Text(ctx, max(8, int(round(style.LEGEND_TEXT_FRAC * min(self.size)))))
+        self.circles = Circles(ctx)
+        self.circles.set_view(self.size)
 
     def _setup_camera(self) -> None:
         p = self.problem
@@ -320,7 +327,42 @@ class Renderer3D(FrameRenderer):
         self._draw(self.cube, self._cubes)
         self._draw(self.ring_dim, self._rings)
         self._draw(self.marker, self._markers)
+        # overlays in image px, on the felt (pucks drawn later cover them): target numbers, legend
+        ctx.disable(mgl.DEPTH_TEST)
+        ctx.enable(mgl.BLEND)
+        ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
+        ctx.blend_equation = mgl.FUNC_ADD
+        if self.target_text is not None:
+            from .scene2d import target_label_instances
+            p = self.problem
+            centre = self.to_pixels(p.target, z=0.0)
+            edge = self.to_pixels(p.target + self._markers["scale"][:, :2] * (1.0, 0.0), z=0.0)
+            self.target_text.draw(self.size, target_label_instances(self.target_text, centre,
+                                                                    np.linalg.norm(edge - centre, axis=1)),
+                                  style.TARGET_LABEL)
+        self._draw_legend()
+        ctx.disable(mgl.BLEND)
         self._static_done = True
+
+    def _draw_legend(self) -> None:
+        """Legend under the readout, left of the table, when there is room."""
+        from .scene2d import draw_legend, legend_entries
+        p = self.problem
+        W, H = p.box
+        pad = style.MARGIN_FRAC * min(self.size) * 0.5
+        x, y = pad, pad + (len(self.readout(0.0, np.zeros(self.problem.n, bool))) + 0.6) * self.text.cell[1]
+        max_h = self.size[1] - pad - y
+        # the table's left edge (outer side of the rail) in the image: a straight line from its far
+        # corner to its near one; the legend must end left of it at the legend's lowest row
+        rw = self.rail_w
+        far, near = self.to_pixels(np.array([[-rw, H + rw], [-rw, -rw]]), z=self.rail_h)
+        n_rows = 5
+        y_low = y + n_rows * style.LEGEND_PITCH * self.legend_text.cell[1]
+        s = np.clip((y_low - far[1]) / max(near[1] - far[1], 1e-9), 0.0, 1.0)
+        edge_x = far[0] + s * (near[0] - far[0]) if y_low > far[1] else self.size[0]
+        draw_legend(self.circles, self.legend_text, self.size, x, y, edge_x - pad - x, max_h,
+                    lambda long: legend_entries(p, ghost=self.ghost is not None,
+                                                labels=self.target_text is not None, long=long))
 
     def draw(self, t: float) -> None:
         """Draw the frame at time ``t`` into the frame target (no readback)."""
@@ -379,6 +421,10 @@ class Renderer3D(FrameRenderer):
             o.release()
         self.prog.release()
         self.text.release()
+        self.legend_text.release()
+        self.circles.release()
+        if self.target_text is not None:
+            self.target_text.release()
         self.target.release()
         self.static.release()
         if self.labels is not None:

@@ -1,9 +1,13 @@
 """Every colour, size and rendering choice of nbst.render in one place, each with why.
 
-Colours are linear 0..1 RGB(A) floats, as GL takes them; ``rgb8`` gives the
-8-bit values a frame holds (tests look for them).
+Colours are 0..1 RGB(A) floats, as GL takes them; ``rgb8`` gives the 8-bit
+values a frame holds (tests look for them). The class colours and the meaning
+of every mark are shared with the figures, the report and the MuJoCo scenes:
+they live in :mod:`nbst.palette`.
 """
 from __future__ import annotations
+
+from nbst import palette
 
 #: Frame background outside the box. Dark, so trails can be drawn with MAX
 #: blending (a trail colour must exceed the background in every channel).
@@ -18,12 +22,10 @@ BOX_WALL = (0.62, 0.66, 0.72)
 #: Wall thickness, as a fraction of the frame's shorter side (4 px at 720p).
 BOX_WALL_FRAC = 0.0055
 
-#: Cueable disks: warm amber; the paper's cue can strike them.
-CUEABLE = (0.97, 0.62, 0.18)
-
-#: Noncueable disks: cool blue; they move only when struck. Distinct from
-#: CUEABLE in hue and in every channel, so a pixel tells the class.
-NONCUEABLE = (0.30, 0.62, 0.96)
+#: Disk colours by class (cueable warm amber, noncueable cool blue): the
+#: palette's, so every picture nbst makes agrees.
+CUEABLE = palette.CUEABLE
+NONCUEABLE = palette.NONCUEABLE
 
 #: Disk rim: the disk's colour times this, so touching disks stay separable.
 DISK_RIM_SHADE = 0.55
@@ -82,6 +84,19 @@ MIN_LABEL_DISK_PX = 6.0
 #: Text height as a fraction of the frame's shorter side (20 px at 720p).
 TEXT_FRAC = 0.028
 
+#: Target numbers (``--labels``): each target's disk index, small and dim, just
+#: above and right of its marker (as in the figures); text height as a fraction
+#: of the frame's shorter side, clamped.
+TARGET_LABEL = TEXT_DIM
+TARGET_LABEL_FRAC = 0.017
+MIN_TARGET_LABEL_PX, MAX_TARGET_LABEL_PX = 8, 14
+
+#: Legend under the time readout (top left): swatches for the classes, the target
+#: mark and MuJoCo rings; text height as a fraction of the frame's shorter side,
+#: line pitch in text heights. Drawn only where it fits beside the box.
+LEGEND_TEXT_FRAC = 0.022
+LEGEND_PITCH = 1.35
+
 #: Margin around the box, as a fraction of the frame's shorter side.
 MARGIN_FRAC = 0.04
 
@@ -123,9 +138,9 @@ MSAA_SAMPLES = 4
 
 def rgb8(c) -> tuple[int, int, int]:
     """The 8-bit RGB a frame holds for an opaque colour ``c``."""
-    return tuple(int(round(max(0.0, min(1.0, x)) * 255)) for x in c[:3])
+    return palette.rgb8(c)
 
 
 def disk_colors(cueable) -> list[tuple[float, float, float]]:
     """One fill colour per disk: CUEABLE or NONCUEABLE."""
-    return [CUEABLE if bool(c) else NONCUEABLE for c in cueable]
+    return palette.class_colors(cueable)

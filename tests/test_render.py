@@ -390,3 +390,106 @@ def test_rgba_frames_are_the_rgb_frames_plus_opaque_alpha(gl, diamond, view):
     assert rgba.shape == (240, 320, 4)
     assert np.array_equal(rgba[..., :3], rgb)
     assert (rgba[..., 3] == 255).all()
+
+
+# --------------------------------------------------------------------------- one visual language
+
+def test_video_class_colours_are_the_shared_palette(gl):
+    """The video's disk colours are nbst.palette's (the figures, report and MuJoCo scenes
+    import the same constants): each disk's centre pixel is rgb8 of its class colour."""
+    from nbst import palette
+    assert style.CUEABLE == palette.CUEABLE and style.NONCUEABLE == palette.NONCUEABLE
+    p, tr = over5_motion()
+    r = Renderer2D(gl, p, tr, size=SIZE)
+    try:
+        f = r.render(0.0)
+    finally:
+        r.release()
+    box = box_from_walls(f)
+    for i, c in enumerate(world_to_px(p, box, p.start)):
+        assert close(pixel(f, c), style.rgb8(palette.class_color(p.cueable[i])), 3), i
+
+
+def _number_box(centre, marker_px, cell):
+    """Rows and columns (slices) where a target's number is written: just above and
+    right of its marker, two digits wide."""
+    cw, ch = cell
+    x0, y1 = int(centre[0] + 0.75 * marker_px), int(np.ceil(centre[1] - 0.75 * marker_px + 0.3 * ch))
+    return slice(max(0, y1 - int(1.3 * ch) - 1), y1 + 1), slice(x0, x0 + int(2.5 * cw) + 2)
+
+
+def test_labels_number_each_target_with_its_disk(gl, mk):
+    """With --labels every target carries its disk's number beside its marker; what
+    --labels changes lies beside the targets and on the disks, nowhere else. Disks
+    start far from every target, so no disk covers a number."""
+    starts = [[100.0 + 150 * k, 700.0] for k in range(5)] + [[100.0 + 150 * k, 560.0] for k in range(5)] \
+        + [[100.0, 420.0], [250.0, 420.0]]
+    targets = [[100.0 + 130 * (k % 6), 80.0 + 120 * (k // 6)] for k in range(12)]
+    p = mk(starts, radii=15.0, targets=targets)
+    tr = simulate(p, np.zeros((p.n, 2)))
+    frames = {}
+    for labels in (False, True):
+        r = Renderer2D(gl, p, tr, size=(800, 800), labels=labels)
+        try:
+            frames[labels] = r.render(0.0)
+            if labels:
+                centres, marker_px, cell = r.target_px.copy(), r.marker_px.copy(), r.target_text.cell
+                disks = r.to_pixels(p.start), r.rpx.copy()
+        finally:
+            r.release()
+    changed = (frames[True] != frames[False]).any(axis=2)
+    expected = np.zeros_like(changed)
+    for i in range(p.n):
+        rows, cols = _number_box(centres[i], marker_px[i], cell)
+        assert changed[rows, cols].sum() >= 4, i  # a number beside every target
+        expected[rows, cols] = True
+    yy, xx = np.mgrid[:changed.shape[0], :changed.shape[1]]
+    for c, rad in zip(*disks):
+        expected |= (xx + 0.5 - c[0]) ** 2 + (yy + 0.5 - c[1]) ** 2 <= (rad + 1) ** 2  # the disks' own numbers
+    assert changed.any() and not (changed & ~expected).any()
+    # the numbers are the disk indices: one glyph per digit, "10" and "11" two each
+    from nbst.render.scene2d import target_label_instances
+    from nbst.render.shapes import FIRST_CHAR, Text
+    t = Text(gl, 12)
+    try:
+        inst = target_label_instances(t, centres, marker_px)
+    finally:
+        t.release()
+    assert "".join(chr(int(g) + FIRST_CHAR) for g in inst["glyph"]) == "".join(str(i) for i in range(p.n))
+
+
+@pytest.mark.parametrize("view", ["2d", "3d"])
+def test_legend_under_the_readout_shows_the_classes_present(gl, view):
+    """1280x720 leaves room left of the box: the legend's swatches there are filled
+    with the palette's class colours, a noncueable swatch only where the problem has
+    noncueable disks; the legend stays out of the box."""
+    from nbst import palette
+    from nbst.render.scene3d import Renderer3D
+    R = Renderer3D if view == "3d" else Renderer2D
+    seen = {}
+    for name in ("diamond-s14", "over5"):
+        p = load_problem(name)
+        tr = simulate(p, np.zeros((p.n, 2)))
+        r = R(gl, p, tr, size=(1280, 720), labels=True)
+        try:
+            f = r.render(0.0).astype(int)
+        finally:
+            r.release()
+        region = f[90:300, :260]  # under the readout, left of the box (2D: 306 px margin; 3D: the far rail at ~360)
+        seen[name] = {c: int((np.abs(region - np.array(style.rgb8(col))).max(axis=2) <= 3).sum())
+                      for c, col in (("cue", palette.CUEABLE), ("non", palette.NONCUEABLE))}
+    assert seen["diamond-s14"]["cue"] > 20 and seen["diamond-s14"]["non"] == 0
+    assert seen["over5"]["cue"] > 20 and seen["over5"]["non"] > 20
+
+
+def test_no_legend_where_there_is_no_room(gl, diamond):
+    p, tr = diamond
+    r = Renderer2D(gl, p, tr, size=(360, 360))  # a square frame: no margin beside the box
+    try:
+        f = r.render(0.0)
+        assert not r.legend_drawn
+    finally:
+        r.release()
+    box = box_from_walls(f)
+    left = f[int(box[1]):int(box[3]), :int(box[0]) - 6].astype(int)  # beside the box, under the readout
+    assert (np.abs(left - np.array(style.rgb8(style.CUEABLE))).max(axis=2) <= 3).sum() == 0

@@ -318,3 +318,114 @@ def test_no_egl_is_a_one_line_error_naming_the_packages(tmp_path, straight, monk
     err = capsys.readouterr().err.strip()
     assert rc == 2 and len(err.splitlines()) == 1
     assert "eglGetDisplay failed" in err and "libegl1 libgl1 libgl1-mesa-dri" in err
+
+
+# --------------------------------------------------------------------------- one visual language in figures
+
+def _drawn(fig):
+    """Lay the figure out and draw it (Agg), so that window extents are final."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    FigureCanvasAgg(fig).draw()
+    return fig
+
+
+def _legend_clear_of_data(fig):
+    """Every legend lies outside every axes' data area, and inside the figure."""
+    _drawn(fig)
+    r = fig.canvas.get_renderer()
+    assert fig.legends or any(ax.get_legend() for ax in fig.axes), "no legend"
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    for lg in legends:
+        lb = lg.get_window_extent(r)
+        for ax in fig.axes:
+            assert not lb.overlaps(ax.get_window_extent(r)), (lb, ax.get_window_extent(r))
+        fb = fig.bbox
+        assert fb.x0 - 1 <= lb.x0 and lb.x1 <= fb.x1 + 1 and fb.y0 - 1 <= lb.y0 and lb.y1 <= fb.y1 + 1
+
+
+def _start_disks(ax, problem):
+    """Filled circles centred on the starts, one per disk (disk i -> its patch)."""
+    from matplotlib.patches import Circle
+    out = {}
+    for c in ax.patches:
+        if isinstance(c, Circle) and c.get_fill():
+            hit = np.nonzero(np.hypot(*(problem.start - np.array(c.center)).T) < 1e-9)[0]
+            if len(hit) == 1 and abs(c.get_radius() - problem.radius[hit[0]]) < 1e-9:
+                out[int(hit[0])] = c
+    return out
+
+
+def _numbers(ax):
+    """{(text, (x, y)) } of the axes' texts and annotations, positions in data units."""
+    from matplotlib.text import Annotation
+    out = set()
+    for t in ax.texts:
+        xy = t.xy if isinstance(t, Annotation) else t.get_position()
+        out.add((t.get_text(), (round(float(xy[0]), 6), round(float(xy[1]), 6))))
+    return out
+
+
+@pytest.mark.parametrize("which", ["problem", "trajectories"])
+def test_figures_use_the_palette_and_number_starts_and_targets(which):
+    """Start disks filled with nbst.palette's class colour (the video's), the number of
+    each disk on it at its start, and beside its target the same number."""
+    from matplotlib.colors import to_rgb
+
+    from nbst import palette
+    from nbst.render.figures import plot_problem, plot_trajectories
+    p = load_problem("over5")
+    tr = simulate(p, np.zeros((p.n, 2)) + np.where(p.cueable[:, None], 30.0, 0.0))
+    fig = plot_problem(p) if which == "problem" else plot_trajectories(p, tr)
+    ax = fig.axes[0]
+    disks = _start_disks(ax, p)
+    assert sorted(disks) == list(range(p.n))
+    for i, c in disks.items():
+        assert np.allclose(c.get_facecolor()[:3], palette.class_color(p.cueable[i]), atol=0.5 / 255), i
+    nums = _numbers(ax)
+    for i in range(p.n):
+        assert (str(i), tuple(np.round(p.start[i], 6))) in nums, i
+        assert (str(i), tuple(np.round(p.target[i], 6))) in nums, i
+    if which == "trajectories":  # paths in a shade of the class colour; final positions as outline circles
+        from matplotlib.patches import Circle
+        paths = [ln for ln in ax.get_lines() if ln.get_label().startswith("_path")]
+        for i, ln in enumerate(paths):
+            assert np.allclose(to_rgb(ln.get_color()), palette.disk_shades(p.cueable)[i], atol=0.5 / 255)
+        outlines = [c for c in ax.patches if isinstance(c, Circle) and not c.get_fill()]
+        for i in range(p.n):
+            assert any(np.allclose(c.center, tr.final_positions[i]) and abs(c.get_radius() - p.radius[i]) < 1e-9
+                       for c in outlines), i
+
+
+def test_figure_legends_sit_outside_the_box(straight):
+    from nbst.render.figures import plot_problem, plot_trajectories
+    p, _ = straight
+    for p_ in (load_problem("over5"), p):
+        _legend_clear_of_data(plot_problem(p_))
+    _legend_clear_of_data(plot_trajectories(p, simulate(p, p.straight_velocities())))
+
+
+def test_figures_legend_says_what_the_marks_mean():
+    from nbst import palette
+    from nbst.render.figures import plot_trajectories
+    p = load_problem("over5")
+    v = np.zeros((p.n, 2))
+    v[0], v[1] = (45.0, 3.0), (90.0, 20.0)  # disk 0 strikes noncueable disk 2: a collision to mark
+    tr = simulate(p, v)
+    assert tr.n_disk_disk >= 1 and tr.n_wall >= 1
+    fig = plot_trajectories(p, tr)
+    words = [t.get_text() for t in fig.legends[0].get_texts()]
+    for w in (palette.LEGEND_TARGET, palette.LEGEND_RING, palette.LEGEND_FINAL):
+        assert w in words
+    assert any(w.startswith(palette.LEGEND_CUEABLE) for w in words)
+    assert any(w.startswith(palette.LEGEND_NONCUEABLE) for w in words)
+    assert any(w.startswith(palette.LEGEND_COLLISION) for w in words)
+    assert any(w.startswith(palette.LEGEND_WALL_BOUNCE) for w in words)
+
+
+def test_plot_says_what_it_wrote_unless_quiet(tmp_path, capsys):
+    out = tmp_path / "p.png"
+    assert main(["plot", "problem", "over5", "-o", str(out), "--dpi", "40"]) == 0
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"nbst plot: wrote {out}") and len(err.splitlines()) == 1
+    assert main(["plot", "problem", "over5", "-o", str(out), "--dpi", "40", "-q"]) == 0
+    assert capsys.readouterr().err == ""
