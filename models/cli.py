@@ -21,6 +21,18 @@ def _positive(what):
     return parse
 
 
+def _positive_int(what):
+    def parse(text):
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be a whole number, got {text!r}") from None
+        if n < 1:
+            raise argparse.ArgumentTypeError(f"{what} must be >= 1, got {text!r}")
+        return n
+    return parse
+
+
 def _timestep(text):
     h = _positive("timestep")(text)
     if h > 0.01:
@@ -54,8 +66,9 @@ def register(sub) -> None:
                                    "per-disk final position error, cost and signature under each, the collision "
                                    "sequences matched in order (time offsets), kinetic energy drift, and the first "
                                    "time any disk's two paths part by more than --tol units, with the event that "
-                                   "caused it. Prints a summary; --report DIR writes report.json and a "
-                                   "self-contained report.html with figures.",
+                                   "caused it; the sensitivity of the motion and its predicted fixed-step error "
+                                   "against the measured one. Prints a summary; --report DIR writes report.json "
+                                   "and a self-contained report.html with figures.",
                        epilog="Exit status: 0, or 1 with --strict when the signatures differ; 2 on bad input.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("solution", help="solution JSON file")
@@ -65,6 +78,18 @@ def register(sub) -> None:
                    help="divergence tolerance in problem units (default 1)")
     p.add_argument("--strict", action="store_true", help="exit 1 if the signature under MuJoCo differs")
     p.add_argument("--json", action="store_true", help="print report.json's content instead of the summary")
+    p.add_argument("--max-steps", type=_positive_int("max-steps"), default=None, metavar="N",
+                   help="refuse a run of more than N MuJoCo steps, t_final / H (default 1,000,000: every step's "
+                        "state is kept in memory); --convergence skips the step sizes that need more")
+    p.add_argument("--stepping", choices=("fixed", "aligned"), default="fixed",
+                   help="fixed (default): MuJoCo's fixed steps of H, each impact resolved one step late; "
+                        "aligned: steps shortened to end at each touch (found with MuJoCo's own collision "
+                        "detection) and each impact resolved by a micro-step of matched stiffness: ~1e-12 units per "
+                        "impact before later collisions amplify it (nbst.models.stepping; cost in the report)")
+    p.add_argument("--convergence", action="store_true",
+                   help="also run fixed steps of H, H/2, ... H/32 (scene rebuilt per step, stiffness 2/h^2) and "
+                        "aligned stepping; report each one's max final error, signature and cost, and the fitted "
+                        "order (log-log plot in report.html). H/32 takes 32x the steps of H")
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("gallery", help="regenerate the MuJoCo scene gallery (models/scenes/NAME/)",
@@ -94,13 +119,13 @@ def cmd_mjcf(args) -> int:
     v = _velocities(problem, args.solution)
     if args.output != "-":
         from nbst.outputs import prepare_output
-        prepare_output(args.output)
+        prepare_output(args.output, inputs=(args.problem, args.solution))
     xml = scene_xml(problem, v, timestep=args.timestep, unit=args.unit)
     if args.output == "-":
         sys.stdout.write(xml)
     else:
-        from pathlib import Path
-        Path(args.output).write_text(xml, encoding="utf-8")
+        from nbst.outputs import write_text_atomic
+        write_text_atomic(args.output, xml)
         print(f"wrote {args.output} ({problem.n} disks; view: python -m mujoco.viewer --mjcf={args.output})",
               file=sys.stderr)
     return 0
@@ -109,24 +134,38 @@ def cmd_mjcf(args) -> int:
 def cmd_validate(args) -> int:
     from nbst.problem import load_problem
 
-    from .validate import validate
+    from .mjrun import MAX_STEPS, check_steps
+    from .validate import LADDER, validate
 
     problem = load_problem(args.problem)
     v = _velocities(problem, args.solution)
+    max_steps = args.max_steps or MAX_STEPS
+    try:
+        check_steps(problem.t_final, args.timestep, max_steps)  # before any work: memory grows with the steps
+    except ValueError as e:
+        print(f"nbst validate: error: {e}", file=sys.stderr)
+        return 2
     if args.report:
         from nbst.outputs import prepare_output
         prepare_output(args.report, directory=True, option="--report")
-    val = validate(problem, v, timestep=args.timestep, unit=args.unit, tol=args.tol)
+    if args.convergence and not args.json:
+        print(f"convergence: {len(LADDER)} fixed-step runs (H to H/{LADDER[-1]}) and an aligned one ...",
+              file=sys.stderr)
+    try:
+        val = validate(problem, v, timestep=args.timestep, unit=args.unit, tol=args.tol, max_steps=max_steps,
+                       stepping=args.stepping, convergence=args.convergence)
+    except RuntimeError as e:  # aligned stepping: a jam, or past --max-steps
+        print(f"nbst validate: error: {e}", file=sys.stderr)
+        return 2
     if args.report:
         from pathlib import Path
 
-        from nbst.solution import write_json_atomic
+        from nbst.outputs import write_json_atomic, write_text_atomic
 
         from .report import report_html
         out = Path(args.report)
-        out.mkdir(parents=True, exist_ok=True)
-        write_json_atomic(out / "report.json", val.to_dict())
-        (out / "report.html").write_text(report_html(val), encoding="utf-8")
+        write_json_atomic(out / "report.json", val.to_dict(), option="--report")
+        write_text_atomic(out / "report.html", report_html(val), option="--report")
     if args.json:
         from nbst.cli import print_json
         from nbst.solution import _json_safe

@@ -1,5 +1,9 @@
 """``report.html``: a self-contained page (inline base64 PNG figures) for a :class:`Validation`.
 
+The figures speak nbst's visual language (:mod:`nbst.palette`; the drawing helpers
+are ``nbst.render.figures``'s): class colours, disk numbers at the starts and beside
+the targets, and legends outside the axes.
+
 Compute only: functions return bytes / text; the CLI writes the files.
 """
 from __future__ import annotations
@@ -7,9 +11,11 @@ from __future__ import annotations
 import base64
 import html
 import io
-import json
 
 import numpy as np
+
+from nbst import palette
+from nbst.solution import dumps_strict
 
 #: Figure resolution (dots per inch); figures are ~7 in wide.
 DPI = 110
@@ -18,23 +24,27 @@ DPI = 110
 def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=DPI, bbox_inches="tight")
-    import matplotlib.pyplot as plt
-    plt.close(fig)
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _colors(n):
-    import matplotlib
-    cmap = matplotlib.colormaps["tab10" if n <= 10 else "tab20"]
-    return [cmap(i % cmap.N) for i in range(n)]
+def _figure(size):
+    """A figure without pyplot (no global state); constrained layout keeps the
+    legends, which sit outside the axes, inside the figure."""
+    from matplotlib.figure import Figure
+    return Figure(figsize=size, layout="constrained")
 
 
-def figure_overlay(val) -> str:
-    """Trajectories: exact (solid) and MuJoCo (dashed), starts, targets with radius R."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Circle, Rectangle
+def overlay_figure(val):
+    """Trajectories, in nbst's visual language (:mod:`nbst.palette`): exact paths in a
+    shade of each disk's class colour (solid cueable, dashed noncueable), MuJoCo's
+    dotted black over them; each disk filled and numbered at its start, its exact
+    final position a thin outline circle (MuJoCo's dotted black), its target a small
+    hollow circle numbered with the disk, with the dotted neighbourhood of radius R.
+    The legend sits below the box."""
+    from matplotlib.patches import Rectangle
+
+    from nbst.render.figures import (circle_handle, draw_final, draw_start, draw_target, legend_below,
+                                     line_handle, mark_handles)
 
     p = val.problem
     ex, mj = val.exact, val.mujoco
@@ -42,79 +52,207 @@ def figure_overlay(val) -> str:
     ts = np.union1d(ts, ex.events["time"])
     xe = ex.at(ts)
     xm = mj.at(ts)
-    fig, ax = plt.subplots(figsize=(6.5, 6.5 * p.height / p.width))
-    ax.add_patch(Rectangle((0, 0), p.width, p.height, fill=False, lw=1.5, color="0.3"))
-    cols = _colors(p.n)
-    for i in range(p.n):
-        c = cols[i]
-        ax.plot(xe[:, i, 0], xe[:, i, 1], "-", color=c, lw=1.2, alpha=0.9)
-        ax.plot(xm[:, i, 0], xm[:, i, 1], "--", color="k", lw=0.7, alpha=0.6)
-        ax.add_patch(Circle(p.target[i], p.target_radius, fill=False, ls=":", color=c, lw=0.8))
-        ax.add_patch(Circle(p.start[i], p.radius[i], color=c, alpha=0.35))
-        ax.add_patch(Circle(ex.final_positions[i], p.radius[i], fill=False, color=c, lw=1.2))
-        ax.annotate(str(i), p.start[i], ha="center", va="center", fontsize=7)
-    ax.plot([], [], "-", color="C0", label="exact (nbst)")
-    ax.plot([], [], "--", color="k", label="MuJoCo")
+    fig = _figure((6.5, 6.5 * p.height / p.width + 0.4))
+    ax = fig.add_subplot(1, 1, 1)
     ax.set_xlim(-0.02 * p.width, 1.02 * p.width)
     ax.set_ylim(-0.02 * p.height, 1.02 * p.height)
     ax.set_aspect("equal")
-    ax.legend(loc="upper right", fontsize=8)
-    ax.set_title("paths: filled = start, ring = exact end, dotted = target radius R", fontsize=9)
-    return _png(fig)
+    ax.add_patch(Rectangle((0, 0), p.width, p.height, fill=False, lw=1.5, color="0.3"))
+    shades = palette.disk_shades(p.cueable)
+    mj_ink = palette.hex_color(palette.INK)
+    for i in range(p.n):
+        ax.plot(xe[:, i, 0], xe[:, i, 1], palette.path_style(p.cueable[i]), color=palette.hex_color(shades[i]),
+                lw=1.3, zorder=3)
+        ax.plot(xm[:, i, 0], xm[:, i, 1], ":", color=mj_ink, lw=0.8, alpha=0.7, zorder=3.5)
+        draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius)
+        draw_final(ax, ex.final_positions[i], p.radius[i], shades[i], zorder=4)
+        draw_final(ax, mj.final_positions[i], p.radius[i], mj_ink, ls=":", zorder=4)
+        draw_start(ax, p.start[i], p.radius[i], p.cueable[i], i)
+    entries = mark_handles(p, paths=True, final=True, ring=True, path_prefix="exact ",
+                           final_label="final position, exact")
+    entries += [(line_handle(mj_ink, ":", lw=1.0), "MuJoCo path"),
+                (circle_handle(ec=mj_ink, lw=1.0, ls=":"), "final position, MuJoCo")]
+    legend_below(fig, entries)
+    ax.set_title("paths: exact (nbst) and MuJoCo", fontsize=9)
+    return fig
 
 
-def figure_error(val) -> str:
-    """Per-disk distance between the two motions over time (log scale), with the tolerance."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def _spread(y, gap: float, hi: float = 1.0) -> np.ndarray:
+    """Positions near ``y`` (axes fractions), at least ``gap`` apart and at most ``hi``:
+    where to write the numbers at the ends of curves so that none overlap."""
+    y = np.asarray(y, float)
+    order = np.argsort(y, kind="stable")
+    out = y[order].copy()
+    for k in range(1, len(out)):
+        out[k] = max(out[k], out[k - 1] + gap)
+    if len(out) and out[-1] > hi:  # crowded at the top: push down from there
+        out[-1] = hi
+        for k in range(len(out) - 2, -1, -1):
+            out[k] = min(out[k], out[k + 1] - gap)
+    res = np.empty_like(out)
+    res[order] = out
+    return res
+
+
+def error_figure(val):
+    """Per-disk distance between the two motions over time (log scale), with the
+    tolerance: one curve per disk in a shade of its class colour (solid cueable,
+    dashed noncueable), numbered at its right end; the legend below."""
+    from nbst.render.figures import legend_below, line_handle
 
     p = val.problem
-    fig, ax = plt.subplots(figsize=(7.5, 3.4))
-    cols = _colors(p.n)
-    floor = 1e-9
+    fig = _figure((7.5, 3.4))
+    ax = fig.add_subplot(1, 1, 1)
+    shades = palette.disk_shades(p.cueable)
+    floor = 1e-13 if getattr(val, "stepping", "fixed") == "aligned" else 1e-9
+    err = np.maximum(val.error_curve, floor)
     for i in range(p.n):
-        ax.semilogy(val.error_curve_t, np.maximum(val.error_curve[:, i], floor), color=cols[i], lw=1, label=str(i))
-    ax.axhline(val.tol, color="r", ls="--", lw=1, label=f"tol {val.tol:g}")
+        ax.semilogy(val.error_curve_t, err[:, i], palette.path_style(p.cueable[i]),
+                    color=palette.hex_color(shades[i]), lw=1, label=f"_disk {i}")
+    ax.axhline(val.tol, color="black", ls="-.", lw=0.9)
     if val.diverge:
-        ax.axvline(val.diverge["time"], color="r", lw=0.8)
+        ax.axvline(val.diverge["time"], color="black", ls=":", lw=1.1)
     for t in val.exact.events["time"]:
-        ax.axvline(t, color="0.85", lw=0.5, zorder=0)
+        ax.axvline(t, color="0.88", lw=0.5, zorder=0)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("|MuJoCo - exact| (units)")
     ax.set_xlim(0, p.t_final)
-    ax.legend(fontsize=6, ncol=min(p.n + 1, 8), loc="upper left")
-    return _png(fig)
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo, hi)
+    # each curve's disk number just right of its end, spread so that numbers never overlap
+    end = (np.log10(err[-1]) - np.log10(lo)) / (np.log10(hi) - np.log10(lo))
+    at = _spread(end, gap=0.066)  # 7 pt numbers on an axes ~160 pt tall
+    for i in range(p.n):
+        ax.annotate(str(i), xy=(1.0, end[i]), xycoords="axes fraction", xytext=(1.025, at[i]),
+                    textcoords="axes fraction", va="center", ha="left", fontsize=7,
+                    color=palette.hex_color(palette.shade(shades[i], 0.25)),
+                    arrowprops=dict(arrowstyle="-", lw=0.5, color=palette.hex_color(shades[i]), shrinkA=0,
+                                    shrinkB=1.5))
+    entries = []
+    if p.cueable.any():
+        entries.append((line_handle(palette.hex_color(palette.CUEABLE), palette.PATH_CUEABLE, lw=1),
+                        "cueable disk (solid)"))
+    if (~p.cueable).any():
+        entries.append((line_handle(palette.hex_color(palette.NONCUEABLE), palette.PATH_NONCUEABLE, lw=1),
+                        "noncueable disk (dashed)"))
+    entries.append((line_handle("black", "-.", lw=0.9), f"tolerance {val.tol:g}"))
+    if val.diverge:
+        entries.append((line_handle("black", ":", lw=1.1), f"first divergence (disk {val.diverge['disk']})"))
+    entries.append((line_handle("0.8", "-", lw=0.8), "event (exact)"))
+    legend_below(fig, entries, ncol=3, grow=False, title="one curve per disk; its number at the right end")
+    return fig
 
 
-def figure_timeline(val) -> str:
-    """Events on a time axis: exact above, MuJoCo below, matched pairs joined."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def timeline_figure(val):
+    """Events on a time axis: exact above, MuJoCo below, matched pairs joined. The
+    marks of ``nbst plot trajectories``: a disk-disk collision a red star, a wall
+    bounce a black dot; an event only one motion has is drawn hollow."""
+    from nbst.render.figures import legend_below, line_handle
 
     ex, mj = val.exact.events, val.mujoco.events
-    fig, ax = plt.subplots(figsize=(7.5, 2.4))
+    fig = _figure((7.5, 2.0))
+    ax = fig.add_subplot(1, 1, 1)
     me = {a for a, _ in val.matches}
     mm = {b for _, b in val.matches}
     for a, b in val.matches:
-        ax.plot([ex["time"][a], mj["time"][b]], [1, 0], color="0.6", lw=0.6)
+        ax.plot([ex["time"][a], mj["time"][b]], [1, 0], color="0.6", lw=0.6, zorder=1)
+    coll, wall = palette.hex_color(palette.COLLISION), palette.hex_color(palette.WALL_BOUNCE)
     for evs, y, matched in ((ex, 1, me), (mj, 0, mm)):
         for k, e in enumerate(evs):
-            m = "o" if e["kind"] == 0 else "s"
-            c = "C0" if e["kind"] == 0 else "C2"
-            if k not in matched:
-                c = "r"
-            ax.plot(e["time"], y, m, color=c, ms=5, mfc=c if k in matched else "none")
-    ax.plot([], [], "o", color="C0", label="disk-disk")
-    ax.plot([], [], "s", color="C2", label="wall")
-    ax.plot([], [], "o", color="r", mfc="none", label="unmatched")
+            is_coll = e["kind"] == 0
+            c = coll if is_coll else wall
+            m = palette.COLLISION_MARKER if is_coll else palette.WALL_BOUNCE_MARKER
+            ms = 9 if is_coll else 5
+            if k in matched:
+                ax.plot(e["time"], y, m, color=c, ms=ms, mec="black" if is_coll else c, mew=0.4, zorder=3)
+            else:
+                ax.plot(e["time"], y, m, ms=ms + 2, mfc="white", mec=c, mew=1.3, zorder=3)
     ax.set_yticks([0, 1], ["MuJoCo", "exact"])
     ax.set_ylim(-0.5, 1.5)
     ax.set_xlim(0, val.problem.t_final)
     ax.set_xlabel("time (s)")
-    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, 1.35))
-    return _png(fig)
+    kinds = set(ex["kind"].tolist()) | set(mj["kind"].tolist())
+    entries = []
+    if 0 in kinds:
+        entries.append((line_handle(coll, "none", marker=palette.COLLISION_MARKER, ms=9, mec="black", mew=0.4),
+                        palette.LEGEND_COLLISION))
+    if 1 in kinds:
+        entries.append((line_handle(wall, "none", marker=palette.WALL_BOUNCE_MARKER, ms=5),
+                        palette.LEGEND_WALL_BOUNCE))
+    if val.matches:
+        entries.append((line_handle("0.6", "-", lw=0.6), "matched pair"))
+    if len(me) < len(ex) or len(mm) < len(mj):
+        entries.append((line_handle("0.3", "none", marker="o", ms=7, mfc="white", mec="0.3", mew=1.3),
+                        "hollow: in one motion only"))
+    if entries:
+        legend_below(fig, entries, ncol=4, grow=False)
+    else:
+        ax.text(0.5, 0.5, "no events", transform=ax.transAxes, ha="center", va="center", color="0.4")
+    return fig
+
+
+def convergence_figure(val):
+    """Max final error against the step size h (log-log): the fixed-step entries (filled:
+    used for the fitted order, hollow: not), the fitted line, and aligned stepping's error as
+    a horizontal line (it has no single h). Legend below."""
+    from nbst.render.figures import legend_below, line_handle
+
+    ink = palette.hex_color(palette.INK)
+    fit_ink = palette.hex_color(palette.RING_INK)
+    al_ink = palette.hex_color(palette.TARGET_INK)
+    conv = val.convergence or []
+    order = val.convergence_order or {}
+    used = set(order.get("points_h") or [])
+    fixed = [e for e in conv if e["stepping"] == "fixed" and e["max_error"] is not None]
+    aligned = [e for e in conv if e["stepping"] == "aligned" and e["max_error"] is not None]
+    fig = _figure((6.0, 3.6))
+    ax = fig.add_subplot(1, 1, 1)
+    floor = 1e-13
+    hs = np.array([e["h"] for e in fixed]) * 1e3
+    errs = np.maximum([e["max_error"] for e in fixed], floor)
+    for e, h_ms, y in zip(fixed, hs, errs):
+        filled = e["h"] in used
+        ax.loglog([h_ms], [y], "o", ms=6, color=ink, mfc=ink if filled else "white", mew=1.2, zorder=3)
+    if order.get("order") is not None:
+        xs = np.array([min(order["points_h"]), max(order["points_h"])])
+        ax.loglog(xs * 1e3, np.exp(order["intercept_log"]) * xs ** order["order"], "--", color=fit_ink, lw=1.2,
+                  zorder=2)
+    if aligned:
+        ax.axhline(max(aligned[0]["max_error"], floor), color=al_ink, ls="-.", lw=1.1)
+    ax.set_xlabel("MuJoCo timestep h (ms)")
+    ax.set_ylabel("max final error (units)")
+    if hs.size:
+        ax.set_xlim(hs.min() / 1.6, hs.max() * 1.6)
+    entries = [(line_handle(ink, "none", marker="o", ms=6, mfc=ink), "fixed steps (used for the fit)")]
+    if len(used) < len(fixed):
+        entries.append((line_handle(ink, "none", marker="o", ms=6, mfc="white", mew=1.2),
+                        "fixed steps (not used: outside the first-order regime)"))
+    if order.get("order") is not None:
+        entries.append((line_handle(fit_ink, "--", lw=1.2), f"fit: error ~ h^{order['order']:.2f}"))
+    if aligned:
+        entries.append((line_handle(al_ink, "-.", lw=1.1), f"aligned stepping ({aligned[0]['max_error']:.2g})"))
+    legend_below(fig, entries, ncol=2, grow=False)
+    return fig
+
+
+def figure_convergence(val) -> str:
+    """:func:`convergence_figure` as base64 PNG."""
+    return _png(convergence_figure(val))
+
+
+def figure_overlay(val) -> str:
+    """:func:`overlay_figure` as base64 PNG."""
+    return _png(overlay_figure(val))
+
+
+def figure_error(val) -> str:
+    """:func:`error_figure` as base64 PNG."""
+    return _png(error_figure(val))
+
+
+def figure_timeline(val) -> str:
+    """:func:`timeline_figure` as base64 PNG."""
+    return _png(timeline_figure(val))
 
 
 _CSS = """body{font-family:system-ui,sans-serif;max-width:60em;margin:1.5em auto;padding:0 1em;color:#222}
@@ -122,6 +260,98 @@ h1{font-size:1.4em}h2{font-size:1.1em;margin-top:1.5em}table{border-collapse:col
 td,th{border:1px solid #ccc;padding:.2em .5em;text-align:right}th{background:#f3f3f3}
 .ok{color:#176317}.bad{color:#b00}pre{background:#f6f6f6;padding:.6em;font-size:.85em;overflow-x:auto}
 img{max-width:100%}.small{font-size:.85em;color:#555}"""
+
+
+def _error_note(val) -> str:
+    """What the error curve shows, for the stepping used."""
+    if getattr(val, "stepping", "fixed") == "aligned":
+        return ("Aligned stepping resolves each impact at its touch (late by overlap / speed, ~1e-12 units); what "
+                "remains grows only through the motion's own sensitivity (its amplification, above).")
+    return ("MuJoCo resolves each impact one step late (an exact reflection delayed by the timestep), so each "
+            "impact adds about |&Delta;v|&middot;h; oblique collisions also err in direction by ~0.1&deg; at "
+            "0.25 ms.")
+
+
+def _num(x, fmt=".3g") -> str:
+    return "&ndash;" if x is None else format(x, fmt)
+
+
+def _stepping_html(val, d) -> str:
+    """The stepping mode and, for aligned stepping, its cost."""
+    st = d["stepping"]
+    if st["mode"] != "aligned" or not st["cost"]:
+        return (f"<h2>Stepping</h2><p>Fixed steps of h = {val.timestep * 1e3:g} ms ({st['steps']} steps, "
+                f"{st['stepping_wall_time_s']:.2f} s): MuJoCo resolves each impact one step late. "
+                f"<code>--stepping aligned</code> ends a step at each touch instead.</p>")
+    c = st["cost"]
+    rows = "".join(f"<tr><td style='text-align:left'>{k}</td><td>{v}</td></tr>" for k, v in (
+        ("accepted steps (h, or shortened to end at a touch)", c["steps"]),
+        ("impact micro-steps (one per impact)", c["impacts"]),
+        ("&nbsp;&nbsp;of them in the same instant as the previous one", c["simultaneous"]),
+        ("&nbsp;&nbsp;capped at h (grazing)", c["capped"]),
+        ("trial steps locating touches (regula falsi)", c["bisections"]),
+        ("trial steps checking grazes inside a step", c["graze_checks"]),
+        ("all mj_step calls (trials + micro-steps)", c["trials"] + c["impacts"]),
+        ("deepest overlap resolved (m)", f"{c['max_overlap']:.3g}"),
+        ("wall time (s)", f"{c['wall_time']:.3f}")))
+    return (f"<h2>Stepping: aligned</h2><p>Probe step h = {val.timestep * 1e3:g} ms; every step that would "
+            f"cross a touch is shortened to end just past it (MuJoCo's own collision detection), and each "
+            f"impact is resolved by one micro-step whose contact stiffness matches it "
+            f"(<code>nbst.models.stepping</code>). Fixed stepping takes "
+            f"{int(np.ceil(val.problem.t_final / val.timestep - 1e-9))} steps for the same motion.</p>"
+            f"<table><tr><th>cost</th><th></th></tr>{rows}</table>")
+
+
+def _sensitivity_html(d) -> str:
+    """A short table: amplification, velocity tolerance, predicted against measured fixed-step error."""
+    sens, pc = d.get("sensitivity"), d.get("prediction_check")
+    if not sens:
+        return ""
+    if sens.get("error"):
+        return f"<h2>Sensitivity</h2><p>No sensitivity analysis: {html.escape(sens['error'])}.</p>"
+    rows = [("amplification (largest singular value of d final / d initial velocities)",
+             f"{_num(sens['amplification'])} s"),
+            ("velocity tolerance (keeps every disk on its side of R)", f"{_num(sens['velocity_tolerance'])} units/s")]
+    if pc:
+        def yn(x):
+            return "yes" if x else "no"
+        rows += [(f"fixed steps of {pc['timestep'] * 1e3:g} ms: predicted max error, linear / worst case",
+                  f"{_num(pc['predicted_error_linear_max'])} / {_num(pc['predicted_error_max'])} units"),
+                 (f"measured max error ({html.escape(pc['fixed_run'])})", f"{_num(pc['measured_error_max'])} units"),
+                 ("measured / predicted (linear)", _num(pc["measured_over_linear"])),
+                 ("keeps the signature: predicted (worst case) / measured",
+                  f"{yn(pc['keeps_signature_predicted'])} / {yn(pc['keeps_signature_measured'])} "
+                  f"(<b class={'bad' if pc['verdict'] == 'wrong' else 'ok'}>{pc['verdict']}</b>)")]
+    body = "".join(f"<tr><td style='text-align:left'>{k}</td><td>{v}</td></tr>" for k, v in rows)
+    return (f"<h2>Sensitivity and the fixed-step prediction</h2><table>{body}</table>"
+            f"<p class=small>First order, from the analytic Jacobian of the exact event chain "
+            f"(<code>nbst.sensitivity</code>); the prediction models each impact resolved one step late.</p>")
+
+
+def _convergence_html(val, d) -> str:
+    """The convergence plot, its entries and the fitted order."""
+    conv = d.get("convergence")
+    if not conv:
+        return ""
+    co = d.get("convergence_order") or {}
+    rows = []
+    for e in conv:
+        h = "aligned" if e["h"] is None else f"{e['h'] * 1e3:.4g} ms (h/{e['divisor']})"
+        if e["skipped"]:
+            rows.append(f"<tr><td style='text-align:left'>{h}</td><td colspan=4>skipped: "
+                        f"{html.escape(e['skipped'])}</td></tr>")
+            continue
+        rows.append(f"<tr><td style='text-align:left'>{h}</td><td>{_num(e['max_error'])}</td>"
+                    f"<td>{html.escape(e['signature'])}{'' if e['same_signature'] else ' <b class=bad>differs</b>'}"
+                    f"</td><td>{e['steps']}</td><td>{e['wall_time']:.2f}</td></tr>")
+    used = ", ".join(f"{h * 1e3:.4g}" for h in co.get("points_h") or [])
+    fit = (f"Fitted order <b>{co['order']:.2f}</b> (least-squares slope of log error on log h) on h = {used} ms: "
+           if co.get("order") is not None else "No order fitted (fewer than two points qualify): ")
+    return (f"<h2>Convergence</h2><img alt='error against step size' "
+            f"src='data:image/png;base64,{figure_convergence(val)}'>"
+            f"<p>{fit}{html.escape(co.get('rule', ''))}.</p>"
+            f"<table><tr><th>step</th><th>max final error (units)</th><th>signature</th><th>steps</th>"
+            f"<th>wall time (s)</th></tr>{''.join(rows)}</table>")
 
 
 def report_html(val) -> str:
@@ -160,14 +390,15 @@ def report_html(val) -> str:
                 f"a small error at one collision grows at every later one.</p>" if div else
                 f"<p class=ok>No divergence: every disk stays within {val.tol:g} units of its exact path "
                 f"up to t_final.</p>")
-    json_text = esc(json.dumps({k: v for k, v in d.items() if k not in ("events", "velocities")}, indent=1))
+    json_text = esc(dumps_strict({k: v for k, v in d.items() if k not in ("events", "velocities")}, indent=1))
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>nbst validate: {esc(p.name)}</title>
 <style>{_CSS}</style></head><body>
 <h1>nbst validate: {esc(p.name)}</h1>
 <p class=small>{esc(p.description)}</p>
 <p>{p.n} disks, t_final = {p.t_final:g} s. MuJoCo {esc(d['mujoco']['version'])}, timestep
-{val.timestep * 1e3:g} ms ({d['mujoco']['steps']} steps), 1 unit = {val.unit:g} m.</p>
+{val.timestep * 1e3:g} ms ({d['mujoco']['steps']} steps), {esc(d['stepping']['mode'])} stepping,
+1 unit = {val.unit:g} m.</p>
 <h2>Verdict</h2>
 <p class="{'ok' if same else 'bad'}"><b>Signature {'the same' if same else 'DIFFERENT'}</b>:
 exact {d['exact']['signature']} (order {d['exact']['order']}, cost {d['exact']['cost']:.6g}),
@@ -176,10 +407,12 @@ MuJoCo {d['mujoco_result']['signature']} (order {d['mujoco_result']['order']}, c
 {ev['exact_only']} exact only, {ev['mujoco_only']} MuJoCo only. Kinetic energy drift
 {d['energy']['drift_max_contact_free']:.3g} (largest, over contact-free steps).</p>
 {div_html}
+{_stepping_html(val, d)}
+{_sensitivity_html(d)}
+{_convergence_html(val, d)}
 <h2>Trajectories</h2><img alt="trajectory overlay" src="data:image/png;base64,{figure_overlay(val)}">
 <h2>Per-disk error over time</h2><img alt="error over time" src="data:image/png;base64,{figure_error(val)}">
-<p class=small>MuJoCo resolves each impact one step late (an exact reflection delayed by the timestep), so each
-impact adds about |&Delta;v|&middot;h; oblique collisions also err in direction by ~0.1&deg; at 0.25 ms.</p>
+<p class=small>{_error_note(val)}</p>
 <h2>Event timeline</h2><img alt="event timeline" src="data:image/png;base64,{figure_timeline(val)}">
 <h2>Final positions</h2>
 <table><tr><th>disk</th><th>exact</th><th>MuJoCo</th><th>error</th><th>exact sig</th><th>MuJoCo sig</th></tr>

@@ -19,6 +19,10 @@ Contact model (see :data:`CONTACT`): frictionless (condim 1), margin = gap = 0,
 step then reverses the normal velocity exactly (elastic bounce); k is computed
 from h because a k off by 1% loses ~0.5% of the speed per bounce.
 
+XML (``scene_xml``) keeps every number at full precision: MuJoCo's writer keeps 6
+significant digits, so :func:`full_precision` rewrites the numbers from the spec's
+own values; a model loaded from the text equals ``build_model``'s bit for bit.
+
 Compute only: functions return a spec, a model or XML text; the CLI writes files.
 """
 from __future__ import annotations
@@ -28,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst import palette
 from nbst.problem import Problem
 
 #: Default MuJoCo timestep (s). 1 ms errs ~0.14 deg on oblique collisions and lets
@@ -45,11 +50,13 @@ PUCK_HALF_HEIGHT_RADII = 0.4
 #: Characters allowed in the model name; everything else becomes '_' (XML safety).
 _NAME_OK = re.compile(r"[^A-Za-z0-9_.-]")
 
-#: Colours (RGBA).
+#: Colours (RGBA). Disks in nbst's class colours (nbst.palette: cueable amber,
+#: noncueable blue, as in the video, the figures and the report); targets in a
+#: neutral green that belongs to no class.
 FLOOR_RGBA = (0.93, 0.93, 0.90, 1.0)
 WALL_RGBA = (0.35, 0.38, 0.45, 1.0)
-CUE_RGBA = (0.12, 0.47, 0.71, 1.0)
-NONCUE_RGBA = (0.85, 0.37, 0.0, 1.0)
+CUE_RGBA = (*palette.CUEABLE, 1.0)
+NONCUE_RGBA = (*palette.NONCUEABLE, 1.0)
 TARGET_RGBA = (0.17, 0.63, 0.17, 0.25)
 TARGET_DOT_RGBA = (0.17, 0.63, 0.17, 0.9)
 
@@ -171,12 +178,98 @@ def _contact(geom, solref) -> None:
 def build_model(problem: Problem, velocities=None, *, timestep: float = DEFAULT_TIMESTEP,
                 unit: float = DEFAULT_UNIT):
     """The compiled ``mujoco.MjModel`` of :func:`build_spec`."""
-    return build_spec(problem, velocities, timestep=timestep, unit=unit).compile()
+    return _compile(build_spec(problem, velocities, timestep=timestep, unit=unit), problem, unit)
+
+
+def _compile(spec, problem: Problem, unit: float):
+    """``spec.compile()``; MuJoCo's refusal (e.g. bodies too small or too light in
+    metres) becomes a one-line ProblemError that says which option to change."""
+    from nbst.problem import ProblemError
+    try:
+        return spec.compile()
+    except ValueError as e:
+        why = str(e).strip().splitlines()[0] if str(e).strip() else "compile failed"
+        r_m = float(problem.radius.min()) * unit
+        raise ProblemError(problem.source, "", f"MuJoCo cannot build the scene at --unit {unit:g} m per unit "
+                                               f"(smallest disk radius {r_m:g} m, lightest mass "
+                                               f"{float(problem.mass.min()):g}): {why}; a radius of ~0.01 m "
+                                               f"needs --unit {0.01 / float(problem.radius.min()):.3g}") from None
 
 
 def scene_xml(problem: Problem, velocities=None, *, timestep: float = DEFAULT_TIMESTEP,
               unit: float = DEFAULT_UNIT) -> str:
-    """MJCF text of the scene (what ``nbst mjcf`` writes)."""
+    """MJCF text of the scene (what ``nbst mjcf`` writes), every number at full precision.
+
+    A model loaded from this text has the same keyframe, disk starts, sizes, masses,
+    contact parameters and timestep as ``build_model``, bit for bit (:func:`full_precision`).
+    """
     spec = build_spec(problem, velocities, timestep=timestep, unit=unit)
-    spec.compile()
-    return spec.to_xml()
+    _compile(spec, problem, unit)
+    return full_precision(spec.to_xml(), spec)
+
+
+#: The numeric attributes ``full_precision`` rewrites, per element: everything the physics or
+#: the keyframe reads, and the cosmetic geometry (all doubles in MjSpec; rgba is float32).
+_EXACT_ATTRS = {
+    "option": ("timestep", "gravity"),
+    "statistic": ("extent", "center"),
+    "body": ("pos",),
+    "joint": ("axis",),
+    "geom": ("pos", "size", "mass", "solref", "solimp", "friction", "margin", "gap", "rgba"),
+    "site": ("pos", "size", "rgba"),
+    "camera": ("pos", "fovy"),
+    "light": ("pos", "dir"),
+    "key": ("time", "qpos", "qvel"),
+}
+_TAG = re.compile(r'<([A-Za-z_]+)((?:\s+[A-Za-z_:]+="[^"]*")*)(\s*/?)>')
+_ATTR = re.compile(r'([A-Za-z_:]+)="([^"]*)"')
+
+
+def _exact(x, float32: bool) -> str:
+    """Shortest text that reads back as exactly x (a double; or a float32 for float32 fields)."""
+    t = str(np.float32(x)) if float32 else repr(float(x))
+    return t[:-2] if t.endswith(".0") else t
+
+
+def full_precision(xml: str, spec) -> str:
+    """``xml`` (``spec.to_xml()``, which keeps 6 significant digits) with the numbers of
+    :data:`_EXACT_ATTRS` rewritten from ``spec``'s own values, shortest round-trip form.
+
+    MuJoCo writes only the leading entries of a vector that differ from its defaults
+    (e.g. ``solimp="0.9999 0.9999"``); the rewrite keeps the same entries. Text layout,
+    element order and every other attribute stay as MuJoCo wrote them.
+    """
+    lookup = {"body": spec.body, "joint": spec.joint, "geom": spec.geom, "site": spec.site,
+              "camera": spec.camera, "light": spec.light, "key": spec.key}
+    fixed = {"option": spec.option, "statistic": spec.stat}
+
+    def element(m):
+        tag, attrs, end = m.group(1), m.group(2), m.group(3)
+        names = _EXACT_ATTRS.get(tag)
+        if not names:
+            return m.group(0)
+        if tag in fixed:
+            obj = fixed[tag]
+        else:
+            name = dict(_ATTR.findall(attrs)).get("name")
+            obj = lookup[tag](name) if name else None
+        if obj is None:
+            return m.group(0)
+
+        def attr(a):
+            key, text = a.group(1), a.group(2)
+            if key not in names:
+                return a.group(0)
+            value = getattr(obj, key)  # a float, a numpy array, or an MjDoubleVec (keyframe)
+            float32 = getattr(value, "dtype", None) == np.float32
+            if not isinstance(value, (np.ndarray, float, int)):
+                value = list(value)
+            vals = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
+            tokens = text.split()
+            if len(tokens) > vals.size:
+                raise ValueError(f"MJCF {tag} {key}: {len(tokens)} numbers written, the spec has {vals.size}")
+            return f'{key}="{" ".join(_exact(x, float32) for x in vals[:len(tokens)])}"'
+
+        return f"<{tag}{_ATTR.sub(attr, attrs)}{end}>"
+
+    return _TAG.sub(element, xml)

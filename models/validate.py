@@ -16,6 +16,16 @@ What is compared:
   units, the disk, and the event that caused it (the last event involving that disk at
   or before that time, in either motion). Chaos makes late divergence normal: a 0.1 deg
   error at one collision grows at every later one.
+
+The MuJoCo run steps ``fixed`` (h every step) or ``aligned`` (:mod:`nbst.models.stepping`:
+every impact resolved at its touch; its cost is reported). Also reported:
+
+* ``sensitivity``: :func:`nbst.sensitivity.analyze` at the run's h, and ``prediction_check``:
+  its fixed-step prediction (keeps the signature? max error) against a fixed-step run at h;
+* with ``convergence=True``: fixed steps at h, h/2, ... h/32 (the scene rebuilt per step,
+  k = 2/h^2) and aligned stepping, each entry's max final error, signature and cost, and the
+  fitted order (least-squares slope of log error on log h over the entries in the first-order
+  regime, :data:`FIT_RULE`).
 """
 from __future__ import annotations
 
@@ -28,12 +38,18 @@ from nbst.problem import Problem
 
 from .scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order
 #: Default divergence tolerance (units): a tenth of the benchmark disks' radius of 10-20,
 #: far above MuJoCo's one-step impact lag (|dv| h ~ 0.05-0.2 units) for a few impacts.
 DIVERGE_TOL = 1.0
 #: Samples of the per-disk error curve kept in the report (the divergence is found on every step).
 CURVE_SAMPLES = 600
+#: Convergence ladder: h divided by these.
+LADDER = (1, 2, 4, 8, 16, 32)
+#: Which ladder entries the order is fitted on, and why (also written into the report).
+FIT_RULE = ("fixed-step entries that keep the exact signature with a max error below the smallest disk radius "
+            "(first order: the collision sequence is unchanged) and above 1e-9 units (round-off)")
+FIT_MIN_ERROR = 1e-9
 _WALL_NAMES = ("left", "right", "bottom", "top")
 
 
@@ -75,6 +91,11 @@ class Validation:
     energy_drift_free: float  # max |E/E0 - 1| over contact-free steps
     energy_drift_final: float
     wall_time: float
+    stepping: str = "fixed"
+    sensitivity: dict | None = None
+    prediction_check: dict | None = None
+    convergence: list | None = None
+    convergence_order: dict | None = None
 
     @property
     def mj_signature_string(self) -> str:
@@ -109,6 +130,8 @@ class Validation:
             "velocities": self.velocities.tolist(),
             "mujoco": {"version": _mujoco_version(), "timestep": self.timestep, "unit_m": self.unit,
                        "steps": mj.steps, "wall_time_s": self.wall_time},
+            "stepping": {"mode": self.stepping, "timestep": self.timestep, "steps": mj.steps,
+                         "stepping_wall_time_s": mj.wall_time, "cost": mj.stats},
             "tolerance": self.tol,
             "final_error": {"per_disk": self.final_error.tolist(), "max": float(self.final_error.max()),
                             "exact_final": ex.final_positions.tolist(), "mujoco_final": mj.final_positions.tolist()},
@@ -133,6 +156,10 @@ class Validation:
             },
             "energy": {"drift_max_contact_free": self.energy_drift_free, "drift_final": self.energy_drift_final},
             "divergence": self.diverge,
+            "sensitivity": self.sensitivity,
+            "prediction_check": self.prediction_check,
+            "convergence": self.convergence,
+            "convergence_order": self.convergence_order,
         }
 
     def _offsets_before_divergence(self):
@@ -179,6 +206,7 @@ class Validation:
             f"energy     drift {self.energy_drift_free:.3g} (max, contact-free steps), "
             f"{self.energy_drift_final:+.3g} at t_final",
         ]
+        lines += self._summary_extra()
         if ev["first_mismatch"]:
             lines.append(f"mismatch   first: {ev['first_mismatch']['text']} ({ev['first_mismatch']['side']})")
         if self.diverge:
@@ -190,26 +218,71 @@ class Validation:
         return "\n".join(lines)
 
 
+    def _summary_extra(self) -> list:
+        """Summary lines of the stepping cost, the prediction check and the convergence study."""
+        out = []
+        st = self.mujoco.stats
+        if st:
+            out.append(f"stepping   aligned: {st['steps']} steps + {st['impacts']} impact micro-steps "
+                       f"({st['simultaneous']} simultaneous), {st['bisections']} search + {st['graze_checks']} "
+                       f"graze trial steps, {st['wall_time']:.2f} s")
+        pc = self.prediction_check
+        if pc:
+            def yn(x):
+                return "?" if x is None else ("yes" if x else "no")
+            out.append(f"predicted  fixed h = {pc['timestep'] * 1e3:g} ms: max error "
+                       f"{_g(pc['predicted_error_linear_max'])} (linear), <= {_g(pc['predicted_error_max'])} "
+                       f"(worst case); measured {_g(pc['measured_error_max'])}; keeps signature: predicted "
+                       f"{yn(pc['keeps_signature_predicted'])}, measured {yn(pc['keeps_signature_measured'])} "
+                       f"({pc['verdict']})")
+        elif self.sensitivity and self.sensitivity.get("error"):
+            out.append(f"predicted  no prediction: {self.sensitivity['error']}")
+        if self.convergence:
+            fixed = [e for e in self.convergence if e["stepping"] == "fixed" and e["max_error"] is not None]
+            al = [e for e in self.convergence if e["stepping"] == "aligned"]
+            co = self.convergence_order or {}
+            txt = ", ".join(f"h/{e['divisor']} {_g(e['max_error'])}" for e in fixed)
+            order = f"order {co['order']:.2f} on {len(co['points_h'])} points" if co.get("order") is not None \
+                else "order not fitted (fewer than 2 points in the first-order regime)"
+            out.append(f"converge   max error {txt}; aligned {_g(al[0]['max_error']) if al else '-'}; {order}")
+        return out
+
+
+def _g(x) -> str:
+    return "-" if x is None else f"{x:.3g}"
+
+
 def _mujoco_version() -> str:
     import mujoco
     return str(mujoco.__version__)
 
 
 def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP, unit: float = DEFAULT_UNIT,
-             tol: float = DIVERGE_TOL) -> Validation:
-    """Run ``velocities`` (N, 2, units/s) in MuJoCo and in the exact simulator; compare (see module doc)."""
+             tol: float = DIVERGE_TOL, max_steps: int | None = None, stepping: str = "fixed",
+             convergence: bool = False, sensitivity: bool = True) -> Validation:
+    """Run ``velocities`` (N, 2, units/s) in MuJoCo and in the exact simulator; compare (see module doc).
+
+    max_steps   : ValueError before any work if t_final needs more MuJoCo steps
+                  (default ``nbst.models.mjrun.MAX_STEPS``); the convergence ladder skips the
+                  step sizes that need more
+    stepping    : "fixed" or "aligned" (``nbst.models.mjrun.STEPPINGS``)
+    convergence : also run the convergence study (module doc)
+    sensitivity : add ``nbst.sensitivity.analyze`` at h and its check against a fixed-step run
+    """
     import time
 
     from nbst.sim import simulate
 
-    from .mjrun import run_mujoco
+    from .mjrun import MAX_STEPS, check_steps, run_final, run_mujoco
 
     if not (np.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be > 0, got {tol!r}")
+    max_steps = MAX_STEPS if max_steps is None else int(max_steps)
+    check_steps(problem.t_final, timestep, max_steps)
     t0 = time.perf_counter()
     v = np.asarray(velocities, dtype=float)
     ex = simulate(problem, v)
-    mj = run_mujoco(problem, v, timestep=timestep, unit=unit)
+    mj = run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps, stepping=stepping)
 
     final_err = np.hypot(*(mj.final_positions - ex.final_positions).T)
     d = np.hypot(*(mj.final_positions - problem.target).T)
@@ -237,11 +310,123 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
     E0 = E[0] if E[0] > 0 else 1.0
     drift_free = float(np.abs(E[free] / E0 - 1).max()) if E[0] > 0 else 0.0
     drift_final = float(E[-1] / E0 - 1) if E[0] > 0 else 0.0
+    conv = order = None
+    if convergence:
+        conv = convergence_study(problem, v, ex, timestep=timestep, unit=unit, max_steps=max_steps,
+                                 aligned=mj if stepping == "aligned" else None,
+                                 fixed=mj if stepping == "fixed" else None)
+        order = fit_order(conv, problem)
+    sens = check = None
+    if sensitivity:
+        sens = _sensitivity(problem, v, timestep)
+        if stepping == "fixed":
+            fixed = (float(final_err.max()), mj_sig == ex.signature, "this run")
+        elif conv and conv[0]["max_error"] is not None:
+            fixed = (conv[0]["max_error"], conv[0]["same_signature"], "convergence entry h")
+        else:
+            e = _entry(problem, ex, *run_final(problem, v, timestep=timestep, unit=unit, max_steps=max_steps),
+                       h=timestep, divisor=1)
+            fixed = (e["max_error"], e["same_signature"], "extra fixed-step run")
+        check = prediction_check(sens, timestep, *fixed)
     return Validation(problem=problem, velocities=v, timestep=float(timestep), unit=float(unit), tol=float(tol),
                       exact=ex, mujoco=mj, final_error=final_err, mj_cost=mj_cost, mj_signature=mj_sig,
                       matches=matches, error_curve_t=ts[::stride], error_curve=err[::stride], diverge=diverge,
                       energy_drift_free=drift_free, energy_drift_final=drift_final,
-                      wall_time=time.perf_counter() - t0)
+                      wall_time=time.perf_counter() - t0, stepping=stepping, sensitivity=sens,
+                      prediction_check=check, convergence=conv, convergence_order=order)
+
+
+def _sensitivity(problem: Problem, v, timestep: float) -> dict:
+    """``nbst.sensitivity.analyze`` at h, or {"error": why} when it cannot (e.g. too many events)."""
+    from nbst.sensitivity import analyze
+    try:
+        return analyze(problem, v, timestep=timestep)
+    except (RuntimeError, ValueError, np.linalg.LinAlgError) as e:
+        return {"error": str(e).splitlines()[0] if str(e) else type(e).__name__}
+
+
+def prediction_check(sens: dict | None, timestep: float, measured_error: float, measured_keeps: bool,
+                     source: str) -> dict | None:
+    """The sensitivity's fixed-step prediction against a fixed-step run at the same h.
+
+    verdict: "right" (predicted keeps-signature == measured), "conservative" (worst case said it
+    may not keep, it did), "wrong" (predicted to keep, it did not).
+    """
+    pred = (sens or {}).get("prediction")
+    if not pred:
+        return None
+    lin, worst = pred["predicted_error_linear_max"], pred["predicted_error_max"]
+    p_keep = bool(pred["keeps_signature_predicted"])
+    m_keep = bool(measured_keeps)
+    verdict = "right" if p_keep == m_keep else ("conservative" if m_keep else "wrong")
+    return {"timestep": float(timestep), "fixed_run": source,
+            "keeps_signature_predicted": p_keep, "keeps_signature_predicted_rss": pred["keeps_signature_predicted_rss"],
+            "keeps_signature_measured": m_keep, "verdict": verdict,
+            "predicted_error_max": worst, "predicted_error_linear_max": lin,
+            "measured_error_max": float(measured_error),
+            "measured_over_linear": float(measured_error / lin) if lin else None,
+            "within_worst_case": bool(measured_error <= worst) if worst is not None else None,
+            "within_first_order": pred["within_first_order"]}
+
+
+def _entry(problem: Problem, ex, final, steps, wall, *, h, divisor, stepping="fixed", stats=None,
+           skipped=None) -> dict:
+    """One convergence entry (final positions against the exact ones)."""
+    if final is None:
+        return {"stepping": stepping, "h": h, "divisor": divisor, "max_error": None, "mean_error": None,
+                "signature": None, "same_signature": None, "cost": None, "steps": steps, "wall_time": None,
+                "stats": stats, "skipped": skipped}
+    err = np.hypot(*(np.asarray(final) - ex.final_positions).T)
+    d = np.hypot(*(np.asarray(final) - problem.target).T)
+    on = d <= problem.target_radius
+    sig = "".join("1" if x else "0" for x in on)
+    return {"stepping": stepping, "h": h, "divisor": divisor, "max_error": float(err.max()),
+            "mean_error": float(err.mean()), "signature": sig, "same_signature": sig == ex.signature_string,
+            "cost": float((d**2).sum()), "steps": int(steps), "wall_time": float(wall), "stats": stats,
+            "skipped": skipped}
+
+
+def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, max_steps: int,
+                      aligned=None, fixed=None) -> list:
+    """Fixed steps at timestep / LADDER and aligned stepping at timestep: one entry each.
+
+    aligned / fixed : a MujocoRun already made (aligned at h / fixed at h) to reuse
+    An entry whose steps exceed max_steps is kept with ``skipped`` saying so.
+    """
+    from .mjrun import run_final, run_mujoco, steps_needed
+
+    out = []
+    for div in LADDER:
+        h = timestep / div
+        n = steps_needed(problem.t_final, h)
+        if n > max_steps:
+            out.append(_entry(problem, ex, None, n, None, h=h, divisor=div,
+                              skipped=f"{n:,} steps, over the limit of {max_steps:,} (--max-steps)"))
+        elif div == 1 and fixed is not None:
+            out.append(_entry(problem, ex, fixed.final_positions, fixed.steps, fixed.wall_time, h=h, divisor=1))
+        else:
+            out.append(_entry(problem, ex, *run_final(problem, v, timestep=h, unit=unit, max_steps=max_steps),
+                              h=h, divisor=div))
+    run = aligned if aligned is not None else run_mujoco(problem, v, timestep=timestep, unit=unit,
+                                                         max_steps=max_steps, stepping="aligned")
+    out.append(_entry(problem, ex, run.final_positions, run.stats["steps"] + run.stats["impacts"], run.wall_time,
+                      h=None, divisor=None, stepping="aligned", stats=run.stats))
+    return out
+
+
+def fit_order(entries: list, problem: Problem) -> dict:
+    """Least-squares slope of log(max error) on log(h) over the entries :data:`FIT_RULE` picks."""
+    rmin = float(np.min(problem.radius))
+    pts = [e for e in entries if e["stepping"] == "fixed" and e["max_error"] is not None and e["same_signature"]
+           and FIT_MIN_ERROR < e["max_error"] < rmin]
+    out = {"order": None, "points_h": [e["h"] for e in pts], "rule": FIT_RULE}
+    if len(pts) >= 2:
+        x = np.log([e["h"] for e in pts])
+        y = np.log([e["max_error"] for e in pts])
+        slope, icpt = np.polyfit(x, y, 1)
+        out["order"] = float(slope)
+        out["intercept_log"] = float(icpt)
+    return out
 
 
 def _cause(ex, mj, disk: int, t: float, matches) -> dict:

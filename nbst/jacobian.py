@@ -22,8 +22,14 @@ Per parameter theta we carry dQ_i and dV_i:
   Q' = Q + (V - V') tau gives dQ' = dQ + (dV - dV') tau + (V - V') d tau;
 * end: d final_i = dQ_i + dV_i t_final.
 
-Kernels take arrays (numba); ``final_jacobian(problem, velocities)`` is the
-Python wrapper.
+The same carry from an intermediate time gives the state-transition matrix of
+the exact motion: a perturbation (dp, dv) of a disk at time t0 is, in intercept
+form, dQ = dp - t0 dv, dV = dv, carried through the events after t0
+(``carry_tangents`` from event e0; ``transition_jacobian``).
+
+Kernels take arrays (numba); ``final_jacobian(problem, velocities)`` and
+``transition_jacobian(problem, velocities, t)`` are the Python wrappers,
+``event_record`` the simulation they share.
 """
 from __future__ import annotations
 
@@ -35,24 +41,17 @@ from .sim import STATUS_OK, alloc_work, run
 
 
 @njit(cache=True, error_model="numpy")
-def jacobian_from_events(x0, v0, mass, t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_state, J):
-    """Fill J (2N, 2C) with d final[i, c] / d v0[cue[k], d] (row 2i + c, column 2k + d).
+def carry_tangents(mass, e0, n_ev, ev_t, ev_i, ev_j, ev_state, V, dQ, dV):
+    """Carry intercept-form tangents dQ, dV (N, 2, P) through events e0 .. n_ev - 1, in place.
 
-    cue : (C,) int64 indices of the cueable disks (the parameters)
-    ev_* : the event record of ``run`` for these velocities (n_ev events)
+    V : (N, 2) the velocities just before event e0 (updated in place to those after the last)
+    ev_* : the event record of ``run`` (see ``jacobian_from_events``)
     """
-    n = x0.shape[0]
-    P = 2 * cue.shape[0]
-    dQ = np.zeros((n, 2, P))
-    dV = np.zeros((n, 2, P))
-    V = v0.copy()
-    for k in range(cue.shape[0]):
-        dV[cue[k], 0, 2 * k] = 1.0
-        dV[cue[k], 1, 2 * k + 1] = 1.0
+    P = dQ.shape[2]
     dDQ = np.empty((2, P))
     dDV = np.empty((2, P))
     dn = np.empty((2, P))
-    for e in range(n_ev):
+    for e in range(e0, n_ev):
         i = ev_i[e]
         j = ev_j[e]
         tau = ev_t[e]
@@ -107,24 +106,96 @@ def jacobian_from_events(x0, v0, mass, t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_
         V[i, 1] = ev_state[e, 3]
         V[j, 0] = ev_state[e, 6]
         V[j, 1] = ev_state[e, 7]
+
+
+@njit(cache=True, error_model="numpy")
+def jacobian_from_events(x0, v0, mass, t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_state, J):
+    """Fill J (2N, 2C) with d final[i, c] / d v0[cue[k], d] (row 2i + c, column 2k + d).
+
+    cue : (C,) int64 indices of the cueable disks (the parameters)
+    ev_* : the event record of ``run`` for these velocities (n_ev events)
+    """
+    n = x0.shape[0]
+    P = 2 * cue.shape[0]
+    dQ = np.zeros((n, 2, P))
+    dV = np.zeros((n, 2, P))
+    V = v0.copy()
+    for k in range(cue.shape[0]):
+        dV[cue[k], 0, 2 * k] = 1.0
+        dV[cue[k], 1, 2 * k + 1] = 1.0
+    carry_tangents(mass, 0, n_ev, ev_t, ev_i, ev_j, ev_state, V, dQ, dV)
     for i in range(n):
         for c in range(2):
             for q in range(P):
                 J[2 * i + c, q] = dQ[i, c, q] + dV[i, c, q] * t_final
 
 
-def final_jacobian(problem: Problem, velocities, *, max_events: int = 100_000):
-    """(final positions (N, 2), J (2N, 2C)) for the cueable velocity components.
+@njit(cache=True, error_model="numpy")
+def velocities_before(v0, e_stop, ev_i, ev_j, ev_state, V):
+    """Fill V (N, 2) with the velocities just before event ``e_stop`` (after events 0 .. e_stop - 1).
 
-    Row 2i + c is final coordinate c of disk i; column 2k + d is component d of
-    the k-th cueable disk's initial velocity. Exact for the collision sequence
-    these velocities produce (one-sided at a change of sequence).
+    Replays the event record as ``carry_tangents`` does (a wall flips one component; a
+    disk-disk event takes the recorded post-event velocities unless the pair was not
+    approaching), so the two agree bit for bit.
+    """
+    for i in range(v0.shape[0]):
+        V[i, 0] = v0[i, 0]
+        V[i, 1] = v0[i, 1]
+    for e in range(e_stop):
+        i = ev_i[e]
+        j = ev_j[e]
+        if j < 0:
+            c = 0 if (-1 - j) <= 1 else 1
+            V[i, c] = -V[i, c]
+            continue
+        nx = ev_state[e, 4] - ev_state[e, 0]
+        ny = ev_state[e, 5] - ev_state[e, 1]
+        if nx * (V[j, 0] - V[i, 0]) + ny * (V[j, 1] - V[i, 1]) >= 0.0:
+            continue
+        V[i, 0] = ev_state[e, 2]
+        V[i, 1] = ev_state[e, 3]
+        V[j, 0] = ev_state[e, 6]
+        V[j, 1] = ev_state[e, 7]
+
+
+@njit(cache=True, error_model="numpy")
+def transition_from_events(v0, mass, t_final, e0, t0, n_ev, ev_t, ev_i, ev_j, ev_state, Phi):
+    """Fill Phi (2N, 4N): d final positions / d (positions, velocities) at time t0.
+
+    The perturbation is applied at t0, after events 0 .. e0 - 1 and before event e0
+    (t0 between their times); column 2i + c perturbs disk i's position component c,
+    column 2N + 2i + c its velocity component c. In intercept form a perturbation
+    (dp, dv) at t0 is dQ = dp - t0 dv, dV = dv.
+    """
+    n = v0.shape[0]
+    P = 4 * n
+    dQ = np.zeros((n, 2, P))
+    dV = np.zeros((n, 2, P))
+    for i in range(n):
+        for c in range(2):
+            dQ[i, c, 2 * i + c] = 1.0
+            dQ[i, c, 2 * n + 2 * i + c] = -t0
+            dV[i, c, 2 * n + 2 * i + c] = 1.0
+    V = np.empty((n, 2))
+    velocities_before(v0, e0, ev_i, ev_j, ev_state, V)
+    carry_tangents(mass, e0, n_ev, ev_t, ev_i, ev_j, ev_state, V, dQ, dV)
+    for i in range(n):
+        for c in range(2):
+            for q in range(P):
+                Phi[2 * i + c, q] = dQ[i, c, q] + dV[i, c, q] * t_final
+
+
+def event_record(problem: Problem, velocities, *, max_events: int = 100_000):
+    """Simulate and keep every event: (final (N, 2), n_ev, ev_t, ev_i, ev_j, ev_state).
+
+    The arrays are ``run``'s record (ev_j = -1 - wall for a wall event; ev_state the
+    state of the participants after the event), trimmed to n_ev events.
+    RuntimeError if the motion needs more than ``max_events`` events.
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
     x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
     radius = np.ascontiguousarray(problem.radius, dtype=np.float64)
     mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
-    cue = np.flatnonzero(problem.cueable).astype(np.int64)
     n = problem.n
     cap = 4096
     while True:
@@ -138,9 +209,43 @@ def final_jacobian(problem: Problem, velocities, *, max_events: int = 100_000):
                              float(problem.t_final), alloc_work(n), final, fvel, max_events, ev_t, ev_i, ev_j, ev_s)
         if st == STATUS_OK:
             break
-        if n_ev < cap:  # truncated by max_events, not by the buffer
-            raise RuntimeError("the motion needs more events than max_events; no Jacobian")
+        if n_ev < cap:  # truncated by max_events (or stalled), not by the buffer
+            raise RuntimeError("the motion needs more events than max_events (or jams); no Jacobian")
         cap *= 4
-    J = np.empty((2 * n, 2 * cue.size))
+    return final, n_ev, ev_t[:n_ev].copy(), ev_i[:n_ev].copy(), ev_j[:n_ev].copy(), ev_s[:n_ev].copy()
+
+
+def final_jacobian(problem: Problem, velocities, *, max_events: int = 100_000):
+    """(final positions (N, 2), J (2N, 2C)) for the cueable velocity components.
+
+    Row 2i + c is final coordinate c of disk i; column 2k + d is component d of
+    the k-th cueable disk's initial velocity. Exact for the collision sequence
+    these velocities produce (one-sided at a change of sequence).
+    """
+    v0 = np.ascontiguousarray(velocities, dtype=np.float64)
+    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
+    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    cue = np.flatnonzero(problem.cueable).astype(np.int64)
+    final, n_ev, ev_t, ev_i, ev_j, ev_s = event_record(problem, v0, max_events=max_events)
+    J = np.empty((2 * problem.n, 2 * cue.size))
     jacobian_from_events(x0, v0, mass, float(problem.t_final), cue, n_ev, ev_t, ev_i, ev_j, ev_s, J)
     return final, J
+
+
+def transition_jacobian(problem: Problem, velocities, t: float, *, max_events: int = 100_000):
+    """Phi (2N, 4N) = d final positions / d (positions, velocities) at time t of the exact motion.
+
+    Column 2i + c: disk i's position component c at t; column 2N + 2i + c: its velocity
+    component c. An event at exactly t counts as before the perturbation. Phi at t = 0
+    restricted to the cueable velocity columns is ``final_jacobian``'s J.
+    """
+    t = float(t)
+    if not 0.0 <= t <= float(problem.t_final):
+        raise ValueError(f"t must lie in [0, t_final = {problem.t_final}], got {t}")
+    v0 = np.ascontiguousarray(velocities, dtype=np.float64)
+    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    _, n_ev, ev_t, ev_i, ev_j, ev_s = event_record(problem, v0, max_events=max_events)
+    e0 = int(np.searchsorted(ev_t, t, side="right"))
+    Phi = np.empty((2 * problem.n, 4 * problem.n))
+    transition_from_events(v0, mass, float(problem.t_final), e0, t, n_ev, ev_t, ev_i, ev_j, ev_s, Phi)
+    return Phi

@@ -56,11 +56,12 @@ def sim_kernels() -> tuple:
 
 
 def other_kernels() -> tuple:
-    """The dispatchers of the polish and the Jacobian."""
-    from .jacobian import jacobian_from_events
+    """The dispatchers of the polish, the Jacobian and the sensitivity report."""
+    from .jacobian import jacobian_from_events, transition_from_events
     from .polish import polish_kernel
+    from .sensitivity import late_impact_errors
 
-    return (jacobian_from_events, polish_kernel)
+    return (jacobian_from_events, transition_from_events, polish_kernel, late_impact_errors)
 
 
 def announce(kernels, *, stream=None, what: str = "numba kernels") -> bool:
@@ -92,6 +93,9 @@ def warm_all(log=None) -> float:
     evaluate(p, np.stack([V, V]))
     log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
     final_jacobian(p, V)
+    from .sensitivity import analyze
+
+    analyze(p, V, timestep=0.00025)  # validate's sensitivity report
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst")
     log(f"nbst search ready ({time.perf_counter() - t0:.0f} s)")
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="A")

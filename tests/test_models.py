@@ -60,9 +60,9 @@ def test_contact_stiffness_follows_the_timestep(h):
     assert m.opt.timestep == h and m.opt.integrator == mujoco.mjtIntegrator.mjINT_EULER
 
 
-@pytest.mark.parametrize("name", ['x"/><geom name="evil', "</mujoco><!--", "a--b & <c> 'é' \n\t", ""])
+@pytest.mark.parametrize("name", ['x"/><geom name="evil', "</mujoco><!--", "a--b & <c> 'é' ]]>", ""])
 def test_hostile_problem_name_cannot_break_xml(name):
-    p = make_problem([[100, 100]], 10.0, name=name or "x")
+    p = make_problem([[100, 100]], 10.0, name=name or "x")  # control characters: refused when read
     xml = scene_xml(p, [[1.0, 2.0]])
     m = mujoco.MjModel.from_xml_string(xml)
     assert m.ngeom == 1 + 4 + 2  # floor, 4 walls, one disk's sphere and puck: nothing injected
@@ -147,3 +147,137 @@ def test_gallery_scenes_load_and_match_their_solutions():
         sol = load_solution(f / "solution.json", p)
         assert np.allclose(m.key_qvel[0].reshape(-1, 2), sol.velocities * 1e-3, rtol=1e-5, atol=1e-9)
         assert (f / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# --------------------------------------------------------------------------- one visual language
+
+def test_mjcf_disks_wear_the_palette_class_colours():
+    """Disk geoms in nbst.palette's class colours (the video's amber and blue); targets
+    neutral: their colour is no class colour."""
+    from nbst import load_problem, palette
+    from nbst.models.scene import build_model
+    p = load_problem("over5")
+    m = build_model(p)
+    for i in range(p.n):
+        want = palette.class_color(p.cueable[i])
+        puck = m.geom_rgba[m.geom(f"disk{i}_puck").id]
+        assert np.allclose(puck, (*want, 1.0), atol=1e-6), i
+        assert np.allclose(m.geom_rgba[m.geom(f"disk{i}_collision").id][:3], want, atol=1e-6)
+        for site in (f"target{i}", f"target{i}_dot"):
+            rgb = m.site_rgba[m.site(site).id][:3]
+            assert not any(np.allclose(rgb, c, atol=0.1) for c in (palette.CUEABLE, palette.NONCUEABLE))
+
+
+def test_gallery_scenes_and_previews_show_the_palette_colours():
+    """The committed gallery matches the palette: scene.xml's pucks carry the class colours,
+    and preview.png shows each puck's top face in its class colour (the preview is lit so
+    that a face lit straight from above shows its rgba). Pixel positions come from the top
+    camera's pinhole projection (fovy 50 deg, straight down), not from the renderer."""
+    from PIL import Image
+
+    from nbst import load_problem, palette
+    from nbst.models.gallery import GALLERY_DIR
+    from nbst.models.scene import DEFAULT_UNIT, PUCK_HALF_HEIGHT_RADII
+    if not (GALLERY_DIR / "over5").is_dir():
+        pytest.skip("no models/scenes here (an installed wheel without the gallery)")
+    for name in ("over5", "diamond-s14"):
+        p = load_problem(name)
+        m = mujoco.MjModel.from_xml_path(str(GALLERY_DIR / name / "scene.xml"))
+        for i in range(p.n):
+            assert np.allclose(m.geom_rgba[m.geom(f"disk{i}_puck").id][:3], palette.class_color(p.cueable[i]),
+                               atol=1e-5)  # the XML keeps 6 significant digits
+        img = np.asarray(Image.open(GALLERY_DIR / name / "preview.png").convert("RGB")).astype(int)
+        S = img.shape[0]
+        u = DEFAULT_UNIT
+        W, H = p.box[0] * u, p.box[1] * u
+        cam_z = 1.2 * max(W, H)
+        f = 0.5 * S / np.tan(np.radians(25.0))
+        for i in range(p.n):
+            top = p.radius[i] * u * (1 + PUCK_HALF_HEIGHT_RADII)
+            x, y = p.start[i] * u
+            col = S / 2 + f * (x - W / 2) / (cam_z - top)
+            row = S / 2 - f * (y - H / 2) / (cam_z - top)
+            px = img[int(row), int(col)]
+            # 8 levels: MuJoCo's rasterizer and the PNG round-trip; the old palette was > 100 away
+            assert np.abs(px - np.array(palette.rgb8(palette.class_color(p.cueable[i])))).max() <= 8, \
+                (name, i, px)
+
+
+@pytest.fixture(scope="module")
+def validation():
+    """A MuJoCo validation with both classes and both kinds of event (nbst.planted seed 4:
+    3 noncueable disks, each struck by a cueable one)."""
+    from nbst.models.validate import validate
+    from nbst.planted import planted
+    p, v = planted(5, noncue=3, radius=10.0, seed=4)
+    val = validate(p, v)
+    assert val.exact.n_disk_disk >= 3 and p.cueable.any() and (~p.cueable).any()
+    return val
+
+
+def _drawn(fig):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    FigureCanvasAgg(fig).draw()
+    return fig.canvas.get_renderer()
+
+
+@pytest.mark.parametrize("which", ["overlay_figure", "error_figure", "timeline_figure"])
+def test_report_legends_never_cover_data(validation, which):
+    """Each report figure has a legend, outside its axes and inside the figure."""
+    from nbst.models import report
+    fig = getattr(report, which)(validation)
+    r = _drawn(fig)
+    assert len(fig.legends) == 1
+    lb = fig.legends[0].get_window_extent(r)
+    for ax in fig.axes:
+        assert not lb.overlaps(ax.get_window_extent(r))
+    assert fig.bbox.x0 - 1 <= lb.x0 and lb.x1 <= fig.bbox.x1 + 1 and fig.bbox.y0 - 1 <= lb.y0
+
+
+def test_report_overlay_speaks_the_palette(validation):
+    """The overlay's start disks are filled with the palette's class colours and numbered;
+    each target carries its disk's number; exact and MuJoCo paths are both in the legend."""
+    from matplotlib.patches import Circle
+    from matplotlib.text import Annotation
+
+    from nbst import palette
+    from nbst.models.report import overlay_figure
+    val = validation
+    p = val.problem
+    fig = overlay_figure(val)
+    ax = fig.axes[0]
+    for i in range(p.n):
+        disk = [c for c in ax.patches if isinstance(c, Circle) and c.get_fill()
+                and np.allclose(c.center, p.start[i]) and abs(c.get_radius() - p.radius[i]) < 1e-9]
+        assert len(disk) == 1 and np.allclose(disk[0].get_facecolor()[:3], palette.class_color(p.cueable[i]),
+                                              atol=0.5 / 255), i
+        texts = {(t.get_text(), tuple(np.round(t.xy if isinstance(t, Annotation) else t.get_position(), 6)))
+                 for t in ax.texts}
+        assert (str(i), tuple(np.round(p.start[i], 6))) in texts and (str(i), tuple(np.round(p.target[i], 6))) in texts
+    words = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "MuJoCo path" in words and any(w.startswith("exact path") for w in words)
+    assert palette.LEGEND_TARGET in words
+
+
+def test_report_error_curves_are_numbered_outside_the_axes(validation):
+    """One curve per disk in a shade of its class colour; each disk's number just right of
+    the axes, none overlapping another."""
+    from matplotlib.colors import to_rgb
+
+    from nbst import palette
+    from nbst.models.report import error_figure
+    val = validation
+    p = val.problem
+    fig = error_figure(val)
+    ax = fig.axes[0]
+    curves = [ln for ln in ax.get_lines() if ln.get_label().startswith("_disk")]
+    assert [to_rgb(ln.get_color()) for ln in curves] == [pytest.approx(c, abs=0.5 / 255)
+                                                        for c in palette.disk_shades(p.cueable)]
+    r = _drawn(fig)
+    axb = ax.get_window_extent(r)
+    nums = [t for t in ax.texts if t.get_text().isdigit()]
+    assert sorted(int(t.get_text()) for t in nums) == list(range(p.n))
+    from matplotlib.text import Text
+    boxes = [Text.get_window_extent(t, r) for t in nums]  # the words, without their leader lines
+    assert all(b.x0 >= axb.x1 for b in boxes)
+    assert not any(a.overlaps(b) for k, a in enumerate(boxes) for b in boxes[k + 1:])

@@ -114,9 +114,15 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
 #: report.json's layout (golden): the keys at each level. A change here is a format change:
 #: bump SCHEMA_VERSION in nbst/models/validate.py and say so in docs/mujoco.md.
 REPORT_KEYS = {
-    "": ["divergence", "energy", "events", "exact", "final_error", "mujoco", "mujoco_result", "n", "problem",
-         "schema_version", "signatures_agree", "t_final", "tolerance", "velocities"],
+    "": ["convergence", "convergence_order", "divergence", "energy", "events", "exact", "final_error", "mujoco",
+         "mujoco_result", "n", "prediction_check", "problem", "schema_version", "sensitivity", "signatures_agree",
+         "stepping", "t_final", "tolerance", "velocities"],
     "mujoco": ["steps", "timestep", "unit_m", "version", "wall_time_s"],
+    "stepping": ["cost", "mode", "stepping_wall_time_s", "steps", "timestep"],
+    "prediction_check": ["fixed_run", "keeps_signature_measured", "keeps_signature_predicted",
+                         "keeps_signature_predicted_rss", "measured_error_max", "measured_over_linear",
+                         "predicted_error_linear_max", "predicted_error_max", "timestep", "verdict",
+                         "within_first_order", "within_worst_case"],
     "final_error": ["exact_final", "max", "mujoco_final", "per_disk"],
     "exact": ["cost", "disk_disk", "order", "signature", "truncated", "wall"],
     "mujoco_result": ["cost", "disk_disk", "order", "signature", "wall"],
@@ -131,8 +137,28 @@ def test_report_json_layout_is_golden():
     from nbst.models.validate import SCHEMA_VERSION
     p = load_problem("over5")
     d = validate(p, p.straight_velocities(), timestep=1e-3).to_dict()
-    assert d["schema_version"] == SCHEMA_VERSION == 1
+    assert d["schema_version"] == SCHEMA_VERSION == 2
     for level, keys in REPORT_KEYS.items():
         node = d if not level else d[level]
         assert sorted(node) == keys, level
+    assert d["convergence"] is None and d["convergence_order"] is None  # only with convergence=True
+    assert d["stepping"]["cost"] is None  # fixed stepping has no search cost
     json.dumps(d, allow_nan=False)  # plain JSON
+
+
+def test_sensitivity_and_prediction_check_in_every_report():
+    # diamond-s14-like wall-only motion: the fixed-step prediction is MuJoCo's own error to 1e-8
+    # (nbst.sensitivity's docstring), so the check must say "right" and measured/linear ~ 1
+    p = make_problem([[100, 100], [600, 500]], 10.0, t_final=5.0)
+    v = np.array([[300.0, 157.0], [-193.0, -131.0]])
+    val = validate(p, v)
+    pc = val.to_dict()["prediction_check"]
+    assert pc["fixed_run"] == "this run" and pc["verdict"] == "right"
+    assert abs(pc["measured_over_linear"] - 1) < 1e-6
+    assert val.to_dict()["sensitivity"]["prediction"]["timestep"] == val.timestep
+    assert "predicted" in val.summary()
+    # aligned: the check uses an extra fixed-step run at the same h, with the same numbers
+    al = validate(p, v, stepping="aligned").to_dict()
+    assert al["prediction_check"]["fixed_run"] == "extra fixed-step run"
+    assert abs(al["prediction_check"]["measured_error_max"] - pc["measured_error_max"]) < 1e-9
+    assert al["final_error"]["max"] < 1e-6 and al["events"]["matched"] == 5
