@@ -1,0 +1,268 @@
+"""Independent searches on every core ("islands"), stopped together, reproducible for a given K.
+
+``nbst solve --jobs K`` runs K copies of one search (``nbst.search.solve`` or a baseline
+through ``nbst.baselines.solve_with``), each from its own seed and with 1/K of the trial
+budget: island 0 in this process, the others in K - 1 worker processes started after
+island 0's first chunk of trials (if that did not already reach the target). They run
+in lockstep: after every chunk of trials each island reports its best cost to the
+parent and waits for a go-ahead. The parent stops
+all of them at the first round in which any island has reached the target cost (or
+when every island has ended by budget or patience), then takes the best island's
+solution. Because every decision is taken at a round boundary, from states that depend
+only on each island's seed, the result is the same for the same (seed, K), however the
+operating system schedules the processes.
+
+Seeds: island k gets ``island_seeds(seed, K)[k]`` (numpy's ``SeedSequence(seed).spawn``);
+with K = 1 there is no worker and the search is exactly ``solve(seed=seed)``.
+
+Trial accounting: ``meta["trials"]`` of the result is the sum over islands (every
+simulation counted), ``meta["islands"]`` lists each island's seed, trials, cost and
+why it stopped.
+"""
+from __future__ import annotations
+
+import math
+import multiprocessing as mp
+import os
+import time
+from typing import Callable
+
+import numpy as np
+
+#: Seconds the parent waits for an island's report before it declares the island lost.
+ISLAND_TIMEOUT = 600.0
+
+
+def island_seeds(seed: int, jobs: int) -> list[int]:
+    """K independent seeds derived from ``seed`` (non-negative int64s)."""
+    if jobs == 1:
+        return [int(seed)]
+    return [int(s.generate_state(1, np.uint64)[0] & np.uint64(2**63 - 1))
+            for s in np.random.SeedSequence(int(seed)).spawn(int(jobs))]
+
+
+def default_jobs() -> int:
+    """Every core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _island(k: int, algorithm: str, problem, kw: dict, conn) -> None:
+    """Worker: run one search; report after every chunk and wait for the parent's word."""
+    import signal
+
+    from .baselines import solve_with
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides; Ctrl-C reaches it alone
+
+    def callback(p) -> bool:
+        conn.send(("progress", k, p.trials, p.best_cost, p.best_order))
+        return conn.recv() == "stop"
+
+    try:
+        sol = solve_with(algorithm, problem, callback=callback, **kw)
+        conn.send(("done", k, sol.velocities, sol.meta))
+    except BaseException as e:  # noqa: BLE001 - reported to the parent, which raises it
+        try:
+            conn.send(("error", k, f"{type(e).__name__}: {e}", None))
+        except OSError:
+            pass
+    finally:
+        conn.close()
+        os._exit(0)  # nothing to tear down: skip the interpreter's exit work (tens of ms)
+
+
+class _Rounds:
+    """The parent's side of the lockstep: one round = one report from every live island."""
+
+    def __init__(self, jobs: int, conns: dict, target: float, callback, t0: float):
+        self.jobs, self.conns, self.target, self.callback, self.t0 = jobs, conns, target, callback, t0
+        self.trials = [0] * jobs
+        self.best = [math.inf] * jobs
+        self.order = [0] * jobs
+        self.results: dict[int, tuple] = {}
+        self.live: set[int] = set()  # worker islands still running
+        self.stop_reason: str | None = None
+        self.pending: list[int] = []
+
+    def first(self, local) -> bool:
+        """Island 0's first round, before any worker starts; True = stop (target reached, or
+        the callback said so)."""
+        from .search import SearchProgress
+
+        self.trials[0], self.best[0], self.order[0] = local
+        stop = self.best[0] <= self.target
+        if self.callback is not None:
+            prog = SearchProgress(trials=int(self.trials[0]), best_cost=float(self.best[0]),
+                                  best_order=int(self.order[0]), elapsed=time.perf_counter() - self.t0,
+                                  population=0, phase="1 island")
+            if self.callback(prog):
+                stop, self.stop_reason = True, "callback"
+        return stop
+
+    def barrier(self, local=None) -> bool:
+        """Collect this round's reports (``local``: island 0's own (trials, cost, order) when the
+        parent runs it), decide, answer the workers; True = stop."""
+        from .search import SearchProgress
+
+        if local is not None:
+            self.trials[0], self.best[0], self.order[0] = local
+        self.answer_pending()
+        waiting = self.pending  # workers that reported this round and wait for the word
+        for k in sorted(self.live):
+            if not self.conns[k].poll(ISLAND_TIMEOUT):
+                raise RuntimeError(f"island {k} stopped answering")
+            msg = self.conns[k].recv()
+            if msg[0] == "progress":
+                _, _, self.trials[k], self.best[k], self.order[k] = msg
+                waiting.append(k)
+            elif msg[0] == "done":
+                self.results[k] = (msg[2], msg[3])
+                self.trials[k] = int(msg[3]["trials"])
+                self.live.discard(k)
+            else:
+                raise RuntimeError(f"island {k} failed: {msg[2]}")
+        stop = min(self.best) <= self.target or self.stop_reason is not None
+        if self.callback is not None and (waiting or local is not None):
+            i = int(np.argmin(self.best))
+            prog = SearchProgress(trials=int(sum(self.trials)), best_cost=float(self.best[i]),
+                                  best_order=int(self.order[i]), elapsed=time.perf_counter() - self.t0,
+                                  population=0, phase=f"{len(self.live) + (local is not None)} islands")
+            if self.callback(prog):
+                stop, self.stop_reason = True, self.stop_reason or "callback"
+        if stop and self.stop_reason is None:
+            self.stop_reason = "target"
+        self.answer_pending()
+        return stop
+
+    def answer_pending(self) -> None:
+        """Give the waiting workers the word (also those a Ctrl-C left unanswered)."""
+        say = "go" if self.stop_reason is None else "stop"
+        while self.pending:
+            k = self.pending.pop()
+            try:
+                self.conns[k].send(say)
+            except (BrokenPipeError, OSError):
+                self.live.discard(k)
+
+
+def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str = "signature",
+                  max_trials: int = 1_000_000, patience: int = 100_000, target_cost: float | None = None,
+                  callback: Callable | None = None, **kw):
+    """Run ``jobs`` islands of ``algorithm`` on ``problem`` and return the best Solution.
+
+    Island 0 runs in this process; islands 1..K-1 run in forked workers that start after
+    island 0's first round (chunk) if that round has not reached the target, and then keep
+    in lockstep one round behind it (a fixed pairing, so the result stays deterministic). Keywords as
+    :func:`nbst.baselines.solve_with` (``variant``, ``robust``, ...). ``max_trials`` is the
+    total budget (each island gets ceil(max_trials / jobs)); ``patience`` applies per island.
+    ``callback(progress)`` sees the islands' sum of trials and the best island's cost and
+    order after every round; a truthy return stops all of them (``stopped == "callback"``).
+    Ctrl-C stops all islands and returns the best so far (``stopped == "interrupted"``).
+    """
+    from .baselines import solve_with
+    from .solution import make_solution
+
+    jobs = int(jobs)
+    if jobs < 1:
+        raise ValueError(f"jobs must be >= 1, got {jobs}")
+    if seed is None:
+        seed = int(np.random.default_rng().integers(2**63))
+    if jobs == 1:
+        return solve_with(algorithm, problem, seed=seed, max_trials=max_trials, patience=patience,
+                          target_cost=target_cost, callback=callback, **kw)
+    seeds = island_seeds(seed, jobs)
+    budget = max(1, math.ceil(int(max_trials) / jobs))
+    target = -math.inf if target_cost is None else float(target_cost)
+    ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+    island_kw = [dict(kw, seed=seeds[k], max_trials=budget, patience=patience, target_cost=target_cost)
+                 for k in range(jobs)]
+    conns, procs = {}, []
+
+    def start_workers() -> None:
+        for k in range(1, jobs):
+            parent, child = ctx.Pipe()
+            p = ctx.Process(target=_island, daemon=True, args=(k, algorithm, problem, island_kw[k], child))
+            p.start()
+            child.close()
+            conns[k] = parent
+            rounds.live.add(k)
+            procs.append(p)
+
+    rounds = _Rounds(jobs, conns, target, callback, time.perf_counter())
+    interrupted = False
+    try:
+        def local(p) -> bool:
+            if not procs:  # island 0's first round runs alone: most easy problems end there
+                if rounds.first((p.trials, p.best_cost, p.best_order)):
+                    return True
+                start_workers()
+                return False
+            return rounds.barrier((p.trials, p.best_cost, p.best_order))
+
+        sol0 = solve_with(algorithm, problem, callback=local, **island_kw[0])
+        rounds.results[0] = (sol0.velocities, sol0.meta)
+        interrupted = sol0.meta.get("stopped") == "interrupted"
+        if interrupted:
+            rounds.stop_reason = "interrupted"
+        while rounds.live:
+            rounds.barrier()
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        if interrupted or rounds.live:
+            rounds.stop_reason = "interrupted" if interrupted else (rounds.stop_reason or "error")
+            rounds.answer_pending()
+            _drain(conns, rounds.live, rounds.results, say="stop")
+        for p in procs:
+            p.join(timeout=5)
+            if p.is_alive():
+                p.kill()
+    results = rounds.results
+    if not results:
+        raise KeyboardInterrupt  # interrupted before any island had a result: nothing to write
+    # the best island: lowest cost, ties to the lowest index (deterministic)
+    k = min(results, key=lambda i: (results[i][1]["cost"], i))
+    v, meta = results[k]
+    meta = dict(meta)
+    meta["islands"] = [{"island": i, "seed": seeds[i], "trials": int(results[i][1]["trials"]),
+                        "cost": results[i][1]["cost"], "stopped": results[i][1]["stopped"]}
+                       if i in results else {"island": i, "seed": seeds[i], "trials": rounds.trials[i],
+                                             "cost": None, "stopped": "lost"} for i in range(jobs)]
+    meta["jobs"] = jobs
+    meta["island"] = k
+    meta["seed"] = int(seed)
+    meta["island_seed"] = seeds[k]
+    meta["trials"] = int(sum(e["trials"] for e in meta["islands"]))
+    meta["wall_time"] = time.perf_counter() - rounds.t0
+    if interrupted:
+        meta["stopped"] = "interrupted"
+    elif rounds.stop_reason in ("callback", "error"):
+        meta["stopped"] = rounds.stop_reason
+    elif meta["stopped"] == "callback":  # stopped because another island reached the target
+        meta["stopped"] = "target_cost"
+    return make_solution(problem, v, **meta)
+
+
+def _drain(conns, live, results, *, say: str) -> None:
+    """Tell the live islands to stop and collect what they return (best so far)."""
+    deadline = time.monotonic() + 30
+    pending = set(live)
+    while pending and time.monotonic() < deadline:
+        for k in sorted(pending):
+            try:
+                if not conns[k].poll(0.05):
+                    continue
+                msg = conns[k].recv()
+            except (EOFError, OSError):
+                pending.discard(k)
+                continue
+            if msg[0] == "progress":
+                conns[k].send(say)
+            elif msg[0] == "done":
+                results[k] = (msg[2], msg[3])
+                pending.discard(k)
+            else:
+                pending.discard(k)
