@@ -33,6 +33,16 @@ STEPPINGS = ("fixed", "aligned")
 MAX_STEPS = 1_000_000
 
 
+def _scene_at_start(problem: Problem, velocities: np.ndarray, timestep: float, unit: float):
+    """(model, data) of the problem's scene with the solution, data at keyframe ``initial``."""
+    import mujoco
+
+    model = build_model(problem, velocities, timestep=timestep, unit=unit)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    return model, data
+
+
 def steps_needed(t_end: float, timestep: float) -> int:
     """MuJoCo steps to reach ``t_end`` (s) with ``timestep`` (s)."""
     x = t_end / timestep - 1e-9
@@ -140,9 +150,7 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
     import mujoco
 
     v = np.asarray(velocities, dtype=float)
-    model = build_model(problem, v, timestep=timestep, unit=unit)
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, 0)
+    model, data = _scene_at_start(problem, v, timestep, unit)
     n = problem.n
     owner = _owners(model, n)
     if stepping == "aligned":
@@ -233,9 +241,7 @@ def run_final(problem: Problem, velocities, *, timestep: float, unit: float = DE
     t_end = float(problem.t_final if t_end is None else t_end)
     steps = check_steps(t_end, timestep, max_steps)
     v = np.asarray(velocities, dtype=float)
-    model = build_model(problem, v, timestep=timestep, unit=unit)
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, 0)
+    model, data = _scene_at_start(problem, v, timestep, unit)
     start = np.asarray(problem.start, dtype=float)
     t0 = _time.perf_counter()
     if steps > 1:

@@ -15,7 +15,8 @@ from .cli_solve import int_at_least, nonnegative_cost
 from .problem import display_name
 
 ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst (nbst's default search; "
-              "'signature' means the same), cma, de, ga, random (baselines)")
+              "'signature' means the same), nbst-noplan (nbst without the backward planner), "
+              "cma, de, ga, random (baselines)")
 
 
 def _common(p, *, runs: int, trials: int, entries: str) -> None:
@@ -56,7 +57,7 @@ def register(sub) -> None:
                                  "default search and each baseline (the paper's Figures 7 and 8: five runs of "
                                  "400,000 trials). Writes OUT/ablation-PROBLEM.{csv,md,png,svg}.")
     a.add_argument("problem", help="built-in name or path to a problem JSON file")
-    _common(a, runs=5, trials=400_000, entries=",".join(("A", "B", "C", "D", "E", "F", "G", "H", "nbst", "cma",
+    _common(a, runs=5, trials=400_000, entries=",".join(("A", "B", "C", "D", "E", "F", "G", "H", "nbst", "nbst-noplan", "cma",
                                                          "de", "ga", "random")))
     a.set_defaults(func=cmd_ablation)
     m = s.add_parser("compare", help="success rate and trials to solve over a set of problems",

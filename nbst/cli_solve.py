@@ -6,8 +6,9 @@ import sys
 
 from .warmup import COLD_COMPILE_SECONDS
 
-VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes and a straight start "
-                "(default); A the paper's full algorithm; B uniform parent selection; C no crossover; "
+VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes, a straight start and a "
+                "backward planner for noncueable disks (default); nbst-noplan: the same without the planner; "
+                "A the paper's full algorithm; B uniform parent selection; C no crossover; "
                 "D no genetically "
                 "engineered crossover; E no signature information (R = box width, initial population 60); "
                 "F no culling of subsumed solutions; G no elitism; H no directed randomization")
@@ -38,11 +39,11 @@ def nonnegative_cost(text: str) -> float:
 
 
 def _variant(text: str) -> str:
-    if text.strip().lower() == "nbst":
-        return "nbst"
+    if text.strip().lower() in ("nbst", "nbst-noplan"):
+        return text.strip().lower()
     v = text.strip().upper()
     if v not in tuple("ABCDEFGH"):
-        raise argparse.ArgumentTypeError(f"unknown variant {text!r}; choose one of nbst A B C D E F G H")
+        raise argparse.ArgumentTypeError(f"unknown variant {text!r}; choose one of nbst nbst-noplan A B C D E F G H")
     return v
 
 
@@ -82,24 +83,41 @@ def register(sub) -> None:
     p.add_argument("--target-cost", type=nonnegative_cost, default=None, metavar="C",
                    help="stop as soon as the best cost (sum of squared distances to the targets, units^2) is <= C "
                         "(default: round-off level, N x (1e-9 x box size)^2; 0: only an exact zero stops)")
+    p.add_argument("--robust", action="store_true",
+                   help="search for a solution that also survives a fixed-step engine (MuJoCo, h = 0.25 ms): "
+                        "every candidate is scored by its worst cost over its own run and 8 runs from start "
+                        "positions shifted by ~half a step of travel (MuJoCo's per-impact error), a disk counting "
+                        "as on target only if it is in all of them; the written solution is the most robust of the "
+                        "best ones found "
+                        "(fresh shifts, polished), which may cost more than a plain solve's "
+                        "(signature search only; docs/search.md, \"Robust mode\")")
+    p.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
+                   help="independent searches (islands) on K cores, each from its own seed derived from --seed and "
+                        "with 1/K of the trial budget, run in lockstep and all stopped at the first round in which "
+                        "one reaches the target cost; the best island's solution is written. The same --seed and K "
+                        "give the same solution. Default: every core; 1: a single search in this process")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
     p.set_defaults(func=cmd_solve)
 
 
 def cmd_solve(args) -> int:
     from .problem import load_problem
-    from .solution import save_solution
-
-    from .outputs import prepare_output
+    from .outputs import prepare_output, signals_deferred, sigterm_as_interrupt, write_json_atomic
 
     problem = load_problem(args.problem)
-    prepare_output(args.output)  # before the search: a long solve must not end unable to write
+    # before the search: a long solve must not end unable to write, nor overwrite its input
+    prepare_output(args.output, inputs=(args.problem,))
     algorithm = getattr(args, "algorithm", "signature")
     if algorithm != "signature" and args.variant != "nbst":
         from .problem import ProblemError
 
         raise ProblemError("<arguments>", "--variant", f"applies to --algorithm signature only, not {algorithm}")
-    label = args.variant if algorithm == "signature" else algorithm
+    robust = bool(getattr(args, "robust", False))
+    if robust and algorithm != "signature":
+        from .problem import ProblemError
+
+        raise ProblemError("<arguments>", "--robust", f"applies to --algorithm signature only, not {algorithm}")
+    label = (args.variant if algorithm == "signature" else algorithm) + (", robust" if robust else "")
     from .search import roundoff_cost
 
     target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
@@ -123,26 +141,39 @@ def cmd_solve(args) -> int:
         bar[0].set_postfix_str(f"best cost {p.best_cost:.6g}, {p.best_order}/{problem.n} disks on target",
                                refresh=False)
 
-    from .baselines import solve_with
+    from .islands import default_jobs, solve_islands
 
-    kw = {"variant": args.variant} if algorithm == "signature" else {}
+    jobs = default_jobs() if args.jobs is None else args.jobs
+    kw = {"variant": args.variant, "robust": robust} if algorithm == "signature" else {}
     try:
-        sol = solve_with(algorithm, problem, seed=args.seed, max_trials=args.max_trials, patience=args.patience,
-                         target_cost=target_cost, callback=progress, **kw)
+        with sigterm_as_interrupt():  # kill (SIGTERM) stops like Ctrl-C: the best so far is written
+            sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
+                                max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,
+                                callback=progress, **kw)
     finally:
         if bar:
             bar[0].close()
-    save_solution(args.output, sol)
+    with signals_deferred(reraise=False) as late:  # a second Ctrl-C cannot stop the write
+        write_json_atomic(args.output, sol.to_dict())
     m = sol.meta
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
            "max_trials": "trial budget spent", "patience": f"no improvement in {args.patience} trials",
            "interrupted": "interrupted"}.get(m["stopped"], str(m["stopped"]))
+    island = f" (best of {jobs} islands: island {m['island']})" if "island" in m else ""
     line = (f"cost {m['cost']:.6g}, {m['order']}/{problem.n} disks on target (signature {m['signature']}) "
-            f"after {m['trials']} trials in {m['wall_time']:.1f} s, seed {m['seed']}; stopped: {why}; "
+            f"after {m['trials']} trials in {m['wall_time']:.1f} s, seed {m['seed']}"
+            f"{island}; stopped: {why}; "
             f"wrote {args.output}")
-    if m["stopped"] == "interrupted":
+    if m["stopped"] == "interrupted" or late:
         print(f"nbst solve: interrupted; best so far written: {line}", file=sys.stderr)
         return 130
     if not args.quiet:
         print(f"nbst solve: {line}", file=sys.stderr)
+        r = m.get("robust")
+        if r:
+            sc = r["score"]
+            print(f"nbst solve: robust: {sc['order']}/{problem.n} disks on target in every one of {r['samples']} "
+                  f"shifted runs; on-target disks within {sc['worst_distance']:.4g} units of their targets "
+                  f"({r['quantile']:.0%} quantile, R = {problem.target_radius:g}); chosen from {r['candidates']} "
+                  "candidates", file=sys.stderr)
     return 0

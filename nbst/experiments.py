@@ -28,7 +28,7 @@ from typing import Callable, Iterable
 from .problem import Problem, ProblemError, problem_from_dict
 
 SCHEMA_VERSION = 1
-VARIANT_ENTRIES = ("A", "B", "C", "D", "E", "F", "G", "H", "nbst")
+VARIANT_ENTRIES = ("A", "B", "C", "D", "E", "F", "G", "H", "nbst", "nbst-noplan")  # nbst-noplan: no backward planner
 BASELINE_ENTRIES = ("cma", "de", "ga", "random")
 ENTRIES = VARIANT_ENTRIES + BASELINE_ENTRIES
 #: The ablation's default bars: the paper's Figures 7/8 (A-H) plus nbst's default and each baseline.
@@ -40,9 +40,9 @@ RUNS_DIR = "runs"
 def parse_entry(text: str) -> str:
     """"a" -> "A", "NBST" -> "nbst", "CMA" -> "cma"; ProblemError for an unknown name."""
     t = text.strip()
-    if t.upper() in VARIANT_ENTRIES[:-1]:
+    if t.upper() in tuple("ABCDEFGH"):
         return t.upper()
-    if t.lower() in ("nbst",) + BASELINE_ENTRIES:
+    if t.lower() in ("nbst", "nbst-noplan") + BASELINE_ENTRIES:
         return t.lower()
     raise ProblemError("<arguments>", "--algorithms",
                        f"unknown entry {text!r}; choose from {', '.join(ENTRIES)} (A-H and nbst are variants of the "
@@ -130,7 +130,7 @@ def run_one(spec: RunSpec) -> dict:
 def _load_finished(path: Path, spec: RunSpec) -> dict | None:
     try:
         d = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return None
     if not isinstance(d, dict) or d.get("kind") != "nbst-experiment-run" or d.get("key") != spec.key():
         return None
@@ -148,7 +148,7 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
               results come back to this process, which writes them
     Returns the results in the order of ``specs``.
     """
-    from .solution import write_json_atomic
+    from .outputs import write_json_atomic
 
     out = Path(out_dir)
     results: list[dict | None] = [None] * len(specs)
@@ -169,7 +169,7 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
     def done(i: int, res: dict) -> None:
         if res.get("stopped") == "interrupted":  # Ctrl-C reached the worker: not a finished run
             raise KeyboardInterrupt
-        write_json_atomic(out / specs[i].relpath(), res)
+        write_json_atomic(out / specs[i].relpath(), res, option="--out")
         results[i] = res
         if on_result is not None:
             on_result(specs[i], res)
@@ -193,11 +193,38 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
     return results  # type: ignore[return-value]
 
 
-def _ignore_sigint() -> None:
-    """Pool workers leave Ctrl-C to the parent, which stops them (no traceback per worker)."""
+#: Seconds between a worker's checks that its parent still lives (the portable fallback of
+#: PR_SET_PDEATHSIG): an orphan dies within this long of a parent killed by SIGKILL.
+PARENT_POLL_S = 0.5
+
+
+def _worker_init(parent_pid: int) -> None:
+    """Pool worker setup: leave Ctrl-C to the parent, which stops the workers (no traceback per
+    worker), and die with the parent. On Linux the kernel sends SIGKILL when the parent dies
+    (prctl PR_SET_PDEATHSIG); everywhere a daemon thread exits once ``os.getppid()`` is no
+    longer the parent (re-parented: the parent died, even by SIGKILL)."""
     import signal
+    import threading
+    import time
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            PR_SET_PDEATHSIG = 1
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent_pid:  # the parent died before the line above took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="nbst-parent-watch", daemon=True).start()
 
 
 def _run_pool(specs, todo, workers: int, done) -> None:
@@ -206,7 +233,7 @@ def _run_pool(specs, todo, workers: int, done) -> None:
 
     # spawn: numba's compiled state and fork do not mix; workers load the cached kernels
     ex = ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=mp.get_context("spawn"),
-                             initializer=_ignore_sigint)
+                             initializer=_worker_init, initargs=(os.getpid(),))
     try:
         pending = {ex.submit(run_one, specs[i]): i for i in todo}
         while pending:
@@ -219,6 +246,9 @@ def _run_pool(specs, todo, workers: int, done) -> None:
         ex.shutdown(wait=False, cancel_futures=True)
         for proc in procs:
             proc.terminate()
+        for proc in procs:
+            proc.join(5.0)
+        ex.shutdown(wait=True)  # now quick: lets the pool release its queues (no leaked-semaphore warning)
         raise
     ex.shutdown(wait=True)
 

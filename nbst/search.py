@@ -71,6 +71,8 @@ import numpy as np
 from ._version import __version__
 from .constants import MAX_EVENTS, ROUNDOFF_REL
 from .problem import Problem, ProblemError
+from .robust import ARCHIVE_SIZE as ROBUST_ARCHIVE, POLISH_TOP as ROBUST_POLISH, SAMPLES as ROBUST_SAMPLES, \
+    SEARCH_SAMPLES as ROBUST_K, TIMESTEP as ROBUST_TIMESTEP
 
 VARIANTS = {
     "A": "the full algorithm",
@@ -81,7 +83,9 @@ VARIANTS = {
     "F": "no culling of subsumed solutions (delete the worst on every insertion)",
     "G": "no elitism",
     "H": "no directed randomization",
-    "nbst": "nbst's default: the paper's search plus polish, bank shots, strikes and a straight start",
+    "nbst": "nbst's default: the paper's search plus polish, bank shots, strikes, a straight start and the backward "
+            "planner",
+    "nbst-noplan": "nbst without the backward planner (ablation)",
 }
 
 ALGORITHM = "paper-signature-search"
@@ -123,6 +127,32 @@ class SearchParams:
     straight_start   : initialize's first trial sends every cueable disk straight at its target
     restart          : re-initialize around the best after this many trials without a
                        local improvement (0: never)
+    planner          : run the backward planner (``nbst.planner``) first when some disk is
+                       noncueable; its best candidates are initialize's first trials
+    planner_trials   : the planner's simulations, at most (and at most a quarter of max_trials);
+                       every one counts as a trial
+    planner_chain    : longest strike chain the planner builds (cue -> noncueable -> ...)
+    planner_seeds    : planner candidates handed to the search
+    planner_polish_sims : polish budget of a planner candidate (instead of polish_sims)
+    planner_weight   : weight of the plan operator (the planner's routes; only after a planner run)
+
+    Robust mode (``nbst.robust``; off in every variant, ``nbst solve --robust``): candidates are
+    scored by their worst cost under small shifts of the start positions (signature: the disks
+    acceptable under all of them), and the solution is the most robust of an archive of
+    top-order members, rescored under fresh shifts.
+    robust           : score every candidate under robust_k start shifts and choose the solution
+                       by its robust score instead of its cost
+    robust_k         : start shifts per candidate during the search (0: the search is plain and
+                       only the final choice is robust)
+    robust_signature : "and": a disk counts as acceptable only if it is in every shifted run;
+                       "plain": the unshifted signature (only the cost is the worst-case one)
+    robust_archive   : top-order population members kept for the final choice (0: the choice
+                       is among the search's best alone)
+    robust_samples   : start shifts per candidate in the final choice (fresh draws)
+    robust_timestep  : the engine step h (s) to survive: start shifts of std 0.5 h x the
+                       fastest speed per axis (``nbst.robust.SHIFT_STEPS``)
+    robust_polish    : candidates polished towards their on-target disks' target centres (and
+                       rescored; ``nbst.robust.polish_on_target``)
     """
 
     variant: str = "A"
@@ -154,12 +184,25 @@ class SearchParams:
     adapt_floor: float = 0.03
     straight_start: bool = False
     restart: int = 0
+    planner: bool = False
+    planner_trials: int = 100_000
+    planner_chain: int = 3
+    planner_seeds: int = 16
+    planner_polish_sims: int = 100
+    planner_weight: float = 0.1
+    robust: bool = False
+    robust_k: int = ROBUST_K
+    robust_signature: str = "and"
+    robust_archive: int = ROBUST_ARCHIVE
+    robust_samples: int = ROBUST_SAMPLES
+    robust_timestep: float = ROBUST_TIMESTEP
+    robust_polish: int = ROBUST_POLISH
 
     @property
     def nbst_loop(self) -> bool:
         """Whether any of nbst's additions is on (they run in ``search_nbst``'s loop)."""
-        return (self.polish or self.bank_weight > 0 or self.strike_weight > 0 or self.adapt
-                or self.straight_start or self.restart > 0)
+        return (self.polish or self.bank_weight > 0 or self.strike_weight > 0 or self.adapt or self.planner
+                or self.straight_start or self.restart > 0 or (self.robust and self.robust_k > 0))
 
     def to_dict(self) -> dict:
         d = dataclasses.asdict(self)
@@ -170,7 +213,7 @@ class SearchParams:
 #: Variant "nbst": the paper's A plus every addition of ``nbst.search_nbst`` (see docs/search.md
 #: and the ablation in docs/results.md for what each contributes).
 NBST_DEFAULTS = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_weight=0.3, strike_weight=0.1, polish=True,
-                     straight_start=True)
+                     straight_start=True, planner=True)
 # The adaptive operator schedule (adapt=True) and restarts (restart=20_000) are built and
 # measured but off: the ablation (docs/results.md) showed no gain from either.
 
@@ -179,11 +222,13 @@ def variant_params(variant: str = "nbst", problem: Problem | None = None) -> Sea
     """nbst's search ("nbst"), the paper's variant A (full algorithm) or B-H (one simplification each).
 
     E needs ``problem`` (its signature radius is the box width)."""
-    v = "nbst" if variant.lower() == "nbst" else variant.upper()
+    v = variant.lower() if variant.lower().startswith("nbst") else variant.upper()
     if v not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; choose one of {', '.join(VARIANTS)}")
     if v == "nbst":
         return SearchParams(variant="nbst", **NBST_DEFAULTS)
+    if v == "nbst-noplan":
+        return SearchParams(variant=v, **{**NBST_DEFAULTS, "planner": False})
     base = SearchParams(variant=v)
     third = 1.0 / 3.0
     if v == "B":
@@ -287,12 +332,22 @@ def _check(params: SearchParams, max_trials: int, patience: int) -> None:
         bad("op_weights", "must be 4 non-negative weights (creep, directed, uniform, crossover), not all 0")
     if params.max_bounces < 0 or params.creep_fraction < 0:
         bad("max_bounces", "max_bounces and creep_fraction must be >= 0")
-    if params.bank_weight < 0 or params.strike_weight < 0:
+    if params.bank_weight < 0 or params.strike_weight < 0 or params.planner_weight < 0:
         bad("bank_weight", "bank_weight and strike_weight must be >= 0")
     if params.polish_sims < 2 or params.polish_ratio < 1 or params.bank_bounces < 0 or params.strike_bounces < 0:
         bad("polish_sims", "polish_sims >= 2, polish_ratio >= 1, bank_bounces >= 0 and strike_bounces >= 0 are required")
-    if not 0 < params.adapt_rate <= 1 or not 0 <= params.adapt_floor < 1.0 / 6 or params.restart < 0:
-        bad("adapt_rate", "0 < adapt_rate <= 1, 0 <= adapt_floor < 1/6 and restart >= 0 are required")
+    if params.planner_trials < 0 or not 0 <= params.planner_chain <= 4 or params.planner_seeds < 0 \
+            or params.planner_polish_sims < 2:
+        bad("planner_trials", "planner_trials >= 0, 0 <= planner_chain <= 4, planner_seeds >= 0 and "
+                              "planner_polish_sims >= 2 are required")
+    if params.robust_signature not in ("and", "plain"):
+        bad("robust_signature", f"must be 'and' or 'plain', got {params.robust_signature!r}")
+    if params.robust_archive < 0 or params.robust_samples < 0 or params.robust_k < 0 or params.robust_polish < 0 \
+            or not params.robust_timestep >= 0:
+        bad("robust_archive", "robust_archive >= 0, robust_samples >= 0, robust_k >= 0, robust_polish >= 0 and "
+                              "robust_timestep >= 0 are required")
+    if not 0 < params.adapt_rate <= 1 or not 0 <= params.adapt_floor < 1.0 / 7 or params.restart < 0:
+        bad("adapt_rate", "0 < adapt_rate <= 1, 0 <= adapt_floor < 1/7 and restart >= 0 are required")
 
 
 @dataclass(frozen=True, eq=False)
@@ -318,7 +373,8 @@ def roundoff_cost(problem: Problem) -> float:
 
 def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
           target_cost: float | None = None, variant: str = "nbst", params: SearchParams | None = None,
-          callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048):
+          callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048,
+          robust: bool | None = None):
     """Run the signature search on ``problem``; return the best :class:`~nbst.solution.Solution`.
 
     seed        : int >= 0; None draws one (recorded in ``meta["seed"]``). Same seed, same
@@ -332,19 +388,22 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_
                   stops the search. A KeyboardInterrupt (Ctrl-C, or raised by the callback)
                   stops it too: ``solve`` then returns the best so far with
                   ``meta["stopped"] == "interrupted"``.
-    chunk       : trials per compiled call (progress / Ctrl-C granularity only)
+    chunk       : trials per compiled call (progress / Ctrl-C granularity only; in robust mode
+                  also the archive's cadence, so a robust result is reproducible for one chunk)
+    robust      : True: write the most noise-robust top-order solution found rather than the
+                  cheapest (``nbst.robust``; sets ``params.robust``); None: as ``params`` says
 
     ``meta`` holds cost, signature, order, trials, seed, variant, params, wall_time,
     nbst_version, history ([trial, cost, order] per improvement) and run statistics.
     """
     return run_search(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
-                      variant=variant, params=params, callback=callback, chunk=chunk).solution
+                      variant=variant, params=params, callback=callback, chunk=chunk, robust=robust).solution
 
 
 def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
                target_cost: float | None = None, variant: str = "nbst", params: SearchParams | None = None,
                callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048,
-               record_every: int = 0) -> SearchRun:
+               record_every: int = 0, robust: bool | None = None) -> SearchRun:
     """:func:`solve`, also returning the final population (for benchmarks and analysis) and, with
     ``record_every`` = k > 0, the candidate velocities of trials k, 2k, ... (the loop's exact mix)."""
     from . import search_loop as L
@@ -353,6 +412,8 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
 
     if params is None:
         params = variant_params(variant, problem)
+    if robust is not None:
+        params = dataclasses.replace(params, robust=bool(robust))
     max_trials, patience = int(max_trials), int(patience)
     _check(params, max_trials, patience)
     if seed is None:
@@ -377,7 +438,12 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
                rng=seed_state(seed), hist_t=np.zeros(1024, np.int64), hist_c=np.zeros(1024),
                hist_o=np.zeros(1024, np.int64))
     rec_v = np.zeros((max_trials // record_every if record_every > 0 else 0, n, 2))
-    advance = _nbst_stepper(problem, params, s, pi, pf) if params.nbst_loop else None
+    advance = _nbst_stepper(problem, params, s, pi, pf, seed) if params.nbst_loop else None
+    archive = None
+    if params.robust:
+        from .robust import Archive
+
+        archive = Archive(n, params.robust_archive)  # size 0 keeps nothing: the search's best alone
     if advance is not None and record_every > 0:
         raise ValueError("record_every is supported by the paper's loop only (variants A-H)")
     stopped = None
@@ -397,6 +463,9 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
                 s.hist_c = np.concatenate([s.hist_c, np.zeros(k)])
                 s.hist_o = np.concatenate([s.hist_o, np.zeros(k, np.int64)])
                 continue
+            if archive is not None:
+                size = int(s.pop[5][SIZE])
+                archive.add(s.pop[0][:size], s.pop[1][:size], s.pop[2][:size])
             stopped = reasons.get(rc)
             if callback is not None:
                 prog = SearchProgress(trials=int(s.st[L.ST_TRIALS]), best_cost=float(s.best_cost[0]),
@@ -417,10 +486,15 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
 
     if not math.isfinite(cost):  # nothing accepted yet: report the motionless start
         best_v = np.zeros((n, 2))
+    robust_info = None
+    if archive is not None and math.isfinite(cost):
+        best_v, robust_info = _robust_choice(problem, params, archive, best_v, cost, sig, seed)
     # cost, signature and order as `nbst simulate` sees them (the problem's R, also for variant E)
     search_sig = sig
     _, c, sg = evaluate(problem, best_v[None], max_events=params.max_events)
     cost, sig = float(c[0]), int(sg[0])
+    if robust_info is not None:  # the written velocities are the choice's, not the search's best
+        search_sig = sig
     nh = int(st[L.ST_NHIST])
     trials = int(st[L.ST_TRIALS])
     op_names = advance.op_names if advance is not None else L.OP_NAMES
@@ -456,15 +530,32 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     }
     if advance is not None:
         meta.update(advance.stats())
+    if params.robust:
+        meta["robust"] = robust_info
     size = int(s.pop[5][SIZE])
     return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop[0][:size].copy(),
                      costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy(),
                      recorded=rec_v[:trials // record_every] if record_every > 0 else rec_v)
 
 
-def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf):
+def _robust_choice(problem: Problem, params: SearchParams, archive, best_v, best_cost: float, best_sig: int,
+                   seed: int):
+    """Robust mode's pick: the search's best first, then the archive; see ``nbst.robust``."""
+    from .robust import choose
+
+    V = np.concatenate([best_v[None], archive.V]) if archive.V.shape[0] else best_v[None]
+    v, info = choose(problem, V, seed=seed, samples=params.robust_samples, timestep=params.robust_timestep,
+                     polish_top=params.robust_polish)
+    info["archive_order"] = int(archive.order)
+    info["archive_seen"] = int(archive.seen)
+    info["search_best"] = {"cost": best_cost, "order": _popcount(best_sig)}
+    return v, info
+
+
+def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf, seed: int):
     """A chunk-advancing closure over ``search_nbst.run_chunk_nbst`` and its extra state."""
     from . import search_nbst as S
+    from . import search_loop as L
 
     qi = np.zeros(S.N_QI, np.int64)
     qi[S.QI_POLISH] = int(params.polish)
@@ -474,17 +565,38 @@ def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf):
     qi[S.QI_STRAIGHT_START] = int(params.straight_start)
     qi[S.QI_STRIKE_BOUNCES] = params.strike_bounces
     qi[S.QI_RESTART] = params.restart
+    qi[S.QI_ROBUST] = (1 if params.robust_signature == "and" else 2) if params.robust and params.robust_k > 0 else 0
+    qi[S.QI_SEED_POLISH_SIMS] = params.planner_polish_sims
     qf = np.zeros(S.N_QF)
     qf[S.QF_POLISH_RATIO] = params.polish_ratio
     qf[S.QF_ADAPT_RATE] = params.adapt_rate
     qf[S.QF_ADAPT_FLOOR] = params.adapt_floor
+    from .robust import SEARCH_STREAM, SHIFT_STEPS, draws
+
+    qf[S.QF_ROBUST_SHIFT] = SHIFT_STEPS * params.robust_timestep
+    zeta, smax = draws(problem, np.random.default_rng([seed, SEARCH_STREAM]), params.robust_k if qi[S.QI_ROBUST] else 0)
     qs = np.zeros(S.N_QS, np.int64)
     non_idx = np.flatnonzero(~problem.cueable).astype(np.int64)
-    base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if non_idx.size else 0.0])
-    base = base / base.sum()
-    weights, reward = base.copy(), base.copy()
     s.op_count = np.zeros((S.N_OPS, 2), np.int64)
     s.best_cost = np.array([np.inf, np.inf])  # [overall, since the last restart]
+    seeds = np.zeros((0, problem.n, 2))
+    routes = (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
+    planned = None
+    if params.planner and non_idx.size:
+        from .planner import plan
+
+        planned = plan(problem, budget=min(params.planner_trials, int(pi[L.PI_MAX_TRIALS]) // 4),
+                       max_chain=params.planner_chain, seeds=params.planner_seeds, sig_limit=params.sig_limit,
+                       max_events=params.max_events, target_cost=float(pf[L.PF_TARGET_COST]))
+        seeds = np.ascontiguousarray(planned.velocities)
+        routes = (planned.route_cue, planned.route_v, planned.route_mask)
+        s.st[L.ST_TRIALS] += planned.trials  # every planner simulation is a trial
+        s.st[L.ST_SINCE] += planned.trials
+        qs[S.QS_SIMS] += planned.trials
+    w_plan = params.planner_weight if len(routes[0]) else 0.0
+    base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if non_idx.size else 0.0, w_plan])
+    base = base / base.sum()
+    weights, reward = base.copy(), base.copy()
     args = (np.ascontiguousarray(problem.start, dtype=np.float64), np.ascontiguousarray(problem.target, dtype=np.float64),
             np.ascontiguousarray(problem.radius, dtype=np.float64), np.ascontiguousarray(problem.mass, dtype=np.float64),
             np.flatnonzero(problem.cueable).astype(np.int64), non_idx, float(problem.box[0]), float(problem.box[1]),
@@ -492,12 +604,17 @@ def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf):
 
     def advance(n_steps: int) -> int:
         return S.run_chunk_nbst(*args, s.pop, s.st, qs, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o,
-                                s.op_count, weights, base, reward, n_steps)
+                                s.op_count, weights, base, reward, zeta, smax, seeds, *routes, n_steps)
 
     def stats() -> dict:
         return {"polish": {"runs": int(qs[S.QS_POLISH_RUNS]), "simulations": int(qs[S.QS_POLISH_SIMS]),
                            "improved": int(qs[S.QS_POLISH_GAINS])},
                 "restarts": int(qs[S.QS_RESTARTS]),
+                "simulations": int(qs[S.QS_SIMS]),
+                **({"planner": {"trials": planned.trials, "seeds": int(len(planned.costs)),
+                                "best_cost": float(planned.costs[0]) if len(planned.costs) else None,
+                                **planned.stats}} if planned is not None else {}),
+                **({"robust_simulations": int(qs[S.QS_ROBUST_SIMS])} if qi[S.QI_ROBUST] else {}),
                 "operator_probabilities": {name: float(w) for name, w in zip(S.OP_NAMES, weights)}}
 
     advance.op_names = S.OP_NAMES

@@ -18,6 +18,12 @@ What is added to the paper's algorithm (each can be switched off, for ablation):
   target or a one-bounce image of it and arrives at t_final; half of the time
   (with two or more noncueable disks) through a chain: the cue strikes a first
   noncueable disk, which strikes the second towards its target.
+* **backward planner** (``nbst.planner``, overconstrained problems only, before the loop):
+  strike chains built from the targets backwards in closed form and checked with the
+  simulator; its cheapest full candidates are initialize's first trials (``seeds``; a seed
+  that triggers polish gets ``planner_polish_sims``), and its checked routes feed the
+  **plan** operator: one noncueable disk of the parent (a non-acceptable one half of the
+  time) gets a random route that moves it.
 * **schedule**: operator probabilities adapt during the run: each operator's
   success (its child beats its parent, or raises the order) is an exponential
   moving average with rate ``adapt_rate``; probabilities are proportional to it,
@@ -40,6 +46,7 @@ from numba import njit
 
 from .aim import alloc_clearance, chain_strike_velocity, choose_bank, mirror, strike_velocity
 from .polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
+from .robust import robust_eval
 from .search_loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
                           PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_POP_LIMIT, PI_SENATE,
                           PI_SIG_LIMIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE, ST_SINCE, ST_TRIALS,
@@ -48,19 +55,21 @@ from .search_ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_v
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 
 # operators of the nbst variant
-OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER, OP_BANK, OP_STRIKE = range(6)
-N_OPS = 6
-OP_NAMES = ("creep", "directed", "uniform", "crossover", "bank", "strike")
+OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER, OP_BANK, OP_STRIKE, OP_PLAN = range(7)
+N_OPS = 7
+OP_NAMES = ("creep", "directed", "uniform", "crossover", "bank", "strike", "plan")
 
 # extra parameters (qi: int64, qf: float64)
-QI_POLISH, QI_POLISH_SIMS, QI_BANK_BOUNCES, QI_ADAPT, QI_STRAIGHT_START, QI_STRIKE_BOUNCES, QI_RESTART = range(7)
-N_QI = 7
-QF_POLISH_RATIO, QF_ADAPT_RATE, QF_ADAPT_FLOOR = range(3)
-N_QF = 3
+QI_POLISH, QI_POLISH_SIMS, QI_BANK_BOUNCES, QI_ADAPT, QI_STRAIGHT_START, QI_STRIKE_BOUNCES, QI_RESTART, \
+    QI_ROBUST, QI_SEED_POLISH_SIMS = range(9)
+N_QI = 9
+QF_POLISH_RATIO, QF_ADAPT_RATE, QF_ADAPT_FLOOR, QF_ROBUST_SHIFT = range(4)
+N_QF = 4
 
 # extra state (qs: int64)
-QS_POLISH_RUNS, QS_POLISH_SIMS, QS_POLISH_GAINS, QS_RESTARTS, QS_LOCAL_SIG, QS_LOCAL_SINCE = range(6)
-N_QS = 6
+QS_POLISH_RUNS, QS_POLISH_SIMS, QS_POLISH_GAINS, QS_RESTARTS, QS_LOCAL_SIG, QS_LOCAL_SINCE, QS_ROBUST_SIMS, \
+    QS_SIMS = range(8)
+N_QS = 8
 
 
 @njit(cache=True, error_model="numpy")
@@ -121,12 +130,22 @@ def _pick_disk(idx, sig, rng, prefer_bad):
 @njit(cache=True, error_model="numpy")
 def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, images, pi, pf, qi, qf,
                    pop, st, qs, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, weights, base, reward,
-                   n_steps):
+                   zeta, smax, seeds, route_cue, route_v, route_mask, n_steps):
     """Advance the nbst search by about n_steps trials (a polish may overrun by its
     budget, never past max_trials). Same contract as ``search_loop.run_chunk``,
     plus qi/qf (QI_*, QF_* parameters), qs (QS_* state and statistics), the
-    operator schedule arrays (weights, base, reward; each (N_OPS,)), and
-    best_cost of shape (2,): [best overall, best since the last restart]."""
+    operator schedule arrays (weights, base, reward; each (N_OPS,)),
+    best_cost of shape (2,): [best overall, best since the last restart], and the
+    start shifts zeta (K, N, 2), smax (K,) of ``nbst.robust.draws``: with qi[QI_ROBUST]
+    on, every candidate is scored by ``nbst.robust.robust_eval`` under them (cost = the
+    worst, signature = the AND), polished children rescored. seeds (S, N, 2): initialize's
+    first S candidates (the backward planner's, ``nbst.planner``), then the straight start;
+    a seed is polished with qi[QI_SEED_POLISH_SIMS] simulations when polish's trigger holds.
+    route_cue (R,), route_v (R, 2), route_mask (R,): the planner's routes for the ``plan``
+    operator (one noncueable disk of the parent, not acceptable half of the time, is given a
+    random route that moves it: that route's cue takes the route's velocity).
+    Every simulation is counted: qs[QS_SIMS] (robust mode's shifted runs apart, in
+    qs[QS_ROBUST_SIMS])."""
     n = x0.shape[0]
     cap = pop[0].shape[0]
     ist = pop[5]
@@ -141,6 +160,12 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
     ncue = cue_idx.shape[0]
     nnon = non_idx.shape[0]
     tol = max(pf[PF_TARGET_COST], 0.0)
+    robust = qi[QI_ROBUST] != 0
+    and_sig = qi[QI_ROBUST] == 1  # 1: signature = the AND over the shifted runs; 2: the unshifted one
+    shift = qf[QF_ROBUST_SHIFT]
+    px0 = np.empty((n, 2))
+    backup = np.empty((n, 2))
+    nseed = seeds.shape[0]
 
     for _ in range(n_steps):
         rc = stop_code(pi, pf, st, best_cost, hist_t.shape[0] - 1)
@@ -155,7 +180,7 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
             insert_initial(pop, best_v, best_cost[0], st[ST_BEST_SIG], True, elitism, pi[PI_SIG_LIMIT],
                            pi[PI_POP_LIMIT])
             st[ST_PHASE] = PHASE_INIT
-            st[ST_INIT_TRIALS] = 1  # not the straight start again
+            st[ST_INIT_TRIALS] = nseed + 1  # not the seeds nor the straight start again
             best_cost[1] = np.inf
             qs[QS_LOCAL_SIG] = 0
             qs[QS_LOCAL_SINCE] = 0
@@ -166,9 +191,12 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
         op = -1
         parent_cost = np.inf
         parent_order = 0
-        if st[ST_PHASE] == PHASE_INIT:
+        seeded = st[ST_PHASE] == PHASE_INIT and st[ST_INIT_TRIALS] < nseed
+        if seeded:
+            child[:, :] = seeds[st[ST_INIT_TRIALS]]
+        elif st[ST_PHASE] == PHASE_INIT:
             child[:, :] = 0.0
-            straight = qi[QI_STRAIGHT_START] != 0 and st[ST_INIT_TRIALS] == 0
+            straight = qi[QI_STRAIGHT_START] != 0 and st[ST_INIT_TRIALS] == nseed
             for q in range(ncue):
                 i = cue_idx[q]
                 if straight or rng_uniform(rng) < pf[PF_P_DIRECTED_INIT]:
@@ -221,6 +249,25 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
                         child[c, 1] = out2[1]
                     else:
                         creep_velocity(pf[PF_CREEP_SIGMA], c, rng, child)
+                elif op == OP_PLAN and route_cue.shape[0] > 0:
+                    s = _pick_disk(non_idx, pop[2][p1], rng, True)
+                    cnt = 0
+                    for r in range(route_cue.shape[0]):
+                        if (route_mask[r] >> s) & 1:
+                            cnt += 1
+                    if cnt == 0:
+                        r = rng_int(rng, route_cue.shape[0])
+                    else:
+                        k = rng_int(rng, cnt)
+                        r = 0
+                        while True:
+                            if (route_mask[r] >> s) & 1:
+                                if k == 0:
+                                    break
+                                k -= 1
+                            r += 1
+                    child[route_cue[r], 0] = route_v[r, 0]
+                    child[route_cue[r], 1] = route_v[r, 1]
                 else:
                     i = _pick_disk(cue_idx, pop[2][p1], rng, op == OP_BANK)
                     if op == OP_CREEP or op == OP_STRIKE:
@@ -238,8 +285,16 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
 
         cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, R, max_events, work,
                                         fin, vel, no_t, no_i, no_s)
+        if robust and not trunc and sig != 0:  # an order-0 candidate is rejected whatever its score
+            c_r, s_r, sims = robust_eval(x0, child, radius, mass, target, W, H, t_final, R, max_events, cue_idx,
+                                         zeta, smax, shift, cost, sig, and_sig, px0, work, fin, vel, no_t, no_i, no_s)
+            cost = c_r
+            if and_sig:
+                sig = s_r
+            qs[QS_ROBUST_SIMS] += sims
         st[ST_TRIALS] += 1
         st[ST_SINCE] += 1
+        qs[QS_SIMS] += 1
         qs[QS_LOCAL_SINCE] += 1
         if st[ST_PHASE] == PHASE_INIT:
             st[ST_INIT_TRIALS] += 1
@@ -254,16 +309,29 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
         local_order = popcount(qs[QS_LOCAL_SIG])
         if (qi[QI_POLISH] != 0 and order > 0 and not trunc and cost > tol
                 and (cost < best_cost[1] or (order >= local_order and cost < qf[QF_POLISH_RATIO] * best_cost[1]))):
-            budget = min(qi[QI_POLISH_SIMS], pi[PI_MAX_TRIALS] - st[ST_TRIALS] + 1)
+            # every simulation is a trial, the polish's first (a repeat of the child's) included
+            budget = min(qi[QI_SEED_POLISH_SIMS] if seeded else qi[QI_POLISH_SIMS], pi[PI_MAX_TRIALS] - st[ST_TRIALS])
             if budget >= 2:
+                if robust:
+                    backup[:, :] = child
                 c2, s2, sims = polish_kernel(x0, child, radius, mass, target, W, H, t_final, R, cue_idx, budget,
                                              tol, work, pscr)
-                extra = sims - 1  # its first simulation repeats the child's
-                st[ST_TRIALS] += extra
-                st[ST_SINCE] += extra
-                qs[QS_LOCAL_SINCE] += extra
+                st[ST_TRIALS] += sims
+                st[ST_SINCE] += sims
+                qs[QS_SIMS] += sims
+                qs[QS_LOCAL_SINCE] += sims
                 qs[QS_POLISH_RUNS] += 1
-                qs[QS_POLISH_SIMS] += extra
+                qs[QS_POLISH_SIMS] += sims
+                if robust and c2 < cost:  # polish lowered the nominal cost: rescore under the perturbations
+                    c2, s_r, rs = robust_eval(x0, child, radius, mass, target, W, H, t_final, R, max_events, cue_idx,
+                                              zeta, smax, shift, c2, s2, and_sig, px0, work, fin, vel, no_t, no_i,
+                                              no_s)
+                    if and_sig:
+                        s2 = s_r
+                    qs[QS_ROBUST_SIMS] += rs
+                    if not c2 < cost or popcount(s2) < order:
+                        child[:, :] = backup
+                        c2 = np.inf
                 if c2 < cost:
                     qs[QS_POLISH_GAINS] += 1
                     cost = c2

@@ -58,10 +58,11 @@ def sim_kernels() -> tuple:
 def other_kernels() -> tuple:
     """The dispatchers of the polish, the Jacobian and the sensitivity report."""
     from .jacobian import jacobian_from_events, transition_from_events
+    from .planner import aim_routes
     from .polish import polish_kernel
     from .sensitivity import late_impact_errors
 
-    return (jacobian_from_events, transition_from_events, polish_kernel, late_impact_errors)
+    return (jacobian_from_events, transition_from_events, polish_kernel, late_impact_errors, aim_routes)
 
 
 def announce(kernels, *, stream=None, what: str = "numba kernels") -> bool:
@@ -97,6 +98,7 @@ def warm_all(log=None) -> float:
 
     analyze(p, V, timestep=0.00025)  # validate's sensitivity report
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst")
+    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst", robust=True)
     log(f"nbst search ready ({time.perf_counter() - t0:.0f} s)")
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="A")
     log(f"paper search ready ({time.perf_counter() - t0:.0f} s)")

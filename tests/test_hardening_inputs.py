@@ -18,16 +18,7 @@ from nbst.problem import ProblemError, box_crossings, display_name, parse_json, 
 from nbst.sim import simulate
 from nbst.solution import dumps_strict, make_solution, save_solution, solution_from_dict
 
-GOOD = {
-    "name": "two",
-    "box": [100.0, 80.0],
-    "t_final": 2.0,
-    "target_radius": 10.0,
-    "disks": [
-        {"start": [20.0, 20.0], "target": [80.0, 60.0], "radius": 5.0},
-        {"start": [50.0, 40.0], "target": [30.0, 30.0], "radius": 5.0, "cueable": False, "mass": 2.0},
-    ],
-}
+from test_problem import GOOD  # noqa: E402 - the same valid two-disk problem
 
 
 def _strict(text: str):

@@ -103,7 +103,9 @@ EXPECTED_CHANGES = {
     "G": {"elitism": False},
     "H": {"op_weights": (1 / 3, 0.0, 1 / 3, 1 / 3), "p_directed_init": 0.0},
     "nbst": {"op_weights": (0.2, 0.1, 0.1, 0.2), "bank_weight": 0.3, "strike_weight": 0.1, "polish": True,
-             "straight_start": True},
+             "straight_start": True, "planner": True},
+    "nbst-noplan": {"op_weights": (0.2, 0.1, 0.1, 0.2), "bank_weight": 0.3, "strike_weight": 0.1, "polish": True,
+                    "straight_start": True},
 }
 
 
