@@ -26,6 +26,7 @@ COMMAND_MODULES = (
     "nbst.cli_generate",
     "nbst.cli_experiment",
     "nbst.models.cli",
+    "nbst.models.bowling.cli",
     "nbst.render.cli",
 )
 

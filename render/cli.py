@@ -26,8 +26,12 @@ def register(sub) -> None:
                "  nbst render diamond-s14 sol.json -o out/check.mp4 --source both   # MuJoCo replay as rings",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
-    p.add_argument("solution", help="path to a solution JSON file (e.g. from `nbst solve`)")
+    p.add_argument("solution", nargs="?",
+                   help="path to a solution JSON file (e.g. from `nbst solve`); omit it when PROBLEM is a bowling "
+                        "shot file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")
     p.add_argument("-o", "--output", required=True, metavar="PATH", help="output file: .mp4, .gif, or .png with --still")
+    p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
+                   help="bowling shots only: behind the ball, overhead, or both side by side (default both)")
     p.add_argument("--fps", type=float, default=None,
                    help=f"frames per second (default {style.DEFAULT_FPS}; {style.GIF_FPS} for .gif)")
     p.add_argument("--size", default=None, metavar="WxH",
@@ -97,7 +101,17 @@ def cmd_render(args) -> int:
     from nbst.problem import load_problem
     from nbst.solution import load_solution
 
+    from .bowling import is_shot_file
     from .gl import RenderError
+
+    if is_shot_file(args.problem):
+        from .bowling import cmd_render_shot
+
+        return cmd_render_shot(args)
+    if args.solution is None:
+        return _err("render", "give PROBLEM and SOLUTION (or one bowling shot file from `nbst bowl solve`)")
+    if args.camera is not None:
+        return _err("render", "--camera applies to bowling shot files only")
 
     out = Path(args.output)
     ext = out.suffix.lower()

@@ -1,0 +1,326 @@
+"""The bowling scene, built with ``mujoco.MjSpec`` (USBC dimensions).
+
+Axes: x down the lane, y to the bowler's left, z up; the lane surface is z = 0 and
+the head pin's spot is x = y = 0. Only the last part of the lane is simulated: the
+ball is launched :data:`LAUNCH_X` before the head pin, on the end of the oil.
+
+* **lane** (USBC): 41.5 in wide (1.0541 m). Friction zones, one box each
+  (``priority = 1`` so the zone's friction, not the ball's, rules the contact):
+  oil 0.04 from the launch point to :data:`OIL_END_X`, dry back end 0.2 from there
+  to the deck, pin deck 0.2 to the pit edge (34 3/16 in behind the head pin spot).
+  A ball sliding on oil barely hooks (mu g = 0.4 m/s^2 sideways); on the back end its
+  side spin turns into sideways roll (the skid-hook-roll of a real lane).
+* **pins**: spots on an equilateral triangle of 12 in sides, numbered as USBC (1 in
+  front; 2 and 3 behind it, 2 on the bowler's left; 7 left and 10 right in the back
+  row). Each pin: a free body ``pin{n}`` standing on its spot, 4 convex mesh pieces
+  for collision, a smooth visual mesh, explicit mass/inertia of the uniform solid
+  (:mod:`.pin`).
+* **ball**: 8.5 in (0.2159 m; USBC allows 8.500 .. 8.595 in), 6.8 kg (15 lb), uniform
+  sphere (radius of gyration 2.69 in, inside USBC's 2.43 .. 2.80 in), a free body ``ball``.
+* **gutters**: 9.25 in wide, 1.875 in deep, concave (an arc of 6 tilted boxes) along
+  the lane and beside the deck; **kickbacks** and lane dividers: walls 1 m tall from
+  the launch point to the back of the pit; **pit**: floor 0.25 m below the lane,
+  0.9 m long, back cushion; a **floor** plane under everything (catches strays).
+
+Contacts: ball and pins ``solref = (0.008, 0.2)``: the calibration note measured
+restitution 0.51-0.52 ball-pin, 0.41-0.49 pin-pin (real pins: ~0.5); the time constant
+is 8 steps of 1 ms (shorter gains energy). Static surfaces ``solref = (0.008, 1)``
+(critically damped: a ball does not bounce on the lane). Friction: ball-pin and
+pin-pin 0.12 (an assumed value for plastic-coated maple on a resin ball; not
+calibrated), sliding only (condim 3). Sleeping is on (bodies at rest cost almost
+nothing); a launch is therefore run from a freshly reset ``MjData`` (see :mod:`.shot`).
+
+Compute only: functions return a spec, a model or XML text.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import pin as pinmod
+
+INCH = 0.0254
+#: Simulation step (s). Solref time constants stay >= 8 steps (see the note above).
+TIMESTEP = 0.001
+#: USBC lane width 41.5 in; gutters 9.25 in wide and 1.875 in deep.
+LANE_WIDTH = 41.5 * INCH
+GUTTER_WIDTH = 9.25 * INCH
+GUTTER_DEPTH = 1.875 * INCH
+#: Pin spacing: 12 in between neighbouring spots.
+PIN_SPACING = 12.0 * INCH
+#: From the head pin spot to the pit edge (USBC: 2 ft 10 3/16 in).
+PIT_EDGE_X = 34.1875 * INCH
+#: Pin deck's front edge (x); the deck's friction zone starts here.
+DECK_FRONT_X = -0.3
+#: Where the oil ends and the dry back end starts (x, m). A real pattern is ~40 ft of
+#: the 60 ft lane; we keep its last 2 m and the 3 m dry back end before the pins.
+OIL_END_X = -3.0
+#: Where the ball starts (x of its centre, m) and where the lane box starts.
+LAUNCH_X = -5.0
+LANE_START_X = -5.5
+#: Friction coefficients: oil, dry back end, deck (sliding; literature 0.04 / 0.2).
+MU_OIL = 0.04
+MU_DRY = 0.2
+MU_DECK = 0.2
+MU_BALL_PIN = 0.12
+#: Ball: 8.5 in, 6.8 kg (USBC maximum 16 lb; 15 lb is the common weight).
+BALL_RADIUS = 4.25 * INCH
+BALL_MASS = 6.8
+#: Contacts: ball and pins (calibrated), static surfaces (critically damped).
+SOLREF_BODY = (0.008, 0.2)
+SOLREF_STATIC = (0.008, 1.0)
+#: Pit: floor depth below the lane, length behind the pit edge; walls' height and thickness.
+PIT_DEPTH = 0.25
+PIT_LENGTH = 0.9
+WALL_HEIGHT = 1.0
+WALL_THICKNESS = 0.05
+#: A plane under everything: anything that escapes lands here.
+FLOOR_Z = -0.3
+#: Sleeping: bodies whose speed stays under this (m/s, rad/s, scaled) for a few steps sleep.
+SLEEP_TOLERANCE = 1e-4
+#: Gutter arc: pieces and thickness of each box.
+GUTTER_PIECES = 6
+GUTTER_SHELL = 0.01
+
+#: Colours (RGBA).
+LANE_RGBA = (0.86, 0.72, 0.52, 1.0)
+OIL_RGBA = (0.82, 0.68, 0.48, 1.0)
+DECK_RGBA = (0.90, 0.78, 0.58, 1.0)
+GUTTER_RGBA = (0.45, 0.45, 0.50, 1.0)
+WALL_RGBA = (0.25, 0.27, 0.32, 1.0)
+PIN_RGBA = (0.97, 0.97, 0.95, 1.0)
+BALL_RGBA = (0.30, 0.62, 0.96, 1.0)  # nbst.palette.NONCUEABLE: the video's blue
+
+PIN_NUMBERS = tuple(range(1, 11))
+
+
+def pin_spots() -> np.ndarray:
+    """(10, 2) float, m: the (x, y) of pin spots 1..10 (row r, r = 0..3, from the front)."""
+    dx = PIN_SPACING * np.sqrt(3) / 2
+    spots = []
+    for row in range(4):
+        for k in range(row + 1):
+            spots.append((row * dx, (row / 2 - k) * PIN_SPACING))  # first of a row is leftmost (+y)
+    return np.array(spots)
+
+
+def pin_names() -> list[str]:
+    return [f"pin{n}" for n in PIN_NUMBERS]
+
+
+def build_spec():
+    """An ``mujoco.MjSpec`` of the scene with ball and pins at rest; keyframe ``rack``."""
+    import mujoco
+
+    G = mujoco.mjtGeom
+    spec = mujoco.MjSpec()
+    spec.modelname = "nbst_bowling"
+    spec.option.timestep = TIMESTEP
+    spec.option.gravity = [0.0, 0.0, -9.81]
+    spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+    spec.option.sleep_tolerance = SLEEP_TOLERANCE
+    spec.compiler.inertiafromgeom = int(mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_AUTO)
+    spec.visual.global_.offwidth = 1280
+    spec.visual.global_.offheight = 720
+    spec.stat.center = [-1.0, 0.0, 0.2]
+    spec.stat.extent = 3.0
+    wb = spec.worldbody
+    wb.add_light(name="sun", pos=[-1.0, 0.0, 4.0], dir=[0.2, 0.0, -1.0],
+                 type=int(mujoco.mjtLightType.mjLIGHT_DIRECTIONAL), castshadow=0)
+    wb.add_camera(name="behind", pos=[LAUNCH_X - 1.5, 0.0, 0.9], quat=_look_quat(0.33), fovy=35.0)
+    wb.add_camera(name="overhead", pos=[-0.2, 0.0, 3.0], quat=_look_quat(np.pi / 2), fovy=45.0)
+
+    half_w = LANE_WIDTH / 2
+    outer = half_w + GUTTER_WIDTH
+    x_end = PIT_EDGE_X + PIT_LENGTH
+    floor = wb.add_geom(name="floor", type=G.mjGEOM_PLANE, pos=[(LANE_START_X + x_end) / 2, 0, FLOOR_Z],
+                        size=[20.0, 20.0, 0.1], rgba=WALL_RGBA)
+    _static(floor, MU_DECK)
+
+    slab = 0.05  # half-thickness of the lane boxes
+    zones = (("oil", LANE_START_X, OIL_END_X, MU_OIL, OIL_RGBA),
+             ("backend", OIL_END_X, DECK_FRONT_X, MU_DRY, LANE_RGBA),
+             ("deck", DECK_FRONT_X, PIT_EDGE_X, MU_DECK, DECK_RGBA))
+    for name, x0, x1, mu, rgba in zones:
+        g = wb.add_geom(name=f"lane_{name}", type=G.mjGEOM_BOX, pos=[(x0 + x1) / 2, 0, -slab],
+                        size=[(x1 - x0) / 2, half_w, slab], rgba=rgba)
+        _static(g, mu)
+
+    # gutters: an arc through the lane edge, the bottom (depth below the lane) and the divider
+    chord = GUTTER_WIDTH
+    R = (chord**2 / 4 + GUTTER_DEPTH**2) / (2 * GUTTER_DEPTH)
+    phi = np.arcsin(chord / 2 / R)
+    gx0, gx1 = LANE_START_X, PIT_EDGE_X
+    for side, sgn in (("left", 1.0), ("right", -1.0)):
+        yc = sgn * (half_w + chord / 2)
+        zc = R - GUTTER_DEPTH
+        for k in range(GUTTER_PIECES):
+            a = -phi + (k + 0.5) * 2 * phi / GUTTER_PIECES  # angle from the bottom
+            seg = 2 * R * np.sin(phi / GUTTER_PIECES)
+            y = yc + sgn * R * np.sin(a)
+            z = zc - R * np.cos(a)
+            nrm = np.array([0.0, -sgn * np.sin(a), np.cos(a)])  # inward (up) normal of this piece
+            y -= nrm[1] * GUTTER_SHELL
+            z -= nrm[2] * GUTTER_SHELL
+            ang = np.arctan2(-nrm[1], nrm[2])  # rotation about x taking z to nrm
+            g = wb.add_geom(name=f"gutter_{side}{k}", type=G.mjGEOM_BOX, pos=[(gx0 + gx1) / 2, y, z],
+                            quat=[np.cos(ang / 2), np.sin(ang / 2), 0.0, 0.0],
+                            size=[(gx1 - gx0) / 2, seg / 2 + 1e-3, GUTTER_SHELL], rgba=GUTTER_RGBA)
+            _static(g, MU_DRY)
+        # divider / kickback: a tall wall outside the gutter, launch point to the back of the pit
+        g = wb.add_geom(name=f"wall_{side}", type=G.mjGEOM_BOX,
+                        pos=[(LANE_START_X + x_end) / 2, sgn * (outer + WALL_THICKNESS / 2),
+                             WALL_HEIGHT / 2 - PIT_DEPTH],
+                        size=[(x_end - LANE_START_X) / 2, WALL_THICKNESS / 2, WALL_HEIGHT / 2 + PIT_DEPTH / 2],
+                        rgba=WALL_RGBA)
+        _static(g, MU_DRY)
+    g = wb.add_geom(name="pit_floor", type=G.mjGEOM_BOX, pos=[(PIT_EDGE_X + x_end) / 2, 0, -PIT_DEPTH - slab],
+                    size=[(x_end - PIT_EDGE_X) / 2, outer, slab], rgba=WALL_RGBA)
+    _static(g, MU_DRY)
+    g = wb.add_geom(name="pit_cushion", type=G.mjGEOM_BOX,
+                    pos=[x_end + WALL_THICKNESS / 2, 0, WALL_HEIGHT / 2 - PIT_DEPTH],
+                    size=[WALL_THICKNESS / 2, outer + WALL_THICKNESS, WALL_HEIGHT / 2 + PIT_DEPTH / 2], rgba=WALL_RGBA)
+    _static(g, MU_DRY)
+
+    geo = pinmod.geometry()
+    piece_names = []
+    for k, verts in enumerate(geo.pieces):
+        m = spec.add_mesh()
+        m.name = f"pin_piece{k}"
+        m.uservert = verts.ravel().tolist()
+        piece_names.append(m.name)
+    vis = spec.add_mesh()
+    vis.name = "pin_visual"
+    vis.uservert = geo.visual_vertices.ravel().tolist()
+    vis.userface = geo.visual_faces.ravel().tolist()
+
+    for n, (x, y) in zip(PIN_NUMBERS, pin_spots()):
+        body = wb.add_body(name=f"pin{n}", pos=[float(x), float(y), 0.0])
+        body.add_freejoint(name=f"pin{n}_free")
+        body.explicitinertial = True
+        body.mass = geo.mass
+        body.ipos = [_six(c) for c in geo.com]  # 6 digits: MuJoCo writes <inertial> so, exactly
+        body.inertia = [_six(c) for c in geo.inertia]
+        for k, mesh in enumerate(piece_names):
+            g = body.add_geom(name=f"pin{n}_c{k}", type=G.mjGEOM_MESH, meshname=mesh, rgba=PIN_RGBA, group=3)
+            _body_contact(g)
+        v = body.add_geom(name=f"pin{n}_visual", type=G.mjGEOM_MESH, meshname="pin_visual", rgba=PIN_RGBA, group=1)
+        v.contype = v.conaffinity = 0
+
+    ball = wb.add_body(name="ball", pos=[LAUNCH_X, 0.0, BALL_RADIUS])
+    ball.add_freejoint(name="ball_free")
+    g = ball.add_geom(name="ball", type=G.mjGEOM_SPHERE, size=[BALL_RADIUS, 0, 0], mass=BALL_MASS, rgba=BALL_RGBA)
+    _body_contact(g)
+    return spec
+
+
+def _six(x: float) -> float:
+    """x to 6 significant digits: the numbers MuJoCo's writer keeps in elements that
+    :func:`scene_xml` cannot rewrite (``<inertial>``) read back exactly."""
+    return float(f"{float(x):.6g}")
+
+
+def _look_quat(pitch: float) -> list:
+    """Camera quaternion looking down the lane (+x), tilted down by ``pitch`` rad (6 digits)."""
+    # camera axes: x_cam = -y (right on screen is the bowler's right), looking along -z_cam
+    c, s = np.cos(pitch), np.sin(pitch)
+    fwd = np.array([c, 0.0, -s])
+    xc = np.array([0.0, -1.0, 0.0])
+    zc = -fwd
+    yc = np.cross(zc, xc)
+    R = np.column_stack([xc, yc, zc])
+    w = np.sqrt(max(1e-12, 1 + R[0, 0] + R[1, 1] + R[2, 2])) / 2
+    q = np.array([w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)])
+    return [_six(v) for v in q / np.linalg.norm(q)]
+
+
+def _static(geom, mu: float) -> None:
+    """A static surface: its friction rules (priority 1), critically damped contact."""
+    geom.contype = geom.conaffinity = 1
+    geom.priority = 1
+    geom.condim = 3
+    geom.friction = [mu, 0.0, 0.0]
+    geom.solref = list(SOLREF_STATIC)
+
+
+def _body_contact(geom) -> None:
+    geom.contype = geom.conaffinity = 1
+    geom.condim = 3
+    geom.friction = [MU_BALL_PIN, 0.0, 0.0]
+    geom.solref = list(SOLREF_BODY)
+
+
+def build_model():
+    """The compiled ``mujoco.MjModel`` of :func:`build_spec`."""
+    return build_spec().compile()
+
+
+# --- XML at full precision -------------------------------------------------------------
+
+_EXACT = {
+    "option": ("timestep", "gravity", "sleep_tolerance"),
+    "statistic": ("extent", "center"),
+    "body": ("pos", "quat", "mass", "ipos", "inertia", "fullinertia", "iquat"),
+    "geom": ("pos", "quat", "size", "mass", "solref", "solimp", "friction", "margin", "gap", "rgba"),
+    "mesh": ("vertex",),
+    "camera": ("pos", "quat", "fovy"),
+    "light": ("pos", "dir"),
+    "key": ("time", "qpos", "qvel"),
+}
+_SPEC_NAME = {"vertex": "uservert"}
+
+
+def scene_xml(spec=None) -> str:
+    """MJCF text of the scene, every number at full precision (MuJoCo's writer keeps 6 digits).
+
+    Reuses the rewrite of :func:`nbst.models.scene.full_precision` (shortest round-trip
+    text, same entries as MuJoCo wrote) for the bowling scene's elements: meshes'
+    vertices, bodies' explicit inertia, rotated geoms. A model loaded from the text equals
+    :func:`build_model`'s, bit for bit (tests/test_bowling.py).
+    """
+    from nbst.models.scene import _ATTR, _TAG, _exact
+
+    spec = build_spec() if spec is None else spec
+    spec.compile()
+    xml = spec.to_xml()
+    lookup = {"body": spec.body, "geom": spec.geom, "mesh": spec.mesh, "camera": spec.camera,
+              "light": spec.light, "key": spec.key}
+    fixed = {"option": spec.option, "statistic": spec.stat}
+
+    def value_of(obj, key):
+        name = _SPEC_NAME.get(key, key)
+        v = obj
+        for part in name.split("."):
+            v = getattr(v, part)
+        return v
+
+    def element(m):
+        tag, attrs, end = m.group(1), m.group(2), m.group(3)
+        names = _EXACT.get(tag)
+        if not names:
+            return m.group(0)
+        if tag in fixed:
+            obj = fixed[tag]
+        else:
+            name = dict(_ATTR.findall(attrs)).get("name")
+            obj = lookup[tag](name) if name else None
+        if obj is None:
+            return m.group(0)
+
+        def attr(a):
+            key, text = a.group(1), a.group(2)
+            if key not in names:
+                return a.group(0)
+            value = value_of(obj, key)
+            float32 = getattr(value, "dtype", None) == np.float32 or key == "vertex"
+            if not isinstance(value, (np.ndarray, float, int)):
+                value = list(value)
+            vals = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
+            tokens = text.split()
+            if len(tokens) > vals.size:
+                raise ValueError(f"MJCF {tag} {key}: {len(tokens)} numbers written, the spec has {vals.size}")
+            return f'{key}="{" ".join(_exact(x, float32) for x in vals[:len(tokens)])}"'
+
+        return f"<{tag}{_ATTR.sub(attr, attrs)}{end}>"
+
+    return _TAG.sub(element, xml)
+
