@@ -200,13 +200,14 @@ def test_video_writer_removes_stale_partial_videos(tmp_path):
 
 def test_signals_deferred_holds_ctrl_c_until_the_write_is_done(tmp_path):
     out = tmp_path / "best.json"
+    before = signal.getsignal(signal.SIGINT)  # Python's handler, or SIG_IGN when run in the background
     with pytest.raises(KeyboardInterrupt):
         with signals_deferred() as got:
             os.kill(os.getpid(), signal.SIGINT)
             write_text_atomic(out, "written")
             assert got == [signal.SIGINT]
     assert out.read_text() == "written"
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.getsignal(signal.SIGINT) is before  # restored
 
 
 def _wait_for(cond, timeout):

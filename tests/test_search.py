@@ -166,7 +166,10 @@ def test_ctrl_c_writes_the_best_so_far(tmp_path):
     proc = subprocess.Popen([sys.executable, str(ROOT / "cli.py"), "solve", "diamond-s14", "-o", str(out),
                              "--seed", "8", "--patience", "0", "--max-trials", "1000000000",
                              "--target-cost", "0"],
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            # a shell runs background jobs with SIGINT ignored, and children inherit that:
+                            # give the solver the default disposition, as a terminal's Ctrl-C finds it
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     buf = ""
     t0 = time.time()
     while "best" not in buf and time.time() - t0 < 60:  # the search is under way
