@@ -231,21 +231,29 @@ def _exact(x, float32: bool) -> str:
     return t[:-2] if t.endswith(".0") else t
 
 
-def full_precision(xml: str, spec) -> str:
+def full_precision(xml: str, spec, *, exact_attrs: dict | None = None, spec_names: dict | None = None,
+                   float32_attrs: tuple = ()) -> str:
     """``xml`` (``spec.to_xml()``, which keeps 6 significant digits) with the numbers of
     :data:`_EXACT_ATTRS` rewritten from ``spec``'s own values, shortest round-trip form.
 
     MuJoCo writes only the leading entries of a vector that differ from its defaults
     (e.g. ``solimp="0.9999 0.9999"``); the rewrite keeps the same entries. Text layout,
     element order and every other attribute stay as MuJoCo wrote them.
+
+    exact_attrs   : {tag: attribute names} to rewrite (default :data:`_EXACT_ATTRS`)
+    spec_names    : {attribute: spec field} where they differ (e.g. mesh ``vertex`` ->
+                    ``uservert``)
+    float32_attrs : attributes stored as float32 whatever the field's type says
     """
-    lookup = {"body": spec.body, "joint": spec.joint, "geom": spec.geom, "site": spec.site,
+    exact_attrs = _EXACT_ATTRS if exact_attrs is None else exact_attrs
+    spec_names = spec_names or {}
+    lookup = {"body": spec.body, "joint": spec.joint, "geom": spec.geom, "site": spec.site, "mesh": spec.mesh,
               "camera": spec.camera, "light": spec.light, "key": spec.key}
     fixed = {"option": spec.option, "statistic": spec.stat}
 
     def element(m):
         tag, attrs, end = m.group(1), m.group(2), m.group(3)
-        names = _EXACT_ATTRS.get(tag)
+        names = exact_attrs.get(tag)
         if not names:
             return m.group(0)
         if tag in fixed:
@@ -260,8 +268,8 @@ def full_precision(xml: str, spec) -> str:
             key, text = a.group(1), a.group(2)
             if key not in names:
                 return a.group(0)
-            value = getattr(obj, key)  # a float, a numpy array, or an MjDoubleVec (keyframe)
-            float32 = getattr(value, "dtype", None) == np.float32
+            value = getattr(obj, spec_names.get(key, key))  # a float, a numpy array, or an MjDoubleVec
+            float32 = getattr(value, "dtype", None) == np.float32 or key in float32_attrs
             if not isinstance(value, (np.ndarray, float, int)):
                 value = list(value)
             vals = np.atleast_1d(np.asarray(value, dtype=float)).ravel()

@@ -14,6 +14,8 @@ import sys
 import time
 from pathlib import Path
 
+from nbst.cli_solve import int_at_least
+
 
 def _pins(text: str) -> int:
     """``--down``: pin numbers "1,2,4,7" (or "strike"/"all") -> 10-bit mask."""
@@ -29,18 +31,6 @@ def _pins(text: str) -> int:
     if bad or not pins:
         raise argparse.ArgumentTypeError(f"pins must be numbers 1..10 (at least one), got {text!r}")
     return sum(1 << (p - 1) for p in set(pins))
-
-
-def _int_at_least(lo: int, what: str):
-    def parse(text):
-        try:
-            n = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be a whole number, got {text!r}") from None
-        if n < lo:
-            raise argparse.ArgumentTypeError(f"{what} must be >= {lo}, got {text!r}")
-        return n
-    return parse
 
 
 def register(sub) -> None:
@@ -63,10 +53,10 @@ def register(sub) -> None:
                    help="pins to knock down, e.g. 1,2,4,7 (USBC numbers: 1 in front, 7 back left, 10 back "
                         "right); 'strike' = all ten")
     s.add_argument("-o", "--output", required=True, metavar="SHOT.json", help="where to write the shot")
-    s.add_argument("--seed", type=_int_at_least(0, "seed"), default=None, help="random seed (default: drawn, recorded)")
-    s.add_argument("--max-rollouts", type=_int_at_least(1, "max rollouts"), default=3000, metavar="N",
+    s.add_argument("--seed", type=int_at_least(0, "seed"), default=None, help="random seed (default: drawn, recorded)")
+    s.add_argument("--max-rollouts", type=int_at_least(1, "max rollouts"), default=3000, metavar="N",
                    help="launch budget (default 3000)")
-    s.add_argument("--jobs", type=_int_at_least(1, "jobs"), default=None, metavar="K",
+    s.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
                    help="threads running rollouts (default: all cores)")
     s.add_argument("--no-robustness", action="store_true",
                    help="skip the robustness probes (~50 extra rollouts) after the search")
@@ -90,12 +80,12 @@ def register(sub) -> None:
                                     "Rerunning resumes: the shots already in DIR "
                                     "are the archive, and their subsets are skipped.")
     a.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    a.add_argument("--max-rollouts", type=_int_at_least(1, "max rollouts"), default=20000, metavar="N",
+    a.add_argument("--max-rollouts", type=int_at_least(1, "max rollouts"), default=20000, metavar="N",
                    help="total launch budget (default 20000)")
-    a.add_argument("--per-subset", type=_int_at_least(1, "per-subset"), default=200, metavar="N",
+    a.add_argument("--per-subset", type=int_at_least(1, "per-subset"), default=200, metavar="N",
                    help="launch budget of each targeted solve (default 200)")
-    a.add_argument("--seed", type=_int_at_least(0, "seed"), default=1, help="random seed (default 1)")
-    a.add_argument("--jobs", type=_int_at_least(1, "jobs"), default=None, metavar="K",
+    a.add_argument("--seed", type=int_at_least(0, "seed"), default=1, help="random seed (default 1)")
+    a.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
                    help="threads running rollouts (default: all cores)")
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     a.set_defaults(func=cmd_atlas)

@@ -277,50 +277,9 @@ def scene_xml(spec=None) -> str:
     vertices, bodies' explicit inertia, rotated geoms. A model loaded from the text equals
     :func:`build_model`'s, bit for bit (tests/test_bowling.py).
     """
-    from nbst.models.scene import _ATTR, _TAG, _exact
+    from nbst.models.scene import full_precision
 
     spec = build_spec() if spec is None else spec
     spec.compile()
-    xml = spec.to_xml()
-    lookup = {"body": spec.body, "geom": spec.geom, "mesh": spec.mesh, "camera": spec.camera,
-              "light": spec.light, "key": spec.key}
-    fixed = {"option": spec.option, "statistic": spec.stat}
-
-    def value_of(obj, key):
-        name = _SPEC_NAME.get(key, key)
-        v = obj
-        for part in name.split("."):
-            v = getattr(v, part)
-        return v
-
-    def element(m):
-        tag, attrs, end = m.group(1), m.group(2), m.group(3)
-        names = _EXACT.get(tag)
-        if not names:
-            return m.group(0)
-        if tag in fixed:
-            obj = fixed[tag]
-        else:
-            name = dict(_ATTR.findall(attrs)).get("name")
-            obj = lookup[tag](name) if name else None
-        if obj is None:
-            return m.group(0)
-
-        def attr(a):
-            key, text = a.group(1), a.group(2)
-            if key not in names:
-                return a.group(0)
-            value = value_of(obj, key)
-            float32 = getattr(value, "dtype", None) == np.float32 or key == "vertex"
-            if not isinstance(value, (np.ndarray, float, int)):
-                value = list(value)
-            vals = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
-            tokens = text.split()
-            if len(tokens) > vals.size:
-                raise ValueError(f"MJCF {tag} {key}: {len(tokens)} numbers written, the spec has {vals.size}")
-            return f'{key}="{" ".join(_exact(x, float32) for x in vals[:len(tokens)])}"'
-
-        return f"<{tag}{_ATTR.sub(attr, attrs)}{end}>"
-
-    return _TAG.sub(element, xml)
+    return full_precision(spec.to_xml(), spec, exact_attrs=_EXACT, spec_names=_SPEC_NAME, float32_attrs=("vertex",))
 
