@@ -326,6 +326,12 @@ def test_cli_atlas_writes_shots_and_resumes(tmp_path):
     assert len(list(out.glob("subset-*.json"))) >= first          # resumed: nothing lost, maybe more
     rows = (out / "summary.csv").read_text().splitlines()
     assert len(rows) == 1 + 1023
+    atlas = json.loads((out / "atlas.json").read_text())  # every shot in one replayable file
+    files = {tuple(json.loads(f.read_text())["down"]) for f in out.glob("subset-*.json")}
+    assert atlas["scene"] == "scene.xml" and atlas["subsets"] == len(atlas["shots"]) == len(files)
+    assert {tuple(d["down"]) for d in atlas["shots"]} == files
+    keys = {"scene", "qpos0", "qvel0", "duration", "pins", "down", "launch"}
+    assert all(keys <= set(d) for d in atlas["shots"])
 
 
 def test_interrupt_keeps_the_best_so_far(launcher, tmp_path, monkeypatch, capsys):

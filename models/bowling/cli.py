@@ -113,6 +113,32 @@ def write_shot(path, model, launch, mask: int, *, shared_scene: str | None = Non
     write_text_atomic(path, shotfile.dumps(d))
 
 
+def atlas_json(folder, *, seed=None) -> Path:
+    """Gather an atlas folder's shot files into FOLDER/atlas.json: one file a MuJoCo user
+    replays without nbst, ``{"kind": "nbst-bowling-atlas", "scene": "scene.xml", "shots":
+    [shot, ...]}``, each shot with the shot-file keys (``scene`` relative to the atlas file),
+    sorted by subset size, then pins."""
+    import json
+
+    from nbst.outputs import write_text_atomic
+
+    folder = Path(folder)
+    shots = []
+    for f in sorted(folder.glob("subset-*.json")):
+        try:
+            d = json.loads(f.read_text(encoding="utf-8"))
+        except (OSError, ValueError, RecursionError):
+            continue
+        if isinstance(d, dict) and "down" in d and "qpos0" in d:
+            shots.append(d)
+    shots.sort(key=lambda d: (len(d["down"]), d["down"]))
+    atlas = {"kind": "nbst-bowling-atlas", "schema_version": 1, "scene": "scene.xml", "seed": seed,
+             "subsets": len(shots), "shots": shots}
+    path = folder / "atlas.json"
+    write_text_atomic(path, json.dumps(atlas, indent=1) + "\n")  # floats by repr: exact
+    return path
+
+
 def cmd_solve(args) -> int:
     import os
 
@@ -302,5 +328,6 @@ def cmd_atlas(args) -> int:
         got = sum(1 for r in rows if r[1] == k and r[2])
         lines.append(f"| {k} | {got} / {tot} |")
     write_text_atomic(out / "summary.md", "\n".join(lines) + "\n")
+    atlas_json(out, seed=args.seed)
     print(f"nbst bowl atlas: {sum(1 for r in rows if r[2])} of 1023 subsets have a shot in {out}", file=sys.stderr)
     return 0
