@@ -74,6 +74,8 @@ def cmd_simulate(args) -> int:
             "order": tr.order,
             "events": {"disk_disk": tr.n_disk_disk, "wall": tr.n_wall},
             "truncated": tr.truncated,
+            "stalled": bool(tr.stalled),
+            "t_end": tr.end_time,
         })
         return 0
     print(f"problem    {problem.name}  ({problem.n} disks, t_final = {problem.t_final:g} s)")
@@ -81,8 +83,10 @@ def cmd_simulate(args) -> int:
     print(f"signature  {tr.signature_string}  order {tr.order}/{problem.n}")
     print(f"events     {tr.n_disk_disk} disk-disk, {tr.n_wall} wall")
     if tr.truncated:
-        print("warning    the event limit was reached before t_final; the motion is truncated")
-    print("disk  final x     final y     target x    target y    distance  within R")
+        why = "a jam: disks pinned between opposite walls" if tr.stalled else "the event limit was reached"
+        print(f"warning    the motion stops at t = {tr.end_time:g} s, before t_final ({why}); "
+              "positions are held there")
+    print(f"disk  final x     final y     target x    target y    distance  within R = {problem.target_radius:g}")
     d = ((tr.final_positions - problem.target) ** 2).sum(axis=1) ** 0.5
     for i in range(problem.n):
         fx, fy = tr.final_positions[i]

@@ -385,3 +385,22 @@ def test_nbst_render_dispatches_shot_files(gl, seven, tmp_path, capsys):
     assert main(["render", "over5", str(path), "-o", str(png), "--still", "0", "--camera", "behind"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "SOLUTION" in err[0] and "--camera" in err[1]
+
+
+def test_shipped_atlas_shots_replay_to_their_pins():
+    """models/bowling/atlas.json (with scene.xml beside it): every shot has the shot-file keys;
+    a spread of them (smallest, middle and largest subsets) replays from the XML to exactly
+    its pins (fresh MjData, only qpos/qvel set)."""
+    import mujoco
+
+    from nbst.models.bowling import shotfile
+
+    folder = ROOT / "models" / "bowling"
+    atlas = json.loads((folder / "atlas.json").read_text())
+    shots = atlas["shots"]
+    assert atlas["subsets"] == len(shots) and len({tuple(d["down"]) for d in shots}) == len(shots)
+    keys = {"scene", "qpos0", "qvel0", "duration", "pins", "down", "launch"}
+    assert all(keys <= set(d) and d["scene"] == atlas["scene"] for d in shots)
+    model = mujoco.MjModel.from_xml_path(str(folder / atlas["scene"]))
+    for d in (shots[0], shots[len(shots) // 2], shots[-1]):
+        assert shotfile.replay(model, d["qpos0"], d["qvel0"], d["duration"], d["rule"]) == sorted(d["down"])
