@@ -108,15 +108,12 @@ def cmd_solve(args) -> int:
     # before the search: a long solve must not end unable to write, nor overwrite its input
     prepare_output(args.output, inputs=(args.problem,))
     algorithm = getattr(args, "algorithm", "signature")
-    if algorithm != "signature" and args.variant != "nbst":
-        from .problem import ProblemError
-
-        raise ProblemError("<arguments>", "--variant", f"applies to --algorithm signature only, not {algorithm}")
     robust = bool(getattr(args, "robust", False))
-    if robust and algorithm != "signature":
-        from .problem import ProblemError
+    for option, given in (("--variant", args.variant != "nbst"), ("--robust", robust)):
+        if given and algorithm != "signature":
+            from .problem import ProblemError
 
-        raise ProblemError("<arguments>", "--robust", f"applies to --algorithm signature only, not {algorithm}")
+            raise ProblemError("<arguments>", option, f"applies to --algorithm signature only, not {algorithm}")
     label = (args.variant if algorithm == "signature" else algorithm) + (", robust" if robust else "")
     from .search import roundoff_cost
 

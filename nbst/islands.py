@@ -87,21 +87,6 @@ class _Rounds:
         self.stop_reason: str | None = None
         self.pending: list[int] = []
 
-    def first(self, local) -> bool:
-        """Island 0's first round, before any worker starts; True = stop (target reached, or
-        the callback said so)."""
-        from .search import SearchProgress
-
-        self.trials[0], self.best[0], self.order[0] = local
-        stop = self.best[0] <= self.target
-        if self.callback is not None:
-            prog = SearchProgress(trials=int(self.trials[0]), best_cost=float(self.best[0]),
-                                  best_order=int(self.order[0]), elapsed=time.perf_counter() - self.t0,
-                                  population=0, phase="1 island")
-            if self.callback(prog):
-                stop, self.stop_reason = True, "callback"
-        return stop
-
     def barrier(self, local=None) -> bool:
         """Collect this round's reports (``local``: island 0's own (trials, cost, order) when the
         parent runs it), decide, answer the workers; True = stop."""
@@ -129,7 +114,7 @@ class _Rounds:
             i = int(np.argmin(self.best))
             prog = SearchProgress(trials=int(sum(self.trials)), best_cost=float(self.best[i]),
                                   best_order=int(self.order[i]), elapsed=time.perf_counter() - self.t0,
-                                  population=0, phase=f"{len(self.live) + (local is not None)} islands")
+                                  population=0, phase=f"islands: {len(self.live) + (local is not None)}")
             if self.callback(prog):
                 stop, self.stop_reason = True, self.stop_reason or "callback"
         if stop and self.stop_reason is None:
@@ -195,12 +180,11 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     interrupted = False
     try:
         def local(p) -> bool:
-            if not procs:  # island 0's first round runs alone: most easy problems end there
-                if rounds.first((p.trials, p.best_cost, p.best_order)):
-                    return True
+            if rounds.barrier((p.trials, p.best_cost, p.best_order)):
+                return True
+            if not procs:  # island 0's first round ran alone (most easy problems end there)
                 start_workers()
-                return False
-            return rounds.barrier((p.trials, p.best_cost, p.best_order))
+            return False
 
         sol0 = solve_with(algorithm, problem, callback=local, **island_kw[0])
         rounds.results[0] = (sol0.velocities, sol0.meta)

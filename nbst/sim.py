@@ -411,13 +411,11 @@ def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, return_events
     sig = np.empty(B, np.int64)
     n_events = np.empty(B, np.int64)
     W, H = problem.box
-    args = (x0, radius, mass, target, float(W), float(H), float(problem.t_final), float(problem.target_radius),
-            int(max_events))
 
     def run_slice(a: int, b: int) -> None:
-        x0_, radius_, mass_, target_, W_, H_, tf_, R_, me_ = args
-        evaluate_kernel(x0_, V[a:b], radius_, mass_, target_, W_, H_, tf_, R_, me_, final[a:b], cost[a:b],
-                        sig[a:b], n_events[a:b])
+        evaluate_kernel(x0, V[a:b], radius, mass, target, float(W), float(H), float(problem.t_final),
+                        float(problem.target_radius), int(max_events), final[a:b], cost[a:b], sig[a:b],
+                        n_events[a:b])
 
     if jobs is None:
         from .islands import default_jobs

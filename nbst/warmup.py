@@ -48,13 +48,6 @@ def search_kernels() -> tuple:
     return (run, evaluate_kernel, run_chunk, run_chunk_nbst)
 
 
-def sim_kernels() -> tuple:
-    """The dispatchers ``simulate``/``evaluate`` run."""
-    from .sim import evaluate_kernel, run
-
-    return (run, evaluate_kernel)
-
-
 def other_kernels() -> tuple:
     """The dispatchers of the polish, the Jacobian and the sensitivity report."""
     from .jacobian import jacobian_from_events, transition_from_events
@@ -65,14 +58,18 @@ def other_kernels() -> tuple:
     return (jacobian_from_events, transition_from_events, polish_kernel, late_impact_errors, aim_routes)
 
 
-def announce(kernels, *, stream=None, what: str = "numba kernels") -> bool:
+def compile_message() -> str:
+    """The one-time message before numba compiles (setup and the first solve say the same)."""
+    return f"nbst: compiling numba kernels (one time, ~{COLD_COMPILE_SECONDS} s on 2 cores)"
+
+
+def announce(kernels, *, stream=None) -> bool:
     """If ``kernels`` are cold, write the one-time compile message to ``stream``
     (stderr by default) and return True."""
     if not is_cold(*kernels):
         return False
-    stream = sys.stderr if stream is None else stream
-    print(f"nbst: compiling {what} (one time, ~{COLD_COMPILE_SECONDS} s on 2 cores; "
-          "`python -m nbst.warmup` does it ahead)", file=stream, flush=True)
+    print(f"{compile_message()}; `python -m nbst.warmup` does it ahead", file=sys.stderr if stream is None else stream,
+          flush=True)
     return True
 
 
@@ -84,6 +81,7 @@ def warm_all(log=None) -> float:
     from .baselines import solve_with
     from .jacobian import final_jacobian
     from .problem import load_problem
+    from .sensitivity import analyze
     from .sim import evaluate, simulate
 
     log = log or (lambda s: None)
@@ -94,8 +92,6 @@ def warm_all(log=None) -> float:
     evaluate(p, np.stack([V, V]))
     log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
     final_jacobian(p, V)
-    from .sensitivity import analyze
-
     analyze(p, V, timestep=0.00025)  # validate's sensitivity report
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst")
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst", robust=True)
@@ -113,8 +109,7 @@ def main(argv=None) -> int:
     cold = is_cold(*search_kernels(), *other_kernels())
     talk = cold and not quiet
     if talk:
-        print(f"nbst: compiling numba kernels (one time, ~{COLD_COMPILE_SECONDS} s on 2 cores)", file=sys.stderr,
-              flush=True)
+        print(compile_message(), file=sys.stderr, flush=True)
     secs = warm_all((lambda s: print(f"nbst:   {s}", file=sys.stderr, flush=True)) if talk else None)
     if talk:
         print(f"nbst: numba kernels compiled and cached in {secs:.0f} s", file=sys.stderr)

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from nbst.cli_solve import int_at_least
+from nbst.islands import default_jobs
 
 
 def _pins(text: str) -> int:
@@ -140,8 +141,6 @@ def atlas_json(folder, *, seed=None) -> Path:
 
 
 def cmd_solve(args) -> int:
-    import os
-
     import numpy as np
 
     from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt
@@ -150,7 +149,7 @@ def cmd_solve(args) -> int:
 
     prepare_output(args.output)
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
-    jobs = args.jobs or os.cpu_count() or 1
+    jobs = args.jobs or default_jobs()
     want = shot.pins_of(args.down)
     bar = []
 
@@ -231,7 +230,6 @@ def cmd_atlas(args) -> int:
     import csv
     import io
     import json
-    import os
 
     import numpy as np
 
@@ -240,7 +238,7 @@ def cmd_atlas(args) -> int:
     from . import search, shot
 
     out = prepare_output(args.out, directory=True, option="--out")
-    jobs = args.jobs or os.cpu_count() or 1
+    jobs = args.jobs or default_jobs()
     L = shot.Launcher(jobs=jobs)
     have = {}
     for f in out.glob("subset-*.json"):
