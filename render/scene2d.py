@@ -238,6 +238,12 @@ class Renderer2D(FrameRenderer):
         text_px = max(8, int(round(style.TEXT_FRAC * min(self.size))))
         self.text = Text(ctx, text_px)
         self.layout = L = Layout(problem.box, self.size)
+        # the readout lives in the left margin: smaller type where its longest line would reach the box
+        free = L.box_rect[0] - L.wall - L.margin  # half a margin of padding on each side
+        need = max(len(s) for s in self.readout(0.0, np.zeros(problem.n, bool))) * self.text.cell[0]
+        if need > free and text_px > 8:
+            self.text.release()
+            self.text = Text(ctx, max(8, int(text_px * free / need)))
         self._mgl = moderngl
         self.circles = Circles(ctx)
         self.capsules = Capsules(ctx)

@@ -493,3 +493,19 @@ def test_no_legend_where_there_is_no_room(gl, diamond):
     box = box_from_walls(f)
     left = f[int(box[1]):int(box[3]), :int(box[0]) - 6].astype(int)  # beside the box, under the readout
     assert (np.abs(left - np.array(style.rgb8(style.CUEABLE))).max(axis=2) <= 3).sum() == 0
+
+
+@pytest.mark.parametrize("size", [(800, 600), (640, 480), (1280, 720)])
+def test_readout_keeps_clear_of_the_box(gl, diamond, size):
+    """At 4:3 as at 16:9, no readout pixel comes within a few px of the box's wall."""
+    p, tr = diamond
+    r = Renderer2D(gl, p, tr, size=size)
+    try:
+        img = r.render(2.5).copy()
+        x_wall = int(r.layout.box_rect[0] - r.layout.wall)
+    finally:
+        r.release()
+    text = np.array(style.rgb8(style.TEXT))
+    lit = np.abs(img[: size[1] // 4].astype(int) - text).max(axis=2) < 60
+    cols = np.flatnonzero(lit[:, :x_wall].any(axis=0))
+    assert cols.size > 0 and cols.max() < x_wall - 3
