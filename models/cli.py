@@ -126,7 +126,7 @@ def cmd_mjcf(args) -> int:
     else:
         from nbst.outputs import write_text_atomic
         write_text_atomic(args.output, xml)
-        print(f"wrote {args.output} ({problem.n} disks; view: python -m mujoco.viewer --mjcf={args.output})",
+        print(f"nbst mjcf: wrote {args.output} ({problem.n} disks; view: python -m mujoco.viewer --mjcf={args.output})",
               file=sys.stderr)
     return 0
 

@@ -51,11 +51,11 @@ def cmd_generate(args) -> int:
         return 2
     write_json_atomic(args.output, problem.raw)
     info = problem.raw["planted"]
-    print(f"wrote {args.output}: {problem.n} disks ({int((~problem.cueable).sum())} noncueable, "
+    print(f"nbst generate: wrote {args.output}: {problem.n} disks ({int((~problem.cueable).sum())} noncueable, "
           f"{info['struck_noncueable']} of them struck), seed {seed}, planted motion with "
           f"{info['disk_disk_collisions']} disk-disk collisions and {info['wall_bounces']} wall bounces")
     if args.solution:
         write_json_atomic(args.solution, make_solution(problem, v, algorithm="planted", seed=seed, cost=0.0).to_dict(),
                           option="--solution")
-        print(f"wrote {args.solution}: the planted velocities")
+        print(f"nbst generate: wrote {args.solution}: the planted velocities")
     return 0

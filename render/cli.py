@@ -204,7 +204,7 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
         if kind == "png":
             write_png(out, renderer.render(float(args.still)))
             if not args.quiet:
-                print(f"wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s)", file=sys.stderr)
+                print(f"nbst render: wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s)", file=sys.stderr)
             return 0
         progress = None
         if not args.quiet:
@@ -219,7 +219,7 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
                 progress.close()
         dt = time.perf_counter() - t0
         if not args.quiet:
-            print(f"wrote {out}: {n} frames, {size[0]}x{size[1]}, {fps:g} fps, {n / fps:.2f} s of video "
+            print(f"nbst render: wrote {out}: {n} frames, {size[0]}x{size[1]}, {fps:g} fps, {n / fps:.2f} s of video "
                   f"({dt:.1f} s, {n / dt:.0f} frames/s)", file=sys.stderr)
         return 0
     finally:

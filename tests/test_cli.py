@@ -129,3 +129,13 @@ def test_unwritable_output_exits_2_before_the_work(cmd, over5_solution, tmp_path
 def test_output_that_is_a_folder_is_refused(tmp_path, capsys):
     assert main(["solve", "over5", "-o", str(tmp_path), "--max-trials", "10", "--quiet"]) == 2
     assert "is a folder; expected a file name" in capsys.readouterr().err
+
+
+def test_writers_name_the_command_that_wrote(tmp_path, capsys):
+    """generate and mjcf say which nbst command wrote what, like solve and plot do."""
+    prob, sol, xml = tmp_path / "p.json", tmp_path / "s.json", tmp_path / "scene.xml"
+    assert main(["generate", "--planted", "3", "--seed", "2", "-o", str(prob), "--solution", str(sol)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith(f"nbst generate: wrote {prob}:") and out[1] == f"nbst generate: wrote {sol}: the planted velocities"
+    assert main(["mjcf", str(prob), str(sol), "-o", str(xml)]) == 0
+    assert capsys.readouterr().err.startswith(f"nbst mjcf: wrote {xml} (3 disks;")
