@@ -17,6 +17,13 @@ Launches are independent, so the figures are for 1 and 2 threads (``--threads``)
 instead runs N uniform throws and prints how often each kind of outcome comes up: the
 number of distinct subsets, by size, and the share of the named targets of docs/bowling.md
 (what a plain random search would need: ~1/share launches).
+
+    python benchmarks/bench_bowling.py --atlas-ablation 3000 [--seed 1] [--jobs 1] [--methods uniform,elites,targeted]
+
+instead grows an empty atlas archive with each method (``models/bowling/atlas.py``: uniform
+throws, the MAP-Elites emitter, the earlier uniform-then-targeted-solves atlas) for the same N
+launches and seed, and prints the distinct subsets found (at each quarter of the budget, and
+by size at the end).
 """
 from __future__ import annotations
 
@@ -40,7 +47,14 @@ def main(argv=None) -> int:
     ap.add_argument("--outcomes", type=int, default=0, metavar="N",
                     help="instead: the outcome frequencies of N uniform throws")
     ap.add_argument("--jobs", type=int, default=None, help="threads for --outcomes (default: all cores)")
+    ap.add_argument("--atlas-ablation", type=int, default=0, metavar="N",
+                    help="instead: distinct subsets that N launches find with each atlas method")
+    ap.add_argument("--methods", default="uniform,elites,targeted",
+                    help="atlas methods to ablate (uniform, elites, elites-plain, targeted)")
     args = ap.parse_args(argv)
+    if args.atlas_ablation:
+        return atlas_ablation(args.atlas_ablation, seed=args.seed, jobs=args.jobs or 1,
+                              methods=args.methods.split(","))
     if args.outcomes:
         return outcomes(args.outcomes, seed=args.seed, jobs=args.jobs)
 
@@ -120,6 +134,23 @@ def outcomes(n: int, *, seed: int, jobs) -> int:
     for name, pins in TARGETS.items():
         m = shot.mask_from_pins(pins)
         print(f"  {name}: {c[m]} of {n} ({c[m] / n:.2%})")
+    return 0
+
+
+def atlas_ablation(n: int, *, seed: int, jobs: int, methods) -> int:
+    from nbst.models.bowling import atlas, shot
+
+    print(f"atlas ablation: {n} launches per method from an empty archive, seed {seed}, {jobs} thread(s)")
+    quarters = [n // 4, n // 2, 3 * n // 4, n]
+    with shot.Launcher(jobs=jobs) as L:
+        for method in methods:
+            t = time.perf_counter()
+            a = atlas.run(L, atlas.Archive(), method=method, budget=n, seed=seed)
+            dt = time.perf_counter() - t
+            at = [max((s for r, s in a.curve if r <= q), default=0) for q in quarters]
+            sizes = ", ".join(f"{k}: {g}" for k, g, _ in atlas.size_table(a.elite))
+            print(f"  {method:9s}: {len(a):4d} subsets in {a.rollouts} launches ({dt:.0f} s, {a.rollouts / dt:.1f}/s); "
+                  f"after {'/'.join(map(str, quarters))}: {'/'.join(map(str, at))}; by size {sizes}", flush=True)
     return 0
 
 

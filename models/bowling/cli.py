@@ -5,7 +5,8 @@ Registration is light: mujoco and cma are imported inside the commands.
 Exit codes: 0 done (solve: the requested pins exactly; replay: the file's pins; atlas:
 finished), 1 a check failed (solve: the request was not found within the budget and
 the nearest shot was written; replay: the pins down differ from the file's ``down``),
-2 bad input, 130 interrupted (solve: the best shot so far is written).
+2 bad input, 130 interrupted (solve: the best shot so far is written; atlas: the shots
+found so far, the summary and atlas.json are written).
 """
 from __future__ import annotations
 
@@ -59,6 +60,9 @@ def register(sub) -> None:
                    help="launch budget (default 3000)")
     s.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
                    help="threads running rollouts (default: all cores)")
+    s.add_argument("--distance", choices=("hamming", "geometry"), default="hamming",
+                   help="distance between subsets that ranks restart points: hamming (pins that differ; "
+                        "default) or geometry (an extra pin down next to a wanted one counts 1/2)")
     s.add_argument("--no-robustness", action="store_true",
                    help="skip the robustness probes (~50 extra rollouts) after the search")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
@@ -73,18 +77,32 @@ def register(sub) -> None:
     r.set_defaults(func=cmd_replay)
 
     a = bowl.add_parser("atlas", help="try for every one of the 1,023 subsets; one shot per subset found",
-                        description="Search for all 1,023 non-empty subsets: a shared exploration (a quarter of "
-                                    "the budget) fills an archive keyed by subset, then targeted solves (--per-subset "
-                                    "launches each, restarting from the archive) go after the missing subsets nearest "
-                                    "the archive first. Writes DIR/subset-<pins>.json (+ scene XML) for every subset "
-                                    "found (all naming one DIR/scene.xml) and DIR/summary.md (+ .csv). "
-                                    "Rerunning resumes: the shots already in DIR "
-                                    "are the archive, and their subsets are skipped.")
+                        description="Search for all 1,023 non-empty subsets, keeping an archive keyed by subset. "
+                                    "--method elites (default, MAP-Elites style): after 256 uniform throws, "
+                                    "each batch of 16 holds 2 uniform throws and 14 children of archived "
+                                    "throws (parents of rare subsets, of sizes with few subsets found, and "
+                                    "whose children found new subsets are drawn more often), moved by a "
+                                    "Gaussian step of 0.4 mm, 4 mm or 42 mm sideways (and alike on the other "
+                                    "axes). --method targeted: a shared uniform exploration (a quarter of the "
+                                    "budget), then targeted solves (--per-subset launches each) for the missing "
+                                    "subsets nearest the archive. --method uniform: random throws. Writes "
+                                    "DIR/subset-<pins>.json for every subset found (all naming one DIR/scene.xml), "
+                                    "each with its robustness (16 more launches; see docs/bowling.md), "
+                                    "DIR/summary.md (+ .csv, + .png: every subset found as a triangle) and "
+                                    "DIR/atlas.json. Rerunning resumes: the shots already in DIR are the archive.")
     a.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    a.add_argument("--max-rollouts", type=int_at_least(1, "max rollouts"), default=20000, metavar="N",
-                   help="total launch budget (default 20000)")
+    a.add_argument("--max-rollouts", type=int_at_least(0, "max rollouts"), default=20000, metavar="N",
+                   help="search launch budget of this run (default 20000; robustness probes not counted)")
+    a.add_argument("--method", choices=("elites", "targeted", "uniform"), default="elites",
+                   help="how to spend the budget (default elites)")
     a.add_argument("--per-subset", type=int_at_least(1, "per-subset"), default=200, metavar="N",
-                   help="launch budget of each targeted solve (default 200)")
+                   help="--method targeted: launch budget of each targeted solve (default 200)")
+    a.add_argument("--from", dest="from_atlas", metavar="ATLAS.json", default=None,
+                   help="start from the shots of this atlas file (e.g. models/bowling/atlas.json): they are "
+                        "written into DIR first (those not there yet), then the search resumes from them")
+    a.add_argument("--robustness-only", action="store_true",
+                   help="no search: add the robustness to every shot in DIR that lacks it, then the summary")
+    a.add_argument("--no-robustness", action="store_true", help="write new shots without the robustness probes")
     a.add_argument("--seed", type=int_at_least(0, "seed"), default=1, help="random seed (default 1)")
     a.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
                    help="threads running rollouts (default: all cores)")
@@ -171,7 +189,8 @@ def cmd_solve(args) -> int:
     progress(search.Progress(0, 10, 0, 0))  # the bar starts with the clock
     try:
         with sigterm_as_interrupt():
-            res = search.solve(args.down, seed=seed, max_rollouts=args.max_rollouts, launcher=L, callback=progress)
+            res = search.solve(args.down, seed=seed, max_rollouts=args.max_rollouts, launcher=L, callback=progress,
+                               distance=args.distance)
         if bar:
             bar[0].close()
         rob = None
@@ -183,7 +202,8 @@ def cmd_solve(args) -> int:
                 res.stopped = "interrupted"
         meta = {"seed": seed, "rollouts": res.rollouts, "restarts": res.restarts, "jobs": jobs,
                 "max_rollouts": args.max_rollouts, "stopped": res.stopped, "wall_time_s": round(res.wall_time, 3),
-                "subsets_seen": len(res.archive), "algorithm": "explore + CMA-ES restarts from nearest subsets"}
+                "subsets_seen": len(res.archive), "algorithm": "explore + CMA-ES restarts from nearest subsets",
+                "distance": args.distance}
         with signals_deferred(reraise=False) as late:
             write_shot(args.output, L.model, res.launch, res.mask, requested=args.down, robustness=rob, search=meta)
     finally:
@@ -226,6 +246,37 @@ def cmd_replay(args) -> int:
     return 0 if ok else 1
 
 
+def shot_name(mask: int) -> str:
+    from . import shot
+
+    return "subset-" + "_".join(map(str, shot.pins_of(mask))) + ".json"
+
+
+def unpack_atlas(atlas_path, folder) -> int:
+    """Write the shots of an atlas file as FOLDER/subset-<pins>.json (those not there yet)
+    and its scene as FOLDER/scene.xml (when absent); returns how many shots were written."""
+    import json
+    import shutil
+
+    from nbst.outputs import write_text_atomic
+
+    from . import shot, shotfile
+
+    atlas_path, folder = Path(atlas_path), Path(folder)
+    a = json.loads(atlas_path.read_text(encoding="utf-8"))
+    if not (isinstance(a, dict) and a.get("kind") == "nbst-bowling-atlas"):
+        raise ValueError(f"{atlas_path}: not an nbst bowling atlas")
+    if not (folder / "scene.xml").exists():
+        shutil.copyfile(atlas_path.parent / a["scene"], folder / "scene.xml")
+    n = 0
+    for d in a["shots"]:
+        f = folder / shot_name(shot.mask_from_pins(d["down"]))
+        if not f.exists():
+            write_text_atomic(f, shotfile.dumps({**d, "scene": "scene.xml"}))
+            n += 1
+    return n
+
+
 def cmd_atlas(args) -> int:
     import csv
     import io
@@ -233,84 +284,88 @@ def cmd_atlas(args) -> int:
 
     import numpy as np
 
-    from nbst.outputs import prepare_output, write_text_atomic
+    from nbst.outputs import prepare_output, sigterm_as_interrupt, write_text_atomic
 
-    from . import search, shot
+    from . import atlas as atlasmod
+    from . import scene as scenemod
+    from . import search, shot, shotfile
 
     out = prepare_output(args.out, directory=True, option="--out")
+    if args.from_atlas:
+        try:
+            unpack_atlas(args.from_atlas, out)
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            return _err("atlas", f"--from: {e}")
+    xml = scenemod.scene_xml()
+    if not (out / "scene.xml").exists():
+        write_text_atomic(out / "scene.xml", xml)  # one scene for every shot (the same model)
+    elif (out / "scene.xml").read_text() != xml:  # shots of another scene: new ones would not replay there
+        return _err("atlas", f"{out / 'scene.xml'} is not this version's scene; use a new --out folder")
     jobs = args.jobs or default_jobs()
     L = shot.Launcher(jobs=jobs)
-    have = {}
+    files = {}
     for f in out.glob("subset-*.json"):
         try:
-            have[shot.mask_from_pins(int(p) for p in f.stem.split("-", 1)[1].split("_"))] = f.name
+            files[shot.mask_from_pins(int(p) for p in f.stem.split("-", 1)[1].split("_"))] = f
         except ValueError:
             continue
-    spent = 0
-    tried: set[int] = set()
+    launches = {}
+    for m, f in files.items():  # resume: the launches of the shots already written
+        try:
+            la = json.loads(f.read_text())["launch"]
+            launches[m] = np.array([la[k] for k in shot.KEYS], dtype=float)
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+    arch = atlasmod.Archive.from_launches(launches)
     t0 = time.perf_counter()
+    probes = [0]
     bar = None
     if not args.quiet:
         from tqdm import tqdm
 
-        bar = tqdm(total=args.max_rollouts, unit="launch", file=sys.stderr, dynamic_ncols=True, desc="atlas")
+        total = 0 if args.robustness_only else args.max_rollouts
+        bar = tqdm(total=total or None, unit="launch", file=sys.stderr, dynamic_ncols=True, desc="atlas")
 
-    def name(mask):
-        return "subset-" + "_".join(map(str, shot.pins_of(mask))) + ".json"
+    def add_robustness(mask, f):
+        d = json.loads(f.read_text())
+        rob = search.robustness_ladder(L, launches[mask], mask)
+        probes[0] += rob["lateral_m_rollouts"] + rob["speed_m_s_rollouts"]
+        d["robustness"] = rob
+        write_text_atomic(f, shotfile.dumps(d))
 
-    from . import scene as scenemod
+    def on_new(masks):
+        for m in masks:
+            f = out / shot_name(m)
+            write_shot(f, L.model, arch.elite[m], m, shared_scene="scene.xml", requested=m,
+                       search={"seed": args.seed, "method": args.method, "found_after": arch.found_at[m]})
+            files[m], launches[m] = f, arch.elite[m]
+            if not args.no_robustness:
+                add_robustness(m, f)
 
-    write_text_atomic(out / "scene.xml", scenemod.scene_xml())  # one scene for every shot (the same model)
+    def progress(a):
+        if bar:
+            bar.update(a.rollouts - bar.n)
+            bar.set_postfix_str(f"{len(a)} subsets", refresh=False)
 
-    def save(archive):
-        for m, x in archive.items():
-            if m and m not in have:
-                write_shot(out / name(m), L.model, x, m, shared_scene="scene.xml", requested=m)
-                have[m] = name(m)
-
+    stopped = False
     try:
-        rng = np.random.default_rng(args.seed)
-        shared = {}
-        for m, f in have.items():  # resume: the launches of the shots already written
-            try:
-                la = json.loads((out / f).read_text())["launch"]
-                shared[m] = np.array([la[k] for k in shot.KEYS], dtype=float)
-            except (OSError, ValueError, KeyError, TypeError):
-                continue
-        # a shared exploration first (a quarter of the budget), then targeted solves from it,
-        # most reachable subsets (nearest an archived one) first
-        n0 = max(0, min(args.max_rollouts // 4, args.max_rollouts - spent)) if not shared else 0
-        if n0:
-            ev = search.Evaluator(L, 1023, max_rollouts=n0)
-            for i in range(0, n0, 4 * search.BATCH):
-                ev(search.from_unit(rng.random((min(4 * search.BATCH, n0 - i), 4))))
-                if bar:
-                    bar.update(ev.rollouts - bar.n)
-            spent += ev.rollouts
-            shared.update({m: x for m, x in ev.archive.items() if m not in shared})
-            save(shared)
-        while spent < args.max_rollouts:
-            todo = [t for t in range(1, 1024) if t not in have and t not in tried]
-            if not todo:
-                break
-            near = {t: min(int(search.hamming(t, m)) for m in shared) if shared else 10 for t in todo}
-            target = min(todo, key=lambda t: (near[t], t))
-            tried.add(target)
-            budget = min(args.per_subset, args.max_rollouts - spent)
-            res = search.solve(target, seed=int(rng.integers(0, 2**31 - 1)), max_rollouts=budget, launcher=L,
-                               explore=0, archive=shared)
-            spent += res.rollouts
-            shared.update({m: x for m, x in res.archive.items() if m not in shared})
-            save(shared)
-            if bar:
-                bar.update(res.rollouts)
-                bar.set_postfix_str(f"{len(have)} subsets", refresh=False)
+        with sigterm_as_interrupt():
+            if args.robustness_only:
+                for m in sorted(files):
+                    if m in launches and "robustness" not in json.loads(files[m].read_text()):
+                        add_robustness(m, files[m])
+                        if bar:
+                            bar.update(1)
+            elif args.max_rollouts:
+                atlasmod.run(L, arch, method=args.method, budget=args.max_rollouts, seed=args.seed,
+                             per_subset=args.per_subset, on_new=on_new, callback=progress)
     except KeyboardInterrupt:
-        pass
+        stopped = True
     finally:
         if bar:
             bar.close()
         L.close()
+    have = {m: f.name for m, f in files.items()}
     rows = [(m, len(shot.pins_of(m)), have.get(m, "")) for m in range(1, 1024)]
     buf = io.StringIO()
     w = csv.writer(buf)
@@ -318,14 +373,31 @@ def cmd_atlas(args) -> int:
     for m, k, f in rows:
         w.writerow([m, "-".join(map(str, shot.pins_of(m))), k, f])
     write_text_atomic(out / "summary.csv", buf.getvalue())
-    lines = ["# Bowling atlas", "", f"{sum(1 for r in rows if r[2])} of 1023 subsets found; "
-             f"{spent} launches this run in {time.perf_counter() - t0:.0f} s (seed {args.seed}).", "",
-             "| pins down | found / possible |", "|---|---|"]
-    for k in range(1, 11):
-        tot = sum(1 for r in rows if r[1] == k)
-        got = sum(1 for r in rows if r[1] == k and r[2])
-        lines.append(f"| {k} | {got} / {tot} |")
-    write_text_atomic(out / "summary.md", "\n".join(lines) + "\n")
+    write_text_atomic(out / "summary.md", summary_md(have, launches=arch.rollouts, probes=probes[0],
+                                                     seconds=time.perf_counter() - t0, seed=args.seed,
+                                                     method=args.method, archive=arch))
     atlas_json(out, seed=args.seed)
-    print(f"nbst bowl atlas: {sum(1 for r in rows if r[2])} of 1023 subsets have a shot in {out}", file=sys.stderr)
-    return 0
+    from . import figure
+
+    fig = figure.atlas_figure(have, title=f"{len(have)} of 1,023 subsets (red frame: needs a flying pin)")
+    figure.save(fig, out / "summary.png")
+    n = len(have)
+    print(f"nbst bowl atlas: {n} of 1023 subsets have a shot in {out} ({arch.rollouts} search launches and "
+          f"{probes[0]} robustness launches this run{', interrupted' if stopped else ''})", file=sys.stderr)
+    return 130 if stopped else 0
+
+
+def summary_md(have: dict, *, launches: int, probes: int, seconds: float, seed: int, method: str,
+               archive=None) -> str:
+    """The atlas's summary table (markdown): found / possible by size, and the geometry classes."""
+    from . import geometry
+
+    found = sorted(have)
+    lines = ["# Bowling atlas", "", f"{len(found)} of 1023 subsets found; this run: {launches} search launches "
+             f"({method}) and {probes} robustness launches in {seconds:.0f} s (seed {seed}).", ""]
+    if archive is not None and method.startswith("elites") and launches:
+        (nu, hu), kids = archive.uniform, sum(archive.children.values())
+        new = sum(1 for v in archive.found_at.values() if v >= 0)
+        lines[-1:-1] = ["", f"New subsets this run: {new}; from its {nu} uniform launches: {hu}; from its "
+                            f"{kids} children of elites: {sum(archive.hits.values())}."]
+    return "\n".join(lines + geometry.summary_lines(found)) + "\n"

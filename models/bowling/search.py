@@ -19,7 +19,8 @@ signature (which pins fell) guides the search instead:
    millimetre away from a hit, or nowhere near).
 3. stop at the first launch whose subset is exactly the request, or at the budget.
 
-Cost of a launch = Hamming(subset, request) + :data:`SOFT_WEIGHT` x the soft distance
+Cost of a launch = Hamming(subset, request) (or, with ``distance="geometry"``,
+:func:`geometry_distance`) + :data:`SOFT_WEIGHT` x the soft distance
 (sum over pins of |min(tilt / 45 deg, 1) - wanted|, off-deck pins count as 1): the
 soft part only orders launches of equal Hamming distance, so CMA-ES sees pins that
 almost fell.
@@ -94,6 +95,28 @@ def hamming(a, b) -> np.ndarray:
     return np.array([bin(int(v)).count("1") for v in np.ravel(x)]).reshape(np.shape(x))
 
 
+#: Geometry-weighted distance (``distance="geometry"``): an extra pin down that neighbours a
+#: wanted down pin on the triangle costs this instead of 1 (a falling neighbour takes it
+#: along: 1-2-3-5 is nearer 1-2-3 than the empty set is).
+NEIGHBOUR_EXTRA = 0.5
+
+
+def geometry_distance(a, b) -> np.ndarray:
+    """Distance from masks ``a`` to the request ``b`` (broadcast): 1 per wanted pin standing or
+    unwanted pin down, but :data:`NEIGHBOUR_EXTRA` for an unwanted down pin whose neighbour on
+    the triangle (12 in away) is a wanted down pin. 0 exactly when a == b."""
+    from . import geometry
+
+    adj = (geometry.neighbours().astype(np.int64) << np.arange(10)).sum(axis=1)   # (10,) neighbour masks
+    a = np.asarray(a, dtype=np.int64)
+    b = int(b)
+    near_wanted = int(np.bitwise_or.reduce([adj[i] for i in range(10) if b >> i & 1], initial=0))
+    extra = a & ~b
+    missing = ~a & b & 1023
+    cheap = extra & near_wanted
+    return hamming(missing | (extra & ~cheap), 0) + NEIGHBOUR_EXTRA * hamming(cheap, 0)
+
+
 def soft_distance(model, final_qpos, target: int) -> np.ndarray:
     """(B,) sum over pins of |min(tilt/45deg, 1) - wanted| (off-deck pins count as down)."""
     adr = shot.pin_addresses(model)
@@ -111,7 +134,11 @@ def soft_distance(model, final_qpos, target: int) -> np.ndarray:
 class Evaluator:
     """Runs launches in batches, keeps the archive and the best launch for a target."""
 
-    def __init__(self, launcher: shot.Launcher, target: int, *, max_rollouts: int, callback=None):
+    def __init__(self, launcher: shot.Launcher, target: int, *, max_rollouts: int, callback=None,
+                 distance: str = "hamming"):
+        if distance not in ("hamming", "geometry"):
+            raise ValueError(f"distance must be hamming or geometry, got {distance!r}")
+        self.distance = hamming if distance == "hamming" else geometry_distance
         self.L = launcher
         self.target = int(target)
         self.max_rollouts = int(max_rollouts)
@@ -140,7 +167,7 @@ class Evaluator:
             qpos = self.L.final_qpos(self.L.run_states(states))
             masks = shot.mask_of(shot.pins_down(self.L.model, qpos))
             ham = hamming(masks, self.target)
-            cost = ham + SOFT_WEIGHT * soft_distance(self.L.model, qpos, self.target)
+            cost = self.distance(masks, self.target) + SOFT_WEIGHT * soft_distance(self.L.model, qpos, self.target)
             for x, m, h, c in zip(chunk, masks, ham, cost):
                 m = int(m)
                 if m not in self.archive:
@@ -165,7 +192,7 @@ class Evaluator:
         ms = [m for m in self.archive if m not in exclude]
 
         def key(m):
-            c = self.elite[m][0] if m in self.elite else float(hamming(m, self.target)) + SOFT_WEIGHT * 10
+            c = self.elite[m][0] if m in self.elite else float(self.distance(m, self.target)) + SOFT_WEIGHT * 10
             return (c, self.order[m])
         return sorted(ms, key=key)
 
@@ -176,14 +203,16 @@ class Evaluator:
 
 def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None = None,
           launcher: shot.Launcher | None = None, callback=None, explore: int = EXPLORE,
-          archive: dict | None = None, explore_between: int = EXPLORE_BETWEEN) -> SearchResult:
+          archive: dict | None = None, explore_between: int = EXPLORE_BETWEEN,
+          distance: str = "hamming") -> SearchResult:
     """Search for a launch that knocks down exactly the pins of ``target`` (a 10-bit mask).
 
     Stops at the first exact hit or after ``max_rollouts`` launches; Ctrl-C
     (KeyboardInterrupt) stops too, and the best so far is returned (``stopped``
     "interrupted"). ``launcher``: reuse one (its jobs then apply). ``archive``: launches
     already known by subset (mask -> (4,) launch; e.g. the atlas's), used as restart
-    points; with ``explore=0`` the search starts from them directly.
+    points; with ``explore=0`` the search starts from them directly. ``distance``: "hamming"
+    or "geometry" (:func:`geometry_distance`) in the cost.
     """
     import cma
 
@@ -192,7 +221,7 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
     own = launcher is None
     L = shot.Launcher(jobs=jobs) if own else launcher
     rng = np.random.default_rng(seed)
-    ev = Evaluator(L, target, max_rollouts=max_rollouts, callback=callback)
+    ev = Evaluator(L, target, max_rollouts=max_rollouts, callback=callback, distance=distance)
     for m, x in (archive or {}).items():
         ev.archive[int(m)] = np.asarray(x, dtype=float)
         ev.order[int(m)] = len(ev.order)
@@ -288,3 +317,42 @@ def robustness(launcher: shot.Launcher, launch, mask: int, *, lateral_max: float
     out["method"] = (f"bisection ({steps} rounds) on [0, max]; a change d passes when launches at -d, -d/2, "
                      f"+d/2, +d all keep the subset; max {lateral_max} m and {speed_max} m/s")
     return out
+
+
+#: The atlas's cheaper probe: a ladder of changes, doubling from the smallest, and checks at
+#: -d and +d only (2 rollouts). 11 rungs each: 0.05 mm .. 51.2 mm and 0.5 mm/s .. 512 mm/s.
+LADDER_LATERAL_M = 0.05e-3 * 2.0 ** np.arange(11)
+LADDER_SPEED_M_S = 0.5e-3 * 2.0 ** np.arange(11)
+
+
+def robustness_ladder(launcher: shot.Launcher, launch, mask: int, *, lateral=LADDER_LATERAL_M,
+                      speed=LADDER_SPEED_M_S) -> dict:
+    """Cheap robustness for the atlas: the largest rung d of a doubling ladder at which the
+    launches at -d and +d both keep ``mask``, by binary search over the rungs (4 checks of 2
+    rollouts for 11 rungs: 8 rollouts an axis, 16 a shot; resolution a factor of 2).
+
+    0.0 means even the smallest rung fails. Outcomes are chaotic: "these probes keep it",
+    not "every smaller change keeps it" (a rung that passes can sit above one that fails).
+    """
+    launch = np.asarray(launch, dtype=float)
+    out = {}
+    for key, col, rungs in (("lateral_m", 0, np.asarray(lateral, float)), ("speed_m_s", 1, np.asarray(speed, float))):
+        lo, hi, runs = -1, len(rungs), 0   # rung lo passes (-1: none), rung hi fails (len: beyond the top)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            xs = np.repeat(launch[None, :], 2, axis=0)
+            xs[:, col] += np.array([-rungs[mid], rungs[mid]])
+            sig, _ = launcher.launch(xs)
+            runs += 2
+            if np.all(sig == mask):
+                lo = mid
+            else:
+                hi = mid
+        out[key] = float(rungs[lo]) if lo >= 0 else 0.0
+        out[f"{key}_rollouts"] = runs
+    out["method"] = (f"ladder: binary search over {len(lateral)} doubling rungs "
+                     f"({lateral[0] * 1e3:g} .. {lateral[-1] * 1e3:g} mm sideways, "
+                     f"{speed[0] * 1e3:g} .. {speed[-1] * 1e3:g} mm/s); a change d passes when launches at "
+                     f"-d and +d both keep the subset; 0 = the smallest rung fails")
+    return out
+
