@@ -141,3 +141,18 @@ def test_geometry_distance_ranks_neighbouring_extras_nearer():
     assert d[(1, 2, 3, 5, 8, 9)] == 2.5 < d[()]                        # the superset now ranks nearer than none
     for m in range(1024):                                              # 0 exactly at the request
         assert (search.geometry_distance(m, want) == 0) == (m == want)
+
+
+def test_atlas_from_a_file_without_its_scene_is_one_clear_error(tmp_path, capsys):
+    """--from names the missing scene file instead of a bare OS error; nothing is searched."""
+    from nbst.cli import main
+
+    src = Path(__file__).resolve().parents[1] / "models" / "bowling" / "atlas.json"
+    lonely = tmp_path / "a" / "atlas.json"
+    lonely.parent.mkdir()
+    lonely.write_bytes(src.read_bytes())  # without scene.xml beside it
+    assert main(["bowl", "atlas", "--out", str(tmp_path / "out"), "--from", str(lonely), "--max-rollouts", "16",
+                 "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("nbst bowl atlas: error: --from: ") and "scene.xml" in err and len(err.splitlines()) == 1
+    assert not list((tmp_path / "out").glob("subset-*.json"))

@@ -266,8 +266,12 @@ def unpack_atlas(atlas_path, folder) -> int:
     a = json.loads(atlas_path.read_text(encoding="utf-8"))
     if not (isinstance(a, dict) and a.get("kind") == "nbst-bowling-atlas"):
         raise ValueError(f"{atlas_path}: not an nbst bowling atlas")
+    scene = atlas_path.parent / a["scene"]
+    if not scene.is_file():
+        raise ValueError(f"{atlas_path}: its shots need their scene {a['scene']!r} beside it, and {scene} "
+                         f"is missing (copy it from where the atlas came from)")
     if not (folder / "scene.xml").exists():
-        shutil.copyfile(atlas_path.parent / a["scene"], folder / "scene.xml")
+        shutil.copyfile(scene, folder / "scene.xml")
     n = 0
     for d in a["shots"]:
         f = folder / shot_name(shot.mask_from_pins(d["down"]))
