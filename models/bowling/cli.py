@@ -58,8 +58,12 @@ def register(sub) -> None:
     s.add_argument("--seed", type=int_at_least(0, "seed"), default=None, help="random seed (default: drawn, recorded)")
     s.add_argument("--max-rollouts", type=int_at_least(1, "max rollouts"), default=3000, metavar="N",
                    help="launch budget (default 3000)")
-    s.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
+    g = s.add_mutually_exclusive_group()
+    g.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
                    help="threads running rollouts (default: all cores)")
+    g.add_argument("--cluster", default=None, metavar="ADDRESS",
+                   help="run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; "
+                        "same shot as --jobs for the same seed")
     s.add_argument("--distance", choices=("hamming", "geometry"), default="hamming",
                    help="distance between subsets that ranks restart points: hamming (pins that differ; "
                         "default) or geometry (an extra pin down next to a wanted one counts 1/2)")
@@ -104,8 +108,12 @@ def register(sub) -> None:
                    help="no search: add the robustness to every shot in DIR that lacks it, then the summary")
     a.add_argument("--no-robustness", action="store_true", help="write new shots without the robustness probes")
     a.add_argument("--seed", type=int_at_least(0, "seed"), default=1, help="random seed (default 1)")
-    a.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
+    g = a.add_mutually_exclusive_group()
+    g.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
                    help="threads running rollouts (default: all cores)")
+    g.add_argument("--cluster", default=None, metavar="ADDRESS",
+                   help="run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; "
+                        "the same shots as --jobs for the same seed and folder")
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     a.set_defaults(func=cmd_atlas)
 
@@ -115,6 +123,18 @@ def _err(cmd: str, msg: str) -> int:
 
     print(f"nbst bowl {cmd}: error: {plain(msg)}", file=sys.stderr)
     return 2
+
+
+def launcher(args, jobs: int):
+    """The rollout runner of a subcommand: K threads here, or a Dask cluster's workers
+    (``--cluster``; ValueError, one line, when the scheduler cannot be reached)."""
+    from . import shot
+
+    if getattr(args, "cluster", None):
+        from .cluster import ClusterLauncher
+
+        return ClusterLauncher(args.cluster)
+    return shot.Launcher(jobs=jobs)
 
 
 def write_shot(path, model, launch, mask: int, *, shared_scene: str | None = None, **kw) -> None:
@@ -185,7 +205,10 @@ def cmd_solve(args) -> int:
             bar[0].set_postfix_str(f"nearest {near} ({p.best_hamming} off), {p.subsets} subsets seen",
                                    refresh=False)
 
-    L = shot.Launcher(jobs=jobs)
+    try:
+        L = launcher(args, jobs)
+    except ValueError as e:
+        return _err("solve", f"--cluster: {e}")
     progress(search.Progress(0, 10, 0, 0))  # the bar starts with the clock
     try:
         with sigterm_as_interrupt():
@@ -200,7 +223,8 @@ def cmd_solve(args) -> int:
                     rob = search.robustness(L, res.launch, res.mask)
             except KeyboardInterrupt:
                 res.stopped = "interrupted"
-        meta = {"seed": seed, "rollouts": res.rollouts, "restarts": res.restarts, "jobs": jobs,
+        runner = {"cluster": args.cluster} if args.cluster else {"jobs": jobs}
+        meta = {"seed": seed, "rollouts": res.rollouts, "restarts": res.restarts, **runner,
                 "max_rollouts": args.max_rollouts, "stopped": res.stopped, "wall_time_s": round(res.wall_time, 3),
                 "subsets_seen": len(res.archive), "algorithm": "explore + CMA-ES restarts from nearest subsets",
                 "distance": args.distance}
@@ -306,7 +330,10 @@ def cmd_atlas(args) -> int:
     elif (out / "scene.xml").read_text() != xml:  # shots of another scene: new ones would not replay there
         return _err("atlas", f"{out / 'scene.xml'} is not this version's scene; use a new --out folder")
     jobs = args.jobs or default_jobs()
-    L = shot.Launcher(jobs=jobs)
+    try:
+        L = launcher(args, jobs)
+    except ValueError as e:
+        return _err("atlas", f"--cluster: {e}")
     files = {}
     for f in out.glob("subset-*.json"):
         try:
