@@ -96,6 +96,11 @@ def register(sub) -> None:
                         "with 1/K of the trial budget, run in lockstep and all stopped at the first round in which "
                         "one reaches the target cost; the best island's solution is written. The same --seed and K "
                         "give the same solution. Default: every core; 1: a single search in this process")
+    p.add_argument("--cluster", default=None, metavar="ADDRESS",
+                   help="run islands 1..K-1 as tasks on the workers of this Dask scheduler (tcp://host:8786; "
+                        "start one with `dask scheduler` and `dask worker ADDRESS`); island 0 runs here. Same "
+                        "rounds, so the same solution as on local cores for the same --seed and K. Default K "
+                        "with --cluster: 1 + the workers' threads")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
     p.set_defaults(func=cmd_solve)
 
@@ -140,16 +145,28 @@ def cmd_solve(args) -> int:
 
     from .islands import default_jobs, solve_islands
 
-    jobs = default_jobs() if args.jobs is None else args.jobs
+    client = None
+    if args.cluster is not None:
+        from .cli_experiment import _cluster
+
+        client = _cluster(args)  # ProblemError (exit 2, one line) when unreachable
+    if args.jobs is not None:
+        jobs = args.jobs
+    elif client is not None:
+        jobs = 1 + sum(w.get("nthreads", 1) for w in client.scheduler_info().get("workers", {}).values())
+    else:
+        jobs = default_jobs()
     kw = {"variant": args.variant, "robust": robust} if algorithm == "signature" else {}
     try:
         with sigterm_as_interrupt():  # kill (SIGTERM) stops like Ctrl-C: the best so far is written
             sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
                                 max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,
-                                callback=progress, **kw)
+                                callback=progress, cluster=client, **kw)
     finally:
         if bar:
             bar[0].close()
+        if client is not None:
+            client.close()
     with signals_deferred(reraise=False) as late:  # a second Ctrl-C cannot stop the write
         write_json_atomic(args.output, sol.to_dict())
     m = sol.meta

@@ -49,13 +49,10 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _island(k: int, algorithm: str, problem, kw: dict, conn) -> None:
-    """Worker: run one search; report after every chunk and wait for the parent's word."""
-    import signal
-
+def _island_body(k: int, algorithm: str, problem, kw: dict, conn) -> None:
+    """Run one search; report after every chunk and wait for the parent's word; send the
+    result (or the error) at the end."""
     from .baselines import solve_with
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides; Ctrl-C reaches it alone
 
     def callback(p) -> bool:
         conn.send(("progress", k, p.trials, p.best_cost, p.best_order))
@@ -69,9 +66,53 @@ def _island(k: int, algorithm: str, problem, kw: dict, conn) -> None:
             conn.send(("error", k, f"{type(e).__name__}: {e}", None))
         except OSError:
             pass
+
+
+def _island(k: int, algorithm: str, problem, kw: dict, conn) -> None:
+    """Forked worker: one island over a pipe."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides; Ctrl-C reaches it alone
+    try:
+        _island_body(k, algorithm, problem, kw, conn)
     finally:
         conn.close()
         os._exit(0)  # nothing to tear down: skip the interpreter's exit work (tens of ms)
+
+
+class _QueueConn:
+    """One end of a pipe made of two Dask queues (``--cluster``): send, recv, poll, close."""
+
+    def __init__(self, out_name: str, in_name: str, client=None):
+        from dask.distributed import Queue
+
+        self._out, self._in = Queue(out_name, client=client), Queue(in_name, client=client)
+        self._held: list = []
+
+    def send(self, obj) -> None:
+        self._out.put(obj)
+
+    def poll(self, timeout: float) -> bool:
+        if not self._held:
+            try:
+                self._held.append(self._in.get(timeout=timeout))
+            except TimeoutError:
+                return False
+        return True
+
+    def recv(self):
+        if self._held:
+            return self._held.pop()
+        return self._in.get()
+
+    def close(self) -> None:
+        pass
+
+
+def _island_dask(k: int, algorithm: str, problem, kw: dict, names: tuple) -> int:
+    """A Dask task: one island, talking to the parent through two named queues."""
+    _island_body(k, algorithm, problem, kw, _QueueConn(*names))
+    return k
 
 
 class _Rounds:
@@ -135,7 +176,7 @@ class _Rounds:
 
 def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str = "signature",
                   max_trials: int = 1_000_000, patience: int = 100_000, target_cost: float | None = None,
-                  callback: Callable | None = None, **kw):
+                  callback: Callable | None = None, cluster=None, **kw):
     """Run ``jobs`` islands of ``algorithm`` on ``problem`` and return the best Solution.
 
     Island 0 runs in this process; islands 1..K-1 run in forked workers that start after
@@ -146,6 +187,10 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     ``callback(progress)`` sees the islands' sum of trials and the best island's cost and
     order after every round; a truthy return stops all of them (``stopped == "callback"``).
     Ctrl-C stops all islands and returns the best so far (``stopped == "interrupted"``).
+    ``cluster``: a ``dask.distributed.Client``; islands 1..K-1 then run as tasks on its
+    workers (one worker thread each, for as long as the search runs) and talk to the
+    parent through named Dask queues; the rounds are the same, so the result is the same
+    as on local processes for the same (seed, K).
     """
     from .baselines import solve_with
     from .solution import make_solution
@@ -167,6 +212,15 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     conns, procs = {}, []
 
     def start_workers() -> None:
+        if cluster is not None:
+            tag = f"nbst-islands-{os.getpid()}-{time.monotonic_ns()}"
+            for k in range(1, jobs):
+                up, down = f"{tag}-{k}-up", f"{tag}-{k}-down"
+                conns[k] = _QueueConn(down, up, client=cluster)  # the parent sends down, hears up
+                procs.append(cluster.submit(_island_dask, k, algorithm, problem, island_kw[k], (up, down),
+                                            pure=False))
+                rounds.live.add(k)
+            return
         for k in range(1, jobs):
             parent, child = ctx.Pipe()
             p = ctx.Process(target=_island, daemon=True, args=(k, algorithm, problem, island_kw[k], child))
@@ -201,6 +255,9 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
             rounds.answer_pending()
             _drain(conns, rounds.live, rounds.results, say="stop")
         for p in procs:
+            if cluster is not None:
+                p.cancel()  # a task still running after the drain (lost island)
+                continue
             p.join(timeout=5)
             if p.is_alive():
                 p.kill()
