@@ -42,12 +42,15 @@ def subproblem(p, idx):
                    "mass": float(p.mass[i]), "cueable": bool(p.cueable[i])} for i in idx]})
 
 
-def group_samples(p, q, c, want, rng, samples, keep=40):
-    """The ``keep`` samples of cue c (in q = c + noncueable disks) that move exactly the
-    noncueable set ``want`` with the smallest largest miss, raw and polished: (2 keep, 2)."""
-    non = np.flatnonzero(~p.cueable)
-    sel = [0] + [1 + j for j in range(non.size) if want >> j & 1]
-    best = []
+def group(mask: int, n_non: int) -> list[int]:
+    """Rows of a subproblem (cue first, then the noncueable disks) in the group of ``mask``."""
+    return [0] + [1 + j for j in range(n_non) if mask >> j & 1]
+
+
+def batches(q, rng, samples):
+    """Cue 0 of q at ``samples`` random velocities (uniform direction, log-uniform speed
+    8-400 units/s), in batches: yields (V (B, n, 2), miss (B, n), keys (B,): the mask of
+    the noncueable disks each sample moved)."""
     done = 0
     while done < samples:
         B = min(400_000, samples - done)
@@ -60,7 +63,17 @@ def group_samples(p, q, c, want, rng, samples, keep=40):
         fin, _, _ = evaluate(q, V, jobs=1)
         miss = np.hypot(*(fin - q.target[None]).transpose(2, 0, 1))
         moved = np.hypot(*(fin - q.start[None]).transpose(2, 0, 1)) > 1e-9
-        ii = np.flatnonzero((moved[:, 1:] * (1 << np.arange(non.size))).sum(1) == want)
+        yield V, miss, (moved[:, 1:] * (1 << np.arange(q.n - 1))).sum(1)
+
+
+def group_samples(p, q, c, want, rng, samples, keep=40):
+    """The ``keep`` samples of cue c (in q = c + noncueable disks) that move exactly the
+    noncueable set ``want`` with the smallest largest miss, raw and polished: (2 keep, 2)."""
+    non = np.flatnonzero(~p.cueable)
+    sel = group(want, non.size)
+    best = []
+    for V, miss, keys in batches(q, rng, samples):
+        ii = np.flatnonzero(keys == want)
         g = miss[np.ix_(ii, sel)].max(1)
         best = sorted(best + [(float(a), V[b, 0].copy()) for a, b in zip(g, ii)], key=lambda x: x[0])[:keep]
     out = []
@@ -121,22 +134,10 @@ def main() -> None:
         best = {}   # group mask -> list of (group cost, velocity)
         all_in = {}
         seen = {}
-        done = 0
-        while done < a.samples:
-            B = min(400_000, a.samples - done)
-            done += B
-            th = rng.uniform(0, 2 * np.pi, B)
-            sp = np.exp(rng.uniform(np.log(8), np.log(400), B))
-            V = np.zeros((B, q.n, 2))
-            V[:, 0, 0] = sp * np.cos(th)
-            V[:, 0, 1] = sp * np.sin(th)
-            fin, _, _ = evaluate(q, V, jobs=1)
-            miss = np.hypot(*(fin - q.target[None]).transpose(2, 0, 1))
-            moved = np.hypot(*(fin - q.start[None]).transpose(2, 0, 1)) > 1e-9
-            keys = (moved[:, 1:] * (1 << np.arange(non.size))).sum(1)
+        for V, miss, keys in batches(q, rng, a.samples):
             for k in np.unique(keys[keys > 0]):
                 ii = np.flatnonzero(keys == k)
-                sel = [0] + [1 + j for j in range(non.size) if k >> j & 1]
+                sel = group(k, non.size)
                 g = (miss[np.ix_(ii, sel)] ** 2).sum(1)
                 seen[k] = seen.get(k, 0) + ii.size
                 all_in[k] = all_in.get(k, 0) + int(np.all(miss[np.ix_(ii, sel)] < R, axis=1).sum())
@@ -146,7 +147,7 @@ def main() -> None:
         print(f"cue {c} ({a.samples:,} samples, {time.perf_counter() - t0:.0f} s so far)")
         print(f"  {'disks moved':>12s} {'samples':>9s} {'all in R':>8s} {'best group cost':>16s} {'polished':>10s}")
         for k in sorted(best):
-            sel = [0] + [1 + j for j in range(non.size) if k >> j & 1]
+            sel = group(k, non.size)
             pol = []
             for _, v in best[k]:
                 v2, _, _, _ = polish(q, v, max_sims=100)

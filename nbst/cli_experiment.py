@@ -80,19 +80,17 @@ def _no_action(p) -> int:
     return 2
 
 
-def _cluster(args):
+def cluster_client(args):
+    """The Dask client of ``--cluster`` (None without it); ProblemError when unreachable."""
     if args.cluster is None:
         return None
+    from .cluster import connect
     from .problem import ProblemError
 
     try:
-        from dask.distributed import Client
-
-        return Client(args.cluster, timeout="20s")
-    except (OSError, TimeoutError, ValueError) as e:
-        raise ProblemError("<arguments>", "--cluster",
-                           f"cannot reach a Dask scheduler at {args.cluster!r} ({e}); start one with "
-                           f"`dask scheduler` and workers with `dask worker ADDRESS`") from None
+        return connect(args.cluster)
+    except ValueError as e:
+        raise ProblemError("<arguments>", "--cluster", str(e)) from None
 
 
 def _run(args, specs, desc: str):
@@ -100,7 +98,7 @@ def _run(args, specs, desc: str):
     from .outputs import prepare_output, sigterm_as_interrupt
 
     prepare_output(args.out, directory=True, option="--out")
-    client = _cluster(args)
+    client = cluster_client(args)
     try:
         with sigterm_as_interrupt():  # kill: workers stopped, finished runs kept, exit 130 as on Ctrl-C
             return run_specs(specs, args.out, workers=args.workers, cluster=client, progress=not args.quiet,

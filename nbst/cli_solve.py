@@ -145,11 +145,9 @@ def cmd_solve(args) -> int:
 
     from .islands import default_jobs, solve_islands
 
-    client = None
-    if args.cluster is not None:
-        from .cli_experiment import _cluster
+    from .cli_experiment import cluster_client
 
-        client = _cluster(args)  # ProblemError (exit 2, one line) when unreachable
+    client = cluster_client(args)  # None without --cluster; ProblemError (exit 2, one line) if unreachable
     if args.jobs is not None:
         jobs = args.jobs
     elif client is not None:

@@ -58,12 +58,7 @@ def register(sub) -> None:
     s.add_argument("--seed", type=int_at_least(0, "seed"), default=None, help="random seed (default: drawn, recorded)")
     s.add_argument("--max-rollouts", type=int_at_least(1, "max rollouts"), default=3000, metavar="N",
                    help="launch budget (default 3000)")
-    g = s.add_mutually_exclusive_group()
-    g.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
-                   help="threads running rollouts (default: all cores)")
-    g.add_argument("--cluster", default=None, metavar="ADDRESS",
-                   help="run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; "
-                        "same shot as --jobs for the same seed")
+    _runner_args(s, "the same shot as --jobs for the same seed")
     s.add_argument("--distance", choices=("hamming", "geometry"), default="hamming",
                    help="distance between subsets that ranks restart points: hamming (pins that differ; "
                         "default) or geometry (an extra pin down next to a wanted one counts 1/2)")
@@ -108,14 +103,18 @@ def register(sub) -> None:
                    help="no search: add the robustness to every shot in DIR that lacks it, then the summary")
     a.add_argument("--no-robustness", action="store_true", help="write new shots without the robustness probes")
     a.add_argument("--seed", type=int_at_least(0, "seed"), default=1, help="random seed (default 1)")
-    g = a.add_mutually_exclusive_group()
+    _runner_args(a, "the same shots as --jobs for the same seed and folder")
+    a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    a.set_defaults(func=cmd_atlas)
+
+
+def _runner_args(parser, same: str) -> None:
+    """--jobs K | --cluster ADDRESS: where the rollouts run (see :func:`launcher`)."""
+    g = parser.add_mutually_exclusive_group()
     g.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
                    help="threads running rollouts (default: all cores)")
     g.add_argument("--cluster", default=None, metavar="ADDRESS",
-                   help="run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; "
-                        "the same shots as --jobs for the same seed and folder")
-    a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    a.set_defaults(func=cmd_atlas)
+                   help=f"run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; {same}")
 
 
 def _err(cmd: str, msg: str) -> int:

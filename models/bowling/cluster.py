@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from nbst.cluster import connect
+
 from . import shot
 
 #: Per worker process: duration -> a one-thread Launcher (built on first use).
@@ -29,17 +31,6 @@ def _run_chunk(states0: np.ndarray, duration: float) -> np.ndarray:
     return L.run_states(states0)
 
 
-def connect(address: str, *, timeout: str = "20s"):
-    """A ``dask.distributed.Client`` for ``address``; ValueError (one line) if unreachable."""
-    try:
-        from dask.distributed import Client
-
-        return Client(address, timeout=timeout)
-    except (OSError, TimeoutError, ValueError) as e:
-        raise ValueError(f"cannot reach a Dask scheduler at {address!r} ({e}); start one with `dask scheduler` "
-                         f"and workers with `dask worker ADDRESS`") from None
-
-
 class ClusterLauncher(shot.Launcher):
     """A Launcher whose ``run_states`` runs on the workers of a Dask ``client`` (or address)."""
 
@@ -47,18 +38,17 @@ class ClusterLauncher(shot.Launcher):
         super().__init__(jobs=1, duration=duration)
         self._own = isinstance(client, str)
         self.client = connect(client) if self._own else client
-
-    def workers(self) -> int:
-        return max(1, len(self.client.scheduler_info().get("workers", {})))
+        # chunks per batch: the workers there at the start (asked once, not per batch; a worker
+        # that joins later still takes chunks, as the scheduler hands them out)
+        self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
 
     def run_states(self, states0: np.ndarray) -> np.ndarray:
         states0 = np.asarray(states0, dtype=float).reshape(-1, self.nstate)
         if not len(states0):
             return states0.copy()
-        chunks = [c for c in np.array_split(states0, min(self.workers(), len(states0))) if len(c)]
+        chunks = np.array_split(states0, min(self.workers, len(states0)))
         futures = self.client.map(_run_chunk, chunks, [self.duration] * len(chunks), pure=False)
-        out = np.concatenate(self.client.gather(futures)).reshape(len(states0), self.nstate)
-        return out
+        return np.concatenate(self.client.gather(futures)).reshape(len(states0), self.nstate)
 
     def close(self) -> None:
         super().close()
