@@ -155,6 +155,7 @@ def test_atlas_from_a_file_without_its_scene_is_one_clear_error(tmp_path, capsys
                  "-q"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("nbst bowl atlas: error: --from: ") and "scene.xml" in err and len(err.splitlines()) == 1
+    assert "is missing" in err and "Errno" not in err  # the atlas's own words, not the OS error's
     assert not list((tmp_path / "out").glob("subset-*.json"))
 
 
