@@ -230,7 +230,7 @@ def problems(draw):
         c = (i + 0.5) * cell
         start = [c, H / 2] if long_is_w else [W / 2, c]
         target = [draw(st.floats(r, W - r)), draw(st.floats(r, H - r))]
-        mass = m0 * 10 ** draw(st.floats(0, math.log10(D.MAX_MASS_RATIO)))
+        mass = m0 * 10 ** draw(st.floats(0, math.log10(D.MAX_MASS_RATIO) - 1e-9))
         disks.append({"start": start, "target": target, "radius": r, "mass": mass})
     t_final = 10 ** draw(st.floats(math.log10(D.T_FINAL_MIN), math.log10(D.T_FINAL_MAX)))
     R = draw(st.floats(1e-6, 1.0)) * math.hypot(W, H)
