@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from nbst import evaluate, load_problem
-from nbst.islands import solve_islands
+from nbst.solvers.islands import solve_islands
 from nbst.planted import planted
 from nbst.search import roundoff_cost
 

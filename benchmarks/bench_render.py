@@ -34,7 +34,7 @@ def main(argv=None) -> int:
 
     from nbst import load_problem, load_solution, simulate
     from nbst.render import style
-    from nbst.render.cli import make_renderer, parse_size
+    from nbst.cli.render import make_renderer, parse_size
     from nbst.render.gl import create_context
     from nbst.render.video import VideoWriter, encode, frame_times, render_video
 

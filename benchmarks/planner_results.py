@@ -41,7 +41,8 @@ def _run(job):
 def classify(n: int, k: int, seed: int) -> str:
     """Why the planted motion of planted(n, noncue=k, seed) is (not) a structure the planner builds."""
     from nbst.planted import planted
-    from nbst.sim import EVENT_DISK, simulate
+    from nbst.constants import EVENT_DISK
+    from nbst.sim import simulate
 
     p, v = planted(n, noncue=k, seed=seed)
     tr = simulate(p, v)

@@ -19,8 +19,9 @@ import time
 import numpy as np
 
 from nbst import load_problem
-from nbst.polish import polish
-from nbst.sim import EVENT_DISK, evaluate, simulate
+from nbst.search.polish import polish
+from nbst.constants import EVENT_DISK
+from nbst.sim import evaluate, simulate
 
 
 def aimed(p, rng, B):

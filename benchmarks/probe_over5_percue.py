@@ -16,7 +16,7 @@ exact on its own: the zero needs the two cues' motions to meet.
 ``--combine`` then pairs the groups of the two cues whose moved sets split the three
 noncueable disks (40 samples per group with the smallest largest miss, raw and polished),
 simulates every pair in full, and reports the order-5 motions: how many, the cheapest, and
-the most robust of them (``nbst.robust.choose``, seed 1) with its score and its signature in
+the most robust of them (``nbst.search.robust.choose``, seed 1) with its score and its signature in
 MuJoCo (fixed steps, h = 0.25 ms). This asks whether order 5 can be robust on over5
 (issue 13's ``--robust`` target).
 """
@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 from nbst import load_problem
-from nbst.polish import polish
+from nbst.search.polish import polish
 from nbst.problem import problem_from_dict
 from nbst.sim import evaluate
 
@@ -86,7 +86,7 @@ def group_samples(p, q, c, want, rng, samples, keep=40):
 
 def combine(p, samples, rng) -> None:
     from nbst.models.validate import validate
-    from nbst.robust import choose
+    from nbst.search.robust import choose
 
     non = np.flatnonzero(~p.cueable)
     c0, c1 = np.flatnonzero(p.cueable)

@@ -95,10 +95,10 @@ def planted_set(a):
              "A (paper)": lambda p, s: solve(p, seed=s, max_trials=a.trials, patience=0, target_cost=1e-6,
                                              variant="A").meta}
     try:
-        from nbst.baselines import solve_cma
+        from nbst.solvers.baselines import solve_cma
         algos["CMA-ES (IPOP)"] = lambda p, s: solve_cma(p, seed=s, max_trials=a.trials, target_cost=1e-6).meta
     except ImportError:
-        print("(nbst.baselines.solve_cma not available: CMA-ES column omitted)\n")
+        print("(nbst.solvers.baselines.solve_cma not available: CMA-ES column omitted)\n")
     sets = ((0.0, "all cueable: cost < 1e-6"), (0.3, "30% noncueable"))
     for noncue_frac, title in (s for s, name in zip(sets, ("cueable", "noncue")) if a.set in (name, "both")):
         print(f"#### {title}\n")

@@ -4,9 +4,9 @@
                                          [--patience 100000] [--configs plain,robust,...] [--json OUT]
 
 For each configuration and seed: one ``nbst.search.solve`` run, then the solution's exact cost
-and order, its amplification (largest singular value of d final / d v, ``nbst.jacobian``; in
+and order, its amplification (largest singular value of d final / d v, ``nbst.sim.jacobian``; in
 seconds: units of final position per units/s of cue velocity), its robust score (64 fresh start
-shifts, ``nbst.robust.robust_score``: order kept in all, 90 % quantile of the largest
+shifts, ``nbst.search.robust.robust_score``: order kept in all, 90 % quantile of the largest
 distance among the disks on target) and the MuJoCo fixed-step outcome at h = 0.25 ms (``nbst.models.validate.validate``:
 max final error, signature kept, MuJoCo's order). Prints one Markdown row per run and a summary
 per configuration. A benchmark, not a test: ~5-30 s per run on the 2-core machine.
@@ -47,7 +47,7 @@ def shifted_error(problem, velocities, *, seed: int, samples: int = 64) -> np.nd
     """(N,) median over ``samples`` start shifts (robust mode's error model) of each disk's final
     displacement from the unshifted run, units: what the model predicts for MuJoCo's final error."""
     from nbst.constants import MAX_EVENTS
-    from nbst.robust import SHIFT_STEPS, TIMESTEP, draws
+    from nbst.search.robust import SHIFT_STEPS, TIMESTEP, draws
     from nbst.sim import evaluate_kernel
 
     v = np.ascontiguousarray(velocities, dtype=np.float64)
@@ -67,9 +67,9 @@ def shifted_error(problem, velocities, *, seed: int, samples: int = 64) -> np.nd
 
 
 def measure(problem, velocities, *, score_seed: int) -> dict:
-    from nbst.jacobian import final_jacobian
+    from nbst.sim.jacobian import final_jacobian
     from nbst.models.validate import validate
-    from nbst.robust import robust_score
+    from nbst.search.robust import robust_score
     from nbst.sim import simulate
 
     tr = simulate(problem, velocities)

@@ -44,7 +44,7 @@ def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
     import mujoco
     from matplotlib import image as mpimg
 
-    from .scene import build_model
+    from nbst.models.scene import build_model
 
     model = build_model(problem, velocities)
     model.vis.headlight.ambient[:] = PREVIEW_AMBIENT
@@ -80,7 +80,7 @@ def build_entry(name: str, folder: Path, *, seed: int, max_trials: int, search: 
     from nbst.sim import simulate
     from nbst.solution import make_solution, save_solution, write_json_atomic
 
-    from .scene import scene_xml
+    from nbst.models.scene import scene_xml
 
     problem = load_problem(name)
     folder.mkdir(parents=True, exist_ok=True)

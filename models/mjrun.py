@@ -16,7 +16,7 @@ import numpy as np
 
 from nbst.problem import Problem
 
-from .scene import DEFAULT_TIMESTEP, DEFAULT_UNIT, build_model
+from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT, build_model
 
 #: Event kinds, as in ``nbst.sim`` (0 disk-disk, 1 wall); j = partner disk or wall 0 left 1 right 2 bottom 3 top.
 EVENT_DISK, EVENT_WALL = 0, 1
@@ -199,7 +199,7 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
 
 def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps) -> MujocoRun:
     """``run_mujoco`` with ``step_aligned``: a record after every accepted step and micro-step."""
-    from .stepping import step_aligned
+    from nbst.models.stepping import step_aligned
 
     n = problem.n
     rec_t, rec_q, rec_v = [float(data.time)], [data.qpos.copy()], [data.qvel.copy()]

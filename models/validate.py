@@ -1,7 +1,7 @@
 """Cross-validation: a solution run in MuJoCo against nbst's exact simulator.
 
 ``validate(problem, velocities) -> Validation`` (compute only); ``Validation.to_dict()``
-is ``report.json``; :mod:`nbst.models.report` draws ``report.html``.
+is ``report.json``; :mod:`nbst.render.report` draws ``report.html``.
 
 What is compared:
 * per-disk final position error (units), cost / signature / order under each;
@@ -20,7 +20,7 @@ What is compared:
 The MuJoCo run steps ``fixed`` (h every step) or ``aligned`` (:mod:`nbst.models.stepping`:
 every impact resolved at its touch; its cost is reported). Also reported:
 
-* ``sensitivity``: :func:`nbst.sensitivity.analyze` at the run's h, and ``prediction_check``:
+* ``sensitivity``: :func:`nbst.sim.sensitivity.analyze` at the run's h, and ``prediction_check``:
   its fixed-step prediction (keeps the signature? max error) against a fixed-step run at h;
 * with ``convergence=True``: fixed steps at h, h/2, ... h/32 (the scene rebuilt per step,
   k = 2/h^2) and aligned stepping, each entry's max final error, signature and cost, and the
@@ -36,7 +36,7 @@ import numpy as np
 
 from nbst.problem import Problem
 
-from .scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
+from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
 
 SCHEMA_VERSION = 2  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order
 #: Default divergence tolerance (units): a tenth of the benchmark disks' radius of 10-20,
@@ -267,13 +267,13 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
                   step sizes that need more
     stepping    : "fixed" or "aligned" (``nbst.models.mjrun.STEPPINGS``)
     convergence : also run the convergence study (module doc)
-    sensitivity : add ``nbst.sensitivity.analyze`` at h and its check against a fixed-step run
+    sensitivity : add ``nbst.sim.sensitivity.analyze`` at h and its check against a fixed-step run
     """
     import time
 
     from nbst.sim import simulate
 
-    from .mjrun import MAX_STEPS, check_steps, run_final, run_mujoco
+    from nbst.models.mjrun import MAX_STEPS, check_steps, run_final, run_mujoco
 
     if not (np.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be > 0, got {tol!r}")
@@ -337,8 +337,8 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
 
 
 def _sensitivity(problem: Problem, v, timestep: float) -> dict:
-    """``nbst.sensitivity.analyze`` at h, or {"error": why} when it cannot (e.g. too many events)."""
-    from nbst.sensitivity import analyze
+    """``nbst.sim.sensitivity.analyze`` at h, or {"error": why} when it cannot (e.g. too many events)."""
+    from nbst.sim.sensitivity import analyze
     try:
         return analyze(problem, v, timestep=timestep)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as e:
@@ -393,7 +393,7 @@ def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, 
     aligned / fixed : a MujocoRun already made (aligned at h / fixed at h) to reuse
     An entry whose steps exceed max_steps is kept with ``skipped`` saying so.
     """
-    from .mjrun import run_final, run_mujoco, steps_needed
+    from nbst.models.mjrun import run_final, run_mujoco, steps_needed
 
     out = []
     for div in LADDER:

@@ -14,9 +14,9 @@ import importlib.machinery
 import sys
 from pathlib import Path
 
-from ._version import __version__
-from .problem import Problem, ProblemError, builtin_names, load_problem
-from .solution import Solution, load_solution, save_solution
+from nbst._version import __version__
+from nbst.problem import Problem, ProblemError, builtin_names, load_problem
+from nbst.solution import Solution, load_solution, save_solution
 
 __all__ = [
     "__version__",

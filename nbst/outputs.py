@@ -256,7 +256,7 @@ def write_text_atomic(path, text: str, *, option: str = "-o") -> None:
 
 def write_json_atomic(path, obj: Any, *, option: str = "-o") -> None:
     """Write ``obj`` as strict JSON (indent 1; ``nbst.solution.dumps_strict``) atomically; OutputError on failure."""
-    from .solution import dumps_strict
+    from nbst.solution import dumps_strict
 
     write_text_atomic(path, dumps_strict(obj, indent=1) + "\n", option=option)
 

@@ -1,7 +1,7 @@
 """Planted instances: problems whose zero-cost solution is known.
 
 Random non-overlapping starts and random cue velocities; each noncueable disk is
-the aim of a strike by a cueable disk (``nbst.aim.strike_velocity``, towards a
+the aim of a strike by a cueable disk (``nbst.search.aim.strike_velocity``, towards a
 random point of the box); the motion is simulated exactly and each disk's target
 is where it ends. So the velocities used are a solution of cost 0 (up to the
 round-off of writing the targets), and a search has a ground truth.
@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .aim import strike_velocity
-from .problem import Problem, problem_from_dict
-from .sim import simulate
+from nbst.problem import Problem, problem_from_dict
+from nbst.search.aim import strike_velocity
+from nbst.sim import simulate
 
 #: Extra gap between starts (units) so that planted starts are not in contact.
 START_GAP = 2.0

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from . import domain as D
-from .constants import MAX_DISKS, OVERLAP_RTOL
-from .domain import bad_text, plain
+from nbst import domain as D
+from nbst.constants import MAX_DISKS, OVERLAP_RTOL
+from nbst.domain import bad_text, plain
 
 SCHEMA_VERSION = 1
 

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from .domain import MAX_BOX_CROSSINGS
-from .problem import Problem, ProblemError, _Checker, box_crossings, read_json
+from nbst.domain import MAX_BOX_CROSSINGS
+from nbst.problem import Problem, ProblemError, _Checker, box_crossings, read_json
 
 SCHEMA_VERSION = 1
 
@@ -109,7 +109,7 @@ def json_safe(x):
     return x
 
 
-_json_safe = json_safe  # the name models/cli.py imports
+_json_safe = json_safe  # the name nbst/cli/mujoco.py imports
 
 
 def dumps_strict(obj: Any, **kw) -> str:

@@ -41,19 +41,19 @@ def is_cold(*dispatchers) -> bool:
 
 def search_kernels() -> tuple:
     """The dispatchers a search runs (nbst's loop and the paper's)."""
-    from .search_loop import run_chunk
-    from .search_nbst import run_chunk_nbst
-    from .sim import evaluate_kernel, run
+    from nbst.search.loop import run_chunk
+    from nbst.search.nbst_loop import run_chunk_nbst
+    from nbst.sim import evaluate_kernel, run
 
     return (run, evaluate_kernel, run_chunk, run_chunk_nbst)
 
 
 def other_kernels() -> tuple:
     """The dispatchers of the polish, the Jacobian and the sensitivity report."""
-    from .jacobian import jacobian_from_events, transition_from_events
-    from .planner import aim_routes
-    from .polish import polish_kernel
-    from .sensitivity import late_impact_errors
+    from nbst.search.planner import aim_routes
+    from nbst.search.polish import polish_kernel
+    from nbst.sim.jacobian import jacobian_from_events, transition_from_events
+    from nbst.sim.sensitivity import late_impact_errors
 
     return (jacobian_from_events, transition_from_events, polish_kernel, late_impact_errors, aim_routes)
 
@@ -78,11 +78,11 @@ def warm_all(log=None) -> float:
     ``log(str)`` gets one line per stage."""
     import numpy as np
 
-    from .baselines import solve_with
-    from .jacobian import final_jacobian
-    from .problem import load_problem
-    from .sensitivity import analyze
-    from .sim import evaluate, simulate
+    from nbst.problem import load_problem
+    from nbst.sim import evaluate, simulate
+    from nbst.sim.jacobian import final_jacobian
+    from nbst.sim.sensitivity import analyze
+    from nbst.solvers.dispatch import solve_with
 
     log = log or (lambda s: None)
     t0 = time.perf_counter()

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import style
-from .gl import FrameRenderer, FrameTarget, create_context
-from .scene3d import look_at, perspective
+from nbst.render import style
+from nbst.render.gl import FrameRenderer, FrameTarget, create_context
+from nbst.render.scene3d import look_at, perspective
 
 #: Slow motion around impact: this many times slower from IMPACT_WINDOW[0] s before
 #: the first ball-pin contact to IMPACT_WINDOW[1] s after it.
@@ -261,7 +261,7 @@ def render_shot(path, output, *, still=None, camera: str = "both", size=None, fp
 
     from nbst.models.bowling import shotfile
 
-    from .video import render_video, write_png
+    from nbst.render.video import render_video, write_png
 
     shot = shotfile.load(path)
     from pathlib import Path
@@ -308,7 +308,7 @@ def cmd_render_shot(args) -> int:
     from nbst.models.bowling.shotfile import ShotFileError
     from nbst.outputs import prepare_output
 
-    from .gl import RenderError
+    from nbst.render.gl import RenderError
 
     out = str(args.output)
     still = getattr(args, "still", None)

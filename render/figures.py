@@ -13,7 +13,7 @@ start; small beside its target), filled disk = start, hollow small circle =
 target, dotted ring = neighbourhood of radius R, thin outline circle = final
 position, solid / dashed paths = cueable / noncueable. The helpers below
 (:func:`draw_start`, :func:`draw_target`, :func:`legend_below`, ...) are shared
-with the validation report (``nbst.models.report``).
+with the validation report (``nbst.render.report``).
 """
 from __future__ import annotations
 

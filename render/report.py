@@ -325,7 +325,7 @@ def _sensitivity_html(d) -> str:
     body = "".join(f"<tr><td style='text-align:left'>{k}</td><td>{v}</td></tr>" for k, v in rows)
     return (f"<h2>Sensitivity and the fixed-step prediction</h2><table>{body}</table>"
             f"<p class=small>First order, from the analytic Jacobian of the exact event chain "
-            f"(<code>nbst.sensitivity</code>); the prediction models each impact resolved one step late.</p>")
+            f"(<code>nbst.sim.sensitivity</code>); the prediction models each impact resolved one step late.</p>")
 
 
 def _convergence_html(val, d) -> str:

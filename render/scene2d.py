@@ -13,9 +13,9 @@ import numpy as np
 
 from nbst import palette
 
-from . import style
-from .gl import FrameRenderer, FrameTarget
-from .shapes import CAPSULE_DTYPE, CIRCLE_DTYPE, Capsules, Circles, Rect, Text
+from nbst.render import style
+from nbst.render.gl import FrameRenderer, FrameTarget
+from nbst.render.shapes import CAPSULE_DTYPE, CIRCLE_DTYPE, Capsules, Circles, Rect, Text
 
 
 class SampledMotion:

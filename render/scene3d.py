@@ -14,9 +14,9 @@ import math
 
 import numpy as np
 
-from . import style
-from .gl import FrameRenderer, FrameTarget
-from .shapes import Circles, Text
+from nbst.render import style
+from nbst.render.gl import FrameRenderer, FrameTarget
+from nbst.render.shapes import Circles, Text
 
 MESH_VS = """#version 330
 uniform mat4 u_mvp;
@@ -245,7 +245,7 @@ class Renderer3D(FrameRenderer):
         self._ghosts["color"] = style.GHOST[:3]
         self.trail_prog = None
         if self.trails:
-            from .shapes import CAPSULE_DTYPE, _Instanced
+            from nbst.render.shapes import CAPSULE_DTYPE, _Instanced
             self.trail = _Instanced(ctx, TRAIL_VS, TRAIL_FS, CAPSULE_DTYPE, "2f 2f 2f 1f 3f",
                                     ("in_p0", "in_p1", "in_alpha", "in_half", "in_color"), capacity=1024)
             self.trail_prog = tp = self.trail.prog
@@ -262,7 +262,7 @@ class Renderer3D(FrameRenderer):
         self.labels = self.target_text = None
         self.rail_w = rw
         if labels:
-            from .scene2d import Labels, target_label_px
+            from nbst.render.scene2d import Labels, target_label_px
             c = np.array([[W / 2, H / 2], [W / 2 + 1.0, H / 2]])
             px_per_unit = float(np.linalg.norm(np.diff(self.to_pixels(c, z=0.0), axis=0)))
             self.labels = Labels(ctx, p, p.radius * px_per_unit)
@@ -333,7 +333,7 @@ class Renderer3D(FrameRenderer):
         ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
         ctx.blend_equation = mgl.FUNC_ADD
         if self.target_text is not None:
-            from .scene2d import target_label_instances
+            from nbst.render.scene2d import target_label_instances
             p = self.problem
             centre = self.to_pixels(p.target, z=0.0)
             edge = self.to_pixels(p.target + self._markers["scale"][:, :2] * (1.0, 0.0), z=0.0)
@@ -346,7 +346,7 @@ class Renderer3D(FrameRenderer):
 
     def _draw_legend(self) -> None:
         """Legend under the readout, left of the table, when there is room."""
-        from .scene2d import draw_legend, legend_entries
+        from nbst.render.scene2d import draw_legend, legend_entries
         p = self.problem
         W, H = p.box
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
@@ -411,7 +411,7 @@ class Renderer3D(FrameRenderer):
         self.text.draw(self.size, self.text.layout(self.readout(t, inside), pad, pad), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
-        from .scene2d import trail_capsules
+        from nbst.render.scene2d import trail_capsules
         return trail_capsules(self.motion, t, self.trail_half, self.colors, min_step=np.sqrt(1e-9))  # world units
 
     def release(self) -> None:

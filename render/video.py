@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import style
-from .gl import RenderError
+from nbst.render import style
+from nbst.render.gl import RenderError
 
 
 def video_kind(path) -> str:

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from conftest import make_problem
-from nbst.aim import alloc_clearance, bank_shot, choose_bank, flights_conflict, path_conflicts, strike
+from nbst.search.aim import alloc_clearance, bank_shot, choose_bank, flights_conflict, path_conflicts, strike
 from nbst.planted import planted
-from nbst.search_ops import seed_state
+from nbst.search.ops import seed_state
 from nbst.sim import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -110,7 +110,7 @@ def test_generate_cli(tmp_path):
 
 
 def test_chain_strike_sends_the_second_struck_disk_to_its_target():
-    from nbst.aim import chain_strike_velocity
+    from nbst.search.aim import chain_strike_velocity
     p = make_problem([(100, 150), (250, 220), (420, 300)], 12.0, masses=[1.0, 1.5, 0.8],
                      cueable=[True, False, False], targets=[(100, 150), (250, 220), (700, 560)])
     out = np.empty(2)

@@ -1,4 +1,4 @@
-"""Baselines (nbst.baselines): exact trial accounting, improvement on a trivial problem,
+"""Baselines (nbst.solvers.baselines): exact trial accounting, improvement on a trivial problem,
 cueable-only search, determinism, the dispatcher."""
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from nbst.baselines import ALGORITHMS, solve_with
+from nbst.solvers import ALGORITHMS, solve_with
 from nbst.planted import planted
 from nbst.problem import ProblemError, problem_from_dict
 

@@ -189,7 +189,7 @@ def _snippet() -> str:
 @pytest.fixture(scope="module")
 def seven(tmp_path_factory, launcher):
     """A solved shot (pin 7 alone, seed 1), written as `nbst bowl solve` writes it."""
-    from nbst.models.bowling.cli import write_shot
+    from nbst.cli.bowl import write_shot
 
     res = search.solve(shot.mask_from_pins([7]), seed=1, max_rollouts=200, launcher=launcher)
     assert res.stopped == "found" and res.rollouts <= 200
@@ -231,8 +231,8 @@ def test_solve_finds_a_strike_within_a_small_budget(launcher):
 # --- the command line ----------------------------------------------------------------------
 
 def _bowl(*argv) -> int:
-    from nbst.cli import _Parser
-    from nbst.models.bowling import cli
+    from nbst.cli.main import _Parser
+    from nbst.cli import bowl as cli
 
     p = _Parser(prog="nbst")
     cli.register(p.add_subparsers(dest="command", parser_class=_Parser))

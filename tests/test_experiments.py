@@ -1,4 +1,4 @@
-"""nbst.experiments / nbst experiment: summaries, output files, resume, pool and Dask = in-process."""
+"""nbst.experiments.runs / nbst experiment: summaries, output files, resume, pool and Dask = in-process."""
 from __future__ import annotations
 
 import argparse
@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from nbst import experiments as X
+from nbst.experiments import runs as X
 from nbst.planted import planted
 from nbst.problem import ProblemError, problem_from_dict
 
@@ -29,8 +29,8 @@ def _same(a: dict, b: dict) -> None:
 
 
 def _cli(argv, tmp_path):
-    from nbst.cli import _Parser
-    from nbst.cli_experiment import register
+    from nbst.cli.main import _Parser
+    from nbst.cli.experiment import register
 
     parser = _Parser(prog="nbst")
     register(parser.add_subparsers(dest="command", parser_class=_Parser))

@@ -323,7 +323,7 @@ def test_error_lines_never_carry_control_characters(tmp_path, capsys):
 
 def test_report_html_escapes_the_name(tmp_path):
     pytest.importorskip("mujoco")
-    from models.report import report_html
+    from nbst.render.report import report_html
     from models.validate import validate
     d = copy.deepcopy(GOOD)
     d["name"] = "<script>alert(1)</script> & $x$"
@@ -352,7 +352,7 @@ def test_simulate_json_is_strict(tmp_path, capsys):
 
 
 def test_print_json_writes_non_finite_numbers_strictly(capsys):
-    from nbst.cli import print_json
+    from nbst.cli.args import print_json
     print_json({"cost": math.inf, "x": [math.nan, -math.inf, np.float32(1.5)], "n": np.int64(3)})
     assert _strict(capsys.readouterr().out) == {"cost": "inf", "x": [None, "-inf", 1.5], "n": 3}
     assert _strict(dumps_strict({"a": np.array([np.nan, 1.0])})) == {"a": [None, 1.0]}

@@ -6,7 +6,7 @@ import pytest
 
 from nbst import load_problem
 from nbst.cli import main
-from nbst.islands import island_seeds, solve_islands
+from nbst.solvers.islands import island_seeds, solve_islands
 from nbst.search import roundoff_cost, solve
 
 

@@ -224,7 +224,7 @@ def _drawn(fig):
 @pytest.mark.parametrize("which", ["overlay_figure", "error_figure", "timeline_figure"])
 def test_report_legends_never_cover_data(validation, which):
     """Each report figure has a legend, outside its axes and inside the figure."""
-    from nbst.models import report
+    from nbst.render import report
     fig = getattr(report, which)(validation)
     r = _drawn(fig)
     assert len(fig.legends) == 1
@@ -241,7 +241,7 @@ def test_report_overlay_speaks_the_palette(validation):
     from matplotlib.text import Annotation
 
     from nbst import palette
-    from nbst.models.report import overlay_figure
+    from nbst.render.report import overlay_figure
     val = validation
     p = val.problem
     fig = overlay_figure(val)
@@ -265,7 +265,7 @@ def test_report_error_curves_are_numbered_outside_the_axes(validation):
     from matplotlib.colors import to_rgb
 
     from nbst import palette
-    from nbst.models.report import error_figure
+    from nbst.render.report import error_figure
     val = validation
     p = val.problem
     fig = error_figure(val)

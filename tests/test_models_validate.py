@@ -148,7 +148,7 @@ def test_report_json_layout_is_golden():
 
 def test_sensitivity_and_prediction_check_in_every_report():
     # diamond-s14-like wall-only motion: the fixed-step prediction is MuJoCo's own error to 1e-8
-    # (nbst.sensitivity's docstring), so the check must say "right" and measured/linear ~ 1
+    # (nbst.sim.sensitivity's docstring), so the check must say "right" and measured/linear ~ 1
     p = make_problem([[100, 100], [600, 500]], 10.0, t_final=5.0)
     v = np.array([[300.0, 157.0], [-193.0, -131.0]])
     val = validate(p, v)

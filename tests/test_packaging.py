@@ -39,7 +39,7 @@ def test_wheel_holds_only_nbst(tmp_path):
     tops = {n.split("/")[0] for n in names}
     assert {t for t in tops if not t.endswith(".dist-info")} == {"nbst"}
     for must in ("nbst/models/__init__.py", "nbst/render/__init__.py", "nbst/problems/diamond-s14.json",
-                 "nbst/problems/over5.json", "nbst/problems/diamond-s14-tiny.json", "nbst/sim.py",
+                 "nbst/problems/over5.json", "nbst/problems/diamond-s14-tiny.json", "nbst/sim/kernel.py",
                  "nbst/models/bowling/atlas.json", "nbst/models/bowling/scene.xml"):
         assert must in names
     assert not any(n.startswith(("tests/", "benchmarks/", "models/", "render/")) for n in names)

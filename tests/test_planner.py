@@ -11,10 +11,11 @@ import pytest
 
 from conftest import make_problem
 from nbst import load_problem
-from nbst.aim import chain_strike_velocity, strike_velocity
-from nbst.planner import chain_aim, plan
+from nbst.search.aim import chain_strike_velocity, strike_velocity
+from nbst.search.planner import chain_aim, plan
 from nbst.search import solve, variant_params
-from nbst.sim import EVENT_DISK, simulate
+from nbst.constants import EVENT_DISK
+from nbst.sim import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -151,7 +152,7 @@ def test_planner_only_with_noncueable_disks():
 
 _COUNT = r"""
 import json, sys
-import nbst.sim as S, nbst.search_loop as SL, nbst.polish as PO
+import nbst.sim.kernel as S, nbst.search.loop as SL, nbst.search.polish as PO
 calls = [0]
 real = S.run
 def counted(*a):
@@ -180,7 +181,7 @@ def test_every_simulation_is_a_trial_counted_at_the_simulator():
 
 
 def test_ablation_entry_without_the_planner():
-    from nbst import experiments as X
+    from nbst.experiments import runs as X
 
     assert X.parse_entries("nbst, NBST-noplan") == ("nbst", "nbst-noplan") and "nbst-noplan" in X.ABLATION_ENTRIES
     spec = X.make_specs([load_problem("over5")], ["nbst-noplan"], runs=1, trials=3000)[0]

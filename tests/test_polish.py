@@ -3,8 +3,8 @@ import numpy as np
 
 from conftest import make_problem
 from nbst import load_problem
-from nbst.jacobian import final_jacobian
-from nbst.polish import polish
+from nbst.sim.jacobian import final_jacobian
+from nbst.search.polish import polish
 from nbst.sim import simulate
 
 

@@ -232,7 +232,7 @@ def test_plot_rejects_unknown_format(tmp_path, capsys):
 
 
 def test_registration_and_import_stay_light():
-    code = ("import sys, nbst, nbst.render, nbst.render.cli; from nbst.cli import build_parser; build_parser(); "
+    code = ("import sys, nbst, nbst.render, nbst.cli.render; from nbst.cli import build_parser; build_parser(); "
             "heavy = [m for m in ('moderngl', 'imageio', 'imageio_ffmpeg', 'matplotlib', 'trimesh', 'PIL') "
             "if m in sys.modules]; print(heavy); sys.exit(1 if heavy else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
@@ -272,7 +272,7 @@ def test_a_failed_render_leaves_no_video(tmp_path):
 def test_mujoco_sources_use_the_replay(tmp_path, straight, monkeypatch, source):
     """The MuJoCo plumbing with a stand-in replay: the exact motion shifted by 40 units
     in x, so frames tell which motion was drawn."""
-    import nbst.render.cli as rcli
+    import nbst.cli.render as rcli
     p, sol = straight
     tr = simulate(p, p.straight_velocities())
     calls = []

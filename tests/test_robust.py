@@ -1,4 +1,4 @@
-"""Robust mode (``nbst.robust``, ``solve(..., robust=True)``, ``nbst solve --robust``): reproducible
+"""Robust mode (``nbst.search.robust``, ``solve(..., robust=True)``, ``nbst solve --robust``): reproducible
 from the seed, never worse than what it chose from, recorded in the file, and its score means what
 it says (start shifts that are physical, a collision-free motion that no shift can spoil)."""
 import dataclasses
@@ -9,7 +9,7 @@ import pytest
 
 from nbst import load_problem
 from nbst.cli import main
-from nbst.robust import SHIFT_STEPS, TIMESTEP, draws, robust_score, score
+from nbst.search.robust import SHIFT_STEPS, TIMESTEP, draws, robust_score, score
 from nbst.search import solve, variant_params
 from nbst.sim import simulate
 
@@ -127,7 +127,7 @@ def test_free_flight_score_is_the_shift():
 
 
 def test_polish_on_target_keeps_the_disks_and_lowers_the_margin_objective(over5):
-    from nbst.robust import MARGIN_POWER, polish_on_target
+    from nbst.search.robust import MARGIN_POWER, polish_on_target
 
     # a plain order-5 solution: every disk on target, none exactly at its centre (cost ~ 1e4)
     v = solve(over5, seed=3, max_trials=TRIALS, patience=0).velocities

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from nbst.search import mirror_images
-from nbst.search_ops import (BEST, CULL_SUBSUMED, CULL_WORST, INS_ADDED, INS_CULLED, INS_DISPLACED, INS_FALLBACK,
+from nbst.search.ops import (BEST, CULL_SUBSUMED, CULL_WORST, INS_ADDED, INS_CULLED, INS_DISPLACED, INS_FALLBACK,
                              INS_SIG_LIMIT,
                              INS_WORST, NTAB, SIZE, crossover, cull_subsumed, insert, insert_initial, new_population,
                              pop_append, pop_remove, rng_uniform, seed_state, select_senate, select_uniform,
@@ -329,7 +329,7 @@ def test_rng_is_reproducible():
 
 
 def test_popcount_matches_python():
-    from nbst.search_ops import popcount
+    from nbst.search.ops import popcount
     rng = np.random.default_rng(10)
     for x in [0, 1, 0b1011, 2**62 + 5, 2**63 - 1, *rng.integers(0, 2**63, 200).tolist()]:
         assert popcount(np.int64(x)) == bin(int(x)).count("1")

@@ -1,4 +1,4 @@
-"""nbst.sensitivity: amplification against finite differences and closed forms; the
+"""nbst.sim.sensitivity: amplification against finite differences and closed forms; the
 fixed-step prediction against closed forms and against MuJoCo itself."""
 import json
 import sys
@@ -10,8 +10,8 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from conftest import make_problem  # noqa: E402
 
-from nbst.jacobian import final_jacobian, transition_jacobian  # noqa: E402
-from nbst.sensitivity import analyze  # noqa: E402
+from nbst.sim.jacobian import final_jacobian, transition_jacobian  # noqa: E402
+from nbst.sim.sensitivity import analyze  # noqa: E402
 from nbst.sim import simulate  # noqa: E402
 
 H = 0.00025

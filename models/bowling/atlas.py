@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import search, shot
+from nbst.models.bowling import search, shot
 
 #: Uniform launches that start an empty archive before the emitter takes over.
 EXPLORE = 256

@@ -17,7 +17,7 @@ import numpy as np
 
 from nbst.cluster import connect
 
-from . import shot
+from nbst.models.bowling import shot
 
 #: Per worker process: duration -> a one-thread Launcher (built on first use).
 _WORKER_LAUNCHERS: dict = {}

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from . import geometry
+from nbst.models.bowling import geometry
 
 #: Triangles per row of a block.
 PER_ROW = 16

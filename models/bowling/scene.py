@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import pin as pinmod
+from nbst.models.bowling import pin as pinmod
 
 INCH = 0.0254
 #: Simulation step (s). Solref time constants stay >= 8 steps (see the note above).

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import shot
+from nbst.models.bowling import shot
 
 #: Uniform exploration launches before CMA-ES restarts (capped at a quarter of the budget).
 EXPLORE = 200
@@ -105,7 +105,7 @@ def geometry_distance(a, b) -> np.ndarray:
     """Distance from masks ``a`` to the request ``b`` (broadcast): 1 per wanted pin standing or
     unwanted pin down, but :data:`NEIGHBOUR_EXTRA` for an unwanted down pin whose neighbour on
     the triangle (12 in away) is a wanted down pin. 0 exactly when a == b."""
-    from . import geometry
+    from nbst.models.bowling import geometry
 
     adj = (geometry.neighbours().astype(np.int64) << np.arange(10)).sum(axis=1)   # (10,) neighbour masks
     a = np.asarray(a, dtype=np.int64)

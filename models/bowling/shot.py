@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from . import scene
+from nbst.models.bowling import scene
 
 #: Length of a shot (s): ~1 s to reach the pins at 5 m/s, then >= 1.5 s of pin action.
 DURATION = 2.5

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import scene, shot
+from nbst.models.bowling import scene, shot
 
 SCHEMA_VERSION = 1
 KIND = "nbst-bowling-shot"

@@ -15,8 +15,8 @@ import sys
 import time
 from pathlib import Path
 
-from nbst.cli_solve import int_at_least
-from nbst.islands import default_jobs
+from nbst.cli.args import int_at_least
+from nbst.parallel import default_jobs
 
 
 def _pins(text: str) -> int:
@@ -127,10 +127,10 @@ def _err(cmd: str, msg: str) -> int:
 def launcher(args, jobs: int):
     """The rollout runner of a subcommand: K threads here, or a Dask cluster's workers
     (``--cluster``; ValueError, one line, when the scheduler cannot be reached)."""
-    from . import shot
+    from nbst.models.bowling import shot
 
     if getattr(args, "cluster", None):
-        from .cluster import ClusterLauncher
+        from nbst.models.bowling.cluster import ClusterLauncher
 
         return ClusterLauncher(args.cluster)
     return shot.Launcher(jobs=jobs)
@@ -141,7 +141,7 @@ def write_shot(path, model, launch, mask: int, *, shared_scene: str | None = Non
     it, atomically; with ``shared_scene`` the file names that scene (written by the caller)."""
     from nbst.outputs import write_text_atomic
 
-    from . import shotfile
+    from nbst.models.bowling import shotfile
 
     path = Path(path)
     scene_name = shared_scene or f"{path.stem}.scene.xml"
@@ -182,7 +182,7 @@ def cmd_solve(args) -> int:
 
     from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt
 
-    from . import search, shot
+    from nbst.models.bowling import search, shot
 
     prepare_output(args.output)
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
@@ -251,7 +251,7 @@ def cmd_solve(args) -> int:
 
 
 def cmd_replay(args) -> int:
-    from . import shotfile
+    from nbst.models.bowling import shotfile
 
     try:
         d, down = shotfile.replay_file(args.shot)
@@ -260,7 +260,7 @@ def cmd_replay(args) -> int:
     want = sorted(d["down"])
     ok = down == want
     if args.json:
-        from nbst.cli import print_json
+        from nbst.cli.args import print_json
 
         print_json({"shot": str(args.shot), "down": down, "expected": want, "match": ok})
     else:
@@ -270,7 +270,7 @@ def cmd_replay(args) -> int:
 
 
 def shot_name(mask: int) -> str:
-    from . import shot
+    from nbst.models.bowling import shot
 
     return "subset-" + "_".join(map(str, shot.pins_of(mask))) + ".json"
 
@@ -283,7 +283,7 @@ def unpack_atlas(atlas_path, folder) -> int:
 
     from nbst.outputs import write_text_atomic
 
-    from . import shot, shotfile
+    from nbst.models.bowling import shot, shotfile
 
     atlas_path, folder = Path(atlas_path), Path(folder)
     a = json.loads(atlas_path.read_text(encoding="utf-8"))
@@ -313,9 +313,9 @@ def cmd_atlas(args) -> int:
 
     from nbst.outputs import prepare_output, sigterm_as_interrupt, write_text_atomic
 
-    from . import atlas as atlasmod
-    from . import scene as scenemod
-    from . import search, shot, shotfile
+    from nbst.models.bowling import atlas as atlasmod
+    from nbst.models.bowling import scene as scenemod
+    from nbst.models.bowling import search, shot, shotfile
 
     out = prepare_output(args.out, directory=True, option="--out")
     if args.from_atlas:
@@ -407,7 +407,7 @@ def cmd_atlas(args) -> int:
                                                      seconds=time.perf_counter() - t0, seed=args.seed,
                                                      method=args.method, archive=arch))
     atlas_json(out, seed=args.seed)
-    from . import figure
+    from nbst.models.bowling import figure
 
     fig = figure.atlas_figure(have, title=f"{len(have)} of 1,023 subsets (red frame: needs a flying pin)")
     figure.save(fig, out / "summary.png")
@@ -420,7 +420,7 @@ def cmd_atlas(args) -> int:
 def summary_md(have: dict, *, launches: int, probes: int, seconds: float, seed: int, method: str,
                archive=None) -> str:
     """The atlas's summary table (markdown): found / possible by size, and the geometry classes."""
-    from . import geometry
+    from nbst.models.bowling import geometry
 
     found = sorted(have)
     lines = ["# Bowling atlas", "", f"{len(found)} of 1023 subsets found; this run: {launches} search launches "

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import argparse
 
-from .domain import plain
-from .problem import builtin_names, load_problem
-from .solution import load_solution
+from nbst.domain import plain
+from nbst.problem import builtin_names, load_problem
+from nbst.solution import load_solution
 
 
 def register(sub) -> None:
@@ -30,7 +30,7 @@ def register(sub) -> None:
 
 
 def cmd_problems(args) -> int:
-    from .cli import print_json
+    from nbst.cli.args import print_json
 
     if args.action == "show":
         if not args.name:
@@ -59,8 +59,8 @@ def _clip(s: str, n: int) -> str:
 
 
 def cmd_simulate(args) -> int:
-    from .cli import print_json
-    from .sim import simulate
+    from nbst.cli.args import print_json
+    from nbst.sim import simulate
 
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)

@@ -11,8 +11,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .cli_solve import int_at_least, nonnegative_cost
-from .problem import display_name
+from nbst.cli.args import cluster_client, int_at_least, nonnegative_cost
+from nbst.problem import display_name
 
 ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst (nbst's default search; "
               "'signature' means the same), nbst-noplan (nbst without the backward planner), "
@@ -80,22 +80,9 @@ def _no_action(p) -> int:
     return 2
 
 
-def cluster_client(args):
-    """The Dask client of ``--cluster`` (None without it); ProblemError when unreachable."""
-    if args.cluster is None:
-        return None
-    from .cluster import connect
-    from .problem import ProblemError
-
-    try:
-        return connect(args.cluster)
-    except ValueError as e:
-        raise ProblemError("<arguments>", "--cluster", str(e)) from None
-
-
 def _run(args, specs, desc: str):
-    from .experiments import run_specs
-    from .outputs import prepare_output, sigterm_as_interrupt
+    from nbst.experiments.runs import run_specs
+    from nbst.outputs import prepare_output, sigterm_as_interrupt
 
     prepare_output(args.out, directory=True, option="--out")
     client = cluster_client(args)
@@ -110,7 +97,7 @@ def _run(args, specs, desc: str):
 
 def _emit(args, rows, table: str, files) -> None:
     if args.json:
-        from .cli import print_json
+        from nbst.cli.args import print_json
 
         print_json(rows)
     else:
@@ -120,9 +107,9 @@ def _emit(args, rows, table: str, files) -> None:
 
 
 def cmd_curves(args) -> int:
-    from . import exp_plots as P
-    from .experiments import _safe, curves_rows, make_specs, parse_entries
-    from .problem import load_problem
+    from nbst.experiments import plots as P
+    from nbst.experiments.runs import _safe, curves_rows, make_specs, parse_entries
+    from nbst.problem import load_problem
 
     problem = load_problem(args.problem)
     entries = parse_entries(args.algorithms)
@@ -146,9 +133,9 @@ ABLATION_COLUMNS = [("entry", "entry"), ("runs", "runs"), ("mean", "mean"), ("be
 
 
 def cmd_ablation(args) -> int:
-    from . import exp_plots as P
-    from .experiments import _safe, ablation_rows, make_specs, parse_entries
-    from .problem import load_problem
+    from nbst.experiments import plots as P
+    from nbst.experiments.runs import _safe, ablation_rows, make_specs, parse_entries
+    from nbst.problem import load_problem
 
     problem = load_problem(args.problem)
     entries = parse_entries(args.algorithms)
@@ -174,7 +161,7 @@ COMPARE_COLUMNS = [("entry", "entry"), ("problems", "problems"), ("runs", "runs"
 
 
 def _expand(problems: list[str]) -> list:
-    from .problem import ProblemError, load_problem
+    from nbst.problem import ProblemError, load_problem
 
     out = []
     for p in problems:
@@ -190,8 +177,8 @@ def _expand(problems: list[str]) -> list:
 
 
 def cmd_compare(args) -> int:
-    from . import exp_plots as P
-    from .experiments import _safe, compare_detail_rows, compare_rows, make_specs, parse_entries
+    from nbst.experiments import plots as P
+    from nbst.experiments.runs import _safe, compare_detail_rows, compare_rows, make_specs, parse_entries
 
     problems = _expand(args.problems)
     entries = parse_entries(args.algorithms)

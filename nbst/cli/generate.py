@@ -29,9 +29,9 @@ def register(sub) -> None:
 def cmd_generate(args) -> int:
     import numpy as np
 
-    from .outputs import prepare_output, write_json_atomic
-    from .planted import planted
-    from .solution import make_solution
+    from nbst.outputs import prepare_output, write_json_atomic
+    from nbst.planted import planted
+    from nbst.solution import make_solution
 
     prepare_output(args.output)
     if args.solution:

@@ -14,20 +14,20 @@ import argparse
 import importlib
 import sys
 
-from ._version import __version__
-from .domain import plain
-from .outputs import OutputError
-from .problem import ProblemError
+from nbst._version import __version__
+from nbst.domain import plain
+from nbst.outputs import OutputError
+from nbst.problem import ProblemError
 
 #: Modules whose ``register(subparsers)`` adds subcommands, in ``--help`` order.
 COMMAND_MODULES = (
-    "nbst.cli_core",
-    "nbst.cli_solve",
-    "nbst.cli_generate",
-    "nbst.cli_experiment",
-    "nbst.models.cli",
-    "nbst.models.bowling.cli",
-    "nbst.render.cli",
+    "nbst.cli.core",
+    "nbst.cli.solve",
+    "nbst.cli.generate",
+    "nbst.cli.experiment",
+    "nbst.cli.mujoco",
+    "nbst.cli.bowl",
+    "nbst.cli.render",
 )
 
 
@@ -77,12 +77,6 @@ def main(argv=None) -> int:
             raise
         print(f"nbst: error: {plain(e.filename)}: {plain(e.strerror or e)}", file=sys.stderr)
         return 1
-
-
-def print_json(obj) -> None:
-    """Print ``obj`` as strict JSON: NaN -> null, +/-inf -> "inf"/"-inf" (``docs/formats.md``)."""
-    from .solution import dumps_strict
-    sys.stdout.write(dumps_strict(obj, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -113,7 +113,7 @@ def _velocities(problem, solution):
 def cmd_mjcf(args) -> int:
     from nbst.problem import load_problem
 
-    from .scene import scene_xml
+    from nbst.models.scene import scene_xml
 
     problem = load_problem(args.problem)
     v = _velocities(problem, args.solution)
@@ -134,8 +134,8 @@ def cmd_mjcf(args) -> int:
 def cmd_validate(args) -> int:
     from nbst.problem import load_problem
 
-    from .mjrun import MAX_STEPS, check_steps
-    from .validate import LADDER, validate
+    from nbst.models.mjrun import MAX_STEPS, check_steps
+    from nbst.models.validate import LADDER, validate
 
     problem = load_problem(args.problem)
     v = _velocities(problem, args.solution)
@@ -162,12 +162,12 @@ def cmd_validate(args) -> int:
 
         from nbst.outputs import write_json_atomic, write_text_atomic
 
-        from .report import report_html
+        from nbst.render.report import report_html
         out = Path(args.report)
         write_json_atomic(out / "report.json", val.to_dict(), option="--report")
         write_text_atomic(out / "report.html", report_html(val), option="--report")
     if args.json:
-        from nbst.cli import print_json
+        from nbst.cli.args import print_json
         from nbst.solution import _json_safe
         print_json(_json_safe(val.to_dict()))
     else:
@@ -180,7 +180,7 @@ def cmd_validate(args) -> int:
 
 
 def cmd_gallery(args) -> int:
-    from .gallery import main as gallery_main
+    from nbst.models.gallery import main as gallery_main
     argv = list(args.names) + ["--seed", str(args.seed), "--max-trials", str(args.max_trials)]
     if args.dir:
         from nbst.outputs import prepare_output

@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import style
+from nbst.render import style
 
 
 def register(sub) -> None:
@@ -101,11 +101,11 @@ def cmd_render(args) -> int:
     from nbst.problem import load_problem
     from nbst.solution import load_solution
 
-    from .bowling import is_shot_file
-    from .gl import RenderError
+    from nbst.render.bowling import is_shot_file
+    from nbst.render.gl import RenderError
 
     if is_shot_file(args.problem):
-        from .bowling import cmd_render_shot
+        from nbst.render.bowling import cmd_render_shot
 
         return cmd_render_shot(args)
     if args.solution is None:
@@ -146,7 +146,7 @@ def cmd_render(args) -> int:
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
     try:  # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
         if kind != "png":
-            from .video import MAX_FRAMES, check_frames
+            from nbst.render.video import MAX_FRAMES, check_frames
             if args.max_frames is not None and args.max_frames < 1:
                 return _err("render", f"--max-frames {args.max_frames}: must be >= 1")
             check_frames(problem.t_final, fps, speed=args.speed, hold=args.hold,
@@ -176,8 +176,8 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
 
     from nbst.sim import simulate
 
-    from .gl import create_context
-    from .video import frame_times, render_video, write_png
+    from nbst.render.gl import create_context
+    from nbst.render.video import frame_times, render_video, write_png
 
     tr = simulate(problem, sol.velocities)
     if tr.truncated:
@@ -190,7 +190,7 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
         times = frame_times(problem.t_final, fps, speed=args.speed, hold=args.hold)
     motion, ghost = tr, None
     if args.source in ("mujoco", "both"):
-        from .scene2d import SampledMotion
+        from nbst.render.scene2d import SampledMotion
         sample_t = np.unique(np.concatenate((times, frame_times(problem.t_final, 120.0))))
         if not args.quiet:
             print(f"nbst render: replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo ...",
@@ -230,15 +230,15 @@ def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, t
                   labels=False):
     """A 2D or 3D renderer with ``render(t, out=None) -> (H, W, 3) uint8`` and ``size``."""
     if view == "3d":
-        from .scene3d import Renderer3D
+        from nbst.render.scene3d import Renderer3D
         return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels)
-    from .scene2d import Renderer2D
+    from nbst.render.scene2d import Renderer2D
     return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels)
 
 
 def mujoco_positions(problem, velocities, times):
     """Disk centres (T, N, 2) from the MuJoCo replay, or a one-line RenderError."""
-    from .gl import RenderError
+    from nbst.render.gl import RenderError
     try:
         from nbst.models import rollout
     except ImportError:
@@ -250,7 +250,7 @@ def mujoco_positions(problem, velocities, times):
 def cmd_plot_problem(args) -> int:
     from nbst.problem import load_problem
 
-    from .figures import plot_problem, save_figure
+    from nbst.render.figures import plot_problem, save_figure
     problem = load_problem(args.problem)
     fig = plot_problem(problem)
     return _save(fig, args, save_figure)
@@ -261,7 +261,7 @@ def cmd_plot_trajectories(args) -> int:
     from nbst.sim import simulate
     from nbst.solution import load_solution
 
-    from .figures import plot_trajectories, save_figure
+    from nbst.render.figures import plot_trajectories, save_figure
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)
     fig = plot_trajectories(problem, simulate(problem, sol.velocities))

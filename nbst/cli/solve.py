@@ -4,7 +4,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .warmup import COLD_COMPILE_SECONDS
+from nbst.cli.args import int_at_least, nonnegative_cost
+from nbst.warmup import COLD_COMPILE_SECONDS
 
 VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes, a straight start and a "
                 "backward planner for noncueable disks (default); nbst-noplan: the same without the planner; "
@@ -12,30 +13,6 @@ VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed s
                 "D no genetically "
                 "engineered crossover; E no signature information (R = box width, initial population 60); "
                 "F no culling of subsumed solutions; G no elitism; H no directed randomization")
-
-
-def int_at_least(lo: int, what: str):
-    """argparse type: an integer >= lo (underscores allowed); ``what`` names it in errors."""
-    def parse(text: str) -> int:
-        try:
-            v = int(text.replace("_", ""))
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be an integer, got {text!r}") from None
-        if v < lo:
-            raise argparse.ArgumentTypeError(f"{what} must be >= {lo}, got {v}")
-        return v
-    return parse
-
-
-def nonnegative_cost(text: str) -> float:
-    """argparse type: a target cost, a number >= 0."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"target cost must be a number, got {text!r}") from None
-    if not v >= 0.0:
-        raise argparse.ArgumentTypeError(f"target cost must be >= 0, got {text!r}")
-    return v
 
 
 def _variant(text: str) -> str:
@@ -106,8 +83,8 @@ def register(sub) -> None:
 
 
 def cmd_solve(args) -> int:
-    from .problem import load_problem
-    from .outputs import prepare_output, signals_deferred, sigterm_as_interrupt, write_json_atomic
+    from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt, write_json_atomic
+    from nbst.problem import load_problem
 
     problem = load_problem(args.problem)
     # before the search: a long solve must not end unable to write, nor overwrite its input
@@ -116,15 +93,15 @@ def cmd_solve(args) -> int:
     robust = bool(getattr(args, "robust", False))
     for option, given in (("--variant", args.variant != "nbst"), ("--robust", robust)):
         if given and algorithm != "signature":
-            from .problem import ProblemError
+            from nbst.problem import ProblemError
 
             raise ProblemError("<arguments>", option, f"applies to --algorithm signature only, not {algorithm}")
     label = (args.variant if algorithm == "signature" else algorithm) + (", robust" if robust else "")
-    from .search import roundoff_cost
+    from nbst.search import roundoff_cost
 
     target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
     if not args.quiet:
-        from .warmup import announce, search_kernels
+        from nbst.warmup import announce, search_kernels
 
         announce(search_kernels())
     bar = []  # made at the first progress report: no rate or ETA while numba compiles
@@ -143,9 +120,10 @@ def cmd_solve(args) -> int:
         bar[0].set_postfix_str(f"best cost {p.best_cost:.6g}, {p.best_order}/{problem.n} disks on target",
                                refresh=False)
 
-    from .islands import default_jobs, solve_islands
+    from nbst.parallel import default_jobs
+    from nbst.solvers.islands import solve_islands
 
-    from .cli_experiment import cluster_client
+    from nbst.cli.args import cluster_client
 
     client = cluster_client(args)  # None without --cluster; ProblemError (exit 2, one line) if unreachable
     if args.jobs is not None:

@@ -1,6 +1,6 @@
 """Tables and figures of ``nbst experiment``: the thin writers (CSV, Markdown, PNG + SVG).
 
-The rows come from ``nbst.experiments`` (pure summaries); here they are only drawn or
+The rows come from ``nbst.experiments.runs`` (pure summaries); here they are only drawn or
 written. matplotlib is imported lazily, with the Agg backend (no display needed).
 """
 from __future__ import annotations
@@ -9,7 +9,7 @@ import csv
 import io
 from pathlib import Path
 
-from .experiments import BASELINE_ENTRIES, fmt
+from nbst.experiments.runs import BASELINE_ENTRIES, fmt
 
 #: Figure size (inches) and raster resolution: small files for the docs (tens of kB).
 FIG_SIZE = (7.0, 4.2)
@@ -30,7 +30,7 @@ def write_csv(path: str | Path, rows: list[dict], columns: list[str]) -> None:
 
 
 def _write_text(path: str | Path, text: str) -> None:
-    from .outputs import write_text_atomic
+    from nbst.outputs import write_text_atomic
 
     write_text_atomic(path, text, option="--out")
 
@@ -63,7 +63,7 @@ def _kind(entry: str) -> str:
 
 def save_figure(fig, stem: str | Path) -> list[Path]:
     """Write ``stem.png`` and ``stem.svg``; returns the paths."""
-    from .outputs import atomic_path
+    from nbst.outputs import atomic_path
 
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)

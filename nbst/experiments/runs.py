@@ -6,11 +6,11 @@ process pool or on a Dask cluster and writes each finished run to its own JSON f
 (atomically) as soon as it finishes, so a crash loses no finished run and running the
 same specs again skips the finished ones. The summaries (:func:`curves_rows`,
 :func:`ablation_rows`, :func:`compare_rows`) are pure functions of the results; plots
-and tables are drawn by ``nbst.exp_plots``.
+and tables are drawn by ``nbst.experiments.runs.plots``.
 
 Entries name what runs: ``A`` .. ``H`` and ``nbst`` are the signature search's variants
 (``nbst.search.solve``), ``cma``, ``de``, ``ga``, ``random`` the baselines
-(``nbst.baselines``). Every run uses its whole budget (patience off) unless a target
+(``nbst.solvers.baselines``). Every run uses its whole budget (patience off) unless a target
 cost is given.
 """
 from __future__ import annotations
@@ -25,7 +25,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable, Iterable
 
-from .problem import Problem, ProblemError, problem_from_dict
+from nbst.problem import Problem, ProblemError, problem_from_dict
 
 SCHEMA_VERSION = 1
 VARIANT_ENTRIES = ("A", "B", "C", "D", "E", "F", "G", "H", "nbst", "nbst-noplan")  # nbst-noplan: no backward planner
@@ -111,7 +111,7 @@ def make_specs(problems: Iterable[Problem], entries: Iterable[str], *, runs: int
 
 def run_one(spec: RunSpec) -> dict:
     """Run one spec (pure: the same spec gives the same result, except wall time)."""
-    from .baselines import solve_with
+    from nbst.solvers.dispatch import solve_with
 
     problem = problem_from_dict(spec.problem, source=f"<experiment {spec.problem_name}>")
     if spec.entry in VARIANT_ENTRIES:
@@ -148,7 +148,7 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
               results come back to this process, which writes them
     Returns the results in the order of ``specs``.
     """
-    from .outputs import write_json_atomic
+    from nbst.outputs import write_json_atomic
 
     out = Path(out_dir)
     results: list[dict | None] = [None] * len(specs)

@@ -26,8 +26,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .search_ops import rng_uniform
-from .sim import pair_tau
+from nbst.search.ops import rng_uniform
+from nbst.sim import pair_tau
 
 @njit(cache=True, inline="always")
 def mirror(u, k, lo, hi):
@@ -194,7 +194,7 @@ def path_conflicts(i, vi, x0, V, radius, W, H, t_final):
 def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounces, scr, rng, out):
     """Bank shot for disk i (min_bounces..max_bounces bounces) whose path meets the
     fewest other disks' current free flights (velocities V), chosen uniformly at
-    random among the best (``rng``: a xoshiro256** state, ``nbst.search_ops.seed_state``).
+    random among the best (``rng``: a xoshiro256** state, ``nbst.search.ops.seed_state``).
     ``scr`` from ``alloc_clearance(N)``. Writes the velocity to out; returns the
     number of conflicts of the chosen path.
 

@@ -1,62 +1,7 @@
-"""The paper's signature search (Ngo & Marks style), its variants B-H, and ``solve``.
-
-    from nbst import load_problem
-    from nbst.search import solve
-    sol = solve(load_problem("diamond-s14"), seed=1, max_trials=200_000)
-    sol.velocities, sol.meta["cost"], sol.meta["order"]
-
-Layout: operators in ``nbst.search_ops`` (small numba kernels, tested one by one
-on hand-built populations), the compiled initialize / generate-insert loop in
-``nbst.search_loop``, parameters, variants and the Python driver here.
-
-Choices the paper leaves open (each is a :class:`SearchParams` field or a run
-option; ``docs/search.md`` has the same list with the reasoning):
-
-* creep: normal perturbation of one cueable disk's velocity, std per axis
-  ``creep_fraction * R / t_final`` (default 0.1: the free-flight end point moves
-  ~R/10 = 7.5 units per axis on the benchmark problems); R is the problem's, in
-  every variant.
-* uniform randomize: the free-flight end point is uniform over the box (centre
-  region [r, W-r] x [r, H-r]) and the mirror image it is reached through is
-  uniform over the 61 images with |kx| + |ky| <= ``max_bounces`` = 5, i.e. the
-  unfolded end point is uniform over the union of those 61 image boxes.
-* directed randomize is deterministic (the straight velocity is unique).
-* within a signature, the parent is a uniformly chosen member.
-* second crossover parent: never the first parent itself (its signature is
-  allowed when another member holds it); Senate-like among the signatures that
-  maximize popcount(s1 | s2).
-* crossover with a single member is replaced by creep (never happens after a
-  normal initialize).
-* "best" means lowest L2 cost among accepted (order >= 1) solutions; an
-  improvement is a strictly lower cost.
-* generate rejects order-0 children too (Senate selection ranges over orders
-  1..N, so the population holds none); truncated simulations (``max_events``)
-  score cost inf, signature 0, and are rejected.
-* initialize: the diversity criterion counts every disk (noncueable ones too),
-  stops after ``init_max_tries`` = 1000 trials if unmet (and goes on past it until
-  at least one solution is accepted); initialize's trials count towards the trial
-  budget; elitism protects the best already during initialize.
-* culling: among the subsumed solutions outside the best's signature, the lowest
-  order is found and every subsumed solution of that order deleted (one round per
-  insertion). If nothing is subsumed and the population exceeds ``hard_limit`` =
-  400, the worst member outside the best's signature is deleted (counted in
-  ``meta["fallback_deletions"]``).
-* insert's per-signature limit is checked before the population limit; "worst"
-  = highest cost, ties to the lowest index.
-* stopping: ``patience`` K counts trials since the last improvement (default
-  100,000; 0 disables), ``max_trials`` (default 1,000,000; includes initialize),
-  ``target_cost`` (stop once the best cost <= C; default off).
-* variants: B both parents uniform over members (second != first, no popcount
-  rule); C weights 1/3 creep, directed, uniform; D crossover coin per disk; E
-  signature radius = box width, initialize until 60 members, per-signature limit
-  60 (else one signature could hold only 10); F after every addition the worst
-  member is deleted (the per-signature limit still applies first); G no elitism
-  anywhere (displacement, limits, culling); H initialize uses uniform randomize
-  only and generate weights 1/3 creep, uniform, crossover.
-* random numbers: xoshiro256** seeded from ``np.random.SeedSequence(seed)``.
-* ``meta`` cost / signature / order use the problem's R (as ``nbst simulate``);
-  ``search_signature``, history orders and ``first_full_order_trial`` use the
-  search's R (they differ only in variant E).
+"""The signature search's driver: ``solve`` and ``run_search`` pack a problem and its
+:class:`~nbst.search.params.SearchParams` into arrays, run the compiled loop
+(``nbst.search.loop``, or ``nbst.search.nbst_loop`` for nbst's variant) chunk by chunk
+with progress and Ctrl-C, and unpack the best solution with its statistics.
 """
 from __future__ import annotations
 
@@ -68,206 +13,11 @@ from typing import Callable
 
 import numpy as np
 
-from ._version import __version__
-from .constants import MAX_EVENTS, ROUNDOFF_REL
-from .problem import Problem, ProblemError
-from .robust import ARCHIVE_SIZE as ROBUST_ARCHIVE, POLISH_TOP as ROBUST_POLISH, SAMPLES as ROBUST_SAMPLES, \
-    SEARCH_SAMPLES as ROBUST_K, TIMESTEP as ROBUST_TIMESTEP
-
-VARIANTS = {
-    "A": "the full algorithm",
-    "B": "uniform probability for parent selection",
-    "C": "no crossover operation",
-    "D": "no genetically engineered crossover",
-    "E": "no signature information (R = box width, initial population 60)",
-    "F": "no culling of subsumed solutions (delete the worst on every insertion)",
-    "G": "no elitism",
-    "H": "no directed randomization",
-    "nbst": "nbst's default: the paper's search plus polish, bank shots, strikes, a straight start and the backward "
-            "planner",
-    "nbst-noplan": "nbst without the backward planner (ablation)",
-}
-
-ALGORITHM = "paper-signature-search"
-ALGORITHM_NBST = "nbst-signature-search"
-
-
-@dataclass(frozen=True, kw_only=True)
-class SearchParams:
-    """Every knob of the signature search. Defaults are the paper's (A).
-
-    pop_limit        : population limit (paper: 200)
-    sig_limit        : members per signature (paper: 10)
-    diversity        : initialize until every disk is acceptable in this many members (paper: 5)
-    init_max_tries   : cap on initialize's trials if the diversity target is never met (open)
-    init_population  : > 0: initialize until the population has this many members instead (E: 60)
-    signature_radius : R used for signatures, None = the problem's (E: the box width)
-    max_bounces      : uniform randomize reaches images with |kx| + |ky| <= this (paper: 5)
-    creep_fraction   : creep std per axis = creep_fraction * R / t_final, units/s (open)
-    op_weights       : (creep, directed, uniform, crossover) probabilities (paper: 1/4 each)
-    p_directed_init  : initialize's chance of directed (vs uniform) randomize per disk (paper: 1/2)
-    senate           : Senate-like parent selection (B: off, uniform over members)
-    engineered       : genetically engineered crossover (D: off)
-    cull             : "subsumed" (paper) or "worst" (F)
-    elitism          : the best member is never deleted (G: off)
-    hard_limit       : culling fallback: above this size the worst member goes (open)
-    max_events       : per-simulation event cap (a truncated run scores cost inf)
-
-    nbst's additions (``nbst.search_nbst``; all off in A-H, on in variant "nbst"):
-    polish           : Levenberg-Marquardt polish of promising children
-    polish_sims      : simulation budget of one polish
-    polish_ratio     : polish children of the best order within this factor of the best cost
-    bank_weight      : generate probability weight of the bank-shot operator
-    bank_bounces     : bank shots use images with at most this many bounces
-    strike_weight    : weight of the strike operator (used only if some disk is noncueable)
-    strike_bounces   : strikes aim at images of the target with at most this many bounces
-    adapt            : adapt operator probabilities from their recent success
-    adapt_rate       : rate of the success moving average
-    adapt_floor      : least probability of an enabled operator
-    straight_start   : initialize's first trial sends every cueable disk straight at its target
-    restart          : re-initialize around the best after this many trials without a
-                       local improvement (0: never)
-    planner          : run the backward planner (``nbst.planner``) first when some disk is
-                       noncueable; its best candidates are initialize's first trials
-    planner_trials   : the planner's simulations, at most (and at most a quarter of max_trials);
-                       every one counts as a trial
-    planner_chain    : longest strike chain the planner builds (cue -> noncueable -> ...)
-    planner_seeds    : planner candidates handed to the search
-    planner_polish_sims : polish budget of a planner candidate (instead of polish_sims)
-    planner_weight   : weight of the plan operator (the planner's routes; only after a planner run)
-
-    Robust mode (``nbst.robust``; off in every variant, ``nbst solve --robust``): candidates are
-    scored by their worst cost under small shifts of the start positions (signature: the disks
-    acceptable under all of them), and the solution is the most robust of an archive of
-    top-order members, rescored under fresh shifts.
-    robust           : score every candidate under robust_k start shifts and choose the solution
-                       by its robust score instead of its cost
-    robust_k         : start shifts per candidate during the search (0: the search is plain and
-                       only the final choice is robust)
-    robust_signature : "and": a disk counts as acceptable only if it is in every shifted run;
-                       "plain": the unshifted signature (only the cost is the worst-case one)
-    robust_archive   : top-order population members kept for the final choice (0: the choice
-                       is among the search's best alone)
-    robust_samples   : start shifts per candidate in the final choice (fresh draws)
-    robust_timestep  : the engine step h (s) to survive: start shifts of std 0.5 h x the
-                       fastest speed per axis (``nbst.robust.SHIFT_STEPS``)
-    robust_polish    : candidates polished towards their on-target disks' target centres (and
-                       rescored; ``nbst.robust.polish_on_target``)
-    """
-
-    variant: str = "A"
-    pop_limit: int = 200
-    sig_limit: int = 10
-    diversity: int = 5
-    init_max_tries: int = 1000
-    init_population: int = 0
-    signature_radius: float | None = None
-    max_bounces: int = 5
-    creep_fraction: float = 0.1
-    op_weights: tuple[float, float, float, float] = (0.25, 0.25, 0.25, 0.25)
-    p_directed_init: float = 0.5
-    senate: bool = True
-    engineered: bool = True
-    cull: str = "subsumed"
-    elitism: bool = True
-    hard_limit: int = 400
-    max_events: int = MAX_EVENTS
-    polish: bool = False
-    polish_sims: int = 20
-    polish_ratio: float = 2.0
-    bank_weight: float = 0.0
-    bank_bounces: int = 3
-    strike_weight: float = 0.0
-    strike_bounces: int = 1
-    adapt: bool = False
-    adapt_rate: float = 0.01
-    adapt_floor: float = 0.03
-    straight_start: bool = False
-    restart: int = 0
-    planner: bool = False
-    planner_trials: int = 100_000
-    planner_chain: int = 3
-    planner_seeds: int = 16
-    planner_polish_sims: int = 100
-    planner_weight: float = 0.1
-    robust: bool = False
-    robust_k: int = ROBUST_K
-    robust_signature: str = "and"
-    robust_archive: int = ROBUST_ARCHIVE
-    robust_samples: int = ROBUST_SAMPLES
-    robust_timestep: float = ROBUST_TIMESTEP
-    robust_polish: int = ROBUST_POLISH
-
-    @property
-    def nbst_loop(self) -> bool:
-        """Whether any of nbst's additions is on (they run in ``search_nbst``'s loop)."""
-        return (self.polish or self.bank_weight > 0 or self.strike_weight > 0 or self.adapt or self.planner
-                or self.straight_start or self.restart > 0 or (self.robust and self.robust_k > 0))
-
-    def to_dict(self) -> dict:
-        d = dataclasses.asdict(self)
-        d["op_weights"] = list(self.op_weights)
-        return d
-
-
-#: Variant "nbst": the paper's A plus every addition of ``nbst.search_nbst`` (see docs/search.md
-#: and the ablation in docs/results.md for what each contributes).
-NBST_DEFAULTS = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_weight=0.3, strike_weight=0.1, polish=True,
-                     straight_start=True, planner=True)
-# The adaptive operator schedule (adapt=True) and restarts (restart=20_000) are built and
-# measured but off: the ablation (docs/results.md) showed no gain from either.
-
-
-def variant_params(variant: str = "nbst", problem: Problem | None = None) -> SearchParams:
-    """nbst's search ("nbst"), the paper's variant A (full algorithm) or B-H (one simplification each).
-
-    E needs ``problem`` (its signature radius is the box width)."""
-    v = variant.lower() if variant.lower().startswith("nbst") else variant.upper()
-    if v not in VARIANTS:
-        raise ValueError(f"unknown variant {variant!r}; choose one of {', '.join(VARIANTS)}")
-    if v == "nbst":
-        return SearchParams(variant="nbst", **NBST_DEFAULTS)
-    if v == "nbst-noplan":
-        return SearchParams(variant=v, **{**NBST_DEFAULTS, "planner": False})
-    base = SearchParams(variant=v)
-    third = 1.0 / 3.0
-    if v == "B":
-        return dataclasses.replace(base, senate=False)
-    if v == "C":
-        return dataclasses.replace(base, op_weights=(third, third, third, 0.0))
-    if v == "D":
-        return dataclasses.replace(base, engineered=False)
-    if v == "E":
-        if problem is None:
-            raise ValueError("variant E needs the problem (R = box width)")
-        return dataclasses.replace(base, signature_radius=float(problem.width), init_population=60, sig_limit=60)
-    if v == "F":
-        return dataclasses.replace(base, cull="worst")
-    if v == "G":
-        return dataclasses.replace(base, elitism=False)
-    if v == "H":
-        return dataclasses.replace(base, op_weights=(third, 0.0, third, third), p_directed_init=0.0)
-    return base
-
-
-def mirror_images(max_bounces: int) -> np.ndarray:
-    """(M, 2) int64 image indices (kx, ky) with |kx| + |ky| <= max_bounces (M = 61 for 5)."""
-    b = int(max_bounces)
-    return np.array([(kx, ky) for kx in range(-b, b + 1) for ky in range(-b, b + 1) if abs(kx) + abs(ky) <= b],
-                    dtype=np.int64).reshape(-1, 2)
-
-
-@dataclass(frozen=True)
-class SearchProgress:
-    """What a callback sees after each chunk of trials."""
-
-    trials: int
-    best_cost: float
-    best_order: int
-    elapsed: float
-    population: int
-    phase: str
-
+from nbst._version import __version__
+from nbst.constants import ROUNDOFF_REL
+from nbst.problem import Problem, ProblemError
+from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, VARIANTS, SearchParams, SearchProgress, _check, mirror_images,
+                                variant_params)
 
 @dataclass
 class _State:
@@ -286,7 +36,7 @@ class _State:
 
 def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: int, target_cost: float | None,
           record_every: int = 0):
-    from . import search_loop as L
+    from nbst.search import loop as L
 
     pi = np.zeros(L.N_PI, np.int64)
     pi[L.PI_POP_LIMIT] = params.pop_limit
@@ -311,43 +61,6 @@ def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: 
     w = np.asarray(params.op_weights, float)
     pf[L.PF_W_CREEP:L.PF_W_CROSSOVER + 1] = w / w.sum()
     return pi, pf
-
-
-def _check(params: SearchParams, max_trials: int, patience: int) -> None:
-    def bad(name, why):
-        raise ProblemError("<search parameters>", name, why)
-
-    if max_trials < 1:
-        bad("max_trials", f"must be >= 1, got {max_trials}")
-    if patience < 0:
-        bad("patience", f"must be >= 0 (0 = no patience limit), got {patience}")
-    if params.pop_limit < 2 or params.sig_limit < 1 or params.diversity < 1:
-        bad("pop_limit", "pop_limit >= 2, sig_limit >= 1 and diversity >= 1 are required")
-    if params.hard_limit < params.pop_limit:
-        bad("hard_limit", f"must be >= pop_limit ({params.pop_limit})")
-    if params.cull not in ("subsumed", "worst"):
-        bad("cull", f"must be 'subsumed' or 'worst', got {params.cull!r}")
-    w = np.asarray(params.op_weights, float)
-    if w.shape != (4,) or np.any(w < 0) or w.sum() <= 0:
-        bad("op_weights", "must be 4 non-negative weights (creep, directed, uniform, crossover), not all 0")
-    if params.max_bounces < 0 or params.creep_fraction < 0:
-        bad("max_bounces", "max_bounces and creep_fraction must be >= 0")
-    if params.bank_weight < 0 or params.strike_weight < 0 or params.planner_weight < 0:
-        bad("bank_weight", "bank_weight and strike_weight must be >= 0")
-    if params.polish_sims < 2 or params.polish_ratio < 1 or params.bank_bounces < 0 or params.strike_bounces < 0:
-        bad("polish_sims", "polish_sims >= 2, polish_ratio >= 1, bank_bounces >= 0 and strike_bounces >= 0 are required")
-    if params.planner_trials < 0 or not 0 <= params.planner_chain <= 4 or params.planner_seeds < 0 \
-            or params.planner_polish_sims < 2:
-        bad("planner_trials", "planner_trials >= 0, 0 <= planner_chain <= 4, planner_seeds >= 0 and "
-                              "planner_polish_sims >= 2 are required")
-    if params.robust_signature not in ("and", "plain"):
-        bad("robust_signature", f"must be 'and' or 'plain', got {params.robust_signature!r}")
-    if params.robust_archive < 0 or params.robust_samples < 0 or params.robust_k < 0 or params.robust_polish < 0 \
-            or not params.robust_timestep >= 0:
-        bad("robust_archive", "robust_archive >= 0, robust_samples >= 0, robust_k >= 0, robust_polish >= 0 and "
-                              "robust_timestep >= 0 are required")
-    if not 0 < params.adapt_rate <= 1 or not 0 <= params.adapt_floor < 1.0 / 7 or params.restart < 0:
-        bad("adapt_rate", "0 < adapt_rate <= 1, 0 <= adapt_floor < 1/7 and restart >= 0 are required")
 
 
 @dataclass(frozen=True, eq=False)
@@ -391,7 +104,7 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_
     chunk       : trials per compiled call (progress / Ctrl-C granularity only; in robust mode
                   also the archive's cadence, so a robust result is reproducible for one chunk)
     robust      : True: write the most noise-robust top-order solution found rather than the
-                  cheapest (``nbst.robust``; sets ``params.robust``); None: as ``params`` says
+                  cheapest (``nbst.search.robust``; sets ``params.robust``); None: as ``params`` says
 
     ``meta`` holds cost, signature, order, trials, seed, variant, params, wall_time,
     nbst_version, history ([trial, cost, order] per improvement) and run statistics.
@@ -406,9 +119,9 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
                record_every: int = 0, robust: bool | None = None) -> SearchRun:
     """:func:`solve`, also returning the final population (for benchmarks and analysis) and, with
     ``record_every`` = k > 0, the candidate velocities of trials k, 2k, ... (the loop's exact mix)."""
-    from . import search_loop as L
-    from .search_ops import SIZE, new_population, seed_state
-    from .solution import make_solution, signature_string
+    from nbst.search import loop as L
+    from nbst.search.ops import SIZE, new_population, seed_state
+    from nbst.solution import make_solution, signature_string
 
     if params is None:
         params = variant_params(variant, problem)
@@ -441,7 +154,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     advance = _nbst_stepper(problem, params, s, pi, pf, seed) if params.nbst_loop else None
     archive = None
     if params.robust:
-        from .robust import Archive
+        from nbst.search.robust import Archive
 
         archive = Archive(n, params.robust_archive)  # size 0 keeps nothing: the search's best alone
     if advance is not None and record_every > 0:
@@ -482,7 +195,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     best_v = s.best_v.copy()
     cost = float(s.best_cost[0])
     sig = int(st[L.ST_BEST_SIG])
-    from .sim import evaluate
+    from nbst.sim import evaluate
 
     if not math.isfinite(cost):  # nothing accepted yet: report the motionless start
         best_v = np.zeros((n, 2))
@@ -540,8 +253,8 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
 
 def _robust_choice(problem: Problem, params: SearchParams, archive, best_v, best_cost: float, best_sig: int,
                    seed: int):
-    """Robust mode's pick: the search's best first, then the archive; see ``nbst.robust``."""
-    from .robust import choose
+    """Robust mode's pick: the search's best first, then the archive; see ``nbst.search.robust``."""
+    from nbst.search.robust import choose
 
     V = np.concatenate([best_v[None], archive.V]) if archive.V.shape[0] else best_v[None]
     v, info = choose(problem, V, seed=seed, samples=params.robust_samples, timestep=params.robust_timestep,
@@ -553,9 +266,9 @@ def _robust_choice(problem: Problem, params: SearchParams, archive, best_v, best
 
 
 def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf, seed: int):
-    """A chunk-advancing closure over ``search_nbst.run_chunk_nbst`` and its extra state."""
-    from . import search_nbst as S
-    from . import search_loop as L
+    """A chunk-advancing closure over ``nbst.search.nbst_loop.run_chunk_nbst`` and its extra state."""
+    from nbst.search import nbst_loop as S
+    from nbst.search import loop as L
 
     qi = np.zeros(S.N_QI, np.int64)
     qi[S.QI_POLISH] = int(params.polish)
@@ -571,7 +284,7 @@ def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf, see
     qf[S.QF_POLISH_RATIO] = params.polish_ratio
     qf[S.QF_ADAPT_RATE] = params.adapt_rate
     qf[S.QF_ADAPT_FLOOR] = params.adapt_floor
-    from .robust import SEARCH_STREAM, SHIFT_STEPS, draws
+    from nbst.search.robust import SEARCH_STREAM, SHIFT_STEPS, draws
 
     qf[S.QF_ROBUST_SHIFT] = SHIFT_STEPS * params.robust_timestep
     zeta, smax = draws(problem, np.random.default_rng([seed, SEARCH_STREAM]), params.robust_k if qi[S.QI_ROBUST] else 0)
@@ -583,7 +296,7 @@ def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf, see
     routes = (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
     planned = None
     if params.planner and non_idx.size:
-        from .planner import plan
+        from nbst.search.planner import plan
 
         planned = plan(problem, budget=min(params.planner_trials, int(pi[L.PI_MAX_TRIALS]) // 4),
                        max_chain=params.planner_chain, seeds=params.planner_seeds, sig_limit=params.sig_limit,

@@ -3,7 +3,7 @@
 ``run_chunk`` advances a search by up to ``n_steps`` trials (one trial = one
 candidate simulated) and returns; all state lives in arrays between calls, so
 a search split into chunks is bit-for-bit the search run in one call.
-The operators themselves are in ``nbst.search_ops``; the parameters and the
+The operators themselves are in ``nbst.search.ops``; the parameters and the
 Python driver in ``nbst.search``.
 """
 from __future__ import annotations
@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .search_ops import (INS_CULLED, INS_FALLBACK, SIZE, acceptable_counts,
+from nbst.search.ops import (INS_CULLED, INS_FALLBACK, SIZE, acceptable_counts,
                          creep_velocity, crossover, directed_velocity, insert, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
-from .sim import alloc_work, cost_signature, run
+from nbst.sim import alloc_work, cost_signature, run
 
 # integer parameters (pi)
 PI_POP_LIMIT, PI_SIG_LIMIT, PI_DIVERSITY, PI_INIT_MAX_TRIES, PI_INIT_POPULATION, PI_SENATE, PI_ENGINEERED, \
@@ -78,7 +78,7 @@ def settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t,
            scr_ord, acc, n):
     """Book one simulated candidate (after the trial counters): order statistics, an
     improvement of the best (and the history), the insert of initialize or generate,
-    and the end of initialize. Shared by this loop and ``search_nbst``'s."""
+    and the end of initialize. Shared by this loop and ``nbst.search.nbst_loop``'s."""
     ist = pop[5]
     elitism = pi[PI_ELITISM] != 0
     order = popcount(sig)

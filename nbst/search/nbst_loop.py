@@ -3,14 +3,14 @@ structure it leaves unused.
 
 What is added to the paper's algorithm (each can be switched off, for ablation):
 
-* **polish** (``nbst.polish``): Levenberg-Marquardt with the analytic Jacobian,
+* **polish** (``nbst.search.polish``): Levenberg-Marquardt with the analytic Jacobian,
   run on promising children -- a new best, or a child of the best order whose
   cost is within ``polish_ratio`` of the best -- and charged as the simulations
   it runs. The polished child is what gets inserted.
 * **bank** operator (footnote 5): one disk of the parent is re-aimed straight at
   a mirror image of its target (0..``bank_bounces`` bounces), choosing among the
   images whose unfolded path meets the fewest other disks' current free flights
-  (exact clearance, ``nbst.aim.choose_bank``; ties at random). Disks that are not
+  (exact clearance, ``nbst.search.aim.choose_bank``; ties at random). Disks that are not
   acceptable in the parent are picked first half of the time. Repeated by the
   search, this is a min-conflicts walk towards a collision-free routing.
 * **strike** operator (footnote 5, overconstrained problems only): a cueable disk
@@ -18,7 +18,7 @@ What is added to the paper's algorithm (each can be switched off, for ablation):
   target or a one-bounce image of it and arrives at t_final; half of the time
   (with two or more noncueable disks) through a chain: the cue strikes a first
   noncueable disk, which strikes the second towards its target.
-* **backward planner** (``nbst.planner``, overconstrained problems only, before the loop):
+* **backward planner** (``nbst.search.planner``, overconstrained problems only, before the loop):
   strike chains built from the targets backwards in closed form and checked with the
   simulator; its cheapest full candidates are initialize's first trials (``seeds``; a seed
   that triggers polish gets ``planner_polish_sims``), and its checked routes feed the
@@ -37,21 +37,21 @@ What is added to the paper's algorithm (each can be switched off, for ablation):
   counts trials since the overall best last improved.
 
 Everything else -- Senate-like selection, engineered crossover, insert, culling,
-elitism, stopping -- is the paper's, from ``nbst.search_ops``.
+elitism, stopping -- is the paper's, from ``nbst.search.ops``.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from .aim import alloc_clearance, chain_strike_velocity, choose_bank, mirror, strike_velocity
-from .polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
-from .robust import robust_eval
-from .search_loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
+from nbst.search.aim import alloc_clearance, chain_strike_velocity, choose_bank, mirror, strike_velocity
+from nbst.search.polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
+from nbst.search.robust import robust_eval
+from nbst.search.loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
                           PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_POP_LIMIT, PI_SENATE,
                           PI_SIG_LIMIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE, ST_SINCE, ST_TRIALS,
                           ST_TRUNCATED, evaluate_one, loop_scratch, settle, stop_code)
-from .search_ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
+from nbst.search.ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 
 # operators of the nbst variant
@@ -132,14 +132,14 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
                    pop, st, qs, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, weights, base, reward,
                    zeta, smax, seeds, route_cue, route_v, route_mask, n_steps):
     """Advance the nbst search by about n_steps trials (a polish may overrun by its
-    budget, never past max_trials). Same contract as ``search_loop.run_chunk``,
+    budget, never past max_trials). Same contract as ``nbst.search.loop.run_chunk``,
     plus qi/qf (QI_*, QF_* parameters), qs (QS_* state and statistics), the
     operator schedule arrays (weights, base, reward; each (N_OPS,)),
     best_cost of shape (2,): [best overall, best since the last restart], and the
-    start shifts zeta (K, N, 2), smax (K,) of ``nbst.robust.draws``: with qi[QI_ROBUST]
-    on, every candidate is scored by ``nbst.robust.robust_eval`` under them (cost = the
+    start shifts zeta (K, N, 2), smax (K,) of ``nbst.search.robust.draws``: with qi[QI_ROBUST]
+    on, every candidate is scored by ``nbst.search.robust.robust_eval`` under them (cost = the
     worst, signature = the AND), polished children rescored. seeds (S, N, 2): initialize's
-    first S candidates (the backward planner's, ``nbst.planner``), then the straight start;
+    first S candidates (the backward planner's, ``nbst.search.planner``), then the straight start;
     a seed is polished with qi[QI_SEED_POLISH_SIMS] simulations when polish's trigger holds.
     route_cue (R,), route_v (R, 2), route_mask (R,): the planner's routes for the ``plan``
     operator (one noncueable disk of the parent, not acceptable half of the time, is given a

@@ -7,7 +7,7 @@ targets backwards instead of sampling cue velocities forwards:
 * **A route** of cueable disk c is a chain ``c = a0 -> a1 -> ... -> aL`` (L = 0..3,
   the a_k distinct noncueable disks at rest) plus one mirror image per leg. The last
   disk aL must reach its target: it leaves along n_L = (T' - p_L)/|T' - p_L| (T' the
-  image of its target, see ``nbst.aim.mirror``), so a_{L-1} must touch it at
+  image of its target, see ``nbst.search.aim.mirror``), so a_{L-1} must touch it at
   q_L = p_L - (r_{L-1} + r_L) n_L, arriving (along its own leg, direct or banked) with a
   normal component that gives aL its speed. Going back leg by leg fixes every leg's
   direction; the speeds follow from the elastic exchange (masses included):
@@ -28,7 +28,7 @@ targets backwards instead of sampling cue velocities forwards:
 * **Combination**: one route per cueable disk, the moved noncueable sets disjoint; the
   combinations are enumerated best-first by their predicted total cost (A* over the cues,
   the heuristic being the remaining cues' best compatible routes) and each is simulated in
-  full. The cheapest become the search's first candidates (``nbst.search_nbst``:
+  full. The cheapest become the search's first candidates (``nbst.search.nbst_loop``:
   initialize's first trials), where polish refines them; the checked routes feed its
   ``plan`` operator.
 * **Sweeps**: for the best combinations, each cue's routes are re-simulated with the
@@ -37,6 +37,9 @@ targets backwards instead of sampling cue velocities forwards:
 
 Every simulation the planner runs is a trial (``PlanResult.trials``); the search charges
 them before its own.
+
+Length: ~530 lines, over the house's ~500, on purpose: the four stages above share the
+route arrays and the ``_Sim`` closure, and read best in order in one file.
 """
 from __future__ import annotations
 
@@ -48,10 +51,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .aim import fold, mirror
-from .constants import MAX_EVENTS
-from .problem import Problem
-from .sim import evaluate_kernel
+from nbst.constants import MAX_EVENTS
+from nbst.problem import Problem
+from nbst.search.aim import fold, mirror
+from nbst.sim import evaluate_kernel
 
 #: A strike whose arrival direction makes a cosine below this with the line of centres is
 #: rejected: it transfers almost nothing, and its outcome is hypersensitive.

@@ -1,5 +1,5 @@
 """Local polish: Levenberg-Marquardt on the initial velocities, with the analytic
-Jacobian of ``nbst.jacobian``.
+Jacobian of ``nbst.sim.jacobian``.
 
 Each step linearizes the final positions within the current collision sequence,
 solves ``(J^T J + lam (diag(J^T J) + eps)) d = -J^T r`` (r = final - target), and
@@ -18,10 +18,10 @@ import math
 import numpy as np
 from numba import njit
 
-from .constants import MAX_EVENTS
-from .jacobian import jacobian_from_events
-from .problem import Problem
-from .sim import STATUS_OK, alloc_work, cost_signature, run
+from nbst.constants import MAX_EVENTS
+from nbst.problem import Problem
+from nbst.sim import STATUS_OK, alloc_work, cost_signature, run
+from nbst.sim.jacobian import jacobian_from_events
 
 #: Initial damping, relative to diag(J^T J).
 LAMBDA0 = 1e-3

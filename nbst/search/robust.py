@@ -41,9 +41,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .problem import Problem
-from .search_loop import evaluate_one
-from .sim import alloc_work
+from nbst.problem import Problem
+from nbst.search.loop import evaluate_one
+from nbst.sim import alloc_work
 
 #: The fixed step of the engine the solution must survive (s): MuJoCo's default in nbst.
 TIMESTEP = 0.00025
@@ -197,7 +197,7 @@ class RobustScore:
 def score(problem: Problem, V, zeta, smax, *, timestep: float = TIMESTEP, quantile: float = QUANTILE,
           max_events: int | None = None) -> RobustScore:
     """Score candidates V (M, N, 2), units/s, under the start shifts (zeta, smax) of :func:`draws`."""
-    from .constants import MAX_EVENTS
+    from nbst.constants import MAX_EVENTS
 
     V = np.ascontiguousarray(np.asarray(V, dtype=np.float64).reshape(-1, problem.n, 2))
     M, K = V.shape[0], zeta.shape[0]
@@ -262,15 +262,15 @@ def polish_on_target(problem: Problem, velocities, *, max_sims: int = POLISH_SIM
     the farthest first: it minimizes sum_i d_i^power over the on-target disks (power 8: close
     to minimizing the largest d_i, the margin R - d that a real engine's error eats).
 
-    ``nbst.polish`` minimizes the whole cost, so a disk that cannot reach its target (a noncueable
+    ``nbst.search.polish`` minimizes the whole cost, so a disk that cannot reach its target (a noncueable
     disk nothing strikes) pulls the others off theirs, and a sum of squares trades the farthest
     disk's margin for the others'. A step is accepted only if it lowers the objective without
     losing an on-target disk. Returns (velocities (N, 2), simulations run). Analytic Jacobian
-    (``nbst.jacobian``), damping as ``nbst.polish``.
+    (``nbst.sim.jacobian``), damping as ``nbst.search.polish``.
     """
-    from .jacobian import final_jacobian
-    from .polish import LAMBDA0, LAMBDA_MAX, LAMBDA_MIN, RIDGE
-    from .sim import evaluate
+    from nbst.search.polish import LAMBDA0, LAMBDA_MAX, LAMBDA_MIN, RIDGE
+    from nbst.sim import evaluate
+    from nbst.sim.jacobian import final_jacobian
 
     v = np.array(velocities, dtype=np.float64)
     cue = np.flatnonzero(problem.cueable)

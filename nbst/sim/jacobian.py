@@ -36,8 +36,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .problem import Problem
-from .sim import STATUS_OK, alloc_work, run
+from nbst.problem import Problem
+from nbst.sim.kernel import STATUS_OK, alloc_work, run
 
 
 @njit(cache=True, error_model="numpy")

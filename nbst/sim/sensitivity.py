@@ -1,7 +1,7 @@
 """How small errors grow: amplification, velocity tolerance, and a fixed-step prediction.
 
 Everything here is first order, read off the analytic tangent map that
-``nbst.jacobian`` carries through the exact event chain:
+``nbst.sim.jacobian`` carries through the exact event chain:
 
 * **amplification**: J = d(final positions, 2N) / d(initial velocities of the
   cueable disks, 2C); its largest singular value (seconds: units per units/s)
@@ -23,7 +23,7 @@ Everything here is first order, read off the analytic tangent map that
   dn = h w_t / s (w_t the tangential relative velocity), which changes both
   velocities. Impact k's share of the final error is this perturbation carried
   through the rest of the event chain by the exact motion's transition map
-  Phi(t_final <- t_k) (``nbst.jacobian.carry_tangents``). Per disk the shares are
+  Phi(t_final <- t_k) (``nbst.sim.jacobian.carry_tangents``). Per disk the shares are
   summed as norms (worst case: ``predicted_error_per_disk``), in quadrature
   (``*_rss``: the typical size of independent errors) and as signed vectors
   (``*_linear``, ``predicted_offset``: the first-order prediction of MuJoCo - exact).
@@ -60,8 +60,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .jacobian import carry_tangents, event_record, jacobian_from_events
-from .problem import Problem
+from nbst.problem import Problem
+from nbst.sim.jacobian import carry_tangents, event_record, jacobian_from_events
 
 #: Worst case: a pair's turned normal counts (1 + PHASE_SPREAD) times its mid-step share;
 #: measured 0.79-1.40 times over the phase of the touch within its step (module docstring).

@@ -1,7 +1,7 @@
 """Baselines behind the same problem model and trial accounting as ``nbst.search.solve``.
 
     from nbst import load_problem
-    from nbst.baselines import solve_with
+    from nbst.solvers import solve_with
     sol = solve_with("cma", load_problem("diamond-s14"), seed=1, max_trials=100_000)
     sol.meta["cost"], sol.meta["trials"], sol.meta["history"]
 
@@ -59,8 +59,8 @@ from typing import Callable
 
 import numpy as np
 
-from ._version import __version__
-from .problem import Problem, ProblemError
+from nbst._version import __version__
+from nbst.problem import Problem, ProblemError
 
 ALGORITHMS = ("signature", "cma", "de", "ga", "random")
 
@@ -107,7 +107,7 @@ class _Budget:
 
     def __init__(self, problem: Problem, *, max_trials: int, patience: int, target_cost: float | None,
                  callback, phase: str = ""):
-        from .sim import evaluate
+        from nbst.sim import evaluate
 
         self._evaluate = evaluate
         self.problem = problem
@@ -177,7 +177,7 @@ class _Budget:
         if self.callback is None or (self.trials - self._last_progress < PROGRESS_EVERY and self.stopped is None):
             return
         self._last_progress = self.trials
-        from .search import SearchProgress
+        from nbst.search import SearchProgress
 
         prog = SearchProgress(trials=self.trials, best_cost=self.best_cost, best_order=_popcount(self.best_sig),
                               elapsed=time.perf_counter() - self.t0, population=self.population, phase=self.phase)
@@ -198,7 +198,7 @@ def _check_args(max_trials: int, patience: int, seed) -> int:
 
 
 def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: dict):
-    from .solution import make_solution, signature_string
+    from nbst.solution import make_solution, signature_string
 
     wall = time.perf_counter() - b.t0
     if b.trials == 0 or not math.isfinite(b.best_cost):
@@ -237,10 +237,10 @@ def _randomize(problem: Problem, rng: np.random.Generator, B: int, *, p_directed
                max_bounces: int = MAX_BOUNCES) -> np.ndarray:
     """(B, 2 n_cue) candidates: each cueable disk directed (straight) or uniform randomize.
 
-    Uniform randomize as ``nbst.search_ops.uniform_velocity``: the free-flight end point
+    Uniform randomize as ``nbst.search.ops.uniform_velocity``: the free-flight end point
     is uniform over the box's centre region reached through a mirror image drawn
     uniformly from those with |kx| + |ky| <= max_bounces."""
-    from .search import mirror_images
+    from nbst.search import mirror_images
 
     cue = np.flatnonzero(problem.cueable)
     x0 = problem.start[cue]
@@ -488,29 +488,3 @@ def solve_de(problem: Problem, *, seed: int | None = None, max_trials: int = 1_0
                    params={"strategy": strategy, "popsize": popsize, "members": popsize * D, "bounces": DE_BOUNCES,
                            "mutation": [0.5, 1.0], "recombination": 0.7,
                            "init": "directed/uniform randomize, p = 1/2, member 0 straight; clipped to the bounds"})
-
-
-def solve_signature(problem: Problem, **kw):
-    """``nbst.search.solve`` (the signature search), unchanged: its defaults apply (patience
-    100,000, variant "nbst"); ``variant=`` picks A-H."""
-    from .search import solve
-
-    return solve(problem, **kw)
-
-
-SOLVERS = {"signature": solve_signature, "cma": solve_cma, "de": solve_de, "ga": solve_ga, "random": solve_random}
-
-
-def solve_with(algorithm: str, problem: Problem, **kw):
-    """Dispatch to a solver by name: "signature" (``nbst.search.solve``; ``variant=`` picks
-    the variant), "cma", "de", "ga", "random". Keywords as :func:`nbst.search.solve`."""
-    a = algorithm.strip().lower()
-    if a not in SOLVERS:
-        raise ProblemError("<search parameters>", "algorithm",
-                           f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
-    if a != "signature" and kw.get("variant") not in (None, "", "nbst"):
-        raise ProblemError("<search parameters>", "variant",
-                           f"a variant ({kw['variant']}) applies to the signature search only, not to {a}")
-    if a != "signature":
-        kw.pop("variant", None)
-    return SOLVERS[a](problem, **kw)

@@ -1,7 +1,7 @@
 """Independent searches on every core ("islands"), stopped together, reproducible for a given K.
 
 ``nbst solve --jobs K`` runs K copies of one search (``nbst.search.solve`` or a baseline
-through ``nbst.baselines.solve_with``), each from its own seed and with 1/K of the trial
+through ``nbst.solvers.baselines.solve_with``), each from its own seed and with 1/K of the trial
 budget: island 0 in this process, the others in K - 1 worker processes started after
 island 0's first chunk of trials (if that did not already reach the target). They run
 in lockstep: after every chunk of trials each island reports its best cost to the
@@ -41,18 +41,10 @@ def island_seeds(seed: int, jobs: int) -> list[int]:
             for s in np.random.SeedSequence(int(seed)).spawn(int(jobs))]
 
 
-def default_jobs() -> int:
-    """Every core this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not Linux
-        return max(1, os.cpu_count() or 1)
-
-
 def _island_body(k: int, algorithm: str, problem, kw: dict, conn) -> None:
     """Run one search; report after every chunk and wait for the parent's word; send the
     result (or the error) at the end."""
-    from .baselines import solve_with
+    from nbst.solvers.dispatch import solve_with
 
     def callback(p) -> bool:
         conn.send(("progress", k, p.trials, p.best_cost, p.best_order))
@@ -131,7 +123,7 @@ class _Rounds:
     def barrier(self, local=None) -> bool:
         """Collect this round's reports (``local``: island 0's own (trials, cost, order) when the
         parent runs it), decide, answer the workers; True = stop."""
-        from .search import SearchProgress
+        from nbst.search import SearchProgress
 
         if local is not None:
             self.trials[0], self.best[0], self.order[0] = local
@@ -182,7 +174,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     Island 0 runs in this process; islands 1..K-1 run in forked workers that start after
     island 0's first round (chunk) if that round has not reached the target, and then keep
     in lockstep one round behind it (a fixed pairing, so the result stays deterministic). Keywords as
-    :func:`nbst.baselines.solve_with` (``variant``, ``robust``, ...). ``max_trials`` is the
+    :func:`nbst.solvers.baselines.solve_with` (``variant``, ``robust``, ...). ``max_trials`` is the
     total budget (each island gets ceil(max_trials / jobs)); ``patience`` applies per island.
     ``callback(progress)`` sees the islands' sum of trials and the best island's cost and
     order after every round; a truthy return stops all of them (``stopped == "callback"``).
@@ -192,8 +184,8 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     parent through named Dask queues; the rounds are the same, so the result is the same
     as on local processes for the same (seed, K).
     """
-    from .baselines import solve_with
-    from .solution import make_solution
+    from nbst.solution import make_solution
+    from nbst.solvers.dispatch import solve_with
 
     jobs = int(jobs)
     if jobs < 1:

@@ -1,0 +1,246 @@
+"""The signature search's parameters: :class:`SearchParams` (every knob, the paper's
+defaults), the variants A-H and nbst's, their checks, and what a progress callback sees.
+The choices behind each default are listed in ``nbst.search``'s docstring and docs/search.md.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from nbst.constants import MAX_EVENTS
+from nbst.problem import Problem, ProblemError
+from nbst.search.robust import ARCHIVE_SIZE as ROBUST_ARCHIVE, POLISH_TOP as ROBUST_POLISH, SAMPLES as ROBUST_SAMPLES, \
+    SEARCH_SAMPLES as ROBUST_K, TIMESTEP as ROBUST_TIMESTEP
+
+VARIANTS = {
+    "A": "the full algorithm",
+    "B": "uniform probability for parent selection",
+    "C": "no crossover operation",
+    "D": "no genetically engineered crossover",
+    "E": "no signature information (R = box width, initial population 60)",
+    "F": "no culling of subsumed solutions (delete the worst on every insertion)",
+    "G": "no elitism",
+    "H": "no directed randomization",
+    "nbst": "nbst's default: the paper's search plus polish, bank shots, strikes, a straight start and the backward "
+            "planner",
+    "nbst-noplan": "nbst without the backward planner (ablation)",
+}
+
+ALGORITHM = "paper-signature-search"
+ALGORITHM_NBST = "nbst-signature-search"
+
+
+@dataclass(frozen=True, kw_only=True)
+class SearchParams:
+    """Every knob of the signature search. Defaults are the paper's (A).
+
+    pop_limit        : population limit (paper: 200)
+    sig_limit        : members per signature (paper: 10)
+    diversity        : initialize until every disk is acceptable in this many members (paper: 5)
+    init_max_tries   : cap on initialize's trials if the diversity target is never met (open)
+    init_population  : > 0: initialize until the population has this many members instead (E: 60)
+    signature_radius : R used for signatures, None = the problem's (E: the box width)
+    max_bounces      : uniform randomize reaches images with |kx| + |ky| <= this (paper: 5)
+    creep_fraction   : creep std per axis = creep_fraction * R / t_final, units/s (open)
+    op_weights       : (creep, directed, uniform, crossover) probabilities (paper: 1/4 each)
+    p_directed_init  : initialize's chance of directed (vs uniform) randomize per disk (paper: 1/2)
+    senate           : Senate-like parent selection (B: off, uniform over members)
+    engineered       : genetically engineered crossover (D: off)
+    cull             : "subsumed" (paper) or "worst" (F)
+    elitism          : the best member is never deleted (G: off)
+    hard_limit       : culling fallback: above this size the worst member goes (open)
+    max_events       : per-simulation event cap (a truncated run scores cost inf)
+
+    nbst's additions (``nbst.search.nbst_loop``; all off in A-H, on in variant "nbst"):
+    polish           : Levenberg-Marquardt polish of promising children
+    polish_sims      : simulation budget of one polish
+    polish_ratio     : polish children of the best order within this factor of the best cost
+    bank_weight      : generate probability weight of the bank-shot operator
+    bank_bounces     : bank shots use images with at most this many bounces
+    strike_weight    : weight of the strike operator (used only if some disk is noncueable)
+    strike_bounces   : strikes aim at images of the target with at most this many bounces
+    adapt            : adapt operator probabilities from their recent success
+    adapt_rate       : rate of the success moving average
+    adapt_floor      : least probability of an enabled operator
+    straight_start   : initialize's first trial sends every cueable disk straight at its target
+    restart          : re-initialize around the best after this many trials without a
+                       local improvement (0: never)
+    planner          : run the backward planner (``nbst.search.planner``) first when some disk is
+                       noncueable; its best candidates are initialize's first trials
+    planner_trials   : the planner's simulations, at most (and at most a quarter of max_trials);
+                       every one counts as a trial
+    planner_chain    : longest strike chain the planner builds (cue -> noncueable -> ...)
+    planner_seeds    : planner candidates handed to the search
+    planner_polish_sims : polish budget of a planner candidate (instead of polish_sims)
+    planner_weight   : weight of the plan operator (the planner's routes; only after a planner run)
+
+    Robust mode (``nbst.search.robust``; off in every variant, ``nbst solve --robust``): candidates are
+    scored by their worst cost under small shifts of the start positions (signature: the disks
+    acceptable under all of them), and the solution is the most robust of an archive of
+    top-order members, rescored under fresh shifts.
+    robust           : score every candidate under robust_k start shifts and choose the solution
+                       by its robust score instead of its cost
+    robust_k         : start shifts per candidate during the search (0: the search is plain and
+                       only the final choice is robust)
+    robust_signature : "and": a disk counts as acceptable only if it is in every shifted run;
+                       "plain": the unshifted signature (only the cost is the worst-case one)
+    robust_archive   : top-order population members kept for the final choice (0: the choice
+                       is among the search's best alone)
+    robust_samples   : start shifts per candidate in the final choice (fresh draws)
+    robust_timestep  : the engine step h (s) to survive: start shifts of std 0.5 h x the
+                       fastest speed per axis (``nbst.search.robust.SHIFT_STEPS``)
+    robust_polish    : candidates polished towards their on-target disks' target centres (and
+                       rescored; ``nbst.search.robust.polish_on_target``)
+    """
+
+    variant: str = "A"
+    pop_limit: int = 200
+    sig_limit: int = 10
+    diversity: int = 5
+    init_max_tries: int = 1000
+    init_population: int = 0
+    signature_radius: float | None = None
+    max_bounces: int = 5
+    creep_fraction: float = 0.1
+    op_weights: tuple[float, float, float, float] = (0.25, 0.25, 0.25, 0.25)
+    p_directed_init: float = 0.5
+    senate: bool = True
+    engineered: bool = True
+    cull: str = "subsumed"
+    elitism: bool = True
+    hard_limit: int = 400
+    max_events: int = MAX_EVENTS
+    polish: bool = False
+    polish_sims: int = 20
+    polish_ratio: float = 2.0
+    bank_weight: float = 0.0
+    bank_bounces: int = 3
+    strike_weight: float = 0.0
+    strike_bounces: int = 1
+    adapt: bool = False
+    adapt_rate: float = 0.01
+    adapt_floor: float = 0.03
+    straight_start: bool = False
+    restart: int = 0
+    planner: bool = False
+    planner_trials: int = 100_000
+    planner_chain: int = 3
+    planner_seeds: int = 16
+    planner_polish_sims: int = 100
+    planner_weight: float = 0.1
+    robust: bool = False
+    robust_k: int = ROBUST_K
+    robust_signature: str = "and"
+    robust_archive: int = ROBUST_ARCHIVE
+    robust_samples: int = ROBUST_SAMPLES
+    robust_timestep: float = ROBUST_TIMESTEP
+    robust_polish: int = ROBUST_POLISH
+
+    @property
+    def nbst_loop(self) -> bool:
+        """Whether any of nbst's additions is on (they run in ``nbst.search.nbst_loop``'s loop)."""
+        return (self.polish or self.bank_weight > 0 or self.strike_weight > 0 or self.adapt or self.planner
+                or self.straight_start or self.restart > 0 or (self.robust and self.robust_k > 0))
+
+    def to_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["op_weights"] = list(self.op_weights)
+        return d
+
+
+#: Variant "nbst": the paper's A plus every addition of ``nbst.search.nbst_loop`` (see docs/search.md
+#: and the ablation in docs/results.md for what each contributes).
+NBST_DEFAULTS = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_weight=0.3, strike_weight=0.1, polish=True,
+                     straight_start=True, planner=True)
+# The adaptive operator schedule (adapt=True) and restarts (restart=20_000) are built and
+# measured but off: the ablation (docs/results.md) showed no gain from either.
+
+
+def variant_params(variant: str = "nbst", problem: Problem | None = None) -> SearchParams:
+    """nbst's search ("nbst"), the paper's variant A (full algorithm) or B-H (one simplification each).
+
+    E needs ``problem`` (its signature radius is the box width)."""
+    v = variant.lower() if variant.lower().startswith("nbst") else variant.upper()
+    if v not in VARIANTS:
+        raise ValueError(f"unknown variant {variant!r}; choose one of {', '.join(VARIANTS)}")
+    if v == "nbst":
+        return SearchParams(variant="nbst", **NBST_DEFAULTS)
+    if v == "nbst-noplan":
+        return SearchParams(variant=v, **{**NBST_DEFAULTS, "planner": False})
+    base = SearchParams(variant=v)
+    third = 1.0 / 3.0
+    if v == "B":
+        return dataclasses.replace(base, senate=False)
+    if v == "C":
+        return dataclasses.replace(base, op_weights=(third, third, third, 0.0))
+    if v == "D":
+        return dataclasses.replace(base, engineered=False)
+    if v == "E":
+        if problem is None:
+            raise ValueError("variant E needs the problem (R = box width)")
+        return dataclasses.replace(base, signature_radius=float(problem.width), init_population=60, sig_limit=60)
+    if v == "F":
+        return dataclasses.replace(base, cull="worst")
+    if v == "G":
+        return dataclasses.replace(base, elitism=False)
+    if v == "H":
+        return dataclasses.replace(base, op_weights=(third, 0.0, third, third), p_directed_init=0.0)
+    return base
+
+
+def mirror_images(max_bounces: int) -> np.ndarray:
+    """(M, 2) int64 image indices (kx, ky) with |kx| + |ky| <= max_bounces (M = 61 for 5)."""
+    b = int(max_bounces)
+    return np.array([(kx, ky) for kx in range(-b, b + 1) for ky in range(-b, b + 1) if abs(kx) + abs(ky) <= b],
+                    dtype=np.int64).reshape(-1, 2)
+
+
+@dataclass(frozen=True)
+class SearchProgress:
+    """What a callback sees after each chunk of trials."""
+
+    trials: int
+    best_cost: float
+    best_order: int
+    elapsed: float
+    population: int
+    phase: str
+
+
+def _check(params: SearchParams, max_trials: int, patience: int) -> None:
+    def bad(name, why):
+        raise ProblemError("<search parameters>", name, why)
+
+    if max_trials < 1:
+        bad("max_trials", f"must be >= 1, got {max_trials}")
+    if patience < 0:
+        bad("patience", f"must be >= 0 (0 = no patience limit), got {patience}")
+    if params.pop_limit < 2 or params.sig_limit < 1 or params.diversity < 1:
+        bad("pop_limit", "pop_limit >= 2, sig_limit >= 1 and diversity >= 1 are required")
+    if params.hard_limit < params.pop_limit:
+        bad("hard_limit", f"must be >= pop_limit ({params.pop_limit})")
+    if params.cull not in ("subsumed", "worst"):
+        bad("cull", f"must be 'subsumed' or 'worst', got {params.cull!r}")
+    w = np.asarray(params.op_weights, float)
+    if w.shape != (4,) or np.any(w < 0) or w.sum() <= 0:
+        bad("op_weights", "must be 4 non-negative weights (creep, directed, uniform, crossover), not all 0")
+    if params.max_bounces < 0 or params.creep_fraction < 0:
+        bad("max_bounces", "max_bounces and creep_fraction must be >= 0")
+    if params.bank_weight < 0 or params.strike_weight < 0 or params.planner_weight < 0:
+        bad("bank_weight", "bank_weight and strike_weight must be >= 0")
+    if params.polish_sims < 2 or params.polish_ratio < 1 or params.bank_bounces < 0 or params.strike_bounces < 0:
+        bad("polish_sims", "polish_sims >= 2, polish_ratio >= 1, bank_bounces >= 0 and strike_bounces >= 0 are required")
+    if params.planner_trials < 0 or not 0 <= params.planner_chain <= 4 or params.planner_seeds < 0 \
+            or params.planner_polish_sims < 2:
+        bad("planner_trials", "planner_trials >= 0, 0 <= planner_chain <= 4, planner_seeds >= 0 and "
+                              "planner_polish_sims >= 2 are required")
+    if params.robust_signature not in ("and", "plain"):
+        bad("robust_signature", f"must be 'and' or 'plain', got {params.robust_signature!r}")
+    if params.robust_archive < 0 or params.robust_samples < 0 or params.robust_k < 0 or params.robust_polish < 0 \
+            or not params.robust_timestep >= 0:
+        bad("robust_archive", "robust_archive >= 0, robust_samples >= 0, robust_k >= 0, robust_polish >= 0 and "
+                              "robust_timestep >= 0 are required")
+    if not 0 < params.adapt_rate <= 1 or not 0 <= params.adapt_floor < 1.0 / 7 or params.restart < 0:
+        bad("adapt_rate", "0 < adapt_rate <= 1, 0 <= adapt_floor < 1/7 and restart >= 0 are required")

@@ -1,0 +1,109 @@
+"""The layer contract (pyproject.toml's [tool.importlinter], docs/architecture.md) holds:
+imports point down only, no cycles anywhere (function-local imports included), and every
+room of nbst has its place in the contract.
+
+nbst.models and nbst.render live in models/ and render/ at the top of the checkout and
+are installed under nbst (setuptools package-dir); import-linter reads a package from one
+folder, so each check runs on a copy of the sources laid out as installed."""
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+LINT = Path(sys.executable).with_name("lint-imports")
+
+
+def _installed_layout(dest: Path) -> Path:
+    ignore = shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc", "*.json")
+    shutil.copytree(ROOT / "nbst", dest / "nbst", ignore=ignore)
+    shutil.copytree(ROOT / "models", dest / "nbst" / "models", ignore=ignore)
+    shutil.copytree(ROOT / "render", dest / "nbst" / "render", ignore=ignore)
+    return dest
+
+
+def _lint(tree: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([str(LINT), str(ROOT / "pyproject.toml"), "--no-cache"], cwd=tree,
+                          env={"PYTHONPATH": str(tree), "PATH": "/usr/bin:/bin"},
+                          capture_output=True, text=True, timeout=300)
+
+
+def _contracts() -> list[dict]:
+    return tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
+
+
+@pytest.fixture(scope="module")
+def tree(tmp_path_factory):
+    return _installed_layout(tmp_path_factory.mktemp("layout"))
+
+
+def test_every_contract_is_kept(tree):
+    out = _lint(tree)
+    assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]
+    assert f"{len(_contracts())} kept, 0 broken" in out.stdout
+
+
+@pytest.mark.parametrize("module, line, broken", [
+    # the simulator may not reach up into the search, even inside a function
+    ("nbst/sim/api.py", "def _upward():\n    from nbst.search import solve\n", "nbst.sim.api -> nbst.search"),
+    # the paper's loop may not import nbst's loop above it
+    ("nbst/search/loop.py", "def _upward():\n    from nbst.search import nbst_loop\n", "nbst.search.loop -> nbst.search.nbst_loop"),
+    # a MuJoCo model may not import the command line
+    ("models/scene.py", "import nbst.cli.args\n", "nbst.models.scene -> nbst.cli.args"),
+])
+def test_an_upward_import_breaks_the_contract(tmp_path, module, line, broken):
+    t = _installed_layout(tmp_path)
+    f = t / ("nbst/" + module if not module.startswith("nbst/") else module)
+    f.write_text(f.read_text() + "\n\n" + line)
+    out = _lint(t)
+    assert out.returncode != 0
+    assert broken in out.stdout and "BROKEN" in out.stdout
+
+
+def _children(folder: Path) -> set[str]:
+    return {p.stem if p.suffix == ".py" else p.name for p in folder.iterdir()
+            if (p.suffix == ".py" and p.stem != "__init__") or (p.is_dir() and (p / "__init__.py").is_file())}
+
+
+def test_the_contract_lists_every_room():
+    """Every module and subpackage of nbst sits in a layer (a new room must be placed)."""
+    layers = next(c for c in _contracts() if c["id"] == "layers")["layers"]
+    listed = {m.strip() for layer in layers for m in layer.split("|")}
+    rooms = {f"nbst.{c}" for c in _children(ROOT / "nbst") | {"models", "render"} if c != "__main__"}
+    assert rooms - listed == set(), "rooms missing from [tool.importlinter] layers"
+    assert listed - rooms == set(), "layers naming no room"
+    for c in _contracts():
+        if c.get("containers"):
+            (pkg,) = c["containers"]
+            inner = {m.strip() for layer in c["layers"] for m in layer.split("|")}
+            assert inner == _children(ROOT / pkg.replace(".", "/")), f"{pkg}: its layers must list every module"
+
+
+def test_the_documented_old_baselines_path_still_works_with_a_warning():
+    import importlib
+    import sys as _sys
+
+    _sys.modules.pop("nbst.baselines", None)
+    with pytest.warns(DeprecationWarning, match="nbst.solvers"):
+        old = importlib.import_module("nbst.baselines")
+    import nbst.solvers as new
+
+    assert old.solve_with is new.solve_with and old.solve_cma is new.solve_cma
+
+
+def test_public_names_keep_working():
+    import nbst
+    import nbst.models
+    import nbst.render
+    from nbst.search import solve
+    from nbst.sim import simulate
+
+    assert nbst.simulate is simulate and callable(nbst.evaluate) and callable(nbst.load_problem)
+    assert callable(solve)
+    assert nbst.models.__name__ == "nbst.models" and nbst.render.__name__ == "nbst.render"
+    out = subprocess.run([sys.executable, str(ROOT / "cli.py"), "problems"], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0 and "over5" in out.stdout
