@@ -51,11 +51,12 @@ def search_kernels() -> tuple:
 def other_kernels() -> tuple:
     """The dispatchers of the polish, the Jacobian and the sensitivity report."""
     from nbst.search.planner import aim_routes
-    from nbst.search.polish import polish_kernel
     from nbst.sim.jacobian import jacobian_from_events, transition_from_events
     from nbst.sim.sensitivity import late_impact_errors
 
-    return (jacobian_from_events, transition_from_events, polish_kernel, late_impact_errors, aim_routes)
+    # not polish_kernel: the commands reach it only inside nbst's loop (compiled with it);
+    # called from Python only by tests, it would stay "cold" after every warm-up.
+    return (jacobian_from_events, transition_from_events, late_impact_errors, aim_routes)
 
 
 def compile_message() -> str:

@@ -328,9 +328,9 @@ def cmd_render_shot(args) -> int:
     prepare_output(out, inputs=(args.problem,))
     bar = None
     if not getattr(args, "quiet", False) and still is None:
-        from tqdm import tqdm
+        from nbst.progress import progress_bar
 
-        bar = tqdm(unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
+        bar = progress_bar(unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
     try:
         n = render_shot(args.problem, out, still=still, camera=getattr(args, "camera", None) or "both",
                         size=size, fps=getattr(args, "fps", None), progress=bar)

@@ -194,9 +194,9 @@ def cmd_solve(args) -> int:
         if args.quiet:
             return
         if not bar:
-            from tqdm import tqdm
+            from nbst.progress import progress_bar
 
-            bar.append(tqdm(total=args.max_rollouts, unit="launch", file=sys.stderr, dynamic_ncols=True,
+            bar.append(progress_bar(total=args.max_rollouts, unit="launch", file=sys.stderr, dynamic_ncols=True,
                             desc=f"bowl {','.join(map(str, want))}", smoothing=0.1))
         bar[0].update(p.rollouts - bar[0].n)
         if p.rollouts:
@@ -351,10 +351,10 @@ def cmd_atlas(args) -> int:
     probes = [0]
     bar = None
     if not args.quiet:
-        from tqdm import tqdm
+        from nbst.progress import progress_bar
 
         total = 0 if args.robustness_only else args.max_rollouts
-        bar = tqdm(total=total or None, unit="launch", file=sys.stderr, dynamic_ncols=True, desc="atlas")
+        bar = progress_bar(total=total or None, unit="launch", file=sys.stderr, dynamic_ncols=True, desc="atlas")
 
     def add_robustness(mask, f):
         d = json.loads(f.read_text())

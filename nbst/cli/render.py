@@ -208,8 +208,8 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
             return 0
         progress = None
         if not args.quiet:
-            from tqdm import tqdm
-            progress = tqdm(total=len(times), unit="frame", desc=f"render {out.name}", file=sys.stderr,
+            from nbst.progress import progress_bar
+            progress = progress_bar(total=len(times), unit="frame", desc=f"render {out.name}", file=sys.stderr,
                             leave=False)
         t0 = time.perf_counter()
         try:

@@ -111,9 +111,9 @@ def cmd_solve(args) -> int:
         if args.quiet:
             return
         if not bar:
-            from tqdm import tqdm
+            from nbst.progress import progress_bar
 
-            bar.append(tqdm(total=args.max_trials, unit="trial", unit_scale=True, file=sys.stderr,
+            bar.append(progress_bar(total=args.max_trials, unit="trial", unit_scale=True, file=sys.stderr,
                             dynamic_ncols=True, desc=f"solve {problem.name} ({label})", smoothing=0.1))
         bar[0].update(p.trials - done[0])
         done[0] = p.trials

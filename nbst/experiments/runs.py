@@ -161,9 +161,9 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
             todo.append(i)
     bar = None
     if progress:
-        from tqdm import tqdm
+        from nbst.progress import progress_bar
 
-        bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="run", file=sys.stderr, desc=desc,
+        bar = progress_bar(total=len(specs), initial=len(specs) - len(todo), unit="run", file=sys.stderr, desc=desc,
                    dynamic_ncols=True)
 
     def done(i: int, res: dict) -> None:
