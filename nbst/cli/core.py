@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from nbst.domain import plain
 from nbst.problem import builtin_names, load_problem
@@ -11,9 +12,9 @@ from nbst.solution import load_solution
 def register(sub) -> None:
     p = sub.add_parser("problems", help="list the built-in problems, or show one",
                        description="List the built-in problems (name, disks, cueable, radius, box, t_final, R), "
-                                   "or print one as JSON with `nbst problems show NAME`.")
-    p.add_argument("action", nargs="?", choices=["show"], help="`show NAME`: print the problem's JSON")
-    p.add_argument("name", nargs="?", help="built-in name or path to a problem JSON file")
+                                   "or print one as JSON with `nbst problems NAME` (or `nbst problems show NAME`).")
+    p.add_argument("words", nargs="*", metavar="[show] NAME",
+                   help="print this problem's JSON (a built-in name or a path); `show` is optional")
     p.set_defaults(func=cmd_problems)
 
     p = sub.add_parser("simulate", help="simulate a solution exactly and report where the disks end",
@@ -32,15 +33,18 @@ def register(sub) -> None:
 def cmd_problems(args) -> int:
     from nbst.cli.args import print_json
 
-    if args.action == "show":
-        if not args.name:
-            raise SystemExit("nbst problems show: error: give a problem NAME (see `nbst problems`)") from None
-        print_json(load_problem(args.name).to_dict())
-        return 0
-    if args.name:
-        print(f"nbst problems: error: unexpected {args.name!r}; did you mean `nbst problems show {args.name}`?",
-              file=__import__("sys").stderr)
+    words = list(args.words)
+    if words[:1] == ["show"]:
+        words = words[1:]
+        if not words:
+            print("nbst problems show: error: give a problem NAME (see `nbst problems`)", file=sys.stderr)
+            return 2
+    if len(words) > 1:
+        print(f"nbst problems: error: one problem at a time, got {len(words)}: {' '.join(words)}", file=sys.stderr)
         return 2
+    if words:
+        print_json(load_problem(words[0]).to_dict())
+        return 0
     rows = [("name", "disks", "cueable", "radius", "box", "t_final", "R", "description")]
     for name in builtin_names():
         p = load_problem(name)

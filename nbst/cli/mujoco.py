@@ -54,7 +54,8 @@ def register(sub) -> None:
                                    "each disk a body with x/y slide joints and a frictionless elastic sphere, "
                                    "targets as non-colliding sites. Open it with `python -m mujoco.viewer "
                                    "--mjcf=scene.xml` and load keyframe `initial` to play the motion. "
-                                   "The XML keeps 6 significant digits (MuJoCo's writer).")
+                                   "Numbers are written at full double precision: the keyframe "
+                                   "round-trips the solution bit for bit.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("solution", nargs="?", help="solution JSON file (default: all disks at rest)")
     p.add_argument("-o", "--output", default="-", metavar="scene.xml", help="output file (default: stdout)")
