@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 
 
 def _positive(what):
@@ -149,15 +150,19 @@ def cmd_validate(args) -> int:
     if args.report:
         from nbst.outputs import prepare_output
         prepare_output(args.report, directory=True, option="--report")
-    if args.convergence and not args.json:
-        print(f"convergence: {len(LADDER)} fixed-step runs (H to H/{LADDER[-1]}) and an aligned one ...",
-              file=sys.stderr)
+    talk = args.convergence and not args.json
+    if talk:
+        print(f"nbst validate: convergence study: {len(LADDER)} fixed-step runs (h to h/{LADDER[-1]}) and an "
+              f"aligned one", file=sys.stderr)
+    t0 = time.perf_counter()
     try:
         val = validate(problem, v, timestep=args.timestep, unit=args.unit, tol=args.tol, max_steps=max_steps,
                        stepping=args.stepping, convergence=args.convergence)
     except RuntimeError as e:  # aligned stepping: a jam, or past --max-steps
         print(f"nbst validate: error: {e}", file=sys.stderr)
         return 2
+    if talk:
+        print(f"nbst validate: convergence study done in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
     if args.report:
         from pathlib import Path
 
