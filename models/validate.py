@@ -214,7 +214,7 @@ class Validation:
             lines.append(f"diverge    disk {dv['disk']} parts by > {self.tol:g} units at t={dv['time']:.4f}s; "
                          f"cause: {dv['cause']}")
         else:
-            lines.append(f"diverge    never: every disk stays within {self.tol:g} unit{"" if self.tol == 1 else "s"} of its exact path")
+            lines.append(f"diverge    never: every disk stays within {self.tol:g} unit{'' if self.tol == 1 else 's'} of its exact path")
         return "\n".join(lines)
 
 
