@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import cluster_client, int_at_least, nonnegative_cost
+from nbst.cli.flags import add_jobs, add_out_dir, add_quiet, add_seed, old_spelling
 from nbst.problem import display_name
 
 ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst (nbst's default search; "
@@ -22,18 +23,19 @@ ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst 
 def _common(p, *, runs: int, trials: int, entries: str) -> None:
     p.add_argument("--runs", type=int_at_least(1, "runs"), default=runs, metavar="R",
                    help=f"runs per entry (and problem); run k uses seed SEED+k (default {runs})")
-    p.add_argument("--trials", type=int_at_least(1, "trials"), default=trials, metavar="N",
+    p.add_argument("--max-trials", dest="trials", type=int_at_least(1, "max-trials"), default=trials, metavar="N",
                    help=f"trial budget of each run (one trial = one simulation; default {trials})")
+    old_spelling(p, "--trials", "--max-trials", dest="trials", type=int_at_least(1, "trials"))
     p.add_argument("--algorithms", default=entries, metavar="LIST", help=f"{ENTRY_HELP} (default {entries})")
-    p.add_argument("--seed", type=int_at_least(0, "seed"), default=1, help="first seed (default 1)")
-    p.add_argument("--out", default="nbst-experiments", metavar="DIR",
-                   help="output folder: tables, figures and runs/ (default ./nbst-experiments)")
-    p.add_argument("--workers", type=int_at_least(1, "workers"), default=None, metavar="W",
-                   help="local worker processes (default: all cores; 1 = in this process)")
+    add_seed(p, type=int_at_least(0, "seed"), resumable=True, what="first seed; run k uses SEED+k")
+    add_out_dir(p, dest="out", default="nbst-experiments", old=("--out",),
+                help="output folder: tables, figures and runs/ (default ./nbst-experiments)")
+    add_jobs(p, dest="workers", type=int_at_least(1, "jobs"), old=("--workers",),
+             help="local worker processes (default: all cores; 1 = in this process)")
     p.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help="run on a Dask distributed scheduler (e.g. tcp://head:8786) instead of local processes; "
                         "nbst must be installed on its workers")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(p, "no progress bar")
     p.add_argument("--json", action="store_true", help="print the summary rows as JSON instead of a table")
 
 
@@ -42,7 +44,7 @@ def register(sub) -> None:
                        description="Run many independent searches and summarize them: best-so-far cost curves "
                                    "(the paper's Figures 5/6), the ablation of variants A-H plus nbst and the "
                                    "baselines (Figures 7/8), and success rates over problem sets. Finished runs "
-                                   "are kept under OUT/runs and reused: rerun a command to resume it.",
+                                   "are kept under DIR/runs and reused: rerun a command to resume it.",
                        epilog="Details and measured results: docs/experiments.md, docs/results.md.")
     s = p.add_subparsers(dest="action", metavar="ACTION")
     c = s.add_parser("curves", help="best-so-far cost against trials (PNG, SVG, CSV)",
@@ -84,7 +86,7 @@ def _run(args, specs, desc: str):
     from nbst.experiments.runs import run_specs
     from nbst.outputs import prepare_output, sigterm_as_interrupt
 
-    prepare_output(args.out, directory=True, option="--out")
+    prepare_output(args.out, directory=True, option="--out-dir")
     client = cluster_client(args)
     try:
         with sigterm_as_interrupt():  # kill: workers stopped, finished runs kept, exit 130 as on Ctrl-C

@@ -3,6 +3,9 @@ from __future__ import annotations
 
 import sys
 
+from nbst.cli.args import int_at_least
+from nbst.cli.flags import add_seed
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -19,7 +22,7 @@ def register(sub) -> None:
     p.add_argument("--t-final", type=float, default=5.0, help="duration in seconds (default 5)")
     p.add_argument("--target-radius", type=float, default=75.0, metavar="R",
                    help="target neighbourhood radius R (default 75)")
-    p.add_argument("--seed", type=int, default=None, help="random seed (default: drawn and recorded)")
+    add_seed(p, type=int_at_least(0, "seed"), resumable=False)
     p.add_argument("--name", default=None, help="problem name (default planted-nN-kK-sSEED)")
     p.add_argument("-o", "--output", required=True, help="problem JSON file to write")
     p.add_argument("--solution", default=None, help="also write the planted velocities as a solution file")

@@ -9,6 +9,9 @@ import math
 import sys
 import time
 
+from nbst.cli.args import int_at_least
+from nbst.cli.flags import add_out_dir, add_quiet, add_seed
+
 
 def _positive(what):
     def parse(text):
@@ -74,11 +77,12 @@ def register(sub) -> None:
                        epilog="Exit status: 0, or 1 with --strict when the signatures differ; 2 on bad input.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("solution", help="solution JSON file")
-    p.add_argument("--report", metavar="DIR", help="write DIR/report.json and DIR/report.html")
+    add_out_dir(p, dest="report", old=("--report",), help="write the report: DIR/report.html and DIR/report.json")
     _add_scene_options(p)
     p.add_argument("--tol", type=_positive("tol"), default=1.0, metavar="D",
                    help="divergence tolerance in problem units (default 1)")
     p.add_argument("--strict", action="store_true", help="exit 1 if the signature under MuJoCo differs")
+    add_quiet(p, "no summary and no status lines (the report files and the exit code still tell)")
     p.add_argument("--json", action="store_true", help="print report.json's content instead of the summary")
     p.add_argument("--max-steps", type=_positive_int("max-steps"), default=None, metavar="N",
                    help="refuse a run of more than N MuJoCo steps, t_final / H (default 1,000,000: every step's "
@@ -100,9 +104,11 @@ def register(sub) -> None:
                                    "the better of DIR/NAME/solution.json (if present) and a fresh `nbst.search."
                                    "solve` run (skipped with --no-search).")
     p.add_argument("names", nargs="*", metavar="NAME", help="built-in problems (default: all)")
-    p.add_argument("--dir", default=None, metavar="DIR", help="gallery folder (default: models/scenes of nbst)")
-    p.add_argument("--seed", type=int, default=1, help="search seed (default 1)")
-    p.add_argument("--max-trials", type=int, default=1_000_000, metavar="N", help="search budget per problem")
+    add_out_dir(p, dest="dir", old=("--dir",), help="gallery folder (default: models/scenes of nbst)")
+    add_seed(p, type=int_at_least(0, "seed"), resumable=True, what="search seed")
+    p.add_argument("--max-trials", type=int_at_least(1, "max-trials"), default=1_000_000, metavar="N",
+                   help="search budget per problem (default 1,000,000)")
+    add_quiet(p, "no progress lines")
     p.add_argument("--no-search", action="store_true", help="only re-render scenes from the stored solutions")
     p.set_defaults(func=cmd_gallery)
 
@@ -149,8 +155,8 @@ def cmd_validate(args) -> int:
         return 2
     if args.report:
         from nbst.outputs import prepare_output
-        prepare_output(args.report, directory=True, option="--report")
-    talk = args.convergence and not args.json
+        prepare_output(args.report, directory=True, option="--out-dir")
+    talk = args.convergence and not args.json and not args.quiet
     if talk:
         print(f"nbst validate: convergence study: {len(LADDER)} fixed-step runs (h to h/{LADDER[-1]}) and an "
               f"aligned one", file=sys.stderr)
@@ -170,13 +176,13 @@ def cmd_validate(args) -> int:
 
         from nbst.render.report import report_html
         out = Path(args.report)
-        write_json_atomic(out / "report.json", val.to_dict(), option="--report")
-        write_text_atomic(out / "report.html", report_html(val), option="--report")
+        write_json_atomic(out / "report.json", val.to_dict(), option="--out-dir")
+        write_text_atomic(out / "report.html", report_html(val), option="--out-dir")
     if args.json:
         from nbst.cli.args import print_json
         from nbst.solution import _json_safe
         print_json(_json_safe(val.to_dict()))
-    else:
+    elif not args.quiet:
         print(val.summary())
         if args.report:
             print(f"report     {args.report}/report.html, {args.report}/report.json")
@@ -190,8 +196,14 @@ def cmd_gallery(args) -> int:
     argv = list(args.names) + ["--seed", str(args.seed), "--max-trials", str(args.max_trials)]
     if args.dir:
         from nbst.outputs import prepare_output
-        prepare_output(args.dir, directory=True, option="--dir")
+        prepare_output(args.dir, directory=True, option="--out-dir")
         argv += ["--dir", args.dir]
     if args.no_search:
         argv.append("--no-search")
+    if args.quiet:
+        import contextlib
+        import io
+
+        with contextlib.redirect_stdout(io.StringIO()):
+            return gallery_main(argv)
     return gallery_main(argv)
