@@ -6,6 +6,8 @@
 * ``brute_force``: fixed small time steps, overlap detection, velocity flips;
   first-order accurate (error ~ speed * dt per contact).
 * ``fold``: exact position of a lone disk bouncing between two walls.
+* ``impulse``, ``mirror_image``: the textbook contact and reflection rules
+  (references for ``nbst.sim.primitives``).
 """
 from __future__ import annotations
 
@@ -19,6 +21,30 @@ def fold(x0, v, t, r, L):
     span = L - 2 * r
     u = (x0 - r + v * t) % (2 * span)
     return r + (u if u <= span else 2 * span - u)
+
+
+def impulse(vi, vj, p_i, p_j, mi, mj):
+    """Textbook frictionless elastic contact: the velocities after it (vectors), with the
+    normal from the centres; a pair that is not approaching is left as it is."""
+    vi, vj = np.array(vi, float), np.array(vj, float)
+    nrm = (np.asarray(p_j, float) - np.asarray(p_i, float))
+    nrm = nrm / np.linalg.norm(nrm)
+    u = (vi - vj) @ nrm
+    if u > 0:
+        vi = vi - 2 * mj / (mi + mj) * u * nrm
+        vj = vj + 2 * mi / (mi + mj) * u * nrm
+    return vi, vj
+
+
+def mirror_image(u, k, lo, hi):
+    """Image k of coordinate u in [lo, hi], by reflecting |k| times in successive walls
+    (lo + L, lo + 2L, ... for k > 0; lo, lo - L, ... for k < 0)."""
+    L = hi - lo
+    x = u
+    for m in range(1, abs(k) + 1):
+        wall = lo + m * L if k > 0 else lo - (m - 1) * L
+        x = 2 * wall - x
+    return x
 
 
 def _pair_time(p1, v1, p2, v2, s):
@@ -43,6 +69,30 @@ def _wall_time(p, v, r, W, H):
         elif v[axis] < 0:
             best = min(best, (max((lo - p[axis]) / v[axis], 0.0), wlo))
     return best
+
+
+def next_event(p, v, radius, W, H):
+    """The next event of a state (positions p, velocities v, both (N, 2)), rescanning every
+    wall and every pair with the textbook formulas: (dt, i, j_or_wall_code) with the wall code
+    -1 - wall, as ``nbst.sim.run`` records it; ties go to the lowest (dt, i), walls first.
+    Vectorized over pairs with numpy, but no state carried between events."""
+    n = len(p)
+    walls = [_wall_time(p[i], v[i], radius[i], W, H) for i in range(n)]
+    best = min((t, i, 0, -1 - w) for i, (t, w) in enumerate(walls))
+    if n > 1:
+        iu, ku = np.triu_indices(n, 1)
+        dp = p[ku] - p[iu]
+        dv = v[ku] - v[iu]
+        a = (dv * dv).sum(axis=1)
+        b = (dp * dv).sum(axis=1)
+        c = (dp * dp).sum(axis=1) - (radius[iu] + radius[ku]) ** 2
+        disc = b * b - a * c
+        ok = (b < 0) & (a > 0) & (disc >= 0)
+        t = np.full(len(iu), math.inf)
+        t[ok] = np.maximum((-b[ok] - np.sqrt(disc[ok])) / a[ok], 0.0)
+        m = int(np.argmin(t))
+        best = min(best, (float(t[m]), int(iu[m]), 1, int(ku[m])))
+    return best[0], best[1], best[3]
 
 
 def naive_simulate(start, vel, radius, mass, W, H, t_final, max_events=100_000):
@@ -70,12 +120,7 @@ def naive_simulate(start, vel, radius, mass, W, H, t_final, max_events=100_000):
             events.append((t, i, -1 - other))
         else:
             k = other
-            nrm = (p[k] - p[i]) / np.linalg.norm(p[k] - p[i])
-            u = (v[i] - v[k]) @ nrm
-            if u > 0:
-                mi, mk = mass[i], mass[k]
-                v[i] -= 2 * mk / (mi + mk) * u * nrm
-                v[k] += 2 * mi / (mi + mk) * u * nrm
+            v[i], v[k] = impulse(v[i], v[k], p[i], p[k], mass[i], mass[k])
             events.append((t, i, k))
     p += v * (t_final - t)
     return p, v, events

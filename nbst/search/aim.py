@@ -17,7 +17,8 @@ of centres n = (T - p_s) / |T - p_s| with speed D / (t_final - t_hit), D = |T - 
 c must touch s at q = p_s - (r_c + r_s) n, arriving at t_hit with normal speed
 u = (v_c . n) giving s the speed (2 m_c / (m_c + m_s)) u. With A = (q - p_c).n
 (> 0 for c to approach from behind; then q is c's first contact with s):
-t_hit = A t_final / (A + k D), k = (m_c + m_s) / (2 m_c), v_c = (q - p_c) / t_hit.
+t_hit = A t_final / (A + k D), k = (m_c + m_s) / (2 m_c) (the inverse of
+``nbst.sim.primitives.impulse_share``), v_c = (q - p_c) / t_hit.
 """
 from __future__ import annotations
 
@@ -27,24 +28,11 @@ import numpy as np
 from numba import njit
 
 from nbst.search.ops import rng_uniform
-from nbst.sim import pair_tau
+from nbst.sim.primitives import fold, images, impulse_share, mirror, pair_tau
 
-@njit(cache=True, inline="always")
-def mirror(u, k, lo, hi):
-    """Coordinate of image k of u in [lo, hi] (k reflections)."""
-    L = hi - lo
-    if k % 2 == 0:
-        return lo + k * L + (u - lo)
-    return lo + k * L + (hi - u)
-
-
-@njit(cache=True, inline="always")
-def fold(x, lo, hi):
-    """Where an unfolded coordinate x lands in [lo, hi]."""
-    L = hi - lo
-    u = (x - lo) % (2.0 * L)
-    return lo + (u if u <= L else 2.0 * L - u)
-
+__all__ = ["MAX_PIECES", "alloc_clearance", "all_pieces", "bank_shot", "bank_velocity", "chain_strike_velocity",
+           "choose_bank", "count_conflicts", "flight_pieces", "flights_conflict", "fold", "mirror", "path_conflicts",
+           "pieces_conflict", "strike", "strike_velocity"]
 
 @njit(cache=True)
 def bank_velocity(start, target, r, W, H, t_final, kx, ky, out):
@@ -202,23 +190,17 @@ def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounce
     taken at once (uniform among the conflict-free images, as a full scan with
     random tie-breaking would choose, at a fraction of the cost)."""
     all_pieces(x0, V, radius, W, H, t_final, scr)
-    m = 0
-    cand = np.empty((2 * max_bounces + 1) ** 2, np.int64)
-    for kx in range(-max_bounces, max_bounces + 1):
-        for ky in range(-max_bounces, max_bounces + 1):
-            b = abs(kx) + abs(ky)
-            if min_bounces <= b <= max_bounces:
-                cand[m] = (kx + max_bounces) * (2 * max_bounces + 1) + (ky + max_bounces)
-                m += 1
+    cand = images(min_bounces, max_bounces)
+    m = cand.shape[0]
     best = 1 << 30
     nbest = 0
     v = np.empty(2)
     for q in range(m):
         r = q + int(rng_uniform(rng) * (m - q))  # Fisher-Yates: a uniformly random unseen image
-        code = cand[r]
-        cand[r] = cand[q]
-        kx = code // (2 * max_bounces + 1) - max_bounces
-        ky = code % (2 * max_bounces + 1) - max_bounces
+        kx = cand[r, 0]
+        ky = cand[r, 1]
+        cand[r, 0] = cand[q, 0]
+        cand[r, 1] = cand[q, 1]
         bank_velocity(x0[i], target[i], radius[i], W, H, t_final, kx, ky, v)
         c = count_conflicts(i, v, x0, radius, W, H, t_final, scr, best)
         if c < best:
@@ -254,8 +236,7 @@ def strike_velocity(pc, rc, mc, ps, rs, ms, T, t_final, out):
     A = (qx - pc[0]) * nx + (qy - pc[1]) * ny
     if A <= 0.0:
         return -1.0
-    k = (mc + ms) / (2.0 * mc)
-    t_hit = A * t_final / (A + k * D)
+    t_hit = A * t_final / (A + D / impulse_share(mc, ms))
     out[0] = (qx - pc[0]) / t_hit
     out[1] = (qy - pc[1]) / t_hit
     return t_hit
@@ -296,7 +277,7 @@ def chain_strike_velocity(pc, rc, mc, p1, r1, m1, p2, r2, m2, T, t_final, out):
     q1 = p1 - (rc + r1) d with normal speed sigma k1 at t1 = A1/(sigma k1),
     A1 = (q1 - pc).d; and t2 = t1 + L2/sigma. With G = A1/k1 + L2 and c2 = d.n2
     these solve to t2 = G c2 t_final / (G c2 + k2 D2), sigma = G / t2.
-    (k = (m_a + m_b) / (2 m_a) for striker a and struck b.)"""
+    (k = (m_a + m_b) / (2 m_a) = 1 / ``impulse_share(m_a, m_b)`` for striker a and struck b.)"""
     dx = T[0] - p2[0]
     dy = T[1] - p2[1]
     D2 = math.sqrt(dx * dx + dy * dy)
@@ -321,12 +302,12 @@ def chain_strike_velocity(pc, rc, mc, p1, r1, m1, p2, r2, m2, T, t_final, out):
     A1 = (q1x - pc[0]) * ddx + (q1y - pc[1]) * ddy
     if A1 <= 0.0:
         return -1.0
-    k1 = (mc + m1) / (2.0 * mc)
-    k2 = (m1 + m2) / (2.0 * m1)
-    G = A1 / k1 + L2
-    t2 = G * c2 * t_final / (G * c2 + k2 * D2)
+    s1 = impulse_share(mc, m1)  # 1 / k1
+    s2 = impulse_share(m1, m2)  # 1 / k2
+    G = A1 * s1 + L2
+    t2 = G * c2 * t_final / (G * c2 + D2 / s2)
     sigma = G / t2
-    t1 = A1 / (sigma * k1)
+    t1 = A1 * s1 / sigma
     out[0] = (q1x - pc[0]) / t1
     out[1] = (q1y - pc[1]) / t1
     return t2

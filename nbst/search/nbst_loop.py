@@ -15,7 +15,12 @@ What is added to the paper's algorithm (each can be switched off, for ablation):
   search, this is a min-conflicts walk towards a collision-free routing.
 * **strike** operator (footnote 5, overconstrained problems only): a cueable disk
   is aimed to strike a noncueable disk so that the struck disk leaves towards its
-  target or a one-bounce image of it and arrives at t_final; half of the time
+  target or an image of it (``strike_bounces`` = b, default 1) and arrives at t_final.
+  The image (kx, ky) is drawn uniformly from the square |kx|, |ky| <= b and an image
+  outside the diamond |kx| + |ky| <= b falls back to the target itself, so the
+  unreflected target is favoured: for b = 1 it has probability 5/9 and each of the
+  four one-bounce images 1/9 (a direct strike is the likeliest to work). Drawing
+  uniformly over the diamond instead would change every seeded result; half of the time
   (with two or more noncueable disks) through a chain: the cue strikes a first
   noncueable disk, which strikes the second towards its target.
 * **backward planner** (``nbst.search.planner``, overconstrained problems only, before the loop):
@@ -44,13 +49,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nbst.search.aim import alloc_clearance, chain_strike_velocity, choose_bank, mirror, strike_velocity
+from nbst.search.aim import alloc_clearance, chain_strike_velocity, choose_bank, strike_velocity
 from nbst.search.polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
 from nbst.search.robust import robust_eval
 from nbst.search.loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
                           PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_POP_LIMIT, PI_SENATE,
                           PI_SIG_LIMIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE, ST_SINCE, ST_TRIALS,
                           ST_TRUNCATED, evaluate_one, loop_scratch, settle, stop_code)
+from nbst.sim.primitives import mirror
 from nbst.search.ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 

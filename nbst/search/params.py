@@ -11,6 +11,7 @@ import numpy as np
 
 from nbst.constants import MAX_EVENTS
 from nbst.problem import Problem, ProblemError
+from nbst.sim.primitives import images
 from nbst.search.robust import ARCHIVE_SIZE as ROBUST_ARCHIVE, POLISH_TOP as ROBUST_POLISH, SAMPLES as ROBUST_SAMPLES, \
     SEARCH_SAMPLES as ROBUST_K, TIMESTEP as ROBUST_TIMESTEP
 
@@ -192,9 +193,7 @@ def variant_params(variant: str = "nbst", problem: Problem | None = None) -> Sea
 
 def mirror_images(max_bounces: int) -> np.ndarray:
     """(M, 2) int64 image indices (kx, ky) with |kx| + |ky| <= max_bounces (M = 61 for 5)."""
-    b = int(max_bounces)
-    return np.array([(kx, ky) for kx in range(-b, b + 1) for ky in range(-b, b + 1) if abs(kx) + abs(ky) <= b],
-                    dtype=np.int64).reshape(-1, 2)
+    return images(0, int(max_bounces))
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ targets backwards instead of sampling cue velocities forwards:
 * **A route** of cueable disk c is a chain ``c = a0 -> a1 -> ... -> aL`` (L = 0..3,
   the a_k distinct noncueable disks at rest) plus one mirror image per leg. The last
   disk aL must reach its target: it leaves along n_L = (T' - p_L)/|T' - p_L| (T' the
-  image of its target, see ``nbst.search.aim.mirror``), so a_{L-1} must touch it at
+  image of its target, see ``nbst.sim.primitives.mirror``), so a_{L-1} must touch it at
   q_L = p_L - (r_{L-1} + r_L) n_L, arriving (along its own leg, direct or banked) with a
   normal component that gives aL its speed. Going back leg by leg fixes every leg's
   direction; the speeds follow from the elastic exchange (masses included):
@@ -53,8 +53,8 @@ from numba import njit
 
 from nbst.constants import MAX_EVENTS
 from nbst.problem import Problem
-from nbst.search.aim import fold, mirror
 from nbst.sim import evaluate_kernel
+from nbst.sim.primitives import fold, images, impulse_share, mirror
 
 #: A strike whose arrival direction makes a cosine below this with the line of centres is
 #: rejected: it transfers almost nothing, and its outcome is hypersensitive.
@@ -142,7 +142,7 @@ def chain_aim(x0, radius, mass, target, W, H, t_final, chain, L, imgs, out_v, ou
     for k in range(L):
         a = chain[k]
         b = chain[k + 1]
-        g[k + 1] = g[k] * cs[k] * 2.0 * mass[a] / (mass[a] + mass[b])
+        g[k + 1] = g[k] * cs[k] * impulse_share(mass[a], mass[b])
     total = D / g[L]
     for k in range(L):
         total += leg[k] / g[k]
@@ -157,7 +157,7 @@ def chain_aim(x0, radius, mass, target, W, H, t_final, chain, L, imgs, out_v, ou
         t += leg[k] / w
         out_t[k] = t
         # the striker keeps its tangential part and loses the transferred normal part
-        tr = 2.0 * mass[b] / (mass[a] + mass[b]) * w * cs[k]
+        tr = impulse_share(mass[b], mass[a]) * w * cs[k]
         vx = w * arr[k, 0] - tr * nd[k + 1, 0]
         vy = w * arr[k, 1] - tr * nd[k + 1, 1]
         dt = t_final - t
@@ -201,8 +201,9 @@ def aim_routes(x0, radius, mass, target, W, H, t_final, chains, L, imgs, vmax, V
 
 
 def _images(b: int) -> np.ndarray:
-    return np.array([(kx, ky) for s in range(b + 1) for kx in range(-s, s + 1) for ky in range(-s, s + 1)
-                     if abs(kx) + abs(ky) == s], dtype=np.int64).reshape(-1, 2)
+    """Mirror images with at most b bounces, fewest bounces first (then kx, ky ascending)."""
+    im = images(0, b)
+    return im[np.argsort(np.abs(im).sum(axis=1), kind="stable")]
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,7 @@
 """The exact simulator: frictionless elastic disks in a box, event to event.
 
+* ``nbst.sim.primitives``: the physics rules, each written once (contact times, the elastic
+  impulse, event replay, mirror images);
 * ``nbst.sim.kernel``: the compiled event kernel (numba, arrays only);
 * ``nbst.sim.api``: :func:`evaluate` (a batch of candidates: final positions, cost,
   signature) and :func:`simulate` (one motion with its events, a :class:`Trajectory`);
@@ -13,8 +15,9 @@ below the search. Nothing here imports the search, MuJoCo or the renderer.
 from __future__ import annotations
 
 from nbst.sim.api import EVENT_DTYPE, Trajectory, evaluate, simulate
-from nbst.sim.kernel import (INF, STATUS_OK, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work,
-                             cost_signature, evaluate_kernel, pair_tau, run, wall_tau)
+from nbst.sim.kernel import (STATUS_OK, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work, cost_signature,
+                             evaluate_kernel, run)
+from nbst.sim.primitives import INF, pair_tau, wall_tau
 
 __all__ = ["EVENT_DTYPE", "INF", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "Trajectory",
            "alloc_work", "cost_signature", "evaluate", "evaluate_kernel", "pair_tau", "run", "simulate", "wall_tau"]

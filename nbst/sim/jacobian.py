@@ -38,6 +38,7 @@ from numba import njit
 
 from nbst.problem import Problem
 from nbst.sim.kernel import STATUS_OK, alloc_work, run
+from nbst.sim.primitives import contact_normal, impulse_share, replay_event, wall_axis
 
 
 @njit(cache=True, error_model="numpy")
@@ -56,27 +57,21 @@ def carry_tangents(mass, e0, n_ev, ev_t, ev_i, ev_j, ev_state, V, dQ, dV):
         j = ev_j[e]
         tau = ev_t[e]
         if j < 0:
-            c = 0 if (-1 - j) <= 1 else 1  # walls 0, 1: x; walls 2, 3: y
+            c = wall_axis(-1 - j)
             for q in range(P):
                 dQ[i, c, q] = -dQ[i, c, q]
                 dV[i, c, q] = -dV[i, c, q]
-            V[i, c] = -V[i, c]
+            replay_event(e, ev_i, ev_j, ev_state, V)
             continue
-        # contact geometry at tau from the recorded post-event positions (positions are continuous)
-        Dx = ev_state[e, 4] - ev_state[e, 0]
-        Dy = ev_state[e, 5] - ev_state[e, 1]
-        s = np.sqrt(Dx * Dx + Dy * Dy)
-        nx = Dx / s
-        ny = Dy / s
+        nx, ny, s = contact_normal(ev_state, e)
         wx = V[j, 0] - V[i, 0]
         wy = V[j, 1] - V[i, 1]
         nw = nx * wx + ny * wy  # < 0: approaching
         if nw >= 0.0:
             continue  # a touch without approach: the simulator changed nothing
         u = -nw
-        mi = mass[i]
-        mj = mass[j]
-        M = mi + mj
+        share_i = impulse_share(mass[j], mass[i])
+        share_j = impulse_share(mass[i], mass[j])
         for c in range(2):
             for q in range(P):
                 dDQ[c, q] = dQ[j, c, q] - dQ[i, c, q]
@@ -93,19 +88,16 @@ def carry_tangents(mass, e0, n_ev, ev_t, ev_i, ev_j, ev_state, V, dQ, dV):
                 nc = nx if c == 0 else ny
                 Vic = V[i, c]
                 Vjc = V[j, c]
-                Vi2 = Vic - 2.0 * mj / M * u * nc
-                Vj2 = Vjc + 2.0 * mi / M * u * nc
-                dVi2 = dV[i, c, q] - 2.0 * mj / M * (du * nc + u * dn[c, q])
-                dVj2 = dV[j, c, q] + 2.0 * mi / M * (du * nc + u * dn[c, q])
+                Vi2 = Vic - share_i * u * nc
+                Vj2 = Vjc + share_j * u * nc
+                dVi2 = dV[i, c, q] - share_i * (du * nc + u * dn[c, q])
+                dVj2 = dV[j, c, q] + share_j * (du * nc + u * dn[c, q])
                 dQ[i, c, q] = dQ[i, c, q] + (dV[i, c, q] - dVi2) * tau + (Vic - Vi2) * dtau
                 dQ[j, c, q] = dQ[j, c, q] + (dV[j, c, q] - dVj2) * tau + (Vjc - Vj2) * dtau
                 dV[i, c, q] = dVi2
                 dV[j, c, q] = dVj2
         # the velocities after the event (as the simulator computed them)
-        V[i, 0] = ev_state[e, 2]
-        V[i, 1] = ev_state[e, 3]
-        V[j, 0] = ev_state[e, 6]
-        V[j, 1] = ev_state[e, 7]
+        replay_event(e, ev_i, ev_j, ev_state, V)
 
 
 @njit(cache=True, error_model="numpy")
@@ -134,28 +126,14 @@ def jacobian_from_events(x0, v0, mass, t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_
 def velocities_before(v0, e_stop, ev_i, ev_j, ev_state, V):
     """Fill V (N, 2) with the velocities just before event ``e_stop`` (after events 0 .. e_stop - 1).
 
-    Replays the event record as ``carry_tangents`` does (a wall flips one component; a
-    disk-disk event takes the recorded post-event velocities unless the pair was not
-    approaching), so the two agree bit for bit.
+    Replays the event record with ``nbst.sim.primitives.replay_event``, as ``carry_tangents``
+    does, so the two agree bit for bit.
     """
     for i in range(v0.shape[0]):
         V[i, 0] = v0[i, 0]
         V[i, 1] = v0[i, 1]
     for e in range(e_stop):
-        i = ev_i[e]
-        j = ev_j[e]
-        if j < 0:
-            c = 0 if (-1 - j) <= 1 else 1
-            V[i, c] = -V[i, c]
-            continue
-        nx = ev_state[e, 4] - ev_state[e, 0]
-        ny = ev_state[e, 5] - ev_state[e, 1]
-        if nx * (V[j, 0] - V[i, 0]) + ny * (V[j, 1] - V[i, 1]) >= 0.0:
-            continue
-        V[i, 0] = ev_state[e, 2]
-        V[i, 1] = ev_state[e, 3]
-        V[j, 0] = ev_state[e, 6]
-        V[j, 1] = ev_state[e, 7]
+        replay_event(e, ev_i, ev_j, ev_state, V)
 
 
 @njit(cache=True, error_model="numpy")

@@ -26,7 +26,10 @@ of ``|dp + dv tau|^2 = (ri + rk)^2``; only approaching pairs (``b < 0``) are
 predicted, so a pair that just collided is never re-predicted at tau = 0, and a
 wall is predicted only for the wall a disk moves towards, so a disk pushed back
 into the wall it just left (or bouncing into the opposite wall) is still caught.
-A contact time that round-off makes negative is clamped to "now".
+A contact time that round-off makes negative is clamped to "now". These closed forms,
+the elastic impulse and the other physics rules are written once, in
+``nbst.sim.primitives``; ``_update_row`` repeats ``pair_tau``'s formula branch-free so
+LLVM vectorizes it (tests/test_primitives.py checks every event against a naive rescan).
 
 A run that stops early (``MAX_EVENTS`` reached, or stalled: a jam of rigid disks pinned
 between opposite walls bouncing infinitely often at one instant) is exact up to its last
@@ -40,65 +43,16 @@ import math
 import numpy as np
 from numba import njit
 
-from nbst.constants import STALL_EVENTS_PER_DISK, STALL_RTOL, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT, WALL_TOP
+from nbst.constants import STALL_EVENTS_PER_DISK, STALL_RTOL, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
+from nbst.sim.primitives import INF, elastic_impulse, pair_tau, wall_tau
 
-INF = math.inf
+__all__ = ["INF", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "alloc_work", "cost_signature",
+           "evaluate_kernel", "pair_tau", "run", "wall_tau"]
 
 STATUS_OK = 0
 STATUS_TRUNCATED = 1  # MAX_EVENTS reached before t_final
 STATUS_OVERFLOW = 2  # event record buffer full (simulate() retries with a larger one)
 STATUS_STALLED = 3  # a jam: STALL_EVENTS_PER_DISK * N events within one instant
-
-
-# --------------------------------------------------------------------------- closed forms
-
-@njit(cache=True, inline="always", error_model="numpy")
-def pair_tau(dx, dy, dvx, dvy, s, h):
-    """Time until two disks touch, if it is at most h; else inf.
-
-    (dx, dy) = pk - pi, (dvx, dvy) = vk - vi, s = contact distance, h = horizon.
-    inf if they never touch within h (or are separating); 0 if round-off already
-    has them overlapping and approaching. The horizon test needs no square root.
-    """
-    b = dx * dvx + dy * dvy
-    if b >= 0.0:
-        return INF
-    a = dvx * dvx + dvy * dvy
-    c = dx * dx + dy * dy - s * s
-    if c <= 0.0:
-        return 0.0
-    if a * h <= -b:
-        # closest approach lies beyond h: contact within h iff the gap closes by h
-        if c + h * (2.0 * b + a * h) > 0.0:
-            return INF
-    disc = b * b - a * c
-    if disc < 0.0:
-        return INF
-    return c / (-b + math.sqrt(disc))
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def wall_tau(x, y, vx, vy, r, W, H):
-    """(time until the disk touches a wall, which wall); x walls win ties."""
-    tx = INF
-    wx = -1
-    if vx > 0.0:
-        tx = (W - r - x) / vx
-        wx = WALL_RIGHT
-    elif vx < 0.0:
-        tx = (r - x) / vx
-        wx = WALL_LEFT
-    ty = INF
-    wy = -1
-    if vy > 0.0:
-        ty = (H - r - y) / vy
-        wy = WALL_TOP
-    elif vy < 0.0:
-        ty = (r - y) / vy
-        wy = WALL_BOTTOM
-    if ty < tx:
-        return (ty if ty > 0.0 else 0.0), wy
-    return (tx if tx > 0.0 else 0.0), wx
 
 
 # --------------------------------------------------------------------------- the kernel
@@ -283,16 +237,7 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
             d = math.sqrt(nx * nx + ny * ny)
             nx /= d
             ny /= d
-            u = (vx[i] - vx[j]) * nx + (vy[i] - vy[j]) * ny  # > 0: approaching
-            if u > 0.0:
-                mi = mass[i]
-                mj = mass[j]
-                fi = 2.0 * mj / (mi + mj) * u
-                fj = 2.0 * mi / (mi + mj) * u
-                vx[i] -= fi * nx
-                vy[i] -= fi * ny
-                vx[j] += fj * nx
-                vy[j] += fj * ny
+            vx[i], vy[i], vx[j], vy[j] = elastic_impulse(vx[i], vy[i], vx[j], vy[j], nx, ny, mass[i], mass[j])
             n_dd += 1
             jj = j
             # the pair entry (i, j) first, so neither row update re-predicts it

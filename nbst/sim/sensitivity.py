@@ -62,6 +62,7 @@ from numba import njit
 
 from nbst.problem import Problem
 from nbst.sim.jacobian import carry_tangents, event_record, jacobian_from_events
+from nbst.sim.primitives import IMPACT_NONE, IMPACT_PAIR, IMPACT_WALL, contact_normal, impulse_share, replay_event
 
 #: Worst case: a pair's turned normal counts (1 + PHASE_SPREAD) times its mid-step share;
 #: measured 0.79-1.40 times over the phase of the touch within its step (module docstring).
@@ -90,26 +91,12 @@ def late_impact_errors(v0, mass, t_final, h, n_ev, ev_t, ev_i, ev_j, ev_state, e
         for a in range(n):
             Va[a, 0] = V[a, 0]
             Va[a, 1] = V[a, 1]
-        if j < 0:
-            c = 0 if (-1 - j) <= 1 else 1
-            Va[i, c] = -V[i, c]
-            impact[k] = 1
-        else:
-            nx = ev_state[k, 4] - ev_state[k, 0]
-            ny = ev_state[k, 5] - ev_state[k, 1]
-            if nx * (V[j, 0] - V[i, 0]) + ny * (V[j, 1] - V[i, 1]) < 0.0:  # approaching: an impulse
-                Va[i, 0] = ev_state[k, 2]
-                Va[i, 1] = ev_state[k, 3]
-                Va[j, 0] = ev_state[k, 6]
-                Va[j, 1] = ev_state[k, 7]
-                impact[k] = 2
-            else:
-                impact[k] = 0
+        impact[k] = replay_event(k, ev_i, ev_j, ev_state, Va)  # Va: the velocities after impact k
         for a in range(n):
             for c in range(2):
                 err[k, a, c] = 0.0
                 errn[k, a, c] = 0.0
-        if impact[k] > 0:
+        if impact[k] != IMPACT_NONE:
             for a in range(n):
                 for c in range(2):
                     for q in range(2):
@@ -123,25 +110,20 @@ def late_impact_errors(v0, mass, t_final, h, n_ev, ev_t, ev_i, ev_j, ev_state, e
             if j >= 0:
                 # a pair meets at contact distance s - u h: h late (the offsets above) and along
                 # the normal of that overlapping configuration, turned by dn = h w_t / s
-                Dx = ev_state[k, 4] - ev_state[k, 0]
-                Dy = ev_state[k, 5] - ev_state[k, 1]
-                s = math.sqrt(Dx * Dx + Dy * Dy)
-                nx = Dx / s
-                ny = Dy / s
+                nx, ny, s = contact_normal(ev_state, k)
                 wx = V[j, 0] - V[i, 0]
                 wy = V[j, 1] - V[i, 1]
                 u = -(nx * wx + ny * wy)
                 dnx = h * (wx + u * nx) / s
                 dny = h * (wy + u * ny) / s
                 du = -(wx * dnx + wy * dny)
-                M = mass[i] + mass[j]
                 gx = du * nx + u * dnx
                 gy = du * ny + u * dny
                 tau = ev_t[k]
-                dV[i, 0, 0] = -2.0 * mass[j] / M * gx
-                dV[i, 1, 0] = -2.0 * mass[j] / M * gy
-                dV[j, 0, 0] = 2.0 * mass[i] / M * gx
-                dV[j, 1, 0] = 2.0 * mass[i] / M * gy
+                dV[i, 0, 0] = -impulse_share(mass[j], mass[i]) * gx
+                dV[i, 1, 0] = -impulse_share(mass[j], mass[i]) * gy
+                dV[j, 0, 0] = impulse_share(mass[i], mass[j]) * gx
+                dV[j, 1, 0] = impulse_share(mass[i], mass[j]) * gy
                 for a in (i, j):
                     for c in range(2):
                         dV[a, c, 1] = dV[a, c, 0]
@@ -246,8 +228,8 @@ def analyze(problem: Problem, velocities, *, timestep: float | None = None) -> d
     out["prediction"] = {
         "timestep": h,
         "impacts": int(np.count_nonzero(impact)),
-        "wall_impacts": int(np.count_nonzero(impact == 1)),
-        "disk_impacts": int(np.count_nonzero(impact == 2)),
+        "wall_impacts": int(np.count_nonzero(impact == IMPACT_WALL)),
+        "disk_impacts": int(np.count_nonzero(impact == IMPACT_PAIR)),
         "predicted_error_max": _num(worst.max()) if n else 0.0,
         "predicted_error_per_disk": [_num(x) for x in worst],
         "predicted_error_rss_max": _num(rss.max()) if n else 0.0,
