@@ -31,6 +31,9 @@ PIN_RED = (0.80, 0.10, 0.12)
 STRIPES_IN = ((9.2, 9.6), (10.3, 10.7))
 BALL_RGB = (0.30, 0.62, 0.96)
 BACKGROUND = (0.10, 0.11, 0.13)
+#: Overhead view: each pin's number is written on the deck this far (m) in front of its spot,
+#: clear of the standing pin (belly radius 0.061 m) and of the spot in front (0.264 m).
+PIN_LABEL_BACK = 0.11
 
 VS = """#version 330
 uniform mat4 u_vp;
@@ -77,14 +80,18 @@ class Motion:
     pins: np.ndarray
     impact: float          # time of the first ball-pin contact (s), or nan
     down: list
+    down_masks: np.ndarray | None = None   # (S,) pins down (10-bit mask) at each step, by the shot's rule
 
 
 def record(shot: dict, model) -> Motion:
-    """Replay ``shot`` (a loaded shot file) in ``model`` and record every step's poses."""
+    """Replay ``shot`` (a loaded shot file) in ``model`` and record every step's poses.
+    A non-finite state is refused before stepping and MuJoCo's warnings raise
+    ``shot.MujocoWarning`` (nothing goes to ``MUJOCO_LOG.TXT``)."""
     import mujoco
 
     from nbst.models.bowling import shot as shotmod
 
+    shotmod.check_state(shot["qpos0"], shot["qvel0"])
     d = mujoco.MjData(model)
     d.qpos[:] = shot["qpos0"]
     d.qvel[:] = shot["qvel0"]
@@ -96,25 +103,37 @@ def record(shot: dict, model) -> Motion:
     q = np.empty((n + 1, model.nq))
     q[0] = d.qpos
     impact = math.nan
-    for k in range(n):
-        mujoco.mj_step(model, d)
-        q[k + 1] = d.qpos
-        if math.isnan(impact):
-            for c in d.contact[:d.ncon]:
-                if ball_geom in (c.geom1, c.geom2) and {int(model.geom_bodyid[c.geom1]),
-                                                        int(model.geom_bodyid[c.geom2])} & pin_bodies:
-                    impact = float(d.time)
-                    break
-    down = shotmod.pins_of(int(shotmod.mask_of(shotmod.pins_down(model, q[-1][None]))[0]))
+    with shotmod.mujoco_warnings_raise():
+        for k in range(n):
+            mujoco.mj_step(model, d)
+            q[k + 1] = d.qpos
+            if math.isnan(impact):
+                for c in d.contact[:d.ncon]:
+                    if ball_geom in (c.geom1, c.geom2) and {int(model.geom_bodyid[c.geom1]),
+                                                            int(model.geom_bodyid[c.geom2])} & pin_bodies:
+                        impact = float(d.time)
+                        break
+    bad = shotmod.data_warnings(d)
+    if bad or not np.isfinite(q).all():
+        raise shotmod.MujocoWarning(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
+    masks = shotmod.mask_of(shotmod.pins_down(model, q))
     return Motion(times=np.arange(n + 1) * model.opt.timestep, ball=q[:, ba:ba + 7],
-                  pins=q[:, adr[:, None] + np.arange(7)], impact=impact, down=down)
+                  pins=q[:, adr[:, None] + np.arange(7)], impact=impact, down=shotmod.pins_of(int(masks[-1])),
+                  down_masks=masks)
+
+
+def slow_window(motion: Motion) -> tuple[float, float]:
+    """(start, end) simulated seconds of the slow motion around the first ball-pin contact."""
+    T = float(motion.times[-1])
+    if math.isnan(motion.impact):
+        return 0.0, 0.0
+    return max(0.0, motion.impact - IMPACT_WINDOW[0]), min(T, motion.impact + IMPACT_WINDOW[1])
 
 
 def frame_times(motion: Motion, fps: float, *, hold: float = 1.0) -> np.ndarray:
     """Simulated time of each video frame: real time, slowed SLOW x around the impact, then a hold."""
     T = float(motion.times[-1])
-    a, b = (0.0, 0.0) if math.isnan(motion.impact) else (max(0.0, motion.impact - IMPACT_WINDOW[0]),
-                                                          min(T, motion.impact + IMPACT_WINDOW[1]))
+    a, b = slow_window(motion)
     out, t = [], 0.0
     while t <= T:
         out.append(t)
@@ -149,16 +168,27 @@ def _flat(mesh, color_fn) -> np.ndarray:
 class BowlingRenderer(FrameRenderer):
     """Frames of a recorded shot: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both."""
 
-    def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both"):
+    def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both", shot: dict | None = None):
         import moderngl
         import trimesh
 
         from nbst.models.bowling import pin, scene
+        from nbst.render.shapes import Text
 
         if camera not in ("behind", "overhead", "both"):
             raise ValueError(f"camera must be behind, overhead or both, got {camera!r}")
         self.ctx, self.motion, self.camera = ctx, motion, camera
         self.size = tuple(size)
+        self.shot = shot or {}
+        n_cams = 2 if camera == "both" else 1
+        panel_w = self.size[0] // n_cams
+        px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
+        chars = max(len(line) for line in self.readout(float(motion.times[-1])))
+        from nbst.render.shapes import text_cell
+        while px > style.MIN_READOUT_PX and chars * text_cell(px)[0] > panel_w - 16:
+            px -= 1
+        self.text = Text(ctx, px)
+        self.pin_text = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.024 * min(self.size)))))
         self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
         self.prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
         self._mgl = moderngl
@@ -223,8 +253,62 @@ class BowlingRenderer(FrameRenderer):
                 proj = perspective(42.0, aspect, 0.1, 10.0)
             up = np.array([1.0, 0.0, 0.0]) if cam == "overhead" else np.array([0.0, 0.0, 1.0])
             flip = np.diag([1.0, -1.0, 1.0, 1.0])  # image row 0 at the top: no flip on readback
-            out.append(((i * vw, 0, vw, h), flip @ proj @ look_at(eye, tgt, up), eye))
+            out.append(((i * vw, 0, vw, h), flip @ proj @ look_at(eye, tgt, up), eye, cam))
         return out, k
+
+    def readout(self, t: float) -> list[str]:
+        """The text of the frame at ``t``: what was asked, the pins down now (at the end: the
+        result, and whether it is what was asked), the throw, the time and the slow motion."""
+        from nbst.models.bowling import shot as shotmod
+
+        def pins(ns) -> str:
+            return ",".join(map(str, ns)) or "none"
+
+        sh = self.shot
+        asked = sorted(sh.get("requested", sh.get("down", [])))
+        leave = [n for n in range(1, 11) if n not in asked]
+        lines = [f"asked   down {pins(asked)}" + (f" (leave {pins(leave)})" if leave and asked else "")]
+        m = self.motion
+        k = int(np.clip(round(t / (m.times[1] - m.times[0])), 0, len(m.times) - 1))
+        if m.down_masks is not None:
+            now = shotmod.pins_of(int(m.down_masks[k]))
+            if k == len(m.times) - 1:
+                lines.append(f"result  down {pins(now)} " + ("= asked" if now == asked else "(not what was asked)"))
+            else:
+                lines.append(f"now     down {pins(now)}")
+        la = sh.get("launch")
+        if isinstance(la, dict) and all(key in la for key in shotmod.KEYS):
+            lines.append(f"throw   {la['speed']:.2f} m/s, spin {la['spin']:+.1f} rad/s")
+            lines.append(f"        angle {la['angle']:+.2f} deg, from y = {la['y']:+.3f} m")
+        a, b = slow_window(m)
+        slow = f"   slow motion x{SLOW:g}" if a <= t < b else ""
+        lines.append(f"t = {t:4.2f} s{slow}")
+        return lines
+
+    def _overlay(self, t: float, views) -> None:
+        """Panel titles, the pin numbers on the deck (overhead view) and the readout, in pixels."""
+        from nbst.models.bowling import scene
+
+        size = self.size
+        cw, ch = self.text.cell
+        titles = {"behind": "behind the ball", "overhead": "overhead: the pin deck (USBC pin numbers)"}
+        for (vx, _, vw, _), _, _, cam in views:
+            title = titles[cam]
+            self.text.draw_halo(size, self.text.layout([title], vx + (vw - cw * len(title)) / 2, 0.4 * ch),
+                                style.TEXT, style.TEXT_HALO)
+            if cam == "overhead":
+                vpm = next(v[1] for v in views if v[3] == "overhead")
+                pcw, pch = self.pin_text.cell
+                parts = []
+                for n, (x, y) in zip(scene.PIN_NUMBERS, scene.pin_spots()):
+                    c = vpm @ np.array([x - PIN_LABEL_BACK, y, 0.0, 1.0])
+                    col = vx + (c[0] / c[3] + 1) / 2 * vw
+                    row = (c[1] / c[3] + 1) / 2 * size[1]
+                    label = str(n)
+                    parts.append(self.pin_text.layout([label], col - pcw * len(label) / 2, row - pch / 2))
+                self.pin_text.draw_halo(size, np.concatenate(parts), style.LABEL, PIN_WHITE)
+        x0 = views[0][0][0] + 0.6 * cw
+        self.text.draw_halo(size, self.text.layout(self.readout(t), x0, 1.8 * ch), style.TEXT, style.TEXT_HALO)
 
     def draw(self, t: float) -> None:
         ctx = self.ctx
@@ -233,7 +317,7 @@ class BowlingRenderer(FrameRenderer):
         ctx.enable(self._mgl.DEPTH_TEST)
         fbo.clear(*BACKGROUND, 1.0, depth=1.0)
         views, k = self._views(t)
-        for vp, vpm, eye in views:
+        for vp, vpm, eye, _ in views:
             ctx.viewport = vp
             self.prog["u_vp"].write(vpm.T.astype("f4").tobytes())
             self.prog["u_eye"].value = tuple(eye)
@@ -245,98 +329,191 @@ class BowlingRenderer(FrameRenderer):
                 self.prog["u_model"].write(_pose(p).T.astype("f4").tobytes())
                 self.pin_vao[0].render(self._mgl.TRIANGLES)
         ctx.viewport = (0, 0, *self.size)
+        ctx.disable(self._mgl.DEPTH_TEST)
+        ctx.enable(self._mgl.BLEND)
+        ctx.blend_func = self._mgl.ONE, self._mgl.ONE_MINUS_SRC_ALPHA  # the text shader's premultiplied alpha
+        self._overlay(t, views)
+        ctx.disable(self._mgl.BLEND)
 
     def release(self) -> None:
         for v, b in (self.pin_vao, self.ball_vao, self.static_vao):
             v.release()
             b.release()
         self.prog.release()
+        self.text.release()
+        self.pin_text.release()
         self.target.release()
 
 
-def render_shot(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None) -> int:
-    """Render the shot file ``path`` to ``output`` (.mp4/.gif video, or .png at time ``still``).
-    Returns the number of frames written."""
-    import mujoco
+#: ``nbst render SHOT.json`` flags: frames per second in (0, FPS_MAX] (as the 2D renderer), the
+#: still's time within the shot (0 .. its duration), frames at most the renderer's MAX_FRAMES.
+FPS_MAX = 240.0
+#: Flags of ``nbst render`` that draw disk problems only (2D/3D disks); an error on a shot file.
+DISK_ONLY_FLAGS = (("trails", False, "--trails"), ("labels", False, "--labels"), ("view", None, "--view"),
+                   ("source", None, "--source"), ("speed", None, "--speed"))
 
+
+def load_motion(path):
+    """(shot dict, Motion) of the shot file ``path``, read through the shot-file gate (scene in
+    its folder, parsed, shapes checked) and replayed; ShotFileError (one line) otherwise."""
+    from nbst.models.bowling import shot as shotmod
     from nbst.models.bowling import shotfile
 
+    shot, model, _ = shotfile.load_with_scene(path)
+    try:
+        return shot, record(shot, model)
+    except shotmod.MujocoWarning as e:
+        raise shotfile.ShotFileError(f"{path}: qpos0/qvel0: {e}") from None
+
+
+def render_motion(shot: dict, motion: Motion, output, *, still=None, camera: str = "both", size=None,
+                  times=None, fps=None, progress=None) -> int:
+    """Render a recorded shot to ``output`` (.mp4/.gif video of ``times`` at ``fps``, or .png at
+    time ``still``). Returns the number of frames written."""
     from nbst.render.video import render_video, write_png
 
-    shot = shotfile.load(path)
-    from pathlib import Path
-
-    model = mujoco.MjModel.from_xml_path(str(Path(path).parent / shot["scene"]))
-    motion = record(shot, model)
     size = tuple(size or style.DEFAULT_SIZE)
     ctx = create_context()
     try:
-        r = BowlingRenderer(ctx, motion, size=size, camera=camera)
+        r = BowlingRenderer(ctx, motion, size=size, camera=camera, shot=shot)
         try:
             if still is not None:
                 write_png(output, r.render(float(np.clip(still, 0.0, motion.times[-1]))))
                 return 1
             fps = float(fps or style.DEFAULT_FPS)
-            return render_video(r, frame_times(motion, fps), output, fps=fps, progress=progress)
+            times = frame_times(motion, fps) if times is None else times
+            return render_video(r, times, output, fps=fps, progress=progress)
         finally:
             r.release()
     finally:
         ctx.release()
 
 
-def is_shot_file(path) -> bool:
-    """True when ``path`` is a bowling shot file (JSON with kind ``nbst-bowling-shot``)."""
-    import json
+def render_shot(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None) -> int:
+    """Render the shot file ``path`` to ``output`` (.mp4/.gif video, or .png at time ``still``).
+    Returns the number of frames written."""
+    shot, motion = load_motion(path)
+    return render_motion(shot, motion, output, still=still, camera=camera, size=size, fps=fps, progress=progress)
+
+
+#: Bytes of a .json file read to tell a bowling file from a problem: nbst writes ``kind`` in
+#: the first lines, so the sniff never reads a large file whole (the loaders read it, capped).
+SNIFF_BYTES = 4096
+
+
+def bowling_kind(path) -> str | None:
+    """"shot" or "atlas" when ``path`` names a regular .json file whose first SNIFF_BYTES name
+    an nbst bowling kind, else None. Reads at most SNIFF_BYTES (stat first: a FIFO or device
+    is never opened), parses nothing."""
+    import os
+    import stat
     from pathlib import Path
 
-    from nbst.models.bowling.shotfile import KIND
+    from nbst.models.bowling.shotfile import ATLAS_KIND, KIND
 
     p = Path(str(path))
-    if p.suffix.lower() != ".json" or not p.is_file():
-        return False
+    if p.suffix.lower() != ".json":
+        return None
     try:
-        return json.loads(p.read_text()).get("kind") == KIND
-    except (OSError, ValueError, AttributeError):
-        return False
+        if not stat.S_ISREG(os.stat(p).st_mode):
+            return None
+        with open(p, "rb") as f:
+            head = f.read(SNIFF_BYTES)
+    except (OSError, ValueError):
+        return None
+    at = {kind: head.find(f'"{k}"'.encode()) for kind, k in (("shot", KIND), ("atlas", ATLAS_KIND))}
+    found = [(i, kind) for kind, i in at.items() if i >= 0]
+    return min(found)[1] if found else None   # an atlas names its own kind before its shots' kind
+
+
+def is_shot_file(path) -> bool:
+    """True when ``path`` looks like a bowling shot file (:func:`bowling_kind`; the loader checks it)."""
+    return bowling_kind(path) == "shot"
+
+
+def _check_shot_flags(args, duration: float) -> str | None:
+    """The first problem with ``nbst render SHOT.json``'s flags, as one line, or None."""
+    given = [flag for attr, default, flag in DISK_ONLY_FLAGS
+             if getattr(args, attr, default) not in (default, None, False)]
+    if given:
+        return (f"{', '.join(given)} draw{'s' if len(given) == 1 else ''} disk problems only; a bowling shot file "
+                f"takes -o, --still, --camera, --size, --fps, --hold, --max-frames and -q")
+    fps = getattr(args, "fps", None)
+    if fps is not None and not (0 < fps <= FPS_MAX):
+        return f"--fps {fps:g}: must be in (0, {FPS_MAX:g}] frames per second"
+    still = getattr(args, "still", None)
+    if still is not None and not (0 <= still <= duration):
+        return f"--still {still:g}: must lie in [0, {duration:g}] seconds (the shot's duration)"
+    hold = getattr(args, "hold", None)
+    if hold is not None and not (0 <= hold <= 60):
+        return f"--hold {hold:g}: must be in [0, 60] seconds"
+    mf = getattr(args, "max_frames", None)
+    if mf is not None and mf < 1:
+        return f"--max-frames {mf}: must be >= 1"
+    return None
 
 
 def cmd_render_shot(args) -> int:
-    """``nbst render SHOT.json -o OUT [--still T] [--camera C] [--size WxH] [--fps F] [-q]``
+    """``nbst render SHOT.json -o OUT [--still T] [--camera C] [--size WxH] [--fps F] [--hold S] [-q]``
     (the render CLI dispatches here when its first argument is a shot file)."""
     import sys
 
-    from nbst.models.bowling.shotfile import ShotFileError
+    from nbst.domain import plain
+    from nbst.models.bowling import shotfile
     from nbst.outputs import prepare_output
 
     from nbst.render.gl import RenderError
+
+    def err(msg) -> int:
+        print(f"nbst render: error: {plain(msg)}", file=sys.stderr)
+        return 2
 
     out = str(args.output)
     still = getattr(args, "still", None)
     want = (".png",) if still is not None else (".mp4", ".gif")
     if not out.lower().endswith(want):
-        print(f"nbst render: error: -o {out}: use a {' or '.join(want)} file"
-              f"{' with --still' if still is not None else ' (or --still T for a .png)'}", file=sys.stderr)
-        return 2
+        return err(f"-o {out}: use a {' or '.join(want)} file"
+                   f"{' with --still' if still is not None else ' (or --still T for a .png)'}")
+    bad = _check_shot_flags(args, 60.0)
+    if bad:
+        return err(bad)
     size = getattr(args, "size", None)
     if isinstance(size, str):
         try:
             w, h = (int(v) for v in size.lower().split("x"))
-            size = (w, h)
         except ValueError:
-            print(f"nbst render: error: --size {size}: expected WxH, e.g. 1280x720", file=sys.stderr)
-            return 2
+            return err(f"--size {size}: expected WxH, e.g. 1280x720")
+        if not (16 <= w <= 8192 and 16 <= h <= 8192):
+            return err(f"--size {size}: width and height must be 16..8192 pixels")
+        if out.lower().endswith(".mp4") and (w % 2 or h % 2):
+            return err(f"--size {size}: H.264 (yuv420p) needs an even width and height")
+        size = (w, h)
+    try:
+        shot, motion = load_motion(args.problem)
+    except shotfile.ShotFileError as e:
+        return err(str(e))
+    bad = _check_shot_flags(args, float(motion.times[-1]))
+    if bad:
+        return err(bad)
+    fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
+    hold = getattr(args, "hold", None)
+    times = frame_times(motion, fps, hold=1.0 if hold is None else float(hold))
+    from nbst.render.video import MAX_FRAMES
+
+    limit = getattr(args, "max_frames", None) or MAX_FRAMES
+    if still is None and len(times) > limit:
+        return err(f"{len(times):,} frames at --fps {fps:g}; at most {limit:,} (--max-frames)")
     prepare_output(out, inputs=(args.problem,))
     bar = None
     if not getattr(args, "quiet", False) and still is None:
         from nbst.progress import progress_bar
 
-        bar = progress_bar(unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
+        bar = progress_bar(total=len(times), unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
     try:
-        n = render_shot(args.problem, out, still=still, camera=getattr(args, "camera", None) or "both",
-                        size=size, fps=getattr(args, "fps", None), progress=bar)
-    except (ShotFileError, RenderError) as e:
-        print(f"nbst render: error: {e}", file=sys.stderr)
-        return 2
+        n = render_motion(shot, motion, out, still=still, camera=getattr(args, "camera", None) or "both",
+                          size=size, times=times, fps=fps, progress=bar)
+    except RenderError as e:
+        return err(str(e))
     finally:
         if bar is not None:
             bar.close()

@@ -302,7 +302,7 @@ def test_render_draws_the_ball_where_the_replay_has_it(gl, seven):
         frame = r.render(0.0)
         # at t = 0 the ball is ahead of the camera: project its centre and read the colour there
         views, _ = r._views(0.0)
-        vp, vpm, _ = views[0]
+        vp, vpm = views[0][:2]
         c = vpm @ np.r_[motion.ball[0, :3], 1.0]
         col = int((c[0] / c[3] + 1) / 2 * 320)
         row = int((c[1] / c[3] + 1) / 2 * 180)
@@ -314,14 +314,14 @@ def test_render_draws_the_ball_where_the_replay_has_it(gl, seven):
 
 def test_cli_atlas_writes_shots_and_resumes(tmp_path):
     out = tmp_path / "atlas"
-    assert _bowl("bowl", "atlas", "--out", str(out), "--max-rollouts", "8", "--per-subset", "4",
+    assert _bowl("bowl", "atlas", "--out-dir", str(out), "--max-rollouts", "8", "--per-subset", "4",
                  "--jobs", "2", "--quiet") == 0
     shots = sorted(out.glob("subset-*.json"))
     assert shots and (out / "scene.xml").exists() and (out / "summary.md").exists()
     first = len(shots)
     d = json.loads(shots[0].read_text())
     assert d["scene"] == "scene.xml" and _bowl("bowl", "replay", str(shots[0])) == 0
-    assert _bowl("bowl", "atlas", "--out", str(out), "--max-rollouts", "8", "--per-subset", "4",
+    assert _bowl("bowl", "atlas", "--out-dir", str(out), "--max-rollouts", "8", "--per-subset", "4",
                  "--jobs", "2", "--quiet") == 0
     assert len(list(out.glob("subset-*.json"))) >= first          # resumed: nothing lost, maybe more
     rows = (out / "summary.csv").read_text().splitlines()

@@ -151,7 +151,7 @@ def test_atlas_from_a_file_without_its_scene_is_one_clear_error(tmp_path, capsys
     lonely = tmp_path / "a" / "atlas.json"
     lonely.parent.mkdir()
     lonely.write_bytes(src.read_bytes())  # without scene.xml beside it
-    assert main(["bowl", "atlas", "--out", str(tmp_path / "out"), "--from", str(lonely), "--max-rollouts", "16",
+    assert main(["bowl", "atlas", "--out-dir", str(tmp_path / "out"), "--from", str(lonely), "--max-rollouts", "16",
                  "-q"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("nbst bowl atlas: error: --from: ") and "scene.xml" in err and len(err.splitlines()) == 1
@@ -167,12 +167,12 @@ def test_atlas_on_a_dask_cluster_writes_the_same_shots_as_one_thread(tmp_path):
     from nbst.cli import main
 
     base = ["bowl", "atlas", "--max-rollouts", "32", "--seed", "7", "--no-robustness", "-q"]
-    assert main([*base, "--out", str(tmp_path / "here"), "--jobs", "1"]) == 0
+    assert main([*base, "--out-dir", str(tmp_path / "here"), "--jobs", "1"]) == 0
     from nbst.models.bowling import cluster as C
 
     C._WORKER_LAUNCHERS.clear()
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
-        assert main([*base, "--out", str(tmp_path / "dask"), "--cluster", cluster.scheduler_address]) == 0
+        assert main([*base, "--out-dir", str(tmp_path / "dask"), "--cluster", cluster.scheduler_address]) == 0
     assert C._WORKER_LAUNCHERS  # the rollouts ran on the workers (threads of this process here)
     here = {f.name: json.loads(f.read_text()) for f in (tmp_path / "here").glob("subset-*.json")}
     dask = {f.name: json.loads(f.read_text()) for f in (tmp_path / "dask").glob("subset-*.json")}

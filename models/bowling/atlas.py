@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nbst.models.bowling import search, shot
+from nbst.models.bowling import geometry, search, shot
 
 #: Uniform launches that start an empty archive before the emitter takes over.
 EXPLORE = 256
@@ -42,7 +42,7 @@ SIZE_FLOOR = 0.05
 #: Parent weight bonus per new subset its children found.
 HIT_BONUS = 3.0
 
-N_SUBSETS = 1023
+N_SUBSETS = geometry.N_SUBSETS
 SIZE_TOTAL = np.array([math.comb(10, k) for k in range(11)])
 
 
@@ -179,7 +179,7 @@ def run(launcher: shot.Launcher, archive: Archive, *, method: str, budget: int, 
             run_batch(search.from_unit(rng.random((min(search.BATCH, start + n0 - archive.rollouts), 4))))
         tried: set[int] = set()
         while archive.rollouts < end:
-            todo = [t for t in range(1, 1024) if t not in archive.elite and t not in tried]
+            todo = [t for t in range(1, N_SUBSETS + 1) if t not in archive.elite and t not in tried]
             if not todo:
                 break
             known = np.array(sorted(archive.elite), dtype=np.int64)

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from nbst.models.bowling import geometry
 
 #: Triangles per row of a block.
@@ -61,8 +59,3 @@ def atlas_figure(found, *, title: str = ""):
 def save(fig, path, *, dpi: float | None = None) -> None:
     """Write the figure (PNG; ``dpi`` default the figure's, 110)."""
     fig.savefig(str(path), dpi=dpi or fig.dpi)
-
-
-def masks_of(shots) -> np.ndarray:
-    """Masks of atlas shot dicts."""
-    return np.array([sum(1 << (n - 1) for n in d["down"]) for d in shots], dtype=np.int64)

@@ -42,8 +42,6 @@ INCH = 0.0254
 PIN_SPACING = 12.0 * INCH
 #: Pin belly radius (USBC 4.766 in across) = the largest of pin.profile().
 PIN_RADIUS = 4.766 / 2 * INCH
-#: Pin height (USBC 15 in).
-PIN_HEIGHT = 15.0 * INCH
 #: Ball radius (8.5 in across) = scene.BALL_RADIUS.
 BALL_RADIUS = 4.25 * INCH
 #: Lane width (41.5 in) = scene.LANE_WIDTH; the ball's centre stays |y| <= Y_LANE on it.
@@ -64,6 +62,10 @@ Y_STEP = 0.001
 THETA_STEP = 0.25
 
 PINS = tuple(range(1, 11))
+#: The strike: every pin down, as a 10-bit mask (bit n-1 = pin n).
+ALL_DOWN = (1 << len(PINS)) - 1
+#: Non-empty subsets of pins down (the masks 1..ALL_DOWN): what an atlas can hold.
+N_SUBSETS = ALL_DOWN
 
 
 def pin_spots() -> np.ndarray:
@@ -142,7 +144,7 @@ def _reached(down: int, seeds: int, adj: np.ndarray) -> int:
 
 
 def classify(*, touch: str = "front") -> dict[int, str]:
-    """mask (1..1023) -> "a" (corridor-consistent), "corridor" or "reach" (class b; see module).
+    """mask (1..N_SUBSETS) -> "a" (corridor-consistent), "corridor" or "reach" (class b; see module).
 
     ``touch``: which corridor pins the corridor rule wants down: "front" (the front-most of
     each column, the module's rule), "all" (every corridor pin: the ball goes straight through
@@ -157,7 +159,7 @@ def classify(*, touch: str = "front") -> dict[int, str]:
     pairs = np.unique(np.column_stack([_masks(inside), _masks(must)]), axis=0)  # distinct corridors
     adj = neighbours()
     out = {}
-    for m in range(1, 1024):
+    for m in range(1, N_SUBSETS + 1):
         ok_corr = ((pairs[:, 1] & m) == pairs[:, 1]) & ((pairs[:, 0] & m) != 0)
         if not ok_corr.any():
             out[m] = "corridor"
@@ -175,7 +177,7 @@ def size_of(m: int) -> int:
 
 def counts(classes: dict[int, str], masks=None) -> dict[str, np.ndarray]:
     """class -> (11,) int counts by subset size, over ``masks`` (default all 1,023)."""
-    masks = range(1, 1024) if masks is None else masks
+    masks = range(1, N_SUBSETS + 1) if masks is None else masks
     out = {c: np.zeros(11, dtype=int) for c in ("a", "corridor", "reach")}
     for m in masks:
         out[classes[int(m)]][size_of(m)] += 1
@@ -202,7 +204,7 @@ def summary_lines(found, *, touch: str = "front") -> list[str]:
         got = f["a"][k] + f["corridor"][k] + f["reach"][k]
         lines.append(f"| {k} | {got} / {tot} | {f['a'][k]} / {a['a'][k]} | {f['corridor'][k]} / "
                      f"{a['corridor'][k]} | {f['reach'][k]} / {a['reach'][k]} |")
-    lines.append(f"| all | {sum(x.sum() for x in f.values())} / 1023 | {f['a'].sum()} / {a['a'].sum()} | "
+    lines.append(f"| all | {sum(x.sum() for x in f.values())} / {N_SUBSETS} | {f['a'].sum()} / {a['a'].sum()} | "
                  f"{f['corridor'].sum()} / {a['corridor'].sum()} | {f['reach'].sum()} / {a['reach'].sum()} |")
     which = {"front": "the front-most corridor pin of each column", "all": "every corridor pin",
              "any": "at least one corridor pin"}[touch]

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nbst.models.bowling import shot
+from nbst.models.bowling import geometry, shot
 
 #: Uniform exploration launches before CMA-ES restarts (capped at a quarter of the budget).
 EXPLORE = 200
@@ -105,14 +105,12 @@ def geometry_distance(a, b) -> np.ndarray:
     """Distance from masks ``a`` to the request ``b`` (broadcast): 1 per wanted pin standing or
     unwanted pin down, but :data:`NEIGHBOUR_EXTRA` for an unwanted down pin whose neighbour on
     the triangle (12 in away) is a wanted down pin. 0 exactly when a == b."""
-    from nbst.models.bowling import geometry
-
     adj = (geometry.neighbours().astype(np.int64) << np.arange(10)).sum(axis=1)   # (10,) neighbour masks
     a = np.asarray(a, dtype=np.int64)
     b = int(b)
     near_wanted = int(np.bitwise_or.reduce([adj[i] for i in range(10) if b >> i & 1], initial=0))
     extra = a & ~b
-    missing = ~a & b & 1023
+    missing = ~a & b & geometry.ALL_DOWN
     cheap = extra & near_wanted
     return hamming(missing | (extra & ~cheap), 0) + NEIGHBOUR_EXTRA * hamming(cheap, 0)
 
@@ -216,8 +214,8 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
     """
     import cma
 
-    if not 0 < int(target) < 1024:
-        raise ValueError(f"target must be a non-empty subset of the 10 pins (1..1023), got {target}")
+    if not 0 < int(target) <= geometry.N_SUBSETS:
+        raise ValueError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")
     own = launcher is None
     L = shot.Launcher(jobs=jobs) if own else launcher
     rng = np.random.default_rng(seed)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -136,14 +137,59 @@ def mask_from_pins(pins) -> int:
     return int(sum(1 << (int(n) - 1) for n in set(pins)))
 
 
-def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.ndarray:
-    """Final qpos from a fresh ``MjData`` and a plain ``mj_step`` loop: the slow reference."""
+class MujocoWarning(ValueError):
+    """MuJoCo warned (a diverging or non-finite state, a bad model): our error, one line."""
+
+
+@contextmanager
+def mujoco_warnings_raise():
+    """While the block runs, MuJoCo's warnings are collected instead of printed and written to
+    ``MUJOCO_LOG.TXT`` in the current folder; after it, the first one raises
+    :class:`MujocoWarning`. (MuJoCo's warning hook is process-wide: the previous one is restored.)"""
     import mujoco
 
+    got: list[str] = []
+    old = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda msg: got.append(str(msg).strip()))
+    try:
+        yield got
+    finally:
+        mujoco.set_mju_user_warning(old)
+    if got:
+        raise MujocoWarning(f"MuJoCo warned: {got[0].splitlines()[0] if got[0] else 'unknown warning'}")
+
+
+def data_warnings(data) -> list[str]:
+    """Names of the MuJoCo warnings that ``data`` recorded (``data.warning[k].number > 0``)."""
+    import mujoco
+
+    return [mujoco.mjtWarning(k).name for k in range(len(data.warning)) if data.warning[k].number > 0]
+
+
+def check_state(qpos, qvel) -> None:
+    """MujocoWarning unless every qpos/qvel entry is finite (MuJoCo steps NaN into a reset)."""
+    for name, v in (("qpos", qpos), ("qvel", qvel)):
+        v = np.asarray(v, dtype=float)
+        if not np.isfinite(v).all():
+            raise MujocoWarning(f"{name}[{int(np.flatnonzero(~np.isfinite(v))[0])}] is not finite; refused before "
+                                f"stepping")
+
+
+def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.ndarray:
+    """Final qpos from a fresh ``MjData`` and a plain ``mj_step`` loop: the slow reference.
+    Non-finite states are refused before stepping, and MuJoCo's warnings raise
+    :class:`MujocoWarning` (nothing is written to ``MUJOCO_LOG.TXT``)."""
+    import mujoco
+
+    check_state(qpos0, qvel0)
     d = mujoco.MjData(model)
     d.qpos[:] = qpos0
     d.qvel[:] = qvel0
-    mujoco.mj_step(model, d, nstep=n_steps(model, duration))
+    with mujoco_warnings_raise():
+        mujoco.mj_step(model, d, nstep=n_steps(model, duration))
+    bad = data_warnings(d)
+    if bad or not np.isfinite(d.qpos).all():
+        raise MujocoWarning(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
     return d.qpos.copy()
 
 

@@ -16,23 +16,49 @@ import time
 from pathlib import Path
 
 from nbst.cli.args import int_at_least
+from nbst.cli.flags import add_out_dir, add_seed
 from nbst.parallel import default_jobs
 
 
-def _pins(text: str) -> int:
-    """``--down``: pin numbers "1,2,4,7" (or "strike"/"all") -> 10-bit mask."""
-    t = text.strip().lower()
-    if t in ("strike", "all"):
-        return 1023
+def _pin_list(text: str, flag: str) -> int:
+    """Pin numbers "1,2,4,7" -> 10-bit mask (bit n-1 = pin n)."""
     try:
-        pins = [int(p) for p in t.replace(" ", "").split(",") if p]
+        pins = [int(p) for p in text.strip().replace(" ", "").split(",") if p]
     except ValueError:
-        raise argparse.ArgumentTypeError(f"pins must be numbers 1..10 separated by commas (e.g. 1,2,4,7), "
+        raise argparse.ArgumentTypeError(f"{flag}: pins must be numbers 1..10 separated by commas (e.g. 1,2,4,7), "
                                          f"got {text!r}") from None
     bad = [p for p in pins if not 1 <= p <= 10]
     if bad or not pins:
-        raise argparse.ArgumentTypeError(f"pins must be numbers 1..10 (at least one), got {text!r}")
+        raise argparse.ArgumentTypeError(f"{flag}: pins must be numbers 1..10 (at least one), got {text!r}")
     return sum(1 << (p - 1) for p in set(pins))
+
+
+def _pins(text: str) -> int:
+    """``--down``: pin numbers "1,2,4,7" (or "strike"/"all") -> 10-bit mask of the pins down."""
+    from nbst.models.bowling.geometry import ALL_DOWN
+
+    if text.strip().lower() in ("strike", "all"):
+        return ALL_DOWN
+    return _pin_list(text, "--down")
+
+
+def _leave(text: str) -> int:
+    """``--leave``: the pins left standing, as bowlers name a leave ("7,10" is the 7-10 split;
+    "none" is a strike) -> 10-bit mask of the pins DOWN (every other pin)."""
+    from nbst.models.bowling.geometry import ALL_DOWN
+
+    if text.strip().lower() in ("none", "strike"):
+        return ALL_DOWN
+    down = ALL_DOWN & ~_pin_list(text, "--leave")
+    if not down:
+        raise argparse.ArgumentTypeError("--leave: all ten pins standing is a gutter ball (any throw into the "
+                                         "gutter); name at most 9 pins")
+    return down
+
+
+#: How many launches ``search.robustness`` spends (2 axes; per axis 4 at the largest change and,
+#: when that fails, 10 bisection rounds of 4): stated in --help, measured in each shot's file.
+ROBUSTNESS_ROLLOUTS = (2 * 4, 2 * (4 + 10 * 4))
 
 
 def register(sub) -> None:
@@ -49,13 +75,18 @@ def register(sub) -> None:
                                     "on --jobs threads, and write the shot: JSON plus the scene XML beside it "
                                     "(replayable with plain mujoco). Ctrl-C writes the best shot so far (exit 130). "
                                     "The same --seed gives the same shot, for any --jobs.",
-                        epilog="Exit 0: found; 1: not found within --max-rollouts (the nearest shot is written "
+                        epilog="Example: nbst bowl solve --leave 7,10 -o split.json --seed 1   (the 7-10 split; "
+                               "the shipped atlas holds it). Exit 0: found; 1: not found within --max-rollouts (the nearest shot is written "
                                "and its pins named); 2: bad input; 130: interrupted.")
-    s.add_argument("--down", required=True, type=_pins, metavar="PINS",
-                   help="pins to knock down, e.g. 1,2,4,7 (USBC numbers: 1 in front, 7 back left, 10 back "
-                        "right); 'strike' = all ten")
+    want = s.add_mutually_exclusive_group(required=True)
+    want.add_argument("--down", type=_pins, metavar="PINS",
+                      help="pins to knock down, e.g. 1,2,4,7 (USBC numbers: 1 in front, 7 back left, 10 back "
+                           "right); 'strike' = all ten")
+    want.add_argument("--leave", type=_leave, metavar="PINS",
+                      help="pins to leave standing, as bowlers name a leave: --leave 7,10 is the 7-10 split "
+                           "(every other pin down); 'none' = a strike")
     s.add_argument("-o", "--output", required=True, metavar="SHOT.json", help="where to write the shot")
-    s.add_argument("--seed", type=int_at_least(0, "seed"), default=None, help="random seed (default: drawn, recorded)")
+    add_seed(s, type=int_at_least(0, "seed"), resumable=False)
     s.add_argument("--max-rollouts", type=int_at_least(1, "max rollouts"), default=3000, metavar="N",
                    help="launch budget (default 3000)")
     _runner_args(s, "the same shot as --jobs for the same seed")
@@ -63,7 +94,13 @@ def register(sub) -> None:
                    help="distance between subsets that ranks restart points: hamming (pins that differ; "
                         "default) or geometry (an extra pin down next to a wanted one counts 1/2)")
     s.add_argument("--no-robustness", action="store_true",
-                   help="skip the robustness probes (~50 extra rollouts) after the search")
+                   help="skip the robustness probes after the search (%d to %d more launches: on each of 2 axes, "
+                        "4 at the largest change, then 10 bisection rounds of 4 if that fails; the shot file "
+                        "records how many ran)" % ROBUSTNESS_ROLLOUTS)
+    s.add_argument("--no-atlas", action="store_true",
+                   help="search from scratch; by default the search starts from the shipped atlas's shots "
+                        "(models/bowling/atlas.json, one throw for each of 328 subsets): a request it holds "
+                        "is confirmed with one launch, others restart from its nearest subsets")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
     s.set_defaults(func=cmd_solve)
 
@@ -75,7 +112,7 @@ def register(sub) -> None:
     r.add_argument("--json", action="store_true", help="print one JSON object: down, expected, match")
     r.set_defaults(func=cmd_replay)
 
-    a = bowl.add_parser("atlas", help="try for every one of the 1,023 subsets; one shot per subset found",
+    a = bowl.add_parser("atlas", help="try for every one of the 1,023 non-empty subsets; one shot per subset found",
                         description="Search for all 1,023 non-empty subsets, keeping an archive keyed by subset. "
                                     "--method elites (default, MAP-Elites style): after 256 uniform throws, "
                                     "each batch of 16 holds 2 uniform throws and 14 children of archived "
@@ -89,7 +126,7 @@ def register(sub) -> None:
                                     "each with its robustness (16 more launches; see docs/bowling.md), "
                                     "DIR/summary.md (+ .csv, + .png: every subset found as a triangle) and "
                                     "DIR/atlas.json. Rerunning resumes: the shots already in DIR are the archive.")
-    a.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    add_out_dir(a, dest="out", required=True, old=("--out",), help="output folder")
     a.add_argument("--max-rollouts", type=int_at_least(0, "max rollouts"), default=20000, metavar="N",
                    help="search launch budget of this run (default 20000; robustness probes not counted)")
     a.add_argument("--method", choices=("elites", "targeted", "uniform"), default="elites",
@@ -102,7 +139,7 @@ def register(sub) -> None:
     a.add_argument("--robustness-only", action="store_true",
                    help="no search: add the robustness to every shot in DIR that lacks it, then the summary")
     a.add_argument("--no-robustness", action="store_true", help="write new shots without the robustness probes")
-    a.add_argument("--seed", type=int_at_least(0, "seed"), default=1, help="random seed (default 1)")
+    add_seed(a, type=int_at_least(0, "seed"), resumable=True)
     _runner_args(a, "the same shots as --jobs for the same seed and folder")
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     a.set_defaults(func=cmd_atlas)
@@ -155,55 +192,74 @@ def atlas_json(folder, *, seed=None) -> Path:
     """Gather an atlas folder's shot files into FOLDER/atlas.json: one file a MuJoCo user
     replays without nbst, ``{"kind": "nbst-bowling-atlas", "scene": "scene.xml", "shots":
     [shot, ...]}``, each shot with the shot-file keys (``scene`` relative to the atlas file),
-    sorted by subset size, then pins."""
+    sorted by subset size, then pins. Files that do not pass the shot-file checks are left out."""
     import json
 
     from nbst.outputs import write_text_atomic
+
+    from nbst.models.bowling import shotfile
 
     folder = Path(folder)
     shots = []
     for f in sorted(folder.glob("subset-*.json")):
         try:
-            d = json.loads(f.read_text(encoding="utf-8"))
-        except (OSError, ValueError, RecursionError):
+            shots.append(shotfile.load(f))
+        except shotfile.ShotFileError:
             continue
-        if isinstance(d, dict) and "down" in d and "qpos0" in d:
-            shots.append(d)
     shots.sort(key=lambda d: (len(d["down"]), d["down"]))
-    atlas = {"kind": "nbst-bowling-atlas", "schema_version": 1, "scene": "scene.xml", "seed": seed,
+    atlas = {"kind": shotfile.ATLAS_KIND, "schema_version": 1, "scene": "scene.xml", "seed": seed,
              "subsets": len(shots), "shots": shots}
     path = folder / "atlas.json"
     write_text_atomic(path, json.dumps(atlas, indent=1) + "\n")  # floats by repr: exact
     return path
 
 
+def shipped_archive() -> dict:
+    """The shipped atlas (models/bowling/atlas.json) as a search archive: mask -> (4,) launch,
+    read through the shot-file gate; {} (with a one-line warning) if it cannot be read."""
+    import numpy as np
+
+    from nbst.models.bowling import shot, shotfile
+
+    try:
+        a, _, _ = shotfile.load_atlas(shotfile.SHIPPED_ATLAS)
+        return {shot.mask_from_pins(d["down"]): np.array([float(d["launch"][k]) for k in shot.KEYS])
+                for d in a["shots"] if "launch" in d}
+    except shotfile.ShotFileError as e:
+        from nbst.domain import plain
+
+        print(f"nbst bowl solve: warning: the shipped atlas is not used: {plain(e)}", file=sys.stderr)
+        return {}
+
+
 def cmd_solve(args) -> int:
     import numpy as np
 
     from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt
+    from nbst.progress import progress_bar
 
     from nbst.models.bowling import search, shot
 
+    target = args.down if args.down is not None else args.leave
     prepare_output(args.output)
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
     jobs = args.jobs or default_jobs()
-    want = shot.pins_of(args.down)
+    want = shot.pins_of(target)
     bar = []
 
     def progress(p) -> None:
         if args.quiet:
             return
         if not bar:
-            from nbst.progress import progress_bar
-
             bar.append(progress_bar(total=args.max_rollouts, unit="launch", file=sys.stderr, dynamic_ncols=True,
-                            desc=f"bowl {','.join(map(str, want))}", smoothing=0.1))
+                                    desc=f"bowl {','.join(map(str, want))}", smoothing=0.1))
         bar[0].update(p.rollouts - bar[0].n)
         if p.rollouts:
             near = ",".join(map(str, shot.pins_of(p.best_mask))) or "none"
             bar[0].set_postfix_str(f"nearest {near} ({p.best_hamming} off), {p.subsets} subsets seen",
                                    refresh=False)
 
+    archive = {} if args.no_atlas else shipped_archive()
     try:
         L = launcher(args, jobs)
     except ValueError as e:
@@ -211,8 +267,8 @@ def cmd_solve(args) -> int:
     progress(search.Progress(0, 10, 0, 0))  # the bar starts with the clock
     try:
         with sigterm_as_interrupt():
-            res = search.solve(args.down, seed=seed, max_rollouts=args.max_rollouts, launcher=L, callback=progress,
-                               distance=args.distance)
+            res = search.solve(target, seed=seed, max_rollouts=args.max_rollouts, launcher=L, callback=progress,
+                               distance=args.distance, archive=archive or None)
         if bar:
             bar[0].close()
         rob = None
@@ -223,18 +279,24 @@ def cmd_solve(args) -> int:
             except KeyboardInterrupt:
                 res.stopped = "interrupted"
         runner = {"cluster": args.cluster} if args.cluster else {"jobs": jobs}
+        from_atlas = bool(archive) and res.mask == target and target in archive and res.rollouts == 1
         meta = {"seed": seed, "rollouts": res.rollouts, "restarts": res.restarts, **runner,
                 "max_rollouts": args.max_rollouts, "stopped": res.stopped, "wall_time_s": round(res.wall_time, 3),
                 "subsets_seen": len(res.archive), "algorithm": "explore + CMA-ES restarts from nearest subsets",
-                "distance": args.distance}
+                "distance": args.distance,
+                "start": f"shipped atlas ({len(archive)} subsets)" if archive else "scratch",
+                "from_atlas": from_atlas}
+        if args.leave is not None:
+            meta["leave"] = [n for n in range(1, 11) if not target >> (n - 1) & 1]
         with signals_deferred(reraise=False) as late:
-            write_shot(args.output, L.model, res.launch, res.mask, requested=args.down, robustness=rob, search=meta)
+            write_shot(args.output, L.model, res.launch, res.mask, requested=target, robustness=rob, search=meta)
     finally:
         if bar:
             bar[0].close()
         L.close()
     got = ",".join(map(str, shot.pins_of(res.mask))) or "none"
-    line = (f"pins down {got} ({res.hamming} off the request) after {res.rollouts} launches in "
+    how = " (the shipped atlas's throw, confirmed)" if from_atlas else ""
+    line = (f"pins down {got} ({res.hamming} off the request) after {res.rollouts} launches{how} in "
             f"{res.wall_time:.1f} s, seed {seed}; wrote {args.output}")
     if res.stopped == "interrupted" or late:
         print(f"nbst bowl solve: interrupted; best so far written: {line}", file=sys.stderr)
@@ -277,143 +339,208 @@ def shot_name(mask: int) -> str:
 
 def unpack_atlas(atlas_path, folder) -> int:
     """Write the shots of an atlas file as FOLDER/subset-<pins>.json (those not there yet)
-    and its scene as FOLDER/scene.xml (when absent); returns how many shots were written."""
-    import json
-    import shutil
-
+    and its scene as FOLDER/scene.xml (when absent), every write atomic; returns how many
+    shots were written. Everything is checked before anything is written: the atlas through
+    the shot-file gate (its scene inside its own folder, parsed by MuJoCo, every shot's shapes
+    fitting it), and its scene must be this version's (the search continues in it)."""
     from nbst.outputs import write_text_atomic
 
+    from nbst.models.bowling import scene as scenemod
     from nbst.models.bowling import shot, shotfile
 
-    atlas_path, folder = Path(atlas_path), Path(folder)
-    a = json.loads(atlas_path.read_text(encoding="utf-8"))
-    if not (isinstance(a, dict) and a.get("kind") == "nbst-bowling-atlas"):
-        raise ValueError(f"{atlas_path}: not an nbst bowling atlas")
-    scene = atlas_path.parent / a["scene"]
-    if not scene.is_file():
-        raise ValueError(f"{atlas_path}: its shots need their scene {a['scene']!r} beside it, and {scene} "
-                         f"is missing (copy it from where the atlas came from)")
+    folder = Path(folder)
+    a, _, text = shotfile.load_atlas(atlas_path)
+    if text != scenemod.scene_xml():
+        raise shotfile.ShotFileError(f"{atlas_path}: scene: {a['scene']!r} is not this version's bowling scene; "
+                                     f"its shots would not replay beside the ones found here")
     if not (folder / "scene.xml").exists():
-        shutil.copyfile(scene, folder / "scene.xml")
+        write_text_atomic(folder / "scene.xml", text, option="--out-dir")
     n = 0
     for d in a["shots"]:
         f = folder / shot_name(shot.mask_from_pins(d["down"]))
         if not f.exists():
-            write_text_atomic(f, shotfile.dumps({**d, "scene": "scene.xml"}))
+            write_text_atomic(f, shotfile.dumps({**d, "scene": "scene.xml"}), option="--out-dir")
             n += 1
     return n
 
 
-def cmd_atlas(args) -> int:
-    import csv
-    import io
-    import json
+# --- bowl atlas, in named steps ---------------------------------------------------------------
 
-    import numpy as np
+def _atlas_folder(args) -> Path:
+    """Step 1: the output folder, with the --from atlas's shots in it and this version's
+    scene.xml; ShotFileError (one line) when --from is refused or DIR holds another scene."""
+    from nbst.outputs import prepare_output, write_text_atomic
 
-    from nbst.outputs import prepare_output, sigterm_as_interrupt, write_text_atomic
-
-    from nbst.models.bowling import atlas as atlasmod
     from nbst.models.bowling import scene as scenemod
-    from nbst.models.bowling import search, shot, shotfile
+    from nbst.models.bowling import shotfile
 
-    out = prepare_output(args.out, directory=True, option="--out")
+    out = prepare_output(args.out, directory=True, option="--out-dir")
     if args.from_atlas:
         try:
             unpack_atlas(args.from_atlas, out)
-        except (OSError, ValueError, KeyError, TypeError) as e:
-            return _err("atlas", f"--from: {e}")
+        except shotfile.ShotFileError as e:
+            raise shotfile.ShotFileError(f"--from: {e}") from None
     xml = scenemod.scene_xml()
-    if not (out / "scene.xml").exists():
-        write_text_atomic(out / "scene.xml", xml)  # one scene for every shot (the same model)
-    elif (out / "scene.xml").read_text() != xml:  # shots of another scene: new ones would not replay there
-        return _err("atlas", f"{out / 'scene.xml'} is not this version's scene; use a new --out folder")
-    jobs = args.jobs or default_jobs()
-    try:
-        L = launcher(args, jobs)
-    except ValueError as e:
-        return _err("atlas", f"--cluster: {e}")
-    files = {}
+    here = out / "scene.xml"
+    if not here.exists():
+        write_text_atomic(here, xml, option="--out-dir")  # one scene for every shot (the same model)
+    elif shotfile.read_scene_text(here, here) != xml:  # shots of another scene: new ones would not replay there
+        raise shotfile.ShotFileError(f"{here} is not this version's scene; use a new --out-dir folder")
+    return out
+
+
+def _atlas_resume(out: Path) -> tuple[dict, dict]:
+    """Step 2: the shots already in the folder: ({mask: file}, {mask: (4,) launch}); files
+    that fail the shot-file checks are skipped (and found again if the search finds them)."""
+    import numpy as np
+
+    from nbst.models.bowling import shot, shotfile
+
+    files, launches = {}, {}
     for f in out.glob("subset-*.json"):
         try:
-            files[shot.mask_from_pins(int(p) for p in f.stem.split("-", 1)[1].split("_"))] = f
+            m = shot.mask_from_pins(int(p) for p in f.stem.split("-", 1)[1].split("_"))
         except ValueError:
             continue
-    launches = {}
-    for m, f in files.items():  # resume: the launches of the shots already written
         try:
-            la = json.loads(f.read_text())["launch"]
-            launches[m] = np.array([la[k] for k in shot.KEYS], dtype=float)
-        except (OSError, ValueError, KeyError, TypeError):
+            d = shotfile.load(f)
+        except shotfile.ShotFileError:
             continue
-    arch = atlasmod.Archive.from_launches(launches)
-    t0 = time.perf_counter()
-    probes = [0]
-    bar = None
-    if not args.quiet:
+        files[m] = f
+        if "launch" in d:
+            launches[m] = np.array([float(d["launch"][k]) for k in shot.KEYS])
+    return files, launches
+
+
+class _AtlasRun:
+    """Step 3: the search (or the robustness pass) over one folder, writing each new shot as it
+    is found, with its robustness; ``probes`` counts the robustness launches."""
+
+    def __init__(self, args, L, out: Path, files: dict, launches: dict):
+        from nbst.models.bowling import atlas as atlasmod
+
+        self.args, self.L, self.out, self.files, self.launches = args, L, out, files, launches
+        self.arch = atlasmod.Archive.from_launches(launches)
+        self.probes = 0
+        self.bar = None
+
+    def add_robustness(self, mask: int, f: Path) -> None:
+        from nbst.outputs import write_text_atomic
+
+        from nbst.models.bowling import search, shotfile
+
+        d = shotfile.load(f)
+        rob = search.robustness_ladder(self.L, self.launches[mask], mask)
+        self.probes += rob["lateral_m_rollouts"] + rob["speed_m_s_rollouts"]
+        d["robustness"] = rob
+        write_text_atomic(f, shotfile.dumps(d), option="--out-dir")
+
+    def on_new(self, masks) -> None:
+        a = self.args
+        for m in masks:
+            f = self.out / shot_name(m)
+            write_shot(f, self.L.model, self.arch.elite[m], m, shared_scene="scene.xml", requested=m,
+                       search={"seed": a.seed, "method": a.method, "found_after": self.arch.found_at[m]})
+            self.files[m], self.launches[m] = f, self.arch.elite[m]
+            if not a.no_robustness:
+                self.add_robustness(m, f)
+
+    def progress(self, arch) -> None:
+        if self.bar:
+            self.bar.update(arch.rollouts - self.bar.n)
+            self.bar.set_postfix_str(f"{len(arch)} subsets", refresh=False)
+
+    def run(self) -> bool:
+        """Search (or add robustness); True when interrupted (what ran is kept)."""
+        from nbst.outputs import sigterm_as_interrupt
         from nbst.progress import progress_bar
 
-        total = 0 if args.robustness_only else args.max_rollouts
-        bar = progress_bar(total=total or None, unit="launch", file=sys.stderr, dynamic_ncols=True, desc="atlas")
+        from nbst.models.bowling import atlas as atlasmod
+        from nbst.models.bowling import shotfile
 
-    def add_robustness(mask, f):
-        d = json.loads(f.read_text())
-        rob = search.robustness_ladder(L, launches[mask], mask)
-        probes[0] += rob["lateral_m_rollouts"] + rob["speed_m_s_rollouts"]
-        d["robustness"] = rob
-        write_text_atomic(f, shotfile.dumps(d))
+        a = self.args
+        todo = []
+        if a.robustness_only:
+            for m in sorted(self.files):
+                try:
+                    if m in self.launches and "robustness" not in shotfile.load(self.files[m]):
+                        todo.append(m)
+                except shotfile.ShotFileError:
+                    continue
+        if not a.quiet:
+            total = len(todo) if a.robustness_only else a.max_rollouts
+            self.bar = progress_bar(total=total, unit="shot" if a.robustness_only else "launch", file=sys.stderr,
+                                    dynamic_ncols=True, desc="atlas")
+        try:
+            with sigterm_as_interrupt():
+                if a.robustness_only:
+                    for m in todo:
+                        self.add_robustness(m, self.files[m])
+                        if self.bar:
+                            self.bar.update(1)
+                elif a.max_rollouts:
+                    atlasmod.run(self.L, self.arch, method=a.method, budget=a.max_rollouts, seed=a.seed,
+                                 per_subset=a.per_subset, on_new=self.on_new, callback=self.progress)
+        except KeyboardInterrupt:
+            return True
+        finally:
+            if self.bar:
+                self.bar.close()
+        return False
 
-    def on_new(masks):
-        for m in masks:
-            f = out / shot_name(m)
-            write_shot(f, L.model, arch.elite[m], m, shared_scene="scene.xml", requested=m,
-                       search={"seed": args.seed, "method": args.method, "found_after": arch.found_at[m]})
-            files[m], launches[m] = f, arch.elite[m]
-            if not args.no_robustness:
-                add_robustness(m, f)
 
-    def progress(a):
-        if bar:
-            bar.update(a.rollouts - bar.n)
-            bar.set_postfix_str(f"{len(a)} subsets", refresh=False)
+def _atlas_summaries(out: Path, run: _AtlasRun, *, seconds: float, seed: int, method: str) -> int:
+    """Step 4: summary.csv, summary.md, atlas.json and summary.png; returns the subsets held."""
+    import csv
+    import io
 
-    stopped = False
-    try:
-        with sigterm_as_interrupt():
-            if args.robustness_only:
-                for m in sorted(files):
-                    if m in launches and "robustness" not in json.loads(files[m].read_text()):
-                        add_robustness(m, files[m])
-                        if bar:
-                            bar.update(1)
-            elif args.max_rollouts:
-                atlasmod.run(L, arch, method=args.method, budget=args.max_rollouts, seed=args.seed,
-                             per_subset=args.per_subset, on_new=on_new, callback=progress)
-    except KeyboardInterrupt:
-        stopped = True
-    finally:
-        if bar:
-            bar.close()
-        L.close()
-    have = {m: f.name for m, f in files.items()}
-    rows = [(m, len(shot.pins_of(m)), have.get(m, "")) for m in range(1, 1024)]
+    from nbst.outputs import write_text_atomic
+
+    from nbst.models.bowling import figure, geometry, shot
+
+    have = {m: f.name for m, f in run.files.items()}
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(["mask", "pins", "size", "file"])
-    for m, k, f in rows:
-        w.writerow([m, "-".join(map(str, shot.pins_of(m))), k, f])
-    write_text_atomic(out / "summary.csv", buf.getvalue())
-    write_text_atomic(out / "summary.md", summary_md(have, launches=arch.rollouts, probes=probes[0],
-                                                     seconds=time.perf_counter() - t0, seed=args.seed,
-                                                     method=args.method, archive=arch))
-    atlas_json(out, seed=args.seed)
-    from nbst.models.bowling import figure
+    for m in range(1, geometry.N_SUBSETS + 1):
+        pins = shot.pins_of(m)
+        w.writerow([m, "-".join(map(str, pins)), len(pins), have.get(m, "")])
+    write_text_atomic(out / "summary.csv", buf.getvalue(), option="--out-dir")
+    write_text_atomic(out / "summary.md", summary_md(have, launches=run.arch.rollouts, probes=run.probes,
+                                                     seconds=seconds, seed=seed, method=method, archive=run.arch),
+                      option="--out-dir")
+    atlas_json(out, seed=seed)
+    fig = figure.atlas_figure(have, title=f"{len(have)} of {geometry.N_SUBSETS:,} subsets "
+                                          f"(red frame: needs a flying pin)")
+    from nbst.outputs import atomic_path
 
-    fig = figure.atlas_figure(have, title=f"{len(have)} of 1,023 subsets (red frame: needs a flying pin)")
-    figure.save(fig, out / "summary.png")
-    n = len(have)
-    print(f"nbst bowl atlas: {n} of 1023 subsets have a shot in {out} ({arch.rollouts} search launches and "
-          f"{probes[0]} robustness launches this run{', interrupted' if stopped else ''})", file=sys.stderr)
+    with atomic_path(out / "summary.png", option="--out-dir") as tmp:
+        figure.save(fig, tmp)
+    return len(have)
+
+
+def cmd_atlas(args) -> int:
+    from nbst.models.bowling import geometry, shotfile
+
+    try:
+        out = _atlas_folder(args)
+    except shotfile.ShotFileError as e:
+        return _err("atlas", str(e))
+    try:
+        L = launcher(args, args.jobs or default_jobs())
+    except ValueError as e:
+        return _err("atlas", f"--cluster: {e}")
+    files, launches = _atlas_resume(out)
+    t0 = time.perf_counter()
+    run = _AtlasRun(args, L, out, files, launches)
+    try:
+        stopped = run.run()
+    finally:
+        L.close()
+    n = _atlas_summaries(out, run, seconds=time.perf_counter() - t0, seed=args.seed, method=args.method)
+    print(f"nbst bowl atlas: {n} of {geometry.N_SUBSETS} subsets have a shot in {out} ({run.arch.rollouts} search "
+          f"launches and {run.probes} robustness launches this run{', interrupted' if stopped else ''})",
+          file=sys.stderr)
     return 130 if stopped else 0
 
 
@@ -423,7 +550,7 @@ def summary_md(have: dict, *, launches: int, probes: int, seconds: float, seed: 
     from nbst.models.bowling import geometry
 
     found = sorted(have)
-    lines = ["# Bowling atlas", "", f"{len(found)} of 1023 subsets found; this run: {launches} search launches "
+    lines = ["# Bowling atlas", "", f"{len(found)} of {geometry.N_SUBSETS} subsets found; this run: {launches} search launches "
              f"({method}) and {probes} robustness launches in {seconds:.0f} s (seed {seed}).", ""]
     if archive is not None and method.startswith("elites") and launches:
         (nu, hu), kids = archive.uniform, sum(archive.children.values())

@@ -33,23 +33,24 @@ def register(sub) -> None:
     p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
                    help="bowling shots only: behind the ball, overhead, or both side by side (default both)")
     p.add_argument("--fps", type=float, default=None,
-                   help=f"frames per second (default {style.DEFAULT_FPS}; {style.GIF_FPS} for .gif)")
+                   help=f"frames per second, in (0, 240] (default {style.DEFAULT_FPS}; {style.GIF_FPS} for .gif)")
     p.add_argument("--size", default=None, metavar="WxH",
                    help="frame size in pixels (default %dx%d; %dx%d for .gif)" % (*style.DEFAULT_SIZE, *style.GIF_SIZE))
-    p.add_argument("--speed", type=float, default=1.0,
+    p.add_argument("--speed", type=float, default=None,
                    help="simulated seconds per second of video (default 1.0; 0.5 = slow motion)")
     p.add_argument("--hold", type=float, default=1.0, metavar="SECONDS",
                    help="seconds of video holding the final frame (default 1.0)")
     p.add_argument("--trails", action="store_true", help="draw each disk's recent path, fading with age")
     p.add_argument("--labels", action="store_true",
                    help="write each disk's index on it, and beside each target the index of its disk")
-    p.add_argument("--view", choices=["2d", "3d"], default="2d",
+    p.add_argument("--view", choices=["2d", "3d"], default=None,
                    help="2d: the box from above (default); 3d: pucks on a table, perspective camera, lighting")
-    p.add_argument("--source", choices=["analytic", "mujoco", "both"], default="analytic",
+    p.add_argument("--source", choices=["analytic", "mujoco", "both"], default=None,
                    help="positions from the exact simulator (default), from a MuJoCo replay, or both "
                         "(MuJoCo drawn as white rings over the exact disks)")
     p.add_argument("--still", type=float, default=None, metavar="T",
-                   help="write only the frame at time T (seconds) to a .png")
+                   help="write only the frame at time T (seconds, in [0, t_final]; for a bowling shot in [0, its "
+                        "duration]) to a .png")
     p.add_argument("--max-frames", type=int, default=None, metavar="N",
                    help="refuse a video of more than N frames (default 108,000: 30 minutes at 60 fps)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
@@ -104,10 +105,12 @@ def cmd_render(args) -> int:
     from nbst.render.bowling import is_shot_file
     from nbst.render.gl import RenderError
 
-    if is_shot_file(args.problem):
+    if is_shot_file(args.problem):  # sniffs the first bytes only; the shot loader reads it, capped
         from nbst.render.bowling import cmd_render_shot
 
-        return cmd_render_shot(args)
+        return cmd_render_shot(args)  # disk-only flags (--trails, --view, ...) are an error there
+    args.view, args.source = args.view or "2d", args.source or "analytic"
+    args.speed = 1.0 if args.speed is None else args.speed
     if args.solution is None:
         return _err("render", "give PROBLEM and SOLUTION (or one bowling shot file from `nbst bowl solve`)")
     if args.camera is not None:
@@ -247,8 +250,24 @@ def mujoco_positions(problem, velocities, times):
     return rollout(problem, velocities, times)
 
 
+def _not_bowling(args) -> int | None:
+    """Exit 2 with one line when PROBLEM is a bowling shot or atlas file (not a disk problem)."""
+    from nbst.render.bowling import bowling_kind
+
+    kind = bowling_kind(args.problem)
+    if kind:
+        how = (f"draw it with `nbst render {args.problem} -o shot.mp4`" if kind == "shot" else
+               f"`nbst bowl atlas --from {args.problem} --out-dir DIR` draws it as DIR/summary.png")
+        return _err("plot", f"{args.problem}: this is a bowling {kind} file, not a disk problem; {how} "
+                            f"(docs/bowling.md)")
+    return None
+
+
 def cmd_plot_problem(args) -> int:
     from nbst.problem import load_problem
+
+    if (rc := _not_bowling(args)) is not None:
+        return rc
 
     from nbst.render.figures import plot_problem, save_figure
     problem = load_problem(args.problem)
@@ -258,6 +277,9 @@ def cmd_plot_problem(args) -> int:
 
 def cmd_plot_trajectories(args) -> int:
     from nbst.problem import load_problem
+
+    if (rc := _not_bowling(args)) is not None:
+        return rc
     from nbst.sim import simulate
     from nbst.solution import load_solution
 
