@@ -38,8 +38,16 @@ NONCUEABLE = (0.30, 0.62, 0.96)
 #: Per-disk shades in figures: disk k of a class (k counted within its class) is
 #: its class colour mixed towards black by SHADE_STEPS[k % len]. Neighbouring
 #: paths of one class then differ in lightness while keeping the class hue; the
-#: darkest step keeps amber readable as a thin line on white.
-SHADE_STEPS = (0.0, 0.38, 0.18, 0.55)
+#: darkest step keeps amber readable as a thin line on white. The steps are about
+#: 12 CIELAB lightness units apart, also as a deuteranope sees them (tests/cvd.py):
+#: hue alone would not tell amber from brown for a colour-blind reader.
+SHADE_STEPS = (0.0, 0.42, 0.21, 0.62)
+
+#: Per-disk marks where curves of many disks share an axes (the report's error plot):
+#: disk k gets DISK_MARKERS[k % len], hollow, in its shade, so each curve is told apart
+#: by shape, not only by colour. A filled dot and a star are left out: they mean a wall
+#: bounce and a disk-disk collision.
+DISK_MARKERS = ("o", "s", "^", "v", "D", "<", ">", "p", "h", "d", "P", "X", "8", "H")
 
 #: Marks that belong to no class (figures on white): target markers and their
 #: numbers, the dotted neighbourhood ring, disk edges.
@@ -94,6 +102,16 @@ def disk_shades(cueable) -> list[tuple[float, float, float]]:
         out.append(shade(class_color(c), SHADE_STEPS[seen[c] % len(SHADE_STEPS)]))
         seen[c] += 1
     return out
+
+
+def disk_marker(i: int) -> str:
+    """The hollow mark of disk ``i`` in plots of many disks' curves (matplotlib marker)."""
+    return DISK_MARKERS[int(i) % len(DISK_MARKERS)]
+
+
+def units(x, fmt: str = "g") -> str:
+    """``x`` in problem units, in words: "1 unit", "0.5 units", "2 units"."""
+    return f"{format(x, fmt)} unit" + ("" if float(x) == 1.0 else "s")
 
 
 def path_style(cueable) -> str:

@@ -55,9 +55,33 @@ class FrameRenderer:
         self.draw(t)
         return self.target.read(out, components=4)
 
-    def readout(self, t: float, inside: np.ndarray) -> list[str]:
-        """The text lines of the time readout (``inside``: which disks are within R)."""
-        return [self.title, f"t = {t:5.2f} s", "on target", f"  {int(inside.sum()):2d}/{self.problem.n}"]
+    #: What the motion drawn as disks is, and what the ghost drawn as rings is (``--source``):
+    #: the readout names them when both are shown, or when the disks are not the exact motion.
+    motion_name: str | None = None
+    ghost_name: str = "MuJoCo"
+
+    def readout(self, t: float, inside: np.ndarray, ghost_inside: np.ndarray | None = None) -> list[str]:
+        """The text lines of the time readout, one fact a line (none wraps): the title, the
+        time, and how many disks are within R of their targets (``inside``), for each motion
+        drawn (``ghost_inside``: the same for the ghost rings, ``--source both``)."""
+        n = self.problem.n
+        w = len(str(n))
+        lines = [self.title, f"t = {t:5.2f} s"]
+        if ghost_inside is None and getattr(self, "ghost", None) is None:
+            name = f"{self.motion_name} " if self.motion_name else ""
+            lines.append(f"{name}on target {int(inside.sum()):{w}d}/{n}")
+        else:
+            a, b = self.motion_name or "exact", self.ghost_name
+            pad = max(len(a), len(b))
+            g = 0 if ghost_inside is None else int(np.asarray(ghost_inside).sum())
+            lines += [f"{a:<{pad}} on target {int(inside.sum()):{w}d}/{n}", f"{b:<{pad}} on target {g:{w}d}/{n}"]
+        return lines
+
+    def readout_width(self) -> int:
+        """Characters in the readout's longest line (at t_final, every disk counted)."""
+        full = np.ones(self.problem.n, bool)
+        ghost = full if getattr(self, "ghost", None) is not None else None
+        return max(len(s) for s in self.readout(self.problem.t_final, full, ghost))
 
 
 class FrameTarget:

@@ -94,22 +94,39 @@ def _spread(y, gap: float, hi: float = 1.0) -> np.ndarray:
     return res
 
 
+def error_floor(val) -> float:
+    """The log axis's floor of the error figure: errors below it (MuJoCo and the exact motion
+    agreeing to round-off, or exactly) are drawn at it. Aligned stepping agrees to ~1e-12."""
+    return 1e-13 if getattr(val, "stepping", "fixed") == "aligned" else 1e-9
+
+
 def error_figure(val):
     """Per-disk distance between the two motions over time (log scale), with the
     tolerance: one curve per disk in a shade of its class colour (solid cueable,
-    dashed noncueable), numbered at its right end; the legend below."""
+    dashed noncueable) carrying the disk's own hollow mark (``palette.disk_marker``),
+    so curves are told apart by shape as well as colour (colour-blind readers), and
+    numbered at its right end; errors below the floor (``error_floor``) are drawn on
+    it, and the legend says so. The legend below names every disk."""
     from nbst.render.figures import legend_below, line_handle
 
     p = val.problem
     fig = _figure((7.5, 3.4))
     ax = fig.add_subplot(1, 1, 1)
     shades = palette.disk_shades(p.cueable)
-    floor = 1e-13 if getattr(val, "stepping", "fixed") == "aligned" else 1e-9
+    floor = error_floor(val)
     err = np.maximum(val.error_curve, floor)
+    ts = np.asarray(val.error_curve_t, float)
+    marks = 5  # per curve, staggered so that marks of different disks do not sit on one another
     for i in range(p.n):
-        ax.semilogy(val.error_curve_t, err[:, i], palette.path_style(p.cueable[i]),
-                    color=palette.hex_color(shades[i]), lw=1, label=f"_disk {i}")
+        at = (np.arange(marks) + (i + 0.5) / p.n) * (p.t_final / marks)
+        idx = np.unique(np.clip(np.searchsorted(ts, at), 0, len(ts) - 1))
+        col = palette.hex_color(shades[i])
+        ax.semilogy(ts, err[:, i], palette.path_style(p.cueable[i]), color=col, lw=1, label=f"_disk {i}",
+                    marker=palette.disk_marker(i), markevery=list(idx), ms=4.5, mfc="white", mec=col, mew=1.0)
     ax.axhline(val.tol, color="black", ls="-.", lw=0.9)
+    at_floor = bool((np.asarray(val.error_curve) < floor).any())
+    if at_floor:
+        ax.axhline(floor, color="0.55", ls=(0, (1, 2)), lw=0.9, zorder=0)
     if val.diverge:
         ax.axvline(val.diverge["time"], color="black", ls=":", lw=1.1)
     for t in val.exact.events["time"]:
@@ -129,17 +146,24 @@ def error_figure(val):
                     arrowprops=dict(arrowstyle="-", lw=0.5, color=palette.hex_color(shades[i]), shrinkA=0,
                                     shrinkB=1.5))
     entries = []
-    if p.cueable.any():
-        entries.append((line_handle(palette.hex_color(palette.CUEABLE), palette.PATH_CUEABLE, lw=1),
-                        "cueable disk (solid)"))
-    if (~p.cueable).any():
-        entries.append((line_handle(palette.hex_color(palette.NONCUEABLE), palette.PATH_NONCUEABLE, lw=1),
-                        "noncueable disk (dashed)"))
-    entries.append((line_handle("black", "-.", lw=0.9), f"tolerance {val.tol:g}"))
+    for i in range(p.n):
+        col = palette.hex_color(shades[i])
+        entries.append((line_handle(col, palette.path_style(p.cueable[i]), lw=1, marker=palette.disk_marker(i),
+                                    ms=4.5, mfc="white", mec=col, mew=1.0), f"disk {i}"))
+    entries.append((line_handle("black", "-.", lw=0.9), f"tolerance {palette.units(val.tol)}"))
     if val.diverge:
         entries.append((line_handle("black", ":", lw=1.1), f"first divergence (disk {val.diverge['disk']})"))
     entries.append((line_handle("0.8", "-", lw=0.8), "event (exact)"))
-    legend_below(fig, entries, ncol=3, grow=False, title="one curve per disk; its number at the right end")
+    if at_floor:
+        entries.append((line_handle("0.55", (0, (1, 2)), lw=0.9), f"floor: error < {floor:g} (round-off) drawn here"))
+    classes = []
+    if p.cueable.any():
+        classes.append("amber solid: cueable")
+    if (~p.cueable).any():
+        classes.append("blue dashed: noncueable")
+    ncol = min(7, max(3, p.n))
+    legend_below(fig, entries, ncol=ncol, grow=True, fontsize=7.0,
+                 title=f"one curve per disk, its number at the right end ({'; '.join(classes)})")
     return fig
 
 
@@ -231,6 +255,8 @@ def convergence_figure(val):
         entries.append((line_handle(fit_ink, "--", lw=1.2), f"fit: error ~ h^{order['order']:.2f}"))
     if aligned:
         entries.append((line_handle(al_ink, "-.", lw=1.1), f"aligned stepping ({aligned[0]['max_error']:.2g})"))
+    if any(e["max_error"] < floor for e in fixed + aligned):
+        entries.append((line_handle("0.55", "none", marker="_", ms=8), f"below {floor:g}: drawn at {floor:g}"))
     legend_below(fig, entries, ncol=2, grow=False)
     return fig
 
@@ -385,12 +411,14 @@ def report_html(val) -> str:
         return "".join(f"<tr><td style='text-align:left'>{t}</td><td>{o}</td></tr>" for _, t, o in out)
 
     div = d["divergence"]
-    div_html = (f"<p>Disk <b>{div['disk']}</b> first parts from its exact path by more than {val.tol:g} units at "
+    div_html = (f"<p>Disk <b>{div['disk']}</b> first parts from its exact path by more than "
+                f"{palette.units(val.tol)} at "
                 f"<b>t = {div['time']:.4f} s</b>. Cause: {esc(div['cause'])}. Chaos makes late divergence normal: "
                 f"a small error at one collision grows at every later one.</p>" if div else
-                f"<p class=ok>No divergence: every disk stays within {val.tol:g} units of its exact path "
+                f"<p class=ok>No divergence: every disk stays within {palette.units(val.tol)} of its exact path "
                 f"up to t_final.</p>")
     json_text = esc(dumps_strict({k: v for k, v in d.items() if k not in ("events", "velocities")}, indent=1))
+    json_lines = json_text.count("\n") + 1
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>nbst validate: {esc(p.name)}</title>
 <style>{_CSS}</style></head><body>
@@ -419,6 +447,8 @@ MuJoCo {d['mujoco_result']['signature']} (order {d['mujoco_result']['order']}, c
 {''.join(rows)}</table>
 <h2>Events (matched in order; offset = MuJoCo time &minus; exact time)</h2>
 <table><tr><th>event (exact time)</th><th>offset</th></tr>{ev_rows()}</table>
-<h2>Summary data</h2><pre>{json_text}</pre>
+<h2>Summary data</h2>
+<details><summary>The numbers above as JSON ({json_lines} lines; also written beside this page as
+<a href="report.json">report.json</a>, with every event)</summary><pre>{json_text}</pre></details>
 </body></html>
 """

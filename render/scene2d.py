@@ -55,7 +55,7 @@ class Layout:
         fw, fh = size
         short = min(fw, fh)
         self.margin = style.MARGIN_FRAC * short
-        self.wall = max(1.5, style.BOX_WALL_FRAC * short)
+        self.wall = max(2.0, style.BOX_WALL_FRAC * short)  # 2 px at least: a 1-px wall blurs away in H.264
         inner = self.margin + self.wall
         self.scale = min((fw - 2 * inner) / W, (fh - 2 * inner) / H)
         self.x0 = 0.5 * (fw - W * self.scale)
@@ -125,20 +125,54 @@ def trail_capsules(motion, t: float, half, colors, *, to_view=None, min_step: fl
 
 
 class Labels:
-    """Disk indices written on the disks (dark digits, centred), sized to the disks."""
+    """Disk indices (``--labels``), sized to the disks but never under MIN_LABEL_PX: dark
+    digits centred on a disk where they fit inside it (LABEL_FIT), else beside the disk,
+    upper left, in the disk's colour over a dark halo. ``on_disk`` says which is which."""
 
-    def __init__(self, ctx, problem, rpx):
-        px = int(np.clip(np.median(rpx) * style.LABEL_FRAC, style.MIN_LABEL_PX, style.MAX_LABEL_PX))
+    def __init__(self, ctx, problem, rpx, colors=None):
+        from nbst.render.shapes import digit_height
+
+        rpx = np.broadcast_to(np.asarray(rpx, float), (problem.n,))
+        self.px = px = int(np.clip(np.median(rpx) * style.LABEL_FRAC, style.MIN_LABEL_PX, style.MAX_LABEL_PX))
         self.text = Text(ctx, px)
         self.strings = [str(i) for i in range(problem.n)]
-        self.visible = np.asarray(rpx) >= style.MIN_LABEL_DISK_PX
+        cw, ch = self.text.cell
+        self.digit_px = digit_height(px)
+        half_w = 0.5 * cw * np.array([len(s) for s in self.strings], float)
+        #: half-diagonal of each number's ink box (px): what a marker on the disk must clear
+        self.half_diag = np.hypot(half_w, 0.5 * self.digit_px)
+        self.on_disk = self.half_diag <= style.LABEL_FIT * rpx
+        self.rpx = rpx
+        self.colors = np.asarray(colors if colors is not None else style.disk_colors(problem.cueable), float)
+
+    def instances(self, centers_px, which):
+        """Text instances of the numbers of disks ``which`` (bool mask) at ``centers_px``:
+        centred on the disk, or (beside) upper left of it."""
+        cw, ch = self.text.cell
+        parts = []
+        for i in np.flatnonzero(which):
+            s, c = self.strings[i], centers_px[i]
+            if self.on_disk[i]:
+                parts.append(self.text.layout([s], c[0] - 0.5 * cw * len(s), c[1] - 0.5 * ch))
+            else:
+                d = 0.72 * self.rpx[i]
+                parts.append(self.text.layout([s], c[0] - d - cw * len(s), c[1] - d - 0.85 * ch))
+        return np.concatenate(parts) if parts else self.text.layout([], 0, 0)
+
+    def boxes(self, centers_px) -> np.ndarray:
+        """(M, 4) px boxes (x0, y0, x1, y1) of the numbers written on disks (for others to avoid)."""
+        cw, ch = self.text.cell
+        c = np.asarray(centers_px, float)[self.on_disk]
+        hw = 0.5 * cw * np.array([len(s) for s, o in zip(self.strings, self.on_disk) if o], float)
+        return np.stack([c[:, 0] - hw, c[:, 1] - 0.5 * ch, c[:, 0] + hw, c[:, 1] + 0.5 * ch], axis=1)
 
     def draw(self, size, centers_px) -> None:
-        cw, ch = self.text.cell
-        parts = [self.text.layout([s], c[0] - 0.5 * cw * len(s), c[1] - 0.5 * ch)
-                 for s, c, v in zip(self.strings, centers_px, self.visible) if v]
-        if parts:
-            self.text.draw(size, np.concatenate(parts), style.LABEL)
+        self.text.draw(size, self.instances(centers_px, self.on_disk), style.LABEL)
+        beside = ~self.on_disk
+        if beside.any():  # one draw per class colour
+            for col in np.unique(self.colors[beside], axis=0):
+                m = beside & (np.abs(self.colors - col).max(axis=1) < 1e-6)
+                self.text.draw_halo(size, self.instances(centers_px, m), col, style.TEXT_HALO)
 
     def release(self) -> None:
         self.text.release()
@@ -150,30 +184,63 @@ def target_label_px(size) -> int:
                        style.MAX_TARGET_LABEL_PX))
 
 
-def target_label_instances(text, centers_px, marker_px) -> np.ndarray:
+def target_label_instances(text, centers_px, marker_px, avoid=None) -> np.ndarray:
     """Text instances numbering each target with its disk's index, just above and
-    right of its marker (centres (N, 2) px, marker radii (N,) px)."""
+    right of its marker (centres (N, 2) px, marker radii (N,) px). ``avoid``: boxes
+    (M, 4) px (x0, y0, x1, y1; the numbers written on disks): a number that would
+    overlap one moves to the first free corner of its marker (upper left, lower right,
+    lower left), or stays upper right if none is free."""
     cw, ch = text.cell
     centers_px = np.asarray(centers_px, float)
-    marker_px = np.broadcast_to(np.asarray(marker_px, float), (len(centers_px),))
-    parts = [text.layout([str(i)], c[0] + 0.75 * m + 1.0, c[1] - 0.75 * m - 0.8 * ch)
-             for i, (c, m) in enumerate(zip(centers_px, marker_px))]
+    n = len(centers_px)
+    marker_px = np.broadcast_to(np.asarray(marker_px, float), (n,))
+    w = cw * np.array([len(str(i)) for i in range(n)], float)
+    d = 0.75 * marker_px + 1.0
+    right, left = centers_px[:, 0] + d, centers_px[:, 0] - d - w
+    up, down = centers_px[:, 1] - 0.75 * marker_px - 0.8 * ch, centers_px[:, 1] + 0.75 * marker_px - 0.2 * ch
+    cands = [(right, up), (left, up), (right, down), (left, down)]
+    x, y = right.copy(), up.copy()
+    if avoid is not None and len(avoid):
+        a = np.asarray(avoid, float)
+        free = np.zeros(n, bool)
+        for cx, cy in cands:
+            hit = ((cx[:, None] < a[None, :, 2]) & (cx[:, None] + w[:, None] > a[None, :, 0])
+                   & (cy[:, None] < a[None, :, 3]) & (cy[:, None] + ch > a[None, :, 1])).any(axis=1)
+            take = ~free & ~hit
+            x[take], y[take] = cx[take], cy[take]
+            free |= take
+    parts = [text.layout([str(i)], x[i], y[i]) for i in range(n)]
     return np.concatenate(parts) if parts else text.layout([], 0, 0)
 
 
-def legend_entries(problem, *, ghost: bool, labels: bool, long: bool = True) -> list[tuple]:
+def ghost_label_instances(text, centers_px, ring_px) -> np.ndarray:
+    """Text instances numbering each ghost ring (``--source both --labels``) with its
+    disk's index, just below and right of the ring (centres (N, 2) px, radii (N,) px)."""
+    cw, ch = text.cell
+    ring_px = np.broadcast_to(np.asarray(ring_px, float), (len(centers_px),))
+    parts = [text.layout([str(i)], c[0] + 0.72 * r + 1.0, c[1] + 0.72 * r - 0.2 * ch)
+             for i, (c, r) in enumerate(zip(np.asarray(centers_px, float), ring_px))]
+    return np.concatenate(parts) if parts else text.layout([], 0, 0)
+
+
+def legend_entries(problem, *, ghost: bool, labels: bool, long: bool = True, ghost_name: str = "MuJoCo",
+                   motion_name: str | None = None) -> list[tuple]:
     """The legend's lines as (words, swatch kind, colour): a filled disk per class
-    present, the hollow target mark (saying that its number names its disk when
-    targets are numbered), the MuJoCo ring when one is drawn. ``long=False``: the
-    short words, for narrow margins."""
+    present (naming the motion when rings show a second one), the hollow target mark
+    (saying that its number names its disk when targets are numbered), the lit ring
+    that the readout's "on target" counts, the ring of the second motion when one is
+    drawn. ``long=False``: the short words, for narrow margins."""
     out = []
+    of = f" ({motion_name or 'exact'})" if ghost and long else ""
     if problem.cueable.any():
-        out.append((palette.LEGEND_CUEABLE, "disk", style.CUEABLE))
+        out.append((palette.LEGEND_CUEABLE + of, "disk", style.CUEABLE))
     if (~problem.cueable).any():
-        out.append((palette.LEGEND_NONCUEABLE, "disk", style.NONCUEABLE))
+        out.append((palette.LEGEND_NONCUEABLE + of, "disk", style.NONCUEABLE))
     out.append((palette.LEGEND_TARGET if labels and long else "target", "target", None))
+    lit = style.CUEABLE if problem.cueable.any() else style.NONCUEABLE
+    out.append(("on target: within R" if long else "within R", "lit", lit))
     if ghost:
-        out.append(("MuJoCo" + (" (ring)" if long else ""), "ghost", None))
+        out.append((f"{ghost_name} replay" + (" (ring)" if long else ""), "ghost", None))
     return out
 
 
@@ -205,6 +272,11 @@ def draw_legend(circles, text, size, x: float, y: float, max_w: float, max_h: fl
             d["radius"] = max(style.MIN_MARKER_PX, 0.22 * ch)
             d["stroke"] = 1.5
             d["rim"] = style.MARKER
+        elif kind == "lit":
+            d["radius"] = 0.45 * ch
+            d["stroke"] = max(1.5, 0.5 * style.RING_LIT_PX)
+            d["fill"] = (*col, style.RING_LIT_FILL_ALPHA)
+            d["rim"] = (*col, style.RING_LIT_ALPHA)
         else:
             d["radius"] = 0.45 * ch
             d["stroke"] = style.GHOST_PX
@@ -222,28 +294,54 @@ class Renderer2D(FrameRenderer):
     motion  : the disks' motion, ``at(t) -> (N, 2)`` (a Trajectory, or SampledMotion)
     ghost   : optional second motion drawn as rings on top (MuJoCo replay)
     trails  : draw the last TRAIL_SECONDS of every path, fading with age
-    labels  : write each disk's index on it (as in ``nbst simulate``'s table) and
-              beside each target the index of the disk it belongs to
+    labels  : write each disk's index on it (as in ``nbst simulate``'s table), beside
+              each target the index of the disk it belongs to, and beside each ghost
+              ring its disk's index
+    motion_name, ghost_name : what the disks and the rings show, for the readout and
+              the legend (default: "exact" and "MuJoCo" when both are drawn; no name
+              for the disks alone)
+
+    Layers, bottom to top: floor and dim target rings (static), trails, lit rings, disks,
+    target markers (in a dark halo: a disk never hides one), ghost rings, numbers, readout.
     """
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
-                 labels: bool = False, title: str | None = None):
+                 labels: bool = False, title: str | None = None, motion_name: str | None = None,
+                 ghost_name: str | None = None):
         import moderngl
 
+        from nbst.render.shapes import text_cell
+
         self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
+        self.motion_name = motion_name
+        if ghost_name:
+            self.ghost_name = ghost_name
         self.trails = bool(trails)
         self.target = FrameTarget(ctx, size)
         self.size = self.target.size
         self.title = problem.name if title is None else title
-        text_px = max(8, int(round(style.TEXT_FRAC * min(self.size))))
-        self.text = Text(ctx, text_px)
-        self.layout = L = Layout(problem.box, self.size)
-        # the readout lives in the left margin: smaller type where its longest line would reach the box
+        # the readout lives in the left margin, one fact a line: smaller type where its longest
+        # line would reach the box, never under MIN_READOUT_PX; the box makes room below that
+        short = min(self.size)
+        L = Layout(problem.box, self.size)
+        chars = self.readout_width()
         free = L.box_rect[0] - L.wall - L.margin  # half a margin of padding on each side
-        need = max(len(s) for s in self.readout(0.0, np.zeros(problem.n, bool))) * self.text.cell[0]
-        if need > free and text_px > 8:
-            self.text.release()
-            self.text = Text(ctx, max(8, int(text_px * free / need)))
+        text_px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * short)))
+        while text_px > style.MIN_READOUT_PX and chars * text_cell(text_px)[0] > free:
+            text_px -= 1
+        # no room at MIN_READOUT_PX: the box moves right (and shrinks) for it, but keeps at least
+        # MIN_BOX_SHARE of its size; on a frame too small for that (a 160x120 GIF) smaller type
+        # is tried, down to 8 px, and at worst the readout overlaps the box's corner
+        while chars * text_cell(text_px)[0] > free:
+            L2 = Layout(problem.box, self.size, keep_left=chars * text_cell(text_px)[0] + L.margin)
+            if L2.scale >= style.MIN_BOX_SHARE * L.scale:
+                L = L2
+                break
+            if text_px <= 8:
+                break
+            text_px -= 1
+        self.layout = L
+        self.text = Text(ctx, text_px)
         self._mgl = moderngl
         self.circles = Circles(ctx)
         self.capsules = Capsules(ctx)
@@ -279,9 +377,22 @@ class Renderer2D(FrameRenderer):
         self._ghosts["stroke"] = style.GHOST_PX
         self._ghosts["rim"] = style.GHOST
         self.trail_half = np.maximum(style.MIN_TRAIL_PX, style.TRAIL_WIDTH_FRAC * self.rpx).astype("f4") * 0.5
-        self.labels = Labels(ctx, problem, self.rpx) if labels else None
+        self.labels = Labels(ctx, problem, self.rpx, self.colors) if labels else None
         self.marker_px = np.maximum(style.MARKER_FRAC * self.rpx, style.MIN_MARKER_PX)
-        self.legend_text = Text(ctx, max(8, int(round(style.LEGEND_TEXT_FRAC * min(self.size)))))
+        if self.labels is not None and self.labels.on_disk.any():
+            # a disk resting on its target: the marker rings its number instead of crossing it
+            clear = float(self.labels.half_diag[self.labels.on_disk].max()) + style.MARKER_LABEL_GAP_PX
+            self.marker_px = np.where(self.labels.on_disk, np.maximum(self.marker_px, clear), self.marker_px)
+        self._markers = np.zeros(2 * n, CIRCLE_DTYPE)  # halo rings, then the markers
+        self._markers["center"] = np.concatenate([self.target_px, self.target_px])
+        h = style.MARKER_HALO_PX
+        self._markers["radius"][:n] = self.marker_px + h
+        self._markers["stroke"][:n] = style.MARKER_PX + 2 * h
+        self._markers["rim"][:n] = style.MARKER_HALO
+        self._markers["radius"][n:] = self.marker_px
+        self._markers["stroke"][n:] = style.MARKER_PX
+        self._markers["rim"][n:] = style.MARKER
+        self.legend_text = Text(ctx, max(style.MIN_LEGEND_PX, int(round(style.LEGEND_TEXT_FRAC * short))))
         self.target_text = Text(ctx, target_label_px(self.size)) if labels else None
         self.static = FrameTarget(ctx, self.size)
         self._draw_static()
@@ -294,8 +405,8 @@ class Renderer2D(FrameRenderer):
         return (pad, pad)
 
     def _draw_static(self) -> None:
-        """Background, box, dim target rings, target markers (numbered with --labels)
-        and the legend: drawn once."""
+        """Background, box, dim target rings and the legend: drawn once (the target
+        markers and numbers are drawn on every frame, above the disks)."""
         ctx, mgl, L, p = self.ctx, self._mgl, self.layout, self.problem
         self.static.fbo.use()
         ctx.viewport = (0, 0, *self.size)
@@ -307,41 +418,42 @@ class Renderer2D(FrameRenderer):
         w = L.wall
         self.rect.draw(self.size, (x0 - w, y0 - w, x1 + w, y1 + w), fill=style.BOX_FLOOR, rim=style.BOX_WALL,
                        stroke=w)
-        n = p.n
-        rings = np.zeros(n, CIRCLE_DTYPE)
+        rings = np.zeros(p.n, CIRCLE_DTYPE)
         rings["center"] = self.target_px
         rings["radius"] = self.R_px
         rings["stroke"] = style.RING_DIM_PX
         rings["rim"] = style.RING_DIM
-        markers = np.zeros(n, CIRCLE_DTYPE)
-        markers["center"] = self.target_px
-        markers["radius"] = self.marker_px
-        markers["stroke"] = 1.5
-        markers["rim"] = style.MARKER
         self.circles.draw(rings)
-        self.circles.draw(markers)
-        if self.target_text is not None:
-            self.target_text.draw(self.size, target_label_instances(self.target_text, self.target_px,
-                                                                    self.marker_px), style.TARGET_LABEL)
         self._draw_legend()
+
+    def readout_lines(self) -> int:
+        """Lines of the readout (the legend starts below them)."""
+        return len(self.readout(0.0, np.zeros(self.problem.n, bool),
+                                np.zeros(self.problem.n, bool) if self.ghost is not None else None))
 
     def _draw_legend(self) -> None:
         """Legend under the readout, in the left margin, when the margin is wide enough."""
         L = self.layout
         x, y = self._readout_origin()
-        y += (len(self.readout(0.0, np.zeros(self.problem.n, bool))) + 0.6) * self.text.cell[1]  # below the readout
+        y += (self.readout_lines() + 0.6) * self.text.cell[1]  # below the readout
         max_w = L.box_rect[0] - L.wall - 0.5 * L.margin - x
         max_h = self.size[1] - 0.5 * L.margin - y
         self.legend_drawn = draw_legend(
             self.circles, self.legend_text, self.size, x, y, max_w, max_h,
             lambda long: legend_entries(self.problem, ghost=self.ghost is not None,
-                                        labels=self.target_text is not None, long=long))
+                                        labels=self.target_text is not None, long=long,
+                                        ghost_name=self.ghost_name, motion_name=self.motion_name))
 
     # ------------------------------------------------------------------ frames
 
     def to_pixels(self, xy) -> np.ndarray:
         """World points -> image px (x = column, y = row, fractional)."""
         return self.layout.to_image(xy)
+
+    def inside(self, pos) -> np.ndarray:
+        """Which disks at ``pos`` (N, 2) are within R of their targets (on target)."""
+        p = self.problem
+        return ((np.asarray(pos, float) - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
 
     def draw(self, t: float) -> None:
         """Draw the frame at time ``t`` into the frame target (no readback)."""
@@ -358,18 +470,29 @@ class Renderer2D(FrameRenderer):
             self.capsules.draw(self._trail_instances(t))
         ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
         ctx.blend_equation = mgl.FUNC_ADD
-        inside = ((pos - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
+        inside = self.inside(pos)
         if inside.any():
             self.circles.draw(self._lit[inside])
         self._disks["center"] = self.layout.to_image(pos)
         self.circles.draw(self._disks)
+        self.circles.draw(self._markers)  # above the disks: never hidden
+        ghost_inside = None
         if self.ghost is not None:
-            self._ghosts["center"] = self.layout.to_image(np.asarray(self.ghost.at(t), float))
+            g = np.asarray(self.ghost.at(t), float)
+            ghost_inside = self.inside(g)
+            self._ghosts["center"] = self.layout.to_image(g)
             self.circles.draw(self._ghosts)
         if self.labels is not None:
             self.labels.draw(self.size, self._disks["center"])
+            numbers = target_label_instances(self.target_text, self.target_px, self.marker_px,
+                                             avoid=self.labels.boxes(self._disks["center"]))
+            self.target_text.draw_halo(self.size, numbers, style.TARGET_LABEL, style.TEXT_HALO)
+            if self.ghost is not None:
+                self.target_text.draw_halo(self.size, ghost_label_instances(self.target_text, self._ghosts["center"],
+                                                                            self.rpx), style.GHOST_LABEL,
+                                           style.TEXT_HALO)
         x, y = self._readout_origin()
-        self.text.draw(self.size, self.text.layout(self.readout(t, inside), x, y), style.TEXT)
+        self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), x, y), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
         return trail_capsules(self.motion, t, self.trail_half, self.colors, to_view=self.layout.to_image,

@@ -172,11 +172,15 @@ class Renderer3D(FrameRenderer):
     """
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
-                 labels: bool = False, title: str | None = None):
+                 labels: bool = False, title: str | None = None, motion_name: str | None = None,
+                 ghost_name: str | None = None):
         import moderngl
         import trimesh
 
         self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
+        self.motion_name = motion_name
+        if ghost_name:
+            self.ghost_name = ghost_name
         self.trails = bool(trails)
         self._mgl = moderngl
         self.target = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
@@ -265,7 +269,7 @@ class Renderer3D(FrameRenderer):
             from nbst.render.scene2d import Labels, target_label_px
             c = np.array([[W / 2, H / 2], [W / 2 + 1.0, H / 2]])
             px_per_unit = float(np.linalg.norm(np.diff(self.to_pixels(c, z=0.0), axis=0)))
-            self.labels = Labels(ctx, p, p.radius * px_per_unit)
+            self.labels = Labels(ctx, p, p.radius * px_per_unit, self.colors)
             self.target_text = Text(ctx, target_label_px(self.size))
         self.text = Text(ctx, max(8, int(round(style.TEXT_FRAC * min(self.size)))))
         self.legend_text = Text(ctx, max(8, int(round(style.LEGEND_TEXT_FRAC * min(self.size)))))
@@ -350,7 +354,9 @@ class Renderer3D(FrameRenderer):
         p = self.problem
         W, H = p.box
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
-        x, y = pad, pad + (len(self.readout(0.0, np.zeros(self.problem.n, bool))) + 0.6) * self.text.cell[1]
+        zero = np.zeros(self.problem.n, bool)
+        lines = len(self.readout(0.0, zero, zero if self.ghost is not None else None))
+        x, y = pad, pad + (lines + 0.6) * self.text.cell[1]
         max_h = self.size[1] - pad - y
         # the table's left edge (outer side of the rail) in the image: a straight line from its far
         # corner to its near one; the legend must end left of it at the legend's lowest row
@@ -362,7 +368,8 @@ class Renderer3D(FrameRenderer):
         edge_x = far[0] + s * (near[0] - far[0]) if y_low > far[1] else self.size[0]
         draw_legend(self.circles, self.legend_text, self.size, x, y, edge_x - pad - x, max_h,
                     lambda long: legend_entries(p, ghost=self.ghost is not None,
-                                                labels=self.target_text is not None, long=long))
+                                                labels=self.target_text is not None, long=long,
+                                                ghost_name=self.ghost_name, motion_name=self.motion_name))
 
     def draw(self, t: float) -> None:
         """Draw the frame at time ``t`` into the frame target (no readback)."""
@@ -396,8 +403,10 @@ class Renderer3D(FrameRenderer):
         self._pucks["offset"][:, :2] = pos
         self._pucks["offset"][:, 2] = self.puck_h / 2
         self._draw(self.cyl, self._pucks)
+        ghost_inside = None
         if self.ghost is not None:
             g = np.asarray(self.ghost.at(t), float)
+            ghost_inside = ((g - p.target) ** 2).sum(axis=1) <= p.target_radius ** 2
             self._ghosts["offset"][:, :2] = g
             self._ghosts["offset"][:, 2] = self.puck_h + 0.8
             self._draw(self.ghost_ring, self._ghosts)
@@ -408,7 +417,7 @@ class Renderer3D(FrameRenderer):
         if self.labels is not None:
             self.labels.draw(self.size, self.to_pixels(pos, z=self.puck_h))
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
-        self.text.draw(self.size, self.text.layout(self.readout(t, inside), pad, pad), style.TEXT)
+        self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
         from nbst.render.scene2d import trail_capsules

@@ -253,17 +253,43 @@ FIRST_CHAR, LAST_CHAR = 32, 126  # printable ASCII
 ATLAS_COLS = 16
 
 
+def _font(px: int):
+    import os
+
+    import matplotlib
+    from PIL import ImageFont
+
+    path = os.path.join(matplotlib.get_data_path(), "fonts", "ttf", "DejaVuSansMono.ttf")
+    return ImageFont.truetype(path, max(6, int(px)))
+
+
+def text_cell(px: int) -> tuple[int, int]:
+    """The glyph cell (cw, ch) in px of text at ``px`` pixels (as :class:`Text` lays it out),
+    without a GL context: for fitting text before any is drawn."""
+    font = _font(px)
+    ascent, descent = font.getmetrics()
+    return int(np.ceil(font.getlength("M"))), ascent + descent
+
+
+def digit_height(px: int) -> int:
+    """Height in px of the digits' ink at ``px`` pixels (about 0.73 px; "0" is 9 px tall at 12)."""
+    from PIL import Image, ImageDraw
+
+    font = _font(px)
+    cw, ch = text_cell(px)
+    img = Image.new("L", (2 * cw, ch), 0)
+    ImageDraw.Draw(img).text((0, 0), "0", font=font, fill=255)
+    rows = np.nonzero(np.asarray(img).max(axis=1) > 127)[0]
+    return int(rows.max() - rows.min() + 1) if rows.size else 0
+
+
 def glyph_atlas(px: int) -> tuple[np.ndarray, tuple[int, int]]:
     """Rasterize printable ASCII in DejaVu Sans Mono (shipped with matplotlib) at
     ``px`` pixels: returns the (rows*ch, 16*cw) uint8 coverage atlas and the cell
     (cw, ch). Made once per size with Pillow; no font dependency beyond matplotlib."""
-    import os
+    from PIL import Image, ImageDraw
 
-    import matplotlib
-    from PIL import Image, ImageDraw, ImageFont
-
-    path = os.path.join(matplotlib.get_data_path(), "fonts", "ttf", "DejaVuSansMono.ttf")
-    font = ImageFont.truetype(path, max(6, int(px)))
+    font = _font(px)
     ascent, descent = font.getmetrics()
     cw = int(np.ceil(font.getlength("M")))
     ch = ascent + descent
@@ -314,6 +340,21 @@ class Text:
         self.tex.use(0)
         self.batch.prog["u_tex"].value = 0
         self.batch.draw(data)
+
+    def draw_halo(self, size, data: np.ndarray, color, halo, *, px: int = 1) -> None:
+        """Draw ``data`` in ``color`` over a halo: the same glyphs shifted by up to ``px`` in
+        each direction in ``halo`` (the text stays legible over disks, rings and trails)."""
+        if len(data) == 0:
+            return
+        shifted = []
+        for dx in range(-px, px + 1):
+            for dy in range(-px, px + 1):
+                if dx or dy:
+                    d = data.copy()
+                    d["pos"] += (dx, dy)
+                    shifted.append(d)
+        self.draw(size, np.concatenate(shifted), halo)
+        self.draw(size, data, color)
 
     def width(self, s: str) -> int:
         return len(s) * self.cell[0]

@@ -19,7 +19,7 @@ BOX_FLOOR = (0.098, 0.110, 0.133)
 #: Walls (the box outline).
 BOX_WALL = (0.62, 0.66, 0.72)
 
-#: Wall thickness, as a fraction of the frame's shorter side (4 px at 720p).
+#: Wall thickness, as a fraction of the frame's shorter side (4 px at 720p; at least 2 px).
 BOX_WALL_FRAC = 0.0055
 
 #: Disk colours by class (cueable warm amber, noncueable cool blue): the
@@ -38,10 +38,18 @@ DISK_RIM_FRAC = 0.12
 MIN_DISK_PX = 3.0
 
 #: Target marker: a small hollow circle (the paper's Figure 1), radius as a
-#: fraction of the disk radius, at least MIN_MARKER_PX.
+#: fraction of the disk radius, at least MIN_MARKER_PX. Drawn above the disks, in a
+#: dark halo (MARKER_HALO, MARKER_HALO_PX wide on each side), so a disk never hides a
+#: target: not a disk passing over it at t = 0, not its own disk resting on it at the
+#: end. Where a disk's number is written on the disk (--labels), the marker is widened
+#: to clear the digits (by MARKER_LABEL_GAP_PX) so a disk on its target stays readable.
 MARKER_FRAC = 0.35
 MIN_MARKER_PX = 3.0
 MARKER = (0.85, 0.87, 0.90, 0.9)
+MARKER_PX = 1.5
+MARKER_HALO = (0.055, 0.063, 0.078, 0.75)
+MARKER_HALO_PX = 1.0
+MARKER_LABEL_GAP_PX = 1.5
 
 #: Target neighbourhood ring of radius R while its disk is outside: faint.
 RING_DIM = (0.55, 0.58, 0.64, 0.22)
@@ -68,33 +76,48 @@ MAX_TRAIL_POINTS = 256
 #: of the analytic disk, so any drift between the two shows as an offset ring.
 GHOST = (0.95, 0.97, 1.0, 0.9)
 GHOST_PX = 2.0
+#: With --labels, each ring carries its disk's number (lower right of the ring, white).
+GHOST_LABEL = (0.95, 0.97, 1.0)
 
 #: Text (time readout, legend).
 TEXT = (0.90, 0.92, 0.95)
 TEXT_DIM = (0.60, 0.64, 0.70)
 
-#: Disk labels (``--labels``): dark digits on the disk, text height as a fraction
-#: of the disk's on-screen radius, clamped; disks smaller than MIN_LABEL_DISK_PX
-#: get none (the digits would not fit).
+#: Halo behind text drawn over the scene (target and ring numbers, disk numbers beside
+#: their disks): the background colour, one pixel around every glyph.
+TEXT_HALO = BACKGROUND
+
+#: Disk labels (``--labels``): dark digits on the disk, text height as a fraction of
+#: the disk's on-screen radius, never under MIN_LABEL_PX: at 12 px a digit's ink is 9 px
+#: tall and "0" no longer reads as "8" (at 8 px it was 6 px). A number that does not fit
+#: inside its disk at that size is written beside the disk instead (upper left, in the
+#: disk's colour over a dark halo), so numbers are legible at every disk size.
 LABEL = (0.08, 0.08, 0.10)
 LABEL_FRAC = 0.95
-MIN_LABEL_PX, MAX_LABEL_PX = 8, 22
-MIN_LABEL_DISK_PX = 6.0
+MIN_LABEL_PX, MAX_LABEL_PX = 12, 22
+#: A number fits on its disk when the half-diagonal of its digits' box is at most this
+#: fraction of the disk's on-screen radius (the rest is rim and air).
+LABEL_FIT = 0.92
 
-#: Text height as a fraction of the frame's shorter side (20 px at 720p).
+#: Text height as a fraction of the frame's shorter side (20 px at 720p); the readout
+#: shrinks to fit the margin beside the box, never under MIN_READOUT_PX: where that
+#: does not fit, the box moves right (and shrinks) to make room. One fact a line.
 TEXT_FRAC = 0.028
+MIN_READOUT_PX = 11
+MIN_BOX_SHARE = 0.7
 
 #: Target numbers (``--labels``): each target's disk index, small and dim, just
 #: above and right of its marker (as in the figures); text height as a fraction
 #: of the frame's shorter side, clamped.
 TARGET_LABEL = TEXT_DIM
 TARGET_LABEL_FRAC = 0.017
-MIN_TARGET_LABEL_PX, MAX_TARGET_LABEL_PX = 8, 14
+MIN_TARGET_LABEL_PX, MAX_TARGET_LABEL_PX = 12, 14
 
 #: Legend under the time readout (top left): swatches for the classes, the target
 #: mark and MuJoCo rings; text height as a fraction of the frame's shorter side,
 #: line pitch in text heights. Drawn only where it fits beside the box.
 LEGEND_TEXT_FRAC = 0.022
+MIN_LEGEND_PX = 10
 LEGEND_PITCH = 1.35
 
 #: Margin around the box, as a fraction of the frame's shorter side.

@@ -281,3 +281,57 @@ def test_report_error_curves_are_numbered_outside_the_axes(validation):
     boxes = [Text.get_window_extent(t, r) for t in nums]  # the words, without their leader lines
     assert all(b.x0 >= axb.x1 for b in boxes)
     assert not any(a.overlaps(b) for k, a in enumerate(boxes) for b in boxes[k + 1:])
+
+
+def test_report_error_curves_differ_in_shape_and_in_a_deuteranopes_view(validation):
+    """Curves are told apart without colour (each disk its own hollow mark) and, in colour,
+    also by a deuteranope: every two disk shades of one class differ by at least 15 CIELAB
+    units in the simulated deuteranopia view (tests/cvd.py), and the classes by far more."""
+    from cvd import delta_e, deuteranopia
+
+    from nbst import palette
+    from nbst.render.report import error_figure
+    val = validation
+    p = val.problem
+    fig = error_figure(val)
+    curves = [ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("_disk")]
+    assert [ln.get_marker() for ln in curves] == [palette.disk_marker(i) for i in range(p.n)]
+    assert len({palette.disk_marker(i) for i in range(len(palette.DISK_MARKERS))}) == len(palette.DISK_MARKERS)
+    assert not {"*", "."} & set(palette.DISK_MARKERS)  # the marks of a collision and a bounce stay theirs
+    words = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert all(f"disk {i}" in words for i in range(p.n))
+    for cls in (palette.CUEABLE, palette.NONCUEABLE):
+        shades = [deuteranopia(palette.shade(cls, s)) for s in palette.SHADE_STEPS]
+        gaps = [delta_e(a, b) for k, a in enumerate(shades) for b in shades[k + 1:]]
+        assert min(gaps) >= 15, (cls, gaps)  # the old steps (0, .38, .18, .55): 13.2 for blue
+    assert delta_e(deuteranopia(palette.CUEABLE), deuteranopia(palette.NONCUEABLE)) > 40
+
+
+def test_report_error_floor_is_explained(mk):
+    """Errors of exactly zero (no impact yet: MuJoCo's free flight is exact) cannot sit on a
+    log axis: they are drawn on the floor, and the legend says what the floor means."""
+    from nbst.models.validate import validate
+    from nbst.render.report import error_figure, error_floor
+    p = mk([[100.0, 400.0], [400.0, 100.0]], radii=10.0, targets=[[600.0, 400.0], [400.0, 600.0]])
+    val = validate(p, np.array([[100.0, 0.0], [0.0, 100.0]]))  # no collision, no bounce
+    assert (val.error_curve < error_floor(val)).any()
+    fig = error_figure(val)
+    words = " ".join(t.get_text() for t in fig.legends[0].get_texts())
+    assert f"{error_floor(val):g}" in words and "floor" in words
+    floor_lines = [ln for ln in fig.axes[0].get_lines() if np.allclose(ln.get_ydata(), error_floor(val))
+                   and not ln.get_label().startswith("_disk")]
+    assert floor_lines  # the floor is drawn, not only named
+
+
+def test_report_page_reads_well(validation):
+    """"1 unit", never "1 units"; the summary JSON folded away under <details>, after the
+    last figure, not a wall of text at the end of the page."""
+    import re
+
+    from nbst.render.report import report_html
+    page = report_html(validation)
+    assert not re.search(r"\b1 units\b", page)
+    assert validation.tol != 1 or "1 unit" in page
+    tail = page[page.index("Summary data"):]
+    assert "<details>" in tail and tail.index("<details>") < tail.index("<pre>") < tail.index("</details>")
+    assert 'href="report.json"' in tail

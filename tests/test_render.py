@@ -92,8 +92,11 @@ def test_each_disk_has_its_colour_at_its_simulated_centre(gl, diamond, t):
     assert f.shape == (SIZE[1], SIZE[0], 3) and f.dtype == np.uint8
     box = box_from_walls(f)
     centres = world_to_px(p, box, tr.at(t))
+    targets = world_to_px(p, box, p.target)
     amber = style.rgb8(style.CUEABLE)
     for i, c in enumerate(centres):
+        if np.linalg.norm(targets - c, axis=1).min() < style.MIN_MARKER_PX + 6:
+            continue  # a target marker lies on this disk (drawn above it: test_targets_are_never_hidden)
         # 3x3 around the centre: all fill colour (disk radius ~8 px here, rim 1 px)
         for dc in (-1, 0, 1):
             for dr in (-1, 0, 1):
@@ -160,10 +163,10 @@ def test_target_rings_light_up_while_their_disk_is_inside(gl, diamond):
     amber = np.array(style.rgb8(style.CUEABLE))
     pos = tr.at(t)
     for i in range(p.n):
-        # a ring pixel (1 px inside radius R) away from every disk and every other ring
+        # a ring pixel (mid-stroke, inside radius R) away from every disk and every other ring
         best = None
         for ang in np.linspace(0, 2 * np.pi, 72, endpoint=False):
-            q = p.target[i] + (p.target_radius - 1.0 / s) * np.array([np.cos(ang), np.sin(ang)])
+            q = p.target[i] + (p.target_radius - 0.5 * style.RING_LIT_PX / s) * np.array([np.cos(ang), np.sin(ang)])
             if np.linalg.norm(pos - q, axis=1).min() < p.radius.max() + 6:
                 continue
             others = np.abs(np.linalg.norm(p.target - q, axis=1) - p.target_radius)
@@ -415,7 +418,7 @@ def _number_box(centre, marker_px, cell):
     right of its marker, two digits wide."""
     cw, ch = cell
     x0, y1 = int(centre[0] + 0.75 * marker_px), int(np.ceil(centre[1] - 0.75 * marker_px + 0.3 * ch))
-    return slice(max(0, y1 - int(1.3 * ch) - 1), y1 + 1), slice(x0, x0 + int(2.5 * cw) + 2)
+    return slice(max(0, y1 - int(1.3 * ch) - 2), y1 + 2), slice(x0 - 1, x0 + int(2.5 * cw) + 3)  # 1 px halo
 
 
 def test_labels_number_each_target_with_its_disk(gl, mk):
@@ -446,6 +449,8 @@ def test_labels_number_each_target_with_its_disk(gl, mk):
     yy, xx = np.mgrid[:changed.shape[0], :changed.shape[1]]
     for c, rad in zip(*disks):
         expected |= (xx + 0.5 - c[0]) ** 2 + (yy + 0.5 - c[1]) ** 2 <= (rad + 1) ** 2  # the disks' own numbers
+    for c, m in zip(centres, marker_px):  # markers widened to ring a number written on its disk
+        expected |= (xx + 0.5 - c[0]) ** 2 + (yy + 0.5 - c[1]) ** 2 <= (m + style.MARKER_HALO_PX + 2) ** 2
     assert changed.any() and not (changed & ~expected).any()
     # the numbers are the disk indices: one glyph per digit, "10" and "11" two each
     from nbst.render.scene2d import target_label_instances
@@ -482,17 +487,24 @@ def test_legend_under_the_readout_shows_the_classes_present(gl, view):
     assert seen["over5"]["cue"] > 20 and seen["over5"]["non"] > 20
 
 
-def test_no_legend_where_there_is_no_room(gl, diamond):
+@pytest.mark.parametrize("size", [(360, 360), (480, 360), (320, 480)])
+def test_legend_stays_out_of_the_box(gl, diamond, size):
+    """Wherever the frame is too narrow for a legend beside the box there is none, and a
+    legend that is drawn never reaches into the box."""
     p, tr = diamond
-    r = Renderer2D(gl, p, tr, size=(360, 360))  # a square frame: no margin beside the box
+    r = Renderer2D(gl, p, tr, size=size)
     try:
         f = r.render(0.0)
-        assert not r.legend_drawn
+        drawn = r.legend_drawn
     finally:
         r.release()
     box = box_from_walls(f)
-    left = f[int(box[1]):int(box[3]), :int(box[0]) - 6].astype(int)  # beside the box, under the readout
-    assert (np.abs(left - np.array(style.rgb8(style.CUEABLE))).max(axis=2) <= 3).sum() == 0
+    left = f[:, :int(box[0]) - 3].astype(int)  # beside the box: readout and legend
+    swatch = (np.abs(left - np.array(style.rgb8(style.CUEABLE))).max(axis=2) <= 3).sum()
+    assert (swatch > 0) == drawn
+    # inside the box, above the disks' starts, the legend's words (TEXT_DIM) never appear
+    inner = f[int(box[1]) + 2:int(box[3]) - 2, int(box[0]) + 2:int(box[2]) - 2].astype(int)
+    assert (np.abs(inner - np.array(style.rgb8(style.TEXT_DIM))).max(axis=2) <= 2).sum() < 5
 
 
 @pytest.mark.parametrize("size", [(800, 600), (640, 480), (1280, 720)])
@@ -509,3 +521,155 @@ def test_readout_keeps_clear_of_the_box(gl, diamond, size):
     lit = np.abs(img[: size[1] // 4].astype(int) - text).max(axis=2) < 60
     cols = np.flatnonzero(lit[:, :x_wall].any(axis=0))
     assert cols.size > 0 and cols.max() < x_wall - 3
+
+
+# --------------------------------------------------------------------------- pictures that explain themselves
+
+def _marker_ring_pixels(r, i, n=24):
+    """Pixels on target i's marker ring (mid-stroke), as (row, col) ints."""
+    c, m = r.target_px[i], r.marker_px[i] - 0.5 * style.MARKER_PX
+    ang = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    pts = c + m * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    return np.floor(pts[:, ::-1]).astype(int)
+
+
+@pytest.mark.parametrize("labels", [False, True])
+def test_targets_are_never_hidden_under_disks(gl, mk, labels):
+    """A disk resting on its own target (t = 0 and t_final) and a disk parked over another
+    disk's target: every target marker still shows its colour (drawn above the disks), and
+    with --labels every target's number is drawn at both times."""
+    # disk 0 rests on its target; disk 1 rests on disk 2's target; disk 2 rests far away
+    p = mk([[400.0, 400.0], [200.0, 200.0], [650.0, 650.0]], radii=20.0,
+           targets=[[400.0, 400.0], [600.0, 200.0], [200.0, 200.0]])
+    tr = simulate(p, np.zeros((p.n, 2)))
+    r = Renderer2D(gl, p, tr, size=(800, 800), labels=labels)
+    try:
+        marker = np.array(style.rgb8(style.MARKER))
+        for t in (0.0, p.t_final):
+            f = r.render(t).astype(int)
+            for i in (0, 2):  # the covered targets
+                px = np.array([f[a, b] for a, b in _marker_ring_pixels(r, i)])
+                near = (np.abs(px - marker).max(axis=1) < 60).mean()
+                assert near > 0.5, (t, i, near)  # most of the ring shows the marker's colour
+                amber_blue = style.rgb8(style.CUEABLE)[2]
+                assert px[:, 2].mean() > amber_blue + 80  # not the disk's fill under it
+    finally:
+        r.release()
+
+
+def test_readout_states_each_count_on_one_line(gl, diamond):
+    """One fact a line: the "on target" words and their count share a line, and with a
+    second motion (--source both) a second line counts the rings, with that motion's own
+    count; every line fits left of the box."""
+    import re
+    p, tr = diamond
+    ts = np.linspace(0, p.t_final, 51)
+    ghost = SampledMotion(ts, np.broadcast_to(p.target, (len(ts), p.n, 2)))  # a "replay" sitting on the targets
+    for g in (None, ghost):
+        r = Renderer2D(gl, p, tr, size=(1280, 720), ghost=g)
+        try:
+            pos = tr.at(p.t_final)
+            inside = r.inside(pos)
+            lines = r.readout(p.t_final, inside, r.inside(p.target) if g is not None else None)
+            width = max(len(s) for s in lines) * r.text.cell[0]
+            room = r.layout.box_rect[0] - r.layout.wall - r._readout_origin()[0]
+            text_px = r.text.cell[1]
+        finally:
+            r.release()
+        counts = [ln for ln in lines if "on target" in ln]
+        assert all(re.search(r"on target +\d+/\d+$", ln) for ln in counts), lines
+        assert not any(re.fullmatch(r"\s*\d+/\d+", ln) for ln in lines), lines  # no count alone on a line
+        assert width < room and text_px >= style.MIN_READOUT_PX
+        if g is None:
+            assert len(counts) == 1 and counts[0].endswith(f"{int(inside.sum())}/{p.n}")
+        else:
+            assert len(counts) == 2
+            assert counts[0].startswith("exact") and counts[0].endswith(f"{int(inside.sum())}/{p.n}")
+            assert counts[1].startswith("MuJoCo") and counts[1].endswith(f"{p.n}/{p.n}")
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (640, 480), (480, 360)])
+def test_readout_never_shrinks_below_legible(gl, size):
+    """Where the margin is narrow the box makes room: the readout keeps MIN_READOUT_PX and
+    still ends left of the box."""
+    p = load_problem("over5")
+    tr = simulate(p, np.zeros((p.n, 2)))
+    ts = np.linspace(0, p.t_final, 11)
+    r = Renderer2D(gl, p, tr, size=size, ghost=SampledMotion(ts, tr.at(ts)))
+    try:
+        f = r.render(p.t_final).copy()
+        x_wall = int(r.layout.box_rect[0] - r.layout.wall)
+        px = r.text.cell[1]
+    finally:
+        r.release()
+    assert px >= style.MIN_READOUT_PX
+    text = np.array(style.rgb8(style.TEXT))
+    lit = np.abs(f[: size[1] // 3].astype(int) - text).max(axis=2) < 60
+    cols = np.flatnonzero(lit[:, :x_wall].any(axis=0))
+    assert cols.size and cols.max() < x_wall - 3
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (480, 360)])
+def test_disk_numbers_are_legible_at_every_disk_size(gl, size):
+    """over5's radius-10 disks are ~8 px on screen at 720p: their numbers are still at least
+    9 px tall (a digit's ink; "0" read as "8" at 6 px), on the disk where they fit and beside
+    it where they do not; the dark digits on a disk are really there, that tall."""
+    from nbst.render.shapes import digit_height
+    p = load_problem("over5")
+    tr = simulate(p, np.zeros((p.n, 2)))
+    r = Renderer2D(gl, p, tr, size=size, labels=True)
+    r0 = Renderer2D(gl, p, tr, size=size, labels=False)
+    try:
+        f, g = r.render(0.0).astype(int), r0.render(0.0).astype(int)
+        lab = r.labels
+        centres = r.to_pixels(p.start)
+    finally:
+        r.release()
+        r0.release()
+    assert lab.px >= style.MIN_LABEL_PX and digit_height(lab.px) >= 9
+    label = np.array(style.rgb8(style.LABEL))
+    for i, c in enumerate(centres):
+        if not lab.on_disk[i]:
+            # beside the disk: new pixels in the disk's colour above-left of it, at least 9 rows tall
+            k = int(lab.rpx[i] + 2 * lab.text.cell[1])
+            win = (slice(max(0, int(c[1]) - k), int(c[1])), slice(max(0, int(c[0]) - k), int(c[0])))
+            col = np.array(style.rgb8(style.disk_colors(p.cueable)[i]))
+            # glyph pixels: new with --labels, nearer the disk's colour than the background is
+            hit = (np.abs(f[win] - g[win]).max(axis=2) > 30) & \
+                (np.abs(f[win] - col).sum(axis=2) < np.abs(g[win] - col).sum(axis=2) - 60)
+        else:
+            k = int(lab.rpx[i])
+            win = (slice(int(c[1]) - k, int(c[1]) + k + 1), slice(int(c[0]) - k, int(c[0]) + k + 1))
+            hit = np.abs(f[win] - label).max(axis=2) < 90
+        rows = np.flatnonzero(hit.any(axis=1))
+        assert rows.size and rows.max() - rows.min() + 1 >= 9, (i, lab.on_disk[i], rows)
+
+
+def test_ghost_rings_carry_their_disk_numbers_and_a_legend(gl):
+    """--source both --labels: each MuJoCo ring has its disk's number beside it (white), and
+    the legend names the rings."""
+    from nbst.render.scene2d import ghost_label_instances, legend_entries
+    from nbst.render.shapes import FIRST_CHAR
+    p = load_problem("over5")
+    tr = simulate(p, np.zeros((p.n, 2)))
+    ts = np.linspace(0, p.t_final, 11)
+    shifted = SampledMotion(ts, tr.at(ts) + np.array([0.0, -120.0]))
+    words = [e[0] for e in legend_entries(p, ghost=True, labels=True)]
+    assert any("MuJoCo" in w and "ring" in w for w in words) and any("within R" in w for w in words)
+    frames = {}
+    for labels in (False, True):
+        r = Renderer2D(gl, p, tr, size=(1280, 720), labels=labels, ghost=shifted)
+        try:
+            frames[labels] = r.render(1.0).astype(int)
+            if labels:
+                inst = ghost_label_instances(r.target_text, r.to_pixels(shifted.at(1.0)), r.rpx)
+                cell = r.target_text.cell
+        finally:
+            r.release()
+    assert "".join(chr(int(gl_) + FIRST_CHAR) for gl_ in inst["glyph"]) == "".join(str(i) for i in range(p.n))
+    white = np.array(style.rgb8(style.GHOST_LABEL))
+    for i, (x, y) in enumerate(inst["pos"]):
+        win = (slice(int(y), int(y) + cell[1]), slice(int(x), int(x) + cell[0]))
+        new = (np.abs(frames[True][win] - white).max(axis=2) < 40) & \
+            (np.abs(frames[False][win] - white).max(axis=2) >= 40)
+        assert new.sum() >= 5, i
