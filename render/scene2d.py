@@ -231,7 +231,7 @@ def legend_entries(problem, *, ghost: bool, labels: bool, long: bool = True, gho
     that the readout's "on target" counts, the ring of the second motion when one is
     drawn. ``long=False``: the short words, for narrow margins."""
     out = []
-    of = f" ({motion_name or 'exact'})" if ghost and long else ""
+    of = f" ({motion_name or 'exact'})" if (ghost or motion_name) and long else ""
     if problem.cueable.any():
         out.append((palette.LEGEND_CUEABLE + of, "disk", style.CUEABLE))
     if (~problem.cueable).any():

@@ -47,7 +47,8 @@ def register(sub) -> None:
                    help="2d: the box from above (default); 3d: pucks on a table, perspective camera, lighting")
     p.add_argument("--source", choices=["analytic", "mujoco", "both"], default=None,
                    help="positions from the exact simulator (default), from a MuJoCo replay, or both "
-                        "(MuJoCo drawn as white rings over the exact disks)")
+                        "(MuJoCo drawn as white rings over the exact disks, numbered with --labels; the readout "
+                        "counts both)")
     p.add_argument("--still", type=float, default=None, metavar="T",
                    help="write only the frame at time T (seconds, in [0, t_final]; for a bowling shot in [0, its "
                         "duration]) to a .png")
@@ -203,7 +204,7 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
     ctx = create_context()
     try:
         renderer = make_renderer(ctx, problem, motion, view=args.view, size=size, trails=args.trails, ghost=ghost,
-                                 labels=args.labels)
+                                 labels=args.labels, motion_name="MuJoCo" if args.source == "mujoco" else None)
         if kind == "png":
             write_png(out, renderer.render(float(args.still)))
             if not args.quiet:
@@ -230,13 +231,16 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
 
 
 def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None,
-                  labels=False):
-    """A 2D or 3D renderer with ``render(t, out=None) -> (H, W, 3) uint8`` and ``size``."""
+                  labels=False, motion_name=None):
+    """A 2D or 3D renderer with ``render(t, out=None) -> (H, W, 3) uint8`` and ``size``.
+    motion_name: what the disks show when it is not the exact motion ("MuJoCo" for --source mujoco)."""
     if view == "3d":
         from nbst.render.scene3d import Renderer3D
-        return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels)
+        return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels,
+                          motion_name=motion_name)
     from nbst.render.scene2d import Renderer2D
-    return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels)
+    return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels,
+                      motion_name=motion_name)
 
 
 def mujoco_positions(problem, velocities, times):
