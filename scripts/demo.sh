@@ -12,6 +12,6 @@ mkdir -p "$OUT"
 set -x
 "$NBST" solve "$PROBLEM" -o "$OUT/$PROBLEM.json" --seed 1
 "$NBST" simulate "$PROBLEM" "$OUT/$PROBLEM.json"
-"$NBST" validate "$PROBLEM" "$OUT/$PROBLEM.json" --report "$OUT/$PROBLEM-validation"
+"$NBST" validate "$PROBLEM" "$OUT/$PROBLEM.json" --out-dir "$OUT/$PROBLEM-validation"
 "$NBST" render "$PROBLEM" "$OUT/$PROBLEM.json" -o "$OUT/$PROBLEM.mp4" --trails --labels
 "$NBST" plot trajectories "$PROBLEM" "$OUT/$PROBLEM.json" -o "$OUT/$PROBLEM-paths.png"

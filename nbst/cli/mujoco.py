@@ -72,7 +72,7 @@ def register(sub) -> None:
                                    "sequences matched in order (time offsets), kinetic energy drift, and the first "
                                    "time any disk's two paths part by more than --tol units, with the event that "
                                    "caused it; the sensitivity of the motion and its predicted fixed-step error "
-                                   "against the measured one. Prints a summary; --report DIR writes report.json "
+                                   "against the measured one. Prints a summary; --out-dir DIR writes report.json "
                                    "and a self-contained report.html with figures.",
                        epilog="Exit status: 0, or 1 with --strict when the signatures differ; 2 on bad input.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
