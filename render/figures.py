@@ -33,6 +33,8 @@ TITLE_PT = 9.0
 MIN_DISK_PT = 2.5
 #: Disk numbers sit above everything (paths, disks, event marks).
 NUMBER_Z = 9
+#: Collision star size (points, matplotlib ``ms``).
+STAR_MS = 8.0
 #: Target marker radius: this fraction of the disk radius, at least TARGET_MIN (units).
 TARGET_FRAC, TARGET_MIN = 0.3, 3.0
 
@@ -75,14 +77,25 @@ def _points_per_unit(ax) -> float:
     return 72.0 * min(fig.get_figwidth() * pos.width / abs(x1 - x0), fig.get_figheight() * pos.height / abs(y1 - y0))
 
 
-def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5):
+def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5, avoid=None, avoid_pt: float = 0.0):
     """The disk at its start: filled in its class colour (or ``color``), black edge,
-    its number on it; beside it, upper right, where the number does not fit."""
+    its number on it; beside it, upper right, where the number does not fit.
+    ``avoid``: points (M, 2, data units) of marks drawn over the figure (collision stars)
+    of radius ``avoid_pt`` points; a number one of them would cover moves beside the
+    disk, on the side away from the nearest such mark."""
     from matplotlib import patheffects
     from matplotlib.patches import Circle
 
     col = palette.hex_color(color if color is not None else palette.class_color(cueable))
-    r_pt = r * _points_per_unit(ax)
+    ppu = _points_per_unit(ax)
+    r_pt = r * ppu
+    away = None
+    if avoid is not None and len(avoid):
+        d = np.asarray(avoid, float) - np.asarray(xy, float)
+        dist = np.hypot(d[:, 0], d[:, 1]) * ppu
+        k = int(np.argmin(dist))
+        if dist[k] < max(r_pt, MIN_DISK_PT) + avoid_pt + 6.0:  # the star reaches the number (on or beside)
+            away = -d[k] / max(np.hypot(*d[k]), 1e-12)
     label = str(i)
     # digits are about 0.6 em wide and 0.73 em tall: the size whose digits fill ~80% of
     # the disk's width; written on the disk only if that is at least the smallest size
@@ -93,7 +106,13 @@ def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5):
     else:  # a disk too small to see (diamond-s14-tiny): a marker of MIN_DISK_PT radius
         ax.plot([xy[0]], [xy[1]], "o", ms=2 * MIN_DISK_PT, mfc=col, mec="black", mew=0.6, zorder=zorder)
         r_pt, on_disk = MIN_DISK_PT, False
-    if on_disk:
+    if away is not None:  # a collision star on or by the disk: the number beside it, away from the star
+        size = DISK_NUMBER_PT[0] + 1.5
+        off = away * (r_pt + 0.45 * size * len(label) + 1.5)
+        ax.annotate(label, xy, xytext=tuple(off), textcoords="offset points", fontsize=size, fontweight="bold",
+                    color="black", ha="center", va="center", zorder=NUMBER_Z,
+                    path_effects=[patheffects.withStroke(linewidth=2, foreground="white")])
+    elif on_disk:
         ax.text(xy[0], xy[1], label, ha="center", va="center_baseline", fontsize=min(raw, DISK_NUMBER_PT[1]),
                 color="black", zorder=NUMBER_Z)
     else:  # too small to write on: beside it, with a white halo
@@ -249,6 +268,15 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
     fig, ax = _figure(p)
     shades = palette.disk_shades(p.cueable)
     paths = np.concatenate((tr.positions, tr.final_positions[None]), axis=0)  # (K+1, N, 2)
+    ev = tr.events
+    wall = ev["kind"] == 1
+    stars = np.zeros((0, 2))
+    if (~wall).any():  # each collision at its contact point
+        k = np.nonzero(~wall)[0]
+        i, j = ev["i"][k], ev["j"][k]
+        pi, pj = tr.positions[k + 1, i], tr.positions[k + 1, j]
+        w = (p.radius[i] / (p.radius[i] + p.radius[j]))[:, None]
+        stars = pi + (pj - pi) * w
     for i in range(p.n):
         draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius if rings else None)
     for i in range(p.n):
@@ -257,9 +285,8 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
         ax.plot(paths[:, i, 0], paths[:, i, 1], palette.path_style(p.cueable[i]), color=col, lw=1.4, zorder=3,
                 solid_joinstyle="miter", label=f"_path {i}")
         draw_final(ax, tr.final_positions[i], p.radius[i], shades[i], zorder=4)
-        draw_start(ax, p.start[i], p.radius[i], p.cueable[i], i, zorder=5)
-    ev = tr.events
-    wall = ev["kind"] == 1
+        # a star on a start disk would cover its number: the number moves beside the disk
+        draw_start(ax, p.start[i], p.radius[i], p.cueable[i], i, zorder=5, avoid=stars, avoid_pt=STAR_MS / 2)
     entries = mark_handles(p, paths=True, final=True, ring=rings)
     wall_ink, coll_ink = palette.hex_color(palette.WALL_BOUNCE), palette.hex_color(palette.COLLISION)
     if wall.any():
@@ -268,16 +295,12 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
         label = f"{palette.LEGEND_WALL_BOUNCE} ({len(k)})"
         ax.plot(pts[:, 0], pts[:, 1], palette.WALL_BOUNCE_MARKER, ms=3.2, color=wall_ink, zorder=7, label=label)
         entries.append((line_handle(wall_ink, "none", marker=palette.WALL_BOUNCE_MARKER, ms=3.2), label))
-    if (~wall).any():
-        k = np.nonzero(~wall)[0]
-        i, j = ev["i"][k], ev["j"][k]
-        pi, pj = tr.positions[k + 1, i], tr.positions[k + 1, j]
-        w = (p.radius[i] / (p.radius[i] + p.radius[j]))[:, None]
-        c = pi + (pj - pi) * w
-        label = f"{palette.LEGEND_COLLISION} ({len(k)})"
-        ax.plot(c[:, 0], c[:, 1], palette.COLLISION_MARKER, ms=8, color=coll_ink, mec="black", mew=0.4, zorder=7,
-                label=label)
-        entries.append((line_handle(coll_ink, "none", marker=palette.COLLISION_MARKER, ms=8, mec="black"), label))
+    if len(stars):
+        label = f"{palette.LEGEND_COLLISION} ({len(stars)})"
+        ax.plot(stars[:, 0], stars[:, 1], palette.COLLISION_MARKER, ms=STAR_MS, color=coll_ink, mec="black", mew=0.4,
+                zorder=7, label=label)
+        entries.append((line_handle(coll_ink, "none", marker=palette.COLLISION_MARKER, ms=STAR_MS, mec="black"),
+                        label))
     legend_below(fig, entries)
     ax.set_title(f"{display_name(p.name)}: cost {tr.cost:.4g}, signature {tr.signature_string} "
                  f"(order {tr.order}/{p.n})", fontsize=TITLE_PT)

@@ -673,3 +673,41 @@ def test_ghost_rings_carry_their_disk_numbers_and_a_legend(gl):
         new = (np.abs(frames[True][win] - white).max(axis=2) < 40) & \
             (np.abs(frames[False][win] - white).max(axis=2) >= 40)
         assert new.sum() >= 5, i
+
+
+@pytest.mark.parametrize("case", ["over5", "diamond"])
+def test_trajectory_figure_stars_never_cover_a_start_number(case):
+    """`nbst plot trajectories`: a disk-disk collision at (or by) a disk's start would hide
+    the number on it under its red star; the number then moves beside the disk. No star's
+    box overlaps any start number's box."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.text import Text
+
+    from nbst import palette
+    from nbst.render.figures import STAR_MS, plot_trajectories
+    if case == "over5":
+        p, tr = over5_motion()  # disk 0 strikes disk 2 right beside their starts
+    else:
+        p = load_problem("diamond-s14")
+        tr = simulate(p, p.straight_velocities())
+    assert tr.n_disk_disk >= 1
+    fig = plot_trajectories(p, tr)
+    FigureCanvasAgg(fig).draw()
+    r = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    stars = [ln for ln in ax.get_lines() if ln.get_marker() == palette.COLLISION_MARKER]
+    assert len(stars) == 1
+    pts = ax.transData.transform(np.stack([stars[0].get_xdata(), stars[0].get_ydata()], axis=1))
+    half = 0.5 * STAR_MS * fig.dpi / 72.0
+    numbers = [t for t in ax.texts if t.get_text() in {str(i) for i in range(p.n)}]
+    starts = ax.transData.transform(p.start)
+    near_start = []
+    for t in numbers:  # the start numbers: anchored at a disk's start
+        xy = t.xy if hasattr(t, "xy") else t.get_position()
+        if np.isclose(ax.transData.transform(xy), starts).all(axis=1).any():
+            near_start.append(Text.get_window_extent(t, r))
+    assert len(near_start) == p.n
+    for b in near_start:
+        for c in pts:
+            assert not (b.x0 < c[0] + half and c[0] - half < b.x1 and b.y0 < c[1] + half and c[1] - half < b.y1), \
+                (b, c)
