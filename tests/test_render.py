@@ -711,3 +711,44 @@ def test_trajectory_figure_stars_never_cover_a_start_number(case):
         for c in pts:
             assert not (b.x0 < c[0] + half and c[0] - half < b.x1 and b.y0 < c[1] + half and c[1] - half < b.y1), \
                 (b, c)
+
+
+def _ablation_rows(entries):
+    rows = []
+    for k, e in enumerate(entries):
+        m = 10.0 ** (2 + (k * 7 % 5) * 0.6)
+        rows.append(dict(entry=e, mean=m, best=m / 3, worst=m * 2, full_order=k % 6, runs=5))
+    return rows
+
+
+def test_ablation_figure_labels_apart_and_nbst_family_colours():
+    """`nbst experiment ablation` with every entry: no two x labels overlap; nbst-noplan is
+    drawn in nbst's family (a green, hatched), not in the paper variants' blue; a legend names
+    the families; the families stay apart in a deuteranope's view."""
+    from cvd import delta_e, deuteranopia
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import to_rgb
+
+    from nbst.experiments import plots as P
+    from nbst.experiments.runs import ENTRIES
+    assert "nbst-noplan" in ENTRIES
+    fig = P.plot_ablation(_ablation_rows(ENTRIES), title="t")
+    FigureCanvasAgg(fig).draw()
+    r = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    boxes = [t.get_window_extent(r) for minor in (False, True) for t in ax.get_xticklabels(minor=minor)
+             if t.get_text()]
+    assert len(boxes) == len(ENTRIES)
+    assert not any(a.overlaps(b) for k, a in enumerate(boxes) for b in boxes[k + 1:])
+    bars = {e: b for e, b in zip(ENTRIES, ax.patches)}
+    green, blue = to_rgb(P.COLORS["nbst"]), to_rgb(P.COLORS["variant"])
+    noplan = bars["nbst-noplan"]
+    assert to_rgb(bars["nbst"].get_facecolor()) == pytest.approx(green)
+    assert noplan.get_hatch() and to_rgb(noplan.get_edgecolor()) == pytest.approx(green)
+    face = np.array(to_rgb(noplan.get_facecolor()))
+    assert face[1] > face[0] and face[1] > face[2]  # a green
+    assert delta_e(face, blue) > 30 and delta_e(face, to_rgb(bars["A"].get_facecolor())) > 30
+    words = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert len(words) == 4 and any("planner" in w for w in words)
+    cols = [deuteranopia(to_rgb(c)) for c in (P.COLORS["variant"], P.COLORS["nbst"], P.COLORS["baseline"])]
+    assert min(delta_e(a, b) for k, a in enumerate(cols) for b in cols[k + 1:]) > 30

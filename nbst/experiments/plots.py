@@ -16,7 +16,15 @@ FIG_SIZE = (7.0, 4.2)
 DPI = 110
 #: Log axes: costs below this (e.g. 1e-27 for an exact solution) are drawn at it.
 CURVE_FLOOR = 1e-3
-COLORS = {"variant": "#4472c4", "nbst": "#2e8b57", "baseline": "#e07b39"}
+#: Bar colours by family (Okabe & Ito's colour-blind-safe set: the three stay apart in a
+#: simulated deuteranopia view, tests/cvd.py): the paper's variants A-H blue, nbst's own
+#: searches green (nbst-noplan, nbst without its planner, a lighter green with hatching),
+#: the baselines orange.
+COLORS = {"variant": "#0072b2", "nbst": "#009e73", "nbst-ablated": "#8fd6bf", "baseline": "#e69f00"}
+#: Legend words of each family.
+FAMILY_WORDS = {"variant": "the paper's search (A-H)", "nbst": "nbst", "nbst-ablated": "nbst with a part off",
+                "baseline": "baselines"}
+HATCH = {"nbst-ablated": "///"}
 
 
 def write_csv(path: str | Path, rows: list[dict], columns: list[str]) -> None:
@@ -58,7 +66,15 @@ def _plt():
 
 
 def _kind(entry: str) -> str:
-    return "baseline" if entry in BASELINE_ENTRIES else ("nbst" if entry == "nbst" else "variant")
+    """The entry's family: "baseline", "nbst", "nbst-ablated" (nbst-noplan and any other
+    nbst-* ablation) or "variant" (the paper's A-H)."""
+    if entry in BASELINE_ENTRIES:
+        return "baseline"
+    if entry == "nbst":
+        return "nbst"
+    if entry.startswith("nbst-"):
+        return "nbst-ablated"
+    return "variant"
 
 
 def save_figure(fig, stem: str | Path) -> list[Path]:
@@ -113,17 +129,37 @@ def plot_ablation(rows: list[dict], *, title: str):
     hi = np.array([r["worst"] for r in rows])
     floor = CURVE_FLOOR
     mean_d, lo_d, hi_d = (np.maximum(a, floor) for a in (mean, lo, hi))
-    ax.bar(x, mean_d, color=[COLORS[_kind(r["entry"])] for r in rows], width=0.7)
+    kinds = [_kind(r["entry"]) for r in rows]
+    bars = ax.bar(x, mean_d, color=[COLORS[k] for k in kinds], width=0.7, edgecolor="white", linewidth=0.0)
+    for b, k in zip(bars, kinds):
+        if k in HATCH:
+            b.set_hatch(HATCH[k])
+            b.set_edgecolor(COLORS["nbst"])
     ax.errorbar(x, mean_d, yerr=[mean_d - lo_d, hi_d - mean_d], fmt="none", ecolor="black", capsize=3, lw=0.9)
     ax.set_yscale("log")
-    ax.set_xticks(x, [r["entry"] for r in rows])
+    names = [r["entry"] for r in rows]
+    if max(len(n) for n in names) * len(names) > 60:  # long names side by side would overlap: two rows
+        ax.set_xticks(x[::2], names[::2])
+        ax.set_xticks(x[1::2], names[1::2], minor=True)
+        ax.tick_params(axis="x", which="minor", length=16, pad=3)  # the second row below the first
+    else:
+        ax.set_xticks(x, names)
+    from matplotlib.patches import Patch
+    seen = list(dict.fromkeys(kinds))
+    words = dict(FAMILY_WORDS)
+    ablated = [n for n, k in zip(names, kinds) if k == "nbst-ablated"]
+    if ablated == ["nbst-noplan"]:
+        words["nbst-ablated"] = "nbst without its planner"
+    handles = [Patch(facecolor=COLORS[k], edgecolor=COLORS["nbst"] if k in HATCH else COLORS[k], hatch=HATCH.get(k),
+                     label=words[k]) for k in ("variant", "nbst", "nbst-ablated", "baseline") if k in seen]
+    ax.legend(handles=handles, loc="upper left", fontsize=7, frameon=True, framealpha=0.9, ncol=len(handles))
     ax.set_ylabel("final L2 cost (mean; whiskers best..worst)")
     ax.set_title(title)
     ax.grid(True, axis="y", which="major", alpha=0.3)
     for xi, r in zip(x, rows):
         ax.annotate(f"{r['full_order']}/{r['runs']}", (xi, hi_d[xi]), textcoords="offset points", xytext=(0, 3),
                     ha="center", fontsize=7)
-    ax.set_ylim(top=float(hi_d.max()) * 8)
+    ax.set_ylim(top=float(hi_d.max()) * 60)  # room above the whiskers for the counts and the legend
     ax.set_xlabel(f"n/m above a bar: runs ending with every disk within R; costs below {floor:g} drawn at {floor:g}",
                   fontsize=7)
     return fig
