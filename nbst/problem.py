@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -34,6 +34,19 @@ class ProblemError(ValueError):
         self.source, self.field, self.reason = str(source), field, reason
         where = f"{self.source}: {field}" if field else self.source
         super().__init__(plain(f"{where}: {reason}"))  # one printable line, whatever the file held
+
+
+class KernelArrays(NamedTuple):
+    """A problem as the numba kernels take it (``Problem.kernel_arrays()``)."""
+
+    start: np.ndarray
+    target: np.ndarray
+    radius: np.ndarray
+    mass: np.ndarray
+    W: float
+    H: float
+    t_final: float
+    R: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,6 +92,19 @@ class Problem:
         v = (self.target - self.start) / self.t_final
         v[~self.cueable] = 0.0
         return v
+
+    def kernel_arrays(self) -> KernelArrays:
+        """The problem as the numba kernels take it (computed once, then cached): start,
+        target, radius, mass as C-contiguous float64 arrays (read-only) and W, H, t_final,
+        R as floats."""
+        ka = self.__dict__.get("_kernel_arrays")
+        if ka is None:
+            ka = KernelArrays(*(np.ascontiguousarray(a, dtype=np.float64)
+                                for a in (self.start, self.target, self.radius, self.mass)),
+                              float(self.box[0]), float(self.box[1]), float(self.t_final),
+                              float(self.target_radius))
+            object.__setattr__(self, "_kernel_arrays", ka)  # a cache, not state: the problem stays frozen
+        return ka
 
     def to_dict(self) -> dict:
         """The problem in its JSON format (round-trips through ``problem_from_dict``)."""

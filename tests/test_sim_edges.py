@@ -16,7 +16,7 @@ import numpy as np
 
 from nbst.constants import STALL_EVENTS_PER_DISK
 from nbst.problem import Problem
-from nbst.sim import evaluate, simulate
+from nbst.sim import evaluate, evaluate_events, simulate
 
 #: Positions on a wall are set exactly (W - r); round-off of free flight is far below this.
 INSIDE_ATOL = 1e-9
@@ -47,7 +47,7 @@ def _check_stalled(problem: Problem, v) -> None:
     assert tr.end_time == 0.0 and np.isinf(tr.cost)
     assert _inside(problem, tr.final_positions)
     assert _inside(problem, tr.at(np.linspace(0.0, problem.t_final, 11)))
-    final, cost, _, n_ev = evaluate(problem, np.asarray(v, float)[None], return_events=True)
+    final, cost, _, n_ev = evaluate_events(problem, np.asarray(v, float)[None])
     assert np.isinf(cost[0]) and n_ev[0] <= STALL_EVENTS_PER_DISK * problem.n + 1
     assert _inside(problem, final[0])
 

@@ -15,9 +15,15 @@ import numpy as np
 
 from nbst._version import __version__
 from nbst.constants import ROUNDOFF_REL
-from nbst.problem import Problem, ProblemError
-from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, VARIANTS, SearchParams, SearchProgress, _check, mirror_images,
-                                variant_params)
+from nbst.problem import Problem
+from nbst.search import loop as _L
+from nbst.search.loop import ChunkResult
+from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, VARIANTS, SearchParams, SearchProgress, StopReason,
+                                check_run, mirror_images, variant_params)
+
+#: Room of the improvement history at the start (doubled whenever the loop fills it).
+HISTORY0 = 1024
+
 
 @dataclass
 class _State:
@@ -31,12 +37,26 @@ class _State:
     hist_t: np.ndarray
     hist_c: np.ndarray
     hist_o: np.ndarray
-    op_count: np.ndarray = field(default_factory=lambda: np.zeros((4, 2), np.int64))
+    op_count: np.ndarray = field(default_factory=lambda: np.zeros((len(_L.OP_NAMES), 2), np.int64))
+
+    @property
+    def pop_size(self) -> int:
+        """Members in the population now."""
+        from nbst.search.ops import SIZE
+
+        return int(self.pop[5][SIZE])
+
+    def grow_history(self) -> None:
+        """Double the improvement history's room (the loop returned HISTORY_FULL)."""
+        k = len(self.hist_t)
+        self.hist_t = np.concatenate([self.hist_t, np.zeros(k, np.int64)])
+        self.hist_c = np.concatenate([self.hist_c, np.zeros(k)])
+        self.hist_o = np.concatenate([self.hist_o, np.zeros(k, np.int64)])
 
 
 def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: int, target_cost: float | None,
           record_every: int = 0):
-    from nbst.search import loop as L
+    L = _L
 
     pi = np.zeros(L.N_PI, np.int64)
     pi[L.PI_POP_LIMIT] = params.pop_limit
@@ -119,84 +139,91 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
                record_every: int = 0, robust: bool | None = None) -> SearchRun:
     """:func:`solve`, also returning the final population (for benchmarks and analysis) and, with
     ``record_every`` = k > 0, the candidate velocities of trials k, 2k, ... (the loop's exact mix)."""
-    from nbst.search import loop as L
-    from nbst.search.ops import SIZE, new_population, seed_state
-    from nbst.solution import make_solution, signature_string
+    from nbst.solution import make_solution
 
     if params is None:
         params = variant_params(variant, problem)
     if robust is not None:
         params = dataclasses.replace(params, robust=bool(robust))
     max_trials, patience = int(max_trials), int(patience)
-    _check(params, max_trials, patience)
-    if seed is None:
-        seed = int(np.random.default_rng().integers(2**63))
-    seed = int(seed)
-    if seed < 0:
-        raise ProblemError("<search parameters>", "seed", f"must be >= 0, got {seed}")
+    seed = int(np.random.default_rng().integers(2**63)) if seed is None else int(seed)
+    check_run(max_trials, patience, seed)
     pi, pf = _pack(problem, params, max_trials=max_trials, patience=patience, target_cost=target_cost,
                    record_every=int(record_every))
-    n = problem.n
-    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
-    target = np.ascontiguousarray(problem.target, dtype=np.float64)
-    radius = np.ascontiguousarray(problem.radius, dtype=np.float64)
-    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
-    cue_idx = np.flatnonzero(problem.cueable).astype(np.int64)
-    images = mirror_images(params.max_bounces)
-    W, H = (float(x) for x in problem.box)
-    cap = params.hard_limit + 2
-    st = np.zeros(L.N_ST, np.int64)
-    st[L.ST_FIRST_FULL] = -1
-    s = _State(pop=new_population(cap, n), st=st, best_cost=np.array([np.inf]), best_v=np.zeros((n, 2)),
-               rng=seed_state(seed), hist_t=np.zeros(1024, np.int64), hist_c=np.zeros(1024),
-               hist_o=np.zeros(1024, np.int64))
-    rec_v = np.zeros((max_trials // record_every if record_every > 0 else 0, n, 2))
-    advance = _nbst_stepper(problem, params, s, pi, pf, seed) if params.nbst_loop else None
+    s = _new_state(problem, params, seed)
+    rec_v = np.zeros((max_trials // record_every if record_every > 0 else 0, problem.n, 2))
+    if params.nbst_loop:
+        if record_every > 0:
+            raise ValueError("record_every is supported by the paper's loop only (variants A-H)")
+        advance = _NbstStepper(problem, params, s, pi, pf, seed)
+    else:
+        advance = _PaperStepper(problem, params, s, pi, pf, rec_v)
     archive = None
     if params.robust:
         from nbst.search.robust import Archive
 
-        archive = Archive(n, params.robust_archive)  # size 0 keeps nothing: the search's best alone
-    if advance is not None and record_every > 0:
-        raise ValueError("record_every is supported by the paper's loop only (variants A-H)")
-    stopped = None
+        archive = Archive(n=problem.n, size=params.robust_archive)  # size 0 keeps nothing: the search's best alone
     t0 = time.perf_counter()
-    reasons = {L.RC_MAX_TRIALS: "max_trials", L.RC_PATIENCE: "patience", L.RC_TARGET_COST: "target_cost"}
+    stopped = _run_chunks(advance, s, int(chunk), archive, callback, t0)
+    wall = time.perf_counter() - t0
+    best_v, meta = _finish(problem, params, s, advance, archive, seed, max_trials=max_trials, patience=patience,
+                           target_cost=target_cost, stopped=stopped, wall=wall)
+    size = s.pop_size
+    trials = int(s.st[_L.ST_TRIALS])
+    return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop[0][:size].copy(),
+                     costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy(),
+                     recorded=rec_v[:trials // record_every] if record_every > 0 else rec_v)
+
+
+def _new_state(problem: Problem, params: SearchParams, seed: int) -> _State:
+    """The arrays of a fresh search: an empty population (room for hard_limit + 2), no best yet."""
+    from nbst.search.ops import new_population, seed_state
+
+    st = np.zeros(_L.N_ST, np.int64)
+    st[_L.ST_FIRST_FULL] = -1
+    n = problem.n
+    return _State(pop=new_population(params.hard_limit + 2, n), st=st, best_cost=np.array([np.inf]),
+                  best_v=np.zeros((n, 2)), rng=seed_state(seed), hist_t=np.zeros(HISTORY0, np.int64),
+                  hist_c=np.zeros(HISTORY0), hist_o=np.zeros(HISTORY0, np.int64))
+
+
+def _run_chunks(advance, s: _State, chunk: int, archive, callback, t0: float) -> StopReason:
+    """Advance the search chunk by chunk until a stopping rule, the callback or Ctrl-C ends it."""
+    reasons = {ChunkResult.MAX_TRIALS: StopReason.MAX_TRIALS, ChunkResult.PATIENCE: StopReason.PATIENCE,
+               ChunkResult.TARGET_COST: StopReason.TARGET_COST}
+    stopped = None
     try:
         while stopped is None:
-            if advance is not None:
-                rc = advance(int(chunk))
-            else:
-                rc = L.run_chunk(x0, target, radius, mass, cue_idx, W, H, float(problem.t_final), images, pi, pf,
-                                 s.pop, s.st, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o,
-                                 s.op_count, rec_v, int(chunk))
-            if rc == L.RC_HISTORY_FULL:
-                k = len(s.hist_t)
-                s.hist_t = np.concatenate([s.hist_t, np.zeros(k, np.int64)])
-                s.hist_c = np.concatenate([s.hist_c, np.zeros(k)])
-                s.hist_o = np.concatenate([s.hist_o, np.zeros(k, np.int64)])
+            rc = advance(chunk)
+            if rc == ChunkResult.HISTORY_FULL:
+                s.grow_history()
                 continue
             if archive is not None:
-                size = int(s.pop[5][SIZE])
+                size = s.pop_size
                 archive.add(s.pop[0][:size], s.pop[1][:size], s.pop[2][:size])
             stopped = reasons.get(rc)
             if callback is not None:
-                prog = SearchProgress(trials=int(s.st[L.ST_TRIALS]), best_cost=float(s.best_cost[0]),
-                                      best_order=_popcount(int(s.st[L.ST_BEST_SIG])),
-                                      elapsed=time.perf_counter() - t0, population=int(s.pop[5][SIZE]),
-                                      phase="initialize" if s.st[L.ST_PHASE] == L.PHASE_INIT else "generate")
+                prog = SearchProgress(trials=int(s.st[_L.ST_TRIALS]), best_cost=float(s.best_cost[0]),
+                                      best_order=_popcount(int(s.st[_L.ST_BEST_SIG])),
+                                      elapsed=time.perf_counter() - t0, population=s.pop_size,
+                                      phase="initialize" if s.st[_L.ST_PHASE] == _L.PHASE_INIT else "generate")
                 if callback(prog) and stopped is None:
-                    stopped = "callback"
+                    stopped = StopReason.CALLBACK
     except KeyboardInterrupt:
-        stopped = "interrupted"
-    wall = time.perf_counter() - t0
+        stopped = StopReason.INTERRUPTED
+    return stopped
 
-    st = s.st
+
+def _finish(problem: Problem, params: SearchParams, s: _State, advance, archive, seed: int, *, max_trials: int,
+            patience: int, target_cost: float | None, stopped: StopReason, wall: float):
+    """The written velocities (the best, or robust mode's choice) and the solution's ``meta``."""
+    from nbst.sim import evaluate
+    from nbst.solution import signature_string
+
+    n = problem.n
     best_v = s.best_v.copy()
     cost = float(s.best_cost[0])
-    sig = int(st[L.ST_BEST_SIG])
-    from nbst.sim import evaluate
-
+    sig = int(s.st[_L.ST_BEST_SIG])
     if not math.isfinite(cost):  # nothing accepted yet: report the motionless start
         best_v = np.zeros((n, 2))
     robust_info = None
@@ -208,16 +235,15 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     cost, sig = float(c[0]), int(sg[0])
     if robust_info is not None:  # the written velocities are the choice's, not the search's best
         search_sig = sig
-    nh = int(st[L.ST_NHIST])
-    trials = int(st[L.ST_TRIALS])
-    op_names = advance.op_names if advance is not None else L.OP_NAMES
+    trials = int(s.st[_L.ST_TRIALS])
+    stats = SearchStats.of(s, advance)
     meta = {
-        "algorithm": ALGORITHM_NBST if advance is not None else ALGORITHM,
+        "algorithm": advance.algorithm,
         "cost": cost,
         "signature": signature_string(sig, n),
         "order": _popcount(sig),
-        "trials": trials,
-        "init_trials": int(st[L.ST_INIT_TRIALS]),
+        "trials": stats.trials,
+        "init_trials": stats.init_trials,
         "seed": seed,
         "search_signature": signature_string(search_sig, n),
         "variant": params.variant,
@@ -226,29 +252,62 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
         "max_trials": max_trials,
         "patience": patience,
         "target_cost": target_cost,
-        "stopped": stopped,
+        "stopped": None if stopped is None else stopped.value,
         "wall_time": wall,
         "trials_per_s": trials / wall if wall > 0 else None,
         "nbst_version": __version__,
-        "first_full_order_trial": int(st[L.ST_FIRST_FULL]) if st[L.ST_FIRST_FULL] >= 0 else None,
-        "max_order_seen": int(st[L.ST_MAX_ORDER]),
-        "population_size": int(s.pop[5][SIZE]),
-        "rejected_order0": int(st[L.ST_REJECTED]),
-        "truncated_runs": int(st[L.ST_TRUNCATED]),
-        "cull_rounds": int(st[L.ST_CULLS]),
-        "fallback_deletions": int(st[L.ST_FALLBACK]),
-        "operators": {name: {"children": int(s.op_count[k, 0]), "improvements": int(s.op_count[k, 1])}
-                      for k, name in enumerate(op_names)},
-        "history": [[int(s.hist_t[k]), float(s.hist_c[k]), int(s.hist_o[k])] for k in range(nh)],
+        **stats.run_meta(),
     }
-    if advance is not None:
-        meta.update(advance.stats())
     if params.robust:
         meta["robust"] = robust_info
-    size = int(s.pop[5][SIZE])
-    return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop[0][:size].copy(),
-                     costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy(),
-                     recorded=rec_v[:trials // record_every] if record_every > 0 else rec_v)
+    return best_v, meta
+
+
+@dataclass(frozen=True)
+class SearchStats:
+    """A finished search's statistics, as ``meta`` writes them (the file format: see docs/search.md).
+
+    operators : per operator name, {"children", "improvements"}
+    history   : [trial, cost, order] per improvement of the best
+    extra     : nbst's loop only: polish, restarts, simulations, planner, robust simulations and
+                operator probabilities (``_NbstStepper.stats``)
+    """
+
+    trials: int
+    init_trials: int
+    first_full_order_trial: int | None
+    max_order_seen: int
+    population_size: int
+    rejected_order0: int
+    truncated_runs: int
+    cull_rounds: int
+    fallback_deletions: int
+    operators: dict
+    history: list
+    extra: dict = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, s: _State, advance) -> "SearchStats":
+        st = s.st
+        nh = int(st[_L.ST_NHIST])
+        return cls(trials=int(st[_L.ST_TRIALS]), init_trials=int(st[_L.ST_INIT_TRIALS]),
+                   first_full_order_trial=int(st[_L.ST_FIRST_FULL]) if st[_L.ST_FIRST_FULL] >= 0 else None,
+                   max_order_seen=int(st[_L.ST_MAX_ORDER]), population_size=s.pop_size,
+                   rejected_order0=int(st[_L.ST_REJECTED]), truncated_runs=int(st[_L.ST_TRUNCATED]),
+                   cull_rounds=int(st[_L.ST_CULLS]), fallback_deletions=int(st[_L.ST_FALLBACK]),
+                   operators={name: {"children": int(s.op_count[k, 0]), "improvements": int(s.op_count[k, 1])}
+                              for k, name in enumerate(advance.op_names)},
+                   history=[[int(s.hist_t[k]), float(s.hist_c[k]), int(s.hist_o[k])] for k in range(nh)],
+                   extra=advance.stats())
+
+    def run_meta(self) -> dict:
+        """The statistics' part of ``meta``, in the file's key order (trials and init_trials are
+        written earlier, beside the cost)."""
+        return {"first_full_order_trial": self.first_full_order_trial, "max_order_seen": self.max_order_seen,
+                "population_size": self.population_size, "rejected_order0": self.rejected_order0,
+                "truncated_runs": self.truncated_runs, "cull_rounds": self.cull_rounds,
+                "fallback_deletions": self.fallback_deletions, "operators": self.operators,
+                "history": self.history, **self.extra}
 
 
 def _robust_choice(problem: Problem, params: SearchParams, archive, best_v, best_cost: float, best_sig: int,
@@ -265,61 +324,99 @@ def _robust_choice(problem: Problem, params: SearchParams, archive, best_v, best
     return v, info
 
 
-def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf, seed: int):
-    """A chunk-advancing closure over ``nbst.search.nbst_loop.run_chunk_nbst`` and its extra state."""
-    from nbst.search import nbst_loop as S
-    from nbst.search import loop as L
+class _PaperStepper:
+    """Advances the paper's loop (``nbst.search.loop.run_chunk``) by one chunk per call."""
 
-    qi = np.zeros(S.N_QI, np.int64)
-    qi[S.QI_POLISH] = int(params.polish)
-    qi[S.QI_POLISH_SIMS] = params.polish_sims
-    qi[S.QI_BANK_BOUNCES] = params.bank_bounces
-    qi[S.QI_ADAPT] = int(params.adapt)
-    qi[S.QI_STRAIGHT_START] = int(params.straight_start)
-    qi[S.QI_STRIKE_BOUNCES] = params.strike_bounces
-    qi[S.QI_RESTART] = params.restart
-    qi[S.QI_ROBUST] = (1 if params.robust_signature == "and" else 2) if params.robust and params.robust_k > 0 else 0
-    qi[S.QI_SEED_POLISH_SIMS] = params.planner_polish_sims
-    qf = np.zeros(S.N_QF)
-    qf[S.QF_POLISH_RATIO] = params.polish_ratio
-    qf[S.QF_ADAPT_RATE] = params.adapt_rate
-    qf[S.QF_ADAPT_FLOOR] = params.adapt_floor
-    from nbst.search.robust import SEARCH_STREAM, SHIFT_STEPS, draws
+    algorithm = ALGORITHM
+    op_names = _L.OP_NAMES
 
-    qf[S.QF_ROBUST_SHIFT] = SHIFT_STEPS * params.robust_timestep
-    zeta, smax = draws(problem, np.random.default_rng([seed, SEARCH_STREAM]), params.robust_k if qi[S.QI_ROBUST] else 0)
-    qs = np.zeros(S.N_QS, np.int64)
-    non_idx = np.flatnonzero(~problem.cueable).astype(np.int64)
-    s.op_count = np.zeros((S.N_OPS, 2), np.int64)
-    s.best_cost = np.array([np.inf, np.inf])  # [overall, since the last restart]
-    seeds = np.zeros((0, problem.n, 2))
-    routes = (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
-    planned = None
-    if params.planner and non_idx.size:
+    def __init__(self, problem: Problem, params: SearchParams, s: _State, pi, pf, rec_v):
+        ka = problem.kernel_arrays()
+        self.s, self.rec_v = s, rec_v
+        self.args = (ka.start, ka.target, ka.radius, ka.mass, np.flatnonzero(problem.cueable).astype(np.int64), ka.W,
+                     ka.H, ka.t_final, mirror_images(params.max_bounces), pi, pf)
+
+    def __call__(self, n_steps: int) -> ChunkResult:
+        s = self.s
+        return _L.run_chunk(*self.args, s.pop, s.st, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o,
+                            s.op_count, self.rec_v, n_steps)
+
+    def stats(self) -> dict:
+        return {}
+
+
+class _NbstStepper:
+    """Advances nbst's loop (``nbst.search.nbst_loop.run_chunk_nbst``) by one chunk per call, with its
+    extra parameters and state; runs the backward planner first when the problem has noncueable disks."""
+
+    algorithm = ALGORITHM_NBST
+
+    def __init__(self, problem: Problem, params: SearchParams, s: _State, pi, pf, seed: int):
+        from nbst.search import nbst_loop as S
+        from nbst.search.robust import SEARCH_STREAM, SHIFT_STEPS, draws
+
+        self.S, self.s = S, s
+        self.op_names = S.OP_NAMES
+        qi = np.zeros(S.N_QI, np.int64)
+        qi[S.QI_POLISH] = int(params.polish)
+        qi[S.QI_POLISH_SIMS] = params.polish_sims
+        qi[S.QI_BANK_BOUNCES] = params.bank_bounces
+        qi[S.QI_ADAPT] = int(params.adapt)
+        qi[S.QI_STRAIGHT_START] = int(params.straight_start)
+        qi[S.QI_STRIKE_BOUNCES] = params.strike_bounces
+        qi[S.QI_RESTART] = params.restart
+        qi[S.QI_ROBUST] = (1 if params.robust_signature == "and" else 2) if params.robust and params.robust_k > 0 \
+            else 0
+        qi[S.QI_SEED_POLISH_SIMS] = params.planner_polish_sims
+        qf = np.zeros(S.N_QF)
+        qf[S.QF_POLISH_RATIO] = params.polish_ratio
+        qf[S.QF_ADAPT_RATE] = params.adapt_rate
+        qf[S.QF_ADAPT_FLOOR] = params.adapt_floor
+        qf[S.QF_ROBUST_SHIFT] = SHIFT_STEPS * params.robust_timestep
+        self.qi = qi
+        self.zeta, self.smax = draws(problem, np.random.default_rng([seed, SEARCH_STREAM]),
+                                     params.robust_k if qi[S.QI_ROBUST] else 0)
+        self.qs = np.zeros(S.N_QS, np.int64)
+        non_idx = np.flatnonzero(~problem.cueable).astype(np.int64)
+        s.op_count = np.zeros((S.N_OPS, 2), np.int64)
+        s.best_cost = np.array([np.inf, np.inf])  # [overall, since the last restart]
+        self.seeds = np.zeros((0, problem.n, 2))
+        self.routes = (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
+        self.planned = None
+        if params.planner and non_idx.size:
+            self._plan(problem, params, pi, pf)
+        w_plan = params.planner_weight if len(self.routes[0]) else 0.0
+        base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if non_idx.size else 0.0,
+                         w_plan])
+        self.base = base / base.sum()
+        self.weights, self.reward = self.base.copy(), self.base.copy()
+        ka = problem.kernel_arrays()
+        self.args = (ka.start, ka.target, ka.radius, ka.mass, np.flatnonzero(problem.cueable).astype(np.int64),
+                     non_idx, ka.W, ka.H, ka.t_final, mirror_images(params.max_bounces), pi, pf, qi, qf)
+
+    def _plan(self, problem: Problem, params: SearchParams, pi, pf) -> None:
+        """The backward planner's seeds and routes; its simulations are charged as trials."""
         from nbst.search.planner import plan
 
-        planned = plan(problem, budget=min(params.planner_trials, int(pi[L.PI_MAX_TRIALS]) // 4),
+        S, s = self.S, self.s
+        planned = plan(problem, budget=min(params.planner_trials, int(pi[_L.PI_MAX_TRIALS]) // 4),
                        max_chain=params.planner_chain, seeds=params.planner_seeds, sig_limit=params.sig_limit,
-                       max_events=params.max_events, target_cost=float(pf[L.PF_TARGET_COST]))
-        seeds = np.ascontiguousarray(planned.velocities)
-        routes = (planned.route_cue, planned.route_v, planned.route_mask)
-        s.st[L.ST_TRIALS] += planned.trials  # every planner simulation is a trial
-        s.st[L.ST_SINCE] += planned.trials
-        qs[S.QS_SIMS] += planned.trials
-    w_plan = params.planner_weight if len(routes[0]) else 0.0
-    base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if non_idx.size else 0.0, w_plan])
-    base = base / base.sum()
-    weights, reward = base.copy(), base.copy()
-    args = (np.ascontiguousarray(problem.start, dtype=np.float64), np.ascontiguousarray(problem.target, dtype=np.float64),
-            np.ascontiguousarray(problem.radius, dtype=np.float64), np.ascontiguousarray(problem.mass, dtype=np.float64),
-            np.flatnonzero(problem.cueable).astype(np.int64), non_idx, float(problem.box[0]), float(problem.box[1]),
-            float(problem.t_final), mirror_images(params.max_bounces), pi, pf, qi, qf)
+                       max_events=params.max_events, target_cost=float(pf[_L.PF_TARGET_COST]))
+        self.planned = planned
+        self.seeds = np.ascontiguousarray(planned.velocities)
+        self.routes = (planned.route_cue, planned.route_v, planned.route_mask)
+        s.st[_L.ST_TRIALS] += planned.trials  # every planner simulation is a trial
+        s.st[_L.ST_SINCE] += planned.trials
+        self.qs[S.QS_SIMS] += planned.trials
 
-    def advance(n_steps: int) -> int:
-        return S.run_chunk_nbst(*args, s.pop, s.st, qs, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o,
-                                s.op_count, weights, base, reward, zeta, smax, seeds, *routes, n_steps)
+    def __call__(self, n_steps: int) -> ChunkResult:
+        s = self.s
+        return self.S.run_chunk_nbst(*self.args, s.pop, s.st, self.qs, s.best_cost, s.best_v, s.rng, s.hist_t,
+                                     s.hist_c, s.hist_o, s.op_count, self.weights, self.base, self.reward, self.zeta,
+                                     self.smax, self.seeds, *self.routes, n_steps)
 
-    def stats() -> dict:
+    def stats(self) -> dict:
+        S, qs, qi, planned = self.S, self.qs, self.qi, self.planned
         return {"polish": {"runs": int(qs[S.QS_POLISH_RUNS]), "simulations": int(qs[S.QS_POLISH_SIMS]),
                            "improved": int(qs[S.QS_POLISH_GAINS])},
                 "restarts": int(qs[S.QS_RESTARTS]),
@@ -328,12 +425,8 @@ def _nbst_stepper(problem: Problem, params: SearchParams, s: _State, pi, pf, see
                                 "best_cost": float(planned.costs[0]) if len(planned.costs) else None,
                                 **planned.stats}} if planned is not None else {}),
                 **({"robust_simulations": int(qs[S.QS_ROBUST_SIMS])} if qi[S.QI_ROBUST] else {}),
-                "operator_probabilities": {name: float(w) for name, w in zip(S.OP_NAMES, weights)}}
-
-    advance.op_names = S.OP_NAMES
-    advance.stats = stats
-    return advance
+                "operator_probabilities": {name: float(w) for name, w in zip(S.OP_NAMES, self.weights)}}
 
 
 def _popcount(x: int) -> int:
-    return bin(x).count("1")
+    return int(x).bit_count()

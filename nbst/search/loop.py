@@ -8,6 +8,8 @@ Python driver in ``nbst.search``.
 """
 from __future__ import annotations
 
+from enum import IntEnum
+
 import numpy as np
 from numba import njit
 
@@ -35,8 +37,19 @@ PHASE_INIT, PHASE_GENERATE = 0, 1
 OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER = range(4)
 OP_NAMES = ("creep", "directed", "uniform", "crossover")
 
-# run_chunk return codes
-RC_CHUNK_DONE, RC_MAX_TRIALS, RC_PATIENCE, RC_TARGET_COST, RC_HISTORY_FULL = range(5)
+
+
+class ChunkResult(IntEnum):
+    """Why ``run_chunk`` (or ``run_chunk_nbst``) returned (numba compiles the members as constants)."""
+
+    CHUNK_DONE = 0  # n_steps trials run: call again
+    MAX_TRIALS = 1  # the trial budget is spent
+    PATIENCE = 2  # patience trials without improving the best
+    TARGET_COST = 3  # the best cost reached the target
+    HISTORY_FULL = 4  # the improvement history is full: grow it and call again
+
+
+RC_CHUNK_DONE, RC_MAX_TRIALS, RC_PATIENCE, RC_TARGET_COST, RC_HISTORY_FULL = tuple(ChunkResult)
 
 
 @njit(cache=True, error_model="numpy")

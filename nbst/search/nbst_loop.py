@@ -56,14 +56,15 @@ from nbst.search.loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGE
                           PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_POP_LIMIT, PI_SENATE,
                           PI_SIG_LIMIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE, ST_SINCE, ST_TRIALS,
                           ST_TRUNCATED, evaluate_one, loop_scratch, settle, stop_code)
+from nbst.search.loop import OP_NAMES as PAPER_OP_NAMES
 from nbst.sim.primitives import mirror
 from nbst.search.ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 
-# operators of the nbst variant
-OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER, OP_BANK, OP_STRIKE, OP_PLAN = range(7)
-N_OPS = 7
-OP_NAMES = ("creep", "directed", "uniform", "crossover", "bank", "strike", "plan")
+# operators of the nbst variant: the paper's four (``nbst.search.loop.OP_NAMES``), then nbst's
+OP_NAMES = PAPER_OP_NAMES + ("bank", "strike", "plan")
+N_OPS = len(OP_NAMES)
+OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER, OP_BANK, OP_STRIKE, OP_PLAN = range(N_OPS)
 
 # extra parameters (qi: int64, qf: float64)
 QI_POLISH, QI_POLISH_SIMS, QI_BANK_BOUNCES, QI_ADAPT, QI_STRAIGHT_START, QI_STRIKE_BOUNCES, QI_RESTART, \
@@ -320,7 +321,7 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
             if budget >= 2:
                 if robust:
                     backup[:, :] = child
-                c2, s2, sims = polish_kernel(x0, child, radius, mass, target, W, H, t_final, R, cue_idx, budget,
+                c2, s2, sims, _ = polish_kernel(x0, child, radius, mass, target, W, H, t_final, R, cue_idx, budget,
                                              tol, work, pscr)
                 st[ST_TRIALS] += sims
                 st[ST_SINCE] += sims

@@ -5,12 +5,16 @@ The choices behind each default are listed in ``nbst.search``'s docstring and do
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
 from nbst.constants import MAX_EVENTS
 from nbst.problem import Problem, ProblemError
+from nbst.search.loop import OP_NAMES as OP_NAMES_PAPER
+from nbst.search.nbst_loop import OP_NAMES as OP_NAMES_NBST
 from nbst.sim.primitives import images
 from nbst.search.robust import ARCHIVE_SIZE as ROBUST_ARCHIVE, POLISH_TOP as ROBUST_POLISH, SAMPLES as ROBUST_SAMPLES, \
     SEARCH_SAMPLES as ROBUST_K, TIMESTEP as ROBUST_TIMESTEP
@@ -139,6 +143,17 @@ class SearchParams:
     robust_timestep: float = ROBUST_TIMESTEP
     robust_polish: int = ROBUST_POLISH
 
+    def __post_init__(self) -> None:
+        """Check every field on its own; a bad one raises ValueError naming it."""
+        for name, ok, want in _FIELD_RULES:
+            value = getattr(self, name)
+            try:
+                good = bool(ok(self, value))
+            except (TypeError, ValueError):
+                good = False
+            if not good:
+                raise ValueError(f"SearchParams.{name}: must be {want}, got {value!r}")
+
     @property
     def nbst_loop(self) -> bool:
         """Whether any of nbst's additions is on (they run in ``nbst.search.nbst_loop``'s loop)."""
@@ -149,6 +164,83 @@ class SearchParams:
         d = dataclasses.asdict(self)
         d["op_weights"] = list(self.op_weights)
         return d
+
+
+def _nonneg_int(_, v) -> bool:
+    return isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 0
+
+
+def _int_at_least(k: int):
+    return lambda _, v: _nonneg_int(_, v) and v >= k
+
+
+def _nonneg(_, v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v) \
+        and v >= 0
+
+
+def _op_weights_ok(_, w) -> bool:
+    a = np.asarray(w, float)
+    return a.shape == (len(OP_NAMES_PAPER),) and bool(np.all(np.isfinite(a))) and bool(np.all(a >= 0)) and a.sum() > 0
+
+
+#: (field, test, what it must be): ``SearchParams.__post_init__`` checks each field on its own.
+_FIELD_RULES = (
+    ("variant", lambda _, v: isinstance(v, str), "a string"),
+    ("pop_limit", _int_at_least(2), "an integer >= 2"),
+    ("sig_limit", _int_at_least(1), "an integer >= 1"),
+    ("diversity", _int_at_least(1), "an integer >= 1"),
+    ("init_max_tries", _int_at_least(1), "an integer >= 1"),
+    ("init_population", _nonneg_int, "an integer >= 0"),
+    ("signature_radius", lambda _, v: v is None or (_nonneg(_, v) and v > 0), "None or a finite number > 0"),
+    ("max_bounces", _nonneg_int, "an integer >= 0"),
+    ("creep_fraction", _nonneg, "a finite number >= 0"),
+    ("op_weights", _op_weights_ok, f"{len(OP_NAMES_PAPER)} finite weights >= 0 ({', '.join(OP_NAMES_PAPER)}), "
+                                   f"not all 0"),
+    ("p_directed_init", lambda _, v: _nonneg(_, v) and v <= 1, "a probability in [0, 1]"),
+    ("senate", lambda _, v: isinstance(v, bool), "True or False"),
+    ("engineered", lambda _, v: isinstance(v, bool), "True or False"),
+    ("cull", lambda _, v: v in ("subsumed", "worst"), "'subsumed' or 'worst'"),
+    ("elitism", lambda _, v: isinstance(v, bool), "True or False"),
+    ("hard_limit", lambda p, v: _nonneg_int(p, v) and v >= p.pop_limit, "an integer >= pop_limit"),
+    ("max_events", _int_at_least(1), "an integer >= 1"),
+    ("polish", lambda _, v: isinstance(v, bool), "True or False"),
+    ("polish_sims", _int_at_least(2), "an integer >= 2"),
+    ("polish_ratio", lambda _, v: _nonneg(_, v) and v >= 1, "a finite number >= 1"),
+    ("bank_weight", _nonneg, "a finite number >= 0"),
+    ("bank_bounces", _nonneg_int, "an integer >= 0"),
+    ("strike_weight", _nonneg, "a finite number >= 0"),
+    ("strike_bounces", _nonneg_int, "an integer >= 0"),
+    ("adapt", lambda _, v: isinstance(v, bool), "True or False"),
+    ("adapt_rate", lambda _, v: _nonneg(_, v) and 0 < v <= 1, "a number in (0, 1]"),
+    ("adapt_floor", lambda _, v: _nonneg(_, v) and v < 1.0 / len(OP_NAMES_NBST),
+     f"a number in [0, 1/{len(OP_NAMES_NBST)}) (one floor per operator must leave room)"),
+    ("straight_start", lambda _, v: isinstance(v, bool), "True or False"),
+    ("restart", _nonneg_int, "an integer >= 0 (0: never)"),
+    ("planner", lambda _, v: isinstance(v, bool), "True or False"),
+    ("planner_trials", _nonneg_int, "an integer >= 0"),
+    ("planner_chain", lambda _, v: _nonneg_int(_, v) and v <= 4, "an integer in [0, 4]"),
+    ("planner_seeds", _nonneg_int, "an integer >= 0"),
+    ("planner_polish_sims", _int_at_least(2), "an integer >= 2"),
+    ("planner_weight", _nonneg, "a finite number >= 0"),
+    ("robust", lambda _, v: isinstance(v, bool), "True or False"),
+    ("robust_k", _nonneg_int, "an integer >= 0"),
+    ("robust_signature", lambda _, v: v in ("and", "plain"), "'and' or 'plain'"),
+    ("robust_archive", _nonneg_int, "an integer >= 0"),
+    ("robust_samples", _nonneg_int, "an integer >= 0"),
+    ("robust_timestep", _nonneg, "a finite number >= 0"),
+    ("robust_polish", _nonneg_int, "an integer >= 0"),
+)
+
+
+class StopReason(str, Enum):
+    """Why a search stopped: ``meta["stopped"]`` holds the value (the file format's strings)."""
+
+    MAX_TRIALS = "max_trials"
+    PATIENCE = "patience"
+    TARGET_COST = "target_cost"
+    CALLBACK = "callback"
+    INTERRUPTED = "interrupted"
 
 
 #: Variant "nbst": the paper's A plus every addition of ``nbst.search.nbst_loop`` (see docs/search.md
@@ -208,7 +300,9 @@ class SearchProgress:
     phase: str
 
 
-def _check(params: SearchParams, max_trials: int, patience: int) -> None:
+def check_run(max_trials: int, patience: int, seed: int | None = None) -> None:
+    """The run options of a search (the parameters check themselves: ``SearchParams.__post_init__``);
+    a bad one raises a one-line ProblemError naming it, as the command line reports it."""
     def bad(name, why):
         raise ProblemError("<search parameters>", name, why)
 
@@ -216,30 +310,5 @@ def _check(params: SearchParams, max_trials: int, patience: int) -> None:
         bad("max_trials", f"must be >= 1, got {max_trials}")
     if patience < 0:
         bad("patience", f"must be >= 0 (0 = no patience limit), got {patience}")
-    if params.pop_limit < 2 or params.sig_limit < 1 or params.diversity < 1:
-        bad("pop_limit", "pop_limit >= 2, sig_limit >= 1 and diversity >= 1 are required")
-    if params.hard_limit < params.pop_limit:
-        bad("hard_limit", f"must be >= pop_limit ({params.pop_limit})")
-    if params.cull not in ("subsumed", "worst"):
-        bad("cull", f"must be 'subsumed' or 'worst', got {params.cull!r}")
-    w = np.asarray(params.op_weights, float)
-    if w.shape != (4,) or np.any(w < 0) or w.sum() <= 0:
-        bad("op_weights", "must be 4 non-negative weights (creep, directed, uniform, crossover), not all 0")
-    if params.max_bounces < 0 or params.creep_fraction < 0:
-        bad("max_bounces", "max_bounces and creep_fraction must be >= 0")
-    if params.bank_weight < 0 or params.strike_weight < 0 or params.planner_weight < 0:
-        bad("bank_weight", "bank_weight and strike_weight must be >= 0")
-    if params.polish_sims < 2 or params.polish_ratio < 1 or params.bank_bounces < 0 or params.strike_bounces < 0:
-        bad("polish_sims", "polish_sims >= 2, polish_ratio >= 1, bank_bounces >= 0 and strike_bounces >= 0 are required")
-    if params.planner_trials < 0 or not 0 <= params.planner_chain <= 4 or params.planner_seeds < 0 \
-            or params.planner_polish_sims < 2:
-        bad("planner_trials", "planner_trials >= 0, 0 <= planner_chain <= 4, planner_seeds >= 0 and "
-                              "planner_polish_sims >= 2 are required")
-    if params.robust_signature not in ("and", "plain"):
-        bad("robust_signature", f"must be 'and' or 'plain', got {params.robust_signature!r}")
-    if params.robust_archive < 0 or params.robust_samples < 0 or params.robust_k < 0 or params.robust_polish < 0 \
-            or not params.robust_timestep >= 0:
-        bad("robust_archive", "robust_archive >= 0, robust_samples >= 0, robust_k >= 0, robust_polish >= 0 and "
-                              "robust_timestep >= 0 are required")
-    if not 0 < params.adapt_rate <= 1 or not 0 <= params.adapt_floor < 1.0 / 7 or params.restart < 0:
-        bad("adapt_rate", "0 < adapt_rate <= 1, 0 <= adapt_floor < 1/7 and restart >= 0 are required")
+    if seed is not None and seed < 0:
+        bad("seed", f"must be >= 0, got {seed}")

@@ -230,10 +230,9 @@ class _Sim:
         self.budget = int(budget)
         self.used = 0
         self.max_events = int(max_events)
-        self.args = (np.ascontiguousarray(problem.start, dtype=np.float64),
-                     np.ascontiguousarray(problem.radius, dtype=np.float64),
-                     np.ascontiguousarray(problem.mass, dtype=np.float64),
-                     np.ascontiguousarray(problem.target, dtype=np.float64))
+        ka = problem.kernel_arrays()
+        self.ka = ka
+        self.args = (ka.start, ka.radius, ka.mass, ka.target)
 
     @property
     def left(self) -> int:
@@ -256,9 +255,8 @@ class _Sim:
         nev = np.empty(B, np.int64)
         for s in range(0, B, BATCH):
             e = min(B, s + BATCH)
-            evaluate_kernel(x0, V[s:e], radius, mass, target, float(self.p.box[0]), float(self.p.box[1]),
-                            float(self.p.t_final), float(self.p.target_radius), self.max_events, final[s:e],
-                            cost[s:e], sig[s:e], nev[s:e])
+            evaluate_kernel(x0, V[s:e], radius, mass, target, self.ka.W, self.ka.H, self.ka.t_final, self.ka.R,
+                            self.max_events, final[s:e], cost[s:e], sig[s:e], nev[s:e])
         self.used += B
         if keep is not None:
             full = np.repeat(np.asarray(self.p.start, float)[None], B, axis=0)
@@ -271,11 +269,7 @@ def _enumerate(problem: Problem, c: int, non: np.ndarray, max_chain: int, bank_b
     """All routes of cue c up to chain length max_chain: (chains, imgs, V, gain) per length
     (impossible chains dropped). A length whose routes would exceed MAX_ROUTES_PER_LENGTH
     uses fewer images for the strikers' legs, or is left out."""
-    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
-    radius = np.ascontiguousarray(problem.radius, dtype=np.float64)
-    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
-    target = np.ascontiguousarray(problem.target, dtype=np.float64)
-    W, H = (float(x) for x in problem.box)
+    x0, target, radius, mass, W, H, t_final, _ = problem.kernel_arrays()
     out = []
     for L in range(0, max_chain + 1):
         perms = [(c,)] if L == 0 else [(c,) + t for t in itertools.permutations(non.tolist(), L)]
@@ -298,8 +292,8 @@ def _enumerate(problem: Problem, c: int, non: np.ndarray, max_chain: int, bank_b
         imgs[:] = np.tile(block, (len(perms), 1, 1))
         V = np.empty((M, 2))
         gain = np.empty(M)
-        vmax = MAX_SPEED * math.hypot(W, H) / float(problem.t_final)
-        aim_routes(x0, radius, mass, target, W, H, float(problem.t_final), chains, L, imgs, vmax, V, gain)
+        vmax = MAX_SPEED * math.hypot(W, H) / t_final
+        aim_routes(x0, radius, mass, target, W, H, t_final, chains, L, imgs, vmax, V, gain)
         ok = np.isfinite(gain)
         out.append((chains[ok], imgs[ok], V[ok], gain[ok]))
     return out

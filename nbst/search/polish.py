@@ -14,11 +14,11 @@ A disk that meets nothing moves as a fold of a straight line: its block of J is
 from __future__ import annotations
 
 import math
+from enum import IntEnum
 
 import numpy as np
 from numba import njit
 
-from nbst.constants import MAX_EVENTS
 from nbst.problem import Problem
 from nbst.sim import STATUS_OK, alloc_work, cost_signature, run
 from nbst.sim.jacobian import jacobian_from_events
@@ -32,6 +32,24 @@ LAMBDA_MIN, LAMBDA_MAX = 1e-12, 1e10
 RIDGE = 1e-12
 #: Event buffer for polish runs; a candidate that needs more is rejected.
 POLISH_EVENT_CAP = 4096
+#: Damping factor after a rejected step: lam *= LAMBDA_UP (a shorter, more gradient-like step).
+LAMBDA_UP = 4.0
+#: Damping factor when the damped system is not positive definite: a larger jump than
+#: LAMBDA_UP, since no step can even be computed at this damping.
+LAMBDA_UP_SINGULAR = 10.0
+#: Damping divisor after an accepted step: lam /= LAMBDA_DOWN (towards Gauss-Newton). Down by
+#: 3, up by 4: the classic asymmetric Levenberg-Marquardt schedule, so an accept-reject cycle
+#: ends with more damping than it started with and the damping cannot oscillate.
+LAMBDA_DOWN = 3.0
+
+
+class PolishStop(IntEnum):
+    """Why ``polish_kernel`` stopped."""
+
+    TOLERANCE = 0  # the cost reached tol
+    BUDGET = 1  # max_sims simulations were run
+    NO_DESCENT = 2  # no damped step lowered the cost (lam reached LAMBDA_MAX, or J is zero)
+    INFEASIBLE = 3  # the starting velocities do not simulate within POLISH_EVENT_CAP events
 
 
 @njit(cache=True, error_model="numpy")
@@ -75,7 +93,7 @@ def alloc_polish(n, n_cue, cap):
 
 @njit(cache=True, error_model="numpy")
 def polish_kernel(x0, v, radius, mass, target, W, H, t_final, R, cue, max_sims, tol, work, scratch):
-    """Polish ``v`` (N, 2) in place. Returns (cost, signature, simulations run).
+    """Polish ``v`` (N, 2) in place. Returns (cost, signature, simulations run, PolishStop).
 
     Stops when the cost is <= tol, after max_sims simulations, or when no damped
     step lowers the cost.
@@ -89,8 +107,9 @@ def polish_kernel(x0, v, radius, mass, target, W, H, t_final, R, cue, max_sims, 
     sims = 1
     cost, sig = cost_signature(final, target, R)
     if st != STATUS_OK:
-        return math.inf, np.int64(0), sims
+        return math.inf, np.int64(0), sims, PolishStop.INFEASIBLE
     lam = LAMBDA0
+    why = PolishStop.BUDGET
     while sims < max_sims and cost > tol:
         jacobian_from_events(x0, v, mass, t_final, cue, n_ev, ct, ci, cj, cs, J)
         # A = J^T J, g = J^T r
@@ -109,6 +128,7 @@ def polish_kernel(x0, v, radius, mass, target, W, H, t_final, R, cue, max_sims, 
         for p in range(P):
             dmax = max(dmax, A[p, p])
         if dmax == 0.0:
+            why = PolishStop.NO_DESCENT
             break
         accepted = False
         while sims < max_sims and lam < LAMBDA_MAX:
@@ -121,7 +141,7 @@ def polish_kernel(x0, v, radius, mass, target, W, H, t_final, R, cue, max_sims, 
             for p in range(P):
                 g[p] = -g[p]
             if not ok:
-                lam *= 10.0
+                lam *= LAMBDA_UP_SINGULAR
                 continue
             for i in range(n):
                 vnew[i, 0] = v[i, 0]
@@ -149,12 +169,16 @@ def polish_kernel(x0, v, radius, mass, target, W, H, t_final, R, cue, max_sims, 
                 ci, ni = ni, ci
                 cj, nj = nj, cj
                 cs, ns = ns, cs
-                lam = max(lam / 3.0, LAMBDA_MIN)
+                lam = max(lam / LAMBDA_DOWN, LAMBDA_MIN)
                 break
-            lam *= 4.0
+            lam *= LAMBDA_UP
         if not accepted:
+            if sims < max_sims:
+                why = PolishStop.NO_DESCENT
             break
-    return cost, sig, sims
+    if cost <= tol:
+        why = PolishStop.TOLERANCE
+    return cost, sig, sims, why
 
 
 def polish(problem: Problem, velocities, *, max_sims: int = 100, tol: float = 0.0):
@@ -168,14 +192,10 @@ def polish(problem: Problem, velocities, *, max_sims: int = 100, tol: float = 0.
     cue = np.flatnonzero(problem.cueable).astype(np.int64)
     n = problem.n
     scratch = alloc_polish(n, cue.size, POLISH_EVENT_CAP)
-    cost, sig, sims = polish_kernel(
-        np.ascontiguousarray(problem.start, dtype=np.float64), v,
-        np.ascontiguousarray(problem.radius, dtype=np.float64),
-        np.ascontiguousarray(problem.mass, dtype=np.float64),
-        np.ascontiguousarray(problem.target, dtype=np.float64),
-        float(problem.box[0]), float(problem.box[1]), float(problem.t_final), float(problem.target_radius),
-        cue, int(max_sims), float(tol), alloc_work(n), scratch)
+    ka = problem.kernel_arrays()
+    cost, sig, sims, _ = polish_kernel(ka.start, v, ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R, cue,
+                                       int(max_sims), float(tol), alloc_work(n), scratch)
     return v, float(cost), int(sig), int(sims)
 
 
-__all__ = ["polish", "polish_kernel", "alloc_polish", "MAX_EVENTS"]
+__all__ = ["POLISH_EVENT_CAP", "PolishStop", "alloc_polish", "polish", "polish_kernel"]

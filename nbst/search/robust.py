@@ -107,6 +107,14 @@ def shift_sigma(v, cue_idx, shift):
     return shift * top
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def shift_starts(x0, z, s, px0):
+    """px0 = x0 + s z: the start positions shifted by one draw z (N, 2) of scale s."""
+    for i in range(x0.shape[0]):
+        px0[i, 0] = x0[i, 0] + s * z[i, 0]
+        px0[i, 1] = x0[i, 1] + s * z[i, 1]
+
+
 @njit(cache=True, error_model="numpy")
 def robust_eval(x0, v, radius, mass, target, W, H, t_final, R, max_events, cue_idx, zeta, smax, shift, cost, sig,
                 stop_early, px0, work, fin, vel, no_t, no_i, no_s):
@@ -120,10 +128,7 @@ def robust_eval(x0, v, radius, mass, target, W, H, t_final, R, max_events, cue_i
     for k in range(zeta.shape[0]):
         if stop_early and sig == 0:
             break
-        s = min(sigma, smax[k])
-        for i in range(x0.shape[0]):
-            px0[i, 0] = x0[i, 0] + s * zeta[k, i, 0]
-            px0[i, 1] = x0[i, 1] + s * zeta[k, i, 1]
+        shift_starts(x0, zeta[k], min(sigma, smax[k]), px0)
         c, sg, trunc = evaluate_one(px0, v, radius, mass, target, W, H, t_final, R, max_events, work, fin, vel,
                                     no_t, no_i, no_s)
         sims += 1
@@ -151,10 +156,10 @@ def _score_kernel(x0, V, radius, mass, target, W, H, t_final, R, max_events, cue
     for m in range(V.shape[0]):
         sigma = shift_sigma(V[m], cue_idx, shift)
         for k in range(zeta.shape[0] + 1):
-            s = 0.0 if k == 0 else min(sigma, smax[k - 1])
-            for i in range(n):
-                px0[i, 0] = x0[i, 0] + (s * zeta[k - 1, i, 0] if k > 0 else 0.0)
-                px0[i, 1] = x0[i, 1] + (s * zeta[k - 1, i, 1] if k > 0 else 0.0)
+            if k == 0:
+                px0[:, :] = x0
+            else:
+                shift_starts(x0, zeta[k - 1], min(sigma, smax[k - 1]), px0)
             c, sg, trunc = evaluate_one(px0, V[m], radius, mass, target, W, H, t_final, R, max_events, work, fin,
                                         vel, no_t, no_i, no_s)
             cost[m, k] = c
@@ -204,15 +209,12 @@ def score(problem: Problem, V, zeta, smax, *, timestep: float = TIMESTEP, quanti
     cost = np.empty((M, K + 1))
     sig = np.empty((M, K + 1), np.int64)
     worst = np.empty((M, K + 1))
-    _score_kernel(np.ascontiguousarray(problem.start, dtype=np.float64), V,
-                  np.ascontiguousarray(problem.radius, dtype=np.float64),
-                  np.ascontiguousarray(problem.mass, dtype=np.float64),
-                  np.ascontiguousarray(problem.target, dtype=np.float64), float(problem.box[0]),
-                  float(problem.box[1]), float(problem.t_final), float(problem.target_radius),
+    ka = problem.kernel_arrays()
+    _score_kernel(ka.start, V, ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R,
                   int(MAX_EVENTS if max_events is None else max_events),
                   np.flatnonzero(problem.cueable).astype(np.int64), np.ascontiguousarray(zeta, dtype=np.float64),
                   np.ascontiguousarray(smax, dtype=np.float64), SHIFT_STEPS * float(timestep), cost, sig, worst)
-    order = np.array([min(bin(int(s)).count("1") for s in row) for row in sig], dtype=np.int64)
+    order = np.array([min(int(s).bit_count() for s in row) for row in sig], dtype=np.int64)
     kept = (sig[:, 1:] == sig[:, :1]).mean(axis=1) if K else np.ones(M)
     return RobustScore(order=order, kept=kept, worst=np.quantile(worst, quantile, axis=1, method="higher"),
                        cost=np.quantile(cost, quantile, axis=1, method="higher"))
@@ -240,7 +242,7 @@ class Archive:
         """Offer population members V (P, N, 2) with their scores (P,) and signatures (P,)."""
         if len(cost) == 0:
             return
-        order = np.array([bin(int(s)).count("1") for s in sig])
+        order = np.array([int(s).bit_count() for s in sig])
         top = int(order.max())
         if top < self.order:
             return

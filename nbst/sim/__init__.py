@@ -14,10 +14,11 @@ below the search. Nothing here imports the search, MuJoCo or the renderer.
 """
 from __future__ import annotations
 
-from nbst.sim.api import EVENT_DTYPE, Trajectory, evaluate, simulate
-from nbst.sim.kernel import (STATUS_OK, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work, cost_signature,
-                             evaluate_kernel, run)
+from nbst.sim.api import EVENT_DTYPE, Trajectory, evaluate, evaluate_events, simulate
+from nbst.sim.kernel import (STATUS_OK, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, SimStatus, alloc_work,
+                             cost_signature, evaluate_kernel, run)
 from nbst.sim.primitives import INF, pair_tau, wall_tau
 
-__all__ = ["EVENT_DTYPE", "INF", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "Trajectory",
-           "alloc_work", "cost_signature", "evaluate", "evaluate_kernel", "pair_tau", "run", "simulate", "wall_tau"]
+__all__ = ["EVENT_DTYPE", "INF", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "SimStatus",
+           "Trajectory",
+           "alloc_work", "cost_signature", "evaluate", "evaluate_events", "evaluate_kernel", "pair_tau", "run", "simulate", "wall_tau"]

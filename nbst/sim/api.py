@@ -13,13 +13,6 @@ from nbst.problem import Problem
 from nbst.sim.kernel import (INF, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work, cost_signature,
                              evaluate_kernel, run)
 
-def _problem_arrays(problem: Problem):
-    return (np.ascontiguousarray(problem.start, dtype=np.float64),
-            np.ascontiguousarray(problem.radius, dtype=np.float64),
-            np.ascontiguousarray(problem.mass, dtype=np.float64),
-            np.ascontiguousarray(problem.target, dtype=np.float64))
-
-
 def _check_velocities(problem: Problem, V: np.ndarray) -> None:
     if V.shape[-2:] != (problem.n, 2):
         raise ValueError(f"velocities have shape {V.shape}; expected (..., {problem.n}, 2) for problem {problem.name!r}")
@@ -29,34 +22,38 @@ def _check_velocities(problem: Problem, V: np.ndarray) -> None:
         raise ValueError("noncueable disks must have zero initial velocity")
 
 
-def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, return_events: bool = False,
-             jobs: int | None = None):
+def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: int | None = None):
     """Simulate a batch of candidate velocity sets (no per-trial Python).
 
     V : (B, N, 2) float, units/s
-    returns final (B, N, 2), cost (B,) float, signature (B,) int64 bitmask
-    [, n_events (B,) int64]. cost is inf (signature 0) for a run that needed more
-    than ``max_events`` events.
+    returns final (B, N, 2), cost (B,) float, signature (B,) int64 bitmask. cost is inf
+    (signature 0) for a run that needed more than ``max_events`` events (or jammed).
     jobs : threads for a batch of at least PARALLEL_BATCH candidates (the kernel releases
            the GIL; each thread takes a contiguous slice); None: every core; 1: this thread.
            The results do not depend on it: each candidate is simulated alone.
+    ``evaluate_events`` returns the event counts too.
     """
+    final, cost, sig, _ = evaluate_events(problem, V, max_events=max_events, jobs=jobs)
+    return final, cost, sig
+
+
+def evaluate_events(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: int | None = None):
+    """:func:`evaluate`, also returning each run's number of events: (final, cost, signature,
+    n_events (B,) int64)."""
     V = np.ascontiguousarray(V, dtype=np.float64)
     if V.ndim != 3:
         raise ValueError(f"V must have shape (B, N, 2), got {V.shape}")
     _check_velocities(problem, V)
-    x0, radius, mass, target = _problem_arrays(problem)
+    ka = problem.kernel_arrays()
     B = V.shape[0]
     final = np.empty((B, problem.n, 2))
     cost = np.empty(B)
     sig = np.empty(B, np.int64)
     n_events = np.empty(B, np.int64)
-    W, H = problem.box
 
     def run_slice(a: int, b: int) -> None:
-        evaluate_kernel(x0, V[a:b], radius, mass, target, float(W), float(H), float(problem.t_final),
-                        float(problem.target_radius), int(max_events), final[a:b], cost[a:b], sig[a:b],
-                        n_events[a:b])
+        evaluate_kernel(ka.start, V[a:b], ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R,
+                        int(max_events), final[a:b], cost[a:b], sig[a:b], n_events[a:b])
 
     if jobs is None:
         from nbst.parallel import default_jobs
@@ -72,9 +69,7 @@ def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, return_events
         with ThreadPoolExecutor(k) as ex:
             for f in [ex.submit(run_slice, int(cuts[i]), int(cuts[i + 1])) for i in range(k)]:
                 f.result()
-    if return_events:
-        return final, cost, sig, n_events
-    return final, cost, sig
+    return final, cost, sig, n_events
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,7 +112,7 @@ class Trajectory:
 
     @property
     def order(self) -> int:
-        return int(bin(self.signature).count("1"))
+        return int(self.signature).bit_count()
 
     @property
     def signature_string(self) -> str:
@@ -175,9 +170,9 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
     if v0.ndim != 2:
         raise ValueError(f"velocities must have shape (N, 2), got {v0.shape}")
     _check_velocities(problem, v0)
-    x0, radius, mass, target = _problem_arrays(problem)
+    ka = problem.kernel_arrays()
+    x0 = ka.start
     n = problem.n
-    W, H = problem.box
     cap = EVENT_BUFFER
     work = alloc_work(n)
     final = np.empty((n, 2))
@@ -187,8 +182,8 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
         ev_i = np.empty(cap, np.int64)
         ev_j = np.empty(cap, np.int64)
         ev_s = np.empty((cap, 8))
-        status, n_ev, _, _ = run(x0, v0, radius, mass, float(W), float(H), float(problem.t_final), work, final,
-                                 fvel, int(max_events), ev_t, ev_i, ev_j, ev_s)
+        status, n_ev, _, _ = run(x0, v0, ka.radius, ka.mass, ka.W, ka.H, ka.t_final, work, final, fvel,
+                                 int(max_events), ev_t, ev_i, ev_j, ev_s)
         if status != STATUS_OVERFLOW:
             break
         cap *= 4
@@ -228,7 +223,7 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
     if truncated:
         cost, sig = INF, 0
     else:
-        cost, sig = cost_signature(final, target, float(problem.target_radius))
+        cost, sig = cost_signature(final, ka.target, ka.R)
     for a in (times, pos, vel, events, final, fvel):
         a.setflags(write=False)
     return Trajectory(problem=problem, initial_velocities=v0, times=times, positions=pos, velocities=vel,

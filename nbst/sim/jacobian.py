@@ -171,9 +171,7 @@ def event_record(problem: Problem, velocities, *, max_events: int = 100_000):
     RuntimeError if the motion needs more than ``max_events`` events.
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
-    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
-    radius = np.ascontiguousarray(problem.radius, dtype=np.float64)
-    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    ka = problem.kernel_arrays()
     n = problem.n
     cap = 4096
     while True:
@@ -183,8 +181,8 @@ def event_record(problem: Problem, velocities, *, max_events: int = 100_000):
         ev_s = np.empty((cap, 8))
         final = np.empty((n, 2))
         fvel = np.empty((n, 2))
-        st, n_ev, _, _ = run(x0, v0, radius, mass, float(problem.box[0]), float(problem.box[1]),
-                             float(problem.t_final), alloc_work(n), final, fvel, max_events, ev_t, ev_i, ev_j, ev_s)
+        st, n_ev, _, _ = run(ka.start, v0, ka.radius, ka.mass, ka.W, ka.H, ka.t_final, alloc_work(n), final, fvel,
+                             max_events, ev_t, ev_i, ev_j, ev_s)
         if st == STATUS_OK:
             break
         if n_ev < cap:  # truncated by max_events (or stalled), not by the buffer
@@ -201,12 +199,11 @@ def final_jacobian(problem: Problem, velocities, *, max_events: int = 100_000):
     these velocities produce (one-sided at a change of sequence).
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
-    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
-    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    ka = problem.kernel_arrays()
     cue = np.flatnonzero(problem.cueable).astype(np.int64)
     final, n_ev, ev_t, ev_i, ev_j, ev_s = event_record(problem, v0, max_events=max_events)
     J = np.empty((2 * problem.n, 2 * cue.size))
-    jacobian_from_events(x0, v0, mass, float(problem.t_final), cue, n_ev, ev_t, ev_i, ev_j, ev_s, J)
+    jacobian_from_events(ka.start, v0, ka.mass, ka.t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_s, J)
     return final, J
 
 
@@ -221,9 +218,9 @@ def transition_jacobian(problem: Problem, velocities, t: float, *, max_events: i
     if not 0.0 <= t <= float(problem.t_final):
         raise ValueError(f"t must lie in [0, t_final = {problem.t_final}], got {t}")
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
-    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    ka = problem.kernel_arrays()
     _, n_ev, ev_t, ev_i, ev_j, ev_s = event_record(problem, v0, max_events=max_events)
     e0 = int(np.searchsorted(ev_t, t, side="right"))
     Phi = np.empty((2 * problem.n, 4 * problem.n))
-    transition_from_events(v0, mass, float(problem.t_final), e0, t, n_ev, ev_t, ev_i, ev_j, ev_s, Phi)
+    transition_from_events(v0, ka.mass, ka.t_final, e0, t, n_ev, ev_t, ev_i, ev_j, ev_s, Phi)
     return Phi

@@ -39,6 +39,7 @@ event; its final positions are those at that event's time, never extrapolated pa
 from __future__ import annotations
 
 import math
+from enum import IntEnum
 
 import numpy as np
 from numba import njit
@@ -46,13 +47,22 @@ from numba import njit
 from nbst.constants import STALL_EVENTS_PER_DISK, STALL_RTOL, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 from nbst.sim.primitives import INF, elastic_impulse, pair_tau, wall_tau
 
-__all__ = ["INF", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "alloc_work", "cost_signature",
+__all__ = ["INF", "SimStatus", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "alloc_work", "cost_signature",
            "evaluate_kernel", "pair_tau", "run", "wall_tau"]
 
-STATUS_OK = 0
-STATUS_TRUNCATED = 1  # MAX_EVENTS reached before t_final
-STATUS_OVERFLOW = 2  # event record buffer full (simulate() retries with a larger one)
-STATUS_STALLED = 3  # a jam: STALL_EVENTS_PER_DISK * N events within one instant
+
+
+class SimStatus(IntEnum):
+    """How a run of the kernel ended (numba compiles the members as constants)."""
+
+    OK = 0  # reached t_final
+    TRUNCATED = 1  # MAX_EVENTS reached before t_final
+    OVERFLOW = 2  # event record buffer full (simulate() retries with a larger one)
+    STALLED = 3  # a jam: STALL_EVENTS_PER_DISK * N events within one instant
+
+
+STATUS_OK, STATUS_TRUNCATED, STATUS_OVERFLOW, STATUS_STALLED = (SimStatus.OK, SimStatus.TRUNCATED,
+                                                                SimStatus.OVERFLOW, SimStatus.STALLED)
 
 
 # --------------------------------------------------------------------------- the kernel

@@ -181,13 +181,13 @@ def analyze(problem: Problem, velocities, *, timestep: float | None = None) -> d
     n = problem.n
     if v0.shape != (n, 2):
         raise ValueError(f"velocities must have shape ({n}, 2), got {v0.shape}")
-    x0 = np.ascontiguousarray(problem.start, dtype=np.float64)
-    mass = np.ascontiguousarray(problem.mass, dtype=np.float64)
+    ka = problem.kernel_arrays()
+    mass = ka.mass
     cue = np.flatnonzero(problem.cueable).astype(np.int64)
-    t_final = float(problem.t_final)
+    t_final = ka.t_final
     final, n_ev, ev_t, ev_i, ev_j, ev_s = event_record(problem, v0)
     J = np.empty((2 * n, 2 * cue.size))
-    jacobian_from_events(x0, v0, mass, t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_s, J)
+    jacobian_from_events(ka.start, v0, mass, t_final, cue, n_ev, ev_t, ev_i, ev_j, ev_s, J)
 
     R = float(problem.target_radius)
     d = np.hypot(*(final - np.asarray(problem.target, dtype=float)).T)

@@ -94,10 +94,6 @@ PROGRESS_EVERY = 2048
 BIG_COST = 1e300
 
 
-class _Stop(Exception):
-    """Raised inside an optimizer's objective when the run must end."""
-
-
 class _Budget:
     """Counts trials, keeps the best, the history and the stopping rules.
 
@@ -230,7 +226,7 @@ def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: 
 
 
 def _popcount(x: int) -> int:
-    return bin(int(x)).count("1")
+    return int(x).bit_count()
 
 
 def _randomize(problem: Problem, rng: np.random.Generator, B: int, *, p_directed: float = 0.5,
