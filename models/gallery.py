@@ -9,7 +9,7 @@ Regenerate (documented in ``models/scenes/README.md`` and ``docs/mujoco.md``)::
 Each folder holds ``problem.json`` (the built-in problem), ``solution.json`` (the best
 solution nbst has found: the stored one unless a fresh ``nbst.search.solve`` run has a
 lower cost), ``scene.xml`` (``nbst mjcf``) and ``preview.png`` (top view at t = 0,
-rendered by MuJoCo). No search module, no stored solution: the folder gets the scene with
+rendered by MuJoCo, every puck and target numbered, a caption below). No search module, no stored solution: the folder gets the scene with
 the disks at rest and no solution.json (never a placeholder).
 """
 from __future__ import annotations
@@ -35,16 +35,90 @@ PREVIEW_AMBIENT = 0.35
 PREVIEW_DIFFUSE = 0.65
 
 
+#: Numbers on the preview (pixels): each puck's index upper left of it, each target's (its
+#: disk's index) upper right of its dot, dark over a white halo; a caption band below the
+#: view says what the picture is and what its marks mean.
+PREVIEW_NUMBER_PX = 15
+PREVIEW_CAPTION_PX = 13
+PREVIEW_INK = (25, 25, 30)
+PREVIEW_TARGET_INK = (20, 100, 35)  # the targets' green, darkened to read as text
+PREVIEW_MIN_PUCK_PX = 3.0  # smaller pucks are drawn at this radius (with a dot at the target)
+
+
+def _project(model, data, cam: str, size: int, xyz) -> np.ndarray:
+    """World points (..., 3) -> image px (column, row) through MuJoCo camera ``cam`` (pinhole,
+    square image of ``size`` px)."""
+    import mujoco
+    k = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, cam)
+    pos, mat = data.cam_xpos[k], data.cam_xmat[k].reshape(3, 3)  # columns: camera x, y, z (looks along -z)
+    f = 0.5 * size / np.tan(np.radians(model.cam_fovy[k]) / 2)
+    local = (np.asarray(xyz, float) - pos) @ mat
+    depth = -local[..., 2]
+    return np.stack([size / 2 + f * local[..., 0] / depth, size / 2 - f * local[..., 1] / depth], axis=-1)
+
+
+def _annotate(rgb: np.ndarray, problem, pucks_px, pucks_r_px, targets_px) -> np.ndarray:
+    """The preview with numbers (pucks upper left in black, targets upper right of their dots
+    in green) and a caption band below it (what the picture shows, what the marks mean)."""
+    from matplotlib import font_manager
+    from PIL import Image, ImageDraw, ImageFont
+
+    from nbst import palette
+    from nbst.problem import display_name
+
+    bold = ImageFont.truetype(font_manager.findfont(font_manager.FontProperties(family="DejaVu Sans",
+                                                                                weight="bold")), PREVIEW_NUMBER_PX)
+    plain = ImageFont.truetype(font_manager.findfont(font_manager.FontProperties(family="DejaVu Sans")),
+                               PREVIEW_CAPTION_PX)
+    size = rgb.shape[1]
+    p = problem
+    ncue = int(p.cueable.sum())
+    kinds = "amber: cueable puck" + (", blue: noncueable puck" if ncue < p.n else "")
+    lines = [f"{display_name(p.name)}: the MuJoCo scene at t = 0, seen from the top camera",
+             f"{kinds}; black number: the puck's disk index",
+             "green disc: a target's neighbourhood of radius R, its dot the target;",
+             "green number: the index of the disk that must end there"]
+    pitch = int(PREVIEW_CAPTION_PX * 1.45)
+    band = len(lines) * pitch + 12
+    img = Image.new("RGB", (size, rgb.shape[0] + band), (255, 255, 255))
+    img.paste(Image.fromarray(np.ascontiguousarray(rgb)), (0, 0))
+    d = ImageDraw.Draw(img)
+    small = np.asarray(pucks_r_px) < PREVIEW_MIN_PUCK_PX
+    for i in np.flatnonzero(small):  # pucks too small to see (diamond-s14-tiny): drawn at the least size
+        (cx, cy), r = pucks_px[i], PREVIEW_MIN_PUCK_PX
+        d.ellipse((cx - r, cy - r, cx + r, cy + r), fill=palette.rgb8(palette.class_color(p.cueable[i])),
+                  outline=PREVIEW_INK)
+        (tx, ty), r = targets_px[i], 2.0
+        d.ellipse((tx - r, ty - r, tx + r, ty + r), fill=PREVIEW_TARGET_INK)
+    if small.any():
+        lines[1] += f" (pucks under {PREVIEW_MIN_PUCK_PX:g} px drawn at {PREVIEW_MIN_PUCK_PX:g})"
+    halo = dict(stroke_width=2, stroke_fill=(255, 255, 255))
+    for i in range(p.n):
+        s = str(i)
+        w = d.textlength(s, font=bold)
+        c, r = pucks_px[i], pucks_r_px[i]
+        off = 0.72 * r + 1
+        d.text((c[0] - off - w, c[1] - off - PREVIEW_NUMBER_PX), s, font=bold, fill=PREVIEW_INK, **halo)
+        t = targets_px[i]
+        d.text((t[0] + 4, t[1] - 4 - PREVIEW_NUMBER_PX), s, font=bold, fill=PREVIEW_TARGET_INK, **halo)
+    y = rgb.shape[0] + 6
+    for ln in lines:
+        d.text((8, y), ln, font=plain, fill=PREVIEW_INK)
+        y += pitch
+    return np.asarray(img)
+
+
 def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
     """A top view of the scene at t = 0 as PNG bytes (MuJoCo's renderer, EGL when headless),
-    lit so that the pucks show their class colours exactly (PREVIEW_AMBIENT)."""
+    lit so that the pucks show their class colours exactly (PREVIEW_AMBIENT); every puck and
+    target numbered with its disk's index and a caption below (``_annotate``)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     import io
 
     import mujoco
     from matplotlib import image as mpimg
 
-    from nbst.models.scene import build_model
+    from nbst.models.scene import DEFAULT_UNIT, PUCK_HALF_HEIGHT_RADII, build_model
 
     model = build_model(problem, velocities)
     model.vis.headlight.ambient[:] = PREVIEW_AMBIENT
@@ -59,6 +133,14 @@ def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
     with mujoco.Renderer(model, size, size) as r:
         r.update_scene(data, camera="top")
         rgb = r.render()
+    u = DEFAULT_UNIT
+    rad = np.asarray(problem.radius, float) * u
+    top = np.concatenate([np.asarray(problem.start, float) * u, (rad * (1 + PUCK_HALF_HEIGHT_RADII))[:, None]], axis=1)
+    pucks = _project(model, data, "top", size, top)
+    edge = _project(model, data, "top", size, top + np.stack([rad, 0 * rad, 0 * rad], axis=1))
+    targets = _project(model, data, "top", size, np.concatenate([np.asarray(problem.target, float) * u,
+                                                                 np.zeros((problem.n, 1))], axis=1))
+    rgb = _annotate(rgb, problem, pucks, np.linalg.norm(edge - pucks, axis=1), targets)
     buf = io.BytesIO()
     mpimg.imsave(buf, rgb, format="png")
     return buf.getvalue()

@@ -187,7 +187,7 @@ def test_gallery_scenes_and_previews_show_the_palette_colours():
             assert np.allclose(m.geom_rgba[m.geom(f"disk{i}_puck").id][:3], palette.class_color(p.cueable[i]),
                                atol=1e-5)  # the XML keeps 6 significant digits
         img = np.asarray(Image.open(GALLERY_DIR / name / "preview.png").convert("RGB")).astype(int)
-        S = img.shape[0]
+        S = img.shape[1]  # the square top view; the caption band lies below it
         u = DEFAULT_UNIT
         W, H = p.box[0] * u, p.box[1] * u
         cam_z = 1.2 * max(W, H)
@@ -335,3 +335,42 @@ def test_report_page_reads_well(validation):
     tail = page[page.index("Summary data"):]
     assert "<details>" in tail and tail.index("<details>") < tail.index("<pre>") < tail.index("</details>")
     assert 'href="report.json"' in tail
+
+
+def test_gallery_previews_number_every_puck_and_target_and_say_what_they_show():
+    """preview.png numbers each puck (upper left, black) and each target (upper right of its
+    dot, green) with its disk's index, and carries a caption band below the square view. The
+    numbers are found where the top camera's projection puts them, as dark glyph pixels that
+    the bare MuJoCo render does not have."""
+    from PIL import Image
+
+    from nbst import load_problem
+    from nbst.models.gallery import GALLERY_DIR, PREVIEW_INK, PREVIEW_NUMBER_PX, PREVIEW_TARGET_INK
+    from nbst.models.scene import DEFAULT_UNIT, PUCK_HALF_HEIGHT_RADII
+    if not (GALLERY_DIR / "over5").is_dir():
+        pytest.skip("no models/scenes here (an installed wheel without the gallery)")
+    for name in ("over5", "diamond-s14", "diamond-s14-tiny"):
+        p = load_problem(name)
+        img = np.asarray(Image.open(GALLERY_DIR / name / "preview.png").convert("RGB")).astype(int)
+        S = img.shape[1]
+        assert img.shape[0] > S + 3 * 12  # a caption of three lines or more below the view
+        caption = img[S:]
+        assert (np.abs(caption - np.array(PREVIEW_INK)).max(axis=2) < 60).sum() > 500  # words in it
+        u = DEFAULT_UNIT
+        W, H = p.box[0] * u, p.box[1] * u
+        cam_z = 1.2 * max(W, H)
+        f = 0.5 * S / np.tan(np.radians(25.0))
+
+        def px(xy, z):
+            return S / 2 + f * (xy[0] - W / 2) / (cam_z - z), S / 2 - f * (xy[1] - H / 2) / (cam_z - z)
+
+        n_px = PREVIEW_NUMBER_PX
+        for i in range(p.n):
+            r = p.radius[i] * u
+            c, rr = px(p.start[i] * u, r * (1 + PUCK_HALF_HEIGHT_RADII)), f * r / cam_z
+            off = 0.72 * max(rr, 3.0) + 1
+            box = img[int(c[1] - off - 1.4 * n_px):int(c[1] - off + 2), int(c[0] - off - 2.2 * n_px):int(c[0] - off + 2)]
+            assert (np.abs(box - np.array(PREVIEW_INK)).max(axis=2) < 50).sum() >= 6, (name, "puck", i)
+            t = px(p.target[i] * u, 0.0)
+            box = img[int(t[1] - 4 - 1.4 * n_px):int(t[1]), int(t[0] + 2):int(t[0] + 4 + 2.2 * n_px)]
+            assert (np.abs(box - np.array(PREVIEW_TARGET_INK)).max(axis=2) < 50).sum() >= 6, (name, "target", i)
