@@ -267,7 +267,8 @@ class BowlingRenderer(FrameRenderer):
         sh = self.shot
         asked = sorted(sh.get("requested", sh.get("down", [])))
         leave = [n for n in range(1, 11) if n not in asked]
-        lines = [f"asked   down {pins(asked)}" + (f" (leave {pins(leave)})" if leave and asked else "")]
+        what = f" (leave {pins(leave)})" if leave and asked else " (a strike)" if asked else ""
+        lines = [f"asked   down {pins(asked)}{what}"]
         m = self.motion
         k = int(np.clip(round(t / (m.times[1] - m.times[0])), 0, len(m.times) - 1))
         if m.down_masks is not None:
@@ -431,7 +432,7 @@ def is_shot_file(path) -> bool:
     return bowling_kind(path) == "shot"
 
 
-def _check_shot_flags(args, duration: float) -> str | None:
+def _check_shot_flags(args, duration: float | None = None) -> str | None:
     """The first problem with ``nbst render SHOT.json``'s flags, as one line, or None."""
     given = [flag for attr, default, flag in DISK_ONLY_FLAGS
              if getattr(args, attr, default) not in (default, None, False)]
@@ -442,7 +443,9 @@ def _check_shot_flags(args, duration: float) -> str | None:
     if fps is not None and not (0 < fps <= FPS_MAX):
         return f"--fps {fps:g}: must be in (0, {FPS_MAX:g}] frames per second"
     still = getattr(args, "still", None)
-    if still is not None and not (0 <= still <= duration):
+    if still is not None and not (0 <= still <= (60.0 if duration is None else duration)):
+        if duration is None:
+            return f"--still {still:g}: must lie in [0, the shot's duration] seconds"
         return f"--still {still:g}: must lie in [0, {duration:g}] seconds (the shot's duration)"
     hold = getattr(args, "hold", None)
     if hold is not None and not (0 <= hold <= 60):
@@ -474,7 +477,7 @@ def cmd_render_shot(args) -> int:
     if not out.lower().endswith(want):
         return err(f"-o {out}: use a {' or '.join(want)} file"
                    f"{' with --still' if still is not None else ' (or --still T for a .png)'}")
-    bad = _check_shot_flags(args, 60.0)
+    bad = _check_shot_flags(args)  # before any work; --still is checked again against the shot's duration
     if bad:
         return err(bad)
     size = getattr(args, "size", None)

@@ -133,8 +133,8 @@ def regular_file(path, what: str = "") -> Path:
         st = os.stat(p)
     except FileNotFoundError:
         raise ShotFileError(f"{where}no such file") from None
-    except OSError as e:
-        raise ShotFileError(f"{where}cannot read ({e.strerror or e})") from None
+    except (OSError, ValueError) as e:  # ValueError: a NUL in the name
+        raise ShotFileError(f"{where}cannot read ({getattr(e, 'strerror', None) or e})") from None
     if stat.S_ISDIR(st.st_mode):
         raise ShotFileError(f"{where}is a directory, not a file")
     if not stat.S_ISREG(st.st_mode):
@@ -224,8 +224,11 @@ def resolve_scene(doc_path, name: str, src, field: str = "scene") -> Path:
     """The scene file a shot or atlas at ``doc_path`` names: inside the document's own folder,
     or the shipped scene; anything else (an absolute path elsewhere, ``../``, a link out of
     the folder) is refused with one line naming the path."""
-    folder = Path(doc_path).resolve().parent
-    cand = (folder / name).resolve()
+    try:
+        folder = Path(doc_path).resolve().parent
+        cand = (folder / name).resolve()
+    except (OSError, RuntimeError, ValueError) as e:  # a name too long, a link loop
+        _fail(src, field, f"{name[:80]!r}: cannot resolve ({getattr(e, 'strerror', None) or e})")
     if cand == SHIPPED_SCENE or cand.is_relative_to(folder):
         return cand
     _fail(src, field, f"{name!r} resolves to {cand}, outside the file's own folder {folder}; a scene must sit "
@@ -338,7 +341,11 @@ def load_atlas(path):
             _fail(path, f"shots[{i}].down", "empty or the same subset as an earlier shot")
         seen.add(key)
     xml = resolve_scene(path, a["scene"], path)
-    if not xml.is_file():  # the common mistake: an atlas copied without its scene
+    try:
+        missing = not os.path.lexists(xml)
+    except (OSError, ValueError):
+        missing = True
+    if missing:  # the common mistake: an atlas copied without its scene
         _fail(path, "scene", f"its shots need their scene {a['scene']!r} beside it, and {xml} is missing "
                              f"(copy it from where the atlas came from)")
     model, text = load_scene(xml, path)

@@ -251,7 +251,7 @@ def cmd_solve(args) -> int:
         if args.quiet:
             return
         if not bar:
-            bar.append(progress_bar(total=args.max_rollouts, unit="launch", file=sys.stderr, dynamic_ncols=True,
+            bar.append(progress_bar(total=args.max_rollouts, unit="rollout", file=sys.stderr, dynamic_ncols=True,
                                     desc=f"bowl {','.join(map(str, want))}", smoothing=0.1))
         bar[0].update(p.rollouts - bar[0].n)
         if p.rollouts:
@@ -469,7 +469,7 @@ class _AtlasRun:
                     continue
         if not a.quiet:
             total = len(todo) if a.robustness_only else a.max_rollouts
-            self.bar = progress_bar(total=total, unit="shot" if a.robustness_only else "launch", file=sys.stderr,
+            self.bar = progress_bar(total=total, unit="shot" if a.robustness_only else "rollout", file=sys.stderr,
                                     dynamic_ncols=True, desc="atlas")
         try:
             with sigterm_as_interrupt():
