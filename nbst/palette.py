@@ -38,9 +38,10 @@ NONCUEABLE = (0.30, 0.62, 0.96)
 #: Per-disk shades in figures: disk k of a class (k counted within its class) is
 #: its class colour mixed towards black by SHADE_STEPS[k % len]. Neighbouring
 #: paths of one class then differ in lightness while keeping the class hue; the
-#: darkest step keeps amber readable as a thin line on white. The steps are about
-#: 12 CIELAB lightness units apart, also as a deuteranope sees them (tests/cvd.py):
-#: hue alone would not tell amber from brown for a colour-blind reader.
+#: darkest step keeps amber readable as a thin line on white. Every two steps of a
+#: class are at least 15 CIELAB units apart (CIE76), also as a deuteranope sees them
+#: (tests/cvd.py; the old steps 0, .38, .18, .55 gave 13.2 for blue): hue alone would
+#: not tell amber from brown for a colour-blind reader.
 SHADE_STEPS = (0.0, 0.42, 0.21, 0.62)
 
 #: Per-disk marks where curves of many disks share an axes (the report's error plot):
