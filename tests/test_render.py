@@ -752,3 +752,23 @@ def test_ablation_figure_labels_apart_and_nbst_family_colours():
     assert len(words) == 4 and any("planner" in w for w in words)
     cols = [deuteranopia(to_rgb(c)) for c in (P.COLORS["variant"], P.COLORS["nbst"], P.COLORS["baseline"])]
     assert min(delta_e(a, b) for k, a in enumerate(cols) for b in cols[k + 1:]) > 30
+
+
+def test_curves_figure_colours_entries_by_family():
+    """`nbst experiment curves`: an entry has its family's colour there as in the ablation
+    (nbst green, the paper's A-H blue, baselines orange); entries of one family differ in
+    line style."""
+    from matplotlib.colors import to_rgb
+
+    from nbst.experiments import plots as P
+    rows = [dict(entry=e, run=k, trial=t, best_cost=c) for e in ("A", "B", "nbst", "nbst-noplan", "cma", "de")
+            for k in range(2) for t, c in ((1, 1e5), (1000, 1e3))]
+    fig = P.plot_curves(rows, title="t")
+    lines = {ln.get_label().split(" (")[0]: ln for ln in fig.axes[0].get_lines() if not ln.get_label().startswith("_")}
+    assert to_rgb(lines["nbst"].get_color()) == pytest.approx(to_rgb(P.COLORS["nbst"]))
+    assert to_rgb(lines["A"].get_color()) == pytest.approx(to_rgb(P.COLORS["variant"]))
+    assert to_rgb(lines["cma"].get_color()) == pytest.approx(to_rgb(P.COLORS["baseline"]))
+    g = np.array(to_rgb(lines["nbst-noplan"].get_color()))
+    assert g[1] > g[0] and g[1] > g[2]  # a green
+    for a, b in (("A", "B"), ("nbst", "nbst-noplan"), ("cma", "de")):
+        assert lines[a].get_linestyle() != lines[b].get_linestyle()

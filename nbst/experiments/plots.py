@@ -77,6 +77,28 @@ def _kind(entry: str) -> str:
     return "variant"
 
 
+#: Within a family, the k-th entry's colour is the family's mixed towards black by
+#: MEMBER_SHADES[k] and drawn in MEMBER_STYLES[k]: told apart by lightness and by dashes.
+MEMBER_SHADES = (0.0, 0.45, 0.25, 0.62)
+MEMBER_STYLES = ("-", "--", "-.", ":")
+
+
+def entry_style(entry: str, entries: list[str]) -> tuple[str, str]:
+    """(colour, line style) of an entry in the curves figure: its family's colour (as the
+    ablation's bars: variants blue, nbst green, baselines orange), shaded and dashed by its
+    rank among the entries of its family in ``entries``."""
+    from matplotlib.colors import to_hex, to_rgb
+
+    kind = _kind(entry)
+    family = [e for e in entries if _kind(e) == kind]
+    k = family.index(entry) if entry in family else 0
+    base = to_rgb(COLORS["nbst"] if kind == "nbst-ablated" else COLORS[kind])
+    if kind == "nbst-ablated":
+        k += 1  # never the plain nbst green
+    f = 1.0 - MEMBER_SHADES[k % len(MEMBER_SHADES)]
+    return to_hex(tuple(c * f for c in base)), MEMBER_STYLES[k % len(MEMBER_STYLES)]
+
+
 def save_figure(fig, stem: str | Path) -> list[Path]:
     """Write ``stem.png`` and ``stem.svg``; returns the paths."""
     from nbst.outputs import atomic_path
@@ -94,17 +116,18 @@ def save_figure(fig, stem: str | Path) -> list[Path]:
 
 
 def plot_curves(rows: list[dict], *, title: str):
-    """Best-so-far cost against trials (both log), one step line per run, one colour per entry."""
+    """Best-so-far cost against trials (both log), one step line per run; each entry in its
+    family's colour (as the ablation's bars), shaded and dashed within a family (``entry_style``)."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=FIG_SIZE)
-    cmap = plt.get_cmap("tab10")
     entries = list(dict.fromkeys(r["entry"] for r in rows))
-    for k, e in enumerate(entries):
+    for e in entries:
+        color, ls = entry_style(e, entries)
         runs = list(dict.fromkeys(r["run"] for r in rows if r["entry"] == e))
         for j, run in enumerate(runs):
             pts = [(r["trial"], r["best_cost"]) for r in rows if r["entry"] == e and r["run"] == run]
             xs, ys = zip(*pts)
-            ax.step(xs, [max(y, CURVE_FLOOR) for y in ys], where="post", color=cmap(k % 10), lw=1.0, alpha=0.85,
+            ax.step(xs, [max(y, CURVE_FLOOR) for y in ys], where="post", color=color, ls=ls, lw=1.0, alpha=0.85,
                     label=f"{e} ({len(runs)} runs)" if j == 0 else None)
     ax.set_yscale("log")
     ax.set_xscale("log")
