@@ -184,12 +184,13 @@ def target_label_px(size) -> int:
                        style.MAX_TARGET_LABEL_PX))
 
 
-def target_label_instances(text, centers_px, marker_px, avoid=None) -> np.ndarray:
+def target_label_instances(text, centers_px, marker_px, avoid=None, skip=None) -> np.ndarray:
     """Text instances numbering each target with its disk's index, just above and
     right of its marker (centres (N, 2) px, marker radii (N,) px). ``avoid``: boxes
     (M, 4) px (x0, y0, x1, y1; the numbers written on disks): a number that would
     overlap one moves to the first free corner of its marker (upper left, lower right,
-    lower left), or stays upper right if none is free."""
+    lower left), or stays upper right if none is free. ``skip`` (N,) bool: targets left
+    unnumbered (their own disk covers them and carries the same number)."""
     cw, ch = text.cell
     centers_px = np.asarray(centers_px, float)
     n = len(centers_px)
@@ -209,8 +210,15 @@ def target_label_instances(text, centers_px, marker_px, avoid=None) -> np.ndarra
             take = ~free & ~hit
             x[take], y[take] = cx[take], cy[take]
             free |= take
-    parts = [text.layout([str(i)], x[i], y[i]) for i in range(n)]
+    keep = np.ones(n, bool) if skip is None else ~np.asarray(skip, bool)
+    parts = [text.layout([str(i)], x[i], y[i]) for i in range(n) if keep[i]]
     return np.concatenate(parts) if parts else text.layout([], 0, 0)
+
+
+def covered_by_own_disk(problem, pos) -> np.ndarray:
+    """Which targets their own disk covers at positions ``pos`` (N, 2): the disk's number
+    then names the target, and the target's own number is left out (no "1313" pairs)."""
+    return ((np.asarray(pos, float) - problem.target) ** 2).sum(axis=1) < problem.radius ** 2
 
 
 def ghost_label_instances(text, centers_px, ring_px) -> np.ndarray:
@@ -485,7 +493,8 @@ class Renderer2D(FrameRenderer):
         if self.labels is not None:
             self.labels.draw(self.size, self._disks["center"])
             numbers = target_label_instances(self.target_text, self.target_px, self.marker_px,
-                                             avoid=self.labels.boxes(self._disks["center"]))
+                                             avoid=self.labels.boxes(self._disks["center"]),
+                                             skip=covered_by_own_disk(p, pos))
             self.target_text.draw_halo(self.size, numbers, style.TARGET_LABEL, style.TEXT_HALO)
             if self.ghost is not None:
                 self.target_text.draw_halo(self.size, ghost_label_instances(self.target_text, self._ghosts["center"],

@@ -1,6 +1,7 @@
 """The 3D view (``--view 3d``): pucks as cylinders on a table inside rails, seen
-by a perspective camera, lit by one directional light; target markers and
-target rings lie on the felt, rings lit in the puck's colour while it is inside.
+by a perspective camera, lit by one directional light; target rings lie on the
+felt, lit in the puck's colour while it is inside; target markers (and, with
+labels, their numbers) are drawn over everything, as in 2D, so no puck hides one.
 With ``labels``, pucks carry their index and each target its disk's index, as in
 the 2D view; a legend sits under the readout when there is room left of the table.
 
@@ -271,10 +272,32 @@ class Renderer3D(FrameRenderer):
             px_per_unit = float(np.linalg.norm(np.diff(self.to_pixels(c, z=0.0), axis=0)))
             self.labels = Labels(ctx, p, p.radius * px_per_unit, self.colors)
             self.target_text = Text(ctx, target_label_px(self.size))
-        self.text = Text(ctx, max(8, int(round(style.TEXT_FRAC * min(self.size)))))
-        self.legend_text = Text(ctx, max(8, int(round(style.LEGEND_TEXT_FRAC * min(self.size)))))
+        self.text = Text(ctx, max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size)))))
+        self.legend_text = Text(ctx, max(style.MIN_LEGEND_PX, int(round(style.LEGEND_TEXT_FRAC * min(self.size)))))
         self.circles = Circles(ctx)
         self.circles.set_view(self.size)
+        # the target markers as an image-space overlay: a ring of the marker's projected radius
+        from nbst.render.shapes import CIRCLE_DTYPE
+        # at the height of the pucks' top faces, so a puck resting on its target has its marker
+        # concentric with its top (and its number); widened to ring that number, as in 2D
+        self._target_centre_px = self.to_pixels(p.target, z=self.puck_h)
+        edge = self.to_pixels(p.target + self._markers["scale"][:, :2] * (1.0, 0.0), z=self.puck_h)
+        self._target_marker_px = np.maximum(np.linalg.norm(edge - self._target_centre_px, axis=1),
+                                            style.MIN_MARKER_PX)
+        if self.labels is not None and self.labels.on_disk.any():
+            clear = float(self.labels.half_diag[self.labels.on_disk].max()) + style.MARKER_LABEL_GAP_PX
+            self._target_marker_px = np.where(self.labels.on_disk, np.maximum(self._target_marker_px, clear),
+                                              self._target_marker_px)
+        h = style.MARKER_HALO_PX
+        ov = np.zeros(2 * n, CIRCLE_DTYPE)
+        ov["center"] = np.concatenate([self._target_centre_px, self._target_centre_px])
+        ov["radius"][:n] = self._target_marker_px + h
+        ov["stroke"][:n] = style.MARKER_PX + 2 * h
+        ov["rim"][:n] = style.MARKER_HALO
+        ov["radius"][n:] = self._target_marker_px
+        ov["stroke"][n:] = style.MARKER_PX
+        ov["rim"][n:] = style.MARKER
+        self._marker_overlay = ov
 
     def _setup_camera(self) -> None:
         p = self.problem
@@ -319,7 +342,7 @@ class Renderer3D(FrameRenderer):
             vao.render(self._mgl.TRIANGLES, instances=len(data))
 
     def _draw_static(self) -> None:
-        """Table, rails, dim rings and markers: drawn once (the big table quad is
+        """Table, rails, dim rings and the legend: drawn once (the big table quad is
         most of the fill cost under MSAA), copied into each frame."""
         ctx, mgl = self.ctx, self._mgl
         fbo = self.static.draw_fbo
@@ -329,21 +352,12 @@ class Renderer3D(FrameRenderer):
         ctx.disable(mgl.BLEND | mgl.CULL_FACE)
         ctx.enable(mgl.DEPTH_TEST)
         self._draw(self.cube, self._cubes)
-        self._draw(self.ring_dim, self._rings)
-        self._draw(self.marker, self._markers)
+        self._draw(self.ring_dim, self._rings)  # (the target markers: an overlay on every frame, in draw)
         # overlays in image px, on the felt (pucks drawn later cover them): target numbers, legend
         ctx.disable(mgl.DEPTH_TEST)
         ctx.enable(mgl.BLEND)
         ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
         ctx.blend_equation = mgl.FUNC_ADD
-        if self.target_text is not None:
-            from nbst.render.scene2d import target_label_instances
-            p = self.problem
-            centre = self.to_pixels(p.target, z=0.0)
-            edge = self.to_pixels(p.target + self._markers["scale"][:, :2] * (1.0, 0.0), z=0.0)
-            self.target_text.draw(self.size, target_label_instances(self.target_text, centre,
-                                                                    np.linalg.norm(edge - centre, axis=1)),
-                                  style.TARGET_LABEL)
         self._draw_legend()
         ctx.disable(mgl.BLEND)
         self._static_done = True
@@ -414,8 +428,20 @@ class Renderer3D(FrameRenderer):
         ctx.enable(mgl.BLEND)
         ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
         ctx.blend_equation = mgl.FUNC_ADD
+        # target markers (and numbers) over everything, in a dark halo, as in 2D: a puck never hides one
+        self.circles.draw(self._marker_overlay)
         if self.labels is not None:
-            self.labels.draw(self.size, self.to_pixels(pos, z=self.puck_h))
+            tops = self.to_pixels(pos, z=self.puck_h)
+            self.labels.draw(self.size, tops)
+            from nbst.render.scene2d import covered_by_own_disk, target_label_instances
+            numbers = target_label_instances(self.target_text, self._target_centre_px, self._target_marker_px,
+                                             avoid=self.labels.boxes(tops), skip=covered_by_own_disk(p, pos))
+            self.target_text.draw_halo(self.size, numbers, style.TARGET_LABEL, style.TEXT_HALO)
+            if self.ghost is not None:
+                from nbst.render.scene2d import ghost_label_instances
+                self.target_text.draw_halo(self.size, ghost_label_instances(
+                    self.target_text, self.to_pixels(g, z=self.puck_h), self.labels.rpx), style.GHOST_LABEL,
+                    style.TEXT_HALO)
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
         self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
 

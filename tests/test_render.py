@@ -772,3 +772,23 @@ def test_curves_figure_colours_entries_by_family():
     assert g[1] > g[0] and g[1] > g[2]  # a green
     for a, b in (("A", "B"), ("nbst", "nbst-noplan"), ("cma", "de")):
         assert lines[a].get_linestyle() != lines[b].get_linestyle()
+
+
+def test_3d_target_markers_show_over_the_pucks(gl, mk):
+    """The 3D view draws target markers over everything too: a puck resting on its target
+    (t = 0 and t_final) leaves the marker's ring in the marker's colour."""
+    from nbst.render.scene3d import Renderer3D
+    p = mk([[400.0, 400.0], [200.0, 200.0]], radii=20.0, targets=[[400.0, 400.0], [600.0, 600.0]])
+    tr = simulate(p, np.zeros((p.n, 2)))
+    r = Renderer3D(gl, p, tr, size=(800, 600), labels=True)
+    try:
+        marker = np.array(style.rgb8(style.MARKER))
+        c, m = r._target_centre_px[0], r._target_marker_px[0] - 0.5 * style.MARKER_PX
+        ang = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+        ring = np.floor((c + m * np.stack([np.cos(ang), np.sin(ang)], axis=1))[:, ::-1]).astype(int)
+        for t in (0.0, p.t_final):
+            f = r.render(t).astype(int)
+            px = np.array([f[a, b] for a, b in ring])
+            assert (np.abs(px - marker).max(axis=1) < 70).mean() > 0.5, t
+    finally:
+        r.release()
