@@ -73,7 +73,10 @@ def overlay_figure(val):
     entries += [(line_handle(mj_ink, ":", lw=1.0), "MuJoCo path"),
                 (circle_handle(ec=mj_ink, lw=1.0, ls=":"), "final position, MuJoCo")]
     legend_below(fig, entries)
-    ax.set_title("paths: exact (nbst) and MuJoCo", fontsize=9)
+    from nbst.problem import display_name
+    how = (f"aligned stepping, probe step {val.timestep * 1e3:g} ms" if getattr(val, "stepping", "fixed") == "aligned"
+           else f"fixed steps of {val.timestep * 1e3:g} ms")
+    ax.set_title(f"{display_name(p.name)}: paths, exact (nbst) and MuJoCo ({how})", fontsize=9)
     return fig
 
 
