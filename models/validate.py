@@ -211,7 +211,8 @@ class Validation:
             lines.append(f"mismatch   first: {ev['first_mismatch']['text']} ({ev['first_mismatch']['side']})")
         if self.diverge:
             dv = self.diverge
-            lines.append(f"diverge    disk {dv['disk']} parts by > {self.tol:g} units at t={dv['time']:.4f}s; "
+            unit = "unit" if self.tol == 1 else "units"
+            lines.append(f"diverge    disk {dv['disk']} parts by > {self.tol:g} {unit} at t={dv['time']:.4f}s; "
                          f"cause: {dv['cause']}")
         else:
             lines.append(f"diverge    never: every disk stays within {self.tol:g} unit{'' if self.tol == 1 else 's'} of its exact path")
