@@ -46,8 +46,8 @@ N_SUBSETS = geometry.N_SUBSETS
 SIZE_TOTAL = np.array([math.comb(10, k) for k in range(11)])
 
 
-def size_of(mask: int) -> int:
-    return bin(int(mask)).count("1")
+#: Pins down in a mask (one definition: the geometry's).
+size_of = geometry.size_of
 
 
 @dataclass

@@ -172,7 +172,7 @@ def classify(*, touch: str = "front") -> dict[int, str]:
 
 
 def size_of(m: int) -> int:
-    return bin(int(m)).count("1")
+    return int(m).bit_count()
 
 
 def counts(classes: dict[int, str], masks=None) -> dict[str, np.ndarray]:

@@ -92,7 +92,7 @@ def from_unit(u) -> np.ndarray:
 def hamming(a, b) -> np.ndarray:
     """Number of pins whose state differs between masks a and b (broadcast)."""
     x = np.bitwise_xor(np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64))
-    return np.array([bin(int(v)).count("1") for v in np.ravel(x)]).reshape(np.shape(x))
+    return np.array([int(v).bit_count() for v in np.ravel(x)]).reshape(np.shape(x))
 
 
 #: Geometry-weighted distance (``distance="geometry"``): an extra pin down that neighbours a

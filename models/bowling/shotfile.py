@@ -79,7 +79,7 @@ def shot_dict(model, launch, *, scene_name: str, down_mask: int, requested=None,
         req = int(requested)
         d["requested"] = shot.pins_of(req)
         d["found"] = req == int(down_mask)
-        d["hamming"] = bin(req ^ int(down_mask)).count("1")
+        d["hamming"] = (req ^ int(down_mask)).bit_count()
     if robustness is not None:
         d["robustness"] = robustness
     if search is not None:
