@@ -296,7 +296,8 @@ def cmd_solve(args) -> int:
         L.close()
     got = ",".join(map(str, shot.pins_of(res.mask))) or "none"
     how = " (the shipped atlas's throw, confirmed)" if from_atlas else ""
-    line = (f"pins down {got} ({res.hamming} off the request) after {res.rollouts} launches{how} in "
+    line = (f"pins down {got} ({res.hamming} off the request) after {res.rollouts} "
+            f"launch{'es' if res.rollouts != 1 else ''}{how} in "
             f"{res.wall_time:.1f} s, seed {seed}; wrote {args.output}")
     if res.stopped == "interrupted" or late:
         print(f"nbst bowl solve: interrupted; best so far written: {line}", file=sys.stderr)
