@@ -16,6 +16,16 @@ OVERLAP_RTOL = 1e-9
 #: finitely many events in finite time, but a bug or a degenerate jam must not
 #: hang a search. A run that hits it is flagged (``Trajectory.truncated``) and
 #: scored with cost = inf by ``evaluate``.
+#:
+#: Where the crossing limit (``nbst.domain.MAX_BOX_CROSSINGS``) keeps runs under it, and
+#: where not: the limit bounds the wall events of a disk that meets no other disk (63
+#: disks x 1,000 crossings = 63,000 events). A collision moves speed between disks and
+#: between axes, so it bounds nothing after one: in a 1e9 x 2001 box with 1 unit of play
+#: across, a disk sent along the box at 999 crossings that grazes a resting disk leaves
+#: with ~1e8 crossings across the channel, and the run stops at this cap after 199,999
+#: wall events (tests/test_search.py measures it). The search never keeps such a run (cost
+#: inf), so its solutions always simulate to t_final; a hand-written solution file within
+#: the crossing limit can still be truncated, and ``nbst simulate`` then says so.
 MAX_EVENTS = 200_000
 
 #: A jam: more than this many events per disk within one instant (a window of

@@ -196,3 +196,88 @@ def test_recorded_candidates_are_what_the_loop_simulated(s14):
         assert cost[t - 1] == c  # the improvement at trial t is the candidate simulated at trial t
     same(r.solution, solve(s14, seed=9, max_trials=1500, patience=0, variant="A"))  # recording changes nothing
     assert len(r.costs) == r.solution.meta["population_size"] and np.all(np.isfinite(r.costs))
+
+
+# --------------------------------------------------------------------------- parameters and the velocity domain
+
+@pytest.mark.parametrize("field, value", [("pop_limit", 1), ("planner_weight", -0.1), ("op_weights", (1.0, 0.0)),
+                                          ("adapt_floor", 1.0 / 7), ("cull", "best"), ("polish_sims", 1),
+                                          ("signature_radius", float("nan")), ("hard_limit", 100)])
+def test_search_params_check_each_field_and_name_it(field, value):
+    with pytest.raises(ValueError, match=rf"^SearchParams\.{field}: must be "):
+        SearchParams(**{field: value})
+
+
+def test_search_params_defaults_and_every_variant_pass_their_checks(s14):
+    for v in VARIANTS:
+        assert variant_params(v, s14).variant.lower() == v.lower()
+
+
+def _narrow_channel(R=1e5):
+    """Legal, and hostile to unbounded proposals: 1 unit of play across a 2001-unit channel,
+    and a target radius so large that a creep (0.1 R / t_final per axis) crosses it 10,000
+    times. The two disks cannot pass each other, so the straight shot fails."""
+    from nbst.problem import problem_from_dict
+
+    return problem_from_dict({"name": "channel", "box": [1e7, 2001], "t_final": 5.0, "target_radius": R,
+                              "disks": [{"start": [2000, 1000.5], "target": [8e6, 1000.5], "radius": 1000},
+                                        {"start": [9e6, 1000.5], "target": [1e6, 1000.2], "radius": 1000}]})
+
+
+@pytest.mark.parametrize("variant", ["nbst", "A"])
+def test_a_legal_problem_never_yields_a_refused_solution(variant):
+    from nbst.domain import MAX_BOX_CROSSINGS
+    from nbst.problem import box_crossings
+    from nbst.solution import solution_from_dict
+
+    p = _narrow_channel()
+    sol = solve(p, seed=1, max_trials=4000, patience=0, variant=variant)
+    assert box_crossings(p, sol.velocities).max() <= MAX_BOX_CROSSINGS
+    d = json.loads(json.dumps({"problem": p.name, "velocities": sol.velocities.tolist()}))
+    solution_from_dict(d, p)  # the checker accepts it
+    assert not simulate(p, sol.velocities).truncated
+
+
+def test_limit_crossings_scales_onto_the_limit_and_leaves_the_domain_alone():
+    from nbst.search.ops import SEARCH_MAX_CROSSINGS, limit_crossings
+    from nbst.problem import box_crossings
+
+    p = _narrow_channel()
+    ka = p.kernel_arrays()
+    cue = np.arange(2, dtype=np.int64)
+    inside = np.array([[1.2e6, 0.3], [-3.0e5, -0.05]])
+    v = inside.copy()
+    assert limit_crossings(v, cue, ka.radius, ka.W, ka.H, ka.t_final) == 0
+    np.testing.assert_array_equal(v, inside)
+    fast = np.array([[1.0e6, 4000.0], [-2.0e5, 10.0]])  # disk 0: 20,000 crossings across the channel
+    v = fast.copy()
+    assert limit_crossings(v, cue, ka.radius, ka.W, ka.H, ka.t_final) == 1
+    assert box_crossings(p, v)[0] == pytest.approx(SEARCH_MAX_CROSSINGS, rel=1e-12)
+    assert v[0, 0] / v[0, 1] == pytest.approx(fast[0, 0] / fast[0, 1], rel=1e-12)  # direction kept
+    np.testing.assert_array_equal(v[1], fast[1])
+    # a disk that fills the channel (H = 2r) may not move across it at all
+    tight = p.radius.copy()
+    tight[0] = 1000.5
+    v = fast.copy()
+    limit_crossings(v, cue, tight, ka.W, ka.H, ka.t_final)
+    assert v[0, 1] == 0.0 and v[0, 0] == fast[0, 0]
+
+
+def test_where_the_crossing_bound_stops_the_event_cap_still_holds():
+    """The crossing limit bounds the wall events of a disk that meets no other (constants.MAX_EVENTS):
+    one collision in a 1e9 x 2001 box turns a run along the long axis into ~1e8 bounces
+    across the short one. Such a run is truncated (cost inf), so the search never keeps it."""
+    from nbst.constants import MAX_EVENTS
+    from nbst.problem import box_crossings, problem_from_dict
+    from nbst.sim import evaluate
+
+    p = problem_from_dict({"name": "long", "box": [1e9, 2001], "t_final": 5.0, "target_radius": 75.0,
+                           "disks": [{"start": [2000, 1000.2], "target": [5e8, 1000.5], "radius": 1000},
+                                     {"start": [5e8, 1000.8], "target": [8e8, 1000.2], "radius": 1000}]})
+    v = np.array([[999 * (1e9 - 2000) / 5, 0.0], [0.0, 0.0]])
+    assert box_crossings(p, v).max() < 1000
+    tr = simulate(p, v)
+    assert tr.truncated and len(tr.events) == MAX_EVENTS and tr.n_disk_disk == 1
+    assert np.isinf(evaluate(p, v[None])[1][0])
+    sol = solve(p, seed=1, max_trials=3000, patience=0, variant="A")
+    assert not simulate(p, sol.velocities).truncated

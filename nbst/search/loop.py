@@ -13,7 +13,7 @@ from enum import IntEnum
 import numpy as np
 from numba import njit
 
-from nbst.search.ops import (INS_CULLED, INS_FALLBACK, SIZE, acceptable_counts,
+from nbst.search.ops import (INS_CULLED, INS_FALLBACK, SIZE, acceptable_counts, limit_crossings,
                          creep_velocity, crossover, directed_velocity, insert, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 from nbst.sim import alloc_work, cost_signature, run
@@ -209,6 +209,7 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
                 else:
                     uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
             op_count[op, 0] += 1
+        limit_crossings(child, cue_idx, radius, W, H, t_final)
 
         cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, R, max_events, work,
                                         fin, vel, no_t, no_i, no_s)

@@ -58,7 +58,7 @@ from nbst.search.loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGE
                           ST_TRUNCATED, evaluate_one, loop_scratch, settle, stop_code)
 from nbst.search.loop import OP_NAMES as PAPER_OP_NAMES
 from nbst.sim.primitives import mirror
-from nbst.search.ops import (BEST, NTAB, SIZE, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
+from nbst.search.ops import (BEST, NTAB, SIZE, limit_crossings, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 
 # operators of the nbst variant: the paper's four (``nbst.search.loop.OP_NAMES``), then nbst's
@@ -289,6 +289,7 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
                         child[i, 0] = out2[0]
                         child[i, 1] = out2[1]
             op_count[op, 0] += 1
+        limit_crossings(child, cue_idx, radius, W, H, t_final)
 
         cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, R, max_events, work,
                                         fin, vel, no_t, no_i, no_s)

@@ -27,6 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
+from nbst.domain import MAX_BOX_CROSSINGS
+
 SIZE, NTAB, BEST = 0, 1, 2
 
 # insert() outcomes
@@ -42,6 +44,53 @@ CULL_SUBSUMED = 0  # the paper's culling (A)
 CULL_WORST = 1  # variant F
 
 _U53 = 1.0 / 9007199254740992.0  # 2**-53
+
+
+# --------------------------------------------------------------------------- the velocity domain
+
+#: Most box crossings the search proposes for one disk: a hair under the solution checker's
+#: limit (``nbst.domain.MAX_BOX_CROSSINGS``), so round-off in the checker's recount of a
+#: proposal scaled onto the limit never refuses it.
+SEARCH_MAX_CROSSINGS = 0.999 * MAX_BOX_CROSSINGS
+
+
+@njit(cache=True, error_model="numpy")
+def limit_crossings(v, cue_idx, radius, W, H, t_final):
+    """Keep velocities v (N, 2) inside the accepted domain, in place: a cueable disk whose free
+    flight would cross the box more than SEARCH_MAX_CROSSINGS times in t_final
+    (|vx| t / (W - 2r) + |vy| t / (H - 2r), as ``nbst.problem.box_crossings`` counts) is slowed
+    down, direction kept, to exactly that many; along an axis the disk fills (W = 2r or
+    H = 2r) its velocity is set to 0. Returns how many disks it changed (0 for a velocity set
+    already inside: such a set is left bit for bit as it is).
+
+    Every proposal of the search (randomize, creep, crossover, bank, strike, plan, planner
+    seeds, polish steps) goes through it, so a legal problem never yields a refused solution.
+    """
+    changed = 0
+    for q in range(cue_idx.shape[0]):
+        i = cue_idx[q]
+        gx = W - 2.0 * radius[i]
+        gy = H - 2.0 * radius[i]
+        hit = False
+        if gx <= 0.0 and v[i, 0] != 0.0:
+            v[i, 0] = 0.0
+            hit = True
+        if gy <= 0.0 and v[i, 1] != 0.0:
+            v[i, 1] = 0.0
+            hit = True
+        k = 0.0
+        if v[i, 0] != 0.0:
+            k += abs(v[i, 0]) * t_final / gx
+        if v[i, 1] != 0.0:
+            k += abs(v[i, 1]) * t_final / gy
+        if k > SEARCH_MAX_CROSSINGS:
+            f = SEARCH_MAX_CROSSINGS / k
+            v[i, 0] *= f
+            v[i, 1] *= f
+            hit = True
+        if hit:
+            changed += 1
+    return changed
 
 
 # --------------------------------------------------------------------------- random numbers

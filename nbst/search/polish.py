@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from nbst.problem import Problem
+from nbst.search.ops import limit_crossings
 from nbst.sim import STATUS_OK, alloc_work, cost_signature, run
 from nbst.sim.jacobian import jacobian_from_events
 
@@ -149,6 +150,7 @@ def polish_kernel(x0, v, radius, mass, target, W, H, t_final, R, cue, max_sims, 
             for k in range(C):
                 vnew[cue[k], 0] += d[2 * k]
                 vnew[cue[k], 1] += d[2 * k + 1]
+            limit_crossings(vnew, cue, radius, W, H, t_final)  # a step never leaves the accepted domain
             st2, n_ev2, _, _ = run(x0, vnew, radius, mass, W, H, t_final, work, fnew, fvel, cap, nt, ni, nj, ns)
             sims += 1
             c2 = math.inf

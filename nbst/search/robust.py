@@ -270,12 +270,15 @@ def polish_on_target(problem: Problem, velocities, *, max_sims: int = POLISH_SIM
     losing an on-target disk. Returns (velocities (N, 2), simulations run). Analytic Jacobian
     (``nbst.sim.jacobian``), damping as ``nbst.search.polish``.
     """
-    from nbst.search.polish import LAMBDA0, LAMBDA_MAX, LAMBDA_MIN, RIDGE
+    from nbst.search.ops import limit_crossings
+    from nbst.search.polish import LAMBDA0, LAMBDA_DOWN, LAMBDA_MAX, LAMBDA_MIN, LAMBDA_UP, LAMBDA_UP_SINGULAR, RIDGE
     from nbst.sim import evaluate
     from nbst.sim.jacobian import final_jacobian
 
     v = np.array(velocities, dtype=np.float64)
     cue = np.flatnonzero(problem.cueable)
+    cue_idx = cue.astype(np.int64)
+    ka = problem.kernel_arrays()
     R = float(problem.target_radius)
     h = 0.5 * power
 
@@ -308,18 +311,19 @@ def polish_on_target(problem: Problem, velocities, *, max_sims: int = POLISH_SIM
             try:
                 step = np.linalg.solve(M, -g)
             except np.linalg.LinAlgError:
-                lam *= 10.0
+                lam *= LAMBDA_UP_SINGULAR
                 continue
             vn = v.copy()
             vn[cue] += step.reshape(-1, 2)
+            limit_crossings(vn, cue_idx, ka.radius, ka.W, ka.H, ka.t_final)
             dn = dist(evaluate(problem, vn[None])[0][0])
             sims += 1
             on = float(((dn[idx] / scale) ** power).sum())
             if np.all(dn[idx] <= R) and on < obj:
                 v, obj, accepted = vn, on, True
-                lam = max(lam / 3.0, LAMBDA_MIN)
+                lam = max(lam / LAMBDA_DOWN, LAMBDA_MIN)
                 break
-            lam *= 4.0
+            lam *= LAMBDA_UP
         if not accepted or sims >= max_sims:
             break
         final, J = final_jacobian(problem, v)  # its simulation counts too

@@ -130,8 +130,17 @@ class _Budget:
         return self.max_trials - self.trials
 
     def velocities(self, X: np.ndarray) -> np.ndarray:
+        """Velocity sets (B, N, 2) of the rows of X, each kept inside the accepted domain
+        (``nbst.search.ops.limit_crossings``: a legal problem never yields a refused solution)."""
+        from nbst.search.ops import limit_crossings
+
         V = np.zeros((X.shape[0], self.problem.n, 2))
         V[:, self.cue] = X.reshape(X.shape[0], self.cue.size, 2)
+        if np.all(np.isfinite(V)):
+            ka = self.problem.kernel_arrays()
+            cue = self.cue.astype(np.int64)
+            for b in range(V.shape[0]):
+                limit_crossings(V[b], cue, ka.radius, ka.W, ka.H, ka.t_final)
         return V
 
     def evaluate(self, X) -> np.ndarray:
