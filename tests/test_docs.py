@@ -9,7 +9,8 @@
 2. docs/cli.md is what ``python -m nbst.cli.reference`` writes.
 3. Every measured figure in the docs (a number with a unit of time, speed, size or share)
    sits in a block that a benchmark script writes, or in a ``measured`` block that carries
-   the command that reproduces it and the date.
+   the command that reproduces it and the date; numbers that are settings (defaults,
+   limits) sit in a ``settings`` block that says so.
 4. No doc points at a file outside the repository.
 """
 from __future__ import annotations
@@ -219,9 +220,12 @@ def test_cli_reference_is_what_the_parser_says():
 
 # ------------------------------------------------------------------ 3. measured figures
 
-FIGURE = re.compile(r"(?<![\w.#-])\d[\d,]*(\.\d+)?(k|M)?\s?(s|ms|min|trials/s|events/s|fps|x|×|%|GB|MB|MiB|GiB)"
-                    r"(?![\w/])")
+FIGURE = re.compile(r"(?<![\w.#-])\d[\d,]*(\.\d+)?(k|M)?(\s?(s|ms|min|trials/s|events/s|fps|%|GB|MB|MiB|GiB)|x|×)"
+                    r"(?![\w/])")  # "3.2x" is a ratio; "2 x R" a product
 MEASURED = re.compile(r"^<!-- measured: (.+) -->$")
+#: Numbers that are choices or limits (defaults, caps, a frame rate to encode at), not
+#: measurements: a block that says so, with the reason.
+SETTINGS = re.compile(r"^<!-- settings: .+ -->$")
 BEGIN = re.compile(r"^<!-- BEGIN ([\w-]+) \(written by (benchmarks/[\w.-]+\.py)[^)]*\) -->$")
 GENERATED = {"cli.md"}  # written whole by nbst.cli.reference (checked above)
 
@@ -238,6 +242,9 @@ def unmarked_figures(doc: Path) -> list[str]:
         if fence:
             continue
         m, b = MEASURED.match(s), BEGIN.match(s)
+        if SETTINGS.match(s):
+            inside = "settings"
+            continue
         if m:
             if not re.search(r"`[^`]+`", m.group(1)) or not re.search(r"\(\d{4}-\d{2}-\d{2}\)", m.group(1)):
                 bad.append(f"{doc.name}:{n}: a measured block needs a `command` and a (YYYY-MM-DD) date")
@@ -248,7 +255,7 @@ def unmarked_figures(doc: Path) -> list[str]:
                 bad.append(f"{doc.name}:{n}: {b.group(2)} does not exist")
             inside = b.group(1)
             continue
-        if s in ("<!-- /measured -->",) or (inside and s == f"<!-- END {inside} -->"):
+        if s in ("<!-- /measured -->", "<!-- /settings -->") or (inside and s == f"<!-- END {inside} -->"):
             inside = None
             continue
         if inside is None and FIGURE.search(re.sub(r"<!--.*?-->|`[^`]*`", "", line)):
@@ -266,8 +273,11 @@ def test_every_measured_figure_says_how_it_was_measured():
 def test_the_figure_checker_catches_a_bare_figure(tmp_path):
     d = tmp_path / "x.md"
     d.write_text("It takes 0.7 s.\n\n<!-- measured: `nbst solve over5` (2026-12-01) -->\nIt takes 2 s.\n"
-                 "<!-- /measured -->\n```\nnbst solve  # 5 s\n```\n")
-    assert [b.split(": ", 1)[1] for b in unmarked_figures(d)] == ["It takes 0.7 s."]
+                 "<!-- /measured -->\n```\nnbst solve  # 5 s\n```\n<!-- settings: defaults -->\n60 fps\n"
+                 "<!-- /settings -->\nA 3.2x speed-up over 2 x N disks.\n<!-- measured: no command (2026-12-01) -->\n"
+                 "<!-- /measured -->\n")
+    assert [b.split(": ", 1)[1] for b in unmarked_figures(d)] == [
+        "It takes 0.7 s.", "A 3.2x speed-up over 2 x N disks.", "a measured block needs a `command` and a (YYYY-MM-DD) date"]
 
 
 # ------------------------------------------------------------------ 4. inside the repository
