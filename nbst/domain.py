@@ -24,6 +24,14 @@ MAX_JSON_BYTES = 64 * 1024 * 1024
 #: metadata a few more; Python's parser would recurse ~1000 deep and then fail.
 MAX_JSON_DEPTH = 64
 
+#: Most JSON values in one file, counted before parsing as the number of ',', ':', '[' and
+#: '{' bytes (each value but the first is preceded by one of them; inside strings they are
+#: counted too, an over-estimate). Parsed, a value costs 30-200 bytes of Python objects
+#: (an empty list 56, a float 24): this bound keeps a parsed file under ~300 MB however
+#: it is shaped, where 64 MiB of ``[],`` would otherwise take 3.2 GB. The largest file nbst
+#: writes, the shipped bowling atlas, holds ~78,000 (a solution with its history < 10,000).
+MAX_JSON_VALUES = 2_000_000
+
 #: Longest integer literal (digits): float64 holds 309-digit integers at most;
 #: longer ones cannot be a number nbst uses (Python itself stops at 4300 digits).
 MAX_INT_DIGITS = 400

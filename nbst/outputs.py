@@ -18,21 +18,28 @@ new one, never a truncated one (a full disk leaves the previous file byte-identi
   alive (a writer killed by SIGKILL) is removed by the next write to the same target.
 
 The CLI turns ``OutputError`` into one line and exit status 2. This module also holds
-the signal helpers the writers need: ``sigterm_as_interrupt`` (SIGTERM handled like
-Ctrl-C, so partial files are cleaned up) and ``signals_deferred`` (Ctrl-C held while a
-result file is written).
+the signal helpers the writers need: ``interrupt_once`` (every command runs inside it: the
+first SIGINT, SIGTERM or SIGHUP stops the work like Ctrl-C, later ones wait for the cleanup,
+so partial files are removed and the best-so-far file written), ``signals_deferred`` (the
+signals held while a result file is written), ``signals_blocked`` and ``die_with_parent``
+(worker processes that never outlive their parent, even after SIGKILL).
 """
 from __future__ import annotations
 
+import json
+import math
 import os
 import re
 import secrets
 import signal
 import stat
 import threading
+import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
+
+import numpy as np
 
 
 class OutputError(Exception):
@@ -121,10 +128,14 @@ def prepare_output(path, *, directory: bool = False, option: str = "-o", inputs=
 
 # --------------------------------------------------------------------------- partial files
 
-def partial_path(target, *, tag: str = "") -> Path:
-    """The hidden partial file for ``target`` written by this process: ``.STEM.partial-PID[-TAG]SUFFIX``."""
+def partial_path(target, *, tag: str = "", suffix: str | None = None) -> Path:
+    """The hidden partial file for ``target`` written by this process: ``.STEM.partial-PID[-TAG]SUFFIX``
+    (``suffix``: the extension the writer sees, by default the target's; a symlink ``fig.png``
+    pointing to ``notes.conf`` is written through a ``.png`` partial file, so writers that pick
+    the format by extension pick the one the user named)."""
     t = Path(target)
-    return t.with_name(f".{t.stem}.partial-{os.getpid()}{'-' + tag if tag else ''}{t.suffix}")
+    return t.with_name(f".{t.stem}.partial-{os.getpid()}{'-' + tag if tag else ''}"
+                       f"{t.suffix if suffix is None else suffix}")
 
 
 def _pid_alive(pid: int) -> bool:
@@ -139,11 +150,13 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-def remove_stale_partials(target) -> list[Path]:
+def remove_stale_partials(target, *, suffix: str | None = None) -> list[Path]:
     """Remove partial files of ``target`` left by writers that no longer run (killed by SIGKILL);
-    returns the removed paths. Files of live processes are left alone."""
+    returns the removed paths. Files of live processes are left alone. ``suffix``: also those
+    with this extension (see ``partial_path``)."""
     t = Path(target)
-    pat = re.compile(r"\." + re.escape(t.stem) + r"\.partial-(\d+)(?:-[0-9A-Za-z]+)?" + re.escape(t.suffix) + "$")
+    sufs = "|".join(re.escape(x) for x in {t.suffix, t.suffix if suffix is None else suffix})
+    pat = re.compile(r"\." + re.escape(t.stem) + r"\.partial-(\d+)(?:-[0-9A-Za-z]+)?(?:" + sufs + ")$")
     removed = []
     try:
         names = os.listdir(t.parent if str(t.parent) else ".")
@@ -162,10 +175,10 @@ def remove_stale_partials(target) -> list[Path]:
     return removed
 
 
-def _mkpartial(target):
+def _mkpartial(target, suffix: str | None = None):
     """Create a fresh partial file for ``target`` (O_EXCL): (fd, path)."""
     for _ in range(100):
-        p = partial_path(target, tag=secrets.token_hex(3))
+        p = partial_path(target, tag=secrets.token_hex(3), suffix=suffix)
         try:
             return os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), str(p)
         except FileExistsError:
@@ -204,33 +217,36 @@ def atomic_path(path, *, option: str = "-o") -> Iterator[str]:
     """
     refuse_special(path, option=option)
     target = Path(os.path.realpath(path))
+    suffix = Path(path).suffix  # the extension asked for, even through a symlink to another name
     existed = target.exists()
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        remove_stale_partials(target)
-        fd, tmp = _mkpartial(target)
+        remove_stale_partials(target, suffix=suffix)
+        fd, tmp = _mkpartial(target, suffix)
         os.close(fd)
     except OSError as e:
         raise OutputError(f"{option} {path}: cannot write there ({_why(e)})") from None
     try:
         yield tmp
-        try:
-            mode = stat.S_IMODE(os.stat(target).st_mode)
-        except OSError:
-            mode = 0o666 & ~_umask()
-        os.chmod(tmp, mode)  # the partial file is 0600; the result gets the old file's or the usual mode
-        fd = os.open(tmp, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-        os.replace(tmp, target)
-        _fsync_dir(target.parent)
+        with signals_deferred():  # the file is finished: a signal now waits for the rename
+            try:
+                mode = stat.S_IMODE(os.stat(target).st_mode)
+            except OSError:
+                mode = 0o666 & ~_umask()
+            os.chmod(tmp, mode)  # the partial file is 0600; the result gets the old file's or the usual mode
+            fd = os.open(tmp, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+            os.replace(tmp, target)
+            _fsync_dir(target.parent)
     except BaseException as e:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        with signals_deferred(reraise=False):  # a second signal cannot leave the partial file behind
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
         if isinstance(e, OSError):
             kept = "the previous file is unchanged" if existed else "nothing was written"
             raise OutputError(f"{option} {path}: cannot write ({_why(e)}); {kept}") from None
@@ -254,57 +270,206 @@ def write_text_atomic(path, text: str, *, option: str = "-o") -> None:
     write_bytes_atomic(path, text.encode("utf-8"), option=option)
 
 
-def write_json_atomic(path, obj: Any, *, option: str = "-o") -> None:
-    """Write ``obj`` as strict JSON (indent 1; ``nbst.solution.dumps_strict``) atomically; OutputError on failure."""
-    from nbst.solution import dumps_strict
+def json_safe(x):
+    """``x`` with every non-finite float made strict-JSON: NaN -> null, +/-inf -> the strings
+    "inf" / "-inf" (numpy scalars and arrays become Python values). Every JSON nbst writes or
+    prints goes through this (``docs/formats.md``)."""
+    if isinstance(x, float) and not math.isfinite(x):
+        return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, np.generic):
+        return json_safe(x.item())
+    if isinstance(x, np.ndarray):
+        return json_safe(x.tolist())
+    return x
 
+
+def dumps_strict(obj: Any, **kw) -> str:
+    """JSON text that any strict parser reads (see :func:`json_safe`)."""
+    return json.dumps(json_safe(obj), allow_nan=False, **kw)
+
+
+def write_json_atomic(path, obj: Any, *, option: str = "-o") -> None:
+    """Write ``obj`` as strict JSON (indent 1; :func:`dumps_strict`) atomically; OutputError on failure.
+    The one JSON writer of nbst (``nbst.solution.save_solution`` uses it)."""
     write_text_atomic(path, dumps_strict(obj, indent=1) + "\n", option=option)
 
 
 # --------------------------------------------------------------------------- signals
 
+#: The signals nbst handles like Ctrl-C: SIGINT (Ctrl-C), SIGTERM (kill) and SIGHUP (the
+#: terminal closed). The first one stops the work (KeyboardInterrupt: the best so far is
+#: written, partial files removed, workers stopped; the CLI exits 130); later ones only wait
+#: for that cleanup to finish. SIGKILL cannot be handled: workers die with their parent
+#: (``die_with_parent``) and stale partial files are removed by the next write.
+STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+#: Seconds after a stop signal during which further ones only wait for the cleanup. A signal
+#: after that stops the work again: a library may have swallowed the first KeyboardInterrupt
+#: (numba compiling, say), and the user who insists must not need SIGKILL. The cleanups that
+#: must finish (result files, partial files, workers) hold the signals (``signals_deferred``).
+INSIST_S = 2.0
+
+
+class _Once:
+    active = False  # an ``interrupt_once`` block is running in the main thread
+    received = 0  # signals received inside it
+    stopped_at = 0.0  # time.monotonic() of the last signal that raised KeyboardInterrupt
+    told = False  # the "still finishing" line was printed
+
+
 def _main_thread() -> bool:
     return threading.current_thread() is threading.main_thread()
 
 
+def _say_finishing() -> None:
+    if not _Once.told:
+        _Once.told = True
+        try:  # os.write, not print: the signal may have landed inside a write to sys.stderr
+            os.write(2, b"\nnbst: stopping: finishing the result file and removing partial files first\n")
+        except OSError:
+            pass
+
+
+@contextmanager
+def interrupt_once() -> Iterator[None]:
+    """While the block runs, the first SIGINT, SIGTERM or SIGHUP raises KeyboardInterrupt (as
+    Ctrl-C does) and later ones within INSIST_S seconds are only noted: the cleanup that the first
+    started (the best-so-far file written, partial files removed, workers stopped) is not cut
+    short by a second Ctrl-C. A signal after that raises again. ``nbst.cli.main`` runs every
+    command inside it. A no-op outside the main thread, and inside another such block."""
+    if not _main_thread() or _Once.active:
+        yield
+        return
+
+    def handler(signum, frame):
+        now = time.monotonic()
+        _Once.received += 1
+        if _Once.received == 1 or now - _Once.stopped_at > INSIST_S:
+            _Once.stopped_at = now
+            raise KeyboardInterrupt
+        _say_finishing()
+
+    old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
+    _Once.active, _Once.received, _Once.told = True, 0, False
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        _Once.active = False
+
+
+def ignore_stop_signals() -> None:
+    """Ignore SIGINT, SIGTERM and SIGHUP from now on (the CLI, once its command has ended and the
+    process only exits). A no-op outside the main thread."""
+    if _main_thread():
+        for s in STOP_SIGNALS:
+            signal.signal(s, signal.SIG_IGN)
+
+
 @contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
-    """While the block runs, SIGTERM raises KeyboardInterrupt (like Ctrl-C), so the cleanup that
-    Ctrl-C gets (partial files removed, worker processes stopped) runs on ``kill`` too; the CLI
-    then exits 130. A no-op outside the main thread."""
-    if not _main_thread():
+    """While the block runs, SIGTERM and SIGHUP raise KeyboardInterrupt (like Ctrl-C), so the
+    cleanup that Ctrl-C gets (partial files removed, worker processes stopped) runs on ``kill``
+    and on a closed terminal too; the CLI then exits 130. Inside ``interrupt_once`` (every CLI
+    command) that block's handling applies instead (a second signal never interrupts the
+    cleanup). A no-op outside the main thread."""
+    if not _main_thread() or _Once.active:
         yield
         return
 
     def handler(signum, frame):
         raise KeyboardInterrupt
 
-    old = signal.signal(signal.SIGTERM, handler)
+    old = {s: signal.signal(s, handler) for s in STOP_SIGNALS if s != signal.SIGINT}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 @contextmanager
 def signals_deferred(*, reraise: bool = True) -> Iterator[list]:
-    """Hold SIGINT and SIGTERM while the block runs (e.g. writing the best solution after a first
-    Ctrl-C), so a second Ctrl-C cannot leave the file unwritten. Yields the list of signals that
-    arrived; after the block, if any arrived and ``reraise``, KeyboardInterrupt is raised (the
-    CLI exits 130, with the file written). A no-op outside the main thread."""
+    """Hold SIGINT, SIGTERM and SIGHUP while the block runs (e.g. writing the best solution after a
+    first Ctrl-C), so a second Ctrl-C cannot leave the file unwritten. Yields the list of signals
+    that arrived; after the block, if any arrived and ``reraise``, KeyboardInterrupt is raised (the
+    CLI exits 130, with the file written), unless an earlier signal already stopped the work (inside
+    ``interrupt_once``: the cleanup it started goes on). A no-op outside the main thread."""
     got: list = []
     if not _main_thread():
         yield got
         return
+    first = not _Once.active or _Once.received == 0
 
     def handler(signum, frame):
         got.append(signum)
+        if _Once.active:
+            _Once.received += 1
+            if not first:
+                _say_finishing()
 
-    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
     try:
         yield got
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-    if got and reraise:
+    if got and reraise and first:
         raise KeyboardInterrupt
+
+
+@contextmanager
+def signals_blocked() -> Iterator[None]:
+    """Block the stop signals in this thread while the block runs (e.g. around ``fork``, so a child
+    cannot get a Ctrl-C before it has set its own handlers); they are delivered after it. A no-op
+    where ``pthread_sigmask`` does not exist."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+#: Seconds between a worker's checks that its parent still lives (the portable fallback of
+#: PR_SET_PDEATHSIG): an orphan dies within this long of a parent killed by SIGKILL.
+PARENT_POLL_S = 0.5
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Worker setup: ignore the stop signals (the parent decides when its workers stop and stops
+    them itself) and die with the parent, even when it is killed by SIGKILL. On Linux the kernel
+    sends SIGKILL when the parent dies (``prctl(PR_SET_PDEATHSIG)``); everywhere a daemon thread
+    exits the process once ``os.getppid()`` is no longer ``parent_pid`` (re-parented). Also
+    unblocks the stop signals (see ``signals_blocked``)."""
+    import sys
+
+    for s in STOP_SIGNALS:
+        signal.signal(s, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOP_SIGNALS)
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            PR_SET_PDEATHSIG = 1
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent_pid:  # the parent died before the line above took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="nbst-parent-watch", daemon=True).start()

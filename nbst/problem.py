@@ -9,6 +9,8 @@ from __future__ import annotations
 import difflib
 import json
 import math
+import os
+import stat
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -138,27 +140,79 @@ def _builtin_text(name: str) -> str:
 
 # --------------------------------------------------------------------------- loading
 
-def read_json(path: str | Path) -> Any:
-    """Read a JSON file, turning every failure into a one-line ProblemError."""
+_NOT_REGULAR = ((stat.S_ISDIR, "is a directory, not a JSON file"), (stat.S_ISFIFO, "is a named pipe (FIFO)"),
+                (stat.S_ISCHR, "is a character device"), (stat.S_ISBLK, "is a block device"),
+                (stat.S_ISSOCK, "is a socket"))
+
+
+def _regular_or_refuse(p: Path, mode: int) -> None:
+    if stat.S_ISREG(mode):
+        return
+    why = next((w for test, w in _NOT_REGULAR if test(mode)), "is not a regular file")
+    raise ProblemError(p, "", f"{why}; nbst reads regular files only")
+
+
+def _too_large(p: Path, size: int) -> ProblemError:
+    return ProblemError(p, "", f"{size:,} bytes, larger than {D.MAX_JSON_BYTES:,}; nbst reads JSON files of at "
+                               f"most {D.MAX_JSON_BYTES:,} bytes")
+
+
+def read_bytes_checked(path: str | Path) -> bytes:
+    """The bytes of a regular file of at most ``MAX_JSON_BYTES``, or a one-line ProblemError.
+
+    Checked by ``stat`` before the file is opened: a directory, FIFO, device or socket is
+    refused without opening it (a FIFO would block, /dev/zero never end), and so is a file
+    over the size cap. The file is then opened non-blocking and checked again (``fstat``:
+    the same file, still regular), so a name swapped in between cannot make nbst block."""
     p = Path(path)
     try:
-        with open(p, "rb") as f:  # bounded: a huge file, /dev/zero or an endless pipe stops here
-            data = f.read(D.MAX_JSON_BYTES + 1)
-        if len(data) > D.MAX_JSON_BYTES:
-            raise ProblemError(p, "", f"larger than {D.MAX_JSON_BYTES:,} bytes; nbst reads JSON files of at "
-                                      f"most {D.MAX_JSON_BYTES:,} bytes")
-        text = data.decode("utf-8")
+        st = os.stat(p)
+        _regular_or_refuse(p, st.st_mode)
+        if st.st_size > D.MAX_JSON_BYTES:
+            raise _too_large(p, st.st_size)
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+        with open(fd, "rb", closefd=True) as f:
+            st2 = os.fstat(fd)
+            _regular_or_refuse(p, st2.st_mode)
+            data = f.read(D.MAX_JSON_BYTES + 1)  # bounded, even if the file grew since stat
     except FileNotFoundError:
         raise ProblemError(p, "", "no such file") from None
+    except NotADirectoryError:
+        raise ProblemError(p, "", "no such file (a part of the path is not a folder)") from None
     except IsADirectoryError:
         raise ProblemError(p, "", "is a directory, not a JSON file") from None
     except PermissionError:
         raise ProblemError(p, "", "permission denied") from None
-    except UnicodeDecodeError:
-        raise ProblemError(p, "", "not a text file (not UTF-8)") from None
     except OSError as e:
         raise ProblemError(p, "", f"cannot read: {e.strerror or e}") from None
+    if len(data) > D.MAX_JSON_BYTES:
+        raise _too_large(p, len(data))
+    return data
+
+
+def read_json(path: str | Path) -> Any:
+    """Read a JSON file through nbst's input gate (``read_bytes_checked``, then ``parse_json``),
+    turning every failure into a one-line ProblemError."""
+    p = Path(path)
+    data = read_bytes_checked(p)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ProblemError(p, "", "not a text file (not UTF-8)") from None
     return parse_json(text, str(p))
+
+
+def _check_shape(text: str, source: str) -> None:
+    """Cheap checks on the raw text before the parser builds anything: at most MAX_JSON_VALUES
+    values (see ``nbst.domain``), counted with C-speed ``str.count`` calls."""
+    n = 0
+    for ch in ",:[{":
+        n += text.count(ch)
+        if n > D.MAX_JSON_VALUES:
+            break
+    if n > D.MAX_JSON_VALUES:
+        raise ProblemError(source, "", f"more than {D.MAX_JSON_VALUES:,} JSON values (counting the ',', ':', '[' "
+                                       f"and '{{' characters); nbst reads files of at most {D.MAX_JSON_VALUES:,}")
 
 
 class _LongInt(Exception):
@@ -178,6 +232,7 @@ def parse_json(text: str, source: str) -> Any:
     if len(text) > D.MAX_JSON_BYTES:
         raise ProblemError(source, "", f"{len(text):,} characters; nbst reads JSON of at most "
                                        f"{D.MAX_JSON_BYTES:,}")
+    _check_shape(text, source)
     try:
         obj = json.loads(text, parse_int=_parse_int)
     except json.JSONDecodeError as e:

@@ -6,10 +6,6 @@ Keys nbst does not know are kept in ``Solution.meta`` and written back.
 """
 from __future__ import annotations
 
-import json
-import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from nbst.domain import MAX_BOX_CROSSINGS
+from nbst.outputs import dumps_strict, json_safe, write_json_atomic
 from nbst.problem import Problem, ProblemError, _Checker, box_crossings, read_json
 
 SCHEMA_VERSION = 1
@@ -92,65 +89,14 @@ def make_solution(problem: Problem, velocities, **meta) -> Solution:
     return Solution(problem=problem.name, velocities=solution_from_dict(d, problem).velocities, meta=dict(meta))
 
 
-def json_safe(x):
-    """``x`` with every non-finite float made strict-JSON: NaN -> null, +/-inf ->
-    the strings "inf" / "-inf" (numpy scalars and arrays become Python values).
-    Every JSON nbst writes or prints goes through this (``docs/formats.md``)."""
-    if isinstance(x, float) and not math.isfinite(x):
-        return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
-    if isinstance(x, dict):
-        return {k: json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.generic):
-        return json_safe(x.item())
-    if isinstance(x, np.ndarray):
-        return json_safe(x.tolist())
-    return x
-
-
+# json_safe and dumps_strict (strict JSON: NaN -> null, +/-inf -> "inf"/"-inf") and the one atomic
+# writer live in nbst.outputs; their names stay importable from here.
 _json_safe = json_safe  # the name nbst/cli/mujoco.py imports
 
 
-def dumps_strict(obj: Any, **kw) -> str:
-    """JSON text that any strict parser reads (see :func:`json_safe`)."""
-    return json.dumps(json_safe(obj), allow_nan=False, **kw)
-
-
-def write_json_atomic(path: str | Path, obj: Any) -> None:
-    """Write JSON so that ``path`` holds either the old file or the whole new one.
-
-    The text goes to a temporary file in the same folder, is flushed to disk,
-    then renamed over ``path`` (atomic on POSIX).
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    text = dumps_strict(obj, indent=1) + "\n"
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    except OSError as e:  # name the file the caller asked for, not the scratch file
-        raise OSError(e.errno, e.strerror, str(path)) from None
-    try:
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual permissions
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def save_solution(path: str | Path, solution: Solution) -> None:
-    """Write ``solution`` atomically in the JSON solution format."""
-    write_json_atomic(path, solution.to_dict())
+def save_solution(path: str | Path, solution: Solution, *, option: str = "-o") -> None:
+    """Write ``solution`` in the JSON solution format with nbst's one atomic writer
+    (``nbst.outputs.write_json_atomic``: a partial file beside the target, fsynced, renamed over it,
+    the folder fsynced, stale partial files of killed writers removed; OutputError naming
+    ``option`` and the path on failure, the previous file then unchanged)."""
+    write_json_atomic(path, solution.to_dict(), option=option)

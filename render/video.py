@@ -88,8 +88,6 @@ class VideoWriter:
 
     def __init__(self, path, size, fps, *, rgba: bool = False, buffers: int = style.QUEUE_FRAMES,
                  crf: int = style.X264_CRF, preset: str = style.X264_PRESET):
-        import imageio_ffmpeg
-
         from nbst.outputs import partial_path, refuse_special, remove_stale_partials
 
         self.final_path = str(path)
@@ -101,9 +99,10 @@ class VideoWriter:
         refuse_special(path)
         final = Path(os.path.realpath(path))
         final.parent.mkdir(parents=True, exist_ok=True)
-        remove_stale_partials(final)
+        suffix = Path(path).suffix  # ffmpeg picks the muxer by it: the name asked for, not a link's target's
+        remove_stale_partials(final, suffix=suffix)
         self._target = str(final)
-        self.path = str(partial_path(final))
+        self.path = str(partial_path(final, suffix=suffix))
         self.size = (int(size[0]), int(size[1]))
         self.fps = float(fps)
         w, h = self.size
@@ -118,6 +117,18 @@ class VideoWriter:
             kw = dict(codec="gif", pix_fmt_out="pal8", quality=None,
                       output_params=["-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse=dither=bayer:bayer_scale=4",
                                      "-loop", "0"])
+        from nbst.outputs import signals_deferred
+
+        try:
+            with signals_deferred():  # ffmpeg and its partial file start together with the thread that ends them
+                self._start(rgba, buffers, kw)
+        except KeyboardInterrupt:  # a signal during the start: stop ffmpeg, remove its partial file
+            self.close(discard=True)
+            raise
+
+    def _start(self, rgba: bool, buffers: int, kw: dict) -> None:
+        import imageio_ffmpeg
+
         self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps,
                                                 pix_fmt_in="rgba" if rgba else "rgb24",
                                                 macro_block_size=1, ffmpeg_log_level="error", **kw)
@@ -190,6 +201,12 @@ class VideoWriter:
         to ``path``; with ``discard`` (or on an encoder error) delete it instead."""
         if self._closed:
             return
+        from nbst.outputs import signals_deferred
+
+        with signals_deferred():  # a Ctrl-C now waits: the file is published, or the partial file removed
+            self._close(discard)
+
+    def _close(self, discard: bool) -> None:
         self._closed = True
         self._todo.put(None)
         self._thread.join()

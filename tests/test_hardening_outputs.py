@@ -257,8 +257,8 @@ def _running(pid: int) -> bool:
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
 def test_experiment_workers_die_with_their_parent(tmp_path, sig):
     p, _ = _files(tmp_path, speed=20.0)
-    proc = subprocess.Popen([*NBST, "experiment", "curves", p, "--runs", "3", "--trials", "1000000000",
-                             "--workers", "2", "--out", str(tmp_path / "exp"), "--quiet"],
+    proc = subprocess.Popen([*NBST, "experiment", "curves", p, "--runs", "3", "--max-trials", "1000000000",
+                             "--jobs", "2", "--out-dir", str(tmp_path / "exp"), "--quiet"],
                             stderr=subprocess.PIPE, text=True)
     assert _wait_for(lambda: len(_children(proc.pid)) >= 2, 60), "the worker pool did not start"
     kids = _children(proc.pid)

@@ -54,13 +54,13 @@ def test_cli_jobs(tmp_path, capsys):
 
 
 def test_evaluate_on_threads_gives_the_same_results():
-    import nbst
     from nbst.constants import PARALLEL_BATCH
+    from nbst.sim import evaluate_events
 
     p = load_problem("diamond-s14")
     V = p.straight_velocities() + np.random.default_rng(0).normal(0, 50, (2 * PARALLEL_BATCH + 7, 14, 2))
-    one = nbst.evaluate(p, V, jobs=1, return_events=True)
-    two = nbst.evaluate(p, V, jobs=2, return_events=True)
+    one = evaluate_events(p, V, jobs=1)
+    two = evaluate_events(p, V, jobs=2)
     for a, b in zip(one, two):
         assert np.array_equal(a, b)  # each candidate is simulated alone: bit-identical
 

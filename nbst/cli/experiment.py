@@ -84,14 +84,13 @@ def _no_action(p) -> int:
 
 def _run(args, specs, desc: str):
     from nbst.experiments.runs import run_specs
-    from nbst.outputs import prepare_output, sigterm_as_interrupt
+    from nbst.outputs import prepare_output
 
     prepare_output(args.out, directory=True, option="--out-dir")
     client = cluster_client(args)
     try:
-        with sigterm_as_interrupt():  # kill: workers stopped, finished runs kept, exit 130 as on Ctrl-C
-            return run_specs(specs, args.out, workers=args.workers, cluster=client, progress=not args.quiet,
-                             desc=desc)
+        # a signal (main's interrupt_once): workers stopped, finished runs kept, exit 130 as on Ctrl-C
+        return run_specs(specs, args.out, workers=args.workers, cluster=client, progress=not args.quiet, desc=desc)
     finally:
         if client is not None:
             client.close()

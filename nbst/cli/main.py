@@ -57,11 +57,38 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help(sys.stderr)
-        return 2
+    """Run one command; returns the exit code. Every command runs inside
+    ``nbst.outputs.interrupt_once``: the first SIGINT, SIGTERM or SIGHUP stops it (exit 130,
+    the best so far written and partial files removed), later ones wait for that cleanup.
+    Called as the program (``argv`` None), the signals are ignored from the moment the command
+    ends (Python's shutdown would restore their default, fatal action), so a late signal cannot
+    change the exit status; called with ``argv`` (tests), the handlers are restored."""
+    from nbst.outputs import interrupt_once
+
+    guard = interrupt_once()
+    guard.__enter__()
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help(sys.stderr)
+            return 2
+        return _run(args)
+    except KeyboardInterrupt:  # the first signal landed outside the command (parsing, an error message)
+        print("nbst: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        if argv is not None:
+            guard.__exit__(None, None, None)
+        else:  # the program exits now: a late signal must not kill it during interpreter shutdown
+            from nbst.outputs import ignore_stop_signals, signals_blocked
+
+            with signals_blocked():
+                guard.__exit__(None, None, None)
+                ignore_stop_signals()
+
+
+def _run(args) -> int:
     try:
         return int(args.func(args) or 0)
     except (ProblemError, OutputError) as e:

@@ -5,6 +5,7 @@ import argparse
 import sys
 
 from nbst.cli.args import int_at_least, nonnegative_cost
+from nbst.cli.flags import add_seed
 from nbst.warmup import COLD_COMPILE_SECONDS
 
 VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes, a straight start and a "
@@ -46,8 +47,7 @@ def register(sub) -> None:
                "Every choice the paper leaves open is listed in docs/search.md.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("-o", "--output", required=True, metavar="SOLUTION.json", help="where to write the solution")
-    p.add_argument("--seed", type=int_at_least(0, "seed"), default=None,
-                   help="random seed (default: drawn, and recorded in the file)")
+    add_seed(p, type=int_at_least(0, "seed"), resumable=False)
     p.add_argument("--max-trials", type=int_at_least(1, "max trials"), default=1_000_000, metavar="N",
                    help="trial budget, initialization included (default 1000000)")
     p.add_argument("--patience", type=int_at_least(0, "patience"), default=100_000, metavar="K",
@@ -83,7 +83,7 @@ def register(sub) -> None:
 
 
 def cmd_solve(args) -> int:
-    from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt, write_json_atomic
+    from nbst.outputs import prepare_output, signals_deferred, write_json_atomic
     from nbst.problem import load_problem
 
     problem = load_problem(args.problem)
@@ -133,18 +133,26 @@ def cmd_solve(args) -> int:
     else:
         jobs = default_jobs()
     kw = {"variant": args.variant, "robust": robust} if algorithm == "signature" else {}
+    # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP stops the search, which
+    # returns its best so far; later ones cannot stop the write below (they are only noted).
+    sol, stopped_late = None, False
     try:
-        with sigterm_as_interrupt():  # kill (SIGTERM) stops like Ctrl-C: the best so far is written
-            sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
-                                max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,
-                                callback=progress, cluster=client, **kw)
+        sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
+                            max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,
+                            callback=progress, cluster=client, **kw)
     finally:
-        if bar:
-            bar[0].close()
-        if client is not None:
-            client.close()
-    with signals_deferred(reraise=False) as late:  # a second Ctrl-C cannot stop the write
+        try:
+            if bar:
+                bar[0].close()
+            if client is not None:
+                client.close()
+        except KeyboardInterrupt:  # the first signal landed after the search: write its result all the same
+            stopped_late = True
+    if sol is None:
+        raise KeyboardInterrupt
+    with signals_deferred(reraise=False) as late:  # a signal during the write waits for it
         write_json_atomic(args.output, sol.to_dict())
+    late = late or stopped_late
     m = sol.meta
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
            "max_trials": "trial budget spent", "patience": f"no improvement in {args.patience} trials",

@@ -21,10 +21,11 @@ import math
 import os
 import statistics
 import sys
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable
 
+from nbst.domain import plain
 from nbst.problem import Problem, ProblemError, problem_from_dict
 
 SCHEMA_VERSION = 1
@@ -97,8 +98,27 @@ class RunSpec:
         return f"{RUNS_DIR}/{_safe(self.problem_name)}/{self.entry}/t{self.trials}{tc}-s{self.seed}.json"
 
 
-def _safe(name: str) -> str:
-    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name) or "problem"
+#: Longest file-name part made from a user's name (ASCII characters): far below the usual
+#: 255-byte limit of one file name, with room for a prefix, a hash and an extension.
+MAX_NAME_PART = 80
+
+
+def safe_name(name: str) -> str:
+    """A file-name part made from a user's name (a problem's, ``--name``): ASCII letters, digits,
+    '-', '_' and '.' only, at most MAX_NAME_PART characters, never empty and never starting with
+    '.' (so never '.', '..' or a hidden name; a cache path built from it stays inside ``runs/``).
+    A name that had to change gets 8 hex digits of its hash, so two names never share a file."""
+    out = "".join(ch if (ch.isascii() and ch.isalnum()) or ch in "-_." else "_" for ch in str(name))
+    out = out[:MAX_NAME_PART]
+    if out.startswith("."):
+        out = "_" + out[1:]
+    if out != name or not out:
+        digest = hashlib.sha256(str(name).encode("utf-8", "surrogatepass")).hexdigest()[:8]
+        out = f"{out or 'problem'}-{digest}"
+    return out
+
+
+_safe = safe_name  # the name nbst.cli.experiment imports
 
 
 def make_specs(problems: Iterable[Problem], entries: Iterable[str], *, runs: int, trials: int, seed: int = 1,
@@ -127,14 +147,61 @@ def run_one(spec: RunSpec) -> dict:
             **{k: m[k] for k in keep if k in m}, "velocities": sol.velocities.tolist()}
 
 
-def _load_finished(path: Path, spec: RunSpec) -> dict | None:
+def _number(x) -> bool:
+    return (isinstance(x, (int, float)) and not isinstance(x, bool)) or x in ("inf", "-inf")
+
+
+def _int(x) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool)
+
+
+def check_run_file(path: Path, spec: RunSpec) -> tuple[dict | None, str | None]:
+    """A finished run's file, checked: ``(result, None)`` when it can be reused, ``(None, None)``
+    when there is no file, ``(None, why)`` when a file is there but cannot be used (not JSON, not
+    a run file, another run's, or damaged: a field the summaries read is missing or of the
+    wrong type); the caller reports ``why`` and runs it again. The file goes through nbst's
+    input gate (``nbst.problem.read_json``: a regular file, size and shape bounded)."""
+    from nbst.problem import read_json
+
+    if not os.path.lexists(path):
+        return None, None
     try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
-        return None
-    if not isinstance(d, dict) or d.get("kind") != "nbst-experiment-run" or d.get("key") != spec.key():
-        return None
-    return d
+        d = read_json(path)
+    except ProblemError as e:
+        return None, e.reason
+    if not isinstance(d, dict) or d.get("kind") != "nbst-experiment-run":
+        return None, "not an nbst experiment run file"
+    if d.get("key") != spec.key():
+        return None, "holds another run (its key differs: the problem file or settings changed)"
+    for field, ok in (("cost", _number), ("order", _int), ("n", _int), ("trials", _int), ("seed", _int),
+                      ("history", lambda h: isinstance(h, list) and all(
+                          isinstance(e, list) and len(e) == 3 and _int(e[0]) and _number(e[1]) and _int(e[2])
+                          for e in h)),
+                      ("velocities", lambda v: isinstance(v, list) and len(v) == d.get("n"))):
+        if field not in d:
+            return None, f"damaged: {field!r} is missing"
+        if not ok(d[field]):
+            return None, f"damaged: {field!r} is not what nbst writes there"
+    for field, ok in (("first_full_order_trial", _int), ("trials_per_s", _number)):
+        if d.get(field) is not None and not ok(d[field]):
+            return None, f"damaged: {field!r} is not what nbst writes there"
+    return d, None
+
+
+def _load_finished(path: Path, spec: RunSpec) -> dict | None:
+    """The reusable result in ``path`` for ``spec``, or None (see ``check_run_file``)."""
+    return check_run_file(path, spec)[0]
+
+
+def run_path(out_dir: str | Path, spec: RunSpec) -> Path:
+    """``out_dir / spec.relpath()``, checked to lie inside ``out_dir/runs/`` (ProblemError if not)."""
+    out = Path(out_dir)
+    path = out / spec.relpath()
+    runs = os.path.realpath(out / RUNS_DIR)
+    if not os.path.realpath(path).startswith(runs + os.sep):
+        raise ProblemError("<experiment>", "", f"the run file of {spec.problem_name!r} would lie outside "
+                                               f"{out / RUNS_DIR}")
+    return path
 
 
 def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None = None, cluster=None,
@@ -154,10 +221,13 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
     results: list[dict | None] = [None] * len(specs)
     todo = []
     for i, spec in enumerate(specs):
-        d = _load_finished(out / spec.relpath(), spec)
+        path = run_path(out, spec)
+        d, why = check_run_file(path, spec)
         if d is not None:
             results[i] = d
         else:
+            if why:
+                print(f"nbst experiment: {plain(path)}: {plain(why)}; running it again", file=sys.stderr)
             todo.append(i)
     bar = None
     if progress:
@@ -169,7 +239,7 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
     def done(i: int, res: dict) -> None:
         if res.get("stopped") == "interrupted":  # Ctrl-C reached the worker: not a finished run
             raise KeyboardInterrupt
-        write_json_atomic(out / specs[i].relpath(), res, option="--out")
+        write_json_atomic(run_path(out, specs[i]), res, option="--out")
         results[i] = res
         if on_result is not None:
             on_result(specs[i], res)
@@ -193,38 +263,13 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
     return results  # type: ignore[return-value]
 
 
-#: Seconds between a worker's checks that its parent still lives (the portable fallback of
-#: PR_SET_PDEATHSIG): an orphan dies within this long of a parent killed by SIGKILL.
-PARENT_POLL_S = 0.5
-
-
 def _worker_init(parent_pid: int) -> None:
-    """Pool worker setup: leave Ctrl-C to the parent, which stops the workers (no traceback per
-    worker), and die with the parent. On Linux the kernel sends SIGKILL when the parent dies
-    (prctl PR_SET_PDEATHSIG); everywhere a daemon thread exits once ``os.getppid()`` is no
-    longer the parent (re-parented: the parent died, even by SIGKILL)."""
-    import signal
-    import threading
-    import time
+    """Pool worker setup: leave Ctrl-C, SIGTERM and SIGHUP to the parent, which stops the workers
+    (no traceback per worker), and die with the parent even when it is killed by SIGKILL
+    (``nbst.outputs.die_with_parent``: PR_SET_PDEATHSIG on Linux, a getppid watchdog everywhere)."""
+    from nbst.outputs import die_with_parent
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            PR_SET_PDEATHSIG = 1
-            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent_pid:  # the parent died before the line above took effect
-        os._exit(1)
-
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(PARENT_POLL_S)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="nbst-parent-watch", daemon=True).start()
+    die_with_parent(parent_pid)
 
 
 def _run_pool(specs, todo, workers: int, done) -> None:
@@ -232,23 +277,28 @@ def _run_pool(specs, todo, workers: int, done) -> None:
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     # spawn: numba's compiled state and fork do not mix; workers load the cached kernels
+    from nbst.outputs import signals_blocked, signals_deferred
+
     ex = ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=mp.get_context("spawn"),
                              initializer=_worker_init, initargs=(os.getpid(),))
     try:
-        pending = {ex.submit(run_one, specs[i]): i for i in todo}
+        with signals_blocked():  # workers start here, signals blocked until their initializer ignores them
+            pending = {ex.submit(run_one, specs[i]): i for i in todo}
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for f in finished:
                 done(pending.pop(f), f.result())
     except BaseException:
-        # interrupted or failed: finished runs are on disk; stop the workers now (they are ours)
-        procs = list(getattr(ex, "_processes", {}).values())
-        ex.shutdown(wait=False, cancel_futures=True)
-        for proc in procs:
-            proc.terminate()
-        for proc in procs:
-            proc.join(5.0)
-        ex.shutdown(wait=True)  # now quick: lets the pool release its queues (no leaked-semaphore warning)
+        # interrupted or failed: finished runs are on disk; stop the workers now (they are ours),
+        # a second Ctrl-C waiting for it
+        with signals_deferred(reraise=False):
+            procs = list(getattr(ex, "_processes", {}).values())
+            ex.shutdown(wait=False, cancel_futures=True)
+            for proc in procs:
+                proc.kill()  # the workers ignore SIGTERM (the parent decides); their runs are not finished
+            for proc in procs:
+                proc.join(5.0)
+            ex.shutdown(wait=True)  # now quick: lets the pool release its queues (no leaked-semaphore warning)
         raise
     ex.shutdown(wait=True)
 
@@ -366,10 +416,3 @@ def fmt(x, digits: int = 6) -> str:
     if isinstance(x, int):
         return f"{x:,}"
     return str(x)
-
-
-def spec_dict(spec: RunSpec) -> dict:
-    d = asdict(spec)
-    d.pop("problem")
-    d["problem"] = spec.problem_name
-    return d

@@ -60,11 +60,16 @@ def _island_body(k: int, algorithm: str, problem, kw: dict, conn) -> None:
             pass
 
 
-def _island(k: int, algorithm: str, problem, kw: dict, conn) -> None:
-    """Forked worker: one island over a pipe."""
-    import signal
+def _island(k: int, algorithm: str, problem, kw: dict, conn, parent_pid: int, inherited: list) -> None:
+    """Forked worker: one island over a pipe. It ignores Ctrl-C, SIGTERM and SIGHUP (the parent
+    decides and stops its islands) and dies with the parent, even one killed by SIGKILL
+    (``die_with_parent``). The parent's ends of the pipes that fork copied here (``inherited``)
+    are closed, so the parent's death also reads as end-of-file on this island's pipe."""
+    from nbst.outputs import die_with_parent
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides; Ctrl-C reaches it alone
+    die_with_parent(parent_pid)
+    for c in inherited:
+        c.close()
     try:
         _island_body(k, algorithm, problem, kw, conn)
     finally:
@@ -130,9 +135,13 @@ class _Rounds:
         self.answer_pending()
         waiting = self.pending  # workers that reported this round and wait for the word
         for k in sorted(self.live):
-            if not self.conns[k].poll(ISLAND_TIMEOUT):
-                raise RuntimeError(f"island {k} stopped answering")
-            msg = self.conns[k].recv()
+            try:
+                if not self.conns[k].poll(ISLAND_TIMEOUT):
+                    raise RuntimeError(f"island {k} stopped answering")
+                msg = self.conns[k].recv()
+            except (EOFError, OSError):  # the worker died (killed): lost, the others go on
+                self.live.discard(k)
+                continue
             if msg[0] == "progress":
                 _, _, self.trials[k], self.best[k], self.order[k] = msg
                 waiting.append(k)
@@ -213,10 +222,15 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
                                             pure=False))
                 rounds.live.add(k)
             return
+        from nbst.outputs import signals_blocked
+
         for k in range(1, jobs):
             parent, child = ctx.Pipe()
-            p = ctx.Process(target=_island, daemon=True, args=(k, algorithm, problem, island_kw[k], child))
-            p.start()
+            p = ctx.Process(target=_island, daemon=True,
+                            args=(k, algorithm, problem, island_kw[k], child, os.getpid(),
+                                  [parent, *conns.values()]))
+            with signals_blocked():  # no Ctrl-C reaches the child before it ignores it (die_with_parent)
+                p.start()
             child.close()
             conns[k] = parent
             rounds.live.add(k)
@@ -242,17 +256,20 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     except KeyboardInterrupt:
         interrupted = True
     finally:
-        if interrupted or rounds.live:
-            rounds.stop_reason = "interrupted" if interrupted else (rounds.stop_reason or "error")
-            rounds.answer_pending()
-            _drain(conns, rounds.live, rounds.results, say="stop")
-        for p in procs:
-            if cluster is not None:
-                p.cancel()  # a task still running after the drain (lost island)
-                continue
-            p.join(timeout=5)
-            if p.is_alive():
-                p.kill()
+        from nbst.outputs import signals_deferred
+
+        with signals_deferred(reraise=False):  # a second Ctrl-C cannot cut the drain short: the islands' best
+            if interrupted or rounds.live:
+                rounds.stop_reason = "interrupted" if interrupted else (rounds.stop_reason or "error")
+                rounds.answer_pending()
+                _drain(conns, rounds.live, rounds.results, say="stop")
+            for p in procs:
+                if cluster is not None:
+                    p.cancel()  # a task still running after the drain (lost island)
+                    continue
+                p.join(timeout=5)
+                if p.is_alive():
+                    p.kill()
     results = rounds.results
     if not results:
         raise KeyboardInterrupt  # interrupted before any island had a result: nothing to write
