@@ -12,7 +12,7 @@ import pytest
 
 from nbst import load_problem
 from nbst.cli import main
-from nbst.search import VARIANTS, SearchParams, solve, variant_params
+from nbst.search import VARIANTS, SearchParams, run_search, solve, variant_params
 from nbst.sim import simulate
 from nbst.solution import load_solution
 
@@ -233,6 +233,9 @@ def test_a_legal_problem_never_yields_a_refused_solution(variant):
     p = _narrow_channel()
     sol = solve(p, seed=1, max_trials=4000, patience=0, variant=variant)
     assert box_crossings(p, sol.velocities).max() <= MAX_BOX_CROSSINGS
+    if variant == "A":  # every candidate the loop simulated (creep alone proposes ~10,000 crossings here)
+        rec = run_search(p, seed=1, max_trials=4000, patience=0, variant="A", record_every=1).recorded
+        assert len(rec) == 4000 and max(box_crossings(p, v).max() for v in rec) <= MAX_BOX_CROSSINGS
     d = json.loads(json.dumps({"problem": p.name, "velocities": sol.velocities.tolist()}))
     solution_from_dict(d, p)  # the checker accepts it
     assert not simulate(p, sol.velocities).truncated

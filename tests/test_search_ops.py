@@ -22,9 +22,9 @@ def build(members, *, best=None, cap=64, n=N):
     for k, (s, c) in enumerate(members):
         pop_append(pop, np.full((n, 2), float(k)), float(c), np.int64(s))
     if best is not None:
-        pop[5][BEST] = best
+        pop.state[BEST] = best
     else:
-        pop[5][BEST] = int(np.argmin(pop[1][:len(members)]))
+        pop.state[BEST] = int(np.argmin(pop.cost[:len(members)]))
     return pop
 
 
@@ -33,15 +33,15 @@ def scratch(n=N, cap=64):
 
 
 def members(pop):
-    size = pop[5][SIZE]
-    return sorted((int(pop[2][j]), float(pop[1][j])) for j in range(size))
+    size = pop.state[SIZE]
+    return sorted((int(pop.sig[j]), float(pop.cost[j])) for j in range(size))
 
 
 def check_table(pop):
     """The signature table agrees with the members."""
-    size, ntab = pop[5][SIZE], pop[5][NTAB]
-    sigs, counts = np.unique(pop[2][:size], return_counts=True)
-    tab = dict(zip(pop[3][:ntab].tolist(), pop[4][:ntab].tolist()))
+    size, ntab = pop.state[SIZE], pop.state[NTAB]
+    sigs, counts = np.unique(pop.sig[:size], return_counts=True)
+    tab = dict(zip(pop.tab_sig[:ntab].tolist(), pop.tab_count[:ntab].tolist()))
     assert tab == dict(zip(sigs.tolist(), counts.tolist()))
 
 
@@ -142,8 +142,8 @@ def test_crossover_genetic_engineering(engineered):
 
 def ins(pop, sig, cost, p1=-1, p2=-1, *, elitism=True, sig_limit=10, pop_limit=200, hard_limit=400,
         cull=CULL_SUBSUMED, seed=0, n=N):
-    best = pop[5][BEST]
-    improvement = best < 0 or cost < pop[1][best]
+    best = pop.state[BEST]
+    improvement = best < 0 or cost < pop.cost[best]
     child = np.full((n, 2), -1.0)
     return insert(pop, child, float(cost), np.int64(sig), p1, p2, improvement, elitism, sig_limit, pop_limit,
                   hard_limit, cull, n, seed_state(seed), np.empty(n + 2, np.int64))
@@ -153,10 +153,10 @@ def test_child_displaces_its_same_signature_parent():
     pop = build([(0b01, 1.0), (0b01, 5.0), (0b10, 7.0)])
     assert ins(pop, 0b01, 6.0, p1=1) == INS_DISPLACED
     assert members(pop) == [(0b01, 1.0), (0b01, 6.0), (0b10, 7.0)]  # a worse child still replaces a non-best parent
-    assert pop[0][1, 0, 0] == -1.0
+    assert pop.vel[1, 0, 0] == -1.0
     # different signature: added, parent kept
     assert ins(pop, 0b11, 9.0, p1=1) == INS_ADDED
-    assert pop[5][SIZE] == 4
+    assert pop.state[SIZE] == 4
     check_table(pop)
 
 
@@ -165,7 +165,7 @@ def test_crossover_child_matching_both_parents_replaces_one_at_random():
     for seed in range(40):
         pop = build([(0b01, 1.0), (0b01, 5.0), (0b01, 6.0)])
         assert ins(pop, 0b01, 9.0, p1=1, p2=2, seed=seed) == INS_DISPLACED
-        replaced.add(tuple(j for j in (1, 2) if pop[1][j] == 9.0))
+        replaced.add(tuple(j for j in (1, 2) if pop.cost[j] == 9.0))
     assert replaced == {(1,), (2,)}
 
 
@@ -175,7 +175,7 @@ def test_elitism_protects_the_best_parent():
     assert members(pop) == [(0b01, 1.0), (0b01, 2.0), (0b10, 5.0)]
     assert ins(pop, 0b01, 0.5, p1=0) == INS_DISPLACED  # an improvement replaces it
     assert members(pop) == [(0b01, 0.5), (0b01, 2.0), (0b10, 5.0)]
-    assert pop[1][pop[5][BEST]] == 0.5
+    assert pop.cost[pop.state[BEST]] == 0.5
     # variant G: no elitism, the best parent is displaced by a worse child
     pop = build([(0b01, 1.0), (0b10, 5.0)])
     assert ins(pop, 0b01, 2.0, p1=0, elitism=False) == INS_DISPLACED
@@ -187,15 +187,15 @@ def test_elitism_never_deletes_the_best_under_random_inserts():
     pop = build([(0b000001, 50.0)])
     best = 50.0
     for t in range(3000):
-        size = pop[5][SIZE]
+        size = pop.state[SIZE]
         sig = int(rng.integers(1, 2**N))
         cost = float(rng.uniform(0, 100))
         p1 = int(rng.integers(size))
         ins(pop, sig, cost, p1=p1, sig_limit=3, pop_limit=20, hard_limit=25, seed=t)
         best = min(best, cost)
-        size = pop[5][SIZE]
-        assert pop[1][pop[5][BEST]] == best
-        assert np.min(pop[1][:size]) == best
+        size = pop.state[SIZE]
+        assert pop.cost[pop.state[BEST]] == best
+        assert np.min(pop.cost[:size]) == best
         assert size <= 25
     check_table(pop)
 
@@ -223,9 +223,9 @@ def test_per_signature_limit_deletes_the_worst_of_that_signature():
     assert (0b01, 50.0) not in members(pop) and sig_count(pop, np.int64(0b01)) == 10
     # ties: the worst-of-signature rule must skip the best (index 0, equal cost)
     pop = build([(0b01, 1.0)] * 3, best=0)
-    pop[0][0] = 42.0
+    pop.vel[0] = 42.0
     assert ins(pop, 0b01, 1.0, sig_limit=3) == INS_SIG_LIMIT
-    assert pop[5][SIZE] == 3 and pop[0][pop[5][BEST], 0, 0] == 42.0
+    assert pop.state[SIZE] == 3 and pop.vel[pop.state[BEST], 0, 0] == 42.0
     check_table(pop)
 
 
@@ -255,7 +255,7 @@ def test_culling_exempts_the_best_signature():
     so = np.empty(N + 2, np.int64)
     assert cull_subsumed(pop, N, True, so) == 1
     assert members(pop) == sorted([(0b0111, 3.0), (0b0001, 0.5), (0b0001, 4.0)])
-    assert pop[1][pop[5][BEST]] == 0.5
+    assert pop.cost[pop.state[BEST]] == 0.5
     pop = build(mem, best=1)
     assert cull_subsumed(pop, N, False, so) == 3  # variant G: no exemption
 
@@ -280,17 +280,17 @@ def test_variant_f_deletes_the_worst_on_every_addition():
 def test_insert_initial_and_remove_keep_the_table_and_best():
     pop = new_population(16, N)
     for k, (s, c) in enumerate([(0b1, 3.0), (0b1, 2.0), (0b1, 1.0), (0b10, 4.0)]):
-        best = pop[5][BEST]
-        imp = best < 0 or c < pop[1][best]
+        best = pop.state[BEST]
+        imp = best < 0 or c < pop.cost[best]
         insert_initial(pop, np.zeros((N, 2)), c, np.int64(s), imp, True, 2, 200)
     assert members(pop) == sorted([(0b1, 2.0), (0b1, 1.0), (0b10, 4.0)])  # the worst 0b1 (3.0) went
-    assert pop[1][pop[5][BEST]] == 1.0
-    j = int(np.flatnonzero(pop[1][:3] == 2.0)[0])
+    assert pop.cost[pop.state[BEST]] == 1.0
+    j = int(np.flatnonzero(pop.cost[:3] == 2.0)[0])
     pop_remove(pop, j)  # the last member moves into slot j; best must follow it
     check_table(pop)
-    assert pop[1][pop[5][BEST]] == 1.0
-    pop_remove(pop, pop[5][BEST])
-    assert pop[5][BEST] == -1 and members(pop) == [(0b10, 4.0)]
+    assert pop.cost[pop.state[BEST]] == 1.0
+    pop_remove(pop, pop.state[BEST])
+    assert pop.state[BEST] == -1 and members(pop) == [(0b10, 4.0)]
 
 
 # --------------------------------------------------------------------------- randomize
@@ -332,4 +332,4 @@ def test_popcount_matches_python():
     from nbst.search.ops import popcount
     rng = np.random.default_rng(10)
     for x in [0, 1, 0b1011, 2**62 + 5, 2**63 - 1, *rng.integers(0, 2**63, 200).tolist()]:
-        assert popcount(np.int64(x)) == bin(int(x)).count("1")
+        assert popcount(np.int64(x)) == int(x).bit_count()

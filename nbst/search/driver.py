@@ -18,6 +18,7 @@ from nbst.constants import ROUNDOFF_REL
 from nbst.problem import Problem
 from nbst.search import loop as _L
 from nbst.search.loop import ChunkResult
+from nbst.search.ops import Population
 from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, VARIANTS, SearchParams, SearchProgress, StopReason,
                                 check_run, mirror_images, variant_params)
 
@@ -29,7 +30,7 @@ HISTORY0 = 1024
 class _State:
     """The arrays a search carries between chunks (mutable by design: the kernel writes them)."""
 
-    pop: tuple
+    pop: Population
     st: np.ndarray
     best_cost: np.ndarray
     best_v: np.ndarray
@@ -44,7 +45,7 @@ class _State:
         """Members in the population now."""
         from nbst.search.ops import SIZE
 
-        return int(self.pop[5][SIZE])
+        return int(self.pop.state[SIZE])
 
     def grow_history(self) -> None:
         """Double the improvement history's room (the loop returned HISTORY_FULL)."""
@@ -170,8 +171,8 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
                            target_cost=target_cost, stopped=stopped, wall=wall)
     size = s.pop_size
     trials = int(s.st[_L.ST_TRIALS])
-    return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop[0][:size].copy(),
-                     costs=s.pop[1][:size].copy(), signatures=s.pop[2][:size].copy(),
+    return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop.vel[:size].copy(),
+                     costs=s.pop.cost[:size].copy(), signatures=s.pop.sig[:size].copy(),
                      recorded=rec_v[:trials // record_every] if record_every > 0 else rec_v)
 
 
@@ -200,7 +201,7 @@ def _run_chunks(advance, s: _State, chunk: int, archive, callback, t0: float) ->
                 continue
             if archive is not None:
                 size = s.pop_size
-                archive.add(s.pop[0][:size], s.pop[1][:size], s.pop[2][:size])
+                archive.add(s.pop.vel[:size], s.pop.cost[:size], s.pop.sig[:size])
             stopped = reasons.get(rc)
             if callback is not None:
                 prog = SearchProgress(trials=int(s.st[_L.ST_TRIALS]), best_cost=float(s.best_cost[0]),

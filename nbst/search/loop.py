@@ -9,6 +9,7 @@ Python driver in ``nbst.search``.
 from __future__ import annotations
 
 from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -17,6 +18,7 @@ from nbst.search.ops import (INS_CULLED, INS_FALLBACK, SIZE, acceptable_counts, 
                          creep_velocity, crossover, directed_velocity, insert, insert_initial, popcount,
                          rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 from nbst.sim import alloc_work, cost_signature, run
+from nbst.sim.kernel import Work
 
 # integer parameters (pi)
 PI_POP_LIMIT, PI_SIG_LIMIT, PI_DIVERSITY, PI_INIT_MAX_TRIES, PI_INIT_POPULATION, PI_SENATE, PI_ENGINEERED, \
@@ -52,13 +54,27 @@ class ChunkResult(IntEnum):
 RC_CHUNK_DONE, RC_MAX_TRIALS, RC_PATIENCE, RC_TARGET_COST, RC_HISTORY_FULL = tuple(ChunkResult)
 
 
+class LoopScratch(NamedTuple):
+    """Scratch of one chunk of a search loop (N disks, population capacity cap)."""
+
+    work: Work  # the simulator's (``nbst.sim.alloc_work``)
+    child: np.ndarray  # (N, 2) the candidate being made
+    fin: np.ndarray  # (N, 2) its final positions
+    vel: np.ndarray  # (N, 2) its final velocities
+    no_t: np.ndarray  # empty event record: record nothing
+    no_i: np.ndarray
+    no_s: np.ndarray
+    scr_ord: np.ndarray  # (N + 2,) int64 selection / culling scratch
+    scr_ok: np.ndarray  # (cap,) bool selection scratch
+    acc: np.ndarray  # (N,) int64 acceptable counts (initialize's diversity test)
+
+
 @njit(cache=True, error_model="numpy")
 def loop_scratch(n, cap):
-    """Scratch of one chunk of a search loop (N disks, population capacity cap):
-    (work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc)."""
-    return (alloc_work(n), np.zeros((n, 2)), np.empty((n, 2)), np.empty((n, 2)), np.empty(0),
-            np.empty(0, np.int64), np.empty((0, 8)), np.empty(n + 2, np.int64), np.empty(cap, np.bool_),
-            np.empty(n, np.int64))
+    """Scratch of one chunk of a search loop: a :class:`LoopScratch`."""
+    return LoopScratch(alloc_work(n), np.zeros((n, 2)), np.empty((n, 2)), np.empty((n, 2)), np.empty(0),
+                       np.empty(0, np.int64), np.empty((0, 8)), np.empty(n + 2, np.int64), np.empty(cap, np.bool_),
+                       np.empty(n, np.int64))
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -92,7 +108,7 @@ def settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t,
     """Book one simulated candidate (after the trial counters): order statistics, an
     improvement of the best (and the history), the insert of initialize or generate,
     and the end of initialize. Shared by this loop and ``nbst.search.nbst_loop``'s."""
-    ist = pop[5]
+    ist = pop.state
     elitism = pi[PI_ELITISM] != 0
     order = popcount(sig)
     if order > st[ST_MAX_ORDER]:
@@ -156,8 +172,8 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
                  (for benchmarks: the exact mix of velocities the loop simulates)
     """
     n = x0.shape[0]
-    cap = pop[0].shape[0]
-    ist = pop[5]
+    cap = pop.vel.shape[0]
+    ist = pop.state
     work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = loop_scratch(n, cap)
     R = pf[PF_R]
     max_events = pi[PI_MAX_EVENTS]
@@ -197,10 +213,10 @@ def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
                     p2 = select_senate(pop, n, rng, p1, scr_ord, scr_ok)
                 else:
                     p2 = select_uniform(pop, rng, p1)
-                crossover(pop[0][p1], pop[0][p2], pop[2][p1], pop[2][p2], cue_idx, pi[PI_ENGINEERED] != 0,
+                crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], cue_idx, pi[PI_ENGINEERED] != 0,
                           rng, child)
             else:
-                child[:, :] = pop[0][p1]
+                child[:, :] = pop.vel[p1]
                 i = cue_idx[rng_int(rng, ncue)]
                 if op == OP_CREEP:
                     creep_velocity(pf[PF_CREEP_SIGMA], i, rng, child)

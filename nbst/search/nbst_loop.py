@@ -154,8 +154,8 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
     Every simulation is counted: qs[QS_SIMS] (robust mode's shifted runs apart, in
     qs[QS_ROBUST_SIMS])."""
     n = x0.shape[0]
-    cap = pop[0].shape[0]
-    ist = pop[5]
+    cap = pop.vel.shape[0]
+    ist = pop.state
     work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = loop_scratch(n, cap)
     clear = alloc_clearance(n)
     pscr = alloc_polish(n, cue_idx.shape[0], POLISH_EVENT_CAP)
@@ -218,21 +218,21 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
                 p1 = select_senate(pop, n, rng, -1, scr_ord, scr_ok)
             else:
                 p1 = select_uniform(pop, rng, -1)
-            parent_cost = pop[1][p1]
-            parent_order = popcount(pop[2][p1])
+            parent_cost = pop.cost[p1]
+            parent_order = popcount(pop.sig[p1])
             if op == OP_CROSSOVER:
                 if pi[PI_SENATE] != 0:
                     p2 = select_senate(pop, n, rng, p1, scr_ord, scr_ok)
                 else:
                     p2 = select_uniform(pop, rng, p1)
-                parent_cost = min(parent_cost, pop[1][p2])
-                parent_order = max(parent_order, popcount(pop[2][p2]))
-                crossover(pop[0][p1], pop[0][p2], pop[2][p1], pop[2][p2], cue_idx, pi[PI_ENGINEERED] != 0,
+                parent_cost = min(parent_cost, pop.cost[p2])
+                parent_order = max(parent_order, popcount(pop.sig[p2]))
+                crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], cue_idx, pi[PI_ENGINEERED] != 0,
                           rng, child)
             else:
-                child[:, :] = pop[0][p1]
+                child[:, :] = pop.vel[p1]
                 if op == OP_STRIKE and nnon > 0:
-                    s = _pick_disk(non_idx, pop[2][p1], rng, True)
+                    s = _pick_disk(non_idx, pop.sig[p1], rng, True)
                     c = cue_idx[rng_int(rng, ncue)]
                     b = qi[QI_STRIKE_BOUNCES]
                     kx = rng_int(rng, 2 * b + 1) - b
@@ -257,7 +257,7 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
                     else:
                         creep_velocity(pf[PF_CREEP_SIGMA], c, rng, child)
                 elif op == OP_PLAN and route_cue.shape[0] > 0:
-                    s = _pick_disk(non_idx, pop[2][p1], rng, True)
+                    s = _pick_disk(non_idx, pop.sig[p1], rng, True)
                     cnt = 0
                     for r in range(route_cue.shape[0]):
                         if (route_mask[r] >> s) & 1:
@@ -276,7 +276,7 @@ def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, im
                     child[route_cue[r], 0] = route_v[r, 0]
                     child[route_cue[r], 1] = route_v[r, 1]
                 else:
-                    i = _pick_disk(cue_idx, pop[2][p1], rng, op == OP_BANK)
+                    i = _pick_disk(cue_idx, pop.sig[p1], rng, op == OP_BANK)
                     if op == OP_CREEP or op == OP_STRIKE:
                         creep_velocity(pf[PF_CREEP_SIGMA], i, rng, child)
                     elif op == OP_DIRECTED:

@@ -4,15 +4,15 @@ Each operator is its own ``@njit(cache=True)`` function so tests can call it on
 hand-built populations; ``nbst.search`` strings them together into the compiled
 generate-insert loop. No I/O, no objects, no global random state.
 
-Population layout (a tuple, built by :func:`new_population`)::
+Population layout (a :class:`Population` NamedTuple of arrays, which numba compiles as a
+tuple; built by :func:`new_population`)::
 
-    pop = (pv, pc, ps, ts, tc, ist)
-    pv  : (cap, N, 2) float64  velocities of members 0 .. size-1
-    pc  : (cap,)      float64  cost (L2)
-    ps  : (cap,)      int64    signature bitmask (bit i: disk i within R)
-    ts  : (cap,)      int64    distinct signatures present (the signature table)
-    tc  : (cap,)      int64    number of members holding ts[k]
-    ist : (3,)        int64    [size, number of table entries, index of the best member or -1]
+    pop.vel       : (cap, N, 2) float64  velocities of members 0 .. size-1
+    pop.cost      : (cap,)      float64  cost (L2)
+    pop.sig       : (cap,)      int64    signature bitmask (bit i: disk i within R)
+    pop.tab_sig   : (cap,)      int64    distinct signatures present (the signature table)
+    pop.tab_count : (cap,)      int64    number of members holding tab_sig[k]
+    pop.state     : (3,)        int64    [SIZE, NTAB (table entries), BEST (index of the best member or -1)]
 
 Members are kept compact: removing member j moves the last member into slot j
 (and the table likewise), so ``best`` is re-pointed when its member moves.
@@ -23,6 +23,7 @@ is a pure function of its seed however it is chunked.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -171,17 +172,28 @@ def popcount(x):
 
 # --------------------------------------------------------------------------- population storage
 
-def new_population(cap: int, n: int):
+class Population(NamedTuple):
+    """The search's population (see the module docstring); mutable arrays in a fixed tuple."""
+
+    vel: np.ndarray
+    cost: np.ndarray
+    sig: np.ndarray
+    tab_sig: np.ndarray
+    tab_count: np.ndarray
+    state: np.ndarray
+
+
+def new_population(cap: int, n: int) -> Population:
     """An empty population with room for ``cap`` members of ``n`` disks."""
-    return (np.zeros((cap, n, 2)), np.full(cap, np.inf), np.zeros(cap, np.int64),
-            np.zeros(cap, np.int64), np.zeros(cap, np.int64), np.array([0, 0, -1], np.int64))
+    return Population(np.zeros((cap, n, 2)), np.full(cap, np.inf), np.zeros(cap, np.int64),
+                      np.zeros(cap, np.int64), np.zeros(cap, np.int64), np.array([0, 0, -1], np.int64))
 
 
 @njit(cache=True)
 def tab_find(pop, s):
     """Index of signature s in the signature table, or -1."""
-    ts = pop[3]
-    for k in range(pop[5][NTAB]):
+    ts = pop.tab_sig
+    for k in range(pop.state[NTAB]):
         if ts[k] == s:
             return k
     return -1
@@ -191,12 +203,12 @@ def tab_find(pop, s):
 def sig_count(pop, s):
     """How many members hold signature s."""
     k = tab_find(pop, s)
-    return 0 if k < 0 else pop[4][k]
+    return 0 if k < 0 else pop.tab_count[k]
 
 
 @njit(cache=True)
 def _tab_add(pop, s):
-    ts, tc, ist = pop[3], pop[4], pop[5]
+    ts, tc, ist = pop.tab_sig, pop.tab_count, pop.state
     k = tab_find(pop, s)
     if k < 0:
         k = ist[NTAB]
@@ -208,7 +220,7 @@ def _tab_add(pop, s):
 
 @njit(cache=True)
 def _tab_sub(pop, s):
-    ts, tc, ist = pop[3], pop[4], pop[5]
+    ts, tc, ist = pop.tab_sig, pop.tab_count, pop.state
     k = tab_find(pop, s)
     tc[k] -= 1
     if tc[k] == 0:
@@ -221,7 +233,7 @@ def _tab_sub(pop, s):
 @njit(cache=True)
 def pop_append(pop, v, cost, sig):
     """Add a member; returns its slot."""
-    pv, pc, ps, ist = pop[0], pop[1], pop[2], pop[5]
+    pv, pc, ps, ist = pop.vel, pop.cost, pop.sig, pop.state
     j = ist[SIZE]
     pv[j, :, :] = v
     pc[j] = cost
@@ -234,7 +246,7 @@ def pop_append(pop, v, cost, sig):
 @njit(cache=True)
 def pop_set(pop, j, v, cost, sig):
     """Overwrite member j."""
-    pv, pc, ps = pop[0], pop[1], pop[2]
+    pv, pc, ps = pop.vel, pop.cost, pop.sig
     if ps[j] != sig:
         _tab_sub(pop, ps[j])
         _tab_add(pop, sig)
@@ -246,7 +258,7 @@ def pop_set(pop, j, v, cost, sig):
 @njit(cache=True)
 def pop_remove(pop, j):
     """Delete member j (the last member moves into slot j; ``best`` follows it)."""
-    pv, pc, ps, ist = pop[0], pop[1], pop[2], pop[5]
+    pv, pc, ps, ist = pop.vel, pop.cost, pop.sig, pop.state
     _tab_sub(pop, ps[j])
     last = ist[SIZE] - 1
     if ist[BEST] == j:
@@ -266,10 +278,10 @@ def worst_member(pop, sig, protect, skip_sig=-1):
     """Index of the highest-cost member (of signature ``sig``, or of all if sig < 0),
     never ``protect`` nor a member of signature ``skip_sig`` (if >= 0); ties go to the
     lowest index; -1 if there is none."""
-    pc, ps = pop[1], pop[2]
+    pc, ps = pop.cost, pop.sig
     w = -1
     wc = -np.inf
-    for j in range(pop[5][SIZE]):
+    for j in range(pop.state[SIZE]):
         if j == protect or (sig >= 0 and ps[j] != sig) or (skip_sig >= 0 and ps[j] == skip_sig):
             continue
         if w < 0 or pc[j] > wc:
@@ -281,10 +293,10 @@ def worst_member(pop, sig, protect, skip_sig=-1):
 @njit(cache=True)
 def acceptable_counts(pop, n, out):
     """out[i] = number of members that are i-acceptable."""
-    ps = pop[2]
+    ps = pop.sig
     for i in range(n):
         out[i] = 0
-    for j in range(pop[5][SIZE]):
+    for j in range(pop.state[SIZE]):
         s = ps[j]
         for i in range(n):
             if (s >> i) & 1:
@@ -304,7 +316,7 @@ def select_senate(pop, n, rng, first, scratch_ord, scratch_ok):
     s1 = the first parent's signature, and never ``first`` itself.
     scratch_ord : (n + 1,) int64, scratch_ok : (cap,) bool. Returns a member index.
     """
-    ps, ts, tc, ist = pop[2], pop[3], pop[4], pop[5]
+    ps, ts, tc, ist = pop.sig, pop.tab_sig, pop.tab_count, pop.state
     ntab = ist[NTAB]
     s1 = ps[first] if first >= 0 else np.int64(0)
     best_or = -1
@@ -356,7 +368,7 @@ def select_senate(pop, n, rng, first, scratch_ord, scratch_ok):
 @njit(cache=True)
 def select_uniform(pop, rng, exclude):
     """Variant B: every member equally likely (never ``exclude``; -1 excludes none)."""
-    size = pop[5][SIZE]
+    size = pop.state[SIZE]
     if exclude < 0:
         return rng_int(rng, size)
     j = rng_int(rng, size - 1)
@@ -425,7 +437,7 @@ def cull_subsumed(pop, n, exempt_best, scratch_or):
     solutions (each of its bits is set in some solution of higher order).
     exempt_best: members sharing the best member's signature are never deleted.
     scratch_or : (n + 2,) int64. Returns the number deleted."""
-    ps, ist = pop[2], pop[5]
+    ps, ist = pop.sig, pop.state
     size = ist[SIZE]
     for o in range(n + 2):
         scratch_or[o] = 0
@@ -475,7 +487,7 @@ def insert(pop, child, cost, sig, p1, p2, improvement, elitism, sig_limit, pop_l
     ``improvement``: the child beats the best so far; it becomes ``best``.
     Returns an INS_* code.
     """
-    ps, ist = pop[2], pop[5]
+    ps, ist = pop.sig, pop.state
     m1 = p1 >= 0 and ps[p1] == sig
     m2 = p2 >= 0 and ps[p2] == sig
     cand = -1
@@ -509,7 +521,7 @@ def insert(pop, child, cost, sig, p1, p2, improvement, elitism, sig_limit, pop_l
             return INS_CULLED
         if ist[SIZE] > hard_limit:
             # the hard-limit fallback: the worst member outside the best's signature (elitism)
-            bs = pop[2][ist[BEST]] if (elitism and ist[BEST] >= 0) else np.int64(-1)
+            bs = pop.sig[ist[BEST]] if (elitism and ist[BEST] >= 0) else np.int64(-1)
             w = worst_member(pop, -1, -1, bs)
             if w >= 0:
                 pop_remove(pop, w)
@@ -523,7 +535,7 @@ def insert_initial(pop, child, cost, sig, improvement, elitism, sig_limit, pop_l
     than ``sig_limit`` members or the population more than ``pop_limit``, delete the
     worst member of its signature (possibly itself; never the best with elitism).
     Returns True if the solution stayed."""
-    ist = pop[5]
+    ist = pop.state
     j = pop_append(pop, child, cost, sig)
     if improvement:
         ist[BEST] = j

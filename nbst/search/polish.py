@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -83,13 +84,36 @@ def _cholesky_solve(A, b, out):
     return True
 
 
+class PolishScratch(NamedTuple):
+    """Scratch of ``polish_kernel``: the event records of the current velocities (``cur_*``)
+    and of a candidate step (``new_*``; the two swap on an accepted step), and the linear
+    algebra (P = 2 x cueable disks)."""
+
+    cur_t: np.ndarray  # (cap,) event times
+    cur_i: np.ndarray  # (cap,) int64 first disk
+    cur_j: np.ndarray  # (cap,) int64 second disk, or -1 - wall
+    cur_state: np.ndarray  # (cap, 8) participants' state after the event
+    new_t: np.ndarray
+    new_i: np.ndarray
+    new_j: np.ndarray
+    new_state: np.ndarray
+    J: np.ndarray  # (2N, P) Jacobian of the final positions
+    A: np.ndarray  # (P, P) J^T J
+    g: np.ndarray  # (P,) J^T r
+    d: np.ndarray  # (P,) the step
+    final: np.ndarray  # (N, 2) final positions of the current velocities
+    fvel: np.ndarray  # (N, 2) final velocities (unused, the kernel writes them)
+    vnew: np.ndarray  # (N, 2) the candidate velocities
+    fnew: np.ndarray  # (N, 2) their final positions
+
+
 @njit(cache=True)
 def alloc_polish(n, n_cue, cap):
-    """Scratch for ``polish_kernel``: two event buffers (current, candidate) and linear algebra."""
-    return (np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, 8)),
-            np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, 8)),
-            np.empty((2 * n, 2 * n_cue)), np.empty((2 * n_cue, 2 * n_cue)), np.empty(2 * n_cue),
-            np.empty(2 * n_cue), np.empty((n, 2)), np.empty((n, 2)), np.empty((n, 2)), np.empty((n, 2)))
+    """Scratch for ``polish_kernel``: a :class:`PolishScratch`."""
+    return PolishScratch(np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, 8)),
+                         np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, 8)),
+                         np.empty((2 * n, 2 * n_cue)), np.empty((2 * n_cue, 2 * n_cue)), np.empty(2 * n_cue),
+                         np.empty(2 * n_cue), np.empty((n, 2)), np.empty((n, 2)), np.empty((n, 2)), np.empty((n, 2)))
 
 
 @njit(cache=True, error_model="numpy")
@@ -200,4 +224,4 @@ def polish(problem: Problem, velocities, *, max_sims: int = 100, tol: float = 0.
     return v, float(cost), int(sig), int(sims)
 
 
-__all__ = ["POLISH_EVENT_CAP", "PolishStop", "alloc_polish", "polish", "polish_kernel"]
+__all__ = ["POLISH_EVENT_CAP", "PolishScratch", "PolishStop", "alloc_polish", "polish", "polish_kernel"]

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -47,7 +48,7 @@ from numba import njit
 from nbst.constants import STALL_EVENTS_PER_DISK, STALL_RTOL, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 from nbst.sim.primitives import INF, elastic_impulse, pair_tau, wall_tau
 
-__all__ = ["INF", "SimStatus", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "alloc_work", "cost_signature",
+__all__ = ["INF", "SimStatus", "Work", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "alloc_work", "cost_signature",
            "evaluate_kernel", "pair_tau", "run", "wall_tau"]
 
 
@@ -67,17 +68,36 @@ STATUS_OK, STATUS_TRUNCATED, STATUS_OVERFLOW, STATUS_STALLED = (SimStatus.OK, Si
 
 # --------------------------------------------------------------------------- the kernel
 
+class Work(NamedTuple):
+    """Scratch arrays of ``run`` (allocate once with ``alloc_work``, reuse for many runs).
+    Per-disk arrays have m >= N lanes (padded, see ``alloc_work``)."""
+
+    px: np.ndarray  # (m,) x at the disk's last event time
+    py: np.ndarray  # (m,) y at the disk's last event time
+    vx: np.ndarray  # (m,) current velocity
+    vy: np.ndarray  # (m,)
+    tl: np.ndarray  # (m,) the disk's last event time
+    T: np.ndarray  # (N, N) predicted event times: T[i, k] pair, T[i, i] wall
+    wall: np.ndarray  # (N,) int64 which wall T[i, i] is
+    rowmin: np.ndarray  # (N,) min of row i of T
+    rowarg: np.ndarray  # (N,) int64 its column
+    tw: np.ndarray  # (m,) next wall time (-inf in padding lanes)
+    tmp: np.ndarray  # (m,) a row of fresh pair predictions
+    rad: np.ndarray  # (m,) radii (0 in padding lanes)
+
+
 @njit(cache=True, error_model="numpy")
 def alloc_work(n):
-    """Scratch arrays for ``run`` (opaque to callers: allocate once, reuse for many runs).
+    """Scratch arrays for ``run``: a :class:`Work` (allocate once, reuse for many runs).
 
     Per-disk arrays are padded to a multiple of 16 lanes so the vectorized
     prediction loop has no scalar remainder; padding lanes have wall time -inf,
     which makes their horizon negative, so they never produce a prediction.
     """
     m = (n + 15) // 16 * 16
-    return (np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.empty((n, n)),
-            np.empty(n, np.int64), np.empty(n), np.empty(n, np.int64), np.full(m, -np.inf), np.empty(m), np.zeros(m))
+    return Work(np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.empty((n, n)),
+                np.empty(n, np.int64), np.empty(n), np.empty(n, np.int64), np.full(m, -np.inf), np.empty(m),
+                np.zeros(m))
 
 
 @njit(cache=True, inline="always", error_model="numpy")
