@@ -89,3 +89,16 @@ def test_old_spellings_still_work_with_a_note(argv, dest, value, new, capsys):
     assert f"is deprecated; use {new}" in err and len(err.strip().splitlines()) == 1
     new_argv = [new if a == argv[-2] else a for a in argv]
     assert getattr(build_parser().parse_args(new_argv), dest) == value
+
+
+@pytest.mark.parametrize("kind, what", [("nbst-bowling-shot", "a bowling shot file"),
+                                        ("nbst-bowling-atlas", "an atlas of bowling shots")])
+def test_a_bowling_file_given_as_a_problem_says_what_it_is(kind, what, tmp_path):
+    import json
+
+    from nbst.problem import ProblemError, load_problem
+
+    f = tmp_path / "shot.json"
+    f.write_text(json.dumps({"kind": kind, "scene": "scene.xml"}))
+    with pytest.raises(ProblemError, match=f"kind: this is {what}, not a problem"):
+        load_problem(str(f))
