@@ -16,9 +16,11 @@ def s14():
     return load_problem("diamond-s14")
 
 
-def test_diamond_s14_solved_exactly(s14):
-    # fixed seed + threshold: this seed needs ~2,700 trials; the paper's A is still at ~11,000 after 200,000
-    sol = solve(s14, seed=1, max_trials=20_000, target_cost=1e-6)
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_diamond_s14_solved_exactly(s14, seed):
+    # threshold with a margin, not one lucky seed: seeds 1-8 needed 842-3,276 trials (median ~1,500;
+    # measured after issue 24), the budget is 6x the worst; the paper's A is still at ~11,000 after 200,000
+    sol = solve(s14, seed=seed, max_trials=20_000, target_cost=1e-6)
     m = sol.meta
     assert m["stopped"] == "target_cost" and m["cost"] < 1e-6 and m["order"] == 14
     assert simulate(s14, sol.velocities).cost == m["cost"]
@@ -37,6 +39,7 @@ def test_planted_instance_recovered(tmp_path):
 
 
 def test_noncueable_disks_stay_at_rest_and_strikes_run():
+    # seeds 1-5 all reach order 5 with ~1,000-2,000 strike children in this budget: order >= 3 is the margin
     p = load_problem("over5")
     sol = solve(p, seed=2, max_trials=30_000, patience=0)
     assert np.all(sol.velocities[~p.cueable] == 0.0)
@@ -64,3 +67,36 @@ def test_defaults_have_fixed_probabilities_and_strikes_only_with_noncueable_disk
     assert m["restarts"] == 0
     assert m["operator_probabilities"]["bank"] == pytest.approx(0.3 / 0.9)  # strike's 0.1 dropped, renormalized
     assert m["operators"]["strike"]["children"] == 0  # diamond-s14 has no noncueable disk
+
+
+@pytest.mark.parametrize("variant, problem", [("A", "diamond-s14"), ("B", "over5"), ("F", "diamond-s14")])
+def test_nbst_loop_with_every_addition_off_is_the_papers_loop(variant, problem):
+    """Both loops share their common steps (nbst.search.loop): nbst's with every addition off
+    draws the same random numbers and makes the same population, bit for bit."""
+    from nbst.search import driver as D
+
+    p = load_problem(problem)
+    params = variant_params(variant, p)
+    assert not params.nbst_loop  # every addition is off in the paper's variants
+    runs = []
+    for stepper in ("paper", "nbst"):
+        prm = D._pack(p, params, max_trials=6000, patience=0, target_cost=None)
+        s = D._new_state(p, params, seed=5)
+        step = D._PaperStepper(p, params, s, prm, np.zeros((0, p.n, 2))) if stepper == "paper" \
+            else D._NbstStepper(p, params, s, prm, seed=5)
+        while (rc := step(1000)) != D.ChunkResult.MAX_TRIALS:
+            if rc == D.ChunkResult.HISTORY_FULL:
+                s.grow_history()
+        runs.append(s)
+    a, b = runs
+    np.testing.assert_array_equal(a.st, b.st)
+    np.testing.assert_array_equal(a.best_v, b.best_v)
+    assert a.best_cost[0] == b.best_cost[0] and np.isfinite(a.best_cost[0])
+    np.testing.assert_array_equal(a.rng, b.rng)
+    for x, y in zip(a.pop, b.pop):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(a.op_count, b.op_count[:4])
+    assert not b.op_count[4:].any()
+    nh = int(a.st[D._L.ST_NHIST])
+    for x, y in ((a.hist_t, b.hist_t), (a.hist_c, b.hist_c), (a.hist_o, b.hist_o)):
+        np.testing.assert_array_equal(x[:nh], y[:nh])

@@ -18,7 +18,7 @@ from nbst.constants import ROUNDOFF_REL
 from nbst.problem import Problem
 from nbst.search import loop as _L
 from nbst.search.loop import ChunkResult
-from nbst.search.ops import Population
+from nbst.search.ops import CULL_SUBSUMED, CULL_WORST, Population
 from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, VARIANTS, SearchParams, SearchProgress, StopReason,
                                 check_run, mirror_images, variant_params)
 
@@ -47,6 +47,11 @@ class _State:
 
         return int(self.pop.state[SIZE])
 
+    def arrays(self) -> _L.SearchArrays:
+        """The state as the compiled loops take it."""
+        return _L.SearchArrays(self.pop, self.st, self.best_cost, self.best_v, self.rng, self.hist_t, self.hist_c,
+                               self.hist_o, self.op_count)
+
     def grow_history(self) -> None:
         """Double the improvement history's room (the loop returned HISTORY_FULL)."""
         k = len(self.hist_t)
@@ -56,32 +61,22 @@ class _State:
 
 
 def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: int, target_cost: float | None,
-          record_every: int = 0):
-    L = _L
-
-    pi = np.zeros(L.N_PI, np.int64)
-    pi[L.PI_POP_LIMIT] = params.pop_limit
-    pi[L.PI_SIG_LIMIT] = params.sig_limit
-    pi[L.PI_DIVERSITY] = params.diversity
-    pi[L.PI_INIT_MAX_TRIES] = params.init_max_tries
-    pi[L.PI_INIT_POPULATION] = params.init_population
-    pi[L.PI_SENATE] = int(params.senate)
-    pi[L.PI_ENGINEERED] = int(params.engineered)
-    pi[L.PI_CULL] = {"subsumed": 0, "worst": 1}[params.cull]
-    pi[L.PI_ELITISM] = int(params.elitism)
-    pi[L.PI_HARD_LIMIT] = params.hard_limit
-    pi[L.PI_MAX_TRIALS] = max_trials
-    pi[L.PI_PATIENCE] = patience
-    pi[L.PI_MAX_EVENTS] = params.max_events
-    pi[L.PI_RECORD_EVERY] = record_every
-    pf = np.zeros(L.N_PF)
-    pf[L.PF_R] = params.signature_radius if params.signature_radius is not None else problem.target_radius
-    pf[L.PF_CREEP_SIGMA] = params.creep_fraction * problem.target_radius / problem.t_final
-    pf[L.PF_TARGET_COST] = -math.inf if target_cost is None else target_cost
-    pf[L.PF_P_DIRECTED_INIT] = params.p_directed_init
+          record_every: int = 0) -> _L.LoopParams:
+    """The loop's parameters (``nbst.search.loop.LoopParams``) from the search parameters and run options."""
     w = np.asarray(params.op_weights, float)
-    pf[L.PF_W_CREEP:L.PF_W_CROSSOVER + 1] = w / w.sum()
-    return pi, pf
+    w = w / w.sum()
+    return _L.LoopParams(
+        pop_limit=int(params.pop_limit), sig_limit=int(params.sig_limit), diversity=int(params.diversity),
+        init_max_tries=int(params.init_max_tries), init_population=int(params.init_population),
+        senate=int(params.senate), engineered=int(params.engineered),
+        cull={"subsumed": CULL_SUBSUMED, "worst": CULL_WORST}[params.cull], elitism=int(params.elitism),
+        hard_limit=int(params.hard_limit), max_trials=int(max_trials), patience=int(patience),
+        max_events=int(params.max_events), record_every=int(record_every),
+        R=float(params.signature_radius if params.signature_radius is not None else problem.target_radius),
+        creep_sigma=float(params.creep_fraction * problem.target_radius / problem.t_final),
+        target_cost=-math.inf if target_cost is None else float(target_cost),
+        p_directed_init=float(params.p_directed_init),
+        w_creep=float(w[0]), w_directed=float(w[1]), w_uniform=float(w[2]), w_crossover=float(w[3]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,16 +144,16 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     max_trials, patience = int(max_trials), int(patience)
     seed = int(np.random.default_rng().integers(2**63)) if seed is None else int(seed)
     check_run(max_trials, patience, seed)
-    pi, pf = _pack(problem, params, max_trials=max_trials, patience=patience, target_cost=target_cost,
-                   record_every=int(record_every))
+    prm = _pack(problem, params, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                record_every=int(record_every))
     s = _new_state(problem, params, seed)
     rec_v = np.zeros((max_trials // record_every if record_every > 0 else 0, problem.n, 2))
     if params.nbst_loop:
         if record_every > 0:
             raise ValueError("record_every is supported by the paper's loop only (variants A-H)")
-        advance = _NbstStepper(problem, params, s, pi, pf, seed)
+        advance = _NbstStepper(problem, params, s, prm, seed)
     else:
-        advance = _PaperStepper(problem, params, s, pi, pf, rec_v)
+        advance = _PaperStepper(problem, params, s, prm, rec_v)
     archive = None
     if params.robust:
         from nbst.search.robust import Archive
@@ -331,16 +326,12 @@ class _PaperStepper:
     algorithm = ALGORITHM
     op_names = _L.OP_NAMES
 
-    def __init__(self, problem: Problem, params: SearchParams, s: _State, pi, pf, rec_v):
-        ka = problem.kernel_arrays()
-        self.s, self.rec_v = s, rec_v
-        self.args = (ka.start, ka.target, ka.radius, ka.mass, np.flatnonzero(problem.cueable).astype(np.int64), ka.W,
-                     ka.H, ka.t_final, mirror_images(params.max_bounces), pi, pf)
+    def __init__(self, problem: Problem, params: SearchParams, s: _State, prm: _L.LoopParams, rec_v):
+        self.s, self.prm, self.rec_v = s, prm, rec_v
+        self.pa = _L.problem_arrays(problem, mirror_images(params.max_bounces))
 
     def __call__(self, n_steps: int) -> ChunkResult:
-        s = self.s
-        return _L.run_chunk(*self.args, s.pop, s.st, s.best_cost, s.best_v, s.rng, s.hist_t, s.hist_c, s.hist_o,
-                            s.op_count, self.rec_v, n_steps)
+        return _L.run_chunk(self.pa, self.prm, self.s.arrays(), self.rec_v, n_steps)
 
     def stats(self) -> dict:
         return {}
@@ -352,72 +343,57 @@ class _NbstStepper:
 
     algorithm = ALGORITHM_NBST
 
-    def __init__(self, problem: Problem, params: SearchParams, s: _State, pi, pf, seed: int):
+    def __init__(self, problem: Problem, params: SearchParams, s: _State, prm: _L.LoopParams, seed: int):
         from nbst.search import nbst_loop as S
-        from nbst.search.robust import SEARCH_STREAM, SHIFT_STEPS, draws
+        from nbst.search.robust import SEARCH_STREAM, SHIFT_STEPS, RobustDraws, draws
 
-        self.S, self.s = S, s
+        self.S, self.s, self.prm = S, s, prm
         self.op_names = S.OP_NAMES
-        qi = np.zeros(S.N_QI, np.int64)
-        qi[S.QI_POLISH] = int(params.polish)
-        qi[S.QI_POLISH_SIMS] = params.polish_sims
-        qi[S.QI_BANK_BOUNCES] = params.bank_bounces
-        qi[S.QI_ADAPT] = int(params.adapt)
-        qi[S.QI_STRAIGHT_START] = int(params.straight_start)
-        qi[S.QI_STRIKE_BOUNCES] = params.strike_bounces
-        qi[S.QI_RESTART] = params.restart
-        qi[S.QI_ROBUST] = (1 if params.robust_signature == "and" else 2) if params.robust and params.robust_k > 0 \
-            else 0
-        qi[S.QI_SEED_POLISH_SIMS] = params.planner_polish_sims
-        qf = np.zeros(S.N_QF)
-        qf[S.QF_POLISH_RATIO] = params.polish_ratio
-        qf[S.QF_ADAPT_RATE] = params.adapt_rate
-        qf[S.QF_ADAPT_FLOOR] = params.adapt_floor
-        qf[S.QF_ROBUST_SHIFT] = SHIFT_STEPS * params.robust_timestep
-        self.qi = qi
-        self.zeta, self.smax = draws(problem, np.random.default_rng([seed, SEARCH_STREAM]),
-                                     params.robust_k if qi[S.QI_ROBUST] else 0)
-        self.qs = np.zeros(S.N_QS, np.int64)
-        non_idx = np.flatnonzero(~problem.cueable).astype(np.int64)
+        robust = (S.ROBUST_AND if params.robust_signature == "and" else S.ROBUST_PLAIN) \
+            if params.robust and params.robust_k > 0 else S.ROBUST_OFF
+        self.q = S.NbstParams(
+            polish=int(params.polish), polish_sims=int(params.polish_sims), bank_bounces=int(params.bank_bounces),
+            adapt=int(params.adapt), straight_start=int(params.straight_start),
+            strike_bounces=int(params.strike_bounces), restart=int(params.restart), robust=robust,
+            seed_polish_sims=int(params.planner_polish_sims), polish_ratio=float(params.polish_ratio),
+            adapt_rate=float(params.adapt_rate), adapt_floor=float(params.adapt_floor),
+            robust_shift=float(SHIFT_STEPS * params.robust_timestep))
+        self.rd = RobustDraws(*draws(problem, np.random.default_rng([seed, SEARCH_STREAM]),
+                                     params.robust_k if robust != S.ROBUST_OFF else 0))
+        self.pa = _L.problem_arrays(problem, mirror_images(params.max_bounces))
+        qs = np.zeros(S.N_QS, np.int64)
         s.op_count = np.zeros((S.N_OPS, 2), np.int64)
         s.best_cost = np.array([np.inf, np.inf])  # [overall, since the last restart]
-        self.seeds = np.zeros((0, problem.n, 2))
-        self.routes = (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
         self.planned = None
-        if params.planner and non_idx.size:
-            self._plan(problem, params, pi, pf)
-        w_plan = params.planner_weight if len(self.routes[0]) else 0.0
-        base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if non_idx.size else 0.0,
-                         w_plan])
-        self.base = base / base.sum()
-        self.weights, self.reward = self.base.copy(), self.base.copy()
-        ka = problem.kernel_arrays()
-        self.args = (ka.start, ka.target, ka.radius, ka.mass, np.flatnonzero(problem.cueable).astype(np.int64),
-                     non_idx, ka.W, ka.H, ka.t_final, mirror_images(params.max_bounces), pi, pf, qi, qf)
+        self.pl = S.Plans(np.zeros((0, problem.n, 2)), np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
+        has_non = self.pa.non_idx.size > 0
+        if params.planner and has_non:
+            self._plan(problem, params, qs)
+        w_plan = params.planner_weight if len(self.pl.route_cue) else 0.0
+        base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if has_non else 0.0, w_plan])
+        base = base / base.sum()
+        self.na = S.NbstArrays(qs, base.copy(), base, base.copy())
 
-    def _plan(self, problem: Problem, params: SearchParams, pi, pf) -> None:
+    def _plan(self, problem: Problem, params: SearchParams, qs) -> None:
         """The backward planner's seeds and routes; its simulations are charged as trials."""
         from nbst.search.planner import plan
 
-        S, s = self.S, self.s
-        planned = plan(problem, budget=min(params.planner_trials, int(pi[_L.PI_MAX_TRIALS]) // 4),
+        S, s, prm = self.S, self.s, self.prm
+        planned = plan(problem, budget=min(params.planner_trials, prm.max_trials // 4),
                        max_chain=params.planner_chain, seeds=params.planner_seeds, sig_limit=params.sig_limit,
-                       max_events=params.max_events, target_cost=float(pf[_L.PF_TARGET_COST]))
+                       max_events=params.max_events, target_cost=prm.target_cost)
         self.planned = planned
-        self.seeds = np.ascontiguousarray(planned.velocities)
-        self.routes = (planned.route_cue, planned.route_v, planned.route_mask)
+        self.pl = S.Plans(np.ascontiguousarray(planned.velocities), planned.route_cue, planned.route_v,
+                          planned.route_mask)
         s.st[_L.ST_TRIALS] += planned.trials  # every planner simulation is a trial
         s.st[_L.ST_SINCE] += planned.trials
-        self.qs[S.QS_SIMS] += planned.trials
+        qs[S.QS_SIMS] += planned.trials
 
     def __call__(self, n_steps: int) -> ChunkResult:
-        s = self.s
-        return self.S.run_chunk_nbst(*self.args, s.pop, s.st, self.qs, s.best_cost, s.best_v, s.rng, s.hist_t,
-                                     s.hist_c, s.hist_o, s.op_count, self.weights, self.base, self.reward, self.zeta,
-                                     self.smax, self.seeds, *self.routes, n_steps)
+        return self.S.run_chunk_nbst(self.pa, self.prm, self.q, self.s.arrays(), self.na, self.rd, self.pl, n_steps)
 
     def stats(self) -> dict:
-        S, qs, qi, planned = self.S, self.qs, self.qi, self.planned
+        S, qs, planned = self.S, self.na.qs, self.planned
         return {"polish": {"runs": int(qs[S.QS_POLISH_RUNS]), "simulations": int(qs[S.QS_POLISH_SIMS]),
                            "improved": int(qs[S.QS_POLISH_GAINS])},
                 "restarts": int(qs[S.QS_RESTARTS]),
@@ -425,8 +401,8 @@ class _NbstStepper:
                 **({"planner": {"trials": planned.trials, "seeds": int(len(planned.costs)),
                                 "best_cost": float(planned.costs[0]) if len(planned.costs) else None,
                                 **planned.stats}} if planned is not None else {}),
-                **({"robust_simulations": int(qs[S.QS_ROBUST_SIMS])} if qi[S.QI_ROBUST] else {}),
-                "operator_probabilities": {name: float(w) for name, w in zip(S.OP_NAMES, self.weights)}}
+                **({"robust_simulations": int(qs[S.QS_ROBUST_SIMS])} if self.q.robust != S.ROBUST_OFF else {}),
+                "operator_probabilities": {name: float(w) for name, w in zip(S.OP_NAMES, self.na.weights)}}
 
 
 def _popcount(x: int) -> int:

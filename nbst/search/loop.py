@@ -14,20 +14,77 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from nbst.search.ops import (INS_CULLED, INS_FALLBACK, SIZE, acceptable_counts, limit_crossings,
-                         creep_velocity, crossover, directed_velocity, insert, insert_initial, popcount,
-                         rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
+from nbst.search.ops import (INS_CULLED, INS_FALLBACK, SIZE, Population, acceptable_counts, creep_velocity, crossover,
+                             directed_velocity, insert, insert_initial, limit_crossings, popcount, rng_int,
+                             rng_uniform, select_senate, select_uniform, uniform_velocity)
 from nbst.sim import alloc_work, cost_signature, run
 from nbst.sim.kernel import Work
 
-# integer parameters (pi)
-PI_POP_LIMIT, PI_SIG_LIMIT, PI_DIVERSITY, PI_INIT_MAX_TRIES, PI_INIT_POPULATION, PI_SENATE, PI_ENGINEERED, \
-    PI_CULL, PI_ELITISM, PI_HARD_LIMIT, PI_MAX_TRIALS, PI_PATIENCE, PI_MAX_EVENTS, PI_RECORD_EVERY = range(14)
-N_PI = 14
-# float parameters (pf)
-PF_R, PF_CREEP_SIGMA, PF_TARGET_COST, PF_P_DIRECTED_INIT, PF_W_CREEP, PF_W_DIRECTED, PF_W_UNIFORM, \
-    PF_W_CROSSOVER = range(8)
-N_PF = 8
+class LoopParams(NamedTuple):
+    """The loop's parameters (``nbst.search.driver`` builds them from ``SearchParams`` and the run
+    options); numba compiles them as a tuple of scalars. Flags are ints (0 off)."""
+
+    pop_limit: int
+    sig_limit: int
+    diversity: int
+    init_max_tries: int
+    init_population: int
+    senate: int
+    engineered: int
+    cull: int  # ops.CULL_SUBSUMED or ops.CULL_WORST
+    elitism: int
+    hard_limit: int
+    max_trials: int
+    patience: int  # 0: no patience limit
+    max_events: int
+    record_every: int  # > 0: copy every k-th trial's candidate to rec_v
+    R: float  # the search's signature radius
+    creep_sigma: float  # units/s per axis
+    target_cost: float  # -inf: none
+    p_directed_init: float
+    w_creep: float  # the four generate weights, normalized
+    w_directed: float
+    w_uniform: float
+    w_crossover: float
+
+
+class ProblemArrays(NamedTuple):
+    """The problem as both loops take it (``Problem.kernel_arrays()`` plus the index sets)."""
+
+    x0: np.ndarray  # (N, 2) starts
+    target: np.ndarray  # (N, 2)
+    radius: np.ndarray  # (N,)
+    mass: np.ndarray  # (N,)
+    cue_idx: np.ndarray  # (C,) int64 cueable disks
+    non_idx: np.ndarray  # (N - C,) int64 noncueable disks
+    W: float
+    H: float
+    t_final: float
+    images: np.ndarray  # (M, 2) int64 mirror images of uniform randomize
+
+
+def problem_arrays(problem, images) -> ProblemArrays:
+    """A problem's ProblemArrays (``images``: uniform randomize's mirror images, (M, 2) int64)."""
+    ka = problem.kernel_arrays()
+    return ProblemArrays(ka.start, ka.target, ka.radius, ka.mass, np.flatnonzero(problem.cueable).astype(np.int64),
+                         np.flatnonzero(~problem.cueable).astype(np.int64), ka.W, ka.H, ka.t_final,
+                         np.ascontiguousarray(images, dtype=np.int64))
+
+
+class SearchArrays(NamedTuple):
+    """A search's state between chunks (the kernel writes the arrays in place; the driver
+    rebuilds the tuple when it grows the history)."""
+
+    pop: Population
+    st: np.ndarray  # (N_ST,) int64 counters, ST_* indices
+    best_cost: np.ndarray  # (1,) the paper's loop; (2,) nbst's: [overall, since the last restart]
+    best_v: np.ndarray  # (N, 2)
+    rng: np.ndarray  # (4,) uint64 xoshiro256** state
+    hist_t: np.ndarray  # improvement history: trial,
+    hist_c: np.ndarray  # cost,
+    hist_o: np.ndarray  # order (st[ST_NHIST] entries used)
+    op_count: np.ndarray  # (operators, 2) int64: children made, improvements
+
 
 # search state (st, int64)
 ST_PHASE, ST_TRIALS, ST_INIT_TRIALS, ST_SINCE, ST_REJECTED, ST_CULLS, ST_FALLBACK, \
@@ -38,7 +95,6 @@ PHASE_INIT, PHASE_GENERATE = 0, 1
 # operators (op counts, per generate trial)
 OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER = range(4)
 OP_NAMES = ("creep", "directed", "uniform", "crossover")
-
 
 
 class ChunkResult(IntEnum):
@@ -78,14 +134,14 @@ def loop_scratch(n, cap):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def stop_code(pi, pf, st, best_cost, hist_room):
+def stop_code(prm, st, best_cost, hist_room):
     """Why a search loop must stop before its next trial (RC_*), or RC_CHUNK_DONE to go on.
-    ``hist_room``: how many history entries the loop may fill."""
-    if st[ST_TRIALS] >= pi[PI_MAX_TRIALS]:
+    ``hist_room``: how many history entries the loop may fill (a trial adds at most one)."""
+    if st[ST_TRIALS] >= prm.max_trials:
         return RC_MAX_TRIALS
-    if best_cost[0] <= pf[PF_TARGET_COST]:
+    if best_cost[0] <= prm.target_cost:
         return RC_TARGET_COST
-    if st[ST_PHASE] == PHASE_GENERATE and pi[PI_PATIENCE] > 0 and st[ST_SINCE] >= pi[PI_PATIENCE]:
+    if st[ST_PHASE] == PHASE_GENERATE and prm.patience > 0 and st[ST_SINCE] >= prm.patience:
         return RC_PATIENCE
     if st[ST_NHIST] >= hist_room:
         return RC_HISTORY_FULL
@@ -93,23 +149,80 @@ def stop_code(pi, pf, st, best_cost, hist_room):
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate_one(x0, v, radius, mass, target, W, H, t_final, R, max_events, work, fin, vel, no_t, no_i, no_s):
-    """Simulate one candidate: (cost, signature, truncated); a truncated run scores inf, 0."""
-    st, _, _, _ = run(x0, v, radius, mass, W, H, t_final, work, fin, vel, max_events, no_t, no_i, no_i, no_s)
+def evaluate_one(x0, v, pa, R, max_events, scr):
+    """Simulate one candidate v from starts x0 (pa.x0, or shifted ones): (cost, signature,
+    truncated); a truncated run scores inf, 0. Writes scr.fin and scr.vel."""
+    st, _, _, _ = run(x0, v, pa.radius, pa.mass, pa.W, pa.H, pa.t_final, scr.work, scr.fin, scr.vel, max_events,
+                      scr.no_t, scr.no_i, scr.no_i, scr.no_s)
     if st != 0:
         return np.inf, np.int64(0), True
-    c, s = cost_signature(fin, target, R)
+    c, s = cost_signature(scr.fin, pa.target, R)
     return c, s, False
 
 
 @njit(cache=True, error_model="numpy")
-def settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng,
-           scr_ord, acc, n):
-    """Book one simulated candidate (after the trial counters): order statistics, an
-    improvement of the best (and the history), the insert of initialize or generate,
-    and the end of initialize. Shared by this loop and ``nbst.search.nbst_loop``'s."""
+def init_child(pa, prm, straight, rng, child):
+    """Initialize's candidate: each cueable disk directed (all of them when ``straight``) or, with
+    probability 1 - p_directed_init, uniform randomize; noncueable disks at rest."""
+    child[:, :] = 0.0
+    for q in range(pa.cue_idx.shape[0]):
+        i = pa.cue_idx[q]
+        if straight or rng_uniform(rng) < prm.p_directed_init:
+            directed_velocity(pa.x0, pa.target, pa.t_final, i, child)
+        else:
+            uniform_velocity(pa.x0, pa.radius, pa.W, pa.H, pa.t_final, pa.images, i, rng, child)
+
+
+@njit(cache=True, error_model="numpy")
+def select_parent(pop, n, prm, rng, first, scr):
+    """A parent: Senate-like (``prm.senate``) or uniform; ``first`` >= 0 picks the second
+    crossover parent (never ``first`` itself)."""
+    if prm.senate != 0:
+        return select_senate(pop, n, rng, first, scr.scr_ord, scr.scr_ok)
+    return select_uniform(pop, rng, first)
+
+
+@njit(cache=True, error_model="numpy")
+def cross_parents(pop, p1, p2, pa, prm, rng, child):
+    """The crossover child of members p1 and p2 (engineered unless ``prm.engineered`` is 0)."""
+    crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], pa.cue_idx, prm.engineered != 0, rng, child)
+
+
+@njit(cache=True, error_model="numpy")
+def mutate_one(op, i, pa, prm, rng, child):
+    """The paper's one-disk operators on disk i of a copy of the parent: creep, directed or uniform."""
+    if op == OP_CREEP:
+        creep_velocity(prm.creep_sigma, i, rng, child)
+    elif op == OP_DIRECTED:
+        directed_velocity(pa.x0, pa.target, pa.t_final, i, child)
+    else:
+        uniform_velocity(pa.x0, pa.radius, pa.W, pa.H, pa.t_final, pa.images, i, rng, child)
+
+
+@njit(cache=True, error_model="numpy")
+def book_trial(sa, prm, rec_v, child, trunc):
+    """Count one simulated candidate (trials, trials since the best, initialize's trials,
+    truncated runs) and record it for ``record_every``."""
+    st = sa.st
+    st[ST_TRIALS] += 1
+    st[ST_SINCE] += 1
+    rec_k = prm.record_every
+    if rec_k > 0 and st[ST_TRIALS] % rec_k == 0 and st[ST_TRIALS] // rec_k <= rec_v.shape[0]:
+        rec_v[st[ST_TRIALS] // rec_k - 1, :, :] = child
+    if st[ST_PHASE] == PHASE_INIT:
+        st[ST_INIT_TRIALS] += 1
+    if trunc:
+        st[ST_TRUNCATED] += 1
+
+
+@njit(cache=True, error_model="numpy")
+def settle(sa, child, cost, sig, op, p1, p2, prm, scr, n):
+    """Book one simulated candidate (after ``book_trial``): order statistics, an improvement
+    of the best (and the history), the insert of initialize or generate, and the end of
+    initialize. Shared by this loop and ``nbst.search.nbst_loop``'s."""
+    pop, st, best_cost = sa.pop, sa.st, sa.best_cost
     ist = pop.state
-    elitism = pi[PI_ELITISM] != 0
+    elitism = prm.elitism != 0
     order = popcount(sig)
     if order > st[ST_MAX_ORDER]:
         st[ST_MAX_ORDER] = order
@@ -121,34 +234,34 @@ def settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t,
         improvement = cost < best_cost[0]
         if improvement:
             best_cost[0] = cost
-            best_v[:, :] = child
+            sa.best_v[:, :] = child
             st[ST_BEST_SIG] = sig
             st[ST_SINCE] = 0
             k = st[ST_NHIST]
-            hist_t[k] = st[ST_TRIALS]
-            hist_c[k] = cost
-            hist_o[k] = order
+            sa.hist_t[k] = st[ST_TRIALS]
+            sa.hist_c[k] = cost
+            sa.hist_o[k] = order
             st[ST_NHIST] = k + 1
             if op >= 0:
-                op_count[op, 1] += 1
+                sa.op_count[op, 1] += 1
         if st[ST_PHASE] == PHASE_INIT:
-            insert_initial(pop, child, cost, sig, improvement, elitism, pi[PI_SIG_LIMIT], pi[PI_POP_LIMIT])
+            insert_initial(pop, child, cost, sig, improvement, elitism, prm.sig_limit, prm.pop_limit)
         else:
-            code = insert(pop, child, cost, sig, p1, p2, improvement, elitism, pi[PI_SIG_LIMIT],
-                          pi[PI_POP_LIMIT], pi[PI_HARD_LIMIT], pi[PI_CULL], n, rng, scr_ord)
+            code = insert(pop, child, cost, sig, p1, p2, improvement, elitism, prm.sig_limit, prm.pop_limit,
+                          prm.hard_limit, prm.cull, n, sa.rng, scr.scr_ord)
             if code == INS_CULLED:
                 st[ST_CULLS] += 1
             elif code == INS_FALLBACK:
                 st[ST_FALLBACK] += 1
     if st[ST_PHASE] == PHASE_INIT and ist[SIZE] > 0:
-        done = st[ST_INIT_TRIALS] >= pi[PI_INIT_MAX_TRIES]
-        if pi[PI_INIT_POPULATION] > 0:
-            done = done or ist[SIZE] >= pi[PI_INIT_POPULATION]
+        done = st[ST_INIT_TRIALS] >= prm.init_max_tries
+        if prm.init_population > 0:
+            done = done or ist[SIZE] >= prm.init_population
         else:
-            acceptable_counts(pop, n, acc)
+            acceptable_counts(pop, n, scr.acc)
             ok = True
             for i in range(n):
-                if acc[i] < pi[PI_DIVERSITY]:
+                if scr.acc[i] < prm.diversity:
                     ok = False
                     break
             done = done or ok
@@ -157,88 +270,51 @@ def settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t,
 
 
 @njit(cache=True, error_model="numpy")
-def run_chunk(x0, target, radius, mass, cue_idx, W, H, t_final, images, pi, pf,
-              pop, st, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, rec_v, n_steps):
-    """Advance the search by at most n_steps trials. Returns an RC_* code.
+def _make_child(pa, prm, sa, scr, n):
+    """The paper's next candidate into scr.child: initialize's, or one generate operator on
+    Senate-selected parents. Returns (operator or -1, p1, p2)."""
+    pop, st, rng, child = sa.pop, sa.st, sa.rng, scr.child
+    if st[ST_PHASE] == PHASE_INIT:
+        init_child(pa, prm, False, rng, child)
+        return -1, -1, -1
+    w_c = prm.w_creep
+    w_d = w_c + prm.w_directed
+    w_u = w_d + prm.w_uniform
+    w_tot = w_u + prm.w_crossover
+    u = rng_uniform(rng) * w_tot
+    op = OP_CREEP if u < w_c else (OP_DIRECTED if u < w_d else (OP_UNIFORM if u < w_u else OP_CROSSOVER))
+    if op == OP_CROSSOVER and pop.state[SIZE] < 2:
+        op = OP_CREEP  # a lone member cannot be crossed
+    p1 = select_parent(pop, n, prm, rng, -1, scr)
+    p2 = -1
+    if op == OP_CROSSOVER:
+        p2 = select_parent(pop, n, prm, rng, p1, scr)
+        cross_parents(pop, p1, p2, pa, prm, rng, child)
+    else:
+        child[:, :] = pop.vel[p1]
+        mutate_one(op, pa.cue_idx[rng_int(rng, pa.cue_idx.shape[0])], pa, prm, rng, child)
+    sa.op_count[op, 0] += 1
+    return op, p1, p2
 
-    x0, target : (N, 2); radius, mass : (N,); cue_idx : indices of cueable disks
-    images     : (M, 2) int64 mirror images for uniform randomize
-    pi, pf     : parameters (PI_*, PF_* indices); st : state (ST_*); best_cost : (1,)
-    best_v     : (N, 2) best velocities so far; rng : (4,) uint64
-    hist_*     : improvement history (trial, cost, order), st[ST_NHIST] entries used
-    op_count   : (4, 2) int64 per operator: children made, improvements
-    rec_v      : (M, N, 2): with pi[PI_RECORD_EVERY] = k > 0, the candidate of every k-th trial
-                 (trial k, 2k, ...) is copied to rec_v[trial / k - 1] while there is room
-                 (for benchmarks: the exact mix of velocities the loop simulates)
+
+@njit(cache=True, error_model="numpy")
+def run_chunk(pa, prm, sa, rec_v, n_steps):
+    """Advance the search by at most n_steps trials. Returns a ChunkResult.
+
+    pa   : ProblemArrays; prm : LoopParams; sa : SearchArrays (written in place)
+    rec_v: (M, N, 2): with prm.record_every = k > 0, the candidate of every k-th trial
+           (trial k, 2k, ...) is copied to rec_v[trial / k - 1] while there is room
+           (for benchmarks: the exact mix of velocities the loop simulates)
     """
-    n = x0.shape[0]
-    cap = pop.vel.shape[0]
-    ist = pop.state
-    work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = loop_scratch(n, cap)
-    R = pf[PF_R]
-    max_events = pi[PI_MAX_EVENTS]
-    w_c = pf[PF_W_CREEP]
-    w_d = w_c + pf[PF_W_DIRECTED]
-    w_u = w_d + pf[PF_W_UNIFORM]
-    w_tot = w_u + pf[PF_W_CROSSOVER]
-    ncue = cue_idx.shape[0]
-
+    n = pa.x0.shape[0]
+    scr = loop_scratch(n, sa.pop.vel.shape[0])
     for _ in range(n_steps):
-        rc = stop_code(pi, pf, st, best_cost, hist_t.shape[0])
+        rc = stop_code(prm, sa.st, sa.best_cost, sa.hist_t.shape[0])
         if rc != RC_CHUNK_DONE:
             return rc
-
-        p1 = -1
-        p2 = -1
-        op = -1
-        if st[ST_PHASE] == PHASE_INIT:
-            child[:, :] = 0.0
-            for q in range(ncue):
-                i = cue_idx[q]
-                if rng_uniform(rng) < pf[PF_P_DIRECTED_INIT]:
-                    directed_velocity(x0, target, t_final, i, child)
-                else:
-                    uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
-        else:
-            u = rng_uniform(rng) * w_tot
-            op = OP_CREEP if u < w_c else (OP_DIRECTED if u < w_d else (OP_UNIFORM if u < w_u else OP_CROSSOVER))
-            if op == OP_CROSSOVER and ist[SIZE] < 2:
-                op = OP_CREEP  # a lone member cannot be crossed
-            if pi[PI_SENATE] != 0:
-                p1 = select_senate(pop, n, rng, -1, scr_ord, scr_ok)
-            else:
-                p1 = select_uniform(pop, rng, -1)
-            if op == OP_CROSSOVER:
-                if pi[PI_SENATE] != 0:
-                    p2 = select_senate(pop, n, rng, p1, scr_ord, scr_ok)
-                else:
-                    p2 = select_uniform(pop, rng, p1)
-                crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], cue_idx, pi[PI_ENGINEERED] != 0,
-                          rng, child)
-            else:
-                child[:, :] = pop.vel[p1]
-                i = cue_idx[rng_int(rng, ncue)]
-                if op == OP_CREEP:
-                    creep_velocity(pf[PF_CREEP_SIGMA], i, rng, child)
-                elif op == OP_DIRECTED:
-                    directed_velocity(x0, target, t_final, i, child)
-                else:
-                    uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
-            op_count[op, 0] += 1
-        limit_crossings(child, cue_idx, radius, W, H, t_final)
-
-        cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, R, max_events, work,
-                                        fin, vel, no_t, no_i, no_s)
-        st[ST_TRIALS] += 1
-        st[ST_SINCE] += 1
-        rec_k = pi[PI_RECORD_EVERY]
-        if rec_k > 0 and st[ST_TRIALS] % rec_k == 0 and st[ST_TRIALS] // rec_k <= rec_v.shape[0]:
-            rec_v[st[ST_TRIALS] // rec_k - 1, :, :] = child
-        if st[ST_PHASE] == PHASE_INIT:
-            st[ST_INIT_TRIALS] += 1
-        if trunc:
-            st[ST_TRUNCATED] += 1
-        settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng,
-               scr_ord, acc, n)
+        op, p1, p2 = _make_child(pa, prm, sa, scr, n)
+        limit_crossings(scr.child, pa.cue_idx, pa.radius, pa.W, pa.H, pa.t_final)
+        cost, sig, trunc = evaluate_one(pa.x0, scr.child, pa, prm.R, prm.max_events, scr)
+        book_trial(sa, prm, rec_v, scr.child, trunc)
+        settle(sa, scr.child, cost, sig, op, p1, p2, prm, scr, n)
     return RC_CHUNK_DONE
-

@@ -46,37 +46,82 @@ elitism, stopping -- is the paper's, from ``nbst.search.ops``.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from nbst.search.aim import alloc_clearance, chain_strike_velocity, choose_bank, strike_velocity
+from nbst.search.loop import OP_NAMES as PAPER_OP_NAMES
+from nbst.search.loop import (PHASE_GENERATE, PHASE_INIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE,
+                              ST_SINCE, ST_TRIALS, book_trial, cross_parents, evaluate_one, init_child, loop_scratch,
+                              mutate_one, select_parent, settle, stop_code)
+from nbst.search.ops import BEST, NTAB, SIZE, creep_velocity, insert_initial, limit_crossings, popcount, rng_int, \
+    rng_uniform
 from nbst.search.polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
 from nbst.search.robust import robust_eval
-from nbst.search.loop import (PF_CREEP_SIGMA, PF_P_DIRECTED_INIT, PF_R, PF_TARGET_COST, PHASE_GENERATE, PHASE_INIT,
-                          PI_ELITISM, PI_ENGINEERED, PI_MAX_EVENTS, PI_MAX_TRIALS, PI_POP_LIMIT, PI_SENATE,
-                          PI_SIG_LIMIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE, ST_SINCE, ST_TRIALS,
-                          ST_TRUNCATED, evaluate_one, loop_scratch, settle, stop_code)
-from nbst.search.loop import OP_NAMES as PAPER_OP_NAMES
 from nbst.sim.primitives import mirror
-from nbst.search.ops import (BEST, NTAB, SIZE, limit_crossings, creep_velocity, crossover, directed_velocity, insert_initial, popcount,
-                         rng_int, rng_uniform, select_senate, select_uniform, uniform_velocity)
 
 # operators of the nbst variant: the paper's four (``nbst.search.loop.OP_NAMES``), then nbst's
 OP_NAMES = PAPER_OP_NAMES + ("bank", "strike", "plan")
 N_OPS = len(OP_NAMES)
 OP_CREEP, OP_DIRECTED, OP_UNIFORM, OP_CROSSOVER, OP_BANK, OP_STRIKE, OP_PLAN = range(N_OPS)
 
-# extra parameters (qi: int64, qf: float64)
-QI_POLISH, QI_POLISH_SIMS, QI_BANK_BOUNCES, QI_ADAPT, QI_STRAIGHT_START, QI_STRIKE_BOUNCES, QI_RESTART, \
-    QI_ROBUST, QI_SEED_POLISH_SIMS = range(9)
-N_QI = 9
-QF_POLISH_RATIO, QF_ADAPT_RATE, QF_ADAPT_FLOOR, QF_ROBUST_SHIFT = range(4)
-N_QF = 4
+#: ``NbstParams.robust``: off, the AND of the shifted signatures, or the unshifted signature.
+ROBUST_OFF, ROBUST_AND, ROBUST_PLAIN = 0, 1, 2
 
-# extra state (qs: int64)
+
+class NbstParams(NamedTuple):
+    """nbst's additions' parameters (``SearchParams`` fields; flags are ints, 0 off)."""
+
+    polish: int
+    polish_sims: int
+    bank_bounces: int
+    adapt: int
+    straight_start: int
+    strike_bounces: int
+    restart: int  # 0: never
+    robust: int  # ROBUST_*
+    seed_polish_sims: int  # polish budget of a planner seed
+    polish_ratio: float
+    adapt_rate: float
+    adapt_floor: float
+    robust_shift: float  # SHIFT_STEPS x robust_timestep
+
+
+# nbst's extra counters (qs: int64 array, mutable between chunks)
 QS_POLISH_RUNS, QS_POLISH_SIMS, QS_POLISH_GAINS, QS_RESTARTS, QS_LOCAL_SIG, QS_LOCAL_SINCE, QS_ROBUST_SIMS, \
     QS_SIMS = range(8)
 N_QS = 8
+
+
+class NbstArrays(NamedTuple):
+    """nbst's extra state between chunks: counters and the operator schedule."""
+
+    qs: np.ndarray  # (N_QS,) int64, QS_* indices
+    weights: np.ndarray  # (N_OPS,) operator probabilities now
+    base: np.ndarray  # (N_OPS,) starting probabilities (0: operator off)
+    reward: np.ndarray  # (N_OPS,) success moving averages (adapt)
+
+
+class Plans(NamedTuple):
+    """The backward planner's output for the loop (``nbst.search.planner``)."""
+
+    seeds: np.ndarray  # (S, N, 2) initialize's first candidates
+    route_cue: np.ndarray  # (R,) int64 the route's cue
+    route_v: np.ndarray  # (R, 2) its velocity
+    route_mask: np.ndarray  # (R,) int64 the noncueable disks it moved
+
+
+class NbstScratch(NamedTuple):
+    """Scratch of one chunk of nbst's loop (besides the paper loop's ``LoopScratch``)."""
+
+    clear: tuple  # ``nbst.search.aim.alloc_clearance``
+    polish: tuple  # ``nbst.search.polish.PolishScratch``
+    out2: np.ndarray  # (2,) one disk's velocity
+    T: np.ndarray  # (2,) a strike's aim point
+    px0: np.ndarray  # (N, 2) shifted starts (robust)
+    backup: np.ndarray  # (N, 2) a child before a robust polish
 
 
 @njit(cache=True, error_model="numpy")
@@ -135,221 +180,224 @@ def _pick_disk(idx, sig, rng, prefer_bad):
 
 
 @njit(cache=True, error_model="numpy")
-def run_chunk_nbst(x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, images, pi, pf, qi, qf,
-                   pop, st, qs, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count, weights, base, reward,
-                   zeta, smax, seeds, route_cue, route_v, route_mask, n_steps):
-    """Advance the nbst search by about n_steps trials (a polish may overrun by its
-    budget, never past max_trials). Same contract as ``nbst.search.loop.run_chunk``,
-    plus qi/qf (QI_*, QF_* parameters), qs (QS_* state and statistics), the
-    operator schedule arrays (weights, base, reward; each (N_OPS,)),
-    best_cost of shape (2,): [best overall, best since the last restart], and the
-    start shifts zeta (K, N, 2), smax (K,) of ``nbst.search.robust.draws``: with qi[QI_ROBUST]
-    on, every candidate is scored by ``nbst.search.robust.robust_eval`` under them (cost = the
-    worst, signature = the AND), polished children rescored. seeds (S, N, 2): initialize's
-    first S candidates (the backward planner's, ``nbst.search.planner``), then the straight start;
-    a seed is polished with qi[QI_SEED_POLISH_SIMS] simulations when polish's trigger holds.
-    route_cue (R,), route_v (R, 2), route_mask (R,): the planner's routes for the ``plan``
-    operator (one noncueable disk of the parent, not acceptable half of the time, is given a
-    random route that moves it: that route's cue takes the route's velocity).
-    Every simulation is counted: qs[QS_SIMS] (robust mode's shifted runs apart, in
-    qs[QS_ROBUST_SIMS])."""
-    n = x0.shape[0]
-    cap = pop.vel.shape[0]
-    ist = pop.state
-    work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = loop_scratch(n, cap)
-    clear = alloc_clearance(n)
-    pscr = alloc_polish(n, cue_idx.shape[0], POLISH_EVENT_CAP)
-    out2 = np.empty(2)
-    T = np.empty(2)
-    R = pf[PF_R]
-    max_events = pi[PI_MAX_EVENTS]
-    elitism = pi[PI_ELITISM] != 0
-    ncue = cue_idx.shape[0]
-    nnon = non_idx.shape[0]
-    tol = max(pf[PF_TARGET_COST], 0.0)
-    robust = qi[QI_ROBUST] != 0
-    and_sig = qi[QI_ROBUST] == 1  # 1: signature = the AND over the shifted runs; 2: the unshifted one
-    shift = qf[QF_ROBUST_SHIFT]
-    px0 = np.empty((n, 2))
-    backup = np.empty((n, 2))
-    nseed = seeds.shape[0]
+def _restart(sa, prm, na, n_seeds):
+    """A fresh population around nothing but the best so far (kept, elitism); initialize again
+    (not the seeds nor the straight start)."""
+    ist = sa.pop.state
+    ist[SIZE] = 0
+    ist[NTAB] = 0
+    ist[BEST] = -1
+    insert_initial(sa.pop, sa.best_v, sa.best_cost[0], sa.st[ST_BEST_SIG], True, prm.elitism != 0, prm.sig_limit,
+                   prm.pop_limit)
+    sa.st[ST_PHASE] = PHASE_INIT
+    sa.st[ST_INIT_TRIALS] = n_seeds + 1
+    sa.best_cost[1] = np.inf
+    na.qs[QS_LOCAL_SIG] = 0
+    na.qs[QS_LOCAL_SINCE] = 0
+    na.qs[QS_RESTARTS] += 1
 
+
+@njit(cache=True, error_model="numpy")
+def _strike(pa, q, sig, rng, xs, child):
+    """Strike operator on a copy of the parent (signature sig): a cueable disk aimed to strike a
+    noncueable one (a non-acceptable one half of the time) towards its target or an image of
+    it (the image draw favours the target itself, 5/9 for one bounce: module docstring); half
+    of the time (two or more noncueable disks) through a chain. Creep if the aim is impossible."""
+    x0, radius, mass, target, non_idx = pa.x0, pa.radius, pa.mass, pa.target, pa.non_idx
+    nnon = non_idx.shape[0]
+    s = _pick_disk(non_idx, sig, rng, True)
+    c = pa.cue_idx[rng_int(rng, pa.cue_idx.shape[0])]
+    b = q.strike_bounces
+    kx = rng_int(rng, 2 * b + 1) - b
+    ky = rng_int(rng, 2 * b + 1) - b
+    if abs(kx) + abs(ky) > b:
+        kx = 0
+        ky = 0
+    T = xs.T
+    T[0] = mirror(target[s, 0], kx, radius[s], pa.W - radius[s])
+    T[1] = mirror(target[s, 1], ky, radius[s], pa.H - radius[s])
+    if nnon >= 2 and rng_uniform(rng) < 0.5:
+        s1 = non_idx[rng_int(rng, nnon)]
+        while s1 == s:
+            s1 = non_idx[rng_int(rng, nnon)]
+        th = chain_strike_velocity(x0[c], radius[c], mass[c], x0[s1], radius[s1], mass[s1], x0[s], radius[s], mass[s],
+                                   T, pa.t_final, xs.out2)
+    else:
+        th = strike_velocity(x0[c], radius[c], mass[c], x0[s], radius[s], mass[s], T, pa.t_final, xs.out2)
+    return c, th
+
+
+@njit(cache=True, error_model="numpy")
+def _plan_route(pa, pl, sig, rng, child):
+    """Plan operator: one noncueable disk (a non-acceptable one half of the time) gets a random
+    planner route that moves it (any route if none does): that route's cue takes its velocity."""
+    s = _pick_disk(pa.non_idx, sig, rng, True)
+    cnt = 0
+    for r in range(pl.route_cue.shape[0]):
+        if (pl.route_mask[r] >> s) & 1:
+            cnt += 1
+    if cnt == 0:
+        r = rng_int(rng, pl.route_cue.shape[0])
+    else:
+        k = rng_int(rng, cnt)
+        r = 0
+        while True:
+            if (pl.route_mask[r] >> s) & 1:
+                if k == 0:
+                    break
+                k -= 1
+            r += 1
+    child[pl.route_cue[r], 0] = pl.route_v[r, 0]
+    child[pl.route_cue[r], 1] = pl.route_v[r, 1]
+
+
+@njit(cache=True, error_model="numpy")
+def _make_child(pa, prm, q, sa, na, pl, scr, xs, n):
+    """nbst's next candidate into scr.child: a planner seed, initialize's (the straight start
+    first), or one operator on selected parents. Returns (operator or -1, p1, p2, the parents'
+    best cost, their highest order, seeded)."""
+    pop, st, rng, child = sa.pop, sa.st, sa.rng, scr.child
+    n_seeds = pl.seeds.shape[0]
+    if st[ST_PHASE] == PHASE_INIT:
+        if st[ST_INIT_TRIALS] < n_seeds:
+            child[:, :] = pl.seeds[st[ST_INIT_TRIALS]]
+            return -1, -1, -1, np.inf, 0, True
+        init_child(pa, prm, q.straight_start != 0 and st[ST_INIT_TRIALS] == n_seeds, rng, child)
+        return -1, -1, -1, np.inf, 0, False
+    op = _pick_op(rng, na.weights)
+    if op == OP_CROSSOVER and pop.state[SIZE] < 2:
+        op = OP_CREEP
+    p1 = select_parent(pop, n, prm, rng, -1, scr)
+    p2 = -1
+    parent_cost = pop.cost[p1]
+    parent_order = popcount(pop.sig[p1])
+    if op == OP_CROSSOVER:
+        p2 = select_parent(pop, n, prm, rng, p1, scr)
+        parent_cost = min(parent_cost, pop.cost[p2])
+        parent_order = max(parent_order, popcount(pop.sig[p2]))
+        cross_parents(pop, p1, p2, pa, prm, rng, child)
+    else:
+        child[:, :] = pop.vel[p1]
+        if op == OP_STRIKE and pa.non_idx.shape[0] > 0:
+            c, th = _strike(pa, q, pop.sig[p1], rng, xs, child)
+            if th > 0.0:
+                child[c, 0] = xs.out2[0]
+                child[c, 1] = xs.out2[1]
+            else:
+                creep_velocity(prm.creep_sigma, c, rng, child)
+        elif op == OP_PLAN and pl.route_cue.shape[0] > 0:
+            _plan_route(pa, pl, pop.sig[p1], rng, child)
+        else:
+            i = _pick_disk(pa.cue_idx, pop.sig[p1], rng, op == OP_BANK)
+            if op == OP_CREEP or op == OP_STRIKE or op == OP_DIRECTED or op == OP_UNIFORM:
+                # a strike without noncueable disks is a creep
+                mutate_one(OP_CREEP if op == OP_STRIKE else op, i, pa, prm, rng, child)
+            else:  # bank (and plan without routes, which its zero weight never picks)
+                choose_bank(i, pa.x0, child, pa.radius, pa.target, pa.W, pa.H, pa.t_final, 0, q.bank_bounces,
+                            xs.clear, rng, xs.out2)
+                child[i, 0] = xs.out2[0]
+                child[i, 1] = xs.out2[1]
+    sa.op_count[op, 0] += 1
+    return op, p1, p2, parent_cost, parent_order, False
+
+
+@njit(cache=True, error_model="numpy")
+def _score(pa, prm, q, na, rd, scr, xs):
+    """Simulate scr.child: (cost, signature, truncated), under robust mode the robust score
+    (its shifted runs counted in qs[QS_ROBUST_SIMS])."""
+    cost, sig, trunc = evaluate_one(pa.x0, scr.child, pa, prm.R, prm.max_events, scr)
+    if q.robust != ROBUST_OFF and not trunc and sig != 0:  # an order-0 candidate is rejected whatever its score
+        c_r, s_r, sims = robust_eval(pa, scr.child, prm.R, prm.max_events, rd, q.robust_shift, cost, sig,
+                                     q.robust == ROBUST_AND, xs.px0, scr)
+        cost = c_r
+        if q.robust == ROBUST_AND:
+            sig = s_r
+        na.qs[QS_ROBUST_SIMS] += sims
+    return cost, sig, trunc
+
+
+@njit(cache=True, error_model="numpy")
+def _polish(pa, prm, q, sa, na, rd, scr, xs, cost, sig, seeded):
+    """Polish the promising child scr.child in place (a new best since the restart, or one of
+    the best order within polish_ratio of it); every simulation is a trial, the polish's
+    first (a repeat of the child's) included. Returns its (cost, signature)."""
+    order = popcount(sig)
+    tol = max(prm.target_cost, 0.0)
+    local = sa.best_cost[1]
+    if not (q.polish != 0 and order > 0 and cost > tol
+            and (cost < local or (order >= popcount(na.qs[QS_LOCAL_SIG]) and cost < q.polish_ratio * local))):
+        return cost, sig
+    st, qs, child = sa.st, na.qs, scr.child
+    budget = min(q.seed_polish_sims if seeded else q.polish_sims, prm.max_trials - st[ST_TRIALS])
+    if budget < 2:
+        return cost, sig
+    robust = q.robust != ROBUST_OFF
+    if robust:
+        xs.backup[:, :] = child
+    c2, s2, sims, _ = polish_kernel(pa.x0, child, pa.radius, pa.mass, pa.target, pa.W, pa.H, pa.t_final, prm.R,
+                                    pa.cue_idx, budget, tol, scr.work, xs.polish)
+    st[ST_TRIALS] += sims
+    st[ST_SINCE] += sims
+    qs[QS_SIMS] += sims
+    qs[QS_LOCAL_SINCE] += sims
+    qs[QS_POLISH_RUNS] += 1
+    qs[QS_POLISH_SIMS] += sims
+    if robust and c2 < cost:  # polish lowered the nominal cost: rescore under the perturbations
+        c2, s_r, rs = robust_eval(pa, child, prm.R, prm.max_events, rd, q.robust_shift, c2, s2,
+                                  q.robust == ROBUST_AND, xs.px0, scr)
+        if q.robust == ROBUST_AND:
+            s2 = s_r
+        qs[QS_ROBUST_SIMS] += rs
+        if not c2 < cost or popcount(s2) < order:
+            child[:, :] = xs.backup
+            c2 = np.inf
+    if c2 < cost:
+        qs[QS_POLISH_GAINS] += 1
+        return c2, s2
+    return cost, sig
+
+
+@njit(cache=True, error_model="numpy")
+def run_chunk_nbst(pa, prm, q, sa, na, rd, pl, n_steps):
+    """Advance the nbst search by about n_steps trials (a polish may overrun by its budget,
+    never past max_trials). Same contract as ``nbst.search.loop.run_chunk``, plus
+    q (NbstParams), na (NbstArrays: counters and the operator schedule), rd
+    (``nbst.search.robust.RobustDraws``: with q.robust on, every candidate is scored by
+    ``robust_eval`` under them, polished children rescored) and pl (Plans: the planner's
+    seeds, initialize's first candidates before the straight start, and its routes for
+    the plan operator). sa.best_cost has shape (2,): [best overall, best since the last
+    restart]. Every simulation is counted: qs[QS_SIMS] (robust mode's shifted runs apart, in
+    qs[QS_ROBUST_SIMS]).
+
+    One trial: restart if due, make a child, limit it to the velocity domain, score it,
+    count it, adapt the schedule, maybe polish it, then settle it as the paper's loop does."""
+    n = pa.x0.shape[0]
+    scr = loop_scratch(n, sa.pop.vel.shape[0])
+    xs = NbstScratch(alloc_clearance(n), alloc_polish(n, pa.cue_idx.shape[0], POLISH_EVENT_CAP), np.empty(2),
+                     np.empty(2), np.empty((n, 2)), np.empty((n, 2)))
+    st, qs = sa.st, na.qs
+    no_rec = np.empty((0, n, 2))
     for _ in range(n_steps):
-        rc = stop_code(pi, pf, st, best_cost, hist_t.shape[0] - 1)
+        rc = stop_code(prm, st, sa.best_cost, sa.hist_t.shape[0])
         if rc != RC_CHUNK_DONE:
             return rc
-        if (qi[QI_RESTART] > 0 and st[ST_PHASE] == PHASE_GENERATE and qs[QS_LOCAL_SINCE] >= qi[QI_RESTART]
-                and best_cost[0] < np.inf):
-            # restart: a fresh population around nothing but the best so far
-            ist[SIZE] = 0
-            ist[NTAB] = 0
-            ist[BEST] = -1
-            insert_initial(pop, best_v, best_cost[0], st[ST_BEST_SIG], True, elitism, pi[PI_SIG_LIMIT],
-                           pi[PI_POP_LIMIT])
-            st[ST_PHASE] = PHASE_INIT
-            st[ST_INIT_TRIALS] = nseed + 1  # not the seeds nor the straight start again
-            best_cost[1] = np.inf
-            qs[QS_LOCAL_SIG] = 0
-            qs[QS_LOCAL_SINCE] = 0
-            qs[QS_RESTARTS] += 1
-
-        p1 = -1
-        p2 = -1
-        op = -1
-        parent_cost = np.inf
-        parent_order = 0
-        seeded = st[ST_PHASE] == PHASE_INIT and st[ST_INIT_TRIALS] < nseed
-        if seeded:
-            child[:, :] = seeds[st[ST_INIT_TRIALS]]
-        elif st[ST_PHASE] == PHASE_INIT:
-            child[:, :] = 0.0
-            straight = qi[QI_STRAIGHT_START] != 0 and st[ST_INIT_TRIALS] == nseed
-            for q in range(ncue):
-                i = cue_idx[q]
-                if straight or rng_uniform(rng) < pf[PF_P_DIRECTED_INIT]:
-                    directed_velocity(x0, target, t_final, i, child)
-                else:
-                    uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
-        else:
-            op = _pick_op(rng, weights)
-            if op == OP_CROSSOVER and ist[SIZE] < 2:
-                op = OP_CREEP
-            if pi[PI_SENATE] != 0:
-                p1 = select_senate(pop, n, rng, -1, scr_ord, scr_ok)
-            else:
-                p1 = select_uniform(pop, rng, -1)
-            parent_cost = pop.cost[p1]
-            parent_order = popcount(pop.sig[p1])
-            if op == OP_CROSSOVER:
-                if pi[PI_SENATE] != 0:
-                    p2 = select_senate(pop, n, rng, p1, scr_ord, scr_ok)
-                else:
-                    p2 = select_uniform(pop, rng, p1)
-                parent_cost = min(parent_cost, pop.cost[p2])
-                parent_order = max(parent_order, popcount(pop.sig[p2]))
-                crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], cue_idx, pi[PI_ENGINEERED] != 0,
-                          rng, child)
-            else:
-                child[:, :] = pop.vel[p1]
-                if op == OP_STRIKE and nnon > 0:
-                    s = _pick_disk(non_idx, pop.sig[p1], rng, True)
-                    c = cue_idx[rng_int(rng, ncue)]
-                    b = qi[QI_STRIKE_BOUNCES]
-                    kx = rng_int(rng, 2 * b + 1) - b
-                    ky = rng_int(rng, 2 * b + 1) - b
-                    if abs(kx) + abs(ky) > b:
-                        kx = 0
-                        ky = 0
-                    T[0] = mirror(target[s, 0], kx, radius[s], W - radius[s])
-                    T[1] = mirror(target[s, 1], ky, radius[s], H - radius[s])
-                    if nnon >= 2 and rng_uniform(rng) < 0.5:
-                        s1 = non_idx[rng_int(rng, nnon)]
-                        while s1 == s:
-                            s1 = non_idx[rng_int(rng, nnon)]
-                        th = chain_strike_velocity(x0[c], radius[c], mass[c], x0[s1], radius[s1], mass[s1],
-                                                   x0[s], radius[s], mass[s], T, t_final, out2)
-                    else:
-                        th = strike_velocity(x0[c], radius[c], mass[c], x0[s], radius[s], mass[s], T, t_final,
-                                             out2)
-                    if th > 0.0:
-                        child[c, 0] = out2[0]
-                        child[c, 1] = out2[1]
-                    else:
-                        creep_velocity(pf[PF_CREEP_SIGMA], c, rng, child)
-                elif op == OP_PLAN and route_cue.shape[0] > 0:
-                    s = _pick_disk(non_idx, pop.sig[p1], rng, True)
-                    cnt = 0
-                    for r in range(route_cue.shape[0]):
-                        if (route_mask[r] >> s) & 1:
-                            cnt += 1
-                    if cnt == 0:
-                        r = rng_int(rng, route_cue.shape[0])
-                    else:
-                        k = rng_int(rng, cnt)
-                        r = 0
-                        while True:
-                            if (route_mask[r] >> s) & 1:
-                                if k == 0:
-                                    break
-                                k -= 1
-                            r += 1
-                    child[route_cue[r], 0] = route_v[r, 0]
-                    child[route_cue[r], 1] = route_v[r, 1]
-                else:
-                    i = _pick_disk(cue_idx, pop.sig[p1], rng, op == OP_BANK)
-                    if op == OP_CREEP or op == OP_STRIKE:
-                        creep_velocity(pf[PF_CREEP_SIGMA], i, rng, child)
-                    elif op == OP_DIRECTED:
-                        directed_velocity(x0, target, t_final, i, child)
-                    elif op == OP_UNIFORM:
-                        uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
-                    else:
-                        choose_bank(i, x0, child, radius, target, W, H, t_final, 0, qi[QI_BANK_BOUNCES], clear,
-                                    rng, out2)
-                        child[i, 0] = out2[0]
-                        child[i, 1] = out2[1]
-            op_count[op, 0] += 1
-        limit_crossings(child, cue_idx, radius, W, H, t_final)
-
-        cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, R, max_events, work,
-                                        fin, vel, no_t, no_i, no_s)
-        if robust and not trunc and sig != 0:  # an order-0 candidate is rejected whatever its score
-            c_r, s_r, sims = robust_eval(x0, child, radius, mass, target, W, H, t_final, R, max_events, cue_idx,
-                                         zeta, smax, shift, cost, sig, and_sig, px0, work, fin, vel, no_t, no_i, no_s)
-            cost = c_r
-            if and_sig:
-                sig = s_r
-            qs[QS_ROBUST_SIMS] += sims
-        st[ST_TRIALS] += 1
-        st[ST_SINCE] += 1
+        if (q.restart > 0 and st[ST_PHASE] == PHASE_GENERATE and qs[QS_LOCAL_SINCE] >= q.restart
+                and sa.best_cost[0] < np.inf):
+            _restart(sa, prm, na, pl.seeds.shape[0])
+        op, p1, p2, parent_cost, parent_order, seeded = _make_child(pa, prm, q, sa, na, pl, scr, xs, n)
+        limit_crossings(scr.child, pa.cue_idx, pa.radius, pa.W, pa.H, pa.t_final)
+        cost, sig, trunc = _score(pa, prm, q, na, rd, scr, xs)
+        book_trial(sa, prm, no_rec, scr.child, trunc)
         qs[QS_SIMS] += 1
         qs[QS_LOCAL_SINCE] += 1
-        if st[ST_PHASE] == PHASE_INIT:
-            st[ST_INIT_TRIALS] += 1
-        if trunc:
-            st[ST_TRUNCATED] += 1
-        order = popcount(sig)
-        if op >= 0 and qi[QI_ADAPT] != 0:
-            _adapt(weights, base, reward, op, cost < parent_cost or order > parent_order, qf[QF_ADAPT_RATE],
-                   qf[QF_ADAPT_FLOOR])
-
-        # polish promising children (relative to this restart's best), charged as the simulations they run
-        local_order = popcount(qs[QS_LOCAL_SIG])
-        if (qi[QI_POLISH] != 0 and order > 0 and not trunc and cost > tol
-                and (cost < best_cost[1] or (order >= local_order and cost < qf[QF_POLISH_RATIO] * best_cost[1]))):
-            # every simulation is a trial, the polish's first (a repeat of the child's) included
-            budget = min(qi[QI_SEED_POLISH_SIMS] if seeded else qi[QI_POLISH_SIMS], pi[PI_MAX_TRIALS] - st[ST_TRIALS])
-            if budget >= 2:
-                if robust:
-                    backup[:, :] = child
-                c2, s2, sims, _ = polish_kernel(x0, child, radius, mass, target, W, H, t_final, R, cue_idx, budget,
-                                             tol, work, pscr)
-                st[ST_TRIALS] += sims
-                st[ST_SINCE] += sims
-                qs[QS_SIMS] += sims
-                qs[QS_LOCAL_SINCE] += sims
-                qs[QS_POLISH_RUNS] += 1
-                qs[QS_POLISH_SIMS] += sims
-                if robust and c2 < cost:  # polish lowered the nominal cost: rescore under the perturbations
-                    c2, s_r, rs = robust_eval(x0, child, radius, mass, target, W, H, t_final, R, max_events, cue_idx,
-                                              zeta, smax, shift, c2, s2, and_sig, px0, work, fin, vel, no_t, no_i,
-                                              no_s)
-                    if and_sig:
-                        s2 = s_r
-                    qs[QS_ROBUST_SIMS] += rs
-                    if not c2 < cost or popcount(s2) < order:
-                        child[:, :] = backup
-                        c2 = np.inf
-                if c2 < cost:
-                    qs[QS_POLISH_GAINS] += 1
-                    cost = c2
-                    sig = s2
-                    order = popcount(sig)
-
-        if order > 0 and cost < best_cost[1]:  # the best since the last restart (polish's reference)
-            best_cost[1] = cost
+        if op >= 0 and q.adapt != 0:
+            _adapt(na.weights, na.base, na.reward, op, cost < parent_cost or popcount(sig) > parent_order,
+                   q.adapt_rate, q.adapt_floor)
+        if not trunc:
+            cost, sig = _polish(pa, prm, q, sa, na, rd, scr, xs, cost, sig, seeded)
+        if popcount(sig) > 0 and cost < sa.best_cost[1]:  # the best since the last restart (polish's reference)
+            sa.best_cost[1] = cost
             qs[QS_LOCAL_SIG] = sig
             qs[QS_LOCAL_SINCE] = 0
-        settle(pop, child, cost, sig, op, p1, p2, pi, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng,
-               scr_ord, acc, n)
+        settle(sa, scr.child, cost, sig, op, p1, p2, prm, scr, n)
     return RC_CHUNK_DONE

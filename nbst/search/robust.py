@@ -37,13 +37,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from nbst.problem import Problem
-from nbst.search.loop import evaluate_one
-from nbst.sim import alloc_work
+from nbst.search.loop import evaluate_one, loop_scratch, problem_arrays
 
 #: The fixed step of the engine the solution must survive (s): MuJoCo's default in nbst.
 TIMESTEP = 0.00025
@@ -115,22 +115,28 @@ def shift_starts(x0, z, s, px0):
         px0[i, 1] = x0[i, 1] + s * z[i, 1]
 
 
+class RobustDraws(NamedTuple):
+    """The fixed start shifts of the search's robust score (``draws``)."""
+
+    zeta: np.ndarray  # (K, N, 2) standard normal
+    smax: np.ndarray  # (K,) the largest scale each draw allows
+
+
 @njit(cache=True, error_model="numpy")
-def robust_eval(x0, v, radius, mass, target, W, H, t_final, R, max_events, cue_idx, zeta, smax, shift, cost, sig,
-                stop_early, px0, work, fin, vel, no_t, no_i, no_s):
+def robust_eval(pa, v, R, max_events, rd, shift, cost, sig, stop_early, px0, scr):
     """Search score of v (N, 2) whose unshifted (cost, sig) are given: the worst cost and the
-    AND of the signatures over the unshifted run and the K runs from x0 + sigma zeta[k]
-    (sigma = ``shift_sigma``, capped by smax[k]). Returns (cost, signature, simulations run);
+    AND of the signatures over the unshifted run and the K runs from pa.x0 + sigma rd.zeta[k]
+    (sigma = ``shift_sigma``, capped by rd.smax[k]). Returns (cost, signature, simulations run);
     with stop_early, stops once no disk is left acceptable (the cost is then a lower bound:
-    a search that uses the AND rejects such a candidate whatever its cost)."""
+    a search that uses the AND rejects such a candidate whatever its cost).
+    pa: ``nbst.search.loop.ProblemArrays``; scr: its ``LoopScratch``; px0 (N, 2) scratch."""
     sims = 0
-    sigma = shift_sigma(v, cue_idx, shift)
-    for k in range(zeta.shape[0]):
+    sigma = shift_sigma(v, pa.cue_idx, shift)
+    for k in range(rd.zeta.shape[0]):
         if stop_early and sig == 0:
             break
-        shift_starts(x0, zeta[k], min(sigma, smax[k]), px0)
-        c, sg, trunc = evaluate_one(px0, v, radius, mass, target, W, H, t_final, R, max_events, work, fin, vel,
-                                    no_t, no_i, no_s)
+        shift_starts(pa.x0, rd.zeta[k], min(sigma, rd.smax[k]), px0)
+        c, sg, trunc = evaluate_one(px0, v, pa, R, max_events, scr)
         sims += 1
         if trunc:
             return np.inf, np.int64(0), sims
@@ -140,36 +146,29 @@ def robust_eval(x0, v, radius, mass, target, W, H, t_final, R, max_events, cue_i
 
 
 @njit(cache=True, error_model="numpy")
-def _score_kernel(x0, V, radius, mass, target, W, H, t_final, R, max_events, cue_idx, zeta, smax, shift,
-                  cost, sig, worst):
+def _score_kernel(pa, V, R, max_events, rd, shift, cost, sig, worst):
     """Every candidate V[m] unshifted (column 0) and under every draw (columns 1..K):
     cost (M, K+1), signature (M, K+1), and the largest distance to its target among the disks
     on target in the unshifted run (M, K+1; 0 if none is)."""
-    n = x0.shape[0]
-    work = alloc_work(n)
+    n = pa.x0.shape[0]
+    scr = loop_scratch(n, 1)
     px0 = np.empty((n, 2))
-    fin = np.empty((n, 2))
-    vel = np.empty((n, 2))
-    no_t = np.empty(0)
-    no_i = np.empty(0, np.int64)
-    no_s = np.empty((0, 8))
     for m in range(V.shape[0]):
-        sigma = shift_sigma(V[m], cue_idx, shift)
-        for k in range(zeta.shape[0] + 1):
+        sigma = shift_sigma(V[m], pa.cue_idx, shift)
+        for k in range(rd.zeta.shape[0] + 1):
             if k == 0:
-                px0[:, :] = x0
+                px0[:, :] = pa.x0
             else:
-                shift_starts(x0, zeta[k - 1], min(sigma, smax[k - 1]), px0)
-            c, sg, trunc = evaluate_one(px0, V[m], radius, mass, target, W, H, t_final, R, max_events, work, fin,
-                                        vel, no_t, no_i, no_s)
+                shift_starts(pa.x0, rd.zeta[k - 1], min(sigma, rd.smax[k - 1]), px0)
+            c, sg, trunc = evaluate_one(px0, V[m], pa, R, max_events, scr)
             cost[m, k] = c
             sig[m, k] = sg
             d = 0.0
             for i in range(n):
                 if (sig[m, 0] >> i) & 1 == 0:
                     continue
-                dx = fin[i, 0] - target[i, 0]
-                dy = fin[i, 1] - target[i, 1]
+                dx = scr.fin[i, 0] - pa.target[i, 0]
+                dy = scr.fin[i, 1] - pa.target[i, 1]
                 d = max(d, math.sqrt(dx * dx + dy * dy))
             worst[m, k] = np.inf if trunc else d
 
@@ -210,10 +209,10 @@ def score(problem: Problem, V, zeta, smax, *, timestep: float = TIMESTEP, quanti
     sig = np.empty((M, K + 1), np.int64)
     worst = np.empty((M, K + 1))
     ka = problem.kernel_arrays()
-    _score_kernel(ka.start, V, ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R,
-                  int(MAX_EVENTS if max_events is None else max_events),
-                  np.flatnonzero(problem.cueable).astype(np.int64), np.ascontiguousarray(zeta, dtype=np.float64),
-                  np.ascontiguousarray(smax, dtype=np.float64), SHIFT_STEPS * float(timestep), cost, sig, worst)
+    pa = problem_arrays(problem, np.zeros((0, 2), np.int64))
+    rd = RobustDraws(np.ascontiguousarray(zeta, dtype=np.float64), np.ascontiguousarray(smax, dtype=np.float64))
+    _score_kernel(pa, V, ka.R, int(MAX_EVENTS if max_events is None else max_events), rd,
+                  SHIFT_STEPS * float(timestep), cost, sig, worst)
     order = np.array([min(int(s).bit_count() for s in row) for row in sig], dtype=np.int64)
     kept = (sig[:, 1:] == sig[:, :1]).mean(axis=1) if K else np.ones(M)
     return RobustScore(order=order, kept=kept, worst=np.quantile(worst, quantile, axis=1, method="higher"),
