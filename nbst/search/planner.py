@@ -74,6 +74,24 @@ MOVED_EPS = 1e-9
 BANKS_PER_CUE = 4
 #: Simulations per batch (memory: batch x N x 2 floats).
 BATCH = 4096
+#: Share of the budget for checking single routes (stage 2); the rest goes to combinations
+#: and sweeps. Routes are cheap to check (one cue and the noncueable disks alone), and a
+#: combination is only as good as the routes it is built from.
+ROUTE_SHARE = 2  # 1 / ROUTE_SHARE of the budget
+#: Of a cue's route checks, at most 1 / BANK_SHARE go to bank shots (its own target through
+#: images): they move no noncueable disk, so one good bank per cue is all a combination needs.
+BANK_SHARE = 8
+#: The sweeps may take at most 1 / SWEEP_SHARE of what is left after the route checks, so the
+#: combinations keep most of it (the sweeps only refine the best few).
+SWEEP_SHARE = 3
+#: Passes of coordinate descent per swept combination (each cue's routes re-simulated with
+#: the others moving); a second pass catches a cue whose best route changed with another's.
+SWEEP_PASSES = 2
+#: The best-first combination search pops at most max(MIN_POPS, POPS_PER_COMBINATION x the
+#: combinations it may simulate) heap entries: enough to find them, bounded when most
+#: partial combinations clash (shared noncueable disks).
+MIN_POPS = 10_000
+POPS_PER_COMBINATION = 20
 
 
 @njit(cache=True, error_model="numpy")
@@ -419,13 +437,13 @@ def plan(problem: Problem, *, budget: int, max_chain: int = 3, bank_bounces: int
 
     # 1.-2. aim every route of every cue in closed form, rank by predicted gain, and check the
     # best of each cue with the simulator (the cue and the noncueable disks alone): half the budget
-    share = max(1, (budget // 2) // len(cue))
+    share = max(1, (budget // ROUTE_SHARE) // len(cue))
     lists = []  # per cue: (V (m, 2), gain (m,), moved mask (m,)), sorted by gain: the best bank and the useful strikes
     wide = []  # per cue, the same plus up to BANKS_PER_CUE banks (for sweeps and the search's plan operator)
     for c in cue:
         V, g, L, first = _routes(problem, int(c), non, max_chain, bank_bounces, pre_bounces, final_bounces)
         stats["routes_aimed"] += len(g)
-        nb = max(1, share // 8)
+        nb = max(1, share // BANK_SHARE)
         banks = np.flatnonzero(L == 0)[:nb]
         strikes = np.flatnonzero(L > 0)[:max(0, share - len(banks))]
         todo = np.concatenate([banks, strikes])[:max(sim.left, 0) if not done() else 0]
@@ -467,8 +485,8 @@ def plan(problem: Problem, *, budget: int, max_chain: int = 3, bank_bounces: int
             v[cue[k]] = lists[k][0][i]
         return v
 
-    sweep_cost = sweeps * 2 * sum(len(lst[1]) for lst in wide)
-    combo_budget = max(1, sim.left - min(sim.left // 3, sweep_cost))
+    sweep_cost = sweeps * SWEEP_PASSES * sum(len(lst[1]) for lst in wide)
+    combo_budget = max(1, sim.left - min(sim.left // SWEEP_SHARE, sweep_cost))
     batch, picks = [], []
     renum = np.zeros(n, np.int64)  # masks over the noncueable disks only, renumbered 0..K-1
     renum[non] = np.arange(non.size)
@@ -476,7 +494,7 @@ def plan(problem: Problem, *, budget: int, max_chain: int = 3, bank_bounces: int
     for _, gl, ml in lists:
         bits = np.array([sum(1 << int(renum[j]) for j in non if (int(m) >> int(j)) & 1) for m in ml], np.int64)
         small.append((gl, bits))
-    for idx in _best_first(small, non.size, limit_pops=max(10_000, 20 * combo_budget)):
+    for idx in _best_first(small, non.size, limit_pops=max(MIN_POPS, POPS_PER_COMBINATION * combo_budget)):
         if len(batch) >= combo_budget:
             break
         batch.append(assemble(idx))
@@ -497,7 +515,7 @@ def plan(problem: Problem, *, budget: int, max_chain: int = 3, bank_bounces: int
             break
         v = assemble(idx)
         cur = [-1] * len(cue)
-        for _ in range(2):
+        for _ in range(SWEEP_PASSES):
             changed = False
             for k in range(len(cue)):
                 if len(wide[k][1]) < 2 or done():
