@@ -1,5 +1,6 @@
 """The analytic Jacobian against finite differences; polish never worsens and aims lone disks exactly."""
 import numpy as np
+import pytest
 
 from conftest import make_problem
 from nbst import load_problem
@@ -80,3 +81,38 @@ def test_free_disks_of_tiny_problem_land_exactly():
     v0 = p.straight_velocities() + rng.normal(0, 5, (14, 2))
     v, c, sig, _ = polish(p, v0, max_sims=60, tol=1e-12)
     assert c < 1e-12 and sig == (1 << 14) - 1
+
+
+def test_cholesky_solve_matches_numpy_and_refuses_non_spd():
+    from nbst.search.polish import _cholesky_solve
+
+    rng = np.random.default_rng(7)
+    for P in (1, 2, 5, 12):
+        M = rng.normal(size=(P + 3, P))
+        A = M.T @ M + 1e-3 * np.eye(P)  # symmetric positive definite
+        b = rng.normal(size=P)
+        out = np.empty(P)
+        assert _cholesky_solve(A, b, out)
+        np.testing.assert_allclose(out, np.linalg.solve(A, b), rtol=1e-9, atol=1e-12)
+    A = np.array([[1.0, 2.0], [2.0, 1.0]])  # indefinite: eigenvalues 3 and -1
+    assert not _cholesky_solve(A, np.ones(2), np.empty(2))
+
+
+def test_polish_kernel_says_why_it_stopped():
+    from nbst.search.polish import POLISH_EVENT_CAP, PolishStop, alloc_polish, polish_kernel
+    from nbst.sim import alloc_work
+
+    p = make_problem([(100.0, 100.0), (400.0, 300.0)], targets=[(700.0, 650.0), (150.0, 500.0)])
+    ka = p.kernel_arrays()
+    cue = np.arange(2, dtype=np.int64)
+
+    def run(v, max_sims, tol):
+        v = np.array(v, float)
+        return polish_kernel(ka.start, v, ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R, cue,
+                             max_sims, tol, alloc_work(2), alloc_polish(2, 2, POLISH_EVENT_CAP))
+
+    off = p.straight_velocities() + 3.0
+    assert run(off, 50, 1e-6)[3] == PolishStop.TOLERANCE  # lone disks: aimed exactly
+    assert run(off, 2, 0.0)[3] == PolishStop.BUDGET
+    c, s, sims, why = run(p.straight_velocities(), 50, -1.0)  # already exact: no step lowers a zero cost
+    assert why == PolishStop.NO_DESCENT and c == pytest.approx(0.0, abs=1e-18) and sims < 50

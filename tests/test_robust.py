@@ -139,3 +139,36 @@ def test_polish_on_target_keeps_the_disks_and_lowers_the_margin_objective(over5)
     assert np.all(d2[on] <= over5.target_radius)  # no on-target disk lost
     assert ((d2[on] / 75) ** MARGIN_POWER).sum() <= ((d0[on] / 75) ** MARGIN_POWER).sum()  # accepted steps only
     assert np.all(v2[~over5.cueable] == 0.0)
+
+
+def test_robust_eval_is_the_worst_cost_and_the_and_over_the_shifted_runs(over5):
+    """The compiled robust score against a plain Python loop over the same shifted starts."""
+    from nbst.search.loop import loop_scratch, problem_arrays
+    from nbst.search.robust import RobustDraws, robust_eval, shift_sigma
+    from nbst.sim import evaluate_kernel
+
+    sol = solve(over5, seed=1, max_trials=5000, patience=0)
+    v = np.ascontiguousarray(sol.velocities)
+    pa = problem_arrays(over5, np.zeros((0, 2), np.int64))
+    zeta, smax = draws(over5, np.random.default_rng(3), 6)
+    rd = RobustDraws(zeta, smax)
+    shift = SHIFT_STEPS * TIMESTEP * 40  # a shift large enough to lose disks in some draws
+    R = float(over5.target_radius)
+    f = np.empty((1, over5.n, 2))
+    c0, s0, ne = np.empty(1), np.empty(1, np.int64), np.empty(1, np.int64)
+    evaluate_kernel(pa.x0, v[None], pa.radius, pa.mass, pa.target, pa.W, pa.H, pa.t_final, R, 200_000, f, c0, s0, ne)
+    sigma = shift_sigma(v, pa.cue_idx, shift)
+    costs, sigs = [c0[0]], [int(s0[0])]
+    for k in range(len(smax)):
+        x0 = np.ascontiguousarray(pa.x0 + min(sigma, smax[k]) * zeta[k])
+        evaluate_kernel(x0, v[None], pa.radius, pa.mass, pa.target, pa.W, pa.H, pa.t_final, R, 200_000, f, c0, s0, ne)
+        costs.append(c0[0])
+        sigs.append(int(s0[0]))
+    ref_sig = 0 if not sigs else sigs[0]
+    for s in sigs:
+        ref_sig &= s
+    c, s, sims = robust_eval(pa, v, R, 200_000, rd, shift, costs[0], sigs[0], False, np.empty((over5.n, 2)),
+                             loop_scratch(over5.n, 1))
+    assert sims == len(smax)
+    assert c == max(costs) and s == ref_sig
+    assert max(costs) > costs[0]  # the shifts matter here

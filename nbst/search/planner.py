@@ -395,6 +395,136 @@ def _score_routes(problem: Problem, c: int, non: np.ndarray, fin: np.ndarray, co
     return g, mask, mask * (np.int64(1) << np.int64(min(problem.n, 31))) + okmask
 
 
+class _Planning:
+    """One planner run's shared state: the problem's index sets, the budgeted simulator, the
+    candidates found (cheapest per velocity set) and the statistics."""
+
+    def __init__(self, problem: Problem, budget: int, max_events: int, target_cost: float):
+        self.problem = problem
+        self.n = problem.n
+        cueable = np.asarray(problem.cueable, bool)
+        self.cue = np.flatnonzero(cueable)
+        self.non = np.flatnonzero(~cueable)
+        self.sim = _Sim(problem, budget, max_events)
+        self.target_cost = target_cost
+        self.found: dict = {}
+        self.stats = {"routes_aimed": 0, "routes_simulated": 0, "combinations": 0, "sweep_simulations": 0}
+
+    def record(self, Vb, costs) -> None:
+        for k in range(len(costs)):
+            if np.isfinite(costs[k]):
+                kb = Vb[k].tobytes()
+                if kb not in self.found or costs[k] < self.found[kb][0]:
+                    self.found[kb] = (float(costs[k]), Vb[k].copy())
+
+    def done(self) -> bool:
+        return self.sim.left <= 0 or any(c <= self.target_cost for c, _ in self.found.values())
+
+    def assemble(self, lists, idx) -> np.ndarray:
+        """The full velocity set of one route per cue (idx[k]: cue k's route in lists[k])."""
+        v = np.zeros((self.n, 2))
+        for k, i in enumerate(idx):
+            v[self.cue[k]] = lists[k][0][i]
+        return v
+
+
+def _check_routes(pl: _Planning, c: int, share: int, routes_args: tuple, sig_limit: int):
+    """Stages 1-2 for cue c: aim its routes in closed form, check the best ``share`` with the
+    simulator (the cue and the noncueable disks alone), keep each signature's ``sig_limit``
+    best. Returns (kept: the best bank and the useful strikes, wide: the same plus up to
+    BANKS_PER_CUE banks), each (V (m, 2), gain (m,), moved mask (m,)) sorted by gain."""
+    n, non, sim = pl.n, pl.non, pl.sim
+    V, g, L, first = _routes(pl.problem, int(c), non, *routes_args)
+    pl.stats["routes_aimed"] += len(g)
+    nb = max(1, share // BANK_SHARE)
+    banks = np.flatnonzero(L == 0)[:nb]
+    strikes = np.flatnonzero(L > 0)[:max(0, share - len(banks))]
+    todo = np.concatenate([banks, strikes])[:max(sim.left, 0) if not pl.done() else 0]
+    if len(todo) == 0:
+        kept = (V[:1], np.zeros(1), np.zeros(1, np.int64))
+        return kept, kept
+    VV = np.zeros((len(todo), n, 2))
+    VV[:, c] = V[todo]
+    fin, cost, _ = sim(VV, np.concatenate([[c], non]))  # the other cues are elsewhere by then
+    pl.stats["routes_simulated"] += len(fin)
+    gs, mask, key = _score_routes(pl.problem, int(c), non, fin, cost)
+    # the paper's per-signature limit, per cue: each signature keeps its sig_limit best routes
+    o = np.lexsort((gs, key))
+    rank = np.zeros(len(o), np.int64)
+    for q in range(1, len(o)):
+        rank[o[q]] = rank[o[q - 1]] + 1 if key[o[q]] == key[o[q - 1]] else 0
+    keep = np.isfinite(gs) & (rank < sig_limit)
+    bank_ok = keep & (mask == 0)
+    floor = gs[bank_ok].min() if bank_ok.any() else np.inf
+    best_bank = np.flatnonzero(bank_ok & (gs == floor))[:1]
+    useful = np.flatnonzero(keep & (mask != 0) & (gs < floor))
+    useful = useful[np.argsort(gs[useful], kind="stable")][:ROUTES_PER_CUE]
+    sel = np.concatenate([best_bank, useful])
+    if len(sel) == 0:
+        sel = np.array([0])
+    sel = sel[np.argsort(gs[sel], kind="stable")]
+    kept = (V[todo][sel], np.where(np.isfinite(gs[sel]), gs[sel], 0.0), mask[sel])
+    banks_ok = np.flatnonzero(bank_ok)
+    more = banks_ok[np.argsort(gs[banks_ok], kind="stable")][:BANKS_PER_CUE]
+    sel = np.unique(np.concatenate([sel, more]))
+    sel = sel[np.argsort(gs[sel], kind="stable")]
+    return kept, (V[todo][sel], np.where(np.isfinite(gs[sel]), gs[sel], 0.0), mask[sel])
+
+
+def _combine(pl: _Planning, lists, wide, sweeps: int) -> list:
+    """Stage 3: combinations of one route per cue, best first (disjoint noncueable sets), each
+    simulated in full; returns the ``sweeps`` cheapest (index tuples)."""
+    n, non, sim = pl.n, pl.non, pl.sim
+    sweep_cost = sweeps * SWEEP_PASSES * sum(len(lst[1]) for lst in wide)
+    combo_budget = max(1, sim.left - min(sim.left // SWEEP_SHARE, sweep_cost))
+    batch, picks = [], []
+    renum = np.zeros(n, np.int64)  # masks over the noncueable disks only, renumbered 0..K-1
+    renum[non] = np.arange(non.size)
+    small = []
+    for _, gl, ml in lists:
+        bits = np.array([sum(1 << int(renum[j]) for j in non if (int(m) >> int(j)) & 1) for m in ml], np.int64)
+        small.append((gl, bits))
+    for idx in _best_first(small, non.size, limit_pops=max(MIN_POPS, POPS_PER_COMBINATION * combo_budget)):
+        if len(batch) >= combo_budget:
+            break
+        batch.append(pl.assemble(lists, idx))
+        picks.append(idx)
+    if not batch or pl.done():
+        return []
+    Vb = np.array(batch)
+    _, cost, _ = sim(Vb)
+    pl.stats["combinations"] = len(cost)
+    pl.record(Vb[:len(cost)], cost)
+    o = np.argsort(cost, kind="stable")
+    return [picks[i] for i in o[:sweeps] if np.isfinite(cost[i])]
+
+
+def _sweep(pl: _Planning, lists, wide, idx) -> None:
+    """Stage 4 for one top combination: each cue's routes (banks included) again, with the other
+    cues moving as combined; the best route of each cue in turn is kept (coordinate descent)."""
+    cue = pl.cue
+    v = pl.assemble(lists, idx)
+    cur = [-1] * len(cue)
+    for _ in range(SWEEP_PASSES):
+        changed = False
+        for k in range(len(cue)):
+            if len(wide[k][1]) < 2 or pl.done():
+                continue
+            Vb = np.repeat(v[None], len(wide[k][1]), axis=0)
+            Vb[:, cue[k]] = wide[k][0]
+            _, cost, _ = pl.sim(Vb)
+            pl.stats["sweep_simulations"] += len(cost)
+            pl.record(Vb[:len(cost)], cost)
+            if len(cost) and np.isfinite(cost).any():
+                b = int(np.argmin(cost))
+                if b != cur[k]:
+                    cur[k] = b
+                    changed = True
+                v[cue[k]] = wide[k][0][b]
+        if not changed:
+            break
+
+
 def plan(problem: Problem, *, budget: int, max_chain: int = 3, bank_bounces: int = 3, pre_bounces: int = 1,
          final_bounces: int = 2, sig_limit: int = 10, seeds: int = 16, sweeps: int = 4,
          max_events: int = MAX_EVENTS, target_cost: float = -math.inf) -> PlanResult:
@@ -410,133 +540,30 @@ def plan(problem: Problem, *, budget: int, max_chain: int = 3, bank_bounces: int
     sweeps        : combinations refined by re-simulating each cue's routes with the others moving
     target_cost   : stop as soon as a candidate costs this little (the straight shot is tried first)
     """
-    n = problem.n
-    cueable = np.asarray(problem.cueable, bool)
-    cue = np.flatnonzero(cueable)
-    non = np.flatnonzero(~cueable)
-    sim = _Sim(problem, budget, max_events)
-    stats = {"routes_aimed": 0, "routes_simulated": 0, "combinations": 0, "sweep_simulations": 0}
-    if non.size == 0 or cue.size == 0 or budget <= 0:
-        return PlanResult(np.zeros((0, n, 2)), np.zeros(0), 0, stats, np.zeros(0, np.int64), np.zeros((0, 2)),
+    pl = _Planning(problem, budget, max_events, target_cost)
+    n, cue = pl.n, pl.cue
+    if pl.non.size == 0 or cue.size == 0 or budget <= 0:
+        return PlanResult(np.zeros((0, n, 2)), np.zeros(0), 0, pl.stats, np.zeros(0, np.int64), np.zeros((0, 2)),
                           np.zeros(0, np.int64))
-
-    found: dict = {}
-
-    def record(Vb, costs):
-        for k in range(len(costs)):
-            if np.isfinite(costs[k]):
-                kb = Vb[k].tobytes()
-                if kb not in found or costs[k] < found[kb][0]:
-                    found[kb] = (float(costs[k]), Vb[k].copy())
-
-    def done():
-        return sim.left <= 0 or any(c <= target_cost for c, _ in found.values())
-
     straight = problem.straight_velocities()[None]
-    record(straight, sim(straight)[1])
-
-    # 1.-2. aim every route of every cue in closed form, rank by predicted gain, and check the
-    # best of each cue with the simulator (the cue and the noncueable disks alone): half the budget
+    pl.record(straight, pl.sim(straight)[1])
+    # 1.-2. every cue's routes, the best checked with the simulator: 1 / ROUTE_SHARE of the budget
     share = max(1, (budget // ROUTE_SHARE) // len(cue))
-    lists = []  # per cue: (V (m, 2), gain (m,), moved mask (m,)), sorted by gain: the best bank and the useful strikes
+    lists = []  # per cue: the best bank and the useful strikes
     wide = []  # per cue, the same plus up to BANKS_PER_CUE banks (for sweeps and the search's plan operator)
     for c in cue:
-        V, g, L, first = _routes(problem, int(c), non, max_chain, bank_bounces, pre_bounces, final_bounces)
-        stats["routes_aimed"] += len(g)
-        nb = max(1, share // BANK_SHARE)
-        banks = np.flatnonzero(L == 0)[:nb]
-        strikes = np.flatnonzero(L > 0)[:max(0, share - len(banks))]
-        todo = np.concatenate([banks, strikes])[:max(sim.left, 0) if not done() else 0]
-        if len(todo) == 0:
-            lists.append((V[:1], np.zeros(1), np.zeros(1, np.int64)))
-            wide.append(lists[-1])
-            continue
-        VV = np.zeros((len(todo), n, 2))
-        VV[:, c] = V[todo]
-        fin, cost, _ = sim(VV, np.concatenate([[c], non]))  # the other cues are elsewhere by then
-        stats["routes_simulated"] += len(fin)
-        gs, mask, key = _score_routes(problem, int(c), non, fin, cost)
-        # the paper's per-signature limit, per cue: each signature keeps its sig_limit best routes
-        o = np.lexsort((gs, key))
-        rank = np.zeros(len(o), np.int64)
-        for q in range(1, len(o)):
-            rank[o[q]] = rank[o[q - 1]] + 1 if key[o[q]] == key[o[q - 1]] else 0
-        keep = np.isfinite(gs) & (rank < sig_limit)
-        bank_ok = keep & (mask == 0)
-        floor = gs[bank_ok].min() if bank_ok.any() else np.inf
-        best_bank = np.flatnonzero(bank_ok & (gs == floor))[:1]
-        useful = np.flatnonzero(keep & (mask != 0) & (gs < floor))
-        useful = useful[np.argsort(gs[useful], kind="stable")][:ROUTES_PER_CUE]
-        sel = np.concatenate([best_bank, useful])
-        if len(sel) == 0:
-            sel = np.array([0])
-        sel = sel[np.argsort(gs[sel], kind="stable")]
-        lists.append((V[todo][sel], np.where(np.isfinite(gs[sel]), gs[sel], 0.0), mask[sel]))
-        banks_ok = np.flatnonzero(bank_ok)
-        more = banks_ok[np.argsort(gs[banks_ok], kind="stable")][:BANKS_PER_CUE]
-        sel = np.unique(np.concatenate([sel, more]))
-        sel = sel[np.argsort(gs[sel], kind="stable")]
-        wide.append((V[todo][sel], np.where(np.isfinite(gs[sel]), gs[sel], 0.0), mask[sel]))
-
-    # 3. combinations, best first (disjoint noncueable sets), each simulated in full
-    def assemble(idx):
-        v = np.zeros((n, 2))
-        for k, i in enumerate(idx):
-            v[cue[k]] = lists[k][0][i]
-        return v
-
-    sweep_cost = sweeps * SWEEP_PASSES * sum(len(lst[1]) for lst in wide)
-    combo_budget = max(1, sim.left - min(sim.left // SWEEP_SHARE, sweep_cost))
-    batch, picks = [], []
-    renum = np.zeros(n, np.int64)  # masks over the noncueable disks only, renumbered 0..K-1
-    renum[non] = np.arange(non.size)
-    small = []
-    for _, gl, ml in lists:
-        bits = np.array([sum(1 << int(renum[j]) for j in non if (int(m) >> int(j)) & 1) for m in ml], np.int64)
-        small.append((gl, bits))
-    for idx in _best_first(small, non.size, limit_pops=max(MIN_POPS, POPS_PER_COMBINATION * combo_budget)):
-        if len(batch) >= combo_budget:
+        kept, more = _check_routes(pl, int(c), share, (max_chain, bank_bounces, pre_bounces, final_bounces),
+                                   sig_limit)
+        lists.append(kept)
+        wide.append(more)
+    # 3. combinations; 4. sweeps of the best ones
+    for idx in _combine(pl, lists, wide, sweeps):
+        if pl.done():
             break
-        batch.append(assemble(idx))
-        picks.append(idx)
-    tops = []
-    if batch and not done():
-        Vb = np.array(batch)
-        _, cost, _ = sim(Vb)
-        stats["combinations"] = len(cost)
-        record(Vb[:len(cost)], cost)
-        o = np.argsort(cost, kind="stable")
-        tops = [picks[i] for i in o[:sweeps] if np.isfinite(cost[i])]
-
-    # 4. sweeps: each cue's routes (banks included) again, with the other cues moving as in a
-    # top combination; the best route of each cue in turn is kept (coordinate descent)
-    for idx in tops:
-        if done():
-            break
-        v = assemble(idx)
-        cur = [-1] * len(cue)
-        for _ in range(SWEEP_PASSES):
-            changed = False
-            for k in range(len(cue)):
-                if len(wide[k][1]) < 2 or done():
-                    continue
-                Vb = np.repeat(v[None], len(wide[k][1]), axis=0)
-                Vb[:, cue[k]] = wide[k][0]
-                _, cost, _ = sim(Vb)
-                stats["sweep_simulations"] += len(cost)
-                record(Vb[:len(cost)], cost)
-                if len(cost) and np.isfinite(cost).any():
-                    b = int(np.argmin(cost))
-                    if b != cur[k]:
-                        cur[k] = b
-                        changed = True
-                    v[cue[k]] = wide[k][0][b]
-            if not changed:
-                break
-
+        _sweep(pl, lists, wide, idx)
     rc = np.concatenate([np.full(len(w[1]), cue[k], np.int64) for k, w in enumerate(wide)])
     rv = np.concatenate([w[0] for w in wide]).reshape(-1, 2)
     rm = np.concatenate([np.asarray(w[2], np.int64) for w in wide])
-    items = sorted(found.values(), key=lambda t: t[0])[:seeds]
+    items = sorted(pl.found.values(), key=lambda t: t[0])[:seeds]
     V = np.array([v for _, v in items]).reshape(-1, n, 2)
-    return PlanResult(V, np.array([c for c, _ in items]), sim.used, stats, rc, np.ascontiguousarray(rv), rm)
+    return PlanResult(V, np.array([c for c, _ in items]), pl.sim.used, pl.stats, rc, np.ascontiguousarray(rv), rm)
