@@ -8,28 +8,108 @@ import sys
 from nbst.problem import ProblemError
 
 
-def int_at_least(lo: int, what: str):
-    """argparse type: an integer >= lo (underscores allowed); ``what`` names it in errors."""
-    def parse(text: str) -> int:
+#: Limits shared by several commands' flags (each flag's --help states its range).
+SEED_MAX = 2**63 - 1  # numpy's SeedSequence and the kernels' int64 state take any seed up to this
+TRIALS_MAX = 10**12  # a trillion trials: days of search, far past any budget nbst has needed
+JOBS_MAX = 256  # processes on this machine (each a full search or worker)
+RUNS_MAX = 100_000  # runs per entry of an experiment
+
+
+def _fmt(x) -> str:
+    """A limit for --help: 2^63-1, 2^62, 100,000, 1e12, 5e8, 0.01."""
+    if isinstance(x, int):
+        if x == SEED_MAX:
+            return "2^63-1"
+        if x >= 2**32 and x & (x - 1) == 0:
+            return f"2^{x.bit_length() - 1}"
+        if abs(x) < 10**7:
+            return f"{x:,}"
+        x = float(x)
+    return f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+class Bounded:
+    """argparse type: a finite number (int or float) in [lo, hi], either end open with
+    ``lo_open``/``hi_open`` and ``hi=None`` for no upper end. ``limits`` says it in words
+    for --help, and every refusal names the flag's ``what``, the value and the range."""
+
+    def __init__(self, what: str, lo, hi=None, *, integer: bool = False, lo_open: bool = False,
+                 hi_open: bool = False, unit: str = ""):
+        self.what, self.lo, self.hi, self.integer = what, lo, hi, integer
+        self.lo_open, self.hi_open, self.unit = lo_open, hi_open, unit
+        self.__name__ = what  # argparse names the type in some messages
+
+    @property
+    def limits(self) -> str:
+        unit = f" {self.unit}" if self.unit else ""
+        if self.integer:
+            lo = self.lo + 1 if self.lo_open else self.lo
+            if self.hi is None:
+                return f"an integer >= {_fmt(lo)}{unit}"
+            hi = self.hi - 1 if self.hi_open else self.hi
+            return f"an integer in {_fmt(lo)}..{_fmt(hi)}{unit}"
+        if self.hi is None:
+            return f"a finite number {'>' if self.lo_open else '>='} {_fmt(self.lo)}{unit}"
+        return (f"a number in {'(' if self.lo_open else '['}{_fmt(self.lo)}, {_fmt(self.hi)}"
+                f"{')' if self.hi_open else ']'}{unit}")
+
+    def __call__(self, text: str):
+        t = str(text).strip()
         try:
-            v = int(text.replace("_", ""))
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be an integer, got {text!r}") from None
-        if v < lo:
-            raise argparse.ArgumentTypeError(f"{what} must be >= {lo}, got {v}")
+            v = int(t.replace("_", "")) if self.integer else float(t)
+        except (ValueError, OverflowError):
+            kind = "an integer" if self.integer else "a number"
+            raise argparse.ArgumentTypeError(f"{self.what} must be {kind}, got {text!r}") from None
+        bad = (not self.integer and v != v) or (not self.integer and abs(v) == float("inf"))
+        bad = bad or v < self.lo or (self.lo_open and v == self.lo)
+        bad = bad or (self.hi is not None and (v > self.hi or (self.hi_open and v == self.hi)))
+        if bad:
+            raise argparse.ArgumentTypeError(f"{self.what} must be {self.limits}, got {text!r}")
         return v
-    return parse
+
+    def __repr__(self) -> str:
+        return f"Bounded({self.what!r}: {self.limits})"
+
+
+def int_at_least(lo: int, what: str, hi: int | None = None) -> Bounded:
+    """argparse type: an integer >= lo (and <= hi when given; underscores allowed); ``what`` names it in errors."""
+    return Bounded(what, lo, hi, integer=True)
+
+
+def with_limits(text: str, t: Bounded) -> str:
+    """A --help text followed by the flag's range: ``"trial budget (default 1000000) [an integer in 1..1e12]"``."""
+    return f"{text} [{t.limits}]"
+
+
+#: The flags every search-running command shares.
+SEED = Bounded("seed", 0, SEED_MAX, integer=True)
+MAX_TRIALS = Bounded("max-trials", 1, TRIALS_MAX, integer=True)
+JOBS = Bounded("jobs", 1, JOBS_MAX, integer=True)
+TARGET_COST = Bounded("target cost", 0.0, None)
 
 
 def nonnegative_cost(text: str) -> float:
-    """argparse type: a target cost, a number >= 0."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"target cost must be a number, got {text!r}") from None
-    if not v >= 0.0:
-        raise argparse.ArgumentTypeError(f"target cost must be >= 0, got {text!r}")
-    return v
+    """argparse type: a target cost, a finite number >= 0."""
+    return TARGET_COST(text)
+
+
+class Size:
+    """argparse type: a frame size ``WxH`` in pixels, each side in [lo, hi] -> (W, H)."""
+
+    def __init__(self, what: str = "size", lo: int = 16, hi: int = 8192):
+        self.what, self.lo, self.hi = what, lo, hi
+        self.limits = f"WxH, each side an integer in {lo}..{hi} pixels"
+        self.__name__ = "size"
+
+    def __call__(self, text: str) -> tuple[int, int]:
+        parts = str(text).lower().replace("*", "x").split("x")
+        if len(parts) != 2 or not all(x.strip().isdigit() and len(x.strip()) < 7 for x in parts):
+            raise argparse.ArgumentTypeError(f"{self.what} must be WIDTHxHEIGHT in pixels (e.g. 1280x720), "
+                                             f"got {text!r}")
+        w, h = int(parts[0]), int(parts[1])
+        if not (self.lo <= w <= self.hi and self.lo <= h <= self.hi):
+            raise argparse.ArgumentTypeError(f"{self.what} must be {self.limits}, got {text!r}")
+        return w, h
 
 
 def cluster_client(args):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from nbst.cli.args import cluster_client, int_at_least, nonnegative_cost
+from nbst.cli.args import JOBS, MAX_TRIALS, RUNS_MAX, TARGET_COST, Bounded, cluster_client, with_limits
 from nbst.cli.flags import add_jobs, add_out_dir, add_quiet, add_seed, old_spelling
 from nbst.problem import display_name
 
@@ -20,18 +20,23 @@ ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst 
               "cma, de, ga, random (baselines)")
 
 
+RUNS = Bounded("runs", 1, RUNS_MAX, integer=True)
+FIRST_SEED = Bounded("seed", 0, 2**62, integer=True)  # seed + k stays a valid seed (< 2^63)
+
+
 def _common(p, *, runs: int, trials: int, entries: str) -> None:
-    p.add_argument("--runs", type=int_at_least(1, "runs"), default=runs, metavar="R",
-                   help=f"runs per entry (and problem); run k uses seed SEED+k (default {runs})")
-    p.add_argument("--max-trials", dest="trials", type=int_at_least(1, "max-trials"), default=trials, metavar="N",
-                   help=f"trial budget of each run (one trial = one simulation; default {trials})")
-    old_spelling(p, "--trials", "--max-trials", dest="trials", type=int_at_least(1, "trials"))
+    p.add_argument("--runs", type=RUNS, default=runs, metavar="R",
+                   help=with_limits(f"runs per entry (and problem); run k uses seed SEED+k (default {runs})", RUNS))
+    p.add_argument("--max-trials", dest="trials", type=MAX_TRIALS, default=trials, metavar="N",
+                   help=with_limits(f"trial budget of each run (one trial = one simulation; default {trials})",
+                                    MAX_TRIALS))
+    old_spelling(p, "--trials", "--max-trials", dest="trials", type=MAX_TRIALS)
     p.add_argument("--algorithms", default=entries, metavar="LIST", help=f"{ENTRY_HELP} (default {entries})")
-    add_seed(p, type=int_at_least(0, "seed"), resumable=True, what="first seed; run k uses SEED+k")
+    add_seed(p, type=FIRST_SEED, resumable=True, what=f"first seed; run k uses SEED+k [{FIRST_SEED.limits}]")
     add_out_dir(p, dest="out", default="nbst-experiments", old=("--out",),
                 help="output folder: tables, figures and runs/ (default ./nbst-experiments)")
-    add_jobs(p, dest="workers", type=int_at_least(1, "jobs"), old=("--workers",),
-             help="local worker processes (default: all cores; 1 = in this process)")
+    add_jobs(p, dest="workers", type=JOBS, old=("--workers",),
+             help=with_limits("local worker processes (default: all cores; 1 = in this process)", JOBS))
     p.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help="run on a Dask distributed scheduler (e.g. tcp://head:8786) instead of local processes; "
                         "nbst must be installed on its workers")
@@ -70,8 +75,9 @@ def register(sub) -> None:
                                  "OUT/compare-NAME.{csv,md} and OUT/compare-NAME-runs.csv.")
     m.add_argument("problems", nargs="+", help="problems: built-in names, JSON files or folders of them")
     _common(m, runs=1, trials=100_000, entries="nbst,A,cma,de,ga,random")
-    m.add_argument("--target-cost", type=nonnegative_cost, default=None, metavar="C",
-                   help="solved = cost <= C, and each run stops there (default: solved = order N, full budget)")
+    m.add_argument("--target-cost", type=TARGET_COST, default=None, metavar="C",
+                   help=with_limits("solved = cost <= C, and each run stops there (default: solved = order N, full "
+                                    "budget)", TARGET_COST))
     m.add_argument("--name", default="compare", help="name of the output files (default compare)")
     m.set_defaults(func=cmd_compare)
     p.set_defaults(func=lambda args: _no_action(p))

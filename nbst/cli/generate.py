@@ -3,7 +3,16 @@ from __future__ import annotations
 
 import sys
 
-from nbst.cli.args import int_at_least
+from nbst import domain as D
+from nbst.cli.args import SEED, Bounded, with_limits
+from nbst.constants import MAX_DISKS
+
+DISKS = Bounded("disk count", 1, MAX_DISKS, integer=True)
+NONCUE = Bounded("noncueable count", 0, MAX_DISKS - 1, integer=True)
+RADIUS = Bounded("radius", 0.0, D.BOX_MAX / 2, lo_open=True)
+BOX = Bounded("box side", D.BOX_MIN, D.BOX_MAX)
+T_FINAL = Bounded("t_final", D.T_FINAL_MIN, D.T_FINAL_MAX, unit="s")
+TARGET_RADIUS = Bounded("target radius", 0.0, 2 * D.BOX_MAX, lo_open=True)
 from nbst.cli.flags import add_seed
 
 
@@ -14,15 +23,18 @@ def register(sub) -> None:
                     "(each noncueable disk is struck by a cueable one), simulated exactly; the targets are "
                     "where the disks end. The problem file carries the planted velocities under \"planted\"; "
                     "--solution also writes them as a solution file.")
-    p.add_argument("--planted", type=int, required=True, metavar="N", help="number of disks")
-    p.add_argument("--noncue", type=int, default=0, metavar="K", help="how many disks are noncueable (default 0)")
-    p.add_argument("--radius", type=float, default=15.0, metavar="r", help="disk radius (default 15)")
-    p.add_argument("--box", type=float, nargs=2, default=(800.0, 800.0), metavar=("W", "H"),
-                   help="box size (default 800 800)")
-    p.add_argument("--t-final", type=float, default=5.0, help="duration in seconds (default 5)")
-    p.add_argument("--target-radius", type=float, default=75.0, metavar="R",
-                   help="target neighbourhood radius R (default 75)")
-    add_seed(p, type=int_at_least(0, "seed"), resumable=False)
+    p.add_argument("--planted", type=DISKS, required=True, metavar="N", help=with_limits("number of disks", DISKS))
+    p.add_argument("--noncue", type=NONCUE, default=0, metavar="K",
+                   help=with_limits("how many disks are noncueable (default 0; fewer than N)", NONCUE))
+    p.add_argument("--radius", type=RADIUS, default=15.0, metavar="r",
+                   help=with_limits("disk radius (default 15; the disks must fit the box)", RADIUS))
+    p.add_argument("--box", type=BOX, nargs=2, default=(800.0, 800.0), metavar=("W", "H"),
+                   help=with_limits("box size (default 800 800)", BOX))
+    p.add_argument("--t-final", type=T_FINAL, default=5.0, help=with_limits("duration in seconds (default 5)", T_FINAL))
+    p.add_argument("--target-radius", type=TARGET_RADIUS, default=75.0, metavar="R",
+                   help=with_limits("target neighbourhood radius R (default 75; at most the box diagonal)",
+                                    TARGET_RADIUS))
+    add_seed(p, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
     p.add_argument("--name", default=None, help="problem name (default planted-nN-kK-sSEED)")
     p.add_argument("-o", "--output", required=True, help="problem JSON file to write")
     p.add_argument("--solution", default=None, help="also write the planted velocities as a solution file")
@@ -41,11 +53,6 @@ def cmd_generate(args) -> int:
         prepare_output(args.solution, option="--solution", outputs=(args.output,))
 
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
-    for flag, value in (("--t-final", args.t_final), ("--target-radius", args.target_radius),
-                        ("--box", min(args.box))):
-        if not value > 0:
-            print(f"nbst generate: error: {flag} must be > 0", file=sys.stderr)
-            return 2
     try:
         problem, v = planted(args.planted, noncue=args.noncue, radius=args.radius, seed=seed, box=tuple(args.box),
                              t_final=args.t_final, target_radius=args.target_radius, name=args.name)

@@ -35,8 +35,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse, but usage errors exit 2 with one line naming the command."""
 
     def error(self, message):
-        self.print_usage(sys.stderr)
-        self.exit(2, f"{self.prog}: error: {message}\n")
+        self.exit(2, f"{self.prog}: error: {plain(message)} (see `{self.prog} --help`)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -4,51 +4,29 @@ Registration is light: mujoco and matplotlib are imported inside the commands.
 """
 from __future__ import annotations
 
-import argparse
-import math
 import sys
 import time
 
-from nbst.cli.args import int_at_least
+from nbst.cli.args import MAX_TRIALS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_out_dir, add_quiet, add_seed
 
 
-def _positive(what):
-    def parse(text):
-        try:
-            x = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be a number, got {text!r}") from None
-        if not (math.isfinite(x) and x > 0):
-            raise argparse.ArgumentTypeError(f"{what} must be a finite number > 0, got {text!r}")
-        return x
-    return parse
-
-
-def _positive_int(what):
-    def parse(text):
-        try:
-            n = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be a whole number, got {text!r}") from None
-        if n < 1:
-            raise argparse.ArgumentTypeError(f"{what} must be >= 1, got {text!r}")
-        return n
-    return parse
-
-
-def _timestep(text):
-    h = _positive("timestep")(text)
-    if h > 0.01:
-        raise argparse.ArgumentTypeError(f"timestep {h:g} s is too coarse for contacts; use <= 0.01 (default 0.00025)")
-    return h
+#: The flags' domains (each --help states its range). The time step: above 0.01 s contacts are too
+#: soft; below 1e-7 s a t_final of 1 s is already 10 million steps. The unit: on over5 (radius 10),
+#: MuJoCo refuses the scene at 1e-6 m per unit (bodies too light, one line) and stops with a
+#: FatalError (a traceback) at 1e300; 1e-5 to 1e4 run (measured with `nbst validate --unit`).
+TIMESTEP = Bounded("timestep", 1e-7, 0.01, unit="s")
+UNIT = Bounded("unit", 1e-6, 1e3, unit="m per unit")
+TOL = Bounded("tol", 0.0, 1e12, lo_open=True, unit="units")
+MAX_STEPS = Bounded("max steps", 1, 100_000_000, integer=True)
 
 
 def _add_scene_options(p) -> None:
-    p.add_argument("--timestep", type=_timestep, default=0.00025, metavar="H",
-                   help="MuJoCo timestep in seconds (default 0.00025; contact stiffness is 2/H^2)")
-    p.add_argument("--unit", type=_positive("unit"), default=1e-3, metavar="M",
-                   help="metres per problem unit (default 0.001: 1 unit = 1 mm)")
+    p.add_argument("--timestep", type=TIMESTEP, default=0.00025, metavar="H",
+                   help=with_limits("MuJoCo timestep in seconds (default 0.00025; contact stiffness is 2/H^2)",
+                                    TIMESTEP))
+    p.add_argument("--unit", type=UNIT, default=1e-3, metavar="M",
+                   help=with_limits("metres per problem unit (default 0.001: 1 unit = 1 mm)", UNIT))
 
 
 def register(sub) -> None:
@@ -79,14 +57,15 @@ def register(sub) -> None:
     p.add_argument("solution", help="solution JSON file")
     add_out_dir(p, dest="report", old=("--report",), help="write the report: DIR/report.html and DIR/report.json")
     _add_scene_options(p)
-    p.add_argument("--tol", type=_positive("tol"), default=1.0, metavar="D",
-                   help="divergence tolerance in problem units (default 1)")
+    p.add_argument("--tol", type=TOL, default=1.0, metavar="D",
+                   help=with_limits("divergence tolerance in problem units (default 1)", TOL))
     p.add_argument("--strict", action="store_true", help="exit 1 if the signature under MuJoCo differs")
     add_quiet(p, "no summary and no status lines (the report files and the exit code still tell)")
     p.add_argument("--json", action="store_true", help="print report.json's content instead of the summary")
-    p.add_argument("--max-steps", type=_positive_int("max-steps"), default=None, metavar="N",
-                   help="refuse a run of more than N MuJoCo steps, t_final / H (default 1,000,000: every step's "
-                        "state is kept in memory); --convergence skips the step sizes that need more")
+    p.add_argument("--max-steps", type=MAX_STEPS, default=None, metavar="N",
+                   help=with_limits("refuse a run of more than N MuJoCo steps, t_final / H (default 1,000,000: "
+                                    "every step's state is kept in memory); --convergence skips the step sizes "
+                                    "that need more", MAX_STEPS))
     p.add_argument("--stepping", choices=("fixed", "aligned"), default="fixed",
                    help="fixed (default): MuJoCo's fixed steps of H, each impact resolved one step late; "
                         "aligned: steps shortened to end at each touch (found with MuJoCo's own collision "
@@ -105,9 +84,9 @@ def register(sub) -> None:
                                    "solve` run (skipped with --no-search).")
     p.add_argument("names", nargs="*", metavar="NAME", help="built-in problems (default: all)")
     add_out_dir(p, dest="dir", old=("--dir",), help="gallery folder (default: models/scenes of nbst)")
-    add_seed(p, type=int_at_least(0, "seed"), resumable=True, what="search seed")
-    p.add_argument("--max-trials", type=int_at_least(1, "max-trials"), default=1_000_000, metavar="N",
-                   help="search budget per problem (default 1,000,000)")
+    add_seed(p, type=SEED, resumable=True, what=f"search seed [{SEED.limits}]")
+    p.add_argument("--max-trials", type=MAX_TRIALS, default=1_000_000, metavar="N",
+                   help=with_limits("search budget per problem (default 1,000,000)", MAX_TRIALS))
     add_quiet(p, "no progress lines")
     p.add_argument("--no-search", action="store_true", help="only re-render scenes from the stored solutions")
     p.set_defaults(func=cmd_gallery)

@@ -8,7 +8,16 @@ from __future__ import annotations
 import argparse
 import sys
 
+from nbst.cli.args import Bounded, Size, with_limits
 from nbst.render import style
+
+FPS = Bounded("fps", 0.0, 240.0, lo_open=True)
+SPEED = Bounded("speed", 0.0, 1e6, lo_open=True)
+HOLD = Bounded("hold", 0.0, 60.0, unit="s")
+STILL = Bounded("still time", 0.0, 1e6, unit="s")
+MAX_FRAMES = Bounded("max frames", 1, 10_000_000, integer=True)
+DPI = Bounded("dpi", 10, 1200, integer=True)
+SIZE = Size()
 
 
 def register(sub) -> None:
@@ -32,14 +41,15 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, metavar="PATH", help="output file: .mp4, .gif, or .png with --still")
     p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
                    help="bowling shots only: behind the ball, overhead, or both side by side (default both)")
-    p.add_argument("--fps", type=float, default=None,
-                   help=f"frames per second, in (0, 240] (default {style.DEFAULT_FPS}; {style.GIF_FPS} for .gif)")
-    p.add_argument("--size", default=None, metavar="WxH",
-                   help="frame size in pixels (default %dx%d; %dx%d for .gif)" % (*style.DEFAULT_SIZE, *style.GIF_SIZE))
-    p.add_argument("--speed", type=float, default=None,
-                   help="simulated seconds per second of video (default 1.0; 0.5 = slow motion)")
-    p.add_argument("--hold", type=float, default=1.0, metavar="SECONDS",
-                   help="seconds of video holding the final frame (default 1.0)")
+    p.add_argument("--fps", type=FPS, default=None,
+                   help=with_limits(f"frames per second (default {style.DEFAULT_FPS}; {style.GIF_FPS} for .gif)", FPS))
+    p.add_argument("--size", type=SIZE, default=None, metavar="WxH",
+                   help="frame size in pixels (default %dx%d; %dx%d for .gif) [%s]" % (*style.DEFAULT_SIZE,
+                                                                                   *style.GIF_SIZE, SIZE.limits))
+    p.add_argument("--speed", type=SPEED, default=None,
+                   help=with_limits("simulated seconds per second of video (default 1.0; 0.5 = slow motion)", SPEED))
+    p.add_argument("--hold", type=HOLD, default=1.0, metavar="SECONDS",
+                   help=with_limits("seconds of video holding the final frame (default 1.0)", HOLD))
     p.add_argument("--trails", action="store_true", help="draw each disk's recent path, fading with age")
     p.add_argument("--labels", action="store_true",
                    help="write each disk's index on it, and beside each target the index of its disk")
@@ -49,11 +59,12 @@ def register(sub) -> None:
                    help="positions from the exact simulator (default), from a MuJoCo replay, or both "
                         "(MuJoCo drawn as white rings over the exact disks, numbered with --labels; the readout "
                         "counts both)")
-    p.add_argument("--still", type=float, default=None, metavar="T",
+    p.add_argument("--still", type=STILL, default=None, metavar="T",
                    help="write only the frame at time T (seconds, in [0, t_final]; for a bowling shot in [0, its "
-                        "duration]) to a .png")
-    p.add_argument("--max-frames", type=int, default=None, metavar="N",
-                   help="refuse a video of more than N frames (default 108,000: 30 minutes at 60 fps)")
+                        f"duration]) to a .png [{STILL.limits}]")
+    p.add_argument("--max-frames", type=MAX_FRAMES, default=None, metavar="N",
+                   help=with_limits("refuse a video of more than N frames (default 108,000: 30 minutes at 60 fps)",
+                                    MAX_FRAMES))
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=cmd_render)
 
@@ -69,14 +80,14 @@ def register(sub) -> None:
     q = psub.add_parser("problem", help="starts, targets and arrows (the paper's Figures 1-2)")
     q.add_argument("problem", help="built-in name or path to a problem JSON file")
     q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
-    q.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    q.add_argument("--dpi", type=DPI, default=150, help=with_limits("resolution of raster output (default 150)", DPI))
     q.add_argument("-q", "--quiet", action="store_true", help="no summary line")
     q.set_defaults(func=cmd_plot_problem)
     q = psub.add_parser("trajectories", help="the disks' paths with bounces and collisions (Figures 3-4)")
     q.add_argument("problem", help="built-in name or path to a problem JSON file")
     q.add_argument("solution", help="path to a solution JSON file")
     q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
-    q.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    q.add_argument("--dpi", type=DPI, default=150, help=with_limits("resolution of raster output (default 150)", DPI))
     q.add_argument("-q", "--quiet", action="store_true", help="no summary line")
     q.set_defaults(func=cmd_plot_trajectories)
 
@@ -131,7 +142,8 @@ def cmd_render(args) -> int:
     else:
         kind = "gif" if ext == ".gif" else "mp4"
     try:
-        size = parse_size(args.size) if args.size else (style.GIF_SIZE if kind == "gif" else style.DEFAULT_SIZE)
+        size = (parse_size(args.size) if isinstance(args.size, str) else args.size) if args.size else \
+            (style.GIF_SIZE if kind == "gif" else style.DEFAULT_SIZE)
     except ValueError as e:
         return _err("render", str(e))
     if kind == "mp4" and (size[0] % 2 or size[1] % 2):

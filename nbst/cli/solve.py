@@ -4,9 +4,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from nbst.cli.args import int_at_least, nonnegative_cost
+from nbst.cli.args import JOBS, MAX_TRIALS, SEED, TARGET_COST, TRIALS_MAX, Bounded, with_limits
 from nbst.cli.flags import add_seed
 from nbst.warmup import COLD_COMPILE_SECONDS
+
+PATIENCE = Bounded("patience", 0, TRIALS_MAX, integer=True)
 
 VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes, a straight start and a "
                 "backward planner for noncueable disks (default); nbst-noplan: the same without the planner; "
@@ -47,19 +49,20 @@ def register(sub) -> None:
                "Every choice the paper leaves open is listed in docs/search.md.")
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("-o", "--output", required=True, metavar="SOLUTION.json", help="where to write the solution")
-    add_seed(p, type=int_at_least(0, "seed"), resumable=False)
-    p.add_argument("--max-trials", type=int_at_least(1, "max trials"), default=1_000_000, metavar="N",
-                   help="trial budget, initialization included (default 1000000)")
-    p.add_argument("--patience", type=int_at_least(0, "patience"), default=100_000, metavar="K",
-                   help="stop after K trials without improvement; 0 = never (default 100000)")
+    add_seed(p, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
+    p.add_argument("--max-trials", type=MAX_TRIALS, default=1_000_000, metavar="N",
+                   help=with_limits("trial budget, initialization included (default 1000000)", MAX_TRIALS))
+    p.add_argument("--patience", type=PATIENCE, default=100_000, metavar="K",
+                   help=with_limits("stop after K trials without improvement; 0 = never (default 100000)", PATIENCE))
     p.add_argument("--algorithm", type=_algorithm, default="signature", metavar="NAME",
                    help="signature: nbst's signature search (default; --variant picks it); baselines (docs/experiments.md): "
                         "cma (CMA-ES, IPOP restarts from the straight-line velocities), de (differential evolution), "
                         "ga (a standard steady-state GA), random (directed/uniform randomize)")
     p.add_argument("--variant", type=_variant, default="nbst", metavar="X", help=VARIANT_HELP)
-    p.add_argument("--target-cost", type=nonnegative_cost, default=None, metavar="C",
-                   help="stop as soon as the best cost (sum of squared distances to the targets, units^2) is <= C "
-                        "(default: round-off level, N x (1e-9 x box size)^2; 0: only an exact zero stops)")
+    p.add_argument("--target-cost", type=TARGET_COST, default=None, metavar="C",
+                   help=with_limits("stop as soon as the best cost (sum of squared distances to the targets, units^2) "
+                                    "is <= C (default: round-off level, N x (1e-9 x box size)^2; 0: only an exact "
+                                    "zero stops)", TARGET_COST))
     p.add_argument("--robust", action="store_true",
                    help="search for a solution that also survives a fixed-step engine (MuJoCo, h = 0.25 ms): "
                         "every candidate is scored by its worst cost over its own run and 8 runs from start "
@@ -68,8 +71,8 @@ def register(sub) -> None:
                         "best ones found "
                         "(fresh shifts, polished), which may cost more than a plain solve's "
                         "(signature search only; docs/search.md, \"Robust mode\")")
-    p.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
-                   help="independent searches (islands) on K cores, each from its own seed derived from --seed and "
+    p.add_argument("--jobs", type=JOBS, default=None, metavar="K",
+                   help=f"[{JOBS.limits}] independent searches (islands) on K cores, each from its own seed derived from --seed and "
                         "with 1/K of the trial budget, run in lockstep and all stopped at the first round in which "
                         "one reaches the target cost; the best island's solution is written. The same --seed and K "
                         "give the same solution. Default: every core; 1: a single search in this process")
