@@ -31,3 +31,94 @@ def make_problem(starts, radii=10.0, *, box=(800.0, 800.0), t_final=5.0, R=75.0,
 @pytest.fixture
 def mk():
     return make_problem
+
+
+# --------------------------------------------------------------------------- compiled kernels, slow tests
+
+
+#: Tests that take >= 0.3 s each (pytest --durations=0, full suite, 2 shared cores, warm numba
+#: cache, issue 24): ``pytest -m "not slow"`` leaves them out. Node ids; a parametrized test is
+#: listed per case, or by its base id for all of them.
+SLOW = frozenset({
+    "tests/test_aim.py::test_bank_shot_lands_exactly_when_the_path_is_clear[0-0]",
+    "tests/test_aim.py::test_generate_cli",
+    "tests/test_baselines.py::test_budget_is_exact[cma]",
+    "tests/test_bowling.py::test_cli_atlas_writes_shots_and_resumes",
+    "tests/test_bowling.py::test_cli_not_found_writes_the_nearest_and_exits_1",
+    "tests/test_bowling.py::test_doc_replay_lines_give_the_shots_pins_without_nbst",
+    "tests/test_bowling.py::test_interrupt_keeps_the_best_so_far",
+    "tests/test_bowling.py::test_render_draws_the_ball_where_the_replay_has_it",
+    "tests/test_bowling.py::test_rollouts_are_bit_identical_to_a_fresh_plain_replay",
+    "tests/test_bowling.py::test_solve_finds_a_strike_within_a_small_budget",
+    "tests/test_bowling.py::test_solve_is_reproducible_for_any_jobs",
+    "tests/test_bowling_atlas.py::test_atlas_on_a_dask_cluster_writes_the_same_shots_as_one_thread",
+    "tests/test_bowling_atlas.py::test_classes_cover_every_subset_and_single_pins",
+    "tests/test_bowling_atlas.py::test_emitter_run_is_reproducible_for_any_jobs",
+    "tests/test_bowling_hardening.py::test_atlas_from_the_shipped_atlas_unpacks_it",
+    "tests/test_cli.py::test_bad_input_exits_2_one_line_no_traceback",
+    "tests/test_cli.py::test_bad_solution_file_exit_2",
+    "tests/test_cli.py::test_checkout_shim_runs",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[README.md]",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[bowling.md]",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[experiments.md]",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[install.md]",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[mujoco.md]",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[render.md]",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[results.md]",
+    "tests/test_experiments.py::test_cli_ablation_outputs",
+    "tests/test_experiments.py::test_cli_curves_outputs",
+    "tests/test_experiments.py::test_process_pool_equals_in_process",
+    "tests/test_hardening_inputs.py::test_inside_the_domain_loads_and_simulates_inside_the_box",
+    "tests/test_hardening_outputs.py::test_experiment_workers_die_with_their_parent[15]",
+    "tests/test_hardening_outputs.py::test_experiment_workers_die_with_their_parent[9]",
+    "tests/test_hardening_outputs.py::test_render_sigterm_removes_its_partial_video",
+    "tests/test_islands.py::test_islands_on_a_dask_cluster_give_the_local_solution",
+    "tests/test_islands.py::test_one_job_is_the_plain_search",
+    "tests/test_logs.py::test_a_second_warm_up_says_nothing",
+    "tests/test_logs.py::test_solve_into_a_log_has_no_carriage_returns",
+    "tests/test_models.py::test_report_legends_never_cover_data[overlay_figure]",
+    "tests/test_models.py::test_report_page_reads_well",
+    "tests/test_models_validate.py::test_cli_mjcf_and_validate_report",
+    "tests/test_packaging.py::test_pip_install_into_a_fresh_venv[pip-install-e]",
+    "tests/test_packaging.py::test_pip_install_into_a_fresh_venv[pip-install]",
+    "tests/test_packaging.py::test_wheel_holds_only_nbst",
+    "tests/test_planner.py::test_every_simulation_is_a_trial_counted_at_the_simulator",
+    "tests/test_robust.py::test_reproducible_from_the_seed",
+    "tests/test_search.py::test_a_legal_problem_never_yields_a_refused_solution[A]",
+    "tests/test_search.py::test_a_legal_problem_never_yields_a_refused_solution[nbst]",
+    "tests/test_search.py::test_ctrl_c_writes_the_best_so_far",
+    "tests/test_search.py::test_variants_behave",
+    "tests/test_sensitivity.py::test_transition_from_an_intermediate_time_is_the_jacobian_of_the_rest",
+    "tests/test_setup.py::test_is_cold_sees_numba_disk_cache",
+    "tests/test_sim.py::test_agrees_with_brute_force_integrator",
+    "tests/test_stepping.py::test_cli_aligned_convergence_report",
+    "tests/test_stepping.py::test_newton_cradle_passes_the_impulse_along",
+    "tests/test_stepping.py::test_simultaneous_three_disk_contact_follows_the_exact_order",
+})
+
+#: Test files that time a command (signals sent after a delay, Ctrl-C during a run): their tests
+#: run after ``compiled_kernels``, so a cold numba cache (~50 s on 2 cores) never lands inside one.
+TIMED_FILES = frozenset({"tests/test_search.py", "tests/test_hardening_outputs.py", "tests/test_cli.py"})
+
+
+@pytest.fixture(scope="session")
+def compiled_kernels():
+    """Compile every numba kernel of the main job once per session (or load it from numba's
+    on-disk cache: ~1-3 s warm), before the first test that times something."""
+    from nbst.warmup import warm_all
+
+    return warm_all()
+
+
+@pytest.fixture(autouse=True)
+def _kernels_before_timed_tests(request):
+    if request.node.nodeid.split("::")[0] in TIMED_FILES:
+        request.getfixturevalue("compiled_kernels")
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark the tests of SLOW (node ids, parametrized ones by their base id) ``slow``, so that
+    ``pytest -m "not slow"`` is the fast development loop; a plain ``pytest`` runs everything."""
+    for item in items:
+        if item.nodeid in SLOW or item.nodeid.split("[")[0] in SLOW:
+            item.add_marker(pytest.mark.slow)

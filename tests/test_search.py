@@ -282,5 +282,7 @@ def test_where_the_crossing_bound_stops_the_event_cap_still_holds():
     tr = simulate(p, v)
     assert tr.truncated and len(tr.events) == MAX_EVENTS and tr.n_disk_disk == 1
     assert np.isinf(evaluate(p, v[None])[1][0])
-    sol = solve(p, seed=1, max_trials=3000, patience=0, variant="A")
-    assert not simulate(p, sol.velocities).truncated
+    # a lower cap keeps the test quick: the search's candidates here truncate at whatever cap
+    params = dataclasses.replace(variant_params("A"), max_events=20_000)
+    sol = solve(p, seed=1, max_trials=2000, patience=0, params=params)
+    assert sol.meta["truncated_runs"] > 0 and not simulate(p, sol.velocities).truncated
