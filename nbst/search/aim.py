@@ -180,6 +180,7 @@ def path_conflicts(i, vi, x0, V, radius, W, H, t_final):
 
 @njit(cache=True, error_model="numpy")
 def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounces, scr, rng, out):
+    # Thirteen parameters on purpose: an operator over flat arrays (numba), also tested alone.
     """Bank shot for disk i (min_bounces..max_bounces bounces) whose path meets the
     fewest other disks' current free flights (velocities V), chosen uniformly at
     random among the best (``rng``: a xoshiro256** state, ``nbst.search.ops.seed_state``).
@@ -218,21 +219,29 @@ def choose_bank(i, x0, V, radius, target, W, H, t_final, min_bounces, max_bounce
     return best
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _strike_point(p, r_sum, T):
+    """Where a striker must touch a resting disk at p (contact distance r_sum) to send it
+    straight at T: (D = |T - p|, the unit direction n = (T - p) / D, q = p - r_sum n);
+    D = 0 (and n = 0, q = p) when p is at T."""
+    dx = T[0] - p[0]
+    dy = T[1] - p[1]
+    D = math.sqrt(dx * dx + dy * dy)
+    if D == 0.0:
+        return 0.0, 0.0, 0.0, p[0], p[1]
+    nx = dx / D
+    ny = dy / D
+    return D, nx, ny, p[0] - r_sum * nx, p[1] - r_sum * ny
+
+
 @njit(cache=True, error_model="numpy")
 def strike_velocity(pc, rc, mc, ps, rs, ms, T, t_final, out):
     """Velocity of cue disk c (from pc) that strikes resting disk s (at ps) so that s
     flies straight to T and arrives at t_final. Returns t_hit, or -1 if impossible
     (c would have to approach from the far side)."""
-    dx = T[0] - ps[0]
-    dy = T[1] - ps[1]
-    D = math.sqrt(dx * dx + dy * dy)
+    D, nx, ny, qx, qy = _strike_point(ps, rc + rs, T)
     if D == 0.0:
         return -1.0
-    nx = dx / D
-    ny = dy / D
-    s = rc + rs
-    qx = ps[0] - s * nx
-    qy = ps[1] - s * ny
     A = (qx - pc[0]) * nx + (qy - pc[1]) * ny
     if A <= 0.0:
         return -1.0
@@ -278,15 +287,9 @@ def chain_strike_velocity(pc, rc, mc, p1, r1, m1, p2, r2, m2, T, t_final, out):
     A1 = (q1 - pc).d; and t2 = t1 + L2/sigma. With G = A1/k1 + L2 and c2 = d.n2
     these solve to t2 = G c2 t_final / (G c2 + k2 D2), sigma = G / t2.
     (k = (m_a + m_b) / (2 m_a) = 1 / ``impulse_share(m_a, m_b)`` for striker a and struck b.)"""
-    dx = T[0] - p2[0]
-    dy = T[1] - p2[1]
-    D2 = math.sqrt(dx * dx + dy * dy)
+    D2, n2x, n2y, q2x, q2y = _strike_point(p2, r1 + r2, T)
     if D2 == 0.0:
         return -1.0
-    n2x = dx / D2
-    n2y = dy / D2
-    q2x = p2[0] - (r1 + r2) * n2x
-    q2y = p2[1] - (r1 + r2) * n2y
     ex = q2x - p1[0]
     ey = q2y - p1[1]
     L2 = math.sqrt(ex * ex + ey * ey)

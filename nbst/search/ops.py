@@ -473,6 +473,8 @@ def cull_subsumed(pop, n, exempt_best, scratch_or):
 @njit(cache=True)
 def insert(pop, child, cost, sig, p1, p2, improvement, elitism, sig_limit, pop_limit, hard_limit, cull_mode,
            n, rng, scratch_or):
+    # Fifteen parameters on purpose: each operator of ops.py takes plain arrays and scalars so it can
+    # be tested on hand-built populations (tests/test_search_ops.py).
     """The paper's insert. p2 = -1 unless the child came from crossover.
 
     If the child's signature equals exactly one parent's, the child replaces that

@@ -96,6 +96,8 @@ POPS_PER_COMBINATION = 20
 
 @njit(cache=True, error_model="numpy")
 def chain_aim(x0, radius, mass, target, W, H, t_final, chain, L, imgs, out_v, out_t, out_pred):
+    # Thirteen parameters on purpose: a closed form over flat arrays (numba), called per route
+    # from ``aim_routes``'s loop.
     """Closed-form aim of one chain ``chain[0] -> chain[1] -> ... -> chain[L]`` (disks at rest
     but the first). ``imgs[k]`` (kx, ky): for k < L the image, in chain[k]'s frame, of the point
     where chain[k] touches chain[k+1]; for k = L the image of chain[L]'s target.
@@ -189,6 +191,7 @@ def chain_aim(x0, radius, mass, target, W, H, t_final, chain, L, imgs, out_v, ou
 
 @njit(cache=True, error_model="numpy")
 def aim_routes(x0, radius, mass, target, W, H, t_final, chains, L, imgs, vmax, V, gain):
+    # Thirteen parameters on purpose: the batch entry point over flat arrays (numba).
     """Aim every route (chains (M, L+1), imgs (M, L+1, 2)): cue velocities V (M, 2) and the
     predicted gain (M,) (squared misses of the chain's disks at their predicted ends minus the
     noncueable ones' misses at rest; inf when the chain is impossible or the cue would need

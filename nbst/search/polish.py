@@ -118,6 +118,8 @@ def alloc_polish(n, n_cue, cap):
 
 @njit(cache=True, error_model="numpy")
 def polish_kernel(x0, v, radius, mass, target, W, H, t_final, R, cue, max_sims, tol, work, scratch):
+    # Fourteen parameters on purpose: called by nbst's loop and by the ``polish`` wrapper with the
+    # problem's flat arrays (numba); the scratch is one PolishScratch.
     """Polish ``v`` (N, 2) in place. Returns (cost, signature, simulations run, PolishStop).
 
     Stops when the cost is <= tol, after max_sims simulations, or when no damped

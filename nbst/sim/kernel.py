@@ -114,6 +114,8 @@ def _rescan(T, rowmin, rowarg, i, n):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _update_row(i, skip, t, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius, W, H, n, t_final, tw, tmp, rad):
+    # Twenty parameters on purpose: inlined into ``run``'s loop; its arrays are run's locals
+    # (unpacked from Work once per run), passed flat so the prediction loop vectorizes.
     """Disk i (at time t, tl[i] == t) has a new velocity: re-predict row i.
     ``skip`` is a disk whose pair entry with i was already set (or -1).
 
@@ -172,6 +174,9 @@ def _update_row(i, skip, t, px, py, vx, vy, tl, T, wall, rowmin, rowarg, radius,
 @njit(cache=True, error_model="numpy")
 def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_events,
         ev_t, ev_i, ev_j, ev_state):
+    # Length and parameters on purpose: the event loop is the hot path of every simulation; numba
+    # takes arrays, and each caller (evaluate, simulate, polish, the Jacobian's records) passes its own
+    # buffers, so the inputs stay flat arrays and the loop stays one function LLVM optimizes whole.
     """Simulate from t = 0 to t_final.
 
     x0, v0      : (N, 2) start positions and velocities
@@ -321,6 +326,8 @@ def cost_signature(final, target, R):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def evaluate_kernel(x0, V, radius, mass, target, W, H, t_final, R, max_events, final, cost, sig, n_events):
+    # Fourteen parameters on purpose: the batch entry point over flat arrays (numba), called from
+    # Python threads on slices of the output arrays.
     """Batch: V (B, N, 2) -> final (B, N, 2), cost (B,), sig (B,), n_events (B,).
     A run that hits max_events gets cost = inf and signature 0."""
     n = x0.shape[0]

@@ -66,27 +66,24 @@ def pair_tau(dx, dy, dvx, dvy, s, h):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def axis_tau(x, v, r, L, wall_lo, wall_hi):
+    """(time until a disk at coordinate x moving at v touches the wall it moves towards on one
+    axis of length L, which wall): wall_lo at x = r, wall_hi at x = L - r; (inf, -1) at rest."""
+    if v > 0.0:
+        return (L - r - x) / v, wall_hi
+    if v < 0.0:
+        return (r - x) / v, wall_lo
+    return INF, -1
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def wall_tau(x, y, vx, vy, r, W, H):
     """(time until the disk touches a wall, which wall); x walls win ties.
 
     Only the wall a disk moves towards is predicted; a time that round-off makes
     negative is clamped to 0 ("now")."""
-    tx = INF
-    wx = -1
-    if vx > 0.0:
-        tx = (W - r - x) / vx
-        wx = WALL_RIGHT
-    elif vx < 0.0:
-        tx = (r - x) / vx
-        wx = WALL_LEFT
-    ty = INF
-    wy = -1
-    if vy > 0.0:
-        ty = (H - r - y) / vy
-        wy = WALL_TOP
-    elif vy < 0.0:
-        ty = (r - y) / vy
-        wy = WALL_BOTTOM
+    tx, wx = axis_tau(x, vx, r, W, WALL_LEFT, WALL_RIGHT)
+    ty, wy = axis_tau(y, vy, r, H, WALL_BOTTOM, WALL_TOP)
     if ty < tx:
         return (ty if ty > 0.0 else 0.0), wy
     return (tx if tx > 0.0 else 0.0), wx
