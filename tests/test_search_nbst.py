@@ -100,3 +100,45 @@ def test_nbst_loop_with_every_addition_off_is_the_papers_loop(variant, problem):
     nh = int(a.st[D._L.ST_NHIST])
     for x, y in ((a.hist_t, b.hist_t), (a.hist_c, b.hist_c), (a.hist_o, b.hist_o)):
         np.testing.assert_array_equal(x[:nh], y[:nh])
+
+
+def test_schedule_kernels_against_their_definitions():
+    """_pick_op draws operator k with probability weights[k] / sum (never a zero weight);
+    _pick_disk prefers a non-acceptable disk half of the time; _adapt keeps every enabled
+    operator at or above the floor and the probabilities summing to 1."""
+    from nbst.search.nbst_loop import N_OPS, _adapt, _pick_disk, _pick_op
+    from nbst.search.ops import seed_state
+
+    rng = seed_state(11)
+    w = np.array([0.2, 0.1, 0.0, 0.2, 0.3, 0.2, 0.0])
+    T = 40_000
+    counts = np.bincount([_pick_op(rng, w) for _ in range(T)], minlength=N_OPS)
+    assert counts[2] == 0 and counts[6] == 0
+    # binomial std <= sqrt(T / 4) = 100 draws: 5 sigma
+    np.testing.assert_allclose(counts / T, w / w.sum(), atol=500 / T)
+    idx = np.arange(6, dtype=np.int64)
+    sig = np.int64(0b110111)  # disk 3 alone is not acceptable
+    picks = np.array([_pick_disk(idx, sig, rng, True) for _ in range(T)])
+    assert abs((picks == 3).mean() - (0.5 + 0.5 / 6)) < 500 / T
+    picks = np.array([_pick_disk(idx, sig, rng, False) for _ in range(T)])
+    assert abs((picks == 3).mean() - 1 / 6) < 500 / T
+    base = w / w.sum()
+    weights, reward = base.copy(), base.copy()
+    for k in range(2000):
+        _adapt(weights, base, reward, k % N_OPS if base[k % N_OPS] > 0 else 0, k % 3 == 0, 0.05, 0.03)
+    on = base > 0
+    assert np.all(weights[on] >= 0.03 - 1e-12) and np.all(weights[~on] == 0.0)
+    assert weights.sum() == pytest.approx(1.0, rel=1e-12)
+
+
+def test_cost_signature_is_the_sum_of_squares_and_the_within_r_mask():
+    from nbst.sim import cost_signature
+
+    rng = np.random.default_rng(4)
+    for n in (1, 7, 63):
+        final, target = rng.uniform(0, 100, (n, 2)), rng.uniform(0, 100, (n, 2))
+        R = 40.0
+        c, s = cost_signature(final, target, R)
+        d2 = ((final - target) ** 2).sum(axis=1)
+        assert c == pytest.approx(d2.sum(), rel=1e-12)
+        assert s == sum(1 << i for i in range(n) if d2[i] <= R * R)
