@@ -194,3 +194,50 @@ def test_cli_bad_input(tmp_path):
         _cli(["experiment", "compare", str(tmp_path / "nope.json")], tmp_path)
     with pytest.raises(SystemExit):
         _cli(["experiment", "curves", "over5", "--runs", "0"], tmp_path)
+
+
+@pytest.mark.parametrize("damage", ["missing history", "history of strings", "not JSON", "foreign kind", "a folder"])
+def test_a_damaged_or_foreign_run_file_is_reported_and_rerun(swap, tmp_path, capsys, damage):
+    spec = X.make_specs([swap], ["random"], runs=1, trials=300)[0]
+    first = X.run_specs([spec], tmp_path, workers=1, progress=False)[0]
+    path = tmp_path / spec.relpath()
+    d = json.loads(path.read_text())
+    if damage == "missing history":
+        del d["history"]
+    elif damage == "history of strings":
+        d["history"] = ["x", "y"]
+    elif damage == "foreign kind":
+        d = {"kind": "something else", "key": d["key"]}
+    if damage == "not JSON":
+        path.write_text("{not json")
+    elif damage == "a folder":
+        path.unlink()
+        path.mkdir()
+    else:
+        path.write_text(json.dumps(d))
+    capsys.readouterr()
+    if damage == "a folder":  # reported, then the write refused: one line, no traceback
+        with pytest.raises(Exception) as e:
+            X.run_specs([spec], tmp_path, workers=1, progress=False)
+        assert type(e.value).__name__ == "OutputError"
+        return
+    again = X.run_specs([spec], tmp_path, workers=1, progress=False)[0]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and "running it again" in err[0], err
+    _same(first, again)
+    assert X._load_finished(path, spec) is not None  # rewritten whole
+    X.curves_rows([again])  # the summaries read it
+
+
+@pytest.mark.parametrize("name", ["..", ".", "../../escape", "/abs", "a/../../b", ".hidden", "é" * 200, ""])
+def test_run_files_stay_inside_runs(swap, tmp_path, name):
+    d = dict(SWAP, name=name)
+    spec = X.make_specs([problem_from_dict(d)], ["random"], runs=1, trials=50)[0]
+    out = tmp_path / "out"
+    X.run_specs([spec], out, workers=1, progress=False)
+    files = [p for p in tmp_path.rglob("*") if p.is_file()]
+    assert len(files) == 1 and (out / "runs") in files[0].parents, files
+    part = files[0].relative_to(out / "runs").parts[0]
+    assert not part.startswith(".") and part.isascii() and len(part) <= X.MAX_NAME_PART + 9, part
+    # two names that sanitize alike still get two files
+    assert X.safe_name("a b") != X.safe_name("a_b") and X.safe_name("a?b") != X.safe_name("a*b")

@@ -4,6 +4,7 @@ exception; everything inside the domain loads and simulates to finite positions.
 import copy
 import json
 import math
+import os
 
 import numpy as np
 import pytest
@@ -80,6 +81,104 @@ def test_file_size_limit(tmp_path, monkeypatch):
     f = _write(tmp_path, GOOD)
     with pytest.raises(ProblemError, match="at most 100 bytes"):
         load_problem(f)
+
+
+def _measure_load(path) -> tuple[float, int, str]:
+    """Seconds, peak resident memory (MB) and the one-line error of load_problem(path) in a fresh process."""
+    import subprocess
+    import sys
+
+    code = ("import resource, sys, time\nfrom nbst.problem import ProblemError, load_problem\nt = time.perf_counter()\n"
+            "try:\n    load_problem(sys.argv[1]); msg = 'accepted'\nexcept ProblemError as e:\n    msg = str(e)\n"
+            "print(time.perf_counter() - t, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024, msg)")
+    out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and "Traceback" not in out.stderr, out.stderr
+    dt, mb, msg = out.stdout.split(" ", 2)
+    return float(dt), int(mb), msg.strip()
+
+
+@pytest.mark.parametrize("unit, count", [
+    ("[],", 21_000_000),          # 63 MiB of empty lists: 3.2 GB once parsed, before the value cap
+    ("1,", 31_000_000),           # 62 MB of small integers
+    ('"abcdefghijklmnopqrstuvwxyz",', 1_990_000),   # just under the value cap: the heaviest accepted shape
+])
+def test_a_huge_file_of_any_shape_is_refused_fast_and_small(tmp_path, unit, count):
+    f = tmp_path / "huge.json"
+    f.write_text("[" + unit * count + "1]")
+    _, mb, msg = _measure_load(f)
+    assert "JSON values" in msg or "must be a JSON object" in msg, msg
+    assert mb < 512, mb  # the issue's bound, whatever the shape (its time: benchmarks/fuzz_inputs.py --huge)
+
+
+def test_the_value_count_is_checked_before_parsing(monkeypatch):
+    monkeypatch.setattr(D, "MAX_JSON_VALUES", 10)
+    with pytest.raises(ProblemError, match="more than 10 JSON values"):
+        parse_json("[" + "[]," * 10 + "1]", "x.json")
+    assert parse_json("[" + "[]," * 4 + "1]", "x.json") == [[]] * 4 + [1]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+def test_special_files_as_inputs_are_refused_by_stat(tmp_path, capsys):
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)  # opening it for reading would block forever
+    sol = _write(tmp_path, {"velocities": [[0.0, 0.0]] * 5}, "s.json")
+    for argv, what in ((["simulate", str(fifo), str(sol)], "named pipe"),
+                       (["simulate", "over5", str(fifo)], "named pipe"),
+                       (["simulate", str(tmp_path), str(sol)], "directory"),
+                       (["simulate", "over5", "/dev/zero"], "character device")):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert what in err and err.count("\n") == 1, err
+
+
+def test_numeric_flags_have_domains_stated_in_help():
+    """Every numeric flag of the core commands, solve, generate, experiment, render, plot and the
+    MuJoCo commands is checked by a shared type whose range its --help states."""
+    import argparse
+
+    from nbst.cli.args import Bounded, Size
+    from nbst.cli.main import build_parser
+
+    def walk(parser, prefix=()):
+        for a in parser._actions:
+            if isinstance(a, argparse._SubParsersAction):
+                for name, sp in a.choices.items():
+                    yield from walk(sp, prefix + (name,))
+            elif a.option_strings:
+                yield prefix, a
+
+    checked = 0
+    for prefix, a in walk(build_parser()):
+        if prefix and prefix[0] == "bowl":
+            continue  # the bowling commands' flags: tests/test_bowling*.py
+        assert a.type not in (int, float), f"nbst {' '.join(prefix)} {a.option_strings[0]}: bare {a.type.__name__}"
+        if isinstance(a.type, (Bounded, Size)) and a.help != argparse.SUPPRESS:  # hidden old spellings aside
+            assert a.type.limits in " ".join(a.help.split()), (prefix, a.option_strings, a.help)
+            checked += 1
+    assert checked >= 30
+
+
+@pytest.mark.parametrize("argv", [
+    ["solve", "over5", "-o", "x.json", "--seed", "nan"], ["solve", "over5", "-o", "x.json", "--seed", str(2**63)],
+    ["solve", "over5", "-o", "x.json", "--max-trials", "9" * 5000], ["solve", "over5", "-o", "x.json", "--jobs", "100000"],
+    ["solve", "over5", "-o", "x.json", "--target-cost", "inf"], ["generate", "--planted", "64", "-o", "x.json"],
+    ["generate", "--planted", "2", "--t-final", "nan", "-o", "x.json"], ["render", "over5", "s.json", "-o", "x.png",
+                                                                          "--still", "nan"],
+    ["render", "over5", "s.json", "-o", "x.mp4", "--fps", "1e9"], ["render", "over5", "s.json", "-o", "x.mp4",
+                                                                    "--fps", "-5"],
+    ["render", "over5", "s.json", "-o", "x.mp4", "--max-frames", "0"], ["plot", "problem", "over5", "-o", "x.png",
+                                                                          "--dpi", "1e9"],
+    ["validate", "over5", "s.json", "--unit", "1e300"], ["validate", "over5", "s.json", "--timestep", "nan"],
+    ["experiment", "curves", "over5", "--runs", "0"],
+])
+def test_a_flag_outside_its_domain_is_one_line_exit_2(argv, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    err = capsys.readouterr().err.strip()
+    assert e.value.code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert "must be" in err and "--help" in err, err
+    assert not list(tmp_path.iterdir())  # refused before any work or file
 
 
 def test_surrogates_and_bad_escapes(tmp_path, capsys):

@@ -79,6 +79,18 @@ def test_symlink_output_is_written_through(tmp_path, capsys):
     assert not [f for f in target.parent.iterdir() if f.name.startswith(".")]  # no partial file left
 
 
+def test_symlink_to_a_file_of_another_extension_gets_the_format_asked_for(tmp_path, capsys):
+    """``plot -o link.png`` with link -> t.conf: matplotlib picks the format by the partial file's
+    extension, which is the link's (.png), not the target's (a traceback before)."""
+    conf = tmp_path / "t.conf"
+    conf.write_text("a = 1\n")
+    link = tmp_path / "link.png"
+    link.symlink_to(conf)
+    assert main(["plot", "problem", "over5", "-o", str(link), "-q"]) == 0
+    assert link.is_symlink() and conf.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["link.png", "t.conf"]  # no partial file left
+
+
 # --------------------------------------------------------------------------- full disk
 
 @pytest.fixture
