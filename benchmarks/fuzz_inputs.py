@@ -1,6 +1,8 @@
-"""Fuzz nbst's input handling (issue 12): every bad file must be one line, exit 2.
+"""Fuzz nbst's input handling (issues 12, 23): every bad file or flag must be one line, exit 2.
 
-    python benchmarks/fuzz_inputs.py                       # 100,000 loader inputs + 1,000 CLI runs
+    python benchmarks/fuzz_inputs.py                       # 100,000 loader inputs, 1,000 + 1,000 CLI runs
+    python benchmarks/fuzz_inputs.py --loader 0 --cli 0 --flags 1000   # only every subcommand's flags
+    python benchmarks/fuzz_inputs.py --loader 0 --cli 0 --flags 0 --huge   # huge files: time and memory
     python benchmarks/fuzz_inputs.py --loader 20000 --cli 0
     python benchmarks/fuzz_inputs.py --keep /tmp/fuzz      # keep the inputs that broke something
 
@@ -15,6 +17,9 @@ surrogates in names, too many disks) and at byte level (flips, inserted bytes
 including invalid UTF-8 and control characters, deleted / duplicated spans,
 truncation, stray JSON tokens).
 
+Part 0 (``--huge``): files of ~64 MB in the shapes that cost a JSON parser most per byte, and
+files just under nbst's value cap, each loaded in a fresh process: seconds and peak memory.
+
 Part 1, in-process over 2 processes: each input goes through ``load_problem`` or
 ``load_solution`` (the files every command reads). Counted: accepted / refused
 with ProblemError / any other exception (a bug: a traceback in the CLI). An
@@ -27,6 +32,14 @@ small mutated problems and solutions, with a per-run timeout. Counted: exit
 codes, tracebacks (stderr containing 'Traceback'), hangs (timeouts), stderr
 errors longer than one line, and ``simulate --json`` output that a strict JSON
 parser refuses.
+
+Part 3, subprocesses again: every subcommand (problems, simulate, solve, generate, experiment,
+validate, mjcf, render of a video, a still and a bowling shot, plot, gallery, bowl solve / atlas /
+replay) with random flags: values that keep the work small, values just outside each flag's
+domain, and hostile ones (NaN, inf, 1e309, 5,000-digit integers, words, hex). Each run has its own
+empty working folder and TMPDIR, its inputs in a folder of their own and its outputs named under
+another. Counted: tracebacks, hangs (timeouts), deaths by a signal, multi-line errors, and runs that
+leave a file anywhere but their named outputs (partial files included) or change an input.
 """
 from __future__ import annotations
 
@@ -453,12 +466,290 @@ def run_cli(seeds, n: int, workers: int, seed: int, timeout: float):
     return results, time.perf_counter() - t0
 
 
+# --------------------------------------------------------------------------- part 3: every subcommand's flags
+
+#: Values no numeric flag may take without a one-line refusal: non-finite, negative, empty, words,
+#: literals beyond float64 or Python's int limit, hex, separators, spaces.
+BAD_NUMBERS = ["nan", "NaN", "inf", "-inf", "-1", "-0.5", "1e309", "", "abc", "1e-400", "9" * 25, "9" * 5000,
+               "0x1f", "1,5", " ", "1e", "--", "1.5.2", "+-3", "\u0663"]
+#: Per kind: values that keep the command's work small (drawn 75% of the time), and edges just outside
+#: the flag's domain.
+GOOD = {
+    "seed": (["0", "1", "7", "123456789", str(2**62)], [str(2**63), "-1"]),
+    "trials": (["1", "50", "300", "1500"], ["0", "1000000000001"]),
+    "patience": (["0", "100", "500"], ["1000000000001"]),
+    "jobs": (["1", "2"], ["0", "257"]),
+    "runs": (["1", "2"], ["0", "100001"]),
+    "cost": (["0", "1e-9", "100", "1e300"], ["-1e-300"]),
+    "fps": (["1", "10", "24.5", "240"], ["0", "240.01", "1e9"]),
+    "size": (["64x64", "32x48", "16x16", "100x60"], ["15x15", "8193x16", "0x0", "axb", "64", "64x64x64", "-64x64",
+                                                      "1e3x1e3", "99999999x9"]),
+    "speed": (["1", "2", "10", "0.5"], ["0", "1e7"]),
+    "hold": (["0", "0.1", "0.5"], ["61", "60.5"]),
+    "still": (["0", "0.1", "0.25", "0.5"], ["1e7", "1e6"]),
+    "frames": (["1", "30", "200"], ["0", "10000001"]),
+    "dpi": (["10", "30", "50"], ["9", "1201"]),
+    "timestep": (["0.001", "0.0005", "0.002"], ["0.02", "1e-8", "0"]),
+    "unit": (["0.001", "0.01", "1"], ["1e-7", "1e4", "1e300"]),
+    "tol": (["0.5", "1", "1e12"], ["0", "1e13"]),
+    "steps": (["100", "2000", "100000"], ["0", "100000001"]),
+    "disks": (["1", "2", "3", "4"], ["0", "64", "100"]),
+    "noncue": (["0", "1"], ["63", "5"]),
+    "radius": (["5", "10", "20"], ["0", "1e9", "500"]),
+    "box": (["200", "300", "150"], ["1e-7", "2e9", "0"]),
+    "tfinal": (["0.3", "0.5", "1"], ["1e-7", "2e6"]),
+    "R": (["20", "50"], ["0", "3e9"]),
+    "rollouts": (["0", "1", "3", "5"], ["-1"]),
+    "persubset": (["1", "2"], ["0"]),
+}
+
+
+def _value(kind: str, rng: random.Random) -> str:
+    good, edge = GOOD[kind]
+    r = rng.random()
+    if r < 0.75:
+        return rng.choice(good)
+    if r < 0.88:
+        return rng.choice(edge)
+    return rng.choice(BAD_NUMBERS)
+
+
+def _flags(rng: random.Random, table: dict, p: float = 0.4) -> list[str]:
+    """Each flag of ``table`` (flag -> kind, or flag -> (kind, nargs)) with probability p."""
+    out = []
+    for flag, kind in table.items():
+        if rng.random() < p:
+            if isinstance(kind, tuple):
+                out += [flag] + [_value(kind[0], rng) for _ in range(kind[1])]
+            else:
+                out += [flag, _value(kind, rng)]
+    return out
+
+
+SEARCH_FLAGS = {"--seed": "seed", "--max-trials": "trials", "--patience": "patience", "--target-cost": "cost",
+                "--jobs": "jobs"}
+RENDER_FLAGS = {"--fps": "fps", "--size": "size", "--speed": "speed", "--hold": "hold", "--max-frames": "frames"}
+SCENE_FLAGS = {"--timestep": "timestep", "--unit": "unit"}
+FLAG_COMMANDS = ["problems", "simulate", "solve", "generate", "experiment", "validate", "mjcf", "render-video",
+                 "render-still", "plot-problem", "plot-trajectories", "gallery", "bowl-solve", "bowl-atlas",
+                 "bowl-replay", "render-shot"]
+
+
+def flag_argv(cmd: str, rng: random.Random, inp: dict, out: Path) -> tuple[list[str], list[Path]]:
+    """argv (after ``nbst``) and the outputs it names (files or folders) for one random run of ``cmd``."""
+    pf, sf = str(inp["problem"]), str(inp["solution"])
+    if cmd == "problems":
+        return ["problems", *rng.choice([[], ["show", "over5"], [pf], ["show", pf]])], []
+    if cmd == "simulate":
+        return ["simulate", pf, sf, *(["--json"] if rng.random() < 0.5 else [])], []
+    if cmd == "solve":
+        o = out / "sol.json"
+        return ["solve", pf, "-o", str(o), "-q", *_flags(rng, SEARCH_FLAGS, 0.7),
+                *(["--variant", rng.choice(["A", "nbst", "C"])] if rng.random() < 0.3 else [])], [o]
+    if cmd == "generate":
+        o, so = out / "gen.json", out / "gen-sol.json"
+        fl = _flags(rng, {"--noncue": "noncue", "--radius": "radius", "--box": ("box", 2), "--t-final": "tfinal",
+                          "--target-radius": "R", "--seed": "seed"}, 0.5)
+        return ["generate", "--planted", _value("disks", rng), "-o", str(o), "--solution", str(so), *fl], [o, so]
+    if cmd == "experiment":
+        d = out / "exp"
+        action = rng.choice(["curves", "ablation", "compare"])
+        fl = _flags(rng, {"--runs": "runs", "--seed": "seed", "--jobs": "jobs"}, 0.5)
+        trials = ["--max-trials", rng.choice(["1", "50", "200"]) if rng.random() < 0.8 else _value("trials", rng)]
+        extra = _flags(rng, {"--target-cost": "cost"}, 0.5) if action == "compare" else []
+        return ["experiment", action, pf, "--algorithms", rng.choice(["A", "random", "cma,A"]), "--out-dir", str(d),
+                "-q", *trials, *fl, *extra], [d]
+    if cmd == "validate":
+        d = out / "rep"
+        fl = _flags(rng, {**SCENE_FLAGS, "--tol": "tol", "--max-steps": "steps"}, 0.5)
+        return ["validate", pf, sf, "-q", *(["--out-dir", str(d)] if rng.random() < 0.5 else []), *fl], [d]
+    if cmd == "mjcf":
+        o = out / "scene.xml"
+        return ["mjcf", pf, sf, "-o", str(o), *_flags(rng, SCENE_FLAGS, 0.6)], [o]
+    if cmd == "render-video":
+        o = out / rng.choice(["v.mp4", "v.gif"])
+        fl = _flags(rng, RENDER_FLAGS, 0.6)
+        if "--size" not in fl:
+            fl += ["--size", "32x32"]
+        return ["render", pf, sf, "-o", str(o), "-q", *fl], [o]
+    if cmd == "render-still":
+        o = out / "still.png"
+        return ["render", pf, sf, "-o", str(o), "-q", "--still", _value("still", rng), "--size",
+                _value("size", rng) if rng.random() < 0.5 else "48x32"], [o]
+    if cmd in ("plot-problem", "plot-trajectories"):
+        o = out / rng.choice(["f.png", "f.svg", "f.pdf"])
+        args = ["problem", pf] if cmd == "plot-problem" else ["trajectories", pf, sf]
+        return ["plot", *args, "-o", str(o), "-q", *_flags(rng, {"--dpi": "dpi"}, 0.8)], [o]
+    if cmd == "gallery":
+        d = out / "gal"
+        return ["gallery", "over5", "--out-dir", str(d), "--no-search", "-q",
+                *_flags(rng, {"--seed": "seed", "--max-trials": "trials"}, 0.5)], [d]
+    if cmd == "bowl-solve":
+        o = out / "shot.json"
+        return ["bowl", "solve", "--down", rng.choice(["1", "7,10", "1,2,4"]), "-o", str(o), "-q", "--no-robustness",
+                "--no-atlas", "--jobs", "1", "--max-rollouts", rng.choice(["1", "3", "5"]) if rng.random() < 0.7
+                else _value("rollouts", rng), *_flags(rng, {"--seed": "seed"}, 0.5)], \
+            [o, o.with_name("shot.scene.xml")]  # and its documented scene beside it
+    if cmd == "bowl-atlas":
+        d = out / "atlas"
+        return ["bowl", "atlas", "--out-dir", str(d), "-q", "--no-robustness", "--jobs", "1", "--max-rollouts",
+                rng.choice(["0", "2", "5"]) if rng.random() < 0.7 else _value("rollouts", rng),
+                *_flags(rng, {"--seed": "seed", "--per-subset": "persubset"}, 0.4)], [d]
+    if cmd == "bowl-replay":
+        return ["bowl", "replay", str(inp["shot"]), *(["--json"] if rng.random() < 0.5 else [])], []
+    if cmd == "render-shot":
+        o = out / rng.choice(["s.png", "s.mp4"])
+        still = ["--still", _value("still", rng)] if o.suffix == ".png" else []
+        fl = _flags(rng, {k: v for k, v in RENDER_FLAGS.items() if k != "--max-frames"}, 0.6)
+        if "--size" not in fl:
+            fl += ["--size", "32x32"]
+        if "--fps" not in fl and not still:
+            fl += ["--fps", "5"]
+        return ["render", str(inp["shot"]), "-o", str(o), "-q", *still, *fl], [o]
+    raise ValueError(cmd)
+
+
+def _tree(root: Path) -> dict[str, str]:
+    """Every file under root (relative path -> sha256 of its first MB; links as 'link')."""
+    import hashlib
+
+    out = {}
+    for dirpath, dirs, files in os.walk(root):
+        for f in files + [d for d in dirs if os.path.islink(os.path.join(dirpath, d))]:
+            p = Path(dirpath) / f
+            rel = str(p.relative_to(root))
+            if p.is_symlink() or not p.is_file():
+                out[rel] = "special"
+                continue
+            with open(p, "rb") as fh:
+                out[rel] = hashlib.sha256(fh.read(1 << 20)).hexdigest()
+    return out
+
+
+def flag_case(args):
+    """One random command run in a sandbox: cwd, TMPDIR, inputs and outputs in their own folders;
+    afterwards every file there must be an input (unchanged) or a named output."""
+    k, seed, timeout, base, inputs = args
+    rng = random.Random(seed * 104_729 + k)
+    cmd = FLAG_COMMANDS[k % len(FLAG_COMMANDS)]
+    root = base / f"flag{k}"
+    cwd, tmp, inp, out = root / "cwd", root / "tmp", root / "in", root / "out"
+    for d in (cwd, tmp, inp, out):
+        d.mkdir(parents=True)
+    local = {}
+    for name, src in inputs.items():
+        local[name] = inp / src.name
+        shutil.copyfile(src, local[name])
+    before = _tree(inp)
+    argv, named = flag_argv(cmd, rng, local, out)
+    env = {**os.environ, "MPLBACKEND": "Agg", "TMPDIR": str(tmp)}
+    t0 = time.perf_counter()
+    try:
+        res = subprocess.run([sys.executable, "-m", "nbst.cli", *argv], capture_output=True, timeout=timeout,
+                             cwd=cwd, env=env)
+        rc, se = res.returncode, res.stderr
+    except subprocess.TimeoutExpired as e:
+        rc, se = "timeout", e.stderr or b""
+    dt = time.perf_counter() - t0
+    err = se.decode("utf-8", "replace")
+    stray = [f"cwd/{f}" for f in _tree(cwd)] + [f"tmp/{f}" for f in _tree(tmp)]
+    after = _tree(inp)
+    stray += [f"in/{f} (changed)" for f in after if before.get(f) != after[f]]
+    for f in _tree(out):
+        p = out / f
+        if ".partial-" in f or not any(p == n or n in p.parents for n in named):
+            stray.append(f"out/{f}")
+    lines = [ln for ln in err.strip().splitlines() if ln.strip()]
+    r = {"cmd": cmd, "rc": rc, "seconds": dt, "traceback": "Traceback" in err, "stray": stray,
+         "multiline": rc == 2 and len([ln for ln in lines if not ln.startswith("nbst: note:")]) > 1,
+         "argv": argv}
+    if r["traceback"] or rc == "timeout" or stray or r["multiline"] or (isinstance(rc, int) and rc < 0):
+        r["stderr"] = err[-800:]
+    shutil.rmtree(root, ignore_errors=True)
+    return r
+
+
+def make_flag_inputs(work: Path, seeds: list[dict]) -> dict:
+    """The input files of the flag runs: a tiny planted problem, its solution, a bowling shot."""
+    tiny = next(s for s in seeds if s["tiny"])
+    files = {"problem": work / "problem.json", "solution": work / "solution.json"}
+    files["problem"].write_text(json.dumps(tiny["problem"]))
+    files["solution"].write_text(json.dumps(tiny["solution"]))
+    shot = work / "shot.json"
+    res = subprocess.run([sys.executable, "-m", "nbst.cli", "bowl", "solve", "--down", "1", "-o", str(shot), "-q",
+                          "--seed", "1", "--max-rollouts", "5", "--no-robustness", "--no-atlas", "--jobs", "1"],
+                         capture_output=True, text=True, cwd=ROOT, timeout=300)
+    if shot.exists() and shot.with_name("shot.scene.xml").exists():
+        files["shot"] = shot
+        files["shot_scene"] = shot.with_name("shot.scene.xml")  # the shot names its scene beside it
+    else:
+        print(f"  no shot file for the bowling runs: {res.stderr.strip()[-200:]}", file=sys.stderr)
+    return files
+
+
+def run_flags(seeds, n: int, workers: int, seed: int, timeout: float):
+    base = Path(tempfile.mkdtemp(prefix="nbst-fuzz-flags-"))
+    results = []
+    t0 = time.perf_counter()
+    try:
+        inputs = make_flag_inputs(base, seeds)
+        cases = [(k, seed, timeout, base, inputs) for k in range(n)
+                 if "shot" in inputs or FLAG_COMMANDS[k % len(FLAG_COMMANDS)] not in ("bowl-replay", "render-shot")]
+        with ThreadPoolExecutor(workers) as ex:
+            for i, r in enumerate(ex.map(flag_case, cases)):
+                results.append(r)
+                print(f"\r  flags {i + 1:,}/{len(cases):,} ({time.perf_counter() - t0:.0f} s)", end="",
+                      file=sys.stderr)
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
+    print(file=sys.stderr)
+    return results, time.perf_counter() - t0
+
+
+# --------------------------------------------------------------------------- part 0: huge files
+
+#: (name, repeated unit, count): files of ~64 MB or at nbst's value cap, in the shapes that cost the
+#: parser most per byte.
+HUGE_SHAPES = [("empty lists, 63 MiB", "[],", 22_000_000), ("small ints, 63 MiB", "1,", 33_000_000),
+               ("empty objects, 63 MiB", "{},", 22_000_000), ("nesting, 63 MiB", "[", 33_000_000),
+               ("one string, 63 MiB", "\u00e9", 33_000_000),
+               ("empty lists at the value cap", "[],", 499_000), ("objects at the value cap", '{"a":[]},', 249_000),
+               ("floats at the value cap", "1.5e300,", 999_000),
+               ("strings at the value cap", '"abcdefghijklmnopqrstuvwxyz",', 999_000)]
+
+
+def run_huge(work: Path) -> list[dict]:
+    """Each huge shape loaded as a problem in a fresh process: seconds, peak memory (VmHWM: the
+    process's own, where ru_maxrss would carry this one's across fork), the verdict."""
+    code = ("import resource, sys, time\nfrom nbst.problem import ProblemError, load_problem\nt = time.perf_counter()\n"
+            "try:\n    load_problem(sys.argv[1]); msg = 'accepted'\nexcept ProblemError as e:\n    msg = e.reason\n"
+            "hwm = [ln for ln in open('/proc/self/status') if ln.startswith('VmHWM')]\n"
+            "mb = int(hwm[0].split()[1]) // 1024 if hwm else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024\n"
+            "print(round(time.perf_counter() - t, 2), mb, msg)")
+    rows = []
+    for name, unit, count in HUGE_SHAPES:
+        f = work / "huge.json"
+        body = unit * count
+        text = body + "]" * count if unit == "[" else ('["' + body + '"]' if unit == "\u00e9" else "[" + body + "1]")
+        f.write_text(text, encoding="utf-8")
+        t0 = time.perf_counter()
+        res = subprocess.run([sys.executable, "-c", code, str(f)], capture_output=True, text=True, timeout=600)
+        wall = time.perf_counter() - t0
+        dt, mb, msg = (res.stdout.split(" ", 2) + ["?", "?", res.stderr.strip()[-200:]])[:3]
+        rows.append({"shape": name, "bytes": f.stat().st_size, "load_s": dt, "process_s": round(wall, 2),
+                     "peak_mb": mb, "verdict": msg.strip()[:90], "traceback": "Traceback" in res.stderr})
+        f.unlink()
+    return rows
+
+
 # --------------------------------------------------------------------------- main
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--loader", type=int, default=100_000, help="inputs fed to the loader in-process")
     ap.add_argument("--cli", type=int, default=1_000, help="CLI runs (subprocesses)")
+    ap.add_argument("--flags", type=int, default=1_000, help="runs of every subcommand with random flags (subprocesses)")
+    ap.add_argument("--huge", action="store_true", help="also load huge files of the costliest shapes (time, memory)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=12)
     ap.add_argument("--timeout", type=float, default=120.0, help="seconds per CLI run")
@@ -473,6 +764,17 @@ def main(argv=None) -> int:
     print(f"seeds: {len(seeds)} problems ({sum(s['tiny'] for s in seeds)} tiny, used by the CLI part)")
     summary = {"seed": a.seed, "seeds": len(seeds)}
     bad_all = []
+    if a.huge:
+        work = Path(tempfile.mkdtemp(prefix="nbst-fuzz-huge-"))
+        try:
+            rows = run_huge(work)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        print("huge files (load_problem in a fresh process; peak = its maximum resident memory):")
+        for r in rows:
+            print(f"  {r['shape']:30s} {r['bytes'] / 2**20:6.1f} MiB  load {r['load_s']:>5} s  peak {r['peak_mb']:>4} MB  "
+                  f"{'TRACEBACK ' if r['traceback'] else ''}{r['verdict']}")
+        summary["huge"] = rows
     if a.loader:
         c, bad, dt = run_loader(seeds, a.loader, a.workers, a.seed, 5 if a.keep else 0)
         bad_all += bad
@@ -514,6 +816,31 @@ def main(argv=None) -> int:
                           "json_not_strict": len(nonjson),
                           "exit_codes": {k: dict(v) for k, v in by.items()}}
         bad_all += [(r["cmd"], json.dumps(r["files"]).encode(), r["stderr"]) for r in tb + hang + nonjson + ml + ctrl]
+    if a.flags:
+        res, dt = run_flags(seeds, a.flags, a.workers, a.seed, a.timeout)
+        print(f"flags: {len(res):,} runs in {dt:.0f} s (timeout {a.timeout:g} s per run)")
+        by = collections.defaultdict(collections.Counter)
+        for r in res:
+            by[r["cmd"]][str(r["rc"])] += 1
+        for cmd in FLAG_COMMANDS:
+            print(f"  {cmd:18s} exit codes {dict(sorted(by[cmd].items()))}")
+        tb = [r for r in res if r["traceback"]]
+        hang = [r for r in res if r["rc"] == "timeout"]
+        killed = [r for r in res if isinstance(r["rc"], int) and r["rc"] < 0]
+        stray = [r for r in res if r["stray"]]
+        ml = [r for r in res if r["multiline"]]
+        print(f"  tracebacks {len(tb)}, hangs {len(hang)}, killed by a signal {len(killed)}, runs leaving files "
+              f"outside their named outputs {len(stray)}, multi-line errors {len(ml)}")
+        print(f"  slowest run {max(r['seconds'] for r in res):.1f} s, median "
+              f"{sorted(r['seconds'] for r in res)[len(res) // 2]:.1f} s")
+        for r in (tb + hang + killed + stray + ml)[:10]:
+            last = r["stderr"].strip().splitlines()[-1][:200] if r.get("stderr", "").strip() else ""
+            print(f"  -- {r['cmd']} rc={r['rc']} {' '.join(r['argv'])[:200]}\n     {last} {r['stray'][:3]}")
+        summary["flags"] = {"runs": len(res), "seconds": round(dt, 1), "tracebacks": len(tb), "hangs": len(hang),
+                            "killed": len(killed), "stray_files": len(stray), "multiline_errors": len(ml),
+                            "exit_codes": {k: dict(v) for k, v in by.items()}}
+        bad_all += [(r["cmd"], json.dumps(r["argv"]).encode(), r.get("stderr", "") + str(r["stray"]))
+                    for r in tb + hang + killed + stray + ml]
     if a.keep and bad_all:
         d = Path(a.keep)
         d.mkdir(parents=True, exist_ok=True)
@@ -522,7 +849,7 @@ def main(argv=None) -> int:
             (d / f"bad{i}-{kind}.txt").write_text(why, encoding="utf-8", errors="replace")
         print(f"kept {len(bad_all)} failing inputs in {d}")
     if a.json:
-        from nbst.solution import write_json_atomic
+        from nbst.outputs import write_json_atomic
         write_json_atomic(a.json, summary)
     return 0
 

@@ -27,10 +27,12 @@ MAX_JSON_DEPTH = 64
 #: Most JSON values in one file, counted before parsing as the number of ',', ':', '[' and
 #: '{' bytes (each value but the first is preceded by one of them; inside strings they are
 #: counted too, an over-estimate). Parsed, a value costs 30-200 bytes of Python objects
-#: (an empty list 56, a float 24): this bound keeps a parsed file under ~300 MB however
-#: it is shaped, where 64 MiB of ``[],`` would otherwise take 3.2 GB. The largest file nbst
-#: writes, the shipped bowling atlas, holds ~78,000 (a solution with its history < 10,000).
-MAX_JSON_VALUES = 2_000_000
+#: (an empty list 56, a float 24): this bound keeps a parsed file in a few hundred MB and
+#: a few seconds however it is shaped, where 64 MiB of ``[],`` took 3.2 GB and 36-50 s
+#: (``benchmarks/fuzz_inputs.py --huge`` measures both). The largest file nbst writes, the
+#: shipped bowling atlas, holds ~78,000 (328 subsets; all 1,023 would be ~250,000); a
+#: solution with its history, under 10,000.
+MAX_JSON_VALUES = 1_000_000
 
 #: Longest integer literal (digits): float64 holds 309-digit integers at most;
 #: longer ones cannot be a number nbst uses (Python itself stops at 4300 digits).
