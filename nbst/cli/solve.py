@@ -72,10 +72,10 @@ def register(sub) -> None:
                         "(fresh shifts, polished), which may cost more than a plain solve's "
                         "(signature search only; docs/search.md, \"Robust mode\")")
     p.add_argument("--jobs", type=JOBS, default=None, metavar="K",
-                   help=f"[{JOBS.limits}] independent searches (islands) on K cores, each from its own seed derived from --seed and "
+                   help="independent searches (islands) on K cores, each from its own seed derived from --seed and "
                         "with 1/K of the trial budget, run in lockstep and all stopped at the first round in which "
                         "one reaches the target cost; the best island's solution is written. The same --seed and K "
-                        "give the same solution. Default: every core; 1: a single search in this process")
+                        f"give the same solution. Default: every core; 1: a single search in this process [{JOBS.limits}]")
     p.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help="run islands 1..K-1 as tasks on the workers of this Dask scheduler (tcp://host:8786; "
                         "start one with `dask scheduler` and `dask worker ADDRESS`); island 0 runs here. Same "
