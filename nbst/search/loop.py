@@ -148,67 +148,64 @@ def stop_code(prm, st, best_cost, hist_room):
     return RC_CHUNK_DONE
 
 
+# The per-trial helpers below take plain arrays and scalars, never the NamedTuples: numba copies a
+# tuple argument into an inlined helper (or a call) by taking a reference to each of its arrays,
+# an atomic increment and decrement per array; with ~40 arrays per trial that cost a quarter of the
+# loop's speed (measured, issue 24). The chunk functions unpack their tuples once per chunk.
+
+
 @njit(cache=True, error_model="numpy")
-def evaluate_one(x0, v, pa, R, max_events, scr):
-    """Simulate one candidate v from starts x0 (pa.x0, or shifted ones): (cost, signature,
-    truncated); a truncated run scores inf, 0. Writes scr.fin and scr.vel."""
-    st, _, _, _ = run(x0, v, pa.radius, pa.mass, pa.W, pa.H, pa.t_final, scr.work, scr.fin, scr.vel, max_events,
-                      scr.no_t, scr.no_i, scr.no_i, scr.no_s)
+def evaluate_one(x0, v, radius, mass, target, W, H, t_final, R, max_events, work, fin, vel, no_t, no_i, no_s):
+    # Sixteen parameters on purpose: the per-trial simulation, flat arrays (see above).
+    """Simulate one candidate: (cost, signature, truncated); a truncated run scores inf, 0."""
+    st, _, _, _ = run(x0, v, radius, mass, W, H, t_final, work, fin, vel, max_events, no_t, no_i, no_i, no_s)
     if st != 0:
         return np.inf, np.int64(0), True
-    c, s = cost_signature(scr.fin, pa.target, R)
+    c, s = cost_signature(fin, target, R)
     return c, s, False
 
 
-@njit(cache=True, error_model="numpy")
-def init_child(pa, prm, straight, rng, child):
+@njit(cache=True, inline="always", error_model="numpy")
+def init_child(x0, target, radius, W, H, t_final, images, cue_idx, p_directed, straight, rng, child):
     """Initialize's candidate: each cueable disk directed (all of them when ``straight``) or, with
-    probability 1 - p_directed_init, uniform randomize; noncueable disks at rest."""
+    probability 1 - p_directed, uniform randomize; noncueable disks at rest."""
     child[:, :] = 0.0
-    for q in range(pa.cue_idx.shape[0]):
-        i = pa.cue_idx[q]
-        if straight or rng_uniform(rng) < prm.p_directed_init:
-            directed_velocity(pa.x0, pa.target, pa.t_final, i, child)
+    for q in range(cue_idx.shape[0]):
+        i = cue_idx[q]
+        if straight or rng_uniform(rng) < p_directed:
+            directed_velocity(x0, target, t_final, i, child)
         else:
-            uniform_velocity(pa.x0, pa.radius, pa.W, pa.H, pa.t_final, pa.images, i, rng, child)
+            uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
 
 
-@njit(cache=True, error_model="numpy")
-def select_parent(pop, n, prm, rng, first, scr):
-    """A parent: Senate-like (``prm.senate``) or uniform; ``first`` >= 0 picks the second
+@njit(cache=True, inline="always", error_model="numpy")
+def select_parent(pop, n, senate, rng, first, scr_ord, scr_ok):
+    """A parent: Senate-like (``senate`` != 0) or uniform; ``first`` >= 0 picks the second
     crossover parent (never ``first`` itself)."""
-    if prm.senate != 0:
-        return select_senate(pop, n, rng, first, scr.scr_ord, scr.scr_ok)
+    if senate != 0:
+        return select_senate(pop, n, rng, first, scr_ord, scr_ok)
     return select_uniform(pop, rng, first)
 
 
-@njit(cache=True, error_model="numpy")
-def cross_parents(pop, p1, p2, pa, prm, rng, child):
-    """The crossover child of members p1 and p2 (engineered unless ``prm.engineered`` is 0)."""
-    crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], pa.cue_idx, prm.engineered != 0, rng, child)
-
-
-@njit(cache=True, error_model="numpy")
-def mutate_one(op, i, pa, prm, rng, child):
+@njit(cache=True, inline="always", error_model="numpy")
+def mutate_one(op, i, x0, target, radius, W, H, t_final, images, creep_sigma, rng, child):
     """The paper's one-disk operators on disk i of a copy of the parent: creep, directed or uniform."""
     if op == OP_CREEP:
-        creep_velocity(prm.creep_sigma, i, rng, child)
+        creep_velocity(creep_sigma, i, rng, child)
     elif op == OP_DIRECTED:
-        directed_velocity(pa.x0, pa.target, pa.t_final, i, child)
+        directed_velocity(x0, target, t_final, i, child)
     else:
-        uniform_velocity(pa.x0, pa.radius, pa.W, pa.H, pa.t_final, pa.images, i, rng, child)
+        uniform_velocity(x0, radius, W, H, t_final, images, i, rng, child)
 
 
-@njit(cache=True, error_model="numpy")
-def book_trial(sa, prm, rec_v, child, trunc):
+@njit(cache=True, inline="always", error_model="numpy")
+def book_trial(st, record_every, rec_v, child, trunc):
     """Count one simulated candidate (trials, trials since the best, initialize's trials,
     truncated runs) and record it for ``record_every``."""
-    st = sa.st
     st[ST_TRIALS] += 1
     st[ST_SINCE] += 1
-    rec_k = prm.record_every
-    if rec_k > 0 and st[ST_TRIALS] % rec_k == 0 and st[ST_TRIALS] // rec_k <= rec_v.shape[0]:
-        rec_v[st[ST_TRIALS] // rec_k - 1, :, :] = child
+    if record_every > 0 and st[ST_TRIALS] % record_every == 0 and st[ST_TRIALS] // record_every <= rec_v.shape[0]:
+        rec_v[st[ST_TRIALS] // record_every - 1, :, :] = child
     if st[ST_PHASE] == PHASE_INIT:
         st[ST_INIT_TRIALS] += 1
     if trunc:
@@ -216,11 +213,12 @@ def book_trial(sa, prm, rec_v, child, trunc):
 
 
 @njit(cache=True, error_model="numpy")
-def settle(sa, child, cost, sig, op, p1, p2, prm, scr, n):
+def settle(pop, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng, child, cost, sig, op, p1, p2, prm,
+           scr_ord, acc, n):
+    # Nineteen parameters on purpose: the search state as flat arrays (see above); prm is scalars.
     """Book one simulated candidate (after ``book_trial``): order statistics, an improvement
     of the best (and the history), the insert of initialize or generate, and the end of
     initialize. Shared by this loop and ``nbst.search.nbst_loop``'s."""
-    pop, st, best_cost = sa.pop, sa.st, sa.best_cost
     ist = pop.state
     elitism = prm.elitism != 0
     order = popcount(sig)
@@ -234,21 +232,21 @@ def settle(sa, child, cost, sig, op, p1, p2, prm, scr, n):
         improvement = cost < best_cost[0]
         if improvement:
             best_cost[0] = cost
-            sa.best_v[:, :] = child
+            best_v[:, :] = child
             st[ST_BEST_SIG] = sig
             st[ST_SINCE] = 0
             k = st[ST_NHIST]
-            sa.hist_t[k] = st[ST_TRIALS]
-            sa.hist_c[k] = cost
-            sa.hist_o[k] = order
+            hist_t[k] = st[ST_TRIALS]
+            hist_c[k] = cost
+            hist_o[k] = order
             st[ST_NHIST] = k + 1
             if op >= 0:
-                sa.op_count[op, 1] += 1
+                op_count[op, 1] += 1
         if st[ST_PHASE] == PHASE_INIT:
             insert_initial(pop, child, cost, sig, improvement, elitism, prm.sig_limit, prm.pop_limit)
         else:
             code = insert(pop, child, cost, sig, p1, p2, improvement, elitism, prm.sig_limit, prm.pop_limit,
-                          prm.hard_limit, prm.cull, n, sa.rng, scr.scr_ord)
+                          prm.hard_limit, prm.cull, n, rng, scr_ord)
             if code == INS_CULLED:
                 st[ST_CULLS] += 1
             elif code == INS_FALLBACK:
@@ -258,43 +256,15 @@ def settle(sa, child, cost, sig, op, p1, p2, prm, scr, n):
         if prm.init_population > 0:
             done = done or ist[SIZE] >= prm.init_population
         else:
-            acceptable_counts(pop, n, scr.acc)
+            acceptable_counts(pop, n, acc)
             ok = True
             for i in range(n):
-                if scr.acc[i] < prm.diversity:
+                if acc[i] < prm.diversity:
                     ok = False
                     break
             done = done or ok
         if done:
             st[ST_PHASE] = PHASE_GENERATE
-
-
-@njit(cache=True, error_model="numpy")
-def _make_child(pa, prm, sa, scr, n):
-    """The paper's next candidate into scr.child: initialize's, or one generate operator on
-    Senate-selected parents. Returns (operator or -1, p1, p2)."""
-    pop, st, rng, child = sa.pop, sa.st, sa.rng, scr.child
-    if st[ST_PHASE] == PHASE_INIT:
-        init_child(pa, prm, False, rng, child)
-        return -1, -1, -1
-    w_c = prm.w_creep
-    w_d = w_c + prm.w_directed
-    w_u = w_d + prm.w_uniform
-    w_tot = w_u + prm.w_crossover
-    u = rng_uniform(rng) * w_tot
-    op = OP_CREEP if u < w_c else (OP_DIRECTED if u < w_d else (OP_UNIFORM if u < w_u else OP_CROSSOVER))
-    if op == OP_CROSSOVER and pop.state[SIZE] < 2:
-        op = OP_CREEP  # a lone member cannot be crossed
-    p1 = select_parent(pop, n, prm, rng, -1, scr)
-    p2 = -1
-    if op == OP_CROSSOVER:
-        p2 = select_parent(pop, n, prm, rng, p1, scr)
-        cross_parents(pop, p1, p2, pa, prm, rng, child)
-    else:
-        child[:, :] = pop.vel[p1]
-        mutate_one(op, pa.cue_idx[rng_int(rng, pa.cue_idx.shape[0])], pa, prm, rng, child)
-    sa.op_count[op, 0] += 1
-    return op, p1, p2
 
 
 @njit(cache=True, error_model="numpy")
@@ -305,16 +275,47 @@ def run_chunk(pa, prm, sa, rec_v, n_steps):
     rec_v: (M, N, 2): with prm.record_every = k > 0, the candidate of every k-th trial
            (trial k, 2k, ...) is copied to rec_v[trial / k - 1] while there is room
            (for benchmarks: the exact mix of velocities the loop simulates)
+
+    One trial: make a child (initialize's, or one operator on Senate-selected parents), limit it
+    to the velocity domain, simulate it, count it, settle it.
     """
-    n = pa.x0.shape[0]
-    scr = loop_scratch(n, sa.pop.vel.shape[0])
+    x0, target, radius, mass, cue_idx, _, W, H, t_final, images = pa
+    pop, st, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count = sa
+    n = x0.shape[0]
+    work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = loop_scratch(n, pop.vel.shape[0])
+    ncue = cue_idx.shape[0]
+    w_c = prm.w_creep
+    w_d = w_c + prm.w_directed
+    w_u = w_d + prm.w_uniform
+    w_tot = w_u + prm.w_crossover
     for _ in range(n_steps):
-        rc = stop_code(prm, sa.st, sa.best_cost, sa.hist_t.shape[0])
+        rc = stop_code(prm, st, best_cost, hist_t.shape[0])
         if rc != RC_CHUNK_DONE:
             return rc
-        op, p1, p2 = _make_child(pa, prm, sa, scr, n)
-        limit_crossings(scr.child, pa.cue_idx, pa.radius, pa.W, pa.H, pa.t_final)
-        cost, sig, trunc = evaluate_one(pa.x0, scr.child, pa, prm.R, prm.max_events, scr)
-        book_trial(sa, prm, rec_v, scr.child, trunc)
-        settle(sa, scr.child, cost, sig, op, p1, p2, prm, scr, n)
+        op = -1
+        p1 = -1
+        p2 = -1
+        if st[ST_PHASE] == PHASE_INIT:
+            init_child(x0, target, radius, W, H, t_final, images, cue_idx, prm.p_directed_init, False, rng, child)
+        else:
+            u = rng_uniform(rng) * w_tot
+            op = OP_CREEP if u < w_c else (OP_DIRECTED if u < w_d else (OP_UNIFORM if u < w_u else OP_CROSSOVER))
+            if op == OP_CROSSOVER and pop.state[SIZE] < 2:
+                op = OP_CREEP  # a lone member cannot be crossed
+            p1 = select_parent(pop, n, prm.senate, rng, -1, scr_ord, scr_ok)
+            if op == OP_CROSSOVER:
+                p2 = select_parent(pop, n, prm.senate, rng, p1, scr_ord, scr_ok)
+                crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], cue_idx, prm.engineered != 0, rng,
+                          child)
+            else:
+                child[:, :] = pop.vel[p1]
+                mutate_one(op, cue_idx[rng_int(rng, ncue)], x0, target, radius, W, H, t_final, images,
+                           prm.creep_sigma, rng, child)
+            op_count[op, 0] += 1
+        limit_crossings(child, cue_idx, radius, W, H, t_final)
+        cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, prm.R, prm.max_events, work,
+                                        fin, vel, no_t, no_i, no_s)
+        book_trial(st, prm.record_every, rec_v, child, trunc)
+        settle(pop, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng, child, cost, sig, op, p1, p2, prm,
+               scr_ord, acc, n)
     return RC_CHUNK_DONE

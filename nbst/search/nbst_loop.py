@@ -54,10 +54,10 @@ from numba import njit
 from nbst.search.aim import alloc_clearance, chain_strike_velocity, choose_bank, strike_velocity
 from nbst.search.loop import OP_NAMES as PAPER_OP_NAMES
 from nbst.search.loop import (PHASE_GENERATE, PHASE_INIT, RC_CHUNK_DONE, ST_BEST_SIG, ST_INIT_TRIALS, ST_PHASE,
-                              ST_SINCE, ST_TRIALS, book_trial, cross_parents, evaluate_one, init_child, loop_scratch,
-                              mutate_one, select_parent, settle, stop_code)
-from nbst.search.ops import BEST, NTAB, SIZE, creep_velocity, insert_initial, limit_crossings, popcount, rng_int, \
-    rng_uniform
+                              ST_SINCE, ST_TRIALS, book_trial, evaluate_one, init_child, loop_scratch, mutate_one,
+                              select_parent, settle, stop_code)
+from nbst.search.ops import BEST, NTAB, SIZE, creep_velocity, crossover, insert_initial, limit_crossings, popcount, \
+    rng_int, rng_uniform
 from nbst.search.polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
 from nbst.search.robust import robust_eval
 from nbst.sim.primitives import mirror
@@ -197,136 +197,67 @@ def _restart(sa, prm, na, n_seeds):
     na.qs[QS_RESTARTS] += 1
 
 
-@njit(cache=True, error_model="numpy")
-def _strike(pa, q, sig, rng, xs, child):
+@njit(cache=True, inline="always", error_model="numpy")
+def _strike(x0, radius, mass, target, cue_idx, non_idx, W, H, t_final, bounces, sig, rng, T, out2):
+    # Fourteen parameters on purpose: per-trial helpers take flat arrays (nbst.search.loop's note).
     """Strike operator on a copy of the parent (signature sig): a cueable disk aimed to strike a
     noncueable one (a non-acceptable one half of the time) towards its target or an image of
     it (the image draw favours the target itself, 5/9 for one bounce: module docstring); half
-    of the time (two or more noncueable disks) through a chain. Creep if the aim is impossible."""
-    x0, radius, mass, target, non_idx = pa.x0, pa.radius, pa.mass, pa.target, pa.non_idx
+    of the time (two or more noncueable disks) through a chain. Returns (the cue, the strike
+    time or -1 when the aim is impossible); its velocity is in out2."""
     nnon = non_idx.shape[0]
     s = _pick_disk(non_idx, sig, rng, True)
-    c = pa.cue_idx[rng_int(rng, pa.cue_idx.shape[0])]
-    b = q.strike_bounces
+    c = cue_idx[rng_int(rng, cue_idx.shape[0])]
+    b = bounces
     kx = rng_int(rng, 2 * b + 1) - b
     ky = rng_int(rng, 2 * b + 1) - b
     if abs(kx) + abs(ky) > b:
         kx = 0
         ky = 0
-    T = xs.T
-    T[0] = mirror(target[s, 0], kx, radius[s], pa.W - radius[s])
-    T[1] = mirror(target[s, 1], ky, radius[s], pa.H - radius[s])
+    T[0] = mirror(target[s, 0], kx, radius[s], W - radius[s])
+    T[1] = mirror(target[s, 1], ky, radius[s], H - radius[s])
     if nnon >= 2 and rng_uniform(rng) < 0.5:
         s1 = non_idx[rng_int(rng, nnon)]
         while s1 == s:
             s1 = non_idx[rng_int(rng, nnon)]
         th = chain_strike_velocity(x0[c], radius[c], mass[c], x0[s1], radius[s1], mass[s1], x0[s], radius[s], mass[s],
-                                   T, pa.t_final, xs.out2)
+                                   T, t_final, out2)
     else:
-        th = strike_velocity(x0[c], radius[c], mass[c], x0[s], radius[s], mass[s], T, pa.t_final, xs.out2)
+        th = strike_velocity(x0[c], radius[c], mass[c], x0[s], radius[s], mass[s], T, t_final, out2)
     return c, th
 
 
-@njit(cache=True, error_model="numpy")
-def _plan_route(pa, pl, sig, rng, child):
+@njit(cache=True, inline="always", error_model="numpy")
+def _plan_route(non_idx, route_cue, route_v, route_mask, sig, rng, child):
     """Plan operator: one noncueable disk (a non-acceptable one half of the time) gets a random
     planner route that moves it (any route if none does): that route's cue takes its velocity."""
-    s = _pick_disk(pa.non_idx, sig, rng, True)
+    s = _pick_disk(non_idx, sig, rng, True)
     cnt = 0
-    for r in range(pl.route_cue.shape[0]):
-        if (pl.route_mask[r] >> s) & 1:
+    for r in range(route_cue.shape[0]):
+        if (route_mask[r] >> s) & 1:
             cnt += 1
     if cnt == 0:
-        r = rng_int(rng, pl.route_cue.shape[0])
+        r = rng_int(rng, route_cue.shape[0])
     else:
         k = rng_int(rng, cnt)
         r = 0
         while True:
-            if (pl.route_mask[r] >> s) & 1:
+            if (route_mask[r] >> s) & 1:
                 if k == 0:
                     break
                 k -= 1
             r += 1
-    child[pl.route_cue[r], 0] = pl.route_v[r, 0]
-    child[pl.route_cue[r], 1] = pl.route_v[r, 1]
-
-
-@njit(cache=True, error_model="numpy")
-def _make_child(pa, prm, q, sa, na, pl, scr, xs, n):
-    """nbst's next candidate into scr.child: a planner seed, initialize's (the straight start
-    first), or one operator on selected parents. Returns (operator or -1, p1, p2, the parents'
-    best cost, their highest order, seeded)."""
-    pop, st, rng, child = sa.pop, sa.st, sa.rng, scr.child
-    n_seeds = pl.seeds.shape[0]
-    if st[ST_PHASE] == PHASE_INIT:
-        if st[ST_INIT_TRIALS] < n_seeds:
-            child[:, :] = pl.seeds[st[ST_INIT_TRIALS]]
-            return -1, -1, -1, np.inf, 0, True
-        init_child(pa, prm, q.straight_start != 0 and st[ST_INIT_TRIALS] == n_seeds, rng, child)
-        return -1, -1, -1, np.inf, 0, False
-    op = _pick_op(rng, na.weights)
-    if op == OP_CROSSOVER and pop.state[SIZE] < 2:
-        op = OP_CREEP
-    p1 = select_parent(pop, n, prm, rng, -1, scr)
-    p2 = -1
-    parent_cost = pop.cost[p1]
-    parent_order = popcount(pop.sig[p1])
-    if op == OP_CROSSOVER:
-        p2 = select_parent(pop, n, prm, rng, p1, scr)
-        parent_cost = min(parent_cost, pop.cost[p2])
-        parent_order = max(parent_order, popcount(pop.sig[p2]))
-        cross_parents(pop, p1, p2, pa, prm, rng, child)
-    else:
-        child[:, :] = pop.vel[p1]
-        if op == OP_STRIKE and pa.non_idx.shape[0] > 0:
-            c, th = _strike(pa, q, pop.sig[p1], rng, xs, child)
-            if th > 0.0:
-                child[c, 0] = xs.out2[0]
-                child[c, 1] = xs.out2[1]
-            else:
-                creep_velocity(prm.creep_sigma, c, rng, child)
-        elif op == OP_PLAN and pl.route_cue.shape[0] > 0:
-            _plan_route(pa, pl, pop.sig[p1], rng, child)
-        else:
-            i = _pick_disk(pa.cue_idx, pop.sig[p1], rng, op == OP_BANK)
-            if op == OP_CREEP or op == OP_STRIKE or op == OP_DIRECTED or op == OP_UNIFORM:
-                # a strike without noncueable disks is a creep
-                mutate_one(OP_CREEP if op == OP_STRIKE else op, i, pa, prm, rng, child)
-            else:  # bank (and plan without routes, which its zero weight never picks)
-                choose_bank(i, pa.x0, child, pa.radius, pa.target, pa.W, pa.H, pa.t_final, 0, q.bank_bounces,
-                            xs.clear, rng, xs.out2)
-                child[i, 0] = xs.out2[0]
-                child[i, 1] = xs.out2[1]
-    sa.op_count[op, 0] += 1
-    return op, p1, p2, parent_cost, parent_order, False
-
-
-@njit(cache=True, error_model="numpy")
-def _score(pa, prm, q, na, rd, scr, xs):
-    """Simulate scr.child: (cost, signature, truncated), under robust mode the robust score
-    (its shifted runs counted in qs[QS_ROBUST_SIMS])."""
-    cost, sig, trunc = evaluate_one(pa.x0, scr.child, pa, prm.R, prm.max_events, scr)
-    if q.robust != ROBUST_OFF and not trunc and sig != 0:  # an order-0 candidate is rejected whatever its score
-        c_r, s_r, sims = robust_eval(pa, scr.child, prm.R, prm.max_events, rd, q.robust_shift, cost, sig,
-                                     q.robust == ROBUST_AND, xs.px0, scr)
-        cost = c_r
-        if q.robust == ROBUST_AND:
-            sig = s_r
-        na.qs[QS_ROBUST_SIMS] += sims
-    return cost, sig, trunc
+    child[route_cue[r], 0] = route_v[r, 0]
+    child[route_cue[r], 1] = route_v[r, 1]
 
 
 @njit(cache=True, error_model="numpy")
 def _polish(pa, prm, q, sa, na, rd, scr, xs, cost, sig, seeded):
-    """Polish the promising child scr.child in place (a new best since the restart, or one of
-    the best order within polish_ratio of it); every simulation is a trial, the polish's
-    first (a repeat of the child's) included. Returns its (cost, signature)."""
+    """Polish the promising child scr.child in place (the caller checked polish's trigger);
+    every simulation is a trial, the polish's first (a repeat of the child's) included. Returns
+    its (cost, signature). Called once per polish (~20 simulations), so it may take tuples."""
     order = popcount(sig)
     tol = max(prm.target_cost, 0.0)
-    local = sa.best_cost[1]
-    if not (q.polish != 0 and order > 0 and cost > tol
-            and (cost < local or (order >= popcount(na.qs[QS_LOCAL_SIG]) and cost < q.polish_ratio * local))):
-        return cost, sig
     st, qs, child = sa.st, na.qs, scr.child
     budget = min(q.seed_polish_sims if seeded else q.polish_sims, prm.max_trials - st[ST_TRIALS])
     if budget < 2:
@@ -369,35 +300,108 @@ def run_chunk_nbst(pa, prm, q, sa, na, rd, pl, n_steps):
     restart]. Every simulation is counted: qs[QS_SIMS] (robust mode's shifted runs apart, in
     qs[QS_ROBUST_SIMS]).
 
-    One trial: restart if due, make a child, limit it to the velocity domain, score it,
-    count it, adapt the schedule, maybe polish it, then settle it as the paper's loop does."""
-    n = pa.x0.shape[0]
-    scr = loop_scratch(n, sa.pop.vel.shape[0])
-    xs = NbstScratch(alloc_clearance(n), alloc_polish(n, pa.cue_idx.shape[0], POLISH_EVENT_CAP), np.empty(2),
+    One trial: restart if due; make a child (a planner seed, initialize's, or one operator on
+    selected parents: the paper's steps from nbst.search.loop, or bank, strike, plan); limit it
+    to the velocity domain; score it; count it; adapt the schedule; polish it if promising;
+    settle it as the paper's loop does."""
+    # Length on purpose (~110 lines): the tuples are unpacked once per chunk and the per-trial
+    # steps take flat arrays (nbst.search.loop's note: a tuple per call costs a quarter of the speed).
+    x0, target, radius, mass, cue_idx, non_idx, W, H, t_final, images = pa
+    pop, st, best_cost, best_v, rng, hist_t, hist_c, hist_o, op_count = sa
+    qs, weights, base, reward = na
+    seeds, route_cue, route_v, route_mask = pl
+    n = x0.shape[0]
+    scr = loop_scratch(n, pop.vel.shape[0])
+    work, child, fin, vel, no_t, no_i, no_s, scr_ord, scr_ok, acc = scr
+    xs = NbstScratch(alloc_clearance(n), alloc_polish(n, cue_idx.shape[0], POLISH_EVENT_CAP), np.empty(2),
                      np.empty(2), np.empty((n, 2)), np.empty((n, 2)))
-    st, qs = sa.st, na.qs
+    clear, _, out2, T, _, _ = xs
     no_rec = np.empty((0, n, 2))
+    n_seeds = seeds.shape[0]
+    tol = max(prm.target_cost, 0.0)
     for _ in range(n_steps):
-        rc = stop_code(prm, st, sa.best_cost, sa.hist_t.shape[0])
+        rc = stop_code(prm, st, best_cost, hist_t.shape[0])
         if rc != RC_CHUNK_DONE:
             return rc
         if (q.restart > 0 and st[ST_PHASE] == PHASE_GENERATE and qs[QS_LOCAL_SINCE] >= q.restart
-                and sa.best_cost[0] < np.inf):
-            _restart(sa, prm, na, pl.seeds.shape[0])
-        op, p1, p2, parent_cost, parent_order, seeded = _make_child(pa, prm, q, sa, na, pl, scr, xs, n)
-        limit_crossings(scr.child, pa.cue_idx, pa.radius, pa.W, pa.H, pa.t_final)
-        cost, sig, trunc = _score(pa, prm, q, na, rd, scr, xs)
-        book_trial(sa, prm, no_rec, scr.child, trunc)
+                and best_cost[0] < np.inf):
+            _restart(sa, prm, na, n_seeds)
+        # make a child
+        op = -1
+        p1 = -1
+        p2 = -1
+        parent_cost = np.inf
+        parent_order = 0
+        seeded = st[ST_PHASE] == PHASE_INIT and st[ST_INIT_TRIALS] < n_seeds
+        if seeded:
+            child[:, :] = seeds[st[ST_INIT_TRIALS]]
+        elif st[ST_PHASE] == PHASE_INIT:
+            init_child(x0, target, radius, W, H, t_final, images, cue_idx, prm.p_directed_init,
+                       q.straight_start != 0 and st[ST_INIT_TRIALS] == n_seeds, rng, child)
+        else:
+            op = _pick_op(rng, weights)
+            if op == OP_CROSSOVER and pop.state[SIZE] < 2:
+                op = OP_CREEP
+            p1 = select_parent(pop, n, prm.senate, rng, -1, scr_ord, scr_ok)
+            parent_cost = pop.cost[p1]
+            parent_order = popcount(pop.sig[p1])
+            if op == OP_CROSSOVER:
+                p2 = select_parent(pop, n, prm.senate, rng, p1, scr_ord, scr_ok)
+                parent_cost = min(parent_cost, pop.cost[p2])
+                parent_order = max(parent_order, popcount(pop.sig[p2]))
+                crossover(pop.vel[p1], pop.vel[p2], pop.sig[p1], pop.sig[p2], cue_idx, prm.engineered != 0, rng,
+                          child)
+            else:
+                child[:, :] = pop.vel[p1]
+                if op == OP_STRIKE and non_idx.shape[0] > 0:
+                    c, th = _strike(x0, radius, mass, target, cue_idx, non_idx, W, H, t_final, q.strike_bounces,
+                                    pop.sig[p1], rng, T, out2)
+                    if th > 0.0:
+                        child[c, 0] = out2[0]
+                        child[c, 1] = out2[1]
+                    else:
+                        creep_velocity(prm.creep_sigma, c, rng, child)
+                elif op == OP_PLAN and route_cue.shape[0] > 0:
+                    _plan_route(non_idx, route_cue, route_v, route_mask, pop.sig[p1], rng, child)
+                else:
+                    i = _pick_disk(cue_idx, pop.sig[p1], rng, op == OP_BANK)
+                    if op == OP_CREEP or op == OP_STRIKE or op == OP_DIRECTED or op == OP_UNIFORM:
+                        # a strike without noncueable disks is a creep
+                        mutate_one(OP_CREEP if op == OP_STRIKE else op, i, x0, target, radius, W, H, t_final,
+                                   images, prm.creep_sigma, rng, child)
+                    else:  # bank (and plan without routes, which its zero weight never picks)
+                        choose_bank(i, x0, child, radius, target, W, H, t_final, 0, q.bank_bounces, clear, rng,
+                                    out2)
+                        child[i, 0] = out2[0]
+                        child[i, 1] = out2[1]
+            op_count[op, 0] += 1
+        limit_crossings(child, cue_idx, radius, W, H, t_final)
+        # score it (robust mode: under the start shifts)
+        cost, sig, trunc = evaluate_one(x0, child, radius, mass, target, W, H, t_final, prm.R, prm.max_events, work,
+                                        fin, vel, no_t, no_i, no_s)
+        if q.robust != ROBUST_OFF and not trunc and sig != 0:  # an order-0 candidate is rejected whatever its score
+            c_r, s_r, sims = robust_eval(pa, child, prm.R, prm.max_events, rd, q.robust_shift, cost, sig,
+                                         q.robust == ROBUST_AND, xs.px0, scr)
+            cost = c_r
+            if q.robust == ROBUST_AND:
+                sig = s_r
+            qs[QS_ROBUST_SIMS] += sims
+        book_trial(st, 0, no_rec, child, trunc)
         qs[QS_SIMS] += 1
         qs[QS_LOCAL_SINCE] += 1
+        order = popcount(sig)
         if op >= 0 and q.adapt != 0:
-            _adapt(na.weights, na.base, na.reward, op, cost < parent_cost or popcount(sig) > parent_order,
-                   q.adapt_rate, q.adapt_floor)
-        if not trunc:
+            _adapt(weights, base, reward, op, cost < parent_cost or order > parent_order, q.adapt_rate,
+                   q.adapt_floor)
+        # polish promising children (relative to this restart's best)
+        if (q.polish != 0 and order > 0 and not trunc and cost > tol
+                and (cost < best_cost[1] or (order >= popcount(qs[QS_LOCAL_SIG])
+                                             and cost < q.polish_ratio * best_cost[1]))):
             cost, sig = _polish(pa, prm, q, sa, na, rd, scr, xs, cost, sig, seeded)
-        if popcount(sig) > 0 and cost < sa.best_cost[1]:  # the best since the last restart (polish's reference)
-            sa.best_cost[1] = cost
+        if popcount(sig) > 0 and cost < best_cost[1]:  # the best since the last restart (polish's reference)
+            best_cost[1] = cost
             qs[QS_LOCAL_SIG] = sig
             qs[QS_LOCAL_SINCE] = 0
-        settle(sa, scr.child, cost, sig, op, p1, p2, prm, scr, n)
+        settle(pop, st, best_cost, best_v, hist_t, hist_c, hist_o, op_count, rng, child, cost, sig, op, p1, p2, prm,
+               scr_ord, acc, n)
     return RC_CHUNK_DONE

@@ -55,7 +55,7 @@ _U53 = 1.0 / 9007199254740992.0  # 2**-53
 SEARCH_MAX_CROSSINGS = 0.999 * MAX_BOX_CROSSINGS
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def limit_crossings(v, cue_idx, radius, W, H, t_final):
     """Keep velocities v (N, 2) inside the accepted domain, in place: a cueable disk whose free
     flight would cross the box more than SEARCH_MAX_CROSSINGS times in t_final
@@ -68,10 +68,14 @@ def limit_crossings(v, cue_idx, radius, W, H, t_final):
     seeds, polish steps) goes through it, so a legal problem never yields a refused solution.
     """
     changed = 0
+    half = 0.5 * SEARCH_MAX_CROSSINGS
     for q in range(cue_idx.shape[0]):
         i = cue_idx[q]
         gx = W - 2.0 * radius[i]
         gy = H - 2.0 * radius[i]
+        # fast path (every proposal of a normal search): at most half the limit on each axis
+        if abs(v[i, 0]) * t_final <= half * gx and abs(v[i, 1]) * t_final <= half * gy and gx > 0.0 and gy > 0.0:
+            continue
         hit = False
         if gx <= 0.0 and v[i, 0] != 0.0:
             v[i, 0] = 0.0
@@ -109,7 +113,7 @@ def _rotl(x, k):
     return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rng_next(s):
     """Next uint64 of xoshiro256** (Blackman & Vigna); advances s in place."""
     s0 = s[0]
@@ -131,20 +135,20 @@ def rng_next(s):
     return result
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rng_uniform(s):
     """Uniform float in [0, 1)."""
     return np.float64(rng_next(s) >> np.uint64(11)) * _U53
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rng_int(s, n):
     """Uniform integer in [0, n) (n >= 1)."""
     k = np.int64(rng_uniform(s) * n)
     return k if k < n else n - 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rng_normal(s):
     """Standard normal (Box-Muller, one value per two uniforms)."""
     u1 = 1.0 - rng_uniform(s)  # (0, 1]
@@ -365,7 +369,7 @@ def select_senate(pop, n, rng, first, scratch_ord, scratch_ok):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def select_uniform(pop, rng, exclude):
     """Variant B: every member equally likely (never ``exclude``; -1 excludes none)."""
     size = pop.state[SIZE]
@@ -377,14 +381,14 @@ def select_uniform(pop, rng, exclude):
 
 # --------------------------------------------------------------------------- making children
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def directed_velocity(x0, target, t_final, i, out):
     """Directed randomize: straight to the target, no wall, arriving at t_final."""
     out[i, 0] = (target[i, 0] - x0[i, 0]) / t_final
     out[i, 1] = (target[i, 1] - x0[i, 1]) / t_final
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def uniform_velocity(x0, radius, W, H, t_final, images, i, rng, out):
     """Uniform randomize: the free flight ends at a point uniform over the box
     (centre region [r, W - r] x [r, H - r]), reached through a mirror image (kx, ky)
@@ -401,14 +405,14 @@ def uniform_velocity(x0, radius, W, H, t_final, images, i, rng, out):
     out[i, 1] = (ey - x0[i, 1]) / t_final
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def creep_velocity(sigma, i, rng, out):
     """Creep: add an isotropic normal perturbation (std ``sigma`` units/s per axis)."""
     out[i, 0] += sigma * rng_normal(rng)
     out[i, 1] += sigma * rng_normal(rng)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def crossover(v1, v2, s1, s2, cue_idx, engineered, rng, out):
     """Child velocities from two parents, disk by disk over the cueable disks.
 

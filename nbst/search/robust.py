@@ -136,7 +136,8 @@ def robust_eval(pa, v, R, max_events, rd, shift, cost, sig, stop_early, px0, scr
         if stop_early and sig == 0:
             break
         shift_starts(pa.x0, rd.zeta[k], min(sigma, rd.smax[k]), px0)
-        c, sg, trunc = evaluate_one(px0, v, pa, R, max_events, scr)
+        c, sg, trunc = evaluate_one(px0, v, pa.radius, pa.mass, pa.target, pa.W, pa.H, pa.t_final, R, max_events,
+                                    scr.work, scr.fin, scr.vel, scr.no_t, scr.no_i, scr.no_s)
         sims += 1
         if trunc:
             return np.inf, np.int64(0), sims
@@ -160,7 +161,8 @@ def _score_kernel(pa, V, R, max_events, rd, shift, cost, sig, worst):
                 px0[:, :] = pa.x0
             else:
                 shift_starts(pa.x0, rd.zeta[k - 1], min(sigma, rd.smax[k - 1]), px0)
-            c, sg, trunc = evaluate_one(px0, V[m], pa, R, max_events, scr)
+            c, sg, trunc = evaluate_one(px0, V[m], pa.radius, pa.mass, pa.target, pa.W, pa.H, pa.t_final, R,
+                                        max_events, scr.work, scr.fin, scr.vel, scr.no_t, scr.no_i, scr.no_s)
             cost[m, k] = c
             sig[m, k] = sg
             d = 0.0
