@@ -302,8 +302,8 @@ def write_json_atomic(path, obj: Any, *, option: str = "-o") -> None:
 
 #: The signals nbst handles like Ctrl-C: SIGINT (Ctrl-C), SIGTERM (kill) and SIGHUP (the
 #: terminal closed). The first one stops the work (KeyboardInterrupt: the best so far is
-#: written, partial files removed, workers stopped; the CLI exits 130); later ones only wait
-#: for that cleanup to finish. SIGKILL cannot be handled: workers die with their parent
+#: written, partial files removed, workers stopped; the CLI exits 130); later ones within
+#: INSIST_S seconds only wait for that cleanup to finish. SIGKILL cannot be handled: workers die with their parent
 #: (``die_with_parent``) and stale partial files are removed by the next write.
 STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
 
@@ -411,7 +411,9 @@ def signals_deferred(*, reraise: bool = True) -> Iterator[list]:
         got.append(signum)
         if _Once.active:
             _Once.received += 1
-            if not first:
+            if _Once.received == 1:  # it stops the work once the block is done: later ones wait
+                _Once.stopped_at = time.monotonic()
+            elif not first:
                 _say_finishing()
 
     old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}

@@ -254,3 +254,44 @@ def test_validate_writes_no_partial_report(tmp_path):
         for f in ("report.json", "report.html"):
             assert not (rep / f).exists() or (rep / f).stat().st_size > 0
     _no_partials(tmp_path)
+
+
+# --------------------------------------------------------------------------- the handler itself
+
+def test_interrupt_once_raises_once_then_lets_the_cleanup_finish(monkeypatch):
+    from nbst import outputs
+
+    monkeypatch.setattr(outputs, "INSIST_S", 0.5)
+    before = {s: signal.getsignal(s) for s in STOP}
+    cleaned = []
+    with outputs.interrupt_once():
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGHUP)  # handled like Ctrl-C
+            time.sleep(1)
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):  # a cleanup under more signals
+            os.kill(os.getpid(), sig)
+            time.sleep(0.01)
+        cleaned.append(True)
+        with outputs.signals_deferred() as got:  # a write: held, and not raised again afterwards
+            os.kill(os.getpid(), signal.SIGINT)
+            cleaned.append(True)
+        assert got == [signal.SIGINT]
+        time.sleep(0.6)  # past INSIST_S: a signal stops the work again (the first may have been swallowed)
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(1)
+    assert cleaned == [True, True]
+    assert {s: signal.getsignal(s) for s in STOP} == before  # restored
+
+
+def test_a_signal_during_a_deferred_write_stops_the_work_after_it():
+    from nbst import outputs
+
+    with outputs.interrupt_once():
+        with pytest.raises(KeyboardInterrupt):
+            with outputs.signals_deferred():
+                os.kill(os.getpid(), signal.SIGTERM)
+                written = True
+        assert written
+        os.kill(os.getpid(), signal.SIGINT)  # the cleanup that follows is not cut short
+        time.sleep(0.01)
