@@ -8,7 +8,8 @@ from naive import _pair_time, _wall_time, fold as naive_fold, impulse, mirror_im
 
 from nbst.sim import alloc_work, run
 from nbst.sim.primitives import (IMPACT_NONE, IMPACT_PAIR, IMPACT_WALL, contact_normal, elastic_impulse, fold,
-                                 images, impulse_share, mirror, pair_tau, replay_event, wall_tau)
+                                 images, impulse_share, mirror, pair_tau, replay_event, strike_ratio,
+                                 transferred_speed, wall_tau)
 
 RNG = np.random.default_rng(20260)
 
@@ -71,6 +72,9 @@ def test_elastic_impulse_matches_the_textbook_and_conserves_momentum_and_energy(
     out = elastic_impulse(vi0, 0.0, 0.0, 0.0, 1.0, 0.0, 2.0, 5.0)
     assert out[2] == pytest.approx(impulse_share(2.0, 5.0) * vi0, rel=1e-15)
     assert impulse_share(1.0, 1.0) == 1.0
+    for ms, mt in ((2.0, 5.0), (0.3, 0.3), (7.0, 1.5)):
+        assert transferred_speed(vi0, ms, mt) == pytest.approx(impulse_share(ms, mt) * vi0, rel=1e-15)
+        assert strike_ratio(ms, mt) == pytest.approx(1.0 / impulse_share(ms, mt), rel=1e-15)
 
 
 def test_mirror_matches_repeated_reflection_and_fold_undoes_it():

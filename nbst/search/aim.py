@@ -17,8 +17,7 @@ of centres n = (T - p_s) / |T - p_s| with speed D / (t_final - t_hit), D = |T - 
 c must touch s at q = p_s - (r_c + r_s) n, arriving at t_hit with normal speed
 u = (v_c . n) giving s the speed (2 m_c / (m_c + m_s)) u. With A = (q - p_c).n
 (> 0 for c to approach from behind; then q is c's first contact with s):
-t_hit = A t_final / (A + k D), k = (m_c + m_s) / (2 m_c) (the inverse of
-``nbst.sim.primitives.impulse_share``), v_c = (q - p_c) / t_hit.
+t_hit = A t_final / (A + k D), k = (m_c + m_s) / (2 m_c) (``nbst.sim.primitives.strike_ratio``), v_c = (q - p_c) / t_hit.
 """
 from __future__ import annotations
 
@@ -28,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from nbst.search.ops import rng_uniform
-from nbst.sim.primitives import fold, images, impulse_share, mirror, pair_tau
+from nbst.sim.primitives import fold, images, mirror, pair_tau, strike_ratio
 
 __all__ = ["MAX_PIECES", "alloc_clearance", "all_pieces", "bank_shot", "bank_velocity", "chain_strike_velocity",
            "choose_bank", "count_conflicts", "flight_pieces", "flights_conflict", "fold", "mirror", "path_conflicts",
@@ -245,7 +244,8 @@ def strike_velocity(pc, rc, mc, ps, rs, ms, T, t_final, out):
     A = (qx - pc[0]) * nx + (qy - pc[1]) * ny
     if A <= 0.0:
         return -1.0
-    t_hit = A * t_final / (A + D / impulse_share(mc, ms))
+    k = strike_ratio(mc, ms)
+    t_hit = A * t_final / (A + k * D)
     out[0] = (qx - pc[0]) / t_hit
     out[1] = (qy - pc[1]) / t_hit
     return t_hit
@@ -286,7 +286,7 @@ def chain_strike_velocity(pc, rc, mc, p1, r1, m1, p2, r2, m2, T, t_final, out):
     q1 = p1 - (rc + r1) d with normal speed sigma k1 at t1 = A1/(sigma k1),
     A1 = (q1 - pc).d; and t2 = t1 + L2/sigma. With G = A1/k1 + L2 and c2 = d.n2
     these solve to t2 = G c2 t_final / (G c2 + k2 D2), sigma = G / t2.
-    (k = (m_a + m_b) / (2 m_a) = 1 / ``impulse_share(m_a, m_b)`` for striker a and struck b.)"""
+    (k = (m_a + m_b) / (2 m_a) = ``strike_ratio(m_a, m_b)`` for striker a and struck b.)"""
     D2, n2x, n2y, q2x, q2y = _strike_point(p2, r1 + r2, T)
     if D2 == 0.0:
         return -1.0
@@ -305,12 +305,12 @@ def chain_strike_velocity(pc, rc, mc, p1, r1, m1, p2, r2, m2, T, t_final, out):
     A1 = (q1x - pc[0]) * ddx + (q1y - pc[1]) * ddy
     if A1 <= 0.0:
         return -1.0
-    s1 = impulse_share(mc, m1)  # 1 / k1
-    s2 = impulse_share(m1, m2)  # 1 / k2
-    G = A1 * s1 + L2
-    t2 = G * c2 * t_final / (G * c2 + D2 / s2)
+    k1 = strike_ratio(mc, m1)
+    k2 = strike_ratio(m1, m2)
+    G = A1 / k1 + L2
+    t2 = G * c2 * t_final / (G * c2 + k2 * D2)
     sigma = G / t2
-    t1 = A1 * s1 / sigma
+    t1 = A1 / (sigma * k1)
     out[0] = (q1x - pc[0]) / t1
     out[1] = (q1y - pc[1]) / t1
     return t2

@@ -54,7 +54,7 @@ from numba import njit
 from nbst.constants import MAX_EVENTS
 from nbst.problem import Problem
 from nbst.sim import evaluate_kernel
-from nbst.sim.primitives import fold, images, impulse_share, mirror
+from nbst.sim.primitives import fold, images, impulse_share, mirror, transferred_speed
 
 #: A strike whose arrival direction makes a cosine below this with the line of centres is
 #: rejected: it transfers almost nothing, and its outcome is hypersensitive.
@@ -162,7 +162,7 @@ def chain_aim(x0, radius, mass, target, W, H, t_final, chain, L, imgs, out_v, ou
     for k in range(L):
         a = chain[k]
         b = chain[k + 1]
-        g[k + 1] = g[k] * cs[k] * impulse_share(mass[a], mass[b])
+        g[k + 1] = transferred_speed(g[k] * cs[k], mass[a], mass[b])
     total = D / g[L]
     for k in range(L):
         total += leg[k] / g[k]

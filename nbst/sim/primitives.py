@@ -106,6 +106,22 @@ def impulse_share(m_partner, m_self):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def transferred_speed(u, m_striker, m_struck):
+    """Head-on, a disk at rest struck with normal speed u leaves with u 2 m_striker /
+    (m_striker + m_struck) (``impulse_share(m_striker, m_struck) u``, evaluated in this order,
+    which the planner's closed forms use)."""
+    return u * 2.0 * m_striker / (m_striker + m_struck)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def strike_ratio(m_striker, m_struck):
+    """(m_striker + m_struck) / (2 m_striker) = 1 / ``impulse_share(m_striker, m_struck)``: the
+    normal speed a striker needs per unit of speed it gives a resting disk (the aiming closed
+    forms divide by the transfer this way)."""
+    return (m_striker + m_struck) / (2.0 * m_striker)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def elastic_impulse(vxi, vyi, vxj, vyj, nx, ny, mi, mj):
     """Velocities of disks i and j after a frictionless elastic contact along the unit
     normal (nx, ny) from i to j: (vxi', vyi', vxj', vyj'). A pair that is not approaching
