@@ -49,14 +49,15 @@ def search_kernels() -> tuple:
 
 
 def other_kernels() -> tuple:
-    """The dispatchers of the polish, the Jacobian and the sensitivity report."""
+    """The dispatchers of the Jacobian, the sensitivity report and the planner."""
     from nbst.search.planner import aim_routes
-    from nbst.sim.jacobian import jacobian_from_events, transition_from_events
+    from nbst.sim.jacobian import jacobian_from_events
     from nbst.sim.sensitivity import late_impact_errors
 
-    # not polish_kernel: the commands reach it only inside nbst's loop (compiled with it);
-    # called from Python only by tests, it would stay "cold" after every warm-up.
-    return (jacobian_from_events, transition_from_events, late_impact_errors, aim_routes)
+    # Only kernels that a command calls from Python: polish_kernel runs inside nbst's loop
+    # (compiled with it) and transition_from_events behind transition_jacobian, which no
+    # command calls; listed here, they would stay "cold" after every warm-up.
+    return (jacobian_from_events, late_impact_errors, aim_routes)
 
 
 def compile_message() -> str:

@@ -33,7 +33,10 @@ def good(tmp_path_factory):
 def _main(argv, capsys):
     from nbst.cli import main
 
-    rc = main([str(a) for a in argv])
+    try:
+        rc = main([str(a) for a in argv])
+    except SystemExit as e:  # a flag refused by its argparse type (its domain) at parse time
+        rc = e.code
     err = capsys.readouterr().err.strip().splitlines()
     return rc, [line for line in err if not line.startswith("nbst: note:")]
 
@@ -242,8 +245,8 @@ def test_load_atlas_checks_shapes_and_duplicates(tmp_path):
 # --- render and plot on shot files ------------------------------------------------------------
 
 @pytest.mark.parametrize("flag, value, needle", [
-    ("--fps", "nan", "--fps nan"), ("--fps", "1e9", "--fps 1e+09"), ("--fps", "-5", "--fps -5"),
-    ("--still", "nan", "--still nan"), ("--still", "1e9", "--still 1e+09"), ("--still", "-5", "--still -5"),
+    ("--fps", "nan", "--fps"), ("--fps", "1e9", "--fps"), ("--fps", "-5", "--fps"),
+    ("--still", "nan", "--still"), ("--still", "1e9", "--still"), ("--still", "-5", "--still"),
 ])
 def test_render_shot_flags_have_a_domain(good, tmp_path, capsys, flag, value, needle):
     folder, _ = good
