@@ -252,7 +252,7 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
             pass
         elif cluster is not None:
             _run_dask(specs, todo, cluster, done)
-        elif (workers or os.cpu_count() or 1) <= 1 or len(todo) == 1:
+        elif (workers or os.cpu_count() or 1) <= 1 or len(todo) == 1 or not _spawn_finds_main():
             for i in todo:
                 done(i, run_one(specs[i]))
         else:
@@ -261,6 +261,17 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
         if bar is not None:
             bar.close()
     return results  # type: ignore[return-value]
+
+
+def _spawn_finds_main() -> bool:
+    """Whether spawned workers can start: they re-run the main script from its path, which fails
+    when it has none on disk (``python - <<EOF``, an embedding); the runs are then done in this
+    process (the same results, one at a time)."""
+    main = sys.modules.get("__main__")
+    if getattr(getattr(main, "__spec__", None), "name", None):
+        return True  # python -m ...: found by name
+    path = getattr(main, "__file__", None)
+    return path is None or os.path.isfile(path)
 
 
 def _worker_init(parent_pid: int) -> None:
