@@ -372,7 +372,7 @@ def _argv(cmd: str, pf: Path, sf: Path, out: Path) -> list[str]:
     return {
         "simulate": ["simulate", str(pf), str(sf)],
         "simulate-json": ["simulate", str(pf), str(sf), "--json"],
-        "validate": ["validate", str(pf), str(sf), "--timestep", "0.001", "--report", str(out / "rep")],
+        "validate": ["validate", str(pf), str(sf), "--timestep", "0.001", "--out-dir", str(out / "rep")],
         "mjcf": ["mjcf", str(pf), str(sf), "-o", str(out / "scene.xml")],
         "render": ["render", str(pf), str(sf), "--still", "0", "-o", str(out / "still.png"), "--size", "64x64", "-q"],
         "plot-problem": ["plot", "problem", str(pf), "-o", str(out / "p.png"), "--dpi", "30"],
