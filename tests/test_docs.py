@@ -86,6 +86,9 @@ def steps(doc: Path) -> list[tuple[int, str, str, list[str]]]:
 #: Budgets cut for the test (flag -> largest value used).
 CAPS = {"--max-trials": 3000, "--trials": 300, "--runs": 1, "--max-rollouts": 40, "--per-subset": 4,
         "--patience": 2000}
+#: Budgets added where a doc line leaves the default (a synopsis, or a real long run).
+ADDED = {"solve": (("--max-trials", "3000"),), "experiment": (("--runs", "1"), ("--max-trials", "300")),
+         "bowl solve": (("--max-rollouts", "40"),), "bowl atlas": (("--max-rollouts", "20"),)}
 #: Commands for which exit 1 is a legitimate outcome under a cut budget.
 MAY_FAIL_CHECK = ("bowl solve", "bowl replay", "validate")
 
@@ -118,6 +121,9 @@ def _cut(cmd: str, scratch: Path) -> tuple[list[str] | None, str]:
     sub = words[3:5] if words[1] == "-m" else words[2:4]
     if "--cluster" in words:  # no scheduler here: check that the flags parse
         return words, "parse"
+    for flag, value in ADDED.get(sub[0], ()) + ADDED.get(" ".join(sub), ()):
+        if flag not in words and not (flag == "--max-trials" and "--trials" in words):
+            words += [flag, value]
     if sub[:1] == ["gallery"]:
         words += ["--out-dir", "gallery", "--max-trials", "2000", "diamond-s14-tiny"]
     if sub[:1] == ["render"] and "--size" not in words and "--still" not in words:
