@@ -9,6 +9,9 @@ in slow motion (:data:`SLOW`) from just before the first ball-pin contact.
 
 Compute apart from I/O: :func:`record` returns the motion, :class:`BowlingRenderer`
 returns frames; :func:`render_shot` is the thin writer the CLI calls.
+
+Length: ~525 lines, past the house's ~500: recording, the two cameras and the readout of
+one shot share the scene's meshes and the shot's timing, and read best together.
 """
 from __future__ import annotations
 
