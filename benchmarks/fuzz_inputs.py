@@ -37,8 +37,8 @@ Part 3, subprocesses again: every subcommand (problems, simulate, solve, generat
 validate, mjcf, render of a video, a still and a bowling shot, plot, gallery, bowl solve / atlas /
 replay) with random flags: values that keep the work small, values just outside each flag's
 domain, and hostile ones (NaN, inf, 1e309, 5,000-digit integers, words, hex). Each run has its own
-empty working folder and TMPDIR, its inputs in a folder of their own and its outputs named under
-another. Counted: tracebacks, hangs (timeouts), deaths by a signal, multi-line errors, and runs that
+empty working folder, TMPDIR and HOME (library caches go to one shared folder), its inputs in a
+folder of their own and its outputs named under another. Counted: tracebacks, hangs (timeouts), deaths by a signal, multi-line errors, and runs that
 leave a file anywhere but their named outputs (partial files included) or change an input.
 """
 from __future__ import annotations
@@ -633,8 +633,8 @@ def flag_case(args):
     rng = random.Random(seed * 104_729 + k)
     cmd = FLAG_COMMANDS[k % len(FLAG_COMMANDS)]
     root = base / f"flag{k}"
-    cwd, tmp, inp, out = root / "cwd", root / "tmp", root / "in", root / "out"
-    for d in (cwd, tmp, inp, out):
+    cwd, tmp, inp, out, home = root / "cwd", root / "tmp", root / "in", root / "out", root / "home"
+    for d in (cwd, tmp, inp, out, home):
         d.mkdir(parents=True)
     local = {}
     for name, src in inputs.items():
@@ -642,7 +642,10 @@ def flag_case(args):
         shutil.copyfile(src, local[name])
     before = _tree(inp)
     argv, named = flag_argv(cmd, rng, local, out)
-    env = {**os.environ, "MPLBACKEND": "Agg", "TMPDIR": str(tmp)}
+    # HOME is the run's own too; the libraries' caches (matplotlib's fonts, fontconfig) go to one
+    # shared folder outside the sandbox, made before the runs
+    env = {**os.environ, "MPLBACKEND": "Agg", "TMPDIR": str(tmp), "HOME": str(home),
+           "MPLCONFIGDIR": str(base / "cache" / "matplotlib"), "XDG_CACHE_HOME": str(base / "cache")}
     t0 = time.perf_counter()
     try:
         res = subprocess.run([sys.executable, "-m", "nbst.cli", *argv], capture_output=True, timeout=timeout,
@@ -652,7 +655,7 @@ def flag_case(args):
         rc, se = "timeout", e.stderr or b""
     dt = time.perf_counter() - t0
     err = se.decode("utf-8", "replace")
-    stray = [f"cwd/{f}" for f in _tree(cwd)] + [f"tmp/{f}" for f in _tree(tmp)]
+    stray = [f"cwd/{f}" for f in _tree(cwd)] + [f"tmp/{f}" for f in _tree(tmp)] + [f"home/{f}" for f in _tree(home)]
     after = _tree(inp)
     stray += [f"in/{f} (changed)" for f in after if before.get(f) != after[f]]
     for f in _tree(out):
@@ -692,6 +695,7 @@ def run_flags(seeds, n: int, workers: int, seed: int, timeout: float):
     results = []
     t0 = time.perf_counter()
     try:
+        (base / "cache" / "matplotlib").mkdir(parents=True)
         inputs = make_flag_inputs(base, seeds)
         cases = [(k, seed, timeout, base, inputs) for k in range(n)
                  if "shot" in inputs or FLAG_COMMANDS[k % len(FLAG_COMMANDS)] not in ("bowl-replay", "render-shot")]
