@@ -258,7 +258,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     finally:
         from nbst.outputs import signals_deferred
 
-        with signals_deferred(reraise=False):  # a second Ctrl-C cannot cut the drain short: the islands' best
+        with signals_deferred(reraise=False) as late:  # a Ctrl-C cannot cut the drain short: the islands' best
             if interrupted or rounds.live:
                 rounds.stop_reason = "interrupted" if interrupted else (rounds.stop_reason or "error")
                 rounds.answer_pending()
@@ -270,6 +270,8 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
                 p.join(timeout=5)
                 if p.is_alive():
                     p.kill()
+        if late:  # a signal during the drain: the result says so (the CLI exits 130 with it written)
+            interrupted = True
     results = rounds.results
     if not results:
         raise KeyboardInterrupt  # interrupted before any island had a result: nothing to write
