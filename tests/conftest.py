@@ -40,6 +40,22 @@ def mk():
 #: cache, issue 24): ``pytest -m "not slow"`` leaves them out. Node ids; a parametrized test is
 #: listed per case, or by its base id for all of them.
 SLOW = frozenset({
+    "tests/test_signals.py::test_render_leaves_the_previous_video_and_no_partial_file",
+    "tests/test_signals.py::test_solve_writes_the_best_so_far_whatever_the_signals",
+    "tests/test_signals.py::test_experiment_keeps_only_whole_run_files",
+    "tests/test_signals.py::test_solve_islands_die_with_their_parent_on_sigkill",
+    "tests/test_signals.py::test_validate_writes_no_partial_report",
+    "tests/test_signals.py::test_interrupt_once_raises_once_then_lets_the_cleanup_finish",
+    "tests/test_search.py::test_where_the_crossing_bound_stops_the_event_cap_still_holds",
+    "tests/test_baselines.py::test_meta_and_history",
+    "tests/test_experiments.py::test_dask_cluster_equals_local",
+    "tests/test_hardening_inputs.py::test_a_huge_file_of_any_shape_is_refused_fast_and_small",
+    "tests/test_render_cli.py::test_figure_legends_sit_outside_the_box",
+    "tests/test_hardening_inputs.py::test_report_html_escapes_the_name",
+    "tests/test_hardening_inputs.py::test_validate_json_outputs_are_strict",
+    "tests/test_models.py::test_report_legends_never_cover_data",
+    "tests/test_aim.py::test_bank_shot_lands_exactly_when_the_path_is_clear",
+    "tests/test_render_cli.py::test_3d_view_writes_a_still_and_a_short_video",
     "tests/test_aim.py::test_bank_shot_lands_exactly_when_the_path_is_clear[0-0]",
     "tests/test_aim.py::test_generate_cli",
     "tests/test_baselines.py::test_budget_is_exact[cma]",

@@ -18,7 +18,7 @@ import sys
 import time
 from pathlib import Path
 
-from nbst.cli.args import int_at_least
+from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_out_dir, add_seed
 from nbst.parallel import default_jobs
 
@@ -61,6 +61,12 @@ def _leave(text: str) -> int:
 
 #: How many launches ``search.robustness`` spends (2 axes; per axis 4 at the largest change and,
 #: when that fails, 10 bisection rounds of 4): stated in --help, measured in each shot's file.
+#: Launch budgets, capped at 1e7: 500x `bowl atlas`'s default budget; past it a typo (an
+#: extra zero or ten) is likelier than a plan.
+SOLVE_ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
+ATLAS_ROLLOUTS = Bounded("max-rollouts", 0, 10_000_000, integer=True)
+PER_SUBSET = Bounded("per-subset", 1, 10_000_000, integer=True)
+
 ROBUSTNESS_ROLLOUTS = (2 * 4, 2 * (4 + 10 * 4))
 
 
@@ -89,9 +95,9 @@ def register(sub) -> None:
                       help="pins to leave standing, as bowlers name a leave: --leave 7,10 is the 7-10 split "
                            "(every other pin down); 'none' = a strike")
     s.add_argument("-o", "--output", required=True, metavar="SHOT.json", help="where to write the shot")
-    add_seed(s, type=int_at_least(0, "seed"), resumable=False)
-    s.add_argument("--max-rollouts", type=int_at_least(1, "max rollouts"), default=3000, metavar="N",
-                   help="launch budget (default 3000)")
+    add_seed(s, type=SEED, resumable=False)
+    s.add_argument("--max-rollouts", type=SOLVE_ROLLOUTS, default=3000, metavar="N",
+                   help=with_limits("launch budget (default 3000)", SOLVE_ROLLOUTS))
     _runner_args(s, "the same shot as --jobs for the same seed")
     s.add_argument("--distance", choices=("hamming", "geometry"), default="hamming",
                    help="distance between subsets that ranks restart points: hamming (pins that differ; "
@@ -130,19 +136,21 @@ def register(sub) -> None:
                                     "DIR/summary.md (+ .csv, + .png: every subset found as a triangle) and "
                                     "DIR/atlas.json. Rerunning resumes: the shots already in DIR are the archive.")
     add_out_dir(a, dest="out", required=True, old=("--out",), help="output folder")
-    a.add_argument("--max-rollouts", type=int_at_least(0, "max rollouts"), default=20000, metavar="N",
-                   help="search launch budget of this run (default 20000; robustness probes not counted)")
+    a.add_argument("--max-rollouts", type=ATLAS_ROLLOUTS, default=20000, metavar="N",
+                   help=with_limits("search launch budget of this run (default 20000; robustness probes not "
+                                    "counted)", ATLAS_ROLLOUTS))
     a.add_argument("--method", choices=("elites", "targeted", "uniform"), default="elites",
                    help="how to spend the budget (default elites)")
-    a.add_argument("--per-subset", type=int_at_least(1, "per-subset"), default=200, metavar="N",
-                   help="--method targeted: launch budget of each targeted solve (default 200)")
+    a.add_argument("--per-subset", type=PER_SUBSET, default=200, metavar="N",
+                   help=with_limits("--method targeted: launch budget of each targeted solve (default 200)",
+                                    PER_SUBSET))
     a.add_argument("--from", dest="from_atlas", metavar="ATLAS.json", default=None,
                    help="start from the shots of this atlas file (e.g. models/bowling/atlas.json): they are "
                         "written into DIR first (those not there yet), then the search resumes from them")
     a.add_argument("--robustness-only", action="store_true",
                    help="no search: add the robustness to every shot in DIR that lacks it, then the summary")
     a.add_argument("--no-robustness", action="store_true", help="write new shots without the robustness probes")
-    add_seed(a, type=int_at_least(0, "seed"), resumable=True)
+    add_seed(a, type=SEED, resumable=True)
     _runner_args(a, "the same shots as --jobs for the same seed and folder")
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     a.set_defaults(func=cmd_atlas)
@@ -151,8 +159,8 @@ def register(sub) -> None:
 def _runner_args(parser, same: str) -> None:
     """--jobs K | --cluster ADDRESS: where the rollouts run (see :func:`launcher`)."""
     g = parser.add_mutually_exclusive_group()
-    g.add_argument("--jobs", type=int_at_least(1, "jobs"), default=None, metavar="K",
-                   help="threads running rollouts (default: all cores)")
+    g.add_argument("--jobs", type=JOBS, default=None, metavar="K",
+                   help=with_limits("threads running rollouts (default: all cores)", JOBS))
     g.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help=f"run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; {same}")
 
