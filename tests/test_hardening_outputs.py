@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from procs import children, running
 
 from nbst.cli import main
 from nbst.outputs import (OutputError, partial_path, refuse_same_file, remove_stale_partials, signals_deferred,
@@ -245,26 +246,6 @@ def test_render_sigterm_removes_its_partial_video(tmp_path):
     assert not list(tmp_path.glob(".v.*")) and not (tmp_path / "v.mp4").exists()
 
 
-def _children(pid: int) -> list[int]:
-    out = []
-    for d in os.listdir("/proc"):
-        if d.isdigit():
-            try:
-                fields = Path(f"/proc/{d}/stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[1]) == pid:
-                out.append(int(d))
-    return out
-
-
-def _running(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
-
-
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the process table from /proc")
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
 def test_experiment_workers_die_with_their_parent(tmp_path, sig):
@@ -272,14 +253,14 @@ def test_experiment_workers_die_with_their_parent(tmp_path, sig):
     proc = subprocess.Popen([*NBST, "experiment", "curves", p, "--runs", "3", "--max-trials", "1000000000",
                              "--jobs", "2", "--out-dir", str(tmp_path / "exp"), "--quiet"],
                             stderr=subprocess.PIPE, text=True)
-    assert _wait_for(lambda: len(_children(proc.pid)) >= 2, 60), "the worker pool did not start"
-    kids = _children(proc.pid)
+    assert _wait_for(lambda: len(children(proc.pid)) >= 2, 60), "the worker pool did not start"
+    kids = children(proc.pid)
     time.sleep(0.5)  # let the workers get into their initializer and the search
     proc.send_signal(sig)
     rc = proc.wait(30)
     assert rc == (130 if sig == signal.SIGTERM else -signal.SIGKILL)
     # PR_SET_PDEATHSIG kills them at once; the getppid watchdog within a second
-    assert _wait_for(lambda: not any(_running(k) for k in kids), 10), [k for k in kids if _running(k)]
+    assert _wait_for(lambda: not any(running(k) for k in kids), 10), [k for k in kids if running(k)]
     if sig == signal.SIGTERM:
         err = proc.stderr.read()
         assert err.strip() == "nbst: interrupted", err

@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 
 import pytest
+from procs import children, running
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
                                 reason="reads the process table from /proc; SIGHUP and ptys are POSIX")
@@ -45,26 +46,6 @@ def _slow_files(tmp_path, t_final=2.0, speed=20.0):
     s = tmp_path / "s.json"
     s.write_text(json.dumps({"problem": "slow", "velocities": [[speed, 0.0], [0.0, speed]]}))
     return str(p), str(s)
-
-
-def _children(pid: int) -> list[int]:
-    out = []
-    for d in os.listdir("/proc"):
-        if d.isdigit():
-            try:
-                fields = Path(f"/proc/{d}/stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[1]) == pid:
-                out.append(int(d))
-    return out
-
-
-def _running(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
 
 
 def _wait_for(cond, timeout: float) -> bool:
@@ -162,8 +143,8 @@ def test_solve_writes_the_best_so_far_whatever_the_signals(tmp_path, jobs, case)
                "--target-cost", "0", "--seed", str(case)], tmp_path)
     assert run.wait_output(b"trial"), run.err.decode(errors="replace")[-500:]  # the search reports progress
     if jobs > 1:
-        assert _wait_for(lambda: _children(run.proc.pid), 60), "no island worker started"
-    kids = _children(run.proc.pid)
+        assert _wait_for(lambda: children(run.proc.pid), 60), "no island worker started"
+    kids = children(run.proc.pid)
     sent = run.signals(rng)
     rc, err = run.finish()
     _check_exit(rc, err, sent)
@@ -173,7 +154,7 @@ def test_solve_writes_the_best_so_far_whatever_the_signals(tmp_path, jobs, case)
     assert sol.meta["stopped"] == "interrupted", (sent, sol.meta["stopped"])
     assert "best so far written" in err, (sent, err[-500:])
     _no_partials(tmp_path)
-    assert _wait_for(lambda: not any(_running(k) for k in kids), 10), (sent, kids)
+    assert _wait_for(lambda: not any(running(k) for k in kids), 10), (sent, kids)
 
 
 def test_solve_islands_die_with_their_parent_on_sigkill(tmp_path):
@@ -181,14 +162,14 @@ def test_solve_islands_die_with_their_parent_on_sigkill(tmp_path):
                              "1000000000", "--patience", "0", "--target-cost", "0", "-q"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        assert _wait_for(lambda: _children(proc.pid), 90), "no island worker started"
-        kids = _children(proc.pid)
+        assert _wait_for(lambda: children(proc.pid), 90), "no island worker started"
+        kids = children(proc.pid)
         time.sleep(0.3)
     finally:
         proc.kill()
         proc.wait()
     # PR_SET_PDEATHSIG kills them at once; the getppid watchdog within half a second
-    assert _wait_for(lambda: not any(_running(k) for k in kids), 10), [k for k in kids if _running(k)]
+    assert _wait_for(lambda: not any(running(k) for k in kids), 10), [k for k in kids if running(k)]
 
 
 # --------------------------------------------------------------------------- render
@@ -223,7 +204,7 @@ def test_experiment_keeps_only_whole_run_files(tmp_path):
                "--jobs", "2", "--out-dir", str(exp), "-q"], tmp_path)
     assert _wait_for(lambda: len(list(exp.glob("runs/*/*/*.json"))) >= 2 or run.proc.poll() is not None, 120)
     assert run.proc.poll() is None, run.finish()
-    kids = _children(run.proc.pid)
+    kids = children(run.proc.pid)
     sent = run.signals(rng)
     rc, err = run.finish()
     _check_exit(rc, err, sent)
@@ -233,7 +214,7 @@ def test_experiment_keeps_only_whole_run_files(tmp_path):
         d = json.loads(f.read_text())
         assert d["kind"] == "nbst-experiment-run" and "history" in d, f
     _no_partials(tmp_path)
-    assert _wait_for(lambda: not any(_running(k) for k in kids), 10), (sent, kids)
+    assert _wait_for(lambda: not any(running(k) for k in kids), 10), (sent, kids)
 
 
 # --------------------------------------------------------------------------- validate
