@@ -76,12 +76,14 @@ T_FINAL_MIN, T_FINAL_MAX = 1e-6, 1e6
 #: above round-off of the box's coordinates).
 
 #: Most box crossings one disk may make on its own in t_final:
-#: |vx| t / (W - 2r) + |vy| t / (H - 2r). Each crossing is a wall event, so even
-#: all 63 disks at this limit (63,000 wall events) stay within half the simulator's
-#: event cap (MAX_EVENTS = 200,000), leaving the rest for collisions, and the
-#: reports and figures that draw every event stay quick. 1,000 crossings is far
-#: past any useful shot (the search's randomize reaches 6). A disk as wide as the
-#: box (W = 2r) may not move along that axis at all (infinitely many bounces).
+#: |vx| t / (W - 2r) + |vy| t / (H - 2r). Each crossing is a wall event, so disks
+#: that meet nothing make at most 63,000 wall events (all 63 at this limit), within half
+#: the simulator's event cap (MAX_EVENTS = 200,000). The bound stops at collisions: one
+#: can turn a run along a long box's length into bounces across its narrow side (a
+#: 1e9 x 2001 box: ~1e8 of them), so the commands refuse a solution whose motion
+#: truncates, in one line (``nbst.cli.args.exact_motion``), and the search never keeps
+#: one (cost inf). 1,000 crossings is far past any useful shot (the search's randomize
+#: reaches 6). A disk as wide as the box (W = 2r) may not move along that axis at all.
 MAX_BOX_CROSSINGS = 1_000
 
 

@@ -469,3 +469,22 @@ def test_validate_json_outputs_are_strict(tmp_path, capsys):
     assert main(["validate", str(pf), str(sf), "--json", "--report", str(rep)]) == 0
     _strict(capsys.readouterr().out)
     _strict((rep / "report.json").read_text())
+
+
+@pytest.mark.parametrize("cmd", [["simulate"], ["validate"], ["render", "--still", "1", "-o", "x.png"],
+                                 ["plot", "trajectories", "-o", "p.png"]])
+def test_a_solution_that_cannot_be_simulated_to_the_end_is_refused_up_front(cmd, tmp_path, capsys, monkeypatch):
+    """Every accepted solution simulates without truncation, or is refused in one line (exit 2):
+    one collision in a 1e9 x 2001 box sends a disk bouncing across the narrow side past the cap."""
+    monkeypatch.chdir(tmp_path)
+    p = {"name": "long", "box": [1e9, 2001], "t_final": 5.0, "target_radius": 75.0,
+         "disks": [{"start": [2000, 1000.2], "target": [5e8, 1000.5], "radius": 1000},
+                   {"start": [5e8, 1000.8], "target": [8e8, 1000.2], "radius": 1000}]}
+    (tmp_path / "long.json").write_text(json.dumps(p))
+    (tmp_path / "sol.json").write_text(json.dumps({"velocities": [[999 * (1e9 - 2000) / 5, 0.0], [0.0, 0.0]]}))
+    argv = cmd[:2] if cmd[0] == "plot" else cmd[:1]
+    rc = main(argv + ["long.json", "sol.json"] + (cmd[2:] if cmd[0] == "plot" else cmd[1:]))
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert "sol.json: velocities: the motion stops at t =" in err[0] and "cannot simulate it to the end" in err[0]
+    assert not list(tmp_path.glob("*.png"))

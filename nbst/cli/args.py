@@ -128,3 +128,22 @@ def print_json(obj) -> None:
     """Print ``obj`` as strict JSON: NaN -> null, +/-inf -> "inf"/"-inf" (``docs/formats.md``)."""
     from nbst.solution import dumps_strict
     sys.stdout.write(dumps_strict(obj, indent=1) + "\n")
+
+
+def exact_motion(problem, solution_path, velocities):
+    """The exact motion of a solution file's velocities, or a ProblemError naming the file (one
+    line, exit 2) when nbst cannot follow it to t_final: the event cap (``MAX_EVENTS``) or a jam
+    of disks pinned between opposite walls. Every solution a command accepts simulates to the
+    end, or is refused here, before any work that would use the motion."""
+    from nbst.constants import MAX_EVENTS
+    from nbst.sim import simulate
+
+    tr = simulate(problem, velocities)
+    if tr.truncated:
+        why = ("a jam: disks pinned between opposite walls bounce without end" if tr.stalled else
+               f"it needs more than {MAX_EVENTS:,} events")
+        raise ProblemError(str(solution_path), "velocities",
+                           f"the motion stops at t = {tr.end_time:.6g} s, before t_final = {problem.t_final:g} s "
+                           f"({why}); nbst cannot simulate it to the end")
+    return tr
+

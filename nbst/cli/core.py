@@ -63,12 +63,11 @@ def _clip(s: str, n: int) -> str:
 
 
 def cmd_simulate(args) -> int:
-    from nbst.cli.args import print_json
-    from nbst.sim import simulate
+    from nbst.cli.args import exact_motion, print_json
 
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)
-    tr = simulate(problem, sol.velocities)
+    tr = exact_motion(problem, args.solution, sol.velocities)
     if args.json:
         print_json({
             "problem": problem.name,
@@ -86,10 +85,6 @@ def cmd_simulate(args) -> int:
     print(f"cost       {tr.cost:.6g}  (sum of squared distances to targets)")
     print(f"signature  {tr.signature_string}  order {tr.order}/{problem.n}")
     print(f"events     {tr.n_disk_disk} disk-disk, {tr.n_wall} wall")
-    if tr.truncated:
-        why = "a jam: disks pinned between opposite walls" if tr.stalled else "the event limit was reached"
-        print(f"warning    the motion stops at t = {tr.end_time:g} s, before t_final ({why}); "
-              "positions are held there")
     print(f"disk  final x     final y     target x    target y    distance  within R = {problem.target_radius:g}")
     d = ((tr.final_positions - problem.target) ** 2).sum(axis=1) ** 0.5
     for i in range(problem.n):

@@ -92,9 +92,19 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_gallery)
 
 
-def _velocities(problem, solution):
+def _velocities(problem, solution, *, whole_motion: bool = False):
+    """A solution file's velocities (None without one); with ``whole_motion``, refused in one
+    line when nbst cannot simulate them to t_final (``nbst.cli.args.exact_motion``)."""
     from nbst.solution import load_solution
-    return load_solution(solution, problem).velocities if solution else None
+
+    if not solution:
+        return None
+    v = load_solution(solution, problem).velocities
+    if whole_motion:
+        from nbst.cli.args import exact_motion
+
+        exact_motion(problem, solution, v)
+    return v
 
 
 def cmd_mjcf(args) -> int:
@@ -125,7 +135,7 @@ def cmd_validate(args) -> int:
     from nbst.models.validate import LADDER, validate
 
     problem = load_problem(args.problem)
-    v = _velocities(problem, args.solution)
+    v = _velocities(problem, args.solution, whole_motion=True)
     max_steps = args.max_steps or MAX_STEPS
     try:
         check_steps(problem.t_final, args.timestep, max_steps)  # before any work: memory grows with the steps

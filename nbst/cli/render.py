@@ -111,6 +111,7 @@ def parse_size(s: str) -> tuple[int, int]:
 def cmd_render(args) -> int:
     from pathlib import Path
 
+    from nbst.cli.args import exact_motion
     from nbst.problem import load_problem
     from nbst.solution import load_solution
 
@@ -158,6 +159,7 @@ def cmd_render(args) -> int:
 
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)
+    exact_motion(problem, args.solution, sol.velocities)  # one line, before any work, if it truncates
     if args.still is not None and not (0 <= args.still <= problem.t_final):
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
     try:  # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
@@ -195,11 +197,7 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
     from nbst.render.gl import create_context
     from nbst.render.video import frame_times, render_video, write_png
 
-    tr = simulate(problem, sol.velocities)
-    if tr.truncated:
-        print("nbst render: warning: the simulation stopped before t_final (" + ("a jam: disks pinned between "
-              "opposite walls" if tr.stalled else "its event limit") + f"); frames after its last event "
-              f"(t = {tr.end_time:.4g} s) hold the disks there", file=sys.stderr)
+    tr = simulate(problem, sol.velocities)  # never truncated: cmd_render refused that up front
     if kind == "png":
         times = np.array([float(args.still)])
     else:
@@ -296,13 +294,13 @@ def cmd_plot_trajectories(args) -> int:
 
     if (rc := _not_bowling(args)) is not None:
         return rc
-    from nbst.sim import simulate
+    from nbst.cli.args import exact_motion
     from nbst.solution import load_solution
 
     from nbst.render.figures import plot_trajectories, save_figure
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)
-    fig = plot_trajectories(problem, simulate(problem, sol.velocities))
+    fig = plot_trajectories(problem, exact_motion(problem, args.solution, sol.velocities))
     return _save(fig, args, save_figure)
 
 
