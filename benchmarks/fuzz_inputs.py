@@ -748,6 +748,17 @@ def run_huge(work: Path) -> list[dict]:
 
 # --------------------------------------------------------------------------- main
 
+
+def print_exit_codes(res: list, commands) -> dict:
+    """Print each command's exit codes over the runs ``res``; return them by command."""
+    by = collections.defaultdict(collections.Counter)
+    for r in res:
+        by[r["cmd"]][str(r["rc"])] += 1
+    for cmd in commands:
+        print(f"  {cmd:18s} exit codes {dict(sorted(by[cmd].items()))}")
+    return by
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--loader", type=int, default=100_000, help="inputs fed to the loader in-process")
@@ -797,11 +808,7 @@ def main(argv=None) -> int:
     if a.cli:
         res, dt = run_cli(seeds, a.cli, a.workers, a.seed, a.timeout)
         print(f"cli: {len(res):,} runs in {dt:.0f} s (timeout {a.timeout:g} s per run)")
-        by = collections.defaultdict(collections.Counter)
-        for r in res:
-            by[r["cmd"]][str(r["rc"])] += 1
-        for cmd in COMMANDS:
-            print(f"  {cmd:18s} exit codes {dict(sorted(by[cmd].items()))}")
+        by = print_exit_codes(res, COMMANDS)
         tb = [r for r in res if r["traceback"]]
         hang = [r for r in res if r["rc"] == "timeout"]
         ml = [r for r in res if r["multiline"]]
@@ -823,11 +830,7 @@ def main(argv=None) -> int:
     if a.flags:
         res, dt = run_flags(seeds, a.flags, a.workers, a.seed, a.timeout)
         print(f"flags: {len(res):,} runs in {dt:.0f} s (timeout {a.timeout:g} s per run)")
-        by = collections.defaultdict(collections.Counter)
-        for r in res:
-            by[r["cmd"]][str(r["rc"])] += 1
-        for cmd in FLAG_COMMANDS:
-            print(f"  {cmd:18s} exit codes {dict(sorted(by[cmd].items()))}")
+        by = print_exit_codes(res, FLAG_COMMANDS)
         tb = [r for r in res if r["traceback"]]
         hang = [r for r in res if r["rc"] == "timeout"]
         killed = [r for r in res if isinstance(r["rc"], int) and r["rc"] < 0]

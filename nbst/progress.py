@@ -59,22 +59,11 @@ class LineProgress:
     def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
         self.postfix = str(s)
 
-    def set_description(self, desc: str = "", refresh: bool = True) -> None:
-        self.desc = str(desc)
-
-    def refresh(self) -> None:
-        pass
-
     def close(self) -> None:
         if not self._closed:
             self._closed = True
             self._emit()
 
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
 
 def progress_bar(**kw):

@@ -152,8 +152,7 @@ def _prepare(scratch: Path) -> None:
     subprocess.run([PY, "-m", "nbst.cli", "solve", "over5", "-o", "sol.json", "--seed", "1", "--max-trials",
                     "3000", "--jobs", "1", "-q"], cwd=scratch, check=True, timeout=TIMEOUT)
     (scratch / "solution.json").write_bytes((scratch / "sol.json").read_bytes())
-    v = [[0.0, 0.0]] * 5
-    v = [list(x) for x in v]
+    v = [[0.0, 0.0] for _ in range(5)]
     v[2] = [3, 0]
     (scratch / "bad.json").write_text(json.dumps({"velocities": v}))
 

@@ -1,7 +1,7 @@
 """``nbst experiment``: cost curves (the paper's Figures 5/6), the ablation (Figures 7/8) and
 comparisons over problem sets, with runs in parallel locally or on a Dask cluster.
 
-Every finished run is kept as ``OUT/runs/<problem>/<entry>/t<trials>-s<seed>.json``; running
+Every finished run is kept as ``DIR/runs/<problem>/<entry>/t<trials>-s<seed>.json``; running
 the same command again reuses them (only missing runs are run), so a crashed or
 interrupted sweep resumes where it stopped, and commands share runs (the ablation's A runs
 are the curves' A runs when seeds and budgets agree).
@@ -55,14 +55,14 @@ def register(sub) -> None:
     c = s.add_parser("curves", help="best-so-far cost against trials (PNG, SVG, CSV)",
                      description="Best cost so far against trials for R runs of each entry (the paper's "
                                  "Figures 5 and 6: six runs of its search, entry A). Writes "
-                                 "OUT/curves-PROBLEM.{csv,png,svg}.")
+                                 "DIR/curves-PROBLEM.{csv,png,svg}.")
     c.add_argument("problem", help="built-in name or path to a problem JSON file")
     _common(c, runs=6, trials=200_000, entries="A")
     c.set_defaults(func=cmd_curves)
     a = s.add_parser("ablation", help="mean / best / worst final cost per variant and baseline",
                      description="Final cost (average, best and worst of R runs) of variants A-H, nbst's "
                                  "default search and each baseline (the paper's Figures 7 and 8: five runs of "
-                                 "400,000 trials). Writes OUT/ablation-PROBLEM.{csv,md,png,svg}.")
+                                 "400,000 trials). Writes DIR/ablation-PROBLEM.{csv,md,png,svg}.")
     a.add_argument("problem", help="built-in name or path to a problem JSON file")
     _common(a, runs=5, trials=400_000, entries=",".join(("A", "B", "C", "D", "E", "F", "G", "H", "nbst", "nbst-noplan", "cma",
                                                          "de", "ga", "random")))
@@ -72,7 +72,7 @@ def register(sub) -> None:
                                  "names, or folders of *.json such as planted instances from `nbst generate`). "
                                  "A run is solved at its first trial with every disk within R (or, with "
                                  "--target-cost C, its first with cost <= C; runs then stop there). Writes "
-                                 "OUT/compare-NAME.{csv,md} and OUT/compare-NAME-runs.csv.")
+                                 "DIR/compare-NAME.{csv,md} and DIR/compare-NAME-runs.csv.")
     m.add_argument("problems", nargs="+", help="problems: built-in names, JSON files or folders of them")
     _common(m, runs=1, trials=100_000, entries="nbst,A,cma,de,ga,random")
     m.add_argument("--target-cost", type=TARGET_COST, default=None, metavar="C",

@@ -159,7 +159,7 @@ def cmd_render(args) -> int:
 
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)
-    exact_motion(problem, args.solution, sol.velocities)  # one line, before any work, if it truncates
+    tr = exact_motion(problem, args.solution, sol.velocities)  # one line, before any work, if it truncates
     if args.still is not None and not (0 <= args.still <= problem.t_final):
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
     try:  # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
@@ -182,22 +182,19 @@ def cmd_render(args) -> int:
     prepare_output(out, inputs=(args.problem, args.solution))
     try:
         with sigterm_as_interrupt():  # kill: the partial video is removed as on Ctrl-C
-            return _render(args, problem, sol, out, kind, size, fps)
+            return _render(args, problem, tr, out, kind, size, fps)
     except RenderError as e:
         return _err("render", str(e))
 
 
-def _render(args, problem, sol, out, kind, size, fps) -> int:
+def _render(args, problem, tr, out, kind, size, fps) -> int:
     import time
 
     import numpy as np
 
-    from nbst.sim import simulate
-
     from nbst.render.gl import create_context
     from nbst.render.video import frame_times, render_video, write_png
 
-    tr = simulate(problem, sol.velocities)  # never truncated: cmd_render refused that up front
     if kind == "png":
         times = np.array([float(args.still)])
     else:
@@ -209,7 +206,7 @@ def _render(args, problem, sol, out, kind, size, fps) -> int:
         if not args.quiet:
             print(f"nbst render: replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo ...",
                   file=sys.stderr, flush=True)
-        mj = SampledMotion(sample_t, mujoco_positions(problem, sol.velocities, sample_t))
+        mj = SampledMotion(sample_t, mujoco_positions(problem, tr.initial_velocities, sample_t))
         motion, ghost = (mj, None) if args.source == "mujoco" else (tr, mj)
     ctx = create_context()
     try:
