@@ -4,9 +4,12 @@ The search's choices (what the paper leaves open) live in ``nbst.search``'s
 parameter table; this module holds those of the problem model and simulator.
 """
 
-#: Most disks in one problem. Signatures are int64 bitmasks (bit i = disk i
-#: acceptable); 63 keeps them positive.
-MAX_DISKS = 63
+#: Most disks for the signature search's compiled loop (nbst.search.loop / nbst_loop):
+#: its population keeps signatures as int64 bitmasks (bit i = disk i acceptable), and
+#: 63 keeps them positive. Larger problems are solved by the many-body search
+#: (``nbst.search.many``), whose signatures are multiword bitsets; the data model's own
+#: limit is ``nbst.domain.MAX_DISKS``.
+GA_MAX_DISKS = 63
 
 #: Starts may touch (centre distance == sum of radii, as the format allows);
 #: this relative slack accepts touching starts written with rounded decimals.

@@ -38,6 +38,15 @@ MAX_JSON_VALUES = 1_000_000
 #: longer ones cannot be a number nbst uses (Python itself stops at 4300 digits).
 MAX_INT_DIGITS = 400
 
+# --------------------------------------------------------------------------- size
+
+#: Most disks in one problem. Signatures have no width limit (files hold them as strings of
+#: N characters; the kernels as multiword bitsets), so the limit is the file and memory:
+#: a disk is ~8 JSON values in a problem and ~3 in a solution, so MAX_JSON_VALUES allows
+#: about 120,000; 100,000 keeps a margin. The event kernel needs ~150 bytes per disk at
+#: this size (cell grid), and ``simulate`` 64 bytes per recorded event on top.
+MAX_DISKS = 100_000
+
 # --------------------------------------------------------------------------- text fields
 
 #: Longest ``name`` (characters): it becomes titles, file names and MJCF model names.

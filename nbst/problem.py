@@ -19,8 +19,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from nbst import domain as D
-from nbst.constants import MAX_DISKS, OVERLAP_RTOL
-from nbst.domain import bad_text, plain
+from nbst.constants import OVERLAP_RTOL
+from nbst.domain import MAX_DISKS, bad_text, plain
 
 SCHEMA_VERSION = 1
 
@@ -417,7 +417,7 @@ def problem_from_dict(d: Any, *, source: str = "<dict>", default_name: str = "pr
     if not disks:
         c.fail("disks", "must hold at least one disk")
     if len(disks) > MAX_DISKS:
-        c.fail("disks", f"{len(disks)} disks; nbst supports at most {MAX_DISKS} (signatures are 64-bit masks)")
+        c.fail("disks", f"{len(disks)} disks; nbst reads at most {MAX_DISKS:,} (nbst.domain.MAX_DISKS: file size)")
     n = len(disks)
     start = np.empty((n, 2))
     target = np.empty((n, 2))

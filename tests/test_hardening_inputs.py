@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from nbst import domain as D
 from nbst import load_problem
 from nbst.cli import main
-from nbst.constants import MAX_DISKS, MAX_EVENTS
+from nbst.constants import GA_MAX_DISKS, MAX_EVENTS
 from nbst.problem import ProblemError, box_crossings, display_name, parse_json, problem_from_dict
 from nbst.sim import simulate
 from nbst.solution import dumps_strict, make_solution, save_solution, solution_from_dict
@@ -264,7 +264,7 @@ def test_velocity_limit_is_the_event_cap():
     p = problem_from_dict(GOOD)
     gap = 100.0 - 10.0
     vmax = D.MAX_BOX_CROSSINGS * gap / p.t_final
-    assert MAX_DISKS * D.MAX_BOX_CROSSINGS <= MAX_EVENTS // 2  # every disk at the limit fits the cap
+    assert GA_MAX_DISKS * D.MAX_BOX_CROSSINGS <= MAX_EVENTS // 2  # every disk at the limit fits the cap
     ok = solution_from_dict({"velocities": [[vmax * 0.999, 0.0], [0.0, 0.0]]}, p)
     assert box_crossings(p, ok.velocities)[0] <= D.MAX_BOX_CROSSINGS
     tr = simulate(p, ok.velocities)  # a disk alone at the limit: within the event cap

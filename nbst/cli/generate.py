@@ -5,7 +5,7 @@ import sys
 
 from nbst import domain as D
 from nbst.cli.args import SEED, Bounded, with_limits
-from nbst.constants import MAX_DISKS
+from nbst.domain import MAX_DISKS
 
 DISKS = Bounded("disk count", 1, MAX_DISKS, integer=True)
 NONCUE = Bounded("noncueable count", 0, MAX_DISKS - 1, integer=True)
