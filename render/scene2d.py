@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from nbst import palette
+from nbst.constants import EVENT_DISK
 
 from nbst.render import style
 from nbst.render.gl import FrameRenderer, FrameTarget
@@ -106,24 +107,74 @@ def trail_points(motion, t: float, seconds: float):
     return np.asarray(motion.at(times)), times
 
 
+def _own_event_points(motion, t0: float, t: float):
+    """Each disk's own corners in (t0, t) of an exact motion: (disk, time, point) arrays.
+
+    Only an event a disk takes part in bends its path (a wall bounce of disk i, a
+    collision of i and j), so the corners of disk i are its positions at its own events;
+    between them it flies straight. None when ``motion`` has no event list (SampledMotion)."""
+    ev = getattr(motion, "events", None)
+    kt, kp = getattr(motion, "times", None), getattr(motion, "positions", None)
+    if ev is None or kt is None or kp is None or len(kt) != len(ev) + 1:
+        return None
+    et = ev["time"]
+    lo, hi = int(np.searchsorted(et, t0, side="right")), int(np.searchsorted(et, t, side="left"))
+    e = np.arange(lo, hi)
+    pair = e[ev["kind"][lo:hi] == EVENT_DISK]
+    disk = np.concatenate((ev["i"][lo:hi], ev["j"][pair])).astype(np.int64)
+    k = np.concatenate((e, pair)) + 1  # keyframe k = e + 1 holds the state after event e
+    return disk, et[k - 1], kp[k, disk]
+
+
+def trail_segments(motion, t: float, seconds: float):
+    """The path of every disk over [max(0, t - seconds), t] as straight segments:
+    p0, p1 (S, 2) world points, ta, tb (S,) their times, disk (S,) whose path.
+
+    For an exact motion (a Trajectory with its events) the corners are each disk's own
+    events, so the segments are the exact path and their count is N plus twice the
+    events in the window: the work per frame grows with the disks and events on screen,
+    never with N x events. Otherwise (SampledMotion) every disk is sampled uniformly at
+    TRAIL_SAMPLES(N) times (fewer per disk for many disks, a bounded total)."""
+    n = motion.at(0.0).shape[0] if not hasattr(motion, "problem") else motion.problem.n
+    t0 = max(0.0, t - seconds)
+    own = _own_event_points(motion, t0, t)
+    if own is not None:
+        ed, etime, epts = own
+        idx = np.arange(n)
+        disk = np.concatenate((idx, ed, idx))
+        times = np.concatenate((np.full(n, t0), etime, np.full(n, t)))
+        seq = np.concatenate((np.zeros(n), np.ones(len(ed)), np.full(n, 2.0)))  # start, corners, end at ties
+        pts = np.concatenate((np.asarray(motion.at(t0), float), epts, np.asarray(motion.at(t), float)))
+        order = np.lexsort((seq, times, disk))
+        disk, times, pts = disk[order], times[order], pts[order]
+        same = disk[1:] == disk[:-1]
+        return pts[:-1][same], pts[1:][same], times[:-1][same], times[1:][same], disk[:-1][same]
+    m = style.trail_samples(n)
+    times = np.linspace(t0, t, m + 1)
+    pts = np.asarray(motion.at(times), float)  # (m + 1, N, 2)
+    disk = np.tile(np.arange(n), m)
+    return (pts[:-1].reshape(-1, 2), pts[1:].reshape(-1, 2), np.repeat(times[:-1], n), np.repeat(times[1:], n),
+            disk)
+
+
 def trail_capsules(motion, t: float, half, colors, *, to_view=None, min_step: float) -> np.ndarray:
-    """The trails at time ``t`` as capsule instances (CAPSULE_DTYPE): one per step of every
-    disk's path over the last TRAIL_SECONDS (``trail_points``), mapped by ``to_view`` (default:
-    world units kept), alpha fading with age; steps shorter than ``min_step`` (disks at rest)
-    are left out. ``half`` and ``colors``: per-disk half width and colour."""
-    pts, times = trail_points(motion, t, style.TRAIL_SECONDS)
+    """The trails at time ``t`` as capsule instances (CAPSULE_DTYPE): one per straight step of
+    every disk's path over the last TRAIL_SECONDS (``trail_segments``), mapped by ``to_view``
+    (default: world units kept), alpha fading with age; steps shorter than ``min_step`` (disks
+    at rest) are left out. ``half`` and ``colors``: per-disk half width and colour."""
+    a, b, ta, tb, disk = trail_segments(motion, t, style.TRAIL_SECONDS)
     if to_view is not None:
-        pts = to_view(pts)  # (M, N, 2)
-    age = np.clip(1.0 - (t - times) / style.TRAIL_SECONDS, 0.0, 1.0) * style.TRAIL_ALPHA  # (M,)
-    a, b = pts[:-1], pts[1:]
-    m_idx, n_idx = np.nonzero(((b - a) ** 2).sum(axis=2) > min_step * min_step)
-    data = np.empty(len(m_idx), CAPSULE_DTYPE)
-    data["p0"] = a[m_idx, n_idx]
-    data["p1"] = b[m_idx, n_idx]
-    data["alpha"][:, 0] = age[m_idx]
-    data["alpha"][:, 1] = age[m_idx + 1]
-    data["half"] = half[n_idx]
-    data["color"] = colors[n_idx]
+        a, b = to_view(a), to_view(b)
+    keep = ((b - a) ** 2).sum(axis=1) > min_step * min_step
+    a, b, ta, tb, disk = a[keep], b[keep], ta[keep], tb[keep], disk[keep]
+    fade = lambda tt: np.clip(1.0 - (t - tt) / style.TRAIL_SECONDS, 0.0, 1.0) * style.TRAIL_ALPHA  # noqa: E731
+    data = np.empty(len(disk), CAPSULE_DTYPE)
+    data["p0"] = a
+    data["p1"] = b
+    data["alpha"][:, 0] = fade(ta)
+    data["alpha"][:, 1] = fade(tb)
+    data["half"] = np.asarray(half)[disk]
+    data["color"] = np.asarray(colors)[disk]
     return data
 
 
@@ -138,10 +189,11 @@ class Labels:
         rpx = np.broadcast_to(np.asarray(rpx, float), (problem.n,))
         self.px = px = int(np.clip(np.median(rpx) * style.LABEL_FRAC, style.MIN_LABEL_PX, style.MAX_LABEL_PX))
         self.text = Text(ctx, px)
-        self.strings = [str(i) for i in range(problem.n)]
+        self.runs = self.text.numbers(problem.n)
+        self.strings = self.runs.strings
         cw, ch = self.text.cell
         self.digit_px = digit_height(px)
-        half_w = 0.5 * cw * np.array([len(s) for s in self.strings], float)
+        half_w = 0.5 * self.runs.width.astype(float)
         #: half-diagonal of each number's ink box (px): what a marker on the disk must clear
         self.half_diag = np.hypot(half_w, 0.5 * self.digit_px)
         self.on_disk = self.half_diag <= style.LABEL_FIT * rpx
@@ -152,21 +204,18 @@ class Labels:
         """Text instances of the numbers of disks ``which`` (bool mask) at ``centers_px``:
         centred on the disk, or (beside) upper left of it."""
         cw, ch = self.text.cell
-        parts = []
-        for i in np.flatnonzero(which):
-            s, c = self.strings[i], centers_px[i]
-            if self.on_disk[i]:
-                parts.append(self.text.layout([s], c[0] - 0.5 * cw * len(s), c[1] - 0.5 * ch))
-            else:
-                d = 0.72 * self.rpx[i]
-                parts.append(self.text.layout([s], c[0] - d - cw * len(s), c[1] - d - 0.85 * ch))
-        return np.concatenate(parts) if parts else self.text.layout([], 0, 0)
+        c = np.asarray(centers_px, float)
+        w = self.runs.width
+        d = 0.72 * self.rpx
+        x = np.where(self.on_disk, c[:, 0] - 0.5 * w, c[:, 0] - d - w)
+        y = np.where(self.on_disk, c[:, 1] - 0.5 * ch, c[:, 1] - d - 0.85 * ch)
+        return self.runs.layout(x, y, which)
 
     def boxes(self, centers_px) -> np.ndarray:
         """(M, 4) px boxes (x0, y0, x1, y1) of the numbers written on disks (for others to avoid)."""
         cw, ch = self.text.cell
         c = np.asarray(centers_px, float)[self.on_disk]
-        hw = 0.5 * cw * np.array([len(s) for s, o in zip(self.strings, self.on_disk) if o], float)
+        hw = 0.5 * self.runs.width[self.on_disk].astype(float)
         return np.stack([c[:, 0] - hw, c[:, 1] - 0.5 * ch, c[:, 0] + hw, c[:, 1] + 0.5 * ch], axis=1)
 
     def draw(self, size, centers_px) -> None:
@@ -179,6 +228,20 @@ class Labels:
 
     def release(self) -> None:
         self.text.release()
+
+
+def labels_legible(rpx) -> bool:
+    """Whether disks of on-screen radii ``rpx`` (px) are numbered by default: every one at
+    least LABELS_MIN_DISK_PX across (``nbst render`` without --labels or --no-labels)."""
+    rpx = np.asarray(rpx, float)
+    return bool(rpx.size) and 2.0 * float(rpx.min()) >= style.LABELS_MIN_DISK_PX
+
+
+def auto_labels(problem, size) -> bool:
+    """:func:`labels_legible` for ``problem`` in a frame of ``size`` with the box centred
+    (the 2D renderer decides on its own layout, the 3D view by this)."""
+    s = Layout(problem.box, size).scale
+    return labels_legible(np.maximum(problem.radius * s, style.MIN_DISK_PX))
 
 
 def target_label_px(size) -> int:
@@ -198,7 +261,8 @@ def target_label_instances(text, centers_px, marker_px, avoid=None, skip=None) -
     centers_px = np.asarray(centers_px, float)
     n = len(centers_px)
     marker_px = np.broadcast_to(np.asarray(marker_px, float), (n,))
-    w = cw * np.array([len(str(i)) for i in range(n)], float)
+    runs = text.numbers(n)
+    w = runs.width.astype(float)
     d = 0.75 * marker_px + 1.0
     right, left = centers_px[:, 0] + d, centers_px[:, 0] - d - w
     up, down = centers_px[:, 1] - 0.75 * marker_px - 0.8 * ch, centers_px[:, 1] + 0.75 * marker_px - 0.2 * ch
@@ -213,9 +277,7 @@ def target_label_instances(text, centers_px, marker_px, avoid=None, skip=None) -
             take = ~free & ~hit
             x[take], y[take] = cx[take], cy[take]
             free |= take
-    keep = np.ones(n, bool) if skip is None else ~np.asarray(skip, bool)
-    parts = [text.layout([str(i)], x[i], y[i]) for i in range(n) if keep[i]]
-    return np.concatenate(parts) if parts else text.layout([], 0, 0)
+    return runs.layout(x, y, None if skip is None else ~np.asarray(skip, bool))
 
 
 def covered_by_own_disk(problem, pos) -> np.ndarray:
@@ -228,10 +290,9 @@ def ghost_label_instances(text, centers_px, ring_px) -> np.ndarray:
     """Text instances numbering each ghost ring (``--source both --labels``) with its
     disk's index, just below and right of the ring (centres (N, 2) px, radii (N,) px)."""
     cw, ch = text.cell
-    ring_px = np.broadcast_to(np.asarray(ring_px, float), (len(centers_px),))
-    parts = [text.layout([str(i)], c[0] + 0.72 * r + 1.0, c[1] + 0.72 * r - 0.2 * ch)
-             for i, (c, r) in enumerate(zip(np.asarray(centers_px, float), ring_px))]
-    return np.concatenate(parts) if parts else text.layout([], 0, 0)
+    c = np.asarray(centers_px, float)
+    ring_px = np.broadcast_to(np.asarray(ring_px, float), (len(c),))
+    return text.numbers(len(c)).layout(c[:, 0] + 0.72 * ring_px + 1.0, c[:, 1] + 0.72 * ring_px - 0.2 * ch)
 
 
 def legend_entries(problem, *, ghost: bool, labels: bool, long: bool = True, ghost_name: str = "MuJoCo",
@@ -307,7 +368,8 @@ class Renderer2D(FrameRenderer):
     trails  : draw the last TRAIL_SECONDS of every path, fading with age
     labels  : write each disk's index on it (as in ``nbst simulate``'s table), beside
               each target the index of the disk it belongs to, and beside each ghost
-              ring its disk's index
+              ring its disk's index; None: only where legible (:func:`labels_legible`:
+              every disk at least LABELS_MIN_DISK_PX across), as ``nbst render``'s default
     motion_name, ghost_name : what the disks and the rings show, for the readout and
               the legend (default: "exact" and "MuJoCo" when both are drawn; no name
               for the disks alone)
@@ -317,7 +379,7 @@ class Renderer2D(FrameRenderer):
     """
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
-                 labels: bool = False, title: str | None = None, motion_name: str | None = None,
+                 labels: bool | None = False, title: str | None = None, motion_name: str | None = None,
                  ghost_name: str | None = None):
         import moderngl
 
@@ -388,6 +450,8 @@ class Renderer2D(FrameRenderer):
         self._ghosts["stroke"] = style.GHOST_PX
         self._ghosts["rim"] = style.GHOST
         self.trail_half = np.maximum(style.MIN_TRAIL_PX, style.TRAIL_WIDTH_FRAC * self.rpx).astype("f4") * 0.5
+        if labels is None:
+            labels = labels_legible(self.rpx)
         self.labels = Labels(ctx, problem, self.rpx, self.colors) if labels else None
         self.marker_px = np.maximum(style.MARKER_FRAC * self.rpx, style.MIN_MARKER_PX)
         if self.labels is not None and self.labels.on_disk.any():

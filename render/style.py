@@ -95,6 +95,12 @@ TEXT_HALO = BACKGROUND
 LABEL = (0.08, 0.08, 0.10)
 LABEL_FRAC = 0.95
 MIN_LABEL_PX, MAX_LABEL_PX = 12, 22
+#: ``nbst render`` without --labels or --no-labels numbers the disks only where the numbers
+#: stay legible: when every disk is at least LABELS_MIN_DISK_PX across in the frame (its
+#: drawn diameter). A number is never under MIN_LABEL_PX (12 px), so on a smaller disk it
+#: would sit beside the disk, larger than the disk itself; with hundreds of such disks
+#: (1,000 radius-1 disks at 720p are 9 px across) the numbers bury the motion.
+LABELS_MIN_DISK_PX = 12.0
 #: A number fits on its disk when the half-diagonal of its digits' box is at most this
 #: fraction of the disk's on-screen radius (the rest is rim and air).
 LABEL_FIT = 0.92
@@ -167,3 +173,15 @@ def rgb8(c) -> tuple[int, int, int]:
 def disk_colors(cueable) -> list[tuple[float, float, float]]:
     """One fill colour per disk: CUEABLE or NONCUEABLE."""
     return palette.class_colors(cueable)
+
+
+#: Trails of a motion known only at sample times (a MuJoCo replay): each disk's last
+#: TRAIL_SECONDS sampled this many times in all (at most 64 steps a disk, at least 12), so
+#: 1,000 disks cost 16,384 capsules a frame, not 64,000 (exact motions bend at their own
+#: events instead, and need no samples).
+TRAIL_SAMPLE_BUDGET = 16_384
+
+
+def trail_samples(n: int) -> int:
+    """Steps per disk of a sampled trail for ``n`` disks (TRAIL_SAMPLE_BUDGET in all, 12..64)."""
+    return int(min(64, max(12, TRAIL_SAMPLE_BUDGET // max(1, int(n)))))

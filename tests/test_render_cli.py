@@ -96,7 +96,8 @@ def test_gif_by_extension(tmp_path, straight):
 def test_still_png_at_t0_shows_the_starts(tmp_path, straight):
     p, sol = straight
     out = tmp_path / "s.png"
-    assert main(["render", "diamond-s14", sol, "--still", "0", "-o", str(out), "--size", "400x300", "-q"]) == 0
+    assert main(["render", "diamond-s14", sol, "--still", "0", "-o", str(out), "--size", "400x300", "--no-labels",
+                 "-q"]) == 0  # no number on the disks' centres (legible at this size: on by default)
     from PIL import Image
 
     from test_render import box_from_walls, pixel, world_to_px
@@ -146,7 +147,7 @@ def test_mujoco_source_renders_or_says_why(tmp_path, straight, capsys):
     out = tmp_path / "m.png"
     t = 0.2
     rc = main(["render", "diamond-s14", sol, "--still", str(t), "-o", str(out), "--size", "480x360",
-               "--source", "mujoco", "-q"])
+               "--source", "mujoco", "--no-labels", "-q"])
     err = capsys.readouterr().err.strip()
     try:
         from nbst.models import rollout  # noqa: F401
@@ -287,7 +288,7 @@ def test_mujoco_sources_use_the_replay(tmp_path, straight, monkeypatch, source):
     monkeypatch.setattr(rcli, "mujoco_positions", fake)
     out = tmp_path / "m.png"
     assert main(["render", "diamond-s14", sol, "--still", "1.5", "-o", str(out), "--size", "480x360",
-                 "--source", source, "-q"]) == 0
+                 "--source", source, "--no-labels", "-q"]) == 0
     assert calls and 1.5 in calls[0]  # sampled at the frame's time
     from PIL import Image
 

@@ -51,8 +51,11 @@ def register(sub) -> None:
     p.add_argument("--hold", type=HOLD, default=1.0, metavar="SECONDS",
                    help=with_limits("seconds of video holding the final frame (default 1.0)", HOLD))
     p.add_argument("--trails", action="store_true", help="draw each disk's recent path, fading with age")
-    p.add_argument("--labels", action="store_true",
-                   help="write each disk's index on it, and beside each target the index of its disk")
+    p.add_argument("--labels", action=argparse.BooleanOptionalAction, default=None,
+                   help="write each disk's index on it, and beside each target the index of its disk (default: "
+                        "on when every disk is at least %g px across in the frame, where a number stays legible; "
+                        "off for smaller disks, e.g. 1,000 disks at 720p; --labels and --no-labels decide "
+                        "instead)" % style.LABELS_MIN_DISK_PX)
     p.add_argument("--view", choices=["2d", "3d"], default=None,
                    help="2d: the box from above (default); 3d: pucks on a table, perspective camera, lighting")
     p.add_argument("--source", choices=["analytic", "mujoco", "both"], default=None,
@@ -240,9 +243,13 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
 def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None,
                   labels=False, motion_name=None):
     """A 2D or 3D renderer with ``render(t, out=None) -> (H, W, 3) uint8`` and ``size``.
+    labels: True, False, or None (only where legible: :func:`nbst.render.scene2d.labels_legible`).
     motion_name: what the disks show when it is not the exact motion ("MuJoCo" for --source mujoco)."""
     if view == "3d":
+        from nbst.render.scene2d import auto_labels
         from nbst.render.scene3d import Renderer3D
+        if labels is None:
+            labels = auto_labels(problem, size)
         return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels,
                           motion_name=motion_name)
     from nbst.render.scene2d import Renderer2D
