@@ -230,6 +230,17 @@ class Labels:
         self.text.release()
 
 
+def marker_radii(rpx) -> np.ndarray:
+    """Target marker radii (px, outer edge) for disks of on-screen radii ``rpx``: inside the
+    disk (MARKER_FRAC of it, at least MIN_MARKER_PX) where the marker and its halo stay within
+    MARKER_INSIDE_MAX of the disk's radius, else a ring just outside the disk's rim (small
+    disks: the marker would hide the disk resting on it)."""
+    rpx = np.asarray(rpx, float)
+    inner = np.maximum(style.MARKER_FRAC * rpx, style.MIN_MARKER_PX)
+    outside = rpx + style.MARKER_OUTSIDE_GAP_PX + style.MARKER_HALO_PX + style.MARKER_PX
+    return np.where(inner + style.MARKER_HALO_PX > style.MARKER_INSIDE_MAX * rpx, outside, inner)
+
+
 def labels_legible(rpx) -> bool:
     """Whether disks of on-screen radii ``rpx`` (px) are numbered by default: every one at
     least LABELS_MIN_DISK_PX across (``nbst render`` without --labels or --no-labels)."""
@@ -453,7 +464,7 @@ class Renderer2D(FrameRenderer):
         if labels is None:
             labels = labels_legible(self.rpx)
         self.labels = Labels(ctx, problem, self.rpx, self.colors) if labels else None
-        self.marker_px = np.maximum(style.MARKER_FRAC * self.rpx, style.MIN_MARKER_PX)
+        self.marker_px = marker_radii(self.rpx)
         if self.labels is not None and self.labels.on_disk.any():
             # a disk resting on its target: the marker rings its number instead of crossing it
             clear = float(self.labels.half_diag[self.labels.on_disk].max()) + style.MARKER_LABEL_GAP_PX

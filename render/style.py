@@ -50,6 +50,13 @@ MARKER_PX = 1.5
 MARKER_HALO = (0.055, 0.063, 0.078, 0.75)
 MARKER_HALO_PX = 1.0
 MARKER_LABEL_GAP_PX = 1.5
+#: A marker inside a small disk would hide it: the smallest marker (MIN_MARKER_PX and its
+#: halo) covers most of a disk under 8 px in radius (1,000 disks at 720p are 4.4 px), so a
+#: disk resting on its target showed as a grey dot. Where the marker with its halo would reach
+#: past this fraction of the disk's radius, the marker rings the disk instead, just outside
+#: its rim (MARKER_OUTSIDE_GAP_PX clear of it): the disk stays whole and the target visible.
+MARKER_INSIDE_MAX = 0.5
+MARKER_OUTSIDE_GAP_PX = 0.5
 
 #: Target neighbourhood ring of radius R while its disk is outside: faint.
 RING_DIM = (0.55, 0.58, 0.64, 0.22)
