@@ -31,6 +31,18 @@ STEPPINGS = ("fixed", "aligned")
 #: the default 0.25 ms step would be 4e9 steps (~300 GiB). 1e6 steps is 250 s of simulated
 #: time at the default step, a minute or two of MuJoCo; ``--max-steps`` raises it.
 MAX_STEPS = 1_000_000
+#: Most numbers a run keeps of its recorded positions (2 per disk and record: 160 MB). Up to it every
+#: step is recorded; above it (many disks over many steps: 1,000 disks x 20,000 steps is 4e7) every
+#: k-th step, k the smallest stride that fits, plus the last two steps (the final position is then
+#: still interpolated between the steps around t_end). Energy and contacts are kept for every step.
+RECORD_FLOATS = 20_000_000
+#: Steps between two calls of a run's ``progress`` callback.
+PROGRESS_EVERY = 500
+
+
+def record_stride(records: int, n: int, budget: int = RECORD_FLOATS) -> int:
+    """Every how many steps a run of ``records`` states of ``n`` disks records positions."""
+    return max(1, -(-int(records) * 2 * int(n) // int(budget)))
 
 
 def _scene_at_start(problem: Problem, velocities: np.ndarray, timestep: float, unit: float):
@@ -63,16 +75,19 @@ def check_steps(t_end: float, timestep: float, max_steps: int = MAX_STEPS, *,
 class MujocoRun:
     """One MuJoCo run of a scene, in problem units.
 
-    times     : (S+1,) s, 0 then after each step
-    positions : (S+1, N, 2) disk centres, units
-    energy    : (S+1,) kinetic energy, mass units x units^2/s^2
-    in_contact: (S+1,) bool, any contact active in the step that ended there
+    times     : (K,) s, 0 then after each recorded step (every step up to :data:`RECORD_FLOATS`;
+                ``stride``: every how many)
+    positions : (K, N, 2) disk centres at those times, units
+    energy    : (S+1,) kinetic energy after every step, mass units x units^2/s^2
+    in_contact: (S+1,) bool, any contact active in the step that ended there (every step)
     events    : structured (E,): time (s: fixed stepping: the first step state in which the pair
                 overlaps; MuJoCo detects it there and resolves it during the next step; aligned
                 stepping: the touch, located to ~1e-13 s), kind, i, j (i < j for disk pairs)
     final_positions : (N, 2) at t_final (linear between the two steps around it)
     stepping  : "fixed" (times = k h) or "aligned" (times: every accepted step and micro-step)
     stats     : aligned stepping's cost (``AlignedStats.to_dict()``), None for fixed
+    n_steps   : S, the steps taken (fixed) or accepted steps + micro-steps (aligned)
+    stride    : every how many steps positions were recorded (1: all)
     """
 
     problem: Problem
@@ -87,17 +102,20 @@ class MujocoRun:
     wall_time: float
     stepping: str = "fixed"
     stats: dict | None = None
+    n_steps: int | None = None
+    stride: int = 1
 
     @property
     def steps(self) -> int:
-        return int(self.times.size - 1)
+        return int(self.times.size - 1) if self.n_steps is None else int(self.n_steps)
 
     def at(self, t):
         """Positions at time(s) t in [0, t_final], linear between steps: (N, 2) or (T, N, 2)."""
         ts = np.asarray(t, dtype=float)
-        if self.stepping != "fixed":  # records at uneven times
-            k = np.clip(np.searchsorted(self.times, ts, side="right") - 1, 0, max(self.steps - 1, 0))
-            k1 = np.minimum(k + 1, self.steps)
+        if self.stepping != "fixed" or self.stride != 1:  # records at uneven times
+            last = self.times.size - 1
+            k = np.clip(np.searchsorted(self.times, ts, side="right") - 1, 0, max(last - 1, 0))
+            k1 = np.minimum(k + 1, last)
             span = self.times[k1] - self.times[k]
             f = np.clip(np.divide(ts - self.times[k], span, out=np.zeros_like(span), where=span > 0), 0.0, 1.0)
             f = f[..., None, None]
@@ -112,7 +130,7 @@ def _owners(model, n: int) -> np.ndarray:
     """geom id -> disk index (>= 0), -1 - w for wall w, -100 for anything else."""
     import mujoco
     owner = np.full(model.ngeom, -100, dtype=np.int64)
-    for i in range(n):
+    for i in range(n):  # by name: ~1 us each, 1 ms at 1,000 disks
         owner[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"disk{i}_collision")] = i
     for w, name in enumerate(_WALLS):
         owner[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)] = -1 - w
@@ -132,13 +150,17 @@ def _event(owner, g1: int, g2: int):
 
 
 def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP, unit: float = DEFAULT_UNIT,
-               t_end: float | None = None, max_steps: int = MAX_STEPS, stepping: str = "fixed") -> MujocoRun:
+               t_end: float | None = None, max_steps: int = MAX_STEPS, stepping: str = "fixed",
+               progress=None, record_floats: int = RECORD_FLOATS) -> MujocoRun:
     """Step the problem's scene from keyframe ``initial`` to ``t_end`` (default t_final).
 
     velocities : (N, 2) float, units/s
     max_steps  : ValueError, before any work, if reaching t_end takes more steps (``check_steps``);
                  aligned stepping: RuntimeError past max_steps accepted steps + micro-steps
     stepping   : "fixed" or "aligned" (module docstring)
+    progress   : None or a callable progress(k): k more simulated steps of h done (every
+                 :data:`PROGRESS_EVERY` steps; aligned: accepted steps)
+    record_floats : positions kept at most (:data:`RECORD_FLOATS`; a stride above it)
     """
     import time as _time
 
@@ -154,61 +176,106 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
     n = problem.n
     owner = _owners(model, n)
     if stepping == "aligned":
-        return _run_aligned(problem, model, data, owner, float(timestep), float(unit), t_end, max_steps)
-    mass = np.asarray(problem.mass, dtype=float)
+        return _run_aligned(problem, model, data, owner, float(timestep), float(unit), t_end, max_steps,
+                            progress=progress, stride=record_stride(steps + 1, n, record_floats))
+    mass2 = np.repeat(np.asarray(problem.mass, dtype=float), 2) / (unit * unit)
     start = np.asarray(problem.start, dtype=float)
-
-    qpos = np.empty((steps + 1, 2 * n))
-    qvel = np.empty((steps + 1, 2 * n))
+    stride = record_stride(steps + 1, n, record_floats)
+    rec = np.unique(np.concatenate([np.arange(0, steps + 1, stride), [max(steps - 1, 0), steps]]))
+    qpos = np.empty((rec.size, 2 * n))
+    energy = np.empty(steps + 1)
     in_contact = np.zeros(steps + 1, dtype=bool)
     qpos[0] = data.qpos
-    qvel[0] = data.qvel
-    active: set = set()
-    events = []
+    energy[0] = 0.5 * np.dot(mass2, data.qvel * data.qvel)
+    base = n + 4  # event code i * base + jj: jj = partner disk, or n + wall
+    active = np.empty(0, np.int64)
+    ev_codes, ev_steps = [], []
     step = mujoco.mj_step
+    r = 1
+    next_rec = int(rec[1]) if rec.size > 1 else -1
     t0 = _time.perf_counter()
     for s in range(1, steps + 1):
         step(model, data)
-        qpos[s] = data.qpos
-        qvel[s] = data.qvel
+        qv = data.qvel
+        energy[s] = 0.5 * np.dot(mass2, qv * qv)
+        if s == next_rec:
+            qpos[r] = data.qpos
+            r += 1
+            next_rec = int(rec[r]) if r < rec.size else -1
         nc = data.ncon
-        if nc or active:
-            now = set()
+        if nc or active.size:
             if nc:
                 in_contact[s] = True
-                geoms = data.contact.geom[:nc]  # a fresh view: the contact list is rebuilt every step
-                for g1, g2 in geoms:
-                    key = _event(owner, g1, g2)
-                    if key is not None:
-                        now.add(key)
-            for key in now - active:
-                events.append(((s - 1) * timestep, *key))
+                g = data.contact.geom[:nc]  # a fresh view: the contact list is rebuilt every step
+                now = _codes(owner[g[:, 0]], owner[g[:, 1]], n, base)
+            else:
+                now = active[:0]
+            new = np.setdiff1d(now, active, assume_unique=True)
+            if new.size:
+                ev_codes.append(new)
+                ev_steps.append(np.full(new.size, s - 1))
             active = now
+        if progress is not None and s % PROGRESS_EVERY == 0:
+            progress(PROGRESS_EVERY)
+    if progress is not None and steps % PROGRESS_EVERY:
+        progress(steps % PROGRESS_EVERY)
     wall = _time.perf_counter() - t0
-    times = np.arange(steps + 1) * timestep
-    pos = start[None] + qpos.reshape(steps + 1, n, 2) / unit
-    vel = qvel.reshape(steps + 1, n, 2) / unit
-    energy = 0.5 * np.einsum("i,sij,sij->s", mass, vel, vel)
-    ev = np.array(sorted(events), dtype=EVENT_DTYPE) if events else np.empty(0, EVENT_DTYPE)
+    times = rec * timestep
+    pos = start[None] + qpos.reshape(rec.size, n, 2) / unit
+    ev = _decode(np.concatenate(ev_codes) if ev_codes else np.empty(0, np.int64),
+                 (np.concatenate(ev_steps) if ev_steps else np.empty(0)) * timestep, n, base)
     run = MujocoRun(problem=problem, timestep=float(timestep), unit=float(unit), times=times, positions=pos,
                     energy=energy, in_contact=in_contact, events=ev, final_positions=np.empty((n, 2)),
-                    wall_time=wall)
+                    wall_time=wall, n_steps=steps, stride=stride)
     object.__setattr__(run, "final_positions", run.at(t_end))
     return run
 
 
-def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps) -> MujocoRun:
-    """``run_mujoco`` with ``step_aligned``: a record after every accepted step and micro-step."""
+def _codes(a: np.ndarray, b: np.ndarray, n: int, base: int) -> np.ndarray:
+    """Sorted unique event codes of contacts between owners a and b (``_owners``): disk pair
+    (i < j): i * base + j; disk i and wall w: i * base + n + w; contacts of no disk dropped."""
+    keep = (a != -100) & (b != -100)
+    a, b = a[keep], b[keep]
+    swap = a < 0
+    a, b = np.where(swap, b, a), np.where(swap, a, b)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    code = np.where(b >= 0, lo * base + hi, a * base + n + (-1 - b))
+    return np.unique(code)
+
+
+def _decode(codes: np.ndarray, times: np.ndarray, n: int, base: int) -> np.ndarray:
+    """Event codes and times -> EVENT_DTYPE array, sorted by (time, kind, i, j)."""
+    ev = np.empty(codes.size, EVENT_DTYPE)
+    i, jj = np.divmod(codes, base)
+    wall = jj >= n
+    ev["time"] = times
+    ev["kind"] = np.where(wall, EVENT_WALL, EVENT_DISK)
+    ev["i"] = i
+    ev["j"] = np.where(wall, jj - n, jj)
+    return ev[np.lexsort((ev["j"], ev["i"], ev["kind"], ev["time"]))]
+
+
+def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps, *, progress=None,
+                 stride: int = 1) -> MujocoRun:
+    """``run_mujoco`` with ``step_aligned``: a record after every accepted step and micro-step
+    (every ``stride``-th of them when there are many disks, and always the last)."""
     from nbst.models.stepping import step_aligned
 
     n = problem.n
     rec_t, rec_q, rec_v = [float(data.time)], [data.qpos.copy()], [data.qvel.copy()]
     events = []
+    calls = [0, 0.0]  # on_step calls, simulated time reported to progress
 
     def on_step(d):
-        rec_t.append(float(d.time))
-        rec_q.append(d.qpos.copy())
-        rec_v.append(d.qvel.copy())
+        calls[0] += 1
+        if calls[0] % stride == 0:
+            rec_t.append(float(d.time))
+            rec_q.append(d.qpos.copy())
+            rec_v.append(d.qvel.copy())
+        if progress is not None and d.time - calls[1] >= PROGRESS_EVERY * timestep:
+            k = int((d.time - calls[1]) / timestep)
+            calls[1] += k * timestep
+            progress(k)
 
     def on_event(t, g1, g2, u):
         key = _event(owner, g1, g2)
@@ -216,6 +283,12 @@ def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps) 
             events.append((t, *key))
 
     stats = step_aligned(model, data, t_end, on_event=on_event, on_step=on_step, max_steps=max_steps)
+    if rec_t[-1] != float(data.time):
+        rec_t.append(float(data.time))
+        rec_q.append(data.qpos.copy())
+        rec_v.append(data.qvel.copy())
+    if progress is not None:
+        progress(max(0, steps_needed(t_end, timestep) - int(round(calls[1] / timestep))))
     times = np.array(rec_t)
     k = times.size
     pos = np.asarray(problem.start, dtype=float)[None] + np.array(rec_q).reshape(k, n, 2) / unit
@@ -224,16 +297,20 @@ def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps) 
     ev = np.array(sorted(events), dtype=EVENT_DTYPE) if events else np.empty(0, EVENT_DTYPE)
     run = MujocoRun(problem=problem, timestep=timestep, unit=unit, times=times, positions=pos, energy=energy,
                     in_contact=np.zeros(k, dtype=bool), events=ev, final_positions=np.empty((n, 2)),
-                    wall_time=stats.wall_time, stepping="aligned", stats=stats.to_dict())
+                    wall_time=stats.wall_time, stepping="aligned", stats=stats.to_dict(),
+                    n_steps=calls[0], stride=stride)
     object.__setattr__(run, "final_positions", run.at(t_end))
     return run
 
 
 def run_final(problem: Problem, velocities, *, timestep: float, unit: float = DEFAULT_UNIT,
-              t_end: float | None = None, max_steps: int = MAX_STEPS) -> tuple[np.ndarray, int, float]:
+              t_end: float | None = None, max_steps: int = MAX_STEPS,
+              progress=None) -> tuple[np.ndarray, int, float]:
     """Fixed steps of ``timestep`` to ``t_end`` (default t_final), keeping nothing per step:
     (final positions (N, 2) units, linear between the two steps around t_end as ``run_mujoco``;
-    steps; wall time s). The scene is built for this timestep (k = 2 / h^2 follows h)."""
+    steps; wall time s). The scene is built for this timestep (k = 2 / h^2 follows h).
+    progress: None or progress(k) after each batch of steps (``mj_step(..., nstep)`` in batches
+    of 10 x :data:`PROGRESS_EVERY`)."""
     import time as _time
 
     import mujoco
@@ -244,11 +321,18 @@ def run_final(problem: Problem, velocities, *, timestep: float, unit: float = DE
     model, data = _scene_at_start(problem, v, timestep, unit)
     start = np.asarray(problem.start, dtype=float)
     t0 = _time.perf_counter()
-    if steps > 1:
-        mujoco.mj_step(model, data, nstep=steps - 1)
+    done, batch = 0, 10 * PROGRESS_EVERY if progress is not None else max(steps - 1, 1)
+    while done < steps - 1:
+        k = min(batch, steps - 1 - done)
+        mujoco.mj_step(model, data, nstep=k)
+        done += k
+        if progress is not None:
+            progress(k)
     before = data.qpos.copy()
     if steps:
         mujoco.mj_step(model, data)
+        if progress is not None:
+            progress(1)
     wall = _time.perf_counter() - t0
     f = min(max(t_end / timestep - (steps - 1), 0.0), 1.0) if steps else 0.0
     q = before * (1 - f) + data.qpos * f

@@ -38,12 +38,36 @@ from nbst.problem import Problem
 
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
 
-SCHEMA_VERSION = 2  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order
+SCHEMA_VERSION = 3  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order;
+#                    3: stepping requested/reason/record_stride, final_error mean/median/worst
+#: ``stepping="auto"`` (the default): fixed steps up to this many disks (every problem nbst took before
+#: it lifted its 63-disk cap validates as it always did), aligned stepping above. Measured on gas
+#: motions at fixed density (``gas_motion``, docs/mujoco.md "Many disks"): fixed steps leave
+#: hundreds of units of error from N = 30 on (each of the ~3 impacts per disk lags one step and the
+#: collisions amplify it), aligned stepping 1e-3 units or less at N = 1,000, at 3.5-6x the wall time
+#: of fixed steps at every N from 10 to 1,000: aligned stepping scales like fixed stepping.
+AUTO_FIXED_MAX_N = 63
+#: ... unless aligned stepping would cost more than this many times the fixed steps: its mj_step
+#: calls are about steps + AUTO_TRIALS_PER_IMPACT x impacts (measured 3.2-3.7 search trials and
+#: one micro-step per impact on gas motions), the fixed run's are t_final / h.
+AUTO_MAX_COST_RATIO = 20.0
+AUTO_TRIALS_PER_IMPACT = 4.5
+#: The sensitivity analysis (``nbst.sim.sensitivity``) is skipped by default above this many disks:
+#: it carries a dense (2N x 2C) Jacobian through every event (measured 0.27 s at 300 disks, 21 s at
+#: 1,000 on the gas motions); ``sensitivity=True`` forces it.
+SENSITIVITY_MAX_N = 300
+#: Disks listed by name in the report's worst-disk table and in report.json's ``final_error.worst``.
+WORST_DISKS = 10
+#: Above this many disks the summary gives counts instead of the signature strings (report.json keeps them).
+SUMMARY_STRING_MAX_N = 64
 #: Default divergence tolerance (units): a tenth of the benchmark disks' radius of 10-20,
 #: far above MuJoCo's one-step impact lag (|dv| h ~ 0.05-0.2 units) for a few impacts.
 DIVERGE_TOL = 1.0
-#: Samples of the per-disk error curve kept in the report (the divergence is found on every step).
+#: Samples of the per-disk error curve kept in the report (the divergence is found on every
+#: recorded step: every step unless the run recorded with a stride, ``MujocoRun.stride``).
 CURVE_SAMPLES = 600
+#: Positions compared at once when the per-step error is computed (bounds its memory: 2e6 x 16 B).
+COMPARE_CHUNK = 2_000_000
 #: Convergence ladder: h divided by these.
 LADDER = (1, 2, 4, 8, 16, 32)
 #: Which ladder entries the order is fitted on, and why (also written into the report).
@@ -96,19 +120,54 @@ class Validation:
     prediction_check: dict | None = None
     convergence: list | None = None
     convergence_order: dict | None = None
+    stepping_requested: str | None = None  # "auto", "fixed" or "aligned" (None: as ``stepping``)
+    stepping_reason: str = ""  # why this stepping (``choose_stepping``)
+    exact_on: np.ndarray | None = None  # (N,) bool: exact final position within R of the target
+    mj_on: np.ndarray | None = None  # (N,) bool: the same under MuJoCo
+
+    def _on(self, which: str) -> np.ndarray:
+        on = self.exact_on if which == "exact" else self.mj_on
+        if on is not None:
+            return np.asarray(on, bool)
+        sig = self.exact.signature if which == "exact" else self.mj_signature
+        return np.array([(int(sig) >> i) & 1 == 1 for i in range(self.problem.n)], dtype=bool)
+
+    @property
+    def exact_signature_string(self) -> str:
+        return "".join("1" if x else "0" for x in self._on("exact"))
+
+    @property
+    def exact_order(self) -> int:
+        return int(self._on("exact").sum())
 
     @property
     def mj_signature_string(self) -> str:
-        return "".join("1" if (self.mj_signature >> i) & 1 else "0" for i in range(self.problem.n))
+        return "".join("1" if x else "0" for x in self._on("mujoco"))
+
+    @property
+    def mj_order(self) -> int:
+        return int(self._on("mujoco").sum())
 
     @property
     def signatures_agree(self) -> bool:
-        return self.mj_signature == self.exact.signature
+        return bool(np.array_equal(self._on("exact"), self._on("mujoco")))
+
+    @property
+    def signature_differs_at(self) -> np.ndarray:
+        """Indices of the disks on target in one motion and not in the other."""
+        return np.flatnonzero(self._on("exact") != self._on("mujoco"))
 
     @property
     def matched_offsets(self) -> np.ndarray:
         ex, mj = self.exact.events, self.mujoco.events
         return np.array([mj["time"][b] - ex["time"][a] for a, b in self.matches])
+
+    def worst_disks(self, k: int = WORST_DISKS) -> list:
+        """The k disks with the largest final error, worst first: [{disk, error, exact, mujoco}]."""
+        idx = np.argsort(-self.final_error, kind="stable")[:k]
+        return [{"disk": int(i), "error": float(self.final_error[i]),
+                 "exact": self.exact.final_positions[i].tolist(), "mujoco": self.mujoco.final_positions[i].tolist()}
+                for i in idx]
 
     def to_dict(self) -> dict:
         p, ex, mj = self.problem, self.exact, self.mujoco
@@ -130,15 +189,19 @@ class Validation:
             "velocities": self.velocities.tolist(),
             "mujoco": {"version": _mujoco_version(), "timestep": self.timestep, "unit_m": self.unit,
                        "steps": mj.steps, "wall_time_s": self.wall_time},
-            "stepping": {"mode": self.stepping, "timestep": self.timestep, "steps": mj.steps,
-                         "stepping_wall_time_s": mj.wall_time, "cost": mj.stats},
+            "stepping": {"mode": self.stepping, "requested": self.stepping_requested or self.stepping,
+                         "reason": self.stepping_reason, "timestep": self.timestep, "steps": mj.steps,
+                         "stepping_wall_time_s": mj.wall_time, "cost": mj.stats,
+                         "record_stride": int(getattr(mj, "stride", 1))},
             "tolerance": self.tol,
             "final_error": {"per_disk": self.final_error.tolist(), "max": float(self.final_error.max()),
+                            "mean": float(self.final_error.mean()), "median": float(np.median(self.final_error)),
+                            "worst": self.worst_disks(),
                             "exact_final": ex.final_positions.tolist(), "mujoco_final": mj.final_positions.tolist()},
-            "exact": {"cost": ex.cost, "signature": ex.signature_string, "order": ex.order,
+            "exact": {"cost": ex.cost, "signature": self.exact_signature_string, "order": self.exact_order,
                       "disk_disk": ex.n_disk_disk, "wall": ex.n_wall, "truncated": bool(ex.truncated)},
             "mujoco_result": {"cost": self.mj_cost, "signature": self.mj_signature_string,
-                              "order": bin(self.mj_signature).count("1"),
+                              "order": self.mj_order,
                               "disk_disk": int(np.count_nonzero(mj.events["kind"] == 0)),
                               "wall": int(np.count_nonzero(mj.events["kind"] == 1))},
             "signatures_agree": self.signatures_agree,
@@ -194,10 +257,11 @@ class Validation:
             f"MuJoCo {d['mujoco']['version']}, h = {self.timestep * 1e3:g} ms, {self.mujoco.steps} steps "
             f"in {self.wall_time:.2f} s",
             f"final      max error {self.final_error.max():.4g} units (disk {int(self.final_error.argmax())}); "
-            f"mean {self.final_error.mean():.4g}",
-            f"exact      cost {self.exact.cost:.6g}  signature {self.exact.signature_string}  order {self.exact.order}",
-            f"mujoco     cost {self.mj_cost:.6g}  signature {self.mj_signature_string}  "
-            f"order {d['mujoco_result']['order']}  ({'same' if self.signatures_agree else 'DIFFERENT'} signature)",
+            f"mean {self.final_error.mean():.4g}" + (f"; median {np.median(self.final_error):.4g}; "
+                                                     f"{int((self.final_error <= self.tol).sum())} of "
+                                                     f"{self.problem.n} disks within {self.tol:g}"
+                                                     if self.problem.n > SUMMARY_STRING_MAX_N else ""),
+            *self._signature_lines(d),
             f"events     {ev['matched']} matched in order, {ev['exact_only']} exact only, {ev['mujoco_only']} "
             f"MuJoCo only" + (f"; offsets {ev['offset_s']['min'] * 1e3:.3g} .. {ev['offset_s']['max'] * 1e3:.3g} ms"
                               if ev["matched"] else "")
@@ -219,9 +283,28 @@ class Validation:
         return "\n".join(lines)
 
 
+    def _signature_lines(self, d) -> list:
+        """The exact and MuJoCo lines of the summary: the signature strings up to
+        :data:`SUMMARY_STRING_MAX_N` disks, counts above (report.json keeps the strings)."""
+        ex, mj = d["exact"], d["mujoco_result"]
+        n = self.problem.n
+        agree = "same" if self.signatures_agree else "DIFFERENT"
+        if n <= SUMMARY_STRING_MAX_N:
+            return [f"exact      cost {ex['cost']:.6g}  signature {ex['signature']}  order {ex['order']}",
+                    f"mujoco     cost {mj['cost']:.6g}  signature {mj['signature']}  order {mj['order']}  "
+                    f"({agree} signature)"]
+        diff = self.signature_differs_at
+        where = "" if not diff.size else (f"; differs at {diff.size} disks: "
+                                          + ", ".join(map(str, diff[:10])) + (" ..." if diff.size > 10 else ""))
+        return [f"exact      cost {ex['cost']:.6g}  order {ex['order']} of {n} disks on target",
+                f"mujoco     cost {mj['cost']:.6g}  order {mj['order']} of {n} disks on target  "
+                f"({agree} signature{where})"]
+
     def _summary_extra(self) -> list:
-        """Summary lines of the stepping cost, the prediction check and the convergence study."""
+        """Summary lines of the stepping choice and cost, the prediction check and the convergence study."""
         out = []
+        if self.stepping_reason:
+            out.append(f"stepping   {self.stepping}: {self.stepping_reason}")
         st = self.mujoco.stats
         if st:
             out.append(f"stepping   aligned: {st['steps']} steps + {st['impacts']} impact micro-steps "
@@ -258,23 +341,52 @@ def _mujoco_version() -> str:
     return str(mujoco.__version__)
 
 
+def choose_stepping(problem: Problem, exact, timestep: float, requested: str = "auto") -> tuple[str, str]:
+    """(stepping, why): ``requested`` if it is "fixed" or "aligned"; for "auto", fixed up to
+    :data:`AUTO_FIXED_MAX_N` disks, aligned above unless its estimated cost passes
+    :data:`AUTO_MAX_COST_RATIO` x the fixed steps (``exact``: the exact motion, for its impacts)."""
+    from nbst.models.mjrun import STEPPINGS, steps_needed
+
+    if requested in STEPPINGS:
+        return requested, f"--stepping {requested} requested"
+    if requested != "auto":
+        raise ValueError(f"stepping must be auto, fixed or aligned, got {requested!r}")
+    n = problem.n
+    if n <= AUTO_FIXED_MAX_N:
+        return "fixed", (f"auto: fixed steps for at most {AUTO_FIXED_MAX_N} disks ({n} here); "
+                         f"--stepping aligned resolves each impact at its touch")
+    steps = steps_needed(problem.t_final, timestep)
+    impacts = len(exact.events)
+    ratio = (steps + AUTO_TRIALS_PER_IMPACT * impacts) / max(steps, 1)
+    if ratio > AUTO_MAX_COST_RATIO:
+        return "fixed", (f"auto: {n} disks, but aligned stepping would cost ~{ratio:.0f}x the fixed steps "
+                         f"({impacts:,} impacts in {steps:,} steps; limit {AUTO_MAX_COST_RATIO:g}x); "
+                         f"--stepping aligned forces it")
+    return "aligned", (f"auto: aligned stepping above {AUTO_FIXED_MAX_N} disks ({n} here, {impacts:,} impacts; "
+                       f"estimated ~{ratio:.1f}x the mj_step calls of fixed steps): fixed steps lag every impact "
+                       f"by one step and many collisions amplify it; --stepping fixed for MuJoCo's own steps")
+
+
 def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP, unit: float = DEFAULT_UNIT,
-             tol: float = DIVERGE_TOL, max_steps: int | None = None, stepping: str = "fixed",
-             convergence: bool = False, sensitivity: bool = True) -> Validation:
+             tol: float = DIVERGE_TOL, max_steps: int | None = None, stepping: str = "auto",
+             convergence: bool = False, sensitivity: bool | None = None, progress=None) -> Validation:
     """Run ``velocities`` (N, 2, units/s) in MuJoCo and in the exact simulator; compare (see module doc).
 
     max_steps   : ValueError before any work if t_final needs more MuJoCo steps
                   (default ``nbst.models.mjrun.MAX_STEPS``); the convergence ladder skips the
                   step sizes that need more
-    stepping    : "fixed" or "aligned" (``nbst.models.mjrun.STEPPINGS``)
+    stepping    : "auto" (``choose_stepping``), "fixed" or "aligned" (``nbst.models.mjrun.STEPPINGS``)
     convergence : also run the convergence study (module doc)
-    sensitivity : add ``nbst.sim.sensitivity.analyze`` at h and its check against a fixed-step run
+    sensitivity : add ``nbst.sim.sensitivity.analyze`` at h and its check against a fixed-step run;
+                  None: only up to :data:`SENSITIVITY_MAX_N` disks
+    progress    : None, or a factory progress(desc, total, unit) -> a bar with update(k) and close()
+                  (``nbst.progress.progress_bar``'s interface), one bar per long stage
     """
     import time
 
     from nbst.sim import simulate
 
-    from nbst.models.mjrun import MAX_STEPS, check_steps, run_final, run_mujoco
+    from nbst.models.mjrun import MAX_STEPS, check_steps, run_final, run_mujoco, steps_needed
 
     if not (np.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be > 0, got {tol!r}")
@@ -283,29 +395,60 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
     t0 = time.perf_counter()
     v = np.asarray(velocities, dtype=float)
     ex = simulate(problem, v)
-    mj = run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps, stepping=stepping)
+    requested = stepping
+    stepping, reason = choose_stepping(problem, ex, timestep, requested)
+
+    def staged(desc, total, fn, unit="step"):
+        if progress is None:
+            return fn(None)
+        bar = progress(desc, total, unit)
+        try:
+            return fn(bar.update)
+        finally:
+            bar.close()
+
+    steps = steps_needed(problem.t_final, timestep)
+    mj = staged(f"MuJoCo, {stepping} steps", steps,
+                lambda cb: run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps,
+                                      stepping=stepping, progress=cb))
 
     final_err = np.hypot(*(mj.final_positions - ex.final_positions).T)
-    d = np.hypot(*(mj.final_positions - problem.target).T)
-    mj_cost = float((d**2).sum())
-    mj_sig = int(sum(1 << i for i in range(problem.n) if d[i] <= problem.target_radius))
+    R2 = float(problem.target_radius) ** 2
+    target = np.asarray(problem.target, dtype=float)
+    dx = mj.final_positions - target
+    d2 = (dx * dx).sum(axis=1)
+    mj_cost = float(d2.sum())
+    mj_on = d2 <= R2  # the exact simulator's rule (nbst.sim.kernel.cost_signature)
+    de = ex.final_positions - target
+    exact_on = (de * de).sum(axis=1) <= R2
+    mj_sig = int(sum(1 << int(i) for i in np.flatnonzero(mj_on)))
 
     # event sequences aligned in order by their keys
     ka, kb = _keys(ex.events), _keys(mj.events)
     sm = difflib.SequenceMatcher(a=ka, b=kb, autojunk=False)
     matches = [(blk.a + k, blk.b + k) for blk in sm.get_matching_blocks() for k in range(blk.size)]
 
-    # per-disk error at every MuJoCo step (t <= t_final)
+    # per-disk error at every recorded MuJoCo step (t <= t_final), in chunks (memory)
     ts = mj.times[mj.times <= problem.t_final * (1 + 1e-12)]
-    err = np.hypot(*(mj.positions[: ts.size] - ex.at(ts)).transpose(2, 0, 1))  # (S, N)
-    diverge = None
-    over = np.flatnonzero((err > tol).any(axis=1))
-    if over.size:
-        s = int(over[0])
-        disk = int(np.argmax(err[s]))
-        diverge = {"time": float(ts[s]), "disk": disk, "error": float(err[s, disk])}
-        diverge.update(_cause(ex, mj, disk, float(ts[s]), matches))
     stride = max(1, ts.size // CURVE_SAMPLES)
+    chunk = max(1, COMPARE_CHUNK // max(problem.n, 1))
+    keep = np.arange(0, ts.size, stride)
+    curve = np.empty((keep.size, problem.n))
+    diverge = None
+    for a in range(0, ts.size, chunk):
+        b = min(a + chunk, ts.size)
+        err = np.hypot(*(mj.positions[a:b] - ex.at(ts[a:b])).transpose(2, 0, 1))  # (b - a, N)
+        sel = keep[(keep >= a) & (keep < b)]
+        curve[np.searchsorted(keep, sel)] = err[sel - a]
+        if diverge is None:
+            over = np.flatnonzero((err > tol).any(axis=1))
+            if over.size:
+                s = a + int(over[0])
+                disk = int(np.argmax(err[over[0]]))
+                diverge = {"time": float(ts[s]), "disk": disk, "error": float(err[over[0], disk])}
+                if getattr(mj, "stride", 1) > 1:
+                    diverge["resolution_s"] = float(ts[s] - ts[s - 1]) if s else 0.0
+                diverge.update(_cause(ex, mj, disk, float(ts[s]), matches))
     E = mj.energy
     free = ~mj.in_contact
     E0 = E[0] if E[0] > 0 else 1.0
@@ -315,26 +458,40 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
     if convergence:
         conv = convergence_study(problem, v, ex, timestep=timestep, unit=unit, max_steps=max_steps,
                                  aligned=mj if stepping == "aligned" else None,
-                                 fixed=mj if stepping == "fixed" else None)
+                                 fixed=mj if stepping == "fixed" else None, progress=progress)
         order = fit_order(conv, problem)
     sens = check = None
+    if sensitivity is None:
+        sensitivity = problem.n <= SENSITIVITY_MAX_N
+        if not sensitivity:
+            sens = {"skipped": f"{problem.n} disks, above {SENSITIVITY_MAX_N}: the analysis carries a dense "
+                               f"(2N x 2C) Jacobian through every event (21 s at 1,000 disks, measured); "
+                               f"nbst.sim.sensitivity.analyze runs it"}
     if sensitivity:
-        sens = _sensitivity(problem, v, timestep)
+        def run_sens(cb):
+            out = _sensitivity(problem, v, timestep)
+            if cb:
+                cb(1)
+            return out
+        sens = staged(f"sensitivity analysis ({problem.n} disks)", 1, run_sens, unit="run")
         if stepping == "fixed":
-            fixed = (float(final_err.max()), mj_sig == ex.signature, "this run")
+            fixed = (float(final_err.max()), bool(np.array_equal(mj_on, exact_on)), "this run")
         elif conv and conv[0]["max_error"] is not None:
             fixed = (conv[0]["max_error"], conv[0]["same_signature"], "convergence entry h")
         else:
-            e = _entry(problem, ex, *run_final(problem, v, timestep=timestep, unit=unit, max_steps=max_steps),
+            e = _entry(problem, ex, *staged("MuJoCo, fixed steps (for the prediction check)", steps,
+                                            lambda cb: run_final(problem, v, timestep=timestep, unit=unit,
+                                                                 max_steps=max_steps, progress=cb)),
                        h=timestep, divisor=1)
             fixed = (e["max_error"], e["same_signature"], "extra fixed-step run")
         check = prediction_check(sens, timestep, *fixed)
     return Validation(problem=problem, velocities=v, timestep=float(timestep), unit=float(unit), tol=float(tol),
                       exact=ex, mujoco=mj, final_error=final_err, mj_cost=mj_cost, mj_signature=mj_sig,
-                      matches=matches, error_curve_t=ts[::stride], error_curve=err[::stride], diverge=diverge,
+                      matches=matches, error_curve_t=ts[keep], error_curve=curve, diverge=diverge,
                       energy_drift_free=drift_free, energy_drift_final=drift_final,
                       wall_time=time.perf_counter() - t0, stepping=stepping, sensitivity=sens,
-                      prediction_check=check, convergence=conv, convergence_order=order)
+                      prediction_check=check, convergence=conv, convergence_order=order,
+                      stepping_requested=requested, stepping_reason=reason, exact_on=exact_on, mj_on=mj_on)
 
 
 def _sensitivity(problem: Problem, v, timestep: float) -> dict:
@@ -378,17 +535,19 @@ def _entry(problem: Problem, ex, final, steps, wall, *, h, divisor, stepping="fi
                 "signature": None, "same_signature": None, "cost": None, "steps": steps, "wall_time": None,
                 "stats": stats, "skipped": skipped}
     err = np.hypot(*(np.asarray(final) - ex.final_positions).T)
-    d = np.hypot(*(np.asarray(final) - problem.target).T)
-    on = d <= problem.target_radius
-    sig = "".join("1" if x else "0" for x in on)
+    target = np.asarray(problem.target, dtype=float)
+    R2 = float(problem.target_radius) ** 2
+    d2 = ((np.asarray(final) - target) ** 2).sum(axis=1)
+    sig = "".join("1" if x else "0" for x in d2 <= R2)
+    sig_ex = "".join("1" if x else "0" for x in ((ex.final_positions - target) ** 2).sum(axis=1) <= R2)
     return {"stepping": stepping, "h": h, "divisor": divisor, "max_error": float(err.max()),
-            "mean_error": float(err.mean()), "signature": sig, "same_signature": sig == ex.signature_string,
-            "cost": float((d**2).sum()), "steps": int(steps), "wall_time": float(wall), "stats": stats,
+            "mean_error": float(err.mean()), "signature": sig, "same_signature": sig == sig_ex,
+            "cost": float(d2.sum()), "steps": int(steps), "wall_time": float(wall), "stats": stats,
             "skipped": skipped}
 
 
 def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, max_steps: int,
-                      aligned=None, fixed=None) -> list:
+                      aligned=None, fixed=None, progress=None) -> list:
     """Fixed steps at timestep / LADDER and aligned stepping at timestep: one entry each.
 
     aligned / fixed : a MujocoRun already made (aligned at h / fixed at h) to reuse
@@ -406,10 +565,25 @@ def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, 
         elif div == 1 and fixed is not None:
             out.append(_entry(problem, ex, fixed.final_positions, fixed.steps, fixed.wall_time, h=h, divisor=1))
         else:
-            out.append(_entry(problem, ex, *run_final(problem, v, timestep=h, unit=unit, max_steps=max_steps),
-                              h=h, divisor=div))
-    run = aligned if aligned is not None else run_mujoco(problem, v, timestep=timestep, unit=unit,
-                                                         max_steps=max_steps, stepping="aligned")
+            bar = progress(f"convergence, fixed h/{div}", n, "step") if progress else None
+            try:
+                out.append(_entry(problem, ex, *run_final(problem, v, timestep=h, unit=unit, max_steps=max_steps,
+                                                          progress=bar.update if bar else None),
+                                  h=h, divisor=div))
+            finally:
+                if bar:
+                    bar.close()
+    if aligned is not None:
+        run = aligned
+    else:
+        n = steps_needed(problem.t_final, timestep)
+        bar = progress("convergence, aligned", n, "step") if progress else None
+        try:
+            run = run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps, stepping="aligned",
+                             progress=bar.update if bar else None)
+        finally:
+            if bar:
+                bar.close()
     out.append(_entry(problem, ex, run.final_positions, run.stats["steps"] + run.stats["impacts"], run.wall_time,
                       h=None, divisor=None, stepping="aligned", stats=run.stats))
     return out
@@ -451,3 +625,50 @@ def _cause(ex, mj, disk: int, t: float, matches) -> dict:
         other = "MuJoCo" if side == "exact" else "the exact simulator"
         why = f"{text} ({side} motion only: {other} has no such event here)"
     return {"cause": why, "cause_event": {"time": t_e, "side": side, "index": int(k), "matched": k in matched}}
+
+
+#: Scale motions (:func:`gas_motion`): area fraction of the disks, radius (units), speeds
+#: (units/s) and duration (s). At this density a disk's mean free path is pi r / (2 phi) ~ 200
+#: units, about one collision per disk per second at the speeds drawn, plus wall bounces near
+#: the walls, at every N (the box grows as sqrt(N)).
+GAS_AREA_FRACTION = 0.08
+GAS_RADIUS = 10.0
+GAS_SPEED = (100.0, 250.0)
+GAS_T_FINAL = 2.0
+
+
+def gas_motion(n: int, *, seed: int = 1, t_final: float = GAS_T_FINAL, fraction: float = GAS_AREA_FRACTION):
+    """A many-disk motion for checks and benchmarks at any N: (problem, velocities).
+
+    N disks of radius :data:`GAS_RADIUS` start at the centres of a square grid in a square box
+    sized so that they cover ``fraction`` of its area (fixed density: the box grows as sqrt(N)),
+    with velocities of random direction and speed in :data:`GAS_SPEED` (seeded). Each target is
+    where the exact simulator takes its disk at t_final, so the motion is an exact solution
+    (cost 0) with real collisions and wall bounces; target radius 2r.
+    """
+    from nbst.problem import problem_from_dict
+    from nbst.sim import simulate
+
+    n = int(n)
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    r = GAS_RADIUS
+    side = float(np.sqrt(n * np.pi * r * r / fraction))
+    k = int(np.ceil(np.sqrt(n)))
+    pitch = side / k
+    if pitch < 2 * r * (1 + 1e-9):
+        raise ValueError(f"fraction {fraction:g} is too dense for a square grid")
+    ij = np.array([(a, b) for a in range(k) for b in range(k)][:n], dtype=float)
+    start = (ij + 0.5) * pitch
+    rng = np.random.default_rng(seed)
+    ang = rng.uniform(0.0, 2 * np.pi, n)
+    speed = rng.uniform(*GAS_SPEED, n)
+    v = np.stack([speed * np.cos(ang), speed * np.sin(ang)], axis=1)
+    disks = [{"start": s.tolist(), "target": s.tolist(), "radius": r} for s in start]
+    d = {"name": f"gas-{n}-s{seed}", "description": f"{n} disks, area fraction {fraction:g}, seed {seed} "
+         f"(nbst.models.validate.gas_motion)", "box": [side, side], "t_final": float(t_final),
+         "target_radius": 2 * r, "disks": disks}
+    final = simulate(problem_from_dict(d), v).final_positions
+    for disk, f in zip(disks, final):
+        disk["target"] = [float(f[0]), float(f[1])]
+    return problem_from_dict(d), v

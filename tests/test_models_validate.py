@@ -118,12 +118,12 @@ REPORT_KEYS = {
          "mujoco_result", "n", "prediction_check", "problem", "schema_version", "sensitivity", "signatures_agree",
          "stepping", "t_final", "tolerance", "velocities"],
     "mujoco": ["steps", "timestep", "unit_m", "version", "wall_time_s"],
-    "stepping": ["cost", "mode", "stepping_wall_time_s", "steps", "timestep"],
+    "stepping": ["cost", "mode", "reason", "record_stride", "requested", "stepping_wall_time_s", "steps", "timestep"],
     "prediction_check": ["fixed_run", "keeps_signature_measured", "keeps_signature_predicted",
                          "keeps_signature_predicted_rss", "measured_error_max", "measured_over_linear",
                          "predicted_error_linear_max", "predicted_error_max", "timestep", "verdict",
                          "within_first_order", "within_worst_case"],
-    "final_error": ["exact_final", "max", "mujoco_final", "per_disk"],
+    "final_error": ["exact_final", "max", "mean", "median", "mujoco_final", "per_disk", "worst"],
     "exact": ["cost", "disk_disk", "order", "signature", "truncated", "wall"],
     "mujoco_result": ["cost", "disk_disk", "order", "signature", "wall"],
     "events": ["exact", "exact_only", "first_mismatch", "matched", "mujoco", "mujoco_only", "offset_s",
@@ -137,7 +137,7 @@ def test_report_json_layout_is_golden():
     from nbst.models.validate import SCHEMA_VERSION
     p = load_problem("over5")
     d = validate(p, p.straight_velocities(), timestep=1e-3).to_dict()
-    assert d["schema_version"] == SCHEMA_VERSION == 2
+    assert d["schema_version"] == SCHEMA_VERSION == 3
     for level, keys in REPORT_KEYS.items():
         node = d if not level else d[level]
         assert sorted(node) == keys, level
