@@ -218,13 +218,14 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
         if kind == "png":
             write_png(out, renderer.render(float(args.still)))
             if not args.quiet:
-                print(f"nbst render: wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s)", file=sys.stderr)
+                print(f"nbst render: wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s)"
+                      f"{_labels_note(args, renderer)}", file=sys.stderr)
             return 0
         progress = None
         if not args.quiet:
             from nbst.progress import progress_bar
-            progress = progress_bar(total=len(times), unit="frame", desc=f"render {out.name}", file=sys.stderr,
-                            leave=False)
+            progress = with_eta(progress_bar(total=len(times), unit="frame", desc=f"render {out.name}",
+                                             file=sys.stderr, leave=False))
         t0 = time.perf_counter()
         try:
             n = render_video(renderer, times, out, fps=fps, progress=progress)
@@ -234,10 +235,43 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
         dt = time.perf_counter() - t0
         if not args.quiet:
             print(f"nbst render: wrote {out}: {n} frames, {size[0]}x{size[1]}, {fps:g} fps, {n / fps:.2f} s of video "
-                  f"({dt:.1f} s, {n / dt:.0f} frames/s)", file=sys.stderr)
+                  f"({dt:.1f} s, {n / dt:.0f} frames/s){_labels_note(args, renderer)}", file=sys.stderr)
         return 0
     finally:
         ctx.release()
+
+
+def _labels_note(args, renderer) -> str:
+    """Why the disks carry no numbers, when the size rule (not the user) left them off."""
+    rpx = getattr(renderer, "rpx", None)
+    if args.labels is not None or getattr(renderer, "labels", None) is not None or rpx is None:
+        return ""
+    return (f"; no disk numbers: disks {2 * float(min(rpx)):.0f} px across, under the {style.LABELS_MIN_DISK_PX:g} "
+            f"px they need (--labels writes them anyway)")
+
+
+class with_eta:
+    """A progress bar (``nbst.progress.progress_bar``) whose plain-line form (a log, a pipe)
+    also says how long is left: ``ETA 12 s`` from the rate so far (tqdm shows its own)."""
+
+    def __init__(self, bar):
+        import time
+
+        self.bar, self._time = bar, time.monotonic
+        self._t0 = self._time()
+        self._plain = not hasattr(bar, "format_dict")  # tqdm has one and prints its own ETA
+
+    def update(self, n: int = 1) -> None:
+        if self._plain and self.bar.total:
+            done = self.bar.n + n
+            rate = done / max(1e-9, self._time() - self._t0)
+            self.bar.set_postfix_str(f"ETA {max(0.0, self.bar.total - done) / rate:.0f} s")
+        self.bar.update(n)
+
+    def close(self) -> None:
+        if self._plain:
+            self.bar.set_postfix_str("")
+        self.bar.close()
 
 
 def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None,
