@@ -124,6 +124,16 @@ class AlignedStats:
         return asdict(self)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise a x b of (k, 3) arrays, the same numbers as np.cross without its axis handling
+    (~70 us a call: 3.9 s of a 41 s aligned run of 1,000 disks, profiled)."""
+    out = np.empty_like(b)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
 class _Stepper:
     """The model's arrays that stepping changes, saved; state save/load; detection."""
 
@@ -181,7 +191,7 @@ class _Stepper:
         b = self.body[g]
         cv = d.cvel[b]
         r = d.geom_xpos[g] - d.subtree_com[self.root[b]]
-        v = np.linalg.norm(cv[:, 3:] + np.cross(cv[:, :3], r), axis=1) + \
+        v = np.linalg.norm(cv[:, 3:] + _cross(cv[:, :3], r), axis=1) + \
             np.linalg.norm(cv[:, :3], axis=1) * m.geom_rbound[g]
         return float(v.max(initial=0.0))
 
@@ -210,7 +220,7 @@ class _Stepper:
         for side, sign in ((0, -1.0), (1, 1.0)):
             b = self.body[geom[:, side]]
             cv = d.cvel[b]
-            v = cv[:, 3:] + np.cross(cv[:, :3], pos - d.subtree_com[self.root[b]])
+            v = cv[:, 3:] + _cross(cv[:, :3], pos - d.subtree_com[self.root[b]])
             rate += sign * np.einsum("ij,ij->i", nrm, v)
         out: dict = {}
         for k in range(n):

@@ -44,7 +44,9 @@ class LineProgress:
         done = f"{self.n:,}" + (f"/{self.total:,}" if self.total else "") + f" {self.unit}s"
         pct = f" ({100.0 * self.n / self.total:.0f}%)" if self.total else ""
         post = f", {self.postfix}" if self.postfix else ""
-        return f"{self.desc + ': ' if self.desc else ''}{done}{pct} in {elapsed:.0f} s{post}"
+        eta = (f", ETA {elapsed * (self.total - self.n) / self.n:.0f} s"  # at the mean rate so far
+               if self.total and 0 < self.n < self.total else "")
+        return f"{self.desc + ': ' if self.desc else ''}{done}{pct} in {elapsed:.0f} s{eta}{post}"
 
     def _emit(self) -> None:
         if not self.disable:
