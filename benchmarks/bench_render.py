@@ -1,15 +1,21 @@
-"""Render benchmark: a t_final-second video of diamond-s14 (default 5 s, 60 fps,
-1280x720), rendered and encoded end to end, and its parts.
+"""Render benchmark: frames per second of ``nbst render``'s 2D view against the number of
+disks (N = 10 .. 1,000 at fixed density, 1280x720), and the parts of one problem's video.
 
-    python benchmarks/bench_render.py                      # straight-line shots, 2D, trails
-    python benchmarks/bench_render.py --solution sol.json  # a solution from `nbst solve`
-    python benchmarks/bench_render.py --view 3d --no-trails
+    python benchmarks/bench_render.py --quick              # the curve, 60 frames a size: < 60 s
+    python benchmarks/bench_render.py                      # the curve, 301 frames a size (5 s at 60 fps)
+    python benchmarks/bench_render.py --sizes 10,1000,3000 # other sizes (3,000: 1.7 GB of keyframes)
+    python benchmarks/bench_render.py --problem diamond-s14 [--solution sol.json] [--view 3d] [--no-trails]
 
-Prints ms per frame for: draw alone, render alone (draw + read_into a
-preallocated buffer; RGB, and RGBA as videos read it), readback alone,
-encode alone (H.264 of pre-rendered frames through the threaded writer, from
-RGB and from RGBA), end to end (render + encode overlapped, as `nbst render`),
-and frames per second. Figures, never assertions.
+The curve: for each N, disks of radius 1 on a jittered grid in a 16:9 box holding them at
+8 % area density, random velocities (up to a quarter of the box's width in t_final = 5 s),
+targets where that motion ends (so every disk ends on target and the lit rings are drawn);
+the same picture at every N, the disks shrinking on screen as N grows. Prints frames per
+second of: render (draw + RGBA readback, as the MP4 path reads it; numbers off), with
+--trails, with --labels forced on, and end to end to an MP4 (render + H.264 encoding,
+overlapped, as ``nbst render``), each with its ratio to N = 10 measured in the same run.
+``--problem``: ms per frame of each part (draw, readback, encode, end to end) for one
+problem. Figures, never assertions; the GL renderer and the load average are printed with
+them (the development machine is shared).
 """
 from __future__ import annotations
 
@@ -20,17 +26,114 @@ import time
 
 import numpy as np
 
+CURVE = (10, 30, 100, 300, 1000)
+
+
+def grid_problem(n: int, *, seed: int = 1, density: float = 0.08, t_final: float = 5.0, name: str | None = None):
+    """(problem, velocities, trajectory): ``n`` radius-1 disks on a jittered grid in a 16:9 box
+    at ``density`` (area share), random velocities up to a quarter of the box's width in
+    ``t_final``, targets at the simulated final positions (an exact solution)."""
+    from nbst import simulate
+    from nbst.problem import problem_from_dict
+
+    rng = np.random.default_rng(seed)
+    r, aspect = 1.0, 16 / 9
+    H = float(np.sqrt(n * np.pi * r * r / density / aspect))
+    W = aspect * H
+    cols = int(np.ceil(np.sqrt(n * aspect)))
+    rows = int(np.ceil(n / cols))
+    xs, ys = (np.arange(cols) + 0.5) * W / cols, (np.arange(rows) + 0.5) * H / rows
+    start = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 2)[:n]
+    pitch = min(W / cols, H / rows)  # >= 2r + 2 * 0.2 pitch at this density: no overlap after the jitter
+    start = np.clip(start + rng.uniform(-0.2, 0.2, start.shape) * pitch, r, (W - r, H - r))
+    ang = rng.uniform(0.0, 2 * np.pi, n)
+    v = (0.25 * W / t_final) * rng.uniform(0.3, 1.0, n)[:, None] * np.stack([np.cos(ang), np.sin(ang)], 1)
+    d = {"name": name or f"grid-{n}", "box": [W, H], "t_final": t_final, "target_radius": 2.5 * r,
+         "disks": [{"start": [float(x), float(y)], "target": [float(x), float(y)], "radius": r} for x, y in start]}
+    tr = simulate(problem_from_dict(d), v)
+    for disk, (x, y) in zip(d["disks"], tr.final_positions):
+        disk["target"] = [float(np.clip(x, r, W - r)), float(np.clip(y, r, H - r))]
+    p = problem_from_dict(d)
+    return p, v, simulate(p, v)
+
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--problem", default="diamond-s14")
-    ap.add_argument("--solution", default=None, help="solution JSON (default: straight-line shots)")
+    ap.add_argument("--quick", action="store_true", help="the curve with 60 frames a size (under a minute)")
+    ap.add_argument("--sizes", default=None, help="comma-separated N for the curve (default 10,30,100,300,1000)")
+    ap.add_argument("--frames", type=int, default=None, help="frames a size (default 301; 60 with --quick)")
+    ap.add_argument("--problem", default=None, help="instead of the curve: the parts of this problem's video")
+    ap.add_argument("--solution", default=None, help="with --problem: solution JSON (default: straight-line shots)")
     ap.add_argument("--size", default="1280x720")
     ap.add_argument("--fps", type=float, default=60.0)
     ap.add_argument("--view", choices=["2d", "3d"], default="2d")
     ap.add_argument("--no-trails", action="store_true")
-    ap.add_argument("--repeat", type=int, default=2, help="runs of each measurement; the best is printed")
+    ap.add_argument("--repeat", type=int, default=None,
+                    help="runs of each measurement; the best is printed (default 2; 1 with --quick)")
     args = ap.parse_args(argv)
+    if args.repeat is None:
+        args.repeat = 1 if args.quick else 2
+    if args.problem is None:
+        return curve(args)
+    return parts(args)
+
+
+def curve(args) -> int:
+    from nbst.cli.render import parse_size
+    from nbst.render.gl import create_context
+    from nbst.render.scene2d import Renderer2D
+    from nbst.render.video import render_video
+
+    sizes = [int(x) for x in args.sizes.split(",")] if args.sizes else list(CURVE)
+    frames = args.frames or (60 if args.quick else 301)
+    size = parse_size(args.size)
+    ctx = create_context()
+    load0 = os.getloadavg()[0]
+    print(f"nbst render, 2D, {size[0]}x{size[1]}, {frames} frames a size over t_final = 5 s; disks at 8 % density; "
+          f"best of {args.repeat}")
+    print(f"GL_RENDERER: {ctx.info['GL_RENDERER']}; {os.cpu_count()} CPUs; load average {load0:.1f} at the start")
+    cols = ("render", "+trails", "+labels", "MP4")
+    print(f"{'N':>6} {'events':>7} " + " ".join(f"{c + ' fps':>12} {'vs N0':>6}" for c in cols))
+    base = None
+    rows = []
+    for n in sizes:
+        p, v, tr = grid_problem(n)
+        times = np.linspace(0.0, p.t_final, frames)
+        fps = []
+        for trails, labels in ((False, False), (True, False), (False, True)):
+            r = Renderer2D(ctx, p, tr, size=size, trails=trails, labels=labels)
+            buf = r.target.new_frame(4)
+            r.render_rgba(times[len(times) // 2], out=buf)  # warm-up: shaders, buffers
+
+            def run():
+                for t in times:
+                    r.render_rgba(t, out=buf)
+            fps.append(frames / _best(run, args.repeat))
+            if not (trails or labels):
+                with tempfile.TemporaryDirectory() as d:
+                    path = os.path.join(d, "bench.mp4")
+                    mp4 = frames / _best(lambda: render_video(r, times, path, fps=args.fps), args.repeat)
+            r.release()
+        fps.append(mp4)
+        base = base or fps
+        rows.append((n, fps))
+        print(f"{n:>6} {len(tr.events):>7} " + " ".join(f"{f:>12.0f} {f / b:>6.2f}" for f, b in zip(fps, base)),
+              flush=True)
+    ctx.release()
+    print(f"load average {os.getloadavg()[0]:.1f} at the end; 'vs N0': fps / fps at N = {sizes[0]} in this run")
+    return 0
+
+
+def _best(fn, repeat: int) -> float:
+    out = []
+    for _ in range(max(1, repeat)):
+        t0 = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t0)
+    return min(out)
+
+
+def parts(args) -> int:
 
     from nbst import load_problem, load_solution, simulate
     from nbst.render import style
