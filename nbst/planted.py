@@ -5,10 +5,22 @@ the aim of a strike by a cueable disk (``nbst.search.aim.strike_velocity``, towa
 random point of the box); the motion is simulated exactly and each disk's target
 is where it ends. So the velocities used are a solution of cost 0 (up to the
 round-off of writing the targets), and a search has a ground truth.
+
+Placement is rejection sampling: a uniform random centre per try, kept when it is at
+least ``2 r + START_GAP`` from every disk placed so far. The tries are drawn in batches
+and checked by a compiled kernel against a uniform grid of cells (side >= that distance,
+so only the 3 x 3 cells around a try can hold a disk too close): O(1) per try instead of
+O(N). The batches consume the random stream exactly as one ``rng.uniform`` per try did
+(the unused tail of the last batch is given back by rewinding the generator), so every
+(n, seed, options) that worked before gives the same problem bit for bit.
 """
 from __future__ import annotations
 
+import math
+import time
+
 import numpy as np
+from numba import njit
 
 from nbst.problem import Problem, problem_from_dict
 from nbst.search.aim import strike_velocity
@@ -18,17 +30,112 @@ from nbst.sim import simulate
 START_GAP = 2.0
 #: Cue speeds are uniform in this fraction range of the box diagonal per t_final.
 SPEED_RANGE = (0.05, 0.35)
-#: Tries to place the disks / to find a strike from the right side.
+#: Tries to place the disks: at least PLACE_TRIES, and PLACE_TRIES_PER_DISK per disk for large N
+#: (at the default density a try is kept with probability > 0.6, so ~1.5 N tries suffice;
+#: the rest is room for a crowded --box). STRIKE_TRIES: tries to find a strike from the right side.
 PLACE_TRIES = 20_000
+PLACE_TRIES_PER_DISK = 200
 STRIKE_TRIES = 64
+#: The default box: DEFAULT_SIDE x DEFAULT_SIDE up to DEFAULT_BOX_UP_TO disks (nbst's old
+#: 63-disk cap, so every problem generated before keeps its box); above, the box grows to keep
+#: the density of DENSITY_DISKS disks of radius 15 in 800 x 800: each side DEFAULT_SIDE * sqrt(N / 60).
+DEFAULT_SIDE = 800.0
+DENSITY_DISKS = 60
+DEFAULT_BOX_UP_TO = 63
+#: Tries per placement batch (one kernel call, one progress update).
+PLACE_BATCH = 65_536
 
 
-def planted(n: int, *, noncue: int = 0, radius: float = 15.0, seed: int, box=(800.0, 800.0), t_final: float = 5.0,
-            target_radius: float = 75.0, name: str | None = None) -> tuple[Problem, np.ndarray]:
+def default_box(n: int) -> tuple[float, float]:
+    """The box ``nbst generate --planted N`` uses without --box (see DEFAULT_BOX_UP_TO)."""
+    if n <= DEFAULT_BOX_UP_TO:
+        return (DEFAULT_SIDE, DEFAULT_SIDE)
+    side = DEFAULT_SIDE * math.sqrt(n / DENSITY_DISKS)
+    return (side, side)
+
+
+def place_tries(n: int) -> int:
+    """The try budget for placing n disks."""
+    return max(PLACE_TRIES, PLACE_TRIES_PER_DISK * n)
+
+
+@njit(cache=True)
+def _grid_place(cand, starts, placed, n, gap, head, nxt, cell, nx, ny):
+    """Keep each candidate centre (cand, (B, 2), in order) whose distance to every disk placed
+    so far is >= gap, until n are placed. The cells (nx x ny of side ``cell`` >= gap) hold
+    linked lists: ``head[cy * nx + cx]`` is the last disk put in a cell, ``nxt[i]`` the one
+    before it (-1 ends). Returns (placed, tries used)."""
+    for k in range(cand.shape[0]):
+        if placed == n:
+            return placed, k
+        x = cand[k, 0]
+        y = cand[k, 1]
+        cx = min(max(int(x / cell), 0), nx - 1)
+        cy = min(max(int(y / cell), 0), ny - 1)
+        ok = True
+        for gy in range(max(cy - 1, 0), min(cy + 2, ny)):
+            for gx in range(max(cx - 1, 0), min(cx + 2, nx)):
+                j = head[gy * nx + gx]
+                while j >= 0:
+                    if math.hypot(starts[j, 0] - x, starts[j, 1] - y) < gap:
+                        ok = False
+                        break
+                    j = nxt[j]
+                if not ok:
+                    break
+            if not ok:
+                break
+        if ok:
+            starts[placed, 0] = x
+            starts[placed, 1] = y
+            c = cy * nx + cx
+            nxt[placed] = head[c]
+            head[c] = placed
+            placed += 1
+    return placed, cand.shape[0]
+
+
+def place_disks(rng: np.random.Generator, n: int, r: float, box, *, gap: float = START_GAP, progress=None):
+    """n centres in the box, pairwise >= 2 r + gap apart, by rejection sampling with
+    ``place_tries(n)`` tries (one ``rng.uniform`` pair per try, in order). Returns (starts, placed):
+    ``placed < n`` when the budget ran out. ``progress(stage, done, total)`` is called between batches."""
+    W, H = box
+    d = 2 * r + gap
+    lo, hi = np.array([r, r]), np.array([W - r, H - r])
+    # cells of side >= d (a hair more, so that a disk two cells away is surely >= d away whatever
+    # the round-off of x / cell), and about 4 cells per disk at most; a centre past the last cell
+    # counts in it (merging cells only adds checks, it never hides a close disk)
+    cell = max(d * (1.0 + 1e-9), math.sqrt(W * H / (4.0 * n)))
+    nx = max(1, min(int(W / cell) + 1, 1 << 15))
+    ny = max(1, min(int(H / cell) + 1, 1 << 15))
+    head = np.full(nx * ny, -1, np.int64)
+    nxt = np.full(n, -1, np.int64)
+    starts = np.empty((n, 2))
+    placed, budget = 0, place_tries(n)
+    while budget > 0 and placed < n:
+        b = min(budget, PLACE_BATCH)
+        state = rng.bit_generator.state
+        cand = rng.uniform(lo, hi, size=(b, 2))
+        placed, used = _grid_place(cand, starts, placed, n, d, head, nxt, cell, nx, ny)
+        if used < b:  # give back the draws this batch did not use
+            rng.bit_generator.state = state
+            rng.uniform(lo, hi, size=(used, 2))
+        budget -= used
+        if progress is not None:
+            progress("placing disks", placed, n)
+    return starts, placed
+
+
+def planted(n: int, *, noncue: int = 0, radius: float = 15.0, seed: int, box=None, t_final: float = 5.0,
+            target_radius: float = 75.0, name: str | None = None, progress=None) -> tuple[Problem, np.ndarray]:
     """A random problem with n disks (the last ``noncue`` noncueable) and its zero-cost velocities.
 
+    box: (W, H), or None for ``default_box(n)``. progress: None, or ``progress(stage, done, total)``,
+    called between placement batches and before and after the exact simulation.
     Raises ValueError when the request cannot be met (no cueable disk, disks do not fit).
     """
+    if box is None:
+        box = default_box(n)
     if n < 1:
         raise ValueError("--planted needs at least 1 disk")
     if not 0 <= noncue < n:
@@ -38,17 +145,10 @@ def planted(n: int, *, noncue: int = 0, radius: float = 15.0, seed: int, box=(80
     rng = np.random.default_rng(seed)
     W, H = box
     r = float(radius)
-    starts = np.empty((n, 2))
-    placed = 0
-    for _ in range(PLACE_TRIES):
-        c = rng.uniform([r, r], [W - r, H - r])
-        if placed == 0 or np.min(np.hypot(*(starts[:placed] - c).T)) >= 2 * r + START_GAP:
-            starts[placed] = c
-            placed += 1
-            if placed == n:
-                break
+    starts, placed = place_disks(rng, n, r, box, progress=progress)
     if placed < n:
-        raise ValueError(f"could not place {n} disks of radius {r:g} in the {W:g} x {H:g} box; use a smaller --radius")
+        raise ValueError(f"could not place {n} disks of radius {r:g} in the {W:g} x {H:g} box "
+                         f"({place_tries(n):,} tries placed {placed:,}); use a smaller --radius or a larger --box")
     cue = np.arange(n) < n - noncue
     diag = float(np.hypot(W, H))
     ang = rng.uniform(0, 2 * np.pi, n)
@@ -76,7 +176,14 @@ def planted(n: int, *, noncue: int = 0, radius: float = 15.0, seed: int, box=(80
         "disks": [{"start": starts[i].tolist(), "target": starts[i].tolist(), "radius": r, "cueable": bool(cue[i])}
                   for i in range(n)],
     }
+    if progress is not None:
+        progress("simulating the planted motion", 0, 1)
     tr = simulate(problem_from_dict(d), v)
+    if tr.truncated:
+        raise ValueError(f"the planted motion of {n} disks needs more events than the simulator's cap "
+                         f"({tr.events.size:,} events by t = {tr.t_end:.3g} s); use fewer disks or a larger --box")
+    if progress is not None:
+        progress("simulating the planted motion", 1, 1)
     final = np.clip(tr.final_positions, r, np.array([W - r, H - r]))  # round-off at a wall
     for i in range(n):
         d["disks"][i]["target"] = final[i].tolist()
