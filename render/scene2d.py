@@ -234,11 +234,19 @@ def marker_radii(rpx) -> np.ndarray:
     """Target marker radii (px, outer edge) for disks of on-screen radii ``rpx``: inside the
     disk (MARKER_FRAC of it, at least MIN_MARKER_PX) where the marker and its halo stay within
     MARKER_INSIDE_MAX of the disk's radius, else a ring just outside the disk's rim (small
-    disks: the marker would hide the disk resting on it)."""
+    disks: the marker would hide the disk resting on it; see :func:`markers_outside`)."""
     rpx = np.asarray(rpx, float)
     inner = np.maximum(style.MARKER_FRAC * rpx, style.MIN_MARKER_PX)
-    outside = rpx + style.MARKER_OUTSIDE_GAP_PX + style.MARKER_HALO_PX + style.MARKER_PX
-    return np.where(inner + style.MARKER_HALO_PX > style.MARKER_INSIDE_MAX * rpx, outside, inner)
+    outside = rpx + style.MARKER_OUTSIDE_GAP_PX + style.MARKER_OUTSIDE_PX
+    return np.where(markers_outside(rpx), outside, inner)
+
+
+def markers_outside(rpx) -> np.ndarray:
+    """Which targets (of disks with on-screen radii ``rpx``) are marked by a thin ring outside
+    their disk's rim, drawn under the disks, instead of a small circle over them."""
+    rpx = np.asarray(rpx, float)
+    inner = np.maximum(style.MARKER_FRAC * rpx, style.MIN_MARKER_PX)
+    return inner + style.MARKER_HALO_PX > style.MARKER_INSIDE_MAX * rpx
 
 
 def labels_legible(rpx) -> bool:
@@ -469,15 +477,20 @@ class Renderer2D(FrameRenderer):
             # a disk resting on its target: the marker rings its number instead of crossing it
             clear = float(self.labels.half_diag[self.labels.on_disk].max()) + style.MARKER_LABEL_GAP_PX
             self.marker_px = np.where(self.labels.on_disk, np.maximum(self.marker_px, clear), self.marker_px)
-        self._markers = np.zeros(2 * n, CIRCLE_DTYPE)  # halo rings, then the markers
-        self._markers["center"] = np.concatenate([self.target_px, self.target_px])
+        # small circles over the disks, each in a dark halo (drawn every frame, above the disks);
+        # around small disks, thin rings under them instead (static layer: markers_outside)
+        self.marker_outside = markers_outside(self.rpx)
+        over = ~self.marker_outside
+        k = int(over.sum())
+        self._markers = np.zeros(2 * k, CIRCLE_DTYPE)  # halo rings, then the markers
+        self._markers["center"] = np.concatenate([self.target_px[over], self.target_px[over]])
         h = style.MARKER_HALO_PX
-        self._markers["radius"][:n] = self.marker_px + h
-        self._markers["stroke"][:n] = style.MARKER_PX + 2 * h
-        self._markers["rim"][:n] = style.MARKER_HALO
-        self._markers["radius"][n:] = self.marker_px
-        self._markers["stroke"][n:] = style.MARKER_PX
-        self._markers["rim"][n:] = style.MARKER
+        self._markers["radius"][:k] = self.marker_px[over] + h
+        self._markers["stroke"][:k] = style.MARKER_PX + 2 * h
+        self._markers["rim"][:k] = style.MARKER_HALO
+        self._markers["radius"][k:] = self.marker_px[over]
+        self._markers["stroke"][k:] = style.MARKER_PX
+        self._markers["rim"][k:] = style.MARKER
         self.legend_text = Text(ctx, max(style.MIN_LEGEND_PX, int(round(style.LEGEND_TEXT_FRAC * short))))
         self.target_text = Text(ctx, target_label_px(self.size)) if labels else None
         self.static = FrameTarget(ctx, self.size)
@@ -491,8 +504,9 @@ class Renderer2D(FrameRenderer):
         return (pad, pad)
 
     def _draw_static(self) -> None:
-        """Background, box, dim target rings and the legend: drawn once (the target
-        markers and numbers are drawn on every frame, above the disks)."""
+        """Background, box, dim target rings, the target rings of small disks and the legend:
+        drawn once (other target markers and all numbers are drawn on every frame, above the
+        disks)."""
         ctx, mgl, L, p = self.ctx, self._mgl, self.layout, self.problem
         self.static.fbo.use()
         ctx.viewport = (0, 0, *self.size)
@@ -510,6 +524,14 @@ class Renderer2D(FrameRenderer):
         rings["stroke"] = style.RING_DIM_PX
         rings["rim"] = style.RING_DIM
         self.circles.draw(rings)
+        out = self.marker_outside
+        if out.any():  # target rings around small disks: under the disks, never over them
+            marks = np.zeros(int(out.sum()), CIRCLE_DTYPE)
+            marks["center"] = self.target_px[out]
+            marks["radius"] = self.marker_px[out]
+            marks["stroke"] = style.MARKER_OUTSIDE_PX
+            marks["rim"] = style.MARKER
+            self.circles.draw(marks)
         self._draw_legend()
 
     def readout_lines(self) -> int:
