@@ -177,7 +177,7 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
     owner = _owners(model, n)
     if stepping == "aligned":
         return _run_aligned(problem, model, data, owner, float(timestep), float(unit), t_end, max_steps,
-                            progress=progress, stride=record_stride(steps + 1, n, record_floats))
+                            progress=progress, stride=record_stride(2 * (steps + 1), n, record_floats))
     mass2 = np.repeat(np.asarray(problem.mass, dtype=float), 2) / (unit * unit)
     start = np.asarray(problem.start, dtype=float)
     stride = record_stride(steps + 1, n, record_floats)
@@ -262,7 +262,8 @@ def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps, 
     from nbst.models.stepping import step_aligned
 
     n = problem.n
-    rec_t, rec_q, rec_v = [float(data.time)], [data.qpos.copy()], [data.qvel.copy()]
+    mass2 = np.repeat(np.asarray(problem.mass, dtype=float), 2) / (unit * unit)
+    rec_t, rec_q, rec_e = [float(data.time)], [data.qpos.copy()], [0.5 * np.dot(mass2, data.qvel * data.qvel)]
     events = []
     calls = [0, 0.0]  # on_step calls, simulated time reported to progress
 
@@ -271,7 +272,7 @@ def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps, 
         if calls[0] % stride == 0:
             rec_t.append(float(d.time))
             rec_q.append(d.qpos.copy())
-            rec_v.append(d.qvel.copy())
+            rec_e.append(0.5 * np.dot(mass2, d.qvel * d.qvel))
         if progress is not None and d.time - calls[1] >= PROGRESS_EVERY * timestep:
             k = int((d.time - calls[1]) / timestep)
             calls[1] += k * timestep
@@ -286,14 +287,16 @@ def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps, 
     if rec_t[-1] != float(data.time):
         rec_t.append(float(data.time))
         rec_q.append(data.qpos.copy())
-        rec_v.append(data.qvel.copy())
+        rec_e.append(0.5 * np.dot(mass2, data.qvel * data.qvel))
     if progress is not None:
         progress(max(0, steps_needed(t_end, timestep) - int(round(calls[1] / timestep))))
     times = np.array(rec_t)
     k = times.size
-    pos = np.asarray(problem.start, dtype=float)[None] + np.array(rec_q).reshape(k, n, 2) / unit
-    vel = np.array(rec_v).reshape(k, n, 2) / unit
-    energy = 0.5 * np.einsum("i,sij,sij->s", np.asarray(problem.mass, dtype=float), vel, vel)
+    q = np.array(rec_q)
+    del rec_q[:]
+    pos = np.asarray(problem.start, dtype=float)[None] + q.reshape(k, n, 2) / unit
+    del q
+    energy = np.array(rec_e)
     ev = np.array(sorted(events), dtype=EVENT_DTYPE) if events else np.empty(0, EVENT_DTYPE)
     run = MujocoRun(problem=problem, timestep=timestep, unit=unit, times=times, positions=pos, energy=energy,
                     in_contact=np.zeros(k, dtype=bool), events=ev, final_positions=np.empty((n, 2)),

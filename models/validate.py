@@ -47,11 +47,13 @@ SCHEMA_VERSION = 3  # 2: stepping, sensitivity, prediction_check, convergence, c
 #: collisions amplify it), aligned stepping 1e-3 units or less at N = 1,000, at 3.5-6x the wall time
 #: of fixed steps at every N from 10 to 1,000: aligned stepping scales like fixed stepping.
 AUTO_FIXED_MAX_N = 63
-#: ... unless aligned stepping would cost more than this many times the fixed steps: its mj_step
-#: calls are about steps + AUTO_TRIALS_PER_IMPACT x impacts (measured 3.2-3.7 search trials and
-#: one micro-step per impact on gas motions), the fixed run's are t_final / h.
-AUTO_MAX_COST_RATIO = 20.0
-AUTO_TRIALS_PER_IMPACT = 4.5
+#: ... unless aligned stepping would cost more than this many times the mj_step calls of fixed
+#: steps (a guard, not reached by any motion measured): its calls are about steps +
+#: AUTO_TRIALS_PER_IMPACT x impacts (measured 4.7-5.2 per impact on the gas motions of 100-1,000
+#: disks: search trials, a micro-step and the shortened step), the fixed run's t_final / h; each
+#: aligned call also runs a collision check, ~2-3x the time of a plain mj_step.
+AUTO_MAX_COST_RATIO = 10.0
+AUTO_TRIALS_PER_IMPACT = 5.2
 #: The sensitivity analysis (``nbst.sim.sensitivity``) is skipped by default above this many disks:
 #: it carries a dense (2N x 2C) Jacobian through every event (measured 0.27 s at 300 disks, 21 s at
 #: 1,000 on the gas motions); ``sensitivity=True`` forces it.
