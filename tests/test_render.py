@@ -792,3 +792,149 @@ def test_3d_target_markers_show_over_the_pucks(gl, mk):
             assert (np.abs(px - marker).max(axis=1) < 70).mean() > 0.5, t
     finally:
         r.release()
+
+
+# ------------------------------------------------------------------ many disks (issue 21)
+
+
+def grid_problem(n: int):
+    """``benchmarks/bench_render.py``'s many-disk problem: ``n`` radius-1 disks on a jittered
+    grid at 8 % density, random velocities, targets where the motion ends (an exact solution)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_render.py"
+    spec = importlib.util.spec_from_file_location("bench_render", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.grid_problem(n)
+
+
+@pytest.fixture(scope="module")
+def thousand():
+    p, v, tr = grid_problem(1000)
+    assert tr.n_disk_disk > 500 and tr.n_wall > 50  # collisions and bounces to draw
+    return p, tr
+
+
+def test_a_thousand_disks_are_each_drawn_once_where_simulated(gl, thousand):
+    """All 1,000 instances are drawn: at t = 0 (starts at least 7 px apart at 720p) the
+    frame holds exactly 1,000 separate blobs of the disk fill colour inside the box, one
+    within 1.5 px of each simulated centre (the scale recovered from the walls); their fill
+    area is N x pi (r_px - rim - 0.5)^2 within 10 % (a pixel is counted when it is the fill
+    colour within 3 levels: the anti-aliased edge is half a pixel)."""
+    from scipy import ndimage
+    from scipy.spatial import cKDTree
+
+    p, tr = thousand
+    r = Renderer2D(gl, p, tr, size=(1280, 720), labels=None)
+    try:
+        f = r.render(0.0).astype(int)
+    finally:
+        r.release()
+    x0, y0, x1, y1 = box_from_walls(f)
+    fill = np.zeros(f.shape[:2], bool)
+    inner = np.abs(f - style.rgb8(style.CUEABLE)).max(axis=2) <= 3
+    fill[int(y0):int(y1), int(x0):int(x1)] = inner[int(y0):int(y1), int(x0):int(x1)]
+    lab, k = ndimage.label(fill)
+    assert k == p.n
+    cents = np.array(ndimage.center_of_mass(fill, lab, range(1, k + 1)))[:, ::-1] + 0.5  # (x, y) px
+    dist, idx = cKDTree(cents).query(world_to_px(p, (x0, y0, x1, y1), tr.at(0.0)))
+    assert dist.max() <= 1.5 and len(set(idx)) == p.n
+    rpx = p.radius[0] * (x1 - x0) / p.width
+    core = rpx - max(1.0, style.DISK_RIM_FRAC * rpx) - 0.5
+    assert abs(fill.sum() / (p.n * np.pi * core ** 2) - 1.0) <= 0.10
+
+
+def test_disk_numbers_default_to_where_they_are_legible(gl, thousand, diamond):
+    """Without --labels/--no-labels the disks are numbered only when every disk is at least
+    LABELS_MIN_DISK_PX across: not 1,000 disks at 720p (8 px), but diamond-s14's 14. The
+    default frame is pixel for pixel the frame of that choice, and differs from the other."""
+    from nbst.render.scene2d import auto_labels
+
+    for (p, tr), on in ((thousand, False), (diamond, True)):
+        assert auto_labels(p, (1280, 720)) is on
+        frames = {}
+        for labels in (None, False, True):
+            r = Renderer2D(gl, p, tr, size=(1280, 720), labels=labels)
+            try:
+                if labels is None:
+                    assert bool(2 * r.rpx.min() >= style.LABELS_MIN_DISK_PX) is on
+                frames[labels] = r.render(0.5 * p.t_final).copy()
+            finally:
+                r.release()
+        assert np.array_equal(frames[None], frames[on])
+        assert not np.array_equal(frames[None], frames[not on])
+
+
+def test_a_thousand_disk_frame_explains_itself(gl, thousand):
+    """At N = 1,000 the frame still says what it shows: the readout (name, time, the count
+    on target, every disk at t_final), the legend beside the box, and every target visible
+    as a grey ring around its disk when the disk rests on it (the disk hides none of it)."""
+    p, tr = thousand
+    r = Renderer2D(gl, p, tr, size=(1280, 720))
+    try:
+        f = r.render(p.t_final).astype(int)
+        assert r.readout(p.t_final, r.inside(tr.at(p.t_final))) == [p.name, "t =  5.00 s", "on target 1000/1000"]
+        assert r.legend_drawn
+        assert r.marker_outside.all() and (r.marker_px > r.rpx + 1).all()
+        marker = np.array(style.rgb8(style.MARKER))
+        ang = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+        seen = []
+        for c, m in zip(r.target_px, r.marker_px):
+            pts = c + (m - 0.5 * style.MARKER_OUTSIDE_PX) * np.stack([np.cos(ang), np.sin(ang)], 1)
+            px = np.array([f[int(y), int(x)] for x, y in pts])
+            seen.append((np.abs(px - marker).max(axis=1) < 70).mean())
+        seen = np.array(seen)
+        assert np.median(seen) >= 0.5 and (seen > 0).all(), np.sort(seen)[:10]  # neighbours may cross a ring
+    finally:
+        r.release()
+
+
+def test_trails_are_exact_segments_between_each_disks_own_events(thousand):
+    """A trail is each disk's path through its own events only: every segment starts and
+    ends on the exact motion, its midpoint lies on it too (straight flight between a disk's
+    events), and there are N + (disk appearances in events inside the window) segments at
+    most, not N x (all events)."""
+    from nbst.render.scene2d import trail_segments
+
+    p, tr = thousand
+    t, w = 2.5, style.TRAIL_SECONDS
+    a, b, ta, tb, disk = trail_segments(tr, t, w)
+    for pts, ts in ((a, ta), (b, tb), (0.5 * (a + b), 0.5 * (ta + tb))):
+        exact = np.array([tr.at(x)[i] for x, i in zip(ts, disk)])
+        assert np.abs(pts - exact).max() <= 1e-9 * max(p.box)
+    ev = tr.events[(tr.events["time"] > t - w) & (tr.events["time"] < t)]
+    appearances = len(ev) + int((ev["kind"] == 0).sum())
+    assert p.n <= len(disk) <= p.n + appearances
+    assert np.all(np.bincount(disk, minlength=p.n) >= 1)
+
+
+def test_glyph_runs_lay_out_as_text_layout_does(gl):
+    """The one-gather layout of many numbers gives the same glyph instances as laying out
+    each number on its own; the halo atlas is the union of the glyph shifted by 1 px."""
+    from nbst.render.shapes import Text
+
+    t = Text(gl, 12)
+    try:
+        rng = np.random.default_rng(0)
+        n = 120
+        x, y = rng.uniform(0, 500, n), rng.uniform(0, 300, n)
+        runs = t.numbers(n)
+        which = rng.random(n) < 0.5
+        fast = runs.layout(x, y, which)
+        slow = np.concatenate([t.layout([str(i)], x[i], y[i]) for i in range(n) if which[i]])
+        assert fast.tobytes() == slow.tobytes()
+        t._make_halo(1)
+        cw, ch = t.cell
+        glyph = ord("8") - 32
+        gr, gc = divmod(glyph, 16)
+        cell = t._atlas[gr * ch:(gr + 1) * ch, gc * cw:(gc + 1) * cw].astype(int)
+        union = np.zeros((ch + 2, cw + 2), int)
+        for dy in (0, 1, 2):
+            for dx in (0, 1, 2):
+                union[dy:dy + ch, dx:dx + cw] = np.maximum(union[dy:dy + ch, dx:dx + cw], cell)
+        halo = np.frombuffer(t._halo[1].read(), np.uint8).reshape(t._halo[1].height, t._halo[1].width)
+        assert np.array_equal(halo[gr * (ch + 2):(gr + 1) * (ch + 2), gc * (cw + 2):(gc + 1) * (cw + 2)], union)
+    finally:
+        t.release()

@@ -433,3 +433,33 @@ def test_plot_says_what_it_wrote_unless_quiet(tmp_path, capsys):
     assert err.startswith(f"nbst plot: wrote {out}") and len(err.splitlines()) == 1
     assert main(["plot", "problem", "over5", "-o", str(out), "--dpi", "40", "-q"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_a_thousand_disk_problem_renders_to_mp4_and_png(tmp_path, capsys):
+    """``nbst render`` at N = 1,000 (issue 21): a small MP4 decodes with every frame, disks
+    where simulated; a 720p still says in its summary why the disks carry no numbers, and
+    --labels overrides the size rule."""
+    import json
+
+    from PIL import Image
+
+    from test_render import box_from_walls, grid_problem, pixel, world_to_px
+    p, v, tr = grid_problem(1000)
+    prob, sol = tmp_path / "grid.json", tmp_path / "sol.json"
+    prob.write_text(json.dumps(p.raw))
+    save_solution(sol, make_solution(p, v))
+    out = tmp_path / "g.mp4"
+    assert main(["render", str(prob), str(sol), "-o", str(out), "--size", "640x360", "--fps", "6", "--hold", "0",
+                 "-q"]) == 0
+    meta, frames = decode(out)
+    assert len(frames) == len(frame_times(p.t_final, 6)) and meta["size"] == (640, 360)
+    png = tmp_path / "g.png"
+    capsys.readouterr()
+    assert main(["render", str(prob), str(sol), "--still", "2.5", "-o", str(png)]) == 0
+    assert "no disk numbers: disks 8 px across, under the 12 px" in capsys.readouterr().err
+    f = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    amber = np.array(style.rgb8(style.CUEABLE))
+    hits = [np.abs(pixel(f, c) - amber).max() <= 3 for c in world_to_px(p, box_from_walls(f), tr.at(2.5))]
+    assert all(hits)  # every disk centre shows the fill: nothing (marker, ring, number) is drawn over a disk
+    assert main(["render", str(prob), str(sol), "--still", "2.5", "-o", str(png), "--labels"]) == 0
+    assert "no disk numbers" not in capsys.readouterr().err
