@@ -42,17 +42,18 @@ SCHEMA_VERSION = 3  # 2: stepping, sensitivity, prediction_check, convergence, c
 #                    3: stepping requested/reason/record_stride, final_error mean/median/worst
 #: ``stepping="auto"`` (the default): fixed steps up to this many disks (every problem nbst took before
 #: it lifted its 63-disk cap validates as it always did), aligned stepping above. Measured on gas
-#: motions at fixed density (``gas_motion``, docs/mujoco.md "Many disks"): fixed steps leave
-#: hundreds of units of error from N = 30 on (each of the ~3 impacts per disk lags one step and the
-#: collisions amplify it), aligned stepping 1e-3 units or less at N = 1,000, at 3.5-6x the wall time
-#: of fixed steps at every N from 10 to 1,000: aligned stepping scales like fixed stepping.
+#: motions at fixed density (``gas_motion``, 2 s, ~3 impacts per disk; docs/mujoco.md "Many disks"):
+#: fixed steps of 0.25 ms end 194-549 units off at every N from 10 to 1,000 (each impact lags one step
+#: and the collisions amplify it), aligned stepping 3e-8 to 1e-3 units, at 3-8x the wall time of fixed
+#: steps (4.1x at 10 disks, 7.8x at 1,000: its mj_step calls grow with the impacts, 2.8x those of fixed
+#: steps at 1,000 disks, and each call adds a collision check).
 AUTO_FIXED_MAX_N = 63
-#: ... unless aligned stepping would cost more than this many times the mj_step calls of fixed
-#: steps (a guard, not reached by any motion measured): its calls are about steps +
-#: AUTO_TRIALS_PER_IMPACT x impacts (measured 4.7-5.2 per impact on the gas motions of 100-1,000
-#: disks: search trials, a micro-step and the shortened step), the fixed run's t_final / h; each
-#: aligned call also runs a collision check, ~2-3x the time of a plain mj_step.
-AUTO_MAX_COST_RATIO = 10.0
+#: ... unless aligned stepping would take more than this many times the mj_step calls of fixed steps
+#: (~10-20x their wall time): its calls are about steps + AUTO_TRIALS_PER_IMPACT x impacts (measured
+#: 4.7-5.2 per impact on the gas motions of 100-1,000 disks: search trials, a micro-step, the shortened
+#: step), the fixed run's t_final / h. The gas motions reach it near 2,000 disks (their impacts grow
+#: as N: an extrapolation, not a measurement); there auto falls back to fixed steps.
+AUTO_MAX_COST_RATIO = 5.0
 AUTO_TRIALS_PER_IMPACT = 5.2
 #: The sensitivity analysis (``nbst.sim.sensitivity``) is skipped by default above this many disks:
 #: it carries a dense (2N x 2C) Jacobian through every event (measured 0.27 s at 300 disks, 21 s at
@@ -361,12 +362,13 @@ def choose_stepping(problem: Problem, exact, timestep: float, requested: str = "
     impacts = len(exact.events)
     ratio = (steps + AUTO_TRIALS_PER_IMPACT * impacts) / max(steps, 1)
     if ratio > AUTO_MAX_COST_RATIO:
-        return "fixed", (f"auto: {n} disks, but aligned stepping would cost ~{ratio:.0f}x the fixed steps "
-                         f"({impacts:,} impacts in {steps:,} steps; limit {AUTO_MAX_COST_RATIO:g}x); "
-                         f"--stepping aligned forces it")
-    return "aligned", (f"auto: aligned stepping above {AUTO_FIXED_MAX_N} disks ({n} here, {impacts:,} impacts; "
-                       f"estimated ~{ratio:.1f}x the mj_step calls of fixed steps): fixed steps lag every impact "
-                       f"by one step and many collisions amplify it; --stepping fixed for MuJoCo's own steps")
+        return "fixed", (f"auto: {n} disks, but aligned stepping would take ~{ratio:.0f}x the mj_step calls of "
+                         f"fixed steps ({impacts:,} exact impacts in {steps:,} steps; limit "
+                         f"{AUTO_MAX_COST_RATIO:g}x); --stepping aligned forces it")
+    return "aligned", (f"auto: aligned stepping above {AUTO_FIXED_MAX_N} disks ({n} here, {impacts:,} exact "
+                       f"impacts: ~{ratio:.1f}x the mj_step calls of fixed steps, each with a collision check): "
+                       f"fixed steps lag every impact by one step and many collisions amplify it; "
+                       f"--stepping fixed for MuJoCo's own steps")
 
 
 def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP, unit: float = DEFAULT_UNIT,

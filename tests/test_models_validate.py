@@ -162,3 +162,96 @@ def test_sensitivity_and_prediction_check_in_every_report():
     assert al["prediction_check"]["fixed_run"] == "extra fixed-step run"
     assert abs(al["prediction_check"]["measured_error_max"] - pc["measured_error_max"]) < 1e-9
     assert al["final_error"]["max"] < 1e-6 and al["events"]["matched"] == 5
+
+
+# --------------------------------------------------------------------------- many disks (issue 21)
+
+from nbst.models.validate import gas_motion  # noqa: E402
+
+
+def test_gas_motion_is_an_exact_solution_with_collisions_and_bounces():
+    p, v = gas_motion(30, seed=2)
+    tr = simulate(p, v)
+    assert p.n == 30 and not tr.truncated
+    assert np.abs(tr.final_positions - p.target).max() == 0.0  # targets are the exact ends
+    assert tr.n_disk_disk >= 30 and tr.n_wall >= 10  # ~3 impacts per disk (fixed density)
+    p2, v2 = gas_motion(30, seed=2)
+    assert np.array_equal(v, v2) and np.array_equal(p.start, p2.start)  # reproducible from the seed
+
+
+def test_auto_stepping_is_fixed_up_to_63_disks_and_aligned_above():
+    from nbst.models.validate import AUTO_FIXED_MAX_N, choose_stepping
+
+    small, _ = gas_motion(AUTO_FIXED_MAX_N)
+    big, vb = gas_motion(AUTO_FIXED_MAX_N + 1)
+    ex = simulate(big, vb)
+    assert choose_stepping(small, simulate(small, _), 0.00025)[0] == "fixed"
+    mode, why = choose_stepping(big, ex, 0.00025)
+    assert mode == "aligned" and why.startswith("auto:")
+    assert choose_stepping(big, ex, 0.00025, "fixed") == ("fixed", "--stepping fixed requested")
+
+    class Busy:  # a motion with far more impacts than steps: the cost guard picks fixed
+        events = np.zeros(10 ** 6)
+    assert choose_stepping(big, Busy(), 0.00025)[0] == "fixed"
+
+
+def test_positions_recorded_with_a_stride_end_where_every_step_does():
+    from nbst.models.mjrun import run_mujoco
+    p, v = gas_motion(10, t_final=0.5)
+    full = run_mujoco(p, v)
+    thin = run_mujoco(p, v, record_floats=2000)  # 2,001 steps x 20 numbers: every 21st step kept
+    assert full.stride == 1 and thin.stride > 1 and thin.times.size < full.times.size / 10
+    assert thin.steps == full.steps and thin.energy.size == full.energy.size
+    assert np.array_equal(thin.final_positions, full.final_positions)  # the same MuJoCo steps
+    assert np.array_equal(thin.events, full.events)
+    t = thin.times[5]
+    assert np.array_equal(thin.at(t), full.at(t))  # a recorded step is the step
+
+
+@pytest.mark.slow
+def test_mjcf_of_1000_disks_loads_with_every_body_at_full_precision():
+    from nbst.models.scene import scene_xml
+    p, v = gas_motion(1000)
+    m = mujoco.MjModel.from_xml_string(scene_xml(p, v))
+    assert m.nbody == 1001 and m.njnt == 2000  # the world and one body (two slide joints) per disk
+    assert np.array_equal(m.key_qvel[0], (v * 1e-3).reshape(-1))  # the keyframe, bit for bit
+    assert m.npair == 0 and m.nexclude == 0  # no pair lists: MuJoCo's broadphase finds the contacts
+
+
+@pytest.mark.slow
+def test_300_disks_validate_aligned_by_default_and_agree_with_the_exact_simulator():
+    # 300 disks at area fraction 0.08, 784 collisions and 132 wall bounces in 2 s: aligned stepping (the
+    # default above 63 disks) ends every disk within 0.01 units of the exact simulator (measured 4e-4;
+    # fixed steps of 0.25 ms end ~400 units off on the same motion), with every event matched in order
+    p, v = gas_motion(300)
+    val = validate(p, v, sensitivity=False)
+    d = val.to_dict()
+    assert d["stepping"]["mode"] == "aligned" and d["stepping"]["requested"] == "auto"
+    assert "above 63 disks" in d["stepping"]["reason"]
+    assert val.final_error.max() < 0.01
+    assert val.signatures_agree and d["exact"]["order"] == 300 == d["mujoco_result"]["order"]
+    assert d["events"]["exact_only"] == 0 == d["events"]["mujoco_only"]
+    assert abs(val.energy_drift_final) < 1e-9
+    s = val.summary()
+    assert "stepping   aligned: auto" in s and "order 300 of 300 disks on target" in s
+    assert "1" * 300 not in s  # counts, not 300-character strings
+
+    from nbst.render.report import EVENT_ROWS, WORST_ROWS, report_html
+    page = report_html(val)
+    assert "aligned stepping" in page and "Why this stepping: auto" in page
+    assert page.count("<tr>") < 2 * EVENT_ROWS + WORST_ROWS + 40  # bounded: not one row per disk or event
+    assert len(page) < 3_000_000
+
+
+@pytest.mark.slow
+def test_cli_validate_of_many_disks_shows_progress_and_q_silences_it(tmp_path, capsys):
+    p, v = gas_motion(100)
+    prob = _problem_file(tmp_path / "p.json", p)
+    sol = _write_solution(tmp_path / "s.json", p, v)
+    assert main(["validate", prob, sol, "--stepping", "fixed", "--sensitivity", "off"]) == 0
+    out, err = capsys.readouterr()
+    assert "nbst validate: MuJoCo, fixed steps: 8,000/8,000 steps (100%)" in err
+    assert "stepping   fixed: --stepping fixed requested" in out
+    assert main(["validate", prob, sol, "--stepping", "fixed", "--sensitivity", "off", "-q"]) == 0
+    out, err = capsys.readouterr()
+    assert out == "" and err == ""

@@ -67,12 +67,13 @@ def register(sub) -> None:
                                     "every step's state is kept in memory); --convergence skips the step sizes "
                                     "that need more", MAX_STEPS))
     p.add_argument("--stepping", choices=("auto", "fixed", "aligned"), default="auto",
-                   help="auto (default): fixed up to 63 disks, aligned above (unless aligned would cost over 20x "
-                        "the fixed steps; the report says which was used and why); fixed: MuJoCo's fixed steps "
+                   help="auto (default): fixed up to 63 disks, aligned above unless its estimated mj_step calls "
+                        "pass 5x those of fixed steps (the report says which was used and why); fixed: MuJoCo's "
+                        "fixed steps "
                         "of H, each impact resolved one step late; aligned: steps shortened to end at each touch "
                         "(found with MuJoCo's own collision detection) and each impact resolved by a micro-step of "
                         "matched stiffness: ~1e-12 units per impact before later collisions amplify it "
-                        "(nbst.models.stepping; cost in the report; 3.5-6x the time of fixed steps)")
+                        "(nbst.models.stepping; cost in the report: 3-8x the time of fixed steps at 10-1,000 disks)")
     p.add_argument("--sensitivity", choices=("auto", "on", "off"), default="auto",
                    help="the sensitivity analysis and its fixed-step prediction: auto (default) up to 300 disks "
                         "(it carries a dense Jacobian through every event: 21 s at 1,000 disks), on, off")
@@ -186,9 +187,10 @@ def cmd_validate(args) -> int:
     return 0
 
 
-#: Work (MuJoCo steps x bodies) above which validate shows progress on stderr: ~1 s of stepping
-#: (100 disks over 20,000 steps); smaller runs stay as quiet as they always were.
-PROGRESS_MIN_WORK = 2_000_000
+#: Work (MuJoCo steps x bodies) above which validate shows progress on stderr: ~0.3 s of fixed
+#: steps (60 disks over 8,000 steps, benchmarks/bench_mujoco_scale.py); the built-in problems
+#: (14 disks, 20,000 steps) stay as quiet as they always were.
+PROGRESS_MIN_WORK = 500_000
 
 
 def _progress(problem, args):
