@@ -81,7 +81,8 @@ class _Stages:
 
     def __init__(self, quiet: bool, announce: bool = False):
         self.quiet, self.announce = quiet, announce
-        self.stage, self.t0, self.bar = None, 0.0, None
+        self.stage, self.t0, self.bar = None, time.monotonic(), None
+        self.seconds = {}  # stage -> seconds from the end of the one before (the first: from here)
 
     def _close(self):
         if self.bar is not None:
@@ -89,23 +90,30 @@ class _Stages:
         self.bar = None
 
     def __call__(self, stage: str, done: int, total: int) -> None:
-        if self.quiet:
-            return
         now = time.monotonic()
         if stage != self.stage:
+            if self.stage is not None:
+                self.seconds[self.stage] = now - self.t0
             self._close()
-            self.stage, self.t0 = stage, now
-            if total == 1 and done == 0 and self.announce:
+            if self.stage is not None or total == 1:  # the first batched stage started with the command
+                self.t0 = now
+            self.stage = stage
+            if total == 1 and done == 0 and self.announce and not self.quiet:
                 print(f"nbst generate: {stage} (one exact run; no progress until it ends)...", file=sys.stderr,
                       flush=True)
         if total == 1:  # a blocking stage: 0 before, 1 after
-            if done == 1 and now - self.t0 >= LONG_STAGE_S:
-                print(f"nbst generate: {stage}: done in {now - self.t0:.1f} s", file=sys.stderr, flush=True)
+            if done == 1:
+                self.seconds[stage] = now - self.t0
+                if now - self.t0 >= LONG_STAGE_S and not self.quiet:
+                    print(f"nbst generate: {stage}: done in {now - self.t0:.1f} s", file=sys.stderr, flush=True)
+            return
+        if self.quiet:
             return
         if self.bar is None and now - self.t0 >= LONG_STAGE_S:
             from nbst.progress import progress_bar
 
-            self.bar = progress_bar(total=total or None, desc=f"nbst generate: {stage}", unit="disk" if total else "pass")
+            self.bar = progress_bar(total=total or None, desc=f"nbst generate: {stage}",
+                                    unit="disk" if total else "pass")
         if self.bar is not None:
             self.bar.update(done - self.bar.n)
 
@@ -159,7 +167,8 @@ def cmd_generate(args) -> int:
         summary = (f"{problem.n} disks forming {what} in a {problem.width:.6g} x {problem.height:.6g} box "
                    f"({f['box']}), starts on a {'grid' if f['start'] == 'grid' else 'random jittered grid'}, seed "
                    f"{seed}; straight shots keep centres >= {f['spacing'] / np.sqrt(2):.4g} apart "
-                   f"(2r = {2 * args.radius:g}); {info['passes']} swap passes, {info['swaps']:,} swaps")
+                   f"(2r = {2 * args.radius:g}); {info['passes']} swap passes, {info['swaps']:,} swaps in "
+                   f"{info['assign_s']:.2g} s")
         algorithm = "formation"
     else:
         from nbst.planted import planted
@@ -177,7 +186,9 @@ def cmd_generate(args) -> int:
         info = problem.raw["planted"]
         summary = (f"{problem.n} disks ({int((~problem.cueable).sum())} noncueable, "
                    f"{info['struck_noncueable']} of them struck), seed {seed}, planted motion with "
-                   f"{info['disk_disk_collisions']} disk-disk collisions and {info['wall_bounces']} wall bounces")
+                   f"{info['disk_disk_collisions']} disk-disk collisions and {info['wall_bounces']} wall bounces "
+                   f"(placed in {stages.seconds.get('placing disks', 0.0):.2g} s, simulated exactly in "
+                   f"{stages.seconds.get('simulating the planted motion', 0.0):.2g} s)")
         algorithm = "planted"
     write_json_atomic(args.output, problem.raw)
     if not args.quiet:
