@@ -355,7 +355,7 @@ def swap_passes(X, Y, perm, max_passes):
 def assign(X: np.ndarray, Y: np.ndarray, *, progress=None) -> tuple[np.ndarray, int, int]:
     """perm with (X[i] - X[j]) . (Y[perm[i]] - Y[perm[j]]) >= 0 for every pair: starts and
     targets first matched in the same sweep order (by x + y, then x - y), then swap passes
-    (one kernel call a pass, ``progress("swap passes", pass, 0)`` after each). Returns
+    (one kernel call a pass, ``progress(stage, passes done, 0)`` before and after each). Returns
     (perm, passes, swaps)."""
     X = np.ascontiguousarray(X, dtype=np.float64)
     Y = np.ascontiguousarray(Y, dtype=np.float64)
@@ -364,11 +364,14 @@ def assign(X: np.ndarray, Y: np.ndarray, *, progress=None) -> tuple[np.ndarray, 
     perm = np.empty(X.shape[0], np.int64)
     perm[ox] = oy
     swaps = 0
+    stage = "assigning targets by pairwise swaps"
+    if progress is not None:
+        progress(stage, 0, 0)
     for k in range(1, MAX_SWAP_PASSES + 1):
         done, m = swap_passes(X, Y, perm, 1)
         swaps += m
         if progress is not None:
-            progress("swap passes", k, 0)
+            progress(stage, k, 0)
         if done == 1:
             return perm, k, swaps
     raise FormationError(f"the swap passes did not settle in {MAX_SWAP_PASSES:,} passes")

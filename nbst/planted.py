@@ -112,6 +112,8 @@ def place_disks(rng: np.random.Generator, n: int, r: float, box, *, gap: float =
     nxt = np.full(n, -1, np.int64)
     starts = np.empty((n, 2))
     placed, budget = 0, place_tries(n)
+    if progress is not None:
+        progress("placing disks", 0, n)
     while budget > 0 and placed < n:
         b = min(budget, PLACE_BATCH)
         state = rng.bit_generator.state

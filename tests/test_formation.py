@@ -142,3 +142,17 @@ def test_planted_and_targets_from_are_exclusive_and_one_is_required(tmp_path, ca
         assert e.value.code == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and ("not allowed with" in err or "required" in err), err
+
+
+def test_cli_progress_names_the_swap_passes_and_quiet_silences_it(tmp_path, capsys, monkeypatch):
+    import nbst.cli.generate as g
+
+    monkeypatch.setattr(g, "LONG_STAGE_S", 0.0)
+    out = tmp_path / "f.json"
+    assert main(["generate", "--targets-from", "ab", "--disks", "40", "--seed", "1", "-o", str(out)]) == 0
+    said = capsys.readouterr()
+    assert "assigning targets by pairwise swaps:" in said.err and "sweeps" in said.err, said.err
+    assert said.out.startswith(f"nbst generate: wrote {out}: 40 disks forming the text 'ab'")
+    assert main(["generate", "--targets-from", "ab", "--disks", "40", "--seed", "1", "-o", str(out), "-q"]) == 0
+    said = capsys.readouterr()
+    assert said.out == "" and said.err == ""

@@ -82,7 +82,7 @@ class _Stages:
     def __init__(self, quiet: bool, announce: bool = False):
         self.quiet, self.announce = quiet, announce
         self.stage, self.t0, self.bar = None, time.monotonic(), None
-        self.seconds = {}  # stage -> seconds from the end of the one before (the first: from here)
+        self.seconds = {}  # stage -> seconds from its first call to the next stage's (or its done = 1)
 
     def _close(self):
         if self.bar is not None:
@@ -95,8 +95,7 @@ class _Stages:
             if self.stage is not None:
                 self.seconds[self.stage] = now - self.t0
             self._close()
-            if self.stage is not None or total == 1:  # the first batched stage started with the command
-                self.t0 = now
+            self.t0 = now
             self.stage = stage
             if total == 1 and done == 0 and self.announce and not self.quiet:
                 print(f"nbst generate: {stage} (one exact run; no progress until it ends)...", file=sys.stderr,
@@ -113,7 +112,7 @@ class _Stages:
             from nbst.progress import progress_bar
 
             self.bar = progress_bar(total=total or None, desc=f"nbst generate: {stage}",
-                                    unit="disk" if total else "pass")
+                                    unit="disk" if total else "sweep")
         if self.bar is not None:
             self.bar.update(done - self.bar.n)
 
