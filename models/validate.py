@@ -26,6 +26,14 @@ every impact resolved at its touch; its cost is reported). Also reported:
   k = 2/h^2) and aligned stepping, each entry's max final error, signature and cost, and the
   fitted order (least-squares slope of log error on log h over the entries in the first-order
   regime, :data:`FIT_RULE`).
+
+Many disks (docs/mujoco.md, "Many disks"): ``stepping="auto"`` picks the stepping by N and cost
+(:func:`choose_stepping`), the sensitivity is skipped above :data:`SENSITIVITY_MAX_N`, and
+:func:`gas_motion` makes test motions of any size.
+
+Length: one comparison and the one schema of report.json (``Validation.to_dict``), with the
+convergence study and the stepping choice that feed it; split, the schema's keys would be
+written in several files.
 """
 from __future__ import annotations
 

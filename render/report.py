@@ -4,7 +4,14 @@ The figures speak nbst's visual language (:mod:`nbst.palette`; the drawing helpe
 are ``nbst.render.figures``'s): class colours, disk numbers at the starts and beside
 the targets, and legends outside the axes.
 
+Above :data:`MANY_DISKS` disks (or :data:`MANY_EVENTS` events) the page summarises: statistics
+and the worst disks instead of a row per disk, percentile bands instead of a curve per disk,
+events per time bin instead of a mark per event.
+
 Compute only: functions return bytes / text; the CLI writes the files.
+
+Length: the page and its four figures, each in a few-disk and a many-disk form that share the
+helpers and the visual language; a second module would split each figure's two forms apart.
 """
 from __future__ import annotations
 
