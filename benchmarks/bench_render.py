@@ -5,6 +5,7 @@ disks (N = 10 .. 1,000 at fixed density, 1280x720), and the parts of one problem
     python benchmarks/bench_render.py                      # the curve, 301 frames a size (5 s at 60 fps)
     python benchmarks/bench_render.py --sizes 10,1000,3000 # other sizes (3,000: 1.7 GB of keyframes)
     python benchmarks/bench_render.py --problem diamond-s14 [--solution sol.json] [--view 3d] [--no-trails]
+    python benchmarks/bench_render.py --problem grid-1000  # the parts for the curve's problem at N = 1,000
 
 The curve: for each N, disks of radius 1 on a jittered grid in a 16:9 box holding them at
 8 % area density, random velocities (up to a quarter of the box's width in t_final = 5 s),
@@ -62,7 +63,8 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="the curve with 60 frames a size (under a minute)")
     ap.add_argument("--sizes", default=None, help="comma-separated N for the curve (default 10,30,100,300,1000)")
     ap.add_argument("--frames", type=int, default=None, help="frames a size (default 301; 60 with --quick)")
-    ap.add_argument("--problem", default=None, help="instead of the curve: the parts of this problem's video")
+    ap.add_argument("--problem", default=None,
+                    help="instead of the curve: the parts of this problem's video (grid-N: the curve's problem)")
     ap.add_argument("--solution", default=None, help="with --problem: solution JSON (default: straight-line shots)")
     ap.add_argument("--size", default="1280x720")
     ap.add_argument("--fps", type=float, default=60.0)
@@ -141,10 +143,13 @@ def parts(args) -> int:
     from nbst.render.gl import create_context
     from nbst.render.video import VideoWriter, encode, frame_times, render_video
 
-    p = load_problem(args.problem)
-    v = load_solution(args.solution, p).velocities if args.solution else p.straight_velocities()
+    if args.problem.startswith("grid-") and args.problem[5:].isdigit():  # the curve's problem at one N
+        p, v, tr = grid_problem(int(args.problem[5:]))
+    else:
+        p = load_problem(args.problem)
+        v = load_solution(args.solution, p).velocities if args.solution else p.straight_velocities()
+        tr = simulate(p, v)
     size = parse_size(args.size)
-    tr = simulate(p, v)
     times = frame_times(p.t_final, args.fps)
     n = len(times)
     ctx = create_context()

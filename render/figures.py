@@ -37,6 +37,9 @@ NUMBER_Z = 9
 STAR_MS = 8.0
 #: Target marker radius: this fraction of the disk radius, at least TARGET_MIN (units).
 TARGET_FRAC, TARGET_MIN = 0.3, 3.0
+#: Longest signature written out in a title (one character a disk): beyond it (many disks)
+#: the title gives the order only; ``nbst simulate`` prints the whole signature.
+TITLE_SIGNATURE_MAX = 40
 
 
 def _figure(problem):
@@ -267,7 +270,7 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
     p, tr = problem, trajectory
     fig, ax = _figure(p)
     shades = palette.disk_shades(p.cueable)
-    paths = np.concatenate((tr.positions, tr.final_positions[None]), axis=0)  # (K+1, N, 2)
+    paths = disk_paths(tr)
     ev = tr.events
     wall = ev["kind"] == 1
     stars = np.zeros((0, 2))
@@ -282,7 +285,7 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
     for i in range(p.n):
         col = palette.hex_color(shades[i])
         # noncueable paths broken, as their arrows in Figure 2; "_" labels stay out of the legend
-        ax.plot(paths[:, i, 0], paths[:, i, 1], palette.path_style(p.cueable[i]), color=col, lw=1.4, zorder=3,
+        ax.plot(paths[i][:, 0], paths[i][:, 1], palette.path_style(p.cueable[i]), color=col, lw=1.4, zorder=3,
                 solid_joinstyle="miter", label=f"_path {i}")
         draw_final(ax, tr.final_positions[i], p.radius[i], shades[i], zorder=4)
         # a star on a start disk would cover its number: the number moves beside the disk
@@ -302,9 +305,28 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
         entries.append((line_handle(coll_ink, "none", marker=palette.COLLISION_MARKER, ms=STAR_MS, mec="black"),
                         label))
     legend_below(fig, entries)
-    ax.set_title(f"{display_name(p.name)}: cost {tr.cost:.4g}, signature {tr.signature_string} "
-                 f"(order {tr.order}/{p.n})", fontsize=TITLE_PT)
+    sig = (f"signature {tr.signature_string} (order {tr.order}/{p.n})" if p.n <= TITLE_SIGNATURE_MAX else
+           f"order {tr.order}/{p.n}")
+    ax.set_title(f"{display_name(p.name)}: cost {tr.cost:.4g}, {sig}", fontsize=TITLE_PT)
     return fig
+
+
+def disk_paths(trajectory) -> list[np.ndarray]:
+    """Each disk's exact path as a polyline (M_i, 2): its start, its position at each event
+    it takes part in (only those bend its path), its final position. For 1,000 disks this is
+    N + 2 x events points in all, where every keyframe for every disk would be N x events."""
+    tr = trajectory
+    n = tr.final_positions.shape[0]
+    ev = tr.events
+    pair = np.nonzero(ev["kind"] == 0)[0]
+    disk = np.concatenate((ev["i"], ev["j"][pair])).astype(np.int64)
+    k = np.concatenate((np.arange(len(ev)), pair)) + 1  # keyframe k = e + 1: the state after event e
+    order = np.lexsort((k, disk))
+    disk, k = disk[order], k[order]
+    pts = tr.positions[k, disk]
+    cuts = np.searchsorted(disk, np.arange(1, n))
+    return [np.concatenate((tr.positions[0, i][None], seg, tr.final_positions[i][None]))
+            for i, seg in enumerate(np.split(pts, cuts))]
 
 
 def save_figure(fig, path, *, dpi: int = 150) -> None:
