@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from nbst import domain as D
+from nbst.domain import BOX_MAX, BOX_MIN
 from nbst.problem import Problem, ProblemError, problem_from_dict
 
 #: Spacing of starts and of targets: s = 2 sqrt(2) r (1 + SPACING_MARGIN); then straight
@@ -455,8 +455,8 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
                                  f"disks of radius {r:g} at spacing {s:.4g} (asked for {n:,}); use fewer --disks, "
                                  f"a smaller --radius, a larger --box, or no --box (sized to fit)")
         box_note = "given"
-    if not (D.BOX_MIN <= W <= D.BOX_MAX and D.BOX_MIN <= H <= D.BOX_MAX):
-        raise FormationError(f"the box would be {W:.4g} x {H:.4g}, outside nbst's [{D.BOX_MIN:g}, {D.BOX_MAX:g}]; "
+    if not (BOX_MIN <= W <= BOX_MAX and BOX_MIN <= H <= BOX_MAX):
+        raise FormationError(f"the box would be {W:.4g} x {H:.4g}, outside nbst's [{BOX_MIN:g}, {BOX_MAX:g}]; "
                              f"use a different --radius")
     # thin the lattice to n points (seeded), then picture pixels -> box units, y up, centred
     if pts.shape[0] > n:
