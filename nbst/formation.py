@@ -493,13 +493,13 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
                   for i in range(n)],
         "formation": {"source": how, how: label if kind == "image" else src, "start": start, "seed": int(seed),
                       "disks": int(n), "spacing": s, "target_spacing": h_px * k,
-                      "start_spacing": float(_least_distance(starts)), "box": box_note},
+                      "start_spacing": _least_distance(starts), "box": box_note},
     }
     return problem_from_dict(d, source=d["name"]), v, info
 
 
-def _least_distance(pts: np.ndarray) -> float:
-    """The least distance between two of the points (0 for one point)."""
+def _least_distance(pts: np.ndarray) -> float | None:
+    """The least distance between two of the points (None for one point)."""
     from scipy.spatial import cKDTree
 
-    return float(cKDTree(pts).query(pts, k=2)[0][:, 1].min()) if pts.shape[0] > 1 else 0.0
+    return float(cKDTree(pts).query(pts, k=2)[0][:, 1].min()) if pts.shape[0] > 1 else None
