@@ -40,6 +40,12 @@ TARGET_FRAC, TARGET_MIN = 0.3, 3.0
 #: Longest signature written out in a title (one character a disk): beyond it (many disks)
 #: the title gives the order only; ``nbst simulate`` prints the whole signature.
 TITLE_SIGNATURE_MAX = 40
+#: Figures number the disks (on each start, beside each target) up to this many disks. Beyond
+#: it the numbers, written beside disks too small to hold them, cover the figure (1,000 disks
+#: in a 6-inch figure are 3 pt across and their 3-digit numbers 15 pt wide): the disks, paths
+#: and targets are drawn without them, and collision stars shrink to MANY_STAR_MS.
+NUMBERS_MAX_DISKS = 100
+MANY_STAR_MS = 3.5
 
 
 def _figure(problem):
@@ -80,9 +86,11 @@ def _points_per_unit(ax) -> float:
     return 72.0 * min(fig.get_figwidth() * pos.width / abs(x1 - x0), fig.get_figheight() * pos.height / abs(y1 - y0))
 
 
-def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5, avoid=None, avoid_pt: float = 0.0):
+def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5, avoid=None, avoid_pt: float = 0.0,
+               number: bool = True):
     """The disk at its start: filled in its class colour (or ``color``), black edge,
-    its number on it; beside it, upper right, where the number does not fit.
+    its number on it (unless ``number`` is False); beside it, upper right, where the number
+    does not fit.
     ``avoid``: points (M, 2, data units) of marks drawn over the figure (collision stars)
     of radius ``avoid_pt`` points; a number one of them would cover moves beside the
     disk, on the side away from the nearest such mark."""
@@ -109,6 +117,8 @@ def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5, avoid=None, avoid
     else:  # a disk too small to see (diamond-s14-tiny): a marker of MIN_DISK_PT radius
         ax.plot([xy[0]], [xy[1]], "o", ms=2 * MIN_DISK_PT, mfc=col, mec="black", mew=0.6, zorder=zorder)
         r_pt, on_disk = MIN_DISK_PT, False
+    if not number:
+        return
     if away is not None:  # a collision star on or by the disk: the number beside it, away from the star
         size = DISK_NUMBER_PT[0] + 1.5
         off = away * (r_pt + 0.45 * size * len(label) + 1.5)
@@ -125,9 +135,9 @@ def draw_start(ax, xy, r, cueable, i, *, color=None, zorder=5, avoid=None, avoid
                     path_effects=[patheffects.withStroke(linewidth=2, foreground="white")])
 
 
-def draw_target(ax, xy, r, i, *, R=None, zorder=4):
-    """A target: a hollow small circle, its disk's number beside it (upper right) and,
-    given R, its dotted neighbourhood ring."""
+def draw_target(ax, xy, r, i, *, R=None, zorder=4, number: bool = True):
+    """A target: a hollow small circle, its disk's number beside it (upper right; unless
+    ``number`` is False) and, given R, its dotted neighbourhood ring."""
     from matplotlib import patheffects
     from matplotlib.patches import Circle
 
@@ -136,6 +146,8 @@ def draw_target(ax, xy, r, i, *, R=None, zorder=4):
     ax.add_patch(Circle(xy, m, fill=False, ec=ink, lw=0.9, zorder=zorder))
     if R is not None:
         ax.add_patch(Circle(xy, R, fill=False, ec=palette.hex_color(palette.RING_INK), lw=0.7, ls=":", zorder=2))
+    if not number:
+        return
     off = m * _points_per_unit(ax) * 0.72 + 0.8
     ax.annotate(str(i), xy, xytext=(off, off), textcoords="offset points", fontsize=TARGET_NUMBER_PT, color=ink,
                 ha="left", va="bottom", zorder=zorder + 2,
@@ -180,7 +192,7 @@ def line_handle(color, ls="-", *, lw=1.4, **marker):
 
 
 def mark_handles(problem, *, paths: bool, final: bool, ring: bool, final_label=None,
-                 path_prefix: str = "") -> list[tuple]:
+                 path_prefix: str = "", numbers: bool = True) -> list[tuple]:
     """(handle, words) of the marks a figure of ``problem`` uses: start disks by class,
     target, ring, final position, paths by class (their words after ``path_prefix``)."""
     cue = bool(problem.cueable.any())
@@ -188,12 +200,12 @@ def mark_handles(problem, *, paths: bool, final: bool, ring: bool, final_label=N
     out = []
     if cue:
         out.append((circle_handle(fc=palette.hex_color(palette.CUEABLE)),
-                    f"{palette.LEGEND_CUEABLE} {palette.LEGEND_START}"))
+                    f"{palette.LEGEND_CUEABLE} {_start_words(numbers)}"))
     if non:
         out.append((circle_handle(fc=palette.hex_color(palette.NONCUEABLE)),
-                    f"{palette.LEGEND_NONCUEABLE} {palette.LEGEND_START}"))
+                    f"{palette.LEGEND_NONCUEABLE} {_start_words(numbers)}"))
     out.append((circle_handle(radius=0.45, ec=palette.hex_color(palette.TARGET_INK), lw=0.9),
-                palette.LEGEND_TARGET))
+                palette.LEGEND_TARGET if numbers else "target"))
     if ring:
         out.append((circle_handle(radius=1.15, ec=palette.hex_color(palette.RING_INK), lw=0.9, ls=":"),
                     palette.LEGEND_RING))
@@ -207,6 +219,16 @@ def mark_handles(problem, *, paths: bool, final: bool, ring: bool, final_label=N
             out.append((line_handle(palette.hex_color(palette.NONCUEABLE), palette.PATH_NONCUEABLE),
                         path_prefix + palette.LEGEND_PATH_NONCUEABLE + " (dashed)"))
     return out
+
+
+def _start_words(numbers: bool) -> str:
+    """The legend's words for a start disk: with its number, or saying why there is none."""
+    return palette.LEGEND_START if numbers else f"disk at its start (no numbers over {NUMBERS_MAX_DISKS} disks)"
+
+
+def numbered(problem) -> bool:
+    """Whether figures of ``problem`` number its disks (NUMBERS_MAX_DISKS)."""
+    return problem.n <= NUMBERS_MAX_DISKS
 
 
 def legend_below(fig, entries, *, ncol: int = 2, fontsize: float = LEGEND_PT, grow: bool = True,
@@ -236,8 +258,9 @@ def plot_problem(problem, *, rings: bool = True):
 
     p = problem
     fig, ax = _figure(p)
+    num = numbered(p)
     for i in range(p.n):
-        draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius if rings else None)
+        draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius if rings else None, number=num)
     for i in range(p.n):
         a, b = p.start[i], p.target[i]
         d = b - a
@@ -248,12 +271,12 @@ def plot_problem(problem, *, rings: bool = True):
             head = b - u * target_marker_radius(p.radius[i])
             ax.add_patch(FancyArrowPatch(tail, head, arrowstyle="-|>", mutation_scale=9, lw=0.9, color="0.2",
                                          ls="-" if p.cueable[i] else (0, (4, 3)), zorder=3))
-        draw_start(ax, a, p.radius[i], p.cueable[i], i)
+        draw_start(ax, a, p.radius[i], p.cueable[i], i, number=num)
     ncue = int(p.cueable.sum())
     kinds = f"{ncue} cueable" + (f", {p.n - ncue} noncueable" if ncue < p.n else "")
     ax.set_title(f"{display_name(p.name)}: {p.n} disks, {kinds}; t_final = {p.t_final:g} s, R = {p.target_radius:g}",
                  fontsize=TITLE_PT)
-    entries = mark_handles(p, paths=False, final=False, ring=rings)
+    entries = mark_handles(p, paths=False, final=False, ring=rings, numbers=num)
     entries.append((line_handle("0.2", "-", lw=0.9, marker=">", ms=4), "start -> target"
                     + (" (dashed: noncueable)" if ncue < p.n else "")))
     legend_below(fig, entries)
@@ -280,8 +303,10 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
         pi, pj = tr.positions[k + 1, i], tr.positions[k + 1, j]
         w = (p.radius[i] / (p.radius[i] + p.radius[j]))[:, None]
         stars = pi + (pj - pi) * w
+    num = numbered(p)
+    star_ms = STAR_MS if num else MANY_STAR_MS
     for i in range(p.n):
-        draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius if rings else None)
+        draw_target(ax, p.target[i], p.radius[i], i, R=p.target_radius if rings else None, number=num)
     for i in range(p.n):
         col = palette.hex_color(shades[i])
         # noncueable paths broken, as their arrows in Figure 2; "_" labels stay out of the legend
@@ -289,8 +314,9 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
                 solid_joinstyle="miter", label=f"_path {i}")
         draw_final(ax, tr.final_positions[i], p.radius[i], shades[i], zorder=4)
         # a star on a start disk would cover its number: the number moves beside the disk
-        draw_start(ax, p.start[i], p.radius[i], p.cueable[i], i, zorder=5, avoid=stars, avoid_pt=STAR_MS / 2)
-    entries = mark_handles(p, paths=True, final=True, ring=rings)
+        draw_start(ax, p.start[i], p.radius[i], p.cueable[i], i, zorder=5, avoid=stars, avoid_pt=star_ms / 2,
+                   number=num)
+    entries = mark_handles(p, paths=True, final=True, ring=rings, numbers=num)
     wall_ink, coll_ink = palette.hex_color(palette.WALL_BOUNCE), palette.hex_color(palette.COLLISION)
     if wall.any():
         k = np.nonzero(wall)[0]
@@ -300,13 +326,14 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
         entries.append((line_handle(wall_ink, "none", marker=palette.WALL_BOUNCE_MARKER, ms=3.2), label))
     if len(stars):
         label = f"{palette.LEGEND_COLLISION} ({len(stars)})"
-        ax.plot(stars[:, 0], stars[:, 1], palette.COLLISION_MARKER, ms=STAR_MS, color=coll_ink, mec="black", mew=0.4,
-                zorder=7, label=label)
+        ax.plot(stars[:, 0], stars[:, 1], palette.COLLISION_MARKER, ms=star_ms, color=coll_ink, mec="black",
+                mew=0.4 if num else 0.2, zorder=7, label=label)
         entries.append((line_handle(coll_ink, "none", marker=palette.COLLISION_MARKER, ms=STAR_MS, mec="black"),
                         label))
     legend_below(fig, entries)
-    sig = (f"signature {tr.signature_string} (order {tr.order}/{p.n})" if p.n <= TITLE_SIGNATURE_MAX else
-           f"order {tr.order}/{p.n}")
+    s = tr.signature_string
+    order = s.count("1")  # from the string: exact for any N
+    sig = f"signature {s} (order {order}/{p.n})" if p.n <= TITLE_SIGNATURE_MAX else f"order {order}/{p.n}"
     ax.set_title(f"{display_name(p.name)}: cost {tr.cost:.4g}, {sig}", fontsize=TITLE_PT)
     return fig
 
