@@ -2,6 +2,7 @@
 
     python benchmarks/bench_mujoco_scale.py            # N = 10, 30, 100, 300, 1,000 (~2-3 min)
     python benchmarks/bench_mujoco_scale.py --quick    # N = 10, 30, 100, 300 (< 1 min)
+    python benchmarks/bench_mujoco_scale.py --mjcf 1000 3000 10000   # the scene only (~1 min)
 
 The motions are ``nbst.models.validate.gas_motion(N, seed=1)``: N disks of radius 10 on a square
 grid at area fraction 0.08 (fixed density: the box grows as sqrt(N)), random directions, speeds
@@ -17,6 +18,9 @@ per disk). For each N it prints one row:
   and micro-steps), impacts, stepping wall time, worst final error;
 * aligned / fixed wall time, and each stepping's wall time over its own at N = 10, measured in the
   same run.
+
+``--mjcf N ...`` times only the scene at those N (the same grid and density, disks at rest, no
+simulation): ``build_spec``, ``scene_xml`` and ``MjModel.from_xml_string``, with ratios to the first N.
 """
 from __future__ import annotations
 
@@ -64,10 +68,45 @@ def row(n: int, repeat: int) -> dict:
             "impacts": st["impacts"], "t_aligned": min(aligned), "err_aligned": err_a}
 
 
+def mjcf_only(ns) -> None:
+    import mujoco
+
+    from nbst.models.scene import build_spec, scene_xml
+    from nbst.models.validate import GAS_AREA_FRACTION, GAS_RADIUS
+    from nbst.problem import problem_from_dict
+
+    print(f"MuJoCo {mujoco.__version__}: the scene of N disks at rest on the gas_motion grid; times in s")
+    print("| N | build_spec | scene_xml | from_xml_string | XML (MB) | bodies | scene_xml vs first N |")
+    print("|---|---|---|---|---|---|---|")
+    first = None
+    for n in ns:
+        side = float(np.sqrt(n * np.pi * GAS_RADIUS ** 2 / GAS_AREA_FRACTION))
+        k = int(np.ceil(np.sqrt(n)))
+        st = [[(a + 0.5) * side / k, (b + 0.5) * side / k] for a in range(k) for b in range(k)][:n]
+        p = problem_from_dict({"name": f"grid-{n}", "box": [side, side], "t_final": 2.0, "target_radius": 20.0,
+                               "disks": [{"start": s, "target": s, "radius": GAS_RADIUS} for s in st]})
+        t0 = time.perf_counter()
+        build_spec(p, None)
+        t_spec = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        xml = scene_xml(p, None)
+        t_xml = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        m = mujoco.MjModel.from_xml_string(xml)
+        t_load = time.perf_counter() - t0
+        first = first or t_xml
+        print(f"| {n:,} | {t_spec:.2f} | {t_xml:.2f} | {t_load:.2f} | {len(xml) / 1e6:.1f} | {m.nbody:,} | "
+              f"{t_xml / first:.1f}x |", flush=True)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="N up to 300, one run each")
+    ap.add_argument("--mjcf", type=int, nargs="+", metavar="N", help="time only the scene at these N")
     args = ap.parse_args(argv)
+    if args.mjcf:
+        mjcf_only(args.mjcf)
+        return
     import mujoco
 
     from nbst.models.validate import gas_motion
