@@ -31,6 +31,16 @@ OVERLAP_RTOL = 1e-9
 #: the crossing limit can still be truncated, and ``nbst simulate`` then says so.
 MAX_EVENTS = 200_000
 
+#: Past 1,000 disks the cap grows with N: ``max_events_for(n) = max(MAX_EVENTS,
+#: MAX_EVENTS_PER_DISK * n)`` (a 10,000-disk planted motion at fixed density makes ~10
+#: events per disk; the cap is 20 times that).
+MAX_EVENTS_PER_DISK = 200
+
+
+def max_events_for(n: int) -> int:
+    """The event cap of one simulation of n disks (``MAX_EVENTS`` up to 1,000 disks)."""
+    return max(MAX_EVENTS, MAX_EVENTS_PER_DISK * int(n))
+
 #: A jam: more than this many events per disk within one instant (a window of
 #: ``STALL_RTOL * t_final`` seconds) stops a run as stalled (``Trajectory.stalled``, cost
 #: inf) instead of spending ``MAX_EVENTS`` on it. Rigid disks pinned between opposite

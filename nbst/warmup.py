@@ -57,7 +57,23 @@ def other_kernels() -> tuple:
     # Only kernels that a command calls from Python: polish_kernel runs inside nbst's loop
     # (compiled with it) and transition_from_events behind transition_jacobian, which no
     # command calls; listed here, they would stay "cold" after every warm-up.
-    return (jacobian_from_events, late_impact_errors, aim_routes)
+    from nbst.sim.api import _keyframes, _replay_at
+    from nbst.sim.cells import evaluate_words_kernel, run_cells
+
+    return (jacobian_from_events, late_impact_errors, aim_routes, run_cells, evaluate_words_kernel, _keyframes,
+            _replay_at)
+
+
+def many_disks_problem(n: int = 144):
+    """A small many-disk problem (n disks on a grid, targets shifted): what the warm-up runs
+    so the cell-grid kernel and multiword signatures are compiled too."""
+    from nbst.problem import problem_from_dict
+
+    side = int(n ** 0.5 + 0.999)
+    disks = [{"start": [20.0 + 40.0 * (k % side), 20.0 + 40.0 * (k // side)],
+              "target": [40.0 + 40.0 * (k % side), 20.0 + 40.0 * (k // side)], "radius": 5.0} for k in range(n)]
+    return problem_from_dict({"name": f"grid-{n}", "box": [40.0 * side + 40.0, 40.0 * side], "t_final": 2.0,
+                              "target_radius": 5.0, "disks": disks})
 
 
 def compile_message() -> str:
@@ -90,8 +106,14 @@ def warm_all(log=None) -> float:
     t0 = time.perf_counter()
     p = load_problem("over5")  # cueable and noncueable disks: every branch's types
     V = p.straight_velocities()
-    simulate(p, V)
+    simulate(p, V).at([0.0, 1.0])
     evaluate(p, np.stack([V, V]))
+    many = many_disks_problem()
+    Vm = many.straight_velocities()
+    tr = simulate(many, Vm)
+    tr.at([0.0, 1.0], replay=True)
+    tr.velocity_at([0.5], replay=True)
+    evaluate(many, np.stack([Vm, Vm]), jobs=1)
     log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
     final_jacobian(p, V)
     analyze(p, V, timestep=0.00025)  # validate's sensitivity report

@@ -163,7 +163,7 @@ def test_numeric_flags_have_domains_stated_in_help():
 @pytest.mark.parametrize("argv", [
     ["solve", "over5", "-o", "x.json", "--seed", "nan"], ["solve", "over5", "-o", "x.json", "--seed", str(2**63)],
     ["solve", "over5", "-o", "x.json", "--max-trials", "9" * 5000], ["solve", "over5", "-o", "x.json", "--jobs", "100000"],
-    ["solve", "over5", "-o", "x.json", "--target-cost", "inf"], ["generate", "--planted", "64", "-o", "x.json"],
+    ["solve", "over5", "-o", "x.json", "--target-cost", "inf"], ["generate", "--planted", "100001", "-o", "x.json"],
     ["generate", "--planted", "2", "--t-final", "nan", "-o", "x.json"], ["render", "over5", "s.json", "-o", "x.png",
                                                                           "--still", "nan"],
     ["render", "over5", "s.json", "-o", "x.mp4", "--fps", "1e9"], ["render", "over5", "s.json", "-o", "x.mp4",

@@ -5,13 +5,33 @@ motion with its events, as a :class:`Trajectory`). The compiled event kernel is 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
+from numba import njit
 
-from nbst.constants import EVENT_BUFFER, EVENT_DISK, EVENT_WALL, MAX_EVENTS, PARALLEL_BATCH, WALL_NAMES
+from nbst.constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, GA_MAX_DISKS, PARALLEL_BATCH, WALL_NAMES,
+                            max_events_for)
 from nbst.problem import Problem
+from nbst.sim.cells import CELLS_MIN_DISKS, alloc_cells, evaluate_words_kernel, run_cells
 from nbst.sim.kernel import (INF, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work, cost_signature,
-                             evaluate_kernel, run)
+                             cost_signature_words, evaluate_kernel, run)
+
+#: Largest keyframe table (events x disks) a ``Trajectory`` builds on its own for ``at``;
+#: past it ``at`` replays the event record (the same numbers, no K x N arrays: a 10,000-disk
+#: motion with 50,000 events would need 16 GB of keyframes).
+DENSE_KEYFRAMES = 4_000_000
+
+
+def uses_cells(n: int) -> bool:
+    """Whether ``simulate`` and ``evaluate`` run n disks on the cell-grid kernel
+    (``nbst.sim.cells``) rather than the table (``nbst.sim.kernel``)."""
+    return int(n) >= CELLS_MIN_DISKS
+
+
+def signature_words_to_int(words) -> int:
+    """A multiword signature ((N + 63) // 64 uint64, little-endian words) as a Python int."""
+    return int.from_bytes(np.ascontiguousarray(words, dtype="<u8").tobytes(), "little")
 
 def _check_velocities(problem: Problem, V: np.ndarray) -> None:
     if V.shape[-2:] != (problem.n, 2):
@@ -22,12 +42,14 @@ def _check_velocities(problem: Problem, V: np.ndarray) -> None:
         raise ValueError("noncueable disks must have zero initial velocity")
 
 
-def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: int | None = None):
+def evaluate(problem: Problem, V, *, max_events: int | None = None, jobs: int | None = None):
     """Simulate a batch of candidate velocity sets (no per-trial Python).
 
     V : (B, N, 2) float, units/s
-    returns final (B, N, 2), cost (B,) float, signature (B,) int64 bitmask. cost is inf
-    (signature 0) for a run that needed more than ``max_events`` events (or jammed).
+    returns final (B, N, 2), cost (B,) float, signature (B,): an int64 bitmask up to 63
+    disks, past that an object array of Python ints (bit i: disk i within R; the kernels
+    keep multiword bitsets). cost is inf (signature 0) for a run that needed more than
+    ``max_events`` events (default ``nbst.constants.max_events_for(N)``) or jammed.
     jobs : threads for a batch of at least PARALLEL_BATCH candidates (the kernel releases
            the GIL; each thread takes a contiguous slice); None: every core; 1: this thread.
            The results do not depend on it: each candidate is simulated alone.
@@ -37,7 +59,7 @@ def evaluate(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: int | N
     return final, cost, sig
 
 
-def evaluate_events(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: int | None = None):
+def evaluate_events(problem: Problem, V, *, max_events: int | None = None, jobs: int | None = None):
     """:func:`evaluate`, also returning each run's number of events: (final, cost, signature,
     n_events (B,) int64)."""
     V = np.ascontiguousarray(V, dtype=np.float64)
@@ -45,21 +67,30 @@ def evaluate_events(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: 
         raise ValueError(f"V must have shape (B, N, 2), got {V.shape}")
     _check_velocities(problem, V)
     ka = problem.kernel_arrays()
+    n = problem.n
+    if max_events is None:
+        max_events = max_events_for(n)
     B = V.shape[0]
-    final = np.empty((B, problem.n, 2))
+    final = np.empty((B, n, 2))
     cost = np.empty(B)
-    sig = np.empty(B, np.int64)
     n_events = np.empty(B, np.int64)
+    wide = n > GA_MAX_DISKS
+    sig = np.empty((B, (n + 63) // 64), np.uint64) if wide else np.empty(B, np.int64)
 
     def run_slice(a: int, b: int) -> None:
-        evaluate_kernel(ka.start, V[a:b], ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R,
-                        int(max_events), final[a:b], cost[a:b], sig[a:b], n_events[a:b])
+        if wide:
+            evaluate_words_kernel(ka.start, V[a:b], ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R,
+                                  int(max_events), uses_cells(n), final[a:b], cost[a:b], sig[a:b], n_events[a:b])
+        else:
+            evaluate_kernel(ka.start, V[a:b], ka.radius, ka.mass, ka.target, ka.W, ka.H, ka.t_final, ka.R,
+                            int(max_events), final[a:b], cost[a:b], sig[a:b], n_events[a:b])
 
     if jobs is None:
         from nbst.parallel import default_jobs
 
         jobs = default_jobs()
-    k = max(1, min(int(jobs), B // PARALLEL_BATCH))
+    # a candidate of many disks is work enough for a thread of its own
+    k = max(1, min(int(jobs), B if wide else B // PARALLEL_BATCH))
     if k == 1:
         run_slice(0, B)
     else:
@@ -69,6 +100,11 @@ def evaluate_events(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: 
         with ThreadPoolExecutor(k) as ex:
             for f in [ex.submit(run_slice, int(cuts[i]), int(cuts[i + 1])) for i in range(k)]:
                 f.result()
+    if wide:
+        out = np.empty(B, object)
+        for b in range(B):
+            out[b] = signature_words_to_int(sig[b])
+        sig = out
     return final, cost, sig, n_events
 
 
@@ -76,12 +112,15 @@ def evaluate_events(problem: Problem, V, *, max_events: int = MAX_EVENTS, jobs: 
 class Trajectory:
     """The exact motion of one simulation.
 
-    times      : (K,) keyframe times: 0, then each event time (non-decreasing)
-    positions  : (K, N, 2) positions at those times (after the event)
-    velocities : (K, N, 2) velocities just after those times
     events     : structured (E,) array: time, kind (0 disk-disk, 1 wall), i, j
                  (j = partner disk, or the wall 0 left, 1 right, 2 bottom, 3 top)
+    event_state: (E, 8) the participants' states after each event (xi, yi, vxi, vyi, xj, yj,
+                 vxj, vyj; the j half unused for a wall), as the kernel recorded them
+    times      : (K,) keyframe times: 0, then each event time (non-decreasing), K = E + 1
+    positions  : (K, N, 2) positions at those times (after the event)  } built on first use:
+    velocities : (K, N, 2) velocities just after those times           } K x N x 2 each
     final_positions / final_velocities : (N, 2) at t_final
+    signature  : Python int, bit i iff disk i ends within R
     truncated  : the run stopped before t_final (``max_events`` reached, or ``stalled``);
                  the motion is exact up to ``t_end`` (its last event) and is held there:
                  ``final_positions`` and ``at(t)`` for t > t_end are the positions at
@@ -89,14 +128,16 @@ class Trajectory:
     stalled    : it stopped because of a jam (disks pinned between opposite walls
                  bouncing infinitely often at one instant), not the event cap
     t_end      : t_final, or the time of the last event of a truncated run
+
+    ``at(t)`` gives the same numbers whether it reads the keyframes or, for a motion past
+    ``DENSE_KEYFRAMES`` (events x disks), replays the event record without building them.
     """
 
     problem: Problem
     initial_velocities: np.ndarray
     times: np.ndarray
-    positions: np.ndarray
-    velocities: np.ndarray
     events: np.ndarray
+    event_state: np.ndarray
     final_positions: np.ndarray
     final_velocities: np.ndarray
     cost: float
@@ -104,6 +145,23 @@ class Trajectory:
     truncated: bool
     stalled: bool = False
     t_end: float | None = None
+
+    @cached_property
+    def _keyframes(self):
+        x0 = self.problem.kernel_arrays().start
+        pos, vel = _keyframes(x0, np.ascontiguousarray(self.initial_velocities), self.times, self.events["i"],
+                              _ev_j(self.events), self.event_state)
+        pos.setflags(write=False)
+        vel.setflags(write=False)
+        return pos, vel
+
+    @property
+    def positions(self) -> np.ndarray:
+        return self._keyframes[0]
+
+    @property
+    def velocities(self) -> np.ndarray:
+        return self._keyframes[1]
 
     @property
     def end_time(self) -> float:
@@ -127,27 +185,48 @@ class Trajectory:
     def n_wall(self) -> int:
         return int(np.count_nonzero(self.events["kind"] == EVENT_WALL))
 
-    def at(self, t):
+    def _dense(self, replay: bool | None = None) -> bool:
+        if replay is not None:
+            return not replay
+        return "_keyframes" in self.__dict__ or self.times.size * self.problem.n <= DENSE_KEYFRAMES
+
+    def at(self, t, *, replay: bool | None = None):
         """Positions at time(s) t in [0, t_final]: (N, 2) for a scalar, (T, N, 2) for an array.
 
         Exact: the keyframe before t plus straight flight. At an event time the
         state after the event is used (positions are continuous anyway). A truncated
-        run holds its positions at ``t_end`` for later t.
+        run holds its positions at ``t_end`` for later t. ``replay``: read the event record
+        (True) or the keyframes (False); None chooses by size (the numbers are the same).
         """
         ts = np.asarray(t, dtype=float)
         if np.any(ts < 0.0) or np.any(ts > self.problem.t_final * (1 + 1e-12)):
             raise ValueError(f"t must lie in [0, t_final = {self.problem.t_final}]")
         if self.truncated:
             ts = np.minimum(ts, self.end_time)
-        k = np.searchsorted(self.times, ts, side="right") - 1
-        dt = (ts - self.times[k])[..., None, None]
-        return self.positions[k] + self.velocities[k] * dt
+        if self._dense(replay):
+            k = np.searchsorted(self.times, ts, side="right") - 1
+            dt = (ts - self.times[k])[..., None, None]
+            return self.positions[k] + self.velocities[k] * dt
+        flat = ts.reshape(-1)
+        order = np.argsort(flat, kind="stable")
+        out = np.empty((flat.size, self.problem.n, 2))
+        _replay_at(self.problem.kernel_arrays().start, np.ascontiguousarray(self.initial_velocities), self.times,
+                   self.events["i"].astype(np.int64), _ev_j(self.events), self.event_state, flat[order], order, out)
+        return out.reshape(ts.shape + (self.problem.n, 2))
 
-    def velocity_at(self, t):
+    def velocity_at(self, t, *, replay: bool | None = None):
         """Velocities at time(s) t (just after any event at exactly t)."""
         ts = np.asarray(t, dtype=float)
-        k = np.searchsorted(self.times, ts, side="right") - 1
-        return self.velocities[k]
+        if self._dense(replay):
+            k = np.searchsorted(self.times, ts, side="right") - 1
+            return self.velocities[k]
+        flat = ts.reshape(-1)
+        order = np.argsort(flat, kind="stable")
+        out = np.empty((flat.size, self.problem.n, 2))
+        _replay_at(self.problem.kernel_arrays().start, np.ascontiguousarray(self.initial_velocities), self.times,
+                   self.events["i"].astype(np.int64), _ev_j(self.events), self.event_state, flat[order], order, out,
+                   True)
+        return out.reshape(ts.shape + (self.problem.n, 2))
 
     def describe_event(self, e: int) -> str:
         ev = self.events[e]
@@ -156,15 +235,97 @@ class Trajectory:
         return f"t={ev['time']:.6f}s disks {ev['i']} and {ev['j']} collide"
 
 
+def _ev_j(events) -> np.ndarray:
+    """The kernel's j of each event: the partner disk, or -1 - wall."""
+    return np.where(events["kind"] == EVENT_WALL, -1 - events["j"].astype(np.int64), events["j"].astype(np.int64))
+
+
+@njit(cache=True, error_model="numpy")
+def _keyframes(x0, v0, times, ev_i, ev_j, ev_s):
+    """The (K, N, 2) positions and velocities after each event (K = events + 1), from the record."""
+    n = x0.shape[0]
+    K = times.shape[0]
+    pos = np.empty((K, n, 2))
+    vel = np.empty((K, n, 2))
+    cur_p = x0.copy()  # position of each disk at its own last event time
+    cur_t = np.zeros(n)
+    cur_v = v0.copy()
+    pos[0] = x0
+    vel[0] = v0
+    for e in range(K - 1):
+        t = times[e + 1]
+        i = ev_i[e]
+        j = ev_j[e]
+        cur_p[i, 0] = ev_s[e, 0]
+        cur_p[i, 1] = ev_s[e, 1]
+        cur_v[i, 0] = ev_s[e, 2]
+        cur_v[i, 1] = ev_s[e, 3]
+        cur_t[i] = t
+        if j >= 0:
+            cur_p[j, 0] = ev_s[e, 4]
+            cur_p[j, 1] = ev_s[e, 5]
+            cur_v[j, 0] = ev_s[e, 6]
+            cur_v[j, 1] = ev_s[e, 7]
+            cur_t[j] = t
+        for k in range(n):
+            pos[e + 1, k, 0] = cur_p[k, 0] + cur_v[k, 0] * (t - cur_t[k])
+            pos[e + 1, k, 1] = cur_p[k, 1] + cur_v[k, 1] * (t - cur_t[k])
+            vel[e + 1, k, 0] = cur_v[k, 0]
+            vel[e + 1, k, 1] = cur_v[k, 1]
+    return pos, vel
+
+
+@njit(cache=True, error_model="numpy")
+def _replay_at(x0, v0, times, ev_i, ev_j, ev_s, ts, slot, out, want_velocity=False):
+    """``Trajectory.at`` (or ``velocity_at``) for sorted times ts without keyframes: replay the
+    events up to each t and write, into out[slot[q]], the keyframe's numbers (the position at
+    the last event time t_k, then straight flight from there: the same two steps as the table)."""
+    n = x0.shape[0]
+    cur_p = x0.copy()
+    cur_t = np.zeros(n)
+    cur_v = v0.copy()
+    K = times.shape[0]
+    e = 0
+    for q in range(ts.shape[0]):
+        t = ts[q]
+        while e + 1 < K and times[e + 1] <= t:
+            tk = times[e + 1]
+            i = ev_i[e]
+            j = ev_j[e]
+            cur_p[i, 0] = ev_s[e, 0]
+            cur_p[i, 1] = ev_s[e, 1]
+            cur_v[i, 0] = ev_s[e, 2]
+            cur_v[i, 1] = ev_s[e, 3]
+            cur_t[i] = tk
+            if j >= 0:
+                cur_p[j, 0] = ev_s[e, 4]
+                cur_p[j, 1] = ev_s[e, 5]
+                cur_v[j, 0] = ev_s[e, 6]
+                cur_v[j, 1] = ev_s[e, 7]
+                cur_t[j] = tk
+            e += 1
+        tk = times[e]
+        o = slot[q]
+        for k in range(n):
+            if want_velocity:
+                out[o, k, 0] = cur_v[k, 0]
+                out[o, k, 1] = cur_v[k, 1]
+            else:
+                out[o, k, 0] = (cur_p[k, 0] + cur_v[k, 0] * (tk - cur_t[k])) + cur_v[k, 0] * (t - tk)
+                out[o, k, 1] = (cur_p[k, 1] + cur_v[k, 1] * (tk - cur_t[k])) + cur_v[k, 1] * (t - tk)
+
+
 EVENT_DTYPE = np.dtype([("time", "f8"), ("kind", "i1"), ("i", "i4"), ("j", "i4")])
 
 
-def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> Trajectory:
+def simulate(problem: Problem, velocities, *, max_events: int | None = None) -> Trajectory:
     """Simulate one motion exactly and keep its events (for rendering, MuJoCo checks, reports).
 
     velocities : (N, 2) float, units/s (zero rows for noncueable disks)
+    max_events : the event cap (default ``nbst.constants.max_events_for(N)``)
     A run that stops early (``max_events``, or a jam) comes back with ``truncated`` (and
     ``stalled``) set, cost inf, positions held at its last event (see ``Trajectory``).
+    From ``CELLS_MIN_DISKS`` disks it runs on the cell-grid kernel (the same events).
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
     if v0.ndim != 2:
@@ -173,8 +334,12 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
     ka = problem.kernel_arrays()
     x0 = ka.start
     n = problem.n
+    if max_events is None:
+        max_events = max_events_for(n)
     cap = EVENT_BUFFER
-    work = alloc_work(n)
+    cells = uses_cells(n)
+    work = alloc_cells(n) if cells else alloc_work(n)
+    kernel = run_cells if cells else run
     final = np.empty((n, 2))
     fvel = np.empty((n, 2))
     while True:
@@ -182,50 +347,35 @@ def simulate(problem: Problem, velocities, *, max_events: int = MAX_EVENTS) -> T
         ev_i = np.empty(cap, np.int64)
         ev_j = np.empty(cap, np.int64)
         ev_s = np.empty((cap, 8))
-        status, n_ev, _, _ = run(x0, v0, ka.radius, ka.mass, ka.W, ka.H, ka.t_final, work, final, fvel,
-                                 int(max_events), ev_t, ev_i, ev_j, ev_s)
+        status, n_ev, _, _ = kernel(x0, v0, ka.radius, ka.mass, ka.W, ka.H, ka.t_final, work, final, fvel,
+                                    int(max_events), ev_t, ev_i, ev_j, ev_s)
         if status != STATUS_OVERFLOW:
             break
-        cap *= 4
+        cap = min(cap * 4, int(max_events) + 1)
     n_ev = min(n_ev, cap)
-    # keyframes: after each event every disk's state (participants exact from the kernel)
-    K = n_ev + 1
-    times = np.empty(K)
-    pos = np.empty((K, n, 2))
-    vel = np.empty((K, n, 2))
+    times = np.empty(n_ev + 1)
     times[0] = 0.0
-    pos[0] = x0
-    vel[0] = v0
-    cur_p = x0.copy()  # position of each disk at its own last event time
-    cur_t = np.zeros(n)
-    cur_v = v0.copy()
-    for e in range(n_ev):
-        t = ev_t[e]
-        i, j = ev_i[e], ev_j[e]
-        cur_p[i] = ev_s[e, 0:2]
-        cur_v[i] = ev_s[e, 2:4]
-        cur_t[i] = t
-        if j >= 0:
-            cur_p[j] = ev_s[e, 4:6]
-            cur_v[j] = ev_s[e, 6:8]
-            cur_t[j] = t
-        times[e + 1] = t
-        pos[e + 1] = cur_p + cur_v * (t - cur_t)[:, None]
-        vel[e + 1] = cur_v
+    times[1:] = ev_t[:n_ev]
     events = np.empty(n_ev, EVENT_DTYPE)
     events["time"] = ev_t[:n_ev]
     wall_ev = ev_j[:n_ev] < 0
     events["kind"] = np.where(wall_ev, EVENT_WALL, EVENT_DISK)
     events["i"] = ev_i[:n_ev]
     events["j"] = np.where(wall_ev, -1 - ev_j[:n_ev], ev_j[:n_ev])
+    ev_state = ev_s[:n_ev].copy()
+    ev_state[wall_ev, 4:] = 0.0  # the j half of a wall event is not written by the kernel
     truncated = status in (STATUS_TRUNCATED, STATUS_STALLED)
     t_end = float(times[-1]) if truncated else float(problem.t_final)
     if truncated:
         cost, sig = INF, 0
+    elif n > GA_MAX_DISKS:
+        words = np.empty((n + 63) // 64, np.uint64)
+        cost = cost_signature_words(final, ka.target, ka.R, words)
+        sig = signature_words_to_int(words)
     else:
         cost, sig = cost_signature(final, ka.target, ka.R)
-    for a in (times, pos, vel, events, final, fvel):
+    for a in (times, events, ev_state, final, fvel):
         a.setflags(write=False)
-    return Trajectory(problem=problem, initial_velocities=v0, times=times, positions=pos, velocities=vel,
-                      events=events, final_positions=final, final_velocities=fvel, cost=float(cost),
-                      signature=int(sig), truncated=truncated, stalled=status == STATUS_STALLED, t_end=t_end)
+    return Trajectory(problem=problem, initial_velocities=v0, times=times, events=events, event_state=ev_state,
+                      final_positions=final, final_velocities=fvel, cost=float(cost), signature=int(sig),
+                      truncated=truncated, stalled=status == STATUS_STALLED, t_end=t_end)

@@ -48,7 +48,7 @@ from numba import njit
 from nbst.constants import STALL_EVENTS_PER_DISK, STALL_RTOL, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 from nbst.sim.primitives import INF, elastic_impulse, pair_tau, wall_tau
 
-__all__ = ["INF", "SimStatus", "Work", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "alloc_work", "cost_signature",
+__all__ = ["INF", "SimStatus", "Work", "STATUS_OK", "STATUS_OVERFLOW", "STATUS_STALLED", "STATUS_TRUNCATED", "alloc_work", "cost_signature", "cost_signature_words",
            "evaluate_kernel", "pair_tau", "run", "wall_tau"]
 
 
@@ -347,3 +347,21 @@ def evaluate_kernel(x0, V, radius, mass, target, W, H, t_final, R, max_events, f
         else:
             cost[b] = INF
             sig[b] = 0
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def cost_signature_words(final, target, R, words):
+    """``cost_signature`` for any N: the cost, and the signature as a multiword bitset written
+    into ``words`` ((N + 63) // 64 uint64; bit i % 64 of word i // 64 iff disk i is within R)."""
+    cost = 0.0
+    R2 = R * R
+    for w in range(words.shape[0]):
+        words[w] = np.uint64(0)
+    for i in range(final.shape[0]):
+        dx = final[i, 0] - target[i, 0]
+        dy = final[i, 1] - target[i, 1]
+        d2 = dx * dx + dy * dy
+        cost += d2
+        if d2 <= R2:
+            words[i >> 6] |= np.uint64(1) << np.uint64(i & 63)
+    return cost
