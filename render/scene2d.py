@@ -7,8 +7,10 @@ gives exact positions at every frame and exact trail corners (its keyframes);
 :class:`SampledMotion` wraps positions known only at sample times (a MuJoCo
 rollout) and interpolates linearly between them.
 
-Length: ~510 lines, at the house's ~500 on purpose: the 2D frame is one layout (box,
-readout, legend, labels, targets) whose parts place themselves against each other.
+Length: ~610 lines, past the house's ~500 on purpose: the 2D frame is one layout (box,
+readout, legend, labels, targets) whose parts place themselves against each other, and
+the many-disk rules (numbers only where legible, target rings around small disks, trails
+through each disk's own events) belong to that layout.
 """
 from __future__ import annotations
 

@@ -938,3 +938,19 @@ def test_glyph_runs_lay_out_as_text_layout_does(gl):
         assert np.array_equal(halo[gr * (ch + 2):(gr + 1) * (ch + 2), gc * (cw + 2):(gc + 1) * (cw + 2)], union)
     finally:
         t.release()
+
+
+def test_figures_of_many_disks_leave_the_numbers_out_and_say_so():
+    """Over NUMBERS_MAX_DISKS disks the figures write no disk or target numbers (at 150 disks
+    they would cover the figure), the legend says why, and the title counts the signature's
+    order from its bits (every disk ends on target in this exact solution)."""
+    from nbst.render import figures
+
+    p, v, tr = grid_problem(150)
+    for fig in (figures.plot_problem(p), figures.plot_trajectories(p, tr)):
+        ax = fig.axes[0]
+        digits = [t.get_text() for t in ax.texts if t.get_text().isdigit()]
+        assert digits == []
+        words = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert any("no numbers over 100 disks" in w for w in words), words
+    assert ax.get_title().endswith("order 150/150")
