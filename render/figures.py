@@ -297,10 +297,12 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
     ev = tr.events
     wall = ev["kind"] == 1
     stars = np.zeros((0, 2))
+    disk, idx, pts = event_points(tr)
+    first = np.arange(len(ev))  # event_points lists every event's disk i first, in event order
     if (~wall).any():  # each collision at its contact point
         k = np.nonzero(~wall)[0]
         i, j = ev["i"][k], ev["j"][k]
-        pi, pj = tr.positions[k + 1, i], tr.positions[k + 1, j]
+        pi, pj = pts[first[k]], pts[len(ev):]
         w = (p.radius[i] / (p.radius[i] + p.radius[j]))[:, None]
         stars = pi + (pj - pi) * w
     num = numbered(p)
@@ -320,9 +322,9 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
     wall_ink, coll_ink = palette.hex_color(palette.WALL_BOUNCE), palette.hex_color(palette.COLLISION)
     if wall.any():
         k = np.nonzero(wall)[0]
-        pts = tr.positions[k + 1, ev["i"][k]]
+        bounce = pts[first[k]]
         label = f"{palette.LEGEND_WALL_BOUNCE} ({len(k)})"
-        ax.plot(pts[:, 0], pts[:, 1], palette.WALL_BOUNCE_MARKER, ms=3.2, color=wall_ink, zorder=7, label=label)
+        ax.plot(bounce[:, 0], bounce[:, 1], palette.WALL_BOUNCE_MARKER, ms=3.2, color=wall_ink, zorder=7, label=label)
         entries.append((line_handle(wall_ink, "none", marker=palette.WALL_BOUNCE_MARKER, ms=3.2), label))
     if len(stars):
         label = f"{palette.LEGEND_COLLISION} ({len(stars)})"
@@ -338,21 +340,36 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
     return fig
 
 
+def event_points(trajectory):
+    """(disk, event index, point) of every disk at every event it takes part in: the
+    participants' states after each event (from the event record where the trajectory keeps
+    one, else from its keyframes), wall bounces once, collisions once for each disk."""
+    tr = trajectory
+    ev = tr.events
+    e = np.arange(len(ev))
+    pair = np.nonzero(ev["kind"] == 0)[0]
+    disk = np.concatenate((ev["i"], ev["j"][pair])).astype(np.int64)
+    idx = np.concatenate((e, pair))
+    state = getattr(tr, "event_state", None)
+    if state is not None and len(state) == len(ev):  # (E, 8): xi, yi, vxi, vyi, xj, yj, vxj, vyj
+        pts = np.concatenate((state[:, 0:2], state[pair, 4:6]))
+    else:
+        pts = tr.positions[idx + 1, disk]  # keyframe e + 1: the state after event e
+    return disk, idx, pts
+
+
 def disk_paths(trajectory) -> list[np.ndarray]:
     """Each disk's exact path as a polyline (M_i, 2): its start, its position at each event
     it takes part in (only those bend its path), its final position. For 1,000 disks this is
     N + 2 x events points in all, where every keyframe for every disk would be N x events."""
     tr = trajectory
     n = tr.final_positions.shape[0]
-    ev = tr.events
-    pair = np.nonzero(ev["kind"] == 0)[0]
-    disk = np.concatenate((ev["i"], ev["j"][pair])).astype(np.int64)
-    k = np.concatenate((np.arange(len(ev)), pair)) + 1  # keyframe k = e + 1: the state after event e
-    order = np.lexsort((k, disk))
-    disk, k = disk[order], k[order]
-    pts = tr.positions[k, disk]
+    disk, idx, pts = event_points(tr)
+    order = np.lexsort((idx, disk))
+    disk, pts = disk[order], pts[order]
     cuts = np.searchsorted(disk, np.arange(1, n))
-    return [np.concatenate((tr.positions[0, i][None], seg, tr.final_positions[i][None]))
+    start = tr.problem.start
+    return [np.concatenate((start[i][None], seg, tr.final_positions[i][None]))
             for i, seg in enumerate(np.split(pts, cuts))]
 
 

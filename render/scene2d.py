@@ -114,16 +114,24 @@ def _own_event_points(motion, t0: float, t: float):
 
     Only an event a disk takes part in bends its path (a wall bounce of disk i, a
     collision of i and j), so the corners of disk i are its positions at its own events;
-    between them it flies straight. None when ``motion`` has no event list (SampledMotion)."""
+    between them it flies straight. The points come from the event record (each event's
+    participants' states) where the motion keeps one, else from its keyframes; None when
+    ``motion`` has neither (SampledMotion)."""
     ev = getattr(motion, "events", None)
-    kt, kp = getattr(motion, "times", None), getattr(motion, "positions", None)
-    if ev is None or kt is None or kp is None or len(kt) != len(ev) + 1:
+    if ev is None:
         return None
     et = ev["time"]
     lo, hi = int(np.searchsorted(et, t0, side="right")), int(np.searchsorted(et, t, side="left"))
     e = np.arange(lo, hi)
     pair = e[ev["kind"][lo:hi] == EVENT_DISK]
     disk = np.concatenate((ev["i"][lo:hi], ev["j"][pair])).astype(np.int64)
+    state = getattr(motion, "event_state", None)
+    if state is not None and len(state) == len(ev):  # (E, 8): xi, yi, vxi, vyi, xj, yj, vxj, vyj after e
+        pts = np.concatenate((state[lo:hi, 0:2], state[pair, 4:6]))
+        return disk, np.concatenate((et[lo:hi], et[pair])), pts
+    kt, kp = getattr(motion, "times", None), getattr(motion, "positions", None)
+    if kt is None or kp is None or len(kt) != len(ev) + 1:
+        return None
     k = np.concatenate((e, pair)) + 1  # keyframe k = e + 1 holds the state after event e
     return disk, et[k - 1], kp[k, disk]
 
