@@ -6,15 +6,19 @@ import pytest
 
 from nbst import load_problem
 from nbst.cli import main
-from nbst.solvers.islands import island_seeds, solve_islands
+from nbst import simulate
+from nbst.solvers.islands import PORTFOLIO, island_seeds, portfolio_for, solve_islands
 from nbst.search import roundoff_cost, solve
 
 
 def test_one_job_is_the_plain_search():
-    p = load_problem("over5")
-    a = solve_islands(p, jobs=1, seed=4, max_trials=3000, patience=0)
-    b = solve(p, seed=4, max_trials=3000, patience=0)
-    assert np.array_equal(a.velocities, b.velocities) and a.meta["trials"] == b.meta["trials"]
+    """Without a portfolio (all-cueable problem, another variant, or portfolio=False) --jobs 1 is solve()."""
+    for name, kw in (("diamond-s14", {}), ("over5", {"portfolio": False}), ("over5", {"variant": "nbst-noplan"})):
+        p = load_problem(name)
+        a = solve_islands(p, jobs=1, seed=4, max_trials=3000, patience=0, **kw)
+        b = solve(p, seed=4, max_trials=3000, patience=0, variant=kw.get("variant", "nbst"))
+        assert np.array_equal(a.velocities, b.velocities) and a.meta["trials"] == b.meta["trials"]
+        assert "portfolio" not in a.meta and a.meta["variant"] == b.meta["variant"]
 
 
 def test_islands_are_reproducible_and_count_every_trial():
@@ -29,7 +33,7 @@ def test_islands_are_reproducible_and_count_every_trial():
     assert all(e["trials"] == 10_000 for e in isl)  # each island: 1/K of the budget, all spent
     # the written solution is the best island's, and it is what that island's own search gives
     k = a.meta["island"]
-    alone = solve(p, seed=island_seeds(9, 2)[k], max_trials=10_000, patience=0)
+    alone = solve(p, seed=island_seeds(9, 2)[k], max_trials=10_000, patience=0, variant=a.meta["configuration"])
     assert np.array_equal(alone.velocities, a.velocities)
     assert a.meta["cost"] == min(e["cost"] for e in isl)
 
@@ -79,3 +83,67 @@ def test_islands_on_a_dask_cluster_give_the_local_solution(tmp_path):
     isl = [[(i["trials"], i["cost"]) for i in d["islands"]] for d in (here, dask)]
     assert isl[0] == isl[1] and sum(t for t, _ in isl[0]) == 20000
     assert all(t > 0 for t, _ in isl[1])  # island 1 ran (on the cluster's worker)
+
+
+# --------------------------------------------------------------------------- the portfolio
+
+def test_portfolio_runs_both_configurations_and_keeps_the_best():
+    """over5 (noncueable disks): island k runs PORTFOLIO[k % 2]; each island's cost is what its own
+    configuration gives from its seed (and not what the other one gives); the written solution is
+    the cheapest island's and says which configuration produced it."""
+    p = load_problem("over5")
+    assert portfolio_for(p) == PORTFOLIO == ("nbst", "nbst-noplan")
+    s = solve_islands(p, jobs=3, seed=11, max_trials=24_000, patience=0)
+    m = s.meta
+    assert m["portfolio"] == ["nbst", "nbst-noplan", "nbst"] and m["variant"] == "nbst"
+    isl = m["islands"]
+    for e in isl:
+        other = "nbst-noplan" if e["variant"] == "nbst" else "nbst"
+        own = solve(p, seed=e["seed"], max_trials=8000, patience=0, variant=e["variant"]).meta["cost"]
+        not_own = solve(p, seed=e["seed"], max_trials=8000, patience=0, variant=other).meta["cost"]
+        assert e["trials"] == 8000 and e["cost"] == own != not_own
+    assert m["cost"] == min(e["cost"] for e in isl)
+    k = min(range(3), key=lambda i: (isl[i]["cost"], i))
+    assert m["island"] == k and m["configuration"] == isl[k]["variant"]
+    assert m["params"]["planner"] == (m["configuration"] == "nbst")  # the winner's own parameters
+    assert simulate(p, s.velocities).cost == m["cost"]
+
+
+def test_portfolio_on_one_job_takes_turns_and_is_reproducible():
+    """--jobs 1: the portfolio's two islands in threads of one process: the same seed gives the same
+    velocities, and the same solution as --jobs 2 (same islands, same rounds)."""
+    p = load_problem("over5")
+    one = [solve_islands(p, jobs=1, seed=6, max_trials=30_000, patience=0) for _ in range(2)]
+    two = solve_islands(p, jobs=2, seed=6, max_trials=30_000, patience=0)
+    assert np.array_equal(one[0].velocities, one[1].velocities)
+    assert np.array_equal(one[0].velocities, two.velocities)
+    for a in (one[0], two):
+        assert a.meta["portfolio"] == ["nbst", "nbst-noplan"] and a.meta["trials"] == 30_000
+        assert [(e["seed"], e["trials"], e["cost"]) for e in a.meta["islands"]] == \
+            [(e["seed"], e["trials"], e["cost"]) for e in two.meta["islands"]]
+    assert one[0].meta["jobs"] == 1 and two.meta["jobs"] == 2
+
+
+def test_portfolio_on_one_job_stops_together():
+    """A callback that says stop ends both threads at the same round; nothing hangs."""
+    p = load_problem("over5")
+    seen = []
+
+    def cb(prog):
+        seen.append(prog.trials)
+        return prog.trials >= 20_000
+
+    s = solve_islands(p, jobs=1, seed=2, max_trials=400_000, patience=0, callback=cb)
+    assert s.meta["stopped"] == "callback" and 20_000 <= s.meta["trials"] < 40_000
+    assert all(e["trials"] < 200_000 and e["stopped"] in ("callback", "max_trials") for e in s.meta["islands"])
+
+
+def test_no_portfolio_where_the_configurations_coincide():
+    """All-cueable problems (the planner never runs), other variants, baselines and robust mode:
+    every island runs the requested search."""
+    p, s14 = load_problem("over5"), load_problem("diamond-s14")
+    assert portfolio_for(s14) is None
+    assert portfolio_for(p, variant="A") is None and portfolio_for(p, "cma") is None
+    assert portfolio_for(p, robust=True) is None
+    m = solve_islands(s14, jobs=2, seed=3, max_trials=4000, patience=0).meta
+    assert "portfolio" not in m and "configuration" not in m and m["variant"] == "nbst"

@@ -75,7 +75,10 @@ def register(sub) -> None:
                    help="independent searches (islands) on K cores, each from its own seed derived from --seed and "
                         "with 1/K of the trial budget, run in lockstep and all stopped at the first round in which "
                         "one reaches the target cost; the best island's solution is written. The same --seed and K "
-                        f"give the same solution. Default: every core; 1: a single search in this process [{JOBS.limits}]")
+                        "give the same solution. With noncueable disks the default search is a portfolio: the "
+                        "islands alternate nbst (backward planner) and nbst-noplan, and --jobs 1 runs those two "
+                        "islands taking turns in this process (docs/search.md). "
+                        f"Default: every core; 1: a single search in this process [{JOBS.limits}]")
     p.add_argument("--cluster", default=None, metavar="ADDRESS",
                    help="run islands 1..K-1 as tasks on the workers of this Dask scheduler (tcp://host:8786; "
                         "start one with `dask scheduler` and `dask worker ADDRESS`); island 0 runs here. Same "
@@ -160,7 +163,8 @@ def cmd_solve(args) -> int:
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
            "max_trials": "trial budget spent", "patience": f"no improvement in {args.patience} trials",
            "interrupted": "interrupted"}.get(m["stopped"], str(m["stopped"]))
-    island = f" (best of {jobs} islands: island {m['island']})" if "island" in m else ""
+    island = (f" (best of {len(m['islands'])} islands: island {m['island']}"
+              + (f", {m['configuration']}" if "configuration" in m else "") + ")") if "island" in m else ""
     line = (f"cost {m['cost']:.6g}, {m['order']}/{problem.n} disks on target (signature {m['signature']}) "
             f"after {m['trials']} trials in {m['wall_time']:.1f} s, seed {m['seed']}"
             f"{island}; stopped: {why}; "

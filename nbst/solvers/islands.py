@@ -16,14 +16,25 @@ Seeds: island k gets ``island_seeds(seed, K)[k]`` (numpy's ``SeedSequence(seed).
 with K = 1 there is no worker and the search is exactly ``solve(seed=seed)``.
 
 Trial accounting: ``meta["trials"]`` of the result is the sum over islands (every
-simulation counted), ``meta["islands"]`` lists each island's seed, trials, cost and
-why it stopped.
+simulation counted), ``meta["islands"]`` lists each island's seed, configuration, trials,
+cost and why it stopped.
+
+The portfolio: nbst's default search on a problem with noncueable disks is a portfolio of
+two configurations, ``PORTFOLIO`` = ("nbst", "nbst-noplan"): island k runs
+``PORTFOLIO[k % 2]`` (with the backward planner on even islands, without it on odd
+ones), because neither dominates the other on over5 (docs/search.md, "The portfolio").
+With ``jobs`` = 1 the portfolio's two islands run in this process, in threads that take
+turns chunk by chunk (one chunk running at a time, so one core), and the result is the
+same as with ``jobs`` = 2. On an all-cueable problem the planner never runs, so both
+configurations are one search and the portfolio does not apply (``portfolio_for``).
 """
 from __future__ import annotations
 
 import math
 import multiprocessing as mp
 import os
+import queue
+import threading
 import time
 from typing import Callable
 
@@ -31,6 +42,25 @@ import numpy as np
 
 #: Seconds the parent waits for an island's report before it declares the island lost.
 ISLAND_TIMEOUT = 600.0
+
+#: nbst's portfolio: island k runs the variant ``PORTFOLIO[k % len(PORTFOLIO)]``.
+PORTFOLIO = ("nbst", "nbst-noplan")
+
+
+def portfolio_for(problem, algorithm: str = "signature", **kw) -> tuple[str, ...] | None:
+    """The configurations the islands take in turn, or None where every island runs the same search.
+
+    The portfolio applies to nbst's default search (algorithm "signature", variant "nbst", no
+    ``params``, not robust) on a problem with at least one noncueable disk: the backward planner
+    runs only there, so elsewhere "nbst" and "nbst-noplan" are one search, bit for bit. Robust
+    mode keeps its single configuration (its results were measured with the planner)."""
+    if str(algorithm).strip().lower() != "signature" or kw.get("params") is not None or kw.get("robust"):
+        return None
+    if str(kw.get("variant") or "nbst").strip().lower() != "nbst":
+        return None
+    if bool(np.all(problem.cueable)):
+        return None
+    return PORTFOLIO
 
 
 def island_seeds(seed: int, jobs: int) -> list[int]:
@@ -41,22 +71,41 @@ def island_seeds(seed: int, jobs: int) -> list[int]:
             for s in np.random.SeedSequence(int(seed)).spawn(int(jobs))]
 
 
-def _island_body(k: int, algorithm: str, problem, kw: dict, conn) -> None:
+def _island_body(k: int, algorithm: str, problem, kw: dict, conn, baton=None) -> None:
     """Run one search; report after every chunk and wait for the parent's word; send the
-    result (or the error) at the end."""
+    result (or the error) at the end. ``baton`` (a lock, islands in threads): held while a
+    chunk runs, so that the threads of one process take turns."""
     from nbst.solvers.dispatch import solve_with
 
     def callback(p) -> bool:
+        if baton is not None:
+            baton.release()
         conn.send(("progress", k, p.trials, p.best_cost, p.best_order))
-        return conn.recv() == "stop"
+        word = conn.recv()
+        if baton is not None:
+            baton.acquire()
+        return word == "stop"
 
+    if baton is not None:
+        baton.acquire()
     try:
         sol = solve_with(algorithm, problem, callback=callback, **kw)
+        _give(baton)
         conn.send(("done", k, sol.velocities, sol.meta))
     except BaseException as e:  # noqa: BLE001 - reported to the parent, which raises it
+        _give(baton)
         try:
             conn.send(("error", k, f"{type(e).__name__}: {e}", None))
         except OSError:
+            pass
+
+
+def _give(baton) -> None:
+    """Release ``baton`` (an RLock) if this thread holds it."""
+    if baton is not None:
+        try:
+            baton.release()
+        except RuntimeError:  # not held by this thread
             pass
 
 
@@ -94,6 +143,33 @@ class _QueueConn:
             try:
                 self._held.append(self._in.get(timeout=timeout))
             except TimeoutError:
+                return False
+        return True
+
+    def recv(self):
+        if self._held:
+            return self._held.pop()
+        return self._in.get()
+
+    def close(self) -> None:
+        pass
+
+
+class _ThreadConn:
+    """One end of a pipe made of two ``queue.Queue`` (islands in threads): send, recv, poll, close."""
+
+    def __init__(self, out_q: queue.Queue, in_q: queue.Queue):
+        self._out, self._in = out_q, in_q
+        self._held: list = []
+
+    def send(self, obj) -> None:
+        self._out.put(obj)
+
+    def poll(self, timeout: float) -> bool:
+        if not self._held:
+            try:
+                self._held.append(self._in.get(timeout=timeout))
+            except queue.Empty:
                 return False
         return True
 
@@ -177,7 +253,7 @@ class _Rounds:
 
 def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str = "signature",
                   max_trials: int = 1_000_000, patience: int = 100_000, target_cost: float | None = None,
-                  callback: Callable | None = None, cluster=None, **kw):
+                  callback: Callable | None = None, cluster=None, portfolio: bool = True, **kw):
     """Run ``jobs`` islands of ``algorithm`` on ``problem`` and return the best Solution.
 
     Island 0 runs in this process; islands 1..K-1 run in forked workers that start after
@@ -192,6 +268,13 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     workers (one worker thread each, for as long as the search runs) and talk to the
     parent through named Dask queues; the rounds are the same, so the result is the same
     as on local processes for the same (seed, K).
+
+    ``portfolio`` (default True): where :func:`portfolio_for` applies (nbst's default search on a
+    problem with noncueable disks), island k runs ``PORTFOLIO[k % 2]``, and ``jobs`` = 1 runs the
+    portfolio's two islands in threads of this process, taking turns chunk by chunk (the same
+    result as ``jobs`` = 2). ``meta["configuration"]`` names the variant of the written solution's
+    island and ``meta["portfolio"]`` the islands' variants. False: every island runs ``variant``
+    (``jobs`` = 1 is then exactly ``solve``).
     """
     from nbst.solution import make_solution
     from nbst.solvers.dispatch import solve_with
@@ -201,21 +284,36 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
         raise ValueError(f"jobs must be >= 1, got {jobs}")
     if seed is None:
         seed = int(np.random.default_rng().integers(2**63))
-    if jobs == 1:
+    configs = portfolio_for(problem, algorithm, **kw) if portfolio else None
+    if jobs == 1 and configs is None:
         return solve_with(algorithm, problem, seed=seed, max_trials=max_trials, patience=patience,
                           target_cost=target_cost, callback=callback, **kw)
-    seeds = island_seeds(seed, jobs)
-    budget = max(1, math.ceil(int(max_trials) / jobs))
+    threads = jobs == 1  # the portfolio on one core: its islands take turns in threads of this process
+    n_islands = len(configs) if threads else jobs
+    seeds = island_seeds(seed, n_islands)
+    budget = max(1, math.ceil(int(max_trials) / n_islands))
     target = -math.inf if target_cost is None else float(target_cost)
     ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-    island_kw = [dict(kw, seed=seeds[k], max_trials=budget, patience=patience, target_cost=target_cost)
-                 for k in range(jobs)]
+    island_kw = [dict(kw, seed=seeds[k], max_trials=budget, patience=patience, target_cost=target_cost,
+                      **({"variant": configs[k % len(configs)]} if configs else {}))
+                 for k in range(n_islands)]
     conns, procs = {}, []
+    baton = threading.RLock() if threads else None  # held by the island whose chunk runs
 
     def start_workers() -> None:
+        if threads:
+            for k in range(1, n_islands):
+                down, up = queue.Queue(), queue.Queue()
+                conns[k] = _ThreadConn(down, up)  # the parent sends down, hears up
+                t = threading.Thread(target=_island_body, daemon=True, name=f"nbst-island-{k}",
+                                     args=(k, algorithm, problem, island_kw[k], _ThreadConn(up, down), baton))
+                t.start()
+                rounds.live.add(k)
+                procs.append(t)
+            return
         if cluster is not None:
             tag = f"nbst-islands-{os.getpid()}-{time.monotonic_ns()}"
-            for k in range(1, jobs):
+            for k in range(1, n_islands):
                 up, down = f"{tag}-{k}-up", f"{tag}-{k}-down"
                 conns[k] = _QueueConn(down, up, client=cluster)  # the parent sends down, hears up
                 procs.append(cluster.submit(_island_dask, k, algorithm, problem, island_kw[k], (up, down),
@@ -224,7 +322,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
             return
         from nbst.outputs import signals_blocked
 
-        for k in range(1, jobs):
+        for k in range(1, n_islands):
             parent, child = ctx.Pipe()
             p = ctx.Process(target=_island, daemon=True,
                             args=(k, algorithm, problem, island_kw[k], child, os.getpid(),
@@ -236,17 +334,23 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
             rounds.live.add(k)
             procs.append(p)
 
-    rounds = _Rounds(jobs, conns, target, callback, time.perf_counter())
+    rounds = _Rounds(n_islands, conns, target, callback, time.perf_counter())
     interrupted = False
     try:
         def local(p) -> bool:
+            _give(baton)  # the thread islands run their chunks while this one waits at the barrier
             if rounds.barrier((p.trials, p.best_cost, p.best_order)):
                 return True
             if not procs:  # island 0's first round ran alone (most easy problems end there)
                 start_workers()
+            if baton is not None:
+                baton.acquire()
             return False
 
+        if baton is not None:
+            baton.acquire()
         sol0 = solve_with(algorithm, problem, callback=local, **island_kw[0])
+        _give(baton)
         rounds.results[0] = (sol0.velocities, sol0.meta)
         interrupted = sol0.meta.get("stopped") == "interrupted"
         if interrupted:
@@ -258,16 +362,19 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     finally:
         from nbst.outputs import signals_deferred
 
+        _give(baton)  # an interrupted island 0 may still hold it
         with signals_deferred(reraise=False) as late:  # a Ctrl-C cannot cut the drain short: the islands' best
             if interrupted or rounds.live:
                 rounds.stop_reason = "interrupted" if interrupted else (rounds.stop_reason or "error")
                 rounds.answer_pending()
                 _drain(conns, rounds.live, rounds.results, say="stop")
             for p in procs:
-                if cluster is not None:
+                if cluster is not None and not threads:
                     p.cancel()  # a task still running after the drain (lost island)
                     continue
                 p.join(timeout=5)
+                if threads:
+                    continue  # a daemon thread: nothing to kill
                 if p.is_alive():
                     p.kill()
         if late:  # a signal during the drain: the result says so (the CLI exits 130 with it written)
@@ -282,7 +389,13 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     meta["islands"] = [{"island": i, "seed": seeds[i], "trials": int(results[i][1]["trials"]),
                         "cost": results[i][1]["cost"], "stopped": results[i][1]["stopped"]}
                        if i in results else {"island": i, "seed": seeds[i], "trials": rounds.trials[i],
-                                             "cost": None, "stopped": "lost"} for i in range(jobs)]
+                                             "cost": None, "stopped": "lost"} for i in range(n_islands)]
+    if configs:
+        for e in meta["islands"]:
+            e["variant"] = island_kw[e["island"]]["variant"]
+        meta["configuration"] = meta["variant"]  # the variant that produced the written solution
+        meta["variant"] = "nbst"  # what was asked for: nbst's search, the portfolio
+        meta["portfolio"] = [e["variant"] for e in meta["islands"]]
     meta["jobs"] = jobs
     meta["island"] = k
     meta["seed"] = int(seed)
