@@ -1,9 +1,9 @@
 """Render benchmark: frames per second of ``nbst render``'s 2D view against the number of
-disks (N = 10 .. 1,000 at fixed density, 1280x720), and the parts of one problem's video.
+disks (N = 10 .. 3,000 at fixed density, 1280x720), and the parts of one problem's video.
 
-    python benchmarks/bench_render.py --quick              # the curve, 60 frames a size: < 60 s
-    python benchmarks/bench_render.py                      # the curve, 301 frames a size (5 s at 60 fps)
-    python benchmarks/bench_render.py --sizes 10,1000,3000 # other sizes (3,000: 1.7 GB of keyframes)
+    python benchmarks/bench_render.py --quick              # N = 10 .. 1,000, 60 frames a size: < 60 s
+    python benchmarks/bench_render.py                      # N = 10 .. 3,000, 301 frames a size (5 s at 60 fps)
+    python benchmarks/bench_render.py --sizes 10,1000      # other sizes
     python benchmarks/bench_render.py --problem diamond-s14 [--solution sol.json] [--view 3d] [--no-trails]
     python benchmarks/bench_render.py --problem grid-1000  # the parts for the curve's problem at N = 1,000
 
@@ -29,7 +29,8 @@ import time
 
 import numpy as np
 
-CURVE = (10, 30, 100, 300, 1000)
+CURVE = (10, 30, 100, 300, 1000, 3000)
+QUICK_CURVE = (10, 30, 100, 300, 1000)
 
 
 def grid_problem(n: int, *, seed: int = 1, density: float = 0.08, t_final: float = 5.0, name: str | None = None):
@@ -63,7 +64,8 @@ def grid_problem(n: int, *, seed: int = 1, density: float = 0.08, t_final: float
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the curve with 60 frames a size (under a minute)")
-    ap.add_argument("--sizes", default=None, help="comma-separated N for the curve (default 10,30,100,300,1000)")
+    ap.add_argument("--sizes", default=None,
+                    help="comma-separated N for the curve (default 10,30,100,300,1000,3000; --quick to 1000)")
     ap.add_argument("--frames", type=int, default=None, help="frames a size (default 301; 60 with --quick)")
     ap.add_argument("--problem", default=None,
                     help="instead of the curve: the parts of this problem's video (grid-N: the curve's problem)")
@@ -87,7 +89,7 @@ def curve(args) -> int:
     from nbst.render.gl import create_context
     from nbst.render.scene2d import Renderer2D
 
-    sizes = [int(x) for x in args.sizes.split(",")] if args.sizes else list(CURVE)
+    sizes = [int(x) for x in args.sizes.split(",")] if args.sizes else list(QUICK_CURVE if args.quick else CURVE)
     frames = args.frames or (60 if args.quick else 301)
     size = parse_size(args.size)
     ctx = create_context()
