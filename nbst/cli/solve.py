@@ -89,6 +89,9 @@ def register(sub) -> None:
 
 
 def cmd_solve(args) -> int:
+    import numpy as np
+
+    from nbst.constants import GA_MAX_DISKS
     from nbst.outputs import prepare_output, signals_deferred, write_json_atomic
     from nbst.problem import load_problem
 
@@ -143,9 +146,22 @@ def cmd_solve(args) -> int:
     # returns its best so far; later ones cannot stop the write below (they are only noted).
     sol, stopped_late = None, False
     try:
-        sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
-                            max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,
-                            callback=progress, cluster=client, **kw)
+        if algorithm == "signature" and problem.n > GA_MAX_DISKS:
+            # the many-body search (nbst.search.many): one process; its repairs are local
+            from nbst.search import solve
+
+            if robust:
+                from nbst.problem import ProblemError
+
+                raise ProblemError("<arguments>", "--robust", f"applies to problems of at most {GA_MAX_DISKS} disks "
+                                                              f"(this one has {problem.n})")
+            seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**63)
+            sol = solve(problem, seed=seed, max_trials=args.max_trials, patience=args.patience,
+                        target_cost=target_cost, variant=args.variant, callback=progress)
+        else:
+            sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
+                                max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,
+                                callback=progress, cluster=client, **kw)
     finally:
         try:
             if bar:
@@ -165,7 +181,8 @@ def cmd_solve(args) -> int:
            "interrupted": "interrupted"}.get(m["stopped"], str(m["stopped"]))
     island = (f" (best of {len(m['islands'])} islands: island {m['island']}"
               + (f", {m['configuration']}" if "configuration" in m else "") + ")") if "island" in m else ""
-    line = (f"cost {m['cost']:.6g}, {m['order']}/{problem.n} disks on target (signature {m['signature']}) "
+    shown = m["signature"] if problem.n <= GA_MAX_DISKS else "in the file"
+    line = (f"cost {m['cost']:.6g}, {m['order']}/{problem.n} disks on target (signature {shown}) "
             f"after {m['trials']} trials in {m['wall_time']:.1f} s, seed {m['seed']}"
             f"{island}; stopped: {why}; "
             f"wrote {args.output}")

@@ -60,7 +60,8 @@ option; ``docs/search.md`` has the same list with the reasoning):
 """
 from __future__ import annotations
 
-from nbst.search.driver import SearchRun, roundoff_cost, run_search, solve
+from nbst.search.driver import SearchRun, roundoff_cost
+from nbst.search.many import run_search, solve
 from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, NBST_DEFAULTS, VARIANTS, SearchParams, SearchProgress,
                                 mirror_images, variant_params)
 

@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from nbst._version import __version__
-from nbst.constants import ROUNDOFF_REL
+from nbst.constants import GA_MAX_DISKS, ROUNDOFF_REL
 from nbst.problem import Problem
 from nbst.search import loop as _L
 from nbst.search.loop import ChunkResult
@@ -137,6 +137,9 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     ``record_every`` = k > 0, the candidate velocities of trials k, 2k, ... (the loop's exact mix)."""
     from nbst.solution import make_solution
 
+    if problem.n > GA_MAX_DISKS:
+        raise ValueError(f"the signature search's compiled loop takes at most {GA_MAX_DISKS} disks (problem "
+                         f"{problem.name!r} has {problem.n}); nbst.search.solve runs the many-body search for it")
     if params is None:
         params = variant_params(variant, problem)
     if robust is not None:

@@ -1,0 +1,376 @@
+"""The many-body search: problems past the compiled loop's 63 disks, solved by local repair.
+
+At fixed density a disk meets only its neighbours, so a choreography of N disks is mostly
+independent small problems. The search works on the whole motion and repairs it locally:
+
+1. **Directed start.** Every cueable disk flies straight to its target (image (0, 0) of
+   the mirror unfolding, the paper's directed randomize): the shortest path, so the fewest
+   crossings. A disk that meets nothing lands exactly.
+2. **Conflicts, found by the exact simulator.** One simulation of all N disks (the cell-grid
+   kernel, O(1) per event) says which disks miss their targets. The disk-disk events form a
+   graph; its connected components that hold a missing disk are the *conflicts*. A resting
+   (noncueable) disk that must move, and has met nobody, is grouped with its nearest
+   cueable disks (who can strike it).
+3. **Local repair.** Each conflict is cut out as a problem of its own (its disks, the same
+   box and t_final) and solved by nbst's signature search (``nbst.search.driver``: bank
+   shots, strikes, the backward planner and polish with the component's Jacobian, which is
+   the blocked Jacobian of the whole problem: disks that never meet are independent, and no
+   N x N matrix is built). Its solution goes back into the whole motion.
+4. **Repeat.** The repaired paths can meet disks outside their conflict; the next
+   simulation finds that, and those disks join the conflict. A conflict that keeps failing
+   grows by its nearest neighbours, and is tried with a new seed.
+
+Each round keeps the best whole motion; the result is never worse than the directed
+start. Trials are counted in whole-problem simulations: a sub-search trial of m disks
+counts m / N.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from nbst.constants import GA_MAX_DISKS
+from nbst.problem import Problem
+from nbst.search.params import SearchProgress, StopReason
+
+__all__ = ["ALGORITHM_MANY", "ManyParams", "conflicts", "run_many", "run_search", "solve", "subproblem"]
+
+#: ``meta["algorithm"]`` of a many-body search's solution.
+ALGORITHM_MANY = "nbst-many"
+
+
+@dataclass(frozen=True)
+class ManyParams:
+    """The many-body search's choices, each with why."""
+
+    #: Sub-search trial budget per disk of a conflict (a 2-disk conflict gets 2 x this):
+    #: planted conflicts of 2-6 disks are solved exactly in a few thousand trials.
+    sub_trials_per_disk: int = 3_000
+    #: Cueable disks grouped with a resting disk that must move (its possible strikers).
+    strikers: int = 3
+    #: Disks a failing conflict grows by, per failure (its nearest outsiders).
+    grow: int = 2
+    #: Largest conflict handed to the sub-search (its compiled loop's limit).
+    max_conflict: int = GA_MAX_DISKS
+    #: Rounds without a better whole motion before the search stops.
+    patience_rounds: int = 4
+    #: Simulations of one conflict's polish (Levenberg-Marquardt on its own Jacobian).
+    polish_sims: int = 60
+    #: Sub-searches per conflict and round (different seeds: different solutions to try).
+    searches: int = 2
+    #: A sub-search's window: this many largest radii around its disks (times 1 + failures).
+    window: float = 8.0
+    #: Sub-search variant (nbst's, with the backward planner).
+    variant: str = "nbst"
+
+
+def subproblem(problem: Problem, idx: np.ndarray, name: str, *, margin: float | None = None) -> Problem:
+    """The disks ``idx`` of ``problem`` as a problem of their own (same t_final and R).
+
+    margin : None: the same box. A length: a window of the box around the disks' starts and
+             targets, that much wider on each side (clipped to the box), with coordinates
+             relative to its corner. Velocities mean the same in both (the motion is
+             translation invariant) as long as no disk touches a side of the window that is
+             not a wall of the box; a search inside it draws paths of the window's size, not
+             the box's, so its solutions stay among the disks they concern.
+    """
+    def ro(a):
+        a = np.ascontiguousarray(a, dtype=bool if a.dtype == bool else np.float64)
+        a.setflags(write=False)
+        return a
+
+    start, target, box = problem.start[idx], problem.target[idx], problem.box
+    if margin is not None:
+        pts = np.concatenate([start, target])
+        lo = np.maximum(pts.min(axis=0) - margin, 0.0)
+        hi = np.minimum(pts.max(axis=0) + margin, np.array(problem.box))
+        lo = np.where(lo < 2 * margin, 0.0, lo)  # near a wall: use the wall itself
+        hi = np.where(np.array(problem.box) - hi < 2 * margin, np.array(problem.box), hi)
+        start, target, box = start - lo, target - lo, (float(hi[0] - lo[0]), float(hi[1] - lo[1]))
+    return Problem(name=name, box=box, t_final=problem.t_final, target_radius=min(problem.target_radius,
+                                                                                   math.hypot(*box)),
+                   start=ro(start), target=ro(target), radius=ro(problem.radius[idx]),
+                   mass=ro(problem.mass[idx]), cueable=ro(problem.cueable[idx]),
+                   description=f"disks {idx.tolist()} of {problem.name}", source=problem.source)
+
+
+def _components(n: int, ev_i: np.ndarray, ev_j: np.ndarray) -> np.ndarray:
+    """Connected components of the disk-disk event graph: a label per disk (union-find)."""
+    parent = np.arange(n)
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a, b in zip(ev_i.tolist(), ev_j.tolist()):
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    return np.array([find(a) for a in range(n)])
+
+
+def _nearest(problem: Problem, centre: np.ndarray, exclude: np.ndarray, k: int, cueable_only: bool) -> np.ndarray:
+    """The k disks (not in ``exclude``) whose starts are nearest any start in ``centre``."""
+    ok = np.ones(problem.n, bool)
+    ok[exclude] = False
+    if cueable_only:
+        ok &= problem.cueable
+    cand = np.flatnonzero(ok)
+    if cand.size == 0 or k <= 0:
+        return np.empty(0, np.int64)
+    d = np.full(cand.size, np.inf)
+    for c in centre:
+        d = np.minimum(d, np.hypot(*(problem.start[cand] - problem.start[c]).T))
+    return cand[np.argsort(d, kind="stable")[:k]]
+
+
+def conflicts(problem: Problem, tr, miss2: float, grow: dict | None = None, strikers: int = 3) -> list[np.ndarray]:
+    """The conflicts of a whole motion: for each collision component holding a disk whose
+    squared miss exceeds ``miss2``, its disks (sorted); a resting disk that must move and met
+    nobody comes with its ``strikers`` nearest cueable disks. ``grow`` maps a conflict's
+    smallest disk to extra neighbours to add (a conflict that failed before)."""
+    n = problem.n
+    err2 = np.sum((np.asarray(tr.final_positions) - problem.target) ** 2, axis=1)
+    missing = err2 > miss2
+    dd = tr.events["kind"] == 0
+    label = _components(n, tr.events["i"][dd].astype(np.int64), tr.events["j"][dd].astype(np.int64))
+    out = []
+    done = set()
+    for d in np.flatnonzero(missing):
+        lab = label[d]
+        if lab in done:
+            continue
+        done.add(lab)
+        idx = np.flatnonzero(label == lab)
+        if not problem.cueable[idx].any():
+            idx = np.union1d(idx, _nearest(problem, idx, idx, strikers, True))
+        extra = (grow or {}).get(int(idx[0]), 0)
+        if extra:
+            idx = np.union1d(idx, _nearest(problem, idx, idx, extra, False))
+        out.append(idx.astype(np.int64))
+    return out
+
+
+def _accept(problem: Problem, tr_old, tr_new, proposals: list[np.ndarray]) -> list[bool]:
+    """Which proposals to keep after simulating them all together: proposals whose disks end
+    in one collision component of the new motion are judged together, with every disk of
+    that component (an outsider they disturbed counts against them); a group is kept if
+    its disks' summed squared miss went down."""
+    n = problem.n
+    e_old = np.sum((np.asarray(tr_old.final_positions) - problem.target) ** 2, axis=1)
+    e_new = np.sum((np.asarray(tr_new.final_positions) - problem.target) ** 2, axis=1)
+    dd = tr_new.events["kind"] == 0
+    lab = _components(n, tr_new.events["i"][dd].astype(np.int64), tr_new.events["j"][dd].astype(np.int64))
+    # union proposals that share a new component
+    P = len(proposals)
+    parent = list(range(P))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    owner: dict = {}
+    for k, idx in enumerate(proposals):
+        for L in np.unique(lab[idx]).tolist():
+            if L in owner:
+                ra, rb = find(owner[L]), find(k)
+                parent[max(ra, rb)] = min(ra, rb)
+            else:
+                owner[L] = k
+    groups: dict = {}
+    for k in range(P):
+        groups.setdefault(find(k), []).append(k)
+    keep = [False] * P
+    for members in groups.values():
+        disks = np.unique(np.concatenate([proposals[k] for k in members]))
+        disks = np.flatnonzero(np.isin(lab, lab[disks]) | np.isin(np.arange(n), disks))
+        if e_new[disks].sum() < e_old[disks].sum():
+            for k in members:
+                keep[k] = True
+    return keep
+
+
+def _misses(problem: Problem, tr, miss2: float) -> int:
+    return int(np.count_nonzero(np.sum((np.asarray(tr.final_positions) - problem.target) ** 2, axis=1) > miss2))
+
+
+def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, target_cost: float,
+             callback: Callable[[SearchProgress], bool | None] | None = None, params: ManyParams | None = None,
+             start: np.ndarray | None = None):
+    """Solve ``problem`` (any N) by local repair; returns (velocities (N, 2), meta dict).
+
+    target_cost : stop once the whole cost is <= this; a disk counts as missing while its
+                  squared miss exceeds target_cost / N
+    max_trials  : budget in whole-problem simulations (a sub-search trial of m disks: m / N)
+    patience    : stop after this many trials without a better whole motion (0: never), or
+                  ``params.patience_rounds`` rounds
+    start       : velocities to start from (default: straight to each target)
+
+    A repair of a conflict is kept only if the whole motion gets better: fewer missing disks,
+    or as many and a lower cost (so the result is never worse than the start).
+    """
+    from nbst.search.driver import run_search as signature_search
+    from nbst.search.polish import polish
+    from nbst.sim import simulate
+
+    prm = params or ManyParams()
+    rng = np.random.default_rng(seed)
+    n = problem.n
+    V = problem.straight_velocities() if start is None else np.array(start, float)
+    miss2 = max(float(target_cost), 0.0) / n
+    t0 = time.perf_counter()
+    trials = 0.0
+    tr = simulate(problem, V)
+    trials += 1
+    score = (_misses(problem, tr, miss2), float(tr.cost))
+    last_better = trials
+    since_better = 0
+    tries = np.zeros(n, np.int64)  # repair attempts of each disk's conflicts so far
+    history = [[int(trials), float(tr.cost), tr.order]]
+    stats = {"rounds": 0, "conflicts": 0, "repaired": 0, "by_polish": 0, "by_search": 0, "largest_conflict": 0,
+             "sub_trials": 0, "polish_sims": 0, "whole_sims": 1}
+    stopped = None
+    r_max = float(problem.radius.max())
+
+    def report(nc) -> bool:
+        if callback is None:
+            return False
+        return bool(callback(SearchProgress(trials=int(trials), best_cost=float(tr.cost), best_order=int(tr.order),
+                                            elapsed=time.perf_counter() - t0, population=nc, phase="repair")))
+
+    try:
+        while True:
+            if tr.cost <= target_cost:
+                stopped = StopReason.TARGET_COST
+                break
+            if trials >= max_trials:
+                stopped = StopReason.MAX_TRIALS
+                break
+            if (patience and trials - last_better >= patience) or since_better >= prm.patience_rounds:
+                stopped = StopReason.PATIENCE
+                break
+            stats["rounds"] += 1
+            cs = conflicts(problem, tr, miss2, None, prm.strikers)
+            improved = False
+            for idx in sorted(cs, key=len):
+                if trials >= max_trials:
+                    break
+                k = int(tries[idx].max())
+                tries[idx] += 1
+                if k >= 1:  # failed before: take in its nearest outsiders too
+                    idx = np.union1d(idx, _nearest(problem, idx, idx, prm.grow * k, False)).astype(np.int64)
+                if idx.size > prm.max_conflict:
+                    err2 = np.sum((tr.final_positions[idx] - problem.target[idx]) ** 2, axis=1)
+                    core = idx[np.argsort(-err2, kind="stable")[: prm.max_conflict // 3]]
+                    idx = np.union1d(core, _nearest(problem, core, core, prm.max_conflict - core.size, False))
+                if np.all(np.sum((tr.final_positions[idx] - problem.target[idx]) ** 2, axis=1) <= miss2):
+                    continue  # repaired on the way by an earlier conflict's repair
+                stats["conflicts"] += 1
+                stats["largest_conflict"] = max(stats["largest_conflict"], int(idx.size))
+                tol = miss2 * idx.size
+                candidates = []
+                sub = subproblem(problem, idx, f"{problem.name}[{idx.size}]")
+                v, c, _, sims = polish(sub, V[idx], max_sims=prm.polish_sims, tol=tol)
+                stats["polish_sims"] += sims
+                trials += sims * idx.size / n
+                if c <= tol:
+                    candidates.append(("polish", v))
+                win = subproblem(problem, idx, f"{problem.name}[{idx.size}]",
+                                 margin=prm.window * r_max * (1 + k))
+                for _ in range(prm.searches):
+                    budget = prm.sub_trials_per_disk * idx.size
+                    run = signature_search(win, seed=int(rng.integers(2**62)), max_trials=budget, patience=budget,
+                                           target_cost=tol, variant=prm.variant)
+                    used = int(run.solution.meta.get("trials", budget))
+                    stats["sub_trials"] += used
+                    trials += used * idx.size / n
+                    if float(run.solution.meta["cost"]) <= tol:
+                        candidates.append(("search", run.solution.velocities))
+                for how, v in candidates:
+                    Vn = V.copy()
+                    Vn[idx] = v
+                    trn = simulate(problem, Vn)
+                    trials += 1
+                    stats["whole_sims"] += 1
+                    sn = (_misses(problem, trn, miss2), float(trn.cost))
+                    if sn < score:
+                        V, tr, score = Vn, trn, sn
+                        stats["repaired"] += 1
+                        stats["by_" + how] += 1
+                        improved = True
+                        tries[idx] = 0
+                        break
+                if report(len(cs)):
+                    raise KeyboardInterrupt
+            if improved:
+                last_better = trials
+                since_better = 0
+                history.append([int(trials), float(tr.cost), tr.order])
+            else:
+                since_better += 1
+            if report(len(cs)):
+                stopped = StopReason.CALLBACK
+                break
+    except KeyboardInterrupt:
+        stopped = StopReason.INTERRUPTED
+    wall = time.perf_counter() - t0
+    meta = {"trials": int(math.ceil(trials)), "stopped": None if stopped is None else stopped.value,
+            "wall_time": wall, "history": history, "many": stats}
+    return V, meta
+
+
+def _order(v, tr) -> int:
+    return int(tr.order)
+
+
+def solve(problem: Problem, **kw):
+    """``nbst.search.solve`` for any N: the signature search (``nbst.search.driver.solve``) up to
+    63 disks, the many-body search past that (same keywords; variant, params, robust and chunk
+    apply to the signature search and to each conflict's sub-search)."""
+    return run_search(problem, **kw).solution
+
+
+def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
+               target_cost: float | None = None, variant: str = "nbst", callback=None, jobs: int | None = None,
+               many: ManyParams | None = None, **kw):
+    """``nbst.search.driver.run_search`` for any N (see :func:`solve`). Past 63 disks the result's
+    population is the one solution, and ``meta`` has the many-body search's statistics
+    (``meta["many"]``: rounds, conflicts tried and solved, the largest conflict)."""
+    from nbst.search import driver
+    from nbst.search.params import check_run
+
+    if problem.n <= GA_MAX_DISKS:
+        return driver.run_search(problem, seed=seed, max_trials=max_trials, patience=patience,
+                                 target_cost=target_cost, variant=variant, callback=callback, **kw)
+    from nbst._version import __version__
+    from nbst.sim import evaluate
+    from nbst.solution import make_solution, signature_string
+
+    seed = int(np.random.default_rng().integers(2**63)) if seed is None else int(seed)
+    check_run(int(max_trials), int(patience), seed)
+    prm = many or ManyParams(variant=variant)
+    tc = driver.roundoff_cost(problem) if target_cost is None else float(target_cost)
+    v, meta = run_many(problem, seed=seed, max_trials=int(max_trials), patience=int(patience), target_cost=tc,
+                       callback=callback, params=prm)
+    _, c, sg = evaluate(problem, v[None], jobs=1)
+    sig = int(sg[0])
+    wall = meta["wall_time"]
+    full = {"algorithm": ALGORITHM_MANY, "cost": float(c[0]), "signature": signature_string(sig, problem.n),
+            "order": sig.bit_count(), "trials": meta["trials"], "seed": seed, "variant": prm.variant,
+            "params": dataclasses.asdict(prm),
+            "max_trials": int(max_trials), "patience": int(patience), "target_cost": target_cost,
+            "stopped": meta["stopped"], "wall_time": wall,
+            "trials_per_s": meta["trials"] / wall if wall > 0 else None, "nbst_version": __version__,
+            "history": meta["history"], "many": meta["many"]}
+    sol = make_solution(problem, v, **full)
+    return driver.SearchRun(solution=sol, velocities=v[None].copy(), costs=np.array([float(c[0])]),
+                            signatures=np.array([sig], dtype=object), recorded=np.zeros((0, problem.n, 2)))
