@@ -100,21 +100,21 @@ def main() -> None:
                 print(f"| {c} | " + " | ".join(cells)
                       + f" | {statistics.median(r[0] for r in rows[c]):.6g}"
                       + f" | {statistics.median(r[4] for r in rows[c]):.1f} |")
-            if "portfolio" in rows:
-                abl = [c for c in configs if c != "portfolio"]
-                ok = sum(rows["portfolio"][i][0] <= min(rows[c][i][0] for c in abl) for i in range(len(seeds))) \
-                    if abl else len(seeds)
-                best = {c: sum(rows[c][i][0] == min(rows[d][i][0] for d in configs) for i in range(len(seeds)))
-                        for c in configs}
-                summary.append((p.name, budget, jobs, ok, best,
-                                {c: (statistics.median(r[0] for r in rows[c]), statistics.mean(r[0] for r in rows[c]),
-                                     sum(r[2] for r in rows[c]), statistics.median(r[3] for r in rows[c]))
-                                 for c in configs}))
+            abl = [c for c in configs if c != "portfolio"]
+            ok = (sum(rows["portfolio"][i][0] <= min(rows[c][i][0] for c in abl) for i in range(len(seeds)))
+                  if abl else len(seeds)) if "portfolio" in rows else None
+            best = {c: sum(rows[c][i][0] == min(rows[d][i][0] for d in configs) for i in range(len(seeds)))
+                    for c in configs}
+            summary.append((p.name, budget, jobs, ok, best,
+                            {c: (statistics.median(r[0] for r in rows[c]), statistics.mean(r[0] for r in rows[c]),
+                                 sum(r[2] for r in rows[c]), statistics.median(r[3] for r in rows[c]))
+                             for c in configs}))
     print("\nsummary: per problem and K, seeds where the portfolio is <= every ablation and seeds each "
           "configuration is best (the seeds are not paired: each configuration's islands draw their own), "
           "then per configuration: median cost / mean cost / exact runs / median trials")
     for name, budget, jobs, ok, best, st in summary:
-        print(f"  {name} {budget:,} --jobs {jobs}: portfolio <= ablations on {ok}/{len(seeds)} seeds; best: "
+        print(f"  {name} {budget:,} --jobs {jobs}: "
+              + (f"portfolio <= ablations on {ok}/{len(seeds)} seeds; " if ok is not None else "") + "best: "
               + ", ".join(f"{c} {n}" for c, n in best.items()) + "; "
               + "; ".join(f"{c} {md:.6g} / {mn:.6g} / {ex}/{len(seeds)} / {tr:,.0f}" for c, (md, mn, ex, tr) in st.items()))
 
