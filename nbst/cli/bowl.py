@@ -155,6 +155,47 @@ def register(sub) -> None:
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     a.set_defaults(func=cmd_atlas)
 
+    register_throw(bowl)
+
+
+def register_throw(bowl) -> None:
+    """``nbst bowl throw``: one delivery from the foul line, its phases (models/bowling/lane.py)."""
+    t = bowl.add_parser("throw", help="one delivery from the foul line down the full lane: skid, breakpoint, roll, "
+                                      "entry angle",
+                        description="Run one delivery in a bowler's units down the full 60 ft lane in MuJoCo "
+                                    "(the ball alone, h = 1 ms, until it reaches the head pin's line) and print its "
+                                    "phases: skid length, breakpoint (distance and board), roll point, entry angle, "
+                                    "board and speed at the pins. Boards as bowlers number them (board 1 at the "
+                                    "edge on the bowling hand's side). Conventions: docs/bowling.md.",
+                        epilog="Example: nbst bowl throw --hand right --board 10 --at arrows --angle 1.5 --mph 17 "
+                               "--rpm 300 --rotation 45 --tilt 15 --oil house")
+    t.add_argument("--hand", choices=("right", "left"), default="right", help="bowling hand (default right)")
+    t.add_argument("--board", type=Bounded("board", 1, 39), default=10.0, metavar="B",
+                   help="board where the ball is at --at (default 10; 1..39, fractions allowed)")
+    t.add_argument("--at", choices=("foul", "arrows"), default="arrows",
+                   help="where --board is: at the foul line or where the ball crosses the arrows, 15 ft out "
+                        "(default arrows)")
+    t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=1.5, metavar="DEG",
+                   help="launch angle from straight down the lane, + out towards board 1 (default 1.5)")
+    t.add_argument("--mph", type=Bounded("mph", 5, 30, unit="mph"), default=17.0, help="release speed (default 17)")
+    t.add_argument("--rpm", type=Bounded("rpm", 0, 800, unit="rpm"), default=300.0, help="rev rate (default 300)")
+    t.add_argument("--rotation", type=Bounded("rotation", 0, 90, unit="deg"), default=45.0, metavar="DEG",
+                   help="axis rotation: 0 end over end, 90 pure side spin (default 45)")
+    t.add_argument("--tilt", type=Bounded("tilt", 0, 90, unit="deg"), default=15.0, metavar="DEG",
+                   help="axis tilt: 0 a horizontal spin axis (default 15)")
+    t.add_argument("--oil", default="house", metavar="PATTERN",
+                   help="oil pattern by name: house (40 ft crown), sport (42 ft, flat), short (34 ft), uniform "
+                        "(test: full oil to the deck); default house")
+    t.add_argument("--weight", type=float, default=15.0, metavar="LB", help="ball weight, lb (default 15; at most 16)")
+    t.add_argument("--rg", type=float, default=2.50, metavar="IN", help="ball RG, in (default 2.50; USBC 2.46..2.80)")
+    t.add_argument("--diff", type=float, default=0.040, metavar="IN",
+                   help="RG differential, in (default 0.040; USBC at most 0.060)")
+    t.add_argument("--cover", type=float, default=0.20, metavar="MU",
+                   help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
+    t.add_argument("-o", "--output", default=None, metavar="THROW.json", help="also write the phases as JSON")
+    t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
+    t.set_defaults(func=cmd_throw)
+
 
 def _runner_args(parser, same: str) -> None:
     """--jobs K | --cluster ADDRESS: where the rollouts run (see :func:`launcher`)."""
@@ -341,6 +382,59 @@ def cmd_replay(args) -> int:
         print(f"pins down  {','.join(map(str, down)) or 'none'}")
         print(f"expected   {','.join(map(str, want)) or 'none'}  ({'match' if ok else 'DIFFERENT'})")
     return 0 if ok else 1
+
+
+def cmd_throw(args) -> int:
+    from nbst.models.bowling import lane
+
+    try:
+        ball = lane.Ball(weight_lb=args.weight, rg=args.rg, diff=args.diff, friction=args.cover).check()
+        d = lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph, rpm=args.rpm,
+                          rotation=args.rotation, tilt=args.tilt).check()
+        lane.pattern(args.oil)
+        r = lane.throw(d, args.oil, ball)
+    except ValueError as e:
+        return _err("throw", str(e))
+    doc = r.to_dict()
+    if args.output:
+        from nbst.outputs import OutputError, write_text_atomic
+        from nbst.solution import dumps_strict
+
+        try:
+            write_text_atomic(Path(args.output), dumps_strict(doc, indent=1) + "\n")
+        except OutputError as e:
+            return _err("throw", str(e))
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json(doc)
+        return 0
+    for line in throw_lines(r):
+        print(line)
+    return 0
+
+
+def throw_lines(r) -> list[str]:
+    """The phases of a throw (lane.ThrowResult) as lines, in bowler's units."""
+    d = r.delivery
+
+    def ft(v):
+        return "none" if v is None else f"{v:.1f} ft"
+
+    bp = ("none (the ball never moved out)" if r.breakpoint_ft is None
+          else f"{r.breakpoint_ft:.1f} ft, board {r.breakpoint_board:.1f}")
+    return [
+        f"delivery     {d['hand']}-handed, {d['mph']:g} mph, {d['rpm']:g} rpm, rotation {d['rotation']:g} deg, "
+        f"tilt {d['tilt']:g} deg, angle {d['angle']:g} deg; oil {r.oil}",
+        f"ball         {r.ball['weight_lb']:g} lb, RG {r.ball['rg']:g} in, diff {r.ball['diff']:g} in, "
+        f"cover {r.ball['friction']:g}",
+        f"boards       foul line {r.board_at_foul_line:.1f}, arrows {r.board_at_arrows:.1f}",
+        f"skid         {'none (no hook)' if r.skid_ft is None else ft(r.skid_ft) + ' (the hook starts)'}",
+        f"breakpoint   {bp}",
+        f"roll         {ft(r.roll_ft)}",
+        f"at the pins  board {r.board_at_pins:.1f}, entry angle {r.entry_angle_deg:.1f} deg, "
+        f"{r.speed_pins_mph:.1f} mph (lost {r.speed_lost_mph:.1f} mph), {r.seconds_to_pins:.2f} s",
+    ]
 
 
 def shot_name(mask: int) -> str:
