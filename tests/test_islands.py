@@ -147,3 +147,31 @@ def test_no_portfolio_where_the_configurations_coincide():
     assert portfolio_for(p, robust=True) is None
     m = solve_islands(s14, jobs=2, seed=3, max_trials=4000, patience=0).meta
     assert "portfolio" not in m and "configuration" not in m and m["variant"] == "nbst"
+
+
+def test_a_portfolio_island_restarts_when_its_patience_runs_out():
+    """A portfolio island whose search stops by patience starts the next configuration from a fresh
+    seed with the budget left; the island's result is its best run, reproducible from the seed."""
+    from nbst.solvers.islands import restart_seed, run_island
+
+    p = load_problem("over5")
+    kw = dict(seed=5, max_trials=30_000, patience=2000, variant="nbst", _portfolio=PORTFOLIO)
+    a, b = run_island("signature", p, **dict(kw)), run_island("signature", p, **dict(kw))
+    assert np.array_equal(a.velocities, b.velocities)
+    runs = a.meta["runs"]
+    assert len(runs) >= 2 and a.meta["trials"] == sum(r["trials"] for r in runs) <= 30_000
+    assert [r["variant"] for r in runs] == [PORTFOLIO[j % 2] for j in range(len(runs))]
+    assert [r["seed"] for r in runs] == [restart_seed(5, j) for j in range(len(runs))] and runs[0]["seed"] == 5
+    assert all(r["stopped"] == "patience" for r in runs[:-1])
+    assert a.meta["cost"] == min(r["cost"] for r in runs) and a.meta["cost"] == runs[a.meta["run"]]["cost"]
+    j = a.meta["run"]  # the best run alone, from its seed and with the budget it had, gives the same velocities
+    alone = solve(p, seed=runs[j]["seed"], max_trials=30_000 - sum(r["trials"] for r in runs[:j]), patience=2000,
+                  variant=runs[j]["variant"])
+    assert np.array_equal(alone.velocities, a.velocities)
+    # through solve_islands: the written solution names the search that produced it
+    s = solve_islands(p, jobs=2, seed=5, max_trials=60_000, patience=2000)
+    k, isl = s.meta["island"], s.meta["islands"]
+    assert all(len(e["runs"]) >= 2 for e in isl) and s.meta["trials"] == sum(e["trials"] for e in isl) <= 60_000
+    best = min((r for r in isl[k]["runs"]), key=lambda r: r["cost"])
+    assert s.meta["search_seed"] == best["seed"] and s.meta["configuration"] == best["variant"]
+    assert s.meta["cost"] == best["cost"] == min(e["cost"] for e in isl)

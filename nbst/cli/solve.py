@@ -53,7 +53,9 @@ def register(sub) -> None:
     p.add_argument("--max-trials", type=MAX_TRIALS, default=1_000_000, metavar="N",
                    help=with_limits("trial budget, initialization included (default 1000000)", MAX_TRIALS))
     p.add_argument("--patience", type=PATIENCE, default=100_000, metavar="K",
-                   help=with_limits("stop after K trials without improvement; 0 = never (default 100000)", PATIENCE))
+                   help=with_limits("stop after K trials without improvement; 0 = never (default 100000). In nbst's "
+                                    "portfolio (noncueable disks) an island restarts with the other configuration "
+                                    "instead, while its budget lasts", PATIENCE))
     p.add_argument("--algorithm", type=_algorithm, default="signature", metavar="NAME",
                    help="signature: nbst's signature search (default; --variant picks it); baselines (docs/experiments.md): "
                         "cma (CMA-ES, IPOP restarts from the straight-line velocities), de (differential evolution), "

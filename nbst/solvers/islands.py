@@ -25,8 +25,10 @@ two configurations, ``PORTFOLIO`` = ("nbst", "nbst-noplan"): island k runs
 ones), because neither dominates the other on over5 (docs/search.md, "The portfolio").
 With ``jobs`` = 1 the portfolio's two islands run in this process, in threads that take
 turns chunk by chunk (one chunk running at a time, so one core), and the result is the
-same as with ``jobs`` = 2. On an all-cueable problem the planner never runs, so both
-configurations are one search and the portfolio does not apply (``portfolio_for``).
+same as with ``jobs`` = 2. A portfolio island whose search stops by patience with budget
+left restarts with the next configuration from a fresh seed (``run_island``). On an
+all-cueable problem the planner never runs, so both configurations are one search and the
+portfolio does not apply (``portfolio_for``).
 """
 from __future__ import annotations
 
@@ -75,7 +77,6 @@ def _island_body(k: int, algorithm: str, problem, kw: dict, conn, baton=None) ->
     """Run one search; report after every chunk and wait for the parent's word; send the
     result (or the error) at the end. ``baton`` (a lock, islands in threads): held while a
     chunk runs, so that the threads of one process take turns."""
-    from nbst.solvers.dispatch import solve_with
 
     def callback(p) -> bool:
         if baton is not None:
@@ -89,7 +90,7 @@ def _island_body(k: int, algorithm: str, problem, kw: dict, conn, baton=None) ->
     if baton is not None:
         baton.acquire()
     try:
-        sol = solve_with(algorithm, problem, callback=callback, **kw)
+        sol = run_island(algorithm, problem, callback=callback, **kw)
         _give(baton)
         conn.send(("done", k, sol.velocities, sol.meta))
     except BaseException as e:  # noqa: BLE001 - reported to the parent, which raises it
@@ -98,6 +99,61 @@ def _island_body(k: int, algorithm: str, problem, kw: dict, conn, baton=None) ->
             conn.send(("error", k, f"{type(e).__name__}: {e}", None))
         except OSError:
             pass
+
+
+#: A portfolio island restarts (next configuration, fresh seed) when its search stops by patience
+#: with at least this many trials of its budget left.
+RESTART_MIN_TRIALS = 2048
+
+
+def run_island(algorithm: str, problem, callback=None, **kw):
+    """One island's search: ``solve_with``, or in a portfolio island (``_portfolio`` = the
+    configurations) a sequence of searches: the first with ``variant`` and ``seed``; whenever one
+    stops by patience with at least ``RESTART_MIN_TRIALS`` of the island's budget left, the next
+    configuration starts from a fresh seed (``restart_seed``) with what is left. The best run's
+    Solution is returned, with ``trials`` the island's total and ``runs`` one entry per search."""
+    from nbst.solution import make_solution
+    from nbst.solvers.dispatch import solve_with
+
+    configs = kw.pop("_portfolio", None)
+    if not configs:
+        return solve_with(algorithm, problem, callback=callback, **kw)
+    from nbst.search import SearchProgress
+
+    budget, seed0, first = int(kw["max_trials"]), int(kw["seed"]), configs.index(kw["variant"])
+    spent, best, runs = 0, None, []
+    while True:
+        j = len(runs)
+        run_kw = dict(kw, variant=configs[(first + j) % len(configs)], seed=restart_seed(seed0, j),
+                      max_trials=budget - spent)
+        base, floor = spent, (math.inf if best is None else best.meta["cost"])
+
+        def cb(p, base=base, floor=floor):
+            if callback is None:
+                return False
+            return callback(SearchProgress(trials=base + p.trials, best_cost=min(floor, p.best_cost),
+                                           best_order=p.best_order, elapsed=p.elapsed, population=p.population,
+                                           phase=p.phase))
+
+        sol = solve_with(algorithm, problem, callback=cb, **run_kw)
+        m = sol.meta
+        spent += int(m["trials"])
+        runs.append({"seed": run_kw["seed"], "variant": run_kw["variant"], "trials": int(m["trials"]),
+                     "cost": m["cost"], "stopped": m["stopped"]})
+        if best is None or m["cost"] < best.meta["cost"]:
+            best, best_run = sol, j
+        if m["stopped"] != "patience" or budget - spent < RESTART_MIN_TRIALS:
+            break
+    meta = dict(best.meta)
+    meta.update(trials=spent, runs=runs, run=best_run, stopped=runs[-1]["stopped"])
+    return make_solution(problem, best.velocities, **meta)
+
+
+def restart_seed(seed: int, j: int) -> int:
+    """The seed of a portfolio island's j-th search: ``seed`` itself for j = 0, then derived."""
+    if j == 0:
+        return int(seed)
+    return int(np.random.SeedSequence([int(seed), int(j)]).generate_state(1, np.uint64)[0] & np.uint64(2**63 - 1))
 
 
 def _give(baton) -> None:
@@ -295,7 +351,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     target = -math.inf if target_cost is None else float(target_cost)
     ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
     island_kw = [dict(kw, seed=seeds[k], max_trials=budget, patience=patience, target_cost=target_cost,
-                      **({"variant": configs[k % len(configs)]} if configs else {}))
+                      **({"variant": configs[k % len(configs)], "_portfolio": configs} if configs else {}))
                  for k in range(n_islands)]
     conns, procs = {}, []
     baton = threading.RLock() if threads else None  # held by the island whose chunk runs
@@ -349,7 +405,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
 
         if baton is not None:
             baton.acquire()
-        sol0 = solve_with(algorithm, problem, callback=local, **island_kw[0])
+        sol0 = run_island(algorithm, problem, callback=local, **island_kw[0])
         _give(baton)
         rounds.results[0] = (sol0.velocities, sol0.meta)
         interrupted = sol0.meta.get("stopped") == "interrupted"
@@ -393,7 +449,10 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     if configs:
         for e in meta["islands"]:
             e["variant"] = island_kw[e["island"]]["variant"]
+            if e["island"] in results:
+                e["runs"] = results[e["island"]][1]["runs"]
         meta["configuration"] = meta["variant"]  # the variant that produced the written solution
+        meta["search_seed"] = meta.pop("runs")[meta.pop("run")]["seed"]  # and its seed
         meta["variant"] = "nbst"  # what was asked for: nbst's search, the portfolio
         meta["portfolio"] = [e["variant"] for e in meta["islands"]]
     meta["jobs"] = jobs
