@@ -38,6 +38,10 @@ the origin. The foul line is 60 ft before it (:data:`FOUL_LINE_X` = -18.288 m).
   recording its state each step; :class:`ThrowResult` holds the phases in bowler's units.
 
 Compute only: no files written, no printing.
+
+Length: ~560 lines, past the house's ~500: boards, oil, ball, delivery, scene and phases share
+one set of conventions (hand, board numbering, spin axes); split, each part would import the
+others' conventions back.
 """
 from __future__ import annotations
 
