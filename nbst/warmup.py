@@ -50,6 +50,7 @@ def search_kernels() -> tuple:
 
 def other_kernels() -> tuple:
     """The dispatchers of the Jacobian, the sensitivity report and the planner."""
+    from nbst.search.aim import pair_contact
     from nbst.search.planner import aim_routes
     from nbst.sim.jacobian import jacobian_from_events
     from nbst.sim.sensitivity import late_impact_errors
@@ -61,7 +62,7 @@ def other_kernels() -> tuple:
     from nbst.sim.cells import evaluate_words_kernel, run_cells
 
     return (jacobian_from_events, late_impact_errors, aim_routes, run_cells, evaluate_words_kernel, _keyframes,
-            _replay_at)
+            _replay_at, pair_contact)
 
 
 def many_disks_problem(n: int = 144):
@@ -114,6 +115,11 @@ def warm_all(log=None) -> float:
     tr.at([0.0, 1.0], replay=True)
     tr.velocity_at([0.5], replay=True)
     evaluate(many, np.stack([Vm, Vm]), jobs=1)
+    from nbst.search.aim import pair_contact  # the many-body search's two-disk contacts
+
+    ka = many.kernel_arrays()
+    pair_contact(ka.start[0], ka.start[1], ka.target[0], ka.target[1], 1.0, 1.0, 5.0, 5.0, ka.W, ka.H, ka.t_final, 8,
+                 np.empty((2, 5)))
     log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
     final_jacobian(p, V)
     analyze(p, V, timestep=0.00025)  # validate's sensitivity report

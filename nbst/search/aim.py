@@ -30,7 +30,7 @@ from nbst.search.ops import rng_uniform
 from nbst.sim.primitives import fold, images, mirror, pair_tau, strike_ratio
 
 __all__ = ["MAX_PIECES", "alloc_clearance", "all_pieces", "bank_shot", "bank_velocity", "chain_strike_velocity",
-           "choose_bank", "count_conflicts", "flight_pieces", "flights_conflict", "fold", "mirror", "path_conflicts",
+           "choose_bank", "count_conflicts", "pair_contact", "flight_pieces", "flights_conflict", "fold", "mirror", "path_conflicts",
            "pieces_conflict", "strike", "strike_velocity"]
 
 @njit(cache=True)
@@ -314,3 +314,83 @@ def chain_strike_velocity(pc, rc, mc, p1, r1, m1, p2, r2, m2, T, t_final, out):
     out[0] = (q1x - pc[0]) / t1
     out[1] = (q1y - pc[1]) / t1
     return t2
+
+
+# --------------------------------------------------------------------------- two disks, one contact
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _pair_residual(sg, tc, D0x, D0y, DTx, DTy, s, T):
+    """f(tc) of ``pair_contact`` for contact normal sign sg: (f, nx, ny, D0 . n)."""
+    f1 = tc / T
+    lx = D0x * (1.0 - f1) + DTx * f1
+    ly = D0y * (1.0 - f1) + DTy * f1
+    L = math.sqrt(lx * lx + ly * ly)
+    if L == 0.0:
+        return math.nan, 0.0, 0.0, 0.0
+    nx = sg * lx / L
+    ny = sg * ly / L
+    d0n = D0x * nx + D0y * ny
+    return sg * T * L - s * tc - (T - tc) * (2.0 * d0n - s), nx, ny, d0n
+
+
+@njit(cache=True, error_model="numpy")
+def pair_contact(a0, b0, aT, bT, ma, mb, ra, rb, W, H, T, samples, out):
+    """Every exact two-disk motion with one contact: disks a and b leave a0 and b0, touch once,
+    and are at aT and bT at time T (straight flights, no wall bounce). Writes (vax, vay, vbx, vby,
+    tc) per solution into out (K, 5); returns how many (at most K).
+
+    The centre of mass moves uniformly, so at the contact time tc the contact points are
+    c(tc) -+ (m_other / M) s n (s = ra + rb). The relative position D goes straight from
+    D0 = b0 - a0 to s n, its velocity w reflects in the tangent (w' = w - 2 (w.n) n), then it
+    goes straight to DT = bT - aT. Eliminating w and w':  tc DT + (T - tc) D0 = n (s (2 tc - T)
+    + 2 (T - tc) D0.n), so n is parallel to D_lin(tc) = D0 + (DT - D0) tc / T (sign sg = +-1)
+    and one scalar equation in tc remains: sg T |D_lin| = s (2 tc - T) + 2 (T - tc) D0.n. Its
+    roots are bracketed on ``samples`` points of (0, T) and bisected to round-off. A root is
+    kept if the pair approaches (D0.n > s: the relative path, straight, then only gets closer
+    before the contact and only farther after it, so there is no other contact) and both
+    contact points lie in the box."""
+    D0x = b0[0] - a0[0]
+    D0y = b0[1] - a0[1]
+    DTx = bT[0] - aT[0]
+    DTy = bT[1] - aT[1]
+    s = ra + rb
+    M = ma + mb
+    k = 0
+    for q in range(2):
+        sg = 1.0 if q == 0 else -1.0
+        t_prev = 0.0
+        f_prev = math.nan
+        for m in range(1, samples + 1):
+            t = T * m / (samples + 1)
+            f, _, _, _ = _pair_residual(sg, t, D0x, D0y, DTx, DTy, s, T)
+            if m > 1 and f_prev * f < 0.0 and k < out.shape[0]:
+                lo = t_prev
+                hi = t
+                flo = f_prev
+                for _ in range(80):
+                    mid = 0.5 * (lo + hi)
+                    fm, _, _, _ = _pair_residual(sg, mid, D0x, D0y, DTx, DTy, s, T)
+                    if (fm < 0.0) == (flo < 0.0):
+                        lo = mid
+                        flo = fm
+                    else:
+                        hi = mid
+                tc = 0.5 * (lo + hi)
+                _, nx, ny, d0n = _pair_residual(sg, tc, D0x, D0y, DTx, DTy, s, T)
+                if d0n > s:
+                    cx = (ma * (a0[0] + (aT[0] - a0[0]) * tc / T) + mb * (b0[0] + (bT[0] - b0[0]) * tc / T)) / M
+                    cy = (ma * (a0[1] + (aT[1] - a0[1]) * tc / T) + mb * (b0[1] + (bT[1] - b0[1]) * tc / T)) / M
+                    pax = cx - mb / M * s * nx
+                    pay = cy - mb / M * s * ny
+                    pbx = cx + ma / M * s * nx
+                    pby = cy + ma / M * s * ny
+                    if ra <= pax <= W - ra and ra <= pay <= H - ra and rb <= pbx <= W - rb and rb <= pby <= H - rb:
+                        out[k, 0] = (pax - a0[0]) / tc
+                        out[k, 1] = (pay - a0[1]) / tc
+                        out[k, 2] = (pbx - b0[0]) / tc
+                        out[k, 3] = (pby - b0[1]) / tc
+                        out[k, 4] = tc
+                        k += 1
+            t_prev = t
+            f_prev = f
+    return k

@@ -51,6 +51,15 @@ class ManyParams:
     #: Sub-search trial budget per disk of a conflict (a 2-disk conflict gets 2 x this):
     #: planted conflicts of 2-6 disks are solved exactly in a few thousand trials.
     sub_trials_per_disk: int = 3_000
+    #: Partners a missing disk tries a two-disk contact with (missing ones first, then nearest).
+    partners: int = 10
+    #: Two-disk contacts per missing disk extended into chains (the disks they meet, polished).
+    chains: int = 4
+    #: Chance that a cleared neighbourhood with as many misses as before (but another
+    #: arrangement) is kept: a walk on the plateau. The best motion is kept apart.
+    plateau: float = 0.3
+    #: Neighbours (beyond the conflict's own size) a cleared neighbourhood takes in.
+    neighbours: int = 6
     #: Cueable disks grouped with a resting disk that must move (its possible strikers).
     strikers: int = 3
     #: Disks a failing conflict grows by, per failure (its nearest outsiders).
@@ -58,11 +67,13 @@ class ManyParams:
     #: Largest conflict handed to the sub-search (its compiled loop's limit).
     max_conflict: int = GA_MAX_DISKS
     #: Rounds without a better whole motion before the search stops.
-    patience_rounds: int = 4
+    patience_rounds: int = 20
     #: Simulations of one conflict's polish (Levenberg-Marquardt on its own Jacobian).
     polish_sims: int = 60
-    #: Sub-searches per conflict and round (different seeds: different solutions to try).
-    searches: int = 2
+    #: Sub-searches per conflict and round (different seeds: different solutions to try); 0
+    #: (the default) skips step 3: measured on planted problems of 250 disks, its windowed
+    #: sub-searches repaired 5 of 136 conflicts and cost half the time.
+    searches: int = 0
     #: A sub-search's window: this many largest radii around its disks (times 1 + failures).
     window: float = 8.0
     #: Sub-search variant (nbst's, with the backward planner).
@@ -203,6 +214,212 @@ def _misses(problem: Problem, tr, miss2: float) -> int:
     return int(np.count_nonzero(np.sum((np.asarray(tr.final_positions) - problem.target) ** 2, axis=1) > miss2))
 
 
+def _candidates(problem: Problem, a: int, V: np.ndarray, err2: np.ndarray, miss2: float, partners: int, scratch):
+    """Velocity changes that could bring missing disk a home, cheapest first: (disks, rows).
+
+    * two-disk contacts with a partner b (``nbst.search.aim.pair_contact``: a and b touch once
+      and both land exactly), partners that miss too first, then the nearest;
+    * a straight shot again (if a is not on one);
+    * bank shots off one or two walls (images with |kx|, |ky| <= 1).
+    """
+    from nbst.search.aim import bank_velocity, pair_contact
+
+    ka = problem.kernel_arrays()
+    W, H, T = ka.W, ka.H, ka.t_final
+    out = []
+    if problem.cueable[a]:
+        d = np.hypot(*(ka.start - ka.start[a]).T)
+        d[a] = np.inf
+        order = np.argsort(d + np.where(err2 > miss2, 0.0, 1e300), kind="stable")[:partners]
+        for b in order.tolist():
+            if not problem.cueable[b]:
+                continue
+            k = pair_contact(ka.start[a], ka.start[b], ka.target[a], ka.target[b], ka.mass[a], ka.mass[b],
+                             ka.radius[a], ka.radius[b], W, H, T, 200, scratch)
+            for q in range(k):
+                out.append((np.array([a, b]), np.array([scratch[q, 0:2], scratch[q, 2:4]])))
+        straight = (ka.target[a] - ka.start[a]) / T
+        if np.any(V[a] != straight):
+            out.append((np.array([a]), straight[None]))
+        vb = np.empty(2)
+        for kx in (-1, 0, 1):
+            for ky in (-1, 0, 1):
+                if kx or ky:
+                    bank_velocity(ka.start[a], ka.target[a], ka.radius[a], W, H, T, kx, ky, vb)
+                    out.append((np.array([a]), vb.copy()[None]))
+    return out
+
+
+class _Search:
+    """The state of one many-body search: the current motion, its score and the counters."""
+
+    def __init__(self, problem: Problem, prm: ManyParams, V: np.ndarray, miss2: float, max_trials: int, report):
+        from nbst.sim import simulate
+
+        self.problem, self.prm, self.miss2, self.max_trials = problem, prm, miss2, max_trials
+        self.simulate = simulate
+        self.report = report
+        self.trials = 0.0
+        self.stats = {"rounds": 0, "by_pair": 0, "by_shot": 0, "by_chain": 0, "neighbourhoods": 0,
+                      "by_neighbourhood": 0, "conflicts": 0, "by_polish": 0, "by_search": 0, "largest_conflict": 0,
+                      "sub_trials": 0, "polish_sims": 0, "whole_sims": 0}
+        self.scratch = np.empty((8, 5))
+        self.V = V
+        self.tr = self.sim(V)
+        self.score = self.score_of(self.tr)
+        self.best = None
+        self.keep_best()
+
+    def sim(self, V):
+        self.trials += 1
+        self.stats["whole_sims"] += 1
+        return self.simulate(self.problem, V)
+
+    def score_of(self, tr) -> tuple[int, float]:
+        """Fewer missing disks first, then the lower cost."""
+        return (_misses(self.problem, tr, self.miss2), float(tr.cost))
+
+    def err2(self, tr=None):
+        tr = self.tr if tr is None else tr
+        return np.sum((np.asarray(tr.final_positions) - self.problem.target) ** 2, axis=1)
+
+    def greedy(self, disks, V, tr, score, stat=True):
+        """For each missing disk of ``disks``: the first candidate (``_candidates``, then a
+        contact extended into a chain) that makes the whole motion better. Returns the new
+        (V, tr, score, number of changes kept)."""
+        from nbst.search.polish import polish
+
+        problem, prm, miss2, n = self.problem, self.prm, self.miss2, self.problem.n
+        kept = 0
+        for a in disks:
+            err2 = np.sum((np.asarray(tr.final_positions) - problem.target) ** 2, axis=1)
+            if err2[a] <= miss2 or self.trials >= self.max_trials:
+                continue
+            near = []
+            done = False
+            for disks2, rows in _candidates(problem, a, V, err2, miss2, prm.partners, self.scratch):
+                Vn = V.copy()
+                Vn[disks2] = rows
+                trn = self.sim(Vn)
+                sn = self.score_of(trn)
+                if sn < score:
+                    V, tr, score, done = Vn, trn, sn, True
+                    kept += 1
+                    if stat:
+                        self.stats["by_pair" if disks2.size == 2 else "by_shot"] += 1
+                    break
+                if disks2.size == 2:
+                    near.append((sn, Vn, trn))
+            if not done:
+                # a contact that lands a and its partner but sends a third disk off: polish the
+                # disks it now meets, starting from there (a chain of contacts)
+                near.sort(key=lambda c: c[0])
+                for _, Vn, trn in near[: prm.chains]:
+                    dd = trn.events["kind"] == 0
+                    lab = _components(n, trn.events["i"][dd].astype(np.int64), trn.events["j"][dd].astype(np.int64))
+                    idx = np.flatnonzero(lab == lab[a]).astype(np.int64)
+                    if idx.size < 3 or idx.size > prm.max_conflict:
+                        continue
+                    sub = subproblem(problem, idx, f"{problem.name}[{idx.size}]")
+                    v, c, _, sims = polish(sub, Vn[idx], max_sims=prm.polish_sims, tol=miss2 * idx.size)
+                    self.stats["polish_sims"] += sims
+                    self.trials += sims * idx.size / n
+                    if c > miss2 * idx.size:
+                        continue
+                    Vn = Vn.copy()
+                    Vn[idx] = v
+                    trn = self.sim(Vn)
+                    sn = self.score_of(trn)
+                    if sn < score:
+                        V, tr, score = Vn, trn, sn
+                        kept += 1
+                        if stat:
+                            self.stats["by_chain"] += 1
+                        break
+            if self.report():
+                raise KeyboardInterrupt
+        return V, tr, score, kept
+
+    def neighbourhood(self, idx, rng):
+        """Large-neighbourhood move: the conflict's disks and their nearest neighbours go back
+        to straight shots and are paired again, in a random order; kept if the whole motion is
+        better than before."""
+        problem, prm = self.problem, self.prm
+        S = np.union1d(idx, _nearest(problem, idx, idx, prm.neighbours + idx.size, False)).astype(np.int64)
+        # and the disks they touch now (a cleared disk's partner would be left on a contact
+        # velocity with nobody to meet)
+        ev = self.tr.events[self.tr.events["kind"] == 0]
+        touch = np.isin(ev["i"], S) | np.isin(ev["j"], S)
+        S = np.union1d(S, np.concatenate([ev["i"][touch], ev["j"][touch]]).astype(np.int64))
+        S = S[problem.cueable[S]]
+        V = self.V.copy()
+        V[S] = problem.straight_velocities()[S]
+        tr = self.sim(V)
+        score = self.score_of(tr)
+        order = S[rng.permutation(S.size)]
+        for _ in range(2):
+            V, tr, score, kept = self.greedy(order.tolist(), V, tr, score, stat=False)
+            if not kept:
+                break
+        self.stats["neighbourhoods"] += 1
+        if score < self.score or (score[0] == self.score[0] and rng.random() < prm.plateau):
+            # better, or as many misses and another arrangement: a walk on the plateau that
+            # lets the next round find what this one could not (the best is kept apart)
+            better = score < self.score
+            self.V, self.tr, self.score = V, tr, score
+            self.keep_best()
+            self.stats["by_neighbourhood"] += int(better)
+            return better
+        return False
+
+    def keep_best(self):
+        if self.best is None or self.score < self.best[0]:
+            self.best = (self.score, self.V.copy(), self.tr)
+
+    def repair(self, idx, k, rng):
+        """A conflict by its own polish, then by sub-searches in a window around it; the first
+        repair that makes the whole motion better is kept."""
+        from nbst.search.driver import run_search as signature_search
+        from nbst.search.polish import polish
+
+        problem, prm, miss2, n = self.problem, self.prm, self.miss2, self.problem.n
+        if idx.size > prm.max_conflict:
+            err2 = self.err2()[idx]
+            core = idx[np.argsort(-err2, kind="stable")[: prm.max_conflict // 3]]
+            idx = np.union1d(core, _nearest(problem, core, core, prm.max_conflict - core.size, False))
+        self.stats["conflicts"] += 1
+        self.stats["largest_conflict"] = max(self.stats["largest_conflict"], int(idx.size))
+        tol = miss2 * idx.size
+        candidates = []
+        sub = subproblem(problem, idx, f"{problem.name}[{idx.size}]")
+        v, c, _, sims = polish(sub, self.V[idx], max_sims=prm.polish_sims, tol=tol)
+        self.stats["polish_sims"] += sims
+        self.trials += sims * idx.size / n
+        if c <= tol:
+            candidates.append(("polish", v))
+        win = subproblem(problem, idx, f"{problem.name}[{idx.size}]",
+                         margin=prm.window * float(problem.radius.max()) * (1 + k))
+        for _ in range(prm.searches):
+            budget = prm.sub_trials_per_disk * idx.size
+            run = signature_search(win, seed=int(rng.integers(2**62)), max_trials=budget, patience=budget,
+                                   target_cost=tol, variant=prm.variant)
+            used = int(run.solution.meta.get("trials", budget))
+            self.stats["sub_trials"] += used
+            self.trials += used * idx.size / n
+            if float(run.solution.meta["cost"]) <= tol:
+                candidates.append(("search", run.solution.velocities))
+        for how, v in candidates:
+            Vn = self.V.copy()
+            Vn[idx] = v
+            trn = self.sim(Vn)
+            sn = self.score_of(trn)
+            if sn < self.score:
+                self.V, self.tr, self.score = Vn, trn, sn
+                self.stats["by_" + how] += 1
+                return True
+        return False
+
+
 def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, target_cost: float,
              callback: Callable[[SearchProgress], bool | None] | None = None, params: ManyParams | None = None,
              start: np.ndarray | None = None):
@@ -215,117 +432,86 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
                   ``params.patience_rounds`` rounds
     start       : velocities to start from (default: straight to each target)
 
-    A repair of a conflict is kept only if the whole motion gets better: fewer missing disks,
-    or as many and a lower cost (so the result is never worse than the start).
+    Every change is kept only if the whole motion gets better: fewer missing disks, or as
+    many and a lower cost (so the result is never worse than the start). Each round:
+    1. each missing disk tries two-disk contacts, straight and bank shots, and chains;
+    2. if that changed nothing: each conflict is cleared (it and its neighbours back to
+       straight shots) and paired again in a random order;
+    3. if that changed nothing either: each conflict's own polish and windowed sub-searches.
     """
-    from nbst.search.driver import run_search as signature_search
-    from nbst.search.polish import polish
-    from nbst.sim import simulate
-
     prm = params or ManyParams()
     rng = np.random.default_rng(seed)
     n = problem.n
-    V = problem.straight_velocities() if start is None else np.array(start, float)
-    miss2 = max(float(target_cost), 0.0) / n
     t0 = time.perf_counter()
-    trials = 0.0
-    tr = simulate(problem, V)
-    trials += 1
-    score = (_misses(problem, tr, miss2), float(tr.cost))
-    last_better = trials
-    since_better = 0
-    tries = np.zeros(n, np.int64)  # repair attempts of each disk's conflicts so far
-    history = [[int(trials), float(tr.cost), tr.order]]
-    stats = {"rounds": 0, "conflicts": 0, "repaired": 0, "by_polish": 0, "by_search": 0, "largest_conflict": 0,
-             "sub_trials": 0, "polish_sims": 0, "whole_sims": 1}
-    stopped = None
-    r_max = float(problem.radius.max())
+    box: list = []
 
-    def report(nc) -> bool:
-        if callback is None:
+    def report() -> bool:
+        if callback is None or not box:
             return False
-        return bool(callback(SearchProgress(trials=int(trials), best_cost=float(tr.cost), best_order=int(tr.order),
-                                            elapsed=time.perf_counter() - t0, population=nc, phase="repair")))
+        s = box[0]
+        return bool(callback(SearchProgress(trials=int(s.trials), best_cost=float(s.tr.cost),
+                                            best_order=int(s.tr.order), elapsed=time.perf_counter() - t0,
+                                            population=s.score[0], phase="repair")))
 
+    V = problem.straight_velocities() if start is None else np.array(start, float)
+    S = _Search(problem, prm, V, max(float(target_cost), 0.0) / n, max_trials, report)
+    box.append(S)
+    last_better = S.trials
+    since_better = 0
+    tries = np.zeros(n, np.int64)
+    history = [[int(S.trials), float(S.tr.cost), S.tr.order]]
+    stopped = None
     try:
         while True:
-            if tr.cost <= target_cost:
+            if S.best[0][1] <= target_cost:
                 stopped = StopReason.TARGET_COST
                 break
-            if trials >= max_trials:
+            if S.trials >= max_trials:
                 stopped = StopReason.MAX_TRIALS
                 break
-            if (patience and trials - last_better >= patience) or since_better >= prm.patience_rounds:
+            if (patience and S.trials - last_better >= patience) or since_better >= prm.patience_rounds:
                 stopped = StopReason.PATIENCE
                 break
-            stats["rounds"] += 1
-            cs = conflicts(problem, tr, miss2, None, prm.strikers)
-            improved = False
-            for idx in sorted(cs, key=len):
-                if trials >= max_trials:
-                    break
-                k = int(tries[idx].max())
-                tries[idx] += 1
-                if k >= 1:  # failed before: take in its nearest outsiders too
-                    idx = np.union1d(idx, _nearest(problem, idx, idx, prm.grow * k, False)).astype(np.int64)
-                if idx.size > prm.max_conflict:
-                    err2 = np.sum((tr.final_positions[idx] - problem.target[idx]) ** 2, axis=1)
-                    core = idx[np.argsort(-err2, kind="stable")[: prm.max_conflict // 3]]
-                    idx = np.union1d(core, _nearest(problem, core, core, prm.max_conflict - core.size, False))
-                if np.all(np.sum((tr.final_positions[idx] - problem.target[idx]) ** 2, axis=1) <= miss2):
-                    continue  # repaired on the way by an earlier conflict's repair
-                stats["conflicts"] += 1
-                stats["largest_conflict"] = max(stats["largest_conflict"], int(idx.size))
-                tol = miss2 * idx.size
-                candidates = []
-                sub = subproblem(problem, idx, f"{problem.name}[{idx.size}]")
-                v, c, _, sims = polish(sub, V[idx], max_sims=prm.polish_sims, tol=tol)
-                stats["polish_sims"] += sims
-                trials += sims * idx.size / n
-                if c <= tol:
-                    candidates.append(("polish", v))
-                win = subproblem(problem, idx, f"{problem.name}[{idx.size}]",
-                                 margin=prm.window * r_max * (1 + k))
-                for _ in range(prm.searches):
-                    budget = prm.sub_trials_per_disk * idx.size
-                    run = signature_search(win, seed=int(rng.integers(2**62)), max_trials=budget, patience=budget,
-                                           target_cost=tol, variant=prm.variant)
-                    used = int(run.solution.meta.get("trials", budget))
-                    stats["sub_trials"] += used
-                    trials += used * idx.size / n
-                    if float(run.solution.meta["cost"]) <= tol:
-                        candidates.append(("search", run.solution.velocities))
-                for how, v in candidates:
-                    Vn = V.copy()
-                    Vn[idx] = v
-                    trn = simulate(problem, Vn)
-                    trials += 1
-                    stats["whole_sims"] += 1
-                    sn = (_misses(problem, trn, miss2), float(trn.cost))
-                    if sn < score:
-                        V, tr, score = Vn, trn, sn
-                        stats["repaired"] += 1
-                        stats["by_" + how] += 1
-                        improved = True
-                        tries[idx] = 0
+            S.stats["rounds"] += 1
+            before = S.score
+            missing = np.flatnonzero(S.err2() > S.miss2).tolist()
+            S.V, S.tr, S.score, _ = S.greedy(missing, S.V, S.tr, S.score)
+            if S.score == before:
+                for idx in sorted(conflicts(problem, S.tr, S.miss2, None, prm.strikers), key=len):
+                    if S.trials >= max_trials:
                         break
-                if report(len(cs)):
-                    raise KeyboardInterrupt
-            if improved:
-                last_better = trials
+                    if np.all(S.err2()[idx] <= S.miss2):
+                        continue
+                    S.neighbourhood(idx, rng)
+            if S.score == before and prm.searches > 0:
+                for idx in sorted(conflicts(problem, S.tr, S.miss2, None, prm.strikers), key=len):
+                    if S.trials >= max_trials:
+                        break
+                    if np.all(S.err2()[idx] <= S.miss2):
+                        continue
+                    k = int(tries[idx].max())
+                    tries[idx] += 1
+                    if k >= 1:
+                        idx = np.union1d(idx, _nearest(problem, idx, idx, prm.grow * k, False)).astype(np.int64)
+                    if S.repair(idx, k, rng):
+                        tries[idx] = 0
+            S.keep_best()
+            if S.score < before:
+                last_better = S.trials
                 since_better = 0
-                history.append([int(trials), float(tr.cost), tr.order])
+                history.append([int(S.trials), float(S.tr.cost), S.tr.order])
             else:
                 since_better += 1
-            if report(len(cs)):
+            if report():
                 stopped = StopReason.CALLBACK
                 break
     except KeyboardInterrupt:
         stopped = StopReason.INTERRUPTED
     wall = time.perf_counter() - t0
-    meta = {"trials": int(math.ceil(trials)), "stopped": None if stopped is None else stopped.value,
-            "wall_time": wall, "history": history, "many": stats}
-    return V, meta
+    S.keep_best()
+    meta = {"trials": int(math.ceil(S.trials)), "stopped": None if stopped is None else stopped.value,
+            "wall_time": wall, "history": history, "many": S.stats}
+    return S.best[1], meta
 
 
 def _order(v, tr) -> int:

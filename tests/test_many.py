@@ -1,0 +1,147 @@
+"""The many-body search (nbst.search.many) and its two-disk contact solutions (nbst.search.aim)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from nbst.problem import load_problem, problem_from_dict
+from nbst.search import run_search, solve
+from nbst.search.aim import pair_contact
+from nbst.search.many import ManyParams, conflicts, run_many, subproblem
+from nbst.sim import simulate
+
+
+def _two(v, box=(200.0, 200.0), r=(5.0, 5.0), m=(1.0, 1.0), starts=((50.0, 100.0), (100.0, 104.0)), t=2.0):
+    """Two disks sent with velocities v; the targets are where the exact simulator takes them."""
+    d = {"name": "two", "box": list(box), "t_final": t, "target_radius": 5.0,
+         "disks": [{"start": list(starts[k]), "target": list(starts[k]), "radius": r[k], "mass": m[k]} for k in (0, 1)]}
+    tr = simulate(problem_from_dict(d), np.array(v, float))
+    for k in (0, 1):
+        d["disks"][k]["target"] = tr.final_positions[k].tolist()
+    return problem_from_dict(d), tr
+
+
+@pytest.mark.parametrize("v,m,r", [([[30.0, 1.0], [-5.0, 0.0]], (1.0, 1.0), (5.0, 5.0)),
+                                   ([[25.0, 8.0], [-10.0, 3.0]], (1.0, 3.0), (5.0, 8.0)),
+                                   ([[40.0, -2.0], [0.0, 0.0]], (2.0, 1.0), (6.0, 4.0))])
+def test_pair_contact_finds_the_motion_that_made_the_targets(v, m, r):
+    """A motion with one contact: pair_contact recovers its velocities (1e-9 relative), and every
+    solution it returns lands both disks on their targets in the exact simulator (1e-9 of the box)."""
+    p, tr = _two(v, r=r, m=m)
+    assert tr.n_disk_disk == 1 and tr.n_wall == 0
+    out = np.empty((8, 5))
+    ka = p.kernel_arrays()
+    k = pair_contact(ka.start[0], ka.start[1], ka.target[0], ka.target[1], ka.mass[0], ka.mass[1], ka.radius[0],
+                     ka.radius[1], ka.W, ka.H, ka.t_final, 400, out)
+    assert k >= 1
+    got = [out[q, :4].reshape(2, 2) for q in range(k)]
+    assert min(np.abs(g - np.array(v)).max() for g in got) <= 1e-9 * np.abs(v).max()
+    for g in got:
+        t2 = simulate(p, g)
+        assert t2.n_disk_disk == 1
+        assert np.abs(t2.final_positions - p.target).max() <= 1e-9 * 200.0
+
+
+def test_pair_contact_far_apart_meets_on_the_way():
+    """Two disks far apart that never meet on straight shots can still meet once and land: every
+    motion pair_contact gives for them has one contact and lands both (1e-9 of the box)."""
+    p, tr = _two([[5.0, 0.0], [0.0, 5.0]], starts=((20.0, 20.0), (180.0, 180.0)))
+    assert tr.n_disk_disk == 0
+    ka = p.kernel_arrays()
+    out = np.empty((8, 5))
+    k = pair_contact(ka.start[0], ka.start[1], ka.target[0], ka.target[1], 1.0, 1.0, 5.0, 5.0, ka.W, ka.H,
+                     ka.t_final, 400, out)
+    assert k >= 1
+    for q in range(k):
+        t2 = simulate(p, out[q, :4].reshape(2, 2))
+        assert t2.n_disk_disk == 1 and np.abs(t2.final_positions - p.target).max() <= 1e-9 * 200.0
+
+
+def test_a_window_subproblem_moves_the_same():
+    """Velocities mean the same in a window of the box (translation invariance) while no disk
+    reaches the window's sides: the same final positions, shifted, to round-off."""
+    p = load_problem("diamond-s14")
+    idx = np.array([0, 1, 2])
+    whole = subproblem(p, idx, "w")
+    win = subproblem(p, idx, "w", margin=200.0)
+    v = whole.straight_velocities()
+    fa = simulate(whole, v).final_positions
+    fb = simulate(win, v).final_positions
+    shift = whole.start[0] - win.start[0]
+    assert win.box[0] <= p.box[0] and np.all(shift >= 0)
+    np.testing.assert_allclose(fb + shift, fa, rtol=0, atol=1e-9 * max(p.box))
+
+
+def _grid(n, spacing=60.0, r=5.0, shift=(20.0, 0.0)):
+    side = int(np.ceil(np.sqrt(n)))
+    disks = [{"start": [40.0 + spacing * (k % side), 40.0 + spacing * (k // side)],
+              "target": [40.0 + spacing * (k % side) + shift[0], 40.0 + spacing * (k // side) + shift[1]],
+              "radius": r} for k in range(n)]
+    return problem_from_dict({"name": f"grid-{n}", "box": [spacing * side + 80.0, spacing * side + 80.0],
+                              "t_final": 2.0, "target_radius": 10.0, "disks": disks})
+
+
+def test_collision_free_targets_are_exact_at_once():
+    """A formation whose straight shots never meet (a shifted grid of 400 disks) is exact after
+    the directed start: one simulation."""
+    p = _grid(400)
+    sol = solve(p, seed=1)
+    assert sol.meta["algorithm"] == "nbst-many" and sol.meta["order"] == 400
+    assert sol.meta["trials"] == 1 and sol.meta["stopped"] == "target_cost"
+    assert len(sol.meta["signature"]) == 400 and set(sol.meta["signature"]) == {"1"}
+
+
+def _crossing(n=100, seed=3):
+    """n disks whose straight shots cross: targets are a random permutation of nearby starts."""
+    rng = np.random.default_rng(seed)
+    p = _grid(n, spacing=45.0, r=6.0, shift=(0.0, 0.0))
+    d = json.loads(json.dumps(p.raw))
+    perm = np.arange(n)
+    for a in range(0, n - 1, 2):  # swap neighbours in pairs: their straight paths meet head on
+        if rng.random() < 0.6:
+            perm[a], perm[a + 1] = perm[a + 1], perm[a]
+    for k in range(n):
+        d["disks"][k]["target"] = p.start[perm[k]].tolist()
+    d["name"] = f"swaps-{n}"
+    return problem_from_dict(d)
+
+
+def test_the_search_is_never_worse_than_its_start_and_reproducible():
+    p = _crossing()
+    start = simulate(p, p.straight_velocities())
+    assert start.n_disk_disk > 10
+    prm = ManyParams(patience_rounds=3)
+    v1, m1 = run_many(p, seed=7, max_trials=3000, patience=0, target_cost=1e-9, params=prm)
+    v2, m2 = run_many(p, seed=7, max_trials=3000, patience=0, target_cost=1e-9, params=prm)
+    np.testing.assert_array_equal(v1, v2)
+    end = simulate(p, v1)
+    assert end.order >= start.order and end.cost <= start.cost
+    assert m1["many"]["by_pair"] + m1["many"]["by_shot"] + m1["many"]["by_chain"] > 0
+    # every disk of every conflict left misses its target by more than the threshold
+    for idx in conflicts(p, end, 1e-9 / p.n):
+        assert np.any(np.sum((end.final_positions[idx] - p.target[idx]) ** 2, axis=1) > 1e-9 / p.n)
+
+
+def test_the_signature_search_refuses_many_disks():
+    from nbst.search import driver
+
+    with pytest.raises(ValueError, match="at most 63 disks"):
+        driver.run_search(_grid(64), seed=1, max_trials=10)
+    r = run_search(_grid(64), seed=1, max_trials=10)
+    assert r.solution.meta["order"] == 64
+
+
+def test_nbst_solve_on_a_many_disk_file(tmp_path):
+    prob = tmp_path / "grid.json"
+    prob.write_text(json.dumps(_grid(150).raw))
+    out = tmp_path / "sol.json"
+    r = subprocess.run([sys.executable, "-m", "nbst.cli", "solve", str(prob), "-o", str(out), "--seed", "2"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "150/150 disks on target (signature in the file)" in r.stderr
+    sol = json.loads(out.read_text())
+    assert sol["order"] == 150 and len(sol["signature"]) == 150 and sol["algorithm"] == "nbst-many"
