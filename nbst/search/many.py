@@ -21,7 +21,11 @@ independent small problems. The search works on the whole motion and repairs it 
    grows by its nearest neighbours, and is tried with a new seed.
 
 Each round keeps the best whole motion; the result is never worse than the directed
-start. Trials are counted in whole-problem simulations: a sub-search trial of m disks
+start.
+
+Length: ~560 lines, past the house's ~500: the search's moves (contacts, chains, cleared
+neighbourhoods, windowed sub-searches) share one state object and its acceptance rule, and
+stay together so that rule is written once. Trials are counted in whole-problem simulations: a sub-search trial of m disks
 counts m / N.
 """
 from __future__ import annotations
