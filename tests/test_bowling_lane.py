@@ -189,7 +189,8 @@ def test_bowl_throw_prints_the_phases_and_writes_json(tmp_path, typical):
 @pytest.mark.parametrize("args, says", [(["--rg", "2.9"], "ball.rg"), (["--diff", "0.08"], "ball.diff"),
                                         (["--cover", "0.5"], "ball.friction"), (["--oil", "wet"], "oil"),
                                         (["--mph", "40"], "--mph"),
-                                        (["--board", "1", "--at", "foul", "--angle", "-10", "--rpm", "0"], "gutter")])
+                                        (["--board", "1", "--at", "foul", "--angle", "-10", "--rpm", "0"], "gutter"),
+                                        (["--board", "39", "--at", "arrows", "--angle", "5"], "off the lane")])
 def test_bowl_throw_refuses_bad_input_in_one_line(args, says):
     out = _nbst(*args)
     assert out.returncode == 2

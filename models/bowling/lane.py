@@ -290,6 +290,9 @@ class Delivery:
             v = getattr(self, k)
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or not lo <= v <= hi:
                 raise LaneError(f"{k}: must be a number in [{lo:g}, {hi:g}], got {v!r}")
+        if not 1.0 <= self.foul_board() <= 39.0:
+            raise LaneError(f"board: {self.board:g} at the arrows, {self.angle:g} deg out, is board "
+                            f"{self.foul_board():.1f} at the foul line: off the lane (1..39)")
         return self
 
     def foul_board(self) -> float:

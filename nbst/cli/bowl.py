@@ -1,4 +1,4 @@
-"""Subcommands ``nbst bowl solve``, ``nbst bowl replay`` and ``nbst bowl atlas``.
+"""Subcommands ``nbst bowl solve``, ``nbst bowl replay``, ``nbst bowl atlas`` and ``nbst bowl throw``.
 
 Registration is light: mujoco and cma are imported inside the commands.
 
