@@ -4,8 +4,9 @@ Configurations, each through ``nbst.solvers.islands.solve_islands`` as ``nbst so
 (the CLI's target: round-off cost; ``--patience`` as given, default 0 = the whole budget):
 
 * ``portfolio``: the default (variant "nbst"): on a problem with noncueable disks island k runs
-  "nbst" (with the backward planner) or "nbst-noplan" in turn; with ``--jobs 1`` the two
-  islands take turns in one process;
+  "nbst" (with the backward planner) or "nbst-noplan" in turn, and an island stopped by
+  patience restarts with the other one (so with ``--patience 0`` nothing restarts); with
+  ``--jobs 1`` the two islands take turns in one process;
 * ``planner``: the old default, every island "nbst" (``portfolio=False``);
 * ``noplan``: every island ``--variant nbst-noplan``.
 
