@@ -159,7 +159,7 @@ def cmd_solve(args) -> int:
                                                               f"(this one has {problem.n})")
             seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**63)
             sol = solve(problem, seed=seed, max_trials=args.max_trials, patience=args.patience,
-                        target_cost=target_cost, variant=args.variant, callback=progress)
+                        target_cost=target_cost, variant=args.variant, callback=progress, jobs=jobs)
         else:
             sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
                                 max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,

@@ -257,9 +257,11 @@ def _candidates(problem: Problem, a: int, V: np.ndarray, err2: np.ndarray, miss2
 class _Search:
     """The state of one many-body search: the current motion, its score and the counters."""
 
-    def __init__(self, problem: Problem, prm: ManyParams, V: np.ndarray, miss2: float, max_trials: int, report):
+    def __init__(self, problem: Problem, prm: ManyParams, V: np.ndarray, miss2: float, max_trials: int, report,
+                 jobs: int = 1):
         from nbst.sim import simulate
 
+        self.jobs = int(jobs)
         self.problem, self.prm, self.miss2, self.max_trials = problem, prm, miss2, max_trials
         self.simulate = simulate
         self.report = report
@@ -279,9 +281,20 @@ class _Search:
         self.stats["whole_sims"] += 1
         return self.simulate(self.problem, V)
 
+    def evaluate(self, Vs):
+        """Final positions of a batch of whole motions (``nbst.sim.evaluate`` on ``jobs`` threads;
+        the scores do not depend on the threads)."""
+        from nbst.sim import evaluate
+
+        self.trials += len(Vs)
+        self.stats["whole_sims"] += len(Vs)
+        return evaluate(self.problem, Vs, jobs=self.jobs)[0]
+
     def score_of(self, tr) -> tuple[int, float]:
-        """Fewer missing disks first, then the lower cost."""
-        return (_misses(self.problem, tr, self.miss2), float(tr.cost))
+        """Fewer missing disks first, then the lower cost (from the final positions, as
+        ``greedy`` scores a batch)."""
+        e2 = np.sum((np.asarray(tr.final_positions) - self.problem.target) ** 2, axis=1)
+        return (int(np.count_nonzero(e2 > self.miss2)), float(e2.sum()))
 
     def err2(self, tr=None):
         tr = self.tr if tr is None else tr
@@ -301,24 +314,34 @@ class _Search:
                 continue
             near = []
             done = False
-            for disks2, rows in _candidates(problem, a, V, err2, miss2, prm.partners, self.scratch):
-                Vn = V.copy()
-                Vn[disks2] = rows
-                trn = self.sim(Vn)
-                sn = self.score_of(trn)
-                if sn < score:
-                    V, tr, score, done = Vn, trn, sn, True
-                    kept += 1
-                    if stat:
-                        self.stats["by_pair" if disks2.size == 2 else "by_shot"] += 1
+            cands = _candidates(problem, a, V, err2, miss2, prm.partners, self.scratch)
+            k = max(1, self.jobs)
+            for c0 in range(0, len(cands), k):
+                chunk = cands[c0:c0 + k]
+                Vs = np.repeat(V[None], len(chunk), axis=0)
+                for q, (disks2, rows) in enumerate(chunk):
+                    Vs[q, disks2] = rows
+                fin = self.evaluate(Vs)
+                for q, (disks2, rows) in enumerate(chunk):
+                    e2 = np.sum((fin[q] - problem.target) ** 2, axis=1)
+                    sn = (int(np.count_nonzero(e2 > miss2)), float(e2.sum()))
+                    if sn < score:
+                        V, score, done = Vs[q].copy(), sn, True
+                        tr = self.sim(V)
+                        kept += 1
+                        if stat:
+                            self.stats["by_pair" if disks2.size == 2 else "by_shot"] += 1
+                        break
+                    if disks2.size == 2:
+                        near.append((sn, q + c0, Vs[q].copy()))
+                if done:
                     break
-                if disks2.size == 2:
-                    near.append((sn, Vn, trn))
             if not done:
                 # a contact that lands a and its partner but sends a third disk off: polish the
                 # disks it now meets, starting from there (a chain of contacts)
-                near.sort(key=lambda c: c[0])
-                for _, Vn, trn in near[: prm.chains]:
+                near.sort(key=lambda c: (c[0], c[1]))
+                for _, _, Vn in near[: prm.chains]:
+                    trn = self.sim(Vn)
                     dd = trn.events["kind"] == 0
                     lab = _components(n, trn.events["i"][dd].astype(np.int64), trn.events["j"][dd].astype(np.int64))
                     idx = np.flatnonzero(lab == lab[a]).astype(np.int64)
@@ -426,7 +449,7 @@ class _Search:
 
 def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, target_cost: float,
              callback: Callable[[SearchProgress], bool | None] | None = None, params: ManyParams | None = None,
-             start: np.ndarray | None = None):
+             start: np.ndarray | None = None, jobs: int | None = None):
     """Solve ``problem`` (any N) by local repair; returns (velocities (N, 2), meta dict).
 
     target_cost : stop once the whole cost is <= this; a disk counts as missing while its
@@ -435,6 +458,8 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
     patience    : stop after this many trials without a better whole motion (0: never), or
                   ``params.patience_rounds`` rounds
     start       : velocities to start from (default: straight to each target)
+    jobs        : threads that simulate candidates side by side (None: every core); the result
+                  does not depend on it
 
     Every change is kept only if the whole motion gets better: fewer missing disks, or as
     many and a lower cost (so the result is never worse than the start). Each round:
@@ -458,7 +483,11 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
                                             population=s.score[0], phase="repair")))
 
     V = problem.straight_velocities() if start is None else np.array(start, float)
-    S = _Search(problem, prm, V, max(float(target_cost), 0.0) / n, max_trials, report)
+    if jobs is None:
+        from nbst.parallel import default_jobs
+
+        jobs = default_jobs()
+    S = _Search(problem, prm, V, max(float(target_cost), 0.0) / n, max_trials, report, jobs)
     box.append(S)
     last_better = S.trials
     since_better = 0
@@ -550,7 +579,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
     prm = many or ManyParams(variant=variant)
     tc = driver.roundoff_cost(problem) if target_cost is None else float(target_cost)
     v, meta = run_many(problem, seed=seed, max_trials=int(max_trials), patience=int(patience), target_cost=tc,
-                       callback=callback, params=prm)
+                       callback=callback, params=prm, jobs=jobs)
     _, c, sg = evaluate(problem, v[None], jobs=1)
     sig = int(sg[0])
     wall = meta["wall_time"]
