@@ -1,0 +1,810 @@
+"""A throw from the foul line in 3D (``nbst bowl throw --video/--still``): the full 60 ft lane
+with its marks, a ball whose grip and track turn with it, numbered pins and a readout.
+
+* **Motion** (:func:`record_throw`): the delivery of :mod:`nbst.models.bowling.lane` in that
+  module's scene with the pins (``lane.build_model(pins=True)``), plain ``mj_step`` at h = 1 ms
+  from the foul line, every body's pose recorded each step; it runs until the pins settle
+  (every pin slower than :data:`SETTLE_SPEED` for :data:`SETTLE_HOLD` s) or :data:`AFTER_IMPACT`
+  s after the first ball-pin contact, whichever is first. The phases come from ``lane.throw``
+  (the ball alone: the same motion up to the first contact).
+* **Lane**: the approach, the foul line, the guide dots at :data:`DOTS_FT` ft, the arrows at
+  15 ft (boards 5 ... 35), the board lines (every fifth board counted from either edge
+  stronger), the oil pattern shaded faintly (darker where the pattern holds more relative oil),
+  the gutters, the pin deck, the pit and the kickbacks.
+* **Ball**: an equirectangular texture in the ball's body frame, sampled per fragment from the
+  body-frame normal, so it turns with the orientation quaternion: the three grip holes (an
+  assumed layout, :func:`grip_holes`), the pin (the low-RG axis, a white dot) and the track
+  (where the ball touched the lane before the pins, a lighter band: its rings spread where the
+  axis migrates).
+* **Cameras**: ``behind`` (from behind the bowler, following the ball until it is
+  :data:`FOLLOW_STOP_FT` ft down, pins numbered above their heads once they are large enough
+  to read) and ``overhead`` (orthographic, true scale, the lane from :data:`OVERHEAD_FROM_FT`
+  ft to the pit, with the ball's track on the lane, distance ticks and a pin diagram with the
+  standing pins lit); ``both`` sets them side by side.
+* **Readout**: the throw (hand, mph, rpm, rotation, tilt, boards at the foul line and arrows,
+  launch angle), the oil and ball, the phases (skid, breakpoint, roll, at the pins), the pins
+  down now (the final result at the end), and, when given, the pins asked for and the
+  probability.
+
+Compute apart from I/O: :func:`record_throw` returns the motion, :class:`LaneRenderer` returns
+frames; :func:`render_throw` is the thin writer the CLI calls.
+
+Length: ~800 lines, past the house's ~500: the lane's marks, the ball's texture, the two
+cameras and the overlays all place things by the same conventions (boards by hand, feet past
+the foul line, the panels' pixel mapping), and the tests check the pixels against exactly
+these functions; a third of the lines are constants and shaders, each with why.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nbst.render import style
+from nbst.render.bowling import BACKGROUND, BALL_RGB, FS, PIN_RED, PIN_WHITE, STRIPES_IN, VS, Motion, _flat, _pose
+from nbst.render.bowling import frame_times as _shot_frame_times
+from nbst.render.gl import FrameRenderer, FrameTarget, create_context
+from nbst.render.scene3d import look_at, perspective
+
+#: The frame ends when every pin moves slower than SETTLE_SPEED (m/s) for SETTLE_HOLD s after the
+#: first contact, or AFTER_IMPACT s after it; a ball that meets no pin runs BALL_ONLY_AFTER s past
+#: the head pin's line.
+SETTLE_SPEED = 0.02
+SETTLE_HOLD = 0.5
+AFTER_IMPACT = 3.0
+BALL_ONLY_AFTER = 1.0
+#: Guide dots (ft past the foul line) on these boards, counted from either edge.
+DOTS_FT = 7.0
+DOT_BOARDS = (3, 5, 8, 11, 14)
+#: The approach drawn behind the foul line (m).
+APPROACH_DRAWN = 5.0
+#: The behind camera follows the ball until it is this far down the lane, then holds.
+FOLLOW_STOP_FT = 44.0
+BEHIND_BACK, BEHIND_HEIGHT, BEHIND_AHEAD, BEHIND_FOV = 2.0, 0.75, 8.0, 40.0
+#: The overhead camera shows the lane from this far past the foul line to the end of the pit
+#: (the breakpoint of a house shot is around 35-45 ft), and takes this share of the frame's
+#: width when both cameras are drawn.
+OVERHEAD_FROM_FT = 30.0
+OVERHEAD_SHARE = 0.32
+#: Colours: the approach, the lane (its oil up to OIL_SHADE darker), the marks, the track.
+APPROACH_RGB = (0.93, 0.84, 0.66)
+LANE_RGB = (0.86, 0.72, 0.52)
+OIL_SHADE = 0.10
+DECK_RGB = (0.90, 0.78, 0.58)
+GUTTER_RGB = (0.40, 0.40, 0.45)
+PIT_RGB = (0.15, 0.15, 0.17)
+KICKBACK_RGB = (0.22, 0.24, 0.30)
+MARK_RGB = (0.12, 0.12, 0.16)
+FOUL_RGB = (0.55, 0.08, 0.08)
+BOARD_LINE = ((0.70, 0.56, 0.38), 0.0015)   # colour, width (m)
+BOARD_LINE_5 = ((0.48, 0.36, 0.22), 0.004)
+TRAIL_RGB = (0.97, 0.62, 0.18)
+#: The ball's track on the lane, half its width: in the behind view and (wider, to stay a
+#: couple of pixels wide at the overhead's scale) in the overhead view (m).
+TRAIL_HALF_WIDTH = 0.012
+TRAIL_HALF_WIDTH_OVERHEAD = 0.03
+#: The ball's texture (equirectangular, body frame): the grip holes, the track, the pin dot.
+TEXTURE_SIZE = (1024, 512)
+HOLE_RGB = (0.03, 0.03, 0.05)
+HOLE_RIM_RGB = (0.85, 0.87, 0.92)
+TRACK_RGB = (0.62, 0.80, 1.00)
+PIN_DOT_RGB = (1.0, 1.0, 1.0)
+#: Assumed grip layout (inches of arc on the ball's surface): the grip's centre this far from
+#: the PAP towards the back of the ball at release; fingers and thumb on a line across the
+#: line to the PAP, the span between them GRIP_SPAN; hole diameters.
+GRIP_FROM_PAP_IN = 5.0
+GRIP_SPAN_IN = 3.0
+FINGER_GAP_IN = 0.45
+FINGER_HOLE_IN, THUMB_HOLE_IN = 0.85, 1.0
+#: The track: the contact point's path sampled TRACK_SUBSTEPS times a step, widened by TRACK_DILATE_PX texels.
+TRACK_SUBSTEPS = 8
+TRACK_DILATE_PX = 2
+PIN_DOT_IN = 0.35
+
+BALL_VS = """#version 330
+uniform mat4 u_vp;
+uniform mat4 u_model;
+in vec3 in_pos;
+out vec3 v_local;
+out vec3 v_normal;
+out vec3 v_world;
+void main() {
+    vec4 w = u_model * vec4(in_pos, 1.0);
+    v_world = w.xyz;
+    v_local = in_pos;
+    v_normal = mat3(u_model) * normalize(in_pos);
+    gl_Position = u_vp * w;
+}
+"""
+BALL_FS = """#version 330
+uniform vec3 u_light;
+uniform vec3 u_eye;
+uniform sampler2D u_tex;
+in vec3 v_local;
+in vec3 v_normal;
+in vec3 v_world;
+out vec4 f_color;
+const float PI = 3.14159265358979;
+void main() {
+    vec3 d = normalize(v_local);
+    vec2 uv = vec2(atan(d.y, d.x) / (2.0 * PI) + 0.5, acos(clamp(d.z, -1.0, 1.0)) / PI);
+    vec3 c = texture(u_tex, uv).rgb;
+    vec3 n = normalize(v_normal);
+    vec3 v = normalize(u_eye - v_world);
+    float diff = max(dot(n, u_light), 0.0);
+    vec3 h = normalize(u_light + v);
+    float spec = pow(max(dot(n, h), 0.0), 40.0) * 0.3;
+    f_color = vec4(c * (0.35 + 0.65 * diff) + vec3(spec), 1.0);
+}
+"""
+
+
+@dataclass(frozen=True)
+class Throw:
+    """A recorded throw: the motion (``render.bowling.Motion``: ball and pin poses each step),
+    its phases (``lane.ThrowResult``, None for a ball that never reaches the pins), and what
+    made it."""
+
+    motion: Motion
+    result: object
+    delivery: object
+    oil: str
+    ball: object
+    timestep: float
+
+
+def _settled(speeds: np.ndarray) -> bool:
+    return bool(len(speeds) == 0 or speeds.max() < SETTLE_SPEED)
+
+
+def record_throw(delivery, oil: str = "house", ball=None, *, pins: bool = True) -> Throw:
+    """Run ``delivery`` (``lane.Delivery``) with ``ball`` on ``oil`` in the lane's scene (pins
+    standing when ``pins``) and record every step until the pins settle (module docstring).
+    Raises ``lane.LaneError`` (one line) for bad input; MuJoCo's warnings raise
+    ``shot.MujocoWarning``."""
+    import mujoco
+
+    from nbst.models.bowling import lane
+    from nbst.models.bowling import shot as shotmod
+
+    delivery = delivery.check()
+    ball = (ball or lane.Ball()).check()
+    try:
+        result = lane.throw(delivery, oil, ball)
+    except lane.LaneError as e:
+        if "gutter" not in str(e) and "did not reach" not in str(e):
+            raise
+        result = None  # the picture still shows it; the readout says so
+    model = lane.build_model(oil, ball, delivery, pins=pins)
+    d = mujoco.MjData(model)
+    ja = model.joint("ball_free")
+    ba, bv = int(ja.qposadr[0]), int(ja.dofadr[0])
+    pos0, v0, w0 = lane.initial_state(delivery)
+    d.qpos[ba:ba + 7] = [*pos0, 1.0, 0.0, 0.0, 0.0]
+    d.qvel[bv:bv + 3] = v0
+    d.qvel[bv + 3:bv + 6] = w0
+    if pins:
+        padr = shotmod.pin_addresses(model)
+        pdof = np.array([int(model.joint(f"pin{n}_free").dofadr[0]) for n in range(1, 11)])
+        pin_geoms = {g for g in range(model.ngeom) if model.body(int(model.geom_bodyid[g])).name.startswith("pin")}
+    else:
+        padr = pdof = np.zeros(0, int)
+        pin_geoms = set()
+    ball_geom = model.geom("ball").id
+    h = model.opt.timestep
+    n_max = int(round((lane.MAX_SECONDS + AFTER_IMPACT) / h))
+    q = np.empty((n_max + 1, model.nq))
+    q[0] = d.qpos
+    impact, crossed, still_since, n = math.nan, math.nan, math.nan, 0
+    with shotmod.mujoco_warnings_raise():
+        while n < n_max:
+            mujoco.mj_step(model, d)
+            n += 1
+            q[n] = d.qpos
+            t = n * h
+            if math.isnan(impact) and pin_geoms:
+                for c in d.contact[:d.ncon]:
+                    if ball_geom in (c.geom1, c.geom2) and {int(c.geom1), int(c.geom2)} & pin_geoms:
+                        impact = t
+                        break
+            if math.isnan(crossed) and d.qpos[ba] >= 0.0:
+                crossed = t
+            if not math.isnan(impact):
+                speeds = np.linalg.norm(d.qvel[pdof[:, None] + np.arange(3)], axis=1) if len(pdof) else np.zeros(0)
+                if _settled(speeds):
+                    still_since = t if math.isnan(still_since) else still_since
+                    if t - still_since >= SETTLE_HOLD:
+                        break
+                else:
+                    still_since = math.nan
+                if t - impact >= AFTER_IMPACT:
+                    break
+            elif not math.isnan(crossed) and t - crossed >= BALL_ONLY_AFTER:
+                break
+            elif abs(d.qpos[ba + 1]) > 2.0 or d.qpos[ba + 2] < -1.0:
+                break
+    q = q[:n + 1]
+    if not np.isfinite(q).all():
+        raise shotmod.MujocoWarning("MuJoCo warned: non-finite state during the throw")
+    masks = shotmod.mask_of(shotmod.pins_down(model, q)) if pins else None
+    pin_q = q[:, padr[:, None] + np.arange(7)] if pins else np.zeros((n + 1, 0, 7))
+    motion = Motion(times=np.arange(n + 1) * h, ball=q[:, ba:ba + 7], pins=pin_q, impact=impact,
+                    down=shotmod.pins_of(int(masks[-1])) if pins else [], down_masks=masks)
+    return Throw(motion=motion, result=result, delivery=delivery, oil=oil, ball=ball, timestep=h)
+
+
+def frame_times(throw: Throw, fps: float, *, hold: float = 1.0) -> np.ndarray:
+    """Simulated time of each video frame: real time from the release, slowed around the first
+    ball-pin contact as ``nbst render SHOT.json`` is (render.bowling.frame_times), then a hold."""
+    return _shot_frame_times(throw.motion, fps, hold=hold)
+
+
+# --------------------------------------------------------------------------- the ball's texture
+
+
+def _exp(base: np.ndarray, direction: np.ndarray, arc: float) -> np.ndarray:
+    """The unit vector ``arc`` radians from ``base`` along the tangent ``direction``."""
+    t = direction - np.dot(direction, base) * base
+    t /= np.linalg.norm(t)
+    return math.cos(arc) * base + math.sin(arc) * t
+
+
+def grip_holes(delivery) -> list[tuple[np.ndarray, float]]:
+    """[(unit direction in the ball's body frame, angular radius)] of the two finger holes and the
+    thumb hole: an assumed layout (module constants) placed from the release's PAP. The body frame
+    is the world frame at release (the throw starts at the identity orientation)."""
+    from nbst.models.bowling import lane, scene
+
+    R_in = scene.BALL_RADIUS / scene.INCH
+    t, _, pap = lane.spin_axes(delivery)
+    g = _exp(pap, -t if abs(np.dot(t, pap)) < 0.999 else np.array([0.0, 0.0, 1.0]), GRIP_FROM_PAP_IN / R_in)
+    to_pap = pap - np.dot(pap, g) * g
+    to_pap /= np.linalg.norm(to_pap)
+    across = np.cross(g, to_pap)
+    fingers = _exp(g, across, GRIP_SPAN_IN / 2 / R_in)
+    thumb = _exp(g, -across, GRIP_SPAN_IN / 2 / R_in)
+    out = [(_exp(fingers, s * to_pap, FINGER_GAP_IN / R_in), FINGER_HOLE_IN / 2 / R_in) for s in (1, -1)]
+    out.append((thumb, THUMB_HOLE_IN / 2 / R_in))
+    return out
+
+
+def _texel_dirs(size) -> np.ndarray:
+    """(H, W, 3) unit directions of the texels' centres, as the fragment shader maps them."""
+    w, h = size
+    u = (np.arange(w) + 0.5) / w
+    v = (np.arange(h) + 0.5) / h
+    phi = (u - 0.5) * 2 * math.pi
+    th = v * math.pi
+    st = np.sin(th)[:, None]
+    return np.stack([st * np.cos(phi)[None, :], st * np.sin(phi)[None, :], np.cos(th)[:, None] * np.ones((1, w))], -1)
+
+
+def ball_texture(throw: Throw, size=TEXTURE_SIZE) -> np.ndarray:
+    """(H, W, 3) uint8 equirectangular texture of the ball in its body frame: the track (the
+    contact point's path in the body frame up to the first pin contact), the pin dot and the
+    grip holes (each with a thin light rim)."""
+    from nbst.models.bowling import lane, scene
+
+    from nbst.models.bowling.lane import _quat_to_mat
+
+    R_in = scene.BALL_RADIUS / scene.INCH
+    dirs = _texel_dirs(size).reshape(-1, 3).astype(np.float32)
+    img = np.tile(np.asarray(BALL_RGB, np.float32), (len(dirs), 1))
+    m = throw.motion
+    end = len(m.times) if math.isnan(m.impact) else int(m.impact / throw.timestep)
+    on_lane = np.flatnonzero((m.ball[:end, 2] < scene.BALL_RADIUS + 0.003) & (m.ball[:end, 0] < scene.DECK_FRONT_X))
+    if len(on_lane) > 1:
+        rot = _quat_to_mat(m.ball[on_lane, 3:7])
+        c = -rot[:, 2, :]                                  # R^T (0, 0, -1): the lowest point, body frame
+        f = np.linspace(0.0, 1.0, TRACK_SUBSTEPS, endpoint=False)[None, :, None]
+        c = (c[:-1, None, :] * (1 - f) + c[1:, None, :] * f).reshape(-1, 3)   # one sample per ~0.2 deg
+        c /= np.linalg.norm(c, axis=1, keepdims=True)
+        w, h = size
+        u = ((np.arctan2(c[:, 1], c[:, 0]) / (2 * math.pi) + 0.5) * w).astype(int) % w
+        v = np.clip((np.arccos(np.clip(c[:, 2], -1, 1)) / math.pi * h).astype(int), 0, h - 1)
+        track = np.zeros((h, w), bool)
+        track[v, u] = True
+        for _ in range(TRACK_DILATE_PX):                   # widen the lines in texels (wrapping in u)
+            grown = track.copy()
+            grown[1:] |= track[:-1]
+            grown[:-1] |= track[1:]
+            grown |= np.roll(track, 1, axis=1) | np.roll(track, -1, axis=1)
+            track = grown
+        img[track.reshape(-1)] = TRACK_RGB
+    marks = [(lane.pin_axis(throw.delivery), PIN_DOT_IN / 2 / R_in, PIN_DOT_RGB, None)]
+    marks += [(p, r, HOLE_RGB, HOLE_RIM_RGB) for p, r in grip_holes(throw.delivery)]
+    for p, r, rgb, rim in marks:
+        c = dirs @ p.astype(np.float32)
+        if rim is not None:
+            img[c >= math.cos(r + 0.06 / R_in * 2)] = rim
+        img[c >= math.cos(r)] = rgb
+    w, h = size
+    return (np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8).reshape(h, w, 3)
+
+
+# --------------------------------------------------------------------------- the lane
+
+
+def _box(x0, x1, y0, y1, z0, z1, rgb) -> np.ndarray:
+    import trimesh
+
+    b = trimesh.creation.box(extents=[x1 - x0, y1 - y0, z1 - z0])
+    b.apply_translation([(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2])
+    tris = b.faces.reshape(-1)
+    fn = np.repeat(b.face_normals, 3, axis=0)
+    return np.concatenate([b.vertices[tris], fn, np.tile(rgb, (len(tris), 1))], axis=1)
+
+
+def _flat_poly(xy, rgb, z=0.0) -> np.ndarray:
+    """A convex polygon on the plane z (a triangle fan), normal up: (V, 9)."""
+    xy = np.asarray(xy, float)
+    tris = np.concatenate([[xy[0], xy[k], xy[k + 1]] for k in range(1, len(xy) - 1)])
+    n = len(tris)
+    return np.concatenate([tris, np.full((n, 1), z), np.tile([0.0, 0.0, 1.0], (n, 1)), np.tile(rgb, (n, 1))], axis=1)
+
+
+def _rect(x0, x1, y0, y1, rgb) -> np.ndarray:
+    return _flat_poly([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], rgb)
+
+
+def lane_solids(oil: str, hand: str = "right") -> np.ndarray:
+    """(V, 9) triangles of the lane's solids: approach, the pattern's cells shaded by oil, the
+    back end, deck, gutters, pit and kickbacks."""
+    from nbst.models.bowling import lane, scene
+
+    hw, gw = scene.LANE_WIDTH / 2, scene.GUTTER_WIDTH
+    x_end = scene.PIT_EDGE_X + scene.PIT_LENGTH
+    parts = [_box(lane.FOUL_LINE_X - APPROACH_DRAWN, lane.FOUL_LINE_X, -hw - gw - 0.3, hw + gw + 0.3, -0.05, 0.0,
+                  APPROACH_RGB)]
+    pat = lane.pattern(oil)
+    x0 = lane.FOUL_LINE_X
+    for to_ft, bands in pat.segments:
+        x1 = float(lane.ft_to_x(to_ft))
+        for lo, hi, u in bands:
+            ya, yb = sorted((float(lane.board_to_y(lo - 0.5, hand)), float(lane.board_to_y(hi + 0.5, hand))))
+            parts.append(_box(x0, x1, ya, yb, -0.05, 0.0, tuple(c * (1 - OIL_SHADE * u) for c in LANE_RGB)))
+        x0 = x1
+    parts += [
+        _box(x0, scene.DECK_FRONT_X, -hw, hw, -0.05, 0.0, LANE_RGB),
+        _box(scene.DECK_FRONT_X, scene.PIT_EDGE_X, -hw, hw, -0.05, 0.0, DECK_RGB),
+        _box(lane.FOUL_LINE_X, scene.PIT_EDGE_X, hw, hw + gw, -0.06, -scene.GUTTER_DEPTH, GUTTER_RGB),
+        _box(lane.FOUL_LINE_X, scene.PIT_EDGE_X, -hw - gw, -hw, -0.06, -scene.GUTTER_DEPTH, GUTTER_RGB),
+        _box(scene.PIT_EDGE_X, x_end, -hw - gw, hw + gw, -scene.PIT_DEPTH - 0.02, -scene.PIT_DEPTH, PIT_RGB),
+        _box(scene.DECK_FRONT_X, x_end, hw + gw, hw + gw + 0.05, -scene.PIT_DEPTH, 0.5, KICKBACK_RGB),
+        _box(scene.DECK_FRONT_X, x_end, -hw - gw - 0.05, -hw - gw, -scene.PIT_DEPTH, 0.5, KICKBACK_RGB),
+    ]
+    return np.concatenate(parts).astype("f4")
+
+
+def board_lines() -> list[tuple[float, bool]]:
+    """[(y of a board line, strong)] for the 40 lines at the boards' edges; a line a multiple of
+    five boards from either edge of the lane is strong (board 5's and board 35's outer edges...)."""
+    from nbst.models.bowling import lane, scene
+
+    out = []
+    for j in range(lane.N_BOARDS + 1):
+        y = -scene.LANE_WIDTH / 2 + j * lane.BOARD_WIDTH
+        out.append((y, min(j, lane.N_BOARDS - j) % 5 == 0))
+    return out
+
+
+def lane_marks(hand: str = "right") -> np.ndarray:
+    """(V, 9) flat triangles of the marks on the lane: board lines, the foul line, the guide
+    dots and the arrows (each pointing down the lane, centred 15 ft past the foul line)."""
+    from nbst.models.bowling import lane, scene
+
+    hw = scene.LANE_WIDTH / 2
+    parts = []
+    for y, strong in board_lines():
+        rgb, w = BOARD_LINE_5 if strong else BOARD_LINE
+        parts.append(_rect(lane.FOUL_LINE_X, scene.PIT_EDGE_X, y - w / 2, y + w / 2, rgb))
+    parts.append(_rect(lane.FOUL_LINE_X - 0.005, lane.FOUL_LINE_X + 0.005, -hw - 0.02, hw + 0.02, FOUL_RGB))
+    xd = float(lane.ft_to_x(DOTS_FT))
+    k = np.linspace(0, 2 * math.pi, 13)[:-1]
+    r = lane.BOARD_WIDTH * 0.3
+    for b in DOT_BOARDS + tuple(lane.N_BOARDS + 1 - b for b in DOT_BOARDS):
+        y = float(lane.board_to_y(b, hand))
+        parts.append(_flat_poly(np.stack([xd + r * np.cos(k), y + r * np.sin(k)], 1), MARK_RGB))
+    xa = float(lane.ft_to_x(lane.ARROWS_FT))
+    for b in lane.ARROW_BOARDS:
+        y = float(lane.board_to_y(b, hand))
+        half = lane.BOARD_WIDTH * 0.45
+        parts.append(_flat_poly([(xa - 0.08, y - half), (xa + 0.08, y), (xa - 0.08, y + half)], MARK_RGB))
+    return np.concatenate(parts).astype("f4")
+
+
+def _ribbon(xy: np.ndarray, half: float, rgb) -> np.ndarray:
+    """(2K, 9) vertices of a flat triangle strip along the path ``xy`` (K, 2)."""
+    d = np.gradient(xy, axis=0)
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
+    nrm = np.stack([-d[:, 1], d[:, 0]], 1) * half
+    pts = np.stack([xy + nrm, xy - nrm], 1).reshape(-1, 2)
+    n = len(pts)
+    return np.concatenate([pts, np.zeros((n, 1)), np.tile([0.0, 0.0, 1.0], (n, 1)), np.tile(rgb, (n, 1))],
+                          axis=1).astype("f4")
+
+
+def ortho_panel(x_range, y_half: float, vp, frame_h: int, *, margin_top: float, margin_bottom: float,
+                col_centre: float) -> tuple[np.ndarray, float]:
+    """(4x4 view-projection, px per m) of a true-scale view from above: the lane's x from
+    ``x_range[0]`` (bottom) to ``x_range[1]`` (top), the bowler's left (+y) on the image's left,
+    the lane's centre at pixel column ``col_centre``; image row 0 at the top (as FrameTarget)."""
+    vx, _, vw, h = vp
+    xa, xb = x_range
+    ppm = min((h - margin_top - margin_bottom) / (xb - xa), 0.9 * vw / (2 * y_half))
+    # pixel: col = col_centre - y * ppm; row = margin_top + (xb - x) * ppm; ndc = 2 * px / size - 1
+    m = np.zeros((4, 4))
+    m[0, 1] = -2 * ppm / vw
+    m[0, 3] = 2 * (col_centre - vx) / vw - 1
+    m[1, 0] = -2 * ppm / frame_h
+    m[1, 3] = 2 * (margin_top + xb * ppm) / frame_h - 1
+    m[2, 2], m[2, 3] = -0.5, 0.1   # larger z nearer (depth -1 near)
+    m[3, 3] = 1.0
+    return m, ppm
+
+
+class LaneRenderer(FrameRenderer):
+    """Frames of a recorded throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both.
+    ``asked`` (pins the shot was meant to knock down), ``probability`` (of the outcome, 0..1) and
+    ``probability_note`` (e.g. its sample size and interval) add readout lines when given."""
+
+    def __init__(self, ctx, throw: Throw, *, size=style.DEFAULT_SIZE, camera: str = "both", asked=None,
+                 probability: float | None = None, probability_note: str | None = None,
+                 overhead_from_ft: float = OVERHEAD_FROM_FT):
+        import moderngl
+        import trimesh
+
+        from nbst.models.bowling import lane, pin, scene
+        from nbst.render.shapes import Text, text_cell
+
+        if camera not in ("behind", "overhead", "both"):
+            raise ValueError(f"camera must be behind, overhead or both, got {camera!r}")
+        self.ctx, self.throw, self.motion, self.camera = ctx, throw, throw.motion, camera
+        self.size = tuple(size)
+        self.asked = None if asked is None else sorted(int(p) for p in asked)
+        self.probability, self.probability_note = probability, probability_note
+        self.hand = throw.delivery.hand
+        self._mgl = moderngl
+        w, h = self.size
+        if camera == "both":
+            ow = int(round(w * OVERHEAD_SHARE))
+            self.panels = {"behind": (0, 0, w - ow, h), "overhead": (w - ow, 0, ow, h)}
+        else:
+            self.panels = {camera: (0, 0, w, h)}
+        px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
+        text_w = self.panels.get("behind", self.panels.get("overhead"))[2]
+        chars = max(len(s) for s in self.readout(float(self.motion.times[-1])))
+        while px > style.MIN_READOUT_PX and chars * text_cell(px)[0] > text_w - 16:
+            px -= 1
+        self.text = Text(ctx, px)
+        self.small = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.022 * min(self.size)))))
+        self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
+        self.prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
+        self.ball_prog = ctx.program(vertex_shader=BALL_VS, fragment_shader=BALL_FS)
+        L = np.array([0.3, 0.4, 1.0])
+        for p in (self.prog, self.ball_prog):
+            p["u_light"].value = tuple(L / np.linalg.norm(L))
+        self._bufs = []
+
+        def vao(arr, prog=None, fmt="3f 3f 3f", names=("in_pos", "in_normal", "in_color")):
+            buf = ctx.buffer(np.ascontiguousarray(arr, dtype="f4").tobytes())
+            v = ctx.vertex_array(prog or self.prog, [(buf, fmt, *names)])
+            self._bufs.append((v, buf))
+            return v
+
+        g = pin.geometry()
+        pm = trimesh.Trimesh(g.visual_vertices.astype(float), g.visual_faces, process=False)
+
+        def pin_color(p):
+            hh = p[2] / scene.INCH
+            return PIN_RED if any(lo <= hh <= hi for lo, hi in STRIPES_IN) else PIN_WHITE
+
+        self.pin_vao = vao(_flat(pm, pin_color))
+        sphere = trimesh.creation.icosphere(subdivisions=4, radius=scene.BALL_RADIUS)
+        self.ball_vao = vao(sphere.vertices[sphere.faces.reshape(-1)], self.ball_prog, "3f", ("in_pos",))
+        tex = ball_texture(throw)
+        self.ball_tex = ctx.texture((tex.shape[1], tex.shape[0]), 3, np.ascontiguousarray(tex).tobytes(), alignment=1)
+        self.ball_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self.ball_tex.repeat_x, self.ball_tex.repeat_y = True, False
+        self.solid_vao = vao(lane_solids(throw.oil, self.hand))
+        self.marks_vao = vao(lane_marks(self.hand))
+        # the ball's track on the lane: a ribbon, one pair of vertices every 10 ms, drawn up to t
+        m = self.motion
+        stride = max(1, int(round(0.01 / throw.timestep)))
+        idx = np.arange(0, len(m.times), stride)
+        on = idx[(m.ball[idx, 0] < scene.PIT_EDGE_X) & (m.ball[idx, 2] > -0.02)]
+        self._trail_idx = on
+        self.trail_vao = self.trail_wide_vao = None
+        if len(on) > 1:
+            self.trail_vao = vao(_ribbon(m.ball[on, :2], TRAIL_HALF_WIDTH, TRAIL_RGB))
+            self.trail_wide_vao = vao(_ribbon(m.ball[on, :2], TRAIL_HALF_WIDTH_OVERHEAD, TRAIL_RGB))
+        self.x_end = scene.PIT_EDGE_X + scene.PIT_LENGTH
+        self.overhead_x = (float(lane.ft_to_x(overhead_from_ft)) - 0.3, self.x_end)
+        self.pin_height = pin.HEIGHT_IN * scene.INCH
+
+    # ---------------------------------------------------------------- cameras
+
+    def step_at(self, t: float) -> int:
+        m = self.motion
+        return int(np.clip(round(t / self.throw.timestep), 0, len(m.times) - 1))
+
+    def views(self, t: float):
+        """[(viewport, view-projection, eye, camera)] for the frame at time t. Pixels: column =
+        vx + (ndc_x + 1) / 2 * vw, row = (ndc_y + 1) / 2 * H (row 0 at the top)."""
+        from nbst.models.bowling import lane, scene
+
+        w, h = self.size
+        k = self.step_at(t)
+        out = []
+        for cam, vp in self.panels.items():
+            if cam == "behind":
+                bx = min(float(self.motion.ball[k, 0]), float(lane.ft_to_x(FOLLOW_STOP_FT)))
+                eye = np.array([bx - BEHIND_BACK, 0.0, BEHIND_HEIGHT])
+                tgt = np.array([bx + BEHIND_AHEAD, 0.0, 0.0])
+                proj = perspective(BEHIND_FOV, vp[2] / h, 0.3, 40.0)
+                flip = np.diag([1.0, -1.0, 1.0, 1.0])
+                out.append((vp, flip @ proj @ look_at(eye, tgt, np.array([0.0, 0.0, 1.0])), eye, cam))
+            else:
+                half = scene.LANE_WIDTH / 2 + scene.GUTTER_WIDTH + 0.05
+                ch = self.text.cell[1]
+                vpm, _ = ortho_panel(self.overhead_x, half, vp, h, margin_top=1.8 * ch, margin_bottom=0.5 * ch,
+                                     col_centre=vp[0] + 0.42 * vp[2])
+                out.append((vp, vpm, np.array([0.0, 0.0, 50.0]), cam))
+        return out
+
+    @staticmethod
+    def to_pixel(vp, vpm, p, frame_h: int):
+        """(column, row, in front of the camera) of the world point ``p`` in the panel ``vp``."""
+        c = vpm @ np.r_[np.asarray(p, float), 1.0]
+        return vp[0] + (c[0] / c[3] + 1) / 2 * vp[2], (c[1] / c[3] + 1) / 2 * frame_h, c[3] > 0
+
+    # ---------------------------------------------------------------- readout
+
+    def readout(self, t: float) -> list[str]:
+        """The text of the frame at ``t``: the throw, the oil and ball, the phases, the ball now,
+        the pins down (at the end: the result), and the pins asked for and the probability when
+        given."""
+        from nbst.models.bowling import lane
+        from nbst.models.bowling import shot as shotmod
+
+        th, d, r = self.throw, self.throw.delivery, self.throw.result
+        b = th.ball
+
+        def pins(ns) -> str:
+            return ",".join(map(str, ns)) or "none"
+
+        lines = [f"throw   {d.hand}-handed, {d.mph:.1f} mph, {d.rpm:.0f} rpm",
+                 f"axis    rotation {d.rotation:.0f} deg, tilt {d.tilt:.0f} deg",
+                 f"line    board {d.foul_board():.1f} at the foul line, {d.angle:+.1f} deg out",
+                 f"oil     {th.oil} ({lane.pattern(th.oil).length_ft:.0f} ft); ball {b.weight_lb:g} lb, "
+                 f"RG {b.rg:.2f}, diff {b.diff:.3f}"]
+        if r is None:
+            lines.append("phases  none: the ball does not reach the pins on the lane")
+        else:
+            lines.append(f"arrows  board {r.board_at_arrows:.1f}; skid "
+                         + ("none" if r.skid_ft is None else f"{r.skid_ft:.1f} ft"))
+            lines.append("break   " + ("none (never moved out)" if r.breakpoint_ft is None
+                                       else f"{r.breakpoint_ft:.1f} ft, board {r.breakpoint_board:.1f}")
+                         + ("" if r.roll_ft is None else f"; roll {r.roll_ft:.1f} ft"))
+            lines.append(f"pins    board {r.board_at_pins:.1f}, entry {r.entry_angle_deg:.1f} deg, "
+                         f"{r.speed_pins_mph:.1f} mph")
+        m = self.motion
+        k = self.step_at(t)
+        if self.asked is not None:
+            leave = [n for n in range(1, 11) if n not in self.asked]
+            lines.append(f"asked   down {pins(self.asked)}" + (f" (leave {pins(leave)})" if leave else " (a strike)"))
+        if m.down_masks is not None:
+            now = shotmod.pins_of(int(m.down_masks[k]))
+            if k == len(m.times) - 1:
+                tail = "" if self.asked is None else (" = asked" if now == self.asked else " (not asked)")
+                lines.append(f"result  down {pins(now)}{tail}")
+            else:
+                lines.append(f"now     down {pins(now)}")
+        if self.probability is not None:
+            note = f" ({self.probability_note})" if self.probability_note else ""
+            lines.append(f"chance  {100 * self.probability:.0f}%{note}")
+        x, y = m.ball[k, 0], m.ball[k, 1]
+        a, b = max(k - 1, 0), min(k + 1, len(m.times) - 1)
+        v = float(np.hypot(*(m.ball[b, :2] - m.ball[a, :2]))) / max((b - a) * self.throw.timestep, 1e-12)
+        where = (f"{float(lane.x_to_ft(x)):4.1f} ft, board {float(lane.y_to_board(y, d.hand)):4.1f}"
+                 if x < 0.0 and abs(y) < 0.6 else "past the head pin")
+        lines.append(f"t {t:4.2f} s  ball {where}, {v / lane.MPH:4.1f} mph")
+        return lines
+
+    def _overlay(self, t: float, views) -> None:
+        from nbst.models.bowling import lane
+        from nbst.models.bowling import shot as shotmod
+
+        size = self.size
+        H = size[1]
+        cw, ch = self.text.cell
+        scw, sch = self.small.cell
+        titles = {"behind": "behind the bowler: the full lane, 60 ft to the head pin",
+                  "overhead": f"overhead from {lane.x_to_ft(self.overhead_x[0] + 0.3):.0f} ft"}
+        k = self.step_at(t)
+        down = (shotmod.pins_of(int(self.motion.down_masks[k])) if self.motion.down_masks is not None else [])
+        for vp, vpm, _, cam in views:
+            title = titles[cam]
+            if len(title) * cw > vp[2] - 8:
+                title = title.split(":")[0]
+            self.text.draw_halo(size, self.text.layout([title], vp[0] + (vp[2] - cw * len(title)) / 2, 0.3 * ch),
+                                style.TEXT, style.TEXT_HALO)
+            if cam == "behind":
+                self._behind_labels(vp, vpm, k, down)
+            else:
+                self._overhead_labels(vp, vpm, down)
+        vp = self.panels.get("behind", next(iter(self.panels.values())))
+        y0 = 1.5 * ch if "behind" in self.panels else H - (len(self.readout(t)) + 0.5) * ch
+        self.text.draw_halo(size, self.text.layout(self.readout(t), vp[0] + 0.6 * cw, y0), style.TEXT,
+                            style.TEXT_HALO)
+
+    def pin_label_points(self, k: int) -> np.ndarray:
+        """(10, 3) world points just above each pin's head at step k (where the behind view writes
+        its number)."""
+        out = []
+        for p in self.motion.pins[k]:
+            out.append(_pose(p)[:3, :3] @ np.array([0.0, 0.0, self.pin_height + 0.05]) + p[:3])
+        return np.array(out)
+
+    def _behind_labels(self, vp, vpm, k, down) -> None:
+        """The standing pins' numbers above their heads, once neighbouring pins are far enough
+        apart on screen for a number to fit between them."""
+        from nbst.models.bowling import scene
+
+        if not len(self.motion.pins):
+            return
+        H = self.size[1]
+        scw, sch = self.small.cell
+        a = self.to_pixel(vp, vpm, [0.0, 0.0, 0.0], H)
+        b = self.to_pixel(vp, vpm, [0.0, scene.PIN_SPACING, 0.0], H)
+        if abs(a[0] - b[0]) < 3.5 * scw:
+            return
+        parts, boxes = [], []
+        for n, p in zip(scene.PIN_NUMBERS, self.pin_label_points(k)):   # front rows first: they keep theirs
+            if n in down:
+                continue
+            col, row, front = self.to_pixel(vp, vpm, p, H)
+            label = str(n)
+            x0, y0 = col - scw * len(label) / 2, row - sch
+            box = (x0 - scw / 2, y0, x0 + scw * (len(label) + 0.5), y0 + sch)
+            if not front or x0 < vp[0] or box[2] > vp[0] + vp[2]:
+                continue
+            if any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in boxes):
+                continue   # a label nearer the camera is there (rows overlap when seen from low behind)
+            boxes.append(box)
+            parts.append(self.small.layout([label], x0, y0))
+        if parts:
+            self.small.draw_halo(self.size, np.concatenate(parts), style.LABEL, PIN_WHITE)
+
+    def pin_diagram(self, vp) -> list[tuple[int, float, float]]:
+        """[(pin, column, row)] of the pin diagram's numbers (top-left of each label) in the
+        overhead panel: the deck as a bowler sees it (7 8 9 10 at the back, the 1 in front)."""
+        from nbst.models.bowling import scene
+
+        scw, sch = self.small.cell
+        gap = 2.2 * scw
+        right = vp[0] + vp[2] - 0.8 * scw - 2 * scw
+        spots = scene.pin_spots()
+        out = []
+        for n, (x, y) in zip(scene.PIN_NUMBERS, spots):
+            col = right - (y / scene.PIN_SPACING + 1.5) * gap
+            row = 2.6 * self.text.cell[1] + (3 - round(x / (scene.PIN_SPACING * math.sqrt(3) / 2))) * 1.6 * sch
+            out.append((n, col - scw * len(str(n)) / 2, row))
+        return out
+
+    def _overhead_labels(self, vp, vpm, down) -> None:
+        """Distance ticks beside the lane (every 10 ft, the arrows and the foul line when in
+        view) and the pin diagram (standing pins lit, pins down dim)."""
+        from nbst.models.bowling import lane, scene
+
+        H = self.size[1]
+        scw, sch = self.small.cell
+        y_edge = scene.LANE_WIDTH / 2 + scene.GUTTER_WIDTH
+        ticks = [(f"{ft:.0f} ft", ft) for ft in range(0, 61, 10)] + [("arrows", lane.ARROWS_FT)]
+        parts = []
+        for label, ft in ticks:
+            x = float(lane.ft_to_x(ft))
+            if not self.overhead_x[0] <= x <= self.overhead_x[1]:
+                continue
+            col, row, _ = self.to_pixel(vp, vpm, [x, y_edge, 0.0], H)
+            parts.append(self.small.layout([label], col - scw * (len(label) + 0.6), row - sch / 2))
+        if parts:
+            self.small.draw_halo(self.size, np.concatenate(parts), style.TEXT_DIM, style.TEXT_HALO)
+        diag = self.pin_diagram(vp)
+        head = "pins"
+        c0 = min(c for _, c, _ in diag)
+        self.small.draw_halo(self.size, self.small.layout([head], c0, diag[-1][2] - 1.4 * sch), style.TEXT_DIM,
+                             style.TEXT_HALO)
+        for standing, colour in ((True, style.TEXT), (False, (0.35, 0.37, 0.42))):
+            parts = [self.small.layout([str(n)], c, r) for n, c, r in diag if (n not in down) == standing]
+            if parts:
+                self.small.draw_halo(self.size, np.concatenate(parts), colour, style.TEXT_HALO)
+
+    # ---------------------------------------------------------------- drawing
+
+    def draw(self, t: float) -> None:
+        ctx, mgl = self.ctx, self._mgl
+        fbo = self.target.draw_fbo
+        fbo.use()
+        fbo.clear(*BACKGROUND, 1.0, depth=1.0)
+        views = self.views(t)
+        k = self.step_at(t)
+        n_trail = int(np.searchsorted(self._trail_idx, k, side="right"))
+        ident = np.eye(4, dtype="f4").tobytes()
+        for vp, vpm, eye, cam in views:
+            ctx.viewport = vp
+            vpb = vpm.T.astype("f4").tobytes()
+            for p in (self.prog, self.ball_prog):
+                p["u_vp"].write(vpb)
+                p["u_eye"].value = tuple(float(e) for e in eye)
+            self.prog["u_model"].write(ident)
+            ctx.enable(mgl.DEPTH_TEST)
+            self.solid_vao.render(mgl.TRIANGLES)
+            ctx.disable(mgl.DEPTH_TEST)   # the marks and the track lie on the lane: drawn over it, under the bodies
+            self.marks_vao.render(mgl.TRIANGLES)
+            if self.trail_vao is not None and n_trail > 1:
+                trail = self.trail_wide_vao if cam == "overhead" else self.trail_vao
+                trail.render(mgl.TRIANGLE_STRIP, vertices=2 * n_trail)
+            ctx.enable(mgl.DEPTH_TEST)
+            for p in self.motion.pins[k]:
+                self.prog["u_model"].write(_pose(p).T.astype("f4").tobytes())
+                self.pin_vao.render(mgl.TRIANGLES)
+            self.ball_prog["u_model"].write(_pose(self.motion.ball[k]).T.astype("f4").tobytes())
+            self.ball_tex.use(0)
+            self.ball_prog["u_tex"].value = 0
+            self.ball_vao.render(mgl.TRIANGLES)
+        ctx.viewport = (0, 0, *self.size)
+        ctx.disable(mgl.DEPTH_TEST)
+        ctx.enable(mgl.BLEND)
+        ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA  # the text shader's premultiplied alpha
+        self._overlay(t, views)
+        ctx.disable(mgl.BLEND)
+
+    def release(self) -> None:
+        for v, b in self._bufs:
+            v.release()
+            b.release()
+        self.ball_tex.release()
+        self.prog.release()
+        self.ball_prog.release()
+        self.text.release()
+        self.small.release()
+        self.target.release()
+
+
+#: The still's default moment: this long before the ball's first contact with a pin (the ball
+#: near the deck, every pin standing and numbered, the track behind it), or the end of the throw.
+STILL_BEFORE_IMPACT = 0.12
+
+
+def still_time(throw: Throw) -> float:
+    m = throw.motion
+    if math.isnan(m.impact):
+        return float(m.times[-1])
+    return max(0.0, m.impact - STILL_BEFORE_IMPACT)
+
+
+def render_throw(throw: Throw, output, *, still: float | None = None, camera: str = "both", size=None,
+                 fps=None, hold: float = 1.0, asked=None, probability=None, probability_note=None,
+                 progress=None) -> int:
+    """Render a recorded throw to ``output``: a .png at time ``still`` (seconds from the release;
+    a negative value: :func:`still_time`), else a .mp4/.gif video at ``fps``. Returns the frames."""
+    from nbst.render.video import render_video, write_png
+
+    size = tuple(size or style.DEFAULT_SIZE)
+    ctx = create_context()
+    try:
+        r = LaneRenderer(ctx, throw, size=size, camera=camera, asked=asked, probability=probability,
+                         probability_note=probability_note)
+        try:
+            if still is not None:
+                t = still_time(throw) if still < 0 else float(np.clip(still, 0.0, throw.motion.times[-1]))
+                write_png(output, r.render(t))
+                return 1
+            fps = float(fps or style.DEFAULT_FPS)
+            return render_video(r, frame_times(throw, fps, hold=hold), output, fps=fps, progress=progress)
+        finally:
+            r.release()
+    finally:
+        ctx.release()
