@@ -1,0 +1,316 @@
+"""A frame from the foul line: the delivery of :mod:`.lane` run into the pins until they come to
+rest, and the settled outcome counted as USBC counts pinfall.
+
+* **Scene**: :func:`.lane.build_spec` with the pins (one compiled model per oil pattern, ball,
+  timestep and oil friction, :func:`frame_model`). The delivery only sets the initial state:
+  the ball's inertia axes are placed by turning the ball body (a sphere: its contact is the
+  same in any orientation) instead of recompiling, so one model serves every throw of a
+  Monte Carlo batch. Pins not in play (a spare's leave) are parked standing on the floor
+  plane behind the approach, out of reach, and left out of the outcome.
+* **Run**: steps of ``h`` (1 ms default; the ladder runs 0.5 and 0.25 ms too), checked every
+  :data:`CHECK_EVERY` s. The frame is **settled** when the ball has reached the pins (or left
+  the lane) and is in the pit or slower than :data:`REST_SPEED`, and every pin in play that
+  is not in the pit moves slower than :data:`REST_SPEED` and turns slower than
+  :data:`REST_SPIN`, for :data:`REST_HOLD` s in a row. The **cap**: :data:`CAP_AFTER_PINS` s
+  after the ball reaches the head pin's line (or :data:`.lane.MAX_SECONDS` if it never does);
+  a capped frame says so. ``extra_s`` runs on past the settle (or the cap) before reading
+  the outcome: the check that the outcome is settled.
+* **Pinfall** (USBC Playing Rules 6a and 6b, 2012-13 rulebook, as quoted at
+  ballreviews.com/miscellaneous/rules-question-300958; docs/bowling.md quotes them): a pin
+  is down when it is knocked down (its axis tilts past :data:`.shot.DOWN_TILT_DEG`), off the
+  lane surface (below the deck, past the pit edge, or over the gutter edge: lying in the
+  gutter), or leaning on and touching the kickback or side partition (dead wood, rule
+  6a.4): a pin in contact with ``wall_left``/``wall_right`` in the settled state. A ball that
+  leaves the lane before reaching the pins scores nothing (rule 6b.1).
+
+Compute only: no files, no printing.
+"""
+from __future__ import annotations
+
+import math
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict, dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from nbst.models.bowling import lane, scene, shot
+
+#: Default step (s) and the ladder of the engine-robustness check.
+TIMESTEP = lane.TIMESTEP
+LADDER = (0.001, 0.0005, 0.00025)
+#: Rest: speeds below these (m/s; rad/s) for REST_HOLD s, checked every CHECK_EVERY s.
+REST_SPEED = 0.01
+REST_SPIN = 0.1
+REST_HOLD = 0.2
+CHECK_EVERY = 0.01
+#: The cap: this long after the ball reaches the head pin's line (s).
+CAP_AFTER_PINS = 6.0
+#: The partitions beside the deck (the scene's kickbacks and lane dividers).
+PARTITIONS = ("wall_left", "wall_right")
+#: Where pins not in play are parked: standing on the floor plane, behind the approach.
+PARK_X = lane.LANE_START_X - 1.0
+PARK_STEP = 0.3
+
+
+class FrameError(ValueError):
+    """Bad input to a frame: one line naming the field."""
+
+
+@dataclass
+class FrameResult:
+    """A settled frame. Pins are numbered 1..10; ``down``/``leave`` cover the pins in play."""
+
+    delivery: dict
+    oil: str
+    timestep: float
+    in_play: list
+    down: list
+    leave: list
+    knocked: list  # tilted past 45 degrees
+    off_deck: list  # below the deck, in the pit, or over the gutter edge (lying in the gutter)
+    partition: list  # touching a kickback or side partition (dead wood)
+    ball_left_lane: bool  # before the pins: rule 6b.1, no pinfall
+    ball_at_pins_s: float | None
+    board_at_pins: float | None  # the ball's line where it crosses the deck front, carried to x = 0
+    entry_angle_deg: float | None
+    settled: bool
+    settle_s: float | None
+    cap_hit: bool
+    seconds: float
+    extra_s: float = 0.0
+    final_qpos: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def mask(self) -> int:
+        return shot.mask_from_pins(self.down)
+
+    @property
+    def strike(self) -> bool:
+        return len(self.in_play) == 10 and not self.leave
+
+    @property
+    def converted(self) -> bool:
+        """Every pin in play down (a strike on a full rack, a spare on a leave)."""
+        return not self.leave
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d.pop("final_qpos")
+        return d
+
+
+@lru_cache(maxsize=16)
+def _compiled(oil, ball: lane.Ball, timestep: float, mu_oil: float):
+    m = lane.build_spec(oil, ball, lane.Delivery(), pins=True, mu_oil=mu_oil).compile()
+    m.opt.timestep = timestep
+    return m
+
+
+def frame_model(oil: str = "house", ball: lane.Ball | None = None, *, timestep: float = TIMESTEP,
+                mu_oil: float = lane.MU_OIL):
+    """The lane with pins, compiled once per (oil, ball, timestep, mu_oil) and shared read-only."""
+    ball = (ball or lane.Ball()).check()
+    if not (isinstance(timestep, (int, float)) and 1e-5 <= timestep <= 0.002):
+        raise FrameError(f"timestep: must be in [1e-05, 0.002] s (the contacts' time constant is 8 ms), got {timestep!r}")
+    if not (isinstance(mu_oil, (int, float)) and 0.0 < mu_oil < ball.friction):
+        raise FrameError(f"mu_oil: must be in (0, the ball's friction), got {mu_oil!r}")
+    lane.pattern(oil) if isinstance(oil, str) else None
+    return _compiled(oil, ball, float(timestep), float(mu_oil))
+
+
+def _qmul(a, b) -> np.ndarray:
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
+
+
+def _qmat(q) -> np.ndarray:
+    return lane._quat_to_mat(np.asarray(q, dtype=float)[None])[0]
+
+
+def initial_qpos_qvel(model, delivery: lane.Delivery, standing=None) -> tuple[np.ndarray, np.ndarray]:
+    """(qpos, qvel) at release: the pins in ``standing`` (pin numbers; default all ten) on their
+    spots, the others parked; the ball at the foul line as :func:`.lane.initial_state`, its body
+    turned so that its inertia axes are those :func:`.lane.build_spec` gives ``delivery``."""
+    delivery = delivery.check()
+    standing = set(scene.PIN_NUMBERS if standing is None else standing)
+    qpos = np.array(model.qpos0, dtype=float)
+    qvel = np.zeros(model.nv)
+    adr = shot.pin_addresses(model)
+    for k, n in enumerate(scene.PIN_NUMBERS):
+        if n not in standing:
+            qpos[adr[k]:adr[k] + 7] = [PARK_X - PARK_STEP * k, 0.0, scene.FLOOR_Z, 1.0, 0.0, 0.0, 0.0]
+    b = model.body("ball")
+    q0 = np.array(model.body_iquat[b.id])  # the model's ball: laid out for the default delivery
+    qd = np.array(lane._quat_x_to(lane.pin_axis(delivery)))
+    q = _qmul(qd, q0 * np.array([1.0, -1.0, -1.0, -1.0]))
+    q /= np.linalg.norm(q)
+    pos, v, w = lane.initial_state(delivery)
+    j = model.joint("ball_free")
+    qa, va = int(j.qposadr[0]), int(j.dofadr[0])
+    qpos[qa:qa + 7] = [*pos, *q]
+    qvel[va:va + 3] = v
+    qvel[va + 3:va + 6] = _qmat(q).T @ w  # the free joint's angular velocity is in the body frame
+    return qpos, qvel
+
+
+def settled_pinfall(model, data, in_play) -> tuple[list, list, list]:
+    """(knocked, off_deck, partition): pin numbers in play down by each rule, on ``data``'s state
+    (its contacts as of the last step)."""
+    import mujoco
+
+    qpos = np.asarray(data.qpos, dtype=float)
+    adr = shot.pin_addresses(model)
+    idx = adr[:, None] + np.arange(7)
+    p = qpos[idx]
+    qw, qx, qy, qz = p[:, 3], p[:, 4], p[:, 5], p[:, 6]
+    cos_tilt = 1.0 - 2.0 * (qx**2 + qy**2) / (qw**2 + qx**2 + qy**2 + qz**2)
+    tilted = cos_tilt < math.cos(math.radians(shot.DOWN_TILT_DEG))
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    off = (z < -shot.LEFT_DECK_DEPTH) | (x > scene.PIT_EDGE_X) | (np.abs(y) > scene.LANE_WIDTH / 2)
+    walls = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, w) for w in PARTITIONS}
+    pin_body = {model.body(f"pin{n}").id: n for n in scene.PIN_NUMBERS}
+    leaning = set()
+    for c in data.contact[:data.ncon]:
+        g1, g2 = int(c.geom1), int(c.geom2)
+        for a, b in ((g1, g2), (g2, g1)):
+            if a in walls and int(model.geom_bodyid[b]) in pin_body:
+                leaning.add(pin_body[int(model.geom_bodyid[b])])
+    play = set(in_play)
+    knocked = [n for k, n in enumerate(scene.PIN_NUMBERS) if n in play and tilted[k]]
+    off_deck = [n for k, n in enumerate(scene.PIN_NUMBERS) if n in play and off[k]]
+    partition = sorted(n for n in leaning if n in play)
+    return knocked, off_deck, partition
+
+
+def _pin_moving(model, data, in_play_idx) -> bool:
+    adr = [int(model.joint(f"pin{scene.PIN_NUMBERS[k]}_free").dofadr[0]) for k in in_play_idx]
+    qadr = shot.pin_addresses(model)
+    for k, a in zip(in_play_idx, adr):
+        if data.qpos[qadr[k]] > scene.PIT_EDGE_X:  # in the pit: down for good
+            continue
+        if np.linalg.norm(data.qvel[a:a + 3]) > REST_SPEED or np.linalg.norm(data.qvel[a + 3:a + 6]) > REST_SPIN:
+            return True
+    return False
+
+
+def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None = None, *,
+              standing=None, timestep: float = TIMESTEP, extra_s: float = 0.0, mu_oil: float = lane.MU_OIL,
+              model=None) -> FrameResult:
+    """Throw ``delivery`` at the pins in ``standing`` (default all ten) and run until they settle
+    (or the cap), then ``extra_s`` more; the USBC outcome (see the module docstring)."""
+    import mujoco
+
+    delivery = delivery.check()
+    in_play = sorted(set(scene.PIN_NUMBERS if standing is None else standing))
+    if not in_play or any(n not in scene.PIN_NUMBERS for n in in_play):
+        raise FrameError(f"standing: pins must be numbers 1..10 (at least one), got {in_play!r}")
+    if not (isinstance(extra_s, (int, float)) and 0.0 <= extra_s <= 60.0):
+        raise FrameError(f"extra_s: must be in [0, 60] s, got {extra_s!r}")
+    m = model if model is not None else frame_model(oil, ball, timestep=timestep, mu_oil=mu_oil)
+    h = float(m.opt.timestep)
+    d = mujoco.MjData(m)
+    qpos0, qvel0 = initial_qpos_qvel(m, delivery, in_play)
+    d.qpos[:], d.qvel[:] = qpos0, qvel0
+    k = max(1, int(round(CHECK_EVERY / h)))
+    bq = int(m.joint("ball_free").qposadr[0])
+    bv = int(m.joint("ball_free").dofadr[0])
+    idx = [scene.PIN_NUMBERS.index(n) for n in in_play]
+    half = scene.LANE_WIDTH / 2
+    t_pins = board = angle = None
+    left_lane = False
+    still_since = None
+    settle = None
+    cap = lane.MAX_SECONDS
+    prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+    with shot.mujoco_warnings_raise():
+        while True:
+            mujoco.mj_step(m, d, nstep=k)
+            bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
+            if t_pins is None and bx < 0.0 and abs(by) > half and bx < scene.DECK_FRONT_X:
+                left_lane = True
+            if board is None and bx >= scene.DECK_FRONT_X and prev[0][0] < scene.DECK_FRONT_X and not left_lane:
+                f = (scene.DECK_FRONT_X - prev[0][0]) / (bx - prev[0][0])
+                y = prev[0][1] + f * (by - prev[0][1])
+                v = prev[1] + f * (d.qvel[bv:bv + 3] - prev[1])
+                s = lane.hand_sign(delivery.hand)
+                board = float(lane.y_to_board(y - v[1] / v[0] * scene.DECK_FRONT_X, delivery.hand))
+                angle = float(math.degrees(math.atan2(s * v[1], v[0])))
+            if t_pins is None and bx >= 0.0:
+                t_pins = float(d.time)
+                cap = t_pins + CAP_AFTER_PINS
+            prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+            ball_done = (t_pins is not None or left_lane) and (
+                bx > scene.PIT_EDGE_X or np.linalg.norm(d.qvel[bv:bv + 3]) < REST_SPEED)
+            if ball_done and not _pin_moving(m, d, idx):
+                still_since = d.time if still_since is None else still_since
+                if d.time - still_since >= REST_HOLD - 1e-9:
+                    settle = float(d.time)
+                    break
+            else:
+                still_since = None
+            if d.time >= cap - 1e-9:
+                break
+        if extra_s > 0:
+            mujoco.mj_step(m, d, nstep=int(round(extra_s / h)))
+    bad = shot.data_warnings(d)
+    if bad or not np.isfinite(d.qpos).all():
+        raise shot.MujocoWarning(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the frame")
+    knocked, off_deck, partition = settled_pinfall(m, d, in_play)
+    down = sorted(set(knocked) | set(off_deck) | set(partition)) if not left_lane else []
+    return FrameResult(
+        delivery=delivery.to_dict(), oil=oil if isinstance(oil, str) else oil.name, timestep=h, in_play=in_play,
+        down=down, leave=[n for n in in_play if n not in down], knocked=knocked, off_deck=off_deck,
+        partition=partition, ball_left_lane=left_lane, ball_at_pins_s=t_pins, board_at_pins=board,
+        entry_angle_deg=angle, settled=settle is not None, settle_s=settle, cap_hit=settle is None,
+        seconds=float(d.time), extra_s=float(extra_s), final_qpos=d.qpos.copy())
+
+
+def ladder(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None = None, *, standing=None,
+           timesteps=LADDER) -> list[FrameResult]:
+    """The same throw at each timestep of ``timesteps`` (the engine-robustness ladder)."""
+    return [run_frame(delivery, oil, ball, standing=standing, timestep=h) for h in timesteps]
+
+
+class FrameRunner:
+    """Runs many frames of one model on ``jobs`` threads (MuJoCo's step releases the GIL);
+    results in input order, each frame from a fresh MjData, so a frame depends on its
+    delivery only."""
+
+    def __init__(self, oil: str = "house", ball: lane.Ball | None = None, *, timestep: float = TIMESTEP,
+                 jobs: int = 1, mu_oil: float = lane.MU_OIL):
+        self.oil, self.ball = oil, (ball or lane.Ball()).check()
+        self.model = frame_model(oil, self.ball, timestep=timestep, mu_oil=mu_oil)
+        self.jobs = max(1, int(jobs))
+        self._pool = ThreadPoolExecutor(max_workers=self.jobs) if self.jobs > 1 else None
+        self._lock = threading.Lock()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def one(self, delivery: lane.Delivery, standing=None) -> FrameResult:
+        return run_frame(delivery, self.oil, self.ball, standing=standing, model=self.model)
+
+    def map(self, deliveries, standing=None, on_done=None) -> list[FrameResult]:
+        """Frames of ``deliveries`` in order; ``on_done()`` after each (progress)."""
+        def job(dv):
+            r = self.one(dv, standing)
+            if on_done is not None:
+                with self._lock:
+                    on_done()
+            return r
+
+        if self._pool is None:
+            return [job(dv) for dv in deliveries]
+        return list(self._pool.map(job, deliveries))

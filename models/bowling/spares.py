@@ -1,0 +1,277 @@
+"""What bowlers ask of a lane: the pocket map, carry, and the best throw at each common spare.
+
+* **Aiming** (:func:`aim_entry`): a delivery that reaches a given board at the head pin's line
+  with a given entry angle. The release is the typical one of :mod:`.lane` (17 mph, 300 rpm,
+  15 deg tilt); the axis rotation (which sets the entry angle) and the launch angle (which
+  sets the board) are found by Newton's method with finite differences on :func:`.lane.throw`
+  (the ball alone), started from the nearest throws of a coarse table over foul board,
+  rotation and launch angle.
+* **Pocket map** (:func:`pocket_map`): for each (board, entry angle) cell, the strike
+  probability of the aimed delivery under the release noise of :mod:`.noise`. The same noisy
+  frames, pooled and binned by where each ball actually crossed the deck front (its board
+  carried to the head pin's line, and its heading), give the strike share by actual entry:
+  **carry**, the share of pocket hits (actual board 17-18, the USBC pocket) that strike.
+* **Spares** (:func:`best_spare`): for a leave, candidate throws are the 3-6-9 system's line
+  (:func:`system_369`) with the strike ball, and a straight spare ball (end over end, 200 rpm)
+  thrown cross-lane at the leave's aim point and at points 1 and 2 boards either side. Each
+  candidate is screened on a few noisy throws; the best is then measured on ``n``.
+
+The 3-6-9 system (talkbowling.co.uk, "Spare systems"): keep the strike line's target arrow
+and move the feet 3 boards (2 pin), 6 (4 pin) or 9 (7 pin) towards the hand side for the
+left-side pins. For the right-side pins the source gives no moves; we mirror them (3 boards
+the other way for the 3 pin, 6 for the 6 pin, 9 for the 10 pin): an assumption. Boards are
+moved at the foul line, the release board standing in for the feet.
+
+Compute only: no files, no printing.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from nbst.models.bowling import frame, lane, noise, scene
+
+#: The strike line: the typical release over the 10 board at the arrows, 1.5 deg out (lane.py).
+STRIKE = lane.Delivery(board=10.0, at="arrows", angle=1.5)
+STRIKE_FOUL = STRIKE.foul_board()
+STRIKE_ARROW = 10.0
+#: The straight spare ball: end over end, no tilt, 200 rpm, 17 mph.
+SPARE_BALL = dict(mph=17.0, rpm=200.0, rotation=0.0, tilt=0.0)
+#: The USBC pocket: boards 17-18 at 4-6 deg entry; board 17.5 at ~6 deg is the published peak.
+POCKET_BOARDS = (17.0, 18.0)
+POCKET_PEAK = (17.5, 6.0)
+
+#: The common leaves of issue 22 (pins standing), the pins whose mean is the aim point, and the
+#: 3-6-9 system's move of the feet in boards (+ towards the hand side, as the system's "right").
+LEAVES = {
+    "10": ((10,), -9), "7": ((7,), 9), "4": ((4,), 6), "6": ((6,), -6), "2-4-5-8": ((2, 4, 5, 8), 3),
+    "3-6-10": ((3, 6, 10), -3), "1-2-4": ((1, 2, 4), 3), "1-3-6": ((1, 3, 6), -3), "2-8": ((2, 8), 3),
+    "3-9": ((3, 9), -3), "7-10": ((7,), 9),
+}
+
+
+def leave_pins(name: str) -> list[int]:
+    try:
+        pins = sorted(int(p) for p in name.split("-"))
+    except ValueError:
+        raise ValueError(f"leave: pins must be numbers 1..10 joined by '-', got {name!r}") from None
+    if not pins or any(not 1 <= p <= 10 for p in pins) or len(set(pins)) != len(pins):
+        raise ValueError(f"leave: pins must be distinct numbers 1..10 joined by '-', got {name!r}")
+    return pins
+
+
+# --------------------------------------------------------------------------- aiming
+
+
+#: The coarse table that starts :func:`aim_entry`'s search: foul boards, axis rotations (more
+#: rotation hooks harder: the entry angle's knob) and launch angles.
+TABLE_FOUL = (STRIKE_FOUL, 18.0, 22.0, 26.0)
+TABLE_ROTATION = tuple(range(10, 91, 10))
+TABLE_ANGLE = tuple(np.arange(-1.0, 5.01, 0.5))
+
+
+def aim_table(oil: str = "house", ball: lane.Ball | None = None, base: lane.Delivery = STRIKE) -> list:
+    """(foul board, rotation, angle, board at the pins, entry angle) of every throw of the coarse
+    table that reaches the pins (~470 ball-alone throws, ~15 s)."""
+    key = (oil, ball, base)
+    if key not in _TABLES:
+        rows = []
+        for foul in TABLE_FOUL:
+            for rot in TABLE_ROTATION:
+                for ang in TABLE_ANGLE:
+                    d = replace(base, board=float(foul), at="foul", rotation=float(rot), angle=float(ang))
+                    try:
+                        d.check()
+                        r = lane.throw(d, oil, ball)
+                    except lane.LaneError:
+                        continue
+                    rows.append((float(foul), float(rot), float(ang), r.board_at_pins, r.entry_angle_deg))
+        _TABLES[key] = rows
+    return _TABLES[key]
+
+
+_TABLES: dict = {}
+
+
+def aim_entry(board: float, entry_deg: float, *, oil: str = "house", ball: lane.Ball | None = None,
+              base: lane.Delivery = STRIKE, tol=(0.15, 0.2), iters: int = 8):
+    """(delivery, ThrowResult): a release (the typical one's speed, revs and tilt) whose ball,
+    alone, crosses the head pin's line on ``board`` at ``entry_deg``: from the nearest throws of
+    :func:`aim_table`, Newton's method on (axis rotation, launch angle) at their foul board; ValueError
+    (one line) when none converges."""
+    table = aim_table(oil, ball, base)
+    near = sorted(table, key=lambda t: (t[3] - board) ** 2 + (4 * (t[4] - entry_deg)) ** 2)[:3]
+    step = np.array([2.0, 0.05])
+    lo, hi = np.array([0.0, -6.0]), np.array([90.0, 6.0])
+    for foul, rot0, ang0, _, _ in near:
+
+        def f(v):
+            d = replace(base, board=foul, at="foul", rotation=float(v[0]), angle=float(v[1]))
+            r = lane.throw(d, oil, ball)
+            return np.array([r.board_at_pins - board, r.entry_angle_deg - entry_deg]), d, r
+
+        x = np.array([rot0, ang0])
+        for _ in range(iters):
+            try:
+                e, d, r = f(x)
+                if abs(e[0]) <= tol[0] and abs(e[1]) <= tol[1]:
+                    return d, r
+                J = np.empty((2, 2))
+                for j in range(2):
+                    J[:, j] = (f(x + step * np.eye(2)[j])[0] - e) / step[j]
+                dx = np.linalg.solve(J, -e)
+            except (lane.LaneError, np.linalg.LinAlgError):
+                break
+            x = np.clip(x + np.clip(dx, -np.array([10.0, 0.5]), np.array([10.0, 0.5])), lo, hi)
+    raise ValueError(f"aim: no release reaches board {board:g} at {entry_deg:g} deg (from the {len(near)} nearest "
+                     f"table throws, {iters} Newton steps each)")
+
+
+# --------------------------------------------------------------------------- pocket map
+
+
+@dataclass
+class PocketMap:
+    boards: list
+    angles: list
+    p: np.ndarray  # (len(angles), len(boards)) strike probability of the aimed throw, NaN if not aimed
+    k: np.ndarray
+    n: int
+    deliveries: dict  # "board,angle" -> delivery dict
+    hits: list  # (actual board, actual entry angle, strike) of every noisy frame
+    seed: int
+    noise: dict
+
+    def carry(self, boards=POCKET_BOARDS, angles=None) -> tuple[int, int]:
+        """(strikes, pocket hits): frames whose ball actually crossed on ``boards`` (and angles)."""
+        sel = [h for h in self.hits if h[0] is not None and boards[0] <= h[0] <= boards[1]
+               and (angles is None or angles[0] <= h[1] <= angles[1])]
+        return sum(1 for h in sel if h[2]), len(sel)
+
+    def best(self):
+        """(board, angle, p, k) of the best aimed cell."""
+        j, i = np.unravel_index(np.nanargmax(self.p), self.p.shape)
+        return self.boards[i], self.angles[j], float(self.p[j, i]), int(self.k[j, i])
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["p"] = [[None if not np.isfinite(v) else float(v) for v in row] for row in self.p]
+        d["k"] = self.k.tolist()
+        return d
+
+
+def pocket_map(boards, angles, n: int, seed: int, *, runner: frame.FrameRunner, nz: noise.Noise = noise.DEFAULT,
+               on_cell=None, on_done=None) -> PocketMap:
+    """Strike probability over (board at the pins x entry angle), ``n`` noisy throws per cell
+    (cell c's throws are seeded ``seed + c``)."""
+    p = np.full((len(angles), len(boards)), np.nan)
+    k = np.zeros((len(angles), len(boards)), dtype=int)
+    deliveries, hits = {}, []
+    c = 0
+    for j, a in enumerate(angles):
+        for i, b in enumerate(boards):
+            try:
+                d, _ = aim_entry(b, a, oil=runner.oil, ball=runner.ball)
+            except ValueError:
+                c += 1
+                if on_cell is not None:
+                    on_cell(b, a, None)
+                continue
+            deliveries[f"{b:g},{a:g}"] = d.to_dict()
+            est, res = noise.probability(d, n, seed + c, runner=runner, noise=nz, on_done=on_done)
+            p[j, i], k[j, i] = est.p, est.k
+            hits += [(r.board_at_pins, r.entry_angle_deg, r.strike) for r in res]
+            c += 1
+            if on_cell is not None:
+                on_cell(b, a, est)
+    return PocketMap(boards=list(boards), angles=list(angles), p=p, k=k, n=n, deliveries=deliveries, hits=hits,
+                     seed=int(seed), noise=nz.to_dict())
+
+
+# --------------------------------------------------------------------------- spares
+
+
+def system_369(name: str) -> lane.Delivery:
+    """The 3-6-9 system's throw at a leave: the strike ball from the strike line's foul board moved
+    by the system's boards, over the same target arrow."""
+    _, move = LEAVES[name]
+    foul = STRIKE_FOUL - move
+    angle = math.degrees(math.atan((foul - STRIKE_ARROW) * lane.BOARD_WIDTH / (lane.ARROWS_FT * lane.FT)))
+    return replace(STRIKE, board=float(foul), at="foul", angle=float(angle))
+
+
+def aim_point(pins) -> tuple[float, float]:
+    """(x, y) of the mean of ``pins``' spots (m)."""
+    spots = scene.pin_spots()
+    xy = np.mean([spots[p - 1] for p in pins], axis=0)
+    return float(xy[0]), float(xy[1])
+
+
+def straight_at(x: float, y: float, *, hand: str = "right", oil: str = "house", ball=None) -> lane.Delivery:
+    """The straight spare ball thrown cross-lane through (x, y): from the foul board mirrored about
+    the middle, its angle corrected once on :func:`.lane.throw` so the ball alone crosses the
+    head pin's line where the straight line does."""
+    b_aim = float(lane.y_to_board(y, hand))
+    foul = float(np.clip(40.0 - b_aim, 6.0, 34.0))
+    y_f = float(lane.board_to_y(foul, hand))
+    s = lane.hand_sign(hand)
+    dx = x - lane.FOUL_LINE_X
+    angle = math.degrees(math.atan2(-s * (y - y_f), dx))
+    y0 = y_f + (y - y_f) * (0 - lane.FOUL_LINE_X) / dx  # the line at the head pin's line
+    want = float(lane.y_to_board(y0, hand))
+    d = lane.Delivery(hand=hand, board=foul, at="foul", angle=angle, **SPARE_BALL)
+    try:
+        got = lane.throw(d, oil, ball).board_at_pins
+    except lane.LaneError:
+        return d
+    per_deg = math.radians(1.0) * (0 - lane.FOUL_LINE_X) / lane.BOARD_WIDTH  # boards per degree
+    return replace(d, angle=float(np.clip(angle + (got - want) / per_deg, -10, 10)))
+
+
+@dataclass
+class SpareResult:
+    leave: str
+    system_369: dict
+    system_369_estimate: dict
+    best: dict
+    best_label: str
+    estimate: dict
+    candidates: list  # (label, screened k/n)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, screen: int = 12,
+               nz: noise.Noise = noise.DEFAULT, on_done=None) -> SpareResult:
+    """The candidate (3-6-9 line, straight ball at the aim point and 1-2 boards either side) that
+    converts leave ``name`` best: screened on ``screen`` noisy throws each, measured on ``n``;
+    the 3-6-9 line is measured on ``n`` too."""
+    if name not in LEAVES:
+        raise ValueError(f"leave: {name!r} is not one of the common leaves ({', '.join(LEAVES)})")
+    standing = leave_pins(name)
+    key, _ = LEAVES[name]
+    x, y = aim_point(key)
+    cands = [("3-6-9", system_369(name))]
+    for off in (0.0, -1.0, 1.0, -2.0, 2.0):
+        yy = y + off * lane.BOARD_WIDTH
+        if abs(yy) < scene.LANE_WIDTH / 2 - 0.02:
+            cands.append((f"straight at {lane.y_to_board(yy):.1f}", straight_at(x, yy, oil=runner.oil,
+                                                                               ball=runner.ball)))
+    screened = []
+    for c, (label, d) in enumerate(cands):
+        est, _ = noise.probability(d, screen, seed + 1000 + c, runner=runner, standing=standing, noise=nz,
+                                   on_done=on_done)
+        screened.append((label, est.k, screen))
+    best_i = max(range(len(cands)), key=lambda i: (screened[i][1], -i))
+    e369, _ = noise.probability(cands[0][1], n, seed, runner=runner, standing=standing, noise=nz, on_done=on_done)
+    if best_i == 0:
+        eb = e369
+    else:
+        eb, _ = noise.probability(cands[best_i][1], n, seed, runner=runner, standing=standing, noise=nz,
+                                  on_done=on_done)
+    return SpareResult(leave=name, system_369=cands[0][1].to_dict(), system_369_estimate=e369.to_dict(),
+                       best=cands[best_i][1].to_dict(), best_label=cands[best_i][0], estimate=eb.to_dict(),
+                       candidates=[list(s) for s in screened])
