@@ -275,3 +275,58 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     return SpareResult(leave=name, system_369=cands[0][1].to_dict(), system_369_estimate=e369.to_dict(),
                        best=cands[best_i][1].to_dict(), best_label=cands[best_i][0], estimate=eb.to_dict(),
                        candidates=[list(s) for s in screened])
+
+
+# --------------------------------------------------------------------------- the picture
+
+
+def pocket_figure(pm: PocketMap, *, title: str = ""):
+    """A matplotlib Figure: left, the strike probability of the aimed throw per (board, entry
+    angle) cell; right, the strike share of all its noisy frames binned by where each ball
+    actually entered. The published pocket (board 17.5, ~6 deg) is marked on both."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11, 4.8), dpi=100)
+    axs = fig.subplots(1, 2)
+    db = pm.boards[1] - pm.boards[0] if len(pm.boards) > 1 else 1.0
+    da = pm.angles[1] - pm.angles[0] if len(pm.angles) > 1 else 1.0
+    ext = (pm.boards[0] - db / 2, pm.boards[-1] + db / 2, pm.angles[0] - da / 2, pm.angles[-1] + da / 2)
+    im = axs[0].imshow(np.ma.masked_invalid(pm.p), origin="lower", extent=ext, aspect="auto", vmin=0, vmax=1,
+                       cmap="viridis")
+    for j, a in enumerate(pm.angles):
+        for i, b in enumerate(pm.boards):
+            v = pm.p[j, i]
+            axs[0].text(b, a, "not\naimed" if not np.isfinite(v) else f"{100 * v:.0f}%", ha="center", va="center",
+                        fontsize=7, color="white" if not np.isfinite(v) or v < 0.6 else "black")
+    axs[0].set_title(f"aimed throw: strike probability ({pm.n} noisy throws per cell)", fontsize=9)
+    # actual entry, binned on the same grid
+    k = np.zeros((len(pm.angles), len(pm.boards)))
+    n = np.zeros_like(k)
+    for b, a, s in pm.hits:
+        if b is None:
+            continue
+        i, j = int(round((b - pm.boards[0]) / db)), int(round((a - pm.angles[0]) / da))
+        if 0 <= i < len(pm.boards) and 0 <= j < len(pm.angles):
+            n[j, i] += 1
+            k[j, i] += s
+    share = np.where(n >= 5, k / np.maximum(n, 1), np.nan)
+    axs[1].imshow(np.ma.masked_invalid(share), origin="lower", extent=ext, aspect="auto", vmin=0, vmax=1,
+                  cmap="viridis")
+    for j, a in enumerate(pm.angles):
+        for i, b in enumerate(pm.boards):
+            txt = f"{100 * share[j, i]:.0f}%\nn={int(n[j, i])}" if np.isfinite(share[j, i]) else f"n={int(n[j, i])}"
+            axs[1].text(b, a, txt, ha="center", va="center", fontsize=7,
+                        color="white" if not np.isfinite(share[j, i]) or share[j, i] < 0.6 else "black")
+    axs[1].set_title("all frames by actual entry: strike share (bins with n >= 5)", fontsize=9)
+    for ax in axs:
+        ax.plot(*POCKET_PEAK, marker="*", ms=16, mfc="none", mec="red", mew=1.5, ls="none",
+                label="published pocket: board 17.5, ~6 deg (USBC)")
+        ax.set_xlabel("board at the head pin's line (right-hander's boards; 20 = head pin)")
+        ax.set_ylabel("entry angle (deg)")
+        ax.set_xticks(pm.boards)
+        ax.set_yticks(pm.angles)
+    axs[0].legend(loc="upper left", fontsize=7, framealpha=0.8)
+    fig.colorbar(im, ax=list(axs), label="strike probability", shrink=0.9)
+    fig.suptitle(title or "Pocket map from the foul line (house oil, 17 mph, 300 rpm, default release noise)",
+                 fontsize=11)
+    return fig

@@ -157,6 +157,7 @@ def register(sub) -> None:
     a.set_defaults(func=cmd_atlas)
 
     register_throw(bowl)
+    register_frame(bowl)
 
 
 def register_throw(bowl) -> None:
@@ -195,6 +196,15 @@ def register_throw(bowl) -> None:
                    help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
     t.add_argument("-o", "--output", default=None, metavar="THROW.json", help="also write the phases as JSON")
     t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
+    t.add_argument("--video", default=None, metavar="OUT.mp4",
+                   help="also film the throw (.mp4 or .gif; 3D, behind the bowler and overhead, the pins until they "
+                        "settle, slow motion at impact; render/bowling_lane.py)")
+    t.add_argument("--still", default=None, metavar="OUT.png",
+                   help="also draw one frame as PNG (by default just before the ball meets the pins)")
+    t.add_argument("--still-time", type=Bounded("still-time", 0, 30, unit="s"), default=None, metavar="S",
+                   help="the --still's moment, seconds after the release")
+    t.add_argument("--size", default=None, metavar="WxH", help="frame size of --video/--still (default 1280x720)")
+    t.add_argument("--fps", type=Bounded("fps", 1, 240), default=None, help="--video's frames per second (default 60)")
     t.set_defaults(func=cmd_throw)
 
 
@@ -396,6 +406,12 @@ def cmd_throw(args) -> int:
         r = lane.throw(d, args.oil, ball)
     except ValueError as e:
         return _err("throw", str(e))
+    if args.video or args.still or args.still_time is not None or args.size or args.fps is not None:
+        from nbst.render.bowling_lane import picture_from_args
+
+        bad = picture_from_args(args, d, ball)
+        if bad:
+            return _err("throw", bad)
     doc = r.to_dict()
     if args.output:
         from nbst.outputs import OutputError, write_text_atomic
@@ -665,3 +681,269 @@ def summary_md(have: dict, *, launches: int, probes: int, seconds: float, seed: 
         lines[-1:-1] = ["", f"New subsets this run: {new}; from its {nu} uniform launches: {hu}; from its "
                             f"{kids} children of elites: {sum(archive.hits.values())}."]
     return "\n".join(lines + geometry.summary_lines(found)) + "\n"
+
+
+# --------------------------------------------------------------------------- frames from the foul line
+
+
+def _delivery_flags(t) -> None:
+    """The delivery flags of ``bowl frame`` (as ``bowl throw``'s)."""
+    t.add_argument("--hand", choices=("right", "left"), default="right", help="bowling hand (default right)")
+    t.add_argument("--board", type=Bounded("board", 1, 39), default=10.0, metavar="B",
+                   help="board where the ball is at --at (default 10; 1..39)")
+    t.add_argument("--at", choices=("foul", "arrows"), default="arrows",
+                   help="where --board is: the foul line or the arrows, 15 ft out (default arrows)")
+    t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=1.5, metavar="DEG",
+                   help="launch angle, + out towards board 1 (default 1.5)")
+    t.add_argument("--mph", type=Bounded("mph", 5, 30, unit="mph"), default=17.0, help="release speed (default 17)")
+    t.add_argument("--rpm", type=Bounded("rpm", 0, 800, unit="rpm"), default=300.0, help="rev rate (default 300)")
+    t.add_argument("--rotation", type=Bounded("rotation", 0, 90, unit="deg"), default=45.0, metavar="DEG",
+                   help="axis rotation (default 45)")
+    t.add_argument("--tilt", type=Bounded("tilt", 0, 90, unit="deg"), default=15.0, metavar="DEG",
+                   help="axis tilt (default 15)")
+
+
+def _mc_flags(t, samples: int, what: str) -> None:
+    t.add_argument("--oil", default="house", metavar="PATTERN", help="oil pattern by name (default house)")
+    t.add_argument("--seed", type=SEED, default=1, help="seed of the release noise (default 1: same command, "
+                                                         "same numbers)")
+    t.add_argument("--jobs", type=JOBS, default=None, metavar="K", help="threads running frames (default: all cores)")
+    t.add_argument("--samples", type=Bounded("samples", 1, 100_000, integer=True), default=samples, metavar="N",
+                   help=f"noisy throws per {what} (default {samples})")
+    t.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    t.add_argument("-q", "--quiet", action="store_true", help="no progress")
+
+
+def register_frame(bowl) -> None:
+    """``nbst bowl frame``, ``spares`` and ``pocket``: frames from the foul line (models/bowling/frame.py)."""
+    f = bowl.add_parser("frame", help="one delivery from the foul line into the pins: the settled USBC pinfall",
+                        description="Throw one delivery (as bowl throw) down the full lane into the pins and run "
+                                    "MuJoCo until every pin rests (or 6 s after the ball reaches the head pin), then "
+                                    "count pinfall as USBC does: knocked down, off the deck, in the gutter, or "
+                                    "leaning on the kickback (dead wood). Options: the timestep ladder, a longer "
+                                    "run, and the probability of the outcome under release noise (docs/bowling.md).",
+                        epilog="Example: nbst bowl frame --board 10 --at arrows --angle 1.5 --timesteps --probability 40")
+    _delivery_flags(f)
+    f.add_argument("--leave", default=None, metavar="PINS",
+                   help="pins standing before the throw, e.g. 10 or 2,4,5,8 (default: a full rack)")
+    f.add_argument("--timesteps", action="store_true", help="also run it at h = 0.5 and 0.25 ms (the ladder)")
+    f.add_argument("--longer", type=Bounded("longer", 0, 60, unit="s"), default=0.0, metavar="S",
+                   help="also run it S seconds past the settle and say whether the outcome changed")
+    f.add_argument("--probability", type=Bounded("probability", 1, 100_000, integer=True), default=None, metavar="N",
+                   help="the probability of converting (strike, or the leave) over N noisy throws, with a 95%% "
+                        "Wilson interval")
+    _mc_flags(f, 40, "estimate")
+    f.set_defaults(func=cmd_frame)
+
+    s = bowl.add_parser("spares", help="the throw converting each common leave with the highest probability",
+                        description="For each leave, the 3-6-9 system's line (the strike ball, feet moved 3/6/9 "
+                                    "boards, same target arrow) and straight cross-lane spare balls at the leave's "
+                                    "aim point and 1-2 boards either side are screened on a few noisy throws; the "
+                                    "best is measured on --samples, beside the 3-6-9 line (docs/bowling.md).",
+                        epilog="Example: nbst bowl spares --leaves 10,7 --samples 40")
+    s.add_argument("--leaves", default=None, metavar="L1,L2",
+                   help="leaves to shoot, '-' joining pins, ',' between leaves (default: 10, 7, 4, 6, 2-4-5-8, "
+                        "3-6-10, 1-2-4, 1-3-6, 2-8, 3-9, 7-10)")
+    s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
+                   help="noisy throws per candidate in the screening (default 12)")
+    _mc_flags(s, 60, "measured throw")
+    s.set_defaults(func=cmd_spares)
+
+    p = bowl.add_parser("pocket", help="pocket map: strike probability over board x entry angle (a PNG), and carry",
+                        description="Aim a delivery at each (board at the head pin, entry angle) cell, run --samples "
+                                    "noisy frames of it, and draw the strike probability as a heatmap beside the "
+                                    "strike share of all frames by actual entry; carry = strikes / pocket hits "
+                                    "(actual board 17-18). The published pocket (17.5, ~6 deg) is marked.",
+                        epilog="Example: nbst bowl pocket -o pocket.png --samples 40")
+    p.add_argument("-o", "--output", required=True, metavar="MAP.png", help="the heatmap (PNG)")
+    p.add_argument("--boards", default="15.5:19.5:1", metavar="A:B:STEP", help="boards (default 15.5:19.5:1)")
+    p.add_argument("--angles", default="2:7:1", metavar="A:B:STEP", help="entry angles, deg (default 2:7:1)")
+    _mc_flags(p, 40, "cell")
+    p.set_defaults(func=cmd_pocket)
+
+
+def _grid(text: str, flag: str, lo: float, hi: float) -> list:
+    import numpy as np
+
+    try:
+        a, b, st = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ValueError(f"{flag}: must be A:B:STEP (numbers), got {text!r}") from None
+    if not (lo <= a <= b <= hi and st > 0 and (b - a) / st <= 40):
+        raise ValueError(f"{flag}: need {lo:g} <= A <= B <= {hi:g}, STEP > 0 and at most 41 values, got {text!r}")
+    return [round(float(v), 6) for v in np.arange(a, b + st / 2, st)]
+
+
+def _bar(args, total: int, desc: str):
+    from nbst.progress import progress_bar
+
+    return progress_bar(total=total, desc=desc, unit="frame", disable=args.quiet, file=sys.stderr)
+
+
+def cmd_frame(args) -> int:
+    from nbst.models.bowling import frame, lane, noise
+
+    try:
+        d = lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph, rpm=args.rpm,
+                          rotation=args.rotation, tilt=args.tilt).check()
+        lane.pattern(args.oil)
+        standing = None if args.leave is None else sorted(
+            n for n in range(1, 11) if _pin_list(args.leave, "--leave") >> (n - 1) & 1)
+    except (ValueError, argparse.ArgumentTypeError) as e:
+        return _err("frame", str(e))
+    try:
+        r = frame.run_frame(d, args.oil, standing=standing)
+        doc = {"frame": r.to_dict()}
+        if args.longer:
+            r2 = frame.run_frame(d, args.oil, standing=standing, extra_s=args.longer)
+            doc["longer"] = {"extra_s": args.longer, "leave": r2.leave, "same": r2.leave == r.leave}
+        if args.timesteps:
+            doc["ladder"] = [{"timestep": x.timestep, "leave": x.leave, "settle_s": x.settle_s, "cap_hit": x.cap_hit}
+                             for x in frame.ladder(d, args.oil, standing=standing)]
+        if args.probability:
+            bar = _bar(args, args.probability, "noisy throws")
+            with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+                est, _ = noise.probability(d, args.probability, args.seed, runner=R, standing=standing,
+                                           on_done=lambda: bar.update(1))
+            bar.close()
+            doc["probability"] = est.to_dict()
+    except KeyboardInterrupt:
+        print("nbst bowl frame: interrupted", file=sys.stderr)
+        return 130
+    except ValueError as e:
+        return _err("frame", str(e))
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json(doc)
+        return 0
+    for line in frame_lines(doc):
+        print(line)
+    return 0
+
+
+def _pins_text(pins) -> str:
+    return "-".join(str(p) for p in pins) if pins else "none"
+
+
+def frame_lines(doc: dict) -> list[str]:
+    r = doc["frame"]
+    what = "strike" if len(r["in_play"]) == 10 and not r["leave"] else ("converted" if not r["leave"] else "")
+    out = [f"pins in play  {_pins_text(r['in_play'])}",
+           f"down          {_pins_text(r['down'])}" + (f"  ({what})" if what else ""),
+           f"leave         {_pins_text(r['leave'])}"]
+    if r["partition"]:
+        out.append(f"dead wood     {_pins_text(r['partition'])} leaning on the kickback (USBC 6a.4)")
+    if r["ball_left_lane"]:
+        out.append("gutter ball   the ball left the lane before the pins: no pinfall (USBC 6b.1)")
+    if r["board_at_pins"] is not None:
+        out.append(f"entry         board {r['board_at_pins']:.1f} at {r['entry_angle_deg']:.1f} deg")
+    out.append(f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: the cap was hit at %.2f s' % r['seconds']}"
+               f" (ball at the head pin {r['ball_at_pins_s']:.2f} s)" if r["ball_at_pins_s"] is not None else
+               f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: capped'}")
+    if "longer" in doc:
+        g = doc["longer"]
+        out.append(f"{g['extra_s']:g} s longer  leave {_pins_text(g['leave'])}: {'same' if g['same'] else 'CHANGED'}")
+    for x in doc.get("ladder", []):
+        out.append(f"h = {1000 * x['timestep']:g} ms".ljust(14) + f"leave {_pins_text(x['leave'])}"
+                   + (f", settled at {x['settle_s']:.2f} s" if x["settle_s"] is not None else ", capped"))
+    if "probability" in doc:
+        e = doc["probability"]
+        top = ", ".join(f"{k or 'none'} {v}" for k, v in list(e["leaves"].items())[:5])
+        out.append(f"probability   {100 * e['p']:.0f}% converted ({e['k']}/{e['n']}; 95% CI {100 * e['lo']:.0f}-"
+                   f"{100 * e['hi']:.0f}%), seed {e['seed']}; leaves: {top}")
+    return out
+
+
+def cmd_spares(args) -> int:
+    from nbst.models.bowling import frame, lane, spares
+
+    names = list(spares.LEAVES) if args.leaves is None else [x.strip() for x in args.leaves.split(",") if x.strip()]
+    try:
+        lane.pattern(args.oil)
+        for nm in names:
+            if nm not in spares.LEAVES:
+                raise ValueError(f"--leaves: {nm!r} is not one of the common leaves ({', '.join(spares.LEAVES)})")
+    except ValueError as e:
+        return _err("spares", str(e))
+    out = []
+    per = 2 * args.samples + 6 * args.screen
+    bar = _bar(args, per * len(names), "spare frames")
+    try:
+        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            for nm in names:
+                res = spares.best_spare(nm, args.samples, args.seed, runner=R, screen=args.screen,
+                                        on_done=lambda: bar.update(1))
+                out.append(res.to_dict())
+                if not args.json:
+                    bar.clear() if hasattr(bar, "clear") else None
+                    print(spare_line(out[-1]), flush=True)
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"nbst bowl spares: interrupted after {len(out)} of {len(names)} leaves", file=sys.stderr)
+        return 130
+    bar.close()
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "spares": out})
+    return 0
+
+
+def spare_line(r: dict) -> str:
+    e, s, b = r["estimate"], r["system_369_estimate"], r["best"]
+    return (f"{r['leave']:>8}  best: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
+            f"{b['rpm']:g} rpm, rotation {b['rotation']:g})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
+            f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)   3-6-9 line (board {r['system_369']['board']:.1f}): "
+            f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)")
+
+
+def cmd_pocket(args) -> int:
+    from nbst.models.bowling import frame, lane, spares
+
+    try:
+        boards = _grid(args.boards, "--boards", 1, 39)
+        angles = _grid(args.angles, "--angles", 0, 10)
+        lane.pattern(args.oil)
+        if not args.output.lower().endswith(".png"):
+            raise ValueError(f"{args.output}: -o must name a .png file")
+    except ValueError as e:
+        return _err("pocket", str(e))
+    bar = _bar(args, args.samples * len(boards) * len(angles), "pocket frames")
+    try:
+        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            pm = spares.pocket_map(boards, angles, args.samples, args.seed, runner=R, on_done=lambda: bar.update(1))
+    except KeyboardInterrupt:
+        bar.close()
+        print("nbst bowl pocket: interrupted; nothing written", file=sys.stderr)
+        return 130
+    bar.close()
+    fig = spares.pocket_figure(pm)
+    try:
+        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(args.output)
+    except OSError as e:
+        return _err("pocket", f"{args.output}: {e.strerror or e}")
+    b, a, p, k = pm.best()
+    ks, ns = pm.carry()
+    kc, nc = pm.carry(angles=(4.0, 6.0))
+    from nbst.models.bowling.noise import wilson
+
+    doc = {"best": {"board": b, "angle": a, "p": p, "k": k, "n": pm.n}, "carry": {"strikes": ks, "pocket_hits": ns},
+           "carry_4_6_deg": {"strikes": kc, "pocket_hits": nc}, "map": pm.to_dict(), "output": args.output}
+    if args.json:
+        from nbst.cli.args import print_json
+
+        doc["map"].pop("hits")
+        print_json(doc)
+        return 0
+    lo, hi = wilson(k, pm.n)
+    print(f"wrote {args.output}: {len(boards)} boards x {len(angles)} angles, {pm.n} noisy throws per cell, seed {pm.seed}")
+    print(f"best cell  board {b:g} at {a:g} deg: strike {100 * p:.0f}% ({k}/{pm.n}; 95% CI {100 * lo:.0f}-{100 * hi:.0f}%)")
+    for label, (kk, nn) in (("carry (actual board 17-18, any angle)", (ks, ns)), ("carry (17-18 at 4-6 deg)", (kc, nc))):
+        if nn:
+            l2, h2 = wilson(kk, nn)
+            print(f"{label}: {100 * kk / nn:.0f}% ({kk}/{nn}; 95% CI {100 * l2:.0f}-{100 * h2:.0f}%)")
+        else:
+            print(f"{label}: no pocket hits")
+    return 0

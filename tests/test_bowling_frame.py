@@ -1,0 +1,139 @@
+"""A frame from the foul line (issue 22): settled USBC pinfall, dead wood, release noise,
+Wilson intervals, reproducibility (models/bowling/frame.py, noise.py, spares.py)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+from nbst.models.bowling import frame, lane, noise, scene, shot, spares  # noqa: E402
+
+TYPICAL = lane.Delivery(board=10.0, at="arrows", angle=1.5)
+
+
+def test_the_typical_release_settles_and_its_outcome_holds_2_s_longer():
+    r = frame.run_frame(TYPICAL)
+    assert r.settled and not r.cap_hit and r.ball_at_pins_s is not None
+    assert r.ball_at_pins_s < r.settle_s <= r.ball_at_pins_s + frame.CAP_AFTER_PINS
+    longer = frame.run_frame(TYPICAL, extra_s=2.0)
+    assert longer.leave == r.leave and longer.seconds == pytest.approx(r.seconds + 2.0, abs=1e-6)
+
+
+def test_a_spare_frame_settles_and_holds_2_s_longer():
+    d = spares.straight_at(*spares.aim_point((10,)))
+    r = frame.run_frame(d, standing=[10])
+    assert r.in_play == [10] and r.settled
+    assert frame.run_frame(d, standing=[10], extra_s=2.0).leave == r.leave
+
+
+def test_the_frame_enters_where_the_ball_alone_does():
+    """The ball's inertia set by turning its body (frame) matches lane.py's recompiled model."""
+    r = frame.run_frame(TYPICAL)
+    t = lane.throw(TYPICAL)
+    assert r.board_at_pins == pytest.approx(t.board_at_pins, abs=0.1)  # boards
+
+
+def _settle(model, qpos, seconds=0.6):
+    d = mujoco.MjData(model)
+    d.qpos[:] = qpos
+    mujoco.mj_step(model, d, nstep=int(seconds / model.opt.timestep))
+    return d
+
+
+def _pin_qpos(model, n, x, y, z, tilt_deg, toward_y):
+    """A pin's qpos with its base at (x, y, z), tilted about x by tilt_deg towards sign(toward_y)."""
+    a = math.radians(tilt_deg) * (-np.sign(toward_y))  # rotating +z about +x by -a tips it towards +y
+    q = np.array(model.qpos0, dtype=float)
+    adr = shot.pin_addresses(model)[n - 1]
+    q[adr:adr + 7] = [x, y, z, math.cos(a / 2), math.sin(a / 2), 0.0, 0.0]
+    return q
+
+
+def test_dead_wood_a_pin_leaning_on_the_kickback_counts_as_down():
+    m = frame.frame_model()
+    half = scene.LANE_WIDTH / 2
+    spot = scene.pin_spots()[6]  # pin 7, back left
+    q = _pin_qpos(m, 7, spot[0], half - 0.006, 0.0, 40.0, +1)
+    d = _settle(m, q)
+    adr = shot.pin_addresses(m)[6]
+    p = d.qpos[adr:adr + 7]
+    tilt = math.degrees(math.acos(1 - 2 * (p[4] ** 2 + p[5] ** 2)))
+    knocked, off, partition = frame.settled_pinfall(m, d, [7])
+    assert partition == [7], f"pin 7 at {tilt:.1f} deg, base y {p[1]:.3f}: not touching the kickback"
+    assert tilt < shot.DOWN_TILT_DEG and knocked == []  # the 45-degree rule alone would call it standing
+    assert not shot.pins_down(m, d.qpos)[6] or off  # the old rule: standing unless off the deck
+
+
+def test_dead_wood_a_pin_lying_in_the_gutter_counts_as_down():
+    m = frame.frame_model()
+    y = scene.LANE_WIDTH / 2 + scene.GUTTER_WIDTH / 2
+    spot = scene.pin_spots()[9]
+    q = _pin_qpos(m, 10, spot[0], -y, 0.0, 90.0, -1)
+    q[shot.pin_addresses(m)[9] + 2] = 0.02  # just above the gutter's bottom
+    d = _settle(m, q)
+    knocked, off, partition = frame.settled_pinfall(m, d, [10])
+    assert off == [10]
+
+
+def test_a_pin_at_rest_on_its_spot_is_standing():
+    m = frame.frame_model()
+    d = _settle(m, np.array(m.qpos0))
+    assert frame.settled_pinfall(m, d, list(range(1, 11))) == ([], [], [])
+
+
+def test_the_noise_draws_have_the_stated_sigmas():
+    n = 4000
+    base = lane.Delivery(board=20.0, at="foul", angle=0.0, mph=17.0, rpm=300.0, rotation=45.0, tilt=15.0)
+    draws = noise.sample(base, n, seed=3)
+    for key in ("board", "angle", "mph", "rpm", "rotation"):
+        v = np.array([getattr(d, key) for d in draws])
+        sd = getattr(noise.DEFAULT, key)
+        # the sample sd of n normals has a standard error of sd / sqrt(2 n): 4 of them
+        assert v.std(ddof=1) == pytest.approx(sd, abs=4 * sd / math.sqrt(2 * n)), key
+        assert v.mean() == pytest.approx(getattr(base, key), abs=4 * sd / math.sqrt(n)), key
+    assert all(d.tilt == 15.0 for d in draws)
+
+
+def test_noise_draws_are_reproducible_and_the_arrows_board_becomes_the_foul_board():
+    a = noise.sample(TYPICAL, 5, seed=7)
+    assert a == noise.sample(TYPICAL, 5, seed=7) and a != noise.sample(TYPICAL, 5, seed=8)
+    assert all(d.at == "foul" for d in a)
+    assert np.mean([d.board for d in noise.sample(TYPICAL, 2000, seed=1)]) == pytest.approx(TYPICAL.foul_board(),
+                                                                                           abs=0.05)
+
+
+def test_wilson_interval_known_values():
+    # Wilson (1927) / Newcombe (1998), 95 %: 81 of 263 -> 0.2553 .. 0.3662; 0 of 10 -> 0 .. 0.2775
+    lo, hi = noise.wilson(81, 263)
+    assert (lo, hi) == (pytest.approx(0.2553, abs=1e-4), pytest.approx(0.3662, abs=1e-4))
+    lo, hi = noise.wilson(0, 10)
+    assert lo == 0.0 and hi == pytest.approx(0.2775, abs=1e-4)
+    with pytest.raises(ValueError):
+        noise.wilson(3, 2)
+
+
+def test_a_noisy_estimate_is_reproducible_from_its_seed_on_any_number_of_threads():
+    with frame.FrameRunner(jobs=1) as one, frame.FrameRunner(jobs=2) as two:
+        e1, r1 = noise.probability(TYPICAL, 4, 11, runner=one)
+        e2, r2 = noise.probability(TYPICAL, 4, 11, runner=two)
+    assert [r.leave for r in r1] == [r.leave for r in r2]
+    assert [r.final_qpos.tolist() for r in r1] == [r.final_qpos.tolist() for r in r2]
+    assert e1.to_dict() == e2.to_dict()
+
+
+def test_the_ladder_runs_each_timestep():
+    rs = frame.ladder(spares.straight_at(*spares.aim_point((7,))), standing=[7], timesteps=(0.001, 0.0005))
+    assert [r.timestep for r in rs] == [0.001, 0.0005]
+    assert all(r.settled for r in rs)
+
+
+def test_bad_input_is_one_line():
+    with pytest.raises(frame.FrameError, match="standing"):
+        frame.run_frame(TYPICAL, standing=[11])
+    with pytest.raises(frame.FrameError, match="timestep"):
+        frame.frame_model(timestep=0.01)
+    with pytest.raises(ValueError, match="noise.rpm"):
+        noise.sample(TYPICAL, 2, 1, noise.Noise(rpm=-1))
