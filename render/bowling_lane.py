@@ -77,6 +77,8 @@ PIT_RGB = (0.15, 0.15, 0.17)
 KICKBACK_RGB = (0.22, 0.24, 0.30)
 MARK_RGB = (0.12, 0.12, 0.16)
 FOUL_RGB = (0.55, 0.08, 0.08)
+#: The foul line's width (m): USBC allows 3/8 to 1 in; drawn at 1 in so it reads from behind.
+FOUL_WIDTH = 0.0254
 BOARD_LINE = ((0.70, 0.56, 0.38), 0.0015)   # colour, width (m)
 BOARD_LINE_5 = ((0.48, 0.36, 0.22), 0.004)
 TRAIL_RGB = (0.97, 0.62, 0.18)
@@ -399,7 +401,8 @@ def lane_marks(hand: str = "right") -> np.ndarray:
     for y, strong in board_lines():
         rgb, w = BOARD_LINE_5 if strong else BOARD_LINE
         parts.append(_rect(lane.FOUL_LINE_X, scene.PIT_EDGE_X, y - w / 2, y + w / 2, rgb))
-    parts.append(_rect(lane.FOUL_LINE_X - 0.005, lane.FOUL_LINE_X + 0.005, -hw - 0.02, hw + 0.02, FOUL_RGB))
+    parts.append(_rect(lane.FOUL_LINE_X - FOUL_WIDTH / 2, lane.FOUL_LINE_X + FOUL_WIDTH / 2, -hw - 0.02, hw + 0.02,
+                       FOUL_RGB))
     xd = float(lane.ft_to_x(DOTS_FT))
     k = np.linspace(0, 2 * math.pi, 13)[:-1]
     r = lane.BOARD_WIDTH * 0.3
@@ -689,7 +692,7 @@ class LaneRenderer(FrameRenderer):
         out = []
         for n, (x, y) in zip(scene.PIN_NUMBERS, spots):
             col = right - (y / scene.PIN_SPACING + 1.5) * gap
-            row = 2.6 * self.text.cell[1] + (3 - round(x / (scene.PIN_SPACING * math.sqrt(3) / 2))) * 1.6 * sch
+            row = 1.5 * self.text.cell[1] + (4.4 - round(x / (scene.PIN_SPACING * math.sqrt(3) / 2))) * 1.5 * sch
             out.append((n, col - scw * len(str(n)) / 2, row))
         return out
 
@@ -714,7 +717,7 @@ class LaneRenderer(FrameRenderer):
         diag = self.pin_diagram(vp)
         head = "pins"
         c0 = min(c for _, c, _ in diag)
-        self.small.draw_halo(self.size, self.small.layout([head], c0, diag[-1][2] - 1.4 * sch), style.TEXT_DIM,
+        self.small.draw_halo(self.size, self.small.layout([head], c0, 1.5 * self.text.cell[1]), style.TEXT_DIM,
                              style.TEXT_HALO)
         for standing, colour in ((True, style.TEXT), (False, (0.35, 0.37, 0.42))):
             parts = [self.small.layout([str(n)], c, r) for n, c, r in diag if (n not in down) == standing]
@@ -808,3 +811,74 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
             r.release()
     finally:
         ctx.release()
+
+
+def check_picture_args(args) -> str | None:
+    """The first problem with ``nbst bowl throw``'s picture flags (--video, --still, --still-time,
+    --size, --fps), as one line, or None. Reads nothing, writes nothing."""
+    video, still = getattr(args, "video", None), getattr(args, "still", None)
+    if video is not None and not str(video).lower().endswith((".mp4", ".gif")):
+        return f"--video {video}: use a .mp4 or .gif file"
+    if still is not None and not str(still).lower().endswith(".png"):
+        return f"--still {still}: use a .png file"
+    if video is not None and still is not None and str(video) == str(still):
+        return f"--video and --still name the same file {video}"
+    for flag, attr in (("--still-time", "still_time"), ("--size", "size"), ("--fps", "fps")):
+        if getattr(args, attr, None) is not None and video is None and still is None:
+            return f"{flag}: needs --video or --still"
+    if getattr(args, "fps", None) is not None and still is not None and video is None:
+        return "--fps: sets --video's frame rate; a --still is one frame"
+    size = getattr(args, "size", None)
+    if size is not None:
+        try:
+            w, h = (int(v) for v in str(size).lower().split("x"))
+        except ValueError:
+            return f"--size {size}: expected WxH, e.g. 1280x720"
+        if not (16 <= w <= 8192 and 16 <= h <= 8192):
+            return f"--size {size}: width and height must be 16..8192 pixels"
+        if video is not None and str(video).lower().endswith(".mp4") and (w % 2 or h % 2):
+            return f"--size {size}: H.264 (yuv420p) needs an even width and height"
+    return None
+
+
+def picture_from_args(args, delivery, ball) -> str | None:
+    """``nbst bowl throw --video/--still``: record the throw with the pins and write the video
+    and/or the still; a progress line on stderr for the video and one line per file written.
+    Returns a one-line error, or None."""
+    import sys
+
+    from nbst.models.bowling import lane
+    from nbst.models.bowling import shot as shotmod
+    from nbst.outputs import OutputError, prepare_output
+    from nbst.render.gl import RenderError
+
+    bad = check_picture_args(args)
+    if bad:
+        return bad
+    size = tuple(int(v) for v in str(args.size).lower().split("x")) if getattr(args, "size", None) else None
+    try:
+        th = record_throw(delivery, args.oil, ball, pins=True)
+    except (lane.LaneError, shotmod.MujocoWarning) as e:
+        return str(e)
+    st = getattr(args, "still_time", None)
+    if st is not None and st > th.motion.times[-1]:
+        return f"--still-time {st:g}: the throw lasts {th.motion.times[-1]:.2f} s"
+    try:
+        if getattr(args, "still", None):
+            prepare_output(args.still, option="--still")
+            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size)
+            print(f"nbst bowl throw: wrote {args.still}", file=sys.stderr)
+        if getattr(args, "video", None):
+            prepare_output(args.video, option="--video")
+            fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
+            from nbst.progress import progress_bar
+
+            bar = progress_bar(total=len(frame_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
+            try:
+                n = render_throw(th, args.video, size=size, fps=fps, progress=bar)
+            finally:
+                bar.close()
+            print(f"nbst bowl throw: wrote {args.video} ({n} frames)", file=sys.stderr)
+    except (OutputError, RenderError) as e:
+        return str(e)
+    return None

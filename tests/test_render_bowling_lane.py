@@ -1,0 +1,241 @@
+"""The picture of a throw from the foul line (render/bowling_lane.py): what a viewer checks,
+never golden pixels. Marks are found where the renderer's own camera projects them (the
+projection is the camera's; the marks' world positions come from models/bowling/lane.py), the
+pin numbers where the diagram puts them, the ball's marks turning with its quaternion, and the
+CLI's video decoding with the frame count the frame times give."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from nbst.models.bowling import lane, scene
+from nbst.render import bowling_lane as bl
+
+SIZE = (960, 540)
+TYPICAL = lane.Delivery(hand="right", board=10, at="arrows", angle=1.5, mph=17, rpm=300, rotation=45, tilt=15)
+
+
+@pytest.fixture(scope="module")
+def gl():
+    """The only place this file creates a GL context (EGL, headless)."""
+    from nbst.render.gl import create_context
+
+    ctx = create_context()
+    yield ctx
+    ctx.release()
+
+
+@pytest.fixture(scope="module")
+def throw():
+    return bl.record_throw(TYPICAL, "house")
+
+
+@pytest.fixture(scope="module")
+def behind(gl, throw):
+    r = bl.LaneRenderer(gl, throw, size=SIZE, camera="behind")
+    yield r
+    r.release()
+
+
+def _px(r, t, p):
+    vp, vpm, _, _ = r.views(t)[0]
+    col, row, front = r.to_pixel(vp, vpm, p, r.size[1])
+    assert front
+    return int(round(col)), int(round(row))
+
+
+def _lane_like(rgb) -> bool:
+    """Wood: red over green over blue, bright."""
+    r, g, b = (int(c) for c in rgb)
+    return r > g > b and r > 150
+
+
+def test_the_motion_starts_at_the_foul_line_and_ends_with_the_pins_at_rest(throw):
+    m = throw.motion
+    assert m.ball[0, 0] == pytest.approx(lane.FOUL_LINE_X) and m.ball[0, 0] < -18.0     # 60 ft from the head pin
+    assert 0 < m.impact < m.times[-1] <= m.impact + bl.AFTER_IMPACT + 1e-9
+    assert throw.result is not None and abs(throw.result.seconds_to_pins - m.impact) < 0.1
+    # the frame ended settled (every pin slower than SETTLE_SPEED) or at the cap
+    speeds = np.linalg.norm(np.diff(m.pins[-2:, :, :3], axis=0)[0], axis=1) / throw.timestep
+    assert speeds.max() < bl.SETTLE_SPEED or m.times[-1] == pytest.approx(m.impact + bl.AFTER_IMPACT, abs=2e-3)
+    assert m.down == sorted(m.down) and m.down_masks.shape == m.times.shape
+
+
+def test_foul_line_is_drawn_where_the_behind_camera_sees_it(behind):
+    frame = behind.render(0.0)
+    ball_col, _ = _px(behind, 0.0, [lane.FOUL_LINE_X, lane.board_to_y(TYPICAL.foul_board()), scene.BALL_RADIUS])
+    checked = 0
+    for board in (2, 5, 8, 25, 30, 35, 38):
+        col, row = _px(behind, 0.0, [lane.FOUL_LINE_X, float(lane.board_to_y(board)), 0.0])
+        if abs(col - ball_col) < 80:
+            continue
+        r, g, b = frame[row, col].astype(int)
+        assert r > 1.6 * g and r > 1.6 * b, (board, (r, g, b))            # the red foul line
+        above = frame[row - 8, col]                                          # the lane just past it
+        below = frame[row + 8, col]                                          # the approach before it
+        assert _lane_like(above) and _lane_like(below), (board, above, below)
+        checked += 1
+    assert checked >= 5
+
+
+def test_arrows_are_drawn_at_15_ft_on_their_boards(behind, throw):
+    # 0.3 s after the release the camera is 4 m from the arrows; the ball (on boards 10-13) is
+    # nearer the camera, so the arrows clear of its disc are checked
+    t = 0.3
+    frame = behind.render(t)
+    k = behind.step_at(t)
+    ball_col, ball_row = _px(behind, t, throw.motion.ball[k, :3])
+    xa = float(lane.ft_to_x(lane.ARROWS_FT))
+    seen = 0
+    for board in lane.ARROW_BOARDS:
+        y = float(lane.board_to_y(board))
+        col, row = _px(behind, t, [xa - 0.08 / 3, y, 0.0])                  # the arrow's centroid
+        if abs(col - ball_col) < 70:
+            continue
+        patch = frame[row - 1:row + 2, col - 1:col + 2].reshape(-1, 3).astype(int)
+        assert patch.sum(axis=1).min() < 0.45 * (255 * 3), board          # dark paint
+        # half a board beside it, and 0.2 m before and after it: the lane
+        for p in ([xa, y + 0.6 * lane.BOARD_WIDTH * 2.2, 0.0], [xa - 0.2, y, 0.0], [xa + 0.2, y, 0.0]):
+            c2, r2 = _px(behind, t, p)
+            assert _lane_like(frame[r2, c2]), (board, p, frame[r2, c2])
+        seen += 1
+    assert seen >= 4
+
+
+def test_ten_pin_numbers_in_the_diagram_lit_while_standing_dim_when_down(gl, throw):
+    r = bl.LaneRenderer(gl, throw, size=SIZE, camera="both")
+    try:
+        vp = r.panels["overhead"]
+        diag = r.pin_diagram(vp)
+        assert sorted(n for n, _, _ in diag) == list(range(1, 11))
+        pos = {n: (c, w) for n, c, w in diag}
+        # laid out as the deck seen from the bowler: 7 left of 10 on the back row, 1 alone in front
+        assert pos[7][0] < pos[8][0] < pos[9][0] < pos[10][0] and pos[7][1] == pos[10][1] < pos[4][1] < pos[2][1] < pos[1][1]
+        assert pos[2][0] < pos[1][0] < pos[3][0]
+        cw, ch = r.small.cell
+
+        def ink(frame, n):
+            c, w = pos[n]
+            box = frame[int(w):int(w + ch), int(c):int(c + cw * len(str(n)))].astype(int)
+            return box.sum(axis=2).max()
+
+        first = r.render(0.0)
+        last = r.render(float(throw.motion.times[-1]))
+        down = set(throw.motion.down)
+        assert down, "the typical release knocks pins down"
+        for n in range(1, 11):
+            assert ink(first, n) > 600, n                                     # every number drawn, bright
+            assert (ink(last, n) < 400) == (n in down), n                     # dim once down
+    finally:
+        r.release()
+
+
+def test_ball_marks_turn_with_the_quaternion(gl, throw):
+    """The dark grip holes inside the ball's disc move between frames 20 ms apart while the
+    ball spins (300 rpm: 36 deg); with its orientation frozen they stay put."""
+    frozen_ball = throw.motion.ball.copy()
+    frozen_ball[:, 3:7] = [1.0, 0.0, 0.0, 0.0]
+    frozen = dataclasses.replace(throw, motion=dataclasses.replace(throw.motion, ball=frozen_ball))
+
+    def dark_masks(th, times):
+        r = bl.LaneRenderer(gl, th, size=SIZE, camera="behind")
+        try:
+            out = []
+            for t in times:
+                frame = r.render(t).astype(int)
+                k = r.step_at(t)
+                c, w = _px(r, t, th.motion.ball[k, :3])
+                c2, _ = _px(r, t, th.motion.ball[k, :3] + [0.0, scene.BALL_RADIUS, 0.0])
+                rad = int(abs(c2 - c) * 0.9)
+                disc = frame[w - rad:w + rad + 1, c - rad:c + rad + 1]
+                yy, xx = np.mgrid[-rad:rad + 1, -rad:rad + 1]
+                out.append((disc.sum(axis=2) < 60) & (xx * xx + yy * yy <= rad * rad))
+            return out
+        finally:
+            r.release()
+
+    times = [0.10 + 0.02 * i for i in range(8)]
+    spun = dark_masks(throw, times)
+    still = dark_masks(frozen, times)
+
+    def centroids(masks):
+        """Centre of the dark pixels relative to the ball's projected centre (px), per frame with any."""
+        out = []
+        for m in masks:
+            if m.sum() >= 10:
+                yy, xx = np.nonzero(m)
+                out.append((xx.mean() - m.shape[1] // 2, yy.mean() - m.shape[0] // 2))
+        return np.array(out)
+
+    cs, cf = centroids(spun), centroids(still)
+    assert len(cf) == len(times) and len(cs) >= 2            # the holes face the camera when frozen at release
+    assert np.abs(np.diff(cf, axis=0)).max() < 2.0, cf        # frozen: they stay within 2 px
+    assert np.hypot(*np.diff(cs, axis=0).T).max() > 8.0, cs   # spinning: they move (36 deg a frame)
+
+
+def test_texture_has_the_grip_holes_and_the_track(throw):
+    tex = bl.ball_texture(throw)
+    h, w, _ = tex.shape
+    dirs = bl._texel_dirs((w, h)).reshape(-1, 3)
+    flat = tex.reshape(-1, 3).astype(int)
+    for p, rad in bl.grip_holes(throw.delivery):
+        inside = dirs @ p > np.cos(rad * 0.8)
+        assert inside.any() and (flat[inside].sum(axis=1) < 40).all()         # dark holes
+    track = np.abs(flat - np.round(np.array(bl.TRACK_RGB) * 255)).sum(axis=1) <= 1
+    # the release's contact point (straight down at the identity orientation) is on the track
+    down = dirs @ np.array([0.0, 0.0, -1.0]) > np.cos(np.radians(1.0))
+    assert track[down].any() and 0.02 < track.mean() < 0.6
+
+
+def test_readout_names_the_throw_and_adds_asked_and_probability_only_when_given(gl, throw):
+    r = bl.LaneRenderer(gl, throw, size=(320, 180), camera="overhead")
+    try:
+        text = "\n".join(r.readout(float(throw.motion.times[-1])))
+        assert "17.0 mph" in text and "300 rpm" in text and "rotation 45" in text and "tilt 15" in text
+        assert "board 14.4 at the foul line" in text and "break   37.1 ft" in text and "entry 4.0 deg" in text
+        assert "result  down" in text and "asked" not in text and "chance" not in text
+    finally:
+        r.release()
+    r = bl.LaneRenderer(gl, throw, size=(320, 180), camera="overhead", asked=range(1, 11), probability=0.72,
+                        probability_note="n = 200")
+    try:
+        text = "\n".join(r.readout(float(throw.motion.times[-1])))
+        assert "asked   down 1,2,3,4,5,6,7,8,9,10 (a strike)" in text and "chance  72% (n = 200)" in text
+    finally:
+        r.release()
+
+
+def test_cli_writes_a_still_and_an_mp4_with_the_expected_frames(gl, throw, tmp_path, capsys):
+    import imageio_ffmpeg
+    from PIL import Image
+
+    from nbst.cli.main import main
+
+    png, mp4 = tmp_path / "t.png", tmp_path / "t.mp4"
+    assert main(["bowl", "throw", "--still", str(png), "--size", "320x180", "--video", str(mp4), "--fps", "8"]) == 0
+    assert Image.open(png).size == (320, 180)
+    expected = len(bl.frame_times(throw, 8.0))
+    reader = imageio_ffmpeg.read_frames(str(mp4))
+    meta = next(reader)
+    assert tuple(meta["size"]) == (320, 180) and meta["fps"] == pytest.approx(8.0)
+    assert sum(1 for _ in reader) == expected
+    err = capsys.readouterr().err
+    assert f"({expected} frames)" in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--video", "x.png"], "--video x.png: use a .mp4 or .gif file"),
+    (["--still", "x.mp4"], "--still x.mp4: use a .png file"),
+    (["--fps", "10"], "--fps: needs --video or --still"),
+    (["--still", "x.png", "--size", "12x9"], "width and height must be 16..8192"),
+])
+def test_cli_bad_picture_flags_are_one_line(tmp_path, capsys, monkeypatch, argv, words):
+    from nbst.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["bowl", "throw", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0]
+    assert not list(tmp_path.iterdir())
