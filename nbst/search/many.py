@@ -64,6 +64,9 @@ class ManyParams:
     plateau: float = 0.3
     #: Neighbours (beyond the conflict's own size) a cleared neighbourhood takes in.
     neighbours: int = 6
+    #: From this many disks, candidates are first simulated among the disks near them only
+    #: (``_Search.local_filter``): a whole simulation of 1,000 disks costs ~20 local ones.
+    local_from: int = 400
     #: Cueable disks grouped with a resting disk that must move (its possible strikers).
     strikers: int = 3
     #: Disks a failing conflict grows by, per failure (its nearest outsiders).
@@ -268,7 +271,7 @@ class _Search:
         self.trials = 0.0
         self.stats = {"rounds": 0, "by_pair": 0, "by_shot": 0, "by_chain": 0, "neighbourhoods": 0,
                       "by_neighbourhood": 0, "conflicts": 0, "by_polish": 0, "by_search": 0, "largest_conflict": 0,
-                      "sub_trials": 0, "polish_sims": 0, "whole_sims": 0}
+                      "sub_trials": 0, "polish_sims": 0, "whole_sims": 0, "local_sims": 0}
         self.scratch = np.empty((8, 5))
         self.V = V
         self.tr = self.sim(V)
@@ -315,6 +318,8 @@ class _Search:
             near = []
             done = False
             cands = _candidates(problem, a, V, err2, miss2, prm.partners, self.scratch)
+            if n >= prm.local_from:
+                cands, near = self.local_filter(cands, V, tr)
             k = max(1, self.jobs)
             for c0 in range(0, len(cands), k):
                 chunk = cands[c0:c0 + k]
@@ -366,6 +371,58 @@ class _Search:
             if self.report():
                 raise KeyboardInterrupt
         return V, tr, score, kept
+
+    def local_filter(self, cands, V, tr):
+        """Many disks: drop the candidates that do not even help the disks around them. Each
+        candidate and the current motion are simulated on the disks near the changed paths
+        only (within a margin of the distance the fast disks travel); a candidate goes on to
+        a whole simulation if it scores better there. Returns (kept candidates, the rest as
+        (score, index, velocities) for the chains)."""
+        problem, miss2 = self.problem, self.miss2
+        ka = problem.kernel_arrays()
+        T = ka.t_final
+        box = np.array([ka.W, ka.H])
+        speed = np.hypot(V[:, 0], V[:, 1])
+        margin = float(np.quantile(speed, 0.99)) * T + 4.0 * float(ka.radius.max())
+        fin = np.asarray(tr.final_positions)
+        keep, rest = [], []
+        for c, (disks2, rows) in enumerate(cands):
+            pts = [ka.start[disks2], ka.target[disks2]]
+            for f in (0.25, 0.5, 0.75):
+                pts.append(ka.start[disks2] + rows * (f * T))
+            pts = np.concatenate(pts)
+            if np.any(pts < 0.0) or np.any(pts > box):
+                keep.append((disks2, rows))  # a bank shot: judged whole
+                continue
+            lo, hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
+            near = np.zeros(problem.n, bool)
+            for P in (ka.start, fin, ka.target):
+                near |= np.all((P >= lo) & (P <= hi), axis=1)
+            near[disks2] = True
+            Q = np.flatnonzero(near)
+            if Q.size >= problem.n // 2:
+                keep.append((disks2, rows))
+                continue
+            sub = subproblem(problem, Q, "local")
+            Vq = np.stack([V[Q], V[Q]])
+            loc = np.searchsorted(Q, disks2)
+            Vq[1, loc] = rows
+            self.trials += 2 * Q.size / problem.n
+            self.stats["local_sims"] += 2
+            from nbst.sim import evaluate
+
+            f2 = evaluate(sub, Vq, jobs=1)[0]
+            e_old = np.sum((f2[0] - sub.target) ** 2, axis=1)
+            e_new = np.sum((f2[1] - sub.target) ** 2, axis=1)
+            s_old = (int(np.count_nonzero(e_old > miss2)), float(e_old.sum()))
+            s_new = (int(np.count_nonzero(e_new > miss2)), float(e_new.sum()))
+            if s_new < s_old:
+                keep.append((disks2, rows))
+            elif disks2.size == 2:
+                full = V.copy()
+                full[disks2] = rows
+                rest.append(((s_new[0] - s_old[0] + self.score[0], s_new[1]), c, full))
+        return keep, rest
 
     def neighbourhood(self, idx, rng):
         """Large-neighbourhood move: the conflict's disks and their nearest neighbours go back

@@ -23,6 +23,20 @@ from nbst.sim.kernel import (INF, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCA
 DENSE_KEYFRAMES = 4_000_000
 
 
+_POOLS: dict = {}
+
+
+def _pool(k: int):
+    """A thread pool of k threads, made once and kept: a search that evaluates small batches
+    many times a second would otherwise spend more time starting threads than simulating."""
+    ex = _POOLS.get(k)
+    if ex is None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        ex = _POOLS[k] = ThreadPoolExecutor(k, thread_name_prefix="nbst-evaluate")
+    return ex
+
+
 def uses_cells(n: int) -> bool:
     """Whether ``simulate`` and ``evaluate`` run n disks on the cell-grid kernel
     (``nbst.sim.cells``) rather than the table (``nbst.sim.kernel``)."""
@@ -94,12 +108,10 @@ def evaluate_events(problem: Problem, V, *, max_events: int | None = None, jobs:
     if k == 1:
         run_slice(0, B)
     else:
-        from concurrent.futures import ThreadPoolExecutor
-
         cuts = np.linspace(0, B, k + 1).astype(np.int64)
-        with ThreadPoolExecutor(k) as ex:
-            for f in [ex.submit(run_slice, int(cuts[i]), int(cuts[i + 1])) for i in range(k)]:
-                f.result()
+        ex = _pool(k)
+        for f in [ex.submit(run_slice, int(cuts[i]), int(cuts[i + 1])) for i in range(k)]:
+            f.result()
     if wide:
         out = np.empty(B, object)
         for b in range(B):
