@@ -104,6 +104,11 @@ TRACK_SUBSTEPS = 8
 TRACK_DILATE_PX = 2
 PIN_DOT_IN = 0.35
 
+#: The overhead panel's key (line, colour), under the pin diagram where it fits.
+LEGEND = (("ball's path", TRAIL_RGB), ("darker wood: oil", (0.60, 0.64, 0.70)),
+          ("lit: pins standing", (0.60, 0.64, 0.70)), ("ticks: ft past", (0.60, 0.64, 0.70)),
+          ("  the foul line", (0.60, 0.64, 0.70)))
+
 BALL_VS = """#version 330
 uniform mat4 u_vp;
 uniform mat4 u_model;
@@ -723,6 +728,15 @@ class LaneRenderer(FrameRenderer):
             parts = [self.small.layout([str(n)], c, r) for n, c, r in diag if (n not in down) == standing]
             if parts:
                 self.small.draw_halo(self.size, np.concatenate(parts), colour, style.TEXT_HALO)
+        # a key under the diagram, where it fits beside the lane
+        right_of_lane = self.to_pixel(vp, vpm, [0.0, -y_edge, 0.0], H)[0] + scw
+        key = [(line, rgb) for line, rgb in LEGEND]
+        width = max(len(line) for line, _ in key) * scw
+        if right_of_lane + width <= vp[0] + vp[2]:
+            row = max(r for _, _, r in diag) + 2.5 * sch
+            for i, (line, rgb) in enumerate(key):
+                self.small.draw_halo(self.size, self.small.layout([line], right_of_lane, row + i * sch), rgb,
+                                     style.TEXT_HALO)
 
     # ---------------------------------------------------------------- drawing
 
