@@ -1,4 +1,5 @@
-"""Subcommands ``nbst bowl solve``, ``nbst bowl replay``, ``nbst bowl atlas`` and ``nbst bowl throw``.
+"""Subcommands ``nbst bowl solve``, ``nbst bowl replay``, ``nbst bowl atlas`` and ``nbst bowl throw``;
+``nbst bowl frame``, ``spares`` and ``pocket`` (frames from the foul line, at the end of the file).
 
 Registration is light: mujoco and cma are imported inside the commands.
 
@@ -8,9 +9,10 @@ the nearest shot was written; replay: the pins down differ from the file's ``dow
 2 bad input, 130 interrupted (solve: the best shot so far is written; atlas: the shots
 found so far, the summary and atlas.json are written).
 
-Length: ~670 lines, past the house's ~500: the three search subcommands share the launcher, the
+Length: ~950 lines, past the house's ~500: the three search subcommands share the launcher, the
 shot writer and the atlas reader; split by subcommand, each would import the others (``throw``,
-~95 lines, shares the error line and the command group).
+~95 lines, shares the error line and the command group; frame/spares/pocket, ~280 lines, share
+the pin-list parser, the error line and the delivery conventions of ``throw``).
 """
 from __future__ import annotations
 
@@ -737,9 +739,10 @@ def register_frame(bowl) -> None:
 
     s = bowl.add_parser("spares", help="the throw converting each common leave with the highest probability",
                         description="For each leave, the 3-6-9 system's line (the strike ball, feet moved 3/6/9 "
-                                    "boards, same target arrow) and straight cross-lane spare balls at the leave's "
-                                    "aim point and 1-2 boards either side are screened on a few noisy throws; the "
-                                    "best is measured on --samples, beside the 3-6-9 line (docs/bowling.md).",
+                                    "boards, same target arrow) and straight spare balls (cross-lane at 17 and 21 mph, "
+                                    "and from the middle, at the leave's aim point and 1-2 boards either side) are "
+                                    "screened on --screen noisy throws each; the best is measured on --samples, "
+                                    "beside the 3-6-9 line (docs/bowling.md).",
                         epilog="Example: nbst bowl spares --leaves 10,7 --samples 40")
     s.add_argument("--leaves", default=None, metavar="L1,L2",
                    help="leaves to shoot, '-' joining pins, ',' between leaves (default: 10, 7, 4, 6, 2-4-5-8, "
@@ -867,7 +870,7 @@ def cmd_spares(args) -> int:
     except ValueError as e:
         return _err("spares", str(e))
     out = []
-    per = 2 * args.samples + 6 * args.screen
+    per = 2 * args.samples + 20 * args.screen
     bar = _bar(args, per * len(names), "spare frames")
     try:
         with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
@@ -895,7 +898,8 @@ def spare_line(r: dict) -> str:
     return (f"{r['leave']:>8}  best: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
             f"{b['rpm']:g} rpm, rotation {b['rotation']:g})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
             f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)   3-6-9 line (board {r['system_369']['board']:.1f}): "
-            f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)")
+            f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
+            + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(_pins_text(x[1]) for x in r["ladder"]))
 
 
 def cmd_pocket(args) -> int:
