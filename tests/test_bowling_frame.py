@@ -115,7 +115,7 @@ def test_wilson_interval_known_values():
         noise.wilson(3, 2)
 
 
-def test_a_noisy_estimate_is_reproducible_from_its_seed_on_any_number_of_threads():
+def test_a_noisy_estimate_is_reproducible_from_its_seed_on_any_number_of_processes():
     with frame.FrameRunner(jobs=1) as one, frame.FrameRunner(jobs=2) as two:
         e1, r1 = noise.probability(TYPICAL, 4, 11, runner=one)
         e2, r2 = noise.probability(TYPICAL, 4, 11, runner=two)

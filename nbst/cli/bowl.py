@@ -709,7 +709,7 @@ def _mc_flags(t, samples: int, what: str) -> None:
     t.add_argument("--oil", default="house", metavar="PATTERN", help="oil pattern by name (default house)")
     t.add_argument("--seed", type=SEED, default=1, help="seed of the release noise (default 1: same command, "
                                                          "same numbers)")
-    t.add_argument("--jobs", type=JOBS, default=None, metavar="K", help="threads running frames (default: all cores)")
+    t.add_argument("--jobs", type=JOBS, default=None, metavar="K", help="processes running frames (default: all cores)")
     t.add_argument("--samples", type=Bounded("samples", 1, 100_000, integer=True), default=samples, metavar="N",
                    help=f"noisy throws per {what} (default {samples})")
     t.add_argument("--json", action="store_true", help="print the result as one JSON object")
