@@ -870,8 +870,9 @@ def cmd_spares(args) -> int:
     except ValueError as e:
         return _err("spares", str(e))
     out = []
-    per = 2 * args.samples + 20 * args.screen
-    bar = _bar(args, per * len(names), "spare frames")
+    # frames per leave: 14 candidates (16 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures
+    total = sum(2 * args.samples + (20 + 2 * ("-" in nm)) * args.screen for nm in names)
+    bar = _bar(args, total, "spare frames")
     try:
         with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
             for nm in names:
