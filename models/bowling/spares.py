@@ -14,8 +14,9 @@
 * **Spares** (:func:`best_spare`): for a leave, candidate throws are the 3-6-9 system's line
   (:func:`system_369`) with the strike ball, and a straight spare ball (end over end, 200 rpm):
   cross-lane at 17 and 21 mph at the leave's aim point and at points 1 and 2 boards either
-  side (3 too at 17 mph on a multi-pin leave), and at 17 mph from the middle (board 20) at the
-  aim point and 1 board either side. Each is screened on a few noisy throws, the best three on more and on the
+  side (3 too at 17 mph on a multi-pin leave), and at 17 mph from the middle (board 20) and
+  from the aim point's own board (straight down the boards) at the aim point and 1 board
+  either side. Each is screened on a few noisy throws, the best three on more and on the
   timestep ladder (:func:`best_spare`); the pick is measured afresh on ``n``.
 
 The 3-6-9 system (talkbowling.co.uk, "Spare systems"): keep the strike line's target arrow
@@ -255,7 +256,9 @@ def candidates(name: str, *, oil: str = "house", ball=None) -> list:
     x, y = aim_point(key)
     wide = (0.0, -1.0, 1.0, -2.0, 2.0) + ((-3.0, 3.0) if len(leave_pins(name)) > 1 else ())
     out = [("3-6-9", system_369(name))]
-    for offs, foul, mph in ((wide, None, 17.0), (wide[:5], None, 21.0), ((0.0, -1.0, 1.0), 20.0, 17.0)):
+    down_board = float(lane.y_to_board(y))  # straight down the boards: drives a front pin into the one behind
+    for offs, foul, mph in ((wide, None, 17.0), (wide[:5], None, 21.0), ((0.0, -1.0, 1.0), 20.0, 17.0),
+                            ((0.0, -1.0, 1.0), down_board, 17.0)):
         for off in offs:
             yy = y + off * lane.BOARD_WIDTH
             if abs(yy) < scene.LANE_WIDTH / 2 - 0.02:

@@ -740,7 +740,8 @@ def register_frame(bowl) -> None:
     s = bowl.add_parser("spares", help="the throw converting each common leave with the highest probability",
                         description="For each leave, the 3-6-9 system's line (the strike ball, feet moved 3/6/9 "
                                     "boards, same target arrow) and straight spare balls (cross-lane at 17 and 21 mph, "
-                                    "and from the middle, at the leave's aim point and 1-2 boards either side) are "
+                                    "from the middle and straight down the boards, at the leave's aim point and 1-2 "
+                                    "boards either side) are "
                                     "screened on --screen noisy throws each; the best is measured on --samples, "
                                     "beside the 3-6-9 line (docs/bowling.md).",
                         epilog="Example: nbst bowl spares --leaves 10,7 --samples 40")
@@ -870,8 +871,8 @@ def cmd_spares(args) -> int:
     except ValueError as e:
         return _err("spares", str(e))
     out = []
-    # frames per leave: 14 candidates (16 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures
-    total = sum(2 * args.samples + (20 + 2 * ("-" in nm)) * args.screen for nm in names)
+    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures
+    total = sum(2 * args.samples + (23 + 2 * ("-" in nm)) * args.screen for nm in names)
     bar = _bar(args, total, "spare frames")
     try:
         with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
