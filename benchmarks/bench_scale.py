@@ -11,7 +11,8 @@ Parts:
   in the same run up to 3,000 disks), their agreement (event lists compared bit for bit), and
   the peak memory of a whole ``nbst.sim.simulate`` in a fresh process;
 * ``solve``: time to exact (every disk within 1e-6 of its target) for planted all-cueable
-  problems against N, 3 seeds each, with ``nbst.search.solve`` defaults and a target cost;
+  problems against N, 3 seeds each, with ``nbst.search.solve`` defaults and a target cost of
+  1e-12 (so every disk ends within 1e-6), each run stopped after ``--budget`` seconds;
 * ``noncue``: planted N = 100 with 10 noncueable disks: the share of seeds where every disk
   ends within R.
 
@@ -138,7 +139,7 @@ def part_solve(sizes, seeds, budget_s):
                 return time.perf_counter() > deadline
 
             t = time.perf_counter()
-            sol = solve(p, seed=seed, target_cost=n * 1e-12, callback=stop)
+            sol = solve(p, seed=seed, target_cost=1e-12, callback=stop)
             wall = time.perf_counter() - t
             err = np.hypot(*(simulate(p, sol.velocities).final_positions - p.target).T)
             rows.append({"n": n, "seed": seed, "wall_s": wall, "exact": bool(err.max() <= 1e-6),
@@ -165,37 +166,60 @@ def part_noncue(seeds, budget_s):
     return rows
 
 
+def work_memory_mb(n: int) -> tuple[float, float]:
+    """(the cell-grid kernel's scratch, the table kernel's scratch) for n disks, MB: the arrays
+    a simulation of n disks allocates besides its event record (exact, from their sizes)."""
+    cells = sum(a.nbytes for a in alloc_cells(n)) / 1e6
+    table = (8.0 * n * n + 8 * 4 * n) / 1e6  # the N x N table of pair times dominates (alloc_work)
+    return cells, table
+
+
 def figure(sim, solve_rows, path):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    panels = 3 if solve_rows else 2
+    fig, axs = plt.subplots(1, panels, figsize=(5.2 * panels, 4.4))
+    a, b = axs[0], axs[1]
     n = [r["n"] for r in sim]
-    a.loglog(n, [r["cells_rate"] for r in sim], "o-", color="#1b7837", label="cell grid + calendar (nbst.sim.cells)")
     nt = [r["n"] for r in sim if "table_rate" in r]
+    a.loglog(n, [r["cells_rate"] for r in sim], "o-", color="#1b7837", label="cell grid + calendar (sim.cells)")
     a.loglog(nt, [r["table_rate"] for r in sim if "table_rate" in r], "s--", color="#762a83",
-             label="N x N table, O(N) rescan (nbst.sim.kernel)")
-    a.set_xlabel("disks N (fixed density)")
+             label="N x N table, O(N) rescan (sim.kernel)")
+    a.set_xlabel("disks N (fixed density and speeds)")
     a.set_ylabel("physical events per second")
     a.set_title("Simulator throughput")
     a.grid(True, which="both", alpha=0.3)
-    a.legend(fontsize=9)
-    ax2 = a.twinx()
-    ax2.loglog(n, [r["peak_mb"] for r in sim], "^:", color="#555555", label="simulate peak memory")
-    ax2.set_ylabel("simulate peak memory (MB, whole process)")
-    ax2.legend(fontsize=9, loc="lower left")
+    a.legend(fontsize=8, loc="lower left")
+    mem = [work_memory_mb(k) for k in n]
+    b.loglog(n, [m[0] for m in mem], "o-", color="#1b7837", label="cell kernel's scratch")
+    b.loglog(n, [m[1] for m in mem], "s--", color="#762a83", label="table kernel's scratch (N x N)")
+    b.loglog(n, [r["peak_mb"] for r in sim], "^:", color="#555555", label="whole process running simulate (peak RSS)")
+    b.axhline(1024, color="#b2182b", lw=0.8)
+    b.text(n[-1], 1300, "1 GiB", color="#b2182b", fontsize=8, ha="right")
+    b.set_xlabel("disks N")
+    b.set_ylabel("MB")
+    b.set_title("Memory")
+    b.grid(True, which="both", alpha=0.3)
+    b.legend(fontsize=8, loc="lower right")
     if solve_rows:
-        for ok, mk, lab in ((True, "o", "exact"), (False, "x", "not exact (time budget)")):
-            pts = [(r["n"], r["wall_s"]) for r in solve_rows if r["exact"] == ok]
-            if pts:
-                b.loglog(*zip(*pts), mk, label=lab, color="#1b7837" if ok else "#b2182b", ms=8)
-        b.set_xlabel("disks N (planted, all cueable)")
-        b.set_ylabel("seconds")
-        b.set_title("Time to exact (every disk within 1e-6)")
-        b.grid(True, which="both", alpha=0.3)
-        b.legend(fontsize=9)
+        c = axs[2]
+        sizes = sorted({r["n"] for r in solve_rows})
+        for k in sizes:
+            rows = [r for r in solve_rows if r["n"] == k]
+            for r in rows:
+                c.semilogx(k, 100.0 * r["order"] / k, "o" if r["exact"] else "x",
+                           color="#1b7837" if r["exact"] else "#b2182b", ms=8)
+        c.plot([], [], "o", color="#1b7837", label="exact (every disk within 1e-6)")
+        c.plot([], [], "x", color="#b2182b", label="not exact (the search stopped, or its time budget)")
+        c.set_ylim(80, 101)
+        c.set_xlabel("disks N (planted, all cueable; 3 seeds)")
+        c.set_ylabel("% of disks within R at the end")
+        c.set_title("The search: what it reaches")
+        c.grid(True, which="both", alpha=0.3)
+        c.legend(fontsize=8, loc="lower left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     print(f"wrote {path}")
@@ -210,8 +234,15 @@ def main(argv=None) -> int:
     ap.add_argument("--budget", type=float, default=600.0, help="seconds per solve (default 600)")
     ap.add_argument("--figure", default=None, help="write the log-log figure here")
     ap.add_argument("--json", default=None, help="write the rows here")
+    ap.add_argument("--from-json", nargs="*", default=None, help="draw the figure from rows written before")
     a = ap.parse_args(argv)
     out = {}
+    if a.from_json:
+        for f in a.from_json:
+            for k, v in json.loads(Path(f).read_text()).items():
+                out.setdefault(k, []).extend(v)
+        figure(out["sim"], out.get("solve", []), a.figure)
+        return 0
     print(f"bench_scale: {os.cpu_count()} cores, numpy {np.__version__}", flush=True)
     if a.part in ("sim", "all"):
         sizes = a.sizes or ([10, 100, 1000, 3000] if a.quick else [10, 30, 100, 300, 1000, 3000, 10000])

@@ -83,11 +83,25 @@ def cmd_simulate(args) -> int:
         return 0
     print(f"problem    {problem.name}  ({problem.n} disks, t_final = {problem.t_final:g} s)")
     print(f"cost       {tr.cost:.6g}  (sum of squared distances to targets)")
-    print(f"signature  {tr.signature_string}  order {tr.order}/{problem.n}")
+    import numpy as np
+
+    from nbst.constants import GA_MAX_DISKS
+
+    many = problem.n > GA_MAX_DISKS
+    shown = f"({problem.n} characters: --json)" if many else tr.signature_string
+    print(f"signature  {shown}  order {tr.order}/{problem.n}")
     print(f"events     {tr.n_disk_disk} disk-disk, {tr.n_wall} wall")
-    print(f"disk  final x     final y     target x    target y    distance  within R = {problem.target_radius:g}")
     d = ((tr.final_positions - problem.target) ** 2).sum(axis=1) ** 0.5
-    for i in range(problem.n):
+    rows = range(problem.n)
+    if many:  # the disks off target (at most 20), else the 5 farthest; --json has every disk
+        off = np.flatnonzero(d > problem.target_radius)
+        rows = (off[np.argsort(-d[off], kind="stable")] if off.size else np.argsort(-d, kind="stable"))[:20 if off.size
+                                                                                                        else 5]
+        print(f"disks      {problem.n - off.size} within R, {off.size} not; below: "
+              + ("the farthest off target" if off.size else "the 5 farthest from their targets")
+              + " (--json: every disk)")
+    print(f"disk  final x     final y     target x    target y    distance  within R = {problem.target_radius:g}")
+    for i in rows:
         fx, fy = tr.final_positions[i]
         tx, ty = problem.target[i]
         ok = "yes" if d[i] <= problem.target_radius else "no"
