@@ -734,6 +734,11 @@ def register_frame(bowl) -> None:
     f.add_argument("--probability", type=Bounded("probability", 1, 100_000, integer=True), default=None, metavar="N",
                    help="the probability of converting (strike, or the leave) over N noisy throws, with a 95%% "
                         "Wilson interval")
+    f.add_argument("--noise-scale", type=Bounded("noise-scale", 0, 10), default=1.0, metavar="F",
+                   help="multiply every release-noise sigma by F (default 1: 1/2 board, 0.15 deg, 0.3 mph, 15 rpm, "
+                        "5 deg rotation)")
+    f.add_argument("--angle-sigma", type=Bounded("angle-sigma", 0, 5, unit="deg"), default=0.15, metavar="DEG",
+                   help="the launch angle's sigma before --noise-scale (default 0.15, an assumption: docs/bowling.md)")
     _mc_flags(f, 40, "estimate")
     f.set_defaults(func=cmd_frame)
 
@@ -806,8 +811,12 @@ def cmd_frame(args) -> int:
                              for x in frame.ladder(d, args.oil, standing=standing)]
         if args.probability:
             bar = _bar(args, args.probability, "noisy throws")
+            k = float(args.noise_scale)
+            D = noise.DEFAULT
+            nz = noise.Noise(board=D.board * k, angle=args.angle_sigma * k, mph=D.mph * k, rpm=D.rpm * k,
+                             rotation=D.rotation * k, tilt=D.tilt * k)
             with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
-                est, _ = noise.probability(d, args.probability, args.seed, runner=R, standing=standing,
+                est, _ = noise.probability(d, args.probability, args.seed, runner=R, standing=standing, noise=nz,
                                            on_done=lambda: bar.update(1))
             bar.close()
             doc["probability"] = est.to_dict()
