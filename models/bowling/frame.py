@@ -114,7 +114,8 @@ def frame_model(oil: str = "house", ball: lane.Ball | None = None, *, timestep: 
         raise FrameError(f"timestep: must be in [1e-05, 0.002] s (the contacts' time constant is 8 ms), got {timestep!r}")
     if not (isinstance(mu_oil, (int, float)) and 0.0 < mu_oil < ball.friction):
         raise FrameError(f"mu_oil: must be in (0, the ball's friction), got {mu_oil!r}")
-    lane.pattern(oil) if isinstance(oil, str) else None
+    if isinstance(oil, str):
+        lane.pattern(oil)  # an unknown name: LaneError, one line
     return _compiled(oil, ball, float(timestep), float(mu_oil))
 
 
