@@ -6,27 +6,21 @@ independent small problems. The search works on the whole motion and repairs it 
 1. **Directed start.** Every cueable disk flies straight to its target (image (0, 0) of
    the mirror unfolding, the paper's directed randomize): the shortest path, so the fewest
    crossings. A disk that meets nothing lands exactly.
-2. **Conflicts, found by the exact simulator.** One simulation of all N disks (the cell-grid
-   kernel, O(1) per event) says which disks miss their targets. The disk-disk events form a
-   graph; its connected components that hold a missing disk are the *conflicts*. A resting
-   (noncueable) disk that must move, and has met nobody, is grouped with its nearest
-   cueable disks (who can strike it).
-3. **Local repair.** Each conflict is cut out as a problem of its own (its disks, the same
-   box and t_final) and solved by nbst's signature search (``nbst.search.driver``: bank
-   shots, strikes, the backward planner and polish with the component's Jacobian, which is
-   the blocked Jacobian of the whole problem: disks that never meet are independent, and no
-   N x N matrix is built). Its solution goes back into the whole motion.
-4. **Repeat.** The repaired paths can meet disks outside their conflict; the next
-   simulation finds that, and those disks join the conflict. A conflict that keeps failing
-   grows by its nearest neighbours, and is tried with a new seed.
+2. **Missing disks, found by the exact simulator.** One simulation of all N disks (the
+   cell-grid kernel, O(1) per event) says which disks miss their targets; the disk-disk
+   events form a graph whose components holding a missing disk are the *conflicts*.
+3. **Moves**, each kept only if the whole motion gets better (``run_many`` has the rounds):
+   two-disk contacts in closed form (``nbst.search.aim.pair_contact``), straight and bank
+   shots, chains (a contact whose group is polished with its own Jacobian: the blocked
+   Jacobian of the whole problem, no N x N matrix), cleared and re-paired neighbourhoods,
+   and optionally each conflict's polish and windowed sub-searches.
 
-Each round keeps the best whole motion; the result is never worse than the directed
-start.
+The best whole motion is kept; the result is never worse than the directed start. Trials
+are counted in whole-problem simulations: one of m disks counts m / N.
 
-Length: ~560 lines, past the house's ~500: the search's moves (contacts, chains, cleared
+Length: ~600 lines, past the house's ~500: the search's moves (contacts, chains, cleared
 neighbourhoods, windowed sub-searches) share one state object and its acceptance rule, and
-stay together so that rule is written once. Trials are counted in whole-problem simulations: a sub-search trial of m disks
-counts m / N.
+stay together so that rule is written once.
 """
 from __future__ import annotations
 
@@ -117,6 +111,19 @@ def subproblem(problem: Problem, idx: np.ndarray, name: str, *, margin: float | 
                    description=f"disks {idx.tolist()} of {problem.name}", source=problem.source)
 
 
+def _score(final: np.ndarray, target: np.ndarray, miss2: float) -> tuple[int, float]:
+    """A motion's score, lower is better: (disks whose squared miss exceeds miss2, cost)."""
+    e2 = np.sum((np.asarray(final) - target) ** 2, axis=1)
+    return (int(np.count_nonzero(e2 > miss2)), float(e2.sum()))
+
+
+def _labels(tr) -> np.ndarray:
+    """The collision components of a motion: a label per disk (``_components`` of its
+    disk-disk events)."""
+    dd = tr.events["kind"] == 0
+    return _components(tr.problem.n, tr.events["i"][dd].astype(np.int64), tr.events["j"][dd].astype(np.int64))
+
+
 def _components(n: int, ev_i: np.ndarray, ev_j: np.ndarray) -> np.ndarray:
     """Connected components of the disk-disk event graph: a label per disk (union-find)."""
     parent = np.arange(n)
@@ -149,16 +156,13 @@ def _nearest(problem: Problem, centre: np.ndarray, exclude: np.ndarray, k: int, 
     return cand[np.argsort(d, kind="stable")[:k]]
 
 
-def conflicts(problem: Problem, tr, miss2: float, grow: dict | None = None, strikers: int = 3) -> list[np.ndarray]:
+def conflicts(problem: Problem, tr, miss2: float, strikers: int = 3) -> list[np.ndarray]:
     """The conflicts of a whole motion: for each collision component holding a disk whose
     squared miss exceeds ``miss2``, its disks (sorted); a resting disk that must move and met
-    nobody comes with its ``strikers`` nearest cueable disks. ``grow`` maps a conflict's
-    smallest disk to extra neighbours to add (a conflict that failed before)."""
-    n = problem.n
+    nobody comes with its ``strikers`` nearest cueable disks."""
     err2 = np.sum((np.asarray(tr.final_positions) - problem.target) ** 2, axis=1)
     missing = err2 > miss2
-    dd = tr.events["kind"] == 0
-    label = _components(n, tr.events["i"][dd].astype(np.int64), tr.events["j"][dd].astype(np.int64))
+    label = _labels(tr)
     out = []
     done = set()
     for d in np.flatnonzero(missing):
@@ -169,56 +173,8 @@ def conflicts(problem: Problem, tr, miss2: float, grow: dict | None = None, stri
         idx = np.flatnonzero(label == lab)
         if not problem.cueable[idx].any():
             idx = np.union1d(idx, _nearest(problem, idx, idx, strikers, True))
-        extra = (grow or {}).get(int(idx[0]), 0)
-        if extra:
-            idx = np.union1d(idx, _nearest(problem, idx, idx, extra, False))
         out.append(idx.astype(np.int64))
     return out
-
-
-def _accept(problem: Problem, tr_old, tr_new, proposals: list[np.ndarray]) -> list[bool]:
-    """Which proposals to keep after simulating them all together: proposals whose disks end
-    in one collision component of the new motion are judged together, with every disk of
-    that component (an outsider they disturbed counts against them); a group is kept if
-    its disks' summed squared miss went down."""
-    n = problem.n
-    e_old = np.sum((np.asarray(tr_old.final_positions) - problem.target) ** 2, axis=1)
-    e_new = np.sum((np.asarray(tr_new.final_positions) - problem.target) ** 2, axis=1)
-    dd = tr_new.events["kind"] == 0
-    lab = _components(n, tr_new.events["i"][dd].astype(np.int64), tr_new.events["j"][dd].astype(np.int64))
-    # union proposals that share a new component
-    P = len(proposals)
-    parent = list(range(P))
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    owner: dict = {}
-    for k, idx in enumerate(proposals):
-        for L in np.unique(lab[idx]).tolist():
-            if L in owner:
-                ra, rb = find(owner[L]), find(k)
-                parent[max(ra, rb)] = min(ra, rb)
-            else:
-                owner[L] = k
-    groups: dict = {}
-    for k in range(P):
-        groups.setdefault(find(k), []).append(k)
-    keep = [False] * P
-    for members in groups.values():
-        disks = np.unique(np.concatenate([proposals[k] for k in members]))
-        disks = np.flatnonzero(np.isin(lab, lab[disks]) | np.isin(np.arange(n), disks))
-        if e_new[disks].sum() < e_old[disks].sum():
-            for k in members:
-                keep[k] = True
-    return keep
-
-
-def _misses(problem: Problem, tr, miss2: float) -> int:
-    return int(np.count_nonzero(np.sum((np.asarray(tr.final_positions) - problem.target) ** 2, axis=1) > miss2))
 
 
 def _candidates(problem: Problem, a: int, V: np.ndarray, err2: np.ndarray, miss2: float, partners: int, scratch):
@@ -296,8 +252,7 @@ class _Search:
     def score_of(self, tr) -> tuple[int, float]:
         """Fewer missing disks first, then the lower cost (from the final positions, as
         ``greedy`` scores a batch)."""
-        e2 = np.sum((np.asarray(tr.final_positions) - self.problem.target) ** 2, axis=1)
-        return (int(np.count_nonzero(e2 > self.miss2)), float(e2.sum()))
+        return _score(tr.final_positions, self.problem.target, self.miss2)
 
     def err2(self, tr=None):
         tr = self.tr if tr is None else tr
@@ -328,8 +283,7 @@ class _Search:
                     Vs[q, disks2] = rows
                 fin = self.evaluate(Vs)
                 for q, (disks2, rows) in enumerate(chunk):
-                    e2 = np.sum((fin[q] - problem.target) ** 2, axis=1)
-                    sn = (int(np.count_nonzero(e2 > miss2)), float(e2.sum()))
+                    sn = _score(fin[q], problem.target, miss2)
                     if sn < score:
                         V, score, done = Vs[q].copy(), sn, True
                         tr = self.sim(V)
@@ -347,8 +301,7 @@ class _Search:
                 near.sort(key=lambda c: (c[0], c[1]))
                 for _, _, Vn in near[: prm.chains]:
                     trn = self.sim(Vn)
-                    dd = trn.events["kind"] == 0
-                    lab = _components(n, trn.events["i"][dd].astype(np.int64), trn.events["j"][dd].astype(np.int64))
+                    lab = _labels(trn)
                     idx = np.flatnonzero(lab == lab[a]).astype(np.int64)
                     if idx.size < 3 or idx.size > prm.max_conflict:
                         continue
@@ -412,10 +365,8 @@ class _Search:
             from nbst.sim import evaluate
 
             f2 = evaluate(sub, Vq, jobs=1)[0]
-            e_old = np.sum((f2[0] - sub.target) ** 2, axis=1)
-            e_new = np.sum((f2[1] - sub.target) ** 2, axis=1)
-            s_old = (int(np.count_nonzero(e_old > miss2)), float(e_old.sum()))
-            s_new = (int(np.count_nonzero(e_new > miss2)), float(e_new.sum()))
+            s_old = _score(f2[0], sub.target, miss2)
+            s_new = _score(f2[1], sub.target, miss2)
             if s_new < s_old:
                 keep.append((disks2, rows))
             elif disks2.size == 2:
@@ -567,14 +518,14 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
             missing = np.flatnonzero(S.err2() > S.miss2).tolist()
             S.V, S.tr, S.score, _ = S.greedy(missing, S.V, S.tr, S.score)
             if S.score == before:
-                for idx in sorted(conflicts(problem, S.tr, S.miss2, None, prm.strikers), key=len):
+                for idx in sorted(conflicts(problem, S.tr, S.miss2, prm.strikers), key=len):
                     if S.trials >= max_trials:
                         break
                     if np.all(S.err2()[idx] <= S.miss2):
                         continue
                     S.neighbourhood(idx, rng)
             if S.score == before and prm.searches > 0:
-                for idx in sorted(conflicts(problem, S.tr, S.miss2, None, prm.strikers), key=len):
+                for idx in sorted(conflicts(problem, S.tr, S.miss2, prm.strikers), key=len):
                     if S.trials >= max_trials:
                         break
                     if np.all(S.err2()[idx] <= S.miss2):
@@ -602,10 +553,6 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
     meta = {"trials": int(math.ceil(S.trials)), "stopped": None if stopped is None else stopped.value,
             "wall_time": wall, "history": history, "many": S.stats}
     return S.best[1], meta
-
-
-def _order(v, tr) -> int:
-    return int(tr.order)
 
 
 def solve(problem: Problem, **kw):

@@ -219,12 +219,7 @@ class Trajectory:
             k = np.searchsorted(self.times, ts, side="right") - 1
             dt = (ts - self.times[k])[..., None, None]
             return self.positions[k] + self.velocities[k] * dt
-        flat = ts.reshape(-1)
-        order = np.argsort(flat, kind="stable")
-        out = np.empty((flat.size, self.problem.n, 2))
-        _replay_at(self.problem.kernel_arrays().start, np.ascontiguousarray(self.initial_velocities), self.times,
-                   self.events["i"].astype(np.int64), _ev_j(self.events), self.event_state, flat[order], order, out)
-        return out.reshape(ts.shape + (self.problem.n, 2))
+        return self._replay(ts, False)
 
     def velocity_at(self, t, *, replay: bool | None = None):
         """Velocities at time(s) t (just after any event at exactly t)."""
@@ -232,12 +227,16 @@ class Trajectory:
         if self._dense(replay):
             k = np.searchsorted(self.times, ts, side="right") - 1
             return self.velocities[k]
+        return self._replay(ts, True)
+
+    def _replay(self, ts: np.ndarray, velocity: bool) -> np.ndarray:
+        """Positions (or velocities) at times ts from the event record, no keyframes."""
         flat = ts.reshape(-1)
         order = np.argsort(flat, kind="stable")
         out = np.empty((flat.size, self.problem.n, 2))
         _replay_at(self.problem.kernel_arrays().start, np.ascontiguousarray(self.initial_velocities), self.times,
                    self.events["i"].astype(np.int64), _ev_j(self.events), self.event_state, flat[order], order, out,
-                   True)
+                   velocity)
         return out.reshape(ts.shape + (self.problem.n, 2))
 
     def describe_event(self, e: int) -> str:
@@ -250,6 +249,24 @@ class Trajectory:
 def _ev_j(events) -> np.ndarray:
     """The kernel's j of each event: the partner disk, or -1 - wall."""
     return np.where(events["kind"] == EVENT_WALL, -1 - events["j"].astype(np.int64), events["j"].astype(np.int64))
+
+
+@njit(cache=True, inline="always")
+def _apply_event(e, t, ev_i, ev_j, ev_s, cur_p, cur_v, cur_t):
+    """Event e of the record (at time t): its participants' positions and velocities after it."""
+    i = ev_i[e]
+    j = ev_j[e]
+    cur_p[i, 0] = ev_s[e, 0]
+    cur_p[i, 1] = ev_s[e, 1]
+    cur_v[i, 0] = ev_s[e, 2]
+    cur_v[i, 1] = ev_s[e, 3]
+    cur_t[i] = t
+    if j >= 0:
+        cur_p[j, 0] = ev_s[e, 4]
+        cur_p[j, 1] = ev_s[e, 5]
+        cur_v[j, 0] = ev_s[e, 6]
+        cur_v[j, 1] = ev_s[e, 7]
+        cur_t[j] = t
 
 
 @njit(cache=True, error_model="numpy")
@@ -266,19 +283,7 @@ def _keyframes(x0, v0, times, ev_i, ev_j, ev_s):
     vel[0] = v0
     for e in range(K - 1):
         t = times[e + 1]
-        i = ev_i[e]
-        j = ev_j[e]
-        cur_p[i, 0] = ev_s[e, 0]
-        cur_p[i, 1] = ev_s[e, 1]
-        cur_v[i, 0] = ev_s[e, 2]
-        cur_v[i, 1] = ev_s[e, 3]
-        cur_t[i] = t
-        if j >= 0:
-            cur_p[j, 0] = ev_s[e, 4]
-            cur_p[j, 1] = ev_s[e, 5]
-            cur_v[j, 0] = ev_s[e, 6]
-            cur_v[j, 1] = ev_s[e, 7]
-            cur_t[j] = t
+        _apply_event(e, t, ev_i, ev_j, ev_s, cur_p, cur_v, cur_t)
         for k in range(n):
             pos[e + 1, k, 0] = cur_p[k, 0] + cur_v[k, 0] * (t - cur_t[k])
             pos[e + 1, k, 1] = cur_p[k, 1] + cur_v[k, 1] * (t - cur_t[k])
@@ -301,20 +306,7 @@ def _replay_at(x0, v0, times, ev_i, ev_j, ev_s, ts, slot, out, want_velocity=Fal
     for q in range(ts.shape[0]):
         t = ts[q]
         while e + 1 < K and times[e + 1] <= t:
-            tk = times[e + 1]
-            i = ev_i[e]
-            j = ev_j[e]
-            cur_p[i, 0] = ev_s[e, 0]
-            cur_p[i, 1] = ev_s[e, 1]
-            cur_v[i, 0] = ev_s[e, 2]
-            cur_v[i, 1] = ev_s[e, 3]
-            cur_t[i] = tk
-            if j >= 0:
-                cur_p[j, 0] = ev_s[e, 4]
-                cur_p[j, 1] = ev_s[e, 5]
-                cur_v[j, 0] = ev_s[e, 6]
-                cur_v[j, 1] = ev_s[e, 7]
-                cur_t[j] = tk
+            _apply_event(e, times[e + 1], ev_i, ev_j, ev_s, cur_p, cur_v, cur_t)
             e += 1
         tk = times[e]
         o = slot[q]

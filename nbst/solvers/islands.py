@@ -182,39 +182,12 @@ def _island(k: int, algorithm: str, problem, kw: dict, conn, parent_pid: int, in
         os._exit(0)  # nothing to tear down: skip the interpreter's exit work (tens of ms)
 
 
-class _QueueConn:
-    """One end of a pipe made of two Dask queues (``--cluster``): send, recv, poll, close."""
-
-    def __init__(self, out_name: str, in_name: str, client=None):
-        from dask.distributed import Queue
-
-        self._out, self._in = Queue(out_name, client=client), Queue(in_name, client=client)
-        self._held: list = []
-
-    def send(self, obj) -> None:
-        self._out.put(obj)
-
-    def poll(self, timeout: float) -> bool:
-        if not self._held:
-            try:
-                self._held.append(self._in.get(timeout=timeout))
-            except TimeoutError:
-                return False
-        return True
-
-    def recv(self):
-        if self._held:
-            return self._held.pop()
-        return self._in.get()
-
-    def close(self) -> None:
-        pass
-
-
 class _ThreadConn:
     """One end of a pipe made of two ``queue.Queue`` (islands in threads): send, recv, poll, close."""
 
-    def __init__(self, out_q: queue.Queue, in_q: queue.Queue):
+    _EMPTY: type[Exception] = queue.Empty  # what the in-queue's get raises on a timeout
+
+    def __init__(self, out_q, in_q):
         self._out, self._in = out_q, in_q
         self._held: list = []
 
@@ -225,7 +198,7 @@ class _ThreadConn:
         if not self._held:
             try:
                 self._held.append(self._in.get(timeout=timeout))
-            except queue.Empty:
+            except self._EMPTY:
                 return False
         return True
 
@@ -236,6 +209,17 @@ class _ThreadConn:
 
     def close(self) -> None:
         pass
+
+
+class _QueueConn(_ThreadConn):
+    """One end of a pipe made of two Dask queues (``--cluster``): the same ends as ``_ThreadConn``."""
+
+    _EMPTY = TimeoutError
+
+    def __init__(self, out_name: str, in_name: str, client=None):
+        from dask.distributed import Queue
+
+        super().__init__(Queue(out_name, client=client), Queue(in_name, client=client))
 
 
 def _island_dask(k: int, algorithm: str, problem, kw: dict, names: tuple) -> int:
