@@ -120,25 +120,28 @@ def parent_weights(a: Archive, masks: list[int]) -> np.ndarray:
 
 
 def emit(a: Archive, rng: np.random.Generator, n: int = search.BATCH, *,
-         selection: str = "biased") -> tuple[np.ndarray, np.ndarray]:
-    """One batch of the MAP-Elites emitter: ((n, 4) launches, (n,) parent masks, -1 = uniform).
+         selection: str = "biased", space=None) -> tuple[np.ndarray, np.ndarray]:
+    """One batch of the MAP-Elites emitter: ((n, D) launches, (n,) parent masks, -1 = uniform).
     The first :data:`UNIFORM_PER_BATCH` are uniform; each other is a parent's elite plus a
-    Gaussian step at a scale drawn from :data:`SCALES`. Random numbers drawn in a fixed order.
-    ``selection``: "biased" (:func:`parent_weights`) or "uniform" (every elite alike: plain
-    MAP-Elites, for the ablation)."""
+    Gaussian step at a scale drawn from the space's scales. Random numbers drawn in a fixed
+    order. ``selection``: "biased" (:func:`parent_weights`) or "uniform" (every elite alike:
+    plain MAP-Elites, for the ablation). ``space``: (D, to_unit, from_unit, scales) of the
+    launch space; default the 5 m launches (4, :func:`search.to_unit`, :func:`search.from_unit`,
+    :data:`SCALES`); the foul-line atlas passes its own."""
+    dim, to_unit, from_unit, scales = space or (4, search.to_unit, search.from_unit, SCALES)
     masks = sorted(a.elite)
     k = min(UNIFORM_PER_BATCH, n) if masks else n
-    u = rng.random((n, 4))                       # always drawn: the stream does not depend on the archive
-    X = search.from_unit(u[:k])
+    u = rng.random((n, dim))                     # always drawn: the stream does not depend on the archive
+    X = from_unit(u[:k])
     parents = np.full(n, -1, dtype=np.int64)
     if n > k:
         w = parent_weights(a, masks) if selection == "biased" else np.full(len(masks), 1.0 / len(masks))
         idx = rng.choice(len(masks), size=n - k, p=w)
-        scale = np.asarray(SCALES)[rng.integers(0, len(SCALES), size=n - k)]
-        step = rng.standard_normal((n - k, 4)) * scale[:, None]
+        scale = np.asarray(scales)[rng.integers(0, len(scales), size=n - k)]
+        step = rng.standard_normal((n - k, dim)) * scale[:, None]
         par = np.array([masks[i] for i in idx])
-        base = np.array([search.to_unit(a.elite[m]) for m in par])
-        X = np.concatenate([X, search.from_unit(base + step)])
+        base = np.array([to_unit(a.elite[m]) for m in par])
+        X = np.concatenate([X, from_unit(base + step)])
         parents[k:] = par
     return X, parents
 

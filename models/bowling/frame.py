@@ -285,8 +285,9 @@ def _worker_init(oil, ball, timestep, mu_oil) -> None:
     _WORKER["oil"], _WORKER["ball"] = oil, ball
 
 
-def _worker_run(delivery, standing) -> FrameResult:
-    return run_frame(delivery, _WORKER["oil"], _WORKER["ball"], standing=standing, model=_WORKER["model"])
+def _worker_run(delivery, standing, extra_s=0.0) -> FrameResult:
+    return run_frame(delivery, _WORKER["oil"], _WORKER["ball"], standing=standing, model=_WORKER["model"],
+                     extra_s=extra_s)
 
 
 class FrameRunner:
@@ -323,23 +324,24 @@ class FrameRunner:
     def __exit__(self, *exc):
         self.close()
 
-    def one(self, delivery: lane.Delivery, standing=None) -> FrameResult:
-        return run_frame(delivery, self.oil, self.ball, standing=standing, model=self.model)
+    def one(self, delivery: lane.Delivery, standing=None, extra_s: float = 0.0) -> FrameResult:
+        return run_frame(delivery, self.oil, self.ball, standing=standing, model=self.model, extra_s=extra_s)
 
-    def map(self, deliveries, standing=None, on_done=None) -> list[FrameResult]:
-        """Frames of ``deliveries`` in order; ``on_done()`` after each (progress)."""
+    def map(self, deliveries, standing=None, on_done=None, extra_s: float = 0.0) -> list[FrameResult]:
+        """Frames of ``deliveries`` in order (each run ``extra_s`` past its settle); ``on_done()``
+        after each (progress)."""
         deliveries = list(deliveries)
         pool = self._get_pool() if len(deliveries) > 1 else None
         if pool is None:
             out = []
             for dv in deliveries:
-                out.append(self.one(dv, standing))
+                out.append(self.one(dv, standing, extra_s))
                 if on_done is not None:
                     on_done()
             return out
         from concurrent.futures import as_completed
 
-        futs = {pool.submit(_worker_run, dv, standing): i for i, dv in enumerate(deliveries)}
+        futs = {pool.submit(_worker_run, dv, standing, extra_s): i for i, dv in enumerate(deliveries)}
         out = [None] * len(deliveries)
         try:
             for f in as_completed(futs):

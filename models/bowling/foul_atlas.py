@@ -1,0 +1,212 @@
+"""The atlas from the foul line: one bowler's throw per subset of pins down, found by search,
+each with the probability of its subset under the release noise.
+
+* **Throw space**: a right-hander's delivery of :mod:`.lane` in a bowler's units, over the
+  ranges of :data:`BOUNDS` (board at the foul line, launch angle, speed, rev rate, axis
+  rotation, axis tilt); the default ball and the atlas's oil pattern. A left-hander's
+  throw for a subset is the mirrored one (:mod:`.lane` mirrors the lane), with the subset's
+  pins mirrored too.
+* **Search** (:func:`grow`): the 5 m atlas's MAP-Elites emitter (:func:`.atlas.emit`, with
+  this space): :data:`.atlas.EXPLORE` uniform throws into an empty archive, then batches of
+  :data:`.search.BATCH` holding 2 uniform throws and children of archived elites, a child
+  moved from its parent by a Gaussian step in the unit cube at one of :data:`SCALES`. Every
+  throw is a settled USBC frame (:func:`.frame.run_frame`); its subset is the pins down.
+  The first throw that gave a subset is its elite.
+* **Probability** (:func:`probabilities`): each elite thrown ``n`` times under the release
+  noise (:mod:`.noise`); the probability is the share of noisy throws whose pins down are
+  exactly the subset, with a 95 % Wilson interval. An elite is the first throw found, not
+  the most repeatable one: ``nbst bowl solve --robust`` maximises the probability of one
+  subset (:mod:`.robust`).
+
+Reproducible from the seed for any number of processes: batches have a fixed size, every
+random number comes from one generator in a fixed order, and each frame depends on its
+delivery only. Resuming from elites already found continues the archive (not the same run
+as one without a stop).
+
+Compute only, but for the search's checkpoint (:func:`archive_doc` / :func:`archive_from_doc`:
+a dict to and from JSON, checked as hostile input). No printing.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from nbst.models.bowling import atlas, frame, lane, noise, search, shot
+
+#: The oil pattern of the shipped atlas (the default ball), and the shipped atlas itself.
+OIL = "house"
+SHIPPED = Path(__file__).with_name("foul_atlas.json")
+#: The search's checkpoint (``archive.json`` beside an atlas): its format tag and version.
+ARCHIVE_FORMAT = "nbst-bowling-foul-archive"
+ARCHIVE_VERSION = 1
+
+#: The throw space (a right-hander; board at the foul line): the ranges a bowler throws.
+#: Boards 3-37 keep the ball's centre on the lane; -3..+4 deg covers crossing the lane both
+#: ways (+ is out toward board 1); 13-23 mph; up to 500 rpm (a power player); rotation
+#: 0 (end over end) to 90 deg (all side spin); tilt up to 30 deg.
+BOUNDS = {"board": (3.0, 37.0), "angle": (-3.0, 4.0), "mph": (13.0, 23.0), "rpm": (0.0, 500.0),
+          "rotation": (0.0, 90.0), "tilt": (0.0, 30.0)}
+KEYS = tuple(BOUNDS)
+LO = np.array([BOUNDS[k][0] for k in KEYS])
+HI = np.array([BOUNDS[k][1] for k in KEYS])
+#: A child's Gaussian step in the unit cube, per coordinate: 0.1, 0.5 and 2 boards at the
+#: foul line (about 0.2, 1 and 4 noise sigmas), and the same shares of the other ranges.
+SCALES = (0.003, 0.015, 0.06)
+
+
+def to_unit(x) -> np.ndarray:
+    return (np.asarray(x, dtype=float) - LO) / (HI - LO)
+
+
+def from_unit(u) -> np.ndarray:
+    return LO + np.clip(np.asarray(u, dtype=float), 0.0, 1.0) * (HI - LO)
+
+
+SPACE = (len(KEYS), to_unit, from_unit, SCALES)
+
+
+def delivery_of(x, hand: str = "right") -> lane.Delivery:
+    """The delivery at a point ``x`` of the throw space ((6,): :data:`KEYS`)."""
+    return lane.Delivery(hand=hand, at="foul", **{k: float(v) for k, v in zip(KEYS, x)})
+
+
+def point_of(d: lane.Delivery) -> np.ndarray:
+    """The point of the throw space of a delivery (its board carried to the foul line)."""
+    d = replace(d, board=d.foul_board(), at="foul")
+    return np.array([float(getattr(d, k)) for k in KEYS])
+
+
+def throw_masks(runner: frame.FrameRunner, X) -> tuple[list[int], list[frame.FrameResult]]:
+    """The subsets (masks of pins down; 0 for a ball that leaves the lane) of throws ``X``."""
+    results = runner.map([delivery_of(x) for x in X])
+    return [shot.mask_from_pins(r.down) for r in results], results
+
+
+def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed: int,
+         on_batch=None) -> atlas.Archive:
+    """Spend ``budget`` frames growing ``archive`` (elites are (6,) points of :data:`KEYS`);
+    ``on_batch(archive, new_masks)`` after each batch (progress, checkpoints).
+    KeyboardInterrupt propagates; what ran is in ``archive``."""
+    rng = np.random.default_rng(seed)
+    end = archive.rollouts + int(budget)
+    n0 = min(atlas.EXPLORE, int(budget)) if not archive.elite else 0
+    start = archive.rollouts
+    while archive.rollouts < end:
+        if archive.rollouts < start + n0:
+            X, parents = from_unit(rng.random((search.BATCH, len(KEYS)))), None
+        else:
+            X, parents = atlas.emit(archive, rng, space=SPACE)
+        X = X[: end - archive.rollouts]
+        masks, _ = throw_masks(runner, X)
+        new = archive.add(X, masks, None if parents is None else parents[: len(X)])
+        if on_batch is not None:
+            on_batch(archive, new)
+    return archive
+
+
+def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int, nz: noise.Noise = noise.DEFAULT,
+                  on_done=None) -> dict:
+    """{mask: noise.Estimate} for each elite ({mask: (6,) point}): ``n`` noisy throws of it
+    (the same ``seed`` for every elite), the outcome counted is exactly its subset."""
+    masks = sorted(elites)
+    throws = []
+    for m in masks:
+        throws.extend(noise.sample(delivery_of(elites[m]), n, seed, nz))
+    results = runner.map(throws, on_done=on_done)
+    out = {}
+    for i, m in enumerate(masks):
+        out[m] = noise.estimate(results[i * n:(i + 1) * n], seed, nz, want=shot.pins_of(m))
+    return out
+
+
+#: :func:`seek`: parents are drawn among this many archived subsets nearest the request.
+NEAREST = 8
+
+
+def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, seed: int,
+         on_batch=None) -> tuple[np.ndarray | None, dict, int]:
+    """A throw whose pins down are exactly ``target`` (a mask), from the archive ``elites``
+    ({mask: (6,) point}): batches of :data:`.search.BATCH` children of the :data:`NEAREST`
+    subsets nearest the request (Hamming distance; nearer ones drawn more often: weight
+    1 / (1 + distance)^2), each moved by a Gaussian step at one of :data:`SCALES`; every new
+    subset seen joins the archive. Stops at the first exact hit or after ``budget`` frames.
+    Returns (the point or None, the grown archive, frames run); ``on_batch(frames, best
+    distance)`` after each batch. An empty archive starts from uniform throws."""
+    rng = np.random.default_rng(seed)
+    arch = {int(m): np.asarray(x, dtype=float) for m, x in elites.items() if m}
+    if target in arch:
+        return arch[target], arch, 0
+    frames = 0
+    while frames < budget:
+        n = min(search.BATCH, budget - frames)
+        if arch:
+            masks = np.array(sorted(arch), dtype=np.int64)
+            dist = search.hamming(target, masks)
+            order = np.argsort(dist, kind="stable")[:NEAREST]
+            w = 1.0 / (1.0 + dist[order]) ** 2
+            pick = order[rng.choice(len(order), size=n, p=w / w.sum())]
+            scale = np.asarray(SCALES)[rng.integers(0, len(SCALES), size=n)]
+            base = np.array([to_unit(arch[int(masks[i])]) for i in pick])
+            X = from_unit(base + rng.standard_normal((n, len(KEYS))) * scale[:, None])
+        else:
+            X = from_unit(rng.random((n, len(KEYS))))
+        got, _ = throw_masks(runner, X)
+        frames += n
+        for x, m in zip(X, got):
+            if m and m not in arch:
+                arch[m] = np.array(x, dtype=float)
+        if on_batch is not None:
+            on_batch(frames, int(search.hamming(target, np.array(sorted(arch), dtype=np.int64)).min()) if arch else 10)
+        if target in arch:
+            return arch[target], arch, frames
+    return None, arch, frames
+
+
+def archive_doc(a: atlas.Archive, seed: int) -> dict:
+    """The search's state as a JSON-able dict (elites as points of :data:`KEYS`)."""
+    return {"format": ARCHIVE_FORMAT, "version": ARCHIVE_VERSION, "seed": int(seed), "keys": list(KEYS),
+            "rollouts": int(a.rollouts),
+            "elites": {str(m): [float(v) for v in a.elite[m]] for m in sorted(a.elite)},
+            "seen": {str(m): int(a.seen.get(m, 1)) for m in sorted(a.elite)},
+            "found_at": {str(m): int(a.found_at.get(m, -1)) for m in sorted(a.elite)}}
+
+
+def archive_from_doc(doc, src) -> atlas.Archive:
+    """An archive from :func:`archive_doc`'s dict; ValueError (one line naming ``src`` and the
+    field) on anything else: a mask outside 1..1023, a point that is not 6 finite numbers in
+    :data:`BOUNDS`, counts that are not whole numbers >= -1."""
+    import math
+
+    def fail(field, why):
+        raise ValueError(f"{src}: {field}: {why}")
+
+    if not isinstance(doc, dict) or doc.get("format") != ARCHIVE_FORMAT:
+        fail("format", f"must be {ARCHIVE_FORMAT!r}")
+    if doc.get("version") != ARCHIVE_VERSION:
+        fail("version", f"must be {ARCHIVE_VERSION}")
+    if doc.get("keys") != list(KEYS):
+        fail("keys", f"must be {list(KEYS)}")
+    n = doc.get("rollouts")
+    if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 10**9:
+        fail("rollouts", "must be a whole number in [0, 1e9]")
+    a = atlas.Archive(rollouts=n)
+    el = doc.get("elites")
+    if not isinstance(el, dict) or len(el) > atlas.N_SUBSETS:
+        fail("elites", "must be an object of at most 1,023 subsets")
+    for key, x in el.items():
+        if not key.isdigit() or not 1 <= int(key) <= atlas.N_SUBSETS:
+            fail(f"elites.{key}", "a subset is a mask 1..1023")
+        if (not isinstance(x, list) or len(x) != len(KEYS)
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in x)
+                or not all(lo <= v <= hi for v, lo, hi in zip(x, LO, HI))):
+            fail(f"elites.{key}", f"must be {len(KEYS)} finite numbers within {BOUNDS}")
+        m = int(key)
+        a.elite[m] = np.array(x, dtype=float)
+        for name, lo in (("seen", 1), ("found_at", -1)):
+            v = doc.get(name, {}).get(key, lo) if isinstance(doc.get(name), dict) else lo
+            if not isinstance(v, int) or isinstance(v, bool) or not lo <= v <= 10**9:
+                fail(f"{name}.{key}", f"must be a whole number >= {lo}")
+            getattr(a, name)[m] = v
+    return a
