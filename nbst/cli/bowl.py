@@ -116,11 +116,13 @@ def register(sub) -> None:
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
     s.set_defaults(func=cmd_solve)
 
-    r = bowl.add_parser("replay", help="replay a shot file and check its pins down",
-                        description="Replay SHOT.json from its scene XML with plain MuJoCo (fresh MjData, qpos0 "
-                                    "and qvel0 set, mj_step for duration) and print the pins down; exit 1 if they "
-                                    "differ from the file's `down`.")
-    r.add_argument("shot", metavar="SHOT.json")
+    r = bowl.add_parser("replay", help="replay a shot or throw file and check its pins down",
+                        description="Replay FILE and print the pins down; exit 1 if they differ from the file's. "
+                                    "A 5 m shot file (bowl solve) replays from its scene XML with plain MuJoCo "
+                                    "(fresh MjData, qpos0 and qvel0 set, mj_step for duration) against its `down`; "
+                                    "a throw file (bowl frame -o) replays its delivery from the foul line, on its "
+                                    "oil, ball and pins standing at its timestep, against its outcome's `down`.")
+    r.add_argument("shot", metavar="FILE", help="a shot file (SHOT.json) or a throw file (THROW.json)")
     r.add_argument("--json", action="store_true", help="print one JSON object: down, expected, match")
     r.set_defaults(func=cmd_replay)
 
@@ -379,9 +381,15 @@ def cmd_solve(args) -> int:
 
 
 def cmd_replay(args) -> int:
-    from nbst.models.bowling import shotfile
+    from nbst.models.bowling import shotfile, throwfile
 
     try:
+        doc = shotfile.read_doc(args.shot)
+        if throwfile.is_throw(doc):
+            return _replay_throw(args)
+        if isinstance(doc, dict) and "kind" not in doc and "format" in doc:
+            return _err("replay", f"{args.shot}: format: not an nbst bowling shot or throw (a shot's kind is "
+                                  f"{shotfile.KIND!r}, a throw's format {throwfile.FORMAT!r})")
         d, down = shotfile.replay_file(args.shot)
     except shotfile.ShotFileError as e:
         return _err("replay", str(e))
@@ -393,6 +401,23 @@ def cmd_replay(args) -> int:
         print_json({"shot": str(args.shot), "down": down, "expected": want, "match": ok})
     else:
         print(f"pins down  {','.join(map(str, down)) or 'none'}")
+        print(f"expected   {','.join(map(str, want)) or 'none'}  ({'match' if ok else 'DIFFERENT'})")
+    return 0 if ok else 1
+
+
+def _replay_throw(args) -> int:
+    """``bowl replay THROW.json``: the frame again from the foul line; exit 1 if its pins down differ."""
+    from nbst.models.bowling import throwfile
+
+    d, r, ok = throwfile.replay_file(args.shot)
+    want = sorted(d["outcome"]["down"])
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json({"throw": str(args.shot), "down": r.down, "expected": want, "leave": r.leave,
+                    "expected_leave": sorted(d["outcome"]["leave"]), "match": ok})
+    else:
+        print(f"pins down  {','.join(map(str, r.down)) or 'none'}  (leave {_pins_text(r.leave)})")
         print(f"expected   {','.join(map(str, want)) or 'none'}  ({'match' if ok else 'DIFFERENT'})")
     return 0 if ok else 1
 
@@ -739,6 +764,9 @@ def register_frame(bowl) -> None:
                         "5 deg rotation)")
     f.add_argument("--angle-sigma", type=Bounded("angle-sigma", 0, 5, unit="deg"), default=0.15, metavar="DEG",
                    help="the launch angle's sigma before --noise-scale (default 0.15, an assumption: docs/bowling.md)")
+    f.add_argument("-o", "--output", default=None, metavar="THROW.json",
+                   help="also write the throw file: delivery, ball, oil, pins standing, the settled outcome, and the "
+                        "--probability estimate and --timesteps ladder when given; bowl replay runs it again")
     _mc_flags(f, 40, "estimate")
     f.set_defaults(func=cmd_frame)
 
@@ -789,7 +817,19 @@ def _bar(args, total: int, desc: str):
     return progress_bar(total=total, desc=desc, unit="frame", disable=args.quiet, file=sys.stderr)
 
 
+def write_throw(path, r, oil: str, *, ladder=None, estimate=None) -> None:
+    """Write THROW.json (models/bowling/throwfile.py) for frame ``r`` of the default ball, atomically."""
+    from nbst.outputs import write_text_atomic
+
+    from nbst.models.bowling import lane, throwfile
+
+    write_text_atomic(Path(path), throwfile.dumps(throwfile.throw_dict(r, oil=oil, ball=lane.Ball(), ladder=ladder,
+                                                                       estimate=estimate)))
+
+
 def cmd_frame(args) -> int:
+    from nbst.outputs import OutputError, prepare_output, signals_deferred
+
     from nbst.models.bowling import frame, lane, noise
 
     try:
@@ -798,8 +838,11 @@ def cmd_frame(args) -> int:
         lane.pattern(args.oil)
         standing = None if args.leave is None else sorted(
             n for n in range(1, 11) if _pin_list(args.leave, "--leave") >> (n - 1) & 1)
-    except (ValueError, argparse.ArgumentTypeError) as e:
+        if args.output:
+            prepare_output(args.output)
+    except (ValueError, argparse.ArgumentTypeError, OutputError) as e:
         return _err("frame", str(e))
+    r = lad = est = None
     try:
         r = frame.run_frame(d, args.oil, standing=standing)
         doc = {"frame": r.to_dict()}
@@ -807,8 +850,9 @@ def cmd_frame(args) -> int:
             r2 = frame.run_frame(d, args.oil, standing=standing, extra_s=args.longer)
             doc["longer"] = {"extra_s": args.longer, "leave": r2.leave, "same": r2.leave == r.leave}
         if args.timesteps:
+            lad = frame.ladder(d, args.oil, standing=standing)
             doc["ladder"] = [{"timestep": x.timestep, "leave": x.leave, "settle_s": x.settle_s, "cap_hit": x.cap_hit}
-                             for x in frame.ladder(d, args.oil, standing=standing)]
+                             for x in lad]
         if args.probability:
             bar = _bar(args, args.probability, "noisy throws")
             k = float(args.noise_scale)
@@ -821,10 +865,28 @@ def cmd_frame(args) -> int:
             bar.close()
             doc["probability"] = est.to_dict()
     except KeyboardInterrupt:
+        if args.output and r is not None:  # the frame is done: keep it (without what was cut short)
+            try:
+                with signals_deferred(reraise=False):
+                    write_throw(args.output, r, args.oil, ladder=lad)
+            except (OutputError, ValueError) as e:
+                return _err("frame", str(e))
+            print(f"nbst bowl frame: interrupted; wrote the frame without the unfinished parts to {args.output}",
+                  file=sys.stderr)
+            return 130
         print("nbst bowl frame: interrupted", file=sys.stderr)
         return 130
     except ValueError as e:
         return _err("frame", str(e))
+    if args.output:
+        try:
+            with signals_deferred(reraise=False) as late:
+                write_throw(args.output, r, args.oil, ladder=lad, estimate=est)
+        except (OutputError, ValueError) as e:
+            return _err("frame", str(e))
+        if late:
+            print(f"nbst bowl frame: interrupted; wrote {args.output}", file=sys.stderr)
+            return 130
     if args.json:
         from nbst.cli.args import print_json
 
@@ -832,6 +894,8 @@ def cmd_frame(args) -> int:
         return 0
     for line in frame_lines(doc):
         print(line)
+    if args.output:
+        print(f"throw file    {args.output} (nbst bowl replay {args.output})")
     return 0
 
 
