@@ -119,6 +119,11 @@ def test_an_atlas_round_trips_and_looks_up_a_down_set_on_a_full_rack(strike, spa
     assert throwfile.lookup(back, sum(1 << (n - 1) for n in r.down)) == d  # a mask names the same set
     assert throwfile.lookup(back, [10]) is None  # the spare's down set, but not on a full rack
     assert throwfile.lookup(back, [1, 2]) is None
+    rack = copy.deepcopy(d)
+    rack["standing"] = rack["standing"][::-1]  # the same rack in another order
+    assert throwfile.lookup(throwfile.check_atlas({**a, "throws": [rack]}, "a"), r.down) == rack
+    with pytest.raises(throwfile.ThrowFileError, match="same pins standing and down"):
+        throwfile.check_atlas({**a, "throws": [d, rack]}, "a")
 
 
 @pytest.mark.parametrize("mutate, field", [

@@ -431,7 +431,7 @@ def check_atlas(a, src) -> dict:
         p = t.get("probability")
         if p is not None and _noise.Noise(**p["noise"]) != nz:
             _fail(src, pre + "probability.noise", f"{p['noise']} is not the atlas's noise {a['noise']}")
-        key = (tuple(t["standing"]), tuple(sorted(t["outcome"]["down"])))
+        key = (tuple(sorted(t["standing"])), tuple(sorted(t["outcome"]["down"])))
         if key in seen:
             _fail(src, pre + "outcome.down", f"the same pins standing and down as throws[{seen[key]}]")
         seen[key] = i
@@ -462,7 +462,7 @@ def lookup(atlas: dict, down) -> dict | None:
     full rack, or None."""
     want = _pins(down)
     for t in atlas["throws"]:
-        if t["standing"] == FULL_RACK and sorted(t["outcome"]["down"]) == want:
+        if sorted(t["standing"]) == FULL_RACK and sorted(t["outcome"]["down"]) == want:
             return t
     return None
 
