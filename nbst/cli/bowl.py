@@ -21,6 +21,7 @@ import sys
 import time
 from pathlib import Path
 
+from nbst.cli import bowl_foul
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_out_dir, add_seed
 from nbst.parallel import default_jobs
@@ -114,6 +115,7 @@ def register(sub) -> None:
                         "(models/bowling/atlas.json, one throw for each of 328 subsets): a request it holds "
                         "is confirmed with one launch, others restart from its nearest subsets")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+    bowl_foul.add_solve_flags(s)
     s.set_defaults(func=cmd_solve)
 
     r = bowl.add_parser("replay", help="replay a shot or throw file and check its pins down",
@@ -158,6 +160,7 @@ def register(sub) -> None:
     add_seed(a, type=SEED, resumable=True)
     _runner_args(a, "the same shots as --jobs for the same seed and folder")
     a.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    bowl_foul.add_atlas_flags(a)
     a.set_defaults(func=cmd_atlas)
 
     register_throw(bowl)
@@ -307,6 +310,8 @@ def cmd_solve(args) -> int:
 
     from nbst.models.bowling import search, shot
 
+    if args.foul_line or args.robust is not None:
+        return bowl_foul.cmd_solve(args)
     target = args.down if args.down is not None else args.leave
     prepare_output(args.output)
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
@@ -670,6 +675,8 @@ def _atlas_summaries(out: Path, run: _AtlasRun, *, seconds: float, seed: int, me
 
 
 def cmd_atlas(args) -> int:
+    if args.foul_line:
+        return bowl_foul.cmd_atlas(args)
     from nbst.models.bowling import geometry, shotfile
 
     try:
