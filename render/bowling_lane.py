@@ -1,11 +1,13 @@
 """A throw from the foul line in 3D (``nbst bowl throw --video/--still``): the full 60 ft lane
 with its marks, a ball whose grip and track turn with it, numbered pins and a readout.
 
-* **Motion** (:func:`record_throw`): the delivery of :mod:`nbst.models.bowling.lane` in that
-  module's scene with the pins (``lane.build_model(pins=True)``), plain ``mj_step`` at h = 1 ms
-  from the foul line, every body's pose recorded each step; it runs until the pins settle
-  (every pin slower than :data:`SETTLE_SPEED` for :data:`SETTLE_HOLD` s) or :data:`AFTER_IMPACT`
-  s after the first ball-pin contact, whichever is first. The phases come from ``lane.throw``
+* **Motion** (:func:`record_throw`): the frame of :mod:`nbst.models.bowling.frame` itself:
+  ``frame.run_frame`` with a recording hook, so the same compiled model (``frame.frame_model``),
+  the same initial state (``frame.initial_qpos_qvel``: the ball body turned for its inertia
+  axes, the pins not in play parked behind the approach), the same steps and the same stop
+  rule (settled, or the cap), every body's pose recorded each step. The pins down drawn at the
+  end are the frame's USBC outcome, the one a throw file records. Pins not in play (a spare's
+  leave) are not drawn; the pin diagram shows them dim. The phases come from ``lane.throw``
   (the ball alone: the same motion up to the first contact).
 * **Lane**: the approach, the foul line, the guide dots at :data:`DOTS_FT` ft, the arrows at
   15 ft (boards 5 ... 35), the board lines (every fifth board counted from either edge
@@ -47,13 +49,6 @@ from nbst.render.bowling import frame_times as _shot_frame_times
 from nbst.render.gl import FrameRenderer, FrameTarget, create_context
 from nbst.render.scene3d import look_at, perspective
 
-#: The frame ends when every pin moves slower than SETTLE_SPEED (m/s) for SETTLE_HOLD s after the
-#: first contact, or AFTER_IMPACT s after it; a ball that meets no pin runs BALL_ONLY_AFTER s past
-#: the head pin's line.
-SETTLE_SPEED = 0.02
-SETTLE_HOLD = 0.5
-AFTER_IMPACT = 3.0
-BALL_ONLY_AFTER = 1.0
 #: Guide dots (ft past the foul line) on these boards, counted from either edge.
 DOTS_FT = 7.0
 DOT_BOARDS = (3, 5, 8, 11, 14)
@@ -149,9 +144,10 @@ void main() {
 
 @dataclass(frozen=True)
 class Throw:
-    """A recorded throw: the motion (``render.bowling.Motion``: ball and pin poses each step),
-    its phases (``lane.ThrowResult``, None for a ball that never reaches the pins), and what
-    made it."""
+    """A recorded throw: the motion (``render.bowling.Motion``: ball and pin poses each step, the
+    ball's orientation relative to its release), its phases (``lane.ThrowResult``, None for a ball
+    that never reaches the pins), the settled frame it is (``frame.FrameResult``: its pins down
+    are the last step's), the pins in play, and what made it."""
 
     motion: Motion
     result: object
@@ -159,20 +155,30 @@ class Throw:
     oil: str
     ball: object
     timestep: float
+    frame: object = None
+    in_play: tuple = tuple(range(1, 11))
 
 
-def _settled(speeds: np.ndarray) -> bool:
-    return bool(len(speeds) == 0 or speeds.max() < SETTLE_SPEED)
+def _qconj(q: np.ndarray) -> np.ndarray:
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
 
 
-def record_throw(delivery, oil: str = "house", ball=None, *, pins: bool = True) -> Throw:
-    """Run ``delivery`` (``lane.Delivery``) with ``ball`` on ``oil`` in the lane's scene (pins
-    standing when ``pins``) and record every step until the pins settle (module docstring).
-    Raises ``lane.LaneError`` (one line) for bad input; MuJoCo's warnings raise
-    ``shot.MujocoWarning``."""
-    import mujoco
+def _qmul_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise Hamilton product of (S, 4) quaternions ``a`` with one quaternion ``b`` (wxyz)."""
+    w1, x1, y1, z1 = a.T
+    w2, x2, y2, z2 = b
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=1)
 
-    from nbst.models.bowling import lane
+
+def record_throw(delivery, oil: str = "house", ball=None, *, standing=None, timestep: float | None = None,
+                 model=None) -> Throw:
+    """Record the frame of ``delivery`` (``lane.Delivery``) with ``ball`` on ``oil`` at the pins in
+    ``standing`` (default all ten) exactly as :func:`nbst.models.bowling.frame.run_frame` runs it
+    (its model, initial state, steps and stop rule, through its ``record`` hook): every step's
+    poses, and the frame's result. Raises ``lane.LaneError``/``frame.FrameError`` (one line) for
+    bad input; MuJoCo's warnings raise ``shot.MujocoWarning``."""
+    from nbst.models.bowling import frame, lane, scene
     from nbst.models.bowling import shot as shotmod
 
     delivery = delivery.check()
@@ -183,62 +189,40 @@ def record_throw(delivery, oil: str = "house", ball=None, *, pins: bool = True) 
         if "gutter" not in str(e) and "did not reach" not in str(e):
             raise
         result = None  # the picture still shows it; the readout says so
-    model = lane.build_model(oil, ball, delivery, pins=pins)
-    d = mujoco.MjData(model)
-    ja = model.joint("ball_free")
-    ba, bv = int(ja.qposadr[0]), int(ja.dofadr[0])
-    pos0, v0, w0 = lane.initial_state(delivery)
-    d.qpos[ba:ba + 7] = [*pos0, 1.0, 0.0, 0.0, 0.0]
-    d.qvel[bv:bv + 3] = v0
-    d.qvel[bv + 3:bv + 6] = w0
-    if pins:
-        padr = shotmod.pin_addresses(model)
-        pdof = np.array([int(model.joint(f"pin{n}_free").dofadr[0]) for n in range(1, 11)])
-        pin_geoms = {g for g in range(model.ngeom) if model.body(int(model.geom_bodyid[g])).name.startswith("pin")}
-    else:
-        padr = pdof = np.zeros(0, int)
-        pin_geoms = set()
-    ball_geom = model.geom("ball").id
-    h = model.opt.timestep
-    n_max = int(round((lane.MAX_SECONDS + AFTER_IMPACT) / h))
-    q = np.empty((n_max + 1, model.nq))
-    q[0] = d.qpos
-    impact, crossed, still_since, n = math.nan, math.nan, math.nan, 0
-    with shotmod.mujoco_warnings_raise():
-        while n < n_max:
-            mujoco.mj_step(model, d)
-            n += 1
-            q[n] = d.qpos
-            t = n * h
-            if math.isnan(impact) and pin_geoms:
-                for c in d.contact[:d.ncon]:
-                    if ball_geom in (c.geom1, c.geom2) and {int(c.geom1), int(c.geom2)} & pin_geoms:
-                        impact = t
-                        break
-            if math.isnan(crossed) and d.qpos[ba] >= 0.0:
-                crossed = t
-            if not math.isnan(impact):
-                speeds = np.linalg.norm(d.qvel[pdof[:, None] + np.arange(3)], axis=1) if len(pdof) else np.zeros(0)
-                if _settled(speeds):
-                    still_since = t if math.isnan(still_since) else still_since
-                    if t - still_since >= SETTLE_HOLD:
-                        break
-                else:
-                    still_since = math.nan
-                if t - impact >= AFTER_IMPACT:
+    m = model if model is not None else frame.frame_model(
+        oil, ball, timestep=frame.TIMESTEP if timestep is None else timestep)
+    ball_geom = m.geom("ball").id
+    pin_geoms = {g for g in range(m.ngeom) if m.body(int(m.geom_bodyid[g])).name.startswith("pin")}
+    qs: list = []
+    impact = [math.nan]
+
+    def record(d) -> None:       # reads d only: the frame's physics is untouched
+        qs.append(d.qpos.copy())
+        if math.isnan(impact[0]):
+            for c in d.contact[:d.ncon]:
+                g1, g2 = int(c.geom1), int(c.geom2)
+                if ball_geom in (g1, g2) and {g1, g2} & pin_geoms:
+                    impact[0] = float(d.time)
                     break
-            elif not math.isnan(crossed) and t - crossed >= BALL_ONLY_AFTER:
-                break
-            elif abs(d.qpos[ba + 1]) > 2.0 or d.qpos[ba + 2] < -1.0:
-                break
-    q = q[:n + 1]
-    if not np.isfinite(q).all():
-        raise shotmod.MujocoWarning("MuJoCo warned: non-finite state during the throw")
-    masks = shotmod.mask_of(shotmod.pins_down(model, q)) if pins else None
-    pin_q = q[:, padr[:, None] + np.arange(7)] if pins else np.zeros((n + 1, 0, 7))
-    motion = Motion(times=np.arange(n + 1) * h, ball=q[:, ba:ba + 7], pins=pin_q, impact=impact,
-                    down=shotmod.pins_of(int(masks[-1])) if pins else [], down_masks=masks)
-    return Throw(motion=motion, result=result, delivery=delivery, oil=oil, ball=ball, timestep=h)
+
+    fr = frame.run_frame(delivery, oil, ball, standing=standing, model=m, record=record)
+    q = np.array(qs)
+    h = float(m.opt.timestep)
+    ja = m.joint("ball_free")
+    ba = int(ja.qposadr[0])
+    padr = shotmod.pin_addresses(m)
+    # the frame's ball body starts turned (its inertia axes placed for the delivery); drawn
+    # relative to its release orientation, its body frame is the world frame at release, as the
+    # texture (grip holes from the release's PAP) is laid out
+    bq = q[:, ba:ba + 7].copy()
+    bq[:, 3:7] = _qmul_rows(bq[:, 3:7], _qconj(q[0, ba + 3:ba + 7]))
+    play = np.array([n in fr.in_play for n in scene.PIN_NUMBERS])
+    masks = shotmod.mask_of(shotmod.pins_down(m, q) & play)   # now down: tilted or off the deck
+    masks[-1] = shotmod.mask_from_pins(fr.down)                 # the end: the frame's USBC outcome
+    motion = Motion(times=np.arange(len(q)) * h, ball=bq, pins=q[:, padr[:, None] + np.arange(7)],
+                    impact=impact[0], down=list(fr.down), down_masks=masks)
+    return Throw(motion=motion, result=result, delivery=delivery, oil=oil, ball=ball, timestep=h, frame=fr,
+                 in_play=tuple(fr.in_play))
 
 
 def frame_times(throw: Throw, fps: float, *, hold: float = 1.0) -> np.ndarray:
@@ -455,11 +439,13 @@ def ortho_panel(x_range, y_half: float, vp, frame_h: int, *, margin_top: float, 
 class LaneRenderer(FrameRenderer):
     """Frames of a recorded throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both.
     ``asked`` (pins the shot was meant to knock down), ``probability`` (of the outcome, 0..1) and
-    ``probability_note`` (e.g. its sample size and interval) add readout lines when given."""
+    ``probability_note`` (e.g. its sample size and interval) add readout lines when given;
+    ``expected`` (the pins down a throw file records) adds a line only when the recorded frame
+    ends differently; ``no_request`` says on the ``asked`` line that a file asked for nothing."""
 
     def __init__(self, ctx, throw: Throw, *, size=style.DEFAULT_SIZE, camera: str = "both", asked=None,
                  probability: float | None = None, probability_note: str | None = None,
-                 overhead_from_ft: float = OVERHEAD_FROM_FT):
+                 overhead_from_ft: float = OVERHEAD_FROM_FT, expected=None, no_request: bool = False):
         import moderngl
         import trimesh
 
@@ -471,6 +457,9 @@ class LaneRenderer(FrameRenderer):
         self.ctx, self.throw, self.motion, self.camera = ctx, throw, throw.motion, camera
         self.size = tuple(size)
         self.asked = None if asked is None else sorted(int(p) for p in asked)
+        self.expected = None if expected is None else sorted(int(p) for p in expected)
+        self.no_request = bool(no_request)
+        self.in_play = tuple(throw.in_play)
         self.probability, self.probability_note = probability, probability_note
         self.hand = throw.delivery.hand
         self._mgl = moderngl
@@ -599,14 +588,26 @@ class LaneRenderer(FrameRenderer):
                          f"{r.speed_pins_mph:.1f} mph")
         m = self.motion
         k = self.step_at(t)
+        play = list(self.in_play)
+        full = len(play) == 10
+
+        def leave_of(down) -> str:
+            leave = [n for n in play if n not in down]
+            return f" (leave {pins(leave)})" if leave else (" (a strike)" if full else " (the spare)")
+
+        if not full:
+            lines.append(f"rack    {pins(play)} standing before the throw")
         if self.asked is not None:
-            leave = [n for n in range(1, 11) if n not in self.asked]
-            lines.append(f"asked   down {pins(self.asked)}" + (f" (leave {pins(leave)})" if leave else " (a strike)"))
+            lines.append(f"asked   down {pins(self.asked)}{leave_of(self.asked)}")
+        elif self.no_request:
+            lines.append("asked   nothing recorded (the file's requested is null)")
         if m.down_masks is not None:
             now = shotmod.pins_of(int(m.down_masks[k]))
             if k == len(m.times) - 1:
-                tail = "" if self.asked is None else (" = asked" if now == self.asked else " (not asked)")
-                lines.append(f"result  down {pins(now)}{tail}")
+                tail = "" if self.asked is None else (" = asked" if now == self.asked else ", not asked")
+                lines.append(f"result  down {pins(now)}{leave_of(now)}{tail}")
+                if self.expected is not None and now != self.expected:
+                    lines.append(f"file    down {pins(self.expected)}: this run differs")
             else:
                 lines.append(f"now     down {pins(now)}")
         if self.probability is not None:
@@ -670,7 +671,7 @@ class LaneRenderer(FrameRenderer):
             return
         parts, boxes = [], []
         for n, p in zip(scene.PIN_NUMBERS, self.pin_label_points(k)):   # front rows first: they keep theirs
-            if n in down:
+            if n in down or n not in self.in_play:
                 continue
             col, row, front = self.to_pixel(vp, vpm, p, H)
             label = str(n)
@@ -725,7 +726,8 @@ class LaneRenderer(FrameRenderer):
         self.small.draw_halo(self.size, self.small.layout([head], c0, 1.5 * self.text.cell[1]), style.TEXT_DIM,
                              style.TEXT_HALO)
         for standing, colour in ((True, style.TEXT), (False, (0.35, 0.37, 0.42))):
-            parts = [self.small.layout([str(n)], c, r) for n, c, r in diag if (n not in down) == standing]
+            parts = [self.small.layout([str(n)], c, r) for n, c, r in diag
+                     if (n not in down and n in self.in_play) == standing]
             if parts:
                 self.small.draw_halo(self.size, np.concatenate(parts), colour, style.TEXT_HALO)
         # a key under the diagram, where it fits beside the lane
@@ -764,7 +766,9 @@ class LaneRenderer(FrameRenderer):
                 trail = self.trail_wide_vao if cam == "overhead" else self.trail_vao
                 trail.render(mgl.TRIANGLE_STRIP, vertices=2 * n_trail)
             ctx.enable(mgl.DEPTH_TEST)
-            for p in self.motion.pins[k]:
+            for n, p in zip(range(1, 11), self.motion.pins[k]):
+                if n not in self.in_play:     # parked behind the approach, out of the frame: not drawn
+                    continue
                 self.prog["u_model"].write(_pose(p).T.astype("f4").tobytes())
                 self.pin_vao.render(mgl.TRIANGLES)
             self.ball_prog["u_model"].write(_pose(self.motion.ball[k]).T.astype("f4").tobytes())
@@ -804,7 +808,7 @@ def still_time(throw: Throw) -> float:
 
 def render_throw(throw: Throw, output, *, still: float | None = None, camera: str = "both", size=None,
                  fps=None, hold: float = 1.0, asked=None, probability=None, probability_note=None,
-                 progress=None) -> int:
+                 expected=None, no_request: bool = False, progress=None) -> int:
     """Render a recorded throw to ``output``: a .png at time ``still`` (seconds from the release;
     a negative value: :func:`still_time`), else a .mp4/.gif video at ``fps``. Returns the frames."""
     from nbst.render.video import render_video, write_png
@@ -813,7 +817,7 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
     ctx = create_context()
     try:
         r = LaneRenderer(ctx, throw, size=size, camera=camera, asked=asked, probability=probability,
-                         probability_note=probability_note)
+                         probability_note=probability_note, expected=expected, no_request=no_request)
         try:
             if still is not None:
                 t = still_time(throw) if still < 0 else float(np.clip(still, 0.0, throw.motion.times[-1]))
@@ -855,33 +859,30 @@ def check_picture_args(args) -> str | None:
     return None
 
 
-def picture_from_args(args, delivery, ball) -> str | None:
-    """``nbst bowl throw --video/--still``: record the throw with the pins and write the video
-    and/or the still; a progress line on stderr for the video and one line per file written.
-    Returns a one-line error, or None."""
+def wants_picture(args) -> bool:
+    """Whether any picture flag (--video, --still, --still-time, --size, --fps) was given."""
+    return any(getattr(args, a, None) is not None for a in ("video", "still", "still_time", "size", "fps"))
+
+
+def write_pictures(args, th: Throw, *, prog: str = "nbst bowl throw", **readout) -> str | None:
+    """Write ``args.still`` and/or ``args.video`` (flags checked by :func:`check_picture_args`) of
+    the recorded throw ``th``; ``readout``: LaneRenderer's asked, probability, probability_note,
+    expected, no_request. A progress line on stderr for the video and one line per file written. Returns a
+    one-line error, or None."""
     import sys
 
-    from nbst.models.bowling import lane
-    from nbst.models.bowling import shot as shotmod
     from nbst.outputs import OutputError, prepare_output
     from nbst.render.gl import RenderError
 
-    bad = check_picture_args(args)
-    if bad:
-        return bad
     size = tuple(int(v) for v in str(args.size).lower().split("x")) if getattr(args, "size", None) else None
-    try:
-        th = record_throw(delivery, args.oil, ball, pins=True)
-    except (lane.LaneError, shotmod.MujocoWarning) as e:
-        return str(e)
     st = getattr(args, "still_time", None)
     if st is not None and st > th.motion.times[-1]:
         return f"--still-time {st:g}: the throw lasts {th.motion.times[-1]:.2f} s"
     try:
         if getattr(args, "still", None):
             prepare_output(args.still, option="--still")
-            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size)
-            print(f"nbst bowl throw: wrote {args.still}", file=sys.stderr)
+            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size, **readout)
+            print(f"{prog}: wrote {args.still}", file=sys.stderr)
         if getattr(args, "video", None):
             prepare_output(args.video, option="--video")
             fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
@@ -889,10 +890,45 @@ def picture_from_args(args, delivery, ball) -> str | None:
 
             bar = progress_bar(total=len(frame_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
             try:
-                n = render_throw(th, args.video, size=size, fps=fps, progress=bar)
+                n = render_throw(th, args.video, size=size, fps=fps, progress=bar, **readout)
             finally:
                 bar.close()
-            print(f"nbst bowl throw: wrote {args.video} ({n} frames)", file=sys.stderr)
+            print(f"{prog}: wrote {args.video} ({n} frames)", file=sys.stderr)
     except (OutputError, RenderError) as e:
         return str(e)
     return None
+
+
+def picture_from_args(args, delivery, ball) -> str | None:
+    """``nbst bowl throw --video/--still``: record the throw's frame on all ten pins (as ``bowl
+    frame`` runs it) and write the video and/or the still. Returns a one-line error, or None."""
+    from nbst.models.bowling import frame, lane
+    from nbst.models.bowling import shot as shotmod
+
+    bad = check_picture_args(args)
+    if bad:
+        return bad
+    try:
+        th = record_throw(delivery, args.oil, ball)
+    except (lane.LaneError, frame.FrameError, shotmod.MujocoWarning) as e:
+        return str(e)
+    return write_pictures(args, th)
+
+
+def throw_file_readout(d: dict) -> dict:
+    """LaneRenderer's readout arguments for a checked throw file ``d`` (``throwfile.load``): the pins
+    asked for (``requested``), the file's outcome, and its probability with n and 95 % CI."""
+    out = {"expected": sorted(d["outcome"]["down"])}
+    if d.get("requested") is not None:
+        out["asked"] = sorted(d["requested"]["down"])
+    else:
+        out["no_request"] = True
+    e = d.get("probability")
+    if e:
+        want = sorted(e["want"]["down"])
+        standing = sorted(d["standing"])
+        what = (("a strike" if len(standing) == 10 else "the spare") if want == standing
+                else "down " + ",".join(map(str, want)))
+        out["probability"] = float(e["p"])
+        out["probability_note"] = (f"{what}; {e['k']}/{e['n']}, 95% CI {100 * e['lo']:.0f}-{100 * e['hi']:.0f}%")
+    return out

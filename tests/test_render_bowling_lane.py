@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from nbst.models.bowling import lane, scene
+from nbst.models.bowling import frame, lane, scene, spares
 from nbst.render import bowling_lane as bl
 
 SIZE = (960, 540)
@@ -52,15 +52,46 @@ def _lane_like(rgb) -> bool:
     return r > g > b and r > 150
 
 
-def test_the_motion_starts_at_the_foul_line_and_ends_with_the_pins_at_rest(throw):
+def test_the_motion_starts_at_the_foul_line_and_ends_with_the_frame(throw):
     m = throw.motion
     assert m.ball[0, 0] == pytest.approx(lane.FOUL_LINE_X) and m.ball[0, 0] < -18.0     # 60 ft from the head pin
-    assert 0 < m.impact < m.times[-1] <= m.impact + bl.AFTER_IMPACT + 1e-9
     assert throw.result is not None and abs(throw.result.seconds_to_pins - m.impact) < 0.1
-    # the frame ended settled (every pin slower than SETTLE_SPEED) or at the cap
-    speeds = np.linalg.norm(np.diff(m.pins[-2:, :, :3], axis=0)[0], axis=1) / throw.timestep
-    assert speeds.max() < bl.SETTLE_SPEED or m.times[-1] == pytest.approx(m.impact + bl.AFTER_IMPACT, abs=2e-3)
-    assert m.down == sorted(m.down) and m.down_masks.shape == m.times.shape
+    # it ends where the frame ends: settled (or at the cap), one recorded pose per step
+    fr = throw.frame
+    assert 0 < m.impact < m.times[-1] and len(m.times) == round(fr.seconds / throw.timestep) + 1
+    assert fr.settled != fr.cap_hit and m.times[-1] == pytest.approx(fr.seconds, abs=1e-9)
+    assert m.down == fr.down == sorted(m.down) and m.down_masks.shape == m.times.shape
+    # the ball is drawn relative to its release orientation: the identity at the release
+    assert np.allclose(m.ball[0, 3:7], [1.0, 0.0, 0.0, 0.0], atol=1e-12)
+
+
+SPARE_10 = spares.straight_at(*spares.aim_point((10,)))
+
+
+@pytest.mark.parametrize("delivery, standing", [(spares.STRIKE, None), (SPARE_10, [10])], ids=["strike", "spare-10"])
+def test_the_recording_is_the_frame_run_frame_runs(delivery, standing):
+    """The picture records frame.run_frame itself (its model, initial state, steps and stop rule):
+    the same pins down and leave and the same final state, bit for bit, as the frame without
+    the recording hook; the last recorded poses are that final state."""
+    from nbst.models.bowling import shot
+
+    fr = frame.run_frame(delivery, standing=standing)
+    th = bl.record_throw(delivery, "house", standing=standing)
+    assert (th.frame.down, th.frame.leave) == (fr.down, fr.leave) and th.motion.down == fr.down
+    assert np.array_equal(th.frame.final_qpos, fr.final_qpos) and th.frame.settle_s == fr.settle_s
+    m = frame.frame_model("house")
+    adr = shot.pin_addresses(m)
+    assert np.array_equal(th.motion.pins[-1], fr.final_qpos[adr[:, None] + np.arange(7)])
+    ba = int(m.joint("ball_free").qposadr[0])
+    assert np.array_equal(th.motion.ball[-1, :3], fr.final_qpos[ba:ba + 3])
+    assert shot.pins_of(int(th.motion.down_masks[-1])) == fr.down
+    assert th.in_play == tuple(fr.in_play)
+    if standing:                               # pins not in play stay parked, never counted down
+        parked = [k for k, n in enumerate(scene.PIN_NUMBERS) if n not in standing]
+        assert np.abs(th.motion.pins[:, parked, :2] - th.motion.pins[0, parked, :2]).max() < 1e-3   # within 1 mm
+        assert (th.motion.pins[:, parked, 0] < lane.FOUL_LINE_X - 1.0).all()     # behind the approach
+        assert all(shot.pins_of(int(x)) == [] or set(shot.pins_of(int(x))) <= set(standing)
+                   for x in th.motion.down_masks)
 
 
 def test_foul_line_is_drawn_where_the_behind_camera_sees_it(behind):
@@ -203,6 +234,7 @@ def test_readout_names_the_throw_and_adds_asked_and_probability_only_when_given(
     try:
         text = "\n".join(r.readout(float(throw.motion.times[-1])))
         assert "asked   down 1,2,3,4,5,6,7,8,9,10 (a strike)" in text and "chance  72% (n = 200)" in text
+        assert "file" not in text
     finally:
         r.release()
 
@@ -239,3 +271,86 @@ def test_cli_bad_picture_flags_are_one_line(tmp_path, capsys, monkeypatch, argv,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0]
     assert not list(tmp_path.iterdir())
+
+
+@pytest.fixture(scope="module")
+def spare_file(tmp_path_factory):
+    """A 10-pin spare throw file from the CLI, with a 4-throw probability."""
+    from nbst.cli.main import main
+
+    path = tmp_path_factory.mktemp("spare") / "spare10.json"
+    assert main(["bowl", "frame", "--leave", "10", "--board", "34", "--at", "foul", "--angle", "2.32", "--rpm", "200",
+                 "--rotation", "0", "--tilt", "0", "--probability", "4", "-o", str(path)]) == 0
+    return path
+
+
+def test_a_spare_draws_only_the_pins_in_play_and_its_readout_names_rack_ask_result_and_chance(gl, spare_file):
+    from nbst.models.bowling import throwfile
+
+    d = throwfile.load(spare_file)
+    th = bl.record_throw(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]), standing=d["standing"],
+                         timestep=d["outcome"]["timestep"])
+    assert th.frame.down == d["outcome"]["down"] == [10]
+    ro = bl.throw_file_readout(d)
+    e = d["probability"]
+    r = bl.LaneRenderer(gl, th, size=SIZE, camera="both", **ro)
+    try:
+        text = "\n".join(r.readout(float(th.motion.times[-1])))
+        assert "rack    10 standing before the throw" in text
+        assert "asked   nothing recorded (the file's requested is null)" in text     # bowl frame asks nothing
+        assert "result  down 10 (the spare)" in text and "this run differs" not in text
+        assert (f"chance  {100 * e['p']:.0f}% (the spare; {e['k']}/{e['n']}, 95% CI {100 * e['lo']:.0f}-"
+                f"{100 * e['hi']:.0f}%)") in text
+        # the diagram lights the 10 alone before the throw (pins 1-9 are not in play), none at the end
+        diag = {n: (c, w) for n, c, w in r.pin_diagram(r.panels["overhead"])}
+        cw, ch = r.small.cell
+
+        def ink(img, n):
+            c, w = diag[n]
+            return img[int(w):int(w + ch), int(c):int(c + cw * len(str(n)))].astype(int).sum(axis=2).max()
+
+        first, last = r.render(0.0), r.render(float(th.motion.times[-1]))
+        assert ink(first, 10) > 600 and all(ink(first, n) < 400 for n in range(1, 10))
+        assert all(ink(last, n) < 400 for n in range(1, 11))
+    finally:
+        r.release()
+    asked = bl.throw_file_readout({**d, "requested": {"down": [10]}})
+    r = bl.LaneRenderer(gl, th, size=(320, 180), camera="overhead", **asked)
+    try:
+        text = "\n".join(r.readout(float(th.motion.times[-1])))
+        assert "asked   down 10 (the spare)" in text and "result  down 10 (the spare) = asked" in text
+    finally:
+        r.release()
+    # a file whose outcome differs from the run says so (the replay exits 1 then)
+    r = bl.LaneRenderer(gl, th, size=(320, 180), camera="overhead", expected=[])
+    try:
+        assert "file    down none: this run differs" in r.readout(float(th.motion.times[-1]))
+    finally:
+        r.release()
+
+
+def test_cli_replay_films_a_throw_file_and_refuses_a_shot_file_in_one_line(spare_file, tmp_path, capsys):
+    import imageio_ffmpeg
+    from PIL import Image
+
+    from nbst.cli.main import main
+
+    png, mp4 = tmp_path / "r.png", tmp_path / "r.mp4"
+    capsys.readouterr()
+    assert main(["bowl", "replay", str(spare_file), "--still", str(png), "--video", str(mp4), "--size", "160x90",
+                 "--fps", "4"]) == 0
+    cap = capsys.readouterr()
+    assert "pins down  10  (leave none)" in cap.out and "(match)" in cap.out
+    assert Image.open(png).size == (160, 90)
+    reader = imageio_ffmpeg.read_frames(str(mp4))
+    assert tuple(next(reader)["size"]) == (160, 90) and sum(1 for _ in reader) > 4
+    assert f"nbst bowl replay: wrote {mp4}" in cap.err
+    shot = tmp_path / "shot.json"
+    shot.write_text('{"kind": "nbst-bowling-shot"}')
+    assert main(["bowl", "replay", str(shot), "--video", str(tmp_path / "s.mp4")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a 5 m shot file" in err[0] and "nbst render SHOT.json" in err[0]
+    assert main(["bowl", "replay", str(spare_file), "--video", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--video" in err[0] and "use a .mp4 or .gif file" in err[0]
+    assert not (tmp_path / "s.mp4").exists() and not (tmp_path / "x.png").exists()

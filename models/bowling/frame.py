@@ -198,9 +198,12 @@ def _pin_moving(model, data, in_play_idx) -> bool:
 
 def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None = None, *,
               standing=None, timestep: float = TIMESTEP, extra_s: float = 0.0, mu_oil: float = lane.MU_OIL,
-              model=None) -> FrameResult:
+              model=None, record=None) -> FrameResult:
     """Throw ``delivery`` at the pins in ``standing`` (default all ten) and run until they settle
-    (or the cap), then ``extra_s`` more; the USBC outcome (see the module docstring)."""
+    (or the cap), then ``extra_s`` more; the USBC outcome (see the module docstring).
+
+    ``record(data)``, when given, is called with the ``MjData`` at release and after every step
+    (the same steps, one at a time: the same states as without it); it must only read ``data``."""
     import mujoco
 
     delivery = delivery.check()
@@ -225,9 +228,20 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
     settle = None
     cap = lane.MAX_SECONDS
     prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+
+    def step(n: int) -> None:
+        if record is None:
+            mujoco.mj_step(m, d, nstep=n)
+            return
+        for _ in range(n):
+            mujoco.mj_step(m, d)
+            record(d)
+
+    if record is not None:
+        record(d)
     with shot.mujoco_warnings_raise():
         while True:
-            mujoco.mj_step(m, d, nstep=k)
+            step(k)
             bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
             if t_pins is None and bx < 0.0 and abs(by) > half and bx < scene.DECK_FRONT_X:
                 left_lane = True
@@ -254,7 +268,7 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
             if d.time >= cap - 1e-9:
                 break
         if extra_s > 0:
-            mujoco.mj_step(m, d, nstep=int(round(extra_s / h)))
+            step(int(round(extra_s / h)))
     bad = shot.data_warnings(d)
     if bad or not np.isfinite(d.qpos).all():
         raise shot.MujocoWarning(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the frame")

@@ -126,6 +126,8 @@ def register(sub) -> None:
                                     "oil, ball and pins standing at its timestep, against its outcome's `down`.")
     r.add_argument("shot", metavar="FILE", help="a shot file (SHOT.json) or a throw file (THROW.json)")
     r.add_argument("--json", action="store_true", help="print one JSON object: down, expected, match")
+    _picture_flags(r, "the throw file's frame, its readout with the pins asked for, the pins down and the file's "
+                      "probability (throw files only: `nbst render SHOT.json` films a 5 m shot)")
     r.set_defaults(func=cmd_replay)
 
     a = bowl.add_parser("atlas", help="try for every one of the 1,023 non-empty subsets; one shot per subset found",
@@ -203,16 +205,22 @@ def register_throw(bowl) -> None:
                    help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
     t.add_argument("-o", "--output", default=None, metavar="THROW.json", help="also write the phases as JSON")
     t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
-    t.add_argument("--video", default=None, metavar="OUT.mp4",
-                   help="also film the throw (.mp4 or .gif; 3D, behind the bowler and overhead, the pins until they "
-                        "settle, slow motion at impact; render/bowling_lane.py)")
-    t.add_argument("--still", default=None, metavar="OUT.png",
-                   help="also draw one frame as PNG (by default just before the ball meets the pins)")
-    t.add_argument("--still-time", type=Bounded("still-time", 0, 30, unit="s"), default=None, metavar="S",
-                   help="the --still's moment, seconds after the release")
-    t.add_argument("--size", default=None, metavar="WxH", help="frame size of --video/--still (default 1280x720)")
-    t.add_argument("--fps", type=Bounded("fps", 1, 240), default=None, help="--video's frames per second (default 60)")
+    _picture_flags(t, "the throw's frame on all ten pins (as bowl frame runs it)")
     t.set_defaults(func=cmd_throw)
+
+
+def _picture_flags(p, what: str) -> None:
+    """--video, --still, --still-time, --size, --fps: the picture of a frame from the foul line."""
+    p.add_argument("--video", default=None, metavar="OUT.mp4",
+                   help=f"also film {what} (.mp4 or .gif; 3D, behind the bowler and overhead, from the release until "
+                        "the pins settle, slow motion at impact; the pins down drawn at the end are the frame's "
+                        "outcome; render/bowling_lane.py)")
+    p.add_argument("--still", default=None, metavar="OUT.png",
+                   help="also draw one frame as PNG (by default just before the ball meets the pins)")
+    p.add_argument("--still-time", type=Bounded("still-time", 0, 30, unit="s"), default=None, metavar="S",
+                   help="the --still's moment, seconds after the release")
+    p.add_argument("--size", default=None, metavar="WxH", help="frame size of --video/--still (default 1280x720)")
+    p.add_argument("--fps", type=Bounded("fps", 1, 240), default=None, help="--video's frames per second (default 60)")
 
 
 def _runner_args(parser, same: str) -> None:
@@ -395,6 +403,13 @@ def cmd_replay(args) -> int:
         if isinstance(doc, dict) and "kind" not in doc and "format" in doc:
             return _err("replay", f"{args.shot}: format: not an nbst bowling shot or throw (a shot's kind is "
                                   f"{shotfile.KIND!r}, a throw's format {throwfile.FORMAT!r})")
+        from nbst.render.bowling_lane import wants_picture
+
+        if wants_picture(args):
+            shot = isinstance(doc, dict) and doc.get("kind") == shotfile.KIND
+            return _err("replay", f"{args.shot}: {'a 5 m shot file' if shot else 'not a throw file'}: --video/--still "
+                                  "film throw files (bowl frame -o); a 5 m shot is filmed by "
+                                  "`nbst render SHOT.json -o OUT.mp4` (or --still T -o OUT.png)")
         d, down = shotfile.replay_file(args.shot)
     except shotfile.ShotFileError as e:
         return _err("replay", str(e))
@@ -411,10 +426,28 @@ def cmd_replay(args) -> int:
 
 
 def _replay_throw(args) -> int:
-    """``bowl replay THROW.json``: the frame again from the foul line; exit 1 if its pins down differ."""
+    """``bowl replay THROW.json``: the frame again from the foul line; exit 1 if its pins down differ.
+    With --video/--still, the frame is recorded as it runs (one run) and filmed with the file's readout."""
     from nbst.models.bowling import throwfile
+    from nbst.render import bowling_lane
 
-    d, r, ok = throwfile.replay_file(args.shot)
+    picture = bowling_lane.wants_picture(args)
+    if not picture:
+        d, r, ok = throwfile.replay_file(args.shot)
+    else:
+        from nbst.models.bowling import frame, lane, shot
+
+        bad = bowling_lane.check_picture_args(args)
+        if bad:
+            return _err("replay", bad)
+        d = throwfile.load(args.shot)
+        try:   # the replay of throwfile.replay, recorded: its model, oil, ball, pins standing and timestep
+            th = bowling_lane.record_throw(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]),
+                                           standing=d["standing"], timestep=float(d["outcome"]["timestep"]))
+        except (lane.LaneError, frame.FrameError, shot.MujocoWarning) as e:
+            return _err("replay", f"{args.shot}: delivery: {e}")
+        r = th.frame
+        ok = r.down == sorted(d["outcome"]["down"])
     want = sorted(d["outcome"]["down"])
     if args.json:
         from nbst.cli.args import print_json
@@ -424,6 +457,10 @@ def _replay_throw(args) -> int:
     else:
         print(f"pins down  {','.join(map(str, r.down)) or 'none'}  (leave {_pins_text(r.leave)})")
         print(f"expected   {','.join(map(str, want)) or 'none'}  ({'match' if ok else 'DIFFERENT'})")
+    if picture:
+        bad = bowling_lane.write_pictures(args, th, prog="nbst bowl replay", **bowling_lane.throw_file_readout(d))
+        if bad:
+            return _err("replay", bad)
     return 0 if ok else 1
 
 
