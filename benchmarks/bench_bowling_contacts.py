@@ -256,7 +256,7 @@ def positive_int(s: str) -> int:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="8 pocket throws and 4 per spare (a smoke run, ~1 min)")
+    ap.add_argument("--quick", action="store_true", help="8 noisy throws of each delivery and 4 of each spare (a smoke run, 1-2 min)")
     ap.add_argument("--jobs", type=positive_int, default=2, help="worker processes (default 2)")
     ap.add_argument("--pocket-n", type=positive_int, default=None, help="noisy throws of the strike line and of the pocket cell, each, per setting (default 40)")
     ap.add_argument("--spare-n", type=positive_int, default=None, help="noisy throws per spare per setting (default 20)")
@@ -395,4 +395,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # before the frames: nothing measured yet to print
+        print("interrupted before the frames ran", file=sys.stderr)
+        sys.exit(130)
