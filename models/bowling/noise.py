@@ -17,7 +17,8 @@ Draws are clipped to the delivery's limits (rotation and tilt to [0, 90] deg, bo
 [1, 39]). Everything is drawn from one ``numpy`` generator seeded by the caller, in a fixed
 order, so a seed gives the same throws whatever the number of threads that run them.
 
-The **probability** of an outcome is a Monte Carlo estimate over ``n`` noisy throws, with a
+The **probability** of an outcome (by default: the frame converts, every pin in play down; with
+``want``: exactly the pins of ``want`` are down) is a Monte Carlo estimate over ``n`` noisy throws, with a
 95 % Wilson score interval (:func:`wilson`): ``(p + z^2/2n +- z sqrt(p(1-p)/n + z^2/4n^2)) /
 (1 + z^2/n)``, z = 1.96, which stays inside [0, 1] and is not empty at 0 or n successes.
 
@@ -115,9 +116,30 @@ class Estimate:
         return f"{100 * self.p:.0f} % ({self.k}/{self.n}; 95 % CI {100 * self.lo:.0f}-{100 * self.hi:.0f} %)"
 
 
-def estimate(results: list, seed: int, noise: Noise = DEFAULT) -> Estimate:
-    """The probability that a frame converts (every pin in play down) from its noisy frames."""
-    k = sum(1 for r in results if r.converted)
+def wanted(want) -> list | None:
+    """``want`` as a sorted list of distinct pin numbers 1..10 (None stays None: convert)."""
+    if want is None:
+        return None
+    try:
+        pins = sorted(int(p) for p in want)
+    except (TypeError, ValueError):
+        raise ValueError(f"want: pins must be numbers 1..10, got {want!r}") from None
+    if any(not 1 <= p <= 10 for p in pins) or len(set(pins)) != len(pins):
+        raise ValueError(f"want: pins must be distinct numbers 1..10, got {want!r}")
+    return pins
+
+
+def success(r, want=None) -> bool:
+    """Whether frame ``r`` gave the outcome: with ``want`` None, it converted (every pin in play
+    down); else exactly the pins of ``want`` (a sorted list) are down."""
+    return r.converted if want is None else sorted(r.down) == want
+
+
+def estimate(results: list, seed: int, noise: Noise = DEFAULT, want=None) -> Estimate:
+    """The probability of the outcome from noisy frames: with ``want`` None, that a frame converts
+    (every pin in play down); else that exactly the pins of ``want`` are down (no more, no fewer)."""
+    want = wanted(want)
+    k = sum(1 for r in results if success(r, want))
     n = len(results)
     lo, hi = wilson(k, n)
     leaves: dict = {}
@@ -129,9 +151,11 @@ def estimate(results: list, seed: int, noise: Noise = DEFAULT) -> Estimate:
 
 
 def probability(delivery: lane.Delivery, n: int, seed: int, *, runner: frame.FrameRunner, standing=None,
-                noise: Noise = DEFAULT, on_done=None) -> tuple[Estimate, list]:
+                noise: Noise = DEFAULT, on_done=None, want=None) -> tuple[Estimate, list]:
     """(the estimate that ``delivery`` converts the pins in ``standing`` (default: a strike) under
-    ``noise``, the frames) from ``n`` noisy throws run by ``runner``."""
+    ``noise``, or with ``want`` knocks down exactly those pins; the frames) from ``n`` noisy
+    throws run by ``runner``."""
+    want = wanted(want)
     throws = sample(delivery, n, seed, noise)
     results = runner.map(throws, standing=standing, on_done=on_done)
-    return estimate(results, seed, noise), results
+    return estimate(results, seed, noise, want), results

@@ -17,7 +17,11 @@
   side (3 too at 17 mph on a multi-pin leave), and at 17 mph from the middle (board 20) and
   from the aim point's own board (straight down the boards) at the aim point and 1 board
   either side. Each is screened on a few noisy throws, the best three on more and on the
-  timestep ladder (:func:`best_spare`); the pick is measured afresh on ``n``.
+  timestep ladder (:func:`best_spare`); the pick is then **polished** by
+  :func:`.robust.maximise` (an evolution strategy over the release on common noisy throws,
+  ``polish`` frames) unless it converted every screening throw, or no candidate converted
+  any (nothing to climb); the polished throw, if it keeps its outcome on the ladder,
+  replaces the pick. The pick is measured afresh on ``n``, before and after the polish.
 
 The 3-6-9 system (talkbowling.co.uk, "Spare systems"): keep the strike line's target arrow
 and move the feet 3 boards (2 pin), 6 (4 pin) or 9 (7 pin) towards the hand side for the
@@ -34,7 +38,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from nbst.models.bowling import frame, lane, noise, scene
+from nbst.models.bowling import frame, lane, noise, robust, scene
 
 #: The strike line: the typical release over the 10 board at the arrows, 1.5 deg out (lane.py).
 STRIKE = lane.Delivery(board=10.0, at="arrows", angle=1.5)
@@ -244,6 +248,9 @@ class SpareResult:
     estimate: dict
     candidates: list  # (label, screened k/n)
     ladder: list  # the best throw without noise: (timestep, leave) at h = 1, 0.5, 0.25 ms, then ("+2 s", leave)
+    screened: dict  # the screening's pick before the polish: label, delivery, fresh estimate (seed, n)
+    polish: dict | None  # robust.maximise's account (None: not polished, see ``polish_note``)
+    polish_note: str
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -267,13 +274,24 @@ def candidates(name: str, *, oil: str = "house", ball=None) -> list:
     return out
 
 
+#: The polish's default budget, in frames per leave: this many times ``screen``.
+POLISH_PER_SCREEN = 40
+
+
 def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, screen: int = 12,
-               nz: noise.Noise = noise.DEFAULT, on_done=None) -> SpareResult:
+               nz: noise.Noise = noise.DEFAULT, on_done=None, polish: int | None = None) -> SpareResult:
     """The candidate of :func:`candidates` that converts leave ``name`` best. Screening: ``screen``
     noisy throws each; the best three get ``2 * screen`` more and their noise-free throw is run
     at h = 1, 0.5 and 0.25 ms; the pick is the most conversions among those three whose ladder
     converts at every step (any of the three if none does). Its probability is then measured
-    afresh on ``n`` throws (seed ``seed``; screening used other seeds), as is the 3-6-9 line's."""
+    afresh on ``n`` throws (seed ``seed``; screening used other seeds), as is the 3-6-9 line's.
+
+    **Polish**: :func:`.robust.maximise` from the pick, ``polish`` noisy frames (default
+    ``POLISH_PER_SCREEN * screen``; 0: none), fresh estimate on ``n`` throws of seed ``seed``
+    (the same throws' noise as the pick's measurement: a paired before/after). Skipped when the
+    pick converted all of its ``3 * screen`` screening throws, or no candidate converted any.
+    The polished throw replaces the pick when its noise-free throw converts at every timestep
+    of the ladder (it is never worse than the pick on the polish's own screen)."""
     if name not in LEAVES:
         raise ValueError(f"leave: {name!r} is not one of the common leaves ({', '.join(LEAVES)})")
     standing = leave_pins(name)
@@ -299,12 +317,35 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     else:
         eb, _ = noise.probability(cands[best_i][1], n, seed, runner=runner, standing=standing, noise=nz,
                                   on_done=on_done)
-    best = cands[best_i][1]
-    lad = ladders[best_i] + [["+2 s", frame.run_frame(best, runner.oil, runner.ball, standing=standing,
-                                                       extra_s=2.0).leave]]
+    best, label, lad0 = cands[best_i][1], cands[best_i][0], ladders[best_i]
+    screened = {"label": label, "delivery": best.to_dict(), "estimate": eb.to_dict()}
+    budget = POLISH_PER_SCREEN * screen if polish is None else int(polish)
+    pol, note = None, ""
+    if budget <= 0:
+        note = "not polished: --polish 0"
+    elif k[best_i][0] == k[best_i][1]:
+        note = f"not polished: the pick converted all {k[best_i][1]} of its screening throws"
+    elif all(k[c][0] == 0 for c in k):
+        note = "not polished: no candidate converted any screening throw (nothing to climb)"
+    else:
+        rr = robust.maximise(best, standing=standing, runner=runner, budget=budget, seed=seed, noise=nz,
+                             on_done=on_done, n=n)
+        pol = {"budget": budget, "frames": rr.frames, "start_screen": rr.start_screen.to_dict(),
+               "screen": rr.screen.to_dict(), "ladder_holds": rr.ladder_holds,
+               "generations": len(rr.history) - 1, "accepted": sum(1 for h in rr.history[1:] if h["accepted"])}
+        moved = rr.delivery != rr.start
+        if moved and rr.ladder_holds:
+            best, label, lad0, eb = rr.delivery, f"polished {label}", [x[:2] for x in rr.ladder], rr.estimate
+            note = "polished: the pick of robust.maximise replaces the screening's"
+        elif moved:
+            note = "polished: no better release kept its outcome on the ladder; the screening's pick stays"
+        else:
+            note = "polished: no better release found on the polish's screen; the screening's pick stays"
+    lad = lad0 + [["+2 s", frame.run_frame(best, runner.oil, runner.ball, standing=standing, extra_s=2.0).leave]]
     return SpareResult(leave=name, system_369=cands[0][1].to_dict(), system_369_estimate=e369.to_dict(),
-                       best=best.to_dict(), best_label=cands[best_i][0], estimate=eb.to_dict(),
-                       candidates=[[cands[c][0], *k[c]] for c in range(len(cands))], ladder=lad)
+                       best=best.to_dict(), best_label=label, estimate=eb.to_dict(),
+                       candidates=[[cands[c][0], *k[c]] for c in range(len(cands))], ladder=lad,
+                       screened=screened, polish=pol, polish_note=note)
 
 
 # --------------------------------------------------------------------------- the picture

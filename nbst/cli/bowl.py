@@ -819,14 +819,19 @@ def register_frame(bowl) -> None:
                                     "boards, same target arrow) and straight spare balls (cross-lane at 17 and 21 mph, "
                                     "from the middle and straight down the boards, at the leave's aim point and 1-2 "
                                     "boards either side) are "
-                                    "screened on --screen noisy throws each; the best is measured on --samples, "
-                                    "beside the 3-6-9 line (docs/bowling.md).",
+                                    "screened on --screen noisy throws each; the best is polished by a robust "
+                                    "search (--polish) and measured on --samples, beside the 3-6-9 line "
+                                    "(docs/bowling.md).",
                         epilog="Example: nbst bowl spares --leaves 10,7 --samples 40")
     s.add_argument("--leaves", default=None, metavar="L1,L2",
                    help="leaves to shoot, '-' joining pins, ',' between leaves (default: 10, 7, 4, 6, 2-4-5-8, "
                         "3-6-10, 1-2-4, 1-3-6, 2-8, 3-9, 7-10)")
     s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
                    help="noisy throws per candidate in the screening (default 12)")
+    s.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=None, metavar="N",
+                   help="noisy frames per leave for polishing the pick with a robust search (an evolution "
+                        "strategy on common noisy throws; skipped where the pick converted every screening "
+                        "throw or nothing converted); default 40 x --screen (480); 0: no polish")
     _mc_flags(s, 60, "measured throw")
     s.set_defaults(func=cmd_spares)
 
@@ -988,14 +993,17 @@ def cmd_spares(args) -> int:
     except ValueError as e:
         return _err("spares", str(e))
     out = []
-    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures
-    total = sum(2 * args.samples + (23 + 2 * ("-" in nm)) * args.screen for nm in names)
+    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures,
+    # then at most the polish's budget and its measure (a skipped polish leaves the bar short of its total)
+    polish = spares.POLISH_PER_SCREEN * args.screen if args.polish is None else args.polish
+    total = sum(2 * args.samples + (23 + 2 * ("-" in nm)) * args.screen + (polish + args.samples) * (polish > 0)
+                for nm in names)
     bar = _bar(args, total, "spare frames")
     try:
         with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
             for nm in names:
                 res = spares.best_spare(nm, args.samples, args.seed, runner=R, screen=args.screen,
-                                        on_done=lambda: bar.update(1))
+                                        on_done=lambda: bar.update(1), polish=polish)
                 out.append(res.to_dict())
                 if not args.json:
                     bar.clear() if hasattr(bar, "clear") else None
@@ -1008,14 +1016,15 @@ def cmd_spares(args) -> int:
     if args.json:
         from nbst.cli.args import print_json
 
-        print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "spares": out})
+        print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "polish": polish,
+                    "spares": out})
     return 0
 
 
 def spare_line(r: dict) -> str:
     e, s, b = r["estimate"], r["system_369_estimate"], r["best"]
     return (f"{r['leave']:>8}  best: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
-            f"{b['rpm']:g} rpm, rotation {b['rotation']:g})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
+            f"{b['mph']:.1f} mph, {b['rpm']:.0f} rpm, rotation {b['rotation']:.0f})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
             f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)   3-6-9 line (board {r['system_369']['board']:.1f}): "
             f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
             + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(_pins_text(x[1]) for x in r["ladder"]))
