@@ -113,7 +113,9 @@ def cmd_solve(args) -> int:
     jobs = args.jobs or default_jobs()
     elites = {} if args.no_atlas else shipped_elites()
     t0 = time.perf_counter()
-    bar = progress_bar(total=args.max_rollouts, desc=f"bowl {','.join(map(str, want))}", unit="frame",
+    asked = (f"leave {','.join(str(n) for n in range(1, 11) if n not in want) or 'none'}" if args.leave is not None
+             else f"down {','.join(map(str, want))}")
+    bar = progress_bar(total=args.max_rollouts, desc=f"bowl {asked}", unit="frame",
                        disable=args.quiet or target in elites, file=sys.stderr)
     state = {"point": None, "est": None, "ladder": None, "stage": "search", "frames": 0, "from_atlas": target in elites}
     arch = dict(elites)
@@ -138,15 +140,19 @@ def cmd_solve(args) -> int:
                     d = foul_atlas.delivery_of(point)
                     if args.robust is not None:
                         state["stage"] = "robust"
-                        rb = progress_bar(total=args.robust, desc="robust", unit="frame", disable=args.quiet,
-                                          file=sys.stderr)
+                        rb = progress_bar(total=args.robust + args.samples, desc="robust", unit="frame",
+                                          disable=args.quiet, file=sys.stderr)
                         res = robust.maximise([d], want=want, runner=R, budget=args.robust, seed=seed,
                                               n=args.samples, on_done=lambda: rb.update(1))
                         rb.close()
-                        state["point"] = foul_atlas.point_of(res.delivery)
-                        state["est"], state["robust"] = res.estimate, res
-                        state["ladder"] = [{"timestep": h, "leave": lv} for h, lv, _ in res.ladder]
-                    else:
+                        state["robust"] = res
+                        if R.one(res.delivery).down == want:
+                            state["point"] = foul_atlas.point_of(res.delivery)
+                            state["est"] = res.estimate
+                            state["ladder"] = [{"timestep": h, "leave": lv} for h, lv, _ in res.ladder]
+                        else:  # the most probable throw seen misses without noise: keep the one that gives it
+                            state["kept_start"] = True
+                    if args.robust is None or state.get("kept_start"):
                         state["stage"] = "probability"
                         pb = progress_bar(total=args.samples, desc="probability", unit="frame", disable=args.quiet,
                                           file=sys.stderr)
@@ -194,6 +200,9 @@ def cmd_solve(args) -> int:
     if r.down != want:
         print(f"nbst bowl solve: the most probable throw found misses without noise: {line}", file=sys.stderr)
         return 1
+    if state.get("kept_start"):
+        print("nbst bowl solve: --robust found no throw more probable that also gives the outcome without noise; "
+              "the throw found first is written", file=sys.stderr)
     if not args.quiet:
         how = " (the shipped foul-line atlas's throw)" if state["from_atlas"] else f" after {state['frames']} frames"
         print(f"nbst bowl solve: found{how}: {line}", file=sys.stderr)
