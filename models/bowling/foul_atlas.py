@@ -1,17 +1,21 @@
 """The atlas from the foul line: one bowler's throw per subset of pins down, found by search,
 each with the probability of its subset under the release noise.
 
-* **Throw space**: a right-hander's delivery of :mod:`.lane` in a bowler's units, over the
-  ranges of :data:`BOUNDS` (board at the foul line, launch angle, speed, rev rate, axis
-  rotation, axis tilt); the default ball and the atlas's oil pattern. A left-hander's
-  throw for a subset is the mirrored one (:mod:`.lane` mirrors the lane), with the subset's
-  pins mirrored too.
+* **Throw space**: a delivery of :mod:`.lane` in a bowler's units, over the ranges of
+  :data:`BOUNDS` (board at the foul line, launch angle, speed, rev rate, axis rotation, axis
+  tilt), and the hand (a 7th coordinate: below 1/2 right, else left); the default ball and
+  the atlas's oil pattern. A left-hander's lane is a right-hander's mirrored (:mod:`.lane`),
+  so a left-handed throw reaches the mirror images of what right-handed throws reach.
 * **Search** (:func:`grow`): the 5 m atlas's MAP-Elites emitter (:func:`.atlas.emit`, with
   this space): :data:`.atlas.EXPLORE` uniform throws into an empty archive, then batches of
   :data:`.search.BATCH` holding 2 uniform throws and children of archived elites, a child
   moved from its parent by a Gaussian step in the unit cube at one of :data:`SCALES`. Every
   throw is a settled USBC frame (:func:`.frame.run_frame`); its subset is the pins down.
-  The first throw that gave a subset is its elite.
+  The first throw that gave a subset is its elite. A child keeps its parent's hand; uniform
+  throws are either hand, half and half.
+* **Mirror step** (:func:`mirror_step`): for each elite whose mirrored subset (pins 2-3,
+  4-6, 7-10 and 8-9 swapped) is not archived yet, the same delivery with the other hand;
+  each is a frame like any other and its own outcome is what is archived.
 * **Probability** (:func:`probabilities`): each elite thrown ``n`` times under the release
   noise (:mod:`.noise`); the probability is the share of noisy throws whose pins down are
   exactly the subset, with a 95 % Wilson interval. An elite is the first throw found, not
@@ -42,15 +46,19 @@ SHIPPED = Path(__file__).with_name("foul_atlas.json")
 ARCHIVE_FORMAT = "nbst-bowling-foul-archive"
 ARCHIVE_VERSION = 1
 
-#: The throw space (a right-hander; board at the foul line): the ranges a bowler throws.
+#: The throw space (board at the foul line): the ranges a bowler throws.
 #: Boards 3-37 keep the ball's centre on the lane; -3..+4 deg covers crossing the lane both
 #: ways (+ is out toward board 1); 13-23 mph; up to 500 rpm (a power player); rotation
 #: 0 (end over end) to 90 deg (all side spin); tilt up to 30 deg.
 BOUNDS = {"board": (3.0, 37.0), "angle": (-3.0, 4.0), "mph": (13.0, 23.0), "rpm": (0.0, 500.0),
           "rotation": (0.0, 90.0), "tilt": (0.0, 30.0)}
 KEYS = tuple(BOUNDS)
-LO = np.array([BOUNDS[k][0] for k in KEYS])
-HI = np.array([BOUNDS[k][1] for k in KEYS])
+#: A point of the throw space: the values of KEYS, then the hand (0 right, 1 left).
+DIM = len(KEYS) + 1
+LO = np.array([BOUNDS[k][0] for k in KEYS] + [0.0])
+HI = np.array([BOUNDS[k][1] for k in KEYS] + [1.0])
+#: Pins swapped by the mirror across the middle board (USBC numbers).
+MIRROR_PIN = {1: 1, 2: 3, 3: 2, 4: 6, 5: 5, 6: 4, 7: 10, 8: 9, 9: 8, 10: 7}
 #: A child's Gaussian step in the unit cube, per coordinate: 0.1, 0.5 and 2 boards at the
 #: foul line (about 0.2, 1 and 4 noise sigmas), and the same shares of the other ranges.
 SCALES = (0.003, 0.015, 0.06)
@@ -61,21 +69,32 @@ def to_unit(x) -> np.ndarray:
 
 
 def from_unit(u) -> np.ndarray:
-    return LO + np.clip(np.asarray(u, dtype=float), 0.0, 1.0) * (HI - LO)
+    x = LO + np.clip(np.asarray(u, dtype=float), 0.0, 1.0) * (HI - LO)
+    x[..., len(KEYS)] = np.round(x[..., len(KEYS)])  # the hand: 0 right, 1 left
+    return x
 
 
-SPACE = (len(KEYS), to_unit, from_unit, SCALES)
+SPACE = (DIM, to_unit, from_unit, SCALES)
 
 
-def delivery_of(x, hand: str = "right") -> lane.Delivery:
-    """The delivery at a point ``x`` of the throw space ((6,): :data:`KEYS`)."""
-    return lane.Delivery(hand=hand, at="foul", **{k: float(v) for k, v in zip(KEYS, x)})
+def hand_of(x) -> str:
+    return "left" if float(x[len(KEYS)]) >= 0.5 else "right"
+
+
+def delivery_of(x) -> lane.Delivery:
+    """The delivery at a point ``x`` of the throw space ((7,): :data:`KEYS`, then the hand)."""
+    return lane.Delivery(hand=hand_of(x), at="foul", **{k: float(v) for k, v in zip(KEYS, x)})
 
 
 def point_of(d: lane.Delivery) -> np.ndarray:
     """The point of the throw space of a delivery (its board carried to the foul line)."""
     d = replace(d, board=d.foul_board(), at="foul")
-    return np.array([float(getattr(d, k)) for k in KEYS])
+    return np.array([float(getattr(d, k)) for k in KEYS] + [1.0 if d.hand == "left" else 0.0])
+
+
+def mirror(mask: int) -> int:
+    """The subset mirrored across the middle board (a left-hander's view of a right-hander's)."""
+    return sum(1 << (MIRROR_PIN[n] - 1) for n in range(1, 11) if mask >> (n - 1) & 1)
 
 
 def throw_masks(runner: frame.FrameRunner, X) -> tuple[list[int], list[frame.FrameResult]]:
@@ -86,7 +105,7 @@ def throw_masks(runner: frame.FrameRunner, X) -> tuple[list[int], list[frame.Fra
 
 def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed: int,
          on_batch=None) -> atlas.Archive:
-    """Spend ``budget`` frames growing ``archive`` (elites are (6,) points of :data:`KEYS`);
+    """Spend ``budget`` frames growing ``archive`` (elites are (7,) points: :data:`KEYS`, hand);
     ``on_batch(archive, new_masks)`` after each batch (progress, checkpoints).
     KeyboardInterrupt propagates; what ran is in ``archive``."""
     rng = np.random.default_rng(seed)
@@ -95,9 +114,11 @@ def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed
     start = archive.rollouts
     while archive.rollouts < end:
         if archive.rollouts < start + n0:
-            X, parents = from_unit(rng.random((search.BATCH, len(KEYS)))), None
+            X, parents = from_unit(rng.random((search.BATCH, DIM))), None
         else:
             X, parents = atlas.emit(archive, rng, space=SPACE)
+            kids = parents >= 0
+            X[kids, len(KEYS)] = [archive.elite[int(p)][len(KEYS)] for p in parents[kids]]  # the parent's hand
         X = X[: end - archive.rollouts]
         masks, _ = throw_masks(runner, X)
         new = archive.add(X, masks, None if parents is None else parents[: len(X)])
@@ -108,7 +129,7 @@ def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed
 
 def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int, nz: noise.Noise = noise.DEFAULT,
                   on_done=None) -> dict:
-    """{mask: noise.Estimate} for each elite ({mask: (6,) point}): ``n`` noisy throws of it
+    """{mask: noise.Estimate} for each elite ({mask: (7,) point}): ``n`` noisy throws of it
     (the same ``seed`` for every elite), the outcome counted is exactly its subset."""
     masks = sorted(elites)
     throws = []
@@ -128,7 +149,7 @@ NEAREST = 8
 def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, seed: int,
          on_batch=None) -> tuple[np.ndarray | None, dict, int]:
     """A throw whose pins down are exactly ``target`` (a mask), from the archive ``elites``
-    ({mask: (6,) point}): batches of :data:`.search.BATCH` children of the :data:`NEAREST`
+    ({mask: (7,) point}): batches of :data:`.search.BATCH` children of the :data:`NEAREST`
     subsets nearest the request (Hamming distance; nearer ones drawn more often: weight
     1 / (1 + distance)^2), each moved by a Gaussian step at one of :data:`SCALES`; every new
     subset seen joins the archive. Stops at the first exact hit or after ``budget`` frames.
@@ -149,9 +170,10 @@ def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, s
             pick = order[rng.choice(len(order), size=n, p=w / w.sum())]
             scale = np.asarray(SCALES)[rng.integers(0, len(SCALES), size=n)]
             base = np.array([to_unit(arch[int(masks[i])]) for i in pick])
-            X = from_unit(base + rng.standard_normal((n, len(KEYS))) * scale[:, None])
+            X = from_unit(base + rng.standard_normal((n, DIM)) * scale[:, None])
+            X[:, len(KEYS)] = base[:, len(KEYS)]  # the parent's hand
         else:
-            X = from_unit(rng.random((n, len(KEYS))))
+            X = from_unit(rng.random((n, DIM)))
         got, _ = throw_masks(runner, X)
         frames += n
         for x, m in zip(X, got):
@@ -166,7 +188,7 @@ def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, s
 
 def archive_doc(a: atlas.Archive, seed: int) -> dict:
     """The search's state as a JSON-able dict (elites as points of :data:`KEYS`)."""
-    return {"format": ARCHIVE_FORMAT, "version": ARCHIVE_VERSION, "seed": int(seed), "keys": list(KEYS),
+    return {"format": ARCHIVE_FORMAT, "version": ARCHIVE_VERSION, "seed": int(seed), "keys": [*KEYS, "hand"],
             "rollouts": int(a.rollouts),
             "elites": {str(m): [float(v) for v in a.elite[m]] for m in sorted(a.elite)},
             "seen": {str(m): int(a.seen.get(m, 1)) for m in sorted(a.elite)},
@@ -186,8 +208,8 @@ def archive_from_doc(doc, src) -> atlas.Archive:
         fail("format", f"must be {ARCHIVE_FORMAT!r}")
     if doc.get("version") != ARCHIVE_VERSION:
         fail("version", f"must be {ARCHIVE_VERSION}")
-    if doc.get("keys") != list(KEYS):
-        fail("keys", f"must be {list(KEYS)}")
+    if doc.get("keys") != [*KEYS, "hand"]:
+        fail("keys", f"must be {[*KEYS, 'hand']}")
     n = doc.get("rollouts")
     if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 10**9:
         fail("rollouts", "must be a whole number in [0, 1e9]")
@@ -198,10 +220,10 @@ def archive_from_doc(doc, src) -> atlas.Archive:
     for key, x in el.items():
         if not key.isdigit() or not 1 <= int(key) <= atlas.N_SUBSETS:
             fail(f"elites.{key}", "a subset is a mask 1..1023")
-        if (not isinstance(x, list) or len(x) != len(KEYS)
+        if (not isinstance(x, list) or len(x) != DIM
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in x)
                 or not all(lo <= v <= hi for v, lo, hi in zip(x, LO, HI))):
-            fail(f"elites.{key}", f"must be {len(KEYS)} finite numbers within {BOUNDS}")
+            fail(f"elites.{key}", f"must be {DIM} finite numbers within {BOUNDS} and the hand in [0, 1]")
         m = int(key)
         a.elite[m] = np.array(x, dtype=float)
         for name, lo in (("seen", 1), ("found_at", -1)):
@@ -210,3 +232,15 @@ def archive_from_doc(doc, src) -> atlas.Archive:
                 fail(f"{name}.{key}", f"must be a whole number >= {lo}")
             getattr(a, name)[m] = v
     return a
+
+
+def mirror_step(runner: frame.FrameRunner, archive: atlas.Archive) -> list[int]:
+    """For each elite whose mirrored subset is not archived, its delivery with the other hand:
+    one frame each, archived by its own outcome (parentless). Returns the new masks."""
+    todo = [m for m in sorted(archive.elite) if mirror(m) not in archive.elite]
+    if not todo:
+        return []
+    X = np.array([archive.elite[m] for m in todo], dtype=float)
+    X[:, len(KEYS)] = 1.0 - np.round(X[:, len(KEYS)])
+    masks, _ = throw_masks(runner, X)
+    return archive.add(X, masks, None)

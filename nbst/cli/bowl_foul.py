@@ -30,7 +30,7 @@ FIVE_M_ONLY = (("cluster", "--cluster"), ("no_robustness", "--no-robustness"))
 def add_solve_flags(s) -> None:
     g = s.add_argument_group("from the foul line (a bowler's throw: board, angle, mph, rpm, rotation, tilt)")
     g.add_argument("--foul-line", action="store_true",
-                   help="find a right-hander's throw from the foul line (house oil, the default ball), not a 5 m "
+                   help="find a bowler's throw from the foul line (house oil, the default ball), not a 5 m "
                         "launch: the shipped foul-line atlas's throw when it holds the request, else children of "
                         "its nearest subsets (--max-rollouts frames); the throw file carries the probability of the "
                         "outcome under the release noise (--samples throws) and the timestep ladder")
@@ -45,11 +45,13 @@ def add_solve_flags(s) -> None:
 def add_atlas_flags(a) -> None:
     g = a.add_argument_group("from the foul line")
     g.add_argument("--foul-line", action="store_true",
-                   help="an atlas of a right-hander's throws from the foul line (house oil, the default ball): "
+                   help="an atlas of bowlers' throws from the foul line (house oil, the default ball): "
                         "--max-rollouts settled frames of the MAP-Elites search over board, angle, mph, rpm, "
-                        "rotation and tilt, then each subset's throw run --samples times under the release noise "
+                        "rotation, tilt and hand, then the other hand's throw for each subset whose mirror image "
+                        "is missing, then each subset's throw run --samples times under the release noise "
                         "(its probability), at h = 0.5 and 0.25 ms, and 2 s longer. Writes DIR/foul_atlas.json "
-                        "(one throw file per subset) and DIR/archive.json (the search, to resume)")
+                        "(one throw per subset), DIR/summary.md, DIR/checks.json and DIR/archive.json (the "
+                        "search, to resume)")
     g.add_argument("--samples", type=SAMPLES, default=ATLAS_SAMPLES, metavar="N",
                    help=f"--foul-line: noisy throws per subset's probability (default {ATLAS_SAMPLES})")
 
@@ -223,8 +225,10 @@ def atlas_summary(a: dict, extra: dict, archive) -> str:
     held = sum(all(x["leave"] == t["outcome"]["leave"] for x in t["ladder"]) for t in lad)
     longer = [v for v in extra.values() if "longer_leave" in v]
     same = sum(v["longer_same"] for v in longer)
+    left = sum(t["delivery"]["hand"] == "left" for t in throws)
     lines = [f"# Foul-line atlas: {len(throws)} subsets", "",
-             f"{archive.rollouts} settled frames searched (right-handed, oil {a['oil']}, the default ball).", "",
+             f"{archive.rollouts} settled frames searched (oil {a['oil']}, the default ball); "
+             f"{len(throws) - left} right-handed throws, {left} left-handed.", "",
              "| pins down | subsets found | possible |", "|---|---|---|"]
     lines += [f"| {k} | {f} | {p} |" for k, f, p in atlas.size_table(
         [sum(1 << (n - 1) for n in t["outcome"]["down"]) for t in throws])]
@@ -232,7 +236,7 @@ def atlas_summary(a: dict, extra: dict, archive) -> str:
         lines += ["", f"Probability of the subset under the release noise ({throws[0]['probability']['n']} throws "
                       f"each): median {100 * ps[len(ps) // 2]:.0f} %; at least 50 %: "
                       f"{sum(p >= 0.5 for p in ps)}; at least 90 %: {sum(p >= 0.9 for p in ps)}; "
-                      f"0 (the elite only): {sum(p == 0 for p in ps)}."]
+                      f"none of the noisy throws: {sum(p == 0 for p in ps)}."]
     if lad:
         lines += [f"Timestep ladder (1, 0.5, 0.25 ms): {held} of {len(lad)} keep their subset."]
     if longer:
@@ -318,6 +322,7 @@ def cmd_atlas(args) -> int:
             try:
                 foul_atlas.grow(R, archive, budget=args.max_rollouts, seed=seed, on_batch=on_batch)
                 bar.close()
+                foul_atlas.mirror_step(R, archive)  # the other hand's throw of each unmirrored subset
                 todo = [m for m in sorted(archive.elite) if m not in done]
                 pb = progress_bar(total=len(todo) * (args.samples + 4), desc="probabilities", unit="frame",
                                   disable=args.quiet, file=sys.stderr)
