@@ -115,6 +115,13 @@ def test_wilson_interval_known_values():
         noise.wilson(3, 2)
 
 
+def test_wilson_ends_are_exact_at_none_and_all():
+    """At 0 of n the interval starts at 0 and at n of n it ends at 1, exactly (a throw file checks
+    lo <= p <= hi; rounding once put 0 of 24 at lo = 1.4e-17)."""
+    for n in range(1, 500):
+        assert noise.wilson(0, n)[0] == 0.0 and noise.wilson(n, n)[1] == 1.0
+
+
 def test_a_noisy_estimate_is_reproducible_from_its_seed_on_any_number_of_processes():
     with frame.FrameRunner(jobs=1) as one, frame.FrameRunner(jobs=2) as two:
         e1, r1 = noise.probability(TYPICAL, 4, 11, runner=one)
