@@ -17,7 +17,8 @@ each with the probability of its subset under the release noise.
   4-6, 7-10 and 8-9 swapped) is not archived yet, the same delivery with the other hand;
   each is a frame like any other and its own outcome is what is archived.
 * **Probability** (:func:`probabilities`): each elite thrown ``n`` times under the release
-  noise (:mod:`.noise`); the probability is the share of noisy throws whose pins down are
+  noise (:mod:`.noise`); a subset that one of these noisy throws knocks down and the archive
+  lacks joins it with that throw as its elite (:func:`harvest`), and gets its own probability; the probability is the share of noisy throws whose pins down are
   exactly the subset, with a 95 % Wilson interval. An elite is the first throw found, not
   the most repeatable one: ``nbst bowl solve --robust`` maximises the probability of one
   subset (:mod:`.robust`).
@@ -128,9 +129,10 @@ def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed
 
 
 def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int, nz: noise.Noise = noise.DEFAULT,
-                  on_done=None) -> dict:
+                  on_done=None, frames: bool = False):
     """{mask: noise.Estimate} for each elite ({mask: (7,) point}): ``n`` noisy throws of it
-    (the same ``seed`` for every elite), the outcome counted is exactly its subset."""
+    (the same ``seed`` for every elite), the outcome counted is exactly its subset. With
+    ``frames``: (that dict, the noisy deliveries, their frames)."""
     masks = sorted(elites)
     throws = []
     for m in masks:
@@ -139,7 +141,26 @@ def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int,
     out = {}
     for i, m in enumerate(masks):
         out[m] = noise.estimate(results[i * n:(i + 1) * n], seed, nz, want=shot.pins_of(m))
-    return out
+    return (out, throws, results) if frames else out
+
+
+def harvest(archive: atlas.Archive, throws, results) -> list[int]:
+    """Subsets that noisy throws (of :func:`probabilities`) knocked down and the archive lacks:
+    each joins with its throw as the elite, when that delivery lies inside the throw space's
+    ranges (the noise may carry it out). The frames have run already: the archive's frame
+    count is unchanged. Returns the new masks, in throw order."""
+    new = []
+    for d, r in zip(throws, results):
+        m = shot.mask_from_pins(r.down)
+        if not m or m in archive.elite:
+            continue
+        x = point_of(d)
+        if np.all(x >= LO) and np.all(x <= HI):
+            archive.elite[m] = x
+            archive.seen[m] = 1
+            archive.found_at[m] = archive.rollouts
+            new.append(m)
+    return new
 
 
 #: :func:`seek`: parents are drawn among this many archived subsets nearest the request.

@@ -241,6 +241,10 @@ def atlas_summary(a: dict, extra: dict, archive) -> str:
         lines += [f"Timestep ladder (1, 0.5, 0.25 ms): {held} of {len(lad)} keep their subset."]
     if longer:
         lines += [f"2 s past the settle: {same} of {len(longer)} keep their subset."]
+    got = sum(1 for v in extra.values() if v.get("harvested"))
+    if got:
+        lines += [f"{got} subsets were first knocked down by a noisy throw of another subset's probability "
+                  "estimate (that throw is their elite)."]
     return "\n".join(lines) + "\n"
 
 
@@ -326,22 +330,34 @@ def cmd_atlas(args) -> int:
                 todo = [m for m in sorted(archive.elite) if m not in done]
                 pb = progress_bar(total=len(todo) * (args.samples + 4), desc="probabilities", unit="frame",
                                   disable=args.quiet, file=sys.stderr)
-                for i in range(0, len(todo), CHUNK):
-                    part = todo[i:i + CHUNK]
+                skip: set = set()
+                while True:
+                    todo = [m for m in sorted(archive.elite) if m not in done and m not in skip]
+                    if not todo:
+                        break
+                    part = todo[:CHUNK]
                     ds = [foul_atlas.delivery_of(archive.elite[m]) for m in part]
-                    est = foul_atlas.probabilities(R, {m: archive.elite[m] for m in part}, n=args.samples,
-                                                   seed=seed, nz=nz, on_done=lambda: pb.update(1))
+                    est, thr, res = foul_atlas.probabilities(R, {m: archive.elite[m] for m in part}, n=args.samples,
+                                                             seed=seed, nz=nz, on_done=lambda: pb.update(1),
+                                                             frames=True)
+                    new = foul_atlas.harvest(archive, thr, res)  # subsets the noisy throws found
+                    for m in new:
+                        extra[m] = {"harvested": True}
+                    if new:
+                        pb.total += len(new) * (args.samples + 4)
                     r1 = R.map(ds)
                     r2, r4 = R05.map(ds), R025.map(ds)
                     rl = R.map(ds, extra_s=2.0)
                     pb.update(4 * len(part))
                     for j, m in enumerate(part):
                         if shot.mask_from_pins(r1[j].down) != m:  # cannot happen: a frame is deterministic
+                            skip.add(m)
                             continue
                         done[m] = throwfile.throw_dict(r1[j], oil=foul_atlas.OIL, requested=shot.pins_of(m),
                                                        estimate=est[m], want=shot.pins_of(m),
                                                        ladder=[r1[j], r2[j], r4[j]])
-                        extra[m] = {"longer_leave": rl[j].leave, "longer_same": rl[j].leave == r1[j].leave}
+                        extra[m] = {**extra.get(m, {}), "longer_leave": rl[j].leave,
+                                    "longer_same": rl[j].leave == r1[j].leave}
                     write_all()
                 pb.close()
             except KeyboardInterrupt:
