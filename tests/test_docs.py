@@ -85,7 +85,7 @@ def steps(doc: Path) -> list[tuple[int, str, str, list[str]]]:
 
 #: Budgets cut for the test (flag -> largest value used).
 CAPS = {"--max-trials": 3000, "--trials": 300, "--runs": 1, "--max-rollouts": 40, "--per-subset": 4,
-        "--patience": 2000}
+        "--patience": 2000, "--samples": 8}
 #: Budgets added where a doc line leaves the default (a synopsis, or a real long run).
 ADDED = {"solve": (("--max-trials", "3000"),), "experiment": (("--runs", "1"), ("--max-trials", "300")),
          "bowl solve": (("--max-rollouts", "40"),), "bowl atlas": (("--max-rollouts", "20"),)}
@@ -124,6 +124,14 @@ def _cut(cmd: str, scratch: Path) -> tuple[list[str] | None, str]:
     for flag, value in ADDED.get(sub[0], ()) + ADDED.get(" ".join(sub), ()):
         if flag not in words and not (flag == "--max-trials" and "--trials" in words):
             words += [flag, value]
+    if "--robust" in words and sub[:2] == ["bowl", "solve"]:  # the foul-line robust search: a short one
+        k = words.index("--robust")
+        if k + 1 < len(words) and words[k + 1].isdigit():
+            words[k + 1] = str(min(int(words[k + 1]), 12))
+        else:
+            words.insert(k + 1, "12")
+        if "--samples" not in words:
+            words += ["--samples", "4"]
     if sub[:1] == ["gallery"]:
         words += ["--out-dir", "gallery", "--max-trials", "2000", "diamond-s14-tiny"]
     if sub[:1] == ["render"] and "--size" not in words and "--still" not in words:

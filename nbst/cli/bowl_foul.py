@@ -207,6 +207,11 @@ def cmd_solve(args) -> int:
               "the throw found first is written", file=sys.stderr)
     if not args.quiet:
         how = " (the shipped foul-line atlas's throw)" if state["from_atlas"] else f" after {state['frames']} frames"
+        rb = state.get("robust")
+        if rb is not None:
+            moved = "the start kept" if rb.delivery == rb.start or state.get("kept_start") else "a new release"
+            how += (f", then --robust ({rb.frames} frames; on its {rb.screen.n} common noisy throws the start "
+                    f"gave it {rb.start_screen.k} times, the pick {rb.screen.k}: {moved})")
         print(f"nbst bowl solve: found{how}: {line}", file=sys.stderr)
     return 0
 
