@@ -232,11 +232,7 @@ def _runner_args(parser, same: str) -> None:
                    help=f"run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; {same}")
 
 
-def _err(cmd: str, msg: str) -> int:
-    from nbst.domain import plain
-
-    print(f"nbst bowl {cmd}: error: {plain(msg)}", file=sys.stderr)
-    return 2
+_err = bowl_foul.err  # one error line, shared by every bowl subcommand
 
 
 def launcher(args, jobs: int):

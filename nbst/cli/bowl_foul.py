@@ -23,8 +23,9 @@ ROBUST = Bounded("robust", 1, 1_000_000, integer=True)
 ROBUST_DEFAULT = 600
 SOLVE_SAMPLES = 40
 ATLAS_SAMPLES = 24
-#: The flags of the 5 m search that a foul-line run refuses (they mean nothing there).
-FIVE_M_ONLY = (("cluster", "--cluster"), ("no_robustness", "--no-robustness"))
+#: The flags of the 5 m search and atlas that a foul-line run refuses (they mean nothing there).
+SOLVE_5M_ONLY = (("cluster", "--cluster"), ("no_robustness", "--no-robustness"))
+ATLAS_5M_ONLY = (("cluster", "--cluster"), ("robustness_only", "--robustness-only"), ("no_robustness", "--no-robustness"))
 
 
 def add_solve_flags(s) -> None:
@@ -56,19 +57,20 @@ def add_atlas_flags(a) -> None:
                    help=f"--foul-line: noisy throws per subset's probability (default {ATLAS_SAMPLES})")
 
 
-def _err(cmd: str, msg: str) -> int:
+def err(cmd: str, msg: str) -> int:
+    """One error line for ``nbst bowl CMD`` on stderr; the exit code 2 (every bowl subcommand)."""
     from nbst.domain import plain
 
     print(f"nbst bowl {cmd}: error: {plain(msg)}", file=sys.stderr)
     return 2
 
 
-def _refuse(args, cmd: str) -> str | None:
-    for dest, flag in FIVE_M_ONLY:
+
+def _refuse(args, flags, what: str, how: str) -> str | None:
+    """The first 5 m-only flag of ``flags`` that ``args`` sets, as one line, or None."""
+    for dest, flag in flags:
         if getattr(args, dest, None):
-            return f"{flag} is for the 5 m launches; it does not apply with --foul-line/--robust"
-    if getattr(args, "distance", "hamming") != "hamming":
-        return "--distance is for the 5 m launches; it does not apply with --foul-line/--robust"
+            return f"{flag} is for the 5 m {what}; it does not apply with {how}"
     return None
 
 
@@ -102,15 +104,17 @@ def cmd_solve(args) -> int:
 
     from nbst.models.bowling import foul_atlas, frame, noise, robust, search, shot, throwfile
 
-    bad = _refuse(args, "solve")
+    bad = _refuse(args, SOLVE_5M_ONLY, "launches", "--foul-line/--robust")
+    if bad is None and args.distance != "hamming":
+        bad = "--distance is for the 5 m launches; it does not apply with --foul-line/--robust"
     if bad:
-        return _err("solve", bad)
+        return err("solve", bad)
     target = args.down if args.down is not None else args.leave
     want = shot.pins_of(target)
     try:
         prepare_output(args.output)
     except OutputError as e:
-        return _err("solve", str(e))
+        return err("solve", str(e))
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
     jobs = args.jobs or default_jobs()
     elites = {} if args.no_atlas else shipped_elites()
@@ -180,7 +184,7 @@ def cmd_solve(args) -> int:
             write_text_atomic(Path(args.output), throwfile.dumps(throwfile.throw_dict(
                 r, oil=foul_atlas.OIL, requested=want, estimate=state["est"], want=want, ladder=state["ladder"])))
     except (OutputError, ValueError) as e:
-        return _err("solve", str(e))
+        return err("solve", str(e))
     finally:
         bar.close()
         R.close()
@@ -262,16 +266,15 @@ def cmd_atlas(args) -> int:
 
     from nbst.models.bowling import atlas, foul_atlas, frame, lane, noise, shot, shotfile, throwfile
 
-    for dest, flag in (("cluster", "--cluster"), ("robustness_only", "--robustness-only"),
-                       ("no_robustness", "--no-robustness")):
-        if getattr(args, dest, None):
-            return _err("atlas", f"{flag} is for the 5 m atlas; it does not apply with --foul-line")
+    bad = _refuse(args, ATLAS_5M_ONLY, "atlas", "--foul-line")
+    if bad:
+        return err("atlas", bad)
     if args.method != "elites":
-        return _err("atlas", "--method: the foul-line atlas uses elites only")
+        return err("atlas", "--method: the foul-line atlas uses elites only")
     try:
         out = prepare_output(args.out, directory=True, option="--out-dir")
     except OutputError as e:
-        return _err("atlas", str(e))
+        return err("atlas", str(e))
     ckpt, atl, summ = out / "archive.json", out / "foul_atlas.json", out / "summary.md"
     seed = args.seed if args.seed is not None else 1
     try:
@@ -288,7 +291,7 @@ def cmd_atlas(args) -> int:
             for t in throwfile.load_atlas(atl)["throws"]:
                 done[shot.mask_from_pins(t["outcome"]["down"])] = t
     except (ValueError, OSError, shotfile.ShotFileError) as e:
-        return _err("atlas", str(e))
+        return err("atlas", str(e))
     extra_path = out / "checks.json"
     extra = {}
     if extra_path.exists():
@@ -369,7 +372,7 @@ def cmd_atlas(args) -> int:
                 interrupted = True
         write_all()
     except (OutputError, ValueError) as e:
-        return _err("atlas", str(e))
+        return err("atlas", str(e))
     finally:
         bar.close()
         for r in (R, R05, R025):
