@@ -264,6 +264,25 @@ def test_bowl_frame_o_writes_the_throw_with_its_probability_and_replay_checks_it
     assert rc == 1 and "DIFFERENT" in stdout
 
 
+def test_bowl_frame_throws_the_ball_of_its_flags_and_the_file_records_it(tmp_path, capsys):
+    argv = ["bowl", "frame", "--leave", "10", "--board", "34", "--at", "foul", "--angle", "2.32", "--rpm", "200",
+            "--rotation", "30", "--tilt", "0", "-q"]
+    ball = lane.Ball(rg=2.70, diff=0.055, friction=0.30)
+    out = tmp_path / "throw.json"
+    rc, stdout, err = _main(argv + ["--rg", "2.70", "--diff", "0.055", "--cover", "0.30", "--json", "-o", out], capsys)
+    assert rc == 0, err
+    got = json.loads(stdout)["frame"]
+    d = lane.Delivery(board=34.0, at="foul", angle=2.32, rpm=200.0, rotation=30.0, tilt=0.0)
+    mine, default = frame.run_frame(d, ball=ball, standing=[10]), frame.run_frame(d, standing=[10])
+    # the flags' ball is the one thrown: its entry board is the direct run's, and not the default ball's
+    assert got["board_at_pins"] == pytest.approx(mine.board_at_pins, abs=1e-9)
+    assert abs(mine.board_at_pins - default.board_at_pins) > 0.05
+    assert throwfile.load(out)["ball"] == {"weight_lb": 15.0, "rg": 2.70, "diff": 0.055, "friction": 0.30}
+    rc, stdout, _ = _main(["bowl", "replay", out, "--json"], capsys)
+    assert rc == 0 and json.loads(stdout)["match"]
+    _refused(argv + ["--rg", "2.9"], capsys, "ball.rg", "2.46")
+
+
 def test_bowl_frame_o_refuses_a_folder_before_throwing(tmp_path, capsys):
     _refused(["bowl", "frame", "-q", "-o", tmp_path], capsys, "-o", "folder")
 

@@ -180,29 +180,11 @@ def register_throw(bowl) -> None:
                                     "edge on the bowling hand's side). Conventions: docs/bowling.md.",
                         epilog="Example: nbst bowl throw --hand right --board 10 --at arrows --angle 1.5 --mph 17 "
                                "--rpm 300 --rotation 45 --tilt 15 --oil house")
-    t.add_argument("--hand", choices=("right", "left"), default="right", help="bowling hand (default right)")
-    t.add_argument("--board", type=Bounded("board", 1, 39), default=10.0, metavar="B",
-                   help="board where the ball is at --at (default 10; 1..39, fractions allowed)")
-    t.add_argument("--at", choices=("foul", "arrows"), default="arrows",
-                   help="where --board is: at the foul line or where the ball crosses the arrows, 15 ft out "
-                        "(default arrows)")
-    t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=1.5, metavar="DEG",
-                   help="launch angle from straight down the lane, + out towards board 1 (default 1.5)")
-    t.add_argument("--mph", type=Bounded("mph", 5, 30, unit="mph"), default=17.0, help="release speed (default 17)")
-    t.add_argument("--rpm", type=Bounded("rpm", 0, 800, unit="rpm"), default=300.0, help="rev rate (default 300)")
-    t.add_argument("--rotation", type=Bounded("rotation", 0, 90, unit="deg"), default=45.0, metavar="DEG",
-                   help="axis rotation: 0 end over end, 90 pure side spin (default 45)")
-    t.add_argument("--tilt", type=Bounded("tilt", 0, 90, unit="deg"), default=15.0, metavar="DEG",
-                   help="axis tilt: 0 a horizontal spin axis (default 15)")
+    _delivery_flags(t)
     t.add_argument("--oil", default="house", metavar="PATTERN",
                    help="oil pattern by name: house (40 ft crown), sport (42 ft, flat), short (34 ft), uniform "
                         "(test: full oil to the deck); default house")
-    t.add_argument("--weight", type=float, default=15.0, metavar="LB", help="ball weight, lb (default 15; at most 16)")
-    t.add_argument("--rg", type=float, default=2.50, metavar="IN", help="ball RG, in (default 2.50; USBC 2.46..2.80)")
-    t.add_argument("--diff", type=float, default=0.040, metavar="IN",
-                   help="RG differential, in (default 0.040; USBC at most 0.060)")
-    t.add_argument("--cover", type=float, default=0.20, metavar="MU",
-                   help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
+    _ball_flags(t)
     t.add_argument("-o", "--output", default=None, metavar="THROW.json", help="also write the phases as JSON")
     t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
     _picture_flags(t, "the throw's frame on all ten pins (as bowl frame runs it)")
@@ -464,7 +446,7 @@ def cmd_throw(args) -> int:
     from nbst.models.bowling import lane
 
     try:
-        ball = lane.Ball(weight_lb=args.weight, rg=args.rg, diff=args.diff, friction=args.cover).check()
+        ball = _ball(args)
         d = lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph, rpm=args.rpm,
                           rotation=args.rotation, tilt=args.tilt).check()
         lane.pattern(args.oil)
@@ -754,20 +736,38 @@ def summary_md(have: dict, *, launches: int, probes: int, seconds: float, seed: 
 
 
 def _delivery_flags(t) -> None:
-    """The delivery flags of ``bowl frame`` (as ``bowl throw``'s)."""
+    """The delivery flags of ``bowl throw`` and ``bowl frame``: one vocabulary, one help text."""
     t.add_argument("--hand", choices=("right", "left"), default="right", help="bowling hand (default right)")
     t.add_argument("--board", type=Bounded("board", 1, 39), default=10.0, metavar="B",
-                   help="board where the ball is at --at (default 10; 1..39)")
+                   help="board where the ball is at --at (default 10; 1..39, fractions allowed)")
     t.add_argument("--at", choices=("foul", "arrows"), default="arrows",
-                   help="where --board is: the foul line or the arrows, 15 ft out (default arrows)")
+                   help="where --board is: at the foul line or where the ball crosses the arrows, 15 ft out "
+                        "(default arrows)")
     t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=1.5, metavar="DEG",
-                   help="launch angle, + out towards board 1 (default 1.5)")
+                   help="launch angle from straight down the lane, + out towards board 1 (default 1.5)")
     t.add_argument("--mph", type=Bounded("mph", 5, 30, unit="mph"), default=17.0, help="release speed (default 17)")
     t.add_argument("--rpm", type=Bounded("rpm", 0, 800, unit="rpm"), default=300.0, help="rev rate (default 300)")
     t.add_argument("--rotation", type=Bounded("rotation", 0, 90, unit="deg"), default=45.0, metavar="DEG",
-                   help="axis rotation (default 45)")
+                   help="axis rotation: 0 end over end, 90 pure side spin (default 45)")
     t.add_argument("--tilt", type=Bounded("tilt", 0, 90, unit="deg"), default=15.0, metavar="DEG",
-                   help="axis tilt (default 15)")
+                   help="axis tilt: 0 a horizontal spin axis (default 15)")
+
+
+def _ball_flags(t) -> None:
+    """The ball flags of ``bowl throw`` and ``bowl frame`` (the ball maker's units; lane.Ball checks them)."""
+    t.add_argument("--weight", type=float, default=15.0, metavar="LB", help="ball weight, lb (default 15; at most 16)")
+    t.add_argument("--rg", type=float, default=2.50, metavar="IN", help="ball RG, in (default 2.50; USBC 2.46..2.80)")
+    t.add_argument("--diff", type=float, default=0.040, metavar="IN",
+                   help="RG differential, in (default 0.040; USBC at most 0.060)")
+    t.add_argument("--cover", type=float, default=0.20, metavar="MU",
+                   help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
+
+
+def _ball(args):
+    """The ball of the ``_ball_flags``, checked (LaneError naming the field outside USBC's limits)."""
+    from nbst.models.bowling import lane
+
+    return lane.Ball(weight_lb=args.weight, rg=args.rg, diff=args.diff, friction=args.cover).check()
 
 
 def _mc_flags(t, samples: int, what: str) -> None:
@@ -791,6 +791,7 @@ def register_frame(bowl) -> None:
                                     "run, and the probability of the outcome under release noise (docs/bowling.md).",
                         epilog="Example: nbst bowl frame --board 10 --at arrows --angle 1.5 --timesteps --probability 40")
     _delivery_flags(f)
+    _ball_flags(f)
     f.add_argument("--leave", default=None, metavar="PINS",
                    help="pins standing before the throw, e.g. 10 or 2,4,5,8 (default: a full rack)")
     f.add_argument("--timesteps", action="store_true", help="also run it at h = 0.5 and 0.25 ms (the ladder)")
@@ -862,13 +863,13 @@ def _bar(args, total: int, desc: str):
     return progress_bar(total=total, desc=desc, unit="frame", disable=args.quiet, file=sys.stderr)
 
 
-def write_throw(path, r, oil: str, *, ladder=None, estimate=None) -> None:
-    """Write THROW.json (models/bowling/throwfile.py) for frame ``r`` of the default ball, atomically."""
+def write_throw(path, r, oil: str, ball, *, ladder=None, estimate=None) -> None:
+    """Write THROW.json (models/bowling/throwfile.py) for frame ``r`` thrown with ``ball``, atomically."""
     from nbst.outputs import write_text_atomic
 
-    from nbst.models.bowling import lane, throwfile
+    from nbst.models.bowling import throwfile
 
-    write_text_atomic(Path(path), throwfile.dumps(throwfile.throw_dict(r, oil=oil, ball=lane.Ball(), ladder=ladder,
+    write_text_atomic(Path(path), throwfile.dumps(throwfile.throw_dict(r, oil=oil, ball=ball, ladder=ladder,
                                                                        estimate=estimate)))
 
 
@@ -880,6 +881,7 @@ def cmd_frame(args) -> int:
     try:
         d = lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph, rpm=args.rpm,
                           rotation=args.rotation, tilt=args.tilt).check()
+        ball = _ball(args)
         lane.pattern(args.oil)
         standing = None if args.leave is None else sorted(
             n for n in range(1, 11) if _pin_list(args.leave, "--leave") >> (n - 1) & 1)
@@ -889,13 +891,13 @@ def cmd_frame(args) -> int:
         return _err("frame", str(e))
     r = lad = est = None
     try:
-        r = frame.run_frame(d, args.oil, standing=standing)
+        r = frame.run_frame(d, args.oil, ball, standing=standing)
         doc = {"frame": r.to_dict()}
         if args.longer:
-            r2 = frame.run_frame(d, args.oil, standing=standing, extra_s=args.longer)
+            r2 = frame.run_frame(d, args.oil, ball, standing=standing, extra_s=args.longer)
             doc["longer"] = {"extra_s": args.longer, "leave": r2.leave, "same": r2.leave == r.leave}
         if args.timesteps:
-            lad = frame.ladder(d, args.oil, standing=standing)
+            lad = frame.ladder(d, args.oil, ball, standing=standing)
             doc["ladder"] = [{"timestep": x.timestep, "leave": x.leave, "settle_s": x.settle_s, "cap_hit": x.cap_hit}
                              for x in lad]
         if args.probability:
@@ -904,7 +906,7 @@ def cmd_frame(args) -> int:
             D = noise.DEFAULT
             nz = noise.Noise(board=D.board * k, angle=args.angle_sigma * k, mph=D.mph * k, rpm=D.rpm * k,
                              rotation=D.rotation * k, tilt=D.tilt * k)
-            with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            with frame.FrameRunner(args.oil, ball, jobs=args.jobs or default_jobs()) as R:
                 est, _ = noise.probability(d, args.probability, args.seed, runner=R, standing=standing, noise=nz,
                                            on_done=lambda: bar.update(1))
             bar.close()
@@ -913,7 +915,7 @@ def cmd_frame(args) -> int:
         if args.output and r is not None:  # the frame is done: keep it (without what was cut short)
             try:
                 with signals_deferred(reraise=False):
-                    write_throw(args.output, r, args.oil, ladder=lad)
+                    write_throw(args.output, r, args.oil, ball, ladder=lad)
             except (OutputError, ValueError) as e:
                 return _err("frame", str(e))
             print(f"nbst bowl frame: interrupted; wrote the frame without the unfinished parts to {args.output}",
@@ -926,7 +928,7 @@ def cmd_frame(args) -> int:
     if args.output:
         try:
             with signals_deferred(reraise=False) as late:
-                write_throw(args.output, r, args.oil, ladder=lad, estimate=est)
+                write_throw(args.output, r, args.oil, ball, ladder=lad, estimate=est)
         except (OutputError, ValueError) as e:
             return _err("frame", str(e))
         if late:
