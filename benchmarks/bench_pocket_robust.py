@@ -14,8 +14,7 @@ import time
 
 from nbst.models.bowling import frame, lane, noise, robust, spares
 
-#: The pocket map's best cell (docs/bowling.md): aimed at board 17.5, 6 deg.
-POCKET_CELL = lane.Delivery(board=22.0, at="foul", angle=1.6105595330681906, rotation=68.48689904701298)
+POCKET_CELL = spares.POCKET_CELL  # the pocket map's best cell: aimed at board 17.5, 6 deg
 
 
 def line(label: str, d: lane.Delivery, est: noise.Estimate, r: frame.FrameResult) -> str:

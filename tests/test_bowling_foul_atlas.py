@@ -199,3 +199,21 @@ def test_cli_atlas_refuses_a_hostile_checkpoint_in_one_line(tmp_path):
     p = _nbst("bowl", "atlas", "--foul-line", "--out-dir", str(tmp_path), "--max-rollouts", "0")
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "elites.7" in p.stderr
     assert "Traceback" not in p.stderr
+
+
+def test_robust_strike_starts_include_throws_that_strike_without_noise(runner):
+    """--robust for a strike also starts from the strike line and the pocket cell: each must
+    strike without noise (a start that misses could never be the pick)."""
+    from nbst.cli.bowl_foul import robust_starts
+    from nbst.models.bowling import spares
+
+    found = foul_atlas.delivery_of(_point(0.5))
+    ten = list(range(1, 11))
+    starts = robust_starts(found, ten)
+    assert starts[0] is found and len(starts) == 3
+    for d in starts[1:]:
+        r = runner.one(d)
+        assert r.down == ten and r.settled, (d, r.leave)
+        # aimed at the pocket: the ball enters within a board of 17.5 (the published pocket)
+        assert abs(r.board_at_pins - spares.POCKET_PEAK[0]) < 1.0
+    assert robust_starts(found, [10]) == [found]  # any other outcome: the throw found alone

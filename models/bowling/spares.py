@@ -49,6 +49,9 @@ SPARE_BALL = dict(mph=17.0, rpm=200.0, rotation=0.0, tilt=0.0)
 #: The USBC pocket: boards 17-18 at 4-6 deg entry; board 17.5 at ~6 deg is the published peak.
 POCKET_BOARDS = (17.0, 18.0)
 POCKET_PEAK = (17.5, 6.0)
+#: The pocket map's best cell (docs/bowling.md): the typical release (17 mph, 300 rpm, tilt 15)
+#: aimed at board 17.5 at 6 deg by the launch angle and the axis rotation (``aim_entry``).
+POCKET_CELL = lane.Delivery(board=22.0, at="foul", angle=1.6105595330681906, rotation=68.48689904701298)
 
 #: The common leaves of issue 22 (pins standing), the pins whose mean is the aim point, and the
 #: 3-6-9 system's move of the feet in boards (+ towards the hand side, as the system's "right").
