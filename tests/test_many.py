@@ -145,3 +145,22 @@ def test_nbst_solve_on_a_many_disk_file(tmp_path):
     assert "150/150 disks on target (signature in the file)" in r.stderr
     sol = json.loads(out.read_text())
     assert sol["order"] == 150 and len(sol["signature"]) == 150 and sol["algorithm"] == "nbst-many"
+
+
+def test_progress_reports_the_best_motion_and_how_near_the_stop_is():
+    """The many-body search's reports: the best motion so far never gets worse (fewer disks
+    missing, then a lower cost: ``population`` is its disks missing), each report carries
+    (rounds without a better motion, the rounds that stop it) within 0..patience_rounds, and
+    the result is the last best reported."""
+    from nbst.planted import planted
+
+    p, _ = planted(100, seed=1)
+    seen = []
+    sol = solve(p, seed=1, max_trials=40_000, callback=lambda q: seen.append(q) and None, jobs=1)
+    assert len(seen) > 3
+    scores = [(q.population, q.best_cost) for q in seen]
+    assert all(b <= a for a, b in zip(scores, scores[1:])), scores
+    costs = [q.best_cost for q in seen]
+    rounds = ManyParams().patience_rounds
+    assert all(q.stall is not None and q.stall[1] == rounds and 0 <= q.stall[0] <= rounds for q in seen)
+    assert sol.meta["cost"] <= costs[-1] * (1 + 1e-12)

@@ -124,12 +124,18 @@ def cmd_solve(args) -> int:
         if not bar:
             from nbst.progress import progress_bar
 
-            bar.append(progress_bar(total=args.max_trials, unit="trial", unit_scale=True, file=sys.stderr,
-                            dynamic_ncols=True, desc=f"solve {problem.name} ({label})", smoothing=0.1))
+            # the many-body search stops after rounds without a better motion, long before its
+            # trial budget as a rule: no total (so no ETA over --max-trials); the postfix says
+            # how near that stop is
+            bar.append(progress_bar(total=None if p.stall is not None else args.max_trials, unit="trial",
+                                    unit_scale=True, file=sys.stderr, dynamic_ncols=True,
+                                    desc=f"solve {problem.name} ({label})", smoothing=0.1))
         bar[0].update(p.trials - done[0])
         done[0] = p.trials
-        bar[0].set_postfix_str(f"best cost {p.best_cost:.6g}, {p.best_order}/{problem.n} disks on target",
-                               refresh=False)
+        post = f"best cost {p.best_cost:.6g}, {p.best_order}/{problem.n} disks on target"
+        if p.stall is not None:
+            post += f", {p.stall[0]} of {p.stall[1]} rounds without a better motion"
+        bar[0].set_postfix_str(post, refresh=False)
 
     from nbst.parallel import default_jobs
     from nbst.solvers.islands import solve_islands
@@ -181,6 +187,8 @@ def cmd_solve(args) -> int:
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
            "max_trials": "trial budget spent", "patience": f"no improvement in {args.patience} trials",
            "interrupted": "interrupted"}.get(m["stopped"], str(m["stopped"]))
+    if m["stopped"] == "patience" and "many" in m:  # the many-body search: rounds, or --patience trials
+        why = (f"no better motion in {m['params']['patience_rounds']} rounds (or in {args.patience} trials)")
     island = (f" (best of {len(m['islands'])} islands: island {m['island']}"
               + (f", {m['configuration']}" if "configuration" in m else "") + ")") if "island" in m else ""
     shown = m["signature"] if problem.n <= GA_MAX_DISKS else "in the file"

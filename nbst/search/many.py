@@ -486,9 +486,12 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
         if callback is None or not box:
             return False
         s = box[0]
-        return bool(callback(SearchProgress(trials=int(s.trials), best_cost=float(s.tr.cost),
-                                            best_order=int(s.tr.order), elapsed=time.perf_counter() - t0,
-                                            population=s.score[0], phase="repair")))
+        # the best motion so far (fewest disks missing, then the lowest cost), not the one in repair
+        score, best = (s.score, s.tr) if s.best is None or s.score < s.best[0] else (s.best[0], s.best[2])
+        return bool(callback(SearchProgress(trials=int(s.trials), best_cost=float(best.cost),
+                                            best_order=int(best.order), elapsed=time.perf_counter() - t0,
+                                            population=score[0], phase="repair",
+                                            stall=(idle[0], prm.patience_rounds))))
 
     V = problem.straight_velocities() if start is None else np.array(start, float)
     if jobs is None:
@@ -498,7 +501,7 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
     S = _Search(problem, prm, V, max(float(target_cost), 0.0) / n, max_trials, report, jobs)
     box.append(S)
     last_better = S.trials
-    since_better = 0
+    idle = [0]  # rounds since the whole motion last got better (the progress report reads it)
     tries = np.zeros(n, np.int64)
     history = [[int(S.trials), float(S.tr.cost), S.tr.order]]
     stopped = None
@@ -510,7 +513,7 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
             if S.trials >= max_trials:
                 stopped = StopReason.MAX_TRIALS
                 break
-            if (patience and S.trials - last_better >= patience) or since_better >= prm.patience_rounds:
+            if (patience and S.trials - last_better >= patience) or idle[0] >= prm.patience_rounds:
                 stopped = StopReason.PATIENCE
                 break
             S.stats["rounds"] += 1
@@ -539,10 +542,10 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
             S.keep_best()
             if S.score < before:
                 last_better = S.trials
-                since_better = 0
+                idle[0] = 0
                 history.append([int(S.trials), float(S.tr.cost), S.tr.order])
             else:
-                since_better += 1
+                idle[0] += 1
             if report():
                 stopped = StopReason.CALLBACK
                 break

@@ -298,6 +298,10 @@ class SearchProgress:
     elapsed: float
     population: int
     phase: str
+    #: The many-body search: (rounds since the whole motion last got better, the rounds after
+    #: which it stops); None for the other searches. Its stop is set by this, not by the trial
+    #: budget, so a progress bar shows this instead of an ETA over ``max_trials``.
+    stall: tuple | None = None
 
 
 def check_run(max_trials: int, patience: int, seed: int | None = None) -> None:
