@@ -241,11 +241,15 @@ def main() -> None:
             est, frames = noise.probability(d, args.n, args.seed, runner=R)
         print(f"   {label:<16} linear spread {sp:.2f} boards, measured sd {sd:.2f} (ball alone, the same throws): "
               f"strikes {est.text()}")
+    # the loop's last frames are the minimised release's: its strike share by entry board
     entry = np.array([f.board_at_pins if f.board_at_pins is not None else np.nan for f in frames])
-    print("   the minimised release's strikes by entry board (the frames above): " + ", ".join(
-        f"{lo:g}-{lo + 0.5:g} {sum(f.converted for f, e in zip(frames, entry) if lo <= e < lo + 0.5)}/"
-        f"{int(np.sum((entry >= lo) & (entry < lo + 0.5)))}"
-        for lo in np.arange(15.0, 20.5, 0.5) if np.any((entry >= lo) & (entry < lo + 0.5))))
+    struck = np.array([f.converted for f in frames])
+    bins = []
+    for lo in np.arange(15.0, 20.5, 0.5):
+        inside = (entry >= lo) & (entry < lo + 0.5)
+        if inside.any():
+            bins.append(f"{lo:g}-{lo + 0.5:g} {int(struck[inside].sum())}/{int(inside.sum())}")
+    print("   the minimised release's strikes by entry board (the frames above): " + ", ".join(bins))
     print(f"   the minimised release: nbst bowl frame --board {best_d.board!r} --at foul --angle {best_d.angle!r} "
           f"--mph {best_d.mph!r} --rpm {best_d.rpm!r} --rotation {best_d.rotation!r} --tilt {best_d.tilt!r} "
           f"--rg {best_b.rg!r} --diff {best_b.diff!r} --cover {best_b.friction!r} --probability {args.n}")

@@ -17,9 +17,10 @@ each with the probability of its subset under the release noise.
   4-6, 7-10 and 8-9 swapped) is not archived yet, the same delivery with the other hand;
   each is a frame like any other and its own outcome is what is archived.
 * **Probability** (:func:`probabilities`): each elite thrown ``n`` times under the release
-  noise (:mod:`.noise`); a subset that one of these noisy throws knocks down and the archive
-  lacks joins it with that throw as its elite (:func:`harvest`), and gets its own probability; the probability is the share of noisy throws whose pins down are
-  exactly the subset, with a 95 % Wilson interval. An elite is the first throw found, not
+  noise (:mod:`.noise`); the probability is the share of noisy throws whose pins down are
+  exactly the subset, with a 95 % Wilson interval. A subset that one of these noisy throws
+  knocks down and the archive lacks joins it with that throw as its elite (:func:`harvest`),
+  and gets its own probability. An elite is the first throw found, not
   the most repeatable one: ``nbst bowl solve --robust`` maximises the probability of one
   subset (:mod:`.robust`).
 

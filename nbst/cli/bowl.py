@@ -447,8 +447,7 @@ def cmd_throw(args) -> int:
 
     try:
         ball = _ball(args)
-        d = lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph, rpm=args.rpm,
-                          rotation=args.rotation, tilt=args.tilt).check()
+        d = _delivery(args)
         lane.pattern(args.oil)
         r = lane.throw(d, args.oil, ball)
     except ValueError as e:
@@ -763,6 +762,14 @@ def _ball_flags(t) -> None:
                    help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
 
 
+def _delivery(args):
+    """The delivery of the ``_delivery_flags``, checked (LaneError naming the field)."""
+    from nbst.models.bowling import lane
+
+    return lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph,
+                         rpm=args.rpm, rotation=args.rotation, tilt=args.tilt).check()
+
+
 def _ball(args):
     """The ball of the ``_ball_flags``, checked (LaneError naming the field outside USBC's limits)."""
     from nbst.models.bowling import lane
@@ -879,8 +886,7 @@ def cmd_frame(args) -> int:
     from nbst.models.bowling import frame, lane, noise
 
     try:
-        d = lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph, rpm=args.rpm,
-                          rotation=args.rotation, tilt=args.tilt).check()
+        d = _delivery(args)
         ball = _ball(args)
         lane.pattern(args.oil)
         standing = None if args.leave is None else sorted(
