@@ -164,3 +164,57 @@ def test_progress_reports_the_best_motion_and_how_near_the_stop_is():
     rounds = ManyParams().patience_rounds
     assert all(q.stall is not None and q.stall[1] == rounds and 0 <= q.stall[0] <= rounds for q in seen)
     assert sol.meta["cost"] <= costs[-1] * (1 + 1e-12)
+
+
+def _grid_and_strike(aim=(900.0, 500.0)):
+    """64 disks on a grid whose straight shots never meet, and apart from them a cue disk c
+    (index 64) that strikes a resting disk b (index 65) towards ``aim``; every target is where
+    the exact simulator takes its disk, so a strike that lands both exists."""
+    from nbst.search.aim import strike
+
+    g = _grid(64)
+    d = {"name": "grid-and-strike", "box": [1000.0, 600.0], "t_final": 2.0, "target_radius": 10.0,
+         "disks": [{"start": p.tolist(), "target": t.tolist(), "radius": 5.0} for p, t in zip(g.start, g.target)]}
+    d["disks"].append({"start": [700.0, 100.0], "target": [700.0, 100.0], "radius": 5.0})
+    d["disks"].append({"start": [800.0, 300.0], "target": [800.0, 300.0], "radius": 5.0, "cueable": False})
+    p = problem_from_dict(d)
+    v = p.straight_velocities()
+    v[64] = strike(p, 64, 65, np.array(aim))[0]
+    tr = simulate(p, v)
+    for k in (64, 65):
+        d["disks"][k]["target"] = tr.final_positions[k].tolist()
+    return problem_from_dict(d), tr
+
+
+def test_strikes_send_a_resting_disk_to_its_target():
+    """``_strikes``' aimed candidates include exact strikes (the resting disk, alone with its
+    striker, lands within 1e-6 of its target, by the closed-form strike), and each polished
+    candidate lands the pair no worse (sum of squared misses) than the aim it started from."""
+    from nbst.search.many import _strikes
+
+    p, _ = _grid_and_strike()
+    cands = _strikes(p, 65, p.straight_velocities(), strikers=3, keep=4, polish_sims=30)
+    assert len(cands) == 8 and all(d.size == 1 and p.cueable[d[0]] for d, _ in cands)
+    pair_miss = []
+    for d, rows in cands:
+        pair = subproblem(p, np.array([d[0], 65]), "pair")
+        fin = simulate(pair, np.array([rows[0], [0.0, 0.0]])).final_positions
+        pair_miss.append(np.sum((fin - pair.target) ** 2, axis=1))
+    assert sum(m[1] <= 1e-12 for m in pair_miss[1::2]) >= 2
+    for polished, aimed in zip(pair_miss[0::2], pair_miss[1::2]):
+        assert polished.sum() <= aimed.sum() * (1 + 1e-12) + 1e-18
+
+
+def test_a_resting_disk_that_must_move_is_struck():
+    """Past 63 disks, with a resting disk whose target is elsewhere, the search counts the
+    disks outside R first and strikes it: every disk ends on its target."""
+    p, planted = _grid_and_strike()
+    assert planted.n_disk_disk == 1
+    start = simulate(p, p.straight_velocities())
+    assert start.order < p.n
+    v, meta = run_many(p, seed=3, max_trials=2000, patience=0, target_cost=1e-12,
+                       params=ManyParams(patience_rounds=3))
+    end = simulate(p, v)
+    assert meta["many"]["by_strike"] >= 1
+    assert end.order == p.n
+    np.testing.assert_allclose(end.final_positions, p.target, atol=1e-6)
