@@ -218,3 +218,29 @@ def test_a_resting_disk_that_must_move_is_struck():
     assert meta["many"]["by_strike"] >= 1
     assert end.order == p.n
     np.testing.assert_allclose(end.final_positions, p.target, atol=1e-6)
+
+
+def test_a_missing_disk_pairs_with_its_nearest_neighbours_first():
+    """``_candidates`` tries two-disk contacts with the missing disks first, then the nearest
+    others (not the lowest-numbered ones): a missing disk next to a landed one gets the contact
+    that made the targets (pair_contact finds every one-contact motion)."""
+    from nbst.search.many import _candidates
+
+    g = _grid(64)
+    d = {"name": "grid-and-pair", "box": [1000.0, 600.0], "t_final": 2.0, "target_radius": 10.0,
+         "disks": [{"start": p.tolist(), "target": t.tolist(), "radius": 5.0} for p, t in zip(g.start, g.target)]}
+    d["disks"] += [{"start": [650.0, 300.0], "target": [650.0, 300.0], "radius": 5.0},
+                   {"start": [800.0, 304.0], "target": [800.0, 304.0], "radius": 5.0}]
+    p = problem_from_dict(d)
+    v = p.straight_velocities()
+    v[64], v[65] = (80.0, 0.0), (-10.0, 0.0)
+    tr = simulate(p, v)
+    assert tr.n_disk_disk == 1
+    for k in (64, 65):
+        d["disks"][k]["target"] = tr.final_positions[k].tolist()
+    p = problem_from_dict(d)
+    err2 = np.zeros(p.n)
+    err2[64] = 1.0  # only disk 64 misses: its partners are the nearest landed disks, 65 first
+    cands = _candidates(p, 64, p.straight_velocities(), err2, 1e-12, 3, np.empty((8, 5)))
+    pairs = [rows for disks, rows in cands if list(disks) == [64, 65]]
+    assert any(np.allclose(rows, v[[64, 65]], atol=1e-6) for rows in pairs)
