@@ -20,7 +20,7 @@ independent small problems. The search works on the whole motion and repairs it 
 The best whole motion is kept; the result is never worse than the directed start. Trials
 are counted in whole-problem simulations: one of m disks counts m / N.
 
-Length: ~680 lines, past the house's ~500: the search's moves (contacts, strikes, chains, cleared
+Length: ~690 lines, past the house's ~500: the search's moves (contacts, strikes, chains, cleared
 neighbourhoods, windowed sub-searches) share one state object and its acceptance rule, and
 stay together so that rule is written once.
 """
@@ -329,9 +329,14 @@ class _Search:
         return evaluate(self.problem, Vs, jobs=self.jobs)[0]
 
     def score_of(self, tr) -> tuple[int, int, float]:
-        """Fewer missing disks first, then the lower cost (from the final positions, as
-        ``greedy`` scores a batch)."""
-        return _score(tr.final_positions, self.problem.target, self.miss2, self.R2, self.order_first)
+        """A motion's score (``_score`` of its final positions, as ``greedy`` scores a batch)."""
+        return self.score_final(tr.final_positions)
+
+    def score_final(self, final, target=None) -> tuple[int, int, float]:
+        """``_score`` of final positions against ``target`` (default: the problem's), with this
+        search's miss threshold, R and order rule."""
+        target = self.problem.target if target is None else target
+        return _score(final, target, self.miss2, self.R2, self.order_first)
 
     def err2(self, tr=None):
         tr = self.tr if tr is None else tr
@@ -365,7 +370,7 @@ class _Search:
                     Vs[q, disks2] = rows
                 fin = self.evaluate(Vs)
                 for q, (disks2, rows) in enumerate(chunk):
-                    sn = _score(fin[q], problem.target, miss2, self.R2, self.order_first)
+                    sn = self.score_final(fin[q])
                     if sn < score:
                         V, score, done = Vs[q].copy(), sn, True
                         tr = self.sim(V)
@@ -414,7 +419,7 @@ class _Search:
         only (within a margin of the distance the fast disks travel); a candidate goes on to
         a whole simulation if it scores better there. Returns (kept candidates, the rest as
         (score, index, velocities) for the chains)."""
-        problem, miss2 = self.problem, self.miss2
+        problem = self.problem
         ka = problem.kernel_arrays()
         T = ka.t_final
         box = np.array([ka.W, ka.H])
@@ -448,14 +453,16 @@ class _Search:
             from nbst.sim import evaluate
 
             f2 = evaluate(sub, Vq, jobs=1)[0]
-            s_old = _score(f2[0], sub.target, miss2, self.R2, self.order_first)
-            s_new = _score(f2[1], sub.target, miss2, self.R2, self.order_first)
+            s_old = self.score_final(f2[0], sub.target)
+            s_new = self.score_final(f2[1], sub.target)
             if s_new < s_old:
                 keep.append((disks2, rows))
             elif disks2.size == 2:
                 full = V.copy()
                 full[disks2] = rows
-                rest.append(((s_new[0] - s_old[0] + self.score[0], s_new[1] - s_old[1] + self.score[1], s_new[2]), c, full))
+                # the whole motion's counts, moved by what the candidate changed locally
+                counts = tuple(new - old + whole for new, old, whole in zip(s_new[:2], s_old[:2], self.score[:2]))
+                rest.append((counts + (s_new[2],), c, full))
         return keep, rest
 
     def neighbourhood(self, idx, rng):
