@@ -193,7 +193,7 @@ def test_strikes_send_a_resting_disk_to_its_target():
     from nbst.search.many import _strikes
 
     p, _ = _grid_and_strike()
-    cands = _strikes(p, 65, p.straight_velocities(), strikers=3, keep=4, polish_sims=30)
+    cands = _strikes(p, 65, strikers=3, keep=4, polish_sims=30)
     assert len(cands) == 8 and all(d.size == 1 and p.cueable[d[0]] for d, _ in cands)
     pair_miss = []
     for d, rows in cands:

@@ -234,7 +234,7 @@ def _candidates(problem: Problem, a: int, V: np.ndarray, err2: np.ndarray, miss2
     return out
 
 
-def _strikes(problem: Problem, b: int, V: np.ndarray, strikers: int, keep: int, polish_sims: int):
+def _strikes(problem: Problem, b: int, strikers: int, keep: int, polish_sims: int):
     """Strikes that could send resting disk b home, best first: (disks, rows) as ``_candidates``.
 
     Each of the ``strikers`` cueable disks nearest b aims (``nbst.search.aim.strike_velocity``)
@@ -250,8 +250,7 @@ def _strikes(problem: Problem, b: int, V: np.ndarray, strikers: int, keep: int, 
     ka = problem.kernel_arrays()
     W, H, T = ka.W, ka.H, ka.t_final
     R2 = float(problem.target_radius) ** 2
-    cue = np.flatnonzero(problem.cueable)
-    cue = cue[np.argsort(np.hypot(*(ka.start[cue] - ka.start[b]).T), kind="stable")[:strikers]]
+    cue = _nearest(problem, np.array([b]), np.array([b]), strikers, True)
     vb, out = np.empty(2), np.empty(2)
     aims = []
     for kx in (-1, 0, 1):
@@ -359,7 +358,7 @@ class _Search:
             if problem.cueable[a]:
                 cands = _candidates(problem, a, V, err2, miss2, prm.partners, self.scratch)
             else:
-                cands = _strikes(problem, a, V, prm.strike_from, prm.chains, prm.polish_sims)
+                cands = _strikes(problem, a, prm.strike_from, prm.chains, prm.polish_sims)
             if n >= prm.local_from:
                 cands, near = self.local_filter(cands, V, tr)
             k = max(1, self.jobs)
