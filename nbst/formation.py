@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
+from nbst.errors import InputError
 from nbst.domain import BOX_MAX, BOX_MIN
 from nbst.problem import Problem, ProblemError, problem_from_dict
 
@@ -74,7 +75,7 @@ MAX_FORMATION_DISKS = 20_000
 START_LAYOUTS = ("grid", "random")
 
 
-class FormationError(ValueError):
+class FormationError(InputError):
     """A formation request that cannot be met (one line, for ``nbst generate``)."""
 
 

@@ -40,10 +40,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
-
-
-class OutputError(Exception):
-    """An output path that cannot be written; the message names the path and the reason."""
+from nbst.errors import OutputError  # re-exported here
 
 
 _SPECIAL = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),

@@ -21,11 +21,12 @@ import numpy as np
 from nbst import domain as D
 from nbst.constants import OVERLAP_RTOL
 from nbst.domain import MAX_DISKS, bad_text, plain
+from nbst.errors import InputError
 
 SCHEMA_VERSION = 1
 
 
-class ProblemError(ValueError):
+class ProblemError(InputError):
     """Bad input: a problem or solution file (or dict) that nbst refuses.
 
     Attributes: ``source`` (file path or a label), ``field`` (a path such as

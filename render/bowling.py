@@ -89,7 +89,7 @@ class Motion:
 def record(shot: dict, model) -> Motion:
     """Replay ``shot`` (a loaded shot file) in ``model`` and record every step's poses.
     A non-finite state is refused before stepping and MuJoCo's warnings raise
-    ``shot.MujocoWarning`` (nothing goes to ``MUJOCO_LOG.TXT``)."""
+    ``shot.MujocoError`` (nothing goes to ``MUJOCO_LOG.TXT``)."""
     import mujoco
 
     from nbst.models.bowling import shot as shotmod
@@ -118,7 +118,7 @@ def record(shot: dict, model) -> Motion:
                         break
     bad = shotmod.data_warnings(d)
     if bad or not np.isfinite(q).all():
-        raise shotmod.MujocoWarning(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
+        raise shotmod.MujocoError(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
     masks = shotmod.mask_of(shotmod.pins_down(model, q))
     return Motion(times=np.arange(n + 1) * model.opt.timestep, ball=q[:, ba:ba + 7],
                   pins=q[:, adr[:, None] + np.arange(7)], impact=impact, down=shotmod.pins_of(int(masks[-1])),
@@ -366,7 +366,7 @@ def load_motion(path):
     shot, model, _ = shotfile.load_with_scene(path)
     try:
         return shot, record(shot, model)
-    except shotmod.MujocoWarning as e:
+    except shotmod.MujocoError as e:
         raise shotfile.ShotFileError(f"{path}: qpos0/qvel0: {e}") from None
 
 

@@ -177,7 +177,7 @@ def record_throw(delivery, oil: str = "house", ball=None, *, standing=None, time
     ``standing`` (default all ten) exactly as :func:`nbst.models.bowling.frame.run_frame` runs it
     (its model, initial state, steps and stop rule, through its ``record`` hook): every step's
     poses, and the frame's result. Raises ``lane.LaneError``/``frame.FrameError`` (one line) for
-    bad input; MuJoCo's warnings raise ``shot.MujocoWarning``."""
+    bad input; MuJoCo's warnings raise ``shot.MujocoError``."""
     from nbst.models.bowling import frame, lane, scene
     from nbst.models.bowling import shot as shotmod
 
@@ -910,7 +910,7 @@ def picture_from_args(args, delivery, ball) -> str | None:
         return bad
     try:
         th = record_throw(delivery, args.oil, ball)
-    except (lane.LaneError, frame.FrameError, shotmod.MujocoWarning) as e:
+    except (lane.LaneError, frame.FrameError, shotmod.MujocoError) as e:
         return str(e)
     return write_pictures(args, th)
 

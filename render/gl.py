@@ -8,10 +8,7 @@ Mesa's llvmpipe renders off-screen through EGL with no display server once
 from __future__ import annotations
 
 import numpy as np
-
-
-class RenderError(RuntimeError):
-    """Rendering cannot proceed (no GL, bad size, encoder failure): one line for the CLI."""
+from nbst.errors import RenderError  # re-exported here
 
 
 def create_context():

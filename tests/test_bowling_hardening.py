@@ -171,18 +171,18 @@ def test_mujoco_warnings_are_errors_and_leave_no_log(good, tmp_path, monkeypatch
     qvel = [1000.0] * model.nv
     try:
         pins = shotfile.replay(model, d["qpos0"], qvel, 0.2)
-    except shot.MujocoWarning as e:
+    except shot.MujocoError as e:
         assert str(e).startswith("MuJoCo warned")
     else:
         assert all(1 <= n <= 10 for n in pins)           # no warning: then the replay was a replay
-    with pytest.raises(shot.MujocoWarning, match="not finite"):
+    with pytest.raises(shot.MujocoError, match="not finite"):
         shot.replay_final_qpos(model, [float("nan")] * model.nq, [0.0] * model.nv, 0.01)
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
 
 
 def test_warning_hook_turns_a_warning_into_an_error_and_is_restored():
     before = mujoco.get_mju_user_warning()
-    with pytest.raises(shot.MujocoWarning, match="MuJoCo warned: boom"):
+    with pytest.raises(shot.MujocoError, match="MuJoCo warned: boom"):
         with shot.mujoco_warnings_raise() as got:
             got.append("boom")
     assert mujoco.get_mju_user_warning() == before

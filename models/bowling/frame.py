@@ -33,6 +33,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.models.bowling import lane, scene, shot
 
 #: Default step (s) and the ladder of the engine-robustness check.
@@ -52,7 +53,7 @@ PARK_X = lane.LANE_START_X - 1.0
 PARK_STEP = 0.3
 
 
-class FrameError(ValueError):
+class FrameError(InputError):
     """Bad input to a frame: one line naming the field."""
 
 
@@ -271,7 +272,7 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
             step(int(round(extra_s / h)))
     bad = shot.data_warnings(d)
     if bad or not np.isfinite(d.qpos).all():
-        raise shot.MujocoWarning(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the frame")
+        raise shot.MujocoError(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the frame")
     knocked, off_deck, partition = settled_pinfall(m, d, in_play)
     down = sorted(set(knocked) | set(off_deck) | set(partition)) if not left_lane else []
     return FrameResult(

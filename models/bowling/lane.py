@@ -53,6 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.models.bowling import scene
 
 FT = 0.3048
@@ -94,7 +95,7 @@ BREAKPOINT_MIN = 0.25
 PATTERNS_FILE = Path(__file__).with_name("oil_patterns.json")
 
 
-class LaneError(ValueError):
+class LaneError(InputError):
     """Bad input to the lane (a pattern, a ball, a delivery): one line naming the field."""
 
 

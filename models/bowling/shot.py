@@ -30,6 +30,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from nbst.models.bowling import scene
+from nbst.errors import MujocoError  # re-exported here
 
 #: Length of a shot (s): ~1 s to reach the pins at 5 m/s, then >= 1.5 s of pin action.
 DURATION = 2.5
@@ -137,15 +138,11 @@ def mask_from_pins(pins) -> int:
     return int(sum(1 << (int(n) - 1) for n in set(pins)))
 
 
-class MujocoWarning(ValueError):
-    """MuJoCo warned (a diverging or non-finite state, a bad model): our error, one line."""
-
-
 @contextmanager
 def mujoco_warnings_raise():
     """While the block runs, MuJoCo's warnings are collected instead of printed and written to
     ``MUJOCO_LOG.TXT`` in the current folder; after it, the first one raises
-    :class:`MujocoWarning`. (MuJoCo's warning hook is process-wide: the previous one is restored.)"""
+    :class:`MujocoError`. (MuJoCo's warning hook is process-wide: the previous one is restored.)"""
     import mujoco
 
     got: list[str] = []
@@ -156,7 +153,7 @@ def mujoco_warnings_raise():
     finally:
         mujoco.set_mju_user_warning(old)
     if got:
-        raise MujocoWarning(f"MuJoCo warned: {got[0].splitlines()[0] if got[0] else 'unknown warning'}")
+        raise MujocoError(f"MuJoCo warned: {got[0].splitlines()[0] if got[0] else 'unknown warning'}")
 
 
 def data_warnings(data) -> list[str]:
@@ -167,18 +164,18 @@ def data_warnings(data) -> list[str]:
 
 
 def check_state(qpos, qvel) -> None:
-    """MujocoWarning unless every qpos/qvel entry is finite (MuJoCo steps NaN into a reset)."""
+    """MujocoError unless every qpos/qvel entry is finite (MuJoCo steps NaN into a reset)."""
     for name, v in (("qpos", qpos), ("qvel", qvel)):
         v = np.asarray(v, dtype=float)
         if not np.isfinite(v).all():
-            raise MujocoWarning(f"{name}[{int(np.flatnonzero(~np.isfinite(v))[0])}] is not finite; refused before "
+            raise MujocoError(f"{name}[{int(np.flatnonzero(~np.isfinite(v))[0])}] is not finite; refused before "
                                 f"stepping")
 
 
 def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.ndarray:
     """Final qpos from a fresh ``MjData`` and a plain ``mj_step`` loop: the slow reference.
     Non-finite states are refused before stepping, and MuJoCo's warnings raise
-    :class:`MujocoWarning` (nothing is written to ``MUJOCO_LOG.TXT``)."""
+    :class:`MujocoError` (nothing is written to ``MUJOCO_LOG.TXT``)."""
     import mujoco
 
     check_state(qpos0, qvel0)
@@ -189,7 +186,7 @@ def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.nda
         mujoco.mj_step(model, d, nstep=n_steps(model, duration))
     bad = data_warnings(d)
     if bad or not np.isfinite(d.qpos).all():
-        raise MujocoWarning(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
+        raise MujocoError(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
     return d.qpos.copy()
 
 

@@ -26,13 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.models.bowling import scene, shot
 
 SCHEMA_VERSION = 1
 KIND = "nbst-bowling-shot"
 
 
-class ShotFileError(ValueError):
+class ShotFileError(InputError):
     """A shot file that cannot be read; the message names the file and the field."""
 
 
@@ -268,7 +269,7 @@ def load_scene(xml_path, src, field: str = "scene"):
     try:
         with shot.mujoco_warnings_raise():
             model = mujoco.MjModel.from_xml_string(text)
-    except (ValueError, shot.MujocoWarning) as e:
+    except (ValueError, shot.MujocoError) as e:
         why = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         _fail(src, field, f"cannot load {p} as a MuJoCo scene ({why})")
     for j in SCENE_JOINTS:
@@ -356,7 +357,7 @@ def load_atlas(path):
 
 def replay(model, qpos0, qvel0, duration: float, rule_: dict | None = None) -> list[int]:
     """Pins down after a plain ``mj_step`` replay from a fresh MjData (pin numbers).
-    MuJoCo's warnings (a diverging state) raise :class:`shot.MujocoWarning`."""
+    MuJoCo's warnings (a diverging state) raise :class:`shot.MujocoError`."""
     q = shot.replay_final_qpos(model, np.asarray(qpos0, float), np.asarray(qvel0, float), duration)
     return shot.pins_of(int(shot.mask_of(shot.pins_down(model, q[None, :]))[0]))
 
@@ -366,5 +367,5 @@ def replay_file(path) -> tuple[dict, list[int]]:
     d, model, _ = load_with_scene(path)
     try:
         return d, replay(model, d["qpos0"], d["qvel0"], float(d["duration"]))
-    except shot.MujocoWarning as e:
+    except shot.MujocoError as e:
         raise ShotFileError(f"{path}: qpos0/qvel0: {e}") from None

@@ -483,6 +483,6 @@ def replay_file(path) -> tuple[dict, frame.FrameResult, bool]:
     d = load(path)
     try:
         r = replay(d)
-    except shot.MujocoWarning as e:
+    except shot.MujocoError as e:
         raise ThrowFileError(f"{path}: delivery: {e}") from None
     return d, r, r.down == sorted(d["outcome"]["down"])

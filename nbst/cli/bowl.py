@@ -422,7 +422,7 @@ def _replay_throw(args) -> int:
         try:   # the replay of throwfile.replay, recorded: its model, oil, ball, pins standing and timestep
             th = bowling_lane.record_throw(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]),
                                            standing=d["standing"], timestep=float(d["outcome"]["timestep"]))
-        except (lane.LaneError, frame.FrameError, shot.MujocoWarning) as e:
+        except (lane.LaneError, frame.FrameError, shot.MujocoError) as e:
             return _err("replay", f"{args.shot}: delivery: {e}")
         r = th.frame
         ok = r.down == sorted(d["outcome"]["down"])

@@ -16,8 +16,7 @@ import sys
 
 from nbst._version import __version__
 from nbst.domain import plain
-from nbst.outputs import OutputError
-from nbst.problem import ProblemError
+from nbst.errors import NbstError
 
 #: Modules whose ``register(subparsers)`` adds subcommands, in ``--help`` order.
 COMMAND_MODULES = (
@@ -90,9 +89,9 @@ def main(argv=None) -> int:
 def _run(args) -> int:
     try:
         return int(args.func(args) or 0)
-    except (ProblemError, OutputError) as e:
+    except NbstError as e:  # every error nbst raises on purpose: one line, its exit status (2: bad input)
         print(f"nbst: error: {plain(e)}", file=sys.stderr)
-        return 2
+        return e.exit_code
     except KeyboardInterrupt:
         print("nbst: interrupted", file=sys.stderr)
         return 130
