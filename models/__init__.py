@@ -1,7 +1,7 @@
 """nbst.models: MuJoCo scenes generated from a problem and its solution, and
 cross-validation of the analytic simulator against MuJoCo.
 
-Installed as ``nbst.models`` (setuptools ``package-dir`` maps this folder).
+Imported as ``nbst.models``: ``nbst/models`` is a link to this folder, in the checkout and installed alike.
 Importing it does not import mujoco; the submodules that need it do.
 """
 from __future__ import annotations

@@ -70,9 +70,10 @@ def test_pip_install_into_a_fresh_venv(tmp_path, editable):
     init, models, render, tops = r.stdout.splitlines()
     assert tops == "None None"
     assert list(venv.glob("lib/python*/site-packages/nbst-*.dist-info")), "nbst not installed in the venv"
-    if editable:  # the checkout's folders, through the package-dir mapping
+    if editable:  # the checkout's folders, through nbst/models and nbst/render (links to models/, render/)
         assert Path(init) == ROOT / "nbst" / "__init__.py"
-        assert Path(models) == ROOT / "models" / "__init__.py" and Path(render) == ROOT / "render" / "__init__.py"
+        assert Path(models).resolve() == ROOT / "models" / "__init__.py"
+        assert Path(render).resolve() == ROOT / "render" / "__init__.py"
     else:  # copies inside the venv's site-packages
         for f, sub in ((init, ""), (models, "models"), (render, "render")):
             assert Path(f).is_relative_to(venv) and Path(f).parent == Path(init).parent / sub
