@@ -155,7 +155,8 @@ def part_noncue(seeds, budget_s):
     order counted first, since resting disks must be struck) and with exactness counted first
     (the ablation, ``ManyParams(order_first=False)``), per seed."""
     from nbst.planted import planted
-    from nbst.search.many import ManyParams, run_search
+    from nbst.search import run_search
+    from nbst.search.many import ManyParams
 
     rows = []
     for seed in seeds:
@@ -164,7 +165,7 @@ def part_noncue(seeds, budget_s):
         for key, prm in (("order", None), ("order_exact_first", ManyParams(order_first=False))):
             deadline = time.perf_counter() + budget_s
             t = time.perf_counter()
-            sol = run_search(p, seed=seed, many=prm, callback=lambda _p, d=deadline: time.perf_counter() > d).solution
+            sol = run_search(p, seed=seed, many=prm, callback=lambda _p, d=deadline: time.perf_counter() > d).result
             row[key], row[key + "_wall_s"] = int(sol.meta["order"]), time.perf_counter() - t
         rows.append(row)
         print(f"  noncue N=100 (10 noncueable) seed {seed}: order {row['order']}/100 in {row['order_wall_s']:.0f} s; "

@@ -68,7 +68,7 @@ def main() -> None:
     print("seed  trials/s   best cost     order  first order-N trial")
     for seed in range(1, args.seeds + 1):
         r = run_search(p, seed=seed, max_trials=args.trials, patience=0, variant=args.variant, record_every=20)
-        m = r.solution.meta
+        m = r.result.meta
         rates.append(m["trials_per_s"])
         runs.append(r)
         print(f"{seed:4d}  {m['trials_per_s']:9.0f}  {m['cost']:12.6g}  {m['order']:2d}/{p.n}  "

@@ -11,6 +11,13 @@ parameter table; this module holds those of the problem model and simulator.
 #: limit is ``nbst.domain.MAX_DISKS``.
 GA_MAX_DISKS = 63
 
+
+def many_body(n: int) -> bool:
+    """Whether a problem of ``n`` disks is past the signature search's compiled loop: the one switch
+    between the signature search and the many-body search (``nbst.search.solve``), int64 and
+    multiword signatures (``nbst.sim``), islands and one process with threads (``nbst solve``)."""
+    return int(n) > GA_MAX_DISKS
+
 #: Starts may touch (centre distance == sum of radii, as the format allows);
 #: this relative slack accepts touching starts written with rounded decimals.
 OVERLAP_RTOL = 1e-9

@@ -130,13 +130,16 @@ class Problem:
 # --------------------------------------------------------------------------- built-ins
 
 def builtin_names() -> list[str]:
-    """Names of the built-in problems, sorted."""
-    files = resources.files("nbst.problems")
-    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".json"))
+    """Names of the built-in problems (registered in ``nbst.problems.PROBLEMS``), sorted."""
+    from nbst.problems import PROBLEMS
+
+    return sorted(PROBLEMS.names())
 
 
 def _builtin_text(name: str) -> str:
-    return resources.files("nbst.problems").joinpath(f"{name}.json").read_text(encoding="utf-8")
+    from nbst.problems import PROBLEMS
+
+    return resources.files("nbst.problems").joinpath(PROBLEMS[name]).read_text(encoding="utf-8")
 
 
 # --------------------------------------------------------------------------- loading

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from nbst.solvers import ALGORITHMS, solve_with
+from nbst.errors import InputError
+from nbst.solvers import SOLVERS, solve_cma, solve_with
 from nbst.planted import planted
 from nbst.problem import ProblemError, problem_from_dict
 
@@ -113,13 +114,15 @@ def test_stopping_rules(algorithm, swap):
 
 
 def test_dispatcher(swap):
-    assert set(ALGORITHMS) == {"signature", "cma", "de", "ga", "random"}
-    m = solve_with("signature", swap, seed=1, max_trials=500, variant="A").meta
-    assert m["variant"] == "A" and m["trials"] <= 500
-    with pytest.raises(ProblemError, match="unknown algorithm"):
+    assert SOLVERS.names() == ("signature", "cma", "de", "ga", "random")
+    r = solve_with("signature", swap, seed=1, max_trials=500, variant="A")
+    assert r.variant == "A" and r.trials <= 500 and r.meta["variant"] == "A"
+    with pytest.raises(InputError, match="unknown algorithm"):
         solve_with("pso", swap, seed=1, max_trials=10)
     with pytest.raises(ProblemError, match="variant"):
         solve_with("cma", swap, seed=1, max_trials=10, variant="B")
+    with pytest.raises(ProblemError, match="robust"):
+        solve_with("de", swap, seed=1, max_trials=10, robust=True)
     with pytest.raises(ProblemError, match="max_trials"):
         solve_with("ga", swap, seed=1, max_trials=0)
 
@@ -127,7 +130,7 @@ def test_dispatcher(swap):
 def test_cma_restarts_double_the_population(swap):
     # a restart is forced by a stopping rule we control (5 generations a restart), not by
     # pycma's own convergence tests, whose firing depends on the machine's float path
-    m = solve_with("cma", swap, seed=1, max_trials=400, cma_options={"maxiter": 5}).meta
+    m = solve_cma(swap, seed=1, max_trials=400, cma_options={"maxiter": 5}).meta
     ends = m["restart_ends"]
     pops = [e["population"] for e in ends]
     assert m["restarts"] == len(pops) - 1 >= 2

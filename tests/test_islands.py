@@ -152,11 +152,12 @@ def test_no_portfolio_where_the_configurations_coincide():
 def test_a_portfolio_island_restarts_when_its_patience_runs_out():
     """A portfolio island whose search stops by patience starts the next configuration from a fresh
     seed with the budget left; the island's result is its best run, reproducible from the seed."""
-    from nbst.solvers.islands import restart_seed, run_island
+    from nbst.solvers import SolveRequest
+    from nbst.solvers.islands import IslandTask, restart_seed, run_island
 
     p = load_problem("over5")
-    kw = dict(seed=5, max_trials=30_000, patience=2000, variant="nbst", _portfolio=PORTFOLIO)
-    a, b = run_island("signature", p, **dict(kw)), run_island("signature", p, **dict(kw))
+    task = IslandTask("signature", SolveRequest(seed=5, max_trials=30_000, patience=2000, variant="nbst"), PORTFOLIO)
+    a, b = run_island(task, p), run_island(task, p)
     assert np.array_equal(a.velocities, b.velocities)
     runs = a.meta["runs"]
     assert len(runs) >= 2 and a.meta["trials"] == sum(r["trials"] for r in runs) <= 30_000

@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 
+from nbst.errors import SolveError
 from nbst.problem import load_problem, problem_from_dict
 from nbst.search import run_search, solve
 from nbst.search.aim import pair_contact
@@ -129,10 +130,10 @@ def test_the_search_is_never_worse_than_its_start_and_reproducible():
 def test_the_signature_search_refuses_many_disks():
     from nbst.search import driver
 
-    with pytest.raises(ValueError, match="at most 63 disks"):
+    with pytest.raises(SolveError, match="at most 63 disks"):
         driver.run_search(_grid(64), seed=1, max_trials=10)
     r = run_search(_grid(64), seed=1, max_trials=10)
-    assert r.solution.meta["order"] == 64
+    assert r.result.meta["order"] == 64
 
 
 def test_nbst_solve_on_a_many_disk_file(tmp_path):

@@ -183,7 +183,7 @@ def test_every_simulation_is_a_trial_counted_at_the_simulator():
 def test_ablation_entry_without_the_planner():
     from nbst.experiments import runs as X
 
-    assert X.parse_entries("nbst, NBST-noplan") == ("nbst", "nbst-noplan") and "nbst-noplan" in X.ABLATION_ENTRIES
+    assert X.parse_entries("nbst, NBST-noplan") == ("nbst", "nbst-noplan") and "nbst-noplan" in X.entries()
     spec = X.make_specs([load_problem("over5")], ["nbst-noplan"], runs=1, trials=3000)[0]
     r = X.run_one(spec)
     assert r["trials"] == 3000 and r["algorithm"] == "nbst-signature-search"

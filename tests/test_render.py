@@ -730,7 +730,8 @@ def test_ablation_figure_labels_apart_and_nbst_family_colours():
     from matplotlib.colors import to_rgb
 
     from nbst.experiments import plots as P
-    from nbst.experiments.runs import ENTRIES
+    from nbst.experiments.runs import entries
+    ENTRIES = entries()
     assert "nbst-noplan" in ENTRIES
     fig = P.plot_ablation(_ablation_rows(ENTRIES), title="t")
     FigureCanvasAgg(fig).draw()

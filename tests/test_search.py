@@ -192,10 +192,10 @@ def test_recorded_candidates_are_what_the_loop_simulated(s14):
     r = run_search(s14, seed=9, max_trials=1500, patience=0, record_every=1, variant="A")
     assert r.recorded.shape == (1500, 14, 2)
     _, cost, _ = evaluate(s14, r.recorded)
-    for t, c, _ in r.solution.meta["history"]:
+    for t, c, _ in r.result.meta["history"]:
         assert cost[t - 1] == c  # the improvement at trial t is the candidate simulated at trial t
-    same(r.solution, solve(s14, seed=9, max_trials=1500, patience=0, variant="A"))  # recording changes nothing
-    assert len(r.costs) == r.solution.meta["population_size"] and np.all(np.isfinite(r.costs))
+    same(r.result, solve(s14, seed=9, max_trials=1500, patience=0, variant="A"))  # recording changes nothing
+    assert len(r.costs) == r.result.meta["population_size"] and np.all(np.isfinite(r.costs))
 
 
 # --------------------------------------------------------------------------- parameters and the velocity domain

@@ -15,9 +15,20 @@ from nbst.cli.args import JOBS, MAX_TRIALS, RUNS_MAX, TARGET_COST, Bounded, clus
 from nbst.cli.flags import add_jobs, add_out_dir, add_quiet, add_seed, old_spelling
 from nbst.problem import display_name
 
-ENTRY_HELP = ("comma-separated: A-H (the paper's search and its variants), nbst (nbst's default search; "
-              "'signature' means the same), nbst-noplan (nbst without the backward planner), "
-              "cma, de, ga, random (baselines)")
+def _entry_help() -> str:
+    """The entries, from the registries: the signature search's variants and the other solvers."""
+    from nbst.search.variants import VARIANTS
+    from nbst.solvers import SOLVERS
+
+    solvers = [e for e in SOLVERS.entries() if not e.value.variants]
+    return ("comma-separated entries: the signature search's variants (" + VARIANTS.help_text() + "; 'signature' "
+            "means nbst) and the other solvers (" + "; ".join(f"{e.name}: {e.help}" for e in solvers) + ")")
+
+
+def _all_entries() -> str:
+    from nbst.experiments.runs import entries
+
+    return ",".join(entries())
 
 
 RUNS = Bounded("runs", 1, RUNS_MAX, integer=True)
@@ -31,7 +42,7 @@ def _common(p, *, runs: int, trials: int, entries: str) -> None:
                    help=with_limits(f"trial budget of each run (one trial = one simulation; default {trials})",
                                     MAX_TRIALS))
     old_spelling(p, "--trials", "--max-trials", dest="trials", type=MAX_TRIALS)
-    p.add_argument("--algorithms", default=entries, metavar="LIST", help=f"{ENTRY_HELP} (default {entries})")
+    p.add_argument("--algorithms", default=entries, metavar="LIST", help=f"{_entry_help()} (default {entries})")
     add_seed(p, type=FIRST_SEED, resumable=True, what=f"first seed; run k uses SEED+k [{FIRST_SEED.limits}]")
     add_out_dir(p, dest="out", default="nbst-experiments", old=("--out",),
                 help="output folder: tables, figures and runs/ (default ./nbst-experiments)")
@@ -64,8 +75,7 @@ def register(sub) -> None:
                                  "default search and each baseline (the paper's Figures 7 and 8: five runs of "
                                  "400,000 trials). Writes DIR/ablation-PROBLEM.{csv,md,png,svg}.")
     a.add_argument("problem", help="built-in name or path to a problem JSON file")
-    _common(a, runs=5, trials=400_000, entries=",".join(("A", "B", "C", "D", "E", "F", "G", "H", "nbst", "nbst-noplan", "cma",
-                                                         "de", "ga", "random")))
+    _common(a, runs=5, trials=400_000, entries=_all_entries())
     a.set_defaults(func=cmd_ablation)
     m = s.add_parser("compare", help="success rate and trials to solve over a set of problems",
                      description="Success rate and trials to solve per entry over PROBLEMS (files, built-in "

@@ -1,40 +1,33 @@
 """``nbst solve``: run nbst's search (or the paper's, or one of its variants) and write a solution file."""
 from __future__ import annotations
 
-import argparse
 import sys
 
 from nbst.cli.args import JOBS, MAX_TRIALS, SEED, TARGET_COST, TRIALS_MAX, Bounded, with_limits
 from nbst.cli.flags import add_seed
+from nbst.search.variants import DEFAULT_VARIANT
 from nbst.warmup import COLD_COMPILE_SECONDS
 
 PATIENCE = Bounded("patience", 0, TRIALS_MAX, integer=True)
 
-VARIANT_HELP = ("nbst: the paper's search plus local polish, bank shots, aimed strikes, a straight start and a "
-                "backward planner for noncueable disks (default); nbst-noplan: the same without the planner; "
-                "A the paper's full algorithm; B uniform parent selection; C no crossover; "
-                "D no genetically "
-                "engineered crossover; E no signature information (R = box width, initial population 60); "
-                "F no culling of subsumed solutions; G no elitism; H no directed randomization")
+
+def _variant_help() -> str:
+    from nbst.search.variants import DEFAULT_VARIANT, VARIANTS
+
+    return f"the signature search's variant (default {DEFAULT_VARIANT}): " + VARIANTS.help_text()
 
 
-def _variant(text: str) -> str:
-    if text.strip().lower() in ("nbst", "nbst-noplan"):
-        return text.strip().lower()
-    v = text.strip().upper()
-    if v not in tuple("ABCDEFGH"):
-        raise argparse.ArgumentTypeError(f"unknown variant {text!r}; choose one of nbst nbst-noplan A B C D E F G H")
-    return v
+def _algorithm_help() -> str:
+    from nbst.solvers import SIGNATURE, SOLVERS
 
-
-def _algorithm(text: str) -> str:
-    a = text.strip().lower()
-    if a not in ("signature", "cma", "de", "ga", "random"):
-        raise argparse.ArgumentTypeError(f"unknown algorithm {text!r}; choose one of signature cma de ga random")
-    return a
+    return (f"the solver (default {SIGNATURE}; --variant picks the signature search's variant; the baselines: "
+            "docs/experiments.md): " + SOLVERS.help_text())
 
 
 def register(sub) -> None:
+    from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, VARIANTS
+    from nbst.solvers import SIGNATURE, SOLVERS
+
     p = sub.add_parser(
         "solve", help="find initial velocities that bring every disk to its target",
         description="Search for initial velocities that bring every disk of PROBLEM to its target at t_final "
@@ -50,17 +43,18 @@ def register(sub) -> None:
     p.add_argument("problem", help="built-in name or path to a problem JSON file")
     p.add_argument("-o", "--output", required=True, metavar="SOLUTION.json", help="where to write the solution")
     add_seed(p, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
-    p.add_argument("--max-trials", type=MAX_TRIALS, default=1_000_000, metavar="N",
-                   help=with_limits("trial budget, initialization included (default 1000000)", MAX_TRIALS))
-    p.add_argument("--patience", type=PATIENCE, default=100_000, metavar="K",
-                   help=with_limits("stop after K trials without improvement; 0 = never (default 100000). In nbst's "
+    p.add_argument("--max-trials", type=MAX_TRIALS, default=DEFAULT_MAX_TRIALS, metavar="N",
+                   help=with_limits(f"trial budget, initialization included (default {DEFAULT_MAX_TRIALS})",
+                                    MAX_TRIALS))
+    p.add_argument("--patience", type=PATIENCE, default=DEFAULT_PATIENCE, metavar="K",
+                   help=with_limits(f"stop after K trials without improvement; 0 = never (default {DEFAULT_PATIENCE}). "
+                                    "In nbst's "
                                     "portfolio (noncueable disks) an island restarts with the other configuration "
                                     "instead, while its budget lasts", PATIENCE))
-    p.add_argument("--algorithm", type=_algorithm, default="signature", metavar="NAME",
-                   help="signature: nbst's signature search (default; --variant picks it); baselines (docs/experiments.md): "
-                        "cma (CMA-ES, IPOP restarts from the straight-line velocities), de (differential evolution), "
-                        "ga (a standard steady-state GA), random (directed/uniform randomize)")
-    p.add_argument("--variant", type=_variant, default="nbst", metavar="X", help=VARIANT_HELP)
+    p.add_argument("--algorithm", type=SOLVERS.argtype("--algorithm"), default=SIGNATURE, metavar="NAME",
+                   help=_algorithm_help())
+    p.add_argument("--variant", type=VARIANTS.argtype("--variant"), default=DEFAULT_VARIANT, metavar="X",
+                   help=_variant_help())
     p.add_argument("--target-cost", type=TARGET_COST, default=None, metavar="C",
                    help=with_limits("stop as soon as the best cost (sum of squared distances to the targets, units^2) "
                                     "is <= C (default: round-off level, N x (1e-9 x box size)^2; 0: only an exact "
@@ -91,23 +85,20 @@ def register(sub) -> None:
 
 
 def cmd_solve(args) -> int:
-    import numpy as np
-
-    from nbst.constants import GA_MAX_DISKS
     from nbst.outputs import prepare_output, signals_deferred, write_json_atomic
-    from nbst.problem import load_problem
+    from nbst.problem import ProblemError, load_problem
+    from nbst.solvers import SIGNATURE, SOLVERS
 
     problem = load_problem(args.problem)
     # before the search: a long solve must not end unable to write, nor overwrite its input
     prepare_output(args.output, inputs=(args.problem,))
-    algorithm = getattr(args, "algorithm", "signature")
+    algorithm = getattr(args, "algorithm", SIGNATURE)
     robust = bool(getattr(args, "robust", False))
-    for option, given in (("--variant", args.variant != "nbst"), ("--robust", robust)):
-        if given and algorithm != "signature":
-            from nbst.problem import ProblemError
-
-            raise ProblemError("<arguments>", option, f"applies to --algorithm signature only, not {algorithm}")
-    label = (args.variant if algorithm == "signature" else algorithm) + (", robust" if robust else "")
+    takes_variants = SOLVERS[algorithm].variants
+    for option, given in (("--variant", args.variant != DEFAULT_VARIANT), ("--robust", robust)):
+        if given and not takes_variants:
+            raise ProblemError("<arguments>", option, f"applies to --algorithm {SIGNATURE} only, not {algorithm}")
+    label = (args.variant if takes_variants else algorithm) + (", robust" if robust else "")
     from nbst.search import roundoff_cost
 
     target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
@@ -137,10 +128,9 @@ def cmd_solve(args) -> int:
             post += f", {p.stall[0]} of {p.stall[1]} rounds without a better motion"
         bar[0].set_postfix_str(post, refresh=False)
 
+    from nbst.cli.args import cluster_client
     from nbst.parallel import default_jobs
     from nbst.solvers.islands import solve_islands
-
-    from nbst.cli.args import cluster_client
 
     client = cluster_client(args)  # None without --cluster; ProblemError (exit 2, one line) if unreachable
     if args.jobs is not None:
@@ -149,27 +139,15 @@ def cmd_solve(args) -> int:
         jobs = 1 + sum(w.get("nthreads", 1) for w in client.scheduler_info().get("workers", {}).values())
     else:
         jobs = default_jobs()
-    kw = {"variant": args.variant, "robust": robust} if algorithm == "signature" else {}
     # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP stops the search, which
     # returns its best so far; later ones cannot stop the write below (they are only noted).
-    sol, stopped_late = None, False
+    result, stopped_late = None, False
     try:
-        if algorithm == "signature" and problem.n > GA_MAX_DISKS:
-            # the many-body search (nbst.search.many): one process; its repairs are local
-            from nbst.search import solve
-
-            if robust:
-                from nbst.problem import ProblemError
-
-                raise ProblemError("<arguments>", "--robust", f"applies to problems of at most {GA_MAX_DISKS} disks "
-                                                              f"(this one has {problem.n})")
-            seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**63)
-            sol = solve(problem, seed=seed, max_trials=args.max_trials, patience=args.patience,
-                        target_cost=target_cost, variant=args.variant, callback=progress, jobs=jobs)
-        else:
-            sol = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed,
-                                max_trials=args.max_trials, patience=args.patience, target_cost=target_cost,
-                                callback=progress, cluster=client, **kw)
+        # K islands on K cores, or (the many-body search past 63 disks) one search on K threads
+        result = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed, max_trials=args.max_trials,
+                               patience=args.patience, target_cost=target_cost,
+                               variant=args.variant if takes_variants else None, robust=robust,
+                               callback=progress, cluster=client)
     finally:
         try:
             if bar:
@@ -178,34 +156,40 @@ def cmd_solve(args) -> int:
                 client.close()
         except KeyboardInterrupt:  # the first signal landed after the search: write its result all the same
             stopped_late = True
-    if sol is None:
+    if result is None:
         raise KeyboardInterrupt
     with signals_deferred(reraise=False) as late:  # a signal during the write waits for it
-        write_json_atomic(args.output, sol.to_dict())
+        write_json_atomic(args.output, result.to_dict())
     late = late or stopped_late
-    m = sol.meta
+    return _summary(args, problem, result, target_cost, late)
+
+
+def _summary(args, problem, r, target_cost: float, late: bool) -> int:
+    """The summary line (and robust mode's line); the exit status."""
+    from nbst.constants import many_body
+
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
            "max_trials": "trial budget spent", "patience": f"no improvement in {args.patience} trials",
-           "interrupted": "interrupted"}.get(m["stopped"], str(m["stopped"]))
-    if m["stopped"] == "patience" and "many" in m:  # the many-body search: rounds, or --patience trials
-        why = (f"no better motion in {m['params']['patience_rounds']} rounds (or in {args.patience} trials)")
-    island = (f" (best of {len(m['islands'])} islands: island {m['island']}"
-              + (f", {m['configuration']}" if "configuration" in m else "") + ")") if "island" in m else ""
-    shown = m["signature"] if problem.n <= GA_MAX_DISKS else "in the file"
-    line = (f"cost {m['cost']:.6g}, {m['order']}/{problem.n} disks on target (signature {shown}) "
-            f"after {m['trials']} trials in {m['wall_time']:.1f} s, seed {m['seed']}"
+           "interrupted": "interrupted"}.get(r.stopped, str(r.stopped))
+    if r.stopped == "patience" and r.many is not None:  # the many-body search: rounds, or --patience trials
+        why = f"no better motion in {r.params['patience_rounds']} rounds (or in {args.patience} trials)"
+    island = (f" (best of {len(r.islands)} islands: island {r.island}"
+              + (f", {r.configuration}" if r.configuration is not None else "") + ")") if r.island is not None else ""
+    shown = "in the file" if many_body(problem.n) else r.signature
+    line = (f"cost {r.cost:.6g}, {r.order}/{problem.n} disks on target (signature {shown}) "
+            f"after {r.trials} trials in {r.wall_time:.1f} s, seed {r.seed}"
             f"{island}; stopped: {why}; "
             f"wrote {args.output}")
-    if m["stopped"] == "interrupted" or late:
+    if r.stopped == "interrupted" or late:
         print(f"nbst solve: interrupted; best so far written: {line}", file=sys.stderr)
         return 130
     if not args.quiet:
         print(f"nbst solve: {line}", file=sys.stderr)
-        r = m.get("robust")
-        if r:
-            sc = r["score"]
-            print(f"nbst solve: robust: {sc['order']}/{problem.n} disks on target in every one of {r['samples']} "
+        rb = r.robust
+        if rb:
+            sc = rb["score"]
+            print(f"nbst solve: robust: {sc['order']}/{problem.n} disks on target in every one of {rb['samples']} "
                   f"shifted runs; on-target disks within {sc['worst_distance']:.4g} units of their targets "
-                  f"({r['quantile']:.0%} quantile, R = {problem.target_radius:g}); chosen from {r['candidates']} "
+                  f"({rb['quantile']:.0%} quantile, R = {problem.target_radius:g}); chosen from {rb['candidates']} "
                   "candidates", file=sys.stderr)
     return 0

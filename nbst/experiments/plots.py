@@ -9,7 +9,7 @@ import csv
 import io
 from pathlib import Path
 
-from nbst.experiments.runs import BASELINE_ENTRIES, fmt
+from nbst.experiments.runs import fmt, solver_entries
 
 #: Figure size (inches) and raster resolution: small files for the docs (tens of kB).
 FIG_SIZE = (7.0, 4.2)
@@ -68,7 +68,7 @@ def _plt():
 def _kind(entry: str) -> str:
     """The entry's family: "baseline", "nbst", "nbst-ablated" (nbst-noplan and any other
     nbst-* ablation) or "variant" (the paper's A-H)."""
-    if entry in BASELINE_ENTRIES:
+    if entry in solver_entries():
         return "baseline"
     if entry == "nbst":
         return "nbst"

@@ -8,9 +8,10 @@ same specs again skips the finished ones. The summaries (:func:`curves_rows`,
 :func:`ablation_rows`, :func:`compare_rows`) are pure functions of the results; plots
 and tables are drawn by ``nbst.experiments.runs.plots``.
 
-Entries name what runs: ``A`` .. ``H`` and ``nbst`` are the signature search's variants
-(``nbst.search.solve``), ``cma``, ``de``, ``ga``, ``random`` the baselines
-(``nbst.solvers.baselines``). Every run uses its whole budget (patience off) unless a target
+Entries name what runs, read from the two registries: every variant of the signature search
+(``nbst.search.variants.VARIANTS``: ``nbst``, ``nbst-noplan``, ``A`` .. ``H``) and every other
+registered solver (``nbst.solvers.SOLVERS``: the baselines ``cma``, ``de``, ``ga``, ``random``, and
+any solver registered since). Every run uses its whole budget (patience off) unless a target
 cost is given.
 """
 from __future__ import annotations
@@ -29,34 +30,56 @@ from nbst.domain import plain
 from nbst.problem import Problem, ProblemError, problem_from_dict
 
 SCHEMA_VERSION = 1
-VARIANT_ENTRIES = ("A", "B", "C", "D", "E", "F", "G", "H", "nbst", "nbst-noplan")  # nbst-noplan: no backward planner
-BASELINE_ENTRIES = ("cma", "de", "ga", "random")
-ENTRIES = VARIANT_ENTRIES + BASELINE_ENTRIES
-#: The ablation's default bars: the paper's Figures 7/8 (A-H) plus nbst's default and each baseline.
-ABLATION_ENTRIES = ENTRIES
 #: Run files live under this folder of the output folder.
 RUNS_DIR = "runs"
+#: An entry that names the signature search itself means its default variant.
+SIGNATURE_MEANS = "nbst"
+
+
+def variant_entries() -> tuple[str, ...]:
+    """The signature search's variants (``nbst.search.variants.VARIANTS``), as entries."""
+    from nbst.search.variants import VARIANTS
+
+    return VARIANTS.names()
+
+
+def solver_entries() -> tuple[str, ...]:
+    """The registered solvers that take no variant (the baselines, and any solver registered
+    since), as entries."""
+    from nbst.solvers import SOLVERS
+
+    return tuple(e.name for e in SOLVERS.entries() if not e.value.variants)
+
+
+def entries() -> tuple[str, ...]:
+    """Every entry, variants first: what the ablation runs by default (the paper's Figures 7/8,
+    A-H, plus nbst's default and each baseline)."""
+    return variant_entries() + solver_entries()
 
 
 def parse_entry(text: str) -> str:
-    """"a" -> "A", "NBST" -> "nbst", "CMA" -> "cma"; ProblemError for an unknown name."""
-    t = text.strip()
-    if t.upper() in tuple("ABCDEFGH"):
-        return t.upper()
-    if t.lower() in ("nbst", "nbst-noplan") + BASELINE_ENTRIES:
-        return t.lower()
+    """"a" -> "A", "NBST" -> "nbst", "CMA" -> "cma"; "signature" -> "nbst"; ProblemError for an unknown name."""
+    from nbst.search.variants import VARIANTS
+    from nbst.solvers import SOLVERS
+
+    if text.strip().lower() == "signature":
+        return SIGNATURE_MEANS
+    if text in VARIANTS:
+        return VARIANTS.parse(text)
+    if text in SOLVERS and text.strip().lower() in solver_entries():
+        return SOLVERS.parse(text)
     raise ProblemError("<arguments>", "--algorithms",
-                       f"unknown entry {text!r}; choose from {', '.join(ENTRIES)} (A-H and nbst are variants of the "
-                       f"signature search; 'signature' means nbst)")
+                       f"unknown entry {text!r}; choose from {', '.join(entries())} (nbst, nbst-noplan and A-H are "
+                       f"variants of the signature search; 'signature' means nbst)")
 
 
 def parse_entries(text: str) -> tuple[str, ...]:
     """A comma-separated list of entries ("signature" means the default search, nbst)."""
-    out = []
+    out: list[str] = []
     for part in text.split(","):
         if not part.strip():
             continue
-        e = "nbst" if part.strip().lower() == "signature" else parse_entry(part)
+        e = parse_entry(part)
         if e not in out:
             out.append(e)
     if not out:
@@ -131,20 +154,17 @@ def make_specs(problems: Iterable[Problem], entries: Iterable[str], *, runs: int
 
 def run_one(spec: RunSpec) -> dict:
     """Run one spec (pure: the same spec gives the same result, except wall time)."""
-    from nbst.solvers.dispatch import solve_with
+    from nbst.solvers import SIGNATURE, solve_with
 
     problem = problem_from_dict(spec.problem, source=f"<experiment {spec.problem_name}>")
-    if spec.entry in VARIANT_ENTRIES:
-        sol = solve_with("signature", problem, seed=spec.seed, max_trials=spec.trials, patience=0,
-                         target_cost=spec.target_cost, variant=spec.entry)
-    else:
-        sol = solve_with(spec.entry, problem, seed=spec.seed, max_trials=spec.trials, patience=0,
-                         target_cost=spec.target_cost)
-    m = sol.meta
+    variant = spec.entry in variant_entries()
+    result = solve_with(SIGNATURE if variant else spec.entry, problem, seed=spec.seed, max_trials=spec.trials,
+                        patience=0, target_cost=spec.target_cost, variant=spec.entry if variant else None)
+    m = result.meta  # the run file keeps these of the solution's keys, in this order
     keep = ("algorithm", "cost", "signature", "order", "trials", "seed", "stopped", "wall_time", "trials_per_s",
             "first_full_order_trial", "nbst_version", "history", "restarts")
     return {"schema_version": SCHEMA_VERSION, "kind": "nbst-experiment-run", "key": spec.key(), "n": problem.n,
-            **{k: m[k] for k in keep if k in m}, "velocities": sol.velocities.tolist()}
+            **{k: m[k] for k in keep if k in m}, "velocities": result.velocities.tolist()}
 
 
 def _number(x) -> bool:

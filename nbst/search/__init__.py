@@ -2,12 +2,18 @@
 
     from nbst import load_problem
     from nbst.search import solve
-    sol = solve(load_problem("diamond-s14"), seed=1, max_trials=200_000)
-    sol.velocities, sol.meta["cost"], sol.meta["order"]
+    result = solve(load_problem("diamond-s14"), seed=1, max_trials=200_000)
+    result.velocities, result.cost, result.order, result.to_solution()
 
-Layout: operators in ``nbst.search.ops`` (small numba kernels, tested one by one
-on hand-built populations), the compiled initialize / generate-insert loop in
-``nbst.search.loop``, parameters, variants and the Python driver here.
+Layout: the one way in (``nbst.search.api``: :func:`solve`, :func:`run_search`), the variants
+(``nbst.search.variants``, registered once), the parameters (``nbst.search.params``), the
+Python driver (``nbst.search.driver``), the many-body search past 63 disks
+(``nbst.search.many``), nbst's loop and its refinements, the compiled initialize /
+generate-insert loop (``nbst.search.loop``) and its operators (``nbst.search.ops``, small
+numba kernels, tested one by one on hand-built populations).
+
+Importing this package is light: its names load their modules (and numba) on first use, so
+the command line can read the variants without compiling anything.
 
 Choices the paper leaves open (each is a :class:`SearchParams` field or a run
 option; ``docs/search.md`` has the same list with the reasoning):
@@ -40,7 +46,7 @@ option; ``docs/search.md`` has the same list with the reasoning):
   order is found and every subsumed solution of that order deleted (one round per
   insertion). If nothing is subsumed and the population exceeds ``hard_limit`` =
   400, the worst member outside the best's signature is deleted (counted in
-  ``meta["fallback_deletions"]``).
+  ``result.meta["fallback_deletions"]``).
 * insert's per-signature limit is checked before the population limit; "worst"
   = highest cost, ties to the lowest index.
 * stopping: ``patience`` K counts trials since the last improvement (default
@@ -60,10 +66,36 @@ option; ``docs/search.md`` has the same list with the reasoning):
 """
 from __future__ import annotations
 
-from nbst.search.driver import SearchRun, roundoff_cost
-from nbst.search.many import run_search, solve
-from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, NBST_DEFAULTS, VARIANTS, SearchParams, SearchProgress,
-                                mirror_images, variant_params)
+import importlib
+from typing import TYPE_CHECKING, Any
 
-__all__ = ["ALGORITHM", "ALGORITHM_NBST", "NBST_DEFAULTS", "VARIANTS", "SearchParams", "SearchProgress", "SearchRun",
-           "mirror_images", "roundoff_cost", "run_search", "solve", "variant_params"]
+if TYPE_CHECKING:
+    from nbst.search.api import run_many_search, run_search, solve
+    from nbst.search.driver import SearchRun, roundoff_cost
+    from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, ProgressCallback, SearchParams, SearchProgress,
+                                    StopReason, mirror_images, variant_params)
+    from nbst.search.variants import DEFAULT_VARIANT, NBST_DEFAULTS, VARIANTS, Variant
+
+#: Each public name and the module it is defined in (loaded on first use).
+_HOMES = {
+    "solve": "api", "run_search": "api", "run_many_search": "api",
+    "SearchRun": "driver", "roundoff_cost": "driver",
+    "ALGORITHM": "params", "ALGORITHM_NBST": "params", "ProgressCallback": "params", "SearchParams": "params",
+    "SearchProgress": "params", "StopReason": "params", "mirror_images": "params", "variant_params": "params",
+    "DEFAULT_VARIANT": "variants", "NBST_DEFAULTS": "variants", "VARIANTS": "variants", "Variant": "variants",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'nbst.search' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"nbst.search.{home}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_HOMES))

@@ -1,4 +1,4 @@
-"""The signature search's driver: ``solve`` and ``run_search`` pack a problem and its
+"""The signature search's driver: ``run_search`` packs a problem and its
 :class:`~nbst.search.params.SearchParams` into arrays, run the compiled loop
 (``nbst.search.loop``, or ``nbst.search.nbst_loop`` for nbst's variant) chunk by chunk
 with progress and Ctrl-C, and unpack the best solution with its statistics.
@@ -9,18 +9,20 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
 from nbst._version import __version__
-from nbst.constants import GA_MAX_DISKS, ROUNDOFF_REL
+from nbst.constants import GA_MAX_DISKS, ROUNDOFF_REL, many_body
+from nbst.errors import SolveError
 from nbst.problem import Problem
 from nbst.search import loop as _L
 from nbst.search.loop import ChunkResult
 from nbst.search.ops import CULL_SUBSUMED, CULL_WORST, Population
-from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, VARIANTS, SearchParams, SearchProgress, StopReason,
-                                check_run, mirror_images, variant_params)
+from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, ProgressCallback, SearchParams, SearchProgress,
+                                StopReason, check_run, mirror_images, variant_params)
+from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, VARIANTS
+from nbst.solution import SolveResult
 
 #: Room of the improvement history at the start (doubled whenever the loop fills it).
 HISTORY0 = 1024
@@ -81,12 +83,12 @@ def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: 
 
 @dataclass(frozen=True, eq=False)
 class SearchRun:
-    """A finished search: the best solution and the final population.
+    """A finished search: its result and the final population.
 
     velocities : (P, N, 2) float, units/s; costs : (P,) float; signatures : (P,) int64 bitmasks
     """
 
-    solution: object
+    result: SolveResult
     velocities: np.ndarray
     costs: np.ndarray
     signatures: np.ndarray
@@ -100,45 +102,39 @@ def roundoff_cost(problem: Problem) -> float:
     return problem.n * (ROUNDOFF_REL * max(problem.box)) ** 2
 
 
-def solve(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
-          target_cost: float | None = None, variant: str = "nbst", params: SearchParams | None = None,
-          callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048,
-          robust: bool | None = None):
-    """Run the signature search on ``problem``; return the best :class:`~nbst.solution.Solution`.
+def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
+               patience: int = DEFAULT_PATIENCE, target_cost: float | None = None,
+               variant: str = DEFAULT_VARIANT, params: SearchParams | None = None,
+               callback: ProgressCallback | None = None, chunk: int = 2048, record_every: int = 0,
+               robust: bool | None = None) -> SearchRun:
+    """The signature search on ``problem`` (at most 63 disks): the best solution and the final population.
 
-    seed        : int >= 0; None draws one (recorded in ``meta["seed"]``). Same seed, same
-                  parameters -> the same solution, bit for bit (chunking does not matter).
-    max_trials  : trial budget (one trial = one simulated candidate, initialize included)
-    patience    : stop after this many trials without improvement (0: never)
-    target_cost : stop once the best cost is <= this (None: never)
-    variant     : "nbst" (nbst's search, the default), "A" (the paper's full algorithm) .. "H"
-                  (its simplified variants); ignored when ``params`` is given
-    callback    : called with a :class:`SearchProgress` after every chunk; a truthy return
-                  stops the search. A KeyboardInterrupt (Ctrl-C, or raised by the callback)
-                  stops it too: ``solve`` then returns the best so far with
-                  ``meta["stopped"] == "interrupted"``.
-    chunk       : trials per compiled call (progress / Ctrl-C granularity only; in robust mode
-                  also the archive's cadence, so a robust result is reproducible for one chunk)
-    robust      : True: write the most noise-robust top-order solution found rather than the
-                  cheapest (``nbst.search.robust``; sets ``params.robust``); None: as ``params`` says
+    Args:
+        problem: the problem, at most ``GA_MAX_DISKS`` = 63 disks (``nbst.search.solve`` sends
+            larger ones to the many-body search).
+        seed: int >= 0; None draws one (recorded in the result). Same seed, same parameters: the
+            same solution, bit for bit (chunking does not matter).
+        max_trials: trial budget (one trial = one simulated candidate, initialize included).
+        patience: stop after this many trials without improvement (0: never).
+        target_cost: stop once the best cost is <= this (None: never).
+        variant: a name of ``nbst.search.variants.VARIANTS`` ("nbst", the default; "A" the paper's
+            full algorithm; "B".."H" its simplified variants); ignored when ``params`` is given.
+        params: every knob of the search (default: the variant's).
+        callback: called with a :class:`SearchProgress` after every chunk; a truthy return stops
+            the search. A KeyboardInterrupt (Ctrl-C, or raised by the callback) stops it too: the
+            result is then the best so far, ``stopped == "interrupted"``.
+        chunk: trials per compiled call (progress / Ctrl-C granularity only; in robust mode also
+            the archive's cadence, so a robust result is reproducible for one chunk).
+        record_every: k > 0 also returns the candidate velocities of trials k, 2k, ... (the
+            paper's loop only; for benchmarks and analysis).
+        robust: True: return the most noise-robust top-order solution found rather than the
+            cheapest (``nbst.search.robust``; sets ``params.robust``); None: as ``params`` says.
 
-    ``meta`` holds cost, signature, order, trials, seed, variant, params, wall_time,
-    nbst_version, history ([trial, cost, order] per improvement) and run statistics.
+    Returns:
+        A :class:`SearchRun`: the result (:class:`~nbst.solution.SolveResult`) and the final population.
     """
-    return run_search(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
-                      variant=variant, params=params, callback=callback, chunk=chunk, robust=robust).solution
-
-
-def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
-               target_cost: float | None = None, variant: str = "nbst", params: SearchParams | None = None,
-               callback: Callable[[SearchProgress], bool | None] | None = None, chunk: int = 2048,
-               record_every: int = 0, robust: bool | None = None) -> SearchRun:
-    """:func:`solve`, also returning the final population (for benchmarks and analysis) and, with
-    ``record_every`` = k > 0, the candidate velocities of trials k, 2k, ... (the loop's exact mix)."""
-    from nbst.solution import make_solution
-
-    if problem.n > GA_MAX_DISKS:
-        raise ValueError(f"the signature search's compiled loop takes at most {GA_MAX_DISKS} disks (problem "
+    if many_body(problem.n):
+        raise SolveError(f"the signature search's compiled loop takes at most {GA_MAX_DISKS} disks (problem "
                          f"{problem.name!r} has {problem.n}); nbst.search.solve runs the many-body search for it")
     if params is None:
         params = variant_params(variant, problem)
@@ -169,7 +165,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1
                            target_cost=target_cost, stopped=stopped, wall=wall)
     size = s.pop_size
     trials = int(s.st[_L.ST_TRIALS])
-    return SearchRun(solution=make_solution(problem, best_v, **meta), velocities=s.pop.vel[:size].copy(),
+    return SearchRun(result=SolveResult.from_meta(problem, best_v, meta), velocities=s.pop.vel[:size].copy(),
                      costs=s.pop.cost[:size].copy(), signatures=s.pop.sig[:size].copy(),
                      recorded=rec_v[:trials // record_every] if record_every > 0 else rec_v)
 
@@ -223,8 +219,8 @@ def _finish(problem: Problem, params: SearchParams, s: _State, advance, archive,
     best_v = s.best_v.copy()
     cost = float(s.best_cost[0])
     sig = int(s.st[_L.ST_BEST_SIG])
-    if not math.isfinite(cost):  # nothing accepted yet: report the motionless start
-        best_v = np.zeros((n, 2))
+    if not math.isfinite(cost):  # nothing accepted yet (interrupted at once): report the straight start
+        best_v = np.array(problem.straight_velocities(), dtype=float)
     robust_info = None
     if archive is not None and math.isfinite(cost):
         best_v, robust_info = _robust_choice(problem, params, archive, best_v, cost, sig, seed)
@@ -246,7 +242,7 @@ def _finish(problem: Problem, params: SearchParams, s: _State, advance, archive,
         "seed": seed,
         "search_signature": signature_string(search_sig, n),
         "variant": params.variant,
-        "variant_description": VARIANTS.get(params.variant, ""),
+        "variant_description": VARIANTS.entry(params.variant).help if params.variant in VARIANTS else "",
         "params": params.to_dict(),
         "max_trials": max_trials,
         "patience": patience,

@@ -20,25 +20,23 @@ independent small problems. The search works on the whole motion and repairs it 
 The best whole motion is kept; the result is never worse than the directed start. Trials
 are counted in whole-problem simulations: one of m disks counts m / N.
 
-Length: ~690 lines, past the house's ~500: the search's moves (contacts, strikes, chains, cleared
+Length: ~650 lines, past the house's ~500: the search's moves (contacts, strikes, chains, cleared
 neighbourhoods, windowed sub-searches) share one state object and its acceptance rule, and
 stay together so that rule is written once.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from nbst.constants import GA_MAX_DISKS
 from nbst.problem import Problem
-from nbst.search.params import SearchProgress, StopReason
+from nbst.search.params import ProgressCallback, SearchProgress, StopReason
 
-__all__ = ["ALGORITHM_MANY", "ManyParams", "conflicts", "run_many", "run_search", "solve", "subproblem"]
+__all__ = ["ALGORITHM_MANY", "ManyParams", "conflicts", "run_many", "subproblem"]
 
 #: ``meta["algorithm"]`` of a many-body search's solution.
 ALGORITHM_MANY = "nbst-many"
@@ -528,11 +526,11 @@ class _Search:
             budget = prm.sub_trials_per_disk * idx.size
             run = signature_search(win, seed=int(rng.integers(2**62)), max_trials=budget, patience=budget,
                                    target_cost=tol, variant=prm.variant)
-            used = int(run.solution.meta.get("trials", budget))
+            used = run.result.trials
             self.stats["sub_trials"] += used
             self.trials += used * idx.size / n
-            if float(run.solution.meta["cost"]) <= tol:
-                candidates.append(("search", run.solution.velocities))
+            if run.result.cost <= tol:
+                candidates.append(("search", run.result.velocities))
         for how, v in candidates:
             Vn = self.V.copy()
             Vn[idx] = v
@@ -546,7 +544,7 @@ class _Search:
 
 
 def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, target_cost: float,
-             callback: Callable[[SearchProgress], bool | None] | None = None, params: ManyParams | None = None,
+             callback: ProgressCallback | None = None, params: ManyParams | None = None,
              start: np.ndarray | None = None, jobs: int | None = None):
     """Solve ``problem`` (any N) by local repair; returns (velocities (N, 2), meta dict).
 
@@ -646,47 +644,3 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
     meta = {"trials": int(math.ceil(S.trials)), "stopped": None if stopped is None else stopped.value,
             "wall_time": wall, "history": history, "many": S.stats}
     return S.best[1], meta
-
-
-def solve(problem: Problem, **kw):
-    """``nbst.search.solve`` for any N: the signature search (``nbst.search.driver.solve``) up to
-    63 disks, the many-body search past that (same keywords; variant, params, robust and chunk
-    apply to the signature search and to each conflict's sub-search)."""
-    return run_search(problem, **kw).solution
-
-
-def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 100_000,
-               target_cost: float | None = None, variant: str = "nbst", callback=None, jobs: int | None = None,
-               many: ManyParams | None = None, **kw):
-    """``nbst.search.driver.run_search`` for any N (see :func:`solve`). Past 63 disks the result's
-    population is the one solution, and ``meta`` has the many-body search's statistics
-    (``meta["many"]``: rounds, conflicts tried and solved, the largest conflict)."""
-    from nbst.search import driver
-    from nbst.search.params import check_run
-
-    if problem.n <= GA_MAX_DISKS:
-        return driver.run_search(problem, seed=seed, max_trials=max_trials, patience=patience,
-                                 target_cost=target_cost, variant=variant, callback=callback, **kw)
-    from nbst._version import __version__
-    from nbst.sim import evaluate
-    from nbst.solution import make_solution, signature_string
-
-    seed = int(np.random.default_rng().integers(2**63)) if seed is None else int(seed)
-    check_run(int(max_trials), int(patience), seed)
-    prm = many or ManyParams(variant=variant)
-    tc = driver.roundoff_cost(problem) if target_cost is None else float(target_cost)
-    v, meta = run_many(problem, seed=seed, max_trials=int(max_trials), patience=int(patience), target_cost=tc,
-                       callback=callback, params=prm, jobs=jobs)
-    _, c, sg = evaluate(problem, v[None], jobs=1)
-    sig = int(sg[0])
-    wall = meta["wall_time"]
-    full = {"algorithm": ALGORITHM_MANY, "cost": float(c[0]), "signature": signature_string(sig, problem.n),
-            "order": sig.bit_count(), "trials": meta["trials"], "seed": seed, "variant": prm.variant,
-            "params": dataclasses.asdict(prm),
-            "max_trials": int(max_trials), "patience": int(patience), "target_cost": target_cost,
-            "stopped": meta["stopped"], "wall_time": wall,
-            "trials_per_s": meta["trials"] / wall if wall > 0 else None, "nbst_version": __version__,
-            "history": meta["history"], "many": meta["many"]}
-    sol = make_solution(problem, v, **full)
-    return driver.SearchRun(solution=sol, velocities=v[None].copy(), costs=np.array([float(c[0])]),
-                            signatures=np.array([sig], dtype=object), recorded=np.zeros((0, problem.n, 2)))

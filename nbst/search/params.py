@@ -8,6 +8,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from enum import Enum
+from typing import Callable
 
 import numpy as np
 
@@ -16,22 +17,9 @@ from nbst.problem import Problem, ProblemError
 from nbst.search.loop import OP_NAMES as OP_NAMES_PAPER
 from nbst.search.nbst_loop import OP_NAMES as OP_NAMES_NBST
 from nbst.sim.primitives import images
+from nbst.search.variants import DEFAULT_VARIANT, NBST_DEFAULTS, VARIANTS
 from nbst.search.robust import ARCHIVE_SIZE as ROBUST_ARCHIVE, POLISH_TOP as ROBUST_POLISH, SAMPLES as ROBUST_SAMPLES, \
     SEARCH_SAMPLES as ROBUST_K, TIMESTEP as ROBUST_TIMESTEP
-
-VARIANTS = {
-    "A": "the full algorithm",
-    "B": "uniform probability for parent selection",
-    "C": "no crossover operation",
-    "D": "no genetically engineered crossover",
-    "E": "no signature information (R = box width, initial population 60)",
-    "F": "no culling of subsumed solutions (delete the worst on every insertion)",
-    "G": "no elitism",
-    "H": "no directed randomization",
-    "nbst": "nbst's default: the paper's search plus polish, bank shots, strikes, a straight start and the backward "
-            "planner",
-    "nbst-noplan": "nbst without the backward planner (ablation)",
-}
 
 ALGORITHM = "paper-signature-search"
 ALGORITHM_NBST = "nbst-signature-search"
@@ -243,44 +231,16 @@ class StopReason(str, Enum):
     INTERRUPTED = "interrupted"
 
 
-#: Variant "nbst": the paper's A plus every addition of ``nbst.search.nbst_loop`` (see docs/search.md
-#: and the ablation in docs/results.md for what each contributes).
-NBST_DEFAULTS = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_weight=0.3, strike_weight=0.1, polish=True,
-                     straight_start=True, planner=True)
-# The adaptive operator schedule (adapt=True) and restarts (restart=20_000) are built and
-# measured but off: the ablation (docs/results.md) showed no gain from either.
+def variant_params(variant: str = DEFAULT_VARIANT, problem: Problem | None = None) -> SearchParams:
+    """The parameters of a registered variant (``nbst.search.variants.VARIANTS``): nbst's search
+    ("nbst"), the paper's variant A (full algorithm) or B-H (one simplification each).
 
-
-def variant_params(variant: str = "nbst", problem: Problem | None = None) -> SearchParams:
-    """nbst's search ("nbst"), the paper's variant A (full algorithm) or B-H (one simplification each).
-
-    E needs ``problem`` (its signature radius is the box width)."""
-    v = variant.lower() if variant.lower().startswith("nbst") else variant.upper()
-    if v not in VARIANTS:
-        raise ValueError(f"unknown variant {variant!r}; choose one of {', '.join(VARIANTS)}")
-    if v == "nbst":
-        return SearchParams(variant="nbst", **NBST_DEFAULTS)
-    if v == "nbst-noplan":
-        return SearchParams(variant=v, **{**NBST_DEFAULTS, "planner": False})
-    base = SearchParams(variant=v)
-    third = 1.0 / 3.0
-    if v == "B":
-        return dataclasses.replace(base, senate=False)
-    if v == "C":
-        return dataclasses.replace(base, op_weights=(third, third, third, 0.0))
-    if v == "D":
-        return dataclasses.replace(base, engineered=False)
-    if v == "E":
-        if problem is None:
-            raise ValueError("variant E needs the problem (R = box width)")
-        return dataclasses.replace(base, signature_radius=float(problem.width), init_population=60, sig_limit=60)
-    if v == "F":
-        return dataclasses.replace(base, cull="worst")
-    if v == "G":
-        return dataclasses.replace(base, elitism=False)
-    if v == "H":
-        return dataclasses.replace(base, op_weights=(third, 0.0, third, third), p_directed_init=0.0)
-    return base
+    E needs ``problem`` (its signature radius is the box width). An unknown name raises an
+    InputError listing the variants."""
+    name = VARIANTS.parse(variant, source="<search parameters>", field="variant")
+    v = VARIANTS[name]
+    changes = v.changes_for(problem) if v.changes_for is not None else v.changes
+    return SearchParams(variant=name, **changes)
 
 
 def mirror_images(max_bounces: int) -> np.ndarray:
@@ -302,6 +262,10 @@ class SearchProgress:
     #: which it stops); None for the other searches. Its stop is set by this, not by the trial
     #: budget, so a progress bar shows this instead of an ETA over ``max_trials``.
     stall: tuple | None = None
+
+
+#: What a search calls after every chunk of trials; a truthy return stops the search.
+ProgressCallback = Callable[[SearchProgress], "bool | None"]
 
 
 def check_run(max_trials: int, patience: int, seed: int | None = None) -> None:

@@ -10,7 +10,7 @@ from functools import cached_property
 import numpy as np
 from numba import njit
 
-from nbst.constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, GA_MAX_DISKS, PARALLEL_BATCH, WALL_NAMES,
+from nbst.constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, PARALLEL_BATCH, WALL_NAMES, many_body,
                             max_events_for)
 from nbst.problem import Problem
 from nbst.sim.cells import CELLS_MIN_DISKS, alloc_cells, evaluate_words_kernel, run_cells
@@ -88,7 +88,7 @@ def evaluate_events(problem: Problem, V, *, max_events: int | None = None, jobs:
     final = np.empty((B, n, 2))
     cost = np.empty(B)
     n_events = np.empty(B, np.int64)
-    wide = n > GA_MAX_DISKS
+    wide = many_body(n)  # multiword signatures
     sig = np.empty((B, (n + 63) // 64), np.uint64) if wide else np.empty(B, np.int64)
 
     def run_slice(a: int, b: int) -> None:
@@ -372,7 +372,7 @@ def simulate(problem: Problem, velocities, *, max_events: int | None = None) -> 
     t_end = float(times[-1]) if truncated else float(problem.t_final)
     if truncated:
         cost, sig = INF, 0
-    elif n > GA_MAX_DISKS:
+    elif many_body(n):
         words = np.empty((n + 63) // 64, np.uint64)
         cost = cost_signature_words(final, ka.target, ka.R, words)
         sig = signature_words_to_int(words)

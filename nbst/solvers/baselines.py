@@ -2,18 +2,19 @@
 
     from nbst import load_problem
     from nbst.solvers import solve_with
-    sol = solve_with("cma", load_problem("diamond-s14"), seed=1, max_trials=100_000)
-    sol.meta["cost"], sol.meta["trials"], sol.meta["history"]
+    result = solve_with("cma", load_problem("diamond-s14"), seed=1, max_trials=100_000)
+    result.cost, result.trials, result.history
 
-Every solver has the signature of :func:`nbst.search.solve` (keyword-only
-``seed``, ``max_trials``, ``patience``, ``target_cost``, ``callback``) and returns
-a :class:`~nbst.solution.Solution` whose ``meta`` holds cost, signature, order,
-trials, seed, algorithm, wall_time, nbst_version, stopped and history
-([trial, cost, order] at every improvement of the best cost).
+Every solver takes the keywords of :func:`nbst.search.solve` that apply to it (keyword-only
+``seed``, ``max_trials``, ``patience``, ``target_cost``, ``callback``, then its own
+options) and returns a :class:`~nbst.solution.SolveResult` (cost, signature, order, trials,
+seed, algorithm, wall_time, stopped and history: (trial, cost, order) at every improvement
+of the best cost; its ``meta`` adds nbst_version and the solver's parameters). The solvers
+are registered by name in ``nbst.solvers.dispatch.SOLVERS``.
 
 Accounting: one trial = one simulated candidate. All simulations go through
 :func:`nbst.sim.evaluate` in batches, each batch cut to the remaining budget, so
-``meta["trials"] <= max_trials`` always (candidates cut off are never simulated
+``result.trials <= max_trials`` always (candidates cut off are never simulated
 and never scored). Only the cueable disks' velocities are searched; noncueable
 disks keep zero velocity. A truncated simulation (``max_events``) scores cost inf.
 
@@ -55,14 +56,19 @@ from __future__ import annotations
 import contextlib
 import math
 import time
-from typing import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from nbst._version import __version__
 from nbst.problem import Problem, ProblemError
+from nbst.solution import SolveResult
 
-ALGORITHMS = ("signature", "cma", "de", "ga", "random")
+if TYPE_CHECKING:
+    from nbst.search.params import ProgressCallback
+
+#: Patience of a baseline unless told otherwise: none (a baseline runs to its budget or target).
+BASELINE_PATIENCE = 0
 
 #: CMA-ES step size, as a fraction of R / t_final (units/s): 1 sigma moves an end point by 3R per axis
 #: (probe on diamond-s14, 2 seeds x 100k trials: 0.3 -> 6564 / 18226, 1 -> 10960 / 11177, 3 -> 72 / 8587).
@@ -102,7 +108,7 @@ class _Budget:
     """
 
     def __init__(self, problem: Problem, *, max_trials: int, patience: int, target_cost: float | None,
-                 callback, phase: str = ""):
+                 callback: ProgressCallback | None, phase: str = ""):
         from nbst.sim import evaluate
 
         self._evaluate = evaluate
@@ -202,8 +208,11 @@ def _check_args(max_trials: int, patience: int, seed) -> int:
     return int(seed)
 
 
-def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: dict):
-    from nbst.solution import make_solution, signature_string
+def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: dict,
+            extra: dict[str, Any] | None = None) -> SolveResult:
+    """The result of a baseline: its best (or the straight-line start if nothing finite was
+    simulated), with ``meta`` in the file's order (``extra`` keys last)."""
+    from nbst.solution import signature_string
 
     wall = time.perf_counter() - b.t0
     if b.trials == 0 or not math.isfinite(b.best_cost):
@@ -230,8 +239,9 @@ def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: 
         "nbst_version": __version__,
         "first_full_order_trial": b.first_full,
         "history": b.history,
+        **(extra or {}),
     }
-    return make_solution(problem, b.velocities(np.asarray(xbest)[None])[0], **meta)
+    return SolveResult.from_meta(problem, b.velocities(np.asarray(xbest)[None])[0], meta)
 
 
 def _popcount(x: int) -> int:
@@ -265,8 +275,10 @@ def _randomize(problem: Problem, rng: np.random.Generator, B: int, *, p_directed
 
 # --------------------------------------------------------------------------- solvers
 
-def solve_random(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 0,
-                 target_cost: float | None = None, callback: Callable | None = None, p_directed: float = 0.5):
+def solve_random(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000,
+                 patience: int = BASELINE_PATIENCE, target_cost: float | None = None,
+                 callback: ProgressCallback | None = None,
+                 p_directed: float = 0.5) -> SolveResult:
     """Random search: independent candidates from directed / uniform randomize (see module doc)."""
     seed = _check_args(max_trials, patience, seed)
     rng = np.random.default_rng(seed)
@@ -282,14 +294,15 @@ def solve_random(problem: Problem, *, seed: int | None = None, max_trials: int =
                    params={"p_directed": p_directed, "max_bounces": MAX_BOUNCES, "batch": RANDOM_BATCH})
 
 
-def solve_cma(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 0,
-              target_cost: float | None = None, callback: Callable | None = None,
+def solve_cma(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000,
+              patience: int = BASELINE_PATIENCE, target_cost: float | None = None,
+              callback: ProgressCallback | None = None,
               sigma0_fraction: float = CMA_SIGMA0_FRACTION, incpopsize: int = CMA_INCPOPSIZE,
-              cma_options: dict | None = None):
+              cma_options: dict | None = None) -> SolveResult:
     """CMA-ES (pycma) with IPOP restarts from the straight-line velocities (see module doc).
 
     sigma0 = sigma0_fraction * R / t_final units/s; population 4 + 3 ln D, times
-    ``incpopsize`` per restart. ``meta["restarts"]`` counts the restarts begun.
+    ``incpopsize`` per restart. ``result.meta["restarts"]`` counts the restarts begun.
     ``cma_options``: extra pycma options for every restart (e.g. ``{"maxiter": 5}``,
     a stopping rule that ends each restart after 5 generations)."""
     import cma
@@ -311,13 +324,10 @@ def solve_cma(problem: Problem, *, seed: int | None = None, max_trials: int = 1_
             _cma_loop(b, cma, sigma0, lam0, incpopsize, randn, ends, dict(cma_options or {}))
     except KeyboardInterrupt:
         b.stopped = "interrupted"
-    restarts = len(ends) - 1
-    sol = _finish(problem, b, algorithm="cma-es-ipop", seed=seed,
-                  params={"sigma0": sigma0, "sigma0_fraction": sigma0_fraction, "popsize0": lam0,
-                          "incpopsize": incpopsize, "x0": "straight-line velocities", "dimension": D})
-    sol.meta["restarts"] = restarts
-    sol.meta["restart_ends"] = ends
-    return sol
+    return _finish(problem, b, algorithm="cma-es-ipop", seed=seed,
+                   params={"sigma0": sigma0, "sigma0_fraction": sigma0_fraction, "popsize0": lam0,
+                           "incpopsize": incpopsize, "x0": "straight-line velocities", "dimension": D},
+                   extra={"restarts": len(ends) - 1, "restart_ends": ends})
 
 
 def _cma_loop(b: _Budget, cma, sigma0: float, lam: int, incpopsize: int, randn, ends: list, extra: dict) -> None:
@@ -387,9 +397,10 @@ def _jsonable(v):
         return str(v)
 
 
-def solve_ga(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 0,
-             target_cost: float | None = None, callback: Callable | None = None, pop_size: int = GA_POP,
-             mutation_fraction: float = GA_MUTATION_FRACTION, batch: int = GA_BATCH):
+def solve_ga(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000,
+             patience: int = BASELINE_PATIENCE, target_cost: float | None = None,
+             callback: ProgressCallback | None = None, pop_size: int = GA_POP,
+             mutation_fraction: float = GA_MUTATION_FRACTION, batch: int = GA_BATCH) -> SolveResult:
     """A standard steady-state real-coded GA (see module doc)."""
     seed = _check_args(max_trials, patience, seed)
     rng = np.random.default_rng(seed)
@@ -448,9 +459,10 @@ def de_bounds(problem: Problem, bounces: int | None = None) -> list[tuple[float,
     return out
 
 
-def solve_de(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000, patience: int = 0,
-             target_cost: float | None = None, callback: Callable | None = None, popsize: int = DE_POPSIZE,
-             strategy: str = "best1bin"):
+def solve_de(problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000,
+             patience: int = BASELINE_PATIENCE, target_cost: float | None = None,
+             callback: ProgressCallback | None = None, popsize: int = DE_POPSIZE,
+             strategy: str = "best1bin") -> SolveResult:
     """Differential evolution (scipy), exact trial accounting (see module doc)."""
     from scipy.optimize import differential_evolution
 

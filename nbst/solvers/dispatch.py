@@ -1,34 +1,197 @@
-"""Pick a solver by name: ``solve_with("cma", problem, seed=1, max_trials=100_000)``.
+"""Every solver, registered once by name: ``solve_with("cma", problem, seed=1, max_trials=100_000)``.
 
-"signature" is the signature search (``nbst.search.solve``, ``variant=`` picks A-H or
-nbst's); "cma", "de", "ga" and "random" are the baselines of ``nbst.solvers.baselines``.
+``SOLVERS`` is the one list of solvers: ``nbst solve --algorithm`` and its help, the islands
+(``nbst solve --jobs``), the experiments' entries (``nbst experiment ... --algorithms``) and the
+docs read it. A new solver is a function ``run(problem, request, callback) -> SolveResult``
+(:class:`Solver`) registered here or from anywhere with :func:`register_solver`::
+
+    from nbst.solvers import SolveRequest, register_solver
+
+    def my_solver(problem, request: SolveRequest, callback) -> SolveResult: ...
+    register_solver("mine", my_solver, help="what it does, in one line")
+
+"signature" is the signature search (``nbst.search.solve``; ``variant`` picks nbst's search,
+A-H, ...); "cma", "de", "ga" and "random" are the baselines of ``nbst.solvers.baselines``.
+
+This module stays light (no numba at import): the command line reads ``SOLVERS`` to build its
+options; the signature search is imported when it runs.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+from nbst.constants import many_body
 from nbst.problem import Problem, ProblemError
-from nbst.search import solve
-from nbst.solvers.baselines import ALGORITHMS, solve_cma, solve_de, solve_ga, solve_random
+from nbst.registry import Registry
+from nbst.solution import SolveResult
+from nbst.solvers.baselines import BASELINE_PATIENCE, solve_cma, solve_de, solve_ga, solve_random
+
+if TYPE_CHECKING:
+    from nbst.search.params import ProgressCallback
+
+__all__ = ["SOLVERS", "SIGNATURE", "SolveRequest", "Solver", "SolverInfo", "register_solver", "run_solver",
+           "solve_with"]
+
+#: The signature search's name among the solvers.
+SIGNATURE = "signature"
 
 
-def solve_signature(problem: Problem, **kw):
-    """``nbst.search.solve`` (the signature search), unchanged: its defaults apply (patience
-    100,000, variant "nbst"); ``variant=`` picks A-H."""
-    return solve(problem, **kw)
+@dataclass(frozen=True)
+class SolveRequest:
+    """What one search is asked to do (a solver's options besides the problem and the callback).
+
+    seed        : int >= 0; None: the solver draws one (and records it)
+    max_trials  : trial budget (one trial = one simulated candidate)
+    patience    : stop after this many trials without improvement (0: never); None: the
+                  solver's default (100,000 for the signature search, none for a baseline)
+    target_cost : stop once the best cost is <= this (None: never; the many-body search:
+                  round-off level)
+    variant     : the signature search's variant (``nbst.search.variants.VARIANTS``); None:
+                  its default. Solvers that take no variant refuse any other.
+    robust      : the signature search's robust mode (``nbst solve --robust``)
+    jobs        : threads of a search that runs in one process (the many-body search); None:
+                  every core
+    """
+
+    seed: int | None = None
+    max_trials: int = 1_000_000
+    patience: int | None = None
+    target_cost: float | None = None
+    variant: str | None = None
+    robust: bool = False
+    jobs: int | None = None
 
 
-SOLVERS = {"signature": solve_signature, "cma": solve_cma, "de": solve_de, "ga": solve_ga, "random": solve_random}
+class Solver(Protocol):
+    """A solver: the best velocities it finds for ``problem`` within ``request``; it calls
+    ``callback`` with a ``SearchProgress`` every few thousand trials (a truthy return stops it)
+    and returns its best so far when interrupted (``stopped == "interrupted"``)."""
+
+    def __call__(self, problem: Problem, request: SolveRequest,
+                 callback: ProgressCallback | None) -> SolveResult: ...
 
 
-def solve_with(algorithm: str, problem: Problem, **kw):
-    """Dispatch to a solver by name: "signature" (``nbst.search.solve``; ``variant=`` picks
-    the variant), "cma", "de", "ga", "random". Keywords as :func:`nbst.search.solve`."""
-    a = algorithm.strip().lower()
-    if a not in SOLVERS:
-        raise ProblemError("<search parameters>", "algorithm",
-                           f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
-    if a != "signature" and kw.get("variant") not in (None, "", "nbst"):
-        raise ProblemError("<search parameters>", "variant",
-                           f"a variant ({kw['variant']}) applies to the signature search only, not to {a}")
-    if a != "signature":
-        kw.pop("variant", None)
-    return SOLVERS[a](problem, **kw)
+def _never(problem: Problem) -> bool:
+    return False
+
+
+@dataclass(frozen=True)
+class SolverInfo:
+    """A registered solver.
+
+    run          : the solver
+    variants     : whether it takes ``variant`` and ``robust`` (the signature search)
+    one_process  : problems on which it runs one search in this process, using ``jobs`` as its
+                   own threads, instead of ``--jobs`` islands (the many-body search)
+    """
+
+    run: Solver
+    variants: bool = False
+    one_process: Callable[[Problem], bool] = _never
+
+
+SOLVERS: Registry[SolverInfo] = Registry("algorithm")
+
+
+def register_solver(name: str, run: Solver, *, help: str, variants: bool = False,
+                    one_process: Callable[[Problem], bool] = _never) -> None:
+    """Add a solver to ``SOLVERS`` (see :class:`SolverInfo`); ``help`` is its one line in
+    ``nbst solve --help`` and the experiments' docs."""
+    SOLVERS.register(name, SolverInfo(run, variants, one_process), help=help)
+
+
+def run_solver(algorithm: str, problem: Problem, request: SolveRequest,
+               callback: ProgressCallback | None = None) -> SolveResult:
+    """Run the registered solver ``algorithm`` (any case) on ``problem`` as ``request`` says.
+
+    Raises:
+        InputError: an unknown algorithm, or a variant or robust mode for a solver without them.
+    """
+    name = SOLVERS.parse(algorithm, source="<search parameters>", field="algorithm")
+    info = SOLVERS[name]
+    if not info.variants:
+        for field, given in (("variant", request.variant not in (None, "", _default_variant())),
+                             ("robust", request.robust)):
+            if given:
+                raise ProblemError("<search parameters>", field,
+                                   f"applies to the signature search only, not to {name}")
+    return info.run(problem, request, callback)
+
+
+def solve_with(algorithm: str, problem: Problem, *, seed: int | None = None, max_trials: int = 1_000_000,
+               patience: int | None = None, target_cost: float | None = None, variant: str | None = None,
+               robust: bool = False, jobs: int | None = None,
+               callback: ProgressCallback | None = None) -> SolveResult:
+    """Run a solver by name: "signature" (``nbst.search.solve``), "cma", "de", "ga", "random", or any
+    other of ``SOLVERS``.
+
+    Args:
+        algorithm: a name of ``SOLVERS`` (any case).
+        problem: the problem.
+        seed, max_trials, patience, target_cost, variant, robust, jobs: as :class:`SolveRequest`.
+        callback: called with a ``SearchProgress`` every chunk of trials; a truthy return stops it.
+
+    Returns:
+        The solver's :class:`~nbst.solution.SolveResult`.
+    """
+    request = SolveRequest(seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                           variant=variant, robust=robust, jobs=jobs)
+    return run_solver(algorithm, problem, request, callback)
+
+
+def _default_variant() -> str:
+    from nbst.search.variants import DEFAULT_VARIANT
+
+    return DEFAULT_VARIANT
+
+
+# --------------------------------------------------------------------------- the registered solvers
+
+def _signature(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
+    """``nbst.search.solve``: its defaults apply where the request leaves a choice open."""
+    from nbst.search.api import solve
+    from nbst.search.variants import DEFAULT_PATIENCE
+
+    return solve(problem, seed=request.seed, max_trials=request.max_trials,
+                 patience=DEFAULT_PATIENCE if request.patience is None else request.patience,
+                 target_cost=request.target_cost, variant=request.variant or _default_variant(),
+                 robust=request.robust, jobs=request.jobs, callback=callback)
+
+
+def _patience(request: SolveRequest) -> int:
+    return BASELINE_PATIENCE if request.patience is None else request.patience
+
+
+def _cma(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
+    return solve_cma(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
+                     target_cost=request.target_cost, callback=callback)
+
+
+def _de(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
+    return solve_de(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
+                    target_cost=request.target_cost, callback=callback)
+
+
+def _ga(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
+    return solve_ga(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
+                    target_cost=request.target_cost, callback=callback)
+
+
+def _random(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
+    return solve_random(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
+                        target_cost=request.target_cost, callback=callback)
+
+
+def _many_body(problem: Problem) -> bool:
+    return many_body(problem.n)
+
+
+register_solver(SIGNATURE, _signature, variants=True, one_process=_many_body,
+                help="nbst's signature search (the default; --variant picks nbst's search, the paper's A or its "
+                     "variants B-H; past 63 disks the many-body search, one process)")
+register_solver("cma", _cma, help="CMA-ES (pycma), IPOP restarts from the straight-line velocities")
+register_solver("de", _de, help="differential evolution (scipy, best1bin)")
+register_solver("ga", _ga, help="a standard steady-state real-coded GA")
+register_solver("random", _random, help="random search: directed or uniform randomize per disk")

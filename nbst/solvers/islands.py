@@ -1,7 +1,7 @@
 """Independent searches on every core ("islands"), stopped together, reproducible for a given K.
 
 ``nbst solve --jobs K`` runs K copies of one search (``nbst.search.solve`` or a baseline
-through ``nbst.solvers.baselines.solve_with``), each from its own seed and with 1/K of the trial
+through ``nbst.solvers.dispatch.run_solver``), each from its own seed and with 1/K of the trial
 budget: island 0 in this process, the others in K - 1 worker processes started after
 island 0's first chunk of trials (if that did not already reach the target). They run
 in lockstep: after every chunk of trials each island reports its best cost to the
@@ -15,9 +15,8 @@ operating system schedules the processes.
 Seeds: island k gets ``island_seeds(seed, K)[k]`` (numpy's ``SeedSequence(seed).spawn``);
 with K = 1 there is no worker and the search is exactly ``solve(seed=seed)``.
 
-Trial accounting: ``meta["trials"]`` of the result is the sum over islands (every
-simulation counted), ``meta["islands"]`` lists each island's seed, configuration, trials,
-cost and why it stopped.
+Trial accounting: ``result.trials`` is the sum over islands (every simulation counted),
+``result.islands`` lists each island's seed, configuration, trials, cost and why it stopped.
 
 The portfolio: nbst's default search on a problem with noncueable disks is a portfolio of
 two configurations, ``PORTFOLIO`` = ("nbst", "nbst-noplan"): island k runs
@@ -32,15 +31,26 @@ portfolio does not apply (``portfolio_for``).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing as mp
 import os
 import queue
 import threading
 import time
-from typing import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+from nbst.problem import Problem
+from nbst.search.params import SearchProgress
+from nbst.search.variants import DEFAULT_MAX_TRIALS
+from nbst.solution import SolveResult
+from nbst.solvers.dispatch import SIGNATURE, SOLVERS, SolveRequest, run_solver
+
+if TYPE_CHECKING:
+    from nbst.search.params import ProgressCallback
 
 #: Seconds the parent waits for an island's report before it declares the island lost.
 ISLAND_TIMEOUT = 600.0
@@ -49,20 +59,31 @@ ISLAND_TIMEOUT = 600.0
 PORTFOLIO = ("nbst", "nbst-noplan")
 
 
-def portfolio_for(problem, algorithm: str = "signature", **kw) -> tuple[str, ...] | None:
+def portfolio_for(problem: Problem, algorithm: str = SIGNATURE, *, variant: str | None = None,
+                  robust: bool = False) -> tuple[str, ...] | None:
     """The configurations the islands take in turn, or None where every island runs the same search.
 
-    The portfolio applies to nbst's default search (algorithm "signature", variant "nbst", no
-    ``params``, not robust) on a problem with at least one noncueable disk: the backward planner
-    runs only there, so elsewhere "nbst" and "nbst-noplan" are one search, bit for bit. Robust
-    mode keeps its single configuration (its results were measured with the planner)."""
-    if str(algorithm).strip().lower() != "signature" or kw.get("params") is not None or kw.get("robust"):
+    The portfolio applies to nbst's default search (algorithm "signature", variant "nbst", not
+    robust) on a problem with at least one noncueable disk: the backward planner runs only there,
+    so elsewhere "nbst" and "nbst-noplan" are one search, bit for bit. Robust mode keeps its
+    single configuration (its results were measured with the planner)."""
+    if str(algorithm).strip().lower() != SIGNATURE or robust:
         return None
-    if str(kw.get("variant") or "nbst").strip().lower() != "nbst":
+    if str(variant or "nbst").strip().lower() != "nbst":
         return None
     if bool(np.all(problem.cueable)):
         return None
     return PORTFOLIO
+
+
+@dataclass(frozen=True)
+class IslandTask:
+    """What one island runs: a registered solver (``algorithm``) with its own ``request`` (seed and
+    budget), or, in nbst's portfolio, searches of the ``portfolio`` configurations in turn."""
+
+    algorithm: str
+    request: SolveRequest
+    portfolio: tuple[str, ...] | None = None
 
 
 def island_seeds(seed: int, jobs: int) -> list[int]:
@@ -73,12 +94,12 @@ def island_seeds(seed: int, jobs: int) -> list[int]:
             for s in np.random.SeedSequence(int(seed)).spawn(int(jobs))]
 
 
-def _island_body(k: int, algorithm: str, problem, kw: dict, conn, baton=None) -> None:
+def _island_body(k: int, task: IslandTask, problem: Problem, conn, baton=None) -> None:
     """Run one search; report after every chunk and wait for the parent's word; send the
     result (or the error) at the end. ``baton`` (a lock, islands in threads): held while a
     chunk runs, so that the threads of one process take turns."""
 
-    def callback(p) -> bool:
+    def callback(p: SearchProgress) -> bool:
         if baton is not None:
             baton.release()
         conn.send(("progress", k, p.trials, p.best_cost, p.best_order))
@@ -90,13 +111,13 @@ def _island_body(k: int, algorithm: str, problem, kw: dict, conn, baton=None) ->
     if baton is not None:
         baton.acquire()
     try:
-        sol = run_island(algorithm, problem, callback=callback, **kw)
+        result = run_island(task, problem, callback=callback)
         _give(baton)
-        conn.send(("done", k, sol.velocities, sol.meta))
+        conn.send(("done", k, result))
     except BaseException as e:  # noqa: BLE001 - reported to the parent, which raises it
         _give(baton)
         try:
-            conn.send(("error", k, f"{type(e).__name__}: {e}", None))
+            conn.send(("error", k, f"{type(e).__name__}: {e}"))
         except OSError:
             pass
 
@@ -106,47 +127,41 @@ def _island_body(k: int, algorithm: str, problem, kw: dict, conn, baton=None) ->
 RESTART_MIN_TRIALS = 2048
 
 
-def run_island(algorithm: str, problem, callback=None, **kw):
-    """One island's search: ``solve_with``, or in a portfolio island (``_portfolio`` = the
-    configurations) a sequence of searches: the first with ``variant`` and ``seed``; whenever one
-    stops by patience with at least ``RESTART_MIN_TRIALS`` of the island's budget left, the next
-    configuration starts from a fresh seed (``restart_seed``) with what is left. The best run's
-    Solution is returned, with ``trials`` the island's total and ``runs`` one entry per search."""
-    from nbst.solution import make_solution
-    from nbst.solvers.dispatch import solve_with
-
-    configs = kw.pop("_portfolio", None)
+def run_island(task: IslandTask, problem: Problem, callback: ProgressCallback | None = None) -> SolveResult:
+    """One island's search: the solver of ``task``, or in a portfolio island a sequence of searches:
+    the first with the request's variant and seed; whenever one stops by patience with at least
+    ``RESTART_MIN_TRIALS`` of the island's budget left, the next configuration starts from a fresh
+    seed (``restart_seed``) with what is left. The best search's result is returned, with
+    ``trials`` the island's total and ``meta["runs"]`` one entry per search."""
+    request = task.request
+    configs = task.portfolio
     if not configs:
-        return solve_with(algorithm, problem, callback=callback, **kw)
-    from nbst.search import SearchProgress
-
-    budget, seed0, first = int(kw["max_trials"]), int(kw["seed"]), configs.index(kw["variant"])
-    spent, best, runs = 0, None, []
+        return run_solver(task.algorithm, problem, request, callback)
+    budget, seed0 = int(request.max_trials), int(request.seed or 0)
+    first = configs.index(request.variant or configs[0])
+    spent, best, best_run, runs = 0, None, 0, []
     while True:
         j = len(runs)
-        run_kw = dict(kw, variant=configs[(first + j) % len(configs)], seed=restart_seed(seed0, j),
-                      max_trials=budget - spent)
-        base, floor = spent, (math.inf if best is None else best.meta["cost"])
+        run_request = dataclasses.replace(request, variant=configs[(first + j) % len(configs)],
+                                          seed=restart_seed(seed0, j), max_trials=budget - spent)
+        base, floor = spent, (math.inf if best is None else best.cost)
 
-        def cb(p, base=base, floor=floor):
+        def cb(p: SearchProgress, base: int = base, floor: float = floor) -> bool:
             if callback is None:
                 return False
-            return callback(SearchProgress(trials=base + p.trials, best_cost=min(floor, p.best_cost),
-                                           best_order=p.best_order, elapsed=p.elapsed, population=p.population,
-                                           phase=p.phase))
+            return bool(callback(SearchProgress(trials=base + p.trials, best_cost=min(floor, p.best_cost),
+                                                best_order=p.best_order, elapsed=p.elapsed,
+                                                population=p.population, phase=p.phase)))
 
-        sol = solve_with(algorithm, problem, callback=cb, **run_kw)
-        m = sol.meta
-        spent += int(m["trials"])
-        runs.append({"seed": run_kw["seed"], "variant": run_kw["variant"], "trials": int(m["trials"]),
-                     "cost": m["cost"], "stopped": m["stopped"]})
-        if best is None or m["cost"] < best.meta["cost"]:
-            best, best_run = sol, j
-        if m["stopped"] != "patience" or budget - spent < RESTART_MIN_TRIALS:
+        result = run_solver(task.algorithm, problem, run_request, cb)
+        spent += result.trials
+        runs.append({"seed": run_request.seed, "variant": run_request.variant, "trials": result.trials,
+                     "cost": result.cost, "stopped": result.stopped})
+        if best is None or result.cost < best.cost:
+            best, best_run = result, j
+        if result.stopped != "patience" or budget - spent < RESTART_MIN_TRIALS:
             break
-    meta = dict(best.meta)
-    meta.update(trials=spent, runs=runs, run=best_run, stopped=runs[-1]["stopped"])
-    return make_solution(problem, best.velocities, **meta)
+    return best.with_meta({"trials": spent, "runs": runs, "run": best_run, "stopped": runs[-1]["stopped"]})
 
 
 def restart_seed(seed: int, j: int) -> int:
@@ -165,7 +180,7 @@ def _give(baton) -> None:
             pass
 
 
-def _island(k: int, algorithm: str, problem, kw: dict, conn, parent_pid: int, inherited: list) -> None:
+def _island(k: int, task: IslandTask, problem: Problem, conn, parent_pid: int, inherited: list) -> None:
     """Forked worker: one island over a pipe. It ignores Ctrl-C, SIGTERM and SIGHUP (the parent
     decides and stops its islands) and dies with the parent, even one killed by SIGKILL
     (``die_with_parent``). The parent's ends of the pipes that fork copied here (``inherited``)
@@ -176,7 +191,7 @@ def _island(k: int, algorithm: str, problem, kw: dict, conn, parent_pid: int, in
     for c in inherited:
         c.close()
     try:
-        _island_body(k, algorithm, problem, kw, conn)
+        _island_body(k, task, problem, conn)
     finally:
         conn.close()
         os._exit(0)  # nothing to tear down: skip the interpreter's exit work (tens of ms)
@@ -222,9 +237,9 @@ class _QueueConn(_ThreadConn):
         super().__init__(Queue(out_name, client=client), Queue(in_name, client=client))
 
 
-def _island_dask(k: int, algorithm: str, problem, kw: dict, names: tuple) -> int:
+def _island_dask(k: int, task: IslandTask, problem: Problem, names: tuple) -> int:
     """A Dask task: one island, talking to the parent through two named queues."""
-    _island_body(k, algorithm, problem, kw, _QueueConn(*names))
+    _island_body(k, task, problem, _QueueConn(*names))
     return k
 
 
@@ -236,7 +251,7 @@ class _Rounds:
         self.trials = [0] * jobs
         self.best = [math.inf] * jobs
         self.order = [0] * jobs
-        self.results: dict[int, tuple] = {}
+        self.results: dict[int, SolveResult] = {}
         self.live: set[int] = set()  # worker islands still running
         self.stop_reason: str | None = None
         self.pending: list[int] = []
@@ -262,8 +277,8 @@ class _Rounds:
                 _, _, self.trials[k], self.best[k], self.order[k] = msg
                 waiting.append(k)
             elif msg[0] == "done":
-                self.results[k] = (msg[2], msg[3])
-                self.trials[k] = int(msg[3]["trials"])
+                self.results[k] = msg[2]
+                self.trials[k] = msg[2].trials
                 self.live.discard(k)
             else:
                 raise RuntimeError(f"island {k} failed: {msg[2]}")
@@ -291,52 +306,68 @@ class _Rounds:
                 self.live.discard(k)
 
 
-def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str = "signature",
-                  max_trials: int = 1_000_000, patience: int = 100_000, target_cost: float | None = None,
-                  callback: Callable | None = None, cluster=None, portfolio: bool = True, **kw):
-    """Run ``jobs`` islands of ``algorithm`` on ``problem`` and return the best Solution.
+def solve_islands(problem: Problem, *, jobs: int, seed: int | None = None, algorithm: str = SIGNATURE,
+                  max_trials: int = DEFAULT_MAX_TRIALS, patience: int | None = None,
+                  target_cost: float | None = None, variant: str | None = None, robust: bool = False,
+                  callback: ProgressCallback | None = None, cluster=None, portfolio: bool = True) -> SolveResult:
+    """Run ``jobs`` islands of ``algorithm`` on ``problem`` and return the best island's result.
 
     Island 0 runs in this process; islands 1..K-1 run in forked workers that start after
     island 0's first round (chunk) if that round has not reached the target, and then keep
-    in lockstep one round behind it (a fixed pairing, so the result stays deterministic). Keywords as
-    :func:`nbst.solvers.baselines.solve_with` (``variant``, ``robust``, ...). ``max_trials`` is the
-    total budget (each island gets ceil(max_trials / jobs)); ``patience`` applies per island.
-    ``callback(progress)`` sees the islands' sum of trials and the best island's cost and
-    order after every round; a truthy return stops all of them (``stopped == "callback"``).
-    Ctrl-C stops all islands and returns the best so far (``stopped == "interrupted"``).
-    ``cluster``: a ``dask.distributed.Client``; islands 1..K-1 then run as tasks on its
-    workers (one worker thread each, for as long as the search runs) and talk to the
-    parent through named Dask queues; the rounds are the same, so the result is the same
-    as on local processes for the same (seed, K).
+    in lockstep one round behind it (a fixed pairing, so the result stays deterministic).
+    A solver that runs in one process on this problem (``SolverInfo.one_process``: the
+    many-body search past 63 disks) runs once, here, with ``jobs`` threads.
 
-    ``portfolio`` (default True): where :func:`portfolio_for` applies (nbst's default search on a
-    problem with noncueable disks), island k runs ``PORTFOLIO[k % 2]``, and ``jobs`` = 1 runs the
-    portfolio's two islands in threads of this process, taking turns chunk by chunk (the same
-    result as ``jobs`` = 2). ``meta["configuration"]`` names the variant of the written solution's
-    island and ``meta["portfolio"]`` the islands' variants. False: every island runs ``variant``
-    (``jobs`` = 1 is then exactly ``solve``).
+    Args:
+        problem: the problem.
+        jobs: islands (K >= 1).
+        seed: the seed the islands' seeds are derived from (``island_seeds``); None draws one.
+        algorithm: a name of ``nbst.solvers.dispatch.SOLVERS``.
+        max_trials: the total budget: each island gets ceil(max_trials / K).
+        patience, target_cost, variant, robust: as ``nbst.solvers.dispatch.SolveRequest``;
+            ``patience`` applies per island.
+        callback: sees the islands' sum of trials and the best island's cost and order after
+            every round; a truthy return stops all of them (``stopped == "callback"``).
+        cluster: a ``dask.distributed.Client``; islands 1..K-1 then run as tasks on its workers
+            (one worker thread each, for as long as the search runs) and talk to the parent
+            through named Dask queues; the rounds are the same, so the result is the same as on
+            local processes for the same (seed, K).
+        portfolio: True (default): where :func:`portfolio_for` applies (nbst's default search on
+            a problem with noncueable disks), island k runs ``PORTFOLIO[k % 2]``, and ``jobs`` = 1
+            runs the portfolio's two islands in threads of this process, taking turns chunk by
+            chunk (the same result as ``jobs`` = 2); ``result.configuration`` names the variant
+            of the written solution's island and ``meta["portfolio"]`` the islands' variants.
+            False: every island runs ``variant`` (``jobs`` = 1 is then exactly one search).
+
+    Returns:
+        The best island's :class:`~nbst.solution.SolveResult` (lowest cost, ties to the lowest
+        island), with ``trials`` the sum over islands, ``island`` and ``islands`` set. Ctrl-C
+        stops all islands and returns the best so far (``stopped == "interrupted"``).
     """
-    from nbst.solution import make_solution
-    from nbst.solvers.dispatch import solve_with
-
     jobs = int(jobs)
     if jobs < 1:
         raise ValueError(f"jobs must be >= 1, got {jobs}")
+    algorithm = SOLVERS.parse(algorithm, source="<search parameters>", field="algorithm")
+    if SOLVERS[algorithm].one_process(problem):
+        return run_solver(algorithm, problem, SolveRequest(seed=seed, max_trials=max_trials, patience=patience,
+                                                           target_cost=target_cost, variant=variant,
+                                                           robust=robust, jobs=jobs), callback)
     if seed is None:
         seed = int(np.random.default_rng().integers(2**63))
-    configs = portfolio_for(problem, algorithm, **kw) if portfolio else None
+    configs = portfolio_for(problem, algorithm, variant=variant, robust=robust) if portfolio else None
+    request = SolveRequest(seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                           variant=variant, robust=robust)
     if jobs == 1 and configs is None:
-        return solve_with(algorithm, problem, seed=seed, max_trials=max_trials, patience=patience,
-                          target_cost=target_cost, callback=callback, **kw)
+        return run_solver(algorithm, problem, request, callback)
     threads = jobs == 1  # the portfolio on one core: its islands take turns in threads of this process
     n_islands = len(configs) if threads else jobs
     seeds = island_seeds(seed, n_islands)
     budget = max(1, math.ceil(int(max_trials) / n_islands))
     target = -math.inf if target_cost is None else float(target_cost)
     ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-    island_kw = [dict(kw, seed=seeds[k], max_trials=budget, patience=patience, target_cost=target_cost,
-                      **({"variant": configs[k % len(configs)], "_portfolio": configs} if configs else {}))
-                 for k in range(n_islands)]
+    tasks = [IslandTask(algorithm, dataclasses.replace(request, seed=seeds[k], max_trials=budget,
+                                                       variant=configs[k % len(configs)] if configs else variant),
+                        configs) for k in range(n_islands)]
     conns, procs = {}, []
     baton = threading.RLock() if threads else None  # held by the island whose chunk runs
 
@@ -346,7 +377,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
                 down, up = queue.Queue(), queue.Queue()
                 conns[k] = _ThreadConn(down, up)  # the parent sends down, hears up
                 t = threading.Thread(target=_island_body, daemon=True, name=f"nbst-island-{k}",
-                                     args=(k, algorithm, problem, island_kw[k], _ThreadConn(up, down), baton))
+                                     args=(k, tasks[k], problem, _ThreadConn(up, down), baton))
                 t.start()
                 rounds.live.add(k)
                 procs.append(t)
@@ -356,8 +387,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
             for k in range(1, n_islands):
                 up, down = f"{tag}-{k}-up", f"{tag}-{k}-down"
                 conns[k] = _QueueConn(down, up, client=cluster)  # the parent sends down, hears up
-                procs.append(cluster.submit(_island_dask, k, algorithm, problem, island_kw[k], (up, down),
-                                            pure=False))
+                procs.append(cluster.submit(_island_dask, k, tasks[k], problem, (up, down), pure=False))
                 rounds.live.add(k)
             return
         from nbst.outputs import signals_blocked
@@ -365,7 +395,7 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
         for k in range(1, n_islands):
             parent, child = ctx.Pipe()
             p = ctx.Process(target=_island, daemon=True,
-                            args=(k, algorithm, problem, island_kw[k], child, os.getpid(),
+                            args=(k, tasks[k], problem, child, os.getpid(),
                                   [parent, *conns.values()]))
             with signals_blocked():  # no Ctrl-C reaches the child before it ignores it (die_with_parent)
                 p.start()
@@ -389,10 +419,10 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
 
         if baton is not None:
             baton.acquire()
-        sol0 = run_island(algorithm, problem, callback=local, **island_kw[0])
+        result0 = run_island(tasks[0], problem, callback=local)
         _give(baton)
-        rounds.results[0] = (sol0.velocities, sol0.meta)
-        interrupted = sol0.meta.get("stopped") == "interrupted"
+        rounds.results[0] = result0
+        interrupted = result0.stopped == "interrupted"
         if interrupted:
             rounds.stop_reason = "interrupted"
         while rounds.live:
@@ -423,19 +453,19 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
     if not results:
         raise KeyboardInterrupt  # interrupted before any island had a result: nothing to write
     # the best island: lowest cost, ties to the lowest index (deterministic)
-    k = min(results, key=lambda i: (results[i][1]["cost"], i))
-    v, meta = results[k]
-    meta = dict(meta)
-    meta["islands"] = [{"island": i, "seed": seeds[i], "trials": int(results[i][1]["trials"]),
-                        "cost": results[i][1]["cost"], "stopped": results[i][1]["stopped"]}
+    k = min(results, key=lambda i: (results[i].cost, i))
+    best = results[k]
+    meta = dict(best.meta)
+    meta["islands"] = [{"island": i, "seed": seeds[i], "trials": results[i].trials, "cost": results[i].cost,
+                        "stopped": results[i].stopped}
                        if i in results else {"island": i, "seed": seeds[i], "trials": rounds.trials[i],
                                              "cost": None, "stopped": "lost"} for i in range(n_islands)]
     if configs:
         for e in meta["islands"]:
-            e["variant"] = island_kw[e["island"]]["variant"]
+            e["variant"] = tasks[e["island"]].request.variant
             if e["island"] in results:
-                e["runs"] = results[e["island"]][1]["runs"]
-        meta["configuration"] = meta["variant"]  # the variant that produced the written solution
+                e["runs"] = results[e["island"]].meta["runs"]
+        meta["configuration"] = best.variant  # the variant that produced the written solution
         meta["search_seed"] = meta.pop("runs")[meta.pop("run")]["seed"]  # and its seed
         meta["variant"] = "nbst"  # what was asked for: nbst's search, the portfolio
         meta["portfolio"] = [e["variant"] for e in meta["islands"]]
@@ -449,9 +479,9 @@ def solve_islands(problem, *, jobs: int, seed: int | None = None, algorithm: str
         meta["stopped"] = "interrupted"
     elif rounds.stop_reason in ("callback", "error"):
         meta["stopped"] = rounds.stop_reason
-    elif meta["stopped"] == "callback":  # stopped because another island reached the target
+    elif best.stopped == "callback":  # stopped because another island reached the target
         meta["stopped"] = "target_cost"
-    return make_solution(problem, v, **meta)
+    return SolveResult.from_meta(problem, best.velocities, meta)
 
 
 def _drain(conns, live, results, *, say: str) -> None:
@@ -470,7 +500,7 @@ def _drain(conns, live, results, *, say: str) -> None:
             if msg[0] == "progress":
                 conns[k].send(say)
             elif msg[0] == "done":
-                results[k] = (msg[2], msg[3])
+                results[k] = msg[2]
                 pending.discard(k)
             else:
                 pending.discard(k)

@@ -1,0 +1,142 @@
+"""The one typed way into the search: :func:`solve` (and :func:`run_search`, which also returns the
+final population) for a problem of any size.
+
+Up to 63 disks the signature search runs (``nbst.search.driver``: nbst's search or the paper's
+variants A-H); past that the many-body search (``nbst.search.many``). Which one is decided here
+alone, by ``nbst.constants.many_body``. Every keyword is spelled out and passed on by name.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from nbst.constants import GA_MAX_DISKS, many_body
+from nbst.errors import SolveError
+from nbst.problem import Problem
+from nbst.search.driver import SearchRun, roundoff_cost
+from nbst.search.driver import run_search as _signature_search
+from nbst.search.many import ALGORITHM_MANY, ManyParams, run_many
+from nbst.search.params import ProgressCallback, SearchParams, check_run
+from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT
+from nbst.solution import SolveResult
+
+__all__ = ["run_many_search", "run_search", "solve"]
+
+
+def solve(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
+          patience: int = DEFAULT_PATIENCE, target_cost: float | None = None,
+          variant: str = DEFAULT_VARIANT, params: SearchParams | None = None,
+          robust: bool | None = None, jobs: int | None = None, callback: ProgressCallback | None = None,
+          chunk: int = 2048, many: ManyParams | None = None) -> SolveResult:
+    """Find initial velocities that bring every disk of ``problem`` to its target at t_final.
+
+    One search in this process (``nbst.solvers.solve_islands`` runs several on several cores).
+
+    Args:
+        problem: the problem (``nbst.load_problem``), any number of disks.
+        seed: int >= 0; None draws one (recorded as ``result.seed``). The same seed and
+            options give the same velocities, bit for bit (``chunk`` and ``jobs`` do not matter).
+        max_trials: trial budget; one trial is one simulated candidate (initialize and the
+            backward planner included; the many-body search counts a simulation of m of N disks
+            as m / N).
+        patience: stop after this many trials without improvement (0: never).
+        target_cost: stop once the best cost (sum of squared distances to the targets, units^2)
+            is <= this; None: never (the many-body search: at round-off level, ``roundoff_cost``).
+        variant: a name of ``nbst.search.variants.VARIANTS``: "nbst" (nbst's search, the
+            default), "nbst-noplan", "A" (the paper's full algorithm) .. "H" (its simplified
+            variants). Past 63 disks: the variant of each conflict's sub-search.
+        params: every knob of the signature search (``SearchParams``; default: the variant's).
+            Up to 63 disks only.
+        robust: True: return the most noise-robust top-order solution rather than the cheapest
+            (``nbst.search.robust``); None: as ``params`` says. Up to 63 disks only.
+        jobs: threads the many-body search simulates candidates on (None: every core; the
+            result does not depend on it). The signature search runs on one core.
+        callback: called with a ``SearchProgress`` after every chunk of trials (every round of
+            the many-body search); a truthy return stops the search. Ctrl-C stops it too; the
+            result is then the best so far, ``stopped == "interrupted"``.
+        chunk: trials per compiled call of the signature search (progress and Ctrl-C granularity).
+        many: the many-body search's choices (``ManyParams``). Past 63 disks only.
+
+    Returns:
+        A :class:`~nbst.solution.SolveResult`: ``velocities``, ``cost``, ``signature``,
+        ``order``, ``trials``, ``seed``, ``stopped``, ``wall_time``, ``history``, ... and the
+        solution file's ``meta`` (``result.to_solution()`` is what ``nbst solve`` writes).
+
+    Raises:
+        SolveError: an option that does not apply to this problem's search.
+        InputError: a bad option (a negative budget, an unknown variant).
+    """
+    return run_search(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                      variant=variant, params=params, robust=robust, jobs=jobs, callback=callback, chunk=chunk,
+                      many=many).result
+
+
+def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
+               patience: int = DEFAULT_PATIENCE, target_cost: float | None = None,
+               variant: str = DEFAULT_VARIANT, params: SearchParams | None = None,
+               robust: bool | None = None, jobs: int | None = None, callback: ProgressCallback | None = None,
+               chunk: int = 2048, many: ManyParams | None = None, record_every: int = 0) -> SearchRun:
+    """:func:`solve`, also returning the final population (for benchmarks and analysis).
+
+    Args: as :func:`solve`, and
+        record_every: k > 0 also returns the candidates of trials k, 2k, ... (the paper's loop
+            only, up to 63 disks).
+
+    Returns:
+        A ``SearchRun``: ``result`` (the :class:`~nbst.solution.SolveResult`), the final
+        population's ``velocities``, ``costs`` and ``signatures``, and ``recorded``. Past 63
+        disks the population is the one solution.
+    """
+    if not many_body(problem.n):
+        if many is not None:
+            raise SolveError(f"many (ManyParams) applies to problems of more than {GA_MAX_DISKS} disks; "
+                             f"{problem.name!r} has {problem.n}")
+        return _signature_search(problem, seed=seed, max_trials=max_trials, patience=patience,
+                                 target_cost=target_cost, variant=variant, params=params, callback=callback,
+                                 chunk=chunk, record_every=record_every, robust=robust)
+    for name, given in (("params", params is not None), ("robust", bool(robust)), ("record_every", record_every > 0)):
+        if given:
+            raise SolveError(f"{name} applies to problems of at most {GA_MAX_DISKS} disks (the signature search); "
+                             f"{problem.name!r} has {problem.n}: the many-body search runs, set it with many=")
+    return run_many_search(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                           variant=variant, callback=callback, jobs=jobs, many=many)
+
+
+def run_many_search(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
+                    patience: int = DEFAULT_PATIENCE, target_cost: float | None = None, variant: str = DEFAULT_VARIANT,
+                    callback: ProgressCallback | None = None, jobs: int | None = None,
+                    many: ManyParams | None = None) -> SearchRun:
+    """The many-body search (``nbst.search.many.run_many``) on ``problem``, any N, with the result a
+    solution file records (:func:`run_search` runs it past 63 disks).
+
+    Args: as :func:`solve`; ``variant`` is that of each conflict's sub-search (ignored when
+        ``many`` is given); ``target_cost`` None means round-off level (``roundoff_cost``).
+
+    Returns:
+        A ``SearchRun`` whose population is the one solution; ``result.many`` holds the search's
+        statistics (rounds, conflicts tried and solved, the largest conflict).
+    """
+    from nbst._version import __version__
+    from nbst.sim import evaluate
+    from nbst.solution import signature_string
+
+    seed = int(np.random.default_rng().integers(2**63)) if seed is None else int(seed)
+    check_run(int(max_trials), int(patience), seed)
+    prm = many or ManyParams(variant=variant)
+    tc = roundoff_cost(problem) if target_cost is None else float(target_cost)
+    v, meta = run_many(problem, seed=seed, max_trials=int(max_trials), patience=int(patience), target_cost=tc,
+                       callback=callback, params=prm, jobs=jobs)
+    _, c, sg = evaluate(problem, v[None], jobs=1)
+    sig = int(sg[0])
+    wall = meta["wall_time"]
+    full = {"algorithm": ALGORITHM_MANY, "cost": float(c[0]), "signature": signature_string(sig, problem.n),
+            "order": sig.bit_count(), "trials": meta["trials"], "seed": seed, "variant": prm.variant,
+            "params": dataclasses.asdict(prm),
+            "max_trials": int(max_trials), "patience": int(patience), "target_cost": target_cost,
+            "stopped": meta["stopped"], "wall_time": wall,
+            "trials_per_s": meta["trials"] / wall if wall > 0 else None, "nbst_version": __version__,
+            "history": meta["history"], "many": meta["many"]}
+    return SearchRun(result=SolveResult.from_meta(problem, v, full), velocities=v[None].copy(),
+                     costs=np.array([float(c[0])]), signatures=np.array([sig], dtype=object),
+                     recorded=np.zeros((0, problem.n, 2)))
