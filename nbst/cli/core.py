@@ -85,9 +85,9 @@ def cmd_simulate(args) -> int:
     print(f"cost       {tr.cost:.6g}  (sum of squared distances to targets)")
     import numpy as np
 
-    from nbst.constants import GA_MAX_DISKS
+    from nbst.constants import many_body
 
-    many = problem.n > GA_MAX_DISKS
+    many = many_body(problem.n)
     shown = f"({problem.n} characters: --json)" if many else tr.signature_string
     print(f"signature  {shown}  order {tr.order}/{problem.n}")
     print(f"events     {tr.n_disk_disk} disk-disk, {tr.n_wall} wall")
