@@ -46,8 +46,9 @@ from nbst.problem import Problem
 
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
 
-SCHEMA_VERSION = 3  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order;
-#                    3: stepping requested/reason/record_stride, final_error mean/median/worst
+SCHEMA_VERSION = 4  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order;
+#                    3: stepping requested/reason/record_stride, final_error mean/median/worst;
+#                    4: mujoco.wall_time_s is the MuJoCo run's (its bar's), validate_wall_time_s the whole
 #: ``stepping="auto"`` (the default): fixed steps up to this many disks (every problem nbst took before
 #: it lifted its 63-disk cap validates as it always did), aligned stepping above. Measured on gas
 #: motions at fixed density (``gas_motion``, 2 s, ~3 impacts per disk; docs/mujoco.md "Many disks"):
@@ -135,6 +136,9 @@ class Validation:
     stepping_reason: str = ""  # why this stepping (``choose_stepping``)
     exact_on: np.ndarray | None = None  # (N,) bool: exact final position within R of the target
     mj_on: np.ndarray | None = None  # (N,) bool: the same under MuJoCo
+    #: seconds of the MuJoCo run compared (its scene built and stepped: the span of its progress bar);
+    #: ``wall_time`` is the whole validation (exact motion, comparison, sensitivity, convergence study)
+    mujoco_seconds: float | None = None
 
     def _on(self, which: str) -> np.ndarray:
         on = self.exact_on if which == "exact" else self.mj_on
@@ -199,7 +203,8 @@ class Validation:
             "t_final": p.t_final,
             "velocities": self.velocities.tolist(),
             "mujoco": {"version": _mujoco_version(), "timestep": self.timestep, "unit_m": self.unit,
-                       "steps": mj.steps, "wall_time_s": self.wall_time},
+                       "steps": mj.steps, "wall_time_s": self._mujoco_seconds,
+                       "validate_wall_time_s": self.wall_time},
             "stepping": {"mode": self.stepping, "requested": self.stepping_requested or self.stepping,
                          "reason": self.stepping_reason, "timestep": self.timestep, "steps": mj.steps,
                          "stepping_wall_time_s": mj.wall_time, "cost": mj.stats,
@@ -265,8 +270,7 @@ class Validation:
         ev = d["events"]
         lines = [
             f"problem    {self.problem.name}  ({self.problem.n} disks, t_final = {self.problem.t_final:g} s); "
-            f"MuJoCo {d['mujoco']['version']}, h = {self.timestep * 1e3:g} ms, {self.mujoco.steps} steps "
-            f"in {self.wall_time:.2f} s",
+            f"MuJoCo {d['mujoco']['version']}, h = {self.timestep * 1e3:g} ms, {self._run_text()}",
             f"final      max error {self.final_error.max():.4g} units (disk {int(self.final_error.argmax())}); "
             f"mean {self.final_error.mean():.4g}" + (f"; median {np.median(self.final_error):.4g}; "
                                                      f"{int((self.final_error <= self.tol).sum())} of "
@@ -294,6 +298,23 @@ class Validation:
         return "\n".join(lines)
 
 
+    @property
+    def _mujoco_seconds(self) -> float:
+        return float(self.mujoco.wall_time if self.mujoco_seconds is None else self.mujoco_seconds)
+
+    def _run_text(self) -> str:
+        """The MuJoCo run in the summary's first line: its steps of h (what its progress bar counts)
+        and its seconds (the bar's clock: compiling and the rest of the validation are not in it)."""
+        from nbst.models.mjrun import steps_needed
+        from nbst.progress import count_text, seconds_text
+
+        t = seconds_text(self._mujoco_seconds)
+        st = self.mujoco.stats
+        if self.stepping == "aligned" and st:
+            return (f"aligned: {count_text(steps_needed(self.problem.t_final, self.timestep))} steps of h "
+                    f"({count_text(st['steps'])} accepted + {count_text(st['impacts'])} impact micro-steps) in {t}")
+        return f"{count_text(self.mujoco.steps)} steps in {t}"
+
     def _signature_lines(self, d) -> list:
         """The exact and MuJoCo lines of the summary: the signature strings up to
         :data:`SUMMARY_STRING_MAX_N` disks, counts above (report.json keeps the strings)."""
@@ -318,9 +339,9 @@ class Validation:
             out.append(f"stepping   {self.stepping}: {self.stepping_reason}")
         st = self.mujoco.stats
         if st:
-            out.append(f"stepping   aligned: {st['steps']} steps + {st['impacts']} impact micro-steps "
-                       f"({st['simultaneous']} simultaneous), {st['bisections']} search + {st['graze_checks']} "
-                       f"graze trial steps, {st['wall_time']:.2f} s")
+            out.append(f"stepping   aligned: {st['steps']:,} steps + {st['impacts']:,} impact micro-steps "
+                       f"({st['simultaneous']} simultaneous), {st['bisections']:,} search + {st['graze_checks']:,} "
+                       f"graze trial steps")
         pc = self.prediction_check
         if pc:
             def yn(x):
@@ -411,18 +432,12 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
     stepping, reason = choose_stepping(problem, ex, timestep, requested)
 
     def staged(desc, total, fn, unit="step"):
-        if progress is None:
-            return fn(None)
-        bar = progress(desc, total, unit)
-        try:
-            return fn(bar.update)
-        finally:
-            bar.close()
+        return _staged(progress, desc, total, fn, unit)[0]
 
     steps = steps_needed(problem.t_final, timestep)
-    mj = staged(f"MuJoCo, {stepping} steps", steps,
-                lambda cb: run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps,
-                                      stepping=stepping, progress=cb))
+    mj, mj_seconds = _staged(progress, f"MuJoCo, {stepping} steps", steps,
+                             lambda cb: run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps,
+                                                   stepping=stepping, progress=cb))
 
     final_err = np.hypot(*(mj.final_positions - ex.final_positions).T)
     R2 = float(problem.target_radius) ** 2
@@ -503,7 +518,28 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
                       energy_drift_free=drift_free, energy_drift_final=drift_final,
                       wall_time=time.perf_counter() - t0, stepping=stepping, sensitivity=sens,
                       prediction_check=check, convergence=conv, convergence_order=order,
-                      stepping_requested=requested, stepping_reason=reason, exact_on=exact_on, mj_on=mj_on)
+                      stepping_requested=requested, stepping_reason=reason, exact_on=exact_on, mj_on=mj_on,
+                      mujoco_seconds=mj_seconds)
+
+
+def _staged(progress, desc: str, total: int, fn, unit: str = "step"):
+    """Run ``fn(callback)`` as one stage: (its result, its seconds). With a ``progress`` factory the
+    stage has a bar, and the seconds are the bar's (its clock from its start to its close), so a
+    summary that quotes them says what the bar's last line says."""
+    import time
+
+    if progress is None:
+        t0 = time.monotonic()
+        out = fn(None)
+        return out, time.monotonic() - t0
+    bar = progress(desc, total, unit)
+    try:
+        out = fn(bar.update)
+    except BaseException:
+        bar.close()
+        raise
+    bar.close()
+    return out, float(getattr(bar, "seconds", 0.0))
 
 
 def _sensitivity(problem: Problem, v, timestep: float) -> dict:
@@ -577,25 +613,16 @@ def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, 
         elif div == 1 and fixed is not None:
             out.append(_entry(problem, ex, fixed.final_positions, fixed.steps, fixed.wall_time, h=h, divisor=1))
         else:
-            bar = progress(f"convergence, fixed h/{div}", n, "step") if progress else None
-            try:
-                out.append(_entry(problem, ex, *run_final(problem, v, timestep=h, unit=unit, max_steps=max_steps,
-                                                          progress=bar.update if bar else None),
-                                  h=h, divisor=div))
-            finally:
-                if bar:
-                    bar.close()
+            res, _ = _staged(progress, f"convergence, fixed h/{div}", n,
+                             lambda cb: run_final(problem, v, timestep=h, unit=unit, max_steps=max_steps, progress=cb))
+            out.append(_entry(problem, ex, *res, h=h, divisor=div))
     if aligned is not None:
         run = aligned
     else:
         n = steps_needed(problem.t_final, timestep)
-        bar = progress("convergence, aligned", n, "step") if progress else None
-        try:
-            run = run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps, stepping="aligned",
-                             progress=bar.update if bar else None)
-        finally:
-            if bar:
-                bar.close()
+        run, _ = _staged(progress, "convergence, aligned", n,
+                         lambda cb: run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps,
+                                               stepping="aligned", progress=cb))
     out.append(_entry(problem, ex, run.final_positions, run.stats["steps"] + run.stats["impacts"], run.wall_time,
                       h=None, divisor=None, stepping="aligned", stats=run.stats))
     return out

@@ -117,7 +117,7 @@ REPORT_KEYS = {
     "": ["convergence", "convergence_order", "divergence", "energy", "events", "exact", "final_error", "mujoco",
          "mujoco_result", "n", "prediction_check", "problem", "schema_version", "sensitivity", "signatures_agree",
          "stepping", "t_final", "tolerance", "velocities"],
-    "mujoco": ["steps", "timestep", "unit_m", "version", "wall_time_s"],
+    "mujoco": ["steps", "timestep", "unit_m", "validate_wall_time_s", "version", "wall_time_s"],
     "stepping": ["cost", "mode", "reason", "record_stride", "requested", "stepping_wall_time_s", "steps", "timestep"],
     "prediction_check": ["fixed_run", "keeps_signature_measured", "keeps_signature_predicted",
                          "keeps_signature_predicted_rss", "measured_error_max", "measured_over_linear",
@@ -137,7 +137,7 @@ def test_report_json_layout_is_golden():
     from nbst.models.validate import SCHEMA_VERSION
     p = load_problem("over5")
     d = validate(p, p.straight_velocities(), timestep=1e-3).to_dict()
-    assert d["schema_version"] == SCHEMA_VERSION == 3
+    assert d["schema_version"] == SCHEMA_VERSION == 4
     for level, keys in REPORT_KEYS.items():
         node = d if not level else d[level]
         assert sorted(node) == keys, level

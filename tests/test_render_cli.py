@@ -463,22 +463,3 @@ def test_a_thousand_disk_problem_renders_to_mp4_and_png(tmp_path, capsys):
     assert all(hits)  # every disk centre shows the fill: nothing (marker, ring, number) is drawn over a disk
     assert main(["render", str(prob), str(sol), "--still", "2.5", "-o", str(png), "--labels"]) == 0
     assert "no disk numbers" not in capsys.readouterr().err
-
-
-def test_render_progress_in_a_log_says_the_eta():
-    """Progress lines of a long render written to a log (not a terminal) end with how long
-    is left, from the rate so far; the last line, at the end, has none."""
-    import io
-
-    from nbst.cli.render import with_eta
-    from nbst.progress import LineProgress
-
-    log = io.StringIO()
-    bar = with_eta(LineProgress(total=40, unit="frame", desc="render v.mp4", file=log, interval=0.0))
-    for _ in range(40):
-        bar.update(1)
-    bar.close()
-    lines = log.getvalue().splitlines()
-    assert len(lines) == 41 and lines[0].startswith("render v.mp4: 1/40 frames (2%)")
-    assert all(ln.split(", ETA ")[1].endswith(" s") for ln in lines[:-1])
-    assert "ETA" not in lines[-1] and lines[-1].startswith("render v.mp4: 40/40 frames (100%)")

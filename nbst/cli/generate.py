@@ -21,8 +21,9 @@ TARGET_RADIUS = Bounded("target radius", 0.0, 2 * D.BOX_MAX, lo_open=True)
 #: Defaults that differ by mode (None on the parser, so that a flag of the other mode is caught).
 PLANTED_TARGET_RADIUS = 75.0
 FORMATION_DISKS_DEFAULT = 1000
-#: A stage that runs longer than this (seconds) shows progress on stderr (unless -q).
-LONG_STAGE_S = 2.0
+#: A stage that runs longer than this (seconds) shows progress on stderr (unless -q), its clock
+#: from the stage's start: a line within 2 s of it.
+LONG_STAGE_S = 1.0
 #: Planted problems from this many disks on announce the exact simulation before it starts
 #: (it is one compiled call: it cannot report while it runs).
 ANNOUNCE_SIMULATION_FROM = 1000
@@ -109,12 +110,12 @@ class _Stages:
         if self.quiet:
             return
         if self.bar is None and now - self.t0 >= LONG_STAGE_S:
-            from nbst.progress import progress_bar
+            from nbst.progress import Bar
 
-            self.bar = progress_bar(total=total or None, desc=f"nbst generate: {stage}",
-                                    unit="disk" if total else "sweep")
+            self.bar = Bar(f"nbst generate: {stage}", total or None, unit="disk" if total else "sweep",
+                           start=self.t0)
         if self.bar is not None:
-            self.bar.update(done - self.bar.n)
+            self.bar.set(done)
 
     def close(self):
         self._close()

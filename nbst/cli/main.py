@@ -31,7 +31,12 @@ COMMAND_MODULES = (
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, but usage errors exit 2 with one line naming the command."""
+    """argparse, but usage errors exit 2 with one line naming the command, and an option is
+    spelled out: no prefix of a longer one is taken for it (``--max-trial`` is not ``--max-trials``)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {plain(message)} (see `{self.prog} --help`)\n")
@@ -62,7 +67,9 @@ def main(argv=None) -> int:
     ends (Python's shutdown would restore their default, fatal action), so a late signal cannot
     change the exit status; called with ``argv`` (tests), the handlers are restored."""
     from nbst.outputs import interrupt_once
+    from nbst.progress import start_clock
 
+    start_clock()  # every progress line and summary counts from here
     guard = interrupt_once()
     guard.__enter__()
     try:

@@ -131,8 +131,8 @@ def cmd_mjcf(args) -> int:
         prepare_output(args.output, inputs=(args.problem, args.solution))
     bar = None
     if problem.n >= MJCF_PROGRESS_MIN_N and not args.quiet:
-        from nbst.progress import progress_bar
-        bar = progress_bar(total=problem.n, desc="nbst mjcf: building the scene", unit="disk", file=sys.stderr)
+        from nbst.progress import Bar
+        bar = Bar("nbst mjcf: building the scene", problem.n, unit="disk", file=sys.stderr)
     try:
         xml = scene_xml(problem, v, timestep=args.timestep, unit=args.unit, progress=bar.update if bar else None)
     finally:
@@ -165,7 +165,7 @@ def cmd_validate(args) -> int:
         return 2
     if args.report:
         from nbst.outputs import prepare_output
-        prepare_output(args.report, directory=True, option="--out-dir")
+        prepare_output(args.report, directory=True, option="--out-dir", files=("report.json", "report.html"))
     progress = _progress(problem, args)
     try:
         val = validate(problem, v, timestep=args.timestep, unit=args.unit, tol=args.tol, max_steps=max_steps,
@@ -218,10 +218,10 @@ def _progress(problem, args):
     work = steps_needed(problem.t_final, args.timestep) * (problem.n + 4)
     if work < PROGRESS_MIN_WORK and not args.convergence:
         return None
-    from nbst.progress import progress_bar
+    from nbst.progress import Bar
 
     def factory(desc, total, unit):
-        return progress_bar(total=total, desc=f"nbst validate: {desc}", unit=unit, file=sys.stderr)
+        return Bar(f"nbst validate: {desc}", total, unit=unit, file=sys.stderr)
     return factory
 
 
@@ -229,8 +229,12 @@ def cmd_gallery(args) -> int:
     from nbst.models.gallery import main as gallery_main
     argv = list(args.names) + ["--seed", str(args.seed), "--max-trials", str(args.max_trials)]
     if args.dir:
+        from nbst.models.gallery import FILES
         from nbst.outputs import prepare_output
-        prepare_output(args.dir, directory=True, option="--out-dir")
+        from nbst.problem import builtin_names
+
+        prepare_output(args.dir, directory=True, option="--out-dir",
+                       files=[f"{name}/{f}" for name in (args.names or builtin_names()) for f in FILES])
         argv += ["--dir", args.dir]
     if args.no_search:
         argv.append("--no-search")

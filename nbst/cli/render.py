@@ -80,13 +80,25 @@ def register(sub) -> None:
                                    "at its start and beside its target; a legend below the box says the rest. The "
                                    "extension picks the format (.png, .pdf, .svg).")
     psub = p.add_subparsers(dest="what", metavar="WHAT", required=True)
-    q = psub.add_parser("problem", help="starts, targets and arrows (the paper's Figures 1-2)")
+    q = psub.add_parser("problem", help="starts, targets and arrows (the paper's Figures 1-2)",
+                        description="Draw PROBLEM as the paper's Figures 1-2: each disk at its start (amber "
+                                    "cueable, blue noncueable, numbered), a small circle at each target with the "
+                                    "index of its disk beside it, the target neighbourhood of radius R, and an "
+                                    "arrow from each start to its target (broken for noncueable disks). A legend "
+                                    "below the box says what each mark means. The extension of -o picks the "
+                                    "format: .png (raster, --dpi), .pdf or .svg (vector).")
     q.add_argument("problem", help="built-in name or path to a problem JSON file")
     q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
     q.add_argument("--dpi", type=DPI, default=150, help=with_limits("resolution of raster output (default 150)", DPI))
     q.add_argument("-q", "--quiet", action="store_true", help="no summary line")
     q.set_defaults(func=cmd_plot_problem)
-    q = psub.add_parser("trajectories", help="the disks' paths with bounces and collisions (Figures 3-4)")
+    q = psub.add_parser("trajectories", help="the disks' paths with bounces and collisions (Figures 3-4)",
+                        description="Simulate SOLUTION on PROBLEM exactly and draw it as the paper's Figures 3-4: "
+                                    "each disk's path from its start to where it ends at t_final, marks where it "
+                                    "bounces off a wall and where two disks collide, and the targets with their "
+                                    "neighbourhoods of radius R, so a glance shows which disks end on target. "
+                                    "Colours and numbers as in `plot problem` and the video; a legend below the "
+                                    "box. The extension of -o picks the format: .png (--dpi), .pdf or .svg.")
     q.add_argument("problem", help="built-in name or path to a problem JSON file")
     q.add_argument("solution", help="path to a solution JSON file")
     q.add_argument("-o", "--output", required=True, metavar="PATH", help="output image (.png, .pdf, .svg)")
@@ -191,10 +203,9 @@ def cmd_render(args) -> int:
 
 
 def _render(args, problem, tr, out, kind, size, fps) -> int:
-    import time
-
     import numpy as np
 
+    from nbst.progress import Bar, command_start, count_text, seconds_text
     from nbst.render.gl import create_context
     from nbst.render.video import frame_times, render_video, write_png
 
@@ -202,43 +213,47 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
         times = np.array([float(args.still)])
     else:
         times = frame_times(problem.t_final, fps, speed=args.speed, hold=args.hold)
-    motion, ghost = tr, None
-    if args.source in ("mujoco", "both"):
-        from nbst.render.scene2d import SampledMotion
-        sample_t = np.unique(np.concatenate((times, frame_times(problem.t_final, 120.0))))
-        if not args.quiet:
-            print(f"nbst render: replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo ...",
-                  file=sys.stderr, flush=True)
-        mj = SampledMotion(sample_t, mujoco_positions(problem, tr.initial_velocities, sample_t))
-        motion, ghost = (mj, None) if args.source == "mujoco" else (tr, mj)
-    ctx = create_context()
+    # the bar counts from the command's start: setting up GL (and the MuJoCo replay) shows in it
+    bar = None if kind == "png" else Bar(f"nbst render: {out.name}", len(times), unit="frame", file=sys.stderr,
+                                          quiet=args.quiet, start=command_start())
     try:
-        renderer = make_renderer(ctx, problem, motion, view=args.view, size=size, trails=args.trails, ghost=ghost,
-                                 labels=args.labels, motion_name="MuJoCo" if args.source == "mujoco" else None)
-        if kind == "png":
-            write_png(out, renderer.render(float(args.still)))
-            if not args.quiet:
-                print(f"nbst render: wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s)"
-                      f"{_labels_note(args, renderer)}", file=sys.stderr)
-            return 0
-        progress = None
-        if not args.quiet:
-            from nbst.progress import progress_bar
-            progress = with_eta(progress_bar(total=len(times), unit="frame", desc=f"render {out.name}",
-                                             file=sys.stderr, leave=False))
-        t0 = time.perf_counter()
+        motion, ghost = tr, None
+        if args.source in ("mujoco", "both"):
+            from nbst.render.scene2d import SampledMotion
+            sample_t = np.unique(np.concatenate((times, frame_times(problem.t_final, 120.0))))
+            if bar is not None:
+                bar.note(f"replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo")
+            elif not args.quiet:
+                print(f"nbst render: replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo ...",
+                      file=sys.stderr, flush=True)
+            mj = SampledMotion(sample_t, mujoco_positions(problem, tr.initial_velocities, sample_t))
+            motion, ghost = (mj, None) if args.source == "mujoco" else (tr, mj)
+        if bar is not None:
+            bar.note("")
+        ctx = create_context()
         try:
-            n = render_video(renderer, times, out, fps=fps, progress=progress)
+            renderer = make_renderer(ctx, problem, motion, view=args.view, size=size, trails=args.trails,
+                                     ghost=ghost, labels=args.labels,
+                                     motion_name="MuJoCo" if args.source == "mujoco" else None)
+            if kind == "png":
+                write_png(out, renderer.render(float(args.still)))
+                if not args.quiet:
+                    print(f"nbst render: wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s)"
+                          f"{_labels_note(args, renderer)}", file=sys.stderr)
+                return 0
+            n = render_video(renderer, times, out, fps=fps, progress=bar)
         finally:
-            if progress is not None:
-                progress.close()
-        dt = time.perf_counter() - t0
-        if not args.quiet:
-            print(f"nbst render: wrote {out}: {n} frames, {size[0]}x{size[1]}, {fps:g} fps, {n / fps:.2f} s of video "
-                  f"({dt:.1f} s, {n / dt:.0f} frames/s){_labels_note(args, renderer)}", file=sys.stderr)
-        return 0
-    finally:
-        ctx.release()
+            ctx.release()
+    except BaseException:
+        if bar is not None:
+            bar.close()
+        raise
+    bar.close(n=n)
+    if not args.quiet:
+        print(f"nbst render: wrote {out}: {count_text(n)} frames, {size[0]}x{size[1]}, {fps:g} fps, "
+              f"{n / fps:.2f} s of video, in {seconds_text(bar.seconds)}{_labels_note(args, renderer)}",
+              file=sys.stderr)
+    return 0
 
 
 def _labels_note(args, renderer) -> str:
@@ -248,30 +263,6 @@ def _labels_note(args, renderer) -> str:
         return ""
     return (f"; no disk numbers: disks {2 * float(min(rpx)):.0f} px across, under the {style.LABELS_MIN_DISK_PX:g} "
             f"px they need (--labels writes them anyway)")
-
-
-class with_eta:
-    """A progress bar (``nbst.progress.progress_bar``) whose plain-line form (a log, a pipe)
-    also says how long is left: ``ETA 12 s`` from the rate so far (tqdm shows its own)."""
-
-    def __init__(self, bar):
-        import time
-
-        self.bar, self._time = bar, time.monotonic
-        self._t0 = self._time()
-        self._plain = not hasattr(bar, "format_dict")  # tqdm has one and prints its own ETA
-
-    def update(self, n: int = 1) -> None:
-        if self._plain and self.bar.total:
-            done = self.bar.n + n
-            rate = done / max(1e-9, self._time() - self._t0)
-            self.bar.set_postfix_str(f"ETA {max(0.0, self.bar.total - done) / rate:.0f} s")
-        self.bar.update(n)
-
-    def close(self) -> None:
-        if self._plain:
-            self.bar.set_postfix_str("")
-        self.bar.close()
 
 
 def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None,

@@ -1,0 +1,100 @@
+"""Progress that tells the truth, command by command: the last line of each progress bar says the
+count and the seconds that the command's summary says (issue 35: validate's headline said 20,024
+steps in 12.30 s while its stepping line said 0.60 s; render printed "ETA 1 s, ETA 1 s").
+
+Each command runs in-process with stderr captured (not a terminal: whole lines). To cover a new
+command that shows progress, add a function that runs it and returns (bar lines, summary).
+"""
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from nbst.cli import main
+
+#: The final line of a bar: "DESC: N/TOTAL UNITs (100%) in T s[, note]" or "DESC: N UNITs in T s".
+FINAL = re.compile(r"^(?P<desc>.+?): (?P<n>[\d,]+)(?:/| of at most )?(?P<total>[\d,]*) (?P<unit>\w+)"
+                   r"(?: \(\d+%\))? in (?P<t>[\d.]+ s)(?:, (?P<note>.*))?$")
+
+
+def _finals(err: str) -> dict:
+    """{bar description: its last line's match} over the progress lines of ``err``."""
+    out = {}
+    for line in err.splitlines():
+        m = FINAL.match(line)
+        if m:
+            out[m["desc"]] = m
+    return out
+
+
+@pytest.fixture
+def over5_sol(tmp_path):
+    p = tmp_path / "s.json"
+    assert main(["solve", "over5", "-o", str(p), "--seed", "1", "--max-trials", "3000", "--jobs", "1", "-q"]) == 0
+    return str(p)
+
+
+def test_validate_headline_is_its_bar(over5_sol, capsys):
+    """--stepping aligned --convergence: the headline's steps of h and seconds are the MuJoCo bar's,
+    not the whole validation's; the stepping line repeats no other time; every bar ends at 100%."""
+    assert main(["validate", "over5", over5_sol, "--stepping", "aligned", "--convergence", "--timestep", "0.005"]) == 0
+    cap = capsys.readouterr()
+    bars = _finals(cap.err)
+    run = bars["nbst validate: MuJoCo, aligned steps"]
+    head = cap.out.splitlines()[0]
+    assert f"aligned: {run['n']} steps of h (" in head and head.endswith(f" in {run['t']}"), (head, run.group(0))
+    assert all(m["n"] == m["total"] for m in bars.values())  # every stage ended where its bar said it would
+    assert len([d for d in bars if "convergence" in d]) >= 5
+    stepping = [ln for ln in cap.out.splitlines() if ln.startswith("stepping   aligned:") and "micro-steps" in ln]
+    assert stepping and not re.search(r"\d s\b", stepping[0])  # no second clock
+    assert "ETA" not in cap.err
+
+
+def test_validate_report_says_the_same_seconds(over5_sol, tmp_path, capsys):
+    assert main(["validate", "over5", over5_sol, "--convergence", "--timestep", "0.005", "--json"]) == 0
+    cap = capsys.readouterr()
+    d = json.loads(cap.out)
+    run = _finals(cap.err)["nbst validate: MuJoCo, fixed steps"]
+    from nbst.progress import seconds_text
+
+    assert seconds_text(d["mujoco"]["wall_time_s"]) == run["t"]
+    assert d["mujoco"]["validate_wall_time_s"] >= d["mujoco"]["wall_time_s"]
+
+
+def test_render_bar_ends_where_the_summary_does(over5_sol, tmp_path, capsys):
+    pytest.importorskip("moderngl")
+    out = tmp_path / "v.mp4"
+    assert main(["render", "over5", over5_sol, "-o", str(out), "--size", "128x72", "--fps", "6"]) == 0
+    err = capsys.readouterr().err
+    bar = _finals(err)[f"nbst render: {out.name}"]
+    summary = [ln for ln in err.splitlines() if ln.startswith(f"nbst render: wrote {out}")][0]
+    assert bar["n"] == bar["total"] and f": {bar['n']} frames," in summary and f" in {bar['t']}" in summary
+    assert all(ln.count("ETA") <= 1 for ln in err.splitlines())  # "ETA 1 s, ETA 1 s" was two
+
+
+def test_mjcf_bar_counts_every_disk(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("mujoco")
+    import nbst.cli.mujoco as M
+
+    monkeypatch.setattr(M, "MJCF_PROGRESS_MIN_N", 1)
+    out = tmp_path / "s.xml"
+    assert main(["mjcf", "diamond-s14", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    bar = _finals(err)["nbst mjcf: building the scene"]
+    assert bar["n"] == bar["total"] == "14" and "(14 disks;" in err
+
+
+def test_generate_stage_bars_end_at_their_totals(tmp_path, capsys, monkeypatch):
+    import nbst.cli.generate as G
+
+    monkeypatch.setattr(G, "LONG_STAGE_S", 0.0)  # every stage shows its bar
+    assert main(["generate", "--targets-from", "hi", "--disks", "60", "--seed", "1", "-o", str(tmp_path / "f.json")]) == 0
+    cap = capsys.readouterr()
+    bars = _finals(cap.err)
+    assert bars and all(m["total"] == "" or m["n"] == m["total"] for m in bars.values()), cap.err
+    m = re.search(r"(\d+) swap passes", cap.out)
+    sweeps = [b for d, b in bars.items() if b["unit"] == "sweeps"]
+    if m and sweeps:
+        assert sweeps[-1]["n"] == m.group(1)  # the bar's passes are the summary's
