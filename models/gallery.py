@@ -25,6 +25,8 @@ import numpy as np
 #: Default gallery folder: models/scenes next to this file.
 GALLERY_DIR = Path(__file__).resolve().parent / "scenes"
 #: Preview size (pixels).
+#: The files of each gallery folder (``nbst gallery`` checks each one before any work).
+FILES = ("problem.json", "solution.json", "scene.xml", "preview.png")
 PREVIEW_SIZE = 640
 #: Preview lighting: MuJoCo's default headlight plus the scene's top light add up to
 #: more than 1 and add a white specular highlight, which turns amber pucks yellow and
@@ -160,6 +162,7 @@ def build_entry(name: str, folder: Path, *, seed: int, max_trials: int, search: 
     """Regenerate one gallery folder; returns what was done."""
     from nbst.problem import load_problem
     from nbst.sim import simulate
+    from nbst.outputs import write_bytes_atomic, write_text_atomic
     from nbst.solution import make_solution, save_solution, write_json_atomic
 
     from nbst.models.scene import scene_xml
@@ -188,8 +191,8 @@ def build_entry(name: str, folder: Path, *, seed: int, max_trials: int, search: 
             meta = dict(best.meta)
             meta.update(cost=tr.cost, signature=tr.signature_string, order=tr.order)
             save_solution(folder / "solution.json", make_solution(problem, v, **meta))
-    (folder / "scene.xml").write_text(scene_xml(problem, v), encoding="utf-8")
-    (folder / "preview.png").write_bytes(preview_png(problem, v))
+    write_text_atomic(folder / "scene.xml", scene_xml(problem, v), option="--out-dir")
+    write_bytes_atomic(folder / "preview.png", preview_png(problem, v), option="--out-dir")
     return {"name": name, "source": source, "cost": best_cost}
 
 
@@ -197,7 +200,8 @@ def main(argv=None) -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported: headless rendering
     from nbst.problem import builtin_names
 
-    ap = argparse.ArgumentParser(prog="python -m nbst.models.gallery", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, prog="python -m nbst.models.gallery",
+                                 description=__doc__.split("\n\n")[0])
     ap.add_argument("names", nargs="*", metavar="NAME", help="built-in problems (default: all)")
     ap.add_argument("--dir", default=str(GALLERY_DIR), help="gallery folder (default: models/scenes)")
     ap.add_argument("--seed", type=int, default=1, help="search seed (default 1)")

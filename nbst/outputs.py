@@ -10,10 +10,12 @@ Written atomically (``atomic_path``, ``write_bytes_atomic``, ``write_text_atomic
 fsyncs it and renames it over the target, so ``path`` holds the old file or the whole
 new one, never a truncated one (a full disk leaves the previous file byte-identical).
 
-* A symlink is written through: the new file replaces the symlink's *target* (the
-  partial file lives beside the target), the link stays a link.
-* A special file (FIFO, device, socket) is refused, never replaced: rename would swap
-  ``/dev/null`` for a regular file.
+* Nothing is written through a symbolic link: an output path that is a link (to a file, a
+  folder or nothing) is refused, as are special files (FIFO, device, socket: rename would swap
+  ``/dev/null`` for a regular file) and folders where a file is expected; one line, exit 2, the
+  link and what it points to untouched. (A folder on the way to the path may be a link: the file
+  is written in that folder. If a link appears at the path after the check, the rename replaces
+  the link itself, never the file it points to.)
 * Partial files are named ``.STEM.partial-PID[-TAG]SUFFIX``; one whose PID is no longer
   alive (a writer killed by SIGKILL) is removed by the next write to the same target.
 
@@ -23,6 +25,10 @@ first SIGINT, SIGTERM or SIGHUP stops the work like Ctrl-C, later ones wait for 
 so partial files are removed and the best-so-far file written), ``signals_deferred`` (the
 signals held while a result file is written), ``signals_blocked`` and ``die_with_parent``
 (worker processes that never outlive their parent, even after SIGKILL).
+
+Length: the writer and the signal handling it relies on (a signal during the rename waits for it,
+partial files of killed writers are removed) are one contract; split, each half would have to
+restate the other's rules.
 """
 from __future__ import annotations
 
@@ -63,12 +69,44 @@ def _why(e: OSError) -> str:
     return e.strerror or str(e)
 
 
-def refuse_special(path, *, option: str = "-o") -> None:
-    """OutputError if ``path`` (through symlinks) is a FIFO, device or socket: nbst writes regular files only."""
-    kind = _special_kind(path)
-    if kind is not None:
-        raise OutputError(f"{option} {path}: is {kind}, not a regular file; nbst writes regular files only "
-                          f"(it never replaces special files): give a file name")
+def not_a_file(path) -> str | None:
+    """Why nbst will not write a file at ``path``, or None: "a symbolic link (to X)", a special file's
+    kind, "a folder". The path itself is looked at (``lstat``): a link is never followed."""
+    try:
+        mode = os.lstat(path).st_mode
+    except OSError:
+        return None
+    if stat.S_ISLNK(mode):
+        try:
+            to = os.readlink(path)
+        except OSError:
+            to = "?"
+        return f"a symbolic link (to {to})"
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    for test, name in _SPECIAL:
+        if test(mode):
+            return name
+    return None
+
+
+def refuse_not_a_file(path, *, option: str = "-o") -> None:
+    """OutputError (one line) if ``path`` is a symbolic link, a FIFO, device or socket, or a folder:
+    nbst writes regular files only, and never through a link. Every writer of nbst calls it."""
+    kind = not_a_file(path)
+    if kind is None:
+        return
+    if kind.startswith("a symbolic link"):
+        raise OutputError(f"{option} {path}: is {kind}; nbst never writes through a link (that would replace "
+                          f"the file it points to): remove the link or give another file name")
+    if kind == "a folder":
+        raise OutputError(f"{option} {path}: is a folder; expected a file name")
+    raise OutputError(f"{option} {path}: is {kind}, not a regular file; nbst writes regular files only "
+                      f"(it never replaces special files): give a file name")
+
+
+#: The older name of :func:`refuse_not_a_file`.
+refuse_special = refuse_not_a_file
 
 
 def refuse_same_file(path, inputs=(), *, option: str = "-o", outputs=()) -> None:
@@ -92,26 +130,27 @@ def refuse_same_file(path, inputs=(), *, option: str = "-o", outputs=()) -> None
                               f"writes; give another file name")
 
 
-def prepare_output(path, *, directory: bool = False, option: str = "-o", inputs=(), outputs=()) -> Path:
+def prepare_output(path, *, directory: bool = False, option: str = "-o", inputs=(), outputs=(),
+                   files=()) -> Path:
     """Make ``path``'s folder (or ``path`` itself with ``directory=True``) exist and be writable.
 
-    Refuses (OutputError naming ``option``, the path and the reason) a folder where a file
-    is expected and vice versa, a special file, and an output that is the same file as one of
-    ``inputs`` (files the command reads) or ``outputs`` (its other outputs): see ``refuse_same_file``.
-    For a symlink the folder checked is the target's (that is where the file is written).
-    Returns ``path`` as a Path.
+    Refuses (OutputError naming ``option``, the path and the reason) what ``refuse_not_a_file``
+    refuses (a symbolic link, a special file, a folder where a file is expected), a file where a
+    folder is expected, and an output that is the same file as one of ``inputs`` (files the command
+    reads) or ``outputs`` (its other outputs): see ``refuse_same_file``. With ``directory=True``,
+    ``files`` names the files the command will write in the folder: each is checked the same way
+    before any work. Returns ``path`` as a Path.
     """
     p = Path(path)
     if not directory:
-        refuse_special(p, option=option)
-        refuse_same_file(p, inputs, option=option, outputs=outputs)
-        target = Path(os.path.realpath(p))
-        folder = target.parent
+        refuse_same_file(p, inputs, option=option, outputs=outputs)  # first: "the same file as the input" says more
+        refuse_not_a_file(p, option=option)
+        folder = p.parent
     else:
         folder = p
+        for name in files:
+            refuse_not_a_file(p / name, option=option)
     try:
-        if p.is_dir() and not directory:
-            raise OutputError(f"{option} {path}: is a folder; expected a file name")
         if p.exists() and directory and not p.is_dir():
             raise OutputError(f"{option} {path}: is {_special_kind(p) or 'a file'}; expected a folder")
         folder.mkdir(parents=True, exist_ok=True)
@@ -127,9 +166,8 @@ def prepare_output(path, *, directory: bool = False, option: str = "-o", inputs=
 
 def partial_path(target, *, tag: str = "", suffix: str | None = None) -> Path:
     """The hidden partial file for ``target`` written by this process: ``.STEM.partial-PID[-TAG]SUFFIX``
-    (``suffix``: the extension the writer sees, by default the target's; a symlink ``fig.png``
-    pointing to ``notes.conf`` is written through a ``.png`` partial file, so writers that pick
-    the format by extension pick the one the user named)."""
+    beside it (``suffix``: by default the target's, so writers that pick the format by extension,
+    matplotlib and ffmpeg, pick the one the user named)."""
     t = Path(target)
     return t.with_name(f".{t.stem}.partial-{os.getpid()}{'-' + tag if tag else ''}"
                        f"{t.suffix if suffix is None else suffix}")
@@ -202,52 +240,91 @@ def _fsync_dir(folder) -> None:
         os.close(fd)
 
 
-@contextmanager
-def atomic_path(path, *, option: str = "-o") -> Iterator[str]:
-    """Yield a partial file's path for a writer that wants a file name (savefig, ffmpeg, PIL).
-
-    The partial file sits beside the target (a symlink's target), has ``path``'s suffix (so
-    writers that pick the format by extension still do), and exists, empty, when yielded.
-    When the block ends it is fsynced and renamed over the target; if the block raises it
-    is removed, and an OSError (a full disk) becomes one-line OutputError. Stale partial
-    files of dead writers of the same target are removed first.
+class PartialFile:
+    """The one way nbst makes an output file: a hidden partial file beside ``path``, filled by the
+    caller (``.path``, which exists and is empty), then :meth:`commit` (checked, fsynced, renamed
+    over ``path``) or :meth:`discard`. Refuses what ``refuse_not_a_file`` refuses; removes the
+    partial files of dead writers of the same target first. ``atomic_path`` wraps it for a block;
+    the video writer holds one while ffmpeg runs.
     """
-    refuse_special(path, option=option)
-    target = Path(os.path.realpath(path))
-    suffix = Path(path).suffix  # the extension asked for, even through a symlink to another name
-    existed = target.exists()
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        remove_stale_partials(target, suffix=suffix)
-        fd, tmp = _mkpartial(target, suffix)
-        os.close(fd)
-    except OSError as e:
-        raise OutputError(f"{option} {path}: cannot write there ({_why(e)})") from None
-    try:
-        yield tmp
-        with signals_deferred():  # the file is finished: a signal now waits for the rename
+
+    def __init__(self, path, *, option: str = "-o"):
+        refuse_not_a_file(path, option=option)
+        self.target = Path(path)
+        self.option = option
+        self.existed = self.target.exists()
+        self.done = False
+        try:
+            self.target.parent.mkdir(parents=True, exist_ok=True)
+            remove_stale_partials(self.target)
+            fd, self.path = _mkpartial(self.target)
+            os.close(fd)
+        except OSError as e:
+            raise OutputError(f"{option} {path}: cannot write there ({_why(e)})") from None
+
+    def kept(self) -> str:
+        """What is at the target after a failed write: the previous file, or nothing."""
+        return "the previous file is unchanged" if self.existed else "nothing was written"
+
+    def commit(self, check=None) -> None:
+        """``check(partial path)`` (raises OutputError or returns a reason it is bad, or None), then fsync
+        and rename over the target, signals held. Any failure: the partial file is removed, the target
+        untouched, and OutputError (one line) raised."""
+        try:
+            why = check(self.path) if check is not None else None
+            if why:
+                raise OutputError(f"{self.option} {self.target}: the written file is damaged ({why}); {self.kept()}")
+            with signals_deferred():  # the file is finished: a signal now waits for the rename
+                try:
+                    st = os.lstat(self.target)
+                    mode = stat.S_IMODE(st.st_mode) if stat.S_ISREG(st.st_mode) else 0o666 & ~_umask()
+                except OSError:
+                    mode = 0o666 & ~_umask()
+                os.chmod(self.path, mode)  # the partial file is 0600; the result gets the old file's or the usual mode
+                fd = os.open(self.path, os.O_RDONLY)
+                try:
+                    os.fsync(fd)
+                finally:
+                    os.close(fd)
+                os.replace(self.path, self.target)  # a link that appeared at the target is replaced, not followed
+                self.done = True
+                _fsync_dir(self.target.parent)
+        except BaseException as e:
+            self.discard()
+            if isinstance(e, OSError):
+                raise OutputError(f"{self.option} {self.target}: cannot write ({_why(e)}); {self.kept()}") from None
+            raise
+
+    def discard(self) -> None:
+        """Remove the partial file (a no-op once committed); a second signal cannot stop it."""
+        if self.done:
+            return
+        self.done = True
+        with signals_deferred(reraise=False):
             try:
-                mode = stat.S_IMODE(os.stat(target).st_mode)
-            except OSError:
-                mode = 0o666 & ~_umask()
-            os.chmod(tmp, mode)  # the partial file is 0600; the result gets the old file's or the usual mode
-            fd = os.open(tmp, os.O_RDONLY)
-            try:
-                os.fsync(fd)
-            finally:
-                os.close(fd)
-            os.replace(tmp, target)
-            _fsync_dir(target.parent)
-    except BaseException as e:
-        with signals_deferred(reraise=False):  # a second signal cannot leave the partial file behind
-            try:
-                os.unlink(tmp)
+                os.unlink(self.path)
             except OSError:
                 pass
+
+
+@contextmanager
+def atomic_path(path, *, option: str = "-o", check=None) -> Iterator[str]:
+    """Yield a partial file's path for a writer that wants a file name (savefig, PIL).
+
+    The partial file sits beside ``path``, has its suffix (so writers that pick the format by
+    extension still do), and exists, empty, when yielded. When the block ends it is checked
+    (``check``, see ``PartialFile.commit``), fsynced and renamed over ``path``; if the block raises
+    it is removed, and an OSError (a full disk) becomes one-line OutputError.
+    """
+    part = PartialFile(path, option=option)
+    try:
+        yield part.path
+    except BaseException as e:
+        part.discard()
         if isinstance(e, OSError):
-            kept = "the previous file is unchanged" if existed else "nothing was written"
-            raise OutputError(f"{option} {path}: cannot write ({_why(e)}); {kept}") from None
+            raise OutputError(f"{option} {path}: cannot write ({_why(e)}); {part.kept()}") from None
         raise
+    part.commit(check)
 
 
 def write_bytes_atomic(path, data: bytes, *, option: str = "-o") -> None:

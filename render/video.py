@@ -88,26 +88,24 @@ class VideoWriter:
 
     def __init__(self, path, size, fps, *, rgba: bool = False, buffers: int = style.QUEUE_FRAMES,
                  crf: int = style.X264_CRF, preset: str = style.X264_PRESET):
-        from nbst.outputs import partial_path, refuse_special, remove_stale_partials
+        from nbst.outputs import PartialFile
 
         self.final_path = str(path)
         self.kind = video_kind(path)
-        # ffmpeg writes a hidden partial file beside the target (a symlink's target; same
-        # extension: it picks the muxer); close() renames it over the target, so a failed or
-        # interrupted run (Ctrl-C, or SIGTERM under the CLI) leaves no half-written video under
-        # the requested name. Partial files of killed (SIGKILL) earlier runs are removed here.
-        refuse_special(path)
-        final = Path(os.path.realpath(path))
-        final.parent.mkdir(parents=True, exist_ok=True)
-        suffix = Path(path).suffix  # ffmpeg picks the muxer by it: the name asked for, not a link's target's
-        remove_stale_partials(final, suffix=suffix)
-        self._target = str(final)
-        self.path = str(partial_path(final, suffix=suffix))
+        # ffmpeg writes a hidden partial file beside the target (same extension: it picks the
+        # muxer); close() checks the finished file (check_video: whole, with every frame) and
+        # renames it over the target, so a failed, interrupted (Ctrl-C, or SIGTERM under the CLI)
+        # or silently truncated run (a full disk: ffmpeg's exit status is not reported) leaves no
+        # half-written video under the requested name, and the previous file as it was.
+        # Links, special files and folders are refused (nbst.outputs.refuse_not_a_file).
         self.size = (int(size[0]), int(size[1]))
         self.fps = float(fps)
         w, h = self.size
         if self.kind == "mp4" and (w % 2 or h % 2):
             raise RenderError(f"H.264 in yuv420p needs an even width and height, got {w}x{h}")
+        self._part = PartialFile(path)
+        self._target = str(path)
+        self.path = self._part.path
         self.frame_shape = (h, w, 4 if rgba else 3)
         if self.kind == "mp4":
             kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None,
@@ -123,7 +121,12 @@ class VideoWriter:
             with signals_deferred():  # ffmpeg and its partial file start together with the thread that ends them
                 self._start(rgba, buffers, kw)
         except KeyboardInterrupt:  # a signal during the start: stop ffmpeg, remove its partial file
-            self.close(discard=True)
+            if hasattr(self, "_thread"):
+                self.close(discard=True)
+            self._part.discard()
+            raise
+        except BaseException:
+            self._part.discard()
             raise
 
     def _start(self, rgba: bool, buffers: int, kw: dict) -> None:
@@ -166,7 +169,7 @@ class VideoWriter:
                               f"({msg[0] if msg else type(self._error).__name__}); {self._kept()}")
 
     def _kept(self) -> str:
-        return "the previous file is unchanged" if os.path.exists(self._target) else "nothing was written"
+        return self._part.kept()
 
     def acquire(self) -> np.ndarray:
         """A free frame buffer of ``frame_shape``, uint8 (blocks while all are queued)."""
@@ -217,10 +220,7 @@ class VideoWriter:
                 self._error = e
         try:
             if discard or self._error is not None:
-                try:
-                    os.unlink(self.path)
-                except FileNotFoundError:
-                    pass
+                self._part.discard()
             if not discard:
                 self._check()
                 self._publish()
@@ -229,20 +229,21 @@ class VideoWriter:
                 self._log.close()
 
     def _publish(self) -> None:
-        """fsync the finished partial file and rename it over the target (RenderError if that fails)."""
+        """Check the finished partial file (``check_video``), fsync it and rename it over the target
+        (RenderError, one line, if any of it fails; the previous file stays)."""
+        from nbst.outputs import OutputError
+
+        def check(path):
+            why = check_video(path, self.kind, self.frames)
+            if why:
+                reason = _ffmpeg_reason(self._log)
+                return f"{why}{'; ffmpeg: ' + reason[0] if reason else ''}"
+            return None
+
         try:
-            fd = os.open(self.path, os.O_RDONLY)
-            try:
-                os.fsync(fd)
-            finally:
-                os.close(fd)
-            os.replace(self.path, self._target)
-        except OSError as e:
-            try:
-                os.unlink(self.path)
-            except OSError:
-                pass
-            raise RenderError(f"{self.final_path}: cannot write ({e.strerror or e}); {self._kept()}") from None
+            self._part.commit(check)
+        except OutputError as e:
+            raise RenderError(str(e).removeprefix("-o ")) from None
 
     def __enter__(self):
         return self
@@ -250,6 +251,115 @@ class VideoWriter:
     def __exit__(self, exc_type, exc, tb):
         # on an error in the render loop (Ctrl-C included) leave no half-written video
         self.close(discard=exc_type is not None)
+
+
+def check_video(path, kind: str, frames: int) -> str | None:
+    """Why the encoded file at ``path`` is not a whole video of ``frames`` frames, or None.
+
+    ffmpeg can end without a complete file and imageio-ffmpeg does not report its exit status (a
+    full disk while the MP4 index is written leaves a file that no player opens: "moov atom not
+    found"). This reads the container, not the pictures (milliseconds): an MP4 must be a chain of
+    boxes that ends exactly at the end of the file, with ``moov`` and ``mdat``, and its video track's
+    sample table must hold ``frames`` samples; a GIF must be a chain of blocks from its header to
+    its trailer with at least one image (ffmpeg merges repeated frames, so not one per frame).
+    """
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        return e.strerror or str(e)
+    if not data:
+        return "the file is empty"
+    return _check_mp4(data, frames) if kind == "mp4" else _check_gif(data)
+
+
+def _boxes(data: bytes, start: int, end: int):
+    """(type, body start, body end) of the MP4 boxes that tile data[start:end]; ValueError if they do not."""
+    k = start
+    while k < end:
+        if end - k < 8:
+            raise ValueError(f"{end - k} stray bytes at the end")
+        size = int.from_bytes(data[k:k + 4], "big")
+        kind = data[k + 4:k + 8].decode("latin-1")
+        head = 8
+        if size == 1:
+            if end - k < 16:
+                raise ValueError("a box header is cut short")
+            size, head = int.from_bytes(data[k + 8:k + 16], "big"), 16
+        elif size == 0:
+            size = end - k
+        if size < head or k + size > end:
+            raise ValueError(f"the box at byte {k:,} runs past the end of the file (cut short)")
+        yield kind, k + head, k + size
+        k += size
+
+
+def _check_mp4(data: bytes, frames: int) -> str | None:
+    try:
+        top = {kind: (a, b) for kind, a, b in _boxes(data, 0, len(data))}
+        for need in ("ftyp", "moov", "mdat"):
+            if need not in top:
+                return f"no {need!r} box: the MP4 is incomplete"
+        samples = 0
+        for kind, a, b in _boxes(data, *top["moov"]):
+            if kind != "trak":
+                continue
+            span = (a, b)
+            for step in ("mdia", "minf", "stbl", "stsz"):
+                span = next(((x, y) for k, x, y in _boxes(data, *span) if k == step), None)
+                if span is None:
+                    break
+            if span is not None and span[1] - span[0] >= 12:
+                samples = max(samples, int.from_bytes(data[span[0] + 8:span[0] + 12], "big"))
+    except ValueError as e:
+        return str(e)
+    if samples != frames:
+        return f"{samples} frames in the file, {frames} sent to the encoder"
+    return None
+
+
+def _check_gif(data: bytes) -> str | None:
+    if data[:6] not in (b"GIF87a", b"GIF89a") or len(data) < 13:
+        return "no GIF header"
+    k = 13
+    if data[10] & 0x80:
+        k += 3 * (2 << (data[10] & 7))
+    images = 0
+    n = len(data)
+
+    def sub_blocks(k):
+        while True:
+            if k >= n:
+                raise ValueError("the GIF is cut short")
+            size = data[k]
+            k += 1 + size
+            if size == 0:
+                return k
+    try:
+        while True:
+            if k >= n:
+                return "the GIF is cut short (no trailer)"
+            b = data[k]
+            if b == 0x3B:
+                break
+            if b == 0x21:  # an extension: label, sub-blocks
+                k = sub_blocks(k + 2)
+            elif b == 0x2C:  # an image: descriptor, local colour table, LZW code size, sub-blocks
+                if k + 10 > n:
+                    return "the GIF is cut short"
+                flags = data[k + 9]
+                k += 10 + (3 * (2 << (flags & 7)) if flags & 0x80 else 0)
+                k = sub_blocks(k + 1)
+                images += 1
+            else:
+                return f"an unknown GIF block 0x{b:02x} at byte {k}"
+    except ValueError as e:
+        return str(e)
+    if images == 0:
+        return "the GIF has no image"
+    if k + 1 != n:
+        return f"{n - k - 1} bytes after the GIF trailer"
+    return None
 
 
 def _start_quietly(gen):

@@ -68,28 +68,7 @@ def test_fifo_and_device_outputs_are_refused_never_replaced(tmp_path, capsys):
     assert stat.S_ISCHR(os.lstat(os.devnull).st_mode)
 
 
-def test_symlink_output_is_written_through(tmp_path, capsys):
-    target = tmp_path / "real" / "problem.json"
-    target.parent.mkdir()
-    target.write_text("old")
-    link = tmp_path / "link.json"
-    link.symlink_to(target)
-    assert main(["generate", "--planted", "2", "--seed", "1", "-o", str(link)]) == 0
-    assert link.is_symlink() and os.readlink(link) == str(target)
-    assert json.loads(target.read_text())["disks"]
-    assert not [f for f in target.parent.iterdir() if f.name.startswith(".")]  # no partial file left
-
-
-def test_symlink_to_a_file_of_another_extension_gets_the_format_asked_for(tmp_path, capsys):
-    """``plot -o link.png`` with link -> t.conf: matplotlib picks the format by the partial file's
-    extension, which is the link's (.png), not the target's (a traceback before)."""
-    conf = tmp_path / "t.conf"
-    conf.write_text("a = 1\n")
-    link = tmp_path / "link.png"
-    link.symlink_to(conf)
-    assert main(["plot", "problem", "over5", "-o", str(link), "-q"]) == 0
-    assert link.is_symlink() and conf.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(f.name for f in tmp_path.iterdir()) == ["link.png", "t.conf"]  # no partial file left
+# symbolic links, FIFOs and folders for every command: tests/test_hardening_links.py
 
 
 # --------------------------------------------------------------------------- full disk
@@ -264,3 +243,62 @@ def test_experiment_workers_die_with_their_parent(tmp_path, sig):
     if sig == signal.SIGTERM:
         err = proc.stderr.read()
         assert err.strip() == "nbst: interrupted", err
+
+
+# --------------------------------------------------------------------------- videos on a full disk
+
+def _video(tmp_path, ext, **kw):
+    """A short video of over5 written by ``nbst render`` (in-process): its bytes."""
+    p, s = _files(tmp_path)
+    out = tmp_path / f"ok{ext}"
+    assert main(["render", p, s, "-o", str(out), "--size", "96x64", "--fps", "8", "-q"]) == 0
+    return out.read_bytes()
+
+
+@pytest.mark.parametrize("ext", [".mp4", ".gif"])
+def test_a_video_cut_short_anywhere_is_seen(tmp_path, ext):
+    """check_video reads the container: a file cut at any point (a full disk) is not a whole video,
+    and one with fewer frames than were sent is not the video asked for."""
+    pytest.importorskip("moderngl")
+    from nbst.render.video import check_video
+
+    data = _video(tmp_path, ext)
+    whole = tmp_path / f"whole{ext}"
+    whole.write_bytes(data)
+    kind = ext[1:]
+    from nbst.render.video import frame_times
+
+    frames = len(frame_times(2.0, 8.0, hold=1.0)) if kind == "mp4" else 1  # a GIF may merge repeated frames
+    assert check_video(whole, kind, frames) is None
+    cut = tmp_path / f"cut{ext}"
+    for k in sorted({0, 10, 100, len(data) // 3, len(data) // 2, len(data) - 200, len(data) - 1}):
+        cut.write_bytes(data[:k])
+        assert check_video(cut, kind, frames), f"cut at {k} of {len(data)} bytes passed"
+    if kind == "mp4":
+        assert "frames" in check_video(whole, kind, frames + 1)
+
+
+@pytest.mark.parametrize("ext", [pytest.param(".mp4"), pytest.param(".gif", marks=pytest.mark.slow)])
+def test_a_full_disk_while_encoding_keeps_the_previous_video(tmp_path, ext):
+    """A file-size limit (RLIMIT_FSIZE, a full disk for ffmpeg and for us) just under the video's
+    size: the encoder's file is cut short near its end (the MP4 index), ffmpeg's exit status goes
+    unreported; nbst must refuse in one line, keep the previous video and leave no partial file."""
+    pytest.importorskip("moderngl")
+    import resource
+
+    old = _video(tmp_path, ext)
+    p, s = _files(tmp_path)
+    out = tmp_path / f"v{ext}"
+    out.write_bytes(old)
+    limit = len(old) - 300
+
+    def small_disk():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    r = subprocess.run(NBST + ["render", p, s, "-o", str(out), "--size", "96x64", "--fps", "8", "--hold", "1.5"],
+                       preexec_fn=small_disk, capture_output=True, text=True, timeout=300)
+    err = [ln for ln in r.stderr.splitlines() if ln.startswith("nbst render: error")]
+    assert r.returncode == 2 and len(err) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert "previous file is unchanged" in err[0]
+    assert out.read_bytes() == old
+    assert not [f.name for f in tmp_path.iterdir() if ".partial-" in f.name]

@@ -444,7 +444,12 @@ def _replay_throw(args) -> int:
 
 def cmd_throw(args) -> int:
     from nbst.models.bowling import lane
+    from nbst.outputs import prepare_output
 
+    for option, path in (("-o", args.output), ("--video", getattr(args, "video", None)),
+                         ("--still", getattr(args, "still", None))):
+        if path:  # before the throw: a link, a FIFO or a folder is refused in one line
+            prepare_output(path, option=option)
     try:
         ball = _ball(args)
         d = _delivery(args)
@@ -1045,6 +1050,9 @@ def cmd_pocket(args) -> int:
             raise ValueError(f"{args.output}: -o must name a .png file")
     except ValueError as e:
         return _err("pocket", str(e))
+    from nbst.outputs import atomic_path, prepare_output
+
+    prepare_output(args.output)  # before the frames: a link, a FIFO or a folder is refused in one line
     bar = _bar(args, args.samples * len(boards) * len(angles), "pocket frames")
     try:
         with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
@@ -1055,11 +1063,8 @@ def cmd_pocket(args) -> int:
         return 130
     bar.close()
     fig = spares.pocket_figure(pm)
-    try:
-        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(args.output)
-    except OSError as e:
-        return _err("pocket", f"{args.output}: {e.strerror or e}")
+    with atomic_path(args.output) as tmp:  # the one writer: whole PNG or the previous file
+        fig.savefig(tmp)
     b, a, p, k = pm.best()
     ks, ns = pm.carry()
     kc, nc = pm.carry(angles=(4.0, 6.0))
