@@ -113,15 +113,13 @@ class Size:
 
 
 def cluster_client(args):
-    """The Dask client of ``--cluster`` (None without it); ProblemError when unreachable."""
+    """The Dask client of ``--cluster`` (None without it); InputError (one line naming the address
+    and what is there, within ``nbst.cluster.CONNECT_TIMEOUT_S``) when no scheduler answers."""
     if args.cluster is None:
         return None
     from nbst.cluster import connect
 
-    try:
-        return connect(args.cluster)
-    except ValueError as e:
-        raise ProblemError("<arguments>", "--cluster", str(e)) from None
+    return connect(args.cluster)
 
 
 def print_json(obj) -> None:
