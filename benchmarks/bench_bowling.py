@@ -40,7 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=48, help="launches per measurement (default 48)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--threads", default="1,2", help="thread counts (default 1,2)")

@@ -255,7 +255,7 @@ def positive_int(s: str) -> int:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="8 noisy throws of each delivery and 4 of each spare (a smoke run, 1-2 min)")
     ap.add_argument("--jobs", type=positive_int, default=2, help="worker processes (default 2)")
     ap.add_argument("--pocket-n", type=positive_int, default=None, help="noisy throws of the strike line and of the pocket cell, each, per setting (default 40)")

@@ -23,7 +23,7 @@ def leave_text(r) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the strike and two spares only; a batch of 8")
     args = ap.parse_args()
     shots = [("strike (typical release)", spares.STRIKE, None)]

@@ -24,7 +24,7 @@ from nbst.search import roundoff_cost
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--max-trials", type=int, default=2_000_000)
     ap.add_argument("--jobs", type=int, default=2)

@@ -100,7 +100,7 @@ def mjcf_only(ns) -> None:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="N up to 300, one run each")
     ap.add_argument("--mjcf", type=int, nargs="+", metavar="N", help="time only the scene at these N")
     args = ap.parse_args(argv)

@@ -182,7 +182,7 @@ def describe(d: lane.Delivery, b: lane.Ball) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--releases", type=int, default=200, help="random releases aimed at the pocket (default 200)")
     ap.add_argument("--evals", type=int, default=150, help="re-aimed evaluations per minimisation (default 150)")
     ap.add_argument("--n", type=int, default=60, help="noisy throws per spread and per strike estimate (default 60)")

@@ -24,7 +24,7 @@ def line(label: str, d: lane.Delivery, est: noise.Estimate, r: frame.FrameResult
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--budget", type=int, default=1200, help="noisy frames of the search (default 1200)")
     ap.add_argument("--n", type=int, default=100, help="fresh noisy throws per estimate (default 100)")
     ap.add_argument("--seed", type=int, default=1)

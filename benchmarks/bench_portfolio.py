@@ -48,7 +48,7 @@ def load(spec: str):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--problems", default="over5:1000000,diamond-s14,diamond-s14-tiny",
                     help="comma-separated NAME[:TRIALS] (planted:N:NONCUE:SEED[:TRIALS] and planted-set[:TRIALS] too); "
                          "TRIALS overrides --max-trials")

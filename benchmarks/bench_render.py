@@ -62,7 +62,7 @@ def grid_problem(n: int, *, seed: int = 1, density: float = 0.08, t_final: float
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the curve with 60 frames a size (under a minute)")
     ap.add_argument("--sizes", default=None,
                     help="comma-separated N for the curve (default 10,30,100,300,1000,3000; --quick to 1000)")

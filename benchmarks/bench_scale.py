@@ -233,7 +233,7 @@ def figure(sim, solve_rows, path):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="smaller sizes and one seed")
     ap.add_argument("--part", choices=("sim", "solve", "noncue", "all"), default="all")
     ap.add_argument("--sizes", type=int, nargs="*", default=None)

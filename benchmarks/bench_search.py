@@ -55,7 +55,7 @@ def init_style_velocities(problem, B, rng):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--problem", default="diamond-s14")
     ap.add_argument("--trials", type=int, default=400_000)
     ap.add_argument("--seeds", type=int, default=3)

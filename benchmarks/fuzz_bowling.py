@@ -261,7 +261,8 @@ def fuzz_cli(k: int, seed: int, folder: Path) -> dict:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--docs", type=int, default=None, help="documents through the loaders (default 50,000)")
     ap.add_argument("--cli", type=int, default=None, help="command runs (default 40)")
     ap.add_argument("--quick", action="store_true", help="5,000 documents and 10 command runs")

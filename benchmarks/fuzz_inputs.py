@@ -760,7 +760,7 @@ def print_exit_codes(res: list, commands) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--loader", type=int, default=100_000, help="inputs fed to the loader in-process")
     ap.add_argument("--cli", type=int, default=1_000, help="CLI runs (subprocesses)")
     ap.add_argument("--flags", type=int, default=1_000, help="runs of every subcommand with random flags (subprocesses)")

@@ -42,7 +42,7 @@ def aimed(p, rng, B):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--samples", type=int, default=2_000_000)
     a = ap.parse_args()

@@ -119,7 +119,7 @@ def combine(p, samples, rng) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=4_000_000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--combine", action="store_true", help="also pair the two cues' groups (see above)")

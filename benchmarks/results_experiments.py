@@ -23,7 +23,7 @@ PLANTED = {"planted6": ("--planted", "6", "--radius", "20"),
 def main(argv=None) -> int:
     from nbst.cli import main as nbst
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="nbst-experiments")
     ap.add_argument("--workers", default="2")
     ap.add_argument("--cluster", default=None)

@@ -132,7 +132,8 @@ def speed(a):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("what", choices=["targets", "ablation", "planted", "speed"])
     ap.add_argument("--trials", type=int, default=1_000_000)
     ap.add_argument("--sizes", type=int, nargs="+", default=[6, 10, 14, 20, 30])

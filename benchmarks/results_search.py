@@ -73,7 +73,7 @@ def variants(seeds: int, trials: int) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--tiny-seeds", type=int, default=20)
     ap.add_argument("--trials", type=int, default=400_000)

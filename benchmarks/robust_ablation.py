@@ -85,7 +85,7 @@ def measure(problem, velocities, *, score_seed: int) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--problem", default="over5")
     ap.add_argument("--seeds", default="1,2,3")
     ap.add_argument("--trials", type=int, default=400_000)

@@ -139,3 +139,32 @@ def test_writers_name_the_command_that_wrote(tmp_path, capsys):
     assert out[0].startswith(f"nbst generate: wrote {prob}:") and out[1] == f"nbst generate: wrote {sol}: the planted velocities"
     assert main(["mjcf", str(prob), str(sol), "-o", str(xml)]) == 0
     assert capsys.readouterr().err.startswith(f"nbst mjcf: wrote {xml} (3 disks;")
+
+
+def test_an_option_must_be_spelled_out(capsys, tmp_path):
+    """``--max-trial`` is not taken for ``--max-trials`` (argparse's prefix matching is off, in every
+    parser nbst builds: the CLI's and the scripts')."""
+    with pytest.raises(SystemExit) as e:
+        main(["solve", "over5", "-o", str(tmp_path / "s.json"), "--max-trial", "10"])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert "--max-trial" in err and "unrecognized" in err and err.count("\n") == 1
+    assert not (tmp_path / "s.json").exists()
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    missing = [f"{f.relative_to(root)}:{text[:m.start()].count(chr(10)) + 1}"
+               for folder in ("nbst", "models", "render", "benchmarks", "scripts")
+               for f in sorted((root / folder).rglob("*.py"))
+               for text in [f.read_text(encoding="utf-8")]
+               for m in re.finditer(r"argparse\.ArgumentParser\(", text)
+               if "allow_abbrev=False" not in text[m.end():m.end() + 200]]
+    assert not missing, missing
+
+
+def test_plot_subcommands_explain_themselves(capsys):
+    for what in ("problem", "trajectories"):
+        with pytest.raises(SystemExit):
+            main(["plot", what, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        assert "Figures" in text and "legend" in text and ".svg" in text
