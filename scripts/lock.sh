@@ -9,7 +9,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 "$PY" -m venv "$tmp/venv"
 "$tmp/venv/bin/python" -m pip install -q --disable-pip-version-check -e ".[test]"
-"$tmp/venv/bin/python" -m pytest -q
+"$tmp/venv/bin/python" -m pytest -q -n auto  # both tiers: everything
 {
   echo "# Exact versions the test suite passed with ($("$tmp/venv/bin/python" -c 'import platform; print(platform.python_implementation(), platform.python_version() + ",", platform.system(), platform.machine())')), used as pip constraints"
   echo "# by scripts/setup.sh and so by CI. Refresh: bash scripts/lock.sh (docs/install.md)."

@@ -60,4 +60,4 @@ fi
 
 # --- 4. numba kernels -----------------------------------------------------------
 "$VENV/bin/python" -m nbst.warmup
-say "done: $("$VENV/bin/nbst" --version); run tools as .venv/bin/nbst, tests as .venv/bin/python -m pytest -q"
+say "done: $("$VENV/bin/nbst" --version); run tools as .venv/bin/nbst, tests as .venv/bin/python -m pytest -q -n auto -m \"not slow\""

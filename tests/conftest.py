@@ -36,9 +36,21 @@ def mk():
 # --------------------------------------------------------------------------- compiled kernels, slow tests
 
 
-#: Tests that take >= 0.3 s each (pytest --durations=0, full suite, 2 shared cores, warm numba
-#: cache, issue 24): ``pytest -m "not slow"`` leaves them out. Node ids; a parametrized test is
-#: listed per case, or by its base id for all of them.
+# --------------------------------------------------------------------------- the two tiers
+#
+# The README's test command runs the fast tier on every core: ``pytest -n auto -m "not slow"``;
+# CI (.ci/run) runs it, then the slow tier (``-m slow``), so CI still runs everything.
+#
+# The rule: a test that takes more than FAST_TEST_S seconds (warm numba cache, one core) belongs
+# to the slow tier. Mark it ``@pytest.mark.slow`` where it is written (a new test), or list its node
+# id below. A fast-tier test that runs past the budget is named at the end of the run.
+
+#: Seconds a fast-tier test may take (warm caches) before the run's summary asks to mark it slow.
+FAST_TEST_S = 3.0
+
+#: The slow tier, by node id (a parametrized test is listed per case, or by its base id for all
+#: of them): tests of seconds each (pytest --durations=0, 2 shared cores, warm numba cache, issues
+#: 24 and 35), and end-to-end runs that a faster test of the same thing already covers in the fast tier.
 SLOW = frozenset({
     "tests/test_signals.py::test_render_leaves_the_previous_video_and_no_partial_file",
     "tests/test_signals.py::test_solve_writes_the_best_so_far_whatever_the_signals",
@@ -110,6 +122,30 @@ SLOW = frozenset({
     "tests/test_stepping.py::test_cli_aligned_convergence_report",
     "tests/test_stepping.py::test_newton_cradle_passes_the_impulse_along",
     "tests/test_stepping.py::test_simultaneous_three_disk_contact_follows_the_exact_order",
+    # issue 35: measured in the fast tier at 5-70 s each (2 cores, load 7), most of them bowling runs
+    "tests/test_docs.py::test_every_command_in_the_doc_runs",
+    "tests/test_robust.py::test_more_robust_than_the_plain_best",
+    "tests/test_robust.py::test_robust_eval_is_the_worst_cost_and_the_and_over_the_shifted_runs",
+    "tests/test_many.py::test_progress_reports_the_best_motion_and_how_near_the_stop_is",
+    "tests/test_many.py::test_nbst_solve_on_a_many_disk_file",
+    "tests/test_bowling_frame.py::test_bowl_spares_is_reproducible_from_its_seed_and_refuses_bad_input_in_one_line",
+    "tests/test_bowling_frame.py::test_a_noisy_estimate_is_reproducible_from_its_seed_on_any_number_of_processes",
+    "tests/test_bowling_foul_atlas.py::test_grow_is_reproducible_from_the_seed_on_one_and_two_processes",
+    "tests/test_bowling_foul_atlas.py::test_noisy_throws_harvest_new_subsets_with_themselves_as_elites",
+    "tests/test_bowling_foul_atlas.py::test_the_probability_counts_exactly_the_subset",
+    "tests/test_bowling_foul_atlas.py::test_cli_solve_from_the_foul_line_answers_from_the_atlas_with_a_probability",
+    "tests/test_bowling_foul_atlas.py::test_the_mirror_step_throws_the_other_hand_once_per_unmirrored_subset",
+    "tests/test_bowling_foul_atlas.py::test_seek_grows_the_archive_with_what_its_children_knock_down",
+    "tests/test_bowling_robust.py::test_maximise_is_reproducible_from_its_seed_on_1_and_2_processes",
+    "tests/test_bowling_robust.py::test_maximise_with_want_climbs_towards_an_exact_outcome_and_keeps_it_on_the_ladder",
+    "tests/test_render_bowling_lane.py::test_cli_writes_a_still_and_an_mp4_with_the_expected_frames",
+    "tests/test_render_bowling_lane.py::test_the_recording_is_the_frame_run_frame_runs",
+    "tests/test_render_bowling_lane.py::test_cli_replay_films_a_throw_file_and_refuses_a_shot_file_in_one_line",
+    "tests/test_bowling_hardening.py::test_solve_leave_answers_from_the_shipped_atlas",
+    "tests/test_bowling_contacts.py::test_ball_pin_and_pin_pin_are_varied_apart",
+    "tests/test_baselines.py::test_improves_on_a_trivial_problem",
+    "tests/test_render.py::test_figures_of_many_disks_leave_the_numbers_out_and_say_so",
+    "tests/test_render_cli.py::test_a_thousand_disk_problem_renders_to_mp4_and_png",
 })
 
 #: Test files that time a command (signals sent after a delay, Ctrl-C during a run): their tests
@@ -134,7 +170,26 @@ def _kernels_before_timed_tests(request):
 
 def pytest_collection_modifyitems(config, items):
     """Mark the tests of SLOW (node ids, parametrized ones by their base id) ``slow``, so that
-    ``pytest -m "not slow"`` is the fast development loop; a plain ``pytest`` runs everything."""
+    ``pytest -m "not slow"`` is the fast tier; a plain ``pytest`` runs everything."""
     for item in items:
         if item.nodeid in SLOW or item.nodeid.split("[")[0] in SLOW:
             item.add_marker(pytest.mark.slow)
+
+
+_over_budget: list = []
+
+
+def pytest_runtest_logreport(report):
+    """Note the fast-tier tests that ran past FAST_TEST_S (setup, call and teardown together)."""
+    if report.when == "call" and "slow" not in report.keywords and report.duration > FAST_TEST_S:
+        _over_budget.append((report.duration, report.nodeid))
+
+
+def pytest_terminal_summary(terminalreporter):
+    """Name the fast-tier tests past the budget (the first test of a process may be compiling a
+    kernel's test-only signature: a cold cache makes any test slow once)."""
+    if _over_budget:
+        terminalreporter.write_line(f"fast tier: {len(_over_budget)} test(s) took over {FAST_TEST_S:g} s: mark them "
+                                    "@pytest.mark.slow (tests/conftest.py, 'the two tiers') unless a cold cache did it:")
+        for d, nodeid in sorted(_over_budget, reverse=True)[:10]:
+            terminalreporter.write_line(f"  {d:6.1f} s  {nodeid}")
