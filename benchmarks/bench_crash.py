@@ -48,7 +48,7 @@ def physics() -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--part", choices=PARTS, action="append", help="which figures (default: all)")
     args = ap.parse_args(argv)
     for part in args.part or PARTS:

@@ -66,7 +66,7 @@ def digests(path: Path) -> tuple[str, str]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--json", default=None, help="also write the digests to this JSON file")
     ap.add_argument("--only", default=None, help="run only the cases whose label contains this text")
     args = ap.parse_args(argv)
