@@ -168,12 +168,12 @@ def test_atlas_on_a_dask_cluster_writes_the_same_shots_as_one_thread(tmp_path):
 
     base = ["bowl", "atlas", "--max-rollouts", "32", "--seed", "7", "--no-robustness", "-q"]
     assert main([*base, "--out-dir", str(tmp_path / "here"), "--jobs", "1"]) == 0
-    from nbst.models.bowling import cluster as C
+    from nbst.models.mjsearch import cluster as C
 
-    C._WORKER_LAUNCHERS.clear()
+    C._WORKER_RUNNERS.clear()
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
         assert main([*base, "--out-dir", str(tmp_path / "dask"), "--cluster", cluster.scheduler_address]) == 0
-    assert C._WORKER_LAUNCHERS  # the rollouts ran on the workers (threads of this process here)
+    assert C._WORKER_RUNNERS  # the rollouts ran on the workers (threads of this process here)
     here = {f.name: json.loads(f.read_text()) for f in (tmp_path / "here").glob("subset-*.json")}
     dask = {f.name: json.loads(f.read_text()) for f in (tmp_path / "dask").glob("subset-*.json")}
     assert here and here.keys() == dask.keys()

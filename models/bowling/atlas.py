@@ -1,7 +1,8 @@
 """The atlas: one launch per subset of pins down, for as many of the 1,023 subsets as a budget finds.
 
 Three ways to spend a launch budget (``method``), all on one archive keyed by subset
-(:class:`Archive`: the first launch that gave each subset is its **elite**):
+(:class:`Archive`, the rollout room's :mod:`nbst.models.mjsearch.archive`: the first launch
+that gave each subset is its **elite**):
 
 * ``"uniform"``: launches uniform over :data:`shot.BOUNDS` (random search).
 * ``"elites"`` (MAP-Elites style, the default): after :data:`EXPLORE` uniform launches
@@ -24,23 +25,23 @@ mask), so the same folder and seed give the same run.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from nbst.models.bowling import geometry, search, shot
+from nbst.models.mjsearch import archive as _archive
 
 #: Uniform launches that start an empty archive before the emitter takes over.
-EXPLORE = 256
+EXPLORE = _archive.EXPLORE
 #: Uniform launches in each batch of 16 of the emitter (keeps finding what no elite is near).
-UNIFORM_PER_BATCH = 2
+UNIFORM_PER_BATCH = _archive.UNIFORM_PER_BATCH
 #: Gaussian steps of a child, in the unit cube (per coordinate): ~0.4 mm, 4 mm, 42 mm
 #: sideways (the unit is 0.84 m of lateral range, 5 m/s of speed, 6 deg, 60 rad/s).
-SCALES = (0.0005, 0.005, 0.05)
+SCALES = search.SCALES
 #: Parent weight floor of a size whose subsets are all found (children land on other sizes).
-SIZE_FLOOR = 0.05
+SIZE_FLOOR = _archive.GROUP_FLOOR
 #: Parent weight bonus per new subset its children found.
-HIT_BONUS = 3.0
+HIT_BONUS = _archive.HIT_BONUS
 
 N_SUBSETS = geometry.N_SUBSETS
 SIZE_TOTAL = np.array([math.comb(10, k) for k in range(11)])
@@ -50,58 +51,15 @@ SIZE_TOTAL = np.array([math.comb(10, k) for k in range(11)])
 size_of = geometry.size_of
 
 
-@dataclass
-class Archive:
-    """Subsets found so far: mask -> elite launch ((4,) array), how often seen, when found,
-    and for the emitter how many children each parent had and how many found a new subset."""
-
-    elite: dict = field(default_factory=dict)     # mask -> (4,) launch (the first that gave it)
-    seen: dict = field(default_factory=dict)      # mask -> launches that gave it
-    found_at: dict = field(default_factory=dict)  # mask -> rollouts spent when found (-1: given)
-    children: dict = field(default_factory=dict)  # mask -> children launched from its elite
-    hits: dict = field(default_factory=dict)      # mask -> children that found a new subset
-    rollouts: int = 0
-    uniform: list = field(default_factory=lambda: [0, 0])   # [launches, new subsets] of parentless launches
-    curve: list = field(default_factory=list)     # (rollouts, subsets) after each batch
+class Archive(_archive.Archive):
+    """Subsets found so far (the rollout room's :class:`~nbst.models.mjsearch.archive.Archive`,
+    keyed by the mask of pins down): mask -> elite launch, how often seen, when found, and for
+    the emitter how many children each parent had and how many found a new subset."""
 
     @classmethod
     def from_launches(cls, launches: dict) -> Archive:
-        a = cls()
-        for m in sorted(launches):
-            if m:
-                a.elite[int(m)] = np.asarray(launches[m], dtype=float)
-                a.seen[int(m)] = 1
-                a.found_at[int(m)] = -1
-        return a
-
-    def __len__(self) -> int:
-        return len(self.elite)
-
-    def add(self, launches, masks, parents=None) -> list[int]:
-        """Record a batch: (B, 4) launches, (B,) masks, (B,) parent masks (-1: none).
-        Returns the new non-empty masks, in launch order."""
-        new = []
-        for i, (x, m) in enumerate(zip(launches, masks)):
-            m = int(m)
-            p = -1 if parents is None else int(parents[i])
-            if p >= 0:
-                self.children[p] = self.children.get(p, 0) + 1
-            else:
-                self.uniform[0] += 1
-            if m == 0:
-                continue
-            self.seen[m] = self.seen.get(m, 0) + 1
-            if m not in self.elite:
-                self.elite[m] = np.array(x, dtype=float)
-                self.found_at[m] = self.rollouts + i + 1
-                new.append(m)
-                if p >= 0:
-                    self.hits[p] = self.hits.get(p, 0) + 1
-                else:
-                    self.uniform[1] += 1
-        self.rollouts += len(masks)
-        self.curve.append((self.rollouts, len(self.elite)))
-        return new
+        """An archive of launches found before ({mask: launch}; the empty mask skipped)."""
+        return cls.from_elites(launches)
 
 
 def parent_weights(a: Archive, masks: list[int]) -> np.ndarray:
@@ -111,39 +69,18 @@ def parent_weights(a: Archive, masks: list[int]) -> np.ndarray:
     found yet (at least :data:`SIZE_FLOOR`); rarity = 1 / sqrt(times seen); curiosity =
     (1 + HIT_BONUS x new subsets its children found) / sqrt(1 + children).
     """
-    found = np.bincount([size_of(m) for m in a.elite], minlength=11)
-    gap = np.maximum(1.0 - found / SIZE_TOTAL, SIZE_FLOOR)
-    w = np.array([gap[size_of(m)] / math.sqrt(a.seen.get(m, 1))
-                  * (1.0 + HIT_BONUS * a.hits.get(m, 0)) / math.sqrt(1.0 + a.children.get(m, 0))
-                  for m in masks])
-    return w / w.sum()
+    return _archive.parent_weights(a, masks, group=size_of, group_total=SIZE_TOTAL, floor=SIZE_FLOOR,
+                                   bonus=HIT_BONUS)
 
 
 def emit(a: Archive, rng: np.random.Generator, n: int = search.BATCH, *,
          selection: str = "biased", space=None) -> tuple[np.ndarray, np.ndarray]:
-    """One batch of the MAP-Elites emitter: ((n, D) launches, (n,) parent masks, -1 = uniform).
-    The first :data:`UNIFORM_PER_BATCH` are uniform; each other is a parent's elite plus a
-    Gaussian step at a scale drawn from the space's scales. Random numbers drawn in a fixed
-    order. ``selection``: "biased" (:func:`parent_weights`) or "uniform" (every elite alike:
-    plain MAP-Elites, for the ablation). ``space``: (D, to_unit, from_unit, scales) of the
-    launch space; default the 5 m launches (4, :func:`search.to_unit`, :func:`search.from_unit`,
-    :data:`SCALES`); the foul-line atlas passes its own."""
-    dim, to_unit, from_unit, scales = space or (4, search.to_unit, search.from_unit, SCALES)
-    masks = sorted(a.elite)
-    k = min(UNIFORM_PER_BATCH, n) if masks else n
-    u = rng.random((n, dim))                     # always drawn: the stream does not depend on the archive
-    X = from_unit(u[:k])
-    parents = np.full(n, -1, dtype=np.int64)
-    if n > k:
-        w = parent_weights(a, masks) if selection == "biased" else np.full(len(masks), 1.0 / len(masks))
-        idx = rng.choice(len(masks), size=n - k, p=w)
-        scale = np.asarray(scales)[rng.integers(0, len(scales), size=n - k)]
-        step = rng.standard_normal((n - k, dim)) * scale[:, None]
-        par = np.array([masks[i] for i in idx])
-        base = np.array([to_unit(a.elite[m]) for m in par])
-        X = np.concatenate([X, from_unit(base + step)])
-        parents[k:] = par
-    return X, parents
+    """One batch of the MAP-Elites emitter (:func:`nbst.models.mjsearch.archive.emit` with the
+    bowling weights :func:`parent_weights`): ((n, D) launches, (n,) parent masks, -1 = uniform).
+    ``selection``: "biased" or "uniform" (plain MAP-Elites, for the ablation). ``space``: the
+    launch space (default the 5 m launches, :data:`.search.SPACE`; the foul-line atlas passes
+    its own)."""
+    return _archive.emit(a, rng, space or search.SPACE, n, selection=selection, weights=parent_weights)
 
 
 def run(launcher: shot.Launcher, archive: Archive, *, method: str, budget: int, seed: int,
@@ -168,13 +105,15 @@ def run(launcher: shot.Launcher, archive: Archive, *, method: str, budget: int, 
         while archive.rollouts < end:
             run_batch(search.from_unit(rng.random((search.BATCH, 4))))
     elif method in ("elites", "elites-plain"):
-        sel = "biased" if method == "elites" else "uniform"
-        n0 = min(EXPLORE, int(budget)) if not archive.elite else 0
-        start = archive.rollouts
-        while archive.rollouts < start + n0:
-            run_batch(search.from_unit(rng.random((search.BATCH, 4))))
-        while archive.rollouts < end:
-            run_batch(*emit(archive, rng, selection=sel))
+        def on_batch(a, new):
+            if new and on_new:
+                on_new(new)
+            if callback:
+                callback(a)
+
+        _archive.grow(lambda X: launcher.launch(X)[0], archive, rng, search.SPACE, budget=budget, explore=EXPLORE,
+                      batch=search.BATCH, selection="biased" if method == "elites" else "uniform",
+                      weights=parent_weights, on_batch=on_batch)
     elif method == "targeted":
         n0 = int(budget) // 4 if not archive.elite else 0
         start = archive.rollouts

@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from nbst.models.bowling import atlas, frame, lane, noise, search, shot
+from nbst.models.mjsearch import archive as _archive
 
 #: The oil pattern of the shipped atlas (the default ball), and the shipped atlas itself.
 OIL = "house"
@@ -76,7 +77,7 @@ def from_unit(u) -> np.ndarray:
     return x
 
 
-SPACE = (DIM, to_unit, from_unit, SCALES)
+SPACE = _archive.Space(DIM, to_unit, from_unit, SCALES)
 
 
 def hand_of(x) -> str:
@@ -107,26 +108,17 @@ def throw_masks(runner: frame.FrameRunner, X) -> tuple[list[int], list[frame.Fra
 
 def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed: int,
          on_batch=None) -> atlas.Archive:
-    """Spend ``budget`` frames growing ``archive`` (elites are (7,) points: :data:`KEYS`, hand);
-    ``on_batch(archive, new_masks)`` after each batch (progress, checkpoints).
-    KeyboardInterrupt propagates; what ran is in ``archive``."""
-    rng = np.random.default_rng(seed)
-    end = archive.rollouts + int(budget)
-    n0 = min(atlas.EXPLORE, int(budget)) if not archive.elite else 0
-    start = archive.rollouts
-    while archive.rollouts < end:
-        if archive.rollouts < start + n0:
-            X, parents = from_unit(rng.random((search.BATCH, DIM))), None
-        else:
-            X, parents = atlas.emit(archive, rng, space=SPACE)
-            kids = parents >= 0
-            X[kids, len(KEYS)] = [archive.elite[int(p)][len(KEYS)] for p in parents[kids]]  # the parent's hand
-        X = X[: end - archive.rollouts]
-        masks, _ = throw_masks(runner, X)
-        new = archive.add(X, masks, None if parents is None else parents[: len(X)])
-        if on_batch is not None:
-            on_batch(archive, new)
-    return archive
+    """Spend ``budget`` frames growing ``archive`` (elites are (7,) points: :data:`KEYS`, hand)
+    with the rollout room's MAP-Elites loop (:func:`nbst.models.mjsearch.archive.grow`); a
+    child keeps its parent's hand. ``on_batch(archive, new_masks)`` after each batch
+    (progress, checkpoints). KeyboardInterrupt propagates; what ran is in ``archive``."""
+    def adopt(X, parents, a):
+        kids = parents >= 0
+        X[kids, len(KEYS)] = [a.elite[int(p)][len(KEYS)] for p in parents[kids]]  # the parent's hand
+
+    return _archive.grow(lambda X: throw_masks(runner, X)[0], archive, np.random.default_rng(seed), SPACE,
+                         budget=budget, explore=atlas.EXPLORE, batch=search.BATCH, weights=atlas.parent_weights,
+                         adopt=adopt, on_batch=on_batch)
 
 
 def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int, nz: noise.Noise = noise.DEFAULT,

@@ -35,6 +35,8 @@ import numpy as np
 
 from nbst.errors import InputError
 from nbst.models.bowling import lane, scene, shot
+from nbst.models.mjsearch.ladder import climb
+from nbst.models.mjsearch.pool import WorkerPool
 
 #: Default step (s) and the ladder of the engine-robustness check.
 TIMESTEP = lane.TIMESTEP
@@ -285,17 +287,15 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
 
 def ladder(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None = None, *, standing=None,
            timesteps=LADDER) -> list[FrameResult]:
-    """The same throw at each timestep of ``timesteps`` (the engine-robustness ladder)."""
-    return [run_frame(delivery, oil, ball, standing=standing, timestep=h) for h in timesteps]
+    """The same throw at each timestep of ``timesteps`` (the engine-robustness ladder, the
+    rollout room's :func:`nbst.models.mjsearch.ladder.climb`)."""
+    return climb(lambda h: run_frame(delivery, oil, ball, standing=standing, timestep=h), timesteps).results
 
 
 _WORKER: dict = {}
 
 
 def _worker_init(oil, ball, timestep, mu_oil) -> None:
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle (no worker tracebacks)
     _WORKER["model"] = frame_model(oil, ball, timestep=timestep, mu_oil=mu_oil)
     _WORKER["oil"], _WORKER["ball"] = oil, ball
 
@@ -309,7 +309,9 @@ class FrameRunner:
     """Runs many frames of one model in ``jobs`` processes (MuJoCo's ``mj_step`` holds the GIL in
     the Python bindings: two threads measured no faster than one); results in input order,
     each frame from a fresh MjData, so a frame depends on its delivery only and the results
-    are the same for any ``jobs``."""
+    are the same for any ``jobs``. The processes are the rollout room's
+    :class:`~nbst.models.mjsearch.pool.WorkerPool`: they die with this process, even when it
+    is killed by SIGKILL."""
 
     def __init__(self, oil: str = "house", ball: lane.Ball | None = None, *, timestep: float = TIMESTEP,
                  jobs: int = 1, mu_oil: float = lane.MU_OIL):
@@ -321,16 +323,12 @@ class FrameRunner:
 
     def _get_pool(self):
         if self._pool is None and self.jobs > 1:
-            import multiprocessing as mp
-            from concurrent.futures import ProcessPoolExecutor
-
-            self._pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=mp.get_context("spawn"),
-                                             initializer=_worker_init, initargs=self._args)
+            self._pool = WorkerPool(self.jobs, _worker_init, self._args)
         return self._pool
 
     def close(self) -> None:
         if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool.close()
             self._pool = None
 
     def __enter__(self):
@@ -354,17 +352,4 @@ class FrameRunner:
                 if on_done is not None:
                     on_done()
             return out
-        from concurrent.futures import as_completed
-
-        futs = {pool.submit(_worker_run, dv, standing, extra_s): i for i, dv in enumerate(deliveries)}
-        out = [None] * len(deliveries)
-        try:
-            for f in as_completed(futs):
-                out[futs[f]] = f.result()
-                if on_done is not None:
-                    on_done()
-        except BaseException:
-            for f in futs:
-                f.cancel()
-            raise
-        return out
+        return pool.map(_worker_run, [(dv, standing, extra_s) for dv in deliveries], on_done=on_done)

@@ -20,7 +20,9 @@ order, so a seed gives the same throws whatever the number of threads that run t
 The **probability** of an outcome (by default: the frame converts, every pin in play down; with
 ``want``: exactly the pins of ``want`` are down) is a Monte Carlo estimate over ``n`` noisy throws, with a
 95 % Wilson score interval (:func:`wilson`): ``(p + z^2/2n +- z sqrt(p(1-p)/n + z^2/4n^2)) /
-(1 + z^2/n)``, z = 1.96, which stays inside [0, 1] and is not empty at 0 or n successes.
+(1 + z^2/n)``, z = 1.96, which stays inside [0, 1] and is not empty at 0 or n successes. The
+draws, the common random numbers and the interval are the rollout room's
+(:mod:`nbst.models.mjsearch.probability`); the bowler's units and the leaves are this module's.
 
 Compute only: no files, no printing.
 """
@@ -29,12 +31,9 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-import numpy as np
 
 from nbst.models.bowling import frame, lane
-
-#: Wilson interval's z for 95 %.
-Z95 = 1.959963984540054
+from nbst.models.mjsearch.probability import Z95, normal_draws, perturb, wilson  # noqa: F401 (re-exported)
 #: Ranges the draws are clipped to (a Delivery's own limits).
 CLIP = {"board": (1.0, 39.0), "angle": (-10.0, 10.0), "mph": (5.0, 30.0), "rpm": (0.0, 800.0),
         "rotation": (0.0, 90.0), "tilt": (0.0, 90.0)}
@@ -72,28 +71,10 @@ def sample(delivery: lane.Delivery, n: int, seed: int, noise: Noise = DEFAULT) -
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"samples: must be a whole number >= 1, got {n!r}")
     base = replace(delivery, board=delivery.foul_board(), at="foul")
-    rng = np.random.default_rng(seed)
-    draws = rng.standard_normal((n, len(KEYS)))  # a fixed order: row per throw, column per key
-    out = []
-    for row in draws:
-        kw = {}
-        for j, key in enumerate(KEYS):
-            lo, hi = CLIP[key]
-            kw[key] = float(np.clip(getattr(base, key) + getattr(noise, key) * row[j], lo, hi))
-        out.append(replace(base, **kw))
-    return out
-
-
-def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """The Wilson score interval for ``k`` successes in ``n`` trials (95 % by default)."""
-    if n <= 0 or not 0 <= k <= n:
-        raise ValueError(f"wilson: need 0 <= k <= n and n > 0, got k={k}, n={n}")
-    p = k / n
-    den = 1 + z * z / n
-    mid = (p + z * z / (2 * n)) / den
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
-    # at k = 0 (k = n) the lower (upper) end is exactly 0 (1); rounding must not move it inside
-    return (0.0 if k == 0 else max(0.0, mid - half)), (1.0 if k == n else min(1.0, mid + half))
+    draws = normal_draws(seed, n, len(KEYS))  # a fixed order: row per throw, column per key
+    X = perturb([getattr(base, k) for k in KEYS], [getattr(noise, k) for k in KEYS], draws,
+                [CLIP[k][0] for k in KEYS], [CLIP[k][1] for k in KEYS])
+    return [replace(base, **{k: float(v) for k, v in zip(KEYS, row)}) for row in X]
 
 
 @dataclass

@@ -3,7 +3,9 @@
 :func:`maximise` searches the delivery of :mod:`.lane` (board at the foul line, launch angle,
 mph, rpm, axis rotation; the axis tilt only when the noise moves it; the hand is kept) for the
 highest probability that a frame gives the outcome (every pin in play down, or with ``want``
-exactly those pins down) under the release noise of :mod:`.noise`.
+exactly those pins down) under the release noise of :mod:`.noise`. The search is the rollout
+room's (:func:`nbst.models.mjsearch.robust.maximise`); this module is its bowling side
+(:class:`Release`: deliveries as points in noise sigmas, noisy throws, frames, pins right).
 
 **Method** (a (1+lambda) evolution strategy with a cross-entropy step, on paired throws):
 
@@ -61,29 +63,12 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from nbst.models.bowling import frame, lane, noise as noise_mod
+from nbst.models.mjsearch import robust as _robust
+from nbst.models.mjsearch.robust import (ALONG, GAUSS, LADDER_TRIES, NARROW, SCREEN_DIV, SCREEN_MAX,  # noqa: F401
+                                         SCREEN_MIN, SECOND_RUNG, STEP0, STEP_MAX, STEP_MIN, WIDEN, Interrupted)
 
 #: Parameters searched (the tilt is carried, and moved only when the noise moves it).
 KEYS = ("board", "angle", "mph", "rpm", "rotation", "tilt")
-#: Candidates per generation: along the cross-entropy direction, and Gaussian.
-ALONG = (0.5, 1.0, 2.0)
-GAUSS = 5
-#: Step size (in sigmas): start, bounds, and its change after a success / a failure.
-STEP0, STEP_MIN, STEP_MAX, WIDEN, NARROW = 1.0, 0.25, 3.0, 1.4, 0.7
-#: The screen's throws: budget // SCREEN_DIV, within [SCREEN_MIN, SCREEN_MAX].
-SCREEN_DIV, SCREEN_MIN, SCREEN_MAX = 6, 12, 60
-#: Candidates run on the whole screen per generation (the best of the first rung), at most.
-SECOND_RUNG = 2
-#: Accepted incumbents tried on the ladder, latest first.
-LADDER_TRIES = 3
-
-
-class Interrupted(KeyboardInterrupt):
-    """Ctrl-C during :func:`maximise`: ``best`` (Delivery) is the incumbent so far, ``screen``
-    its (k, m) on the screen's throws, ``frames`` the frames run, ``history`` the generations."""
-
-    def __init__(self, best, screen, frames, history):
-        super().__init__("robust search interrupted")
-        self.best, self.screen, self.frames, self.history = best, screen, frames, history
 
 
 @dataclass
@@ -109,87 +94,60 @@ class RobustResult:
         return d
 
 
-class _Search:
-    """The bookkeeping of one search: candidates, their results on the common throws, frames."""
+class Release:
+    """The rollout room's :class:`~nbst.models.mjsearch.robust.Problem` for a bowler's release:
+    candidates are Deliveries (the board at the foul line), points their :data:`KEYS` in noise
+    sigmas, noisy copies :func:`.noise.sample`'s, run as frames on the pins ``standing``."""
 
-    def __init__(self, base, keys, scale, standing, want, runner, nz, seed, on_done):
-        self.base, self.keys, self.scale = base, keys, scale
-        self.standing, self.want, self.runner, self.nz, self.on_done = standing, want, runner, nz, on_done
-        self.seed = seed
-        self.frames = 0
-        self.points: list[np.ndarray] = []  # scaled coordinates
-        self.res: list[dict] = []  # per candidate: throw index -> (outcome, pins right, leave)
-        self.exact: dict = {}  # candidate -> the start's own Delivery (no round trip through the scaling)
+    def __init__(self, base: lane.Delivery, *, standing, want, runner: frame.FrameRunner, nz: noise_mod.Noise,
+                 on_done=None):
+        self.base, self.standing, self.want, self.runner, self.nz, self.on_done = \
+            base, standing, want, runner, nz, on_done
+        self.scale = {k: (getattr(nz, k) or getattr(noise_mod.DEFAULT, k) or 1.0) for k in KEYS}
+        self.moved = np.array([1.0 if k != "tilt" or nz.tilt > 0 else 0.0 for k in KEYS])  # the tilt: only if noisy
 
     def delivery(self, x) -> lane.Delivery:
         kw = {}
-        for k, v in zip(self.keys, x):
+        for k, v in zip(KEYS, x):
             lo, hi = noise_mod.CLIP[k]
             kw[k] = float(np.clip(v * self.scale[k], lo, hi))
         return replace(self.base, **kw)
 
-    def coords(self, d: lane.Delivery) -> np.ndarray:
-        return np.array([getattr(d, k) / self.scale[k] for k in self.keys])
+    def point(self, d: lane.Delivery) -> np.ndarray:
+        return np.array([getattr(d, k) / self.scale[k] for k in KEYS])
 
-    def add(self, x) -> int | None:
-        x = self.coords(self.delivery(x))  # clipped to the limits
-        try:
-            self.delivery(x).check()
-        except lane.LaneError:
-            return None
-        for i, p in enumerate(self.points):
-            if np.allclose(p, x, atol=1e-9):
-                return i
-        self.points.append(x)
-        self.res.append({})
-        return len(self.points) - 1
+    def project(self, x) -> np.ndarray:
+        return self.point(self.delivery(x))  # clipped to the limits
 
-    def throws(self, c: int, idx) -> list:
-        m = max(idx) + 1
-        return noise_mod.sample(self.of(c), m, self.seed, self.nz)
+    def make(self, x) -> lane.Delivery:
+        return self.delivery(x).check()  # LaneError (a ValueError) when off the lane
 
-    def of(self, c: int) -> lane.Delivery:
-        return self.exact.get(c) or self.delivery(self.points[c])
+    def noisy(self, d: lane.Delivery, m: int, seed: int) -> list:
+        return noise_mod.sample(d, m, seed, self.nz)
 
-    def run(self, jobs: list, budget: int) -> bool:
-        """Run (candidate, throw indices) pairs not yet run, in one batch; False (nothing run)
-        if they do not fit in ``budget``."""
-        todo = []
-        for c, idx in jobs:
-            need = [i for i in idx if i not in self.res[c]]
-            if need:
-                th = self.throws(c, need)
-                todo += [(c, i, th[i]) for i in need]
-        if not todo or self.frames + len(todo) > budget:
-            return not todo
-        out = self.runner.map([t for _, _, t in todo], standing=self.standing, on_done=self.on_done)
-        self.frames += len(todo)
-        for (c, i, _), r in zip(todo, out):
-            down = set(r.down)
-            target = set(r.in_play) if self.want is None else set(self.want)
-            right = sum(1 for p in r.in_play if (p in down) == (p in target))
-            self.res[c][i] = (noise_mod.success(r, self.want), right, "-".join(str(p) for p in r.leave))
-        return True
+    def run(self, throws: list) -> list:
+        return self.runner.map(throws, standing=self.standing, on_done=self.on_done)
 
-    def score(self, c: int, idx) -> tuple[int, int]:
-        got = [self.res[c][i] for i in idx]
-        return sum(1 for g in got if g[0]), sum(g[1] for g in got)
+    def judge(self, r) -> tuple[bool, int, str]:
+        down = set(r.down)
+        target = set(r.in_play) if self.want is None else set(self.want)
+        right = sum(1 for p in r.in_play if (p in down) == (p in target))
+        return noise_mod.success(r, self.want), right, "-".join(str(p) for p in r.leave)
 
-    def offsets(self, c: int, idx) -> np.ndarray:
-        """The scaled offsets of candidate ``c``'s noisy throws ``idx`` from its release (clipped)."""
-        th = self.throws(c, idx)
-        x = self.points[c]
-        return np.array([[getattr(th[i], k) / self.scale[k] for k in self.keys] for i in idx]) - x
+    def ladder(self, d: lane.Delivery) -> tuple[list, bool, int]:
+        rs = frame.ladder(d, self.runner.oil, self.runner.ball, standing=self.standing)
+        return [[r.timestep, r.leave, r.down] for r in rs], all(noise_mod.success(r, self.want) for r in rs), len(rs)
 
+    def fresh(self, d: lane.Delivery, n: int, seed: int) -> noise_mod.Estimate:
+        est, _ = noise_mod.probability(d, n, seed, runner=self.runner, standing=self.standing, noise=self.nz,
+                                       on_done=self.on_done, want=self.want)
+        return est
 
-def _estimate(search: _Search, c: int, idx, seed: int, nz) -> noise_mod.Estimate:
-    k, _ = search.score(c, idx)
-    lo, hi = noise_mod.wilson(k, len(idx))
-    leaves: dict = {}
-    for i in idx:
-        leaves[search.res[c][i][2]] = leaves.get(search.res[c][i][2], 0) + 1
-    return noise_mod.Estimate(k=k, n=len(idx), p=k / len(idx), lo=lo, hi=hi, seed=int(seed), noise=nz.to_dict(),
-                              leaves=dict(sorted(leaves.items(), key=lambda kv: -kv[1])))
+    def estimate(self, screen: _robust.Screen, seed: int) -> noise_mod.Estimate:
+        lo, hi = noise_mod.wilson(screen.k, screen.n)
+        return noise_mod.Estimate(k=screen.k, n=screen.n, p=screen.k / screen.n, lo=lo, hi=hi, seed=int(seed),
+                                  noise=self.nz.to_dict(),
+                                  leaves=dict(sorted(screen.labels.items(), key=lambda kv: -kv[1])))
 
 
 def maximise(starts, *, standing=None, want=None, runner: frame.FrameRunner, budget: int, seed: int,
@@ -214,115 +172,9 @@ def maximise(starts, *, standing=None, want=None, runner: frame.FrameRunner, bud
     starts = [replace(d.check(), board=d.foul_board(), at="foul") for d in starts]
     if len({d.hand for d in starts}) > 1:
         raise ValueError("starts: every start must be thrown with the same hand")
-    keys = KEYS
-    scale = {k: (getattr(nz, k) or getattr(noise_mod.DEFAULT, k) or 1.0) for k in keys}
-    moved = np.array([1.0 if k != "tilt" or nz.tilt > 0 else 0.0 for k in keys])  # the tilt: only if noisy
-    ss = np.random.SeedSequence([int(seed), 22])
-    screen_seed = int(ss.generate_state(1, np.uint64)[0] >> 1)
-    rng = np.random.default_rng(ss.spawn(1)[0])
-    S = _Search(starts[0], keys, scale, in_play, want, runner, nz, screen_seed, on_done)
-    m = int(np.clip(budget // SCREEN_DIV, SCREEN_MIN, SCREEN_MAX))
-    history: list = []
-    chain: list[int] = []  # accepted incumbents, oldest first
-    start_ids = []
-    for d in starts:
-        c = S.add(S.coords(d))
-        if c is not None and c not in start_ids:
-            start_ids.append(c)
-            S.exact[c] = d
-    inc = None
-    try:
-        idx = list(range(m))
-        fitted = [c for c in start_ids if S.run([(c, idx)], budget)]
-        if not fitted:  # not even one start fits: screen the first on what the budget allows
-            m = max(1, min(m, budget))
-            idx = list(range(m))
-            S.run([(start_ids[0], idx)], budget)
-            fitted = [start_ids[0]]
-        inc = max(fitted, key=lambda c: (S.score(c, idx), -c))
-        best_start = inc
-        chain.append(inc)
-        step = STEP0
-        history.append({"generation": 0, "m": m, "starts": len(fitted), "incumbent": list(S.score(inc, idx)),
-                        "step": step, "frames": S.frames, "accepted": True})
-        gen = 0
-        while True:
-            gen += 1
-            k_inc, _ = S.score(inc, idx)
-            if k_inc == m:  # every common throw gives the outcome: the screen cannot tell better
-                break
-            fail = [i for i in idx if not S.res[inc][i][0]]
-            passed = [i for i in idx if S.res[inc][i][0]]
-            probe = sorted(fail + passed[:max(len(fail), 4)])
-            rest = [i for i in idx if i not in set(probe)]
-            # the cross-entropy direction from the incumbent's own throws
-            z = S.offsets(inc, idx)
-            y = np.array([1.0 if S.res[inc][i][0] else 0.0 for i in idx])
-            g = ((y - y.mean())[:, None] * z).mean(axis=0)
-            props = []
-            g = g * moved
-            if np.linalg.norm(g) > 1e-12 and 0 < k_inc < m:
-                u = g / np.linalg.norm(g)
-                props += [S.points[inc] + a * step * u for a in ALONG]
-            props += [S.points[inc] + step * moved * rng.standard_normal(len(keys)) for _ in range(GAUSS)]
-            cands = []
-            for x in props:
-                c = S.add(x)
-                if c is not None and c != inc and c not in cands:
-                    cands.append(c)
-            # rung 1: the informative throws; fit as many candidates as the budget allows
-            fit, need = [], 0
-            for c in cands:
-                more = sum(1 for i in probe if i not in S.res[c])
-                if S.frames + need + more <= budget:
-                    fit.append(c)
-                    need += more
-            if not fit:
-                break  # the budget is spent
-            S.run([(c, probe) for c in fit], budget)
-            base_p = S.score(inc, probe)
-            up = sorted((c for c in fit if S.score(c, probe) > base_p), key=lambda c: (S.score(c, probe), -c),
-                        reverse=True)
-            up = up[:SECOND_RUNG]
-            # rung 2: the rest of the screen, as many as fit
-            full = [c for c in up if S.run([(c, rest)], budget)]
-            acc = False
-            if full:
-                top = max(full, key=lambda c: (S.score(c, idx), -c))
-                if S.score(top, idx) > S.score(inc, idx):
-                    inc, acc = top, True
-                    chain.append(inc)
-            step = float(np.clip(step * (WIDEN if acc else NARROW), STEP_MIN, STEP_MAX))
-            history.append({"generation": gen, "m": m, "candidates": len(fit), "second_rung": len(full),
-                            "incumbent": list(S.score(inc, idx)), "step": step, "frames": S.frames,
-                            "accepted": acc})
-            if len(full) < len(up):
-                break  # the budget is spent
-    except KeyboardInterrupt:
-        best = S.of(inc) if inc is not None else starts[0]
-        raise Interrupted(best, None if inc is None else (S.score(inc, idx)[0], m), S.frames, history) from None
-    # the pick: the latest incumbent (the best on the screen) that keeps its outcome on the ladder
-    order = list(reversed(chain))[:LADDER_TRIES]
-    lad, holds, pick, frames = [], None, order[0], S.frames
-    try:
-        if ladder:
-            holds = False
-            for c in order:
-                rs = frame.ladder(S.of(c), runner.oil, runner.ball, standing=in_play)
-                frames += len(rs)
-                rows = [[r.timestep, r.leave, r.down] for r in rs]
-                if c == order[0]:
-                    lad = rows
-                if all(noise_mod.success(r, want) for r in rs):
-                    lad, holds, pick = rows, True, c
-                    break
-        d = S.of(pick)
-        est, _ = noise_mod.probability(d, n, seed, runner=runner, standing=in_play, noise=nz, on_done=on_done,
-                                       want=want)
-    except KeyboardInterrupt:
-        raise Interrupted(S.of(pick), (S.score(pick, idx)[0], m), frames, history) from None
-    frames += n
-    return RobustResult(delivery=d, start=S.of(best_start), want=want, standing=in_play,
-                        estimate=est, screen=_estimate(S, pick, idx, screen_seed, nz),
-                        start_screen=_estimate(S, best_start, idx, screen_seed, nz), ladder=lad, ladder_holds=holds,
-                        frames=frames, budget=budget, history=history)
+    P = Release(starts[0], standing=in_play, want=want, runner=runner, nz=nz, on_done=on_done)
+    got = _robust.maximise(P, starts, budget=budget, seed=seed, n=n, ladder=ladder)
+    return RobustResult(delivery=got.best, start=got.start, want=want, standing=in_play, estimate=got.fresh,
+                        screen=P.estimate(got.screen, got.screen_seed),
+                        start_screen=P.estimate(got.start_screen, got.screen_seed), ladder=got.ladder,
+                        ladder_holds=got.ladder_holds, frames=got.frames + n, budget=budget, history=got.history)

@@ -1,7 +1,8 @@
 """Search the launch space for a requested set of pins down.
 
 The paper's crossover needs several velocity vectors; a bowling shot has one, so the
-signature (which pins fell) guides the search instead:
+signature (which pins fell) guides the search instead. The search is the rollout room's
+(:func:`nbst.models.mjsearch.restarts.search`) on the 5 m launches:
 
 1. **explore**: ``explore`` launches drawn uniformly over :data:`shot.BOUNDS`
    (from the seeded Generator); every launch enters an **archive keyed by subset**
@@ -31,27 +32,32 @@ Generator, and nothing else touches numpy's global random state in between).
 """
 from __future__ import annotations
 
-import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from nbst.models.bowling import geometry, shot
+from nbst.models.mjsearch import archive as _archive
+from nbst.models.mjsearch import restarts
 
 #: Uniform exploration launches before CMA-ES restarts (capped at a quarter of the budget).
-EXPLORE = 200
+EXPLORE = restarts.EXPLORE
 #: Uniform launches after each restart (new subsets to restart from; a search never stops
 #: exploring, so a subset that only random throws find is still found).
-EXPLORE_BETWEEN = 16
+EXPLORE_BETWEEN = restarts.EXPLORE_BETWEEN
 #: Launches run per batch (fixed, so that results do not depend on --jobs).
-BATCH = 16
+BATCH = _archive.BATCH
 #: CMA-ES: population, initial step (unit cube), generations without progress per restart.
-POPSIZE = 8
-SIGMA0 = 0.05
-STALL_GENERATIONS = 6
+POPSIZE = restarts.POPSIZE
+SIGMA0 = restarts.SIGMA0
+STALL_GENERATIONS = restarts.STALL_GENERATIONS
 #: Weight of the soft distance (in Hamming units per pin): < 1/10, so it only breaks ties.
 SOFT_WEIGHT = 0.05
+#: Gaussian steps of an atlas child, in the unit cube (per coordinate): ~0.4 mm, 4 mm, 42 mm
+#: sideways (the unit is 0.84 m of lateral range, 5 m/s of speed, 6 deg, 60 rad/s).
+SCALES = (0.0005, 0.005, 0.05)
+#: The 5 m launch space (:data:`shot.BOUNDS` as a box of the rollout room).
+SPACE = _archive.box_space(shot.LO, shot.HI, SCALES)
 
 
 @dataclass
@@ -82,11 +88,11 @@ class SearchResult:
 
 
 def to_unit(launch) -> np.ndarray:
-    return (np.asarray(launch, dtype=float) - shot.LO) / (shot.HI - shot.LO)
+    return SPACE.to_unit(launch)
 
 
 def from_unit(u) -> np.ndarray:
-    return shot.clamp(shot.LO + np.clip(np.asarray(u, dtype=float), 0.0, 1.0) * (shot.HI - shot.LO))
+    return SPACE.from_unit(u)
 
 
 def hamming(a, b) -> np.ndarray:
@@ -129,74 +135,20 @@ def soft_distance(model, final_qpos, target: int) -> np.ndarray:
     return np.abs(soft - want).sum(axis=-1)
 
 
-class Evaluator:
-    """Runs launches in batches, keeps the archive and the best launch for a target."""
+def scorer(launcher: shot.Launcher, target: int, distance: str = "hamming"):
+    """``evaluate(launches) -> (masks, Hamming distances, costs)`` of a batch, for the room's search."""
+    if distance not in ("hamming", "geometry"):
+        raise ValueError(f"distance must be hamming or geometry, got {distance!r}")
+    dist = hamming if distance == "hamming" else geometry_distance
 
-    def __init__(self, launcher: shot.Launcher, target: int, *, max_rollouts: int, callback=None,
-                 distance: str = "hamming"):
-        if distance not in ("hamming", "geometry"):
-            raise ValueError(f"distance must be hamming or geometry, got {distance!r}")
-        self.distance = hamming if distance == "hamming" else geometry_distance
-        self.L = launcher
-        self.target = int(target)
-        self.max_rollouts = int(max_rollouts)
-        self.callback = callback
-        self.rollouts = 0
-        self.archive: dict[int, np.ndarray] = {}   # mask -> first launch that gave it (the atlas's)
-        self.order: dict[int, int] = {}   # mask -> discovery index (tie-break)
-        self.elite: dict[int, tuple] = {}  # mask -> (cost, launch): the best launch of each subset for this target
-        self.best = None                  # (cost, hamming, mask, launch)
+    def evaluate(chunk):
+        states = np.array([launcher.initial_state(*shot.initial_qpos_qvel(launcher.model, x)) for x in chunk])
+        qpos = launcher.final_qpos(launcher.run_states(states))
+        masks = shot.mask_of(shot.pins_down(launcher.model, qpos))
+        cost = dist(masks, target) + SOFT_WEIGHT * soft_distance(launcher.model, qpos, target)
+        return masks, hamming(masks, target), cost
 
-    @property
-    def left(self) -> int:
-        return self.max_rollouts - self.rollouts
-
-    @property
-    def found(self) -> bool:
-        return self.best is not None and self.best[1] == 0
-
-    def __call__(self, launches: np.ndarray) -> np.ndarray:
-        """(B, 4) launches -> (B,) costs; stops early (returns what ran) at the budget or a hit."""
-        launches = shot.clamp(np.atleast_2d(launches))[: max(0, self.left)]
-        costs = []
-        for i in range(0, len(launches), BATCH):
-            chunk = launches[i:i + BATCH]
-            states = np.array([self.L.initial_state(*shot.initial_qpos_qvel(self.L.model, x)) for x in chunk])
-            qpos = self.L.final_qpos(self.L.run_states(states))
-            masks = shot.mask_of(shot.pins_down(self.L.model, qpos))
-            ham = hamming(masks, self.target)
-            cost = self.distance(masks, self.target) + SOFT_WEIGHT * soft_distance(self.L.model, qpos, self.target)
-            for x, m, h, c in zip(chunk, masks, ham, cost):
-                m = int(m)
-                if m not in self.archive:
-                    self.archive[m] = x.copy()
-                    self.order[m] = len(self.order)
-                if m not in self.elite or c < self.elite[m][0]:
-                    self.elite[m] = (float(c), x.copy())
-                if self.best is None or c < self.best[0]:
-                    self.best = (float(c), int(h), m, x.copy())
-            self.rollouts += len(chunk)
-            costs.extend(cost.tolist())
-            if self.callback:
-                self.callback(Progress(self.rollouts, self.best[1], self.best[2], len(self.archive)))
-            if self.found:
-                break
-        return np.array(costs)
-
-    def nearest(self, exclude) -> list[int]:
-        """Archived masks, nearest the target first, without ``exclude``: by the cost of their
-        elite (Hamming distance + the soft part), then discovery order; masks known only from a
-        given archive (no elite yet) by their Hamming distance."""
-        ms = [m for m in self.archive if m not in exclude]
-
-        def key(m):
-            c = self.elite[m][0] if m in self.elite else float(self.distance(m, self.target)) + SOFT_WEIGHT * 10
-            return (c, self.order[m])
-        return sorted(ms, key=key)
-
-    def start(self, mask: int) -> np.ndarray:
-        """The launch a restart from ``mask`` begins at: its elite, else its archived launch."""
-        return self.elite[mask][1] if mask in self.elite else self.archive[mask]
+    return evaluate, dist
 
 
 def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None = None,
@@ -212,70 +164,24 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
     points; with ``explore=0`` the search starts from them directly. ``distance``: "hamming"
     or "geometry" (:func:`geometry_distance`) in the cost.
     """
-    import cma
-
     if not 0 < int(target) <= geometry.N_SUBSETS:
         raise ValueError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")
+    target = int(target)
     own = launcher is None
     L = shot.Launcher(jobs=jobs) if own else launcher
-    rng = np.random.default_rng(seed)
-    ev = Evaluator(L, target, max_rollouts=max_rollouts, callback=callback, distance=distance)
-    for m, x in (archive or {}).items():
-        ev.archive[int(m)] = np.asarray(x, dtype=float)
-        ev.order[int(m)] = len(ev.order)
-    t0 = time.perf_counter()
-    if int(target) in ev.archive:  # known already: one launch confirms it and makes it the best
-        ev(ev.archive[int(target)][None, :])
-    restarts = 0
-    stopped = "budget"
     try:
-        n0 = min(int(explore), max_rollouts // 4 if ev.archive else max(1, max_rollouts // 4))
-        if not ev.found:
-            ev(from_unit(rng.random((n0, 4))))
-        used: set[int] = set()
-        while not ev.found and ev.left > 0:
-            order = ev.nearest(used)
-            if not order and not ev.archive:  # nothing to start from: explore a little
-                ev(from_unit(rng.random((POPSIZE, 4))))
-                continue
-            if not order:
-                used.clear()
-                order = ev.nearest(used)
-            start = order[0]
-            used.add(start)
-            sigma = SIGMA0 if restarts % 2 == 0 else SIGMA0 / 10
-            restarts += 1
-            es = cma.CMAEvolutionStrategy(to_unit(ev.start(start)).tolist(), sigma,
-                                          {"bounds": [0.0, 1.0], "popsize": POPSIZE, "verbose": -9,
-                                           "seed": int(rng.integers(1, 2**31 - 1))})
-            best_here, stall = math.inf, 0
-            while not ev.found and ev.left > 0 and stall < STALL_GENERATIONS:
-                xs = es.ask()
-                costs = ev(from_unit(np.array(xs)))
-                if len(costs) < len(xs):
-                    break
-                es.tell(xs, costs.tolist())
-                if costs.min() < best_here - 1e-12:
-                    best_here, stall = float(costs.min()), 0
-                else:
-                    stall += 1
-            if not ev.found and ev.left > 0 and explore_between:
-                ev(from_unit(rng.random((explore_between, 4))))  # keep exploring: rare subsets are found so
-        if ev.found:
-            stopped = "found"
-    except KeyboardInterrupt:
-        stopped = "interrupted"
+        evaluate, dist = scorer(L, target, distance)
+        cb = None if callback is None else (lambda p: callback(Progress(p.rollouts, p.best_distance,
+                                                                        p.best_signature, p.signatures)))
+        f = restarts.search(evaluate, SPACE, target, seed=seed, max_rollouts=max_rollouts, archive=archive,
+                            prior=lambda m: float(dist(m, target)) + SOFT_WEIGHT * 10, clip=shot.clamp,
+                            callback=cb, explore=explore, explore_between=explore_between, batch=BATCH)
     finally:
         if own:
             L.close()
-    if ev.best is None:
-        if stopped == "interrupted":
-            raise KeyboardInterrupt
-        raise ValueError("max_rollouts must allow at least one launch")
-    cost, ham, mask, launch = ev.best
-    return SearchResult(target=int(target), launch=launch, mask=mask, hamming=ham, cost=cost,
-                        rollouts=ev.rollouts, restarts=restarts, stopped=stopped, seed=int(seed),
-                        wall_time=time.perf_counter() - t0, archive=dict(ev.archive))
+    return SearchResult(target=target, launch=f.x, mask=f.signature, hamming=f.distance, cost=f.cost,
+                        rollouts=f.rollouts, restarts=f.restarts, stopped=f.stopped, seed=int(seed),
+                        wall_time=f.wall_time, archive=f.archive)
 
 
 def robustness(launcher: shot.Launcher, launch, mask: int, *, lateral_max: float = 0.05,

@@ -16,21 +16,21 @@ Replays are bit-identical: every launch starts from a freshly reset ``MjData`` w
 ``qpos``/``qvel`` set (sleeping is on, and a reused MjData can carry sleep state that the
 state ``mujoco.rollout`` sets does not cover: the calibration note saw 2/60 launches
 change that way, benchmarks/bench_bowling.py 0/48; rare is not never). :class:`Launcher`
-runs launches on K threads, each a ``mujoco.rollout`` call on the thread's own MjData,
-reset before every launch, recording only the final state (not all 2,500 steps).
+runs launches on K threads with the rollout room's runner (:mod:`nbst.models.mjsearch.runner`):
+each a ``mujoco.rollout`` call on the thread's own MjData, reset before every launch, keeping
+only the final state.
 """
 from __future__ import annotations
 
 import math
-import threading
-from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from nbst.models.bowling import scene
 from nbst.errors import MujocoError  # re-exported here
+from nbst.models.bowling import scene
+from nbst.models.mjsearch import runner
+from nbst.models.mjsearch.runner import check_state, data_warnings, mujoco_warnings_raise  # noqa: F401 (re-exported)
 
 #: Length of a shot (s): ~1 s to reach the pins at 5 m/s, then >= 1.5 s of pin action.
 DURATION = 2.5
@@ -138,40 +138,6 @@ def mask_from_pins(pins) -> int:
     return int(sum(1 << (int(n) - 1) for n in set(pins)))
 
 
-@contextmanager
-def mujoco_warnings_raise():
-    """While the block runs, MuJoCo's warnings are collected instead of printed and written to
-    ``MUJOCO_LOG.TXT`` in the current folder; after it, the first one raises
-    :class:`MujocoError`. (MuJoCo's warning hook is process-wide: the previous one is restored.)"""
-    import mujoco
-
-    got: list[str] = []
-    old = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(lambda msg: got.append(str(msg).strip()))
-    try:
-        yield got
-    finally:
-        mujoco.set_mju_user_warning(old)
-    if got:
-        raise MujocoError(f"MuJoCo warned: {got[0].splitlines()[0] if got[0] else 'unknown warning'}")
-
-
-def data_warnings(data) -> list[str]:
-    """Names of the MuJoCo warnings that ``data`` recorded (``data.warning[k].number > 0``)."""
-    import mujoco
-
-    return [mujoco.mjtWarning(k).name for k in range(len(data.warning)) if data.warning[k].number > 0]
-
-
-def check_state(qpos, qvel) -> None:
-    """MujocoError unless every qpos/qvel entry is finite (MuJoCo steps NaN into a reset)."""
-    for name, v in (("qpos", qpos), ("qvel", qvel)):
-        v = np.asarray(v, dtype=float)
-        if not np.isfinite(v).all():
-            raise MujocoError(f"{name}[{int(np.flatnonzero(~np.isfinite(v))[0])}] is not finite; refused before "
-                                f"stepping")
-
-
 def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.ndarray:
     """Final qpos from a fresh ``MjData`` and a plain ``mj_step`` loop: the slow reference.
     Non-finite states are refused before stepping, and MuJoCo's warnings raise
@@ -191,88 +157,11 @@ def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.nda
 
 
 def n_steps(model, duration: float = DURATION) -> int:
-    return int(round(duration / model.opt.timestep))
+    return runner.n_steps(model, duration)
 
 
-class Launcher:
-    """Runs launches on ``jobs`` threads with ``mujoco.rollout``; results in launch order.
-
-    Each thread owns an MjData and a ``mujoco.rollout.Rollout`` (nthread 0: it runs on the
-    calling thread, which the bindings let run without the GIL) and a state buffer for
-    one launch (nstep x nstate, ~3 MB); before each launch the data is reset, so a
-    launch's result depends on its initial state only.
-    """
-
-    def __init__(self, model=None, *, jobs: int | None = None, duration: float = DURATION):
-        import os
-
-        import mujoco
-
-        self.model = scene.build_model() if model is None else model
-        self.jobs = max(1, int(jobs or os.cpu_count() or 1))
-        self.duration = float(duration)
-        self.nstep = n_steps(self.model, self.duration)
-        self._spec = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        self.nstate = mujoco.mj_stateSize(self.model, self._spec)
-        self._local = threading.local()
-        self._pool = ThreadPoolExecutor(max_workers=self.jobs) if self.jobs > 1 else None
-        self._all = []
-
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
-        for r in self._all:
-            r.close()
-        self._all = []
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-
-    def _worker(self):
-        loc = self._local
-        if not hasattr(loc, "data"):
-            import mujoco
-            from mujoco import rollout
-
-            loc.data = mujoco.MjData(self.model)
-            loc.rollout = rollout.Rollout(nthread=0)
-            self._all.append(loc.rollout)
-            loc.state = np.empty((1, self.nstep, self.nstate))
-        return loc
-
-    def initial_state(self, qpos, qvel) -> np.ndarray:
-        """(nstate,) full physics state of a fresh MjData with ``qpos``/``qvel`` set."""
-        import mujoco
-
-        d = mujoco.MjData(self.model)
-        d.qpos[:] = qpos
-        d.qvel[:] = qvel
-        s = np.empty(self.nstate)
-        mujoco.mj_getState(self.model, d, s, self._spec)
-        return s
-
-    def _one(self, state0: np.ndarray) -> np.ndarray:
-        import mujoco
-
-        w = self._worker()
-        mujoco.mj_resetData(self.model, w.data)
-        w.rollout.rollout(self.model, w.data, state0[None, :], nstep=self.nstep, state=w.state)
-        return w.state[0, -1].copy()
-
-    def run_states(self, states0: np.ndarray) -> np.ndarray:
-        """(B, nstate) initial states -> (B, nstate) final states."""
-        states0 = np.ascontiguousarray(states0, dtype=float)
-        if self._pool is None:
-            return np.array([self._one(s) for s in states0]).reshape(len(states0), self.nstate)
-        return np.array(list(self._pool.map(self._one, states0))).reshape(len(states0), self.nstate)
-
-    def final_qpos(self, final_states: np.ndarray) -> np.ndarray:
-        """(B, nq) qpos out of (B, nstate) full physics states (time first, then qpos)."""
-        return final_states[:, 1:1 + self.model.nq]
+class Launches:
+    """What a runner of launches adds to :class:`~nbst.models.mjsearch.runner.Runner`: :meth:`launch`."""
 
     def launch(self, launches) -> tuple[np.ndarray, np.ndarray]:
         """(B, 4) launch arrays -> (signatures (B,) int, pins down (B, 10) bool)."""
@@ -280,3 +169,12 @@ class Launcher:
         states = np.array([self.initial_state(*initial_qpos_qvel(self.model, x)) for x in launches])
         down = pins_down(self.model, self.final_qpos(self.run_states(states)))
         return mask_of(down), down
+
+
+class Launcher(Launches, runner.Runner):
+    """Runs launches on ``jobs`` threads with ``mujoco.rollout`` (the shared
+    :class:`~nbst.models.mjsearch.runner.Runner`: an MjData per thread, reset before each
+    launch, so a launch's result depends on its initial state only); results in launch order."""
+
+    def __init__(self, model=None, *, jobs: int | None = None, duration: float = DURATION):
+        super().__init__(scene.build_model() if model is None else model, jobs=jobs, duration=duration)
