@@ -102,7 +102,7 @@ def cases():
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     ap.add_argument("--save", metavar="FILE", help="write the hashes as JSON")
     ap.add_argument("--compare", metavar="FILE", help="compare with saved hashes; exit 1 on any difference")
     ap.add_argument("-k", default="", help="only the cases whose name contains this text")
