@@ -1,4 +1,5 @@
 """One import name is installed: ``nbst``. models/ and render/ arrive as nbst.models / nbst.render."""
+import os
 import subprocess
 import sys
 import zipfile
@@ -42,6 +43,12 @@ def test_wheel_holds_only_nbst(tmp_path):
                  "nbst/problems/over5.json", "nbst/problems/diamond-s14-tiny.json", "nbst/sim/kernel.py",
                  "nbst/models/bowling/atlas.json", "nbst/models/bowling/scene.xml"):
         assert must in names
+    # every package of the checkout (models/ and render/ through their links) is in the wheel
+    for folder, dirs, files in os.walk(ROOT / "nbst", followlinks=True):
+        dirs[:] = [d for d in dirs if d != "__pycache__"]
+        if "__init__.py" in files:
+            rel = Path(folder).relative_to(ROOT).as_posix()
+            assert f"{rel}/__init__.py" in names, f"{rel} is not in the wheel (pyproject's packages)"
     assert not any(n.startswith(("tests/", "benchmarks/", "models/", "render/")) for n in names)
 
 
