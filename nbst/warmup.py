@@ -100,6 +100,7 @@ def warm_all(log=None) -> float:
 
     from nbst.problem import load_problem
     from nbst.sim import evaluate, simulate
+    from nbst.solution import solution_from_dict
     from nbst.sim.jacobian import final_jacobian
     from nbst.sim.sensitivity import analyze
     from nbst.solvers.dispatch import solve_with
@@ -108,22 +109,36 @@ def warm_all(log=None) -> float:
     t0 = time.perf_counter()
     p = load_problem("over5")  # cueable and noncueable disks: every branch's types
     V = p.straight_velocities()
-    simulate(p, V).at([0.0, 1.0])
+    # The commands read velocities from solution files: read-only arrays, which numba compiles as
+    # other signatures than writable ones. Warm with what they pass (solution_from_dict, the reader
+    # of every solution file), through the calls they make (simulate, the keyframes and replays
+    # behind positions at given times, the Jacobian and sensitivity behind validate's report).
+    # 3x the straight shots: a motion with events (a record of one event or none is typed as a
+    # contiguous array, of two or more as a strided one: another signature of the keyframes)
+    Vro = solution_from_dict({"velocities": (3.0 * V).tolist()}, p).velocities
+    for v in (V, solution_from_dict({"velocities": V.tolist()}, p).velocities, Vro):
+        simulate(p, v).at([0.0, 1.0])
     evaluate(p, np.stack([V, V]))
     many = many_disks_problem()
     Vm = many.straight_velocities()
-    tr = simulate(many, Vm)
-    tr.at([0.0, 1.0], replay=True)
-    tr.velocity_at([0.5], replay=True)
+    for v in (Vm, solution_from_dict({"velocities": Vm.tolist()}, many).velocities):
+        tr = simulate(many, v)
+        tr.at([0.0, 1.0], replay=True)
+        tr.velocity_at([0.5], replay=True)
     evaluate(many, np.stack([Vm, Vm]), jobs=1)
     from nbst.search.aim import pair_contact  # the many-body search's two-disk contacts
 
     ka = many.kernel_arrays()
     pair_contact(ka.start[0], ka.start[1], ka.target[0], ka.target[1], 1.0, 1.0, 5.0, 5.0, ka.W, ka.H, ka.t_final, 8,
                  np.empty((2, 5)))
+    from nbst.formation import formation
+    from nbst.planted import planted
+
+    planted(20, noncue=2, seed=0)  # nbst generate's kernels: placing disks, assigning a formation's targets
+    formation("nbst", 40, seed=0)
     log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
-    final_jacobian(p, V)
-    analyze(p, V, timestep=0.00025)  # validate's sensitivity report
+    final_jacobian(p, Vro)
+    analyze(p, Vro, timestep=0.00025)  # validate's sensitivity report
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst")
     solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst", robust=True)
     log(f"nbst search ready ({time.perf_counter() - t0:.0f} s)")

@@ -111,3 +111,47 @@ def test_solve_help_lists_each_variant_once(capsys):
     text = " ".join(capsys.readouterr().out.split())  # argparse wraps lines
     assert text.count("no culling of subsumed solutions") == 1
     assert "round-off" in text
+
+
+_NO_NEW_COMPILE = textwrap.dedent("""
+    import gc, json, os, sys
+    from nbst.warmup import many_disks_problem, warm_all
+    warm_all()
+    from numba.core.registry import CPUDispatcher
+
+    def compiled():
+        return {f"{d.py_func.__module__}.{d.py_func.__qualname__}": set(map(str, d.signatures))
+                for d in gc.get_objects() if isinstance(d, CPUDispatcher)}
+
+    before = compiled()
+    from nbst.cli import main
+    os.chdir(sys.argv[1])
+    m = many_disks_problem(150)
+    json.dump(m.to_dict(), open("m.json", "w"))
+    json.dump({"velocities": m.straight_velocities().tolist()}, open("ms.json", "w"))
+    runs = [["solve", "over5", "-o", "s.json", "--seed", "1", "--max-trials", "2000", "--jobs", "1", "-q"],
+            ["simulate", "over5", "s.json"], ["validate", "over5", "s.json", "--timestep", "0.002"],
+            ["validate", "over5", "s.json", "--stepping", "aligned", "--convergence", "--timestep", "0.005"],
+            ["simulate", "m.json", "ms.json"], ["validate", "m.json", "ms.json", "--timestep", "0.004"]]
+    new = []
+    for argv in runs:
+        assert main(argv) in (0, 1), argv
+        after = compiled()
+        new += [f"{' '.join(argv[:2])}: {k} {sorted(v - before.get(k, set()))}" for k, v in after.items()
+                if v - before.get(k, set())]
+        before = after
+    print("NEW " + json.dumps(new))
+""")
+
+
+@pytest.mark.slow
+def test_the_commands_compile_nothing_after_the_warm_up(tmp_path):
+    """After nbst.warmup, `nbst simulate` and `nbst validate` (read-only velocities from solution
+    files; a built-in problem and a 150-disk file on the cell grid) run only kernels the warm-up
+    compiled: numba adds no signature (issue 35: the warm-up passed writable arrays, the command
+    line read-only ones, and the first validate counted the compile as MuJoCo time)."""
+    r = subprocess.run([sys.executable, "-c", _NO_NEW_COMPILE, str(tmp_path)], capture_output=True, text=True,
+                       timeout=900)
+    assert r.returncode == 0, r.stderr[-2000:]
+    new = json.loads(r.stdout.rsplit("NEW ", 1)[1])
+    assert new == [], new
