@@ -32,37 +32,22 @@ a pass, from a start that already matches starts and targets in the same sweep o
 from __future__ import annotations
 
 import math
-import os
 import shlex
-import stat
-import warnings
 from pathlib import Path
 
 import numpy as np
 from numba import njit
 
-from nbst.errors import InputError
-from nbst.domain import BOX_MAX, BOX_MIN
+from nbst.domain import BOX_MAX, BOX_MIN, RADIUS_MIN_FRACTION
+from nbst.pictures import (DARK_BELOW, IMAGE_EXTENSIONS, MAX_TEXT_CHARS, FormationError, check_text, hex_lattice,
+                           image_mask, is_image_source, lattice_for, text_mask)
 from nbst.problem import Problem, ProblemError, problem_from_dict
+
+__all__ = ["formation", "FormationError", "is_image_source", "assign", "spacing", "MAX_FORMATION_DISKS"]
 
 #: Spacing of starts and of targets: s = 2 sqrt(2) r (1 + SPACING_MARGIN); then straight
 #: paths keep centres >= 2 r (1 + SPACING_MARGIN) apart (module docstring).
 SPACING_MARGIN = 0.1
-#: A SRC ending in one of these is an image file; anything else is text to write.
-IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".gif", ".bmp", ".tif", ".tiff", ".webp")
-#: Largest image file read (bytes) and largest picture decoded (pixels): a 4K frame is
-#: 8.3 Mpx; the cap keeps a decoded RGBA picture under ~160 MB, and a small file that
-#: claims a huge size (a decompression bomb) is refused from its header, before decoding.
-MAX_IMAGE_BYTES = 64 * 1024 * 1024
-MAX_IMAGE_PIXELS = 40_000_000
-#: Longest text (characters): it names the problem and is rendered as one picture.
-MAX_TEXT_CHARS = 200
-#: Text is drawn this many pixels high per line (DejaVu Sans Bold): fine enough that the
-#: target lattice, a few pixels apart for thousands of disks, follows the glyphs.
-TEXT_PX = 160
-TEXT_FONT = {"family": "DejaVu Sans", "weight": "bold"}
-#: A pixel is dark when its luminance (composited over white) is below this (0 black, 1 white).
-DARK_BELOW = 0.5
 #: Random starts: cells of pitch up to RANDOM_PITCH x s (one start per cell, jittered so that
 #: starts stay >= s apart), at least RANDOM_SPARE x N cells so that the chosen ones scatter.
 RANDOM_PITCH = 2.0
@@ -73,171 +58,6 @@ MAX_SWAP_PASSES = 10_000
 #: at this size on one core), and a few tens of passes are needed.
 MAX_FORMATION_DISKS = 20_000
 START_LAYOUTS = ("grid", "random")
-
-
-class FormationError(InputError):
-    """A formation request that cannot be met (one line, for ``nbst generate``)."""
-
-
-# --------------------------------------------------------------------------- the source picture
-
-
-def is_image_source(src: str) -> bool:
-    """SRC names an image file when it ends in an image extension (any case)."""
-    return str(src).lower().endswith(IMAGE_EXTENSIONS)
-
-
-def _read_image_bytes(path: Path) -> bytes:
-    """The bytes of a regular file of at most MAX_IMAGE_BYTES (checked by stat before opening,
-    and by fstat after: a FIFO, device or folder is refused without blocking), or ProblemError."""
-    def regular(mode):
-        if not stat.S_ISREG(mode):
-            kind = ("a directory" if stat.S_ISDIR(mode) else "a named pipe (FIFO)" if stat.S_ISFIFO(mode)
-                    else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a regular file")
-            raise ProblemError(path, "", f"is {kind}, not an image file; nbst reads regular files only")
-
-    try:
-        st = os.stat(path)
-        regular(st.st_mode)
-        if st.st_size > MAX_IMAGE_BYTES:
-            raise ProblemError(path, "", f"{st.st_size:,} bytes; nbst reads images of at most {MAX_IMAGE_BYTES:,}")
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
-        with open(fd, "rb", closefd=True) as f:
-            regular(os.fstat(fd).st_mode)
-            data = f.read(MAX_IMAGE_BYTES + 1)
-    except FileNotFoundError:
-        raise ProblemError(path, "", "no such image file") from None
-    except NotADirectoryError:
-        raise ProblemError(path, "", "no such image file (a part of the path is not a folder)") from None
-    except IsADirectoryError:
-        raise ProblemError(path, "", "is a directory, not an image file") from None
-    except PermissionError:
-        raise ProblemError(path, "", "permission denied") from None
-    except OSError as e:
-        raise ProblemError(path, "", f"cannot read: {e.strerror or e}") from None
-    if len(data) > MAX_IMAGE_BYTES:
-        raise ProblemError(path, "", f"larger than {MAX_IMAGE_BYTES:,} bytes; nbst reads images of at most that")
-    if not data:
-        raise ProblemError(path, "", "is empty, not an image")
-    return data
-
-
-def image_mask(path: str | Path) -> np.ndarray:
-    """(h, w) bool: the dark pixels of the image at ``path`` (first frame; transparent pixels
-    count as white). Every failure is a one-line ProblemError naming the file."""
-    import imageio.v3 as iio
-
-    p = Path(path)
-    data = _read_image_bytes(p)
-    ext = p.suffix.lower()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            props = iio.improps(data, index=0, extension=ext)
-        except Exception as e:  # noqa: BLE001 - any decoder failure is a bad input file
-            raise ProblemError(p, "", f"cannot be read as a {ext[1:].upper()} image ({_why(e)})") from None
-        shape = tuple(int(k) for k in props.shape)
-        if len(shape) < 2 or math.prod(shape[:2]) > MAX_IMAGE_PIXELS:
-            size = "x".join(map(str, shape[1::-1])) if len(shape) >= 2 else str(shape)
-            raise ProblemError(p, "", f"a {size} picture; nbst reads images of at most {MAX_IMAGE_PIXELS:,} pixels")
-        try:
-            img = np.asarray(iio.imread(data, index=0, extension=ext))
-        except Exception as e:  # noqa: BLE001
-            raise ProblemError(p, "", f"cannot be decoded as a {ext[1:].upper()} image ({_why(e)})") from None
-    return _dark(img, p)
-
-
-def _why(e: Exception) -> str:
-    return " ".join(str(e).split())[:160] or type(e).__name__
-
-
-def _dark(img: np.ndarray, p: Path) -> np.ndarray:
-    if img.ndim == 3 and img.shape[0] < 8 and img.shape[-1] > 8:  # channels first (rare TIFFs)
-        img = np.moveaxis(img, 0, -1)
-    if img.ndim not in (2, 3) or (img.ndim == 3 and img.shape[2] not in (1, 2, 3, 4)):
-        raise ProblemError(p, "", f"pixels of shape {img.shape}: not a grey, RGB or RGBA picture")
-    if img.dtype == bool:
-        a = img.astype(float)
-    elif np.issubdtype(img.dtype, np.integer):
-        a = img.astype(float) / float(np.iinfo(img.dtype).max)
-    else:
-        a = np.nan_to_num(img.astype(float), nan=1.0).clip(0.0, 1.0)
-    if a.ndim == 2:
-        a = a[:, :, None]
-    c = a.shape[2]
-    colour = a[:, :, :3] if c >= 3 else a[:, :, :1]
-    alpha = a[:, :, c - 1] if c in (2, 4) else np.ones(a.shape[:2])
-    lum = colour @ np.array([0.299, 0.587, 0.114]) if colour.shape[2] == 3 else colour[:, :, 0]
-    lum = alpha * lum + (1.0 - alpha)  # over white
-    return lum < DARK_BELOW
-
-
-def text_mask(text: str) -> np.ndarray:
-    """(h, w) bool: the glyphs of ``text`` drawn by matplotlib (Agg, offscreen, no display),
-    TEXT_PX pixels a line, black on white, a little white around."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    dpi = 72.0  # one point = one pixel
-    fig = Figure(figsize=(1, 1), dpi=dpi, facecolor="white")
-    canvas = FigureCanvasAgg(fig)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # a glyph DejaVu lacks is drawn as a box, not a warning
-        t = fig.text(0, 0, text, fontsize=TEXT_PX, color="black", ha="left", va="bottom", parse_math=False,
-                     **TEXT_FONT)
-        bb = t.get_window_extent(renderer=canvas.get_renderer())
-        pad = TEXT_PX / 4
-        w, h = max(bb.width, 1.0) + 2 * pad, max(bb.height, 1.0) + 2 * pad
-        fig.set_size_inches(w / dpi, h / dpi)
-        t.set_position((pad / w, pad / h))
-        canvas.draw()
-        rgba = np.asarray(canvas.buffer_rgba())
-    return rgba[:, :, :3].mean(axis=2) < 255 * DARK_BELOW
-
-
-# --------------------------------------------------------------------------- points
-
-
-def hex_lattice(mask: np.ndarray, h: float) -> np.ndarray:
-    """(M, 2) points (px, py: pixel units, column right and row down) of a hexagonal lattice of
-    spacing h whose pixel is dark. Rows are h sqrt(3) / 2 apart, odd rows shifted by h / 2."""
-    H, W = mask.shape
-    dy = h * math.sqrt(3.0) / 2.0
-    ys = (np.arange(max(int(H / dy) + 1, 1)) + 0.5) * dy
-    ys = ys[ys < H]
-    out = []
-    for j, y in enumerate(ys):
-        xs = (np.arange(int(W / h) + 1) + 0.5 + 0.5 * (j % 2)) * h
-        xs = xs[xs < W]
-        keep = mask[int(y), xs.astype(np.int64)]
-        out.append(np.stack([xs[keep], np.full(int(keep.sum()), y)], axis=1))
-    return np.concatenate(out) if out else np.empty((0, 2))
-
-
-def lattice_for(mask: np.ndarray, n: int) -> tuple[float, np.ndarray]:
-    """The largest hexagonal spacing h (pixels, to 1e-6 relative) whose lattice on ``mask``
-    holds at least n points, and those points."""
-    area = float(mask.sum())
-    h0 = math.sqrt(2.0 * area / (math.sqrt(3.0) * n))
-    lo = h0
-    pts = hex_lattice(mask, lo)
-    while pts.shape[0] < n:  # shrink until it holds n (the region's outline costs points)
-        lo *= 0.5
-        if lo < 1e-6 * h0:
-            raise FormationError(f"the dark region cannot hold {n} lattice points")
-        pts = hex_lattice(mask, lo)
-    hi = lo * 2.0
-    while hex_lattice(mask, hi).shape[0] >= n:
-        lo, hi = hi, hi * 2.0
-    for _ in range(40):
-        if hi - lo <= 1e-6 * lo:
-            break
-        mid = 0.5 * (lo + hi)
-        if hex_lattice(mask, mid).shape[0] >= n:
-            lo = mid
-        else:
-            hi = mid
-    return lo, hex_lattice(mask, lo)
 
 
 def grid_starts(n: int, box, s: float) -> np.ndarray | None:
@@ -424,6 +244,7 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
             raise ProblemError(src, "", f"has no dark pixels (luminance below {DARK_BELOW:g}) to form")
     else:
         kind, label = "text", src
+        check_text(src)
         if not src.strip():
             raise FormationError("--targets-from: the text is empty; give a text to write or an image file "
                                  f"({', '.join(IMAGE_EXTENSIONS)})")
@@ -459,6 +280,10 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
     if not (BOX_MIN <= W <= BOX_MAX and BOX_MIN <= H <= BOX_MAX):
         raise FormationError(f"the box would be {W:.4g} x {H:.4g}, outside nbst's [{BOX_MIN:g}, {BOX_MAX:g}]; "
                              f"use a different --radius")
+    if r < RADIUS_MIN_FRACTION * max(W, H):
+        raise FormationError(f"the picture's dark part is {pw:,} x {ph:,} px: at the spacing of disks of radius "
+                             f"{r:g} its box would be {W:.4g} x {H:.4g}, over {1 / RADIUS_MIN_FRACTION:,.0f} radii "
+                             f"long; use a picture of a less extreme shape, or fewer --disks")
     # thin the lattice to n points (seeded), then picture pixels -> box units, y up, centred
     if pts.shape[0] > n:
         pts = pts[np.sort(rng.choice(pts.shape[0], size=n, replace=False))]

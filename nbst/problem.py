@@ -9,8 +9,6 @@ from __future__ import annotations
 import difflib
 import json
 import math
-import os
-import stat
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -19,9 +17,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from nbst import domain as D
-from nbst.constants import OVERLAP_RTOL
 from nbst.domain import MAX_DISKS, bad_text, plain
 from nbst.errors import InputError
+from nbst.files import FileRefused, read_regular
+from nbst.overlap import first_overlap
 
 SCHEMA_VERSION = 1
 
@@ -144,54 +143,14 @@ def _builtin_text(name: str) -> str:
 
 # --------------------------------------------------------------------------- loading
 
-_NOT_REGULAR = ((stat.S_ISDIR, "is a directory, not a JSON file"), (stat.S_ISFIFO, "is a named pipe (FIFO)"),
-                (stat.S_ISCHR, "is a character device"), (stat.S_ISBLK, "is a block device"),
-                (stat.S_ISSOCK, "is a socket"))
-
-
-def _regular_or_refuse(p: Path, mode: int) -> None:
-    if stat.S_ISREG(mode):
-        return
-    why = next((w for test, w in _NOT_REGULAR if test(mode)), "is not a regular file")
-    raise ProblemError(p, "", f"{why}; nbst reads regular files only")
-
-
-def _too_large(p: Path, size: int) -> ProblemError:
-    return ProblemError(p, "", f"{size:,} bytes, larger than {D.MAX_JSON_BYTES:,}; nbst reads JSON files of at "
-                               f"most {D.MAX_JSON_BYTES:,} bytes")
-
-
 def read_bytes_checked(path: str | Path) -> bytes:
-    """The bytes of a regular file of at most ``MAX_JSON_BYTES``, or a one-line ProblemError.
-
-    Checked by ``stat`` before the file is opened: a directory, FIFO, device or socket is
-    refused without opening it (a FIFO would block, /dev/zero never end), and so is a file
-    over the size cap. The file is then opened non-blocking and checked again (``fstat``:
-    the same file, still regular), so a name swapped in between cannot make nbst block."""
-    p = Path(path)
+    """The bytes of a regular file of at most ``MAX_JSON_BYTES``, or a one-line ProblemError: the one
+    bounded, non-blocking read of ``nbst.files.read_regular`` (a directory, FIFO, device or socket
+    refused without being opened, the size checked before and after)."""
     try:
-        st = os.stat(p)
-        _regular_or_refuse(p, st.st_mode)
-        if st.st_size > D.MAX_JSON_BYTES:
-            raise _too_large(p, st.st_size)
-        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
-        with open(fd, "rb", closefd=True) as f:
-            st2 = os.fstat(fd)
-            _regular_or_refuse(p, st2.st_mode)
-            data = f.read(D.MAX_JSON_BYTES + 1)  # bounded, even if the file grew since stat
-    except FileNotFoundError:
-        raise ProblemError(p, "", "no such file") from None
-    except NotADirectoryError:
-        raise ProblemError(p, "", "no such file (a part of the path is not a folder)") from None
-    except IsADirectoryError:
-        raise ProblemError(p, "", "is a directory, not a JSON file") from None
-    except PermissionError:
-        raise ProblemError(p, "", "permission denied") from None
-    except OSError as e:
-        raise ProblemError(p, "", f"cannot read: {e.strerror or e}") from None
-    if len(data) > D.MAX_JSON_BYTES:
-        raise _too_large(p, len(data))
-    return data
+        return read_regular(path, max_bytes=D.MAX_JSON_BYTES, what="JSON file")
+    except FileRefused as e:
+        raise ProblemError(e.path, "", e.reason) from None
 
 
 def read_json(path: str | Path) -> Any:
@@ -452,14 +411,12 @@ def problem_from_dict(d: Any, *, source: str = "<dict>", default_name: str = "pr
         c.fail(f"disks[{int(mass.argmax())}].mass", f"{_fmt(mass.max())} is {_fmt(ratio)} x the lightest "
                                                     f"disk's mass (disks[{int(mass.argmin())}]); the ratio "
                                                     f"may be at most {_fmt(D.MAX_MASS_RATIO)}")
-    for i in range(n):
-        d2 = ((start[i + 1:] - start[i]) ** 2).sum(axis=1)
-        s = radius[i + 1:] + radius[i]
-        bad = np.nonzero(d2 < (s * (1.0 - OVERLAP_RTOL)) ** 2)[0]
-        if bad.size:
-            j = i + 1 + int(bad[0])
-            c.fail(f"disks[{j}].start", f"overlaps disks[{i}] (centre distance {_fmt(math.sqrt(d2[bad[0]]))} "
-                                        f"< sum of radii {_fmt(s[bad[0]])})")
+    pair = first_overlap(start, radius)
+    if pair is not None:
+        i, j = pair
+        c.fail(f"disks[{j}].start", f"overlaps disks[{i}] (centre distance "
+                                    f"{_fmt(math.hypot(*(start[j] - start[i])))} < sum of radii "
+                                    f"{_fmt(radius[i] + radius[j])})")
     if not cue.any():
         c.fail("disks", "no disk is cueable: at least one disk must be able to move at t = 0")
     for a in (start, target, radius, mass, cue):

@@ -114,7 +114,7 @@ def _refused(tmp_path, capsys, argv, *words):
 
 def test_bad_sources_exit_2_with_one_line(tmp_path, capsys, monkeypatch):
     missing = tmp_path / "nope.png"
-    _refused(tmp_path, capsys, ["--targets-from", str(missing)], "nope.png", "no such image file")
+    _refused(tmp_path, capsys, ["--targets-from", str(missing)], "nope.png", "no such file")
     junk = tmp_path / "junk.jpg"
     junk.write_bytes(b"this is not a jpeg at all")
     _refused(tmp_path, capsys, ["--targets-from", str(junk)], "junk.jpg", "cannot be read as a JPG image")
@@ -126,12 +126,12 @@ def test_bad_sources_exit_2_with_one_line(tmp_path, capsys, monkeypatch):
     _refused(tmp_path, capsys, ["--targets-from", "nbst", "--noncue", "2"], "--noncue applies to --planted only")
     import imageio.v3 as iio
 
-    import nbst.formation as F
+    import nbst.pictures as pictures
 
     white = tmp_path / "white.png"
     iio.imwrite(white, np.full((8, 8), 255, np.uint8))
     _refused(tmp_path, capsys, ["--targets-from", str(white)], "white.png", "no dark pixels")
-    monkeypatch.setattr(F, "MAX_IMAGE_PIXELS", 50)  # a picture larger than the cap, refused from its header
+    monkeypatch.setattr(pictures, "MAX_IMAGE_PIXELS", 50)  # a picture larger than the cap, refused from its header
     _refused(tmp_path, capsys, ["--targets-from", str(white)], "white.png", "8x8 picture", "at most 50 pixels")
 
 
@@ -156,3 +156,63 @@ def test_cli_progress_names_the_swap_passes_and_quiet_silences_it(tmp_path, caps
     assert main(["generate", "--targets-from", "ab", "--disks", "40", "--seed", "1", "-o", str(out), "-q"]) == 0
     said = capsys.readouterr()
     assert said.out == "" and said.err == ""
+
+
+# --------------------------------------------------------------------------- hostile sources (issue 35)
+
+@pytest.mark.parametrize("shape", [(1, 2_000_000), (2_000_000, 1)])
+def test_a_picture_too_thin_for_the_disks_is_refused_with_bounded_work(tmp_path, capsys, shape):
+    """A 1 x 2,000,000 line ran for over a minute at 420 MB: the target lattice's spacing shrank
+    below a pixel and its candidates grew without bound. The lattice is bounded (MAX_LATTICE_POINTS
+    candidates, MIN_LATTICE_PX apart), the box by the radius floor: one line, exit 2."""
+    import imageio.v3 as iio
+
+    png = tmp_path / "line.png"
+    iio.imwrite(png, np.zeros(shape, np.uint8))
+    for n in (200, 20_000):
+        rc = main(["generate", "--targets-from", str(png), "--disks", str(n), "--seed", "1", "-q",
+                   "-o", str(tmp_path / "p.json")])
+        err = capsys.readouterr().err
+        # a one-pixel line: its box would be over a million radii long
+        assert rc == 2 and err.count("\n") == 1 and "Traceback" not in err and "picture" in err, err
+
+
+def test_the_target_lattice_never_lays_more_than_its_bound():
+    from nbst import pictures
+
+    mask = np.ones((1, 5_000_000), bool)  # holds 5,000 targets only at ~2 px: 2.3 million candidates
+    assert pictures.lattice_size(mask.shape, 2.1) > pictures.MAX_LATTICE_POINTS
+    with pytest.raises(pictures.FormationError, match="too thin"):
+        pictures.lattice_for(mask, 5_000)
+    with pytest.raises(pictures.FormationError, match="at least 1 pixel apart"):
+        pictures.lattice_for(np.ones((4, 4), bool), 100)
+
+
+@pytest.mark.parametrize("name,exists,words", [("logo.svg", True, "SVG picture"), ("drawing.pdf", False, "PDF"),
+                                               ("notes.txt", True, "existing file")])
+def test_a_file_that_is_not_an_image_nbst_reads_is_not_drawn_as_its_name(tmp_path, capsys, monkeypatch, name,
+                                                                          exists, words):
+    monkeypatch.chdir(tmp_path)
+    if exists:
+        (tmp_path / name).write_text("<svg xmlns='http://www.w3.org/2000/svg'/>")
+    assert main(["generate", "--targets-from", name, "--disks", "20", "-o", "p.json", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err and name in err, err
+    assert main(["generate", "--targets-from", "nbst", "--disks", "20", "-o", "p.json", "-q"]) == 0  # a word is text
+
+
+def test_a_text_that_is_not_printable_utf8_is_one_line(tmp_path):
+    """Invalid UTF-8 in argv reaches Python as lone surrogates (matplotlib's TypeError before);
+    control characters are refused as in every text field nbst reads."""
+    import os
+    import subprocess
+    import sys
+
+    for text in (b"ab\xff\xfecd", b"a\x1b[31mred", b"a\x01b"):
+        r = subprocess.run([os.fsencode(sys.executable), b"-m", b"nbst.cli", b"generate", b"--targets-from", text,
+                            b"--disks", b"20", b"-o", os.fsencode(tmp_path / "p.json")],
+                           capture_output=True, timeout=120)
+        err = r.stderr.decode("utf-8", "replace")
+        assert r.returncode == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert "UTF-8" in err or "control character" in err, err
+    assert not (tmp_path / "p.json").exists()
