@@ -29,10 +29,12 @@ MAX_JSON_DEPTH = 64
 #: counted too, an over-estimate). Parsed, a value costs 30-200 bytes of Python objects
 #: (an empty list 56, a float 24): this bound keeps a parsed file in a few hundred MB and
 #: a few seconds however it is shaped, where 64 MiB of ``[],`` took 3.2 GB and 36-50 s
-#: (``benchmarks/fuzz_inputs.py --huge`` measures both). The largest file nbst writes, the
-#: shipped bowling atlas, holds ~78,000 (328 subsets; all 1,023 would be ~250,000); a
-#: solution with its history, under 10,000.
-MAX_JSON_VALUES = 1_000_000
+#: (``benchmarks/fuzz_inputs.py --huge`` measures both). A disk of a problem is 11 values
+#: written minimally (``{"start": [x, y], "target": [x, y], "radius": r}``) and 15 with
+#: ``mass`` and ``cueable``, so MAX_DISKS disks of either form fit (1.5 million); the largest
+#: file nbst writes besides, the shipped bowling atlas, holds ~78,000 (328 subsets; all 1,023
+#: would be ~250,000); a solution with its history, under 10,000.
+MAX_JSON_VALUES = 2_000_000
 
 #: Longest integer literal (digits): float64 holds 309-digit integers at most;
 #: longer ones cannot be a number nbst uses (Python itself stops at 4300 digits).
@@ -42,9 +44,9 @@ MAX_INT_DIGITS = 400
 
 #: Most disks in one problem. Signatures have no width limit (files hold them as strings of
 #: N characters; the kernels as multiword bitsets), so the limit is the file and memory:
-#: a disk is ~8 JSON values in a problem and ~3 in a solution, so MAX_JSON_VALUES allows
-#: about 120,000; 100,000 keeps a margin. The event kernel needs ~150 bytes per disk at
-#: this size (cell grid), and ``simulate`` 64 bytes per recorded event on top.
+#: a disk is 11-15 JSON values in a problem and 3 in a solution, and MAX_JSON_VALUES lets
+#: 100,000 of them load in either form (tests/test_problem.py loads one). The event kernel needs
+#: ~150 bytes per disk at this size (cell grid), and ``simulate`` 64 bytes per recorded event on top.
 MAX_DISKS = 100_000
 
 # --------------------------------------------------------------------------- text fields

@@ -198,3 +198,72 @@ def test_solution_errors(tmp_path):
     with pytest.raises(ProblemError, match="missing") as ei:
         load_solution(f, p)
     assert ei.value.field == "velocities"
+
+
+# --------------------------------------------------------------------------- many disks (issue 35)
+
+def _grid_problem(n: int, *, full: bool = False, k: int = 317) -> dict:
+    """n disks of radius 15 on a 40-unit grid, k a row, written as minimally as the format allows
+    (or with mass and cueable): the shape of the largest problems the README promises."""
+    disks = []
+    for m in range(n):
+        x, y = 20.0 + 40.0 * (m % k), 20.0 + 40.0 * (m // k)
+        d = {"start": [x, y], "target": [x, y], "radius": 15}
+        if full:
+            d.update(mass=1.0, cueable=True)
+        disks.append(d)
+    return {"box": [40.0 * k + 40.0, 40.0 * (n // k + 2)], "t_final": 1, "target_radius": 10, "disks": disks}
+
+
+@pytest.mark.parametrize("full", [False, True])
+def test_the_promised_100000_disks_load(tmp_path, full):
+    """README: problems of up to 100,000 disks load. The JSON value cap refused a minimal
+    100,000-disk file (11 values a disk) before; now both forms are read."""
+    from nbst.domain import MAX_DISKS
+
+    f = tmp_path / "big.json"
+    f.write_text(json.dumps(_grid_problem(MAX_DISKS, full=full), separators=(",", ":")))
+    assert load_problem(f).n == MAX_DISKS
+
+
+def test_an_overlap_in_a_90000_disk_problem_is_found_on_the_grid():
+    """The last disk of 90,000 overlapping an early one: named (the old check compared every pair,
+    O(N^2), and was still running after 60 s)."""
+    d = _grid_problem(90_000)
+    d["disks"][-1]["start"] = [d["disks"][5]["start"][0] + 1.0, d["disks"][5]["start"][1]]
+    d["disks"][-1]["target"] = d["disks"][-1]["start"]
+    with pytest.raises(ProblemError, match=r"overlaps disks\[5\]") as e:
+        problem_from_dict(d)
+    assert e.value.field == "disks[89999].start"
+    many = _grid_problem(90_000)
+    for disk in many["disks"]:  # every disk on one spot: the first dense cell says it at once
+        disk["start"] = disk["target"] = [100.0, 100.0]
+    with pytest.raises(ProblemError, match="overlaps"):
+        problem_from_dict(many)
+
+
+def test_the_grid_finds_the_pair_the_pairwise_check_finds():
+    """first_overlap against the plain O(N^2) rule (the least i, then j), on random layouts of
+    equal, similar and very different radii (several radius classes, big disks beside small)."""
+    from nbst.overlap import first_overlap
+
+    def pairwise(start, radius, tol=1e-9):
+        for i in range(len(radius)):
+            d2 = ((start[i + 1:] - start[i]) ** 2).sum(axis=1)
+            bad = np.nonzero(d2 < ((radius[i + 1:] + radius[i]) * (1 - tol)) ** 2)[0]
+            if bad.size:
+                return i, i + 1 + int(bad[0])
+        return None
+
+    rng = np.random.default_rng(7)
+    seen = set()
+    for trial in range(300):
+        n = int(rng.integers(2, 60))
+        radius = [np.full(n, 10.0), rng.uniform(1, 30, n), np.exp(rng.uniform(0, 6, n))][trial % 3]
+        start = rng.uniform(0, 500, (n, 2))
+        got = first_overlap(start, radius)
+        assert got == pairwise(start, radius), trial
+        seen.add(got is None)
+    assert seen == {True, False}  # both outcomes were tried
+    touching = np.array([[0.0, 0.0], [20.0, 0.0]])
+    assert first_overlap(touching, np.array([10.0, 10.0])) is None  # touching starts are allowed
