@@ -17,7 +17,7 @@ import numpy as np
 
 from nbst.render import style
 from nbst.render.gl import FrameRenderer, FrameTarget
-from nbst.render.shapes import Circles, Text
+from nbst.render.shapes import CAPSULE_FS_IO, CAPSULE_VS_IO, Circles, Text
 
 MESH_VS = """#version 330
 uniform mat4 u_mvp;
@@ -60,29 +60,10 @@ void main() {
 # Trails lie on the felt as capsules in world units, blended with MAX against the
 # felt's own lit colour (computed here, per fragment, by the same lighting), so
 # overlapping segments never add up into beads at the joints.
-TRAIL_VS = """#version 330
-uniform mat4 u_mvp;
-uniform float u_z;
-in vec2 in_corner;
-in vec2 in_p0;
-in vec2 in_p1;
-in vec2 in_alpha;
-in float in_half;
-in vec3 in_color;
-out vec2 v_pos;
-flat out vec2 v_p0;
-flat out vec2 v_p1;
-flat out vec2 v_alpha;
-flat out float v_half;
-flat out vec3 v_color;
+TRAIL_VS = "#version 330\nuniform mat4 u_mvp;\nuniform float u_z;" + CAPSULE_VS_IO + """
 void main() {
-    vec2 d = in_p1 - in_p0;
-    float len = length(d);
-    vec2 u = len > 1e-6 ? d / len : vec2(1.0, 0.0);
-    vec2 n = vec2(-u.y, u.x);
-    float ext = in_half * 1.6 + 1.0;
-    v_pos = 0.5 * (in_p0 + in_p1) + u * in_corner.x * (0.5 * len + ext) + n * in_corner.y * ext;
-    v_p0 = in_p0; v_p1 = in_p1; v_alpha = in_alpha; v_half = in_half; v_color = in_color;
+    v_pos = capsule_corner(in_corner, in_p0, in_p1, in_half * 1.6 + 1.0);  // world units, with room for fwidth
+    capsule_out();
     gl_Position = u_mvp * vec4(v_pos, u_z, 1.0);
 }
 """
@@ -92,14 +73,7 @@ uniform vec3 u_light;
 uniform vec3 u_eye;
 uniform float u_ambient;
 uniform float u_z;
-uniform vec3 u_felt;
-in vec2 v_pos;
-flat in vec2 v_p0;
-flat in vec2 v_p1;
-flat in vec2 v_alpha;
-flat in float v_half;
-flat in vec3 v_color;
-out vec4 f_color;
+uniform vec3 u_felt;""" + CAPSULE_FS_IO + """
 vec3 shade(vec3 c, vec3 w) {
     vec3 n = vec3(0.0, 0.0, 1.0), v = normalize(u_eye - w);
     float diff = max(dot(n, u_light), 0.0);
@@ -107,10 +81,8 @@ vec3 shade(vec3 c, vec3 w) {
     return c * (u_ambient + (1.0 - u_ambient) * diff) + vec3(spec);
 }
 void main() {
-    vec2 pa = v_pos - v_p0, ba = v_p1 - v_p0;
-    float bb = dot(ba, ba);
-    float h = bb > 1e-12 ? clamp(dot(pa, ba) / bb, 0.0, 1.0) : 0.0;
-    float d = length(pa - ba * h) - v_half;         // world units
+    float h;
+    float d = segment_distance(v_pos, v_p0, v_p1, h) - v_half;  // world units
     float px = max(fwidth(d), 1e-6);                 // world units per pixel here
     float a = mix(v_alpha.x, v_alpha.y, h) * clamp(0.5 - d / px, 0.0, 1.0);
     if (a <= 0.0) discard;

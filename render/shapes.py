@@ -57,12 +57,18 @@ void main() {
 }
 """
 
-CAPSULE_VS = "#version 330\n" + _NDC + """
+#: The capsule (a segment p0 -> p1 with round ends, its alpha running from one end to the other):
+#: the one copy of its GLSL, shared by the 2D trails here and the 3D trails on the felt
+#: (``nbst.render.scene3d``). ``CAPSULE_VS_IO`` declares the per-instance inputs and what the
+#: fragment shader gets; ``capsule_corner`` places a corner of the quad that covers the capsule
+#: (``ext``: how far it reaches beyond the segment); ``segment_distance`` (fragment side) is the
+#: distance from p to the segment and, in ``h``, where along it (0 at p0, 1 at p1) the nearest point is.
+CAPSULE_VS_IO = """
 in vec2 in_corner;
 in vec2 in_p0;
 in vec2 in_p1;
 in vec2 in_alpha;   // alpha at p0, at p1
-in float in_half;   // half width, px
+in float in_half;   // half width
 in vec3 in_color;
 out vec2 v_pos;
 flat out vec2 v_p0;
@@ -70,24 +76,18 @@ flat out vec2 v_p1;
 flat out vec2 v_alpha;
 flat out float v_half;
 flat out vec3 v_color;
-void main() {
-    vec2 d = in_p1 - in_p0;
+vec2 capsule_corner(vec2 corner, vec2 p0, vec2 p1, float ext) {
+    vec2 d = p1 - p0;
     float len = length(d);
     vec2 u = len > 1e-6 ? d / len : vec2(1.0, 0.0);
     vec2 n = vec2(-u.y, u.x);
-    float ext = in_half + 1.5;
-    vec2 mid = 0.5 * (in_p0 + in_p1);
-    v_pos = mid + u * in_corner.x * (0.5 * len + ext) + n * in_corner.y * ext;
+    return 0.5 * (p0 + p1) + u * corner.x * (0.5 * len + ext) + n * corner.y * ext;
+}
+void capsule_out() {
     v_p0 = in_p0; v_p1 = in_p1; v_alpha = in_alpha; v_half = in_half; v_color = in_color;
-    gl_Position = to_ndc(v_pos);
 }
 """
-
-# Trails are drawn with MAX blending over a uniform dark floor: overlapping
-# segments of one path (joints, self-crossings) take the max, never the sum,
-# so a trail has no dark or bright seams.
-CAPSULE_FS = """#version 330
-uniform vec3 u_floor;
+CAPSULE_FS_IO = """
 in vec2 v_pos;
 flat in vec2 v_p0;
 flat in vec2 v_p1;
@@ -95,11 +95,29 @@ flat in vec2 v_alpha;
 flat in float v_half;
 flat in vec3 v_color;
 out vec4 f_color;
-void main() {
-    vec2 pa = v_pos - v_p0, ba = v_p1 - v_p0;
+float segment_distance(vec2 p, vec2 p0, vec2 p1, out float h) {
+    vec2 pa = p - p0, ba = p1 - p0;
     float bb = dot(ba, ba);
-    float h = bb > 1e-12 ? clamp(dot(pa, ba) / bb, 0.0, 1.0) : 0.0;
-    float d = length(pa - ba * h) - v_half;
+    h = bb > 1e-12 ? clamp(dot(pa, ba) / bb, 0.0, 1.0) : 0.0;
+    return length(pa - ba * h);
+}
+"""
+
+CAPSULE_VS = "#version 330\n" + _NDC + CAPSULE_VS_IO + """
+void main() {
+    v_pos = capsule_corner(in_corner, in_p0, in_p1, in_half + 1.5);  // px: half a pixel of anti-aliasing
+    capsule_out();
+    gl_Position = to_ndc(v_pos);
+}
+"""
+
+# Trails are drawn with MAX blending over a uniform dark floor: overlapping
+# segments of one path (joints, self-crossings) take the max, never the sum,
+# so a trail has no dark or bright seams.
+CAPSULE_FS = "#version 330\nuniform vec3 u_floor;" + CAPSULE_FS_IO + """
+void main() {
+    float h;
+    float d = segment_distance(v_pos, v_p0, v_p1, h) - v_half;
     float a = mix(v_alpha.x, v_alpha.y, h) * clamp(0.5 - d, 0.0, 1.0);
     if (a <= 0.0) discard;
     f_color = vec4(mix(u_floor, v_color, a), 1.0);
