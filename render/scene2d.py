@@ -213,24 +213,42 @@ class Labels:
     def instances(self, centers_px, which):
         """Text instances of the numbers of disks ``which`` (bool mask) at ``centers_px``:
         centred on the disk, or (beside) upper left of it."""
+        x, y = self._origins(centers_px)
+        return self.runs.layout(x, y, which)
+
+    def _origins(self, centers_px):
         cw, ch = self.text.cell
         c = np.asarray(centers_px, float)
         w = self.runs.width
         d = 0.72 * self.rpx
         x = np.where(self.on_disk, c[:, 0] - 0.5 * w, c[:, 0] - d - w)
         y = np.where(self.on_disk, c[:, 1] - 0.5 * ch, c[:, 1] - d - 0.85 * ch)
-        return self.runs.layout(x, y, which)
+        return x, y
 
-    def boxes(self, centers_px) -> np.ndarray:
-        """(M, 4) px boxes (x0, y0, x1, y1) of the numbers written on disks (for others to avoid)."""
-        cw, ch = self.text.cell
-        c = np.asarray(centers_px, float)[self.on_disk]
-        hw = 0.5 * self.runs.width[self.on_disk].astype(float)
-        return np.stack([c[:, 0] - hw, c[:, 1] - 0.5 * ch, c[:, 0] + hw, c[:, 1] + 0.5 * ch], axis=1)
+    def _all_boxes(self, centers_px) -> np.ndarray:
+        x, y = self._origins(centers_px)
+        return np.stack([x, y, x + self.runs.width, y + self.text.cell[1]], axis=1)
 
-    def draw(self, size, centers_px) -> None:
+    def drawn(self, centers_px) -> np.ndarray:
+        """Which numbers are drawn at ``centers_px``: every one written on its disk (disks do not
+        overlap, so neither do they), and each one beside its disk that covers no number drawn
+        before it (lower disk numbers first): crowded disks never run their numbers together."""
+        keep = self.on_disk.copy()
+        beside = np.flatnonzero(~self.on_disk)
+        if beside.size:
+            boxes = self._all_boxes(centers_px)
+            keep[beside] = keep_apart(boxes[beside], taken=boxes[self.on_disk])
+        return keep
+
+    def boxes(self, centers_px, drawn=None) -> np.ndarray:
+        """(M, 4) px boxes (x0, y0, x1, y1) of the numbers drawn (for others to avoid)."""
+        drawn = self.drawn(centers_px) if drawn is None else drawn
+        return self._all_boxes(centers_px)[drawn]
+
+    def draw(self, size, centers_px, drawn=None) -> None:
+        drawn = self.drawn(centers_px) if drawn is None else drawn
         self.text.draw(size, self.instances(centers_px, self.on_disk), style.LABEL)
-        beside = ~self.on_disk
+        beside = ~self.on_disk & drawn
         if beside.any():  # one draw per class colour
             for col in np.unique(self.colors[beside], axis=0):
                 m = beside & (np.abs(self.colors - col).max(axis=1) < 1e-6)
@@ -238,6 +256,35 @@ class Labels:
 
     def release(self) -> None:
         self.text.release()
+
+
+def keep_apart(boxes, taken=None, gap: float = 1.0) -> np.ndarray:
+    """Which of ``boxes`` (M, 4) px (x0, y0, x1, y1) to draw so that no two drawn ones come within
+    ``gap`` px of each other or of a box of ``taken``: greedy, in order (the first one wins). On a
+    grid of cells as large as the largest box: each box looks at the few cells it covers."""
+    boxes = np.asarray(boxes, float).reshape(-1, 4)
+    keep = np.zeros(len(boxes), bool)
+    if not len(boxes):
+        return keep
+    cell = float(max((boxes[:, 2] - boxes[:, 0]).max(), (boxes[:, 3] - boxes[:, 1]).max(), 1.0)) + gap
+    grid: dict = {}
+
+    def span(b):
+        return [(i, j) for i in range(int((b[0] - gap) // cell), int((b[2] + gap) // cell) + 1)
+                for j in range(int((b[1] - gap) // cell), int((b[3] + gap) // cell) + 1)]
+
+    def add(b):
+        for key in span(b):
+            grid.setdefault(key, []).append(b)
+
+    for b in np.asarray(taken if taken is not None else (), float).reshape(-1, 4):
+        add(b)
+    for k, b in enumerate(boxes):
+        if not any(b[0] < o[2] + gap and o[0] < b[2] + gap and b[1] < o[3] + gap and o[1] < b[3] + gap
+                   for key in span(b) for o in grid.get(key, ())):
+            keep[k] = True
+            add(b)
+    return keep
 
 
 def marker_radii(rpx) -> np.ndarray:
@@ -280,12 +327,20 @@ def target_label_px(size) -> int:
 
 
 def target_label_instances(text, centers_px, marker_px, avoid=None, skip=None) -> np.ndarray:
-    """Text instances numbering each target with its disk's index, just above and
+    """Text instances of :func:`target_label_boxes`' numbers (the ones it draws)."""
+    x, y, want = target_label_boxes(text, centers_px, marker_px, avoid, skip)
+    return text.numbers(len(want)).layout(x, y, want)
+
+
+def target_label_boxes(text, centers_px, marker_px, avoid=None, skip=None):
+    """(x, y, drawn): where each target's number goes (top-left, px) and which are drawn. Each
+    target is numbered with its disk's index, just above and
     right of its marker (centres (N, 2) px, marker radii (N,) px). ``avoid``: boxes
-    (M, 4) px (x0, y0, x1, y1; the numbers written on disks): a number that would
+    (M, 4) px (x0, y0, x1, y1; the disks' numbers drawn): a number that would
     overlap one moves to the first free corner of its marker (upper left, lower right,
-    lower left), or stays upper right if none is free. ``skip`` (N,) bool: targets left
-    unnumbered (their own disk covers them and carries the same number)."""
+    lower left), or stays upper right if none is free, and is left out if it still covers
+    one or another target's number. ``skip`` (N,) bool: targets left unnumbered (their own
+    disk covers them and carries the same number)."""
     cw, ch = text.cell
     centers_px = np.asarray(centers_px, float)
     n = len(centers_px)
@@ -306,7 +361,12 @@ def target_label_instances(text, centers_px, marker_px, avoid=None, skip=None) -
             take = ~free & ~hit
             x[take], y[take] = cx[take], cy[take]
             free |= take
-    return runs.layout(x, y, None if skip is None else ~np.asarray(skip, bool))
+    want = np.ones(n, bool) if skip is None else ~np.asarray(skip, bool)
+    # a target's number never covers a disk's number nor another target's (crowded targets: the
+    # lower disk numbers are written, the others left out rather than run together)
+    idx = np.flatnonzero(want)
+    want[idx] = keep_apart(np.stack([x, y, x + w, y + ch], axis=1)[idx], taken=avoid)
+    return x, y, want
 
 
 def covered_by_own_disk(problem, pos) -> np.ndarray:
@@ -422,13 +482,19 @@ class Renderer2D(FrameRenderer):
         self.target = FrameTarget(ctx, size)
         self.size = self.target.size
         self.title = problem.name if title is None else title
-        # the readout lives in the left margin, one fact a line: smaller type where its longest
-        # line would reach the box, never under MIN_READOUT_PX; the box makes room below that
+        # the readout lives in the top-left corner, one fact a line, at the frame's text size when
+        # it ends above the box (a wide box, e.g. a formation of text, leaves room above it) or
+        # left of it; else smaller type where its longest line would reach the box, never under
+        # MIN_READOUT_PX; the box makes room below that
         short = min(self.size)
         L = Layout(problem.box, self.size)
         chars = self.readout_width()
         free = L.box_rect[0] - L.wall - L.margin  # half a margin of padding on each side
         text_px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * short)))
+        cw, ch = text_cell(text_px)
+        above = 0.5 * L.margin + self.readout_lines() * ch + 0.5 * L.margin <= L.box_rect[1] - L.wall
+        if above and 0.5 * L.margin + chars * cw <= self.size[0]:
+            free = float("inf")  # it ends above the box: its width is free
         while text_px > style.MIN_READOUT_PX and chars * text_cell(text_px)[0] > free:
             text_px -= 1
         # no room at MIN_READOUT_PX: the box moves right (and shrinks) for it, but keeps at least
@@ -547,20 +613,29 @@ class Renderer2D(FrameRenderer):
     def readout_lines(self) -> int:
         """Lines of the readout (the legend starts below them)."""
         return len(self.readout(0.0, np.zeros(self.problem.n, bool),
-                                np.zeros(self.problem.n, bool) if self.ghost is not None else None))
+                                np.zeros(self.problem.n, bool) if getattr(self, "ghost", None) is not None else None))
 
     def _draw_legend(self) -> None:
-        """Legend under the readout, in the left margin, when the margin is wide enough."""
+        """Legend under the readout, in the left margin, when the margin is wide enough; else
+        below the box, or above it right of the readout (a wide box leaves no left margin)."""
         L = self.layout
         x, y = self._readout_origin()
-        y += (self.readout_lines() + 0.6) * self.text.cell[1]  # below the readout
-        max_w = L.box_rect[0] - L.wall - 0.5 * L.margin - x
-        max_h = self.size[1] - 0.5 * L.margin - y
-        self.legend_drawn = draw_legend(
-            self.circles, self.legend_text, self.size, x, y, max_w, max_h,
-            lambda long: legend_entries(self.problem, ghost=self.ghost is not None,
-                                        labels=self.target_text is not None, long=long,
-                                        ghost_name=self.ghost_name, motion_name=self.motion_name))
+        pad = 0.5 * L.margin
+        bx0, by0, bx1, by1 = L.box_rect
+        places = [  # (x, y, max_w, max_h): left margin under the readout; below the box; above it
+            (x, y + (self.readout_lines() + 0.6) * self.text.cell[1], bx0 - L.wall - pad - x, None),
+            (bx0, by1 + L.wall + pad, self.size[0] - bx0 - pad, self.size[1] - (by1 + L.wall + pad) - pad),
+            (x + (self.readout_width() + 2) * self.text.cell[0], y, None, by0 - L.wall - pad - y)]
+        for px, py, max_w, max_h in places:
+            max_w = self.size[0] - pad - px if max_w is None else max_w
+            max_h = self.size[1] - pad - py if max_h is None else max_h
+            self.legend_drawn = draw_legend(
+                self.circles, self.legend_text, self.size, px, py, max_w, max_h,
+                lambda long: legend_entries(self.problem, ghost=self.ghost is not None,
+                                            labels=self.target_text is not None, long=long,
+                                            ghost_name=self.ghost_name, motion_name=self.motion_name))
+            if self.legend_drawn:
+                return
 
     # ------------------------------------------------------------------ frames
 
@@ -601,9 +676,10 @@ class Renderer2D(FrameRenderer):
             self._ghosts["center"] = self.layout.to_image(g)
             self.circles.draw(self._ghosts)
         if self.labels is not None:
-            self.labels.draw(self.size, self._disks["center"])
+            drawn = self.labels.drawn(self._disks["center"])
+            self.labels.draw(self.size, self._disks["center"], drawn)
             numbers = target_label_instances(self.target_text, self.target_px, self.marker_px,
-                                             avoid=self.labels.boxes(self._disks["center"]),
+                                             avoid=self.labels.boxes(self._disks["center"], drawn),
                                              skip=covered_by_own_disk(p, pos))
             self.target_text.draw_halo(self.size, numbers, style.TARGET_LABEL, style.TEXT_HALO)
             if self.ghost is not None:

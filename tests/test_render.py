@@ -489,8 +489,8 @@ def test_legend_under_the_readout_shows_the_classes_present(gl, view):
 
 @pytest.mark.parametrize("size", [(360, 360), (480, 360), (320, 480)])
 def test_legend_stays_out_of_the_box(gl, diamond, size):
-    """Wherever the frame is too narrow for a legend beside the box there is none, and a
-    legend that is drawn never reaches into the box."""
+    """Wherever the frame has no room for a legend beside, below or above the box there is
+    none, and a legend that is drawn never reaches into the box."""
     p, tr = diamond
     r = Renderer2D(gl, p, tr, size=size)
     try:
@@ -499,8 +499,9 @@ def test_legend_stays_out_of_the_box(gl, diamond, size):
     finally:
         r.release()
     box = box_from_walls(f)
-    left = f[:, :int(box[0]) - 3].astype(int)  # beside the box: readout and legend
-    swatch = (np.abs(left - np.array(style.rgb8(style.CUEABLE))).max(axis=2) <= 3).sum()
+    outside = f.astype(int)
+    outside[int(box[1]) - 8:int(box[3]) + 8, int(box[0]) - 8:int(box[2]) + 8] = 0  # around the box: readout, legend
+    swatch = (np.abs(outside - np.array(style.rgb8(style.CUEABLE))).max(axis=2) <= 3).sum()
     assert (swatch > 0) == drawn
     # inside the box, above the disks' starts, the legend's words (TEXT_DIM) never appear
     inner = f[int(box[1]) + 2:int(box[3]) - 2, int(box[0]) + 2:int(box[2]) - 2].astype(int)
@@ -955,3 +956,30 @@ def test_figures_of_many_disks_leave_the_numbers_out_and_say_so():
         words = [t.get_text() for t in fig.legends[0].get_texts()]
         assert any("no numbers over 100 disks" in w for w in words), words
     assert ax.get_title().endswith("order 150/150")
+
+
+def test_crowded_numbers_never_run_together(gl):
+    """200 disks forming a text (issue 35: the numbers ran together, "113115116"): at every
+    moment no drawn number, a disk's or a target's, covers another; the lower numbers are kept."""
+    from nbst.formation import formation
+    from nbst.render.scene2d import keep_apart, target_label_boxes
+
+    p, v, _ = formation("nbst", 200, seed=1)
+    tr = simulate(p, v)
+    r = Renderer2D(gl, p, tr, size=(1280, 720), labels=True)
+    try:
+        ch = r.target_text.cell[1]
+        w = r.target_text.numbers(p.n).width
+        for t in np.linspace(0.0, p.t_final, 6):
+            centers = r.layout.to_image(tr.at(t))
+            drawn = r.labels.drawn(centers)
+            disks = r.labels.boxes(centers, drawn)
+            x, y, keep = target_label_boxes(r.target_text, r.target_px, r.marker_px, avoid=disks)
+            boxes = np.concatenate([disks, np.stack([x, y, x + w, y + ch], axis=1)[keep]])
+            assert keep_apart(boxes, gap=0.0).all(), t  # no drawn box overlaps an earlier one
+            assert drawn.sum() + keep.sum() >= p.n  # most numbers are still written
+    finally:
+        r.release()
+    boxes = np.array([[0, 0, 10, 10], [5, 5, 15, 15], [20, 0, 30, 10], [0, 0, 2, 2]], float)
+    assert keep_apart(boxes).tolist() == [True, False, True, False]
+    assert keep_apart(boxes, taken=[[0, 0, 3, 3]]).tolist() == [False, True, True, False]
