@@ -8,8 +8,10 @@ The search does not set velocities; it sets each driver's **intent** (a row of
 * ``arrive``: the time (s) to reach the aim point; the speed is paced as distance / time left
   (NaN: cruise at ``speed``);
 * ``brake_at``: the time (s) of a reaction stop: every wheel braked, the wheel held (NaN: none);
-* ``slide_at``, ``slide_steer``: a handbrake turn: from that time the rear wheels lock and the
-  wheel goes to ``slide_steer`` (rad, + left) and stays there (NaN: none);
+* ``slide_at``, ``slide_steer``, ``slide_power``: a slide: from that time the wheel goes to
+  ``slide_steer`` (rad, + left) and stays there, and the rear wheels either lock (a handbrake
+  turn; ``slide_power`` 0 or NaN) or spin under ``slide_power`` x the full drive torque (a
+  power slide: the rear breaks away and the car keeps turning; NaN: no slide);
 * ``headway``, ``reaction``: the car-following driver (IDM) behind the script's ``follow``
   leader: time gap (s) and reaction delay (s): it sees the leader as it was that long ago;
 * ``after``: what the driver does once the vehicle has touched anything (another vehicle, a
@@ -23,7 +25,8 @@ length (at least :data:`LOOKAHEAD_MIN`); a target within :data:`REACHED` or behi
 vehicle is done, and after the last one the wheel is straight. The wheels turn at most
 :data:`STEER_RATE`; left and right get Ackermann angles. **Speed**: the commanded acceleration
 ``KV (v_target - v)`` (clipped to :data:`ACCEL` and :data:`DECEL`) is a torque on the rear
-wheels when positive and a proportional brake on all four when negative. **IDM** (Treiber,
+wheels when positive (at most the engine's power over the wheels' speed) and a proportional
+brake on all four when negative. **IDM** (Treiber,
 Hennecke and Helbing 2000): a = a_max [1 - (v / v0)^4 - (s* / s)^2], s* = s0 + v T + v dv /
 (2 sqrt(a_max b)); beyond the brakes' reach the driver stands on them.
 
@@ -41,8 +44,8 @@ from nbst.models.crash import vehicle as veh
 
 #: The drivers act every PERIOD seconds (the controls hold in between).
 PERIOD = 0.02
-INTENT = ("speed", "aim_x", "aim_y", "arrive", "brake_at", "slide_at", "slide_steer", "headway", "reaction",
-          "after", "after_steer")
+INTENT = ("speed", "aim_x", "aim_y", "arrive", "brake_at", "slide_at", "slide_steer", "slide_power", "headway",
+          "reaction", "after", "after_steer")
 IX = {k: i for i, k in enumerate(INTENT)}
 AFTER_BRAKE, AFTER_COAST, AFTER_HOLD = 0, 1, 2
 #: Pure pursuit: shortest look-ahead (m), a target counts as reached within REACHED m.
@@ -96,6 +99,7 @@ class Fleet:
     b: np.ndarray            # CoM to rear axle (m)
     lock: np.ndarray
     torque: np.ndarray
+    power: np.ndarray        # engine power (W)
     waypoints: tuple
     leader: np.ndarray
 
@@ -106,6 +110,7 @@ class Fleet:
                    mass=a(lambda v: v.mass), front=a(lambda v: v.a + v.front_overhang),
                    rear=a(lambda v: v.length - v.a - v.front_overhang), b=a(lambda v: v.b),
                    lock=a(lambda v: math.radians(v.steer_max_deg)), torque=a(lambda v: v.drive_torque),
+                   power=a(lambda v: v.power),
                    waypoints=tuple(np.asarray(w, dtype=float).reshape(-1, 2) for w in waypoints),
                    leader=np.array(leaders, dtype=int))
 
@@ -168,7 +173,7 @@ def _remaining(fleet: Fleet, intent, state, x, y, tx, ty, has) -> np.ndarray:
 
 
 def controls(t: float, fleet: Fleet, intent: np.ndarray, state: DriverState, pos: np.ndarray, quat: np.ndarray,
-             vel: np.ndarray, touched: np.ndarray) -> np.ndarray:
+             vel: np.ndarray, wheel: np.ndarray, touched: np.ndarray) -> np.ndarray:
     """Actuator values (s, n, 8) in :data:`vehicle.CONTROLS` order at time ``t`` (s).
 
     intent  : (s, n, len(INTENT)) the drivers' intents (SI; NaN = off)
@@ -227,15 +232,24 @@ def controls(t: float, fleet: Fleet, intent: np.ndarray, state: DriverState, pos
     speed = np.maximum(np.abs(v), 0.5)
     soft = np.clip(fleet.mass * np.maximum(-acc, 0.0) * fleet.radius ** 2 / (4 * veh.BRAKE_KV * speed), 0.0, 1.0)
     brake[:] = soft[..., None]
-    stop = t >= intent[..., IX["brake_at"]]  # NaN compares False
+    slide = t >= intent[..., IX["slide_at"]]  # NaN compares False
+    stop = t >= intent[..., IX["brake_at"]]
+    stop &= ~(slide & (intent[..., IX["slide_at"]] > intent[..., IX["brake_at"]]))  # a later slide takes over
     stop |= panic
     brake[stop] = 1.0
     drive[stop] = 0.0
     want = np.where(stop, state.steer, want)
-    slide = t >= intent[..., IX["slide_at"]]
+    slide &= ~stop
     want = np.where(slide, np.clip(intent[..., IX["slide_steer"]], -fleet.lock, fleet.lock), want)
-    brake[slide] = [0.0, 0.0, 1.0, 1.0]
-    drive[slide] = 0.0
+    power = np.nan_to_num(intent[..., IX["slide_power"]])
+    hand = slide & (power <= 0)
+    brake[hand] = [0.0, 0.0, 1.0, 1.0]
+    drive[hand] = 0.0
+    gun = slide & (power > 0)
+    brake[gun] = 0.0
+    drive[gun] = (power * fleet.torque)[gun]
+    # the engine's power caps the torque at the rear wheels' speed (no wheel spins up without end)
+    drive = np.minimum(drive, fleet.power / 2 / np.maximum(np.abs(wheel).max(axis=-1), 1.0))
     steer = state.steer + np.clip(want - state.steer, -step, step)
 
     # out of the loop: after the first contact the driver does what ``after`` says

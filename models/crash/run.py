@@ -119,7 +119,7 @@ class Runner:
                 p = k // self.period
                 u = drv.controls(k * self.dt, self.fleet, intents, state, qpos[:s][:, L.qpos[:, None] + np.arange(3)],
                                  qpos[:s][:, L.qpos[:, None] + np.arange(3, 7)], qvel[:s][:, L.qvel[:, None] + np.arange(3)],
-                                 touched)
+                                 qvel[:s][:, L.spin[:, 2:4]], touched)
                 row = np.zeros((s, m.nu))
                 row[:, L.ctrl] = u
                 ctrl[:s] = row

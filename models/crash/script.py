@@ -102,6 +102,7 @@ class Driver:
     brake_at: Range | None = None
     slide_at: Range | None = None
     slide_steer: Range | None = None
+    slide_power: Range | None = None
     follow: int | None = None           # index of the leader (IDM)
     headway: Range | None = None
     reaction: Range | None = None
@@ -299,10 +300,13 @@ def _driver(c: Fields, d, p: str, road, duration: float, names: list, me: int) -
         if key in d:
             kw[key] = _rng(c.range(d[key], f"{p}.{key}", 0.0, duration, f"seconds within the {duration:g} s script"))
     if "slide" in d:
-        s = c.obj(d["slide"], f"{p}.slide", ("at", "steer"), required=("at", "steer"))
+        s = c.obj(d["slide"], f"{p}.slide", ("at", "steer", "power"), required=("at", "steer"))
         kw["slide_at"] = _rng(c.range(s["at"], f"{p}.slide.at", 0.0, duration, "seconds"))
         kw["slide_steer"] = _rng(c.range(s["steer"], f"{p}.slide.steer", *LIMITS["steer"], "degrees, + = left"),
                                  math.pi / 180)
+        if "power" in s:
+            kw["slide_power"] = _rng(c.range(s["power"], f"{p}.slide.power", 0.0, 1.0,
+                                             "share of the full drive torque; 0 = handbrake"))
     if "follow" in d:
         f = c.obj(d["follow"], f"{p}.follow", ("leader", "headway", "reaction"), required=("leader",))
         lead = c.text(f["leader"], f"{p}.follow.leader", MAX_NAME_CHARS)

@@ -110,6 +110,7 @@ class VehicleType:
     roll_bar: float = 3.0         # anti-roll bars' roll stiffness / the springs' (per axle)
     steer_max_deg: float = 35.0
     drive_torque: float = 1500.0  # N m per rear wheel
+    power: float = 150e3          # W at the rear wheels (a spinning wheel's torque is at most power / omega)
     brake_torque: float = 6000.0  # N m per wheel (beyond what a tyre can pass on at mu 1.2: the wheel locks)
     source: str = ""
 
@@ -151,7 +152,7 @@ TYPES = {
     "suv": VehicleType(
         name="suv", label="mid-size SUV", mass=2000.0, length=4.90, width=1.93, height=1.75,
         wheelbase=2.86, track=1.65, ssf=1.17, front_weight=0.55, wheel_radius=0.37, wheel_width=0.245,
-        clearance=0.20, belt=1.10, cabin_length=3.3, cabin_offset=0.45, front_overhang=0.95,
+        clearance=0.20, belt=1.10, cabin_length=3.3, cabin_offset=0.45, front_overhang=0.95, power=200e3,
         source="mid-size SUV class; SSF 1.17: NHTSA HS 809 868, SUVs MY2003"),
     "van": VehicleType(
         name="van", label="full-size van", mass=2500.0, length=5.53, width=2.05, height=2.10,

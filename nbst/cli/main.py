@@ -26,6 +26,7 @@ COMMAND_MODULES = (
     "nbst.cli.experiment",
     "nbst.cli.mujoco",
     "nbst.cli.bowl",
+    "nbst.cli.crash",
     "nbst.cli.render",
 )
 

@@ -1,0 +1,218 @@
+"""Subcommands ``nbst crash scripts|check|solve|replay|probability|reconstruct`` (docs/crash.md).
+
+Registration is light: mujoco and cma are imported inside the commands.
+
+Exit codes: 0 done (solve: the script met; replay: the file reproduced bit for bit), 1 a check
+failed (solve: not met within the budget, the nearest crash written; replay: the replay
+differs), 2 bad input, 130 interrupted (solve: the best crash so far written).
+"""
+from __future__ import annotations
+
+import sys
+
+from nbst.cli.args import JOBS, SEED, Bounded, print_json, with_limits
+from nbst.cli.flags import add_quiet, add_seed
+
+ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
+SAMPLES = Bounded("samples", 1, 100_000, integer=True)
+
+
+def register(sub) -> None:
+    p = sub.add_parser("crash", help="a multi-vehicle crash on MuJoCo: script it, solve it, replay it, reconstruct one",
+                       description="The paper's second challenge (docs/crash.md): several vehicles, each driven by "
+                                   "a partially autonomous driver, crash as a script says (whom each hits and in what "
+                                   "order, its impact speed or delta-V, where it ends up and facing where, how it "
+                                   "rolls). Units: metres, km/h, degrees, seconds.")
+    cr = p.add_subparsers(dest="crash_command", metavar="SUBCOMMAND", parser_class=type(p))
+    p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
+
+    s = cr.add_parser("scripts", help="list the built-in crash scripts",
+                      description="List the built-in crash scripts (models/crash/scripts/): name, vehicles, "
+                                  "what the script asks.")
+    s.add_argument("--json", action="store_true", help="print one JSON object per script")
+    s.set_defaults(func=cmd_scripts)
+
+    c = cr.add_parser("check", help="validate a crash script (exit 0, or 2 with one line naming the field)",
+                      description="Read SCRIPT through the input gate and print what it asks: the road, each "
+                                  "vehicle, its driver's ranges and its fate.")
+    c.add_argument("script", metavar="SCRIPT", help="built-in name (see `nbst crash scripts`) or a JSON file")
+    c.set_defaults(func=cmd_check)
+
+    v = cr.add_parser("solve", help="search driver intents that make the crash happen as scripted",
+                      description="Search each vehicle's driver intent (speed, aim point, arrival time, reactions, "
+                                  "after-impact behaviour; within the script's ranges) for a crash that meets the "
+                                  "script: the paper's signature search (one bit per vehicle whose fates hold, "
+                                  "crossover of whole per-vehicle blocks), a MAP-Elites archive keyed by the contact "
+                                  "sequence, CMA-ES restarts. Writes the crash file (CRASH.json: the scene, the "
+                                  "initial state, the realised controls, the outcome) that `nbst crash replay` and "
+                                  "`nbst render` read. Ctrl-C writes the best crash so far (exit 130). The same "
+                                  "--seed gives the same crash for any --jobs.",
+                      epilog="Example: nbst crash solve t-bone -o tbone.json --seed 1. Exit 0: met; 1: not met "
+                             "within --max-rollouts (the nearest crash is written); 2: bad input; 130: interrupted.")
+    v.add_argument("script", metavar="SCRIPT", help="built-in name (see `nbst crash scripts`) or a JSON file")
+    v.add_argument("-o", "--output", required=True, metavar="CRASH.json", help="where to write the crash")
+    add_seed(v, type=SEED, resumable=False)
+    v.add_argument("--max-rollouts", type=ROLLOUTS, default=3000, metavar="N",
+                   help=with_limits("rollout budget of the search (default 3000)", ROLLOUTS))
+    _runner_flags(v)
+    add_quiet(v, "no progress bar and no summary line")
+    v.set_defaults(func=cmd_solve)
+
+    r = cr.add_parser("replay", help="replay a crash file with plain mj_step and check it bit for bit",
+                      description="Replay CRASH.json from its own scene, initial state and recorded controls with "
+                                  "a plain mj_step loop (docs/crash.md has the same recipe in a few lines of "
+                                  "MuJoCo), check that the final state equals the file's bit for bit and that the "
+                                  "outcome read again is the file's, and print the outcome.",
+                      epilog="Exit 0: reproduced; 1: it differs; 2: bad input.")
+    r.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
+    r.add_argument("--json", action="store_true", help="print one JSON object: identical, outcome")
+    r.set_defaults(func=cmd_replay)
+
+
+def _runner_flags(p) -> None:
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--jobs", type=JOBS, default=None, metavar="K",
+                   help=with_limits("threads running the rollouts (default: all cores); any K gives the same crash",
+                                    JOBS))
+
+
+def _load(name):
+    from nbst.models.crash.script import load_script
+
+    return load_script(name)
+
+
+def cmd_scripts(args) -> int:
+    from nbst.models.crash.script import builtin_names, load_script
+
+    rows = []
+    for name in builtin_names():
+        s = load_script(name)
+        rows.append({"name": name, "vehicles": [f"{v.name} ({v.vtype.name})" for v in s.vehicles],
+                     "road": s.road.layout, "duration_s": s.duration, "description": s.description})
+    if args.json:
+        print_json(rows)
+        return 0
+    for r in rows:
+        print(f"{r['name']:12s} {r['road']:12s} {', '.join(r['vehicles'])}")
+        if r["description"]:
+            print(f"{'':12s} {r['description'].splitlines()[0]}")
+    return 0
+
+
+def cmd_check(args) -> int:
+    import math
+
+    s = _load(args.script)
+    print(f"{s.name}: {s.road.layout} road, {s.road.width:g} m wide, friction {s.road.friction:g}"
+          + (f", curbs {s.road.curb:g} m" if s.road.curb else "") + f"; {s.duration:g} s at {s.timestep * 1e3:g} ms")
+    names = s.names()
+    for v in s.vehicles:
+        f = v.fate
+        asks = []
+        if f.hits is not None:
+            asks.append("hits " + (", ".join(names[j] for j in f.hits) or "nobody"))
+        if f.rest is not None:
+            asks.append(f"rests within {f.rest[2]:g} m of ({f.rest[0]:g}, {f.rest[1]:g})")
+        if f.heading is not None:
+            asks.append(f"facing {math.degrees(f.heading[0]):g} +- {math.degrees(f.heading[1]):g} deg")
+        if f.quarter_turns is not None:
+            asks.append(f"{f.quarter_turns[0]}-{f.quarter_turns[1]} quarter turns")
+        if f.attitude is not None:
+            asks.append(f"ends {f.attitude}")
+        if f.spin is not None:
+            asks.append(f"spins {math.degrees(f.spin[0]):g} deg")
+        print(f"  {v.name}: {v.vtype.label} at ({v.x:g}, {v.y:g}) facing {math.degrees(v.heading):g} deg, "
+              f"{v.speed.lo * 3.6:g}-{v.speed.hi * 3.6:g} km/h; " + ("; ".join(asks) or "no fate asked"))
+    if s.order is not None:
+        print("  order: " + ", then ".join(f"{names[a]}-{names[b]}" for a, b in s.order))
+    return 0
+
+
+def _seed(args) -> int:
+    import numpy as np
+
+    return args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
+
+
+def write_crash(path, d: dict) -> None:
+    from nbst.outputs import write_text_atomic
+
+    import json
+
+    write_text_atomic(path, json.dumps(d, indent=1, allow_nan=False) + "\n")
+
+
+def cmd_solve(args) -> int:
+    from nbst.outputs import prepare_output, sigterm_as_interrupt
+    from nbst.parallel import default_jobs
+    from nbst.progress import progress_bar
+
+    from nbst.models.crash import crashfile, search
+    from nbst.models.crash.run import Runner
+
+    script = _load(args.script)
+    prepare_output(args.output)
+    seed = _seed(args)
+    runner = Runner(script, jobs=args.jobs or default_jobs())
+    bar = []
+
+    def progress(p) -> None:
+        if args.quiet:
+            return
+        if not bar:
+            bar.append(progress_bar(total=args.max_rollouts, unit="rollout", file=sys.stderr, dynamic_ncols=True,
+                                    desc=f"crash {script.name}", smoothing=0.1))
+        bar[0].update(p.rollouts - bar[0].n)
+        bar[0].set_postfix_str(f"best cost {p.best_cost:.3g}, signature {p.best_signature}, "
+                               f"{p.sequences} contact sequences", refresh=False)
+
+    progress(search.Progress(0, float("inf"), "0" * script.n, False, 0))
+    with sigterm_as_interrupt():
+        res = search.solve(script, seed=seed, max_rollouts=args.max_rollouts, runner=runner, callback=progress)
+    if bar:
+        bar[0].close()
+    b = res.best
+    S = search.space_of(script)
+    d = crashfile.crash_dict(script, runner.xml, runner.model, S.intents(b.u[None])[0], b.qpos0, b.qvel0, b.controls,
+                             b.final_qpos, b.outcome, seed=seed, period_steps=runner.period,
+                             search={"rollouts": res.rollouts, "restarts": res.restarts, "stopped": res.stopped,
+                                     "wall_time_s": round(res.wall_time, 2), "max_rollouts": args.max_rollouts,
+                                     "contact_sequences": len(res.archive)})
+    write_crash(args.output, d)
+    if not args.quiet:
+        met = "met" if b.outcome.solved else f"not met (cost {b.cost:.3g})"
+        print(f"crash {script.name}: {met}, signature {b.outcome.signature_text(script.n)} after {res.rollouts} "
+              f"rollouts ({res.wall_time:.0f} s), seed {seed}; wrote {args.output}", file=sys.stderr)
+    if res.stopped == "interrupted":
+        return 130
+    return 0 if b.outcome.solved else 1
+
+
+def cmd_replay(args) -> int:
+    import numpy as np
+
+    from nbst.models.crash import crashfile
+
+    d, script, model = crashfile.load(args.crash)
+    q, o = crashfile.replay(d, script, model)
+    same_state = bool(np.array_equal(q, np.array(d["final_qpos"])))
+    again = crashfile.outcome_dict(o, script, crashfile.scene_mod.layout(model, script.n).mass)
+    same_outcome = again == d["outcome"]
+    ok = same_state and same_outcome
+    if args.json:
+        print_json({"identical": ok, "final_state_identical": same_state, "outcome_identical": same_outcome,
+                    "outcome": again})
+    else:
+        print(f"{args.crash}: {'reproduced bit for bit' if ok else 'DIFFERS'} "
+              f"(final state {'identical' if same_state else 'differs'}, outcome "
+              f"{'identical' if same_outcome else 'differs'}); {'met' if o.solved else 'not met'}, signature "
+              f"{again['signature']}")
+        for c in again["contacts"]:
+            dv = ", ".join(f"{k} {v:.1f} km/h" for k, v in c["delta_v_kmh"].items())
+            print(f"  t = {c['t']:.3f} s  {c['a']}-{c['b']}  delta-V {dv}")
+        for v in again["vehicles"]:
+            r = v["rest"]
+            print(f"  {v['name']}: rests at ({r['x']:.2f}, {r['y']:.2f}) facing {r['heading_deg']:.1f} deg, "
+                  f"{v['attitude']}, {v['quarter_turns']} quarter turns")
+    return 0 if ok else 1

@@ -1,0 +1,154 @@
+"""Crash rollouts: determinism (threads, replay by plain mj_step), the outcome read from the
+sensors, the drivers, the crash file and its replay; the search on a small script."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from nbst.models.crash import crashfile, driver, run, script, space
+
+#: A short two-car crossing: A eastbound meets B northbound in about 1.6 s.
+SHORT = {
+    "kind": "nbst-crash-script", "name": "short",
+    "road": {"layout": "intersection", "width": 7, "length": 80},
+    "duration": 2.5,
+    "vehicles": [
+        {"name": "A", "type": "sedan", "start": {"x": -22, "y": -1.75, "heading": 0}, "speed": [45, 55],
+         "driver": {"aim": {"x": [0, 4], "y": -1.75}, "arrive": [1.5, 1.8], "after_impact": ["brake", "coast"]},
+         "fate": {"hits": ["B"]}},
+        {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -22, "heading": 90}, "speed": [45, 55],
+         "driver": {"aim": {"x": 1.75, "y": [-2, 2]}, "arrive": [1.5, 1.8]}, "fate": {"hits": ["A"]}},
+    ],
+}
+
+
+@pytest.fixture(scope="module")
+def short():
+    s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
+    sp = space.space_of(s)
+    U = np.random.default_rng(3).random((3, sp.dim))
+    R = run.Runner(s, jobs=1)
+    return s, sp, U, R, R.run(sp.intents(U))
+
+
+def test_jobs_do_not_change_a_rollout(short):
+    s, sp, U, R, res = short
+    res2 = run.Runner(s, jobs=2).run(sp.intents(U))
+    assert np.array_equal(res.final_qpos, res2.final_qpos)  # bitwise determinism is the claim
+    assert np.array_equal(res.controls, res2.controls)
+
+
+def test_a_plain_mj_step_loop_with_the_recorded_controls_replays_bit_for_bit(short):
+    import mujoco
+
+    s, sp, U, R, res = short
+    m = R.model
+    for k in range(len(U)):
+        d = mujoco.MjData(m)
+        d.qpos[:], d.qvel[:] = res.qpos0[k], res.qvel0[k]
+        for p, row in enumerate(res.controls[k]):
+            d.ctrl[:] = row
+            mujoco.mj_step(m, d, nstep=min(R.period, R.nstep - p * R.period))
+        assert np.array_equal(d.qpos, res.final_qpos[k])
+
+
+def test_the_contact_sensors_read_who_hit_whom_and_the_impulse(short):
+    s, sp, U, R, res = short
+    hit = [o for o in res.outcomes if o.contacts]
+    assert hit, "the short script's drivers meet in the junction"
+    for o in hit:
+        i, j, t0, t1, pos, J = o.contacts[0]
+        assert (i, j) == (0, 1) and 0.5 < t0 <= t1 < s.duration
+        assert abs(pos[0]) < 6 and abs(pos[1]) < 6  # in the junction
+        a, b = o.vehicles
+        # delta-V from the impulse: the same impulse on both, so delta-V scales as 1/m (exact)
+        assert a.delta_v * 1450.0 == pytest.approx(b.delta_v * 2000.0, rel=1e-9)
+        assert 0 < b.delta_v < 30  # m/s: bounded by the closing speed
+        # paced: between its slowest start (45 km/h) and the pace that reaches the farthest aim point
+        # (26 m) at the earliest arrival (1.5 s)
+        assert 45 / 3.6 - 0.5 <= a.impact_speed <= 26 / 1.5 + 0.5
+        assert o.signature == 0b11 and o.solved
+
+
+def test_ackermann_turns_the_inner_wheel_more():
+    left, right = driver.ackermann(np.array([0.3, -0.3]), np.array([2.8, 2.8]), np.array([1.6, 1.6]))
+    assert left[0] > 0.3 > right[0] > 0 and right[1] < -0.3 < left[1] < 0
+    # both wheels turn about one point on the rear axle's line: L / tan(inner) - L / tan(outer) = track
+    assert 2.8 / math.tan(right[0]) - 2.8 / math.tan(left[0]) == pytest.approx(1.6, rel=1e-12)
+
+
+def test_pure_pursuit_reaches_an_aim_point_off_the_heading():
+    # one car, aim 30 m ahead and 10 m to the left: it passes within 1.5 m of it
+    d = {"kind": "nbst-crash-script", "road": {"layout": "straight", "width": 30, "length": 120}, "duration": 5.0,
+         "vehicles": [{"name": "A", "type": "sedan", "start": {"x": -30, "y": 0, "heading": 0}, "speed": 30,
+                       "driver": {"aim": {"x": 0, "y": 10}}}]}
+    s = script.script_from_dict(d)
+    R = run.Runner(s)
+    import mujoco
+
+    res = R.run(space.space_of(s).intents(np.zeros((1, 0))))
+    m = R.model
+    dd = mujoco.MjData(m)
+    dd.qpos[:], dd.qvel[:] = res.qpos0[0], res.qvel0[0]
+    best = math.inf
+    for p, row in enumerate(res.controls[0]):
+        dd.ctrl[:] = row
+        mujoco.mj_step(m, dd, nstep=R.period)
+        best = min(best, math.hypot(dd.qpos[0] - 0.0, dd.qpos[1] - 10.0))
+    assert best < 1.5
+
+
+def test_reaction_braking_stops_the_car_as_locked_wheels_do():
+    # braking at t = 0.5 s from 20 m/s on a dry road: at rest, v^2 / 2 mu g (+ 0.5 s of travel) on, within 3 %
+    d = {"kind": "nbst-crash-script", "road": {"layout": "straight", "width": 7, "length": 200}, "duration": 4.0,
+         "vehicles": [{"name": "A", "type": "sedan", "start": {"x": -80, "y": -1.75, "heading": 0}, "speed": 72,
+                       "driver": {"brake_at": 0.5}}]}
+    s = script.script_from_dict(d)
+    res = run.Runner(s).run(space.space_of(s).intents(np.zeros((1, 0))))
+    v = res.outcomes[0].vehicles[0]
+    travelled = v.rest[0] + 80
+    assert not v.moving
+    assert travelled == pytest.approx(20 * 0.5 + 20 ** 2 / (2 * 0.8 * 9.81), rel=0.03)
+
+
+def test_the_crash_file_replays_and_refuses_tampering(short, tmp_path):
+    s, sp, U, R, res = short
+    k = 0
+    d = crashfile.crash_dict(s, R.xml, R.model, sp.intents(U[k:k + 1])[0], res.qpos0[k], res.qvel0[k],
+                             res.controls[k], res.final_qpos[k], res.outcomes[k], seed=7, period_steps=R.period)
+    f = tmp_path / "c.json"
+    f.write_text(json.dumps(d, allow_nan=False))
+    dd, s2, m2 = crashfile.load(f)
+    q, o = crashfile.replay(dd, s2, m2)
+    assert np.array_equal(q, np.array(dd["final_qpos"]))
+    assert crashfile.outcome_dict(o, s2, run.scene_mod.layout(m2, 2).mass) == dd["outcome"]
+    # the renderer needs nothing more: names, bodies, actuators in control order, fates, contacts
+    assert dd["controls"]["actuators"][:8] == dd["vehicles"][0]["actuators"]
+    assert dd["vehicles"][0]["fate"]["hits"] == ["B"] and dd["outcome"]["contacts"][0]["a"] == "A"
+    for field, value in (("qpos0", [1.0]), ("scene_xml", '<mujoco><include file="x.xml"/></mujoco>'),
+                         ("controls", {"period_steps": 0, "rows": []})):
+        bad = dict(d)
+        bad[field] = value
+        f.write_text(json.dumps(bad))
+        with pytest.raises(crashfile.CrashFileError, match=field.split("_")[0]):
+            crashfile.load(f)
+
+
+@pytest.mark.slow
+def test_solve_meets_the_short_script_and_the_cli_replays_it(tmp_path, capsys):
+    from nbst.cli.main import main
+
+    f = tmp_path / "short.json"
+    f.write_text(json.dumps(SHORT))
+    out = tmp_path / "crash.json"
+    assert main(["crash", "solve", str(f), "-o", str(out), "--seed", "1", "--max-rollouts", "64", "-q",
+                 "--jobs", "1"]) == 0
+    d = json.loads(out.read_text())
+    assert d["outcome"]["solved"] and d["seed"] == 1
+    assert main(["crash", "replay", str(out)]) == 0
+    assert "reproduced bit for bit" in capsys.readouterr().out
+    out2 = tmp_path / "crash2.json"
+    assert main(["crash", "solve", str(f), "-o", str(out2), "--seed", "1", "--max-rollouts", "64", "-q",
+                 "--jobs", "2"]) == 0
+    assert json.loads(out2.read_text())["final_qpos"] == d["final_qpos"]  # --jobs changes nothing

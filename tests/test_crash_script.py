@@ -1,0 +1,169 @@
+"""The crash script's input gate: every refusal is one line naming the file and the field."""
+import copy
+import json
+import math
+
+import pytest
+
+from nbst.models.crash import script as S
+
+
+def base() -> dict:
+    return {
+        "kind": "nbst-crash-script", "name": "t",
+        "road": {"layout": "intersection", "width": 7, "length": 120, "curb": 0.15},
+        "duration": 4.0,
+        "vehicles": [
+            {"name": "A", "type": "sedan", "start": {"x": -40, "y": -1.75, "heading": 0}, "speed": [40, 60],
+             "driver": {"aim": {"x": [0, 5], "y": -1.75}, "arrive": [2.5, 3.5]},
+             "fate": {"hits": ["B"], "rest": {"x": 5, "y": 5, "radius": 2}}},
+            {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -40, "heading": 90}, "speed": 50,
+             "fate": {"hits": ["A"]}},
+        ],
+    }
+
+
+def refuse(d, field, words=()):
+    with pytest.raises(S.ScriptError) as e:
+        S.script_from_dict(d, source="x.json")
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith("x.json: ")
+    assert e.value.field == field, msg
+    for w in words:
+        assert w in msg, msg
+    return msg
+
+
+def test_a_good_script_reads_in_si_units():
+    s = S.script_from_dict(base(), source="x.json")
+    a, b = s.vehicles
+    assert a.speed.lo == pytest.approx(40 / 3.6) and a.speed.hi == pytest.approx(60 / 3.6)
+    assert b.speed.fixed and b.heading == pytest.approx(math.pi / 2)
+    assert a.fate.hits == (1,) and a.fate.rest == (5.0, 5.0, 2.0)
+    assert s.timestep == 0.002 and s.road.friction == S.SURFACES["dry"]
+
+
+def test_every_builtin_script_loads():
+    names = S.builtin_names()
+    assert {"t-bone", "chain3", "rear-end4", "rollover", "stunt"} <= set(names)
+    for n in names:
+        s = S.load_script(n)
+        assert s.n >= 1 and any(v.fate.asks() for v in s.vehicles)
+
+
+@pytest.mark.parametrize("path, value, field, words", [
+    (("road", "layout"), "roundabout", "road.layout", ["straight", "intersection", "curve"]),
+    (("road", "friction"), 2.5, "road.friction", ["outside"]),
+    (("road", "friction"), float("nan"), "road.friction", ["finite"]),
+    (("road", "width"), True, "road.width", ["number"]),
+    (("duration",), 1e300, "duration", ["outside"]),
+    (("vehicles", 0, "speed"), [70, 40], "vehicles[0].speed", ["low end"]),
+    (("vehicles", 0, "speed"), 400, "vehicles[0].speed", ["outside"]),
+    (("vehicles", 0, "type"), "tank", "vehicles[0].type", ["sedan"]),
+    (("vehicles", 1, "name"), "A", "vehicles[1].name", ["differ"]),
+    (("vehicles", 0, "driver", "after_impact"), "pray", "vehicles[0].driver.after_impact", ["brake"]),
+    (("vehicles", 0, "fate", "attitude"), "flying", "vehicles[0].fate.attitude", ["roof"]),
+    (("vehicles", 0, "fate", "quarter_turns"), 2.5, "vehicles[0].fate.quarter_turns", ["whole"]),
+])
+def test_bad_values_are_refused_with_their_field(path, value, field, words):
+    d = base()
+    o = d
+    for k in path[:-1]:
+        o = o[k]
+    o[path[-1]] = value
+    refuse(d, field, words)
+
+
+def test_unknown_keys_are_refused_with_a_hint():
+    d = base()
+    d["vehicles"][0]["fate"]["hit"] = ["B"]
+    msg = refuse(d, "vehicles[0].fate.hit", ["unknown key", "hits"])
+    assert "did you mean" in msg
+    d = base()
+    d["colour"] = "red"
+    refuse(d, "colour", ["unknown key"])
+
+
+def test_overlapping_starts_are_refused():
+    d = base()
+    d["vehicles"][1]["start"] = {"x": -38, "y": -1.75, "heading": 0}
+    refuse(d, "vehicles[1].start", ["overlaps"])
+
+
+def test_a_start_off_the_road_is_refused():
+    d = base()
+    d["vehicles"][0]["start"] = {"x": -40, "y": 3.0, "heading": 0}  # its left side 0.4 m past the carriageway's edge
+    refuse(d, "vehicles[0].start", ["not on the road", "corner"])
+
+
+def test_a_fate_outside_the_map_is_refused():
+    d = base()
+    d["vehicles"][0]["fate"]["rest"] = {"x": 500, "y": 0}
+    refuse(d, "vehicles[0].fate.rest", ["outside the map"])
+
+
+def test_contradictory_hit_lists_are_refused():
+    d = base()
+    d["vehicles"][1]["fate"]["hits"] = []  # A says it hits B, B says it hits nobody
+    refuse(d, "vehicles[1].fate.hits", ["mutual"])
+    # three vehicles whose lists need a cycle of first contacts
+    d = base()
+    d["vehicles"].append({"name": "C", "type": "van", "start": {"x": -1.75, "y": 40, "heading": -90}, "speed": 30})
+    d["vehicles"][0]["fate"] = {"hits": ["B", "C"]}
+    d["vehicles"][1]["fate"] = {"hits": ["C", "A"]}
+    d["vehicles"][2]["fate"] = {"hits": ["A", "B"]}
+    refuse(d, "vehicles", ["contradict"])
+
+
+def test_hits_must_agree_with_the_global_order():
+    d = base()
+    d["order"] = [["B", "A"]]
+    S.script_from_dict(d, source="x.json")  # the same pair, either way round
+    d["vehicles"].append({"name": "C", "type": "van", "start": {"x": -1.75, "y": 40, "heading": -90}, "speed": 30})
+    d["order"] = [["A", "C"], ["A", "B"]]
+    refuse(d, "vehicles[0].fate.hits", ["global order"])
+    d["order"] = [["A", "A"]]
+    refuse(d, "order[0]", ["itself"])
+
+
+def test_impossible_fates_are_refused():
+    d = base()
+    d["road"]["curb"] = 0
+    d["vehicles"][0]["fate"]["strikes"] = {"curb": True}
+    refuse(d, "vehicles[0].fate.strikes.curb", ["no curbs"])
+    d = base()
+    d["vehicles"][0]["fate"].update({"quarter_turns": 1, "attitude": "roof"})
+    refuse(d, "vehicles[0].fate.attitude", ["quarter turns"])
+    d = base()
+    d["vehicles"][0]["fate"] = {"delta_v": [10, 20]}
+    refuse(d, "vehicles[0].fate.delta_v", ["whom it hits"])
+
+
+def test_the_file_gate_refuses_nan_huge_integers_and_other_kinds(tmp_path):
+    f = tmp_path / "s.json"
+    f.write_text(json.dumps(base()).replace('"duration": 4.0', '"duration": NaN'))
+    with pytest.raises(S.ScriptError, match="duration: must be finite"):
+        S.load_script(f)
+    f.write_text(json.dumps(base()).replace('"duration": 4.0', '"duration": ' + "9" * 500))
+    with pytest.raises(S.ScriptError, match="500 digits"):
+        S.load_script(f)
+    d = base()
+    d["kind"] = "nbst-bowling-shot"
+    f.write_text(json.dumps(d))
+    with pytest.raises(S.ScriptError, match="kind"):
+        S.load_script(f)
+    with pytest.raises(S.ScriptError, match="no such file and no built-in"):
+        S.load_script("t-bon")
+
+
+def test_the_cli_check_refuses_in_one_line_with_exit_2(tmp_path, capsys):
+    from nbst.cli.main import main
+
+    d = copy.deepcopy(base())
+    d["vehicles"][0]["speed"] = [40, "fast"]
+    f = tmp_path / "s.json"
+    f.write_text(json.dumps(d))
+    assert main(["crash", "check", str(f)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "vehicles[0].speed[1]" in err and "Traceback" not in err
+    assert main(["crash", "check", "t-bone"]) == 0
