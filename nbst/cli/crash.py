@@ -51,7 +51,7 @@ def register(sub) -> None:
                              "within --max-rollouts (the nearest crash is written); 2: bad input; 130: interrupted.")
     v.add_argument("script", metavar="SCRIPT", help="built-in name (see `nbst crash scripts`) or a JSON file")
     v.add_argument("-o", "--output", required=True, metavar="CRASH.json", help="where to write the crash")
-    add_seed(v, type=SEED, resumable=False)
+    add_seed(v, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
     v.add_argument("--max-rollouts", type=ROLLOUTS, default=3000, metavar="N",
                    help=with_limits("rollout budget of the search (default 3000)", ROLLOUTS))
     _runner_flags(v)
