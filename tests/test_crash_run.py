@@ -152,3 +152,62 @@ def test_solve_meets_the_short_script_and_the_cli_replays_it(tmp_path, capsys):
     assert main(["crash", "solve", str(f), "-o", str(out2), "--seed", "1", "--max-rollouts", "64", "-q",
                  "--jobs", "2"]) == 0
     assert json.loads(out2.read_text())["final_qpos"] == d["final_qpos"]  # --jobs changes nothing
+
+
+def test_driver_noise_uses_common_random_numbers(short):
+    from nbst.models.crash import robust
+
+    s, sp, U, R, res = short
+    a, b = sp.intents(U[:2])
+    na, nb = robust.noisy(a, 6, seed=5), robust.noisy(b, 6, seed=5)
+    speed = driver.IX["speed"]
+    # the same draws on both: copy i moves each intent set by the same amount (no clipping here)
+    assert np.allclose(na[:, :, speed] - a[:, speed], nb[:, :, speed] - b[:, speed], rtol=0, atol=1e-12)
+    assert np.isnan(na[:, :, driver.IX["brake_at"]]).all()  # an off behaviour stays off
+    assert (na[:, :, driver.IX["after"]] == a[:, driver.IX["after"]]).all()  # the choice is kept
+    assert not np.allclose(robust.noisy(a, 6, seed=6), na)  # another seed, other draws
+
+
+@pytest.mark.slow
+def test_probability_and_ladder_of_a_crash(short):
+    from nbst.models.crash import robust
+
+    s, sp, U, R, res = short
+    k = next(i for i, o in enumerate(res.outcomes) if o.solved)
+    intents = sp.intents(U[k:k + 1])[0]
+    est = robust.probability(R, intents, 16, seed=2)
+    assert est.n == 16 and 0 <= est.lo <= est.p <= est.hi <= 1
+    assert sum(est.outcomes.values()) == 16 and est.k == sum(v for lab, v in est.outcomes.items() if "+" in lab)
+    lad = robust.ladder(s, R.xml, intents)
+    assert lad.timesteps == [0.002, 0.001, 0.0005] and lad.wanted[1]  # solved at 2 ms
+    assert lad.holds  # two cars meeting square in the junction: the same crash at 1 and 0.5 ms
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_same_rollouts(short):
+    from dask.distributed import LocalCluster
+
+    s, sp, U, R, res = short
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as lc:
+        C = run.ClusterRunner(s, lc.scheduler_address)
+        try:
+            got = C.run(sp.intents(U))
+        finally:
+            C.close()
+    assert np.array_equal(got.final_qpos, res.final_qpos) and np.array_equal(got.controls, res.controls)
+
+
+@pytest.mark.slow
+def test_solve_robust_writes_the_pick_with_its_probability_and_ladder(tmp_path):
+    from nbst.cli.main import main
+
+    f = tmp_path / "short.json"
+    f.write_text(json.dumps(SHORT))
+    out = tmp_path / "r.json"
+    assert main(["crash", "solve", str(f), "-o", str(out), "--seed", "1", "--max-rollouts", "64", "-q", "--jobs", "1",
+                 "--robust", "24", "--samples", "12"]) == 0
+    d = json.loads(out.read_text())
+    p = d["probability"]
+    assert p["n"] == 12 and p["lo"] <= p["p"] <= p["hi"] and d["ladder"]["rows"][0][0] == 0.002
+    assert main(["crash", "replay", str(out)]) == 0
+    assert main(["crash", "probability", str(out), "--samples", "8", "--jobs", "1", "-q"]) == 0

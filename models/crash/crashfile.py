@@ -9,6 +9,8 @@ needs, nothing to look up elsewhere:
 * ``vehicles``: per vehicle its name, type and figures, its body, free joint, actuators (in
   control order), wheel bodies and tyre geoms, colour, the driver's intent (user units) and
   the fate asked (user units: rest region, heading and its tolerance, hits, ...);
+* ``intents``: the drivers' intents, exact (SI; ``columns`` the intent names, one row per
+  vehicle, null = off): what ``nbst crash probability`` perturbs;
 * ``qpos0``, ``qvel0``: the initial state (JSON floats by ``repr``: exact);
 * ``controls``: the realised controls, steps x actuators run-length coded: ``actuators``
   (names, the model's order), ``period_steps`` and ``rows``: row k holds for steps
@@ -142,6 +144,8 @@ def crash_dict(script: Script, xml: str, model, intents: np.ndarray, qpos0, qvel
         "scene_xml": xml, "timestep": float(model.opt.timestep), "duration": script.duration,
         "nstep": int(round(script.duration / model.opt.timestep)),
         "vehicles": vehicles,
+        "intents": {"columns": list(drv.INTENT),
+                    "rows": [[None if math.isnan(x) else float(x) for x in row] for row in intents]},
         "qpos0": [float(x) for x in qpos0], "qvel0": [float(x) for x in qvel0],
         "controls": {"actuators": [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, k) for k in range(model.nu)],
                      "period_steps": int(period_steps), "rows": [[float(x) for x in r] for r in controls]},
@@ -181,7 +185,7 @@ def load(path):
     if not isinstance(d, dict) or d.get("kind") != KIND:
         _fail(src, "kind", f"not an nbst crash file (kind must be {KIND!r}); a crash script is solved with "
                            f"`nbst crash solve`")
-    for k in ("script", "scene_xml", "qpos0", "qvel0", "controls", "outcome", "final_qpos"):
+    for k in ("script", "scene_xml", "intents", "qpos0", "qvel0", "controls", "outcome", "final_qpos"):
         if k not in d:
             _fail(src, k, "missing")
     try:
@@ -219,7 +223,24 @@ def load(path):
                                     f"periods of {ps} steps needs {-(-nstep // ps)}")
     for k, row in enumerate(c["rows"]):
         _vector({"r": row}, "r", f"{src}: controls.rows[{k}]", CTRL_MAX, model.nu)
+    it = d["intents"]
+    if not isinstance(it, dict) or it.get("columns") != list(drv.INTENT) or not isinstance(it.get("rows"), list) \
+            or len(it["rows"]) != script.n:
+        _fail(src, "intents", f"must hold columns {list(drv.INTENT)} and one row per vehicle")
+    for k, row in enumerate(it["rows"]):
+        if not isinstance(row, list) or len(row) != len(drv.INTENT) or not all(
+                x is None or (isinstance(x, (int, float)) and not isinstance(x, bool) and abs(x) <= QPOS_MAX)
+                for x in row):
+            _fail(src, f"intents.rows[{k}]", f"must be {len(drv.INTENT)} finite numbers (or null: off)")
+        a = row[drv.IX["after"]]
+        if a is None or a not in (0, 1, 2):
+            _fail(src, f"intents.rows[{k}]", "its after-impact code must be 0, 1 or 2")
     return d, script, model
+
+
+def intents_array(d: dict, script: Script) -> np.ndarray:
+    """(n, len(INTENT)) the drivers' intents of a checked crash dict (SI, exact; NaN = off)."""
+    return np.array([[np.nan if x is None else x for x in row] for row in d["intents"]["rows"]], dtype=float)
 
 
 def controls_array(d: dict) -> np.ndarray:
@@ -247,9 +268,9 @@ def replay(d: dict, script: Script, model):
             md.ctrl[:] = rows[k // ps]
             if k:
                 rec.period(md.qpos[None])
-        speed = np.hypot(*np.moveaxis(md.qvel[vi], -1, 0))[None]
+        vel = md.qvel[vi][None]
         mujoco.mj_step(model, md)
-        rec.step((k + 1) * dt, md.sensordata[None], speed)
+        rec.step((k + 1) * dt, md.sensordata[None], vel)
     rec.finish(md.qpos[None], md.qvel[None])
     o = out_mod.outcomes(rec, script.names(), L.mass)[0]
     out_mod.judge(o, script, rec.min_dist[0])

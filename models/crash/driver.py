@@ -130,12 +130,22 @@ def ackermann(delta: np.ndarray, wheelbase: np.ndarray, track: np.ndarray) -> tu
 
 
 def _targets(fleet: Fleet, intent: np.ndarray, state: DriverState, x, y, yaw):
-    """(target x, target y, has target) per (sim, vehicle); advances past reached targets."""
+    """(target x, target y, has target) per (sim, vehicle); advances past reached targets.
+    Vehicles without waypoints (the aim point alone) are done in numpy over the batch."""
     s, n = x.shape
     tx, ty, has = np.zeros((s, n)), np.zeros((s, n)), np.zeros((s, n), bool)
     for j in range(n):
         pts = fleet.waypoints[j]
         aim = intent[:, j, [IX["aim_x"], IX["aim_y"]]]  # (s, 2)
+        if not len(pts):
+            live = (state.target[:, j] == 0) & np.isfinite(aim).all(axis=1)
+            dx, dy = aim[:, 0] - x[:, j], aim[:, 1] - y[:, j]
+            ahead = dx * np.cos(yaw[:, j]) + dy * np.sin(yaw[:, j])
+            done = live & ((np.hypot(dx, dy) < REACHED) | (ahead < 0.0))
+            state.target[done, j] = 1
+            live &= ~done
+            tx[:, j], ty[:, j], has[:, j] = np.where(live, aim[:, 0], 0.0), np.where(live, aim[:, 1], 0.0), live
+            continue
         for i in range(s):
             k = state.target[i, j]
             while True:
@@ -162,6 +172,8 @@ def _remaining(fleet: Fleet, intent, state, x, y, tx, ty, has) -> np.ndarray:
     out = np.hypot(tx - x, ty - y)
     for j in range(n):
         pts = fleet.waypoints[j]
+        if not len(pts):
+            continue  # the aim point is the target
         for i in range(s):
             if not has[i, j]:
                 continue

@@ -27,7 +27,7 @@ import numpy as np
 
 from nbst.models.crash import driver as drv
 from nbst.models.crash import scene as scene_mod
-from nbst.models.crash.script import Script, attitude_of_turns
+from nbst.models.crash.script import Script
 
 KMH = 3.6
 #: cos(45 deg): the up axis's vertical part that splits upright / side / roof.
@@ -64,22 +64,26 @@ class Recorder:
         self.min_dist = np.full((nsim, P), np.inf)
         self.final = None
         self.pair_of = [[k for k, (a, b) in enumerate(L.pairs) if i in (a, b)] for i in range(n)]
-        self._f = (L.pair_adr[:, None] + np.array([0]))[:, 0]
+        self._f = L.pair_adr.copy()
         self._F = L.pair_adr[:, None] + np.arange(1, 4)
         self._p = L.pair_adr[:, None] + np.arange(4, 7)
-        self.started = False
+        # every "found" number (pairs, curbs, barriers) at once: a step with none costs one test
+        self._any = np.concatenate([L.pair_adr, L.curb_adr[L.curb_adr >= 0], L.barrier_adr[L.barrier_adr >= 0]])
 
     def begin(self, qpos: np.ndarray) -> None:
         """The state at t = 0 (nsim, nq): the starting roll and yaw."""
         q = qpos[:, self.L.qpos[:, None] + np.arange(3, 7)]
         self.roll_prev, self.yaw_prev = _roll(q), drv.yaw_of(q)
 
-    def step(self, t: float, sensordata: np.ndarray, speed_before: np.ndarray) -> np.ndarray:
+    def step(self, t: float, sensordata: np.ndarray, vel_before: np.ndarray) -> np.ndarray:
         """After a step ending at time ``t``: ``sensordata`` (nsim, nsensordata), the vehicles'
-        speeds before the step (nsim, n). Returns (nsim, n) bool: touched anything this step."""
+        planar velocities before the step (nsim, n, 2). Returns (nsim, n) bool: touched anything
+        this step."""
         L = self.L
-        found = sensordata[:, self._f] > 0
         touched = np.zeros(self.touch.shape, bool)
+        if not sensordata[:, self._any].any():
+            return touched
+        found = sensordata[:, self._f] > 0
         if found.any():
             F = sensordata[:, self._F]
             self.J += np.where(found[..., None], F * self.dt, 0.0)
@@ -92,7 +96,7 @@ class Recorder:
                 got = found[:, self.pair_of[i]].any(axis=1)
                 first = got & np.isnan(self.hit_first[:, i])
                 self.hit_first[first, i] = t
-                self.impact_speed[first, i] = speed_before[first, i]
+                self.impact_speed[first, i] = np.hypot(*vel_before[first, i].T)
                 touched[:, i] |= got
         for arr, adr in ((self.curb, L.curb_adr), (self.barrier, L.barrier_adr)):
             if adr[0] < 0:
@@ -300,6 +304,3 @@ def judge(o: Outcome, script: Script, min_dist: np.ndarray | None = None) -> Out
     o.solved = o.order_ok and sig == (1 << script.n) - 1
     return o
 
-
-def turns_attitude_agree(turns: int, attitude: str) -> bool:
-    return attitude_of_turns(turns) == attitude

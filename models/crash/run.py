@@ -8,7 +8,9 @@ batch, after which the contact sensors are read (:class:`.outcome.Recorder`); ev
 controls each simulation received (its realised controls: one row per period, steps x
 actuators in run-length form) are kept, so that a plain ``mj_step`` loop replays the rollout
 bit for bit (warm-starting is off and the Batch's simulations are independent, so the thread
-count changes nothing: tests/test_crash_run.py).
+count changes nothing: tests/test_crash_run.py). The stepping itself is the rollout room's
+(:class:`nbst.models.mjsearch.batch.BatchRunner`); this module gives it the drivers (its
+controller) and the outcome recorder (its observer).
 
 Compute only.
 """
@@ -57,7 +59,7 @@ class Runner:
 
     def __init__(self, script: Script, *, jobs: int = 1, timestep: float | None = None, xml: str | None = None,
                  batch: int = BATCH):
-        from mujoco import batch as mjbatch
+        from nbst.models.mjsearch.batch import BatchRunner
 
         self.script = script
         self.xml = scene_text(script) if xml is None else xml
@@ -74,7 +76,7 @@ class Runner:
         self.periods = -(-self.nstep // self.period)
         self.jobs = max(1, int(jobs))
         self.size = int(batch)
-        self.batch = mjbatch.Batch(self.model, nsim=self.size, nthread=self.jobs)
+        self.stepper = BatchRunner(self.model, jobs=self.jobs, size=self.size)
         self.names = script.names()
 
     def initial(self, intents: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -97,50 +99,87 @@ class Runner:
                         final_qpos=np.concatenate([p.final_qpos for p in parts]))
 
     def _batch(self, intents: np.ndarray) -> Rollouts:
-        import mujoco
-
-        B, L, m = self.batch, self.L, self.model
+        L, m = self.L, self.model
         s = len(intents)
-        ids = None if s == self.size else np.arange(s)
         qpos0, qvel0 = self.initial(intents)
-        B.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE.value)
-        qpos, qvel, ctrl, sensordata = B.qpos, B.qvel, B.ctrl, B.sensordata
-        qpos[:s] = qpos0
-        qvel[:s] = qvel0
-        ctrl[:s] = 0.0
         rec = out_mod.Recorder(L, s, self.dt)
-        rec.begin(qpos[:s])
+        rec.begin(qpos0)
         state = drv.DriverState.start(s, L.n, self.periods)
-        controls = np.zeros((s, self.periods, m.nu))
         touched = np.zeros((s, L.n), bool)
         vi = L.qvel[:, None] + np.arange(2)
-        for k in range(self.nstep):
-            if k % self.period == 0:
-                p = k // self.period
-                u = drv.controls(k * self.dt, self.fleet, intents, state, qpos[:s][:, L.qpos[:, None] + np.arange(3)],
-                                 qpos[:s][:, L.qpos[:, None] + np.arange(3, 7)], qvel[:s][:, L.qvel[:, None] + np.arange(3)],
-                                 qvel[:s][:, L.spin[:, 2:4]], touched)
-                row = np.zeros((s, m.nu))
-                row[:, L.ctrl] = u
-                ctrl[:s] = row
-                controls[:, p] = row
-                touched[:] = False
-                if p:
-                    rec.period(qpos[:s])
-            speed = np.hypot(*np.moveaxis(qvel[:s][:, vi], -1, 0))
-            B.step(ids)
-            touched |= rec.step((k + 1) * self.dt, sensordata[:s], speed)
-        rec.finish(qpos[:s], qvel[:s])
+        pi, qi, vel = L.qpos[:, None] + np.arange(3), L.qpos[:, None] + np.arange(3, 7), L.qvel[:, None] + np.arange(3)
+        vel0 = [qvel0[:, vi]]
+
+        def controller(v):
+            u = drv.controls(v.t, self.fleet, intents, state, v.qpos[:, pi], v.qpos[:, qi], v.qvel[:, vel],
+                             v.qvel[:, L.spin[:, 2:4]], touched)
+            row = np.zeros((s, m.nu))
+            row[:, L.ctrl] = u
+            touched[:] = False
+            if v.step:
+                rec.period(v.qpos)
+            return row
+
+        def observer(v):
+            touched[:] |= rec.step(v.t, v.sensordata, vel0[0])
+            vel0[0] = v.qvel[:, vi]  # a copy (fancy indexing): the velocities before the next step
+
+        out = self.stepper.run(qpos0, qvel0, self.nstep, period=self.period, controller=controller, observer=observer)
+        if not np.isfinite(out.final_qpos).all():
+            from nbst.errors import MujocoError
+
+            bad = int((~np.isfinite(out.final_qpos).all(axis=1)).sum())
+            raise MujocoError(f"the simulation diverged (non-finite state) in {bad} of {s} rollouts")
+        rec.finish(out.final_qpos, out.final_qvel)
         outs = out_mod.outcomes(rec, self.names, L.mass)
         for o, md in zip(outs, rec.min_dist):
             out_mod.judge(o, self.script, md)
-        bad = [i for i in range(s) if not np.isfinite(qpos[i]).all()]
-        if bad:
-            from nbst.errors import MujocoError
-
-            raise MujocoError(f"the simulation diverged (non-finite state) in {len(bad)} of {s} rollouts")
-        return Rollouts(outcomes=outs, min_dist=rec.min_dist.copy(), qpos0=qpos0, qvel0=qvel0, controls=controls,
-                        final_qpos=np.array(qpos[:s]))
+        return Rollouts(outcomes=outs, min_dist=rec.min_dist.copy(), qpos0=qpos0, qvel0=qvel0, controls=out.controls,
+                        final_qpos=out.final_qpos)
 
     def close(self) -> None:
-        self.batch = None
+        self.stepper.close()
+
+
+#: Per worker process: (scene text, timestep) -> a one-thread Runner of the script (built on first use).
+_WORKER_RUNNERS: dict = {}
+
+
+def _run_on_worker(intents: list, raw: dict, xml: str, timestep: float) -> list:
+    """On a Dask worker: the rollouts of ``intents`` (a list of (n, len(INTENT)) arrays), as
+    per-rollout tuples (outcome, min_dist, qpos0, qvel0, controls, final_qpos)."""
+    from nbst.models.crash.script import script_from_dict
+
+    key = (xml, timestep)
+    R = _WORKER_RUNNERS.get(key)
+    if R is None:
+        R = _WORKER_RUNNERS[key] = Runner(script_from_dict(raw), jobs=1, xml=xml, timestep=timestep)
+    r = R.run(np.array(intents))
+    return list(zip(r.outcomes, r.min_dist, r.qpos0, r.qvel0, r.controls, r.final_qpos))
+
+
+class ClusterRunner(Runner):
+    """A :class:`Runner` whose batches run on the workers of a Dask scheduler (``--cluster``):
+    each batch is cut into one chunk per worker (:func:`nbst.models.mjsearch.cluster.map_chunks`),
+    every worker runs its chunk with a one-thread Runner of the same scene text, and the results
+    come back in order: the same bits as ``--jobs K`` (a rollout depends on its intents only)."""
+
+    def __init__(self, script: Script, address: str, **kw):
+        from nbst.cluster import connect
+
+        super().__init__(script, jobs=1, **kw)
+        self.client = connect(address)
+
+    def _batch(self, intents: np.ndarray) -> Rollouts:
+        from nbst.models.mjsearch.cluster import map_chunks
+
+        got = map_chunks(self.client, _run_on_worker, list(intents), self.script.raw, self.xml, self.dt)
+        o, md, q0, v0, c, q = zip(*got)
+        return Rollouts(outcomes=list(o), min_dist=np.array(md), qpos0=np.array(q0), qvel0=np.array(v0),
+                        controls=np.array(c), final_qpos=np.array(q))
+
+    def close(self) -> None:
+        super().close()
+        if self.client is not None:
+            self.client.close()
+            self.client = None

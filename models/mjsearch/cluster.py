@@ -8,6 +8,8 @@ the same), and the results come back in order. Everything else (the batches, the
 random numbers) stays in the calling process, so a run gives the same bits as ``--jobs K``
 for the same seed: a rollout depends on its initial state (and controls) only.
 
+:func:`map_chunks` is the same cut for any function of a list (the crash's batch runner uses it).
+
 The connection goes through :func:`nbst.cluster.connect` (the one place for ``--cluster``:
 its timeout, its one-line errors). Start a cluster with ``dask scheduler`` and ``dask worker
 tcp://HOST:8786`` on each machine (the same nbst and MuJoCo versions everywhere).
@@ -91,3 +93,20 @@ class ClusterRunner(Runner):
         if self._own and self.client is not None:
             self.client.close()
             self.client = None
+
+
+def map_chunks(client, fn: Callable, items, *args) -> list:
+    """``fn(chunk, *args)`` on the workers of ``client``, ``items`` cut into one contiguous chunk
+    per worker; the results' lists joined in the items' order. For runners that are not a
+    :class:`~.runner.Runner` (e.g. the crash's batch runner): ``fn`` builds (and caches, per
+    worker process) what it needs from ``args``, which must pickle."""
+    items = list(items)
+    if not items:
+        return []
+    workers = max(1, len(client.scheduler_info().get("workers", {})))
+    parts = np.array_split(np.arange(len(items)), min(workers, len(items)))
+    futures = client.map(fn, [[items[i] for i in p] for p in parts], *[[a] * len(parts) for a in args], pure=False)
+    out: list = []
+    for got in client.gather(futures):
+        out += list(got)
+    return out

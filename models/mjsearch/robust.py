@@ -154,7 +154,8 @@ class _Search:
         return len(self.points) - 1
 
     def of(self, c: int):
-        return self.exact.get(c) or self.P.make(self.points[c])
+        e = self.exact.get(c)  # a candidate may be an array: no truth value
+        return e if e is not None else self.P.make(self.points[c])
 
     def copies(self, c: int, idx) -> list:
         return self.P.noisy(self.of(c), max(idx) + 1, self.seed)

@@ -14,6 +14,7 @@ from nbst.cli.args import JOBS, SEED, Bounded, print_json, with_limits
 from nbst.cli.flags import add_quiet, add_seed
 
 ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
+ROBUST = Bounded("robust", 12, 1_000_000, integer=True)
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
 
 
@@ -55,8 +56,36 @@ def register(sub) -> None:
     v.add_argument("--max-rollouts", type=ROLLOUTS, default=3000, metavar="N",
                    help=with_limits("rollout budget of the search (default 3000)", ROLLOUTS))
     _runner_flags(v)
+    v.add_argument("--robust", type=ROBUST, nargs="?", const=600, default=None, metavar="BUDGET",
+                   help=with_limits("after the search, maximise the probability that the script is met under "
+                                    "driver noise (the rollout room's robust maximiser: common random numbers, "
+                                    "successive halving; BUDGET noisy rollouts, default 600) and write the pick, "
+                                    "the latest that keeps its outcome at 2, 1 and 0.5 ms", ROBUST))
+    v.add_argument("--samples", type=SAMPLES, default=None, metavar="N",
+                   help=with_limits("also estimate the probability that the crash written meets the script under "
+                                    "driver noise from N noisy rollouts, with its 95 %% Wilson interval (default: "
+                                    "none; 100 with --robust)", SAMPLES))
+    v.add_argument("--no-ladder", action="store_true",
+                   help="skip the timestep ladder (the crash rerun at 1 and 0.5 ms: does its outcome hold?)")
     add_quiet(v, "no progress bar and no summary line")
     v.set_defaults(func=cmd_solve)
+
+    b = cr.add_parser("probability", help="the probability that a crash file's intents meet its script under "
+                                          "driver noise",
+                      description="Run N noisy copies of CRASH.json's driver intents (speed +-0.5 m/s, aim "
+                                  "+-0.2 m, times +-0.1 s, steering +-1 deg: docs/crash.md) and print the share "
+                                  "that meets the script with its 95 %% Wilson interval, and the outcomes seen. "
+                                  "The same --seed gives the same copies (common random numbers).")
+    b.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
+    b.add_argument("--samples", type=SAMPLES, default=100, metavar="N",
+                   help=with_limits("noisy rollouts (default 100)", SAMPLES))
+    b.add_argument("--seed", type=SEED, default=1, help=f"noise seed [{SEED.limits}] (default 1)")
+    b.add_argument("-o", "--output", default=None, metavar="OUT.json",
+                   help="also write the crash file with this estimate in its `probability`")
+    _runner_flags(b)
+    b.add_argument("--json", action="store_true", help="print the estimate as one JSON object")
+    add_quiet(b, "no progress bar")
+    b.set_defaults(func=cmd_probability)
 
     r = cr.add_parser("replay", help="replay a crash file with plain mj_step and check it bit for bit",
                       description="Replay CRASH.json from its own scene, initial state and recorded controls with "
@@ -74,6 +103,19 @@ def _runner_flags(p) -> None:
     g.add_argument("--jobs", type=JOBS, default=None, metavar="K",
                    help=with_limits("threads running the rollouts (default: all cores); any K gives the same crash",
                                     JOBS))
+    g.add_argument("--cluster", default=None, metavar="ADDRESS",
+                   help="run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; the same "
+                        "crash as --jobs for the same seed")
+
+
+def _runner(args, script, xml=None):
+    from nbst.parallel import default_jobs
+
+    from nbst.models.crash import run
+
+    if getattr(args, "cluster", None):
+        return run.ClusterRunner(script, args.cluster, xml=xml)
+    return run.Runner(script, jobs=args.jobs or default_jobs(), xml=xml)
 
 
 def _load(name):
@@ -145,16 +187,14 @@ def write_crash(path, d: dict) -> None:
 
 def cmd_solve(args) -> int:
     from nbst.outputs import prepare_output, sigterm_as_interrupt
-    from nbst.parallel import default_jobs
     from nbst.progress import progress_bar
 
     from nbst.models.crash import crashfile, search
-    from nbst.models.crash.run import Runner
 
     script = _load(args.script)
     prepare_output(args.output)
     seed = _seed(args)
-    runner = Runner(script, jobs=args.jobs or default_jobs())
+    runner = _runner(args, script)
     bar = []
 
     def progress(p) -> None:
@@ -174,19 +214,99 @@ def cmd_solve(args) -> int:
         bar[0].close()
     b = res.best
     S = search.space_of(script)
-    d = crashfile.crash_dict(script, runner.xml, runner.model, S.intents(b.u[None])[0], b.qpos0, b.qvel0, b.controls,
+    intents = S.intents(b.u[None])[0]
+    extra: dict = {}
+    stopped = res.stopped
+    if stopped != "interrupted":
+        try:
+            with sigterm_as_interrupt():
+                b, intents, extra = _after_search(args, script, runner, S, b, intents, seed)
+        except KeyboardInterrupt:
+            stopped = "interrupted"
+    d = crashfile.crash_dict(script, runner.xml, runner.model, intents, b.qpos0, b.qvel0, b.controls,
                              b.final_qpos, b.outcome, seed=seed, period_steps=runner.period,
-                             search={"rollouts": res.rollouts, "restarts": res.restarts, "stopped": res.stopped,
+                             search={"rollouts": res.rollouts, "restarts": res.restarts, "stopped": stopped,
                                      "wall_time_s": round(res.wall_time, 2), "max_rollouts": args.max_rollouts,
                                      "contact_sequences": len(res.archive)})
+    d.update(extra)
     write_crash(args.output, d)
+    runner.close()
     if not args.quiet:
         met = "met" if b.outcome.solved else f"not met (cost {b.cost:.3g})"
+        more = ""
+        if "ladder" in d:
+            more += "; ladder " + ("holds at 2, 1 and 0.5 ms" if d["ladder"]["holds"] else "does not hold")
+        if "probability" in d:
+            p = d["probability"]
+            more += f"; P {100 * p['p']:.0f} % ({p['k']}/{p['n']}, 95 % CI {100 * p['lo']:.0f}-{100 * p['hi']:.0f} %)"
         print(f"crash {script.name}: {met}, signature {b.outcome.signature_text(script.n)} after {res.rollouts} "
-              f"rollouts ({res.wall_time:.0f} s), seed {seed}; wrote {args.output}", file=sys.stderr)
-    if res.stopped == "interrupted":
+              f"rollouts ({res.wall_time:.0f} s), seed {seed}{more}; wrote {args.output}", file=sys.stderr)
+    if stopped == "interrupted":
         return 130
     return 0 if b.outcome.solved else 1
+
+
+def _after_search(args, script, runner, S, best, intents, seed):
+    """The robust maximiser (--robust), the ladder and the probability (--samples) of the crash
+    found: (the trial to write, its intents, the file's extra fields)."""
+    import numpy as np
+
+    from nbst.models.crash import robust
+    from nbst.models.crash.search import Trial
+
+    extra: dict = {}
+    if args.robust is not None and best.outcome.solved:
+        from nbst.models.mjsearch import robust as room
+
+        n = args.samples or 100
+        P = robust.Problem(S, runner, runner.xml)
+        mx = room.maximise(P, [intents], budget=args.robust, seed=seed, n=n, ladder=not args.no_ladder)
+        intents = mx.best
+        r = runner.run(intents[None])
+        best = Trial(u=S.unit_of(intents), outcome=r.outcomes[0], controls=r.controls[0], qpos0=r.qpos0[0],
+                     qvel0=r.qvel0[0], final_qpos=r.final_qpos[0])
+        extra["robust"] = {"budget": args.robust, "rollouts": mx.frames, "screen": [mx.screen.k, mx.screen.n],
+                           "start_screen": [mx.start_screen.k, mx.start_screen.n], "screen_seed": mx.screen_seed}
+        extra["probability"] = mx.fresh.to_dict()
+        if mx.ladder:
+            extra["ladder"] = {"rows": mx.ladder, "holds": bool(mx.ladder_holds)}
+        return best, intents, extra
+    if not args.no_ladder:
+        lad = robust.ladder(script, runner.xml, intents)
+        extra["ladder"] = {"rows": robust.ladder_rows(lad), "holds": bool(lad.holds)}
+    if args.samples:
+        extra["probability"] = robust.probability(runner, np.asarray(intents), args.samples, seed).to_dict()
+    return best, intents, extra
+
+
+def cmd_probability(args) -> int:
+    from nbst.outputs import prepare_output
+    from nbst.progress import progress_bar
+
+    from nbst.models.crash import crashfile, robust
+
+    d, script, model = crashfile.load(args.crash)
+    if args.output:
+        prepare_output(args.output, inputs=(args.crash,))
+    intents = crashfile.intents_array(d, script)
+    runner = _runner(args, script, xml=d["scene_xml"])
+    bar = None if args.quiet else progress_bar(total=args.samples, unit="rollout", file=sys.stderr,
+                                               desc=f"probability {script.name}")
+    est = robust.probability(runner, intents, args.samples, args.seed,
+                             on_batch=None if bar is None else (lambda k: bar.update(k - bar.n)))
+    if bar is not None:
+        bar.close()
+    runner.close()
+    if args.output:
+        d["probability"] = est.to_dict()
+        write_crash(args.output, d)
+    if args.json:
+        print_json(est.to_dict())
+    else:
+        print(f"{args.crash}: P(script met) = {est.text()} under driver noise, seed {args.seed}")
+        for lab, k in est.outcomes.items():
+            print(f"  {lab:12s} {k}")
+    return 0
 
 
 def cmd_replay(args) -> int:
