@@ -211,3 +211,26 @@ def test_solve_robust_writes_the_pick_with_its_probability_and_ladder(tmp_path):
     assert p["n"] == 12 and p["lo"] <= p["p"] <= p["hi"] and d["ladder"]["rows"][0][0] == 0.002
     assert main(["crash", "replay", str(out)]) == 0
     assert main(["crash", "probability", str(out), "--samples", "8", "--jobs", "1", "-q"]) == 0
+
+
+def test_nbst_mjcf_exports_the_crash_scene_with_its_keyframe_and_controls(short, tmp_path):
+    import mujoco
+
+    from nbst.cli.main import main
+
+    s, sp, U, R, res = short
+    d = crashfile.crash_dict(s, R.xml, R.model, sp.intents(U[:1])[0], res.qpos0[0], res.qvel0[0], res.controls[0],
+                             res.final_qpos[0], res.outcomes[0], seed=7, period_steps=R.period)
+    f = tmp_path / "c.json"
+    f.write_text(json.dumps(d))
+    out = tmp_path / "scene.xml"
+    assert main(["mjcf", str(f), "-o", str(out), "-q"]) == 0
+    m = mujoco.MjModel.from_xml_path(str(out))
+    rows = m.numeric("crash_controls").data.reshape(-1, m.nu)
+    period = int(m.numeric("crash_period_steps").data[0])
+    data = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, data, m.key("start").id)
+    for k, row in enumerate(rows):
+        data.ctrl[:] = row
+        mujoco.mj_step(m, data, nstep=min(period, d["nstep"] - k * period))
+    assert np.array_equal(data.qpos, np.array(d["final_qpos"]))  # the exported scene replays bit for bit

@@ -330,3 +330,35 @@ def test_the_ladder_says_which_timesteps_keep_an_outcome():
     assert ladder.kept_text([0.001, 0.0005], [0.001, 0.0005]) == "kept at h = 1 and 0.5 ms"
     assert ladder.kept_text([0.001, 0.0005], []) == "kept at no timestep (1 and 0.5 ms)"
     assert ladder.climb(lambda h: 3, (0.002, 0.001)).holds
+
+
+def test_the_batch_runner_is_replayed_by_mj_step_and_ignores_threads():
+    """BatchRunner (a batch-wide controller every period, an observer every step): the recorded
+    controls replayed by a plain mj_step loop give the same bits, for 1 and 2 threads."""
+    from nbst.models.mjsearch.batch import BatchRunner
+
+    m = _model()
+    s, nstep, period = 3, 500, 7  # a period that does not divide the run: the last row is short
+    qv = np.zeros((s, m.nv))
+    qv[:, 0] = [0.0, 0.5, 1.0]
+    q0 = np.repeat(m.qpos0[None], s, axis=0)
+    seen = []
+
+    def drive(v):  # numpy over the batch, reading the sensors
+        return np.stack([1500.0 * np.tanh(2.5 - v.qpos[:, 0]), 5.0 * v.sensordata[:, 1]], axis=1)
+
+    outs = []
+    for jobs in (1, 2):
+        seen.clear()
+        with_obs = BatchRunner(m, jobs=jobs, size=4).run(q0, qv, nstep, period=period, controller=drive,
+                                                         observer=lambda v: seen.append(v.step))
+        outs.append(with_obs)
+    assert seen == list(range(1, nstep + 1))
+    assert np.array_equal(outs[0].final_qpos, outs[1].final_qpos)  # bitwise: threads change nothing
+    for i in range(s):
+        d = mujoco.MjData(m)
+        d.qpos[:], d.qvel[:] = q0[i], qv[i]
+        for k, row in enumerate(outs[0].controls[i]):
+            d.ctrl[:] = row
+            mujoco.mj_step(m, d, nstep=min(period, nstep - k * period))
+        assert np.array_equal(d.qpos, outs[0].final_qpos[i])

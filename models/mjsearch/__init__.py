@@ -8,6 +8,9 @@ the machinery every rollout search needs, one module each:
   ``MjData`` per thread reset before each rollout (results independent of K); open loop, or
   closed loop in chunks with a controller called between them (bit for bit the same as one
   call with the recorded controls); MuJoCo's warnings as :class:`~nbst.errors.MujocoError`.
+* :mod:`.batch` -- :class:`~.batch.BatchRunner`: many simulations stepped together on a
+  ``mujoco.batch.Batch``, a batch-wide controller every period and an observer every step
+  (the crash's drivers and contact sensors); the recorded controls replay by ``mj_step``.
 * :mod:`.pool` -- :class:`WorkerPool`: processes for hand-stepped rollouts (checks between
   steps), results in order, workers that die with their parent.
 * :mod:`.archive` -- :class:`Archive` keyed by signature, the MAP-Elites emitter
@@ -36,18 +39,19 @@ Example (a closed-loop batch, replayed open loop from its recorded controls)::
         assert np.array_equal(out.final, again.final)
 
 Importing this package imports neither mujoco nor cma; the modules that need them import them
-when they run. Users: :mod:`nbst.models.bowling` (both halves). docs/architecture.md places the
+when they run. Users: :mod:`nbst.models.bowling` (both halves) and :mod:`nbst.models.crash`
+(batch, probability, robust, ladder, cluster). docs/architecture.md places the
 room; tests/test_mjsearch.py checks it on a small model of its own.
 """
 from __future__ import annotations
 
 import importlib
 
-__all__ = ["Runner", "Rollouts", "WorkerPool", "Archive", "Space", "box_space", "emit", "grow", "Probability",
+__all__ = ["Runner", "Rollouts", "BatchRunner", "WorkerPool", "Archive", "Space", "box_space", "emit", "grow", "Probability",
            "wilson", "normal_draws", "perturb", "Ladder", "climb", "ClusterRunner",
-           "runner", "pool", "archive", "restarts", "probability", "robust", "ladder", "cluster"]
+           "runner", "batch", "pool", "archive", "restarts", "probability", "robust", "ladder", "cluster"]
 
-_LAZY = {"Runner": "runner", "Rollouts": "runner", "WorkerPool": "pool", "Archive": "archive", "Space": "archive",
+_LAZY = {"Runner": "runner", "Rollouts": "runner", "BatchRunner": "batch", "WorkerPool": "pool", "Archive": "archive", "Space": "archive",
          "box_space": "archive", "emit": "archive", "grow": "archive", "Probability": "probability",
          "wilson": "probability", "normal_draws": "probability", "perturb": "probability", "Ladder": "ladder",
          "climb": "ladder", "ClusterRunner": "cluster"}

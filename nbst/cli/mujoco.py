@@ -43,7 +43,8 @@ def register(sub) -> None:
                                    "--mjcf=scene.xml` and load keyframe `initial` to play the motion. "
                                    "Numbers are written at full double precision: the keyframe "
                                    "round-trips the solution bit for bit.")
-    p.add_argument("problem", help="built-in name or path to a problem JSON file")
+    p.add_argument("problem", help="built-in name or path to a problem JSON file, or a crash file (nbst crash "
+                                   "solve -o): its scene with keyframe `start` and its controls as custom numerics")
     p.add_argument("solution", nargs="?", help="solution JSON file (default: all disks at rest)")
     p.add_argument("-o", "--output", default="-", metavar="scene.xml", help="output file (default: stdout)")
     _add_scene_options(p)
@@ -124,6 +125,8 @@ def cmd_mjcf(args) -> int:
 
     from nbst.models.scene import scene_xml
 
+    if _is_crash(args.problem):
+        return _crash_mjcf(args)
     problem = load_problem(args.problem)
     v = _velocities(problem, args.solution)
     if args.output != "-":
@@ -146,6 +149,42 @@ def cmd_mjcf(args) -> int:
         if not args.quiet:
             print(f"nbst mjcf: wrote {args.output} ({problem.n} disks; view: python -m mujoco.viewer "
                   f"--mjcf={args.output})", file=sys.stderr)
+    return 0
+
+
+def _is_crash(path) -> bool:
+    """Whether PROBLEM names a crash file (nbst crash solve -o): a JSON file of kind nbst-crash."""
+    import os
+    import re
+
+    try:
+        if not (str(path).endswith(".json") and os.path.isfile(path)):
+            return False
+        with open(path, "rb") as f:
+            head = f.read(4096).decode("utf-8", "replace")
+    except OSError:
+        return False
+    return re.search(r'"kind"\s*:\s*"nbst-crash"', head) is not None
+
+
+def _crash_mjcf(args) -> int:
+    """``nbst mjcf CRASH.json``: the crash's scene with keyframe ``start`` and its controls."""
+    from nbst.models.crash import crashfile
+
+    if args.solution:
+        raise crashfile.CrashFileError(f"{args.solution}: a crash file carries its own controls; give it alone")
+    d, script, model = crashfile.load(args.problem)
+    xml = crashfile.export_xml(d, script, model)
+    if args.output == "-":
+        sys.stdout.write(xml)
+        return 0
+    from nbst.outputs import prepare_output, write_text_atomic
+
+    prepare_output(args.output, inputs=(args.problem,))
+    write_text_atomic(args.output, xml)
+    if not args.quiet:
+        print(f"nbst mjcf: wrote {args.output} ({script.n} vehicles; keyframe `start`; controls in "
+              f"custom numeric `crash_controls`, {d['controls']['period_steps']} steps a row)", file=sys.stderr)
     return 0
 
 
