@@ -55,6 +55,7 @@ class Recorder:
         self.touch = np.full((nsim, n), np.nan)       # first contact of any kind
         self.hit_first = np.full((nsim, n), np.nan)   # first vehicle contact
         self.impact_speed = np.full((nsim, n), np.nan)
+        self.impact_heading = np.full((nsim, n), np.nan)
         self.curb = np.full((nsim, n), np.nan)
         self.barrier = np.full((nsim, n), np.nan)
         self.roll = np.zeros((nsim, n))
@@ -97,6 +98,7 @@ class Recorder:
                 first = got & np.isnan(self.hit_first[:, i])
                 self.hit_first[first, i] = t
                 self.impact_speed[first, i] = np.hypot(*vel_before[first, i].T)
+                self.impact_heading[first, i] = np.arctan2(vel_before[first, i, 1], vel_before[first, i, 0])
                 touched[:, i] |= got
         for arr, adr in ((self.curb, L.curb_adr), (self.barrier, L.barrier_adr)):
             if adr[0] < 0:
@@ -152,6 +154,7 @@ class VehicleOutcome:
     name: str
     hits: list            # [(other index, first contact time s)] in time order
     impact_speed: float   # m/s just before its first vehicle contact (NaN: none)
+    impact_heading: float  # rad: its direction of travel then
     delta_v: float        # m/s in its first vehicle impact (NaN: none)
     rest: tuple           # (x, y, heading rad)
     quarter_turns: int
@@ -166,7 +169,8 @@ class VehicleOutcome:
     def to_dict(self, names) -> dict:
         r = lambda x, k=3: None if x is None or (isinstance(x, float) and math.isnan(x)) else round(float(x), k)  # noqa: E731
         return {"name": self.name, "hits": [{"vehicle": names[j], "t": r(t)} for j, t in self.hits],
-                "impact_speed_kmh": r(self.impact_speed * KMH, 2), "delta_v_kmh": r(self.delta_v * KMH, 2),
+                "impact_speed_kmh": r(self.impact_speed * KMH, 2),
+                "impact_heading_deg": r(math.degrees(self.impact_heading), 2), "delta_v_kmh": r(self.delta_v * KMH, 2),
                 "rest": {"x": r(self.rest[0]), "y": r(self.rest[1]), "heading_deg": r(math.degrees(self.rest[2]), 2)},
                 "quarter_turns": self.quarter_turns, "roll_deg": r(math.degrees(self.roll), 1),
                 "attitude": self.attitude, "spin_deg": r(math.degrees(self.spin), 1),
@@ -218,7 +222,8 @@ def outcomes(rec: Recorder, names: list[str], mass: np.ndarray) -> list[Outcome]
             up = rec.final["up"][s, i]
             att = "upright" if up > COS45 else ("roof" if up < -COS45 else "side")
             vs.append(VehicleOutcome(
-                name=nm, hits=[(j, t) for j, t in hits], impact_speed=float(rec.impact_speed[s, i]), delta_v=dv,
+                name=nm, hits=[(j, t) for j, t in hits], impact_speed=float(rec.impact_speed[s, i]),
+                impact_heading=float(rec.impact_heading[s, i]), delta_v=dv,
                 rest=(float(rec.final["pos"][s, i, 0]), float(rec.final["pos"][s, i, 1]), float(rec.final["yaw"][s, i])),
                 quarter_turns=turns, roll=roll, attitude=att, spin=float(rec.yaw[s, i]), curb=float(rec.curb[s, i]),
                 barrier=float(rec.barrier[s, i]), moving=bool(rec.final["speed"][s, i] > REST_SPEED)))

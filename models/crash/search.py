@@ -21,9 +21,11 @@ that vehicle holds (the paper's i-acceptable). Around the paper's population:
   signatures subsumed by higher-order ones are culled (never the best's signature);
 * a **MAP-Elites archive keyed by the contact sequence** (the vehicle pairs in the order they
   first touch) keeps the best trial of every sequence seen;
-* **CMA-ES restarts** (pycma) in the unit cube, every :data:`GA_BATCHES` batches, from the
-  best trial and from the archive's sequences nearest the script's, step sizes alternating
-  :data:`SIGMA0` and a third of it, ending after :data:`STALL` generations without a lower cost.
+* **CMA-ES restarts** (pycma) in the unit cube, every :data:`GA_BATCHES` batches of the paper's
+  operations (every batch once the best trial's contacts are right), ending after :data:`STALL`
+  generations without a lower cost: from the best trial and from the archive's sequences nearest
+  the script's in turn while the contacts are wrong; from the best trial at steps of
+  :data:`SIGMA0`, a third and a ninth of it once they are right (fine-tuning rest poses).
 
 The search stops at the first trial that meets the script (every bit set and the global
 order), at the budget, or on Ctrl-C (the best so far is returned, ``stopped`` "interrupted").
@@ -57,7 +59,7 @@ CREEP = 0.05
 #: Batches of the paper's operations between CMA-ES restarts.
 GA_BATCHES = 3
 #: CMA-ES: initial step (unit cube), generations without a lower cost that end a restart.
-SIGMA0, STALL = 0.12, 4
+SIGMA0, STALL = 0.12, 6
 
 
 @dataclass(eq=False)
@@ -110,9 +112,9 @@ def _order_bits(sig: int) -> int:
 
 
 class _Search:
-    def __init__(self, space: Space, runner, rng: np.random.Generator, max_rollouts: int, callback):
+    def __init__(self, space: Space, runner, rng: np.random.Generator, max_rollouts: int, callback, keep=None):
         self.S, self.R, self.rng = space, runner, rng
-        self.max_rollouts, self.callback = int(max_rollouts), callback
+        self.max_rollouts, self.callback, self.keep = int(max_rollouts), callback, keep
         self.rollouts = 0
         self.pop: list[Trial] = []
         self.archive: dict = {}          # contact sequence -> best Trial
@@ -138,6 +140,8 @@ class _Search:
                 t = Trial(u=u.copy(), outcome=o, controls=res.controls[i], qpos0=res.qpos0[i], qvel0=res.qvel0[i],
                           final_qpos=res.final_qpos[i])
                 trials.append(t)
+                if self.keep is not None:
+                    self.keep(t)
                 cur = self.archive.get(o.sequence)
                 if cur is None or t.cost < cur.cost:
                     self.archive[o.sequence] = t
@@ -229,20 +233,31 @@ class _Search:
             self.insert(t, parents)
 
     # -- CMA-ES restarts -------------------------------------------------------------------
-    def restart_points(self, k: int) -> Trial:
-        """The k-th restart's start: the best trial on even restarts, else the archive's
-        sequences nearest the script's order (then by cost), in turn."""
+    def contacts_right(self, t: Trial) -> bool:
+        """Whether a trial has every vehicle's hits and the global order right (what is left is
+        fine-tuning: rest poses, speeds, attitudes)."""
+        o, sc = t.outcome, self.S.script
+        if sc.order is not None and not o.order_ok:
+            return False
+        return all(v.fate.hits is None or vo.fates.get("hits", True) for v, vo in zip(sc.vehicles, o.vehicles))
+
+    def restart_point(self, k: int) -> tuple[Trial, float]:
+        """The k-th restart's start and step: from the best trial when its contacts are right,
+        at steps of SIGMA0, SIGMA0 / 3 and SIGMA0 / 9 in turn (fine-tuning); else alternately
+        from the best (SIGMA0) and from the archive's contact sequences nearest the script's
+        (SIGMA0 / 3), in turn."""
+        if self.contacts_right(self.best):
+            return self.best, SIGMA0 / (3 ** (k % 3))
         if k % 2 == 0 or not self.archive:
-            return self.best
+            return self.best, SIGMA0
         want = list(self.S.script.order or _fate_sequence(self.S.script))
         cells = sorted(self.archive.values(), key=lambda t: (out_mod._edit(list(t.outcome.sequence), want), t.cost))
-        return cells[(k // 2) % len(cells)]
+        return cells[(k // 2) % len(cells)], SIGMA0 / 3
 
     def cma(self, k: int) -> None:
         import cma
 
-        start = self.restart_points(k)
-        sigma = SIGMA0 if k % 2 == 0 else SIGMA0 / 3
+        start, sigma = self.restart_point(k)
         es = cma.CMAEvolutionStrategy(start.u.tolist(), sigma,
                                       {"bounds": [0.0, 1.0], "popsize": BATCH, "verbose": -9,
                                        "seed": int(self.rng.integers(1, 2**31 - 1))})
@@ -314,15 +329,16 @@ def directed(space: Space, rng: np.random.Generator, u: np.ndarray | None = None
 
 
 def solve(script, *, seed: int, max_rollouts: int = 1500, runner=None, jobs: int = 1, callback=None,
-          explore: int = EXPLORE) -> SearchResult:
-    """Search driver intents that meet ``script``; see the module docstring."""
+          explore: int = EXPLORE, keep=None) -> SearchResult:
+    """Search driver intents that meet ``script``; see the module docstring. ``keep(trial)`` is
+    called for every rollout (reconstruction collects its fits so)."""
     from nbst.models.crash.run import Runner
 
     own = runner is None
     R = Runner(script, jobs=jobs) if own else runner
     S = space_of(script)
     rng = np.random.default_rng(seed)
-    s = _Search(S, R, rng, max_rollouts, callback)
+    s = _Search(S, R, rng, max_rollouts, callback, keep)
     t0 = time.perf_counter()
     restarts = 0
     stopped = "budget"
@@ -336,7 +352,8 @@ def solve(script, *, seed: int, max_rollouts: int = 1500, runner=None, jobs: int
             for t in s.evaluate(U):
                 s.insert(t, [])
             while not s.solved and s.left > 0:
-                for _ in range(GA_BATCHES):
+                # the paper's operations while contacts are wrong; one batch when only fine-tuning is left
+                for _ in range(1 if s.contacts_right(s.best) else GA_BATCHES):
                     if s.solved or s.left <= 0:
                         break
                     s.generation()

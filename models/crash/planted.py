@@ -1,0 +1,98 @@
+"""Planted crashes: scripts whose answer is known, for the benchmarks and the tests.
+
+A **planted script** runs hidden driver intents, drawn uniformly within a template's ranges, and
+writes what happened as the fates (whom each hit and in what order, where it came to rest and
+facing where, its attitude), with the tolerances asked: a search must find intents that do the
+same, and one is known to exist. A **planted case** does the same for reconstruction, and keeps
+the hidden truth (each vehicle's impact speed and heading) for the comparison.
+
+Templates (:data:`TEMPLATES`): ``crossing2`` (a sedan and an SUV meeting at an intersection,
+after-impact braking known: the reconstruction's planted crashes), ``intersection3`` (three
+vehicles at an intersection: the search's planted scripts).
+
+Compute only.
+"""
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+
+from nbst.models.crash import script as script_mod
+from nbst.models.crash.run import Runner
+from nbst.models.crash.space import space_of
+
+_ROAD = {"layout": "intersection", "width": 7, "length": 120, "curb": 0.15}
+TEMPLATES = {
+    "crossing2": {
+        "kind": "nbst-crash-script", "road": _ROAD, "duration": 6.0,
+        "vehicles": [
+            {"name": "A", "type": "sedan", "start": {"x": -45, "y": -1.75, "heading": 0}, "speed": [30, 80],
+             "driver": {"aim": {"x": [-3, 6], "y": [-3, 0]}, "arrive": [2.2, 4.0], "after_impact": "brake"}},
+            {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -45, "heading": 90}, "speed": [30, 80],
+             "driver": {"aim": {"x": [0, 3], "y": [-3, 6]}, "arrive": [2.2, 4.0], "after_impact": "brake"}}]},
+    "intersection3": {
+        "kind": "nbst-crash-script", "road": _ROAD, "duration": 6.0,
+        "vehicles": [
+            {"name": "A", "type": "sedan", "start": {"x": -45, "y": -1.75, "heading": 0}, "speed": [40, 70],
+             "driver": {"aim": {"x": [-5, 10], "y": [-4, 1]}, "arrive": [2.5, 4.0], "after_impact": ["brake", "coast"],
+                        "after_steer": [-20, 20]}},
+            {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -45, "heading": 90}, "speed": [30, 60],
+             "driver": {"aim": {"x": [-2, 5], "y": [-5, 10]}, "arrive": [2.5, 4.0], "after_impact": ["brake", "coast"],
+                        "after_steer": [-20, 20]}},
+            {"name": "C", "type": "van", "start": {"x": -1.75, "y": 25, "heading": -90}, "speed": [0, 30],
+             "driver": {"brake_at": [0.5, 3.0], "after_impact": ["brake", "coast"]}}]},
+}
+
+
+def _run_hidden(template: dict, rng: np.random.Generator, need_contacts: int, tries: int = 64):
+    """(script of the template, hidden unit point, its outcome) with at least ``need_contacts``
+    vehicle contacts, drawn until one has them (within ``tries`` batches)."""
+    s = script_mod.script_from_dict(copy.deepcopy(template), source="<planted template>")
+    S = space_of(s)
+    R = Runner(s)
+    try:
+        for _ in range(tries):
+            U = rng.random((16, S.dim))
+            res = R.run(S.intents(U))
+            for u, o in zip(U, res.outcomes):
+                if len(o.contacts) >= need_contacts and all(v.rest == v.rest for v in o.vehicles):
+                    return s, u, o
+    finally:
+        R.close()
+    raise RuntimeError("no planted crash with enough contacts in the tries allowed")
+
+
+def _plant(seed: int, template: str, radius: float, heading_tol: float, need_contacts: int):
+    rng = np.random.default_rng([int(seed), 32])
+    s, u, o = _run_hidden(TEMPLATES[template], rng, need_contacts)
+    d = copy.deepcopy(TEMPLATES[template])
+    names = s.names()
+    d["name"] = f"planted-{template}-{seed}"
+    for v, vo in zip(d["vehicles"], o.vehicles):
+        v["fate"] = {"hits": [names[j] for j, _ in vo.hits],
+                     "rest": {"x": round(vo.rest[0], 3), "y": round(vo.rest[1], 3), "radius": radius},
+                     "heading": {"deg": round(math.degrees(vo.rest[2]), 2), "tol": heading_tol},
+                     "attitude": vo.attitude}
+    d["order"] = [[names[i], names[j]] for i, j in o.sequence]
+    return d, u, o
+
+
+def planted_script(seed: int, *, template: str = "intersection3", radius: float = 2.0, heading_tol: float = 20.0,
+                   need_contacts: int = 1) -> tuple[dict, np.ndarray]:
+    """(script dict, hidden unit point): the template with the fates of hidden random intents."""
+    d, u, _ = _plant(seed, template, radius, heading_tol, need_contacts)
+    return d, u
+
+
+def planted_case(seed: int, *, template: str = "crossing2", radius: float = 1.0,
+                 heading_tol: float = 10.0) -> tuple[dict, list]:
+    """(case dict, truth): a reconstruction case from a hidden crash of ``template`` (the fates:
+    whom each hit, rest within ``radius`` m, heading within ``heading_tol`` deg; no speeds), and
+    the truth per vehicle: {"impact_speed": m/s, "impact_heading": rad}."""
+    d, _, o = _plant(seed, template, radius, heading_tol, 1)
+    d["name"] = f"planted-case-{template}-{seed}"
+    for v in d["vehicles"]:
+        v["fate"].pop("attitude", None)
+    return d, [{"impact_speed": v.impact_speed, "impact_heading": v.impact_heading} for v in o.vehicles]
