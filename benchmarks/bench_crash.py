@@ -20,7 +20,10 @@ Parts (default: all, in this order; each prints its figures and its target, met 
   10 deg), 3,000 rollouts each: the median fit's impact speed against the truth (target within
   1 m/s or 5 % in >= 8 of 10);
 * ``probability``: P(fates) of the solved t-bone from 100 noisy rollouts on ``--jobs`` threads,
-  wall time (target <= 60 s on 2 cores).
+  wall time (target <= 60 s on 2 cores);
+* ``sensitivity``: the solved chain3 (seed 1) rerun with each assumed parameter changed (body
+  friction, road friction, yaw and roll inertia, the body contact's damping): its signature and
+  how far each vehicle's rest position moves.
 """
 from __future__ import annotations
 
@@ -32,7 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-PARTS = ("physics", "speed", "chain", "planted", "builtins", "recon", "probability")
+PARTS = ("physics", "speed", "chain", "planted", "builtins", "recon", "probability", "sensitivity")
 ARGS = None
 
 
@@ -191,6 +194,55 @@ def probability() -> None:
     print(f"P(fates) of the solved t-bone under driver noise: {est.text()} from 100 noisy rollouts in {wall:.1f} s "
           f"wall on {ARGS.jobs} thread(s) (target <= 60 s on 2 cores: {'met' if wall <= 60 else 'NOT met'}); "
           f"outcomes {est.outcomes}")
+
+
+def sensitivity() -> None:
+    import math
+
+    from nbst.models.crash import run, script, space
+
+    sc = script.load_script("chain3")
+    r, _, _ = _solve(sc, 1, 1500)
+    if not r.best.outcome.solved:
+        print("chain3 not solved with seed 1: no sensitivity")
+        return
+    S = space.space_of(sc)
+    intents = S.intents(r.best.u[None])
+    base = r.best.outcome
+
+    def variant(name, change):
+        R = run.Runner(sc, jobs=1)
+        m = R.model
+        change(m)
+        o = R.run(intents).outcomes[0]
+        moved = [math.hypot(a.rest[0] - b.rest[0], a.rest[1] - b.rest[1]) for a, b in zip(o.vehicles, base.vehicles)]
+        turned = [abs(math.degrees((a.rest[2] - b.rest[2] + math.pi) % (2 * math.pi) - math.pi))
+                  for a, b in zip(o.vehicles, base.vehicles)]
+        print(f"  {name:32s} signature {o.signature_text(3)}{'+' if o.solved else ' '} rest moved "
+              + ", ".join(f"{v.name} {d:.2f} m {t:.0f} deg" for v, d, t in zip(sc.vehicles, moved, turned)))
+
+    def geoms(m, part):
+        return [g for g in range(m.ngeom) if (m.geom(g).name or "").endswith(part)]
+
+    def scale(arr, idx, f, col=None):
+        for i in idx:
+            if col is None:
+                arr[i] *= f
+            else:
+                arr[i, col] *= f
+
+    print("chain3 solved (seed 1) rerun with one assumed parameter changed:")
+    variant("as solved", lambda m: None)
+    for f in (0.75, 1.25):
+        variant(f"body friction x{f} (0.4)", lambda m, f=f: scale(m.geom_friction, geoms(m, "_lower") + geoms(m, "_cabin"), f, 0))
+    for mu in (0.7, 0.9):
+        variant(f"road friction {mu} (0.8)", lambda m, mu=mu: m.geom_friction.__setitem__((m.geom("ground").id, 0), mu))
+    for f in (0.9, 1.1):
+        variant(f"yaw inertia x{f}", lambda m, f=f: scale(m.body_inertia, [m.body(f"v{i}").id for i in range(3)], f, 2))
+        variant(f"roll inertia x{f}", lambda m, f=f: scale(m.body_inertia, [m.body(f"v{i}").id for i in range(3)], f, 0))
+    for z in (0.5, 0.7):
+        variant(f"body damping ratio {z} (0.6)",
+                lambda m, z=z: [m.geom_solref.__setitem__((g, 1), z) for g in geoms(m, "_lower") + geoms(m, "_cabin")])
 
 
 def main(argv=None) -> int:
