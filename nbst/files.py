@@ -19,7 +19,7 @@ from pathlib import Path
 
 from nbst.errors import InputError
 
-__all__ = ["FileRefused", "read_regular"]
+__all__ = ["FileRefused", "read_regular", "sniff_kind"]
 
 _NOT_REGULAR = ((stat.S_ISDIR, "is a directory"), (stat.S_ISFIFO, "is a named pipe (FIFO)"),
                 (stat.S_ISCHR, "is a character device"), (stat.S_ISBLK, "is a block device"),
@@ -77,3 +77,23 @@ def read_regular(path, *, max_bytes: int, what: str = "file", allow_empty: bool 
     if not data and not allow_empty:
         raise FileRefused(p, f"is empty, not a {what}")
     return data
+
+
+def sniff_kind(path, kinds, *, max_bytes: int = 4096) -> str | None:
+    """Which of ``kinds`` ((name, kind string), ...) the .json file ``path`` is, by the first of
+    the quoted kind strings to appear in its first ``max_bytes`` bytes (nbst writes ``kind`` in a
+    file's first lines; ``"nbst-crash"`` with its quotes is not found in ``"nbst-crash-script"``);
+    None for anything else, a file that is not regular (never opened: a FIFO would block) or
+    cannot be read. Parses nothing: the file's own loader checks it."""
+    p = Path(str(path))
+    if p.suffix.lower() != ".json":
+        return None
+    try:
+        if not stat.S_ISREG(os.stat(p).st_mode):
+            return None
+        with open(p, "rb") as f:
+            head = f.read(max_bytes)
+    except (OSError, ValueError):
+        return None
+    found = [(i, name) for name, k in kinds if (i := head.find(f'"{k}"'.encode())) >= 0]
+    return min(found)[1] if found else None

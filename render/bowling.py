@@ -409,25 +409,11 @@ def bowling_kind(path) -> str | None:
     """"shot" or "atlas" when ``path`` names a regular .json file whose first SNIFF_BYTES name
     an nbst bowling kind, else None. Reads at most SNIFF_BYTES (stat first: a FIFO or device
     is never opened), parses nothing."""
-    import os
-    import stat
-    from pathlib import Path
-
+    from nbst.files import sniff_kind
     from nbst.models.bowling.shotfile import ATLAS_KIND, KIND
 
-    p = Path(str(path))
-    if p.suffix.lower() != ".json":
-        return None
-    try:
-        if not stat.S_ISREG(os.stat(p).st_mode):
-            return None
-        with open(p, "rb") as f:
-            head = f.read(SNIFF_BYTES)
-    except (OSError, ValueError):
-        return None
-    at = {kind: head.find(f'"{k}"'.encode()) for kind, k in (("shot", KIND), ("atlas", ATLAS_KIND))}
-    found = [(i, kind) for kind, i in at.items() if i >= 0]
-    return min(found)[1] if found else None   # an atlas names its own kind before its shots' kind
+    # an atlas names its own kind before its shots' kind: the first found wins
+    return sniff_kind(path, (("shot", KIND), ("atlas", ATLAS_KIND)), max_bytes=SNIFF_BYTES)
 
 
 def is_shot_file(path) -> bool:

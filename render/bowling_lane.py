@@ -48,6 +48,7 @@ from nbst.render.bowling import BACKGROUND, BALL_RGB, FS, PIN_RED, PIN_WHITE, ST
 from nbst.render.bowling import frame_times as _shot_frame_times
 from nbst.render.gl import FrameRenderer, FrameTarget, create_context
 from nbst.render.scene3d import look_at, perspective
+from nbst.render.solids import box as _box, flat_poly as _flat_poly, ribbon as _ribbon  # shared with the crash video
 
 #: Guide dots (ft past the foul line) on these boards, counted from either edge.
 DOTS_FT = 7.0
@@ -317,24 +318,6 @@ def ball_texture(throw: Throw, size=TEXTURE_SIZE) -> np.ndarray:
 # --------------------------------------------------------------------------- the lane
 
 
-def _box(x0, x1, y0, y1, z0, z1, rgb) -> np.ndarray:
-    import trimesh
-
-    b = trimesh.creation.box(extents=[x1 - x0, y1 - y0, z1 - z0])
-    b.apply_translation([(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2])
-    tris = b.faces.reshape(-1)
-    fn = np.repeat(b.face_normals, 3, axis=0)
-    return np.concatenate([b.vertices[tris], fn, np.tile(rgb, (len(tris), 1))], axis=1)
-
-
-def _flat_poly(xy, rgb, z=0.0) -> np.ndarray:
-    """A convex polygon on the plane z (a triangle fan), normal up: (V, 9)."""
-    xy = np.asarray(xy, float)
-    tris = np.concatenate([[xy[0], xy[k], xy[k + 1]] for k in range(1, len(xy) - 1)])
-    n = len(tris)
-    return np.concatenate([tris, np.full((n, 1), z), np.tile([0.0, 0.0, 1.0], (n, 1)), np.tile(rgb, (n, 1))], axis=1)
-
-
 def _rect(x0, x1, y0, y1, rgb) -> np.ndarray:
     return _flat_poly([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], rgb)
 
@@ -404,17 +387,6 @@ def lane_marks(hand: str = "right") -> np.ndarray:
         half = lane.BOARD_WIDTH * 0.45
         parts.append(_flat_poly([(xa - 0.08, y - half), (xa + 0.08, y), (xa - 0.08, y + half)], MARK_RGB))
     return np.concatenate(parts).astype("f4")
-
-
-def _ribbon(xy: np.ndarray, half: float, rgb) -> np.ndarray:
-    """(2K, 9) vertices of a flat triangle strip along the path ``xy`` (K, 2)."""
-    d = np.gradient(xy, axis=0)
-    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
-    nrm = np.stack([-d[:, 1], d[:, 0]], 1) * half
-    pts = np.stack([xy + nrm, xy - nrm], 1).reshape(-1, 2)
-    n = len(pts)
-    return np.concatenate([pts, np.zeros((n, 1)), np.tile([0.0, 0.0, 1.0], (n, 1)), np.tile(rgb, (n, 1))],
-                          axis=1).astype("f4")
 
 
 def ortho_panel(x_range, y_half: float, vp, frame_h: int, *, margin_top: float, margin_bottom: float,

@@ -268,6 +268,9 @@ class Rect:
 # --------------------------------------------------------------------------- text
 
 FIRST_CHAR, LAST_CHAR = 32, 126  # printable ASCII
+#: Beyond ASCII, the few signs the readouts write (a crash's delta-V, degrees, tolerances, a fate's
+#: check mark and cross); DejaVu Sans Mono has each. Their glyphs follow ASCII's in the atlas.
+EXTRA_CHARS = "\u00b0\u00b1\u00d7\u00b7\u0394\u2713\u2717\u2192"   # ° ± × · Δ ✓ ✗ →
 ATLAS_COLS = 16
 
 
@@ -311,14 +314,23 @@ def glyph_atlas(px: int) -> tuple[np.ndarray, tuple[int, int]]:
     ascent, descent = font.getmetrics()
     cw = int(np.ceil(font.getlength("M")))
     ch = ascent + descent
-    n = LAST_CHAR - FIRST_CHAR + 1
-    rows = (n + ATLAS_COLS - 1) // ATLAS_COLS
+    chars = [chr(k) for k in range(FIRST_CHAR, LAST_CHAR + 1)] + list(EXTRA_CHARS)
+    rows = (len(chars) + ATLAS_COLS - 1) // ATLAS_COLS
     img = Image.new("L", (ATLAS_COLS * cw, rows * ch), 0)
     draw = ImageDraw.Draw(img)
-    for k in range(n):
+    for k, char in enumerate(chars):
         r, c = divmod(k, ATLAS_COLS)
-        draw.text((c * cw, r * ch), chr(FIRST_CHAR + k), font=font, fill=255)
+        draw.text((c * cw, r * ch), char, font=font, fill=255)
     return np.asarray(img, dtype=np.uint8), (cw, ch)
+
+
+def glyph_index(c: str) -> int | None:
+    """The atlas cell of character ``c``; None for a space or a character the atlas lacks."""
+    k = ord(c)
+    if FIRST_CHAR < k <= LAST_CHAR:
+        return k - FIRST_CHAR
+    i = EXTRA_CHARS.find(c)
+    return None if i < 0 else LAST_CHAR - FIRST_CHAR + 1 + i
 
 
 class GlyphRuns:
@@ -380,10 +392,10 @@ class Text:
         out = []
         for li, s in enumerate(lines):
             for ci, c in enumerate(s):
-                k = ord(c)
-                if c == " " or not FIRST_CHAR <= k <= LAST_CHAR:
+                g = glyph_index(c)
+                if g is None:
                     continue
-                out.append(((round(x + ci * cw), round(y + li * ch)), k - FIRST_CHAR))
+                out.append(((round(x + ci * cw), round(y + li * ch)), g))
         data = np.zeros(len(out), TEXT_DTYPE)
         for i, (pos, g) in enumerate(out):
             data[i] = (pos, g)

@@ -248,8 +248,10 @@ def controls_array(d: dict) -> np.ndarray:
     return np.array(d["controls"]["rows"], dtype=float)
 
 
-def replay(d: dict, script: Script, model):
-    """Replay a checked crash dict with plain ``mj_step``: (final qpos, judged Outcome)."""
+def replay(d: dict, script: Script, model, *, on_step=None):
+    """Replay a checked crash dict with plain ``mj_step``: (final qpos, judged Outcome).
+    ``on_step(k, data)``, when given, is called after step k (1 .. nstep) and only reads
+    ``data`` (the renderer records the motion through it: the replay it films is this one)."""
     import mujoco
 
     L = scene_mod.layout(model, script.n)
@@ -271,6 +273,8 @@ def replay(d: dict, script: Script, model):
         vel = md.qvel[vi][None]
         mujoco.mj_step(model, md)
         rec.step((k + 1) * dt, md.sensordata[None], vel)
+        if on_step is not None:
+            on_step(k + 1, md)
     rec.finish(md.qpos[None], md.qvel[None])
     o = out_mod.outcomes(rec, script.names(), L.mass)[0]
     out_mod.judge(o, script, rec.min_dist[0])

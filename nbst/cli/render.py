@@ -30,17 +30,22 @@ def register(sub) -> None:
                     ".mp4 (H.264, yuv420p, plays everywhere) or .gif; with --still T, a .png of the\n"
                     "frame at time T. Headless: OpenGL through EGL, no display or GPU needed.",
         epilog="examples:\n  nbst render diamond-s14 sol.json -o out/diamond.mp4 --trails\n"
+               "  nbst render tbone.json -o tbone.mp4 --follow A         # a crash file (nbst crash solve)\n"
                "  nbst render over5 sol.json -o out/over5.gif\n"
                "  nbst render diamond-s14 sol.json --still 0 -o out/start.png\n"
                "  nbst render diamond-s14 sol.json -o out/check.mp4 --source both   # MuJoCo replay as rings",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("problem", help="built-in name or path to a problem JSON file")
+    p.add_argument("problem", help="built-in name or path to a problem JSON file (or a crash file from `nbst crash "
+                                   "solve`, rendered in 3D alone, docs/render.md)")
     p.add_argument("solution", nargs="?",
                    help="path to a solution JSON file (e.g. from `nbst solve`); omit it when PROBLEM is a bowling "
                         "shot file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")
     p.add_argument("-o", "--output", required=True, metavar="PATH", help="output file: .mp4, .gif, or .png with --still")
     p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
-                   help="bowling shots only: behind the ball, overhead, or both side by side (default both)")
+                   help="bowling shots only: behind the ball, overhead, or both side by side (default both); "
+                        "crash files: overhead (default), behind the --follow vehicle, or both")
+    p.add_argument("--follow", default=None, metavar="NAME",
+                   help="crash files only: a chase camera behind vehicle NAME, beside the overhead view")
     p.add_argument("--fps", type=FPS, default=None,
                    help=with_limits(f"frames per second (default {style.DEFAULT_FPS}; {style.GIF_FPS} for .gif)", FPS))
     p.add_argument("--size", type=SIZE, default=None, metavar="WxH",
@@ -133,6 +138,18 @@ def cmd_render(args) -> int:
     from nbst.render.bowling import is_shot_file
     from nbst.render.gl import RenderError
 
+    from nbst.render.crash import crash_kind
+
+    ck = crash_kind(args.problem)  # sniffs the first bytes only; the crash file's gate reads it, capped
+    if ck == "crash":
+        from nbst.cli.render_crash import cmd_render_crash
+
+        return cmd_render_crash(args)
+    if ck == "script":
+        return _err("render", f"{args.problem} is a crash script; solve it first (`nbst crash solve "
+                              f"{args.problem} -o crash.json`), then render the crash file")
+    if args.follow is not None:
+        return _err("render", "--follow applies to crash files only (from `nbst crash solve`)")
     if is_shot_file(args.problem):  # sniffs the first bytes only; the shot loader reads it, capped
         from nbst.render.bowling import cmd_render_shot
 

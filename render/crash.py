@@ -1,0 +1,487 @@
+"""A crash in 3D (``nbst render CRASH.json``): the road, the vehicles, their marks and the readout.
+
+The motion is the crash file's own replay (:mod:`nbst.render.crash_motion`); everything drawn
+comes from the file (:mod:`nbst.render.crash_scene`): the road and the vehicles are the
+scene's own geoms (their MJCF sizes, poses and colours), placed each frame by
+``mj_kinematics`` from the recorded ``qpos``, so the wheels spin and steer as their joints do.
+
+* **Cameras**: ``overhead`` (orthographic, true scale, north up, over every path, target and
+  impact, with a scale bar; the wheels drawn through the bodies so that their steering shows)
+  and ``behind``, a chase camera behind the followed vehicle, :data:`CHASE_SIDE` degrees off
+  its axis so the wheels' faces show, turning with its heading smoothed over
+  :data:`CHASE_TAU` s (a spinning car does not whirl the camera); ``both``: the chase view,
+  and the overhead view above the readout.
+* **On the road**: lane markings, the script's rest regions and heading arrows, each
+  vehicle's trail, skid marks and scrapes, and an impact ring at each first contact point
+  from the moment of contact, labelled with the pair and the time (drawn over the vehicles in
+  the overhead view, as a crash diagram marks its points of impact).
+* **Readout** (:mod:`nbst.render.crash_readout`) in a column on the right; slow motion around
+  each impact (:func:`nbst.render.crash_motion.frame_times`).
+
+Compute apart from I/O: :class:`CrashRenderer` returns frames; :func:`render_crash` is the thin
+writer the CLI calls; :func:`crash_kind` sniffs a file's kind.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from nbst.render import crash_readout as ro
+from nbst.render import crash_scene as cs
+from nbst.render import style
+from nbst.render.bowling import FS, VS
+from nbst.render.crash_motion import frame_times, slow_windows, slowed
+from nbst.render.gl import FrameRenderer, FrameTarget, create_context
+from nbst.render.scene3d import look_at, perspective
+
+CAMERAS = ("overhead", "behind", "both")
+#: Share of the frame's width the readout column takes, and the most it takes where its text
+#: at MIN_READOUT_PX needs more (small frames).
+COLUMN_SHARE, COLUMN_MAX = 0.36, 0.62
+#: Height of the overhead panel above the readout (camera "both"), as a share of the frame's height.
+INSET_SHARE = 0.45
+#: Chase camera: this far behind the vehicle (m), this high, looking at a point this far ahead
+#: of it, from this many degrees off its axis (its left), field of view (deg); the heading it
+#: follows is smoothed with this time constant (s).
+CHASE_BACK, CHASE_HEIGHT, CHASE_AHEAD, CHASE_SIDE, CHASE_FOV, CHASE_TAU = 14.0, 5.5, 6.0, 15.0, 45.0, 0.6
+#: Overhead view: the impacts, rest poses and regions and the paths within this distance (m) of
+#: them, with this margin (m), at least this wide (m).
+OVERHEAD_LEAD, OVERHEAD_MARGIN, OVERHEAD_MIN = 12.0, 4.0, 24.0
+#: Scale bar lengths (m) to choose from: the longest under a quarter of the panel's width.
+SCALE_BARS = (1, 2, 5, 10, 20, 50, 100, 200)
+SKY = (0.60, 0.68, 0.78)
+PANEL = (0.09, 0.10, 0.12)
+OK_RGB, NO_RGB = (0.35, 0.85, 0.40), (0.95, 0.32, 0.26)
+IMPACT_TEXT = (1.0, 0.70, 0.30)
+LIGHT = (0.3, 0.4, 1.0)
+
+MARK_VS = """#version 330
+uniform mat4 u_vp;
+in vec3 in_pos;
+in vec4 in_color;
+in float in_time;
+out vec4 v_color;
+out float v_time;
+void main() {
+    v_color = in_color;
+    v_time = in_time;
+    gl_Position = u_vp * vec4(in_pos, 1.0);
+}
+"""
+#: A mark shows from its time on (crash_scene's rows): a ribbon whose vertices carry the times
+#: they were laid grows between two samples as the frame's time passes.
+MARK_FS = """#version 330
+uniform float u_t;
+in vec4 v_color;
+in float v_time;
+out vec4 f_color;
+void main() {
+    if (v_time > u_t) discard;
+    f_color = vec4(v_color.rgb * v_color.a, v_color.a);
+}
+"""
+
+
+def top_view(bounds, vp) -> tuple[np.ndarray, float]:
+    """(4x4 view-projection, px per m) of a true-scale view from above of ``bounds`` (x0, y0, x1,
+    y1) m in the viewport ``vp`` (x, top row, w, h) px: x east to the right, y north up, centred;
+    image row 0 at the top (as FrameTarget); larger z nearer."""
+    x0, y0, x1, y1 = bounds
+    _, _, vw, vh = vp
+    ppm = min(vw / (x1 - x0), vh / (y1 - y0))
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    m = np.zeros((4, 4))
+    m[0, 0], m[0, 3] = 2 * ppm / vw, -2 * ppm * cx / vw
+    m[1, 1], m[1, 3] = -2 * ppm / vh, 2 * ppm * cy / vh
+    m[2, 2], m[2, 3] = -0.1, 0.3
+    m[3, 3] = 1.0
+    return m, ppm
+
+
+def chase_yaw(times: np.ndarray, yaw: np.ndarray, tau: float = CHASE_TAU) -> np.ndarray:
+    """The chase camera's heading at each sample: the vehicle's unwrapped yaw through a causal
+    first-order low-pass of time constant ``tau`` s (exact for the samples' spacing)."""
+    out = np.empty_like(yaw)
+    out[0] = yaw[0]
+    a = 1.0 - np.exp(-np.diff(times) / tau)
+    for k in range(1, len(yaw)):
+        out[k] = out[k - 1] + a[k - 1] * (yaw[k] - out[k - 1])
+    return out
+
+
+class CrashRenderer(FrameRenderer):
+    """Frames of a recorded crash: ``render(t)`` -> (H, W, 3) uint8.
+
+    d, script, model: ``crashfile.load``'s; motion: ``crash_motion.record``'s; camera: overhead |
+    behind | both; follow: the chased vehicle's index (behind and both)."""
+
+    def __init__(self, ctx, d: dict, script, model, motion, *, size=style.DEFAULT_SIZE, camera: str = "overhead",
+                 follow: int = 0):
+        import moderngl
+        import mujoco
+
+        from nbst.models.crash import crashfile
+        from nbst.render.shapes import Text, text_cell
+
+        if camera not in CAMERAS:
+            raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
+        self.ctx, self.d, self.script, self.model, self.motion = ctx, d, script, model, motion
+        self.camera, self.follow = camera, int(follow)
+        self.size = tuple(int(v) for v in size)
+        self._mgl, self._mj = moderngl, mujoco
+        self.data = mujoco.MjData(model)
+        n = script.n
+        self.names = script.names()
+        self.colours = [tuple(float(c) for c in model.geom_rgba[model.geom(f"v{i}_lower").id][:3]) for i in range(n)]
+        self.fates = [crashfile.fate_dict(script, i) for i in range(n)]
+        self.labels = [v.vtype.label for v in script.vehicles]
+        self.windows = slow_windows([im.t for im in motion.impacts], motion.duration)
+        w, h = self.size
+        # the readout: text as large as TEXT_FRAC of the frame, in a column COLUMN_SHARE wide;
+        # where its lines do not fit, the text shrinks (to MIN_READOUT_PX), then the column widens
+        # (to COLUMN_MAX of the frame; past that the lines are cut at the frame's edge)
+        chars, rows = ro.widest(motion, script, self.fates, self.labels, self.windows)
+        px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
+        ih = int(round(INSET_SHARE * h)) if camera == "both" else 0
+        cw_ = int(round(COLUMN_SHARE * w))
+        while px > style.MIN_READOUT_PX and ((chars + 2) * text_cell(px)[0] > cw_ or
+                                             (rows + 1) * text_cell(px)[1] > h - ih):
+            px -= 1
+        cw_ = int(min(max(cw_, (chars + 2) * text_cell(px)[0]), round(COLUMN_MAX * w)))
+        self.column = (w - cw_, 0, cw_, h)
+        main = (0, 0, w - cw_, h)
+        if camera == "both":
+            self.panels = {"behind": main, "overhead": (w - cw_, 0, cw_, ih)}
+            self.text_box = (w - cw_, ih, cw_, h - ih)
+        else:
+            self.panels = {camera: main}
+            self.text_box = self.column
+        self.text = Text(ctx, px)
+        self.small = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.018 * min(self.size)))))
+        self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
+        self.prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
+        L = np.asarray(LIGHT) / np.linalg.norm(LIGHT)
+        self.prog["u_light"].value = tuple(L)
+        self.mprog = ctx.program(vertex_shader=MARK_VS, fragment_shader=MARK_FS)
+        self._objs = []
+        mujoco.mj_kinematics(model, self.data)
+        ground, statics, rgb = cs.static_solids(model, self.data)
+        self.ground_vao, self.static_vao = self._vao(ground), self._vao(statics)
+        # the overhead view clears to the ground's lit colour instead of filling it (a flat surface
+        # under LIGHT: ambient + diffuse; the highlight of the chase view's ground is left out)
+        self.ground_rgb = tuple(float(c) * (0.35 + 0.65 * float(L[2])) for c in rgb)
+        self.lines_vao = self._vao(np.concatenate([cs.lane_marks(script.road),
+                                                   cs.target_marks(self.fates, self.colours)]), marks=True)
+        self.trail_vao = self._vao(cs.motion_marks(motion, self.colours), marks=True)
+        imp = cs.impact_marks(motion.impacts)
+        self.impact_vao = self._vao(imp, marks=True) if len(imp) else None
+        # the vehicles' geoms, one buffer per shape (equal vehicles share theirs); the lower body
+        # has an arch over each wheel, placed from the wheels' poses at the start
+        self.geoms: list[tuple[int, bool, object]] = []    # (geom id, is a tyre, vao)
+        self.heights = []
+        cache: dict = {}
+        self.data.qpos[:] = motion.qpos[0]
+        mujoco.mj_kinematics(model, self.data)
+        for i in range(n):
+            body = model.body(f"v{i}").id
+            for g in np.nonzero(model.geom_bodyid == body)[0].tolist() + [
+                    model.geom(f"v{i}_tyre_{c}").id for c in ("fl", "fr", "rl", "rr")]:
+                nm = model.geom(g).name
+                arches = self._arches(i, g) if nm.endswith("_lower") else ()
+                key = (int(model.geom_type[g]), tuple(np.round(model.geom_size[g], 6)), tuple(model.geom_rgba[g]),
+                       nm.endswith("_cabin"), "_tyre_" in nm, tuple(np.round(np.ravel(arches), 6)))
+                if key not in cache:
+                    rows = cs.geom_solid(model, g, arches)
+                    cache[key] = None if rows is None else self._vao(rows)
+                if cache[key] is not None:
+                    self.geoms.append((g, "_tyre_" in nm, cache[key]))
+            self.heights.append(script.vehicles[i].vtype.height)
+        self.bounds = self._overhead_bounds()
+        if "behind" in self.panels:
+            self.cam_yaw = chase_yaw(motion.times, motion.yaw[:, self.follow])
+
+    def _vao(self, rows: np.ndarray, *, marks: bool = False):
+        buf = self.ctx.buffer(np.ascontiguousarray(rows, dtype="f4").tobytes())
+        if marks:
+            vao = self.ctx.vertex_array(self.mprog, [(buf, "3f 4f 1f", "in_pos", "in_color", "in_time")])
+        else:
+            vao = self.ctx.vertex_array(self.prog, [(buf, "3f 3f 3f", "in_pos", "in_normal", "in_color")])
+        self._objs += [vao, buf]
+        return vao
+
+    def _arches(self, i: int, g: int) -> list[tuple[float, float, float]]:
+        """Wheel arches of vehicle ``i``'s body box ``g``: (x, half length, top z) in the box's frame."""
+        R, p = self.data.geom_xmat[g].reshape(3, 3), self.data.geom_xpos[g]
+        out = []
+        for c in ("fl", "fr", "rl", "rr"):
+            t = self.model.geom(f"v{i}_tyre_{c}").id
+            x, _, z = R.T @ (self.data.geom_xpos[t] - p)
+            r = float(self.model.geom_size[t][0]) + cs.ARCH_CLEAR
+            if not any(abs(a[0] - x) < 1e-6 for a in out):
+                out.append((float(x), r, float(z) + r))
+        return out
+
+    def _overhead_bounds(self) -> tuple[float, float, float, float]:
+        """(x0, y0, x1, y1) m the overhead view shows: the crash's places (every impact, rest pose
+        and rest region) and the paths within OVERHEAD_LEAD m of them, with OVERHEAD_MARGIN, at least
+        OVERHEAD_MIN across, in the panel's aspect: a crash diagram the vehicles drive into (their
+        names wait at the edge they come from)."""
+        m = self.motion
+        keys = [m.pos[-1, :, :2]]
+        for f in self.fates:
+            if "rest" in f:
+                r = f["rest"]
+                keys.append(np.array([[r["x"] - r["radius"], r["y"] - r["radius"]],
+                                      [r["x"] + r["radius"], r["y"] + r["radius"]]]))
+        keys += [np.array([im.pos[:2]]) for im in m.impacts if all(math.isfinite(c) for c in im.pos[:2])]
+        keys = np.concatenate(keys)
+        path = m.pos[:, :, :2].reshape(-1, 2)
+        near = np.hypot(*(path[:, None, :] - keys[None]).transpose(2, 0, 1)).min(axis=1) <= OVERHEAD_LEAD
+        p = np.concatenate([keys, path[near]])
+        lo, hi = p.min(axis=0) - OVERHEAD_MARGIN, p.max(axis=0) + OVERHEAD_MARGIN
+        c, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, OVERHEAD_MIN / 2)
+        _, _, vw, vh = self.panels["overhead"] if "overhead" in self.panels else (0, 0, 1, 1)
+        aspect = vw / vh
+        half = np.maximum(half, [half[1] * aspect, half[0] / aspect])
+        return c[0] - half[0], c[1] - half[1], c[0] + half[0], c[1] + half[1]
+
+    # ---------------------------------------------------------------- cameras
+
+    def views(self, t: float):
+        """[(camera, viewport (x, top row, w, h) px, view-projection, eye)] of the frame at ``t``."""
+        out = []
+        k = self.motion.index(t)
+        for cam, vp in self.panels.items():
+            if cam == "overhead":
+                vpm, _ = top_view(self.bounds, vp)
+                out.append((cam, vp, vpm, np.array([0.0, 0.0, 100.0])))
+                continue
+            p = self.motion.pos[k, self.follow].copy()
+            p[2] = 0.0
+            yaw = float(self.cam_yaw[k])
+            back = yaw + math.pi - math.radians(CHASE_SIDE)
+            eye = p + np.array([CHASE_BACK * math.cos(back), CHASE_BACK * math.sin(back), CHASE_HEIGHT])
+            tgt = p + np.array([CHASE_AHEAD * math.cos(yaw), CHASE_AHEAD * math.sin(yaw), 0.6])
+            flip = np.diag([1.0, -1.0, 1.0, 1.0])  # image row 0 at the top: no flip on readback
+            vpm = flip @ perspective(CHASE_FOV, vp[2] / vp[3], 0.5, 3000.0) @ look_at(eye, tgt, np.array([0.0, 0.0, 1.0]))
+            out.append((cam, vp, vpm, eye))
+        return out
+
+    @staticmethod
+    def to_pixel(vp, vpm, p) -> tuple[float, float, bool]:
+        """(column, row, in front of the camera) of the world point ``p`` in the panel ``vp``."""
+        c = vpm @ np.r_[np.asarray(p, float)[:3], 1.0]
+        return vp[0] + (c[0] / c[3] + 1) / 2 * vp[2], vp[1] + (c[1] / c[3] + 1) / 2 * vp[3], c[3] > 0
+
+    def readout(self, t: float) -> list[str]:
+        return ro.readout(t, self.motion, self.script, self.fates, self.labels, self.windows)
+
+    # ---------------------------------------------------------------- drawing
+
+    def draw(self, t: float) -> None:
+        mgl, ctx = self._mgl, self.ctx
+        k = self.motion.index(t)
+        self.data.qpos[:] = self.motion.qpos[k]
+        self._mj.mj_kinematics(self.model, self.data)
+        fbo = self.target.draw_fbo
+        fbo.use()
+        fbo.clear(*PANEL, 1.0, depth=1.0)
+        views = self.views(t)
+        for cam, vp, vpm, eye in views:
+            ctx.viewport = vp
+            fbo.clear(*(SKY if cam == "behind" else self.ground_rgb), 1.0, depth=1.0, viewport=vp)
+            ctx.enable(mgl.DEPTH_TEST)
+            ctx.disable(mgl.BLEND)
+            self.prog["u_vp"].write(vpm.T.astype("f4").tobytes())
+            self.prog["u_eye"].value = tuple(float(e) for e in eye)
+            self.prog["u_model"].write(np.eye(4, dtype="f4").tobytes())
+            if cam == "behind":
+                self.ground_vao.render(mgl.TRIANGLES)
+            self.static_vao.render(mgl.TRIANGLES)
+            ctx.enable(mgl.BLEND)
+            ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
+            self.mprog["u_vp"].write(vpm.T.astype("f4").tobytes())
+            self.mprog["u_t"].value = float(t)
+            fbo.depth_mask = False   # the marks lie on the road in the order drawn (each is hidden by
+            self.lines_vao.render(mgl.TRIANGLES)   # what stands in front of it, and hides nothing)
+            self.trail_vao.render(mgl.TRIANGLES)
+            if self.impact_vao is not None and cam == "behind":
+                self.impact_vao.render(mgl.TRIANGLES)
+            fbo.depth_mask = True
+            ctx.disable(mgl.BLEND)
+            self._draw_vehicles(tyres_only=False)
+            if cam == "overhead":
+                ctx.disable(mgl.DEPTH_TEST)   # the wheels through the bodies; the impacts over all
+                self._draw_vehicles(tyres_only=True)
+                if self.impact_vao is not None:
+                    ctx.enable(mgl.BLEND)
+                    self.impact_vao.render(mgl.TRIANGLES)
+        ctx.viewport = (0, 0, *self.size)
+        ctx.disable(mgl.DEPTH_TEST)
+        ctx.enable(mgl.BLEND)
+        ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA  # the text shader's premultiplied alpha
+        self._overlay(t, k, views)
+        ctx.disable(mgl.BLEND)
+
+    def _draw_vehicles(self, *, tyres_only: bool) -> None:
+        mgl = self._mgl
+        m = np.eye(4, dtype="f4")
+        for g, tyre, vao in self.geoms:
+            if tyres_only and not tyre:
+                continue
+            m[:3, :3] = self.data.geom_xmat[g].reshape(3, 3)
+            m[:3, 3] = self.data.geom_xpos[g]
+            self.prog["u_model"].write(m.T.copy().tobytes())
+            vao.render(mgl.TRIANGLES)
+
+    def _overlay(self, t: float, k: int, views) -> None:
+        """Panel titles, names by the vehicles and their targets, impact labels, the scale bar and
+        the readout, in pixels."""
+        size = self.size
+        sm = self.small
+        scw, sch = sm.cell
+        for cam, vp, vpm, _ in views:
+            title = ("overhead, true scale" if cam == "overhead" else f"chase: {self.names[self.follow]}")
+            if cam == "behind" and slowed(t, self.windows):
+                title += f"   slow motion \u00d7{ro.SLOW:g}"
+            sm.draw_halo(size, sm.layout([title], vp[0] + 0.6 * scw, vp[1] + 0.3 * sch), style.TEXT, style.TEXT_HALO)
+            placed = []        # label boxes (x0, y0, x1, y1) px drawn in this panel
+            for i, nm in enumerate(self.names):
+                p = self.motion.pos[k, i].copy()
+                p[2] += self.heights[i]
+                col, row, front = self.to_pixel(vp, vpm, p)
+                if cam == "overhead":   # above the vehicle; at the panel's edge while it is outside
+                    col = float(np.clip(col, vp[0] + scw * (len(nm) / 2 + 0.5), vp[0] + vp[2] - scw * (len(nm) / 2 + 0.5)))
+                    row = float(np.clip(row - 1.6 * sch, vp[1] + 1.5 * sch, vp[1] + vp[3] - 1.2 * sch))
+                elif not (front and self._inside(vp, col, row)):
+                    continue
+                else:
+                    row -= 0.5 * sch
+                placed.append(self._label(nm, col - scw * len(nm) / 2, row, self.colours[i]))
+                if cam == "overhead" and "rest" in self.fates[i]:
+                    f = self.fates[i]["rest"]
+                    col, row, _ = self.to_pixel(vp, vpm, (f["x"], f["y"] + f["radius"], 0.0))
+                    if self._inside(vp, col, row):
+                        placed.append(self._label(nm, col - scw * len(nm) / 2, row - 1.1 * sch, self.colours[i]))
+            from nbst.render.scene2d import keep_apart
+
+            for im in self.motion.impacts:
+                if im.t > t or not all(math.isfinite(c) for c in im.pos[:2]):
+                    continue
+                label = (f"{self.names[im.a]}-{self.names[im.b]}" if im.b is not None else
+                         f"{self.names[im.a]} {im.what}") + f" {im.t:.2f} s"
+                col, row, front = self.to_pixel(vp, vpm, im.pos)
+                if not (front and self._inside(vp, col, row)):
+                    continue
+                w = scw * len(label)
+                spots = [(col + 0.8 * scw, row + 0.3 * sch), (col + 0.8 * scw, row - 1.3 * sch),
+                         (col - 0.8 * scw - w, row + 0.3 * sch), (col - 0.8 * scw - w, row - 1.3 * sch),
+                         (col - w / 2, row + 1.2 * sch), (col - w / 2, row - 2.2 * sch),
+                         (col - w / 2, row + 2.2 * sch), (col - w / 2, row - 3.2 * sch)]
+                x, y = next(((x, y) for x, y in spots if keep_apart([(x, y, x + w, y + sch)], placed)[0]), spots[0])
+                placed.append(self._label(label, x, y, IMPACT_TEXT))
+            if cam == "overhead":
+                self._scale_bar(vp, vpm)
+        self._readout(t)
+
+    def _label(self, text: str, x: float, y: float, colour) -> tuple:
+        """Draw ``text`` in the small size with its top-left at (x, y) px; its box (x0, y0, x1, y1)."""
+        sm = self.small
+        sm.draw_halo(self.size, sm.layout([text], x, y), colour, style.TEXT_HALO)
+        return (x, y, x + sm.cell[0] * len(text), y + sm.cell[1])
+
+    @staticmethod
+    def _inside(vp, col, row) -> bool:
+        return vp[0] <= col < vp[0] + vp[2] and vp[1] <= row < vp[1] + vp[3]
+
+    def _scale_bar(self, vp, vpm) -> None:
+        from nbst.render.shapes import Rect
+
+        _, ppm = top_view(self.bounds, vp)
+        L = max((b for b in SCALE_BARS if b * ppm <= vp[2] / 4), default=SCALE_BARS[0])
+        sm = self.small
+        x0, y0 = vp[0] + 0.6 * sm.cell[0], vp[1] + vp[3] - 1.6 * sm.cell[1]
+        if not hasattr(self, "_rect"):
+            self._rect = Rect(self.ctx)
+            self._objs.append(self._rect)
+        self._rect.draw(self.size, (x0, y0, x0 + L * ppm, y0 + 4.0), fill=(*style.TEXT, 1.0), rim=(*style.TEXT_HALO, 1.0),
+                        stroke=1.0)
+        sm.draw_halo(self.size, sm.layout([f"{L} m"], x0 + L * ppm + 0.5 * sm.cell[0], y0 - 0.4 * sm.cell[1]),
+                     style.TEXT, style.TEXT_HALO)
+
+    def _readout(self, t: float) -> None:
+        lines = self.readout(t)
+        plain, oks, nos = ro.mark_masks(lines)
+        owner = ro.colour_rows(lines, self.names)
+        cw, ch = self.text.cell
+        x0, y0 = self.text_box[0] + 0.7 * cw, self.text_box[1] + 0.5 * ch
+        size = self.size
+        base = [s if owner[j] < 0 else "" for j, s in enumerate(plain)]
+        self.text.draw(size, self.text.layout(base, x0, y0), style.TEXT)
+        for j, s in enumerate(plain):
+            if owner[j] >= 0:
+                self.text.draw(size, self.text.layout([s], x0, y0 + j * ch), self.colours[owner[j]])
+        self.text.draw(size, self.text.layout(oks, x0, y0), OK_RGB)
+        self.text.draw(size, self.text.layout(nos, x0, y0), NO_RGB)
+
+    def release(self) -> None:
+        for o in self._objs:
+            o.release()
+        self.prog.release()
+        self.mprog.release()
+        self.text.release()
+        self.small.release()
+        self.target.release()
+
+
+# --------------------------------------------------------------------------- files
+
+#: Bytes of a .json file read to tell a crash file from others: ``crash_dict`` writes ``kind``
+#: second, so the sniff never reads a large file whole (the loader reads it, capped).
+SNIFF_BYTES = 4096
+
+
+def crash_kind(path) -> str | None:
+    """"crash" (a crash file) or "script" (a crash script) when ``path`` names a regular .json
+    file whose first SNIFF_BYTES name that kind, else None (``nbst.files.sniff_kind``)."""
+    from nbst.files import sniff_kind
+    from nbst.models.crash.crashfile import KIND
+    from nbst.models.crash.script import KIND as SCRIPT_KIND
+
+    return sniff_kind(path, (("crash", KIND), ("script", SCRIPT_KIND)), max_bytes=SNIFF_BYTES)
+
+
+def load(path):
+    """(crash dict, Script, MjModel, CrashMotion) of the crash file ``path``: read through the crash
+    file's gate (``crashfile.load``: one line naming the field) and replayed."""
+    from nbst.models.crash import crashfile
+    from nbst.render.crash_motion import record
+
+    d, script, model = crashfile.load(path)
+    return d, script, model, record(d, script, model)
+
+
+def render_crash(d: dict, script, model, motion, output, *, still=None, camera: str = "overhead", follow: int = 0,
+                 size=None, fps=None, hold: float = 1.0, times=None, progress=None) -> int:
+    """Render a recorded crash to ``output`` (.mp4/.gif at ``fps``, slowed around each impact, or a
+    .png at time ``still``); ``times``: the frames' times (default :func:`.crash_motion.frame_times`
+    with ``hold``). Returns the number of frames written."""
+    from nbst.render.video import render_video, write_png
+
+    size = tuple(size or style.DEFAULT_SIZE)
+    ctx = create_context()
+    try:
+        r = CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera, follow=follow)
+        try:
+            if still is not None:
+                write_png(output, r.render(float(np.clip(still, 0.0, motion.duration))))
+                return 1
+            fps = float(fps or style.DEFAULT_FPS)
+            if times is None:
+                times = frame_times(motion.duration, fps, r.windows, hold=hold)
+            return render_video(r, times, output, fps=fps, progress=progress)
+        finally:
+            r.release()
+    finally:
+        ctx.release()

@@ -1,0 +1,268 @@
+"""The crash video (render/crash*.py): what a viewer checks, never golden pixels. A vehicle shows
+its colour where the replay has it, projected by the renderer's own camera; the impact ring
+appears at the contact's time and not before; slow motion adds the frames its windows say; the
+readout's marks are the judged fates; the CLI writes a still and a video that decodes with the
+frames the frame times give, through the one atomic writer (nothing through a link)."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from nbst.models.crash import crashfile, run, script, space
+from nbst.render import crash, crash_motion, crash_readout, crash_scene
+
+SIZE = (800, 450)
+#: A short crossing (2.5 s): A eastbound T-bones B northbound at about 1.6 s and brakes; B's fate
+#: asks for a rest region and a heading it does not reach (so the readout has a ✗ to show).
+SHORT = {
+    "kind": "nbst-crash-script", "name": "short",
+    "road": {"layout": "intersection", "width": 7, "length": 80},
+    "duration": 2.5,
+    "vehicles": [
+        {"name": "A", "type": "sedan", "start": {"x": -22, "y": -1.75, "heading": 0}, "speed": [45, 55],
+         "driver": {"aim": {"x": [0, 4], "y": -1.75}, "arrive": [1.5, 1.8], "after_impact": "brake"},
+         "fate": {"hits": ["B"]}},
+        {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -22, "heading": 90}, "speed": [45, 55],
+         "driver": {"aim": {"x": 1.75, "y": [-2, 2]}, "arrive": [1.5, 1.8]},
+         "fate": {"hits": ["A"], "rest": {"x": -20, "y": 20, "radius": 2}, "heading": {"deg": 90, "tol": 30}}},
+    ],
+}
+
+
+@pytest.fixture(scope="module")
+def crash_file(tmp_path_factory):
+    """One rollout of SHORT (seeded intents) written as a crash file, as `nbst crash solve` writes one."""
+    s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
+    sp = space.space_of(s)
+    U = np.random.default_rng(3).random((1, sp.dim))
+    R = run.Runner(s, jobs=1, batch=1)
+    res = R.run(sp.intents(U))
+    d = crashfile.crash_dict(s, R.xml, R.model, sp.intents(U)[0], res.qpos0[0], res.qvel0[0], res.controls[0],
+                             res.final_qpos[0], res.outcomes[0], seed=3, period_steps=R.period)
+    f = tmp_path_factory.mktemp("crash") / "short.json"
+    f.write_text(json.dumps(d, indent=1, allow_nan=False))
+    return f
+
+
+@pytest.fixture(scope="module")
+def loaded(crash_file):
+    return crash.load(crash_file)
+
+
+@pytest.fixture(scope="module")
+def gl():
+    """The only place this file creates a GL context (EGL, headless)."""
+    from nbst.render.gl import create_context
+
+    ctx = create_context()
+    yield ctx
+    ctx.release()
+
+
+@pytest.fixture(scope="module")
+def overhead(gl, loaded):
+    r = crash.CrashRenderer(gl, *loaded, size=SIZE, camera="overhead")
+    yield r
+    r.release()
+
+
+def test_the_recording_is_the_files_own_replay(loaded):
+    d, s, model, m = loaded
+    assert m.identical                               # the final state bit for bit, the same outcome
+    assert np.array_equal(m.qpos[-1], np.array(d["final_qpos"])) and m.times[-1] == pytest.approx(s.duration)
+    assert np.array_equal(m.qpos[0], np.array(d["qpos0"]))
+    assert np.all(np.diff(m.times) <= crash_motion.POSE_DT + 1e-12)
+    assert crash_motion.impact_times(d["outcome"]) == [im.t for im in m.impacts]   # known before the replay
+    (hit,) = [im for im in m.impacts if im.what == "vehicle"]
+    assert (hit.a, hit.b, hit.t) == (0, 1, d["outcome"]["contacts"][0]["t"])
+
+
+def test_a_braked_sliding_tyre_marks_the_road_and_a_rolling_one_does_not(loaded):
+    """A brakes after the impact (its wheels lock): its skid marks start at the impact and follow
+    its path within a tyre's reach; before the impact nobody slides, so the road is clean."""
+    d, s, model, m = loaded
+    t_hit = d["outcome"]["contacts"][0]["t"]
+    skids = [mk for mk in m.marks if mk.kind == "skid"]
+    assert all(mk.times[0] >= t_hit - crash_motion.MARK_DT for mk in skids)
+    mine = [mk for mk in skids if mk.vehicle == 0]
+    assert sum(mk.times[-1] - mk.times[0] for mk in mine) > 0.5         # four tyres, ~0.9 s of braking
+    for mk in mine:   # every sample of a mark lies under the car: within its half diagonal of the CoM
+        k = [m.index(t) for t in mk.times]
+        off = np.hypot(*(mk.xy - m.pos[k, 0, :2]).T)
+        assert off.max() < math.hypot(4.88, 1.83) / 2
+
+
+def test_a_vehicle_shows_its_colour_where_the_replay_has_it(overhead):
+    """Overhead: the pixel at the centre of each vehicle's roof, placed by MuJoCo's kinematics from
+    the replay's state at that time, is of the vehicle's hue (A red, B blue), before, during and
+    after the crash."""
+    import mujoco
+
+    r = overhead
+    data = mujoco.MjData(r.model)
+    for t in (0.4, 1.2, 2.5):
+        frame = r.render(t)
+        data.qpos[:] = r.motion.qpos[r.motion.index(t)]
+        mujoco.mj_kinematics(r.model, data)
+        (cam, vp, vpm, _), = r.views(t)
+        for i, hue in enumerate((0, 2)):
+            g = r.model.geom(f"v{i}_cabin").id
+            roof = data.geom_xpos[g] + data.geom_xmat[g].reshape(3, 3) @ [0.0, 0.0, r.model.geom_size[g][2]]
+            col, row, front = r.to_pixel(vp, vpm, roof)
+            assert front and r._inside(vp, col, row)
+            rgb = frame[int(row), int(col)].astype(int)
+            assert np.argmax(rgb) == hue and rgb[hue] > rgb.min() + 40, (t, i, rgb)
+
+
+def _ring_pixels(r, frame, t, im) -> int:
+    """Pixels of the impact colour in the ring around impact ``im`` (overhead)."""
+    (cam, vp, vpm, _), = r.views(t)
+    col, row, _ = r.to_pixel(vp, vpm, im.pos)
+    _, ppm = crash.top_view(r.bounds, vp)
+    yy, xx = np.mgrid[0:frame.shape[0], 0:frame.shape[1]]
+    d = np.hypot(xx + 0.5 - col, yy + 0.5 - row) / ppm
+    edge = 0.7 / ppm                                   # a pixel clear of the ring's anti-aliased edges
+    ring = (d > crash_scene.IMPACT_RING[0] + edge) & (d < crash_scene.IMPACT_RING[1] - edge)
+    orange = np.abs(frame.astype(int) - np.array([255, 140, 20])).max(axis=2) < 40
+    return int((ring & orange).sum()), int(ring.sum())
+
+
+def test_the_impact_marker_appears_at_the_impact_and_not_before(overhead):
+    r = overhead
+    (im,) = [m for m in r.motion.impacts if m.what == "vehicle"]
+    before, n = _ring_pixels(r, r.render(im.t - 0.05), im.t - 0.05, im)
+    assert n > 50 and before == 0
+    for t in (im.t + 0.01, r.motion.duration):
+        got, n = _ring_pixels(r, r.render(t), t, im)
+        assert got > 0.8 * n                          # drawn over the vehicles in the overhead view
+
+
+def test_slow_motion_adds_the_frames_its_windows_say():
+    fps, T = 30.0, 6.0
+    w = crash_motion.slow_windows([2.0, 2.3, 5.9], T)
+    a, b = crash_motion.SLOW_WINDOW
+    assert w == [(2.0 - a, 2.3 + b), (5.9 - a, T)]     # overlapping windows merge; clipped to the end
+    plain = crash_motion.frame_times(T, fps, [], hold=0.0)
+    slow = crash_motion.frame_times(T, fps, w, hold=0.0)
+    extra = (crash_motion.SLOW - 1) * fps * sum(e - s for s, e in w)
+    assert abs(len(slow) - len(plain) - extra) <= 1
+    assert slow[0] == 0.0 and slow[-1] == T and np.all(np.diff(slow) > 0)
+    inside = np.diff(slow)[(slow[:-1] >= w[0][0] + 1e-9) & (slow[1:] <= w[0][1] - 1e-9)]
+    assert np.allclose(inside, 1 / (fps * crash_motion.SLOW))
+    held = crash_motion.frame_times(T, fps, w, hold=1.0)
+    assert len(held) == len(slow) + 30 and np.all(held[len(slow):] == T)
+
+
+def _marks_of(lines):
+    return [(s, crash_readout.OK in s, crash_readout.NO in s) for s in lines]
+
+
+def test_the_readout_marks_are_the_judged_fates(loaded):
+    """At rest each asked fate's line carries ✓ where the replay's judgement holds it, ✗ where it
+    does not (B: hits A ✓, rest and heading ✗), the vehicles' headers their signature bits, and
+    the signature line the outcome's; before the end no line is marked."""
+    d, s, model, m = loaded
+    fates = [crashfile.fate_dict(s, i) for i in range(s.n)]
+    labels = [v.vtype.label for v in s.vehicles]
+    w = crash_motion.slow_windows([im.t for im in m.impacts], m.duration)
+    end = crash_readout.readout(m.duration, m, s, fates, labels, w)
+    assert f"signature {m.outcome.signature_text(s.n)}" in "\n".join(end) and d["outcome"]["signature"] == "10"
+    key = {"hit ": "hits", "rest ": "rest", "end ": "rest", "facing ": "heading"}
+    for i, (name, vo) in enumerate(zip(s.names(), m.outcome.vehicles)):
+        block = end[end.index(next(x for x in end if x.startswith(f"{name} \u00b7 "))):]
+        head = block[0]
+        assert (crash_readout.OK in head) == all(vo.fates.values()) and (crash_readout.NO in head) != all(vo.fates.values())
+        seen = set()
+        for line in block[1:]:
+            if not line:
+                break
+            fate = next((f for p, f in key.items() if line.startswith(p)), None)
+            if fate in vo.fates and fate not in seen:
+                seen.add(fate)
+                assert (crash_readout.OK in line, crash_readout.NO in line) == (vo.fates[fate], not vo.fates[fate]), line
+        assert seen == set(vo.fates) - {"delta_v", "impact_speed"}
+    assert m.outcome.vehicles[1].fates == {"hits": True, "rest": False, "heading": False}
+    early = crash_readout.readout(1.0, m, s, fates, labels, w)
+    assert not any(crash_readout.OK in x or crash_readout.NO in x for x in early)
+    assert "no hit yet" in "\n".join(early) and any("hit B 1.58 s" in x for x in end)
+
+
+def test_the_atlas_writes_the_readout_signs(gl):
+    from nbst.render.shapes import Text, glyph_index
+
+    t = Text(gl, 20)
+    try:
+        cw, ch = t.cell
+        for c in "\u2713\u2717\u0394\u00b0\u00b1\u00d7":
+            g = glyph_index(c)
+            r, k = divmod(g, 16)
+            assert t._atlas[r * ch:(r + 1) * ch, k * cw:(k + 1) * cw].max() > 200, c   # ink in its cell
+        assert glyph_index(" ") is None and glyph_index("\u2603") is None and glyph_index("A") == ord("A") - 32
+    finally:
+        t.release()
+
+
+def test_crash_kind_sniffs_files_and_scripts(crash_file, tmp_path):
+    assert crash.crash_kind(crash_file) == "crash"
+    f = tmp_path / "s.json"
+    f.write_text(json.dumps(SHORT))
+    assert crash.crash_kind(f) == "script"
+    (tmp_path / "p.json").write_text('{"kind": "problem"}')
+    assert crash.crash_kind(tmp_path / "p.json") is None and crash.crash_kind(tmp_path / "none.json") is None
+
+
+@pytest.mark.slow
+def test_cli_writes_a_still_and_a_video_with_the_frames_its_times_give(crash_file, tmp_path, capsys):
+    import imageio
+
+    from nbst.cli.main import main
+
+    png = tmp_path / "s.png"
+    assert main(["render", str(crash_file), "--still", "1.6", "-o", str(png), "--size", "320x180",
+                 "--follow", "B"]) == 0
+    from PIL import Image
+
+    assert Image.open(png).size == (320, 180)
+    mp4 = tmp_path / "v.mp4"
+    assert main(["render", str(crash_file), "-o", str(mp4), "--size", "320x180", "--fps", "12", "--hold", "0.5"]) == 0
+    err = capsys.readouterr().err
+    assert "bit for bit" in err and "slow motion around 1 impact" in err
+    d, s, model, m = crash.load(crash_file)
+    want = len(crash_motion.frame_times(m.duration, 12.0, crash_motion.slow_windows([im.t for im in m.impacts], m.duration),
+                                        hold=0.5))
+    rd = imageio.get_reader(mp4)
+    assert sum(1 for _ in rd) == want and rd.get_meta_data()["fps"] == 12.0
+    assert f"{want} frames" in err and not list(tmp_path.glob(".*partial*"))
+
+
+def test_cli_refuses_bad_flags_and_links_in_one_line(crash_file, tmp_path, capsys):
+    from nbst.cli.main import main
+
+    target = tmp_path / "kept.png"
+    target.write_bytes(b"previous")
+    link = tmp_path / "link.png"
+    link.symlink_to(target)
+    cases = [
+        (["--still", "1", "-o", str(link)], "link"),
+        (["--still", "9", "-o", str(tmp_path / "a.png")], "--still 9"),
+        (["--still", "1", "-o", str(tmp_path / "a.png"), "--follow", "Z"], "--follow 'Z'"),
+        (["-o", str(tmp_path / "a.mp4"), "--trails"], "--trails"),
+        (["-o", str(tmp_path / "a.txt")], ".mp4 or .gif"),
+        (["-o", str(tmp_path / "a.mp4"), "--follow", "A", "--camera", "overhead"], "--follow"),
+    ]
+    for extra, why in cases:
+        capsys.readouterr()
+        assert main(["render", str(crash_file), *extra]) == 2, extra
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and why in err and "Traceback" not in err, err
+    assert target.read_bytes() == b"previous" and link.is_symlink()
+    s = tmp_path / "script.json"
+    s.write_text(json.dumps(SHORT))
+    assert main(["render", str(s), "-o", str(tmp_path / "a.mp4")]) == 2
+    assert "crash solve" in capsys.readouterr().err
+    (tmp_path / "p.json").write_text("{}")
+    assert main(["render", str(tmp_path / "p.json"), "-o", str(tmp_path / "a.mp4"), "--follow", "A"]) == 2
+    assert "crash files only" in capsys.readouterr().err
