@@ -165,6 +165,7 @@ class CrashRenderer(FrameRenderer):
         self.prog["u_light"].value = tuple(L)
         self.mprog = ctx.program(vertex_shader=MARK_VS, fragment_shader=MARK_FS)
         self._objs = []
+        self.data.qpos[:] = motion.qpos[0]    # the start: the statics, and the wheels the arches are over
         mujoco.mj_kinematics(model, self.data)
         ground, statics, rgb = cs.static_solids(model, self.data)
         self.ground_vao, self.static_vao = self._vao(ground), self._vao(statics)
@@ -174,15 +175,12 @@ class CrashRenderer(FrameRenderer):
         self.lines_vao = self._vao(np.concatenate([cs.lane_marks(script.road),
                                                    cs.target_marks(self.fates, self.colours)]), marks=True)
         self.trail_vao = self._vao(cs.motion_marks(motion, self.colours), marks=True)
-        imp = cs.impact_marks(motion.impacts)
-        self.impact_vao = self._vao(imp, marks=True) if len(imp) else None
+        self.impact_vao = self._vao(cs.impact_marks(motion.impacts), marks=True)
         # the vehicles' geoms, one buffer per shape (equal vehicles share theirs); the lower body
         # has an arch over each wheel, placed from the wheels' poses at the start
         self.geoms: list[tuple[int, bool, object]] = []    # (geom id, is a tyre, vao)
         self.heights = []
         cache: dict = {}
-        self.data.qpos[:] = motion.qpos[0]
-        mujoco.mj_kinematics(model, self.data)
         for i in range(n):
             body = model.body(f"v{i}").id
             for g in np.nonzero(model.geom_bodyid == body)[0].tolist() + [
@@ -202,6 +200,9 @@ class CrashRenderer(FrameRenderer):
             self.cam_yaw = chase_yaw(motion.times, motion.yaw[:, self.follow])
 
     def _vao(self, rows: np.ndarray, *, marks: bool = False):
+        """A vertex array of solids (V, 9) or marks (V, 8); None for no rows."""
+        if not len(rows):
+            return None
         buf = self.ctx.buffer(np.ascontiguousarray(rows, dtype="f4").tobytes())
         if marks:
             vao = self.ctx.vertex_array(self.mprog, [(buf, "3f 4f 1f", "in_pos", "in_color", "in_time")])
@@ -296,18 +297,17 @@ class CrashRenderer(FrameRenderer):
             self.prog["u_vp"].write(vpm.T.astype("f4").tobytes())
             self.prog["u_eye"].value = tuple(float(e) for e in eye)
             self.prog["u_model"].write(np.eye(4, dtype="f4").tobytes())
-            if cam == "behind":
-                self.ground_vao.render(mgl.TRIANGLES)
-            self.static_vao.render(mgl.TRIANGLES)
+            for vao in (self.ground_vao if cam == "behind" else None, self.static_vao):
+                if vao is not None:
+                    vao.render(mgl.TRIANGLES)
             ctx.enable(mgl.BLEND)
             ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
             self.mprog["u_vp"].write(vpm.T.astype("f4").tobytes())
             self.mprog["u_t"].value = float(t)
-            fbo.depth_mask = False   # the marks lie on the road in the order drawn (each is hidden by
-            self.lines_vao.render(mgl.TRIANGLES)   # what stands in front of it, and hides nothing)
-            self.trail_vao.render(mgl.TRIANGLES)
-            if self.impact_vao is not None and cam == "behind":
-                self.impact_vao.render(mgl.TRIANGLES)
+            fbo.depth_mask = False   # the marks lie on the road in the order drawn: each is hidden by
+            for vao in (self.lines_vao, self.trail_vao, self.impact_vao if cam == "behind" else None):
+                if vao is not None:  # what stands in front of it, and hides nothing
+                    vao.render(mgl.TRIANGLES)
             fbo.depth_mask = True
             ctx.disable(mgl.BLEND)
             self._draw_vehicles(tyres_only=False)

@@ -80,8 +80,8 @@ class CrashMotion:
     times (S,), qpos (S, nq): recorded states; speed (S, n) m/s of each vehicle's CoM;
     pos (S, n, 3) CoM; quat (S, n, 4) attitude (w, x, y, z); roll, yaw (S, n) unwrapped rad;
     marks, impacts; outcome: the replay's judged :class:`nbst.models.crash.outcome.Outcome`;
-    outcome_dict: the same in the file's units; identical: the replay ended in the file's
-    final state bit for bit (and read the same outcome)."""
+    outcome_dict: the same in the file's units; same_state: the replay ended in the file's final
+    state bit for bit; same_outcome: and read the file's outcome."""
 
     times: np.ndarray
     qpos: np.ndarray
@@ -94,8 +94,21 @@ class CrashMotion:
     impacts: list
     outcome: object
     outcome_dict: dict
-    identical: bool
+    same_state: bool
+    same_outcome: bool
     duration: float
+
+    @property
+    def identical(self) -> bool:
+        return self.same_state and self.same_outcome
+
+    def differs(self) -> str | None:
+        """How the replay differs from the file, in words (None: it reproduces it bit for bit)."""
+        if not self.same_state:
+            return "the replay ends in another state than the file's (another MuJoCo?); the video shows the replay"
+        if not self.same_outcome:
+            return "the replay reads another outcome than the file records (another nbst?); the readout shows the replay's"
+        return None
 
     def index(self, t: float) -> int:
         """The recorded sample nearest time ``t`` (clamped to the motion)."""
@@ -203,7 +216,7 @@ def record(d: dict, script, model) -> CrashMotion:
 
     q_end, outcome = crashfile.replay(d, script, model, on_step=on_step)
     od = crashfile.outcome_dict(outcome, script, L.mass)
-    identical = bool(np.array_equal(q_end, np.asarray(d["final_qpos"], float))) and od == d["outcome"]
+    same_state = bool(np.array_equal(q_end, np.asarray(d["final_qpos"], float)))
     qa = L.qpos[:, None]
     pos = Q[:, qa + np.arange(3)]
     quat = Q[:, qa + np.arange(3, 7)]
@@ -214,7 +227,7 @@ def record(d: dict, script, model) -> CrashMotion:
     return CrashMotion(times=np.array(keep, float) * dt, qpos=Q, speed=V, pos=pos, quat=quat, roll=roll, yaw=yaw,
                        marks=marks,
                        impacts=_impacts(outcome, od, script, strikes), outcome=outcome, outcome_dict=od,
-                       identical=identical, duration=nstep * dt)
+                       same_state=same_state, same_outcome=od == d["outcome"], duration=nstep * dt)
 
 
 #: A scrape's half width (m): a body corner or edge dragged over the road.

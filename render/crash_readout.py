@@ -170,7 +170,7 @@ def readout(t: float, motion, script, fates: list[dict], labels: list[str], wind
     else:
         lines.append("signature: judged at rest")
     if not motion.identical:
-        lines.append(f"{NO} replay differs from the file")
+        lines.append(f"{NO} replay {'state' if not motion.same_state else 'outcome'} differs from the file")
     lines.append(f"{'what happened':<{RESULT_CHARS}}   asked")
     for i in range(script.n):
         lines.append("")

@@ -220,7 +220,10 @@ def static_solids(model, data) -> tuple[np.ndarray, np.ndarray, tuple]:
             ground_rgb = rgb
         elif model.geom_type[g] == GEOM_BOX:
             rest.append(_in_frame(_box(-sx, sx, -sy, sy, -sz, sz, rgb), R, p))
-    return (np.concatenate(ground).astype("f4"), np.concatenate(rest).astype("f4"), ground_rgb)
+    def rows(parts):
+        return np.concatenate(parts).astype("f4") if parts else np.zeros((0, 9), "f4")
+
+    return rows(ground), rows(rest), ground_rgb
 
 
 def _vehicles(model) -> int:

@@ -42,7 +42,7 @@ def register(sub) -> None:
                         "shot file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")
     p.add_argument("-o", "--output", required=True, metavar="PATH", help="output file: .mp4, .gif, or .png with --still")
     p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
-                   help="bowling shots only: behind the ball, overhead, or both side by side (default both); "
+                   help="bowling shots: behind the ball, overhead, or both side by side (default both); "
                         "crash files: overhead (default), behind the --follow vehicle, or both")
     p.add_argument("--follow", default=None, metavar="NAME",
                    help="crash files only: a chase camera behind vehicle NAME, beside the overhead view")

@@ -113,8 +113,7 @@ def cmd_render_crash(args) -> int:
         if bar is not None:
             bar.close()
         raise
-    same = "the replay reproduces the file bit for bit" if motion.identical else \
-        "WARNING: the replay differs from the file (another MuJoCo?); the video shows the replay"
+    same = "the replay reproduces the file bit for bit" if motion.identical else f"WARNING: {motion.differs()}"
     if bar is not None:
         bar.close(n=n)
     if args.quiet:
