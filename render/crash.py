@@ -39,8 +39,9 @@ CAMERAS = ("overhead", "behind", "both")
 #: Share of the frame's width the readout column takes, and the most it takes where its text
 #: at MIN_READOUT_PX needs more (small frames).
 COLUMN_SHARE, COLUMN_MAX = 0.36, 0.62
-#: Height of the overhead panel above the readout (camera "both"), as a share of the frame's height.
-INSET_SHARE = 0.45
+#: Height of the overhead panel above the readout (camera "both"), as a share of the frame's
+#: height; less where the readout needs the rows, none under INSET_MIN (a small frame).
+INSET_SHARE, INSET_MIN = 0.45, 0.2
 #: Chase camera: this far behind the vehicle (m), this high, looking at a point this far ahead
 #: of it, from this many degrees off its axis (its left), field of view (deg); the heading it
 #: follows is smoothed with this time constant (s).
@@ -149,13 +150,16 @@ class CrashRenderer(FrameRenderer):
                                              (rows + 1) * text_cell(px)[1] > h - ih):
             px -= 1
         cw_ = int(min(max(cw_, (chars + 2) * text_cell(px)[0]), round(COLUMN_MAX * w)))
+        if ih:   # the overhead panel gives the readout the rows it needs, and goes below INSET_MIN
+            ih = min(ih, h - (rows + 1) * text_cell(px)[1])
+            ih = ih if ih >= INSET_MIN * h else 0
         self.column = (w - cw_, 0, cw_, h)
         main = (0, 0, w - cw_, h)
-        if camera == "both":
+        if camera == "both" and ih:
             self.panels = {"behind": main, "overhead": (w - cw_, 0, cw_, ih)}
             self.text_box = (w - cw_, ih, cw_, h - ih)
         else:
-            self.panels = {camera: main}
+            self.panels = {"behind" if camera == "both" else camera: main}
             self.text_box = self.column
         self.text = Text(ctx, px)
         self.small = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.018 * min(self.size)))))
@@ -358,12 +362,12 @@ class CrashRenderer(FrameRenderer):
                     continue
                 else:
                     row -= 0.5 * sch
-                placed.append(self._label(nm, col - scw * len(nm) / 2, row, self.colours[i]))
+                placed.append(self._label(vp, nm, col - scw * len(nm) / 2, row, self.colours[i]))
                 if cam == "overhead" and "rest" in self.fates[i]:
                     f = self.fates[i]["rest"]
                     col, row, _ = self.to_pixel(vp, vpm, (f["x"], f["y"] + f["radius"], 0.0))
                     if self._inside(vp, col, row):
-                        placed.append(self._label(nm, col - scw * len(nm) / 2, row - 1.1 * sch, self.colours[i]))
+                        placed.append(self._label(vp, nm, col - scw * len(nm) / 2, row - 1.1 * sch, self.colours[i]))
             from nbst.render.scene2d import keep_apart
 
             for im in self.motion.impacts:
@@ -380,14 +384,17 @@ class CrashRenderer(FrameRenderer):
                          (col - w / 2, row + 1.2 * sch), (col - w / 2, row - 2.2 * sch),
                          (col - w / 2, row + 2.2 * sch), (col - w / 2, row - 3.2 * sch)]
                 x, y = next(((x, y) for x, y in spots if keep_apart([(x, y, x + w, y + sch)], placed)[0]), spots[0])
-                placed.append(self._label(label, x, y, IMPACT_TEXT))
+                placed.append(self._label(vp, label, x, y, IMPACT_TEXT))
             if cam == "overhead":
                 self._scale_bar(vp, vpm)
         self._readout(t)
 
-    def _label(self, text: str, x: float, y: float, colour) -> tuple:
-        """Draw ``text`` in the small size with its top-left at (x, y) px; its box (x0, y0, x1, y1)."""
+    def _label(self, vp, text: str, x: float, y: float, colour) -> tuple:
+        """Draw ``text`` in the small size with its top-left at (x, y) px, moved into the panel ``vp``
+        where it would cross its edge; its box (x0, y0, x1, y1)."""
         sm = self.small
+        x = float(np.clip(x, vp[0], max(vp[0], vp[0] + vp[2] - sm.cell[0] * len(text))))
+        y = float(np.clip(y, vp[1], max(vp[1], vp[1] + vp[3] - sm.cell[1])))
         sm.draw_halo(self.size, sm.layout([text], x, y), colour, style.TEXT_HALO)
         return (x, y, x + sm.cell[0] * len(text), y + sm.cell[1])
 

@@ -190,6 +190,26 @@ def test_the_readout_marks_are_the_judged_fates(loaded):
     assert "no hit yet" in "\n".join(early) and any("hit B 1.58 s" in x for x in end)
 
 
+@pytest.mark.parametrize("size, camera", [((640, 360), "both"), ((1280, 720), "both"), ((640, 360), "overhead")])
+def test_the_readout_fits_its_box_and_labels_stay_in_their_panels(gl, loaded, size, camera):
+    """Every readout line fits the column and every row the box under the overhead panel (which
+    gives way on a small frame); the labels drawn in a panel stay inside it."""
+    r = crash.CrashRenderer(gl, *loaded, size=size, camera=camera, follow=1)
+    try:
+        cw, ch = r.text.cell
+        for t in (0.0, r.motion.duration):
+            lines = r.readout(t)
+            assert max(len(x) for x in lines) * cw <= r.text_box[2] and len(lines) * ch <= r.text_box[3]
+        boxes = []
+        r._label = (lambda f: lambda vp, *a: boxes.append((vp, f(vp, *a))) or boxes[-1][1])(r._label)
+        r.render(r.motion.duration)
+        assert boxes
+        for vp, (x0, y0, x1, y1) in boxes:
+            assert vp[0] <= x0 and x1 <= vp[0] + vp[2] and vp[1] <= y0 and y1 <= vp[1] + vp[3]
+    finally:
+        r.release()
+
+
 def test_the_atlas_writes_the_readout_signs(gl):
     from nbst.render.shapes import Text, glyph_index
 
