@@ -4,7 +4,7 @@
 
 Prints launches/s (2.5 s shots, 1 ms steps) for the same N uniform throws:
 
-* nbst's runner (``shot.Launcher``): sleeping on, MjData reset before every launch,
+* nbst's runner (``deck.Runner``): sleeping on, MjData reset before every launch,
   one ``mujoco.rollout`` call per launch on each of K threads, final state only;
 * one ``mujoco.rollout`` call per batch over K reused MjData (no reset), sleeping on:
   speed, and how many launches end bitwise different from the reset-per-launch runner;
@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from nbst.models.bowling import deck, pinfall
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -61,31 +62,32 @@ def main(argv=None) -> int:
     import mujoco
     from mujoco import rollout
 
-    from nbst.models.bowling import scene, search, shot
+    from nbst.models.bowling import scene
+    from nbst.models.bowling.deck import search
 
     model = scene.build_model()
     X = search.from_unit(np.random.default_rng(args.seed).random((args.n, 4)))
     threads = [int(t) for t in args.threads.split(",")]
-    print(f"bowling rollouts: {args.n} uniform throws (seed {args.seed}), {shot.DURATION} s each at "
+    print(f"bowling rollouts: {args.n} uniform throws (seed {args.seed}), {deck.DURATION} s each at "
           f"h = {model.opt.timestep} s; mujoco {mujoco.__version__}; {os.cpu_count()} cores")
 
     ref = None
     for k in threads:
-        with shot.Launcher(model, jobs=k) as L:
-            st = np.array([L.initial_state(*shot.initial_qpos_qvel(model, x)) for x in X])
+        with deck.Runner(model, jobs=k) as L:
+            st = np.array([L.initial_state(*deck.initial_qpos_qvel(model, x)) for x in X])
             t = time.perf_counter()
             f = L.run_states(st)
             dt = time.perf_counter() - t
         ref = f if ref is None else ref
         same = np.array_equal(f, ref)
-        masks = shot.mask_of(shot.pins_down(model, f[:, 1:1 + model.nq]))
+        masks = pinfall.mask_of(pinfall.pins_down(model, f[:, 1:1 + model.nq]))
         print(f"  Launcher (sleep, reset per launch), {k} thread(s): {args.n / dt:6.2f} launches/s "
               f"({dt / args.n * 1e3:.0f} ms each); equal to the first run: {same}; "
               f"strikes {int((masks == 1023).sum())}, no pin {int((masks == 0).sum())}")
 
     def batch(m, k):
         datas = [mujoco.MjData(m) for _ in range(max(1, k))]
-        nstep = shot.n_steps(m)
+        nstep = deck.n_steps(m)
         out = np.empty((len(st), m.nq))
         t = time.perf_counter()
         chunk = 4 * max(1, k)  # chunked: the state of every step is kept, ~2.9 MB per launch
@@ -118,12 +120,12 @@ TARGETS = {"strike": range(1, 11), "7 alone": [7], "10 alone": [10],
 def outcomes(n: int, *, seed: int, jobs) -> int:
     from collections import Counter
 
-    from nbst.models.bowling import search, shot
+    from nbst.models.bowling.deck import search
 
     X = search.from_unit(np.random.default_rng(seed).random((n, 4)))
     t = time.perf_counter()
-    with shot.Launcher(jobs=jobs) as L:
-        masks = np.concatenate([L.launch(X[i:i + 64])[0] for i in range(0, n, 64)])
+    with deck.Runner(jobs=jobs) as L:
+        masks = np.concatenate([L.throw(X[i:i + 64])[0] for i in range(0, n, 64)])
     dt = time.perf_counter() - t
     c = Counter(int(m) for m in masks)
     print(f"{n} uniform throws (seed {seed}) in {dt:.0f} s ({n / dt:.1f}/s, {L.jobs} threads): "
@@ -132,17 +134,17 @@ def outcomes(n: int, *, seed: int, jobs) -> int:
     print("  found / possible by subset size: " + ", ".join(
         f"{k}: {sizes[k]}/{math.comb(10, k)}" for k in range(1, 11)))
     for name, pins in TARGETS.items():
-        m = shot.mask_from_pins(pins)
+        m = pinfall.mask_from_pins(pins)
         print(f"  {name}: {c[m]} of {n} ({c[m] / n:.2%})")
     return 0
 
 
 def atlas_ablation(n: int, *, seed: int, jobs: int, methods) -> int:
-    from nbst.models.bowling import atlas, shot
+    from nbst.models.bowling.deck import atlas
 
     print(f"atlas ablation: {n} launches per method from an empty archive, seed {seed}, {jobs} thread(s)")
     quarters = [n // 4, n // 2, 3 * n // 4, n]
-    with shot.Launcher(jobs=jobs) as L:
+    with deck.Runner(jobs=jobs) as L:
         for method in methods:
             t = time.perf_counter()
             a = atlas.run(L, atlas.Archive(), method=method, budget=n, seed=seed)

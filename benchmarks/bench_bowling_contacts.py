@@ -49,7 +49,8 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 
 import numpy as np
 
-from nbst.models.bowling import frame, lane, noise, scene, spares
+from nbst.models.bowling import lane, scene
+from nbst.models.bowling.lane import frame, noise, spares
 from nbst.models.bowling import pin as pinmod
 
 #: The defaults: ball-pin and pin-pin friction, damping ratio (scene.py).

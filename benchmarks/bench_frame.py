@@ -15,7 +15,7 @@ import time
 import mujoco
 import numpy as np
 
-from nbst.models.bowling import frame, noise, spares
+from nbst.models.bowling.lane import frame, noise, spares
 
 
 def leave_text(r) -> str:

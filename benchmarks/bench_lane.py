@@ -83,7 +83,7 @@ def main(argv=None) -> int:
     n = 3 if args.quick else 10
     t0 = time.perf_counter()
     for k in range(n):
-        lane.build_spec("house", lane.Ball(rg=2.50 + 0.001 * k), TYPICAL, pins=True).compile()
+        lane.lane_spec("house", lane.Ball(rg=2.50 + 0.001 * k), TYPICAL, pins=True).compile()
     build = (time.perf_counter() - t0) / n
     lane.throw(TYPICAL, "house")  # compiled and cached
     t0 = time.perf_counter()

@@ -37,7 +37,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from nbst.models.bowling import frame, lane, noise, robust, spares
+from nbst.models.bowling import lane
+from nbst.models.bowling.lane import frame, noise, robust, spares
 
 POCKET_CELL = spares.POCKET_CELL  # the pocket map's best cell: aimed at board 17.5, 6 deg
 NOISY = ("board", "angle", "mph", "rpm", "rotation")  # the default noise moves these (tilt sigma 0)

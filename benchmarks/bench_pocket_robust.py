@@ -12,7 +12,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from nbst.models.bowling import frame, lane, noise, robust, spares
+from nbst.models.bowling import lane
+from nbst.models.bowling.lane import frame, noise, robust, spares
 
 POCKET_CELL = spares.POCKET_CELL  # the pocket map's best cell: aimed at board 17.5, 6 deg
 

@@ -4,7 +4,8 @@ Runs each ``nbst bowl`` command below in a fresh folder with a fixed seed and pr
 (first 16 hex digits) of what it wrote: the 5 m shot files (``bowl solve``, three methods of
 ``bowl atlas``), the foul-line throw files (``bowl solve --foul-line``, ``--robust``), the
 ``bowl frame --probability`` outputs, a foul-line atlas, ``bowl spares`` and ``bowl pocket``. A
-refactor that keeps every result keeps every hash. Fields that measure the machine, not the
+refactor that keeps every result keeps every hash. The first case hashes MuJoCo's binary models
+of the 5 m deck and the full lane (the one scene path must build the same models). Fields that measure the machine, not the
 result (``wall_time_s``, the ``jobs`` or ``cluster`` that ran it, the run's seconds in a summary),
 are dropped before hashing; summary.md (its seconds) and PNGs are not hashed.
 
@@ -51,8 +52,26 @@ def digest(paths) -> str:
     return h.hexdigest()[:16]
 
 
+#: The compiled scenes (the 5 m deck, the full lane with and without pins, another oil, ball and
+#: delivery): MuJoCo's binary model of each, hashed (the one scene path must build the same models).
+MODELS = """
+import hashlib, mujoco, numpy as np
+from nbst.models.bowling import lane, scene
+build = getattr(lane, "lane_spec", None) or lane.build_spec
+specs = [scene.build_spec(), build(), build(pins=False),
+         build("sport", lane.Ball(weight_lb=14, rg=2.6, diff=0.05, friction=0.25),
+               lane.Delivery(hand="left", board=30, angle=-1, rpm=400, rotation=70, tilt=30), mu_oil=0.05)]
+for spec in specs:
+    m = spec.compile()
+    buf = np.zeros(mujoco.mj_sizeModel(m), dtype=np.uint8)
+    mujoco.mj_saveModel(m, None, buf)
+    print(hashlib.sha256(buf.tobytes()).hexdigest())
+"""
+
+
 def run(argv, cwd, ok=(0, 1)) -> str:
-    p = subprocess.run([*NBST, *argv], cwd=cwd, capture_output=True, text=True)
+    cmd = [sys.executable, "-c", MODELS] if argv == ["models"] else [*NBST, *argv]
+    p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True)
     if p.returncode not in ok:
         sys.exit(f"{' '.join(argv)}: exit {p.returncode}\n{p.stderr[-2000:]}")
     return p.stdout
@@ -60,6 +79,7 @@ def run(argv, cwd, ok=(0, 1)) -> str:
 
 def cases():
     """(name, argv, files to hash (relative to the run's folder), hash stdout too)."""
+    yield ("scene models (MJB bytes)", ["models"], [], "text")
     yield ("deck solve --down 1,2,4", ["bowl", "solve", "--down", "1,2,4", "--seed", "3", "--max-rollouts", "200",
                                        "--no-atlas", "--jobs", "2", "-o", "s.json", "-q"], ["s.json", "s.scene.xml"], False)
     yield ("deck solve --distance geometry --jobs 1", ["bowl", "solve", "--down", "1,2,4", "--seed", "3",
@@ -121,7 +141,9 @@ def main() -> int:
             out = run(argv, tmp)
             paths = [Path(tmp) / f for f in files]
             h = digest(paths)
-            if stdout:
+            if stdout == "text":
+                h = hashlib.sha256(out.encode()).hexdigest()[:16]
+            elif stdout:
                 doc = _clean(json.loads(out))
                 doc.pop("output", None)
                 h = hashlib.sha256((h + json.dumps(doc, sort_keys=True)).encode()).hexdigest()[:16]

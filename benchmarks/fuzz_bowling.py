@@ -9,8 +9,8 @@ atlases made from the shipped one: fields deleted or retyped (null, booleans, st
 and non-finite numbers, deep nesting, 5,000-digit integers), qpos0/qvel0 lengths and entries
 changed, ``scene`` pointed at absolute paths, ``../``, links out of the folder, FIFOs,
 folders, non-scenes and scenes that read other files, plus byte-level damage of the JSON text
-(flips, cuts, inserts, non-UTF-8). Each goes through ``shotfile.load_with_scene`` (shots) or
-``shotfile.load_atlas`` (atlases); the outcome must be acceptance or one ShotFileError line,
+(flips, cuts, inserts, non-UTF-8). Each goes through ``deckfile.load_with_scene`` (shots) or
+``deckfile.load_atlas`` (atlases); the outcome must be acceptance or one ShotFileError line,
 within 5 s (SIGALRM). Parsing the 90 kB scene costs ~60 ms, so the loaders' ``load_scene`` is
 wrapped in a cache for the one unchanged, known-good scene file only (every other scene file,
 including mutated ones, goes through the real parser each time).
@@ -137,9 +137,9 @@ def setup_folder(folder: Path) -> None:
 
 
 def fuzz_loaders(n: int, seed: int, folder: Path) -> dict:
-    from nbst.models.bowling import shotfile
+    from nbst.models.bowling.deck import throwfile as deckfile
 
-    real_load_scene = shotfile.load_scene
+    real_load_scene = deckfile.load_scene
     good = (folder / "scene.xml").resolve()
     st0 = os.stat(good)
     cache = {}
@@ -156,7 +156,7 @@ def fuzz_loaders(n: int, seed: int, folder: Path) -> dict:
             return cache["m"]
         return real_load_scene(xml_path, src, field)
 
-    shotfile.load_scene = cached_load_scene
+    deckfile.load_scene = cached_load_scene
     atlas = json.loads((SHIPPED / "atlas.json").read_text())
     base = next(s for s in atlas["shots"] if s["down"] == [1, 2, 3, 4, 5, 6, 8, 9])
     base = {**base, "scene": "scene.xml"}
@@ -187,11 +187,11 @@ def fuzz_loaders(n: int, seed: int, folder: Path) -> dict:
             signal.setitimer(signal.ITIMER_REAL, 5.0)
             try:
                 if is_atlas:
-                    shotfile.load_atlas(target)
+                    deckfile.load_atlas(target)
                 else:
-                    shotfile.load_with_scene(target)
+                    deckfile.load_with_scene(target)
                 out["accepted"] += 1
-            except shotfile.ShotFileError as e:
+            except deckfile.ThrowFileError as e:
                 out["refused"] += 1
                 if "\n" in str(e):
                     out["tracebacks"] += 1
@@ -209,7 +209,7 @@ def fuzz_loaders(n: int, seed: int, folder: Path) -> dict:
             out["atlases" if is_atlas else "shots"] += 1
     finally:
         signal.signal(signal.SIGALRM, old)
-        shotfile.load_scene = real_load_scene
+        deckfile.load_scene = real_load_scene
     return out
 
 

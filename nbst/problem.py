@@ -353,8 +353,8 @@ def problem_from_dict(d: Any, *, source: str = "<dict>", default_name: str = "pr
     c = _Checker(source)
     c.obj(d, "")
     kind = d.get("kind")
-    if isinstance(kind, str) and kind.startswith("nbst-bowling-"):  # a shot or atlas file given as a problem
-        what = "an atlas of bowling shots" if kind.endswith("atlas") else "a bowling shot file"
+    if isinstance(kind, str) and kind.startswith("nbst-bowling-"):  # a bowling throw or atlas file given as a problem
+        what = "an atlas of bowling throws" if kind.endswith("atlas") else "a bowling throw file"
         c.fail("kind", f"this is {what}, not a problem: replay it with `nbst bowl replay`, film it with `nbst render`")
     if "name" in d:
         name = c.text(d["name"], "name", max_chars=D.MAX_NAME_CHARS)

@@ -1,6 +1,6 @@
-"""Bowling shots in 3D (``nbst render SHOT.json``): the lane, the pins and the ball, headless.
+"""5 m throws in 3D (``nbst render THROW.json``): the lane, the pins and the ball, headless.
 
-The motion is the shot's own replay (plain ``mj_step`` from the shot file's scene and
+The motion is the throw's own replay (plain ``mj_step`` from the throw file's scene and
 initial state, the pose of every body recorded at each 1 ms step); the pin mesh is the
 same trimesh solid the scene is built from (:mod:`nbst.models.bowling.pin`). Two
 cameras: ``behind`` (behind the ball, following it down the lane until the pins) and
@@ -8,10 +8,11 @@ cameras: ``behind`` (behind the ball, following it down the lane until the pins)
 in slow motion (:data:`SLOW`) from just before the first ball-pin contact.
 
 Compute apart from I/O: :func:`record` returns the motion, :class:`BowlingRenderer`
-returns frames; :func:`render_shot` is the thin writer the CLI calls.
+returns frames; :func:`render_file` is the thin writer (``nbst render``'s handler is
+``nbst.cli.render.cmd_render_throw``). The shading (:data:`SHADE`) is both bowling videos'.
 
 Length: ~525 lines, past the house's ~500: recording, the two cameras and the readout of
-one shot share the scene's meshes and the shot's timing, and read best together.
+one throw share the scene's meshes and the throw's timing, and read best together.
 """
 from __future__ import annotations
 
@@ -55,6 +56,21 @@ void main() {
     gl_Position = u_vp * w;
 }
 """
+#: The bowling scenes' shading, one GLSL function for both videos' shaders (the pins and lane
+#: here, the textured ball of :mod:`nbst.render.bowling_lane`): ambient 0.35 plus 0.65 Lambert,
+#: and a Blinn-Phong highlight (exponent 40, weight 0.3); the normal is turned towards the eye
+#: (the pins' meshes and the lane's flat solids are drawn from either side).
+SHADE = """
+vec3 shade(vec3 color, vec3 normal, vec3 world, vec3 light, vec3 eye) {
+    vec3 n = normalize(normal);
+    vec3 v = normalize(eye - world);
+    if (dot(n, v) < 0.0) n = -n;
+    float diff = max(dot(n, light), 0.0);
+    vec3 h = normalize(light + v);
+    float spec = pow(max(dot(n, h), 0.0), 40.0) * 0.3;
+    return color * (0.35 + 0.65 * diff) + vec3(spec);
+}
+"""
 FS = """#version 330
 uniform vec3 u_light;
 uniform vec3 u_eye;
@@ -62,51 +78,48 @@ in vec3 v_normal;
 in vec3 v_world;
 in vec3 v_color;
 out vec4 f_color;
+""" + SHADE + """
 void main() {
-    vec3 n = normalize(v_normal);
-    vec3 v = normalize(u_eye - v_world);
-    if (dot(n, v) < 0.0) n = -n;
-    float diff = max(dot(n, u_light), 0.0);
-    vec3 h = normalize(u_light + v);
-    float spec = pow(max(dot(n, h), 0.0), 40.0) * 0.3;
-    f_color = vec4(v_color * (0.35 + 0.65 * diff) + vec3(spec), 1.0);
+    f_color = vec4(shade(v_color, v_normal, v_world, u_light, u_eye), 1.0);
 }
 """
 
 
 @dataclass(frozen=True)
 class Motion:
-    """A replayed shot: times (S,), ball (S, 7) and pins (S, 10, 7) poses (pos, quat wxyz)."""
+    """A replayed 5 m throw: times (S,), ball (S, 7) and pins (S, 10, 7) poses (pos, quat wxyz)."""
 
     times: np.ndarray
     ball: np.ndarray
     pins: np.ndarray
     impact: float          # time of the first ball-pin contact (s), or nan
     down: list
-    down_masks: np.ndarray | None = None   # (S,) pins down (10-bit mask) at each step, by the shot's rule
+    down_masks: np.ndarray | None = None   # (S,) pins down (10-bit mask) at each step, by the throw's rule
 
 
-def record(shot: dict, model) -> Motion:
-    """Replay ``shot`` (a loaded shot file) in ``model`` and record every step's poses.
+def record(throw: dict, model) -> Motion:
+    """Replay ``throw`` (a loaded 5 m throw file) in ``model`` and record every step's poses.
     A non-finite state is refused before stepping and MuJoCo's warnings raise
-    ``shot.MujocoError`` (nothing goes to ``MUJOCO_LOG.TXT``)."""
+    :class:`~nbst.errors.MujocoError` (nothing goes to ``MUJOCO_LOG.TXT``)."""
     import mujoco
 
-    from nbst.models.bowling import shot as shotmod
+    from nbst.errors import MujocoError
+    from nbst.models.bowling import pinfall
+    from nbst.models.mjsearch.runner import check_state, data_warnings, mujoco_warnings_raise
 
-    shotmod.check_state(shot["qpos0"], shot["qvel0"])
+    check_state(throw["qpos0"], throw["qvel0"])
     d = mujoco.MjData(model)
-    d.qpos[:] = shot["qpos0"]
-    d.qvel[:] = shot["qvel0"]
-    n = int(round(float(shot["duration"]) / model.opt.timestep))
-    adr = shotmod.pin_addresses(model)
+    d.qpos[:] = throw["qpos0"]
+    d.qvel[:] = throw["qvel0"]
+    n = int(round(float(throw["duration"]) / model.opt.timestep))
+    adr = pinfall.pin_addresses(model)
     ba = int(model.joint("ball_free").qposadr[0])
     ball_geom = model.geom("ball").id
-    pin_bodies = {model.body(name).id for name in shot["pins"]}
+    pin_bodies = {model.body(name).id for name in throw["pins"]}
     q = np.empty((n + 1, model.nq))
     q[0] = d.qpos
     impact = math.nan
-    with shotmod.mujoco_warnings_raise():
+    with mujoco_warnings_raise():
         for k in range(n):
             mujoco.mj_step(model, d)
             q[k + 1] = d.qpos
@@ -116,12 +129,12 @@ def record(shot: dict, model) -> Motion:
                                                             int(model.geom_bodyid[c.geom2])} & pin_bodies:
                         impact = float(d.time)
                         break
-    bad = shotmod.data_warnings(d)
+    bad = data_warnings(d)
     if bad or not np.isfinite(q).all():
-        raise shotmod.MujocoError(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
-    masks = shotmod.mask_of(shotmod.pins_down(model, q))
+        raise MujocoError(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the replay")
+    masks = pinfall.mask_of(pinfall.pins_down(model, q))
     return Motion(times=np.arange(n + 1) * model.opt.timestep, ball=q[:, ba:ba + 7],
-                  pins=q[:, adr[:, None] + np.arange(7)], impact=impact, down=shotmod.pins_of(int(masks[-1])),
+                  pins=q[:, adr[:, None] + np.arange(7)], impact=impact, down=pinfall.pins_of(int(masks[-1])),
                   down_masks=masks)
 
 
@@ -169,9 +182,9 @@ def _flat(mesh, color_fn) -> np.ndarray:
 
 
 class BowlingRenderer(FrameRenderer):
-    """Frames of a recorded shot: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both."""
+    """Frames of a recorded 5 m throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both."""
 
-    def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both", shot: dict | None = None):
+    def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both", throw: dict | None = None):
         import moderngl
         import trimesh
 
@@ -182,7 +195,7 @@ class BowlingRenderer(FrameRenderer):
             raise ValueError(f"camera must be behind, overhead or both, got {camera!r}")
         self.ctx, self.motion, self.camera = ctx, motion, camera
         self.size = tuple(size)
-        self.shot = shot or {}
+        self.throw = throw or {}
         n_cams = 2 if camera == "both" else 1
         panel_w = self.size[0] // n_cams
         px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
@@ -262,12 +275,12 @@ class BowlingRenderer(FrameRenderer):
     def readout(self, t: float) -> list[str]:
         """The text of the frame at ``t``: what was asked, the pins down now (at the end: the
         result, and whether it is what was asked), the throw, the time and the slow motion."""
-        from nbst.models.bowling import shot as shotmod
+        from nbst.models.bowling import deck, pinfall
 
         def pins(ns) -> str:
             return ",".join(map(str, ns)) or "none"
 
-        sh = self.shot
+        sh = self.throw
         asked = sorted(sh.get("requested", sh.get("down", [])))
         leave = [n for n in range(1, 11) if n not in asked]
         what = f" (leave {pins(leave)})" if leave and asked else " (a strike)" if asked else ""
@@ -275,15 +288,15 @@ class BowlingRenderer(FrameRenderer):
         m = self.motion
         k = int(np.clip(round(t / (m.times[1] - m.times[0])), 0, len(m.times) - 1))
         if m.down_masks is not None:
-            now = shotmod.pins_of(int(m.down_masks[k]))
+            now = pinfall.pins_of(int(m.down_masks[k]))
             if k == len(m.times) - 1:
                 lines.append(f"result  down {pins(now)} " + ("= asked" if now == asked else "(not what was asked)"))
             else:
                 lines.append(f"now     down {pins(now)}")
         la = sh.get("launch")
-        if isinstance(la, dict) and all(key in la for key in shotmod.KEYS):
-            lines.append(f"throw   {la['speed']:.2f} m/s, spin {la['spin']:+.1f} rad/s")
-            lines.append(f"        angle {la['angle']:+.2f} deg, from y = {la['y']:+.3f} m")
+        if isinstance(la, dict) and all(key in la for key in deck.KEYS):
+            lines.append(f"delivery {la['speed']:.2f} m/s, spin {la['spin']:+.1f} rad/s")
+            lines.append(f"         angle {la['angle']:+.2f} deg, from y = {la['y']:+.3f} m")
         a, b = slow_window(m)
         slow = f"   slow motion x{SLOW:g}" if a <= t < b else ""
         lines.append(f"t = {t:4.2f} s{slow}")
@@ -349,37 +362,37 @@ class BowlingRenderer(FrameRenderer):
         self.target.release()
 
 
-#: ``nbst render SHOT.json`` flags: frames per second in (0, FPS_MAX] (as the 2D renderer), the
-#: still's time within the shot (0 .. its duration), frames at most the renderer's MAX_FRAMES.
+#: ``nbst render THROW.json`` flags: frames per second in (0, FPS_MAX] (as the 2D renderer), the
+#: still's time within the throw (0 .. its duration), frames at most the renderer's MAX_FRAMES.
 FPS_MAX = 240.0
-#: Flags of ``nbst render`` that draw disk problems only (2D/3D disks); an error on a shot file.
+#: Flags of ``nbst render`` that draw disk problems only (2D/3D disks); an error on a throw file.
 DISK_ONLY_FLAGS = (("trails", False, "--trails"), ("labels", False, "--labels"), ("view", None, "--view"),
                    ("source", None, "--source"), ("speed", None, "--speed"))
 
 
 def load_motion(path):
-    """(shot dict, Motion) of the shot file ``path``, read through the shot-file gate (scene in
-    its folder, parsed, shapes checked) and replayed; ShotFileError (one line) otherwise."""
-    from nbst.models.bowling import shot as shotmod
-    from nbst.models.bowling import shotfile
+    """(throw dict, Motion) of the 5 m throw file ``path``, read through the throw-file gate (scene
+    in its folder, parsed, shapes checked) and replayed; ThrowFileError (one line) otherwise."""
+    from nbst.errors import MujocoError
+    from nbst.models.bowling.deck import throwfile
 
-    shot, model, _ = shotfile.load_with_scene(path)
+    throw, model, _ = throwfile.load_with_scene(path)
     try:
-        return shot, record(shot, model)
-    except shotmod.MujocoError as e:
-        raise shotfile.ShotFileError(f"{path}: qpos0/qvel0: {e}") from None
+        return throw, record(throw, model)
+    except MujocoError as e:
+        raise throwfile.ThrowFileError(f"{path}: qpos0/qvel0: {e}") from None
 
 
-def render_motion(shot: dict, motion: Motion, output, *, still=None, camera: str = "both", size=None,
+def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: str = "both", size=None,
                   times=None, fps=None, progress=None) -> int:
-    """Render a recorded shot to ``output`` (.mp4/.gif video of ``times`` at ``fps``, or .png at
+    """Render a recorded 5 m throw to ``output`` (.mp4/.gif video of ``times`` at ``fps``, or .png at
     time ``still``). Returns the number of frames written."""
     from nbst.render.video import render_video, write_png
 
     size = tuple(size or style.DEFAULT_SIZE)
     ctx = create_context()
     try:
-        r = BowlingRenderer(ctx, motion, size=size, camera=camera, shot=shot)
+        r = BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw)
         try:
             if still is not None:
                 write_png(output, r.render(float(np.clip(still, 0.0, motion.times[-1]))))
@@ -393,11 +406,11 @@ def render_motion(shot: dict, motion: Motion, output, *, still=None, camera: str
         ctx.release()
 
 
-def render_shot(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None) -> int:
-    """Render the shot file ``path`` to ``output`` (.mp4/.gif video, or .png at time ``still``).
+def render_file(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None) -> int:
+    """Render the 5 m throw file ``path`` to ``output`` (.mp4/.gif video, or .png at time ``still``).
     Returns the number of frames written."""
-    shot, motion = load_motion(path)
-    return render_motion(shot, motion, output, still=still, camera=camera, size=size, fps=fps, progress=progress)
+    throw, motion = load_motion(path)
+    return render_motion(throw, motion, output, still=still, camera=camera, size=size, fps=fps, progress=progress)
 
 
 #: Bytes of a .json file read to tell a bowling file from a problem: nbst writes ``kind`` in
@@ -406,109 +419,16 @@ SNIFF_BYTES = 4096
 
 
 def bowling_kind(path) -> str | None:
-    """"shot" or "atlas" when ``path`` names a regular .json file whose first SNIFF_BYTES name
+    """"throw" (a 5 m throw file) or "atlas" when ``path`` names a regular .json file whose first SNIFF_BYTES name
     an nbst bowling kind, else None. Reads at most SNIFF_BYTES (stat first: a FIFO or device
     is never opened), parses nothing."""
     from nbst.files import sniff_kind
-    from nbst.models.bowling.shotfile import ATLAS_KIND, KIND
+    from nbst.models.bowling.deck.throwfile import ATLAS_KIND, KIND
 
-    # an atlas names its own kind before its shots' kind: the first found wins
-    return sniff_kind(path, (("shot", KIND), ("atlas", ATLAS_KIND)), max_bytes=SNIFF_BYTES)
-
-
-def is_shot_file(path) -> bool:
-    """True when ``path`` looks like a bowling shot file (:func:`bowling_kind`; the loader checks it)."""
-    return bowling_kind(path) == "shot"
+    # an atlas names its own kind before its throws' kind: the first found wins
+    return sniff_kind(path, (("throw", KIND), ("atlas", ATLAS_KIND)), max_bytes=SNIFF_BYTES)
 
 
-def _check_shot_flags(args, duration: float | None = None) -> str | None:
-    """The first problem with ``nbst render SHOT.json``'s flags, as one line, or None."""
-    given = [flag for attr, default, flag in DISK_ONLY_FLAGS
-             if getattr(args, attr, default) not in (default, None, False)]
-    if given:
-        return (f"{', '.join(given)} draw{'s' if len(given) == 1 else ''} disk problems only; a bowling shot file "
-                f"takes -o, --still, --camera, --size, --fps, --hold, --max-frames and -q")
-    fps = getattr(args, "fps", None)
-    if fps is not None and not (0 < fps <= FPS_MAX):
-        return f"--fps {fps:g}: must be in (0, {FPS_MAX:g}] frames per second"
-    still = getattr(args, "still", None)
-    if still is not None and not (0 <= still <= (60.0 if duration is None else duration)):
-        if duration is None:
-            return f"--still {still:g}: must lie in [0, the shot's duration] seconds"
-        return f"--still {still:g}: must lie in [0, {duration:g}] seconds (the shot's duration)"
-    hold = getattr(args, "hold", None)
-    if hold is not None and not (0 <= hold <= 60):
-        return f"--hold {hold:g}: must be in [0, 60] seconds"
-    mf = getattr(args, "max_frames", None)
-    if mf is not None and mf < 1:
-        return f"--max-frames {mf}: must be >= 1"
-    return None
-
-
-def cmd_render_shot(args) -> int:
-    """``nbst render SHOT.json -o OUT [--still T] [--camera C] [--size WxH] [--fps F] [--hold S] [-q]``
-    (the render CLI dispatches here when its first argument is a shot file)."""
-    import sys
-
-    from nbst.domain import plain
-    from nbst.models.bowling import shotfile
-    from nbst.outputs import prepare_output
-
-    from nbst.render.gl import RenderError
-
-    def err(msg) -> int:
-        print(f"nbst render: error: {plain(msg)}", file=sys.stderr)
-        return 2
-
-    out = str(args.output)
-    still = getattr(args, "still", None)
-    want = (".png",) if still is not None else (".mp4", ".gif")
-    if not out.lower().endswith(want):
-        return err(f"-o {out}: use a {' or '.join(want)} file"
-                   f"{' with --still' if still is not None else ' (or --still T for a .png)'}")
-    bad = _check_shot_flags(args)  # before any work; --still is checked again against the shot's duration
-    if bad:
-        return err(bad)
-    size = getattr(args, "size", None)
-    if isinstance(size, str):
-        try:
-            w, h = (int(v) for v in size.lower().split("x"))
-        except ValueError:
-            return err(f"--size {size}: expected WxH, e.g. 1280x720")
-        if not (16 <= w <= 8192 and 16 <= h <= 8192):
-            return err(f"--size {size}: width and height must be 16..8192 pixels")
-        if out.lower().endswith(".mp4") and (w % 2 or h % 2):
-            return err(f"--size {size}: H.264 (yuv420p) needs an even width and height")
-        size = (w, h)
-    try:
-        shot, motion = load_motion(args.problem)
-    except shotfile.ShotFileError as e:
-        return err(str(e))
-    bad = _check_shot_flags(args, float(motion.times[-1]))
-    if bad:
-        return err(bad)
-    fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
-    hold = getattr(args, "hold", None)
-    times = frame_times(motion, fps, hold=1.0 if hold is None else float(hold))
-    from nbst.render.video import MAX_FRAMES
-
-    limit = getattr(args, "max_frames", None) or MAX_FRAMES
-    if still is None and len(times) > limit:
-        return err(f"{len(times):,} frames at --fps {fps:g}; at most {limit:,} (--max-frames)")
-    prepare_output(out, inputs=(args.problem,))
-    bar = None
-    if not getattr(args, "quiet", False) and still is None:
-        from nbst.progress import progress_bar
-
-        bar = progress_bar(total=len(times), unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
-    try:
-        n = render_motion(shot, motion, out, still=still, camera=getattr(args, "camera", None) or "both",
-                          size=size, times=times, fps=fps, progress=bar)
-    except RenderError as e:
-        return err(str(e))
-    finally:
-        if bar is not None:
-            bar.close()
-    if not getattr(args, "quiet", False):
-        print(f"nbst render: wrote {out} ({n} frame{'s' if n != 1 else ''})", file=sys.stderr)
-    return 0
+def is_throw_file(path) -> bool:
+    """True when ``path`` looks like a 5 m throw file (:func:`bowling_kind`; the loader checks it)."""
+    return bowling_kind(path) == "throw"

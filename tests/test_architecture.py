@@ -62,7 +62,7 @@ def test_an_import_graph_tool_sees_inside_models_and_render():
     """grimp (import-linter's graph) on the checkout, with no finder hook: the imports inside
     nbst.models and nbst.render are seen, as installed."""
     code = ("import grimp; g = grimp.build_graph('nbst', cache_dir=None);"
-            "print(g.direct_import_exists(importer='nbst.models.bowling.frame', imported='nbst.models.bowling.scene'),"
+            "print(g.direct_import_exists(importer='nbst.models.bowling.lane.frame', imported='nbst.models.bowling.scene'),"
             " g.direct_import_exists(importer='nbst.render.video', imported='nbst.render.gl'),"
             " len([m for m in g.modules if m.startswith(('nbst.models.', 'nbst.render.'))]) > 20)")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
@@ -88,6 +88,18 @@ def test_the_contract_lists_every_room():
             (pkg,) = c["containers"]
             inner = {m.strip() for layer in c["layers"] for m in layer.split("|")}
             assert inner == _children(ROOT / pkg.replace(".", "/")), f"{pkg}: its layers must list every module"
+
+
+def test_bowling_its_halves_and_the_rollout_room_have_inner_contracts():
+    """Every package of nbst.models.bowling (the two halves included) and the rollout room is the
+    container of a layers contract (a new half or subpackage must be placed, module by module)."""
+    contained = {c["containers"][0] for c in _contracts() if c.get("containers")}
+    packages = set()
+    for top in ("bowling", "mjsearch"):
+        for init in (ROOT / "models" / top).rglob("__init__.py"):
+            packages.add("nbst.models." + ".".join(init.parent.relative_to(ROOT / "models").parts))
+    assert {"nbst.models.bowling", "nbst.models.bowling.deck", "nbst.models.bowling.lane"} <= packages
+    assert packages - contained == set(), "packages without an inner layers contract"
 
 
 def test_the_documented_old_baselines_path_still_works_with_a_warning():

@@ -16,7 +16,9 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from nbst.models.bowling import pin, scene, search, shot, shotfile  # noqa: E402
+from nbst.models.bowling import pin, scene  # noqa: E402
+from nbst.models.bowling.deck import search, throwfile as deckfile
+from nbst.models.bowling import deck, pinfall, subsets
 
 ROOT = Path(__file__).resolve().parents[1]
 INCH = 0.0254
@@ -34,7 +36,7 @@ def model():
 
 @pytest.fixture(scope="module")
 def launcher(model):
-    with shot.Launcher(model, jobs=2) as L:
+    with deck.Runner(model, jobs=2) as L:
         yield L
 
 
@@ -80,10 +82,10 @@ def test_scene_xml_loads_to_the_same_model_bit_for_bit(model):
 def test_pins_stand_still_when_untouched(model):
     # a gutter ball: nothing touches the pins for 2 s. Tolerance 10 um: soft contacts settle
     # by microns under the pins' weight (measured < 1 um); a disturbed pin moves centimetres.
-    q, v = shot.initial_qpos_qvel(model, GUTTER_LEFT)
+    q, v = deck.initial_qpos_qvel(model, GUTTER_LEFT)
     d = mujoco.MjData(model)
     d.qpos[:], d.qvel[:] = q, v
-    adr = shot.pin_addresses(model)
+    adr = pinfall.pin_addresses(model)
     p0 = np.array([d.qpos[a:a + 3] for a in adr])
     mujoco.mj_step(model, d, nstep=2000)
     p1 = np.array([d.qpos[a:a + 3] for a in adr])
@@ -91,13 +93,13 @@ def test_pins_stand_still_when_untouched(model):
 
 
 def test_gutter_balls_leave_every_pin_standing(launcher):
-    sig, down = launcher.launch([GUTTER_LEFT, GUTTER_RIGHT])
+    sig, down = launcher.throw([GUTTER_LEFT, GUTTER_RIGHT])
     assert sig.tolist() == [0, 0]
     m = launcher.model
     ball = m.joint("ball_free").qposadr[0]
     for throw in (GUTTER_LEFT, GUTTER_RIGHT):  # where the ball passes the head pin: in the gutter
         d = mujoco.MjData(m)
-        d.qpos[:], d.qvel[:] = shot.initial_qpos_qvel(m, throw)
+        d.qpos[:], d.qvel[:] = deck.initial_qpos_qvel(m, throw)
         while d.qpos[ball] < 0:
             mujoco.mj_step(m, d)
         assert abs(d.qpos[ball + 1]) > scene.LANE_WIDTH / 2 and d.qpos[ball + 2] < scene.BALL_RADIUS
@@ -117,7 +119,7 @@ def test_ball_pin_impact_conserves_momentum_and_does_not_gain_energy(model):
     ball_geom = m.geom("ball").id
     pin_geoms = {m.geom(f"pin1_c{k}").id for k in range(len(pin.geometry().pieces))}
     d = mujoco.MjData(m)
-    d.qpos[:], d.qvel[:] = shot.initial_qpos_qvel(m, HEAD_ON)
+    d.qpos[:], d.qvel[:] = deck.initial_qpos_qvel(m, HEAD_ON)
 
     def touching():
         return any({int(c.geom1), int(c.geom2)} & pin_geoms and ball_geom in (c.geom1, c.geom2)
@@ -147,14 +149,14 @@ def test_ball_pin_impact_conserves_momentum_and_does_not_gain_energy(model):
 # --- shots and replays ---------------------------------------------------------------------
 
 def test_masks_and_pins():
-    assert shot.mask_from_pins([1, 2, 4, 7]) == 0b1001011
-    assert shot.pins_of(0b1001011) == [1, 2, 4, 7]
-    assert search.hamming(1023, 0).item() == 10
-    np.testing.assert_array_equal(search.hamming([3, 5], 1), [1, 1])
+    assert pinfall.mask_from_pins([1, 2, 4, 7]) == 0b1001011
+    assert pinfall.pins_of(0b1001011) == [1, 2, 4, 7]
+    assert subsets.hamming(1023, 0).item() == 10
+    np.testing.assert_array_equal(subsets.hamming([3, 5], 1), [1, 1])
 
 
 def test_launch_is_clamped_to_a_human_throw(model):
-    q, v = shot.initial_qpos_qvel(model, [5.0, 50.0, 10.0, 100.0])
+    q, v = deck.initial_qpos_qvel(model, [5.0, 50.0, 10.0, 100.0])
     ball = model.joint("ball_free")
     vb = v[ball.dofadr[0]:ball.dofadr[0] + 6]
     assert np.hypot(vb[0], vb[1]) == pytest.approx(10.0)
@@ -170,14 +172,14 @@ def test_launch_is_clamped_to_a_human_throw(model):
 def test_rollouts_are_bit_identical_to_a_fresh_plain_replay(model, launcher):
     # exact equality is the claim: threads, launch order, the XML model and mj_step agree
     X = search.from_unit(np.random.default_rng(7).random((6, 4)))
-    st = np.array([launcher.initial_state(*shot.initial_qpos_qvel(model, x)) for x in X])
+    st = np.array([launcher.initial_state(*deck.initial_qpos_qvel(model, x)) for x in X])
     f = launcher.run_states(st)
     np.testing.assert_array_equal(launcher.run_states(st[::-1])[::-1], f)
-    with shot.Launcher(model, jobs=1) as one:
+    with deck.Runner(model, jobs=1) as one:
         np.testing.assert_array_equal(one.run_states(st[:3]), f[:3])
-    m2 = mujoco.MjModel.from_xml_string(shotfile.scene_with_shot(*shot.initial_qpos_qvel(model, X[0])))
+    m2 = mujoco.MjModel.from_xml_string(deckfile.scene_with_start(*deck.initial_qpos_qvel(model, X[0])))
     for i in (0, 1):
-        q = shot.replay_final_qpos(m2, *shot.initial_qpos_qvel(model, X[i]))
+        q = deck.replay_final_qpos(m2, *deck.initial_qpos_qvel(model, X[i]))
         np.testing.assert_array_equal(q, launcher.final_qpos(f)[i])
 
 
@@ -189,12 +191,12 @@ def _snippet() -> str:
 @pytest.fixture(scope="module")
 def seven(tmp_path_factory, launcher):
     """A solved shot (pin 7 alone, seed 1), written as `nbst bowl solve` writes it."""
-    from nbst.cli.bowl import write_shot
+    from nbst.models.bowling.deck.folder import write_throw
 
-    res = search.solve(shot.mask_from_pins([7]), seed=1, max_rollouts=200, launcher=launcher)
+    res = search.solve(pinfall.mask_from_pins([7]), seed=1, max_rollouts=200, runner=launcher)
     assert res.stopped == "found" and res.rollouts <= 200
     out = tmp_path_factory.mktemp("bowl") / "seven.json"
-    write_shot(out, launcher.model, res.launch, res.mask, requested=res.target,
+    write_throw(out, launcher.model, res.delivery, res.mask, requested=res.target,
                robustness={"lateral_m": 0.0, "speed_m_s": 0.0}, search={"seed": 1})
     return out, res
 
@@ -209,22 +211,22 @@ def test_doc_replay_lines_give_the_shots_pins_without_nbst(seven):
     d = json.loads(path.read_text())
     assert d["down"] == [7] and d["found"] and d["scene"] == "seven.scene.xml"
     assert (path.parent / d["scene"]).exists()
-    np.testing.assert_array_equal(d["qpos0"], shot.initial_qpos_qvel(scene.build_model(), res.launch)[0])
+    np.testing.assert_array_equal(d["qpos0"], deck.initial_qpos_qvel(scene.build_model(), res.delivery)[0])
 
 
 def test_solve_is_reproducible_for_any_jobs(seven, model):
     _, res = seven
-    again = search.solve(shot.mask_from_pins([7]), seed=1, max_rollouts=200, jobs=1)
-    np.testing.assert_array_equal(again.launch, res.launch)
+    again = search.solve(pinfall.mask_from_pins([7]), seed=1, max_rollouts=200, jobs=1)
+    np.testing.assert_array_equal(again.delivery, res.delivery)
     assert again.rollouts == res.rollouts
 
 
 def test_solve_finds_a_strike_within_a_small_budget(launcher):
     # fixed seed plus a threshold (measured: found in the first batch, 16 launches, with seed 3;
     # a strike is 8.6 % of uniform throws)
-    res = search.solve(1023, seed=3, max_rollouts=300, launcher=launcher)
+    res = search.solve(1023, seed=3, max_rollouts=300, runner=launcher)
     assert res.stopped == "found" and res.hamming == 0
-    sig, _ = launcher.launch([res.launch])
+    sig, _ = launcher.throw([res.delivery])
     assert sig[0] == 1023
 
 
@@ -251,7 +253,7 @@ def test_cli_replay_checks_the_file(seven, tmp_path, capsys):
     assert _bowl("bowl", "replay", str(bad)) == 1
     bad.write_text("{}")
     assert _bowl("bowl", "replay", str(bad)) == 2
-    assert "not an nbst bowling shot" in capsys.readouterr().err
+    assert "not an nbst 5 m throw file" in capsys.readouterr().err
 
 
 def test_cli_bad_pins_exit_2(tmp_path):
@@ -267,7 +269,7 @@ def test_cli_not_found_writes_the_nearest_and_exits_1(tmp_path, capsys):
     rc = _bowl("bowl", "solve", "--down", "4,6,7,10", "-o", str(out), "--seed", "3", "--max-rollouts", "4",
                "--jobs", "2", "--quiet", "--no-robustness")
     assert rc == 1
-    assert "not found within 4 launches" in capsys.readouterr().err
+    assert "not found within 4 rollouts" in capsys.readouterr().err
     d = json.loads(out.read_text())
     assert d["found"] is False and d["requested"] == [4, 6, 7, 10] and d["search"]["rollouts"] == 4
     assert _bowl("bowl", "replay", str(out)) == 0
@@ -286,10 +288,11 @@ def gl():
 
 
 def test_render_draws_the_ball_where_the_replay_has_it(gl, seven):
+    from nbst.cli.render import cmd_render_throw
     from nbst.render import bowling as rb
 
     path, _ = seven
-    d = shotfile.load(path)
+    d = deckfile.load(path)
     model = mujoco.MjModel.from_xml_path(str(path.parent / d["scene"]))
     motion = rb.record(d, model)
     assert motion.down == d["down"] and 0 < motion.impact < d["duration"]
@@ -339,34 +342,35 @@ def test_interrupt_keeps_the_best_so_far(launcher, tmp_path, monkeypatch, capsys
         if p.rollouts >= 16:
             raise KeyboardInterrupt
 
-    res = search.solve(shot.mask_from_pins([1, 2, 4, 7]), seed=2, max_rollouts=500, launcher=launcher,
+    res = search.solve(pinfall.mask_from_pins([1, 2, 4, 7]), seed=2, max_rollouts=500, runner=launcher,
                        callback=stop)
-    assert res.stopped == "interrupted" and res.rollouts == 16 and res.launch.shape == (4,)
+    assert res.stopped == "interrupted" and res.rollouts == 16 and res.delivery.shape == (4,)
     # the CLI writes that best shot and exits 130
     monkeypatch.setattr(search, "solve", lambda *a, **k: res)
     out = tmp_path / "stopped.json"
     assert _bowl("bowl", "solve", "--down", "1,2,4,7", "-o", str(out), "--jobs", "1", "--quiet") == 130
     assert "interrupted; best so far written" in capsys.readouterr().err
     d = json.loads(out.read_text())
-    assert d["search"]["stopped"] == "interrupted" and d["down"] == shot.pins_of(res.mask)
+    assert d["search"]["stopped"] == "interrupted" and d["down"] == pinfall.pins_of(res.mask)
     assert "robustness" not in d
 
 
 def test_render_shot_still_and_bad_output(gl, seven, tmp_path, capsys):
     import argparse
 
+    from nbst.cli.render import cmd_render_throw
     from nbst.render import bowling as rb
 
     path, _ = seven
-    assert rb.is_shot_file(path) and not rb.is_shot_file(ROOT / "pyproject.toml")
+    assert rb.is_throw_file(path) and not rb.is_throw_file(ROOT / "pyproject.toml")
     ns = argparse.Namespace(problem=str(path), output=str(tmp_path / "f.png"), still=0.6, size="160x90",
                             fps=None, quiet=True, camera="overhead")
-    assert rb.cmd_render_shot(ns) == 0
+    assert cmd_render_throw(ns) == 0
     from PIL import Image
 
     assert Image.open(tmp_path / "f.png").size == (160, 90)
     ns.output = str(tmp_path / "f.mp4")  # --still wants a .png
-    assert rb.cmd_render_shot(ns) == 2
+    assert cmd_render_throw(ns) == 2
     assert "use a .png file" in capsys.readouterr().err
 
 
@@ -388,14 +392,14 @@ def test_nbst_render_dispatches_shot_files(gl, seven, tmp_path, capsys):
 
 
 def test_shipped_atlas_shots_replay_to_their_pins():
-    """models/bowling/atlas.json (with scene.xml beside it): every shot has the shot-file keys;
+    """models/bowling/deck/atlas.json (with scene.xml beside it): every shot has the shot-file keys;
     a spread of them (smallest, middle and largest subsets) replays from the XML to exactly
     its pins (fresh MjData, only qpos/qvel set)."""
     import mujoco
 
-    from nbst.models.bowling import shotfile
+    from nbst.models.bowling.deck import throwfile as deckfile
 
-    folder = ROOT / "models" / "bowling"
+    folder = ROOT / "models" / "bowling" / "deck"
     atlas = json.loads((folder / "atlas.json").read_text())
     shots = atlas["shots"]
     assert atlas["subsets"] == len(shots) and len({tuple(d["down"]) for d in shots}) == len(shots)
@@ -403,4 +407,4 @@ def test_shipped_atlas_shots_replay_to_their_pins():
     assert all(keys <= set(d) and d["scene"] == atlas["scene"] for d in shots)
     model = mujoco.MjModel.from_xml_path(str(folder / atlas["scene"]))
     for d in (shots[0], shots[len(shots) // 2], shots[-1]):
-        assert shotfile.replay(model, d["qpos0"], d["qvel0"], d["duration"], d["rule"]) == sorted(d["down"])
+        assert deckfile.replay(model, d["qpos0"], d["qvel0"], d["duration"], d["rule"]) == sorted(d["down"])

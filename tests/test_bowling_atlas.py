@@ -1,4 +1,4 @@
-"""The bowling atlas (nbst.models.bowling.atlas, .geometry): the shipped atlas's robustness,
+"""The bowling atlas (nbst.models.bowling.deck.atlas, .geometry): the shipped atlas's robustness,
 the MAP-Elites emitter's reproducibility, and the geometric facts behind "which subsets seem
 impossible"."""
 from __future__ import annotations
@@ -10,24 +10,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nbst.models.bowling import geometry
+from nbst.models.bowling import deck, geometry, pinfall
 
 ROOT = Path(__file__).resolve().parents[1]
-ATLAS = ROOT / "models" / "bowling" / "atlas.json"
+ATLAS = ROOT / "models" / "bowling" / "deck" / "atlas.json"
 
 
 # --- geometry (pure numpy) -------------------------------------------------------------------
 
 def test_geometry_numbers_are_the_scenes():
     pytest.importorskip("mujoco")
-    from nbst.models.bowling import pin, scene, shot
-
+    from nbst.models.bowling import pin, scene
+    
     np.testing.assert_allclose(geometry.pin_spots(), scene.pin_spots(), rtol=0, atol=1e-15)
     assert geometry.PIN_RADIUS == pytest.approx(pin.profile()[:, 0].max(), rel=1e-12)
     assert geometry.BALL_RADIUS == scene.BALL_RADIUS and geometry.LANE_WIDTH == scene.LANE_WIDTH
     assert geometry.GUTTER_WIDTH == scene.GUTTER_WIDTH
-    assert geometry.Y_LANE == pytest.approx(shot.BOUNDS["y"][1])
-    assert geometry.THETA_MAX >= shot.BOUNDS["angle"][1]
+    assert geometry.Y_LANE == pytest.approx(deck.BOUNDS["y"][1])
+    assert geometry.THETA_MAX >= deck.BOUNDS["angle"][1]
 
 
 def test_the_ball_cannot_pass_between_neighbouring_pins():
@@ -79,9 +79,8 @@ def test_shipped_atlas_shots_carry_robustness():
 def test_shipped_atlas_has_no_subset_the_corridor_rule_excludes():
     """What the docs claim: no found subset breaks the corridor rule (the rule stands on the
     atlas's evidence); flying pins do happen (the reach rule is broken)."""
-    from nbst.models.bowling import shot
-
-    found = [shot.mask_from_pins(d["down"]) for d in json.loads(ATLAS.read_text())["shots"]]
+    
+    found = [pinfall.mask_from_pins(d["down"]) for d in json.loads(ATLAS.read_text())["shots"]]
     r = geometry.compare(found)
     assert r["breakers"]["corridor"] == []
     assert r["breakers"]["reach"]
@@ -90,29 +89,28 @@ def test_shipped_atlas_has_no_subset_the_corridor_rule_excludes():
 # --- the emitter ---------------------------------------------------------------------------
 
 def test_emitter_batches_depend_on_the_seed_and_archive_only():
-    from nbst.models.bowling import atlas
+    from nbst.models.bowling.deck import atlas
 
-    a = atlas.Archive.from_launches({7: np.array([0.3, 7.0, 0.0, 0.0]), 1023: np.array([0.05, 8.0, 0.0, -10.0])})
+    a = atlas.Archive.from_elites({7: np.array([0.3, 7.0, 0.0, 0.0]), 1023: np.array([0.05, 8.0, 0.0, -10.0])})
     X1, p1 = atlas.emit(a, np.random.default_rng(5))
     X2, p2 = atlas.emit(a, np.random.default_rng(5))
     np.testing.assert_array_equal(X1, X2)
     np.testing.assert_array_equal(p1, p2)
     assert (p1[:atlas.UNIFORM_PER_BATCH] == -1).all() and set(p1[atlas.UNIFORM_PER_BATCH:]) <= {7, 1023}
-    from nbst.models.bowling import shot
-
-    assert (X1 >= shot.LO).all() and (X1 <= shot.HI).all()
+    
+    assert (X1 >= deck.LO).all() and (X1 <= deck.HI).all()
     w = atlas.parent_weights(a, [7, 1023])
     assert w.sum() == pytest.approx(1.0) and w[0] > w[1]          # size 1 (1/10 found) over the strike (1/1)
 
 
 def test_emitter_run_is_reproducible_for_any_jobs():
     pytest.importorskip("mujoco")
-    from nbst.models.bowling import atlas, shot
+    from nbst.models.bowling.deck import atlas
 
     runs = []
     for jobs in (1, 2):
-        with shot.Launcher(jobs=jobs) as L:
-            a = atlas.Archive.from_launches({1023: np.array([0.05, 8.0, 0.0, -10.0])})
+        with deck.Runner(jobs=jobs) as L:
+            a = atlas.Archive.from_elites({1023: np.array([0.05, 8.0, 0.0, -10.0])})
             runs.append(atlas.run(L, a, method="elites", budget=32, seed=4))
     assert runs[0].rollouts == runs[1].rollouts == 32
     assert sorted(runs[0].elite) == sorted(runs[1].elite)
@@ -122,7 +120,7 @@ def test_emitter_run_is_reproducible_for_any_jobs():
 
 
 def test_size_table():
-    from nbst.models.bowling import atlas
+    from nbst.models.bowling.deck import atlas
 
     t = atlas.size_table([1, 2, 1023])
     assert t[0] == (1, 2, 10) and t[-1] == (10, 1, 1) and sum(p for _, _, p in t) == 1023
@@ -131,10 +129,10 @@ def test_size_table():
 
 def test_geometry_distance_ranks_neighbouring_extras_nearer():
     pytest.importorskip("mujoco")
-    from nbst.models.bowling import search, shot
+    from nbst.models.bowling.deck import search
 
-    want = shot.mask_from_pins([1, 2, 3])
-    d = {tuple(p): float(search.geometry_distance(shot.mask_from_pins(p), want))
+    want = pinfall.mask_from_pins([1, 2, 3])
+    d = {tuple(p): float(search.geometry_distance(pinfall.mask_from_pins(p), want))
          for p in ([1, 2, 3], [], [1, 2, 3, 5], [1, 2, 3, 10], [1, 2], [1, 2, 3, 5, 8, 9])}
     assert d[(1, 2, 3)] == 0.0 and d[()] == 3.0 and d[(1, 2)] == 1.0
     assert d[(1, 2, 3, 5)] == 0.5 < d[(1, 2, 3, 10)] == 1.0           # 5 neighbours 2 and 3; 10 is far
@@ -147,7 +145,7 @@ def test_atlas_from_a_file_without_its_scene_is_one_clear_error(tmp_path, capsys
     """--from names the missing scene file instead of a bare OS error; nothing is searched."""
     from nbst.cli import main
 
-    src = Path(__file__).resolve().parents[1] / "models" / "bowling" / "atlas.json"
+    src = Path(__file__).resolve().parents[1] / "models" / "bowling" / "deck" / "atlas.json"
     lonely = tmp_path / "a" / "atlas.json"
     lonely.parent.mkdir()
     lonely.write_bytes(src.read_bytes())  # without scene.xml beside it

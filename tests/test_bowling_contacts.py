@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nbst.models.bowling import frame, scene, spares
+from nbst.models.bowling import scene
+from nbst.models.bowling.lane import frame, spares
 
 
 @pytest.fixture(scope="module")

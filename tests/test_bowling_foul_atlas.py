@@ -10,7 +10,9 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from nbst.models.bowling import atlas, foul_atlas, frame, noise, shot, throwfile  # noqa: E402
+from nbst.models.bowling.deck import atlas  # noqa: E402
+from nbst.models.bowling.lane import atlas as foul_atlas, frame, noise, throwfile
+from nbst.models.bowling import pinfall
 
 
 @pytest.fixture(scope="module")
@@ -38,8 +40,8 @@ def test_the_throw_space_is_a_bowlers_and_round_trips():
 
 
 def test_the_mirror_swaps_the_pins_across_the_middle_board():
-    assert foul_atlas.mirror(shot.mask_from_pins([7])) == shot.mask_from_pins([10])
-    assert foul_atlas.mirror(shot.mask_from_pins([1, 2, 4, 8])) == shot.mask_from_pins([1, 3, 6, 9])
+    assert foul_atlas.mirror(pinfall.mask_from_pins([7])) == pinfall.mask_from_pins([10])
+    assert foul_atlas.mirror(pinfall.mask_from_pins([1, 2, 4, 8])) == pinfall.mask_from_pins([1, 3, 6, 9])
     assert all(foul_atlas.mirror(foul_atlas.mirror(m)) == m for m in range(1, 1024))
 
 
@@ -48,7 +50,7 @@ def test_a_left_handers_mirrored_spare_converts_the_mirrored_pin(runner):
     counted from the left edge) converts the 7 pin, within the ladder's robustness."""
     from dataclasses import replace
 
-    from nbst.models.bowling import spares
+    from nbst.models.bowling.lane import spares
 
     d = spares.straight_at(*spares.aim_point((10,)))
     assert runner.one(d, standing=[10]).converted
@@ -65,7 +67,7 @@ def test_grow_is_reproducible_from_the_seed_on_one_and_two_processes(runner):
         assert np.array_equal(a1.elite[m], a2.elite[m])
     # every elite is a throw whose settled pins down are its subset (a frame depends on its delivery only)
     m = sorted(a1.elite)[0]
-    assert runner.one(foul_atlas.delivery_of(a1.elite[m])).down == shot.pins_of(m)
+    assert runner.one(foul_atlas.delivery_of(a1.elite[m])).down == pinfall.pins_of(m)
 
 
 def test_the_probability_counts_exactly_the_subset(runner):
@@ -73,7 +75,7 @@ def test_the_probability_counts_exactly_the_subset(runner):
     m = max(a.elite, key=lambda k: bin(k).count("1"))
     est = foul_atlas.probabilities(runner, {m: a.elite[m]}, n=4, seed=3)[m]
     frames = runner.map(noise.sample(foul_atlas.delivery_of(a.elite[m]), 4, 3))
-    k = sum(r.down == shot.pins_of(m) for r in frames)
+    k = sum(r.down == pinfall.pins_of(m) for r in frames)
     assert (est.k, est.n) == (k, 4) and est.lo <= est.p <= est.hi
 
 
@@ -96,12 +98,12 @@ def test_noisy_throws_harvest_new_subsets_with_themselves_as_elites(runner):
     b.elite[m] = a.elite[m]
     _, throws, results = foul_atlas.probabilities(runner, {m: a.elite[m]}, n=6, seed=3, frames=True)
     new = foul_atlas.harvest(b, throws, results)
-    seen = {shot.mask_from_pins(r.down) for r in results} - {0, m}
+    seen = {pinfall.mask_from_pins(r.down) for r in results} - {0, m}
     assert set(new) <= seen and b.rollouts == 7  # the frames had run: no new frames counted
     for k in new:
         x = b.elite[k]
         assert np.all(x >= foul_atlas.LO) and np.all(x <= foul_atlas.HI)
-        assert runner.one(foul_atlas.delivery_of(x)).down == shot.pins_of(k)
+        assert runner.one(foul_atlas.delivery_of(x)).down == pinfall.pins_of(k)
 
 
 def test_seek_answers_from_the_archive_without_a_frame(runner):
@@ -112,11 +114,11 @@ def test_seek_answers_from_the_archive_without_a_frame(runner):
 
 def test_seek_grows_the_archive_with_what_its_children_knock_down(runner):
     # the 7-10 split is out of reach of 16 frames; every subset seen on the way is archived truly
-    point, arch, frames = foul_atlas.seek(runner, {}, shot.mask_from_pins([1, 2, 3, 4, 5, 6, 8, 9]), budget=16,
+    point, arch, frames = foul_atlas.seek(runner, {}, pinfall.mask_from_pins([1, 2, 3, 4, 5, 6, 8, 9]), budget=16,
                                           seed=4)
     assert frames == 16
     for m, x in list(arch.items())[:2]:
-        assert runner.one(foul_atlas.delivery_of(x)).down == shot.pins_of(m)
+        assert runner.one(foul_atlas.delivery_of(x)).down == pinfall.pins_of(m)
 
 
 def test_the_archive_checkpoint_round_trips_and_refuses_hostile_content():
@@ -205,7 +207,7 @@ def test_robust_strike_starts_include_throws_that_strike_without_noise(runner):
     """--robust for a strike also starts from the strike line and the pocket cell: each must
     strike without noise (a start that misses could never be the pick)."""
     from nbst.cli.bowl_foul import robust_starts
-    from nbst.models.bowling import spares
+    from nbst.models.bowling.lane import spares
 
     found = foul_atlas.delivery_of(_point(0.5))
     ten = list(range(1, 11))

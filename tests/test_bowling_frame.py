@@ -9,7 +9,9 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from nbst.models.bowling import frame, lane, noise, scene, shot, spares  # noqa: E402
+from nbst.models.bowling import lane, scene  # noqa: E402
+from nbst.models.bowling.lane import frame, noise, spares
+from nbst.models.bowling import pinfall
 
 TYPICAL = lane.Delivery(board=10.0, at="arrows", angle=1.5)
 
@@ -47,7 +49,7 @@ def _pin_qpos(model, n, x, y, z, tilt_deg, toward_y):
     """A pin's qpos with its base at (x, y, z), tilted about x by tilt_deg towards sign(toward_y)."""
     a = math.radians(tilt_deg) * (-np.sign(toward_y))  # rotating +z about +x by -a tips it towards +y
     q = np.array(model.qpos0, dtype=float)
-    adr = shot.pin_addresses(model)[n - 1]
+    adr = pinfall.pin_addresses(model)[n - 1]
     q[adr:adr + 7] = [x, y, z, math.cos(a / 2), math.sin(a / 2), 0.0, 0.0]
     return q
 
@@ -58,13 +60,13 @@ def test_dead_wood_a_pin_leaning_on_the_kickback_counts_as_down():
     spot = scene.pin_spots()[6]  # pin 7, back left
     q = _pin_qpos(m, 7, spot[0], half - 0.006, 0.0, 40.0, +1)
     d = _settle(m, q)
-    adr = shot.pin_addresses(m)[6]
+    adr = pinfall.pin_addresses(m)[6]
     p = d.qpos[adr:adr + 7]
     tilt = math.degrees(math.acos(1 - 2 * (p[4] ** 2 + p[5] ** 2)))
     knocked, off, partition = frame.settled_pinfall(m, d, [7])
     assert partition == [7], f"pin 7 at {tilt:.1f} deg, base y {p[1]:.3f}: not touching the kickback"
-    assert tilt < shot.DOWN_TILT_DEG and knocked == []  # the 45-degree rule alone would call it standing
-    assert not shot.pins_down(m, d.qpos)[6] or off  # the old rule: standing unless off the deck
+    assert tilt < pinfall.DOWN_TILT_DEG and knocked == []  # the 45-degree rule alone would call it standing
+    assert not pinfall.pins_down(m, d.qpos)[6] or off  # the old rule: standing unless off the deck
 
 
 def test_dead_wood_a_pin_lying_in_the_gutter_counts_as_down():
@@ -72,7 +74,7 @@ def test_dead_wood_a_pin_lying_in_the_gutter_counts_as_down():
     y = scene.LANE_WIDTH / 2 + scene.GUTTER_WIDTH / 2
     spot = scene.pin_spots()[9]
     q = _pin_qpos(m, 10, spot[0], -y, 0.0, 90.0, -1)
-    q[shot.pin_addresses(m)[9] + 2] = 0.02  # just above the gutter's bottom
+    q[pinfall.pin_addresses(m)[9] + 2] = 0.02  # just above the gutter's bottom
     d = _settle(m, q)
     knocked, off, partition = frame.settled_pinfall(m, d, [10])
     assert off == [10]

@@ -1,4 +1,4 @@
-"""Shot and atlas files are hostile input too (the shot-file gate, models/bowling/shotfile.py):
+"""Shot and atlas files are hostile input too (the shot-file gate, models/bowling/deckfile.py):
 regular files only, nbst's core JSON reader, finite and bounded states, shapes checked against
 the scene, the scene inside the file's own folder; MuJoCo's warnings are our errors; the render
 and plot commands check their flags on shot files. Every refusal is one line and exit 2."""
@@ -13,10 +13,13 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from nbst.models.bowling import shot, shotfile  # noqa: E402
+from nbst.models.bowling.deck import throwfile as deckfile
+from nbst.models.bowling import deck, pinfall
+from nbst.models.mjsearch import runner as mjrunner
+from nbst.errors import MujocoError
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ROOT / "models" / "bowling"
+SHIPPED = ROOT / "models" / "bowling" / "deck"
 
 
 @pytest.fixture(scope="module")
@@ -141,7 +144,7 @@ def test_a_link_out_of_the_folder_is_refused(good, tmp_path, capsys):
 
 def test_the_shipped_scene_may_be_named_from_anywhere(good, tmp_path, capsys):
     _, d = good
-    p = _write(tmp_path, "shipped.json", {**d, "scene": str(shotfile.SHIPPED_SCENE)})
+    p = _write(tmp_path, "shipped.json", {**d, "scene": str(deckfile.SHIPPED_SCENE)})
     rc, _ = _main(["bowl", "replay", p], capsys)
     assert rc == 0
 
@@ -170,20 +173,20 @@ def test_mujoco_warnings_are_errors_and_leave_no_log(good, tmp_path, monkeypatch
     model = mujoco.MjModel.from_xml_path(str(folder / "scene.xml"))
     qvel = [1000.0] * model.nv
     try:
-        pins = shotfile.replay(model, d["qpos0"], qvel, 0.2)
-    except shot.MujocoError as e:
+        pins = deckfile.replay(model, d["qpos0"], qvel, 0.2)
+    except MujocoError as e:
         assert str(e).startswith("MuJoCo warned")
     else:
         assert all(1 <= n <= 10 for n in pins)           # no warning: then the replay was a replay
-    with pytest.raises(shot.MujocoError, match="not finite"):
-        shot.replay_final_qpos(model, [float("nan")] * model.nq, [0.0] * model.nv, 0.01)
+    with pytest.raises(MujocoError, match="not finite"):
+        deck.replay_final_qpos(model, [float("nan")] * model.nq, [0.0] * model.nv, 0.01)
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
 
 
 def test_warning_hook_turns_a_warning_into_an_error_and_is_restored():
     before = mujoco.get_mju_user_warning()
-    with pytest.raises(shot.MujocoError, match="MuJoCo warned: boom"):
-        with shot.mujoco_warnings_raise() as got:
+    with pytest.raises(MujocoError, match="MuJoCo warned: boom"):
+        with mjrunner.mujoco_warnings_raise() as got:
             got.append("boom")
     assert mujoco.get_mju_user_warning() == before
 
@@ -235,11 +238,11 @@ def test_load_atlas_checks_shapes_and_duplicates(tmp_path):
     shutil.copyfile(SHIPPED / "scene.xml", tmp_path / "scene.xml")
     atlas = json.loads((SHIPPED / "atlas.json").read_text())
     a = _write(tmp_path, "a.json", {**atlas, "shots": [atlas["shots"][0], atlas["shots"][0]]})
-    with pytest.raises(shotfile.ShotFileError, match=r"shots\[1\]\.down"):
-        shotfile.load_atlas(a)
+    with pytest.raises(deckfile.ThrowFileError, match=r"shots\[1\]\.down"):
+        deckfile.load_atlas(a)
     a = _write(tmp_path, "a.json", {**atlas, "shots": [{**atlas["shots"][0], "duration": 1e9}]})
-    with pytest.raises(shotfile.ShotFileError, match=r"shots\[0\]\.duration"):
-        shotfile.load_atlas(a)
+    with pytest.raises(deckfile.ThrowFileError, match=r"shots\[0\]\.duration"):
+        deckfile.load_atlas(a)
 
 
 # --- render and plot on shot files ------------------------------------------------------------
@@ -271,7 +274,7 @@ def test_render_sniffs_json_without_reading_it_whole(tmp_path, capsys):
 def test_plot_problem_says_it_is_a_bowling_shot(good, tmp_path, capsys):
     folder, _ = good
     _refused(["plot", "problem", folder / "shot.json", "-o", tmp_path / "p.png"], capsys,
-             "this is a bowling shot file")
+             "this is a bowling throw file")
     _refused(["plot", "problem", SHIPPED / "atlas.json", "-o", tmp_path / "p.png"], capsys,
              "this is a bowling atlas file")
 
@@ -279,14 +282,14 @@ def test_plot_problem_says_it_is_a_bowling_shot(good, tmp_path, capsys):
 # --- bowl solve --leave -----------------------------------------------------------------------
 
 def test_leave_means_the_pins_left_standing():
-    from nbst.cli import bowl
+    from nbst.cli import bowl_args
 
-    assert bowl._leave("7,10") == shot.mask_from_pins([1, 2, 3, 4, 5, 6, 8, 9])
-    assert bowl._leave("none") == 1023 and bowl._pins("strike") == 1023
+    assert bowl_args.leave("7,10") == pinfall.mask_from_pins([1, 2, 3, 4, 5, 6, 8, 9])
+    assert bowl_args.leave("none") == 1023 and bowl_args.pins_down("strike") == 1023
     import argparse
 
     with pytest.raises(argparse.ArgumentTypeError, match="gutter ball"):
-        bowl._leave("1,2,3,4,5,6,7,8,9,10")
+        bowl_args.leave("1,2,3,4,5,6,7,8,9,10")
 
 
 def test_solve_leave_answers_from_the_shipped_atlas(tmp_path, capsys):

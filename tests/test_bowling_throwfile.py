@@ -14,7 +14,8 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from nbst.models.bowling import frame, lane, noise, spares, throwfile  # noqa: E402
+from nbst.models.bowling import lane  # noqa: E402
+from nbst.models.bowling.lane import frame, noise, spares, throwfile
 
 TYPICAL = lane.Delivery(board=10.0, at="arrows", angle=1.5)
 
@@ -234,7 +235,7 @@ def test_a_fifo_a_folder_and_a_huge_file_are_refused_unopened(tmp_path, capsys):
 def test_an_unknown_format_is_neither_a_shot_nor_a_throw(tmp_path, capsys):
     p = tmp_path / "x.json"
     p.write_text('{"format": "nbst-bowling-frame"}')
-    _refused(["bowl", "replay", p], capsys, "not an nbst bowling shot or throw")
+    _refused(["bowl", "replay", p], capsys, "not an nbst bowling throw file")
 
 
 # --- the CLI ------------------------------------------------------------------------------------
@@ -305,11 +306,13 @@ def test_the_shot_files_still_replay_as_before(tmp_path, capsys):
     """A 5 m shot file (the shipped atlas's 7-10 leave, beside its scene) takes the old path."""
     import shutil
 
-    shipped = Path(throwfile.shotfile.SHIPPED_ATLAS)
+    from nbst.models.bowling.deck import throwfile as deckfile
+
+    shipped = Path(deckfile.SHIPPED_ATLAS)
     atlas = json.loads(shipped.read_text())
     s = next(x for x in atlas["shots"] if x["down"] == [1, 2, 3, 4, 5, 6, 8, 9])
     shutil.copyfile(shipped.with_name("scene.xml"), tmp_path / "scene.xml")
     (tmp_path / "shot.json").write_text(json.dumps(s))
     rc, stdout, _ = _main(["bowl", "replay", tmp_path / "shot.json", "--json"], capsys)
-    assert rc == 0 and json.loads(stdout) == {"shot": str(tmp_path / "shot.json"), "down": s["down"],
+    assert rc == 0 and json.loads(stdout) == {"throw": str(tmp_path / "shot.json"), "down": s["down"],
                                               "expected": s["down"], "match": True}

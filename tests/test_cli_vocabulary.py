@@ -91,8 +91,8 @@ def test_old_spellings_still_work_with_a_note(argv, dest, value, new, capsys):
     assert getattr(build_parser().parse_args(new_argv), dest) == value
 
 
-@pytest.mark.parametrize("kind, what", [("nbst-bowling-shot", "a bowling shot file"),
-                                        ("nbst-bowling-atlas", "an atlas of bowling shots")])
+@pytest.mark.parametrize("kind, what", [("nbst-bowling-shot", "a bowling throw file"),
+                                        ("nbst-bowling-atlas", "an atlas of bowling throws")])
 def test_a_bowling_file_given_as_a_problem_says_what_it_is(kind, what, tmp_path):
     import json
 

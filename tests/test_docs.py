@@ -184,7 +184,7 @@ def test_every_command_in_the_doc_runs(doc, tmp_path):
     for line, kind, text, expect in todo:
         where = f"{doc.name}:{line}"
         if kind == "python":
-            argv = ["shot.json"] if "sys.argv[1]" in text else []
+            argv = ["throw.json"] if "sys.argv[1]" in text else []
             out = subprocess.run([PY, "-", *argv], input=_cut_python(text), cwd=tmp_path, env=_env(),
                                  capture_output=True, text=True, timeout=TIMEOUT)
             if out.returncode != 0:

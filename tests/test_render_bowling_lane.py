@@ -10,8 +10,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from nbst.models.bowling import frame, lane, scene, spares
+from nbst.models.bowling import lane, scene
+from nbst.models.bowling.lane import frame, spares
 from nbst.render import bowling_lane as bl
+from nbst.render import bowling_throw as bt
+from nbst.models.bowling import pinfall
 
 SIZE = (960, 540)
 TYPICAL = lane.Delivery(hand="right", board=10, at="arrows", angle=1.5, mph=17, rpm=300, rotation=45, tilt=15)
@@ -29,7 +32,7 @@ def gl():
 
 @pytest.fixture(scope="module")
 def throw():
-    return bl.record_throw(TYPICAL, "house")
+    return bt.record_throw(TYPICAL, "house")
 
 
 @pytest.fixture(scope="module")
@@ -73,24 +76,23 @@ def test_the_recording_is_the_frame_run_frame_runs(delivery, standing):
     """The picture records frame.run_frame itself (its model, initial state, steps and stop rule):
     the same pins down and leave and the same final state, bit for bit, as the frame without
     the recording hook; the last recorded poses are that final state."""
-    from nbst.models.bowling import shot
-
+    
     fr = frame.run_frame(delivery, standing=standing)
-    th = bl.record_throw(delivery, "house", standing=standing)
+    th = bt.record_throw(delivery, "house", standing=standing)
     assert (th.frame.down, th.frame.leave) == (fr.down, fr.leave) and th.motion.down == fr.down
     assert np.array_equal(th.frame.final_qpos, fr.final_qpos) and th.frame.settle_s == fr.settle_s
     m = frame.frame_model("house")
-    adr = shot.pin_addresses(m)
+    adr = pinfall.pin_addresses(m)
     assert np.array_equal(th.motion.pins[-1], fr.final_qpos[adr[:, None] + np.arange(7)])
     ba = int(m.joint("ball_free").qposadr[0])
     assert np.array_equal(th.motion.ball[-1, :3], fr.final_qpos[ba:ba + 3])
-    assert shot.pins_of(int(th.motion.down_masks[-1])) == fr.down
+    assert pinfall.pins_of(int(th.motion.down_masks[-1])) == fr.down
     assert th.in_play == tuple(fr.in_play)
     if standing:                               # pins not in play stay parked, never counted down
         parked = [k for k, n in enumerate(scene.PIN_NUMBERS) if n not in standing]
         assert np.abs(th.motion.pins[:, parked, :2] - th.motion.pins[0, parked, :2]).max() < 1e-3   # within 1 mm
         assert (th.motion.pins[:, parked, 0] < lane.FOUL_LINE_X - 1.0).all()     # behind the approach
-        assert all(shot.pins_of(int(x)) == [] or set(shot.pins_of(int(x))) <= set(standing)
+        assert all(pinfall.pins_of(int(x)) == [] or set(pinfall.pins_of(int(x))) <= set(standing)
                    for x in th.motion.down_masks)
 
 
@@ -207,14 +209,14 @@ def test_ball_marks_turn_with_the_quaternion(gl, throw):
 
 
 def test_texture_has_the_grip_holes_and_the_track(throw):
-    tex = bl.ball_texture(throw)
+    tex = bt.ball_texture(throw)
     h, w, _ = tex.shape
-    dirs = bl._texel_dirs((w, h)).reshape(-1, 3)
+    dirs = bt._texel_dirs((w, h)).reshape(-1, 3)
     flat = tex.reshape(-1, 3).astype(int)
-    for p, rad in bl.grip_holes(throw.delivery):
+    for p, rad in bt.grip_holes(throw.delivery):
         inside = dirs @ p > np.cos(rad * 0.8)
         assert inside.any() and (flat[inside].sum(axis=1) < 40).all()         # dark holes
-    track = np.abs(flat - np.round(np.array(bl.TRACK_RGB) * 255)).sum(axis=1) <= 1
+    track = np.abs(flat - np.round(np.array(bt.TRACK_RGB) * 255)).sum(axis=1) <= 1
     # the release's contact point (straight down at the identity orientation) is on the track
     down = dirs @ np.array([0.0, 0.0, -1.0]) > np.cos(np.radians(1.0))
     assert track[down].any() and 0.02 < track.mean() < 0.6
@@ -248,7 +250,7 @@ def test_cli_writes_a_still_and_an_mp4_with_the_expected_frames(gl, throw, tmp_p
     png, mp4 = tmp_path / "t.png", tmp_path / "t.mp4"
     assert main(["bowl", "throw", "--still", str(png), "--size", "320x180", "--video", str(mp4), "--fps", "8"]) == 0
     assert Image.open(png).size == (320, 180)
-    expected = len(bl.frame_times(throw, 8.0))
+    expected = len(bt.frame_times(throw, 8.0))
     reader = imageio_ffmpeg.read_frames(str(mp4))
     meta = next(reader)
     assert tuple(meta["size"]) == (320, 180) and meta["fps"] == pytest.approx(8.0)
@@ -285,13 +287,13 @@ def spare_file(tmp_path_factory):
 
 
 def test_a_spare_draws_only_the_pins_in_play_and_its_readout_names_rack_ask_result_and_chance(gl, spare_file):
-    from nbst.models.bowling import throwfile
+    from nbst.models.bowling.lane import throwfile
 
     d = throwfile.load(spare_file)
-    th = bl.record_throw(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]), standing=d["standing"],
+    th = bt.record_throw(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]), standing=d["standing"],
                          timestep=d["outcome"]["timestep"])
     assert th.frame.down == d["outcome"]["down"] == [10]
-    ro = bl.throw_file_readout(d)
+    ro = bt.throw_file_readout(d)
     e = d["probability"]
     r = bl.LaneRenderer(gl, th, size=SIZE, camera="both", **ro)
     try:
@@ -314,7 +316,7 @@ def test_a_spare_draws_only_the_pins_in_play_and_its_readout_names_rack_ask_resu
         assert all(ink(last, n) < 400 for n in range(1, 11))
     finally:
         r.release()
-    asked = bl.throw_file_readout({**d, "requested": {"down": [10]}})
+    asked = bt.throw_file_readout({**d, "requested": {"down": [10]}})
     r = bl.LaneRenderer(gl, th, size=(320, 180), camera="overhead", **asked)
     try:
         text = "\n".join(r.readout(float(th.motion.times[-1])))
@@ -349,7 +351,7 @@ def test_cli_replay_films_a_throw_file_and_refuses_a_shot_file_in_one_line(spare
     shot.write_text('{"kind": "nbst-bowling-shot"}')
     assert main(["bowl", "replay", str(shot), "--video", str(tmp_path / "s.mp4")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "a 5 m shot file" in err[0] and "nbst render SHOT.json" in err[0]
+    assert len(err) == 1 and "a 5 m throw file" in err[0] and "nbst render THROW.json" in err[0]
     assert main(["bowl", "replay", str(spare_file), "--video", str(tmp_path / "x.png")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--video" in err[0] and "use a .mp4 or .gif file" in err[0]

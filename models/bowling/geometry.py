@@ -2,12 +2,12 @@
 
 Pure numpy (no MuJoCo): the numbers are those of :mod:`.scene` and :mod:`.pin` (USBC):
 pin spots 12 in apart on a triangle, pin belly :data:`PIN_RADIUS` (4.766 in across), ball
-:data:`BALL_RADIUS` (8.5 in across), lane 41.5 in wide; launch bounds of :mod:`.shot`.
+:data:`BALL_RADIUS` (8.5 in across), lane 41.5 in wide; the deck half's delivery bounds (:data:`.deck.delivery.BOUNDS`).
 
 A **ball path** across the deck is a straight line ``y = y0 + x tan(theta)`` (x from the
 head pin's spot): the ball's centre stays on the lane or in a gutter, at most as far out as
 the gutter's middle, over the deck (|y| <= :data:`Y_MAX`), and ``|theta| <=``
-:data:`THETA_MAX` (the launch's 3 degrees plus the strongest hook measured in
+:data:`THETA_MAX` (the 5 m delivery's 3 degrees plus the strongest hook measured in
 docs/bowling.md, 6.4 degrees at the deck: a gently hooking ball is straight over the 0.8 m
 of the deck to within a few mm). The ball's **corridor** is the
 band within ``BALL_RADIUS + PIN_RADIUS`` of the path: a pin whose axis is in it is touched
@@ -52,8 +52,8 @@ Y_LANE = LANE_WIDTH / 2 - BALL_RADIUS
 #: gutter's depth, still clips pin 7 or 10 (taken as if it were on the lane: generous).
 GUTTER_WIDTH = 9.25 * INCH
 Y_MAX = LANE_WIDTH / 2 + GUTTER_WIDTH / 2
-#: Largest angle of the ball's path to the lane axis over the deck (deg): launch 3 deg
-#: (shot.BOUNDS) plus the entry angle of the strongest hook measured (6.4 deg at -30 rad/s).
+#: Largest angle of the ball's path to the lane axis over the deck (deg): the 5 m delivery's 3 deg
+#: (deck.BOUNDS) plus the entry angle of the strongest hook measured (6.4 deg at -30 rad/s).
 THETA_MAX = 3.0 + 6.4
 #: Pins within this distance of the ball's path are touched (ball radius + pin radius).
 REACH = BALL_RADIUS + PIN_RADIUS

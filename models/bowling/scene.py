@@ -2,11 +2,11 @@
 
 Axes: x down the lane, y to the bowler's left, z up; the lane surface is z = 0 and
 the head pin's spot is x = y = 0. Only the last part of the lane is simulated: the
-ball is launched :data:`LAUNCH_X` before the head pin, on the end of the oil.
+deck half's ball starts :data:`BALL_START_X` before the head pin, on the end of the oil.
 
 * **lane** (USBC): 41.5 in wide (1.0541 m). Friction zones, one box each
   (``priority = 1`` so the zone's friction, not the ball's, rules the contact):
-  oil 0.04 from the launch point to :data:`OIL_END_X`, dry back end 0.2 from there
+  oil 0.04 from where the ball starts to :data:`OIL_END_X`, dry back end 0.2 from there
   to the deck, pin deck 0.2 to the pit edge (34 3/16 in behind the head pin spot).
   A ball sliding on oil barely hooks (mu g = 0.4 m/s^2 sideways); on the back end its
   side spin turns into sideways roll (the skid-hook-roll of a real lane).
@@ -19,7 +19,7 @@ ball is launched :data:`LAUNCH_X` before the head pin, on the end of the oil.
   sphere (radius of gyration 2.69 in, inside USBC's 2.43 .. 2.80 in), a free body ``ball``.
 * **gutters**: 9.25 in wide, 1.875 in deep, concave (an arc of 6 tilted boxes) along
   the lane and beside the deck; **kickbacks** and lane dividers: walls 1 m tall from
-  the launch point to the back of the pit; **pit**: floor 0.25 m below the lane,
+  where the ball starts to the back of the pit; **pit**: floor 0.25 m below the lane,
   0.9 m long, back cushion; a **floor** plane under everything (catches strays).
 
 Contacts: ball and pins ``solref = (0.008, 0.2)``: the calibration note measured
@@ -28,11 +28,13 @@ is 8 steps of 1 ms (shorter gains energy). Static surfaces ``solref = (0.008, 1)
 (critically damped: a ball does not bounce on the lane). Friction: ball-pin and
 pin-pin 0.12 (an assumed value for plastic-coated maple on a resin ball; not
 calibrated), sliding only (condim 3). Sleeping is on (bodies at rest cost almost
-nothing); a launch is therefore run from a freshly reset ``MjData`` (see :mod:`.shot`).
+nothing); a delivery is therefore thrown from a freshly reset ``MjData`` (see :mod:`.deck.delivery`).
 
 Compute only: functions return a spec, a model or XML text.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -54,8 +56,8 @@ DECK_FRONT_X = -0.3
 #: Where the oil ends and the dry back end starts (x, m). A real pattern is ~40 ft of
 #: the 60 ft lane; we keep its last 2 m and the 3 m dry back end before the pins.
 OIL_END_X = -3.0
-#: Where the ball starts (x of its centre, m) and where the lane box starts.
-LAUNCH_X = -5.0
+#: Where the deck half's ball starts (x of its centre, m) and where its lane box starts.
+BALL_START_X = -5.0
 LANE_START_X = -5.5
 #: Friction coefficients: oil, dry back end, deck (sliding; literature 0.04 / 0.2).
 MU_OIL = 0.04
@@ -107,13 +109,42 @@ def pin_names() -> list[str]:
     return [f"pin{n}" for n in PIN_NUMBERS]
 
 
-def build_spec():
-    """An ``mujoco.MjSpec`` of the scene with ball and pins at rest; keyframe ``rack``."""
+@dataclass(frozen=True)
+class LaneLayout:
+    """The full lane from the foul line, as the lane half lays it out (:mod:`.lane.scene`): what
+    :func:`build_spec` puts in place of the deck half's 5 m of lane.
+
+    ``start_x``: where the lane, its gutters and its walls start (m); ``cells``: friction boxes
+    ``(name, pos, size, rgba, mu)`` in order (the oil pattern's cells, then the dry back end to
+    the deck); ``marks``: visual boxes ``(name, pos, size)`` (the foul line, the arrows);
+    ``camera_x``: the ``behind`` camera's x; ``center``, ``extent``: the model's statistics;
+    the ball's start ``ball_pos``, and its ``ball_mass`` (kg), principal ``ball_inertia``
+    (kg m^2) and ``ball_iquat`` (its inertia axes in the body frame)."""
+
+    start_x: float
+    cells: tuple
+    marks: tuple
+    camera_x: float
+    center: tuple
+    extent: float
+    ball_pos: tuple
+    ball_mass: float
+    ball_inertia: tuple
+    ball_iquat: tuple
+
+
+def build_spec(lane: LaneLayout | None = None, *, pins: bool = True):
+    """An ``mujoco.MjSpec`` of the scene, ball and pins at rest: the one path that builds a
+    bowling scene. Without ``lane``, the deck half's: the last 5.5 m of lane (oil, dry back end)
+    before the deck. With ``lane``, the full lane of that layout (the lane half's, from the foul
+    line: its friction cells replace the 5 m zones, gutters and walls run from its start, its
+    marks, camera, statistics and ball's inertia). ``pins=False`` leaves the pin bodies out
+    (the lane half's ball-alone run)."""
     import mujoco
 
     G = mujoco.mjtGeom
     spec = mujoco.MjSpec()
-    spec.modelname = "nbst_bowling"
+    spec.modelname = "nbst_bowling" if lane is None else "nbst_bowling_lane"
     spec.option.timestep = TIMESTEP
     spec.option.gravity = [0.0, 0.0, -9.81]
     spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
@@ -121,12 +152,14 @@ def build_spec():
     spec.compiler.inertiafromgeom = int(mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_AUTO)
     spec.visual.global_.offwidth = 1280
     spec.visual.global_.offheight = 720
-    spec.stat.center = [-1.0, 0.0, 0.2]
-    spec.stat.extent = 3.0
+    spec.stat.center = [-1.0, 0.0, 0.2] if lane is None else list(lane.center)
+    spec.stat.extent = 3.0 if lane is None else lane.extent
+    start = LANE_START_X if lane is None else lane.start_x
+    behind = BALL_START_X - 1.5 if lane is None else lane.camera_x
     wb = spec.worldbody
     wb.add_light(name="sun", pos=[-1.0, 0.0, 4.0], dir=[0.2, 0.0, -1.0],
                  type=int(mujoco.mjtLightType.mjLIGHT_DIRECTIONAL), castshadow=0)
-    wb.add_camera(name="behind", pos=[LAUNCH_X - 1.5, 0.0, 0.9], quat=_look_quat(0.33), fovy=35.0)
+    wb.add_camera(name="behind", pos=[behind, 0.0, 0.9], quat=_look_quat(0.33), fovy=35.0)
     wb.add_camera(name="overhead", pos=[-0.2, 0.0, 3.0], quat=_look_quat(np.pi / 2), fovy=45.0)
 
     half_w = LANE_WIDTH / 2
@@ -141,6 +174,8 @@ def build_spec():
              ("backend", OIL_END_X, DECK_FRONT_X, MU_DRY, LANE_RGBA),
              ("deck", DECK_FRONT_X, PIT_EDGE_X, MU_DECK, DECK_RGBA))
     for name, x0, x1, mu, rgba in zones:
+        if lane is not None and name != "deck":
+            continue  # the lane's own cells replace these (after the pit, below)
         g = wb.add_geom(name=f"lane_{name}", type=G.mjGEOM_BOX, pos=[(x0 + x1) / 2, 0, -slab],
                         size=[(x1 - x0) / 2, half_w, slab], rgba=rgba)
         _static(g, mu)
@@ -149,7 +184,7 @@ def build_spec():
     chord = GUTTER_WIDTH
     R = (chord**2 / 4 + GUTTER_DEPTH**2) / (2 * GUTTER_DEPTH)
     phi = np.arcsin(chord / 2 / R)
-    gx0, gx1 = LANE_START_X, PIT_EDGE_X
+    gx0, gx1 = start, PIT_EDGE_X
     for side, sgn in (("left", 1.0), ("right", -1.0)):
         yc = sgn * (half_w + chord / 2)
         zc = R - GUTTER_DEPTH
@@ -166,11 +201,11 @@ def build_spec():
                             quat=[np.cos(ang / 2), np.sin(ang / 2), 0.0, 0.0],
                             size=[(gx1 - gx0) / 2, seg / 2 + 1e-3, GUTTER_SHELL], rgba=GUTTER_RGBA)
             _static(g, MU_DRY)
-        # divider / kickback: a tall wall outside the gutter, launch point to the back of the pit
+        # divider / kickback: a tall wall outside the gutter, the lane's start to the back of the pit
         g = wb.add_geom(name=f"wall_{side}", type=G.mjGEOM_BOX,
-                        pos=[(LANE_START_X + x_end) / 2, sgn * (outer + WALL_THICKNESS / 2),
+                        pos=[(start + x_end) / 2, sgn * (outer + WALL_THICKNESS / 2),
                              WALL_HEIGHT / 2 - PIT_DEPTH],
-                        size=[(x_end - LANE_START_X) / 2, WALL_THICKNESS / 2, WALL_HEIGHT / 2 + PIT_DEPTH / 2],
+                        size=[(x_end - start) / 2, WALL_THICKNESS / 2, WALL_HEIGHT / 2 + PIT_DEPTH / 2],
                         rgba=WALL_RGBA)
         _static(g, MU_DRY)
     g = wb.add_geom(name="pit_floor", type=G.mjGEOM_BOX, pos=[(PIT_EDGE_X + x_end) / 2, 0, -PIT_DEPTH - slab],
@@ -180,6 +215,14 @@ def build_spec():
                     pos=[x_end + WALL_THICKNESS / 2, 0, WALL_HEIGHT / 2 - PIT_DEPTH],
                     size=[WALL_THICKNESS / 2, outer + WALL_THICKNESS, WALL_HEIGHT / 2 + PIT_DEPTH / 2], rgba=WALL_RGBA)
     _static(g, MU_DRY)
+    if lane is not None:
+        for name, pos, size, rgba, mu in lane.cells:
+            g = wb.add_geom(name=name, type=G.mjGEOM_BOX, pos=list(pos), size=list(size), rgba=rgba)
+            _static(g, mu)
+        for name, pos, size in lane.marks:  # visual only
+            g = wb.add_geom(name=name, type=G.mjGEOM_BOX, pos=list(pos), size=list(size),
+                            rgba=(0.15, 0.15, 0.2, 1.0), group=1)
+            g.contype = g.conaffinity = 0
 
     geo = pinmod.geometry()
     piece_names = []
@@ -194,6 +237,8 @@ def build_spec():
     vis.userface = geo.visual_faces.ravel().tolist()
 
     for n, (x, y) in zip(PIN_NUMBERS, pin_spots()):
+        if not pins:
+            break
         body = wb.add_body(name=f"pin{n}", pos=[float(x), float(y), 0.0])
         body.add_freejoint(name=f"pin{n}_free")
         body.explicitinertial = True
@@ -206,10 +251,17 @@ def build_spec():
         v = body.add_geom(name=f"pin{n}_visual", type=G.mjGEOM_MESH, meshname="pin_visual", rgba=PIN_RGBA, group=1)
         v.contype = v.conaffinity = 0
 
-    ball = wb.add_body(name="ball", pos=[LAUNCH_X, 0.0, BALL_RADIUS])
+    ball = wb.add_body(name="ball", pos=[BALL_START_X, 0.0, BALL_RADIUS] if lane is None else list(lane.ball_pos))
     ball.add_freejoint(name="ball_free")
-    g = ball.add_geom(name="ball", type=G.mjGEOM_SPHERE, size=[BALL_RADIUS, 0, 0], mass=BALL_MASS, rgba=BALL_RGBA)
+    g = ball.add_geom(name="ball", type=G.mjGEOM_SPHERE, size=[BALL_RADIUS, 0, 0],
+                      mass=BALL_MASS if lane is None else lane.ball_mass, rgba=BALL_RGBA)
     _body_contact(g)
+    if lane is not None:  # the ball maker's inertia: explicit, its axes turned by iquat
+        ball.explicitinertial = True
+        ball.mass = lane.ball_mass
+        ball.ipos = [0.0, 0.0, 0.0]
+        ball.inertia = list(lane.ball_inertia)
+        ball.iquat = list(lane.ball_iquat)
     return spec
 
 

@@ -39,10 +39,10 @@ def register(sub) -> None:
                                    "solve`, rendered in 3D alone, docs/render.md)")
     p.add_argument("solution", nargs="?",
                    help="path to a solution JSON file (e.g. from `nbst solve`); omit it when PROBLEM is a bowling "
-                        "shot file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")
+                        "5 m throw file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")
     p.add_argument("-o", "--output", required=True, metavar="PATH", help="output file: .mp4, .gif, or .png with --still")
     p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
-                   help="bowling shots: behind the ball, overhead, or both side by side (default both); "
+                   help="5 m bowling throws: behind the ball, overhead, or both side by side (default both); "
                         "crash files: overhead (default), behind the --follow vehicle, or both")
     p.add_argument("--follow", default=None, metavar="NAME",
                    help="crash files only: a chase camera behind vehicle NAME, beside the overhead view")
@@ -68,7 +68,7 @@ def register(sub) -> None:
                         "(MuJoCo drawn as white rings over the exact disks, numbered with --labels; the readout "
                         "counts both)")
     p.add_argument("--still", type=STILL, default=None, metavar="T",
-                   help="write only the frame at time T (seconds, in [0, t_final]; for a bowling shot in [0, its "
+                   help="write only the frame at time T (seconds, in [0, t_final]; for a bowling throw in [0, its "
                         f"duration]) to a .png [{STILL.limits}]")
     p.add_argument("--max-frames", type=MAX_FRAMES, default=None, metavar="N",
                    help=with_limits("refuse a video of more than N frames (default 108,000: 30 minutes at 60 fps)",
@@ -135,7 +135,7 @@ def cmd_render(args) -> int:
     from nbst.problem import load_problem
     from nbst.solution import load_solution
 
-    from nbst.render.bowling import is_shot_file
+    from nbst.render.bowling import is_throw_file
     from nbst.render.gl import RenderError
 
     from nbst.render.crash import crash_kind
@@ -150,16 +150,14 @@ def cmd_render(args) -> int:
                               f"{args.problem} -o crash.json`), then render the crash file")
     if args.follow is not None:
         return _err("render", "--follow applies to crash files only (from `nbst crash solve`)")
-    if is_shot_file(args.problem):  # sniffs the first bytes only; the shot loader reads it, capped
-        from nbst.render.bowling import cmd_render_shot
-
-        return cmd_render_shot(args)  # disk-only flags (--trails, --view, ...) are an error there
+    if is_throw_file(args.problem):  # sniffs the first bytes only; the throw loader reads it, capped
+        return cmd_render_throw(args)  # disk-only flags (--trails, --view, ...) are an error there
     args.view, args.source = args.view or "2d", args.source or "analytic"
     args.speed = 1.0 if args.speed is None else args.speed
     if args.solution is None:
-        return _err("render", "give PROBLEM and SOLUTION (or one bowling shot file from `nbst bowl solve`)")
+        return _err("render", "give PROBLEM and SOLUTION (or one 5 m bowling throw file from `nbst bowl solve`)")
     if args.camera is not None:
-        return _err("render", "--camera applies to bowling shot files only")
+        return _err("render", "--camera applies to 5 m bowling throw files only")
 
     out = Path(args.output)
     ext = out.suffix.lower()
@@ -311,12 +309,12 @@ def mujoco_positions(problem, velocities, times):
 
 
 def _not_bowling(args) -> int | None:
-    """Exit 2 with one line when PROBLEM is a bowling shot or atlas file (not a disk problem)."""
+    """Exit 2 with one line when PROBLEM is a bowling throw or atlas file (not a disk problem)."""
     from nbst.render.bowling import bowling_kind
 
     kind = bowling_kind(args.problem)
     if kind:
-        how = (f"draw it with `nbst render {args.problem} -o shot.mp4`" if kind == "shot" else
+        how = (f"draw it with `nbst render {args.problem} -o throw.mp4`" if kind == "throw" else
                f"`nbst bowl atlas --from {args.problem} --out-dir DIR` draws it as DIR/summary.png")
         return _err("plot", f"{args.problem}: this is a bowling {kind} file, not a disk problem; {how} "
                             f"(docs/bowling.md)")
@@ -365,4 +363,105 @@ def _save(fig, args, save_figure) -> int:
     if not getattr(args, "quiet", False):
         kind = f"PNG, {args.dpi} dpi" if ext == ".png" else ext[1:].upper()
         print(f"nbst plot: wrote {args.output} ({kind})", file=sys.stderr)
+    return 0
+
+
+# --------------------------------------------------------------------------- bowling (H2's)
+
+
+def _check_throw_flags(args, duration: float | None = None) -> str | None:
+    """The first problem with ``nbst render THROW.json``'s flags (a 5 m throw file), as one line, or None."""
+    from nbst.render.bowling import DISK_ONLY_FLAGS, FPS_MAX
+
+    given = [flag for attr, default, flag in DISK_ONLY_FLAGS
+             if getattr(args, attr, default) not in (default, None, False)]
+    if given:
+        return (f"{', '.join(given)} draw{'s' if len(given) == 1 else ''} disk problems only; a 5 m throw file "
+                f"takes -o, --still, --camera, --size, --fps, --hold, --max-frames and -q")
+    fps = getattr(args, "fps", None)
+    if fps is not None and not (0 < fps <= FPS_MAX):
+        return f"--fps {fps:g}: must be in (0, {FPS_MAX:g}] frames per second"
+    still = getattr(args, "still", None)
+    if still is not None and not (0 <= still <= (60.0 if duration is None else duration)):
+        if duration is None:
+            return f"--still {still:g}: must lie in [0, the throw's duration] seconds"
+        return f"--still {still:g}: must lie in [0, {duration:g}] seconds (the throw's duration)"
+    hold = getattr(args, "hold", None)
+    if hold is not None and not (0 <= hold <= 60):
+        return f"--hold {hold:g}: must be in [0, 60] seconds"
+    mf = getattr(args, "max_frames", None)
+    if mf is not None and mf < 1:
+        return f"--max-frames {mf}: must be >= 1"
+    return None
+
+
+def cmd_render_throw(args) -> int:
+    """``nbst render THROW.json -o OUT [--still T] [--camera C] [--size WxH] [--fps F] [--hold S] [-q]``
+    (``cmd_render`` dispatches here when its first argument is a 5 m throw file; the recording and
+    the frames are :mod:`nbst.render.bowling`'s)."""
+    import sys
+
+    from nbst.domain import plain
+    from nbst.models.bowling.deck import throwfile
+    from nbst.outputs import prepare_output
+
+    from nbst.render import style
+    from nbst.render.bowling import frame_times, load_motion, render_motion
+    from nbst.render.gl import RenderError
+
+    def err(msg) -> int:
+        print(f"nbst render: error: {plain(msg)}", file=sys.stderr)
+        return 2
+
+    out = str(args.output)
+    still = getattr(args, "still", None)
+    want = (".png",) if still is not None else (".mp4", ".gif")
+    if not out.lower().endswith(want):
+        return err(f"-o {out}: use a {' or '.join(want)} file"
+                   f"{' with --still' if still is not None else ' (or --still T for a .png)'}")
+    bad = _check_throw_flags(args)  # before any work; --still is checked again against the throw's duration
+    if bad:
+        return err(bad)
+    size = getattr(args, "size", None)
+    if isinstance(size, str):
+        try:
+            w, h = (int(v) for v in size.lower().split("x"))
+        except ValueError:
+            return err(f"--size {size}: expected WxH, e.g. 1280x720")
+        if not (16 <= w <= 8192 and 16 <= h <= 8192):
+            return err(f"--size {size}: width and height must be 16..8192 pixels")
+        if out.lower().endswith(".mp4") and (w % 2 or h % 2):
+            return err(f"--size {size}: H.264 (yuv420p) needs an even width and height")
+        size = (w, h)
+    try:
+        throw, motion = load_motion(args.problem)
+    except throwfile.ThrowFileError as e:
+        return err(str(e))
+    bad = _check_throw_flags(args, float(motion.times[-1]))
+    if bad:
+        return err(bad)
+    fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
+    hold = getattr(args, "hold", None)
+    times = frame_times(motion, fps, hold=1.0 if hold is None else float(hold))
+    from nbst.render.video import MAX_FRAMES
+
+    limit = getattr(args, "max_frames", None) or MAX_FRAMES
+    if still is None and len(times) > limit:
+        return err(f"{len(times):,} frames at --fps {fps:g}; at most {limit:,} (--max-frames)")
+    prepare_output(out, inputs=(args.problem,))
+    bar = None
+    if not getattr(args, "quiet", False) and still is None:
+        from nbst.progress import progress_bar
+
+        bar = progress_bar(total=len(times), unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
+    try:
+        n = render_motion(throw, motion, out, still=still, camera=getattr(args, "camera", None) or "both",
+                          size=size, times=times, fps=fps, progress=bar)
+    except RenderError as e:
+        return err(str(e))
+    finally:
+        if bar is not None:
+            bar.close()
+    if not getattr(args, "quiet", False):
+        print(f"nbst render: wrote {out} ({n} frame{'s' if n != 1 else ''})", file=sys.stderr)
     return 0

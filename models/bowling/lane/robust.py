@@ -62,7 +62,8 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from nbst.models.bowling import frame, lane, noise as noise_mod
+from nbst.models.bowling import lane
+from nbst.models.bowling.lane import frame, noise as noise_mod
 from nbst.models.mjsearch import robust as _robust
 from nbst.models.mjsearch.robust import (ALONG, GAUSS, LADDER_TRIES, NARROW, SCREEN_DIV, SCREEN_MAX,  # noqa: F401
                                          SCREEN_MIN, SECOND_RUNG, STEP0, STEP_MAX, STEP_MIN, WIDEN, Interrupted)

@@ -28,12 +28,13 @@ A **throw atlas** is ``{"format": "nbst-bowling-throw-atlas", "version": 1, "oil
 (if any) under the atlas's noise, no two with the same pins standing and down;
 :func:`lookup` finds the throw of a down set on a full rack.
 
-Both come in through the gate of :mod:`.shotfile` (a regular file, checked by ``stat``
-before it is opened; nbst's core JSON reader with its size, depth and number caps), then
+Both come in through the gate of :mod:`nbst.models.bowling.files` (a regular file, checked by
+``stat`` before it is opened; nbst's core JSON reader with its size, depth and number caps; no
+integer too large for a float), then
 :func:`check_throw` / :func:`check_atlas` check every field: one
 :class:`ThrowFileError` line naming the file and the field (``throws[3].ball.rg``). Keys
-beyond the schema are ignored, as in shot files. The 5 m shot files of :mod:`.shotfile` are
-a different format.
+beyond the schema are ignored, as in 5 m throw files. The 5 m throw files of
+:mod:`nbst.models.bowling.deck.throwfile` are a different format.
 
 Compute apart from I/O: :func:`throw_dict`, :func:`check_throw`, :func:`replay` take values;
 :func:`load`, :func:`load_atlas` and :func:`replay_file` read files; nothing here writes.
@@ -41,11 +42,10 @@ Compute apart from I/O: :func:`throw_dict`, :func:`check_throw`, :func:`replay` 
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import asdict, is_dataclass
 
-from nbst.models.bowling import frame, lane, scene, shotfile
-from nbst.models.bowling import noise as _noise
+from nbst.models.bowling import files, lane, scene
+from nbst.models.bowling.lane import frame, noise as _noise
 
 FORMAT = "nbst-bowling-throw"
 ATLAS_FORMAT = "nbst-bowling-throw-atlas"
@@ -63,9 +63,9 @@ SECONDS_MAX = 120.0
 #: Largest seed (numpy's SeedSequence and nbst's --seed take any seed up to this).
 SEED_MAX = 2**63 - 1
 
-ThrowFileError = shotfile.ShotFileError
+ThrowFileError = files.BowlingFileError
 """A throw or throw-atlas file that cannot be read: one line naming the file and the field
-(the shot files' error: one ``except`` catches both)."""
+(every bowling file's error: one ``except`` catches them all)."""
 
 BALL_KEYS = tuple(asdict(lane.Ball()))
 DELIVERY_KEYS = tuple(asdict(lane.Delivery()))
@@ -76,7 +76,7 @@ THROW_KEYS = ("format", "version", "oil", "ball", "delivery", "standing", "reque
 ATLAS_KEYS = ("format", "version", "oil", "ball", "noise", "throws")
 FULL_RACK = list(scene.PIN_NUMBERS)
 
-_fail = shotfile._fail
+_fail = files.fail
 
 
 # --------------------------------------------------------------------------- building
@@ -357,7 +357,7 @@ def check_throw(d, src, pre: str = "") -> dict:
     for k in ("version", "oil", "ball", "delivery", "standing", "outcome"):
         if k not in d:
             _fail(src, pre + k, "missing")
-    bad = shotfile._non_finite(d, pre.rstrip("."))
+    bad = files.non_finite(d, pre.rstrip("."))
     if bad:
         _fail(src, bad[0], f"must be a finite number, got {bad[1]}")
     if d["version"] != VERSION or isinstance(d["version"], bool):
@@ -411,7 +411,7 @@ def check_atlas(a, src) -> dict:
             _fail(src, k, "missing")
     if a["version"] != VERSION or isinstance(a["version"], bool):
         _fail(src, "version", f"this nbst reads version {VERSION}, got {json.dumps(a['version'])[:40]}")
-    bad = shotfile._non_finite({k: a[k] for k in ("ball", "noise")}, "")
+    bad = files.non_finite({k: a[k] for k in ("ball", "noise")}, "")
     if bad:
         _fail(src, bad[0], f"must be a finite number, got {bad[1]}")
     check_oil(a["oil"], src)
@@ -447,14 +447,14 @@ def is_throw(doc) -> bool:
 
 
 def load(path) -> dict:
-    """Read (the shot-file gate: a regular file, stat first, size and depth caps) and check a
+    """Read (the bowling files' gate: a regular file, stat first, size and depth caps) and check a
     throw file; ThrowFileError naming the file and the field."""
-    return check_throw(shotfile.read_doc(path), path)
+    return check_throw(files.read_doc(path), path)
 
 
 def load_atlas(path) -> dict:
     """Read and check a throw atlas (:func:`check_atlas`); ThrowFileError naming the file and field."""
-    return check_atlas(shotfile.read_doc(path), path)
+    return check_atlas(files.read_doc(path), path)
 
 
 def lookup(atlas: dict, down) -> dict | None:
@@ -478,11 +478,11 @@ def replay(d: dict, *, model=None) -> frame.FrameResult:
 def replay_file(path) -> tuple[dict, frame.FrameResult, bool]:
     """(throw dict, the replayed frame, whether its pins down are the file's) of a throw file.
     MuJoCo's warnings (a diverging state) become a ThrowFileError naming the file."""
-    from nbst.models.bowling import shot
+    from nbst.errors import MujocoError
 
     d = load(path)
     try:
         r = replay(d)
-    except shot.MujocoError as e:
+    except MujocoError as e:
         raise ThrowFileError(f"{path}: delivery: {e}") from None
     return d, r, r.down == sorted(d["outcome"]["down"])

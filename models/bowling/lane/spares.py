@@ -38,7 +38,8 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from nbst.models.bowling import frame, lane, noise, robust, scene
+from nbst.models.bowling import lane, scene
+from nbst.models.bowling.lane import frame, noise, robust
 
 #: The strike line: the typical release over the 10 board at the arrows, 1.5 deg out (lane.py).
 STRIKE = lane.Delivery(board=10.0, at="arrows", angle=1.5)

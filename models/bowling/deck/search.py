@@ -1,33 +1,33 @@
-"""Search the launch space for a requested set of pins down.
+"""Search the delivery space for a requested set of pins down.
 
-The paper's crossover needs several velocity vectors; a bowling shot has one, so the
+The paper's crossover needs several velocity vectors; a bowling delivery is one, so the
 signature (which pins fell) guides the search instead. The search is the rollout room's
-(:func:`nbst.models.mjsearch.restarts.search`) on the 5 m launches:
+(:func:`nbst.models.mjsearch.restarts.search`) on the 5 m deliveries:
 
-1. **explore**: ``explore`` launches drawn uniformly over :data:`shot.BOUNDS`
-   (from the seeded Generator); every launch enters an **archive keyed by subset**
-   (MAP-Elites style: the first launch that produced each subset is kept; the archive
+1. **explore**: ``explore`` deliveries drawn uniformly over :data:`.delivery.BOUNDS`
+   (from the seeded Generator); every delivery enters an **archive keyed by subset**
+   (MAP-Elites style: the first delivery that produced each subset is kept; the archive
    is also what ``nbst bowl atlas`` collects).
-2. **restarts**: CMA-ES (pycma) in the unit cube of launch space, started from the
-   **elite** (the lowest-cost launch seen) of the subset **nearest** the request and not
+2. **restarts**: CMA-ES (pycma) in the unit cube of delivery space, started from the
+   **elite** (the lowest-cost delivery seen) of the subset **nearest** the request and not
    used yet, step size :data:`SIGMA0`. Nearest = lowest elite cost (Hamming distance
    between the 10-bit masks plus the soft distance below), then discovery order; when
    every subset has been a start, the cycle begins again. A restart ends after
    :data:`STALL_GENERATIONS` generations without a nearer subset, and the next starts
-   from the next-nearest archived launch, after :data:`EXPLORE_BETWEEN` more uniform
-   launches; each restart's sigma alternates between
+   from the next-nearest archived delivery, after :data:`EXPLORE_BETWEEN` more uniform
+   deliveries; each restart's sigma alternates between
    :data:`SIGMA0` and a tenth of it (outcomes are chaotic: a near miss is often one
    millimetre away from a hit, or nowhere near).
-3. stop at the first launch whose subset is exactly the request, or at the budget.
+3. stop at the first delivery whose subset is exactly the request, or at the budget.
 
-Cost of a launch = Hamming(subset, request) (or, with ``distance="geometry"``,
+Cost of a delivery = Hamming(subset, request) (or, with ``distance="geometry"``,
 :func:`geometry_distance`) + :data:`SOFT_WEIGHT` x the soft distance
 (sum over pins of |min(tilt / 45 deg, 1) - wanted|, off-deck pins count as 1): the
-soft part only orders launches of equal Hamming distance, so CMA-ES sees pins that
+soft part only orders deliveries of equal Hamming distance, so CMA-ES sees pins that
 almost fell.
 
-Reproducible: the same seed gives the same shot for any number of jobs (batches do not
-depend on the jobs; launches are independent; pycma gets a seed drawn from the
+Reproducible: the same seed gives the same throw for any number of jobs (batches do not
+depend on the jobs; deliveries are independent; pycma gets a seed drawn from the
 Generator, and nothing else touches numpy's global random state in between).
 """
 from __future__ import annotations
@@ -36,16 +36,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nbst.models.bowling import geometry, shot
+from nbst.models.bowling import deck, geometry, pinfall, subsets
+
 from nbst.models.mjsearch import archive as _archive
 from nbst.models.mjsearch import restarts
 
-#: Uniform exploration launches before CMA-ES restarts (capped at a quarter of the budget).
+#: Uniform exploration deliveries before CMA-ES restarts (capped at a quarter of the budget).
 EXPLORE = restarts.EXPLORE
-#: Uniform launches after each restart (new subsets to restart from; a search never stops
+#: Uniform deliveries after each restart (new subsets to restart from; a search never stops
 #: exploring, so a subset that only random throws find is still found).
 EXPLORE_BETWEEN = restarts.EXPLORE_BETWEEN
-#: Launches run per batch (fixed, so that results do not depend on --jobs).
+#: Deliveries run per batch (fixed, so that results do not depend on --jobs).
 BATCH = _archive.BATCH
 #: CMA-ES: population, initial step (unit cube), generations without progress per restart.
 POPSIZE = restarts.POPSIZE
@@ -56,8 +57,8 @@ SOFT_WEIGHT = 0.05
 #: Gaussian steps of an atlas child, in the unit cube (per coordinate): ~0.4 mm, 4 mm, 42 mm
 #: sideways (the unit is 0.84 m of lateral range, 5 m/s of speed, 6 deg, 60 rad/s).
 SCALES = (0.0005, 0.005, 0.05)
-#: The 5 m launch space (:data:`shot.BOUNDS` as a box of the rollout room).
-SPACE = _archive.box_space(shot.LO, shot.HI, SCALES)
+#: The 5 m delivery space (:data:`.delivery.BOUNDS` as a box of the rollout room).
+SPACE = _archive.box_space(deck.LO, deck.HI, SCALES)
 
 
 @dataclass
@@ -72,10 +73,10 @@ class Progress:
 
 @dataclass
 class SearchResult:
-    """Best launch found for ``target`` (a 10-bit mask), and how the search went."""
+    """Best delivery found for ``target`` (a 10-bit mask), and how the search went."""
 
     target: int
-    launch: np.ndarray           # (4,) y, speed, angle, spin
+    delivery: np.ndarray         # (4,) y, speed, angle, spin
     mask: int
     hamming: int
     cost: float
@@ -84,21 +85,19 @@ class SearchResult:
     stopped: str                 # "found" | "budget" | "interrupted"
     seed: int
     wall_time: float
-    archive: dict = field(default_factory=dict)   # mask -> (4,) launch
+    archive: dict = field(default_factory=dict)   # mask -> (4,) delivery
 
 
-def to_unit(launch) -> np.ndarray:
-    return SPACE.to_unit(launch)
+def to_unit(delivery) -> np.ndarray:
+    return SPACE.to_unit(delivery)
 
 
 def from_unit(u) -> np.ndarray:
     return SPACE.from_unit(u)
 
 
-def hamming(a, b) -> np.ndarray:
-    """Number of pins whose state differs between masks a and b (broadcast)."""
-    x = np.bitwise_xor(np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64))
-    return np.array([int(v).bit_count() for v in np.ravel(x)]).reshape(np.shape(x))
+#: Pins whose state differs between two masks (the shared definition).
+hamming = subsets.hamming
 
 
 #: Geometry-weighted distance (``distance="geometry"``): an extra pin down that neighbours a
@@ -123,85 +122,82 @@ def geometry_distance(a, b) -> np.ndarray:
 
 def soft_distance(model, final_qpos, target: int) -> np.ndarray:
     """(B,) sum over pins of |min(tilt/45deg, 1) - wanted| (off-deck pins count as down)."""
-    adr = shot.pin_addresses(model)
-    p = np.asarray(final_qpos)[:, adr[:, None] + np.arange(7)]
-    qw, qx, qy, qz = p[..., 3], p[..., 4], p[..., 5], p[..., 6]
-    cos_t = np.clip(1.0 - 2.0 * (qx**2 + qy**2) / (qw**2 + qx**2 + qy**2 + qz**2), -1, 1)
+    cos_t = np.clip(pinfall.cos_tilt(pinfall.poses(model, final_qpos)), -1, 1)
     tilt = np.degrees(np.arccos(cos_t))
-    soft = np.minimum(tilt / shot.DOWN_TILT_DEG, 1.0)
-    down = shot.pins_down(model, final_qpos)
+    soft = np.minimum(tilt / pinfall.DOWN_TILT_DEG, 1.0)
+    down = pinfall.pins_down(model, final_qpos)
     soft = np.where(down, 1.0, soft)
     want = (target >> np.arange(10)) & 1
     return np.abs(soft - want).sum(axis=-1)
 
 
-def scorer(launcher: shot.Launcher, target: int, distance: str = "hamming"):
-    """``evaluate(launches) -> (masks, Hamming distances, costs)`` of a batch, for the room's search."""
+def scorer(runner: deck.Runner, target: int, distance: str = "hamming"):
+    """``evaluate(deliveries) -> (masks, Hamming distances, costs)`` of a batch, for the room's search."""
     if distance not in ("hamming", "geometry"):
         raise ValueError(f"distance must be hamming or geometry, got {distance!r}")
     dist = hamming if distance == "hamming" else geometry_distance
 
     def evaluate(chunk):
-        states = np.array([launcher.initial_state(*shot.initial_qpos_qvel(launcher.model, x)) for x in chunk])
-        qpos = launcher.final_qpos(launcher.run_states(states))
-        masks = shot.mask_of(shot.pins_down(launcher.model, qpos))
-        cost = dist(masks, target) + SOFT_WEIGHT * soft_distance(launcher.model, qpos, target)
+        states = np.array([runner.initial_state(*deck.initial_qpos_qvel(runner.model, x)) for x in chunk])
+        qpos = runner.final_qpos(runner.run_states(states))
+        masks = pinfall.mask_of(pinfall.pins_down(runner.model, qpos))
+        cost = dist(masks, target) + SOFT_WEIGHT * soft_distance(runner.model, qpos, target)
         return masks, hamming(masks, target), cost
 
     return evaluate, dist
 
 
 def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None = None,
-          launcher: shot.Launcher | None = None, callback=None, explore: int = EXPLORE,
+          runner: deck.Runner | None = None, callback=None, explore: int = EXPLORE,
           archive: dict | None = None, explore_between: int = EXPLORE_BETWEEN,
           distance: str = "hamming") -> SearchResult:
-    """Search for a launch that knocks down exactly the pins of ``target`` (a 10-bit mask).
+    """Search for a delivery that knocks down exactly the pins of ``target`` (a 10-bit mask).
 
-    Stops at the first exact hit or after ``max_rollouts`` launches; Ctrl-C
+    Stops at the first exact hit or after ``max_rollouts`` deliveries; Ctrl-C
     (KeyboardInterrupt) stops too, and the best so far is returned (``stopped``
-    "interrupted"). ``launcher``: reuse one (its jobs then apply). ``archive``: launches
-    already known by subset (mask -> (4,) launch; e.g. the atlas's), used as restart
+    "interrupted"). ``runner``: reuse one (its jobs then apply). ``archive``: deliveries
+    already known by subset (mask -> (4,) delivery; e.g. the atlas's), used as restart
     points; with ``explore=0`` the search starts from them directly. ``distance``: "hamming"
     or "geometry" (:func:`geometry_distance`) in the cost.
     """
     if not 0 < int(target) <= geometry.N_SUBSETS:
         raise ValueError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")
     target = int(target)
-    own = launcher is None
-    L = shot.Launcher(jobs=jobs) if own else launcher
+    own = runner is None
+    L = deck.Runner(jobs=jobs) if own else runner
     try:
         evaluate, dist = scorer(L, target, distance)
         cb = None if callback is None else (lambda p: callback(Progress(p.rollouts, p.best_distance,
                                                                         p.best_signature, p.signatures)))
         f = restarts.search(evaluate, SPACE, target, seed=seed, max_rollouts=max_rollouts, archive=archive,
-                            prior=lambda m: float(dist(m, target)) + SOFT_WEIGHT * 10, clip=shot.clamp,
+                            prior=lambda m: float(dist(m, target)) + SOFT_WEIGHT * 10, clip=deck.clamp,
                             callback=cb, explore=explore, explore_between=explore_between, batch=BATCH)
     finally:
         if own:
             L.close()
-    return SearchResult(target=target, launch=f.x, mask=f.signature, hamming=f.distance, cost=f.cost,
+    return SearchResult(target=target, delivery=f.x, mask=f.signature, hamming=f.distance, cost=f.cost,
                         rollouts=f.rollouts, restarts=f.restarts, stopped=f.stopped, seed=int(seed),
                         wall_time=f.wall_time, archive=f.archive)
 
 
-def robustness(launcher: shot.Launcher, launch, mask: int, *, lateral_max: float = 0.05,
+def robustness(runner: deck.Runner, delivery, mask: int, *, lateral_max: float = 0.05,
                speed_max: float = 0.5, steps: int = 10) -> dict:
     """Largest lateral (m) and speed (m/s) changes that keep ``mask``, by bisection.
 
-    A change d passes when the launches at -d, -d/2, +d/2 and +d all give ``mask``
+    A change d passes when the deliveries at -d, -d/2, +d/2 and +d all give ``mask``
     (4 rollouts). Bisection on [0, max] for ``steps`` rounds (outcomes are chaotic, so
     the answer is "these 4 probes keep it", not "every smaller change keeps it").
     """
-    launch = np.asarray(launch, dtype=float)
+    delivery = np.asarray(delivery, dtype=float)
     out = {}
     for key, col, hi in (("lateral_m", 0, lateral_max), ("speed_m_s", 1, speed_max)):
         lo_ok, hi_bad = 0.0, hi
         probes_run = 0
 
         def keeps(d):
-            xs = np.repeat(launch[None, :], 4, axis=0)
+            xs = np.repeat(delivery[None, :], 4, axis=0)
             xs[:, col] += np.array([-d, -d / 2, d / 2, d])
-            sig, _ = launcher.launch(xs)
+            sig, _ = runner.throw(xs)
             return bool(np.all(sig == mask))
 
         if keeps(hi):
@@ -229,24 +225,24 @@ LADDER_LATERAL_M = 0.05e-3 * 2.0 ** np.arange(11)
 LADDER_SPEED_M_S = 0.5e-3 * 2.0 ** np.arange(11)
 
 
-def robustness_ladder(launcher: shot.Launcher, launch, mask: int, *, lateral=LADDER_LATERAL_M,
+def robustness_ladder(runner: deck.Runner, delivery, mask: int, *, lateral=LADDER_LATERAL_M,
                       speed=LADDER_SPEED_M_S) -> dict:
     """Cheap robustness for the atlas: the largest rung d of a doubling ladder at which the
-    launches at -d and +d both keep ``mask``, by binary search over the rungs (4 checks of 2
-    rollouts for 11 rungs: 8 rollouts an axis, 16 a shot; resolution a factor of 2).
+    deliveries at -d and +d both keep ``mask``, by binary search over the rungs (4 checks of 2
+    rollouts for 11 rungs: 8 rollouts an axis, 16 a throw; resolution a factor of 2).
 
     0.0 means even the smallest rung fails. Outcomes are chaotic: "these probes keep it",
     not "every smaller change keeps it" (a rung that passes can sit above one that fails).
     """
-    launch = np.asarray(launch, dtype=float)
+    delivery = np.asarray(delivery, dtype=float)
     out = {}
     for key, col, rungs in (("lateral_m", 0, np.asarray(lateral, float)), ("speed_m_s", 1, np.asarray(speed, float))):
         lo, hi, runs = -1, len(rungs), 0   # rung lo passes (-1: none), rung hi fails (len: beyond the top)
         while hi - lo > 1:
             mid = (lo + hi) // 2
-            xs = np.repeat(launch[None, :], 2, axis=0)
+            xs = np.repeat(delivery[None, :], 2, axis=0)
             xs[:, col] += np.array([-rungs[mid], rungs[mid]])
-            sig, _ = launcher.launch(xs)
+            sig, _ = runner.throw(xs)
             runs += 2
             if np.all(sig == mask):
                 lo = mid

@@ -1,14 +1,14 @@
-"""The atlas from the foul line: one bowler's throw per subset of pins down, found by search,
+"""The atlas from the foul line: one bowler's delivery per subset of pins down, found by search,
 each with the probability of its subset under the release noise.
 
-* **Throw space**: a delivery of :mod:`.lane` in a bowler's units, over the ranges of
+* **Delivery space**: a delivery of :mod:`.lane` in a bowler's units, over the ranges of
   :data:`BOUNDS` (board at the foul line, launch angle, speed, rev rate, axis rotation, axis
   tilt), and the hand (a 7th coordinate: below 1/2 right, else left); the default ball and
   the atlas's oil pattern. A left-hander's lane is a right-hander's mirrored (:mod:`.lane`),
   so a left-handed throw reaches the mirror images of what right-handed throws reach.
 * **Search** (:func:`grow`): the 5 m atlas's MAP-Elites emitter (:func:`.atlas.emit`, with
   this space): :data:`.atlas.EXPLORE` uniform throws into an empty archive, then batches of
-  :data:`.search.BATCH` holding 2 uniform throws and children of archived elites, a child
+  :data:`._archive.BATCH` holding 2 uniform throws and children of archived elites, a child
   moved from its parent by a Gaussian step in the unit cube at one of :data:`SCALES`. Every
   throw is a settled USBC frame (:func:`.frame.run_frame`); its subset is the pins down.
   The first throw that gave a subset is its elite. A child keeps its parent's hand; uniform
@@ -39,7 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.models.bowling import atlas, frame, lane, noise, search, shot
+from nbst.models.bowling import lane, pinfall, subsets
+from nbst.models.bowling.lane import frame, noise
 from nbst.models.mjsearch import archive as _archive
 
 #: The oil pattern of the shipped atlas (the default ball), and the shipped atlas itself.
@@ -49,14 +50,14 @@ SHIPPED = Path(__file__).with_name("foul_atlas.json")
 ARCHIVE_FORMAT = "nbst-bowling-foul-archive"
 ARCHIVE_VERSION = 1
 
-#: The throw space (board at the foul line): the ranges a bowler throws.
+#: The delivery space (board at the foul line): the ranges a bowler throws.
 #: Boards 3-37 keep the ball's centre on the lane; -3..+4 deg covers crossing the lane both
 #: ways (+ is out toward board 1); 13-23 mph; up to 500 rpm (a power player); rotation
 #: 0 (end over end) to 90 deg (all side spin); tilt up to 30 deg.
 BOUNDS = {"board": (3.0, 37.0), "angle": (-3.0, 4.0), "mph": (13.0, 23.0), "rpm": (0.0, 500.0),
           "rotation": (0.0, 90.0), "tilt": (0.0, 30.0)}
 KEYS = tuple(BOUNDS)
-#: A point of the throw space: the values of KEYS, then the hand (0 right, 1 left).
+#: A point of the delivery space: the values of KEYS, then the hand (0 right, 1 left).
 DIM = len(KEYS) + 1
 LO = np.array([BOUNDS[k][0] for k in KEYS] + [0.0])
 HI = np.array([BOUNDS[k][1] for k in KEYS] + [1.0])
@@ -85,12 +86,12 @@ def hand_of(x) -> str:
 
 
 def delivery_of(x) -> lane.Delivery:
-    """The delivery at a point ``x`` of the throw space ((7,): :data:`KEYS`, then the hand)."""
+    """The delivery at a point ``x`` of the delivery space ((7,): :data:`KEYS`, then the hand)."""
     return lane.Delivery(hand=hand_of(x), at="foul", **{k: float(v) for k, v in zip(KEYS, x)})
 
 
 def point_of(d: lane.Delivery) -> np.ndarray:
-    """The point of the throw space of a delivery (its board carried to the foul line)."""
+    """The point of the delivery space of a delivery (its board carried to the foul line)."""
     d = replace(d, board=d.foul_board(), at="foul")
     return np.array([float(getattr(d, k)) for k in KEYS] + [1.0 if d.hand == "left" else 0.0])
 
@@ -103,11 +104,11 @@ def mirror(mask: int) -> int:
 def throw_masks(runner: frame.FrameRunner, X) -> tuple[list[int], list[frame.FrameResult]]:
     """The subsets (masks of pins down; 0 for a ball that leaves the lane) of throws ``X``."""
     results = runner.map([delivery_of(x) for x in X])
-    return [shot.mask_from_pins(r.down) for r in results], results
+    return [pinfall.mask_from_pins(r.down) for r in results], results
 
 
-def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed: int,
-         on_batch=None) -> atlas.Archive:
+def grow(runner: frame.FrameRunner, archive: subsets.Archive, *, budget: int, seed: int,
+         on_batch=None) -> subsets.Archive:
     """Spend ``budget`` frames growing ``archive`` (elites are (7,) points: :data:`KEYS`, hand)
     with the rollout room's MAP-Elites loop (:func:`nbst.models.mjsearch.archive.grow`); a
     child keeps its parent's hand. ``on_batch(archive, new_masks)`` after each batch
@@ -117,7 +118,7 @@ def grow(runner: frame.FrameRunner, archive: atlas.Archive, *, budget: int, seed
         X[kids, len(KEYS)] = [a.elite[int(p)][len(KEYS)] for p in parents[kids]]  # the parent's hand
 
     return _archive.grow(lambda X: throw_masks(runner, X)[0], archive, np.random.default_rng(seed), SPACE,
-                         budget=budget, explore=atlas.EXPLORE, batch=search.BATCH, weights=atlas.parent_weights,
+                         budget=budget, explore=_archive.EXPLORE, batch=_archive.BATCH, weights=subsets.parent_weights,
                          adopt=adopt, on_batch=on_batch)
 
 
@@ -133,18 +134,18 @@ def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int,
     results = runner.map(throws, on_done=on_done)
     out = {}
     for i, m in enumerate(masks):
-        out[m] = noise.estimate(results[i * n:(i + 1) * n], seed, nz, want=shot.pins_of(m))
+        out[m] = noise.estimate(results[i * n:(i + 1) * n], seed, nz, want=pinfall.pins_of(m))
     return (out, throws, results) if frames else out
 
 
-def harvest(archive: atlas.Archive, throws, results) -> list[int]:
+def harvest(archive: subsets.Archive, throws, results) -> list[int]:
     """Subsets that noisy throws (of :func:`probabilities`) knocked down and the archive lacks:
-    each joins with its throw as the elite, when that delivery lies inside the throw space's
+    each joins with its throw as the elite, when that delivery lies inside the delivery space's
     ranges (the noise may carry it out). The frames have run already: the archive's frame
     count is unchanged. Returns the new masks, in throw order."""
     new = []
     for d, r in zip(throws, results):
-        m = shot.mask_from_pins(r.down)
+        m = pinfall.mask_from_pins(r.down)
         if not m or m in archive.elite:
             continue
         x = point_of(d)
@@ -163,7 +164,7 @@ NEAREST = 8
 def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, seed: int,
          on_batch=None) -> tuple[np.ndarray | None, dict, int]:
     """A throw whose pins down are exactly ``target`` (a mask), from the archive ``elites``
-    ({mask: (7,) point}): batches of :data:`.search.BATCH` children of the :data:`NEAREST`
+    ({mask: (7,) point}): batches of :data:`._archive.BATCH` children of the :data:`NEAREST`
     subsets nearest the request (Hamming distance; nearer ones drawn more often: weight
     1 / (1 + distance)^2), each moved by a Gaussian step at one of :data:`SCALES`; every new
     subset seen joins the archive. Stops at the first exact hit or after ``budget`` frames.
@@ -175,10 +176,10 @@ def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, s
         return arch[target], arch, 0
     frames = 0
     while frames < budget:
-        n = min(search.BATCH, budget - frames)
+        n = min(_archive.BATCH, budget - frames)
         if arch:
             masks = np.array(sorted(arch), dtype=np.int64)
-            dist = search.hamming(target, masks)
+            dist = subsets.hamming(target, masks)
             order = np.argsort(dist, kind="stable")[:NEAREST]
             w = 1.0 / (1.0 + dist[order]) ** 2
             pick = order[rng.choice(len(order), size=n, p=w / w.sum())]
@@ -194,13 +195,13 @@ def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, s
             if m and m not in arch:
                 arch[m] = np.array(x, dtype=float)
         if on_batch is not None:
-            on_batch(frames, int(search.hamming(target, np.array(sorted(arch), dtype=np.int64)).min()) if arch else 10)
+            on_batch(frames, int(subsets.hamming(target, np.array(sorted(arch), dtype=np.int64)).min()) if arch else 10)
         if target in arch:
             return arch[target], arch, frames
     return None, arch, frames
 
 
-def archive_doc(a: atlas.Archive, seed: int) -> dict:
+def archive_doc(a: subsets.Archive, seed: int) -> dict:
     """The search's state as a JSON-able dict (elites as points of :data:`KEYS`)."""
     return {"format": ARCHIVE_FORMAT, "version": ARCHIVE_VERSION, "seed": int(seed), "keys": [*KEYS, "hand"],
             "rollouts": int(a.rollouts),
@@ -209,7 +210,7 @@ def archive_doc(a: atlas.Archive, seed: int) -> dict:
             "found_at": {str(m): int(a.found_at.get(m, -1)) for m in sorted(a.elite)}}
 
 
-def archive_from_doc(doc, src) -> atlas.Archive:
+def archive_from_doc(doc, src) -> subsets.Archive:
     """An archive from :func:`archive_doc`'s dict; ValueError (one line naming ``src`` and the
     field) on anything else: a mask outside 1..1023, a point that is not 6 finite numbers in
     :data:`BOUNDS`, counts that are not whole numbers >= -1."""
@@ -227,12 +228,12 @@ def archive_from_doc(doc, src) -> atlas.Archive:
     n = doc.get("rollouts")
     if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 10**9:
         fail("rollouts", "must be a whole number in [0, 1e9]")
-    a = atlas.Archive(rollouts=n)
+    a = subsets.Archive(rollouts=n)
     el = doc.get("elites")
-    if not isinstance(el, dict) or len(el) > atlas.N_SUBSETS:
+    if not isinstance(el, dict) or len(el) > subsets.N_SUBSETS:
         fail("elites", "must be an object of at most 1,023 subsets")
     for key, x in el.items():
-        if not key.isdigit() or not 1 <= int(key) <= atlas.N_SUBSETS:
+        if not key.isdigit() or not 1 <= int(key) <= subsets.N_SUBSETS:
             fail(f"elites.{key}", "a subset is a mask 1..1023")
         if (not isinstance(x, list) or len(x) != DIM
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in x)
@@ -248,7 +249,7 @@ def archive_from_doc(doc, src) -> atlas.Archive:
     return a
 
 
-def mirror_step(runner: frame.FrameRunner, archive: atlas.Archive) -> list[int]:
+def mirror_step(runner: frame.FrameRunner, archive: subsets.Archive) -> list[int]:
     """For each elite whose mirrored subset is not archived, its delivery with the other hand:
     one frame each, archived by its own outcome (parentless). Returns the new masks."""
     todo = [m for m in sorted(archive.elite) if mirror(m) not in archive.elite]

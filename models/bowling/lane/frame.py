@@ -1,7 +1,7 @@
 """A frame from the foul line: the delivery of :mod:`.lane` run into the pins until they come to
 rest, and the settled outcome counted as USBC counts pinfall.
 
-* **Scene**: :func:`.lane.build_spec` with the pins (one compiled model per oil pattern, ball,
+* **Scene**: :func:`nbst.models.bowling.lane.scene.lane_spec` with the pins (one compiled model per oil pattern, ball,
   timestep and oil friction, :func:`frame_model`). The delivery only sets the initial state:
   the ball's inertia axes are placed by turning the ball body (a sphere: its contact is the
   same in any orientation) instead of recompiling, so one model serves every throw of a
@@ -17,7 +17,7 @@ rest, and the settled outcome counted as USBC counts pinfall.
   the outcome: the check that the outcome is settled.
 * **Pinfall** (USBC Playing Rules 6a and 6b, 2012-13 rulebook, as quoted at
   ballreviews.com/miscellaneous/rules-question-300958; docs/bowling.md quotes them): a pin
-  is down when it is knocked down (its axis tilts past :data:`.shot.DOWN_TILT_DEG`), off the
+  is down when it is knocked down (its axis tilts past :data:`nbst.models.bowling.pinfall.DOWN_TILT_DEG`), off the
   lane surface (below the deck, past the pit edge, or over the gutter edge: lying in the
   gutter), or leaning on and touching the kickback or side partition (dead wood, rule
   6a.4): a pin in contact with ``wall_left``/``wall_right`` in the settled state. A ball that
@@ -34,7 +34,9 @@ from functools import lru_cache
 import numpy as np
 
 from nbst.errors import InputError
-from nbst.models.bowling import lane, scene, shot
+from nbst.errors import MujocoError
+from nbst.models.bowling import lane, pinfall, scene
+from nbst.models.mjsearch.runner import data_warnings, mujoco_warnings_raise
 from nbst.models.mjsearch.ladder import climb
 from nbst.models.mjsearch.pool import WorkerPool
 
@@ -85,7 +87,7 @@ class FrameResult:
 
     @property
     def mask(self) -> int:
-        return shot.mask_from_pins(self.down)
+        return pinfall.mask_from_pins(self.down)
 
     @property
     def strike(self) -> bool:
@@ -104,7 +106,7 @@ class FrameResult:
 
 @lru_cache(maxsize=16)
 def _compiled(oil, ball: lane.Ball, timestep: float, mu_oil: float):
-    m = lane.build_spec(oil, ball, lane.Delivery(), pins=True, mu_oil=mu_oil).compile()
+    m = lane.lane_spec(oil, ball, lane.Delivery(), pins=True, mu_oil=mu_oil).compile()
     m.opt.timestep = timestep
     return m
 
@@ -130,24 +132,24 @@ def _qmul(a, b) -> np.ndarray:
 
 
 def _qmat(q) -> np.ndarray:
-    return lane._quat_to_mat(np.asarray(q, dtype=float)[None])[0]
+    return lane.quat_to_mat(np.asarray(q, dtype=float)[None])[0]
 
 
 def initial_qpos_qvel(model, delivery: lane.Delivery, standing=None) -> tuple[np.ndarray, np.ndarray]:
     """(qpos, qvel) at release: the pins in ``standing`` (pin numbers; default all ten) on their
     spots, the others parked; the ball at the foul line as :func:`.lane.initial_state`, its body
-    turned so that its inertia axes are those :func:`.lane.build_spec` gives ``delivery``."""
+    turned so that its inertia axes are those :func:`nbst.models.bowling.lane.scene.layout` gives ``delivery``."""
     delivery = delivery.check()
     standing = set(scene.PIN_NUMBERS if standing is None else standing)
     qpos = np.array(model.qpos0, dtype=float)
     qvel = np.zeros(model.nv)
-    adr = shot.pin_addresses(model)
+    adr = pinfall.pin_addresses(model)
     for k, n in enumerate(scene.PIN_NUMBERS):
         if n not in standing:
             qpos[adr[k]:adr[k] + 7] = [PARK_X - PARK_STEP * k, 0.0, scene.FLOOR_Z, 1.0, 0.0, 0.0, 0.0]
     b = model.body("ball")
     q0 = np.array(model.body_iquat[b.id])  # the model's ball: laid out for the default delivery
-    qd = np.array(lane._quat_x_to(lane.pin_axis(delivery)))
+    qd = np.array(lane.quat_x_to(lane.pin_axis(delivery)))
     q = _qmul(qd, q0 * np.array([1.0, -1.0, -1.0, -1.0]))
     q /= np.linalg.norm(q)
     pos, v, w = lane.initial_state(delivery)
@@ -164,15 +166,9 @@ def settled_pinfall(model, data, in_play) -> tuple[list, list, list]:
     (its contacts as of the last step)."""
     import mujoco
 
-    qpos = np.asarray(data.qpos, dtype=float)
-    adr = shot.pin_addresses(model)
-    idx = adr[:, None] + np.arange(7)
-    p = qpos[idx]
-    qw, qx, qy, qz = p[:, 3], p[:, 4], p[:, 5], p[:, 6]
-    cos_tilt = 1.0 - 2.0 * (qx**2 + qy**2) / (qw**2 + qx**2 + qy**2 + qz**2)
-    tilted = cos_tilt < math.cos(math.radians(shot.DOWN_TILT_DEG))
-    x, y, z = p[:, 0], p[:, 1], p[:, 2]
-    off = (z < -shot.LEFT_DECK_DEPTH) | (x > scene.PIT_EDGE_X) | (np.abs(y) > scene.LANE_WIDTH / 2)
+    p = pinfall.poses(model, data.qpos)
+    tilted = pinfall.tilted(p)
+    off = pinfall.off_deck(p)
     walls = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, w) for w in PARTITIONS}
     pin_body = {model.body(f"pin{n}").id: n for n in scene.PIN_NUMBERS}
     leaning = set()
@@ -190,7 +186,7 @@ def settled_pinfall(model, data, in_play) -> tuple[list, list, list]:
 
 def _pin_moving(model, data, in_play_idx) -> bool:
     adr = [int(model.joint(f"pin{scene.PIN_NUMBERS[k]}_free").dofadr[0]) for k in in_play_idx]
-    qadr = shot.pin_addresses(model)
+    qadr = pinfall.pin_addresses(model)
     for k, a in zip(in_play_idx, adr):
         if data.qpos[qadr[k]] > scene.PIT_EDGE_X:  # in the pit: down for good
             continue
@@ -242,7 +238,7 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
 
     if record is not None:
         record(d)
-    with shot.mujoco_warnings_raise():
+    with mujoco_warnings_raise():
         while True:
             step(k)
             bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
@@ -272,9 +268,9 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
                 break
         if extra_s > 0:
             step(int(round(extra_s / h)))
-    bad = shot.data_warnings(d)
+    bad = data_warnings(d)
     if bad or not np.isfinite(d.qpos).all():
-        raise shot.MujocoError(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the frame")
+        raise MujocoError(f"MuJoCo warned: {', '.join(bad) or 'non-finite state'} during the frame")
     knocked, off_deck, partition = settled_pinfall(m, d, in_play)
     down = sorted(set(knocked) | set(off_deck) | set(partition)) if not left_lane else []
     return FrameResult(

@@ -32,7 +32,8 @@ import math
 from dataclasses import asdict, dataclass, replace
 
 
-from nbst.models.bowling import frame, lane
+from nbst.models.bowling import lane
+from nbst.models.bowling.lane import frame
 from nbst.models.mjsearch.probability import Z95, normal_draws, perturb, wilson  # noqa: F401 (re-exported)
 #: Ranges the draws are clipped to (a Delivery's own limits).
 CLIP = {"board": (1.0, 39.0), "angle": (-10.0, 10.0), "mph": (5.0, 30.0), "rpm": (0.0, 800.0),

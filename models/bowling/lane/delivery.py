@@ -1,0 +1,124 @@
+"""The lane half's delivery: what the bowler does, in a bowler's units, and the release it gives.
+
+* **Delivery** (:class:`Delivery`): hand, board at the foul line (or at the arrows), launch
+  angle (degrees from straight down the lane, + towards board 1: out towards the gutter on
+  the hand side, as a hook is thrown out to its breakpoint), speed (mph), rev rate (rpm),
+  axis rotation (0 = end over end, 90 = pure side spin about the travel direction) and axis
+  tilt (0 = a horizontal spin axis, 90 = spinning like a top). The ball's centre starts over
+  the foul line on the lane (no loft), with the spin vector ``omega = rpm * (cos(tilt)
+  (cos(rot) a_roll + sin(rot) a_side) + sin(tilt) a_up)``: ``a_roll`` the forward-roll axis,
+  ``a_side`` along the travel direction with the sign that hooks towards the pocket
+  (opposite the travel for a right-hander), ``a_up`` vertical with the PAP end tipped up.
+
+The ball's pin (low-RG) axis is placed :data:`PIN_TO_PAP_IN` inches of arc from the positive
+axis point (PAP, the hand-side end of the release's spin axis), towards the top of the ball:
+an assumed layout (:func:`pin_axis`).
+
+Pure numpy.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from nbst.models.bowling import scene
+from nbst.models.bowling.lane.units import ARROWS_FT, BOARD_WIDTH, FOUL_LINE_X, FT, MPH, LaneError, board_to_y, hand_sign
+
+__all__ = ["PIN_TO_PAP_IN", "Delivery", "spin_axes", "quat_x_to", "quat_to_mat", "pin_axis", "initial_state"]
+
+#: Assumed layout: the pin (low-RG axis) 4 1/2 in of arc from the PAP, towards the top of the ball.
+PIN_TO_PAP_IN = 4.5
+
+
+@dataclass(frozen=True)
+class Delivery:
+    """A delivery in a bowler's units (see the module docstring for every convention)."""
+
+    hand: str = "right"
+    board: float = 12.5
+    at: str = "foul"  # "foul": board at the foul line; "arrows": board where it crosses the arrows
+    angle: float = 1.5
+    mph: float = 17.0
+    rpm: float = 300.0
+    rotation: float = 45.0
+    tilt: float = 15.0
+
+    def check(self) -> Delivery:
+        hand_sign(self.hand)
+        if self.at not in ("foul", "arrows"):
+            raise LaneError(f"at: must be 'foul' or 'arrows', got {self.at!r}")
+        lim = {"board": (1.0, 39.0), "angle": (-10.0, 10.0), "mph": (5.0, 30.0), "rpm": (0.0, 800.0),
+               "rotation": (0.0, 90.0), "tilt": (0.0, 90.0)}
+        for k, (lo, hi) in lim.items():
+            v = getattr(self, k)
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or not lo <= v <= hi:
+                raise LaneError(f"{k}: must be a number in [{lo:g}, {hi:g}], got {v!r}")
+        if not 1.0 <= self.foul_board() <= 39.0:
+            raise LaneError(f"board: {self.board:g} at the arrows, {self.angle:g} deg out, is board "
+                            f"{self.foul_board():.1f} at the foul line: off the lane (1..39)")
+        return self
+
+    def foul_board(self) -> float:
+        """Board at the foul line (from the arrows: the straight line back, 15 ft)."""
+        if self.at == "foul":
+            return float(self.board)
+        return float(self.board + math.tan(math.radians(self.angle)) * ARROWS_FT * FT / BOARD_WIDTH)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def spin_axes(d: Delivery) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(travel direction, unit spin vector (right-hand rule), PAP direction) at release, world frame."""
+    s = hand_sign(d.hand)
+    a = math.radians(d.angle)
+    t = np.array([math.cos(a), -s * math.sin(a), 0.0])  # + angle: towards board 1
+    z = np.array([0.0, 0.0, 1.0])
+    a_roll = np.cross(z, t)  # forward roll: omega = z x v / R
+    a_side = -s * t  # a right-hander's side spin: about -t, which hooks to +y (the pocket)
+    a_up = -s * z  # so that the PAP end (-s * omega) tips up
+    rot, tilt = math.radians(d.rotation), math.radians(d.tilt)
+    w = math.cos(tilt) * (math.cos(rot) * a_roll + math.sin(rot) * a_side) + math.sin(tilt) * a_up
+    w /= np.linalg.norm(w)
+    pap = -s * w  # the hand-side end of the axis
+    return t, w, pap
+
+
+def quat_x_to(p: np.ndarray) -> list:
+    """Unit quaternion (w, x, y, z) rotating the x axis onto the unit vector ``p``."""
+    x = np.array([1.0, 0.0, 0.0])
+    c = float(np.dot(x, p))
+    if c < -1 + 1e-12:
+        return [0.0, 0.0, 0.0, 1.0]
+    v = np.cross(x, p)
+    q = np.array([1.0 + c, *v])
+    return list(q / np.linalg.norm(q))
+
+
+def pin_axis(d: Delivery) -> np.ndarray:
+    """The ball's pin (low-RG) axis at release: PIN_TO_PAP_IN of arc from the PAP, towards the top."""
+    _, w, pap = spin_axes(d)
+    z = np.array([0.0, 0.0, 1.0])
+    n = z - np.dot(z, w) * w
+    n = n / np.linalg.norm(n) if np.linalg.norm(n) > 1e-9 else np.cross(w, [0.0, 1.0, 0.0])
+    beta = PIN_TO_PAP_IN / (scene.BALL_RADIUS / scene.INCH)
+    return math.cos(beta) * pap + math.sin(beta) * n
+
+
+def initial_state(d: Delivery) -> tuple[np.ndarray, np.ndarray]:
+    """(position (3,), linear velocity (3,), angular velocity (3,) world frame) at the foul line."""
+    t, w, _ = spin_axes(d)
+    y = float(board_to_y(d.foul_board(), d.hand))
+    pos = np.array([FOUL_LINE_X, y, scene.BALL_RADIUS])
+    return pos, d.mph * MPH * t, d.rpm * 2 * math.pi / 60 * w
+
+
+def quat_to_mat(q: np.ndarray) -> np.ndarray:
+    """(n, 4) unit quaternions (w, x, y, z) -> (n, 3, 3) rotation matrices."""
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)

@@ -1,0 +1,497 @@
+"""``nbst bowl throw``, ``frame``, ``spares`` and ``pocket``: the lane half, deliveries from the foul
+line in a bowler's units (models/bowling/lane/), and the replay of a foul-line throw file.
+
+The delivery flags (hand, board at the foul line or the arrows, launch angle, mph, rpm, axis
+rotation and tilt) and the ball flags (weight, RG, differential, coverstock) are one vocabulary
+for every subcommand (:mod:`nbst.cli.bowl_args`). The work is the library's: the ball's phases
+(:mod:`nbst.models.bowling.lane.phases`), frames (:mod:`.frame`), noise, spares and the pocket
+map (:mod:`.spares`), throw files (:mod:`.throwfile`).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from nbst.cli.args import Bounded
+from nbst.cli.bowl_args import (ball_flags, ball_of, check_picture_args, delivery_flags, delivery_of, err, mc_flags,
+                                oil_flag, picture_flags, pin_list, pins_text, wants_picture)
+from nbst.parallel import default_jobs
+
+
+def register(bowl) -> None:
+    """The lane half's subcommands on ``nbst bowl``'s subparsers."""
+    register_throw(bowl)
+    register_frame(bowl)
+
+
+def register_throw(bowl) -> None:
+    """``nbst bowl throw``: one delivery from the foul line, its phases (models/bowling/lane/phases.py)."""
+    t = bowl.add_parser("throw", help="one delivery from the foul line down the full lane: skid, breakpoint, roll, "
+                                      "entry angle",
+                        description="Run one delivery in a bowler's units down the full 60 ft lane in MuJoCo "
+                                    "(the ball alone, h = 1 ms, until it reaches the head pin's line) and print its "
+                                    "phases: skid length, breakpoint (distance and board), roll point, entry angle, "
+                                    "board and speed at the pins. Boards as bowlers number them (board 1 at the "
+                                    "edge on the bowling hand's side). Conventions: docs/bowling.md.",
+                        epilog="Example: nbst bowl throw --hand right --board 10 --at arrows --angle 1.5 --mph 17 "
+                               "--rpm 300 --rotation 45 --tilt 15 --oil house")
+    delivery_flags(t)
+    oil_flag(t)
+    ball_flags(t)
+    t.add_argument("-o", "--output", default=None, metavar="THROW.json", help="also write the phases as JSON")
+    t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
+    picture_flags(t, "the throw's frame on all ten pins (as bowl frame runs it)")
+    t.set_defaults(func=cmd_throw)
+
+
+def register_frame(bowl) -> None:
+    """``nbst bowl frame``, ``spares`` and ``pocket``: frames from the foul line (models/bowling/frame.py)."""
+    f = bowl.add_parser("frame", help="one delivery from the foul line into the pins: the settled USBC pinfall",
+                        description="Throw one delivery (as bowl throw) down the full lane into the pins and run "
+                                    "MuJoCo until every pin rests (or 6 s after the ball reaches the head pin), then "
+                                    "count pinfall as USBC does: knocked down, off the deck, in the gutter, or "
+                                    "leaning on the kickback (dead wood). Options: the timestep ladder, a longer "
+                                    "run, and the probability of the outcome under release noise (docs/bowling.md).",
+                        epilog="Example: nbst bowl frame --board 10 --at arrows --angle 1.5 --timesteps --probability 40")
+    delivery_flags(f)
+    ball_flags(f)
+    f.add_argument("--leave", default=None, metavar="PINS",
+                   help="pins standing before the throw, e.g. 10 or 2,4,5,8 (default: a full rack)")
+    f.add_argument("--timesteps", action="store_true", help="also run it at h = 0.5 and 0.25 ms (the ladder)")
+    f.add_argument("--longer", type=Bounded("longer", 0, 60, unit="s"), default=0.0, metavar="S",
+                   help="also run it S seconds past the settle and say whether the outcome changed")
+    f.add_argument("--probability", type=Bounded("probability", 1, 100_000, integer=True), default=None, metavar="N",
+                   help="the probability of converting (strike, or the leave) over N noisy throws, with a 95%% "
+                        "Wilson interval")
+    f.add_argument("--noise-scale", type=Bounded("noise-scale", 0, 10), default=1.0, metavar="F",
+                   help="multiply every release-noise sigma by F (default 1: 1/2 board, 0.15 deg, 0.3 mph, 15 rpm, "
+                        "5 deg rotation)")
+    f.add_argument("--angle-sigma", type=Bounded("angle-sigma", 0, 5, unit="deg"), default=0.15, metavar="DEG",
+                   help="the launch angle's sigma before --noise-scale (default 0.15, an assumption: docs/bowling.md)")
+    f.add_argument("-o", "--output", default=None, metavar="THROW.json",
+                   help="also write the throw file: delivery, ball, oil, pins standing, the settled outcome, and the "
+                        "--probability estimate and --timesteps ladder when given; bowl replay runs it again")
+    mc_flags(f, 40, "estimate")
+    f.set_defaults(func=cmd_frame)
+
+    s = bowl.add_parser("spares", help="the throw converting each common leave with the highest probability",
+                        description="For each leave, the 3-6-9 system's line (the strike ball, feet moved 3/6/9 "
+                                    "boards, same target arrow) and straight spare balls (cross-lane at 17 and 21 mph, "
+                                    "from the middle and straight down the boards, at the leave's aim point and 1-2 "
+                                    "boards either side) are "
+                                    "screened on --screen noisy throws each; the best is polished by a robust "
+                                    "search (--polish) and measured on --samples, beside the 3-6-9 line "
+                                    "(docs/bowling.md).",
+                        epilog="Example: nbst bowl spares --leaves 10,7 --samples 40")
+    s.add_argument("--leaves", default=None, metavar="L1,L2",
+                   help="leaves to shoot, '-' joining pins, ',' between leaves (default: 10, 7, 4, 6, 2-4-5-8, "
+                        "3-6-10, 1-2-4, 1-3-6, 2-8, 3-9, 7-10)")
+    s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
+                   help="noisy throws per candidate in the screening (default 12)")
+    s.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=None, metavar="N",
+                   help="noisy frames per leave for polishing the pick with a robust search (an evolution "
+                        "strategy on common noisy throws; skipped where the pick converted every screening "
+                        "throw or nothing converted); default 40 x --screen (480); 0: no polish")
+    mc_flags(s, 60, "measured throw")
+    s.set_defaults(func=cmd_spares)
+
+    p = bowl.add_parser("pocket", help="pocket map: strike probability over board x entry angle (a PNG), and carry",
+                        description="Aim a delivery at each (board at the head pin, entry angle) cell, run --samples "
+                                    "noisy frames of it, and draw the strike probability as a heatmap beside the "
+                                    "strike share of all frames by actual entry; carry = strikes / pocket hits "
+                                    "(actual board 17-18). The published pocket (17.5, ~6 deg) is marked.",
+                        epilog="Example: nbst bowl pocket -o pocket.png --samples 40")
+    p.add_argument("-o", "--output", required=True, metavar="MAP.png", help="the heatmap (PNG)")
+    p.add_argument("--boards", default="15.5:19.5:1", metavar="A:B:STEP", help="boards (default 15.5:19.5:1)")
+    p.add_argument("--angles", default="2:7:1", metavar="A:B:STEP", help="entry angles, deg (default 2:7:1)")
+    mc_flags(p, 40, "cell")
+    p.set_defaults(func=cmd_pocket)
+
+
+def _grid(text: str, flag: str, lo: float, hi: float) -> list:
+    import numpy as np
+
+    try:
+        a, b, st = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ValueError(f"{flag}: must be A:B:STEP (numbers), got {text!r}") from None
+    if not (lo <= a <= b <= hi and st > 0 and (b - a) / st <= 40):
+        raise ValueError(f"{flag}: need {lo:g} <= A <= B <= {hi:g}, STEP > 0 and at most 41 values, got {text!r}")
+    return [round(float(v), 6) for v in np.arange(a, b + st / 2, st)]
+
+
+def _bar(args, total: int, desc: str):
+    from nbst.progress import progress_bar
+
+    return progress_bar(total=total, desc=desc, unit="frame", disable=args.quiet, file=sys.stderr)
+
+
+def write_throw(path, r, oil: str, ball, *, ladder=None, estimate=None) -> None:
+    """Write THROW.json (models/bowling/throwfile.py) for frame ``r`` thrown with ``ball``, atomically."""
+    from nbst.outputs import write_text_atomic
+
+    from nbst.models.bowling.lane import throwfile
+
+    write_text_atomic(Path(path), throwfile.dumps(throwfile.throw_dict(r, oil=oil, ball=ball, ladder=ladder,
+                                                                       estimate=estimate)))
+
+
+def cmd_throw(args) -> int:
+    from nbst.models.bowling import lane
+    from nbst.outputs import prepare_output
+
+    for option, path in (("-o", args.output), ("--video", getattr(args, "video", None)),
+                         ("--still", getattr(args, "still", None))):
+        if path:  # before the throw: a link, a FIFO or a folder is refused in one line
+            prepare_output(path, option=option)
+    try:
+        ball = ball_of(args)
+        d = delivery_of(args)
+        lane.pattern(args.oil)
+        r = lane.throw(d, args.oil, ball)
+    except ValueError as e:
+        return err("throw", str(e))
+    if args.video or args.still or args.still_time is not None or args.size or args.fps is not None:
+        bad = picture_from_args(args, d, ball)
+        if bad:
+            return err("throw", bad)
+    doc = r.to_dict()
+    if args.output:
+        from nbst.outputs import OutputError, write_text_atomic
+        from nbst.solution import dumps_strict
+
+        try:
+            write_text_atomic(Path(args.output), dumps_strict(doc, indent=1) + "\n")
+        except OutputError as e:
+            return err("throw", str(e))
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json(doc)
+        return 0
+    for line in throw_lines(r):
+        print(line)
+    return 0
+
+
+def throw_lines(r) -> list[str]:
+    """The phases of a throw (lane.ThrowResult) as lines, in bowler's units."""
+    d = r.delivery
+
+    def ft(v):
+        return "none" if v is None else f"{v:.1f} ft"
+
+    bp = ("none (the ball never moved out)" if r.breakpoint_ft is None
+          else f"{r.breakpoint_ft:.1f} ft, board {r.breakpoint_board:.1f}")
+    return [
+        f"delivery     {d['hand']}-handed, {d['mph']:g} mph, {d['rpm']:g} rpm, rotation {d['rotation']:g} deg, "
+        f"tilt {d['tilt']:g} deg, angle {d['angle']:g} deg; oil {r.oil}",
+        f"ball         {r.ball['weight_lb']:g} lb, RG {r.ball['rg']:g} in, diff {r.ball['diff']:g} in, "
+        f"cover {r.ball['friction']:g}",
+        f"boards       foul line {r.board_at_foul_line:.1f}, arrows {r.board_at_arrows:.1f}",
+        f"skid         {'none (no hook)' if r.skid_ft is None else ft(r.skid_ft) + ' (the hook starts)'}",
+        f"breakpoint   {bp}",
+        f"roll         {ft(r.roll_ft)}",
+        f"at the pins  board {r.board_at_pins:.1f}, entry angle {r.entry_angle_deg:.1f} deg, "
+        f"{r.speed_pins_mph:.1f} mph (lost {r.speed_lost_mph:.1f} mph), {r.seconds_to_pins:.2f} s",
+    ]
+
+
+def cmd_frame(args) -> int:
+    from nbst.outputs import OutputError, prepare_output, signals_deferred
+
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import frame, noise
+
+    try:
+        d = delivery_of(args)
+        ball = ball_of(args)
+        lane.pattern(args.oil)
+        standing = None if args.leave is None else sorted(
+            n for n in range(1, 11) if pin_list(args.leave, "--leave") >> (n - 1) & 1)
+        if args.output:
+            prepare_output(args.output)
+    except (ValueError, argparse.ArgumentTypeError, OutputError) as e:
+        return err("frame", str(e))
+    r = lad = est = None
+    try:
+        r = frame.run_frame(d, args.oil, ball, standing=standing)
+        doc = {"frame": r.to_dict()}
+        if args.longer:
+            r2 = frame.run_frame(d, args.oil, ball, standing=standing, extra_s=args.longer)
+            doc["longer"] = {"extra_s": args.longer, "leave": r2.leave, "same": r2.leave == r.leave}
+        if args.timesteps:
+            lad = frame.ladder(d, args.oil, ball, standing=standing)
+            doc["ladder"] = [{"timestep": x.timestep, "leave": x.leave, "settle_s": x.settle_s, "cap_hit": x.cap_hit}
+                             for x in lad]
+        if args.probability:
+            bar = _bar(args, args.probability, "noisy throws")
+            k = float(args.noise_scale)
+            D = noise.DEFAULT
+            nz = noise.Noise(board=D.board * k, angle=args.angle_sigma * k, mph=D.mph * k, rpm=D.rpm * k,
+                             rotation=D.rotation * k, tilt=D.tilt * k)
+            with frame.FrameRunner(args.oil, ball, jobs=args.jobs or default_jobs()) as R:
+                est, _ = noise.probability(d, args.probability, args.seed, runner=R, standing=standing, noise=nz,
+                                           on_done=lambda: bar.update(1))
+            bar.close()
+            doc["probability"] = est.to_dict()
+    except KeyboardInterrupt:
+        if args.output and r is not None:  # the frame is done: keep it (without what was cut short)
+            try:
+                with signals_deferred(reraise=False):
+                    write_throw(args.output, r, args.oil, ball, ladder=lad)
+            except (OutputError, ValueError) as e:
+                return err("frame", str(e))
+            print(f"nbst bowl frame: interrupted; wrote the frame without the unfinished parts to {args.output}",
+                  file=sys.stderr)
+            return 130
+        print("nbst bowl frame: interrupted", file=sys.stderr)
+        return 130
+    except ValueError as e:
+        return err("frame", str(e))
+    if args.output:
+        try:
+            with signals_deferred(reraise=False) as late:
+                write_throw(args.output, r, args.oil, ball, ladder=lad, estimate=est)
+        except (OutputError, ValueError) as e:
+            return err("frame", str(e))
+        if late:
+            print(f"nbst bowl frame: interrupted; wrote {args.output}", file=sys.stderr)
+            return 130
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json(doc)
+        return 0
+    for line in frame_lines(doc):
+        print(line)
+    if args.output:
+        print(f"throw file    {args.output} (nbst bowl replay {args.output})")
+    return 0
+
+
+def frame_lines(doc: dict) -> list[str]:
+    r = doc["frame"]
+    what = "strike" if len(r["in_play"]) == 10 and not r["leave"] else ("converted" if not r["leave"] else "")
+    out = [f"pins in play  {pins_text(r['in_play'])}",
+           f"down          {pins_text(r['down'])}" + (f"  ({what})" if what else ""),
+           f"leave         {pins_text(r['leave'])}"]
+    if r["partition"]:
+        out.append(f"dead wood     {pins_text(r['partition'])} leaning on the kickback (USBC 6a.4)")
+    if r["ball_left_lane"]:
+        out.append("gutter ball   the ball left the lane before the pins: no pinfall (USBC 6b.1)")
+    if r["board_at_pins"] is not None:
+        out.append(f"entry         board {r['board_at_pins']:.1f} at {r['entry_angle_deg']:.1f} deg")
+    out.append(f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: the cap was hit at %.2f s' % r['seconds']}"
+               f" (ball at the head pin {r['ball_at_pins_s']:.2f} s)" if r["ball_at_pins_s"] is not None else
+               f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: capped'}")
+    if "longer" in doc:
+        g = doc["longer"]
+        out.append(f"{g['extra_s']:g} s longer  leave {pins_text(g['leave'])}: {'same' if g['same'] else 'CHANGED'}")
+    for x in doc.get("ladder", []):
+        out.append(f"h = {1000 * x['timestep']:g} ms".ljust(14) + f"leave {pins_text(x['leave'])}"
+                   + (f", settled at {x['settle_s']:.2f} s" if x["settle_s"] is not None else ", capped"))
+    if "probability" in doc:
+        e = doc["probability"]
+        top = ", ".join(f"{k or 'none'} {v}" for k, v in list(e["leaves"].items())[:5])
+        out.append(f"probability   {100 * e['p']:.0f}% converted ({e['k']}/{e['n']}; 95% CI {100 * e['lo']:.0f}-"
+                   f"{100 * e['hi']:.0f}%), seed {e['seed']}; leaves: {top}")
+    return out
+
+
+def cmd_spares(args) -> int:
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import frame, spares
+
+    names = list(spares.LEAVES) if args.leaves is None else [x.strip() for x in args.leaves.split(",") if x.strip()]
+    try:
+        lane.pattern(args.oil)
+        for nm in names:
+            if nm not in spares.LEAVES:
+                raise ValueError(f"--leaves: {nm!r} is not one of the common leaves ({', '.join(spares.LEAVES)})")
+    except ValueError as e:
+        return err("spares", str(e))
+    out = []
+    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures,
+    # then at most the polish's budget and its measure (a skipped polish leaves the bar short of its total)
+    polish = spares.POLISH_PER_SCREEN * args.screen if args.polish is None else args.polish
+    total = sum(2 * args.samples + (23 + 2 * ("-" in nm)) * args.screen + (polish + args.samples) * (polish > 0)
+                for nm in names)
+    bar = _bar(args, total, "spare frames")
+    try:
+        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            for nm in names:
+                res = spares.best_spare(nm, args.samples, args.seed, runner=R, screen=args.screen,
+                                        on_done=lambda: bar.update(1), polish=polish)
+                out.append(res.to_dict())
+                if not args.json:
+                    bar.clear() if hasattr(bar, "clear") else None
+                    print(spare_line(out[-1]), flush=True)
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"nbst bowl spares: interrupted after {len(out)} of {len(names)} leaves", file=sys.stderr)
+        return 130
+    bar.close()
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "polish": polish,
+                    "spares": out})
+    return 0
+
+
+def spare_line(r: dict) -> str:
+    e, s, b = r["estimate"], r["system_369_estimate"], r["best"]
+    return (f"{r['leave']:>8}  best: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
+            f"{b['mph']:.1f} mph, {b['rpm']:.0f} rpm, rotation {b['rotation']:.0f})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
+            f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)   3-6-9 line (board {r['system_369']['board']:.1f}): "
+            f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
+            + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(pins_text(x[1]) for x in r["ladder"]))
+
+
+def cmd_pocket(args) -> int:
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import frame, spares
+
+    try:
+        boards = _grid(args.boards, "--boards", 1, 39)
+        angles = _grid(args.angles, "--angles", 0, 10)
+        lane.pattern(args.oil)
+        if not args.output.lower().endswith(".png"):
+            raise ValueError(f"{args.output}: -o must name a .png file")
+    except ValueError as e:
+        return err("pocket", str(e))
+    from nbst.outputs import atomic_path, prepare_output
+
+    prepare_output(args.output)  # before the frames: a link, a FIFO or a folder is refused in one line
+    bar = _bar(args, args.samples * len(boards) * len(angles), "pocket frames")
+    try:
+        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            pm = spares.pocket_map(boards, angles, args.samples, args.seed, runner=R, on_done=lambda: bar.update(1))
+    except KeyboardInterrupt:
+        bar.close()
+        print("nbst bowl pocket: interrupted; nothing written", file=sys.stderr)
+        return 130
+    bar.close()
+    fig = spares.pocket_figure(pm)
+    with atomic_path(args.output) as tmp:  # the one writer: whole PNG or the previous file
+        fig.savefig(tmp)
+    b, a, p, k = pm.best()
+    ks, ns = pm.carry()
+    kc, nc = pm.carry(angles=(4.0, 6.0))
+    from nbst.models.bowling.lane.noise import wilson
+
+    doc = {"best": {"board": b, "angle": a, "p": p, "k": k, "n": pm.n}, "carry": {"strikes": ks, "pocket_hits": ns},
+           "carry_4_6_deg": {"strikes": kc, "pocket_hits": nc}, "map": pm.to_dict(), "output": args.output}
+    if args.json:
+        from nbst.cli.args import print_json
+
+        doc["map"].pop("hits")
+        print_json(doc)
+        return 0
+    lo, hi = wilson(k, pm.n)
+    print(f"wrote {args.output}: {len(boards)} boards x {len(angles)} angles, {pm.n} noisy throws per cell, seed {pm.seed}")
+    print(f"best cell  board {b:g} at {a:g} deg: strike {100 * p:.0f}% ({k}/{pm.n}; 95% CI {100 * lo:.0f}-{100 * hi:.0f}%)")
+    for label, (kk, nn) in (("carry (actual board 17-18, any angle)", (ks, ns)), ("carry (17-18 at 4-6 deg)", (kc, nc))):
+        if nn:
+            l2, h2 = wilson(kk, nn)
+            print(f"{label}: {100 * kk / nn:.0f}% ({kk}/{nn}; 95% CI {100 * l2:.0f}-{100 * h2:.0f}%)")
+        else:
+            print(f"{label}: no pocket hits")
+    return 0
+
+
+def replay_throw(args) -> int:
+    """``bowl replay THROW.json``: the frame again from the foul line; exit 1 if its pins down differ.
+    With --video/--still, the frame is recorded as it runs (one run) and filmed with the file's readout."""
+    from nbst.models.bowling.lane import throwfile
+    from nbst.render import bowling_throw
+
+    picture = wants_picture(args)
+    if not picture:
+        d, r, ok = throwfile.replay_file(args.file)
+    else:
+        from nbst.errors import MujocoError
+        from nbst.models.bowling import lane
+        from nbst.models.bowling.lane import frame
+
+        bad = check_picture_args(args)
+        if bad:
+            return err("replay", bad)
+        d = throwfile.load(args.file)
+        try:   # the replay of throwfile.replay, recorded: its model, oil, ball, pins standing and timestep
+            th = bowling_throw.record_throw(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]),
+                                           standing=d["standing"], timestep=float(d["outcome"]["timestep"]))
+        except (lane.LaneError, frame.FrameError, MujocoError) as e:
+            return err("replay", f"{args.file}: delivery: {e}")
+        r = th.frame
+        ok = r.down == sorted(d["outcome"]["down"])
+    want = sorted(d["outcome"]["down"])
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json({"throw": str(args.file), "down": r.down, "expected": want, "leave": r.leave,
+                    "expected_leave": sorted(d["outcome"]["leave"]), "match": ok})
+    else:
+        print(f"pins down  {','.join(map(str, r.down)) or 'none'}  (leave {pins_text(r.leave)})")
+        print(f"expected   {','.join(map(str, want)) or 'none'}  ({'match' if ok else 'DIFFERENT'})")
+    if picture:
+        bad = write_pictures(args, th, prog="nbst bowl replay", **bowling_throw.throw_file_readout(d))
+        if bad:
+            return err("replay", bad)
+    return 0 if ok else 1
+
+
+def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str | None:
+    """Write ``args.still`` and/or ``args.video`` (flags checked by :func:`check_picture_args`) of
+    the recorded throw ``th``; ``readout``: LaneRenderer's asked, probability, probability_note,
+    expected, no_request. A progress line on stderr for the video and one line per file written. Returns a
+    one-line error, or None."""
+    from nbst.outputs import OutputError, prepare_output
+    from nbst.render import style
+    from nbst.render.bowling_lane import render_throw
+    from nbst.render.bowling_throw import frame_times
+    from nbst.render.gl import RenderError
+
+    size = tuple(int(v) for v in str(args.size).lower().split("x")) if getattr(args, "size", None) else None
+    st = getattr(args, "still_time", None)
+    if st is not None and st > th.motion.times[-1]:
+        return f"--still-time {st:g}: the throw lasts {th.motion.times[-1]:.2f} s"
+    try:
+        if getattr(args, "still", None):
+            prepare_output(args.still, option="--still")
+            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size, **readout)
+            print(f"{prog}: wrote {args.still}", file=sys.stderr)
+        if getattr(args, "video", None):
+            prepare_output(args.video, option="--video")
+            fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
+            from nbst.progress import progress_bar
+
+            bar = progress_bar(total=len(frame_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
+            try:
+                n = render_throw(th, args.video, size=size, fps=fps, progress=bar, **readout)
+            finally:
+                bar.close()
+            print(f"{prog}: wrote {args.video} ({n} frames)", file=sys.stderr)
+    except (OutputError, RenderError) as e:
+        return str(e)
+    return None
+
+
+def picture_from_args(args, delivery, ball) -> str | None:
+    """``nbst bowl throw --video/--still``: record the throw's frame on all ten pins (as ``bowl
+    frame`` runs it) and write the video and/or the still. Returns a one-line error, or None."""
+    from nbst.errors import MujocoError
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import frame
+    from nbst.render.bowling_throw import record_throw
+
+    bad = check_picture_args(args)
+    if bad:
+        return bad
+    try:
+        th = record_throw(delivery, args.oil, ball)
+    except (lane.LaneError, frame.FrameError, MujocoError) as e:
+        return str(e)
+    return write_pictures(args, th)
