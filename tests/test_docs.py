@@ -89,9 +89,9 @@ CAPS = {"--max-trials": 3000, "--trials": 300, "--runs": 1, "--max-rollouts": 40
 #: Budgets added where a doc line leaves the default (a synopsis, or a real long run).
 ADDED = {"solve": (("--max-trials", "3000"),), "experiment": (("--runs", "1"), ("--max-trials", "300")),
          "bowl solve": (("--max-rollouts", "40"),), "bowl atlas": (("--max-rollouts", "20"),),
-         "crash solve": (("--max-rollouts", "40"),)}
+         "crash solve": (("--max-rollouts", "40"),), "crash reconstruct": (("--max-rollouts", "40"),)}
 #: Commands for which exit 1 is a legitimate outcome under a cut budget.
-MAY_FAIL_CHECK = ("bowl solve", "bowl replay", "validate", "crash solve")
+MAY_FAIL_CHECK = ("bowl solve", "bowl replay", "validate", "crash solve", "crash reconstruct")
 
 
 def _cut(cmd: str, scratch: Path) -> tuple[list[str] | None, str]:

@@ -106,7 +106,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = 2000, runner=None, jobs:
             fits.append(t)
 
     fit_budget = max(BATCH, int(FIT_SHARE * max_rollouts))
-    res = search_mod.solve(case, seed=seed, max_rollouts=fit_budget, runner=R, callback=callback, keep=keep)
+    res = search_mod.solve(case, seed=seed, max_rollouts=fit_budget, runner=R, callback=callback, keep=keep,
+                           ladder=False)  # a fit is a fit at the case's step; the spread measures the rest
     used = res.rollouts
     best = res.best
     interrupted = res.stopped == "interrupted"

@@ -68,32 +68,29 @@ def label(o) -> str:
 
 @dataclass
 class Estimate:
-    """k of n noisy copies met the script: p and its Wilson interval, the seed, the noise and the
-    outcomes seen ({label: count})."""
+    """The room's :class:`~nbst.models.mjsearch.probability.Probability` (k of n noisy copies met
+    the script, its Wilson interval) with the seed and the outcomes seen ({label: count})."""
 
-    k: int
-    n: int
-    p: float
-    lo: float
-    hi: float
+    prob: object
     seed: int
     outcomes: dict
 
-    def to_dict(self) -> dict:
-        return {"k": self.k, "n": self.n, "p": self.p, "lo": self.lo, "hi": self.hi, "seed": self.seed,
-                "noise": {k: NOISE[k] for k in NOISE}, "outcomes": dict(self.outcomes)}
+    def __getattr__(self, name):  # k, n, p, lo, hi, text() of the probability
+        if name == "prob":
+            raise AttributeError(name)
+        return getattr(self.prob, name)
 
-    def text(self) -> str:
-        return f"{100 * self.p:.0f} % ({self.k}/{self.n}; 95 % CI {100 * self.lo:.0f}-{100 * self.hi:.0f} %)"
+    def to_dict(self) -> dict:
+        pr = self.prob
+        return {"k": pr.k, "n": pr.n, "p": pr.p, "lo": pr.lo, "hi": pr.hi, "seed": self.seed,
+                "noise": {k: NOISE[k] for k in NOISE}, "outcomes": dict(self.outcomes)}
 
 
 def estimate_of(outcomes, seed: int) -> Estimate:
     from nbst.models.mjsearch.probability import Probability, counts
 
     k = sum(1 for o in outcomes if o.solved)
-    pr = Probability.of(k, len(outcomes))
-    return Estimate(k=pr.k, n=pr.n, p=pr.p, lo=pr.lo, hi=pr.hi, seed=int(seed),
-                    outcomes=counts(label(o) for o in outcomes))
+    return Estimate(prob=Probability.of(k, len(outcomes)), seed=int(seed), outcomes=counts(label(o) for o in outcomes))
 
 
 def probability(runner: Runner, intents: np.ndarray, n: int, seed: int, *, on_batch=None) -> Estimate:

@@ -28,7 +28,9 @@ that vehicle holds (the paper's i-acceptable). Around the paper's population:
   :data:`SIGMA0`, a third and a ninth of it once they are right (fine-tuning rest poses).
 
 The search stops at the first trial that meets the script (every bit set and the global
-order), at the budget, or on Ctrl-C (the best so far is returned, ``stopped`` "interrupted").
+order) and keeps meeting it at 1 and 0.5 ms (the **ladder**: a crash that only the 2 ms step
+makes is no result; such a trial costs :data:`FRAGILE` more and the search goes on), at the
+budget, or on Ctrl-C (the best so far is returned, ``stopped`` "interrupted").
 Cost: :func:`.outcome.judge` (0 when met).
 
 Reproducible: batches have a fixed size (:data:`.run.BATCH`), every random number comes from
@@ -58,6 +60,10 @@ PER_SIGNATURE, POPULATION = 8, 64
 CREEP = 0.05
 #: Batches of the paper's operations between CMA-ES restarts.
 GA_BATCHES = 3
+#: The ladder a trial that meets the script must hold on (s; the script's own step first), and the
+#: cost added to one that does not (it meets the script only at its own step: search on).
+LADDER = (0.001, 0.0005)
+FRAGILE = 0.5
 #: CMA-ES: initial step (unit cube), generations without a lower cost that end a restart.
 SIGMA0, STALL = 0.12, 6
 
@@ -72,6 +78,7 @@ class Trial:
     qpos0: np.ndarray = field(repr=False, default=None)
     qvel0: np.ndarray = field(repr=False, default=None)
     final_qpos: np.ndarray = field(repr=False, default=None)
+    holds: bool | None = None   # the ladder's verdict on a trial that meets the script (None: not asked)
 
     @property
     def signature(self) -> int:
@@ -79,7 +86,13 @@ class Trial:
 
     @property
     def cost(self) -> float:
-        return self.outcome.cost
+        """The search's cost: the outcome's, plus :data:`FRAGILE` when the ladder lost it."""
+        return self.outcome.cost + (FRAGILE if self.holds is False else 0.0)
+
+    @property
+    def accepted(self) -> bool:
+        """Meets the script, and keeps meeting it on the ladder (when asked)."""
+        return self.outcome.solved and self.holds is not False
 
 
 @dataclass
@@ -112,9 +125,10 @@ def _order_bits(sig: int) -> int:
 
 
 class _Search:
-    def __init__(self, space: Space, runner, rng: np.random.Generator, max_rollouts: int, callback, keep=None):
+    def __init__(self, space: Space, runner, rng: np.random.Generator, max_rollouts: int, callback, keep=None,
+                 check=None):
         self.S, self.R, self.rng = space, runner, rng
-        self.max_rollouts, self.callback, self.keep = int(max_rollouts), callback, keep
+        self.max_rollouts, self.callback, self.keep, self.check = int(max_rollouts), callback, keep, check
         self.rollouts = 0
         self.pop: list[Trial] = []
         self.archive: dict = {}          # contact sequence -> best Trial
@@ -128,7 +142,7 @@ class _Search:
 
     @property
     def solved(self) -> bool:
-        return self.best is not None and self.best.outcome.solved
+        return self.best is not None and self.best.accepted
 
     def evaluate(self, U: np.ndarray) -> list[Trial]:
         U = np.clip(np.atleast_2d(U), 0.0, 1.0)[: max(0, self.left)]
@@ -140,12 +154,16 @@ class _Search:
                 t = Trial(u=u.copy(), outcome=o, controls=res.controls[i], qpos0=res.qpos0[i], qvel0=res.qvel0[i],
                           final_qpos=res.final_qpos[i])
                 trials.append(t)
+                if o.solved and self.check is not None:
+                    t.holds = bool(self.check(t))
+                    self.rollouts += len(LADDER)  # counted: the ladder's rollouts are rollouts too
                 if self.keep is not None:
                     self.keep(t)
                 cur = self.archive.get(o.sequence)
                 if cur is None or t.cost < cur.cost:
                     self.archive[o.sequence] = t
-                if self.best is None or (t.outcome.solved, -t.cost) > (self.best.outcome.solved, -self.best.cost):
+                if self.best is None or (t.accepted, t.outcome.solved, -t.cost) > \
+                        (self.best.accepted, self.best.outcome.solved, -self.best.cost):
                     self.best = t
             self.rollouts += len(chunk)
             self.history.append((self.rollouts, float(self.best.cost)))
@@ -328,17 +346,36 @@ def directed(space: Space, rng: np.random.Generator, u: np.ndarray | None = None
     return out
 
 
+def ladder_check(script, xml: str, space: Space, timesteps=LADDER):
+    """``check(trial) -> bool``: the trial's intents meet the script with the same contact
+    sequence at every one of ``timesteps`` too (one rollout each)."""
+    from nbst.models.crash.run import Runner
+
+    runners = [Runner(script, xml=xml, timestep=h, batch=1) for h in timesteps]
+
+    def check(t: Trial) -> bool:
+        intents = space.intents(t.u[None])
+        for R in runners:
+            o = R.run(intents).outcomes[0]
+            if not (o.solved and o.sequence == t.outcome.sequence):
+                return False
+        return True
+    return check
+
+
 def solve(script, *, seed: int, max_rollouts: int = 1500, runner=None, jobs: int = 1, callback=None,
-          explore: int = EXPLORE, keep=None) -> SearchResult:
+          explore: int = EXPLORE, keep=None, ladder: bool = True) -> SearchResult:
     """Search driver intents that meet ``script``; see the module docstring. ``keep(trial)`` is
-    called for every rollout (reconstruction collects its fits so)."""
+    called for every rollout (reconstruction collects its fits so). With ``ladder``, a trial
+    that meets the script counts only when it also does at :data:`LADDER` (two more rollouts,
+    counted in the budget); one that does not costs :data:`FRAGILE` more and the search goes on."""
     from nbst.models.crash.run import Runner
 
     own = runner is None
     R = Runner(script, jobs=jobs) if own else runner
     S = space_of(script)
     rng = np.random.default_rng(seed)
-    s = _Search(S, R, rng, max_rollouts, callback, keep)
+    s = _Search(S, R, rng, max_rollouts, callback, keep, ladder_check(script, R.xml, S) if ladder else None)
     t0 = time.perf_counter()
     restarts = 0
     stopped = "budget"
