@@ -167,3 +167,11 @@ def test_the_cli_check_refuses_in_one_line_with_exit_2(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "vehicles[0].speed[1]" in err and "Traceback" not in err
     assert main(["crash", "check", "t-bone"]) == 0
+
+
+def test_every_script_file_is_registered_once():
+    from importlib import resources
+
+    files = sorted(p.name for p in resources.files("nbst.models.crash").joinpath("scripts").iterdir()
+                   if p.name.endswith(".json"))
+    assert sorted(S.SCRIPTS[n] for n in S.SCRIPTS.names()) == files

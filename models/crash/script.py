@@ -15,7 +15,8 @@ other or the global order, a fate that asks for the impossible (a curb strike on
 curbs, an attitude its quarter turns cannot give).
 
 Compute only: :func:`script_from_dict` takes decoded JSON; :func:`load_script` reads a file
-or a built-in (:func:`builtin_names`, the JSON files of ``models/crash/scripts/``).
+or a built-in (:data:`SCRIPTS`, a ``nbst.registry.Registry`` of the JSON files of
+``models/crash/scripts/``).
 
 Length: ~540 lines, past the house's ~500: one validator per part of one file format (road,
 vehicle, driver, fate, order, the cross-checks), kept together so that every rule of the format
@@ -34,6 +35,7 @@ import numpy as np
 
 from nbst.models.crash import road as road_mod
 from nbst.models.crash.fields import Fields, ScriptError, jtype as _jtype
+from nbst.registry import Registry
 from nbst.models.crash import vehicle as veh
 
 KIND = "nbst-crash-script"
@@ -506,14 +508,25 @@ def _hits_agree(c: Fields, vehicles, order, names: list) -> None:
 
 # --------------------------------------------------------------------------- loading
 
+#: The built-in crash scripts, registered once (``nbst crash scripts`` lists them in this order): a
+#: new one is a JSON file in ``models/crash/scripts/`` and one line here.
+SCRIPTS: Registry[str] = Registry("built-in crash script")
+SCRIPTS.register("t-bone", "t-bone.json", help="a sedan T-bones an SUV at an intersection")
+SCRIPTS.register("chain3", "chain3.json", help="a 3-car intersection chain: A hits B, B hits C, each in its region")
+SCRIPTS.register("rear-end4", "rear-end4.json", help="a 4-car rear-end chain on a highway, the lead car braking")
+SCRIPTS.register("rollover", "rollover.json", help="an SUV trips on a curb and ends on its roof")
+SCRIPTS.register("stunt", "stunt.json", help="a sedan spins a full turn and stops in a marked bay")
+SCRIPTS.register("crossing-case", "crossing-case.json",
+                 help="a reconstruction case: two rest poses of a planted crossing crash")
+
+
 def builtin_names() -> list[str]:
-    """Names of the built-in crash scripts (``models/crash/scripts/*.json``), sorted."""
-    files = resources.files("nbst.models.crash").joinpath("scripts")
-    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".json"))
+    """Names of the built-in crash scripts, in registration order (:data:`SCRIPTS`)."""
+    return list(SCRIPTS.names())
 
 
 def builtin_text(name: str) -> str:
-    return resources.files("nbst.models.crash").joinpath("scripts", f"{name}.json").read_text(encoding="utf-8")
+    return resources.files("nbst.models.crash").joinpath("scripts", SCRIPTS[name]).read_text(encoding="utf-8")
 
 
 def load_script(name_or_path) -> Script:

@@ -158,9 +158,9 @@ def cmd_scripts(args) -> int:
         print_json(rows)
         return 0
     for r in rows:
-        print(f"{r['name']:12s} {r['road']:12s} {', '.join(r['vehicles'])}")
+        print(f"{r['name']:14s} {r['road']:12s} {', '.join(r['vehicles'])}")
         if r["description"]:
-            print(f"{'':12s} {r['description'].splitlines()[0]}")
+            print(f"{'':14s} {r['description'].splitlines()[0]}")
     return 0
 
 
