@@ -175,3 +175,27 @@ def test_every_script_file_is_registered_once():
     files = sorted(p.name for p in resources.files("nbst.models.crash").joinpath("scripts").iterdir()
                    if p.name.endswith(".json"))
     assert sorted(S.SCRIPTS[n] for n in S.SCRIPTS.names()) == files
+
+
+def test_crash_commands_refuse_bad_input_in_one_line(tmp_path, capsys):
+    from nbst.cli.main import main
+
+    f = tmp_path / "s.json"
+    f.write_text(json.dumps(base()))
+    for argv, words in ((["crash", "replay", str(f)], ["kind", "nbst crash solve"]),
+                        (["crash", "probability", str(f)], ["kind"]),
+                        (["crash", "solve", "no-such-script", "-o", str(tmp_path / "o.json")], ["no such file"]),
+                        (["crash", "solve", str(f), "-o", str(tmp_path)], ["-o"]),
+                        (["crash", "reconstruct", str(tmp_path / "x.json"), "-o", str(tmp_path / "r.json")],
+                         ["no such file"]),
+                        (["crash", "solve", str(f), "-o", str(tmp_path / "o.json"), "--max-rollouts", "0"],
+                         ["max-rollouts"])):
+        try:
+            rc = main(argv)
+        except SystemExit as e:  # argparse's usage errors exit 2 themselves
+            rc = e.code
+        assert rc == 2, argv
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "Traceback" not in err, err
+        for w in words:
+            assert w in err, (argv, err)
