@@ -98,3 +98,34 @@ def test_generate_stage_bars_end_at_their_totals(tmp_path, capsys, monkeypatch):
     sweeps = [b for d, b in bars.items() if b["unit"] == "sweeps"]
     if m and sweeps:
         assert sweeps[-1]["n"] == m.group(1)  # the bar's passes are the summary's
+
+
+# solve and bowl solve: their commands belong to others (issue 35's items 4 and 5: H1 and H2
+# adopt nbst.progress there). Until they do, these say how their bars and summaries disagree
+# today; strict, so the first run in which they agree fails here and the marks come off.
+
+@pytest.mark.xfail(strict=True, reason="solve's bar starts at its first report and says 0.01 s where the "
+                                       "summary says 0.6 s: nbst.progress not adopted in nbst/cli/solve.py yet")
+def test_solve_bar_ends_where_the_summary_does(tmp_path, capsys):
+    assert main(["solve", "over5", "-o", str(tmp_path / "s.json"), "--max-trials", "3000", "--jobs", "1",
+                 "--seed", "1"]) == 0
+    err = capsys.readouterr().err
+    bar = [m for d, m in _finals(err).items() if d.startswith("solve over5")][-1]
+    summary = [ln for ln in err.splitlines() if ln.startswith("nbst solve: cost")][0]
+    m = re.search(r"after ([\d,]+) trials in ([\d.]+ s)", summary)
+    assert m and m.group(1).replace(",", "") == bar["n"].replace(",", "") and m.group(2) == bar["t"], \
+        (bar.group(0), summary)
+    assert bar["note"].split(",")[0].replace("best cost", "cost") in summary
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="bowl solve's bar counts rollouts of a budget (1/3,000) and its own clock "
+                                       "(0.72 s) where the summary says 1 launch in 0.1 s: nbst.progress not "
+                                       "adopted in nbst/cli/bowl.py yet")
+def test_bowl_solve_bar_ends_where_the_summary_does(tmp_path, capsys):
+    pytest.importorskip("mujoco")
+    assert main(["bowl", "solve", "--leave", "7,10", "-o", str(tmp_path / "shot.json"), "--seed", "1"]) == 0
+    err = capsys.readouterr().err
+    bar = list(_finals(err).values())[-1]
+    summary = [ln for ln in err.splitlines() if ln.startswith("nbst bowl solve:")][-1]
+    assert f" in {bar['t']}" in summary and bar["n"] in summary, (bar.group(0), summary)
