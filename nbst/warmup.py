@@ -16,10 +16,11 @@ from __future__ import annotations
 import sys
 import time
 
-#: Measured cold compile of everything :func:`warm_all` touches on the 2-core development
-#: machine (numba 0.68, Python 3.11; 112 s at load 1-2 with the cell-grid kernel, the
-#: multiword signatures and the many-body search's kernels): what the one-time message quotes.
-COLD_COMPILE_SECONDS = 110
+#: Cold compile of everything :func:`warm_all` touches on the 2-core development machine (numba
+#: 0.68, Python 3.11): 214-235 s of CPU (2026-12-03, `NUMBA_CACHE_DIR=EMPTY python -m nbst.warmup`),
+#: on two cores at once (the searches in a second process) about half of it in wall time when the
+#: cores are idle: what the one-time message quotes.
+COLD_COMPILE_SECONDS = 120
 
 
 def is_cold(*dispatchers) -> bool:
@@ -93,9 +94,11 @@ def announce(kernels, *, stream=None) -> bool:
     return True
 
 
-def warm_all(log=None) -> float:
-    """Compile (or load from the cache) every kernel the main job uses; returns seconds.
-    ``log(str)`` gets one line per stage."""
+def warm_all(log=None, *, parallel: bool = False) -> float:
+    """Compile (or load from the cache) every kernel the commands use; returns seconds.
+    ``log(str)`` gets one line per stage. ``parallel``: once the event kernel that both call is
+    compiled, the searches compile in a second process while this one compiles the rest of the
+    simulator (numba compiles on one core; ``python -m nbst.warmup`` does this on 2 cores or more)."""
     import numpy as np
 
     from nbst.problem import load_problem
@@ -103,28 +106,29 @@ def warm_all(log=None) -> float:
     from nbst.solution import solution_from_dict
     from nbst.sim.jacobian import final_jacobian
     from nbst.sim.sensitivity import analyze
-    from nbst.solvers.dispatch import solve_with
 
     log = log or (lambda s: None)
     t0 = time.perf_counter()
     p = load_problem("over5")  # cueable and noncueable disks: every branch's types
     V = p.straight_velocities()
+    simulate(p, V).at([0.0, 1.0])  # the event kernel, which the searches call too
+    evaluate(p, np.stack([V, V]))
+    search = _start_search() if parallel else None
     # The commands read velocities from solution files: read-only arrays, which numba compiles as
     # other signatures than writable ones. Warm with what they pass (solution_from_dict, the reader
     # of every solution file), through the calls they make (simulate, the keyframes and replays
     # behind positions at given times, the Jacobian and sensitivity behind validate's report).
     # 3x the straight shots: a motion with events (a record of one event or none is typed as a
     # contiguous array, of two or more as a strided one: another signature of the keyframes)
+    # (simulate hands the event kernels read-only velocities whatever it is given: one signature)
     Vro = solution_from_dict({"velocities": (3.0 * V).tolist()}, p).velocities
-    for v in (V, solution_from_dict({"velocities": V.tolist()}, p).velocities, Vro):
-        simulate(p, v).at([0.0, 1.0])
-    evaluate(p, np.stack([V, V]))
+    simulate(p, Vro).at([0.0, 1.0])
     many = many_disks_problem()
     Vm = many.straight_velocities()
-    for v in (Vm, solution_from_dict({"velocities": Vm.tolist()}, many).velocities):
-        tr = simulate(many, v)
-        tr.at([0.0, 1.0], replay=True)
-        tr.velocity_at([0.5], replay=True)
+    tr = simulate(many, Vm)
+    tr.at([0.0, 1.0], replay=False)  # the keyframes, for N disks and their multiword signature
+    tr.at([0.0, 1.0], replay=True)
+    tr.velocity_at([0.5], replay=True)
     evaluate(many, np.stack([Vm, Vm]), jobs=1)
     from nbst.search.aim import pair_contact  # the many-body search's two-disk contacts
 
@@ -136,27 +140,57 @@ def warm_all(log=None) -> float:
 
     planted(20, noncue=2, seed=0)  # nbst generate's kernels: placing disks, assigning a formation's targets
     formation("nbst", 40, seed=0)
+    for v in (Vro, 3.0 * V):  # validate's sensitivity report: from a file, and from the library (the tests)
+        final_jacobian(p, v)
+        analyze(p, v, timestep=0.00025)
     log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
-    final_jacobian(p, Vro)
-    analyze(p, Vro, timestep=0.00025)  # validate's sensitivity report
-    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst")
-    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst", robust=True)
-    log(f"nbst search ready ({time.perf_counter() - t0:.0f} s)")
-    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="A")
-    log(f"paper search ready ({time.perf_counter() - t0:.0f} s)")
+    if search is not None and search.wait() == 0:
+        log(f"searches ready ({time.perf_counter() - t0:.0f} s, compiled beside it)")
+    else:  # one core, or the second process failed: here, one after the other
+        warm_search(lambda s: log(f"{s} ({time.perf_counter() - t0:.0f} s)"))
     return time.perf_counter() - t0
 
 
+def warm_search(log=None) -> None:
+    """Compile the searches: nbst's (plain and ``--robust``) and the paper's."""
+    from nbst.problem import load_problem
+    from nbst.solvers.dispatch import solve_with
+
+    log = log or (lambda s: None)
+    p = load_problem("over5")
+    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst")
+    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="nbst", robust=True)
+    log("nbst search ready")
+    solve_with("signature", p, seed=0, max_trials=3000, patience=0, variant="A")
+    log("paper search ready")
+
+
+def _start_search():
+    """``python -m nbst.warmup --search`` in a second process (None if it cannot start)."""
+    import subprocess
+
+    try:
+        return subprocess.Popen([sys.executable, "-m", "nbst.warmup", "--search"], stdin=subprocess.DEVNULL)
+    except OSError:
+        return None
+
+
 def main(argv=None) -> int:
-    """``python -m nbst.warmup [--quiet]``: compile what is not in the cache yet. Says so
-    (and how long it took) only when there was something to compile."""
+    """``python -m nbst.warmup [--quiet]``: compile what is not in the cache yet, on two cores when
+    there are two. Says so (and how long it took) only when there was something to compile."""
     argv = sys.argv[1:] if argv is None else argv
+    if "--search" in argv:  # the second process of a parallel warm-up
+        warm_search()
+        return 0
     quiet = "-q" in argv or "--quiet" in argv
     cold = is_cold(*search_kernels(), *other_kernels())
     talk = cold and not quiet
     if talk:
         print(compile_message(), file=sys.stderr, flush=True)
-    secs = warm_all((lambda s: print(f"nbst:   {s}", file=sys.stderr, flush=True)) if talk else None)
+    from nbst.parallel import default_jobs
+
+    secs = warm_all((lambda s: print(f"nbst:   {s}", file=sys.stderr, flush=True)) if talk else None,
+                    parallel=default_jobs() >= 2)
     if talk:
         print(f"nbst: numba kernels compiled and cached in {secs:.0f} s", file=sys.stderr)
     return 0

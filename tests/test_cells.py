@@ -32,7 +32,14 @@ def scene(n, seed, *, frac=0.07, speed=3.0, t_final=8.0, mixed=False, resting=0.
     mass = rad ** 2 if mixed else np.ones(n)
     v = rng.normal(size=(n, 2)) * speed
     v[rng.random(n) < resting] = 0.0
-    return x0, v, rad, mass, side, side, t_final
+    return _read_only(x0), v, _read_only(rad), _read_only(mass), side, side, t_final
+
+
+def _read_only(a):
+    """``a`` read-only, as Problem.kernel_arrays() gives the starts, radii and masses: the kernels'
+    signatures that nbst.warmup compiled, not new ones (minutes of compiling on a cold cache)."""
+    a.setflags(write=False)
+    return a
 
 
 def record(kernel, work, args, cap=500_000):
@@ -95,13 +102,14 @@ def test_agrees_with_the_slow_reference():
 def test_a_jam_stalls_as_in_the_table():
     """A disk exactly as wide as the box bounces infinitely often at one instant: both kernels
     stop with STALLED at the same event."""
-    x0 = np.array([[1.0, 5.0], [3.5, 2.0]])
+    x0 = _read_only(np.array([[1.0, 5.0], [3.5, 2.0]]))
     v = np.array([[1.0, 0.0], [0.0, 0.0]])
-    args = (x0, v, np.array([1.0, 1.0]), np.ones(2), 2.0 + 1e-300, 10.0, 1.0)
+    args = (x0, v, _read_only(np.array([1.0, 1.0])), _read_only(np.ones(2)), 2.0 + 1e-300, 10.0, 1.0)
     a = assert_same_motion(args)
     b = record(run_cells, alloc_cells(2), args)
     assert a[0][0] == b[0][0]
-    args2 = (np.array([[1.0, 1.0]]), np.array([[3.0, 0.0]]), np.array([1.0]), np.ones(1), 2.0, 2.0, 1.0)
+    args2 = (_read_only(np.array([[1.0, 1.0]])), np.array([[3.0, 0.0]]), _read_only(np.array([1.0])),
+             _read_only(np.ones(1)), 2.0, 2.0, 1.0)
     assert record(run_cells, alloc_cells(1), args2)[0][0] == STATUS_STALLED
 
 

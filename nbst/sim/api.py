@@ -332,6 +332,9 @@ def simulate(problem: Problem, velocities, *, max_events: int | None = None) -> 
     From ``CELLS_MIN_DISKS`` disks it runs on the cell-grid kernel (the same events).
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
+    if v0.flags.writeable:  # read-only, as a solution file's are: one signature of each kernel below
+        v0 = v0.view()      # (numba compiles writable and read-only arrays apart; the cell-grid
+        v0.setflags(write=False)  # kernel takes ~1 min a signature on a cold cache)
     if v0.ndim != 2:
         raise ValueError(f"velocities must have shape (N, 2), got {v0.shape}")
     _check_velocities(problem, v0)
