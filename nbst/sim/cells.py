@@ -46,9 +46,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from nbst.constants import STALL_EVENTS_PER_DISK, STALL_RTOL, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
-from nbst.sim.kernel import (STATUS_OK, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work,
-                             cost_signature_words, run)
+from nbst.constants import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
+from nbst.sim.kernel import (STATUS_OK, STATUS_OVERFLOW, alloc_work, cost_signature_words, event_guard, run,
+                             stall_limits)
 from nbst.sim.primitives import INF, elastic_impulse, pair_tau, wall_tau
 
 __all__ = ["CELLS_MIN_DISKS", "CellWork", "alloc_cells", "evaluate_words_kernel", "grid_shape", "run_cells"]
@@ -352,10 +352,9 @@ def run_cells(x0, v0, radius, mass, W, H, t_final, w, out_final, out_vel, max_ev
     n_dd = 0
     n_wall = 0
     t_last = 0.0
-    t_inst = 0.0
+    t_inst = 0.0  # start of the current "instant" (stall test)
     n_inst = 0
-    stall_events = STALL_EVENTS_PER_DISK * n
-    stall_dt = STALL_RTOL * t_final
+    stall_events, stall_dt = stall_limits(n, t_final)
     while True:
         i = tree[1]
         te = et[i]
@@ -399,15 +398,8 @@ def run_cells(x0, v0, radius, mass, W, H, t_final, w, out_final, out_vel, max_ev
                 continue
             if j < i:
                 i, j = j, i  # the table's row is the lower index
-        if n_ev >= max_events:
-            status = STATUS_TRUNCATED
-            break
-        if te > t_inst + stall_dt:
-            t_inst = te
-            n_inst = 0
-        n_inst += 1
-        if n_inst > stall_events:
-            status = STATUS_STALLED
+        status, t_inst, n_inst = event_guard(te, n_ev, max_events, t_inst, n_inst, stall_events, stall_dt)
+        if status != STATUS_OK:
             break
         t_last = te
         S[i, X] += S[i, VX] * (te - S[i, TL])

@@ -66,6 +66,34 @@ STATUS_OK, STATUS_TRUNCATED, STATUS_OVERFLOW, STATUS_STALLED = (SimStatus.OK, Si
                                                                 SimStatus.OVERFLOW, SimStatus.STALLED)
 
 
+# --------------------------------------------------------------------------- the event loop's safety valves
+
+@njit(cache=True)
+def stall_limits(n: int, t_final: float):
+    """(events, seconds): a run stalls when more than ``events`` events fall within ``seconds`` of
+    each other (``STALL_EVENTS_PER_DISK`` per disk within ``STALL_RTOL`` of t_final: a jam)."""
+    return STALL_EVENTS_PER_DISK * n, STALL_RTOL * t_final
+
+
+@njit(cache=True)
+def event_guard(te: float, n_ev: int, max_events: int, t_inst: float, n_inst: int, stall_events: int,
+                stall_dt: float):
+    """Both event kernels' check before the event at time ``te``: ``STATUS_TRUNCATED`` once
+    ``max_events`` events are done, ``STATUS_STALLED`` past ``stall_events`` events within
+    ``stall_dt`` of the instant that began at ``t_inst`` (a new instant begins at the first event
+    later than that), else ``STATUS_OK``. Returns (status, t_inst, n_inst), the instant's start and
+    its events counted so far, for the next call."""
+    if n_ev >= max_events:
+        return STATUS_TRUNCATED, t_inst, n_inst
+    if te > t_inst + stall_dt:
+        t_inst = te
+        n_inst = 0
+    n_inst += 1
+    if n_inst > stall_events:
+        return STATUS_STALLED, t_inst, n_inst
+    return STATUS_OK, t_inst, n_inst
+
+
 # --------------------------------------------------------------------------- the kernel
 
 class Work(NamedTuple):
@@ -224,8 +252,7 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
     t_last = 0.0  # time of the last processed event
     t_inst = 0.0  # start of the current "instant" (stall test)
     n_inst = 0
-    stall_events = STALL_EVENTS_PER_DISK * n
-    stall_dt = STALL_RTOL * t_final
+    stall_events, stall_dt = stall_limits(n, t_final)
     while True:
         i = 0
         te = rowmin[0]
@@ -235,15 +262,8 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
                 i = k
         if te > t_final:
             break
-        if n_ev >= max_events:
-            status = STATUS_TRUNCATED
-            break
-        if te > t_inst + stall_dt:
-            t_inst = te
-            n_inst = 0
-        n_inst += 1
-        if n_inst > stall_events:
-            status = STATUS_STALLED
+        status, t_inst, n_inst = event_guard(te, n_ev, max_events, t_inst, n_inst, stall_events, stall_dt)
+        if status != STATUS_OK:
             break
         t_last = te
         j = rowarg[i]
