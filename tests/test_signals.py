@@ -157,6 +157,43 @@ def test_solve_writes_the_best_so_far_whatever_the_signals(tmp_path, jobs, case)
     assert _wait_for(lambda: not any(running(k) for k in kids), 10), (sent, kids)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [0.5, 2.0, 8.0])
+def test_solve_writes_the_best_motion_so_far_at_any_moment(tmp_path, delay):
+    """Issue 35, item 5: a signal at any moment after the problem is read writes the best motion so
+    far, the straight start included (before any search result: at 0.5 s the numba load or the
+    backward planner may still run). ``--jobs 1`` on over5: nbst's portfolio, planner first. The
+    first line comes at once (issue 35, item 4: within 2 s), and the bar's last state is the
+    summary's."""
+    import re
+
+    from nbst import load_problem, load_solution, simulate
+
+    out = tmp_path / "sol.json"
+    t0 = time.monotonic()
+    run = Run(["solve", HARD, "-o", str(out), "--jobs", "1", "--max-trials", "1000000000", "--patience", "0",
+               "--target-cost", "0", "--seed", "3"], tmp_path)
+    while not run.err and run.proc.poll() is None and time.monotonic() - t0 < 30:
+        run.read(0.01)
+    first = time.monotonic() - t0
+    assert first < 2.0, f"the first line came after {first:.2f} s"  # the problem is read by now
+    while time.monotonic() - t0 < delay:
+        run.read(0.01)
+    run.proc.send_signal(signal.SIGINT)
+    rc, err = run.finish()
+    _check_exit(rc, err, ["SIGINT"])
+    p = load_problem(HARD)
+    sol = load_solution(out, p)
+    m = sol.meta
+    assert m["stopped"] == "interrupted" and m["seed"] == 3 and "best so far written" in err
+    # the recorded cost is the motion's own (as nbst simulate sees it; the two kernels agree to round-off)
+    assert m["cost"] == pytest.approx(simulate(p, sol.velocities).cost, rel=1e-9, abs=1e-9)
+    bar = re.findall(r"best cost ([0-9.e+-]+), (\d)/5 disks on target", err.split("nbst solve:")[0])
+    summary = re.search(r"nbst solve: interrupted; best so far written: cost ([0-9.e+-]+), (\d)/5", err)
+    assert bar and summary and bar[-1] == summary.groups(), (bar[-3:], err[-600:])
+    _no_partials(tmp_path)
+
+
 def test_solve_islands_die_with_their_parent_on_sigkill(tmp_path):
     proc = subprocess.Popen([*NBST, "solve", HARD, "-o", str(tmp_path / "sol.json"), "--jobs", "2", "--max-trials",
                              "1000000000", "--patience", "0", "--target-cost", "0", "-q"],

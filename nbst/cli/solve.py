@@ -33,8 +33,10 @@ def register(sub) -> None:
         description="Search for initial velocities that bring every disk of PROBLEM to its target at t_final "
                     "(nbst's search by default; the paper's signature-based evolutionary search with --variant A, "
                     "or one of its simplified variants B-H), "
-                    "and write the best solution found to a JSON file. Ctrl-C stops the search and still writes "
-                    "the best solution so far (exit 130). The same --seed gives the same solution, bit for bit.",
+                    "and write the best solution found to a JSON file. Ctrl-C (or SIGTERM, SIGHUP) at any moment after "
+                    "the problem is read stops the search and still writes the best motion so far, the straight "
+                    "start (every disk straight at its target) if the search has none yet (exit 130). The same "
+                    "--seed gives the same solution, bit for bit.",
         epilog="By default a solve stops at the first of: --max-trials, --patience, or a cost at round-off level "
                "(every disk within 1e-9 of the box size of its target; --target-cost 0 turns that off). "
                "The first run on a new install also compiles the numba kernels (one time, about "
@@ -84,11 +86,53 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_solve)
 
 
+class _Progress:
+    """``nbst solve``'s progress bar: shown as soon as the problem is read (its clock starts with the
+    command), fed by the search's reports, and left showing what the summary says."""
+
+    def __init__(self, args, problem, label: str, total: int | None) -> None:
+        self.args, self.problem, self.done, self.bar = args, problem, 0, None
+        if args.quiet:
+            return
+        from nbst.progress import progress_bar
+
+        self.bar = progress_bar(total=total, unit="trial", unit_scale=True, file=sys.stderr, dynamic_ncols=True,
+                                desc=f"solve {problem.name} ({label})", smoothing=0.1)
+        self.bar.set_postfix_str("loading the simulator and the straight start")
+
+    def report(self, p) -> None:
+        """A search's report (``SearchProgress``): trials done, the best cost and order so far."""
+        if self.bar is None:
+            return
+        post = f"best cost {p.best_cost:.6g}, {p.best_order}/{self.problem.n} disks on target"
+        if p.stall is not None:  # the many-body search: rounds without a better motion, not an ETA
+            post += f", {p.stall[0]} of {p.stall[1]} rounds without a better motion"
+        self._show(p.trials, post)
+
+    def finish(self, r) -> None:
+        """The written result: the bar's last state is the summary's (trials, cost, disks on target)."""
+        if self.bar is not None:
+            self._show(r.trials, f"best cost {r.cost:.6g}, {r.order}/{self.problem.n} disks on target")
+
+    def _show(self, trials: int, post: str) -> None:
+        self.bar.update(trials - self.done)
+        self.done = trials
+        self.bar.set_postfix_str(post, refresh=False)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
 def cmd_solve(args) -> int:
+    import time
+
     from nbst.outputs import prepare_output, signals_deferred, write_json_atomic
     from nbst.problem import ProblemError, load_problem
+    from nbst.search.variants import roundoff_cost
     from nbst.solvers import SIGNATURE, SOLVERS
 
+    t0 = time.monotonic()  # the command's clock: the summary's seconds
     problem = load_problem(args.problem)
     # before the search: a long solve must not end unable to write, nor overwrite its input
     prepare_output(args.output, inputs=(args.problem,))
@@ -98,75 +142,88 @@ def cmd_solve(args) -> int:
     for option, given in (("--variant", args.variant != DEFAULT_VARIANT), ("--robust", robust)):
         if given and not takes_variants:
             raise ProblemError("<arguments>", option, f"applies to --algorithm {SIGNATURE} only, not {algorithm}")
+    variant = args.variant if takes_variants else None
     label = (args.variant if takes_variants else algorithm) + (", robust" if robust else "")
-    from nbst.search import roundoff_cost
-
     target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
-    if not args.quiet:
-        from nbst.warmup import announce, search_kernels
+    seed = args.seed if args.seed is not None else _draw_seed()  # drawn here: even the straight start records it
+    from nbst.constants import many_body
 
-        announce(search_kernels())
-    bar = []  # made at the first progress report: no rate or ETA while numba compiles
-    done = [0]
-
-    def progress(p) -> None:
-        if args.quiet:
-            return
-        if not bar:
-            from nbst.progress import progress_bar
-
-            # the many-body search stops after rounds without a better motion, long before its
-            # trial budget as a rule: no total (so no ETA over --max-trials); the postfix says
-            # how near that stop is
-            bar.append(progress_bar(total=None if p.stall is not None else args.max_trials, unit="trial",
-                                    unit_scale=True, file=sys.stderr, dynamic_ncols=True,
-                                    desc=f"solve {problem.name} ({label})", smoothing=0.1))
-        bar[0].update(p.trials - done[0])
-        done[0] = p.trials
-        post = f"best cost {p.best_cost:.6g}, {p.best_order}/{problem.n} disks on target"
-        if p.stall is not None:
-            post += f", {p.stall[0]} of {p.stall[1]} rounds without a better motion"
-        bar[0].set_postfix_str(post, refresh=False)
-
-    from nbst.cli.args import cluster_client
-    from nbst.parallel import default_jobs
-    from nbst.solvers.islands import solve_islands
-
-    client = cluster_client(args)  # None without --cluster; ProblemError (exit 2, one line) if unreachable
-    if args.jobs is not None:
-        jobs = args.jobs
-    elif client is not None:
-        jobs = 1 + sum(w.get("nthreads", 1) for w in client.scheduler_info().get("workers", {}).values())
-    else:
-        jobs = default_jobs()
+    # the many-body search stops after rounds without a better motion, long before its trial budget
+    # as a rule: no total (so no ETA over --max-trials)
+    bar = _Progress(args, problem, label, None if many_body(problem.n) and takes_variants else args.max_trials)
     # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP stops the search, which
-    # returns its best so far; later ones cannot stop the write below (they are only noted).
-    result, stopped_late = None, False
+    # returns its best so far; before the search has one, the straight start is written.
+    result = fallback = client = None
+    interrupted = False
     try:
-        # K islands on K cores, or (the many-body search past 63 disks) one search on K threads
-        result = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=args.seed, max_trials=args.max_trials,
-                               patience=args.patience, target_cost=target_cost,
-                               variant=args.variant if takes_variants else None, robust=robust,
-                               callback=progress, cluster=client)
-    finally:
         try:
-            if bar:
-                bar[0].close()
+            with signals_deferred():  # a signal here waits for the straight start, then stops the solve
+                from nbst.search import straight_start
+
+                fallback = straight_start(problem, seed=seed, max_trials=args.max_trials, patience=args.patience,
+                                          target_cost=target_cost, variant=variant)
+            bar.report(_first_report(fallback))
+            if not args.quiet:
+                from nbst.warmup import announce, search_kernels
+
+                announce(search_kernels())
+            from nbst.cli.args import cluster_client
+            from nbst.parallel import default_jobs
+            from nbst.solvers.islands import solve_islands
+
+            client = cluster_client(args)  # None without --cluster; ProblemError (exit 2, one line) if unreachable
+            if args.jobs is not None:
+                jobs = args.jobs
+            elif client is not None:
+                jobs = 1 + sum(w.get("nthreads", 1) for w in client.scheduler_info().get("workers", {}).values())
+            else:
+                jobs = default_jobs()
+            # K islands on K cores, or (the many-body search past 63 disks) one search on K threads
+            result = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=seed, max_trials=args.max_trials,
+                                   patience=args.patience, target_cost=target_cost, variant=variant, robust=robust,
+                                   callback=bar.report, cluster=client)
+        finally:
             if client is not None:
                 client.close()
-        except KeyboardInterrupt:  # the first signal landed after the search: write its result all the same
-            stopped_late = True
-    if result is None:
-        raise KeyboardInterrupt
-    with signals_deferred(reraise=False) as late:  # a signal during the write waits for it
-        write_json_atomic(args.output, result.to_dict())
-    late = late or stopped_late
-    return _summary(args, problem, result, target_cost, late)
+    except KeyboardInterrupt:  # before the search returned, or just after: what is there is written
+        interrupted = True
+    for attempt in (1, 2):  # a first signal that lands between the search and this block: once more
+        try:
+            with signals_deferred(reraise=False) as late:  # a signal during the write waits for it
+                if result is None:
+                    if fallback is None:
+                        from nbst.search import straight_start
+
+                        fallback = straight_start(problem, seed=seed, max_trials=args.max_trials,
+                                                  patience=args.patience, target_cost=target_cost, variant=variant)
+                    result = fallback.with_meta({"stopped": "interrupted"})
+                bar.finish(result)
+                bar.close()
+                write_json_atomic(args.output, result.to_dict())
+            interrupted = interrupted or bool(late)
+            break
+        except KeyboardInterrupt:
+            interrupted = True
+    return _summary(args, problem, result, target_cost, interrupted, time.monotonic() - t0)
 
 
-def _summary(args, problem, r, target_cost: float, late: bool) -> int:
-    """The summary line (and robust mode's line); the exit status."""
+def _draw_seed() -> int:
+    import numpy as np
+
+    return int(np.random.default_rng().integers(2**63))
+
+
+def _first_report(r):
+    """The straight start as the bar's first state (no trial yet)."""
+    from nbst.search import SearchProgress
+
+    return SearchProgress(trials=0, best_cost=r.cost, best_order=r.order, elapsed=0.0, population=0, phase="start")
+
+
+def _summary(args, problem, r, target_cost: float, late: bool, seconds: float) -> int:
+    """The summary line (and robust mode's line); the exit status. ``seconds``: since the command began."""
     from nbst.constants import many_body
+    from nbst.search.api import ALGORITHM_STRAIGHT
 
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
            "max_trials": "trial budget spent", "patience": f"no improvement in {args.patience} trials",
@@ -176,8 +233,9 @@ def _summary(args, problem, r, target_cost: float, late: bool) -> int:
     island = (f" (best of {len(r.islands)} islands: island {r.island}"
               + (f", {r.configuration}" if r.configuration is not None else "") + ")") if r.island is not None else ""
     shown = "in the file" if many_body(problem.n) else r.signature
-    line = (f"cost {r.cost:.6g}, {r.order}/{problem.n} disks on target (signature {shown}) "
-            f"after {r.trials} trials in {r.wall_time:.1f} s, seed {r.seed}"
+    start = " (the straight start: no search result yet)" if r.algorithm == ALGORITHM_STRAIGHT else ""
+    line = (f"cost {r.cost:.6g}, {r.order}/{problem.n} disks on target (signature {shown}){start} "
+            f"after {r.trials} trials in {seconds:.1f} s, seed {r.seed}"
             f"{island}; stopped: {why}; "
             f"wrote {args.output}")
     if r.stopped == "interrupted" or late:

@@ -14,14 +14,14 @@ import numpy as np
 from nbst.constants import GA_MAX_DISKS, many_body
 from nbst.errors import SolveError
 from nbst.problem import Problem
-from nbst.search.driver import SearchRun, roundoff_cost
+from nbst.search.driver import SearchRun
 from nbst.search.driver import run_search as _signature_search
 from nbst.search.many import ALGORITHM_MANY, ManyParams, run_many
 from nbst.search.params import ProgressCallback, SearchParams, check_run
-from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT
+from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, roundoff_cost
 from nbst.solution import SolveResult
 
-__all__ = ["run_many_search", "run_search", "solve"]
+__all__ = ["ALGORITHM_STRAIGHT", "run_many_search", "run_search", "solve", "straight_start"]
 
 
 def solve(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
@@ -140,3 +140,39 @@ def run_many_search(problem: Problem, *, seed: int | None = None, max_trials: in
     return SearchRun(result=SolveResult.from_meta(problem, v, full), velocities=v[None].copy(),
                      costs=np.array([float(c[0])]), signatures=np.array([sig], dtype=object),
                      recorded=np.zeros((0, problem.n, 2)))
+
+
+#: ``result.algorithm`` of :func:`straight_start`'s result.
+ALGORITHM_STRAIGHT = "straight-start"
+
+
+def straight_start(problem: Problem, *, seed: int, max_trials: int = DEFAULT_MAX_TRIALS,
+                   patience: int = DEFAULT_PATIENCE, target_cost: float | None = None,
+                   variant: str | None = DEFAULT_VARIANT, stopped: str | None = None) -> SolveResult:
+    """The motion every search starts from, as a result: each cueable disk straight at its target
+    (``problem.straight_velocities()``), simulated once (no trial counted). What ``nbst solve``
+    writes when it is stopped before a search has a result of its own (a signal during the
+    numba load or the backward planner): the straight start is a motion too.
+
+    Args:
+        problem: the problem.
+        seed: the seed the search was (or would have been) run with: recorded, as always.
+        max_trials, patience, target_cost, variant: the search's options, recorded as a search's are.
+        stopped: why no search result replaced it ("interrupted"), or None.
+
+    Returns:
+        A :class:`~nbst.solution.SolveResult` with ``trials`` 0 and an empty history.
+    """
+    from nbst._version import __version__
+    from nbst.sim import evaluate
+    from nbst.solution import signature_string
+
+    v = np.array(problem.straight_velocities(), dtype=float)
+    _, c, sg = evaluate(problem, v[None], jobs=1)
+    sig = int(sg[0])
+    meta = {"algorithm": ALGORITHM_STRAIGHT, "cost": float(c[0]), "signature": signature_string(sig, problem.n),
+            "order": sig.bit_count(), "trials": 0, "seed": int(seed), "variant": variant,
+            "max_trials": int(max_trials), "patience": int(patience), "target_cost": target_cost,
+            "stopped": stopped, "wall_time": 0.0, "trials_per_s": None, "nbst_version": __version__,
+            "history": []}
+    return SolveResult.from_meta(problem, v, meta)

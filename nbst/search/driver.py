@@ -13,15 +13,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nbst._version import __version__
-from nbst.constants import GA_MAX_DISKS, ROUNDOFF_REL, many_body
+from nbst.constants import GA_MAX_DISKS, many_body
 from nbst.errors import SolveError
+from nbst.outputs import signals_deferred
 from nbst.problem import Problem
 from nbst.search import loop as _L
 from nbst.search.loop import ChunkResult
 from nbst.search.ops import CULL_SUBSUMED, CULL_WORST, Population
 from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, ProgressCallback, SearchParams, SearchProgress,
                                 StopReason, check_run, mirror_images, variant_params)
-from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, VARIANTS
+from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, VARIANTS, roundoff_cost
 from nbst.solution import SolveResult
 
 #: Room of the improvement history at the start (doubled whenever the loop fills it).
@@ -95,13 +96,6 @@ class SearchRun:
     recorded: np.ndarray  # (M, N, 2) candidates of every record_every-th trial (empty unless asked)
 
 
-def roundoff_cost(problem: Problem) -> float:
-    """The cost of a solution whose every disk ends ROUNDOFF_REL x max(W, H) from its
-    target: N (ROUNDOFF_REL max(W, H))^2, units^2. Below it a search has nothing left to
-    gain (``nbst solve``'s default target cost)."""
-    return problem.n * (ROUNDOFF_REL * max(problem.box)) ** 2
-
-
 def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
                patience: int = DEFAULT_PATIENCE, target_cost: float | None = None,
                variant: str = DEFAULT_VARIANT, params: SearchParams | None = None,
@@ -161,8 +155,11 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = D
     t0 = time.perf_counter()
     stopped = _run_chunks(advance, s, int(chunk), archive, callback, t0)
     wall = time.perf_counter() - t0
-    best_v, meta = _finish(problem, params, s, advance, archive, seed, max_trials=max_trials, patience=patience,
-                           target_cost=target_cost, stopped=stopped, wall=wall)
+    with signals_deferred(reraise=False) as late:  # a Ctrl-C now waits for the result, which says so
+        best_v, meta = _finish(problem, params, s, advance, archive, seed, max_trials=max_trials,
+                               patience=patience, target_cost=target_cost, stopped=stopped, wall=wall)
+    if late:
+        meta["stopped"] = StopReason.INTERRUPTED.value
     size = s.pop_size
     trials = int(s.st[_L.ST_TRIALS])
     return SearchRun(result=SolveResult.from_meta(problem, best_v, meta), velocities=s.pop.vel[:size].copy(),
@@ -188,6 +185,7 @@ def _run_chunks(advance, s: _State, chunk: int, archive, callback, t0: float) ->
                ChunkResult.TARGET_COST: StopReason.TARGET_COST}
     stopped = None
     try:
+        advance.start()
         while stopped is None:
             rc = advance(chunk)
             if rc == ChunkResult.HISTORY_FULL:
@@ -329,6 +327,9 @@ class _PaperStepper:
         self.s, self.prm, self.rec_v = s, prm, rec_v
         self.pa = _L.problem_arrays(problem, mirror_images(params.max_bounces))
 
+    def start(self) -> None:
+        """Nothing to prepare before the first chunk."""
+
     def __call__(self, n_steps: int) -> ChunkResult:
         return _L.run_chunk(self.pa, self.prm, self.s.arrays(), self.rec_v, n_steps)
 
@@ -365,13 +366,25 @@ class _NbstStepper:
         s.best_cost = np.array([np.inf, np.inf])  # [overall, since the last restart]
         self.planned = None
         self.pl = S.Plans(np.zeros((0, problem.n, 2)), np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
+        self.problem, self.params = problem, params
+        self._weights(qs)  # without the planner's routes; start() plans, and weighs them in
+
+    def _weights(self, qs) -> None:
+        """The operators' probabilities (the plan operator's only once the planner gave routes)."""
+        params = self.params
         has_non = self.pa.non_idx.size > 0
-        if params.planner and has_non:
-            self._plan(problem, params, qs)
         w_plan = params.planner_weight if len(self.pl.route_cue) else 0.0
         base = np.array([*params.op_weights, params.bank_weight, params.strike_weight if has_non else 0.0, w_plan])
         base = base / base.sum()
-        self.na = S.NbstArrays(qs, base.copy(), base, base.copy())
+        self.na = self.S.NbstArrays(qs, base.copy(), base, base.copy())
+
+    def start(self) -> None:
+        """Before the first chunk: the backward planner, when the problem has noncueable disks (a
+        Ctrl-C here stops the search like one during a chunk: the result is the best so far)."""
+        if self.params.planner and self.pa.non_idx.size > 0:
+            qs = self.na.qs
+            self._plan(self.problem, self.params, qs)
+            self._weights(qs)
 
     def _plan(self, problem: Problem, params: SearchParams, qs) -> None:
         """The backward planner's seeds and routes; its simulations are charged as trials."""

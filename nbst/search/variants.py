@@ -14,12 +14,14 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from nbst.constants import ROUNDOFF_REL
 from nbst.registry import Registry
 
 if TYPE_CHECKING:
     from nbst.problem import Problem
 
-__all__ = ["DEFAULT_MAX_TRIALS", "DEFAULT_PATIENCE", "DEFAULT_VARIANT", "NBST_DEFAULTS", "VARIANTS", "Variant"]
+__all__ = ["DEFAULT_MAX_TRIALS", "DEFAULT_PATIENCE", "DEFAULT_VARIANT", "NBST_DEFAULTS", "VARIANTS", "Variant",
+           "roundoff_cost"]
 
 #: The variant ``nbst.search.solve`` and ``nbst solve`` run unless told otherwise.
 DEFAULT_VARIANT = "nbst"
@@ -37,6 +39,13 @@ NBST_DEFAULTS: Mapping[str, Any] = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_we
 # measured but off: the ablation (docs/results.md) showed no gain from either.
 
 _THIRD = 1.0 / 3.0
+
+
+def roundoff_cost(problem: Problem) -> float:
+    """The cost of a solution whose every disk ends ROUNDOFF_REL x max(W, H) from its
+    target: N (ROUNDOFF_REL max(W, H))^2, units^2. Below it a search has nothing left to
+    gain (``nbst solve``'s default target cost)."""
+    return problem.n * (ROUNDOFF_REL * max(problem.box)) ** 2
 
 
 @dataclass(frozen=True)
