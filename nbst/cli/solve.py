@@ -157,16 +157,16 @@ def cmd_solve(args) -> int:
     interrupted = False
     try:
         try:
+            if not args.quiet:  # a cold numba cache: say so before the first kernel compiles
+                from nbst.warmup import announce, search_kernels
+
+                announce(search_kernels())
             with signals_deferred():  # a signal here waits for the straight start, then stops the solve
                 from nbst.search import straight_start
 
                 fallback = straight_start(problem, seed=seed, max_trials=args.max_trials, patience=args.patience,
                                           target_cost=target_cost, variant=variant)
             bar.report(_first_report(fallback))
-            if not args.quiet:
-                from nbst.warmup import announce, search_kernels
-
-                announce(search_kernels())
             from nbst.cli.args import cluster_client
             from nbst.parallel import default_jobs
             from nbst.solvers.islands import solve_islands
