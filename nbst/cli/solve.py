@@ -134,42 +134,46 @@ def cmd_solve(args) -> int:
 
     t0 = time.monotonic()  # the command's clock: the summary's seconds
     problem = load_problem(args.problem)
-    # before the search: a long solve must not end unable to write, nor overwrite its input
-    prepare_output(args.output, inputs=(args.problem,))
-    algorithm = getattr(args, "algorithm", SIGNATURE)
-    robust = bool(getattr(args, "robust", False))
-    takes_variants = SOLVERS[algorithm].variants
-    for option, given in (("--variant", args.variant != DEFAULT_VARIANT), ("--robust", robust)):
-        if given and not takes_variants:
-            raise ProblemError("<arguments>", option, f"applies to --algorithm {SIGNATURE} only, not {algorithm}")
-    variant = args.variant if takes_variants else None
-    label = (args.variant if takes_variants else algorithm) + (", robust" if robust else "")
-    target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
-    seed = args.seed if args.seed is not None else _draw_seed()  # drawn here: even the straight start records it
-    from nbst.constants import many_body
-
-    # the many-body search stops after rounds without a better motion, long before its trial budget
-    # as a rule: no total (so no ETA over --max-trials)
-    bar = _Progress(args, problem, label, None if many_body(problem.n) and takes_variants else args.max_trials)
-    # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP stops the search, which
-    # returns its best so far; before the search has one, the straight start is written.
-    result = fallback = client = None
+    # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP from here on stops the solve
+    # and writes the best motion so far: the search's, or the straight start before it has one.
+    result = fallback = client = bar = None
     interrupted = False
     try:
         try:
-            if not args.quiet:  # a cold numba cache: say so before the first kernel compiles
-                from nbst.warmup import announce, search_kernels
+            # checks, the bar, the heavy imports (numba, whose import a signal must not cut in half)
+            # and the straight start: a signal here waits for them (about a second), then stops the solve
+            with signals_deferred():
+                # before the search: a long solve must not end unable to write, nor overwrite its input
+                prepare_output(args.output, inputs=(args.problem,))
+                algorithm = getattr(args, "algorithm", SIGNATURE)
+                robust = bool(getattr(args, "robust", False))
+                takes_variants = SOLVERS[algorithm].variants
+                for option, given in (("--variant", args.variant != DEFAULT_VARIANT), ("--robust", robust)):
+                    if given and not takes_variants:
+                        raise ProblemError("<arguments>", option,
+                                           f"applies to --algorithm {SIGNATURE} only, not {algorithm}")
+                variant = args.variant if takes_variants else None
+                label = (args.variant if takes_variants else algorithm) + (", robust" if robust else "")
+                target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
+                seed = args.seed if args.seed is not None else _draw_seed()  # even the straight start records it
+                from nbst.constants import many_body
 
-                announce(search_kernels())
-            with signals_deferred():  # a signal here waits for the straight start, then stops the solve
+                # the many-body search stops after rounds without a better motion, long before its trial
+                # budget as a rule: no total (so no ETA over --max-trials)
+                bar = _Progress(args, problem, label,
+                                None if many_body(problem.n) and takes_variants else args.max_trials)
+                if not args.quiet:  # a cold numba cache: say so before the first kernel compiles
+                    from nbst.warmup import announce, search_kernels
+
+                    announce(search_kernels())
                 from nbst.search import straight_start
+                from nbst.solvers.islands import solve_islands
 
                 fallback = straight_start(problem, seed=seed, max_trials=args.max_trials, patience=args.patience,
                                           target_cost=target_cost, variant=variant)
             bar.report(_first_report(fallback))
             from nbst.cli.args import cluster_client
             from nbst.parallel import default_jobs
-            from nbst.solvers.islands import solve_islands
 
             client = cluster_client(args)  # None without --cluster; ProblemError (exit 2, one line) if unreachable
             if args.jobs is not None:
@@ -187,18 +191,16 @@ def cmd_solve(args) -> int:
                 client.close()
     except KeyboardInterrupt:  # before the search returned, or just after: what is there is written
         interrupted = True
+    if result is None and fallback is None:  # stopped in the instant after the problem was read
+        raise KeyboardInterrupt
     for attempt in (1, 2):  # a first signal that lands between the search and this block: once more
         try:
             with signals_deferred(reraise=False) as late:  # a signal during the write waits for it
                 if result is None:
-                    if fallback is None:
-                        from nbst.search import straight_start
-
-                        fallback = straight_start(problem, seed=seed, max_trials=args.max_trials,
-                                                  patience=args.patience, target_cost=target_cost, variant=variant)
                     result = fallback.with_meta({"stopped": "interrupted"})
-                bar.finish(result)
-                bar.close()
+                if bar is not None:
+                    bar.finish(result)
+                    bar.close()
                 write_json_atomic(args.output, result.to_dict())
             interrupted = interrupted or bool(late)
             break

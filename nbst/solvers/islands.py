@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from nbst.outputs import signals_deferred
 from nbst.problem import Problem
 from nbst.search.params import SearchProgress
 from nbst.search.variants import DEFAULT_MAX_TRIALS
@@ -269,19 +270,10 @@ class _Rounds:
             try:
                 if not self.conns[k].poll(ISLAND_TIMEOUT):
                     raise RuntimeError(f"island {k} stopped answering")
-                msg = self.conns[k].recv()
+                with signals_deferred():  # a message taken is a message booked: a Ctrl-C waits for it
+                    self._book(k, self.conns[k].recv(), waiting)
             except (EOFError, OSError):  # the worker died (killed): lost, the others go on
                 self.live.discard(k)
-                continue
-            if msg[0] == "progress":
-                _, _, self.trials[k], self.best[k], self.order[k] = msg
-                waiting.append(k)
-            elif msg[0] == "done":
-                self.results[k] = msg[2]
-                self.trials[k] = msg[2].trials
-                self.live.discard(k)
-            else:
-                raise RuntimeError(f"island {k} failed: {msg[2]}")
         stop = min(self.best) <= self.target or self.stop_reason is not None
         if self.callback is not None and (waiting or local is not None):
             i = int(np.argmin(self.best))
@@ -295,15 +287,30 @@ class _Rounds:
         self.answer_pending()
         return stop
 
+    def _book(self, k: int, msg: tuple, waiting: list) -> None:
+        """One island's report: its progress (it then waits for the word), its result or its error."""
+        if msg[0] == "progress":
+            _, _, self.trials[k], self.best[k], self.order[k] = msg
+            waiting.append(k)
+        elif msg[0] == "done":
+            self.results[k] = msg[2]
+            self.trials[k] = msg[2].trials
+            self.live.discard(k)
+        else:
+            raise RuntimeError(f"island {k} failed: {msg[2]}")
+
     def answer_pending(self) -> None:
-        """Give the waiting workers the word (also those a Ctrl-C left unanswered)."""
+        """Give the waiting workers the word (also those a Ctrl-C left unanswered); a Ctrl-C cannot
+        come between taking a worker off the list and answering it."""
         say = "go" if self.stop_reason is None else "stop"
-        while self.pending:
-            k = self.pending.pop()
-            try:
-                self.conns[k].send(say)
-            except (BrokenPipeError, OSError):
-                self.live.discard(k)
+        with signals_deferred():
+            while self.pending:
+                k = self.pending[-1]
+                try:
+                    self.conns[k].send(say)
+                except (BrokenPipeError, OSError):
+                    self.live.discard(k)
+                self.pending.pop()
 
 
 def solve_islands(problem: Problem, *, jobs: int, seed: int | None = None, algorithm: str = SIGNATURE,
@@ -397,12 +404,12 @@ def solve_islands(problem: Problem, *, jobs: int, seed: int | None = None, algor
             p = ctx.Process(target=_island, daemon=True,
                             args=(k, tasks[k], problem, child, os.getpid(),
                                   [parent, *conns.values()]))
-            with signals_blocked():  # no Ctrl-C reaches the child before it ignores it (die_with_parent)
-                p.start()
-            child.close()
-            conns[k] = parent
-            rounds.live.add(k)
-            procs.append(p)
+            with signals_blocked():  # no Ctrl-C reaches the child before it ignores it (die_with_parent),
+                p.start()  # nor comes between starting a worker and booking it
+                child.close()
+                conns[k] = parent
+                rounds.live.add(k)
+                procs.append(p)
 
     rounds = _Rounds(n_islands, conns, target, callback, time.perf_counter())
     interrupted = False
@@ -430,8 +437,6 @@ def solve_islands(problem: Problem, *, jobs: int, seed: int | None = None, algor
     except KeyboardInterrupt:
         interrupted = True
     finally:
-        from nbst.outputs import signals_deferred
-
         _give(baton)  # an interrupted island 0 may still hold it
         with signals_deferred(reraise=False) as late:  # a Ctrl-C cannot cut the drain short: the islands' best
             if interrupted or rounds.live:
