@@ -229,6 +229,41 @@ def test_a_damaged_or_foreign_run_file_is_reported_and_rerun(swap, tmp_path, cap
     X.curves_rows([again])  # the summaries read it
 
 
+@pytest.mark.parametrize("field, value", [
+    ("trials_per_s", float("inf")),  # a JSON Infinity: the table once failed on it (TypeError)
+    ("cost", float("-inf")),  # once accepted, and printed as the best cost
+    ("cost", float("nan")),
+    ("cost", float("inf")),  # nbst writes an infinite cost as "inf", never as Infinity
+    ("cost", -1.0),
+    ("order", 3),  # 2 disks
+    ("trials", -5),
+    ("seed", 99),  # not the run's seed
+    ("history", [[1, float("-inf"), 1]]),
+    ("history", [[10**9, 1.0, 1]]),  # an improvement after the last trial
+    ("velocities", [[float("nan"), 0.0], [0.0, 0.0]]),
+    ("wall_time", float("inf")),
+    ("first_full_order_trial", 0),
+])
+def test_a_run_file_with_a_number_out_of_bounds_is_reported_and_rerun(swap, tmp_path, capsys, field, value):
+    """Run files pass the input gate every input passes: finite and bounded numbers, or one line
+    and the run is done again (issue 35, round-4 audit)."""
+    spec = X.make_specs([swap], ["random"], runs=1, trials=300)[0]
+    first = X.run_specs([spec], tmp_path, workers=1, progress=False)[0]
+    path = tmp_path / spec.relpath()
+    d = json.loads(path.read_text())
+    d[field] = value
+    path.write_text(json.dumps(d))  # Python's json writes Infinity / NaN literals, as a hand edit might
+    capsys.readouterr()
+    why = X.check_run_file(path, spec)[1]
+    assert why and repr(field) in why, why
+    again = X.run_specs([spec], tmp_path, workers=1, progress=False)[0]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and "running it again" in err[0], err
+    _same(first, again)
+    rows = X.compare_rows([again], ["random"]) + X.ablation_rows([again], ["random"])
+    assert all(X.fmt(v) for r in rows for v in r.values())  # the tables print
+
+
 @pytest.mark.parametrize("name", ["..", ".", "../../escape", "/abs", "a/../../b", ".hidden", "é" * 200, ""])
 def test_run_files_stay_inside_runs(swap, tmp_path, name):
     d = dict(SWAP, name=name)

@@ -167,20 +167,62 @@ def run_one(spec: RunSpec) -> dict:
             **{k: m[k] for k in keep if k in m}, "velocities": result.velocities.tolist()}
 
 
-def _number(x) -> bool:
-    return (isinstance(x, (int, float)) and not isinstance(x, bool)) or x in ("inf", "-inf")
+#: Largest number a run file may hold where nbst writes a count or a cost (far above any real
+#: run: 10^12 trials is the CLI's budget limit; a cost is at most N x the box diagonal squared).
+RUN_FILE_MAX = 1e300
 
 
-def _int(x) -> bool:
-    return isinstance(x, int) and not isinstance(x, bool)
+def _finite(x, lo: float = 0.0, hi: float = RUN_FILE_MAX) -> bool:
+    """A finite number (not a bool) in [lo, hi]."""
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and lo <= x <= hi
+
+
+def _cost(x) -> bool:
+    """A cost as nbst writes it: a finite number >= 0, or "inf" (strict JSON's infinity: a run
+    whose every simulation was cut off). Never -inf, NaN or a JSON ``Infinity``."""
+    return x == "inf" or _finite(x)
+
+
+def _int(x, lo: int = 0, hi: float = RUN_FILE_MAX) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool) and lo <= x <= hi
+
+
+def _run_file_rules(d: dict, spec: "RunSpec") -> tuple:
+    """(field, test, required) for every field of a run file that the summaries read."""
+    n = len(spec.problem.get("disks", ()))
+    trials = d.get("trials") if _int(d.get("trials")) else 0
+
+    def history(h) -> bool:
+        return isinstance(h, list) and len(h) <= trials + 1 and all(
+            isinstance(e, list) and len(e) == 3 and _int(e[0], 0, trials) and _cost(e[1]) and _int(e[2], 0, n)
+            for e in h)
+
+    def velocities(v) -> bool:
+        return isinstance(v, list) and len(v) == n and all(
+            isinstance(p, list) and len(p) == 2 and _finite(p[0], -RUN_FILE_MAX) and _finite(p[1], -RUN_FILE_MAX)
+            for p in v)
+
+    return (("n", lambda x: x == n, True),
+            ("trials", lambda x: _int(x, 0, 10**12), True),
+            ("seed", lambda x: x == spec.seed, True),
+            ("cost", _cost, True),
+            ("order", lambda x: _int(x, 0, n), True),
+            ("history", history, True),
+            ("velocities", velocities, True),
+            ("first_full_order_trial", lambda x: x is None or _int(x, 1, trials), False),
+            ("trials_per_s", lambda x: x is None or _finite(x), False),
+            ("wall_time", lambda x: x is None or _finite(x), False),
+            ("restarts", lambda x: x is None or _int(x), False),
+            ("stopped", lambda x: x is None or isinstance(x, str), False))
 
 
 def check_run_file(path: Path, spec: RunSpec) -> tuple[dict | None, str | None]:
     """A finished run's file, checked: ``(result, None)`` when it can be reused, ``(None, None)``
     when there is no file, ``(None, why)`` when a file is there but cannot be used (not JSON, not
-    a run file, another run's, or damaged: a field the summaries read is missing or of the
-    wrong type); the caller reports ``why`` and runs it again. The file goes through nbst's
-    input gate (``nbst.problem.read_json``: a regular file, size and shape bounded)."""
+    a run file, another run's, or damaged: a field the summaries read is missing, of the wrong
+    type, not finite, or out of its bounds); the caller reports ``why`` in one line and runs it
+    again. The file goes through nbst's input gate (``nbst.problem.read_json``: a regular file,
+    size and shape bounded), then every number through a finite and bounded test."""
     from nbst.problem import read_json
 
     if not os.path.lexists(path):
@@ -193,19 +235,20 @@ def check_run_file(path: Path, spec: RunSpec) -> tuple[dict | None, str | None]:
         return None, "not an nbst experiment run file"
     if d.get("key") != spec.key():
         return None, "holds another run (its key differs: the problem file or settings changed)"
-    for field, ok in (("cost", _number), ("order", _int), ("n", _int), ("trials", _int), ("seed", _int),
-                      ("history", lambda h: isinstance(h, list) and all(
-                          isinstance(e, list) and len(e) == 3 and _int(e[0]) and _number(e[1]) and _int(e[2])
-                          for e in h)),
-                      ("velocities", lambda v: isinstance(v, list) and len(v) == d.get("n"))):
+    for field, ok, required in _run_file_rules(d, spec):
         if field not in d:
-            return None, f"damaged: {field!r} is missing"
+            if required:
+                return None, f"damaged: {field!r} is missing"
+            continue
         if not ok(d[field]):
-            return None, f"damaged: {field!r} is not what nbst writes there"
-    for field, ok in (("first_full_order_trial", _int), ("trials_per_s", _number)):
-        if d.get(field) is not None and not ok(d[field]):
-            return None, f"damaged: {field!r} is not what nbst writes there"
+            return None, f"damaged: {field!r} is not what nbst writes there ({_shown(d[field])})"
     return d, None
+
+
+def _shown(x) -> str:
+    """A refused value, short and printable."""
+    text = repr(x)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _load_finished(path: Path, spec: RunSpec) -> dict | None:
