@@ -191,3 +191,24 @@ def test_worst_case_bounds_the_others_and_big_errors_are_flagged():
     p = make_problem([[400, 300]], 10.0, box=(800, 600), t_final=5.0)
     pr = analyze(p, np.array([[2537.0, -1311.0]]), timestep=0.01)["prediction"]
     assert pr["impacts"] > 20 and pr["predicted_error_max"] > 10.0 and not pr["within_first_order"]
+
+
+def test_a_strict_validation_that_fails_names_the_amplification_and_robust_mode(capsys):
+    """Issue 35, item 6: where ``validate --strict`` fails on a chaotic motion, its message says how
+    chaotic (the amplification, from this module) and what to do (``nbst solve --robust``)."""
+    pytest.importorskip("mujoco")
+    import re
+    from pathlib import Path
+
+    from nbst.cli import main
+    from nbst.problem import load_problem
+    from nbst.solution import load_solution
+
+    f = Path(__file__).resolve().parents[1] / "models" / "scenes" / "over5" / "solution.json"
+    assert main(["validate", "over5", str(f), "--strict", "-q"]) == 1  # this stored motion is chaotic
+    err = capsys.readouterr().err
+    m = re.search(r"amplification is ([0-9.e+]+) s", err)
+    assert m and "nbst solve over5 --robust" in err, err
+    p = load_problem("over5")
+    amp = analyze(p, load_solution(f, p).velocities)["amplification"]
+    assert float(m.group(1)) == pytest.approx(amp, rel=1e-3)  # printed to 4 digits

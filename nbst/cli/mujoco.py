@@ -237,8 +237,28 @@ def cmd_validate(args) -> int:
         if args.report:
             print(f"report     {args.report}/report.html, {args.report}/report.json")
     if args.strict and not val.signatures_agree:
+        print(_strict_hint(problem, v, val, args), file=sys.stderr)
         return 1
     return 0
+
+
+def _strict_hint(problem, v, val, args) -> str:
+    """What --strict's failure means and what to do: the motion's amplification (how far a velocity
+    error of 1 unit/s moves the final positions, ``nbst.sim.sensitivity``) and ``nbst solve --robust``."""
+    sens = val.sensitivity or {}
+    amp = sens.get("amplification")
+    if amp is None and not sens.get("error"):
+        try:
+            from nbst.sim.sensitivity import analyze
+
+            amp = analyze(problem, v).get("amplification")
+        except (RuntimeError, ValueError):
+            amp = None
+    what = (f"its amplification is {amp:.4g} s (a velocity error of 1 unit/s moves a final position by up to "
+            f"{amp:.4g} units), so a fixed-step engine's small per-impact errors can change where disks end"
+            if amp is not None else "a fixed-step engine's small per-impact errors changed where disks end")
+    return (f"nbst validate: --strict: the signature under MuJoCo differs from the exact one: {what}. "
+            f"For a motion that survives it: nbst solve {args.problem} --robust -o SOLUTION.json")
 
 
 #: Work (MuJoCo steps x bodies) above which validate shows progress on stderr: ~0.3 s of fixed
