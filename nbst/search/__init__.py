@@ -74,7 +74,8 @@ if TYPE_CHECKING:
     from nbst.search.driver import SearchRun
     from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, ProgressCallback, SearchParams, SearchProgress,
                                     StopReason, mirror_images, variant_params)
-    from nbst.search.variants import DEFAULT_VARIANT, NBST_DEFAULTS, VARIANTS, Variant, roundoff_cost
+    from nbst.search.variants import (DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, NBST_DEFAULTS, VARIANTS,
+                                      Variant, roundoff_cost)
 
 #: Each public name and the module it is defined in (loaded on first use).
 _HOMES = {
@@ -82,7 +83,7 @@ _HOMES = {
     "SearchRun": "driver", "roundoff_cost": "variants",
     "ALGORITHM": "params", "ALGORITHM_NBST": "params", "ProgressCallback": "params", "SearchParams": "params",
     "SearchProgress": "params", "StopReason": "params", "mirror_images": "params", "variant_params": "params",
-    "DEFAULT_VARIANT": "variants", "NBST_DEFAULTS": "variants", "VARIANTS": "variants", "Variant": "variants",
+    "DEFAULT_MAX_TRIALS": "variants", "DEFAULT_PATIENCE": "variants", "DEFAULT_VARIANT": "variants", "NBST_DEFAULTS": "variants", "VARIANTS": "variants", "Variant": "variants",
 }
 
 __all__ = sorted(_HOMES)
