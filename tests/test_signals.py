@@ -159,7 +159,7 @@ def test_solve_writes_the_best_so_far_whatever_the_signals(tmp_path, jobs, case)
 
 @pytest.mark.slow
 @pytest.mark.parametrize("delay", [0.5, 2.0, 8.0])
-def test_solve_writes_the_best_motion_so_far_at_any_moment(tmp_path, delay):
+def test_solve_writes_the_best_motion_so_far_at_any_moment(tmp_path, monkeypatch, delay):
     """Issue 35, item 5: a signal at any moment after the problem is read writes the best motion so
     far, the straight start included (before any search result: at 0.5 s the numba load or the
     backward planner may still run). ``--jobs 1`` on over5: nbst's portfolio, planner first. The
@@ -170,6 +170,7 @@ def test_solve_writes_the_best_motion_so_far_at_any_moment(tmp_path, delay):
     from nbst import load_problem, load_solution, simulate
 
     out = tmp_path / "sol.json"
+    monkeypatch.setenv("COLUMNS", "250")  # a terminal wide enough for the whole bar
     t0 = time.monotonic()
     run = Run(["solve", HARD, "-o", str(out), "--jobs", "1", "--max-trials", "1000000000", "--patience", "0",
                "--target-cost", "0", "--seed", "3"], tmp_path)

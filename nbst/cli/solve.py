@@ -87,52 +87,42 @@ def register(sub) -> None:
 
 
 class _Progress:
-    """``nbst solve``'s progress bar: shown as soon as the problem is read (its clock starts with the
-    command), fed by the search's reports, and left showing what the summary says."""
+    """``nbst solve``'s progress bar (``nbst.progress.Bar``): shown as soon as the problem is read, on
+    the command's clock, fed by the search's reports, and closed on the written result, so its last
+    line and the summary quote the same trials, seconds, cost and disks on target."""
 
     def __init__(self, args, problem, label: str, total: int | None) -> None:
-        self.args, self.problem, self.done, self.bar = args, problem, 0, None
-        if args.quiet:
-            return
-        from nbst.progress import progress_bar
+        from nbst import progress
 
-        self.bar = progress_bar(total=total, unit="trial", unit_scale=True, file=sys.stderr, dynamic_ncols=True,
-                                desc=f"solve {problem.name} ({label})", smoothing=0.1)
-        self.bar.set_postfix_str("loading the simulator and the straight start")
+        self.problem = problem
+        # --max-trials is a budget the search may stop short of (patience, target): no ETA over it
+        self.bar = progress.Bar(f"solve {problem.name} ({label})", total, unit="trial", bound=True,
+                                start=progress.command_start(), quiet=args.quiet)
+        self.bar.note("loading the simulator and the straight start")
 
     def report(self, p) -> None:
         """A search's report (``SearchProgress``): trials done, the best cost and order so far."""
-        if self.bar is None:
-            return
         post = f"best cost {p.best_cost:.6g}, {p.best_order}/{self.problem.n} disks on target"
         if p.stall is not None:  # the many-body search: rounds without a better motion, not an ETA
             post += f", {p.stall[0]} of {p.stall[1]} rounds without a better motion"
-        self._show(p.trials, post)
+        self.bar.note(post)
+        self.bar.set(p.trials)
 
-    def finish(self, r) -> None:
-        """The written result: the bar's last state is the summary's (trials, cost, disks on target)."""
-        if self.bar is not None:
-            self._show(r.trials, f"best cost {r.cost:.6g}, {r.order}/{self.problem.n} disks on target")
+    def close(self, r) -> None:
+        """The written result is the bar's last state (what the summary says)."""
+        self.bar.close(n=r.trials, note=f"best cost {r.cost:.6g}, {r.order}/{self.problem.n} disks on target")
 
-    def _show(self, trials: int, post: str) -> None:
-        self.bar.update(trials - self.done)
-        self.done = trials
-        self.bar.set_postfix_str(post, refresh=False)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
+    @property
+    def seconds(self) -> float:
+        return self.bar.seconds
 
 
 def cmd_solve(args) -> int:
-    import time
-
     from nbst.outputs import prepare_output, signals_deferred, write_json_atomic
     from nbst.problem import ProblemError, load_problem
     from nbst.search.variants import roundoff_cost
     from nbst.solvers import SIGNATURE, SOLVERS
 
-    t0 = time.monotonic()  # the command's clock: the summary's seconds
     problem = load_problem(args.problem)
     # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP from here on stops the solve
     # and writes the best motion so far: the search's, or the straight start before it has one.
@@ -199,14 +189,16 @@ def cmd_solve(args) -> int:
                 if result is None:
                     result = fallback.with_meta({"stopped": "interrupted"})
                 if bar is not None:
-                    bar.finish(result)
-                    bar.close()
+                    bar.close(result)
                 write_json_atomic(args.output, result.to_dict())
             interrupted = interrupted or bool(late)
             break
         except KeyboardInterrupt:
             interrupted = True
-    return _summary(args, problem, result, target_cost, interrupted, time.monotonic() - t0)
+    from nbst.progress import since_start
+
+    seconds = bar.seconds if bar is not None else since_start()
+    return _summary(args, problem, result, target_cost, interrupted, seconds)
 
 
 def _draw_seed() -> int:
@@ -223,8 +215,10 @@ def _first_report(r):
 
 
 def _summary(args, problem, r, target_cost: float, late: bool, seconds: float) -> int:
-    """The summary line (and robust mode's line); the exit status. ``seconds``: since the command began."""
+    """The summary line (and robust mode's line); the exit status. ``seconds``: the bar's, since the
+    command began."""
     from nbst.constants import many_body
+    from nbst.progress import count_text, seconds_text
     from nbst.search.api import ALGORITHM_STRAIGHT
 
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),
@@ -237,7 +231,7 @@ def _summary(args, problem, r, target_cost: float, late: bool, seconds: float) -
     shown = "in the file" if many_body(problem.n) else r.signature
     start = " (the straight start: no search result yet)" if r.algorithm == ALGORITHM_STRAIGHT else ""
     line = (f"cost {r.cost:.6g}, {r.order}/{problem.n} disks on target (signature {shown}){start} "
-            f"after {r.trials} trials in {seconds:.1f} s, seed {r.seed}"
+            f"after {count_text(r.trials)} trials in {seconds_text(seconds)}, seed {r.seed}"
             f"{island}; stopped: {why}; "
             f"wrote {args.output}")
     if r.stopped == "interrupted" or late:
