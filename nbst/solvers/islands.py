@@ -1,16 +1,13 @@
 """Independent searches on every core ("islands"), stopped together, reproducible for a given K.
 
-``nbst solve --jobs K`` runs K copies of one search (``nbst.search.solve`` or a baseline
-through ``nbst.solvers.dispatch.run_solver``), each from its own seed and with 1/K of the trial
-budget: island 0 in this process, the others in K - 1 worker processes started after
-island 0's first chunk of trials (if that did not already reach the target). They run
-in lockstep: after every chunk of trials each island reports its best cost to the
-parent and waits for a go-ahead. The parent stops
-all of them at the first round in which any island has reached the target cost (or
-when every island has ended by budget or patience), then takes the best island's
-solution. Because every decision is taken at a round boundary, from states that depend
-only on each island's seed, the result is the same for the same (seed, K), however the
-operating system schedules the processes.
+``nbst solve --jobs K`` runs K copies of one registered solver (``nbst.solvers.dispatch.run_solver``),
+each from its own seed and with 1/K of the trial budget: island 0 in this process, the others in
+K - 1 worker processes started after island 0's first chunk of trials (if that did not already
+reach the target). They run in lockstep: after every chunk each island reports its best cost to
+the parent and waits for a go-ahead. The parent stops all of them at the first round in which
+any island has reached the target cost (or when every island has ended by budget or patience),
+then takes the best island's solution. Every decision is taken at a round boundary, from states
+that depend only on each island's seed: the same (seed, K) gives the same result.
 
 Seeds: island k gets ``island_seeds(seed, K)[k]`` (numpy's ``SeedSequence(seed).spawn``);
 with K = 1 there is no worker and the search is exactly ``solve(seed=seed)``.
@@ -22,12 +19,10 @@ The portfolio: nbst's default search on a problem with noncueable disks is a por
 two configurations, ``PORTFOLIO`` = ("nbst", "nbst-noplan"): island k runs
 ``PORTFOLIO[k % 2]`` (with the backward planner on even islands, without it on odd
 ones), because neither dominates the other on over5 (docs/search.md, "The portfolio").
-With ``jobs`` = 1 the portfolio's two islands run in this process, in threads that take
-turns chunk by chunk (one chunk running at a time, so one core), and the result is the
-same as with ``jobs`` = 2. A portfolio island whose search stops by patience with budget
-left restarts with the next configuration from a fresh seed (``run_island``). On an
-all-cueable problem the planner never runs, so both configurations are one search and the
-portfolio does not apply (``portfolio_for``).
+With ``jobs`` = 1 its two islands take turns in threads of this process, chunk by chunk (one
+core): the result of ``jobs`` = 2. A portfolio island whose search stops by patience with budget
+left restarts with the next configuration from a fresh seed (``run_island``). On an all-cueable
+problem the planner never runs: one search, no portfolio (``portfolio_for``).
 """
 from __future__ import annotations
 
