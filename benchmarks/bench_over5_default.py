@@ -20,7 +20,7 @@ import time
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], allow_abbrev=False)
     ap.add_argument("--seeds", default="1,2,3,4,5")
     ap.add_argument("--max-trials", type=int, default=1_000_000)
     ap.add_argument("--variants", default="nbst-noplan,nbst,A")
