@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import dataclass
 
 from nbst.cli.args import JOBS, MAX_TRIALS, SEED, TARGET_COST, TRIALS_MAX, Bounded, with_limits
 from nbst.cli.flags import add_seed
@@ -117,88 +118,122 @@ class _Progress:
         return self.bar.seconds
 
 
-def cmd_solve(args) -> int:
-    from nbst.outputs import prepare_output, signals_deferred, write_json_atomic
-    from nbst.problem import ProblemError, load_problem
+@dataclass(frozen=True)
+class _Options:
+    """A solve's options once checked (the seed drawn, so that even the straight start records it)."""
+
+    algorithm: str
+    variant: str | None  # None: a solver without variants
+    robust: bool
+    target_cost: float
+    seed: int
+    label: str
+
+
+def _options(args, problem) -> _Options:
+    """The checks before any work: the output path (a long solve must not end unable to write, nor
+    overwrite its input) and the options that apply to the solver asked for."""
+    from nbst.outputs import prepare_output
+    from nbst.problem import ProblemError
     from nbst.search.variants import roundoff_cost
     from nbst.solvers import SIGNATURE, SOLVERS
+
+    prepare_output(args.output, inputs=(args.problem,))
+    algorithm = getattr(args, "algorithm", SIGNATURE)
+    robust = bool(getattr(args, "robust", False))
+    takes_variants = SOLVERS[algorithm].variants
+    for option, given in (("--variant", args.variant != DEFAULT_VARIANT), ("--robust", robust)):
+        if given and not takes_variants:
+            raise ProblemError("<arguments>", option, f"applies to --algorithm {SIGNATURE} only, not {algorithm}")
+    label = (args.variant if takes_variants else algorithm) + (", robust" if robust else "")
+    return _Options(algorithm=algorithm, variant=args.variant if takes_variants else None, robust=robust,
+                    target_cost=roundoff_cost(problem) if args.target_cost is None else args.target_cost,
+                    seed=args.seed if args.seed is not None else _draw_seed(), label=label)
+
+
+def _straight(args, problem, o: _Options):
+    from nbst.search import straight_start
+
+    return straight_start(problem, seed=o.seed, max_trials=args.max_trials, patience=args.patience,
+                          target_cost=o.target_cost, variant=o.variant)
+
+
+def cmd_solve(args) -> int:
+    from nbst.cli.args import cluster_client
+    from nbst.constants import many_body
+    from nbst.outputs import signals_deferred
+    from nbst.problem import load_problem
 
     problem = load_problem(args.problem)
     # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP from here on stops the solve
     # and writes the best motion so far: the search's, or the straight start before it has one.
-    result = fallback = client = bar = None
+    o = result = fallback = client = bar = None
     interrupted = False
     try:
         try:
-            # checks, the bar, the heavy imports (numba, whose import a signal must not cut in half)
-            # and the straight start: a signal here waits for them (about a second), then stops the solve
+            with signals_deferred():  # a signal here waits for the checks, then stops the solve
+                o = _options(args, problem)
+            # before the bar: an unreachable --cluster address is one line (ProblemError, exit 2)
+            client = cluster_client(args)
+            # the bar, the heavy imports (numba, whose import a signal must not cut in half) and the
+            # straight start: a signal here waits for them (about a second), then stops the solve
             with signals_deferred():
-                # before the search: a long solve must not end unable to write, nor overwrite its input
-                prepare_output(args.output, inputs=(args.problem,))
-                algorithm = getattr(args, "algorithm", SIGNATURE)
-                robust = bool(getattr(args, "robust", False))
-                takes_variants = SOLVERS[algorithm].variants
-                for option, given in (("--variant", args.variant != DEFAULT_VARIANT), ("--robust", robust)):
-                    if given and not takes_variants:
-                        raise ProblemError("<arguments>", option,
-                                           f"applies to --algorithm {SIGNATURE} only, not {algorithm}")
-                variant = args.variant if takes_variants else None
-                label = (args.variant if takes_variants else algorithm) + (", robust" if robust else "")
-                target_cost = roundoff_cost(problem) if args.target_cost is None else args.target_cost
-                seed = args.seed if args.seed is not None else _draw_seed()  # even the straight start records it
-                from nbst.constants import many_body
-
-                # the many-body search stops after rounds without a better motion, long before its trial
-                # budget as a rule: no total (so no ETA over --max-trials)
-                bar = _Progress(args, problem, label,
-                                None if many_body(problem.n) and takes_variants else args.max_trials)
+                # the many-body search stops after rounds without a better motion, long before its
+                # trial budget as a rule: no total (so no ETA over --max-trials)
+                bar = _Progress(args, problem, o.label,
+                                None if many_body(problem.n) and o.variant is not None else args.max_trials)
                 if not args.quiet:  # a cold numba cache: say so before the first kernel compiles
                     from nbst.warmup import announce, search_kernels
 
                     announce(search_kernels())
-                from nbst.search import straight_start
                 from nbst.solvers.islands import solve_islands
 
-                fallback = straight_start(problem, seed=seed, max_trials=args.max_trials, patience=args.patience,
-                                          target_cost=target_cost, variant=variant)
+                fallback = _straight(args, problem, o)
             bar.report(_first_report(fallback))
-            from nbst.cli.args import cluster_client
-            from nbst.parallel import default_jobs
-
-            client = cluster_client(args)  # None without --cluster; ProblemError (exit 2, one line) if unreachable
             if args.jobs is not None:
                 jobs = args.jobs
             elif client is not None:
                 jobs = 1 + sum(w.get("nthreads", 1) for w in client.scheduler_info().get("workers", {}).values())
             else:
+                from nbst.parallel import default_jobs
+
                 jobs = default_jobs()
             # K islands on K cores, or (the many-body search past 63 disks) one search on K threads
-            result = solve_islands(problem, jobs=jobs, algorithm=algorithm, seed=seed, max_trials=args.max_trials,
-                                   patience=args.patience, target_cost=target_cost, variant=variant, robust=robust,
-                                   callback=bar.report, cluster=client)
+            result = solve_islands(problem, jobs=jobs, algorithm=o.algorithm, seed=o.seed,
+                                   max_trials=args.max_trials, patience=args.patience, target_cost=o.target_cost,
+                                   variant=o.variant, robust=o.robust, callback=bar.report, cluster=client)
         finally:
             if client is not None:
                 client.close()
     except KeyboardInterrupt:  # before the search returned, or just after: what is there is written
         interrupted = True
-    if result is None and fallback is None:  # stopped in the instant after the problem was read
+    if o is None:  # stopped before the checks were done: nothing to write
         raise KeyboardInterrupt
-    for attempt in (1, 2):  # a first signal that lands between the search and this block: once more
-        try:
-            with signals_deferred(reraise=False) as late:  # a signal during the write waits for it
-                if result is None:
-                    result = fallback.with_meta({"stopped": "interrupted"})
-                if bar is not None:
-                    bar.close(result)
-                write_json_atomic(args.output, result.to_dict())
-            interrupted = interrupted or bool(late)
-            break
-        except KeyboardInterrupt:
-            interrupted = True
+    result, late = _write(args, problem, o, result, fallback, bar)
     from nbst.progress import since_start
 
     seconds = bar.seconds if bar is not None else since_start()
-    return _summary(args, problem, result, target_cost, interrupted, seconds)
+    return _summary(args, problem, result, o.target_cost, interrupted or late, seconds)
+
+
+def _write(args, problem, o: _Options, result, fallback, bar):
+    """Write the result (the straight start if there is none yet), with signals held; returns
+    (what was written, whether a signal came meanwhile)."""
+    from nbst.outputs import signals_deferred, write_json_atomic
+
+    late = False
+    for attempt in (1, 2):  # a first signal that lands between the search and this block: once more
+        try:
+            with signals_deferred(reraise=False) as got:  # a signal during the write waits for it
+                if result is None:
+                    result = (fallback or _straight(args, problem, o)).with_meta({"stopped": "interrupted"})
+                if bar is not None:
+                    bar.close(result)
+                write_json_atomic(args.output, result.to_dict())
+            return result, late or bool(got)
+        except KeyboardInterrupt:
+            late = True
+    raise KeyboardInterrupt  # not reached: the second attempt holds every signal
 
 
 def _draw_seed() -> int:
