@@ -101,11 +101,9 @@ def test_generate_stage_bars_end_at_their_totals(tmp_path, capsys, monkeypatch):
 
 
 # solve and bowl solve: their commands belong to others (issue 35's items 4 and 5: H1 and H2
-# adopt nbst.progress there). Until they do, these say how their bars and summaries disagree
-# today; strict, so the first run in which they agree fails here and the marks come off.
+# adopt nbst.progress there; solve has). Until they do, these say how their bars and summaries
+# disagree today; strict, so the first run in which they agree fails here and the marks come off.
 
-@pytest.mark.xfail(strict=True, reason="solve's bar starts at its first report and says 0.01 s where the "
-                                       "summary says 0.6 s: nbst.progress not adopted in nbst/cli/solve.py yet")
 def test_solve_bar_ends_where_the_summary_does(tmp_path, capsys):
     assert main(["solve", "over5", "-o", str(tmp_path / "s.json"), "--max-trials", "3000", "--jobs", "1",
                  "--seed", "1"]) == 0
