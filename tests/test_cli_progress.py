@@ -100,9 +100,7 @@ def test_generate_stage_bars_end_at_their_totals(tmp_path, capsys, monkeypatch):
         assert sweeps[-1]["n"] == m.group(1)  # the bar's passes are the summary's
 
 
-# solve and bowl solve: their commands belong to others (issue 35's items 4 and 5: H1 and H2
-# adopt nbst.progress there; solve has). Until they do, these say how their bars and summaries
-# disagree today; strict, so the first run in which they agree fails here and the marks come off.
+# solve and bowl solve: their commands are H1's and H2's (issue 35, items 4-5); both use nbst.progress.
 
 def test_solve_bar_ends_where_the_summary_does(tmp_path, capsys):
     assert main(["solve", "over5", "-o", str(tmp_path / "s.json"), "--max-trials", "3000", "--jobs", "1",
@@ -117,13 +115,13 @@ def test_solve_bar_ends_where_the_summary_does(tmp_path, capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="bowl solve's bar counts rollouts of a budget (1/3,000) and its own clock "
-                                       "(0.72 s) where the summary says 1 launch in 0.1 s: nbst.progress not "
-                                       "adopted in nbst/cli/bowl.py yet")
 def test_bowl_solve_bar_ends_where_the_summary_does(tmp_path, capsys):
+    """It said "1/3,000 rollouts ... 0.72 s" and then "1 launch ... in 0.1 s" (issue 35)."""
     pytest.importorskip("mujoco")
     assert main(["bowl", "solve", "--leave", "7,10", "-o", str(tmp_path / "shot.json"), "--seed", "1"]) == 0
     err = capsys.readouterr().err
     bar = list(_finals(err).values())[-1]
     summary = [ln for ln in err.splitlines() if ln.startswith("nbst bowl solve:")][-1]
-    assert f" in {bar['t']}" in summary and bar["n"] in summary, (bar.group(0), summary)
+    m = re.search(r"after ([\d,]+) rollouts", summary)
+    assert m and m.group(1) == bar["n"] and f" in {bar['t']}," in summary, (bar.group(0), summary)
+    assert "ETA" not in err  # a budget it stops short of: no ETA over it
