@@ -50,8 +50,10 @@ LOG_INTERVAL = 10.0
 TTY_INTERVAL = 0.2
 #: Seconds between two ticks of the elapsed time while no update comes (a terminal bar).
 TICK_S = 1.0
-#: Seconds after which a bar in a log writes its first line (work that ends sooner writes only its
-#: final line: a log is not filled with the starts of short stages); a terminal bar shows at once.
+#: Seconds after its clock's start (``start``) at which a bar in a log writes its first line (work
+#: that ends sooner writes only its final line: a log is not filled with the starts of short
+#: stages; a bar whose clock started with the command writes it as soon as it is made); a
+#: terminal bar shows at once.
 FIRST_LINE_S = 1.0
 #: Seconds of work measured after the first update before an ETA is shown (the warm-up before
 #: the first update, compiling say, is never part of a rate).
@@ -284,8 +286,8 @@ class Bar:
 
     def _tick(self) -> None:
         wait = TICK_S if self.tty else max(self.interval, TICK_S)
-        if not self.tty:
-            if self._stop.wait(FIRST_LINE_S):
+        if not self.tty:  # the first line FIRST_LINE_S after the bar's clock started (at once if that has passed)
+            if self._stop.wait(max(0.0, self.t0 + FIRST_LINE_S - _now())):
                 return
             self._draw(_now())
         while not self._stop.wait(wait):

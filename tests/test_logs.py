@@ -145,6 +145,11 @@ def test_a_log_gets_the_first_line_soon_and_a_short_stage_only_its_last(monkeypa
     time.sleep(0.6)  # a stage that runs: its first line comes after FIRST_LINE_S, before any update
     assert out.getvalue().startswith("long: 0/5 steps (0%) in ")
     bar.close()
+    out = io.StringIO()  # a bar on the command's clock, made after FIRST_LINE_S (loading took long): at once
+    bar = Bar("render", 5, unit="frame", file=out, start=progress.command_start() - 1.0)
+    time.sleep(0.1)
+    assert out.getvalue().startswith("render: 0/5 frames (0%) in ")
+    bar.close()
 
 
 def test_solve_into_a_log_has_no_carriage_returns(tmp_path):
