@@ -215,7 +215,7 @@ def _grid_problem(n: int, *, full: bool = False, k: int = 317) -> dict:
     return {"box": [40.0 * k + 40.0, 40.0 * (n // k + 2)], "t_final": 1, "target_radius": 10, "disks": disks}
 
 
-@pytest.mark.parametrize("full", [False, True])
+@pytest.mark.parametrize("full", [False, pytest.param(True, marks=pytest.mark.slow)])
 def test_the_promised_100000_disks_load(tmp_path, full):
     """README: problems of up to 100,000 disks load. The JSON value cap refused a minimal
     100,000-disk file (11 values a disk) before; now both forms are read."""
