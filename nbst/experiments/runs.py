@@ -190,7 +190,7 @@ def _int(x, lo: int = 0, hi: float = RUN_FILE_MAX) -> bool:
 def _run_file_rules(d: dict, spec: "RunSpec") -> tuple:
     """(field, test, required) for every field of a run file that the summaries read."""
     n = len(spec.problem.get("disks", ()))
-    trials = d.get("trials") if _int(d.get("trials")) else 0
+    trials: int = d["trials"] if _int(d.get("trials")) else 0
 
     def history(h) -> bool:
         return isinstance(h, list) and len(h) <= trials + 1 and all(

@@ -9,6 +9,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -144,7 +145,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = D
     if params.nbst_loop:
         if record_every > 0:
             raise ValueError("record_every is supported by the paper's loop only (variants A-H)")
-        advance = _NbstStepper(problem, params, s, prm, seed)
+        advance: _NbstStepper | _PaperStepper = _NbstStepper(problem, params, s, prm, seed)
     else:
         advance = _PaperStepper(problem, params, s, prm, rec_v)
     archive = None
@@ -364,7 +365,7 @@ class _NbstStepper:
         qs = np.zeros(S.N_QS, np.int64)
         s.op_count = np.zeros((S.N_OPS, 2), np.int64)
         s.best_cost = np.array([np.inf, np.inf])  # [overall, since the last restart]
-        self.planned = None
+        self.planned: Any = None  # the planner's result (nbst.search.planner.PlanResult), once it ran
         self.pl = S.Plans(np.zeros((0, problem.n, 2)), np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64))
         self.problem, self.params = problem, params
         self._weights(qs)  # without the planner's routes; start() plans, and weighs them in

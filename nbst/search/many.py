@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -308,7 +309,7 @@ class _Search:
         self.V = V
         self.tr = self.sim(V)
         self.score = self.score_of(self.tr)
-        self.best = None
+        self.best: Any = None  # (score, velocities, trajectory) of the best whole motion so far
         self.keep_best()
 
     def sim(self, V):

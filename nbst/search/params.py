@@ -155,7 +155,7 @@ class SearchParams:
 
 
 def _nonneg_int(_, v) -> bool:
-    return isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 0
+    return isinstance(v, (int, np.integer)) and not isinstance(v, bool) and bool(v >= 0)
 
 
 def _int_at_least(k: int):
@@ -164,7 +164,7 @@ def _int_at_least(k: int):
 
 def _nonneg(_, v) -> bool:
     return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v) \
-        and v >= 0
+        and bool(v >= 0)
 
 
 def _op_weights_ok(_, w) -> bool:

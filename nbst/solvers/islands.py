@@ -34,7 +34,7 @@ import queue
 import threading
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -135,7 +135,8 @@ def run_island(task: IslandTask, problem: Problem, callback: ProgressCallback | 
         return run_solver(task.algorithm, problem, request, callback)
     budget, seed0 = int(request.max_trials), int(request.seed or 0)
     first = configs.index(request.variant or configs[0])
-    spent, best, best_run, runs = 0, None, 0, []
+    spent, best, best_run = 0, None, 0
+    runs: list[dict[str, Any]] = []
     while True:
         j = len(runs)
         run_request = dataclasses.replace(request, variant=configs[(first + j) % len(configs)],
@@ -362,24 +363,27 @@ def solve_islands(problem: Problem, *, jobs: int, seed: int | None = None, algor
     if jobs == 1 and configs is None:
         return run_solver(algorithm, problem, request, callback)
     threads = jobs == 1  # the portfolio on one core: its islands take turns in threads of this process
-    n_islands = len(configs) if threads else jobs
+    cycle = configs or ()
+    n_islands = len(cycle) if threads else jobs
     seeds = island_seeds(seed, n_islands)
     budget = max(1, math.ceil(int(max_trials) / n_islands))
     target = -math.inf if target_cost is None else float(target_cost)
-    ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+    ctx: Any = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
     tasks = [IslandTask(algorithm, dataclasses.replace(request, seed=seeds[k], max_trials=budget,
-                                                       variant=configs[k % len(configs)] if configs else variant),
+                                                       variant=cycle[k % len(cycle)] if cycle else variant),
                         configs) for k in range(n_islands)]
-    conns, procs = {}, []
+    conns: dict[int, Any] = {}  # the parent's end of each worker's pipe
+    procs: list[Any] = []  # threads, processes or Dask futures
     baton = threading.RLock() if threads else None  # held by the island whose chunk runs
 
     def start_workers() -> None:
         if threads:
             for k in range(1, n_islands):
-                down, up = queue.Queue(), queue.Queue()
-                conns[k] = _ThreadConn(down, up)  # the parent sends down, hears up
+                q_down: queue.Queue = queue.Queue()
+                q_up: queue.Queue = queue.Queue()
+                conns[k] = _ThreadConn(q_down, q_up)  # the parent sends down, hears up
                 t = threading.Thread(target=_island_body, daemon=True, name=f"nbst-island-{k}",
-                                     args=(k, tasks[k], problem, _ThreadConn(up, down), baton))
+                                     args=(k, tasks[k], problem, _ThreadConn(q_up, q_down), baton))
                 t.start()
                 rounds.live.add(k)
                 procs.append(t)
