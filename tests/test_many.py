@@ -12,7 +12,8 @@ from nbst.errors import SolveError
 from nbst.problem import load_problem, problem_from_dict
 from nbst.search import run_search, solve
 from nbst.search.aim import pair_contact
-from nbst.search.many import ManyParams, conflicts, run_many, subproblem
+from nbst.search.local import conflicts, subproblem
+from nbst.search.many import ManyParams, run_many
 from nbst.sim import simulate
 
 
@@ -116,12 +117,13 @@ def test_the_search_is_never_worse_than_its_start_and_reproducible():
     start = simulate(p, p.straight_velocities())
     assert start.n_disk_disk > 10
     prm = ManyParams(patience_rounds=3)
-    v1, m1 = run_many(p, seed=7, max_trials=3000, patience=0, target_cost=1e-9, params=prm)
-    v2, m2 = run_many(p, seed=7, max_trials=3000, patience=0, target_cost=1e-9, params=prm)
+    r1 = run_many(p, seed=7, max_trials=3000, patience=0, target_cost=1e-9, params=prm)
+    r2 = run_many(p, seed=7, max_trials=3000, patience=0, target_cost=1e-9, params=prm)
+    v1, v2 = r1.velocities, r2.velocities
     np.testing.assert_array_equal(v1, v2)
     end = simulate(p, v1)
     assert end.order >= start.order and end.cost <= start.cost
-    assert m1["many"]["by_pair"] + m1["many"]["by_shot"] + m1["many"]["by_chain"] > 0
+    assert r1.stats["by_pair"] + r1.stats["by_shot"] + r1.stats["by_chain"] > 0
     # every disk of every conflict left misses its target by more than the threshold
     for idx in conflicts(p, end, 1e-9 / p.n):
         assert np.any(np.sum((end.final_positions[idx] - p.target[idx]) ** 2, axis=1) > 1e-9 / p.n)
@@ -213,10 +215,10 @@ def test_a_resting_disk_that_must_move_is_struck():
     assert planted.n_disk_disk == 1
     start = simulate(p, p.straight_velocities())
     assert start.order < p.n
-    v, meta = run_many(p, seed=3, max_trials=2000, patience=0, target_cost=1e-12,
-                       params=ManyParams(patience_rounds=3))
+    run = run_many(p, seed=3, max_trials=2000, patience=0, target_cost=1e-12, params=ManyParams(patience_rounds=3))
+    v = run.velocities
     end = simulate(p, v)
-    assert meta["many"]["by_strike"] >= 1
+    assert run.stats["by_strike"] >= 1
     assert end.order == p.n
     np.testing.assert_allclose(end.final_positions, p.target, atol=1e-6)
 

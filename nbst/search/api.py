@@ -125,18 +125,19 @@ def run_many_search(problem: Problem, *, seed: int | None = None, max_trials: in
     check_run(int(max_trials), int(patience), seed)
     prm = many or ManyParams(variant=variant)
     tc = roundoff_cost(problem) if target_cost is None else float(target_cost)
-    v, meta = run_many(problem, seed=seed, max_trials=int(max_trials), patience=int(patience), target_cost=tc,
-                       callback=callback, params=prm, jobs=jobs)
+    run = run_many(problem, seed=seed, max_trials=int(max_trials), patience=int(patience), target_cost=tc,
+                   callback=callback, params=prm, jobs=jobs)
+    v = run.velocities
     _, c, sg = evaluate(problem, v[None], jobs=1)
     sig = int(sg[0])
-    wall = meta["wall_time"]
+    wall = run.wall_time
     full = {"algorithm": ALGORITHM_MANY, "cost": float(c[0]), "signature": signature_string(sig, problem.n),
-            "order": sig.bit_count(), "trials": meta["trials"], "seed": seed, "variant": prm.variant,
+            "order": sig.bit_count(), "trials": run.trials, "seed": seed, "variant": prm.variant,
             "params": dataclasses.asdict(prm),
             "max_trials": int(max_trials), "patience": int(patience), "target_cost": target_cost,
-            "stopped": meta["stopped"], "wall_time": wall,
-            "trials_per_s": meta["trials"] / wall if wall > 0 else None, "nbst_version": __version__,
-            "history": meta["history"], "many": meta["many"]}
+            "stopped": run.stopped, "wall_time": wall,
+            "trials_per_s": run.trials / wall if wall > 0 else None, "nbst_version": __version__,
+            "history": run.history, "many": run.stats}
     return SearchRun(result=SolveResult.from_meta(problem, v, full), velocities=v[None].copy(),
                      costs=np.array([float(c[0])]), signatures=np.array([sig], dtype=object),
                      recorded=np.zeros((0, problem.n, 2)))

@@ -20,9 +20,9 @@ independent small problems. The search works on the whole motion and repairs it 
 The best whole motion is kept; the result is never worse than the directed start. Trials
 are counted in whole-problem simulations: one of m disks counts m / N.
 
-Length: ~650 lines, past the house's ~500: the search's moves (contacts, strikes, chains, cleared
+Length: ~570 lines, past the house's ~500: the search's moves (contacts, strikes, chains, cleared
 neighbourhoods, windowed sub-searches) share one state object and its acceptance rule, and
-stay together so that rule is written once.
+stay together so that rule is written once (the local pieces they work on: ``nbst.search.local``).
 """
 from __future__ import annotations
 
@@ -35,9 +35,10 @@ import numpy as np
 
 from nbst.constants import GA_MAX_DISKS
 from nbst.problem import Problem
+from nbst.search.local import conflicts, labels, must_be_struck, nearest, subproblem
 from nbst.search.params import ProgressCallback, SearchProgress, StopReason
 
-__all__ = ["ALGORITHM_MANY", "ManyParams", "conflicts", "run_many", "subproblem"]
+__all__ = ["ALGORITHM_MANY", "ManyParams", "ManyRun", "run_many"]
 
 #: ``meta["algorithm"]`` of a many-body search's solution.
 ALGORITHM_MANY = "nbst-many"
@@ -93,36 +94,6 @@ class ManyParams:
     order_first: bool | None = None
 
 
-def subproblem(problem: Problem, idx: np.ndarray, name: str, *, margin: float | None = None) -> Problem:
-    """The disks ``idx`` of ``problem`` as a problem of their own (same t_final and R).
-
-    margin : None: the same box. A length: a window of the box around the disks' starts and
-             targets, that much wider on each side (clipped to the box), with coordinates
-             relative to its corner. Velocities mean the same in both (the motion is
-             translation invariant) as long as no disk touches a side of the window that is
-             not a wall of the box; a search inside it draws paths of the window's size, not
-             the box's, so its solutions stay among the disks they concern.
-    """
-    def ro(a):
-        a = np.ascontiguousarray(a, dtype=bool if a.dtype == bool else np.float64)
-        a.setflags(write=False)
-        return a
-
-    start, target, box = problem.start[idx], problem.target[idx], problem.box
-    if margin is not None:
-        pts = np.concatenate([start, target])
-        lo = np.maximum(pts.min(axis=0) - margin, 0.0)
-        hi = np.minimum(pts.max(axis=0) + margin, np.array(problem.box))
-        lo = np.where(lo < 2 * margin, 0.0, lo)  # near a wall: use the wall itself
-        hi = np.where(np.array(problem.box) - hi < 2 * margin, np.array(problem.box), hi)
-        start, target, box = start - lo, target - lo, (float(hi[0] - lo[0]), float(hi[1] - lo[1]))
-    return Problem(name=name, box=box, t_final=problem.t_final, target_radius=min(problem.target_radius,
-                                                                                   math.hypot(*box)),
-                   start=ro(start), target=ro(target), radius=ro(problem.radius[idx]),
-                   mass=ro(problem.mass[idx]), cueable=ro(problem.cueable[idx]),
-                   description=f"disks {idx.tolist()} of {problem.name}", source=problem.source)
-
-
 def _score(final: np.ndarray, target: np.ndarray, miss2: float, R2: float,
            order_first: bool) -> tuple[int, int, float]:
     """A motion's score, lower is better: (disks whose squared miss exceeds miss2, 0, cost), or
@@ -134,66 +105,6 @@ def _score(final: np.ndarray, target: np.ndarray, miss2: float, R2: float,
     if order_first:
         return (int(np.count_nonzero(e2 > R2)), inexact, float(e2.sum()))
     return (inexact, 0, float(e2.sum()))
-
-
-def _labels(tr) -> np.ndarray:
-    """The collision components of a motion: a label per disk (``_components`` of its
-    disk-disk events)."""
-    dd = tr.events["kind"] == 0
-    return _components(tr.problem.n, tr.events["i"][dd].astype(np.int64), tr.events["j"][dd].astype(np.int64))
-
-
-def _components(n: int, ev_i: np.ndarray, ev_j: np.ndarray) -> np.ndarray:
-    """Connected components of the disk-disk event graph: a label per disk (union-find)."""
-    parent = np.arange(n)
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for a, b in zip(ev_i.tolist(), ev_j.tolist()):
-        ra, rb = find(a), find(b)
-        if ra != rb:
-            parent[max(ra, rb)] = min(ra, rb)
-    return np.array([find(a) for a in range(n)])
-
-
-def _nearest(problem: Problem, centre: np.ndarray, exclude: np.ndarray, k: int, cueable_only: bool) -> np.ndarray:
-    """The k disks (not in ``exclude``) whose starts are nearest any start in ``centre``."""
-    ok = np.ones(problem.n, bool)
-    ok[exclude] = False
-    if cueable_only:
-        ok &= problem.cueable
-    cand = np.flatnonzero(ok)
-    if cand.size == 0 or k <= 0:
-        return np.empty(0, np.int64)
-    d = np.full(cand.size, np.inf)
-    for c in centre:
-        d = np.minimum(d, np.hypot(*(problem.start[cand] - problem.start[c]).T))
-    return cand[np.argsort(d, kind="stable")[:k]]
-
-
-def conflicts(problem: Problem, tr, miss2: float, strikers: int = 3) -> list[np.ndarray]:
-    """The conflicts of a whole motion: for each collision component holding a disk whose
-    squared miss exceeds ``miss2``, its disks (sorted); a resting disk that must move and met
-    nobody comes with its ``strikers`` nearest cueable disks."""
-    err2 = np.sum((np.asarray(tr.final_positions) - problem.target) ** 2, axis=1)
-    missing = err2 > miss2
-    label = _labels(tr)
-    out = []
-    done = set()
-    for d in np.flatnonzero(missing):
-        lab = label[d]
-        if lab in done:
-            continue
-        done.add(lab)
-        idx = np.flatnonzero(label == lab)
-        if not problem.cueable[idx].any():
-            idx = np.union1d(idx, _nearest(problem, idx, idx, strikers, True))
-        out.append(idx.astype(np.int64))
-    return out
 
 
 def _candidates(problem: Problem, a: int, V: np.ndarray, err2: np.ndarray, miss2: float, partners: int, scratch):
@@ -249,7 +160,7 @@ def _strikes(problem: Problem, b: int, strikers: int, keep: int, polish_sims: in
     ka = problem.kernel_arrays()
     W, H, T = ka.W, ka.H, ka.t_final
     R2 = float(problem.target_radius) ** 2
-    cue = _nearest(problem, np.array([b]), np.array([b]), strikers, True)
+    cue = nearest(problem, np.array([b]), np.array([b]), strikers, True)
     vb, out = np.empty(2), np.empty(2)
     aims = []
     for kx in (-1, 0, 1):
@@ -282,12 +193,6 @@ def _strikes(problem: Problem, b: int, strikers: int, keep: int, polish_sims: in
     return cands
 
 
-def _must_be_struck(problem: Problem) -> bool:
-    """Whether some resting (noncueable) disk has a target other than its start."""
-    rest = ~problem.cueable
-    return bool(np.any(np.hypot(*(problem.target[rest] - problem.start[rest]).T) > 0.0))
-
-
 class _Search:
     """The state of one many-body search: the current motion, its score and the counters."""
 
@@ -298,7 +203,7 @@ class _Search:
         self.jobs = int(jobs)
         self.problem, self.prm, self.miss2, self.max_trials = problem, prm, miss2, max_trials
         self.R2 = float(problem.target_radius) ** 2
-        self.order_first = prm.order_first if prm.order_first is not None else _must_be_struck(problem)
+        self.order_first = prm.order_first if prm.order_first is not None else must_be_struck(problem)
         self.simulate = simulate
         self.report = report
         self.trials = 0.0
@@ -387,7 +292,7 @@ class _Search:
                 near.sort(key=lambda c: (c[0], c[1]))
                 for _, _, Vn in near[: prm.chains]:
                     trn = self.sim(Vn)
-                    lab = _labels(trn)
+                    lab = labels(trn)
                     idx = np.flatnonzero(lab == lab[a]).astype(np.int64)
                     if idx.size < 3 or idx.size > prm.max_conflict:
                         continue
@@ -468,7 +373,7 @@ class _Search:
         to straight shots and are paired again, in a random order; kept if the whole motion is
         better than before."""
         problem, prm = self.problem, self.prm
-        S = np.union1d(idx, _nearest(problem, idx, idx, prm.neighbours + idx.size, False)).astype(np.int64)
+        S = np.union1d(idx, nearest(problem, idx, idx, prm.neighbours + idx.size, False)).astype(np.int64)
         # and the disks they touch now (a cleared disk's partner would be left on a contact
         # velocity with nobody to meet)
         ev = self.tr.events[self.tr.events["kind"] == 0]
@@ -510,7 +415,7 @@ class _Search:
         if idx.size > prm.max_conflict:
             err2 = self.err2()[idx]
             core = idx[np.argsort(-err2, kind="stable")[: prm.max_conflict // 3]]
-            idx = np.union1d(core, _nearest(problem, core, core, prm.max_conflict - core.size, False))
+            idx = np.union1d(core, nearest(problem, core, core, prm.max_conflict - core.size, False))
         self.stats["conflicts"] += 1
         self.stats["largest_conflict"] = max(self.stats["largest_conflict"], int(idx.size))
         tol = miss2 * idx.size
@@ -544,10 +449,27 @@ class _Search:
         return False
 
 
+@dataclass(frozen=True)
+class ManyRun:
+    """What :func:`run_many` found: the best whole motion and how the search went.
+
+    velocities : (N, 2) float, units/s; trials : whole-problem simulations (rounded up);
+    stopped : a ``StopReason`` value or None; wall_time : seconds; history : [trial, cost, order]
+    per better whole motion; stats : rounds, moves kept by kind, conflicts, simulations
+    """
+
+    velocities: np.ndarray
+    trials: int
+    stopped: str | None
+    wall_time: float
+    history: list
+    stats: dict
+
+
 def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, target_cost: float,
              callback: ProgressCallback | None = None, params: ManyParams | None = None,
-             start: np.ndarray | None = None, jobs: int | None = None):
-    """Solve ``problem`` (any N) by local repair; returns (velocities (N, 2), meta dict).
+             start: np.ndarray | None = None, jobs: int | None = None) -> ManyRun:
+    """Solve ``problem`` (any N) by local repair; returns a :class:`ManyRun`.
 
     target_cost : stop once the whole cost is <= this; a disk counts as missing while its
                   squared miss exceeds target_cost / N
@@ -625,7 +547,7 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
                     k = int(tries[idx].max())
                     tries[idx] += 1
                     if k >= 1:
-                        idx = np.union1d(idx, _nearest(problem, idx, idx, prm.grow * k, False)).astype(np.int64)
+                        idx = np.union1d(idx, nearest(problem, idx, idx, prm.grow * k, False)).astype(np.int64)
                     if S.repair(idx, k, rng):
                         tries[idx] = 0
             S.keep_best()
@@ -642,6 +564,6 @@ def run_many(problem: Problem, *, seed: int, max_trials: int, patience: int, tar
         stopped = StopReason.INTERRUPTED
     wall = time.perf_counter() - t0
     S.keep_best()
-    meta = {"trials": int(math.ceil(S.trials)), "stopped": None if stopped is None else stopped.value,
-            "wall_time": wall, "history": history, "many": S.stats}
-    return S.best[1], meta
+    return ManyRun(velocities=S.best[1], trials=int(math.ceil(S.trials)),
+                   stopped=None if stopped is None else stopped.value, wall_time=wall, history=history,
+                   stats=S.stats)
