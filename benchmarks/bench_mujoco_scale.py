@@ -4,7 +4,7 @@
     python benchmarks/bench_mujoco_scale.py --quick    # N = 10, 30, 100, 300 (< 1 min)
     python benchmarks/bench_mujoco_scale.py --mjcf 1000 3000 10000   # the scene only (~1 min)
 
-The motions are ``nbst.models.validate.gas_motion(N, seed=1)``: N disks of radius 10 on a square
+The motions are ``nbst.models.gas.gas_motion(N, seed=1)``: N disks of radius 10 on a square
 grid at area fraction 0.08 (fixed density: the box grows as sqrt(N)), random directions, speeds
 100-250 units/s, t_final = 2 s, targets where the exact simulator takes them (about 3 impacts
 per disk). For each N it prints one row:
@@ -38,7 +38,7 @@ def row(n: int, repeat: int) -> dict:
 
     from nbst.models.mjrun import run_final, run_mujoco
     from nbst.models.scene import scene_xml
-    from nbst.models.validate import gas_motion
+    from nbst.models.gas import gas_motion
     from nbst.sim import simulate
 
     p, v = gas_motion(n, seed=1)
@@ -109,7 +109,7 @@ def main(argv=None) -> None:
         return
     import mujoco
 
-    from nbst.models.validate import gas_motion
+    from nbst.models.gas import gas_motion
     from nbst.sim import simulate
 
     p, v = gas_motion(10)

@@ -25,15 +25,14 @@ every impact resolved at its touch; its cost is reported). Also reported:
 * with ``convergence=True``: fixed steps at h, h/2, ... h/32 (the scene rebuilt per step,
   k = 2/h^2) and aligned stepping, each entry's max final error, signature and cost, and the
   fitted order (least-squares slope of log error on log h over the entries in the first-order
-  regime, :data:`FIT_RULE`).
+  regime, :data:`nbst.models.convergence.FIT_RULE`; the study lives in :mod:`nbst.models.convergence`).
 
 Many disks (docs/mujoco.md, "Many disks"): ``stepping="auto"`` picks the stepping by N and cost
 (:func:`choose_stepping`), the sensitivity is skipped above :data:`SENSITIVITY_MAX_N`, and
-:func:`gas_motion` makes test motions of any size.
+:func:`nbst.models.gas.gas_motion` makes test motions of any size.
 
 Length: one comparison and the one schema of report.json (``Validation.to_dict``), with the
-convergence study and the stepping choice that feed it; split, the schema's keys would be
-written in several files.
+stepping choice that feeds it; split, the schema's keys would be written in several files.
 """
 from __future__ import annotations
 
@@ -44,6 +43,7 @@ import numpy as np
 
 from nbst.problem import Problem
 
+from nbst.models.convergence import convergence_study, entry, fit_order, staged as run_stage
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
 
 SCHEMA_VERSION = 4  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order;
@@ -51,7 +51,7 @@ SCHEMA_VERSION = 4  # 2: stepping, sensitivity, prediction_check, convergence, c
 #                    4: mujoco.wall_time_s is the MuJoCo run's (its bar's), validate_wall_time_s the whole
 #: ``stepping="auto"`` (the default): fixed steps up to this many disks (every problem nbst took before
 #: it lifted its 63-disk cap validates as it always did), aligned stepping above. Measured on gas
-#: motions at fixed density (``gas_motion``, 2 s, ~3 impacts per disk; docs/mujoco.md "Many disks"):
+#: motions at fixed density (``nbst.models.gas.gas_motion``, 2 s, ~3 impacts per disk; docs/mujoco.md "Many disks"):
 #: fixed steps of 0.25 ms end 194-549 units off at every N from 10 to 1,000 (each impact lags one step
 #: and the collisions amplify it), aligned stepping 3e-8 to 1e-3 units, at 3-8x the wall time of fixed
 #: steps (4.1x at 10 disks, 7.8x at 1,000: its mj_step calls grow with the impacts, 2.8x those of fixed
@@ -80,12 +80,6 @@ DIVERGE_TOL = 1.0
 CURVE_SAMPLES = 600
 #: Positions compared at once when the per-step error is computed (bounds its memory: 2e6 x 16 B).
 COMPARE_CHUNK = 2_000_000
-#: Convergence ladder: h divided by these.
-LADDER = (1, 2, 4, 8, 16, 32)
-#: Which ladder entries the order is fitted on, and why (also written into the report).
-FIT_RULE = ("fixed-step entries that keep the exact signature with a max error below the smallest disk radius "
-            "(first order: the collision sequence is unchanged) and above 1e-9 units (round-off)")
-FIT_MIN_ERROR = 1e-9
 _WALL_NAMES = ("left", "right", "bottom", "top")
 
 
@@ -432,10 +426,10 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
     stepping, reason = choose_stepping(problem, ex, timestep, requested)
 
     def staged(desc, total, fn, unit="step"):
-        return _staged(progress, desc, total, fn, unit)[0]
+        return run_stage(progress, desc, total, fn, unit)[0]
 
     steps = steps_needed(problem.t_final, timestep)
-    mj, mj_seconds = _staged(progress, f"MuJoCo, {stepping} steps", steps,
+    mj, mj_seconds = run_stage(progress, f"MuJoCo, {stepping} steps", steps,
                              lambda cb: run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps,
                                                    stepping=stepping, progress=cb))
 
@@ -506,7 +500,7 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
         elif conv and conv[0]["max_error"] is not None:
             fixed = (conv[0]["max_error"], conv[0]["same_signature"], "convergence entry h")
         else:
-            e = _entry(problem, ex, *staged("MuJoCo, fixed steps (for the prediction check)", steps,
+            e = entry(problem, ex, *staged("MuJoCo, fixed steps (for the prediction check)", steps,
                                             lambda cb: run_final(problem, v, timestep=timestep, unit=unit,
                                                                  max_steps=max_steps, progress=cb)),
                        h=timestep, divisor=1)
@@ -520,26 +514,6 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
                       prediction_check=check, convergence=conv, convergence_order=order,
                       stepping_requested=requested, stepping_reason=reason, exact_on=exact_on, mj_on=mj_on,
                       mujoco_seconds=mj_seconds)
-
-
-def _staged(progress, desc: str, total: int, fn, unit: str = "step"):
-    """Run ``fn(callback)`` as one stage: (its result, its seconds). With a ``progress`` factory the
-    stage has a bar, and the seconds are the bar's (its clock from its start to its close), so a
-    summary that quotes them says what the bar's last line says."""
-    import time
-
-    if progress is None:
-        t0 = time.monotonic()
-        out = fn(None)
-        return out, time.monotonic() - t0
-    bar = progress(desc, total, unit)
-    try:
-        out = fn(bar.update)
-    except BaseException:
-        bar.close()
-        raise
-    bar.close()
-    return out, float(getattr(bar, "seconds", 0.0))
 
 
 def _sensitivity(problem: Problem, v, timestep: float) -> dict:
@@ -575,74 +549,6 @@ def prediction_check(sens: dict | None, timestep: float, measured_error: float, 
             "within_first_order": pred["within_first_order"]}
 
 
-def _entry(problem: Problem, ex, final, steps, wall, *, h, divisor, stepping="fixed", stats=None,
-           skipped=None) -> dict:
-    """One convergence entry (final positions against the exact ones)."""
-    if final is None:
-        return {"stepping": stepping, "h": h, "divisor": divisor, "max_error": None, "mean_error": None,
-                "signature": None, "same_signature": None, "cost": None, "steps": steps, "wall_time": None,
-                "stats": stats, "skipped": skipped}
-    err = np.hypot(*(np.asarray(final) - ex.final_positions).T)
-    target = np.asarray(problem.target, dtype=float)
-    R2 = float(problem.target_radius) ** 2
-    d2 = ((np.asarray(final) - target) ** 2).sum(axis=1)
-    sig = "".join("1" if x else "0" for x in d2 <= R2)
-    sig_ex = "".join("1" if x else "0" for x in ((ex.final_positions - target) ** 2).sum(axis=1) <= R2)
-    return {"stepping": stepping, "h": h, "divisor": divisor, "max_error": float(err.max()),
-            "mean_error": float(err.mean()), "signature": sig, "same_signature": sig == sig_ex,
-            "cost": float(d2.sum()), "steps": int(steps), "wall_time": float(wall), "stats": stats,
-            "skipped": skipped}
-
-
-def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, max_steps: int,
-                      aligned=None, fixed=None, progress=None) -> list:
-    """Fixed steps at timestep / LADDER and aligned stepping at timestep: one entry each.
-
-    aligned / fixed : a MujocoRun already made (aligned at h / fixed at h) to reuse
-    An entry whose steps exceed max_steps is kept with ``skipped`` saying so.
-    """
-    from nbst.models.mjrun import run_final, run_mujoco, steps_needed
-
-    out = []
-    for div in LADDER:
-        h = timestep / div
-        n = steps_needed(problem.t_final, h)
-        if n > max_steps:
-            out.append(_entry(problem, ex, None, n, None, h=h, divisor=div,
-                              skipped=f"{n:,} steps, over the limit of {max_steps:,} (--max-steps)"))
-        elif div == 1 and fixed is not None:
-            out.append(_entry(problem, ex, fixed.final_positions, fixed.steps, fixed.wall_time, h=h, divisor=1))
-        else:
-            res, _ = _staged(progress, f"convergence, fixed h/{div}", n,
-                             lambda cb: run_final(problem, v, timestep=h, unit=unit, max_steps=max_steps, progress=cb))
-            out.append(_entry(problem, ex, *res, h=h, divisor=div))
-    if aligned is not None:
-        run = aligned
-    else:
-        n = steps_needed(problem.t_final, timestep)
-        run, _ = _staged(progress, "convergence, aligned", n,
-                         lambda cb: run_mujoco(problem, v, timestep=timestep, unit=unit, max_steps=max_steps,
-                                               stepping="aligned", progress=cb))
-    out.append(_entry(problem, ex, run.final_positions, run.stats["steps"] + run.stats["impacts"], run.wall_time,
-                      h=None, divisor=None, stepping="aligned", stats=run.stats))
-    return out
-
-
-def fit_order(entries: list, problem: Problem) -> dict:
-    """Least-squares slope of log(max error) on log(h) over the entries :data:`FIT_RULE` picks."""
-    rmin = float(np.min(problem.radius))
-    pts = [e for e in entries if e["stepping"] == "fixed" and e["max_error"] is not None and e["same_signature"]
-           and FIT_MIN_ERROR < e["max_error"] < rmin]
-    out = {"order": None, "points_h": [e["h"] for e in pts], "rule": FIT_RULE}
-    if len(pts) >= 2:
-        x = np.log([e["h"] for e in pts])
-        y = np.log([e["max_error"] for e in pts])
-        slope, icpt = np.polyfit(x, y, 1)
-        out["order"] = float(slope)
-        out["intercept_log"] = float(icpt)
-    return out
-
-
 def _cause(ex, mj, disk: int, t: float, matches) -> dict:
     """The last event involving ``disk`` at or before t in either motion, described."""
     best = None
@@ -664,50 +570,3 @@ def _cause(ex, mj, disk: int, t: float, matches) -> dict:
         other = "MuJoCo" if side == "exact" else "the exact simulator"
         why = f"{text} ({side} motion only: {other} has no such event here)"
     return {"cause": why, "cause_event": {"time": t_e, "side": side, "index": int(k), "matched": k in matched}}
-
-
-#: Scale motions (:func:`gas_motion`): area fraction of the disks, radius (units), speeds
-#: (units/s) and duration (s). At this density a disk's mean free path is pi r / (2 phi) ~ 200
-#: units, about one collision per disk per second at the speeds drawn, plus wall bounces near
-#: the walls, at every N (the box grows as sqrt(N)).
-GAS_AREA_FRACTION = 0.08
-GAS_RADIUS = 10.0
-GAS_SPEED = (100.0, 250.0)
-GAS_T_FINAL = 2.0
-
-
-def gas_motion(n: int, *, seed: int = 1, t_final: float = GAS_T_FINAL, fraction: float = GAS_AREA_FRACTION):
-    """A many-disk motion for checks and benchmarks at any N: (problem, velocities).
-
-    N disks of radius :data:`GAS_RADIUS` start at the centres of a square grid in a square box
-    sized so that they cover ``fraction`` of its area (fixed density: the box grows as sqrt(N)),
-    with velocities of random direction and speed in :data:`GAS_SPEED` (seeded). Each target is
-    where the exact simulator takes its disk at t_final, so the motion is an exact solution
-    (cost 0) with real collisions and wall bounces; target radius 2r.
-    """
-    from nbst.problem import problem_from_dict
-    from nbst.sim import simulate
-
-    n = int(n)
-    if n < 1:
-        raise ValueError(f"n must be >= 1, got {n}")
-    r = GAS_RADIUS
-    side = float(np.sqrt(n * np.pi * r * r / fraction))
-    k = int(np.ceil(np.sqrt(n)))
-    pitch = side / k
-    if pitch < 2 * r * (1 + 1e-9):
-        raise ValueError(f"fraction {fraction:g} is too dense for a square grid")
-    ij = np.array([(a, b) for a in range(k) for b in range(k)][:n], dtype=float)
-    start = (ij + 0.5) * pitch
-    rng = np.random.default_rng(seed)
-    ang = rng.uniform(0.0, 2 * np.pi, n)
-    speed = rng.uniform(*GAS_SPEED, n)
-    v = np.stack([speed * np.cos(ang), speed * np.sin(ang)], axis=1)
-    disks = [{"start": s.tolist(), "target": s.tolist(), "radius": r} for s in start]
-    d = {"name": f"gas-{n}-s{seed}", "description": f"{n} disks, area fraction {fraction:g}, seed {seed} "
-         f"(nbst.models.validate.gas_motion)", "box": [side, side], "t_final": float(t_final),
-         "target_radius": 2 * r, "disks": disks}
-    final = simulate(problem_from_dict(d), v).final_positions
-    for disk, f in zip(disks, final):
-        disk["target"] = [float(f[0]), float(f[1])]
-    return problem_from_dict(d), v

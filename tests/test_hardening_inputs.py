@@ -425,7 +425,7 @@ def test_error_lines_never_carry_control_characters(tmp_path, capsys):
 def test_report_html_escapes_the_name(tmp_path):
     pytest.importorskip("mujoco")
     from nbst.render.report import report_html
-    from models.validate import validate
+    from nbst.models.validate import validate
     d = copy.deepcopy(GOOD)
     d["name"] = "<script>alert(1)</script> & $x$"
     d["description"] = "<b>bold</b>\nsecond line"

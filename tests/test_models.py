@@ -224,7 +224,7 @@ def _drawn(fig):
 @pytest.mark.parametrize("which", ["overlay_figure", "error_figure", "timeline_figure"])
 def test_report_legends_never_cover_data(validation, which):
     """Each report figure has a legend, outside its axes and inside the figure."""
-    from nbst.render import report
+    from nbst.render import report_figures as report
     fig = getattr(report, which)(validation)
     r = _drawn(fig)
     assert len(fig.legends) == 1
@@ -241,7 +241,7 @@ def test_report_overlay_speaks_the_palette(validation):
     from matplotlib.text import Annotation
 
     from nbst import palette
-    from nbst.render.report import overlay_figure
+    from nbst.render.report_figures import overlay_figure
     val = validation
     p = val.problem
     fig = overlay_figure(val)
@@ -265,7 +265,7 @@ def test_report_error_curves_are_numbered_outside_the_axes(validation):
     from matplotlib.colors import to_rgb
 
     from nbst import palette
-    from nbst.render.report import error_figure
+    from nbst.render.report_figures import error_figure
     val = validation
     p = val.problem
     fig = error_figure(val)
@@ -290,7 +290,7 @@ def test_report_error_curves_differ_in_shape_and_in_a_deuteranopes_view(validati
     from cvd import delta_e, deuteranopia
 
     from nbst import palette
-    from nbst.render.report import error_figure
+    from nbst.render.report_figures import error_figure
     val = validation
     p = val.problem
     fig = error_figure(val)
@@ -311,7 +311,7 @@ def test_report_error_floor_is_explained(mk):
     """Errors of exactly zero (no impact yet: MuJoCo's free flight is exact) cannot sit on a
     log axis: they are drawn on the floor, and the legend says what the floor means."""
     from nbst.models.validate import validate
-    from nbst.render.report import error_figure, error_floor
+    from nbst.render.report_figures import error_figure, error_floor
     p = mk([[100.0, 400.0], [400.0, 100.0]], radii=10.0, targets=[[600.0, 400.0], [400.0, 600.0]])
     val = validate(p, np.array([[100.0, 0.0], [0.0, 100.0]]))  # no collision, no bounce
     assert (val.error_curve < error_floor(val)).any()

@@ -166,7 +166,7 @@ def test_sensitivity_and_prediction_check_in_every_report():
 
 # --------------------------------------------------------------------------- many disks (issue 21)
 
-from nbst.models.validate import gas_motion  # noqa: E402
+from nbst.models.gas import gas_motion  # noqa: E402
 
 
 def test_gas_motion_is_an_exact_solution_with_collisions_and_bounces():

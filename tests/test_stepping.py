@@ -151,7 +151,7 @@ def test_scene_loaded_from_mjcf_text():
 def test_convergence_errors_fall_with_h():
     # one wall bounce at 300 units/s and one collision, 1 s at h = 1 ms: the fixed-step error is
     # first order (|dv| h per impact), so h/32 must be ~32x below h; aligned far below both
-    from nbst.models.validate import LADDER, convergence_study, fit_order
+    from nbst.models.convergence import LADDER, convergence_study, fit_order
     p = make_problem([[700, 400], [300, 400]], 10.0, t_final=1.0)
     v = np.array([[300.0, 0.0], [150.0, 30.0]])
     ex = simulate(p, v)
@@ -167,7 +167,7 @@ def test_convergence_errors_fall_with_h():
 
 
 def test_convergence_skips_step_sizes_over_max_steps():
-    from nbst.models.validate import convergence_study
+    from nbst.models.convergence import convergence_study
     p = make_problem([[700, 400]], 10.0, t_final=1.0)
     v = np.array([[300.0, 0.0]])
     conv = convergence_study(p, v, simulate(p, v), timestep=1e-3, unit=UNIT, max_steps=5000)
