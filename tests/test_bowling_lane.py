@@ -182,8 +182,13 @@ def test_bowl_throw_prints_the_phases_and_writes_json(tmp_path, typical):
     assert out.returncode == 0, out.stderr
     assert "breakpoint" in out.stdout and "entry angle" in out.stdout
     doc = json.loads((tmp_path / "throw.json").read_text())
-    assert doc["entry_angle_deg"] == pytest.approx(typical.entry_angle_deg, abs=1e-9)
-    assert doc["breakpoint_ft"] == pytest.approx(typical.breakpoint_ft, abs=1e-9)
+    # the command aims --at arrows along the ball's path: the library's run of that aimed delivery
+    aimed = lane.throw(lane.aim_at_arrows(TYPICAL, "house"), "house")
+    assert doc["entry_angle_deg"] == pytest.approx(aimed.entry_angle_deg, abs=1e-9)
+    assert doc["breakpoint_ft"] == pytest.approx(aimed.breakpoint_ft, abs=1e-9)
+    assert abs(doc["board_at_arrows"] - 10.0) <= lane.AIM_TOL
+    # the straight line back (TYPICAL as given) misses the arrows' board by the hook before them
+    assert abs(typical.board_at_arrows - 10.0) > lane.AIM_TOL
 
 
 @pytest.mark.parametrize("args, says", [(["--rg", "2.9"], "ball.rg"), (["--diff", "0.08"], "ball.diff"),

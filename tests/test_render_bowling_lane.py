@@ -248,7 +248,9 @@ def test_cli_writes_a_still_and_an_mp4_with_the_expected_frames(gl, throw, tmp_p
     from nbst.cli.main import main
 
     png, mp4 = tmp_path / "t.png", tmp_path / "t.mp4"
-    assert main(["bowl", "throw", "--still", str(png), "--size", "320x180", "--video", str(mp4), "--fps", "8"]) == 0
+    # the fixture's delivery, given at the foul line (--at arrows would be aimed along the ball's path)
+    assert main(["bowl", "throw", "--board", repr(TYPICAL.foul_board()), "--at", "foul", "--still", str(png),
+                 "--size", "320x180", "--video", str(mp4), "--fps", "8"]) == 0
     assert Image.open(png).size == (320, 180)
     expected = len(bt.frame_times(throw, 8.0))
     reader = imageio_ffmpeg.read_frames(str(mp4))

@@ -100,8 +100,9 @@ def delivery_flags(t) -> None:
     t.add_argument("--board", type=Bounded("board", 1, 39), default=10.0, metavar="B",
                    help="board where the ball is at --at (default 10; 1..39, fractions allowed)")
     t.add_argument("--at", choices=("foul", "arrows"), default="arrows",
-                   help="where --board is: at the foul line or where the ball crosses the arrows, 15 ft out "
-                        "(default arrows)")
+                   help="where --board is: at the foul line, or where the ball crosses the arrows, 15 ft out, "
+                        "along its real path (the board at the foul line is found by running the ball alone; "
+                        "default arrows)")
     t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=1.5, metavar="DEG",
                    help="launch angle from straight down the lane, + out towards board 1 (default 1.5)")
     t.add_argument("--mph", type=Bounded("mph", 5, 30, unit="mph"), default=17.0, help="release speed (default 17)")

@@ -147,8 +147,7 @@ def cmd_throw(args) -> int:
             prepare_output(path, option=option)
     try:
         ball = ball_of(args)
-        d = delivery_of(args)
-        lane.pattern(args.oil)
+        d = lane.aim_at_arrows(delivery_of(args), args.oil, ball)  # --at arrows: along the ball's real path
         r = lane.throw(d, args.oil, ball)
     except ValueError as e:
         return err("throw", str(e))
@@ -205,9 +204,8 @@ def cmd_frame(args) -> int:
     from nbst.models.bowling.lane import frame, noise
 
     try:
-        d = delivery_of(args)
         ball = ball_of(args)
-        lane.pattern(args.oil)
+        d = lane.aim_at_arrows(delivery_of(args), args.oil, ball)  # --at arrows: along the ball's real path
         standing = None if args.leave is None else sorted(
             n for n in range(1, 11) if pin_list(args.leave, "--leave") >> (n - 1) & 1)
         if args.output:

@@ -10,7 +10,7 @@ Compute only: no files written, no printing.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -21,7 +21,8 @@ from nbst.models.bowling.lane.oil import MU_OIL
 from nbst.models.bowling.lane.scene import build_model
 from nbst.models.bowling.lane.units import ARROWS_FT, MPH, LaneError, hand_sign, x_to_ft, y_to_board
 
-__all__ = ["TIMESTEP", "MAX_SECONDS", "ROLL_SLIP", "HOOK_SHARE", "BREAKPOINT_MIN", "ThrowResult", "run", "throw"]
+__all__ = ["TIMESTEP", "MAX_SECONDS", "ROLL_SLIP", "HOOK_SHARE", "BREAKPOINT_MIN", "AIM_TOL", "ThrowResult", "run",
+           "throw", "board_at", "aim_at_arrows"]
 
 #: Step and the longest run (s): a ball released at 5 mph (the slowest Delivery) takes ~11 s.
 TIMESTEP = scene.TIMESTEP
@@ -137,10 +138,9 @@ def throw(delivery: Delivery, oil: str = "house", ball: Ball | None = None, *, m
     f = -p[-2, 0] / (p[-1, 0] - p[-2, 0])
     y_pin = p[-2, 1] + f * (p[-1, 1] - p[-2, 1])
     v_pin = v[-2] + f * (v[-1] - v[-2])
-    arrows_i = int(np.argmax(ft >= ARROWS_FT))
     return ThrowResult(
         oil=oil if isinstance(oil, str) else oil.name, ball=ball.to_dict(), delivery=delivery.to_dict(),
-        board_at_foul_line=float(board[0]), board_at_arrows=float(board[arrows_i]),
+        board_at_foul_line=float(board[0]), board_at_arrows=board_at(ft, board, ARROWS_FT),
         skid_ft=None if skid_i is None else float(ft[skid_i]),
         breakpoint_ft=None if bp_i is None else float(ft[bp_i]),
         breakpoint_board=None if bp_i is None else float(board[bp_i]),
@@ -152,3 +152,50 @@ def throw(delivery: Delivery, oil: str = "house", ball: Ball | None = None, *, m
         seconds_to_pins=float(t[-2] + f * TIMESTEP),
         path={"t": t, "ft": ft, "board": board, "speed_mph": speed / MPH, "slip": slip_h, "a_hook": a_perp,
               "y": p[:, 1]})
+
+
+def board_at(ft, board, at_ft: float) -> float:
+    """The ball's board where its path crosses ``at_ft`` feet past the foul line, interpolated
+    between the two steps around it (``ft``, ``board``: the path's per-step arrays)."""
+    i = int(np.argmax(ft >= at_ft))
+    if i == 0:
+        return float(board[0])
+    f = (at_ft - ft[i - 1]) / (ft[i] - ft[i - 1])
+    return float(board[i - 1] + f * (board[i] - board[i - 1]))
+
+
+#: How close (boards) the ball's real path must cross the arrows to the board asked.
+AIM_TOL = 0.01
+
+
+def aim_at_arrows(delivery: Delivery, oil: str = "house", ball: Ball | None = None, *, mu_oil: float = MU_OIL,
+                  tol: float = AIM_TOL, iters: int = 8) -> Delivery:
+    """A delivery given at the arrows (``at="arrows"``), aimed along the ball's real path: the
+    foul-line delivery (``at="foul"``) whose ball, thrown on ``oil`` with ``ball``, crosses the
+    asked board 15 ft out within ``tol`` boards. ``Delivery.foul_board`` carries the board back
+    along a straight line; a hooking ball is off that line before the arrows (0.07 board for the
+    typical release, 2.1 boards at 500 rpm), so the foul board is corrected by what the run
+    shows (Newton's step with slope 1: a board moved at the foul line moves the crossing by about
+    a board), each correction one run of the ball alone. A delivery given at the foul line is
+    returned as it is. LaneError when the ball leaves the lane before the arrows or no foul
+    board within ``iters`` runs crosses there."""
+    delivery = delivery.check()
+    if delivery.at != "arrows":
+        return delivery
+    want = float(delivery.board)
+    b = delivery.foul_board()
+    for _ in range(iters):
+        d = replace(delivery, board=float(b), at="foul").check()
+        _, p, _, _ = run(d, oil, ball, mu_oil=mu_oil)
+        ft = x_to_ft(p[:, 0])
+        if ft[-1] < ARROWS_FT:
+            raise LaneError(f"board: the ball aimed at board {want:g} at the arrows leaves the lane "
+                            f"{float(ft[-1]):.1f} ft past the foul line, before the arrows")
+        off = board_at(ft, y_to_board(p[:, 1], d.hand), ARROWS_FT) - want
+        if abs(off) <= tol:
+            return d
+        b -= off
+        if not 1.0 <= b <= 39.0:
+            break
+    raise LaneError(f"board: no board at the foul line puts this ball on board {want:g} at the arrows "
+                    f"({iters} runs of the ball alone)")
