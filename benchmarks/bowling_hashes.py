@@ -127,7 +127,10 @@ def main() -> int:
     ap.add_argument("--compare", metavar="FILE", help="compare with saved hashes; exit 1 on any difference")
     ap.add_argument("-k", default="", help="only the cases whose name contains this text")
     ap.add_argument("--resume", action="store_true", help="with --save: keep the cases already in FILE, run the rest")
+    ap.add_argument("--ignore", action="append", default=[], metavar="KEY",
+                    help="also drop this JSON key before hashing (e.g. a field a change added on purpose)")
     args = ap.parse_args()
+    VOLATILE.update(args.ignore)
     old = json.loads(Path(args.compare).read_text()) if args.compare else {}
     got, differ = {}, []
     if args.resume and args.save and Path(args.save).exists():

@@ -259,6 +259,8 @@ def test_bowl_frame_o_writes_the_throw_with_its_probability_and_replay_checks_it
     wrong = copy.deepcopy(d)
     down = d["outcome"]["down"]
     wrong["outcome"]["down"], wrong["outcome"]["leave"] = d["outcome"]["leave"], down
+    for x in wrong["ladder"]:  # the ladder's kept flags follow the outcome, or the file is refused (exit 2)
+        x["kept"] = sorted(x["leave"]) == sorted(wrong["outcome"]["leave"])
     bad = tmp_path / "wrong.json"
     bad.write_text(throwfile.dumps(wrong))
     rc, stdout, _ = _main(["bowl", "replay", bad], capsys)

@@ -12,7 +12,6 @@ or the atlas so far, is written).
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 from nbst.cli.args import Bounded
@@ -38,9 +37,14 @@ def add_solve_flags(s) -> None:
                         "outcome under the release noise (--samples throws) and the timestep ladder")
     g.add_argument("--robust", type=ROBUST, nargs="?", const=ROBUST_DEFAULT, default=None, metavar="FRAMES",
                    help="(implies --foul-line) then maximise that probability: a local search over the release on "
-                        f"paired noisy throws (models/bowling/robust.py), FRAMES noisy frames (default "
-                        f"{ROBUST_DEFAULT}), from the throw found (and, for a strike, from the strike line and "
-                        "the pocket map's best cell too); the pick keeps its outcome at h = 1, 0.5 and 0.25 ms")
+                        f"paired noisy throws (models/bowling/lane/robust.py), FRAMES noisy frames (default "
+                        f"{ROBUST_DEFAULT}), from the delivery found (and, for a strike, from the strike line and "
+                        "the pocket map's best cell too); the pick is the latest that keeps its outcome at h = 1, "
+                        "0.5 and 0.25 ms, if one does: the summary line and the file's ladder say which timesteps "
+                        "the written throw keeps")
+    g.add_argument("--require-robust", action="store_true",
+                   help="exit 1 (the throw is still written) unless the written throw keeps its outcome at every "
+                        "timestep of the ladder (h = 1, 0.5 and 0.25 ms)")
     g.add_argument("--samples", type=SAMPLES, default=SOLVE_SAMPLES, metavar="N",
                    help=f"noisy throws of the probability estimate (default {SOLVE_SAMPLES})")
 
@@ -90,14 +94,18 @@ def _delivery_text(d) -> str:
 
 
 def cmd_solve(args) -> int:
+    """``bowl solve --foul-line|--robust``: the search (the shipped atlas's delivery, else children of
+    its nearest subsets), then --robust's climb or the probability, then the ladder; one progress
+    bar over every frame, its clock the command's; the summary quotes the bar's count and seconds."""
     import numpy as np
 
+    from nbst import progress
     from nbst.outputs import OutputError, prepare_output, signals_deferred, sigterm_as_interrupt, write_text_atomic
     from nbst.parallel import default_jobs
-    from nbst.progress import progress_bar
 
     from nbst.models.bowling import pinfall, subsets
     from nbst.models.bowling.lane import atlas as foul_atlas, frame, noise, robust, throwfile
+    from nbst.models.mjsearch.ladder import kept_text
 
     bad = _refuse(args, SOLVE_5M_ONLY, "deliveries", "--foul-line/--robust")
     if bad is None and args.distance != "hamming":
@@ -113,18 +121,19 @@ def cmd_solve(args) -> int:
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
     jobs = args.jobs or default_jobs()
     elites = {} if args.no_atlas else shipped_elites()
-    t0 = time.perf_counter()
     asked = (f"leave {','.join(str(n) for n in range(1, 11) if n not in want) or 'none'}" if args.leave is not None
              else f"down {','.join(map(str, want))}")
-    bar = progress_bar(total=args.max_rollouts, desc=f"bowl {asked}", unit="frame",
-                       disable=args.quiet or target in elites, file=sys.stderr)
+    ladder_frames = len(frame.LADDER) * (robust.LADDER_TRIES if args.robust is not None else 1)
+    after = (args.robust if args.robust is not None else 0) + args.samples + ladder_frames + 1
+    bar = progress.Bar(f"bowl solve {asked}", (0 if target in elites else args.max_rollouts) + after, unit="frame",
+                       bound=True, start=progress.command_start(), quiet=args.quiet)
     state = {"point": None, "est": None, "ladder": None, "stage": "search", "frames": 0, "from_atlas": target in elites}
     arch = dict(elites)
     interrupted = False
 
     def on_batch(frames, dist):
-        bar.update(frames - bar.n)
-        bar.set_postfix_str(f"nearest {dist} pin{'s' if dist != 1 else ''} off", refresh=False)
+        bar.set(frames)
+        bar.note(f"searching: nearest {dist} pin{'s' if dist != 1 else ''} off")
 
     R = frame.FrameRunner(foul_atlas.OIL, jobs=jobs)
     try:
@@ -133,7 +142,6 @@ def cmd_solve(args) -> int:
                 point, arch, frames = foul_atlas.seek(R, elites, target, budget=args.max_rollouts, seed=seed,
                                                       on_batch=on_batch)
                 state["frames"] = frames
-                bar.close()
                 if point is None:
                     state["stage"] = "not found"
                 else:
@@ -141,57 +149,60 @@ def cmd_solve(args) -> int:
                     d = foul_atlas.delivery_of(point)
                     if args.robust is not None:
                         state["stage"] = "robust"
-                        rb = progress_bar(total=args.robust + args.samples, desc="robust", unit="frame",
-                                          disable=args.quiet, file=sys.stderr)
+                        bar.note("--robust: climbing the probability")
                         res = robust.maximise(robust_starts(d, want), want=want, runner=R, budget=args.robust,
-                                              seed=seed, n=args.samples, on_done=lambda: rb.update(1))
-                        rb.close()
+                                              seed=seed, n=args.samples, on_done=bar.update)
+                        bar.set(frames + res.frames)  # the ladder's frames ran in this process
                         state["robust"] = res
                         if R.one(res.delivery).down == want:
                             state["point"] = foul_atlas.point_of(res.delivery)
                             state["est"] = res.estimate
                             state["ladder"] = [{"timestep": h, "leave": lv} for h, lv, _ in res.ladder]
-                        else:  # the most probable throw seen misses without noise: keep the one that gives it
+                        else:  # the most probable delivery seen misses without noise: keep the one that gives it
                             state["kept_start"] = True
                     if args.robust is None or state.get("kept_start"):
                         state["stage"] = "probability"
-                        pb = progress_bar(total=args.samples, desc="probability", unit="frame", disable=args.quiet,
-                                          file=sys.stderr)
-                        est, _ = noise.probability(d, args.samples, seed, runner=R, want=want,
-                                                   on_done=lambda: pb.update(1))
-                        pb.close()
+                        bar.note("the probability under the release noise")
+                        est, _ = noise.probability(d, args.samples, seed, runner=R, want=want, on_done=bar.update)
                         state["est"] = est
+                        bar.note("the timestep ladder")
                         state["ladder"] = frame.ladder(d)
+                        bar.update(len(state["ladder"]))
             except KeyboardInterrupt as e:
                 interrupted = True
                 if isinstance(e, robust.Interrupted):
                     state["point"] = foul_atlas.point_of(e.best)
-        if state["point"] is None:  # not found (or interrupted before): the nearest subset's throw
+        if state["point"] is None:  # not found (or interrupted before): the nearest subset's delivery
             masks = np.array(sorted(arch), dtype=np.int64)
             if not len(masks):
+                bar.close(note="nothing reached the pins")
                 print("nbst bowl solve: no throw reached the pins within the budget; nothing written", file=sys.stderr)
                 return 130 if interrupted else 1
             near = int(masks[int(np.argmin(subsets.hamming(target, masks)))])
             state["point"] = arch[near]
         d = foul_atlas.delivery_of(state["point"])
         r = R.one(d)
+        bar.update()
+        doc = throwfile.throw_dict(r, oil=foul_atlas.OIL, requested=want, estimate=state["est"], want=want,
+                                   ladder=state["ladder"])
         with signals_deferred(reraise=False) as late:
-            write_text_atomic(Path(args.output), throwfile.dumps(throwfile.throw_dict(
-                r, oil=foul_atlas.OIL, requested=want, estimate=state["est"], want=want, ladder=state["ladder"])))
+            write_text_atomic(Path(args.output), throwfile.dumps(doc))
     except (OutputError, ValueError) as e:
+        bar.close()
         return err("solve", str(e))
     finally:
-        bar.close()
         R.close()
     got = ",".join(map(str, r.down)) or "none"
+    bar.close(note=f"pins down {got}")
     line = (f"pins down {got}, leave {','.join(map(str, r.leave)) or 'none'}; from the foul line: {_delivery_text(d)}")
     if state["est"] is not None:
         e = state["est"]
         line += f"; probability {e.text()} under the release noise, seed {seed}"
-    if state["ladder"]:
-        lv = [x.leave if hasattr(x, "leave") else x["leave"] for x in state["ladder"]]
-        line += "; the same at h = 1, 0.5, 0.25 ms" if all(v == r.leave for v in lv) else "; CHANGES with the timestep"
-    line += f"; {time.perf_counter() - t0:.1f} s; wrote {args.output}"
+    steps, kept = throwfile.ladder_kept(doc)
+    if steps:
+        line += f"; {kept_text(steps, kept)}"
+    line += (f"; {progress.count_text(bar.n)} frame{'s' if bar.n != 1 else ''} in {progress.seconds_text(bar.seconds)}"
+             f"; wrote {args.output}")
     if interrupted or late:
         print(f"nbst bowl solve: interrupted; best so far written: {line}", file=sys.stderr)
         return 130
@@ -202,8 +213,13 @@ def cmd_solve(args) -> int:
         print(f"nbst bowl solve: the most probable throw found misses without noise: {line}", file=sys.stderr)
         return 1
     if state.get("kept_start"):
-        print("nbst bowl solve: --robust found no throw more probable that also gives the outcome without noise; "
-              "the throw found first is written", file=sys.stderr)
+        print("nbst bowl solve: --robust found no delivery more probable that also gives the outcome without noise; "
+              "the delivery found first is written", file=sys.stderr)
+    if args.require_robust and (not steps or len(kept) < len(steps)):
+        why = "" if steps else " (no ladder was run)"
+        print(f"nbst bowl solve: --require-robust: the written throw does not keep its outcome at every "
+              f"timestep{why}: {line}", file=sys.stderr)
+        return 1
     if not args.quiet:
         how = " (the shipped foul-line atlas's throw)" if state["from_atlas"] else f" after {state['frames']} frames"
         rb = state.get("robust")
@@ -229,9 +245,9 @@ def robust_starts(found, want) -> list:
 def cmd_atlas(args) -> int:
     """``bowl atlas --foul-line``: the search, the mirror step and each subset's measures of
     :class:`nbst.models.bowling.lane.folder.FoulAtlasRun`, with progress and Ctrl-C handling."""
+    from nbst import progress
     from nbst.outputs import OutputError, prepare_output, sigterm_as_interrupt
     from nbst.parallel import default_jobs
-    from nbst.progress import progress_bar
 
     from nbst.models.bowling import files
     from nbst.models.bowling.lane.folder import FoulAtlasRun
@@ -248,27 +264,27 @@ def cmd_atlas(args) -> int:
     except (OutputError, ValueError, OSError, files.BowlingFileError) as e:
         return err("atlas", str(e))
     interrupted = False
-    bar = progress_bar(total=args.max_rollouts, desc="foul-line atlas", unit="frame", disable=args.quiet,
-                       file=sys.stderr)
+    bar = progress.Bar("bowl atlas --foul-line: search", args.max_rollouts, unit="frame", bound=True,
+                       start=progress.command_start(), quiet=args.quiet)
+    pb = None
 
     def on_batch(frames, found) -> None:
-        bar.update(frames - bar.n)
-        bar.set_postfix_str(f"{found} subsets", refresh=False)
+        bar.set(frames)
+        bar.note(f"{found} subsets")
 
     try:
         with sigterm_as_interrupt():
             try:
                 run.grow(args.max_rollouts, on_batch=on_batch)
-                bar.close()
+                bar.close(note=f"{len(run.archive.elite)} subsets")
                 run.mirror()
-                pb = progress_bar(total=len(run.todo()) * (args.samples + 4), desc="probabilities", unit="frame",
-                                  disable=args.quiet, file=sys.stderr)
+                pb = progress.Bar("bowl atlas --foul-line: probabilities", len(run.todo()) * (args.samples + 4),
+                                  unit="frame", start=progress.command_start(), quiet=args.quiet)
 
                 def more(k) -> None:
                     pb.total += k * (args.samples + 4)
 
-                run.measure(args.samples, on_done=lambda: pb.update(1), on_more=more)
-                pb.close()
+                run.measure(args.samples, on_done=pb.update, on_more=more)
             except KeyboardInterrupt:
                 interrupted = True
         run.write_all()
@@ -276,9 +292,13 @@ def cmd_atlas(args) -> int:
         return err("atlas", str(e))
     finally:
         bar.close()
+        if pb is not None:
+            pb.close(note=f"{len(run.done)} subsets measured")
         run.close()
+    last = pb if pb is not None else bar
     msg = (f"{len(run.done)} subsets with their probability ({len(run.archive.elite)} found in "
-           f"{run.archive.rollouts} frames); wrote {run.atl}, {run.summ}")
+           f"{run.archive.rollouts} frames searched{f', {progress.count_text(pb.n)} frames measuring them' if pb else ''}"
+           f") in {progress.seconds_text(last.seconds)}; wrote {run.atl}, {run.summ}")
     if interrupted:
         print(f"nbst bowl atlas: interrupted; what ran is written: {msg}", file=sys.stderr)
         return 130

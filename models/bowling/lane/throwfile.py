@@ -13,15 +13,16 @@ runs it again (:func:`replay_file`) and compares the pins down::
      "outcome": {"down", "leave", "settled", "settle_s", "cap_hit", "board_at_pins",
                  "entry_angle_deg", "timestep"},
      "probability": Estimate.to_dict() + {"want": {"down": [...]}} | null,
-     "ladder": [{"timestep": h, "leave": [...]}, ...] | null}
+     "ladder": [{"timestep": h, "leave": [...], "kept": bool}, ...] | null}
 
 ``probability`` is :class:`.noise.Estimate`: ``k`` of ``n`` noisy throws (seed, noise sigmas)
 gave the outcome ``want`` (the pins down counted as a success; for ``bowl frame``, every pin in
 play: a strike or the spare), ``p = k/n`` and its 95 % Wilson interval ``[lo, hi]``, and how
-often each leave came up. ``ladder`` is the same throw at each timestep of the
-engine-robustness ladder. A frame is replayed with :func:`.frame.run_frame` at the outcome's
-``timestep`` and the default oil friction (:data:`.lane.MU_OIL`); it is deterministic, so
-the pins down are the file's.
+often each leave came up. ``ladder`` is the same delivery thrown at each timestep of the
+engine-robustness ladder, and whether it ``kept`` the outcome there (the same pins left as the
+outcome's; files written before ``kept`` existed lack it and still load). A frame is replayed
+with :func:`.frame.run_frame` at the outcome's ``timestep`` and the default oil friction
+(:data:`.lane.MU_OIL`); it is deterministic, so the pins down are the file's.
 
 A **throw atlas** is ``{"format": "nbst-bowling-throw-atlas", "version": 1, "oil", "ball",
 "noise", "throws": [throw, ...]}``: every throw on the atlas's oil and ball, its probability
@@ -127,6 +128,8 @@ def throw_dict(result: frame.FrameResult, *, oil: str, ball=None, requested=None
     if ladder is not None:
         lad = [{"timestep": float(x.timestep), "leave": list(x.leave)} if isinstance(x, frame.FrameResult)
                else {"timestep": float(x["timestep"]), "leave": _pins(x["leave"])} for x in ladder]
+        for x in lad:
+            x["kept"] = x["leave"] == list(result.leave)
     d = {
         "format": FORMAT,
         "version": VERSION,
@@ -178,7 +181,7 @@ def _ordered_throw(t: dict) -> dict:
     if isinstance(p, dict) and isinstance(p.get("noise"), dict):
         p["noise"] = _ordered(p["noise"], _noise.KEYS)
     if isinstance(t.get("ladder"), list):
-        t["ladder"] = [_ordered(x, ("timestep", "leave")) if isinstance(x, dict) else x for x in t["ladder"]]
+        t["ladder"] = [_ordered(x, ("timestep", "leave", "kept")) if isinstance(x, dict) else x for x in t["ladder"]]
     return t
 
 
@@ -396,8 +399,20 @@ def check_throw(d, src, pre: str = "") -> dict:
             g = f"{pre}ladder[{i}]"
             _object(x, src, g, ("timestep", "leave"))
             _check_timestep(x, "timestep", src, g + ".timestep")
-            _pin_list(x["leave"], src, g + ".leave", within=standing)
+            lv = _pin_list(x["leave"], src, g + ".leave", within=standing)
+            if "kept" in x and _flag(x, "kept", src, g + ".kept") != (lv == leave):
+                _fail(src, g + ".kept", f"says {str(x['kept']).lower()}, but the leave there {lv} is "
+                                        f"{'' if lv == leave else 'not '}the outcome's {leave}")
     return d
+
+
+def ladder_kept(d: dict) -> tuple[list, list]:
+    """(timesteps, the timesteps that kept the outcome) of a checked throw dict's ladder ([], []
+    without one)."""
+    lad = d.get("ladder") or []
+    leave = sorted(d["outcome"]["leave"])
+    return ([float(x["timestep"]) for x in lad],
+            [float(x["timestep"]) for x in lad if x.get("kept", sorted(x["leave"]) == leave)])
 
 
 def check_atlas(a, src) -> dict:
