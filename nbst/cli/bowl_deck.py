@@ -61,7 +61,7 @@ def cmd_solve(args) -> int:
     try:
         L = runner_of(args, jobs)
     except ValueError as e:
-        return err("solve", f"--cluster: {e}")
+        return err("solve", str(e))  # nbst.cluster.connect names --cluster and the address
     probes = 0 if args.no_robustness else ROBUSTNESS_ROLLOUTS[1]
     bar = progress.Bar(f"bowl solve {','.join(map(str, want))}", args.max_rollouts + probes, unit="rollout",
                        bound=True, start=progress.command_start(), quiet=args.quiet)
@@ -138,7 +138,7 @@ def cmd_atlas(args) -> int:
     try:
         L = runner_of(args, args.jobs or default_jobs())
     except ValueError as e:
-        return err("atlas", f"--cluster: {e}")
+        return err("atlas", str(e))  # nbst.cluster.connect names --cluster and the address
     files, deliveries = folder.resume(out)
     bar = None
 
