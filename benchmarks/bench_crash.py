@@ -109,17 +109,19 @@ def chain() -> None:
     from nbst.models.crash import script
 
     sc = script.load_script("chain3")
-    got = []
+    got, first = [], []
     for seed in range(1, ARGS.seeds + 1):
         r, wall, cpu = _solve(sc, seed, 1500)
-        n = r.rollouts if r.best.outcome.solved else None
+        n = r.rollouts if r.best.accepted else None
         got.append(n if n is not None else float("inf"))
-        print(f"  seed {seed}: {'solved in ' + str(n) if n else 'NOT solved in 1500'} rollouts (best cost "
-              f"{r.best.cost:.3g}, signature {r.best.outcome.signature_text(3)}), {wall:.0f} s wall, {cpu:.0f} s CPU",
-              flush=True)
-    med = float(np.median(got))
-    print(f"chain3: median rollouts to solve over {ARGS.seeds} seeds: {med:g} (target <= 1,500: "
-          f"{'met' if med <= 1500 else 'NOT met'})")
+        first.append(r.first_met if r.first_met is not None else float("inf"))
+        print(f"  seed {seed}: met at 2 ms after {r.first_met} rollouts; "
+              f"{'met on the ladder (1, 0.5 ms too) after ' + str(n) if n else 'never on the ladder in 1500'} "
+              f"(best cost {r.best.cost:.3g}, signature {r.best.outcome.signature_text(3)}), {wall:.0f} s wall, "
+              f"{cpu:.0f} s CPU", flush=True)
+    med, med1 = float(np.median(got)), float(np.median(first))
+    print(f"chain3 over {ARGS.seeds} seeds: median rollouts to meet it at 2 ms {med1:g}, and to meet it at 2, 1 and "
+          f"0.5 ms {med:g} (target <= 1,500: {'met' if med <= 1500 else 'NOT met'})")
 
 
 def planted() -> None:
@@ -130,9 +132,10 @@ def planted() -> None:
         d, _ = pl.planted_script(100 + k)
         sc = script.script_from_dict(d)
         r, wall, cpu = _solve(sc, 1, 3000)
-        ok = r.best.outcome.solved
+        ok = r.best.accepted
         solved += ok
-        print(f"  planted {100 + k}: {len(d['order'])} contacts; {'solved in ' + str(r.rollouts) if ok else 'NOT solved'}"
+        print(f"  planted {100 + k}: {len(d['order'])} contacts; met at 2 ms after {r.first_met}; "
+              f"{'solved (on the ladder) in ' + str(r.rollouts) if ok else 'NOT solved on the ladder'}"
               f" (best cost {r.best.cost:.3g}, signature {r.best.outcome.signature_text(3)}), {wall:.0f} s wall",
               flush=True)
     print(f"planted 3-car scripts: {solved} of {ARGS.planted} solved within 3,000 rollouts (target >= 8 of 10)")
@@ -146,8 +149,11 @@ def builtins() -> None:
         sc = script.load_script(name)
         r, wall, cpu = _solve(sc, 1, 3000)
         b = r.best
-        line = (f"  {name}: {'solved in ' + str(r.rollouts) if b.outcome.solved else 'NOT solved in 3000'} rollouts "
-                f"(cost {b.cost:.3g}, signature {b.outcome.signature_text(sc.n)}), {wall:.0f} s wall")
+        state = ("solved in " + str(r.rollouts) if b.accepted else
+                 "met at 2 ms only (never on the ladder) in " + str(r.rollouts) if b.outcome.solved else
+                 "NOT solved in " + str(r.rollouts))
+        line = (f"  {name}: {state} rollouts (cost {b.cost:.3g}, signature {b.outcome.signature_text(sc.n)}), "
+                f"{wall:.0f} s wall")
         if b.outcome.solved:
             lad = robust.ladder(sc, scene_text(sc), space.space_of(sc).intents(b.u[None])[0])
             line += "; ladder " + ", ".join(f"{1e3 * h:g} ms {'kept' if o[1] and o == lad.wanted else 'LOST'}"
@@ -211,9 +217,12 @@ def sensitivity() -> None:
     base = r.best.outcome
 
     def variant(name, change):
+        from nbst.models.mjsearch.batch import BatchRunner
+
         R = run.Runner(sc, jobs=1)
-        m = R.model
-        change(m)
+        change(R.model)
+        R.stepper.close()  # the Batch copies the model when made: make it again from the changed one
+        R.stepper = BatchRunner(R.model, jobs=1, size=R.size)
         o = R.run(intents).outcomes[0]
         moved = [math.hypot(a.rest[0] - b.rest[0], a.rest[1] - b.rest[1]) for a, b in zip(o.vehicles, base.vehicles)]
         turned = [abs(math.degrees((a.rest[2] - b.rest[2] + math.pi) % (2 * math.pi) - math.pi))

@@ -13,8 +13,9 @@ every driver period, for a batch of simulations at once (numpy over the batch):
 
 :func:`outcomes` turns a finished record into :class:`Outcome` values; :func:`judge` checks
 them against a script's fates: one **signature** bit per vehicle, set when every fate of that
-vehicle holds (the paper's i-acceptable), the global order, and a cost that is 0 when the
-script is met and grows with how far each fate is from holding (the search's guide).
+vehicle holds (the paper's i-acceptable), the global order, and a cost that grows with how far
+each fate is from holding (the search's guide; a met script costs at most a few hundredths:
+the centring term, :data:`W_CENTRE`).
 
 Compute only.
 """
@@ -39,6 +40,10 @@ REST_SPEED = 0.5
 #: outside a speed band, 45 degrees of spin.
 W_CONTACT, W_NEAR, W_METRE, W_HEADING, W_TURN, W_ATTITUDE, W_STRIKE, W_KMH, W_SPIN = \
     10.0, 5.0, 0.5, 1.0 / math.radians(30), 2.0, 3.0, 2.0, 0.1, 1.0 / math.radians(45)
+#: Centring: a fate met near the edge of its tolerance is one the timestep or the driver's noise
+#: can lose, so every measured fate also costs W_CENTRE x (how far from the middle of its band,
+#: in band halves): the search prefers the middle of the rest region, heading, spin and bands.
+W_CENTRE = 0.02
 
 
 class Recorder:
@@ -272,14 +277,16 @@ def judge(o: Outcome, script: Script, min_dist: np.ndarray | None = None) -> Out
                 miss = _band(val, band.lo, band.hi)
                 ok[key] = miss == 0.0
                 c += W_KMH * KMH * miss if math.isfinite(miss) else W_CONTACT / 2
+                if math.isfinite(val) and band.hi > band.lo:
+                    c += W_CENTRE * min(abs(val - (band.lo + band.hi) / 2) / ((band.hi - band.lo) / 2), 2.0)
         if f.rest is not None:
             d = math.hypot(vo.rest[0] - f.rest[0], vo.rest[1] - f.rest[1])
             ok["rest"] = d <= f.rest[2]
-            c += W_METRE * max(0.0, d - f.rest[2])
+            c += W_METRE * max(0.0, d - f.rest[2]) + W_CENTRE * min(d / f.rest[2], 2.0)
         if f.heading is not None:
             err = abs(float(_wrap(vo.rest[2] - f.heading[0])))
             ok["heading"] = err <= f.heading[1]
-            c += W_HEADING * max(0.0, err - f.heading[1])
+            c += W_HEADING * max(0.0, err - f.heading[1]) + W_CENTRE * min(err / f.heading[1], 2.0)
         if f.quarter_turns is not None:
             lo, hi = f.quarter_turns
             ok["quarter_turns"] = lo <= vo.quarter_turns <= hi
@@ -290,7 +297,7 @@ def judge(o: Outcome, script: Script, min_dist: np.ndarray | None = None) -> Out
         if f.spin is not None:
             err = abs(abs(vo.spin) - f.spin[0])
             ok["spin"] = err <= f.spin[1]
-            c += W_SPIN * max(0.0, err - f.spin[1])
+            c += W_SPIN * max(0.0, err - f.spin[1]) + W_CENTRE * min(err / f.spin[1], 2.0)
         for key, t in (("curb", vo.curb), ("barrier", vo.barrier)):
             want = getattr(f, key)
             if want is not None:

@@ -31,7 +31,7 @@ The search stops at the first trial that meets the script (every bit set and the
 order) and keeps meeting it at 1 and 0.5 ms (the **ladder**: a crash that only the 2 ms step
 makes is no result; such a trial costs :data:`FRAGILE` more and the search goes on), at the
 budget, or on Ctrl-C (the best so far is returned, ``stopped`` "interrupted").
-Cost: :func:`.outcome.judge` (0 when met).
+Cost: :func:`.outcome.judge` (a few hundredths when met: its centring term).
 
 Reproducible: batches have a fixed size (:data:`.run.BATCH`), every random number comes from
 the seeded Generator in a fixed order, pycma gets seeds drawn from it; the rollouts do not
@@ -63,7 +63,7 @@ GA_BATCHES = 3
 #: The ladder a trial that meets the script must hold on (s; the script's own step first), and the
 #: cost added to one that does not (it meets the script only at its own step: search on).
 LADDER = (0.001, 0.0005)
-FRAGILE = 0.5
+FRAGILE = 0.1  # small: a fragile crash stays a parent (its neighbours may hold on the ladder)
 #: CMA-ES: initial step (unit cube), generations without a lower cost that end a restart.
 SIGMA0, STALL = 0.12, 6
 
@@ -118,7 +118,7 @@ class SearchResult:
     wall_time: float
     archive: dict
     history: list           # (rollouts, best cost) after each batch
-
+    first_met: int | None = None  # rollouts when a trial first met the script at its own step
 
 def _order_bits(sig: int) -> int:
     return bin(sig).count("1")
@@ -134,6 +134,7 @@ class _Search:
         self.archive: dict = {}          # contact sequence -> best Trial
         self.best: Trial | None = None
         self.history: list = []
+        self.first_met: int | None = None
         self.full = (1 << space.n) - 1
 
     @property
@@ -154,6 +155,8 @@ class _Search:
                 t = Trial(u=u.copy(), outcome=o, controls=res.controls[i], qpos0=res.qpos0[i], qvel0=res.qvel0[i],
                           final_qpos=res.final_qpos[i])
                 trials.append(t)
+                if o.solved and self.first_met is None:
+                    self.first_met = self.rollouts + i + 1
                 if o.solved and self.check is not None:
                     t.holds = bool(self.check(t))
                     self.rollouts += len(LADDER)  # counted: the ladder's rollouts are rollouts too
@@ -405,4 +408,5 @@ def solve(script, *, seed: int, max_rollouts: int = 1500, runner=None, jobs: int
             raise
     return SearchResult(best=s.best, rollouts=s.rollouts, restarts=restarts, stopped=stopped, seed=int(seed),
                         wall_time=time.perf_counter() - t0,
-                        archive={k: float(t.cost) for k, t in s.archive.items()}, history=s.history)
+                        archive={k: float(t.cost) for k, t in s.archive.items()}, history=s.history,
+                        first_met=s.first_met)
