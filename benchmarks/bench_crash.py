@@ -217,13 +217,9 @@ def sensitivity() -> None:
     base = r.best.outcome
 
     def variant(name, change):
-        from nbst.models.mjsearch.batch import BatchRunner
-
-        R = run.Runner(sc, jobs=1)
-        change(R.model)
-        R.stepper.close()  # the Batch copies the model when made: make it again from the changed one
-        R.stepper = BatchRunner(R.model, jobs=1, size=R.size)
+        R = run.Runner(sc, jobs=1, edit=change)  # the change made before the batch copies the model
         o = R.run(intents).outcomes[0]
+        R.close()
         moved = [math.hypot(a.rest[0] - b.rest[0], a.rest[1] - b.rest[1]) for a, b in zip(o.vehicles, base.vehicles)]
         turned = [abs(math.degrees((a.rest[2] - b.rest[2] + math.pi) % (2 * math.pi) - math.pi))
                   for a, b in zip(o.vehicles, base.vehicles)]

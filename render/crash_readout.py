@@ -5,7 +5,8 @@ on the left and, where the script asks something of it, a mark and what was aske
 
 * ``hit B 3.08 s Δv 27.8 km/h`` one line per vehicle it hits, in order, as they happen (the
   delta-V is this vehicle's in that contact: |impulse| / its mass); asked: whom, in order;
-* ``impact 53.8 km/h`` and ``Δv 27.8 km/h`` (its first impact) where the script asks for them;
+* ``impact 53.8 km/h`` and ``Δv 27.8 km/h`` (its first impact) where the script asks for them
+  (then the first hit's line leaves its delta-V to that line: each hit's delta-V said once);
 * ``0 quarter turns, upright`` (roll so far, unwrapped); asked: the turns and/or the attitude;
 * ``spun 361°`` (yaw turned), ``curb 3.41 s`` (strikes) where asked;
 * ``at (x, y) 48.2 km/h`` while it moves, ``rest (x, y) 146°`` at the end; asked: the region
@@ -109,7 +110,10 @@ def vehicle_lines(i: int, t: float, motion, script, fate: dict, label: str, *, f
     for c in motion.outcome_dict["contacts"]:
         if me in (c["a"], c["b"]) and c["t"] <= t + 1e-9:
             other = c["b"] if c["a"] == me else c["a"]
-            hits.append(f"hit {other} {c['t']:.2f} s {DV} {c['delta_v_kmh'][me]:.1f} km/h")
+            hits.append(f"hit {other} {c['t']:.2f} s")
+            if not hits[1:] and "dv" in asked:
+                continue  # the first hit's delta-V has its own line, with its mark: said once
+            hits[-1] += f" {DV} {c['delta_v_kmh'][me]:.1f} km/h"
     n_hits = max(1, sum(me in (c["a"], c["b"]) for c in motion.outcome_dict["contacts"]))
     hits += [""] * (n_hits - len(hits))
     if not any(hits):

@@ -112,6 +112,27 @@ def test_reaction_braking_stops_the_car_as_locked_wheels_do():
     assert travelled == pytest.approx(20 * 0.5 + 20 ** 2 / (2 * 0.8 * 9.81), rel=0.03)
 
 
+def test_a_changed_road_friction_reaches_the_rollouts():
+    # the sensitivity runs' edit: the same braking car on a road of mu 0.5 instead of 0.8 slides
+    # farther, v^2 / 2 mu g (+ 0.5 s of travel) on, within 3 %
+    d = {"kind": "nbst-crash-script", "road": {"layout": "straight", "width": 7, "length": 200}, "duration": 6.0,
+         "vehicles": [{"name": "A", "type": "sedan", "start": {"x": -80, "y": -1.75, "heading": 0}, "speed": 72,
+                       "driver": {"brake_at": 0.5}}]}
+    s = script.script_from_dict(d)
+    intents = space.space_of(s).intents(np.zeros((1, 0)))
+
+    def wet(m):
+        m.geom_friction[m.geom("ground").id, 0] = 0.5
+
+    dry = run.Runner(s).run(intents).outcomes[0].vehicles[0]
+    R = run.Runner(s, edit=wet)
+    assert R.model.geom_friction[R.model.geom("ground").id, 0] == 0.5
+    v = R.run(intents).outcomes[0].vehicles[0]
+    assert not v.moving and not dry.moving
+    assert v.rest[0] + 80 == pytest.approx(20 * 0.5 + 20 ** 2 / (2 * 0.5 * 9.81), rel=0.03)
+    assert v.rest[0] - dry.rest[0] > 10  # m: 40.8 - 25.5 = 15.3 m farther on the lower mu
+
+
 def test_the_crash_file_replays_and_refuses_tampering(short, tmp_path):
     s, sp, U, R, res = short
     k = 0

@@ -190,6 +190,27 @@ def test_the_readout_marks_are_the_judged_fates(loaded):
     assert "no hit yet" in "\n".join(early) and any("hit B 1.58 s" in x for x in end)
 
 
+def test_the_readout_says_each_hits_delta_v_once(loaded):
+    """Whether or not the script asks a delta-V band, each vehicle's block gives the delta-V of
+    each hit once: with the band asked, the first hit's is on the asked line, not also on its hit line."""
+    d, s, model, m = loaded
+    labels = [v.vtype.label for v in s.vehicles]
+    w = crash_motion.slow_windows([im.t for im in m.impacts], m.duration)
+    for ask in (False, True):
+        fates = [crashfile.fate_dict(s, i) for i in range(s.n)]
+        if ask:
+            for f in fates:
+                f["delta_v_kmh"] = [5.0, 40.0]
+        end = crash_readout.readout(m.duration, m, s, fates, labels, w)
+        for i, (name, vo) in enumerate(zip(s.names(), m.outcome.vehicles)):
+            at = end.index(next(x for x in end if x.startswith(f"{name} \u00b7 ")))
+            block = end[at:end.index("", at) if "" in end[at:] else len(end)]
+            assert vo.hits, "the short crash's vehicles meet"
+            assert sum(x.count(crash_readout.DV) for x in block) == len(vo.hits), block
+            first = f"{crash_readout.DV} {d['outcome']['contacts'][0]['delta_v_kmh'][name]:.1f} km/h"
+            assert sum(first in x for x in block) == 1 and any(x.startswith(first) for x in block) == ask, block
+
+
 @pytest.mark.parametrize("size, camera", [((640, 360), "both"), ((1280, 720), "both"), ((640, 360), "overhead")])
 def test_the_readout_fits_its_box_and_labels_stay_in_their_panels(gl, loaded, size, camera):
     """Every readout line fits the column and every row the box under the overhead panel (which

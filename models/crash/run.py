@@ -17,6 +17,7 @@ Compute only.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -55,10 +56,12 @@ class Rollouts:
 
 class Runner:
     """Runs batches of intents for ``script`` (see the module docstring); ``timestep`` overrides
-    the script's (the ladder), ``xml`` reuses a scene text (a result file's)."""
+    the script's (the ladder), ``xml`` reuses a scene text (a result file's), ``edit`` changes
+    the compiled model before the batch is made from it (a parameter's sensitivity: the batch
+    copies the model when made, so a change made to ``model`` after that reaches no rollout)."""
 
     def __init__(self, script: Script, *, jobs: int = 1, timestep: float | None = None, xml: str | None = None,
-                 batch: int = BATCH):
+                 batch: int = BATCH, edit: Callable | None = None):
         from nbst.models.mjsearch.batch import BatchRunner
 
         self.script = script
@@ -66,6 +69,8 @@ class Runner:
         self.model = scene_mod.model_from_xml(self.xml)
         if timestep is not None:
             self.model.opt.timestep = float(timestep)
+        if edit is not None:
+            edit(self.model)
         self.dt = float(self.model.opt.timestep)
         self.vehicles = scene_vehicles(script)
         self.L = scene_mod.layout(self.model, script.n)
