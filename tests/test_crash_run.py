@@ -156,6 +156,44 @@ def test_the_crash_file_replays_and_refuses_tampering(short, tmp_path):
             crashfile.load(f)
 
 
+def test_replay_says_which_vehicles_rest_and_which_still_move_at_the_end(short, tmp_path, capsys):
+    from nbst.cli.main import main
+
+    braked = script.script_from_dict({
+        "kind": "nbst-crash-script", "road": {"layout": "straight", "width": 7, "length": 200}, "duration": 4.0,
+        "vehicles": [{"name": "A", "type": "sedan", "start": {"x": -80, "y": -1.75, "heading": 0}, "speed": 72,
+                      "driver": {"brake_at": 0.5}}]})
+    s, sp, U, R, res = short  # 2.5 s: both still moving
+    Rb = run.Runner(braked)
+    ib = space.space_of(braked).intents(np.zeros((1, 0)))
+    rb = Rb.run(ib)
+    f = tmp_path / "c.json"
+    for s, R, res, u, want in ((s, R, res, sp.intents(U[:1])[0], "still moving at the end (2.5 s), at"),
+                               (braked, Rb, rb, ib[0], "rests at")):
+        o = res.outcomes[0]
+        assert all(v.moving == (want != "rests at") for v in o.vehicles)
+        d = crashfile.crash_dict(s, R.xml, R.model, u, res.qpos0[0], res.qvel0[0], res.controls[0],
+                                 res.final_qpos[0], o, seed=7, period_steps=R.period)
+        f.write_text(json.dumps(d, allow_nan=False))
+        assert main(["crash", "replay", str(f)]) == 0
+        out = capsys.readouterr().out
+        for v in o.vehicles:
+            assert f"  {v.name}: {want} (" in out
+
+
+@pytest.mark.slow
+def test_the_builtin_rollover_is_met_at_rest_on_its_roof():
+    # the rest pose and attitude are read at the script's end: the built-in rollover lasts long
+    # enough (12 s) for the SUV found to have stopped there (at 6 s it was still sliding on its roof)
+    from nbst.models.crash import search
+
+    s = script.load_script("rollover")
+    r = search.solve(s, seed=1, max_rollouts=600, jobs=1)
+    assert r.best.accepted
+    v = r.best.outcome.vehicles[0]
+    assert not v.moving and v.attitude == "roof" and v.quarter_turns == 2 and not math.isnan(v.curb)
+
+
 @pytest.mark.slow
 def test_solve_meets_the_short_script_and_the_cli_replays_it(tmp_path, capsys):
     from nbst.cli.main import main

@@ -262,6 +262,10 @@ def cmd_solve(args) -> int:
         if "probability" in d:
             p = d["probability"]
             more += f"; P {100 * p['p']:.0f} % ({p['k']}/{p['n']}, 95 % CI {100 * p['lo']:.0f}-{100 * p['hi']:.0f} %)"
+        moving = [v.name for v in b.outcome.vehicles if v.moving]
+        if moving:
+            more += (f"; {', '.join(moving)} still moving at the end ({script.duration:g} s): the pose then, not a "
+                     "rest position (a longer duration lets it stop)")
         print(f"crash {script.name}: {met}, signature {b.outcome.signature_text(script.n)} after {res.rollouts} "
               f"rollouts ({res.wall_time:.0f} s), seed {seed}{more}; wrote {args.output}", file=sys.stderr)
     if stopped == "interrupted":
@@ -408,6 +412,7 @@ def cmd_replay(args) -> int:
             print(f"  t = {c['t']:.3f} s  {c['a']}-{c['b']}  delta-V {dv}")
         for v in again["vehicles"]:
             r = v["rest"]
-            print(f"  {v['name']}: rests at ({r['x']:.2f}, {r['y']:.2f}) facing {r['heading_deg']:.1f} deg, "
+            where = (f"still moving at the end ({d['duration']:g} s), at" if v["moving_at_end"] else "rests at")
+            print(f"  {v['name']}: {where} ({r['x']:.2f}, {r['y']:.2f}) facing {r['heading_deg']:.1f} deg, "
                   f"{v['attitude']}, {v['quarter_turns']} quarter turns")
     return 0 if ok else 1
