@@ -1,6 +1,6 @@
 """The crash model's figures and the issue's targets (docs/crash.md).
 
-    python benchmarks/bench_crash.py [--part P ...] [--jobs K] [--seeds 5] [--planted 10]
+    python benchmarks/bench_crash.py [--part P ...] [--jobs K] [--seeds 5] [--planted 10] [--recon-budget 3000]
 
 Parts (default: all, in this order; each prints its figures and its target, met or not):
 
@@ -17,8 +17,8 @@ Parts (default: all, in this order; each prints its figures and its target, met 
 * ``builtins``: every built-in script solved (3,000 rollouts, seed 1) and its signature at 1
   and 0.5 ms (the ladder; the rollover among them);
 * ``recon``: ``--planted`` planted 2-car crashes reconstructed from their rest poses (1 m,
-  10 deg), 3,000 rollouts each: the median fit's impact speed against the truth (target within
-  1 m/s or 5 % in >= 8 of 10);
+  10 deg), ``--recon-budget`` rollouts each (default 3,000): the median fit's impact speed
+  against the truth (target within 1 m/s or 5 % in >= 8 of 10);
 * ``probability``: P(fates) of the solved t-bone from 100 noisy rollouts on ``--jobs`` threads,
   wall time (target <= 60 s on 2 cores);
 * ``sensitivity``: the solved chain3 (seed 1) rerun with each assumed parameter changed (body
@@ -169,7 +169,7 @@ def recon() -> None:
         d, truth = pl.planted_case(200 + k)
         case = script.script_from_dict(d)
         t0 = time.perf_counter()
-        r = reconstruct.reconstruct(case, seed=1, max_rollouts=3000, jobs=ARGS.jobs)
+        r = reconstruct.reconstruct(case, seed=1, max_rollouts=ARGS.recon_budget, jobs=ARGS.jobs)
         errs = []
         for i, tr in enumerate(truth):
             rng = r.ranges[i].get("impact_speed")
@@ -182,7 +182,8 @@ def recon() -> None:
             for i, (nm, tr, e) in enumerate(zip(case.names(), truth, errs)))
         print(f"  case {200 + k}: {len(r.fits)} fits, {r.rollouts} rollouts, {time.perf_counter() - t0:.0f} s: {desc}: "
               f"{'within' if ok else 'OUTSIDE'}", flush=True)
-    print(f"reconstruction: {good} of {ARGS.planted} planted 2-car crashes within 1 m/s or 5 % (target >= 8 of 10)")
+    print(f"reconstruction: {good} of {ARGS.planted} planted 2-car crashes within 1 m/s or 5 % with "
+          f"{ARGS.recon_budget:,} rollouts each (target >= 8 of 10)")
 
 
 def probability() -> None:
@@ -257,6 +258,7 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="threads for the searches (default 2)")
     ap.add_argument("--seeds", type=int, default=5, help="seeds of the chain3 part (default 5)")
     ap.add_argument("--planted", type=int, default=10, help="planted scripts and cases (default 10)")
+    ap.add_argument("--recon-budget", type=int, default=3000, help="rollouts per reconstruction (default 3,000)")
     args = ARGS = ap.parse_args(argv)
     for part in args.part or PARTS:
         t0 = time.perf_counter()
