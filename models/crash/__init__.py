@@ -15,5 +15,23 @@ Rooms, bottom up (the layer contract in pyproject.toml lists them):
   probability, the ladder, the robust maximiser; :mod:`.reconstruct`: rest poses back to speeds;
   :mod:`.planted`: scripts and cases with a known answer.
 
-Importing this package imports nothing heavy; the submodules that need MuJoCo import it.
+Importing this package imports nothing heavy; the submodules that need MuJoCo import it. The
+entry points below load their module on first use: :func:`script_from_dict` and the registered
+scripts :data:`SCRIPTS` (``nbst.models.crash.script``), :func:`solve` and :class:`SearchResult`
+(``nbst.models.crash.search``), :func:`reconstruct` and :class:`Reconstruction`
+(``nbst.models.crash.reconstruct``).
 """
+from __future__ import annotations
+
+import importlib
+
+__all__ = ["SCRIPTS", "Script", "script_from_dict", "solve", "SearchResult", "reconstruct", "Reconstruction"]
+
+_LAZY = {"SCRIPTS": "script", "Script": "script", "script_from_dict": "script", "solve": "search",
+         "SearchResult": "search", "reconstruct": "reconstruct", "Reconstruction": "reconstruct"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        return getattr(importlib.import_module(f"nbst.models.crash.{_LAZY[name]}"), name)
+    raise AttributeError(f"module 'nbst.models.crash' has no attribute {name!r}")
