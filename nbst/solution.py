@@ -148,7 +148,7 @@ class SolveResult:
 
     @property
     def island(self) -> int | None:
-        """Islands (``nbst.solvers.solve_islands``): the island whose solution this is."""
+        """Islands (``nbst.solvers.islands.solve_islands``): the island whose solution this is."""
         v = self.meta.get("island")
         return None if v is None else int(v)
 

@@ -6,7 +6,7 @@ process pool or on a Dask cluster and writes each finished run to its own JSON f
 (atomically) as soon as it finishes, so a crash loses no finished run and running the
 same specs again skips the finished ones. The summaries (:func:`curves_rows`,
 :func:`ablation_rows`, :func:`compare_rows`) are pure functions of the results; plots
-and tables are drawn by ``nbst.experiments.runs.plots``.
+and tables are drawn by ``nbst.experiments.plots``.
 
 Entries name what runs, read from the two registries: every variant of the signature search
 (``nbst.search.variants.VARIANTS``: ``nbst``, ``nbst-noplan``, ``A`` .. ``H``) and every other

@@ -31,7 +31,7 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAUL
           chunk: int = 2048, many: ManyParams | None = None) -> SolveResult:
     """Find initial velocities that bring every disk of ``problem`` to its target at t_final.
 
-    One search in this process (``nbst.solvers.solve_islands`` runs several on several cores).
+    One search in this process (``nbst.solvers.islands.solve_islands`` runs several on several cores).
 
     Args:
         problem: the problem (``nbst.load_problem``), any number of disks.
