@@ -41,7 +41,7 @@ def test_wheel_holds_only_nbst(tmp_path):
     assert {t for t in tops if not t.endswith(".dist-info")} == {"nbst"}
     for must in ("nbst/models/__init__.py", "nbst/render/__init__.py", "nbst/problems/diamond-s14.json",
                  "nbst/problems/over5.json", "nbst/problems/diamond-s14-tiny.json", "nbst/sim/kernel.py",
-                 "nbst/models/bowling/deck/atlas.json", "nbst/models/bowling/deck/scene.xml"):
+                 "nbst/models/bowling/deck/atlas.json", "nbst/models/bowling/deck/scene.xml", "nbst/py.typed"):
         assert must in names
     # every package of the checkout (models/ and render/ through their links) is in the wheel
     for folder, dirs, files in os.walk(ROOT / "nbst", followlinks=True):
