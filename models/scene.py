@@ -211,6 +211,18 @@ def scene_xml(problem: Problem, velocities=None, *, timestep: float = DEFAULT_TI
 
     A model loaded from this text has the same keyframe, disk starts, sizes, masses,
     contact parameters and timestep as ``build_model``, bit for bit (:func:`full_precision`).
+
+    Args:
+        problem: the problem whose box and disks make the scene.
+        velocities: (N, 2) float, units/s (a solution's), or None: keyframe ``initial`` then has
+            zero qvel.
+        timestep: MuJoCo's timestep, seconds (default :data:`DEFAULT_TIMESTEP`).
+        unit: metres per problem unit (default :data:`DEFAULT_UNIT`: problems are millimetres).
+        progress: None or progress(k): k more disks added (see :func:`build_spec`).
+
+    Returns:
+        The MJCF XML text: load it with ``mujoco.MjModel.from_xml_string`` and reset to keyframe
+        ``initial`` to play the motion.
     """
     spec = build_spec(problem, velocities, timestep=timestep, unit=unit, progress=progress)
     _compile(spec, problem, unit)

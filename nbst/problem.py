@@ -53,14 +53,25 @@ class KernelArrays(NamedTuple):
 
 @dataclass(frozen=True, eq=False)
 class Problem:
-    """A validated problem. Arrays are read-only.
+    """A validated problem. Arrays are read-only. Build one with :func:`load_problem` or
+    :func:`problem_from_dict`, which check every field; the constructor checks nothing.
 
-    start, target : (N, 2) float, units
-    radius, mass  : (N,) float, units and mass units
-    cueable       : (N,) bool
-    box           : (W, H), the box spans [0, W] x [0, H]
-    t_final       : seconds
-    target_radius : R, units; disk i is acceptable iff |final_i - target_i| <= R
+    Args:
+        name: the problem's name (a built-in's, or the file's ``name``).
+        box: (W, H), units; the box spans [0, W] x [0, H].
+        t_final: seconds.
+        target_radius: R, units; disk i is acceptable iff |final_i - target_i| <= R.
+        start: (N, 2) float, units: the disks' positions at t = 0.
+        target: (N, 2) float, units: where each disk should be at t_final.
+        radius: (N,) float, units.
+        mass: (N,) float, mass units.
+        cueable: (N,) bool: a cueable disk gets an initial velocity; the others start at rest.
+        description: free text from the file.
+        source: where it came from (a path, ``<built-in NAME>`` or ``<dict>``).
+        raw: the decoded JSON object it was built from.
+
+    Returns:
+        The problem; ``n``, ``width``, ``height`` and ``straight_velocities()`` derive from it.
     """
 
     name: str
@@ -239,6 +250,17 @@ def load_problem(name_or_path: str | Path) -> Problem:
     """Load a problem by built-in name (``diamond-s14``) or by path to a JSON file.
 
     An existing file wins over a built-in of the same name.
+
+    Args:
+        name_or_path: a built-in name (``nbst problems`` lists them) or a path to a problem file
+            (a :class:`~pathlib.Path` is always read as a path).
+
+    Returns:
+        The checked :class:`Problem`.
+
+    Raises:
+        ProblemError: one line naming the file, the field and the problem (an unknown name, an
+            unreadable or invalid file).
     """
     s = str(name_or_path)
     p = Path(s)

@@ -244,7 +244,18 @@ def solution_from_dict(d: Any, problem: Problem, *, source: str = "<dict>") -> S
 
 
 def load_solution(path: str | Path, problem: Problem) -> Solution:
-    """Read and validate a solution file for ``problem``."""
+    """Read and validate a solution file for ``problem``.
+
+    Args:
+        path: the solution file (``nbst solve -o``'s JSON).
+        problem: the problem it solves; its disk count and cueable disks are checked.
+
+    Returns:
+        The :class:`Solution`: ``velocities`` (N, 2), read-only, and every other key in ``meta``.
+
+    Raises:
+        ProblemError: one line naming the file, the field and the problem.
+    """
     return solution_from_dict(read_json(path), problem, source=str(path))
 
 
@@ -270,6 +281,15 @@ _json_safe = json_safe  # the name nbst/cli/mujoco.py imports
 def save_solution(path: str | Path, solution: Solution, *, option: str = "-o") -> None:
     """Write ``solution`` in the JSON solution format with nbst's one atomic writer
     (``nbst.outputs.write_json_atomic``: a partial file beside the target, fsynced, renamed over it,
-    the folder fsynced, stale partial files of killed writers removed; OutputError naming
-    ``option`` and the path on failure, the previous file then unchanged)."""
+    the folder fsynced, stale partial files of killed writers removed).
+
+    Args:
+        path: the file to write (never written through a symbolic link).
+        solution: what to write (:class:`Solution`; ``SolveResult.to_solution()`` gives one).
+        option: the command-line option named in an error (``-o``).
+
+    Returns:
+        None. On failure an OutputError names ``option`` and the path, and the previous file is
+        unchanged.
+    """
     write_json_atomic(path, solution.to_dict(), option=option)

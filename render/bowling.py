@@ -386,7 +386,22 @@ def load_motion(path):
 def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: str = "both", size=None,
                   times=None, fps=None, progress=None) -> int:
     """Render a recorded 5 m throw to ``output`` (.mp4/.gif video of ``times`` at ``fps``, or .png at
-    time ``still``). Returns the number of frames written."""
+    time ``still``).
+
+    Args:
+        throw: the 5 m throw file's dict (:func:`load_motion`'s first value).
+        motion: its replayed :class:`Motion` (:func:`load_motion`'s second value).
+        output: the .mp4, .gif or .png to write.
+        still: None for a video; seconds: one frame at that time (clipped to the motion).
+        camera: behind | overhead | both.
+        size: (width, height) pixels (default 1280 x 720).
+        times: the frames' times (default :func:`frame_times` at ``fps``).
+        fps: frames per second (default 60).
+        progress: None, or an object whose ``update(1)`` is called after each frame.
+
+    Returns:
+        The number of frames written (1 for a still).
+    """
     from nbst.render.video import render_video, write_png
 
     size = tuple(size or style.DEFAULT_SIZE)

@@ -428,8 +428,28 @@ class LaneRenderer(FrameRenderer):
 def render_throw(throw: Throw, output, *, still: float | None = None, camera: str = "both", size=None,
                  fps=None, hold: float = 1.0, asked=None, probability=None, probability_note=None,
                  expected=None, no_request: bool = False, progress=None) -> int:
-    """Render a recorded throw to ``output``: a .png at time ``still`` (seconds from the release;
-    a negative value: :func:`still_time`), else a .mp4/.gif video at ``fps``. Returns the frames."""
+    """Render a recorded throw to ``output``: a .png at time ``still``, else a .mp4/.gif video.
+
+    Args:
+        throw: the recorded throw from the foul line (``nbst.render.bowling_throw.record_throw``).
+        output: the .mp4, .gif or .png to write.
+        still: None for a video; seconds from the release: one frame then (clipped to the
+            motion); a negative value: :func:`still_time`.
+        camera: behind | overhead | both.
+        size: (width, height) pixels (default 1280 x 720).
+        fps: frames per second (default 60).
+        hold: seconds the last frame is held.
+        asked: the pins the throw was meant to knock down (a readout line), or None.
+        probability: the probability of the outcome, 0..1 (a readout line), or None.
+        probability_note: its sample size and interval, or None.
+        expected: the pins down a throw file records (a line only when the frame ends
+            differently), or None.
+        no_request: say on the ``asked`` line that the file asked for nothing.
+        progress: None, or an object whose ``update(1)`` is called after each frame.
+
+    Returns:
+        The number of frames written (1 for a still).
+    """
     from nbst.render.video import render_video, write_png
 
     size = tuple(size or style.DEFAULT_SIZE)

@@ -472,8 +472,24 @@ def load(path):
 def render_crash(d: dict, script, model, motion, output, *, still=None, camera: str = "overhead", follow: int = 0,
                  size=None, fps=None, hold: float = 1.0, times=None, progress=None) -> int:
     """Render a recorded crash to ``output`` (.mp4/.gif at ``fps``, slowed around each impact, or a
-    .png at time ``still``); ``times``: the frames' times (default :func:`.crash_motion.frame_times`
-    with ``hold``). Returns the number of frames written."""
+    .png at time ``still``).
+
+    Args:
+        d, script, model: the checked crash file, its script and its MuJoCo model, as
+            ``nbst.models.crash.crashfile.load`` returns them.
+        motion: the replayed motion (``nbst.render.crash_motion.record(d, script, model)``).
+        output: the .mp4, .gif or .png to write.
+        still: None for a video; seconds: one frame at that time (clipped to the motion).
+        camera: overhead | behind | both.
+        follow: the index of the vehicle the behind camera chases.
+        size, fps: (width, height) pixels and frames per second (default 1280 x 720, 60).
+        hold: seconds the last frame is held.
+        times: the frames' times (default :func:`.crash_motion.frame_times`: slowed at impacts).
+        progress: None, or an object whose ``update(1)`` is called after each frame.
+
+    Returns:
+        The number of frames written (1 for a still).
+    """
     from nbst.render.video import render_video, write_png
 
     size = tuple(size or style.DEFAULT_SIZE)

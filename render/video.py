@@ -438,7 +438,18 @@ def render_video(renderer, times, path, *, fps, progress=None) -> int:
     """Render the frame at each of ``times`` and encode to ``path`` (.mp4 or .gif).
     For MP4 frames go to the encoder as RGBA (``renderer.render_rgba``), for GIF
     as RGB (``renderer.render``: no alpha for the palette to reserve a slot for).
-    Returns the number of frames."""
+
+    Args:
+        renderer: a frame renderer (``render(t)`` -> (H, W, 3) uint8, and ``size``), e.g. a
+            ``nbst.render.scene2d`` scene.
+        times: the frames' times, seconds of the motion (``frame_times`` gives them).
+        path: the .mp4 or .gif to write, through the one atomic writer.
+        fps: frames per second of the video.
+        progress: None, or an object whose ``update(1)`` is called after each frame (a bar).
+
+    Returns:
+        The number of frames written.
+    """
     times = np.asarray(times, float)
     rgba = video_kind(path) == "mp4" and hasattr(renderer, "render_rgba")
     render = renderer.render_rgba if rgba else renderer.render

@@ -93,7 +93,23 @@ def ranges_of(fits: list, n: int) -> list:
 
 def reconstruct(case, *, seed: int, max_rollouts: int = 2000, runner=None, jobs: int = 1,
                 callback=None) -> Reconstruction:
-    """Every fit of ``case`` (a Script whose fates are the evidence) within ``max_rollouts``."""
+    """Every fit of ``case`` (a Script whose fates are the evidence) within ``max_rollouts``.
+
+    Args:
+        case: the crash script whose fates are the evidence (rest positions, headings, ...).
+        seed: the seed; the same seed gives the same fits whatever ``jobs``.
+        max_rollouts: the budget, in rollouts: the crash search for fits first, then Gaussian
+            children of the fits that spread them.
+        runner: a ``nbst.models.crash.run.Runner`` for this case to reuse, or None: one is made
+            with ``jobs`` threads and closed at the end.
+        jobs: threads of the runner made here.
+        callback: None, or called with a ``Progress`` after each batch.
+
+    Returns:
+        A :class:`Reconstruction`: the fits in the order found, the best trial, the rollouts,
+        and per vehicle the range (min, median, max) of impact speed, heading and delta-V over
+        the fits (``to_dict`` gives them in km/h and degrees); ``interrupted`` after Ctrl-C.
+    """
     from nbst.models.crash.run import Runner
 
     own = runner is None

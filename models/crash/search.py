@@ -368,10 +368,28 @@ def ladder_check(script, xml: str, space: Space, timesteps=LADDER):
 
 def solve(script, *, seed: int, max_rollouts: int = 1500, runner=None, jobs: int = 1, callback=None,
           explore: int = EXPLORE, keep=None, ladder: bool = True) -> SearchResult:
-    """Search driver intents that meet ``script``; see the module docstring. ``keep(trial)`` is
-    called for every rollout (reconstruction collects its fits so). With ``ladder``, a trial
-    that meets the script counts only when it also does at :data:`LADDER` (two more rollouts,
-    counted in the budget); one that does not costs :data:`FRAGILE` more and the search goes on."""
+    """Search driver intents that meet ``script``; see the module docstring.
+
+    Args:
+        script: the crash script (``nbst.models.crash.script.script_from_dict``, or a built-in
+            of ``SCRIPTS``).
+        seed: the seed; the same seed gives the same result whatever ``jobs``.
+        max_rollouts: the budget, in rollouts (ladder checks included).
+        runner: a ``nbst.models.crash.run.Runner`` for this script to reuse (its threads then
+            apply), or None: one is made with ``jobs`` threads and closed at the end.
+        jobs: threads of the runner made here.
+        callback: None, or called with a :class:`Progress` after each batch.
+        explore: rollouts of the initial population (half uniform, half directed).
+        keep: None, or ``keep(trial)`` called for every rollout (reconstruction collects its fits so).
+        ladder: a trial that meets the script counts only when it also does at :data:`LADDER`
+            (two more rollouts, counted in the budget); one that does not costs :data:`FRAGILE`
+            more and the search goes on.
+
+    Returns:
+        A :class:`SearchResult`: the best trial (its intents, outcome and controls), the rollouts
+        and restarts used, ``stopped`` ("found", "budget" or "interrupted": Ctrl-C returns the
+        best so far), the seed, the wall time, the archive and the history.
+    """
     from nbst.models.crash.run import Runner
 
     own = runner is None

@@ -59,15 +59,21 @@ def _check_velocities(problem: Problem, V: np.ndarray) -> None:
 def evaluate(problem: Problem, V, *, max_events: int | None = None, jobs: int | None = None):
     """Simulate a batch of candidate velocity sets (no per-trial Python).
 
-    V : (B, N, 2) float, units/s
-    returns final (B, N, 2), cost (B,) float, signature (B,): an int64 bitmask up to 63
-    disks, past that an object array of Python ints (bit i: disk i within R; the kernels
-    keep multiword bitsets). cost is inf (signature 0) for a run that needed more than
-    ``max_events`` events (default ``nbst.constants.max_events_for(N)``) or jammed.
-    jobs : threads for a batch of at least PARALLEL_BATCH candidates (the kernel releases
-           the GIL; each thread takes a contiguous slice); None: every core; 1: this thread.
-           The results do not depend on it: each candidate is simulated alone.
-    ``evaluate_events`` returns the event counts too.
+    Args:
+        problem: the problem (``nbst.load_problem``).
+        V: (B, N, 2) float, units/s: B candidate sets of initial velocities (zero rows for
+            noncueable disks).
+        max_events: the event cap of each run (default ``nbst.constants.max_events_for(N)``).
+        jobs: threads for a batch of at least PARALLEL_BATCH candidates (the kernel releases
+            the GIL; each thread takes a contiguous slice); None: every core; 1: this thread.
+            The results do not depend on it: each candidate is simulated alone.
+
+    Returns:
+        (final, cost, signature): final (B, N, 2) positions at t_final; cost (B,) float, the sum
+        of squared distances to the targets (units^2); signature (B,): an int64 bitmask up to 63
+        disks, past that an object array of Python ints (bit i: disk i within R; the kernels
+        keep multiword bitsets). cost is inf (signature 0) for a run that needed more than
+        ``max_events`` events or jammed. ``evaluate_events`` returns the event counts too.
     """
     final, cost, sig, _ = evaluate_events(problem, V, max_events=max_events, jobs=jobs)
     return final, cost, sig
@@ -325,11 +331,17 @@ EVENT_DTYPE = np.dtype([("time", "f8"), ("kind", "i1"), ("i", "i4"), ("j", "i4")
 def simulate(problem: Problem, velocities, *, max_events: int | None = None) -> Trajectory:
     """Simulate one motion exactly and keep its events (for rendering, MuJoCo checks, reports).
 
-    velocities : (N, 2) float, units/s (zero rows for noncueable disks)
-    max_events : the event cap (default ``nbst.constants.max_events_for(N)``)
-    A run that stops early (``max_events``, or a jam) comes back with ``truncated`` (and
-    ``stalled``) set, cost inf, positions held at its last event (see ``Trajectory``).
     From ``CELLS_MIN_DISKS`` disks it runs on the cell-grid kernel (the same events).
+
+    Args:
+        problem: the problem (``nbst.load_problem``).
+        velocities: (N, 2) float, units/s (zero rows for noncueable disks), e.g. a solution's.
+        max_events: the event cap (default ``nbst.constants.max_events_for(N)``).
+
+    Returns:
+        A :class:`Trajectory`: the events, ``at(t)``, the final positions and velocities, the
+        cost, the signature and order. A run that stops early (``max_events``, or a jam) comes
+        back with ``truncated`` (and ``stalled``) set, cost inf, positions held at its last event.
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
     if v0.flags.writeable:  # read-only, as a solution file's are: one signature of each kernel below

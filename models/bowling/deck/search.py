@@ -155,10 +155,26 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
 
     Stops at the first exact hit or after ``max_rollouts`` deliveries; Ctrl-C
     (KeyboardInterrupt) stops too, and the best so far is returned (``stopped``
-    "interrupted"). ``runner``: reuse one (its jobs then apply). ``archive``: deliveries
-    already known by subset (mask -> (4,) delivery; e.g. the atlas's), used as restart
-    points; with ``explore=0`` the search starts from them directly. ``distance``: "hamming"
-    or "geometry" (:func:`geometry_distance`) in the cost.
+    "interrupted").
+
+    Args:
+        target: the pins to knock down, a 10-bit mask (bit k: pin k + 1), 1..1023.
+        seed: the seed; the same seed gives the same delivery whatever ``jobs``.
+        max_rollouts: the budget, in deliveries run.
+        jobs: threads of the runner made here (None: every core).
+        runner: a ``deck.Runner`` to reuse (its jobs then apply), or None.
+        callback: None, or called with a :class:`Progress` after each batch.
+        explore: uniform deliveries before the CMA-ES restarts (capped at a quarter of the budget).
+        archive: deliveries already known by subset (mask -> (4,) delivery; e.g. the atlas's),
+            used as restart points; with ``explore=0`` the search starts from them directly.
+        explore_between: uniform deliveries after each restart.
+        distance: "hamming" or "geometry" (:func:`geometry_distance`) in the cost.
+
+    Returns:
+        A :class:`SearchResult`: the best delivery (y, speed, angle, spin 5 m before the pins),
+        the pins it knocks down, its Hamming distance to ``target``, the rollouts and restarts
+        used, ``stopped`` ("found", "budget" or "interrupted"), the seed, the wall time and the
+        archive.
     """
     if not 0 < int(target) <= geometry.N_SUBSETS:
         raise ValueError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")

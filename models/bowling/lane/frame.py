@@ -201,8 +201,27 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
     """Throw ``delivery`` at the pins in ``standing`` (default all ten) and run until they settle
     (or the cap), then ``extra_s`` more; the USBC outcome (see the module docstring).
 
-    ``record(data)``, when given, is called with the ``MjData`` at release and after every step
-    (the same steps, one at a time: the same states as without it); it must only read ``data``."""
+    Args:
+        delivery: what the bowler does (``lane.Delivery``); checked first.
+        oil: the name of a registered oil pattern.
+        ball: the ball (``lane.Ball``; None: the default ball).
+        standing: the pins standing before the throw, numbers 1..10 (None: all ten).
+        timestep: MuJoCo's timestep, seconds.
+        extra_s: seconds run after the pins settle, 0..60.
+        mu_oil: the ball-lane friction coefficient on oil.
+        model: a compiled frame model to reuse (``frame_model(oil, ball, ...)``), or None.
+        record: None, or ``record(data)`` called with the ``MjData`` at release and after every
+            step (the same steps, one at a time: the same states as without it); it must only
+            read ``data``.
+
+    Returns:
+        A :class:`FrameResult`: the pins in play, down and left, counted as USBC counts pinfall
+        (with the knocked, off-deck and dead-wood pins apart), whether it settled, and the ball's
+        board and entry angle at the pins.
+
+    Raises:
+        FrameError: a bad ``standing`` or ``extra_s`` (one line).
+    """
     import mujoco
 
     delivery = delivery.check()

@@ -104,7 +104,19 @@ def run(delivery: Delivery, oil: str = "house", ball: Ball | None = None, *, mu_
 
 
 def throw(delivery: Delivery, oil: str = "house", ball: Ball | None = None, *, mu_oil: float = MU_OIL) -> ThrowResult:
-    """Run ``delivery`` down the lane with ``oil`` and ``ball``; its phases (see ThrowResult)."""
+    """Run ``delivery`` down the lane with ``oil`` and ``ball``; its phases (see ThrowResult).
+
+    Args:
+        delivery: what the bowler does (:class:`Delivery`: hand, board, angle, mph, rpm, axis
+            rotation and tilt); checked first.
+        oil: the name of a registered oil pattern (``nbst.models.bowling.lane.oil.PATTERNS``).
+        ball: the ball (:class:`Ball`, within USBC's limits; None: the default ball).
+        mu_oil: the ball-lane friction coefficient on oil (the dry lane's is fixed).
+
+    Returns:
+        A :class:`ThrowResult` in bowler's units: the skid, breakpoint and roll (feet past the
+        foul line, boards), the entry angle (degrees) and the board at the pins.
+    """
     delivery = delivery.check()
     ball = (ball or Ball()).check()
     t, p, v, w = run(delivery, oil, ball, mu_oil=mu_oil)
