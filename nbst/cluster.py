@@ -32,6 +32,10 @@ CONNECT_TIMEOUT_S = 10.0
 #: Seconds of silence after which the probe asks for an HTTP page (a Dask scheduler sends its
 #: handshake within microseconds of the connection; a late one is still recognised after the ask).
 SPEAKS_FIRST_S = 2.0
+#: Seconds a listener that accepted the connection may stay silent, the ask included, before it is
+#: told not to be a scheduler (at most the connection timeout): a scheduler has spoken long before,
+#: and with the command's start-up a silent port is named within ~10 s, not 10 s after the connect.
+SILENT_LIMIT_S = 6.0
 #: Protocols Dask's addresses may name.
 SCHEMES = ("tcp", "tls", "ws", "wss", "ucx", "inproc")
 _HINT = "start one with `dask scheduler` (it prints its tcp:// address) and workers with `dask worker ADDRESS`"
@@ -114,7 +118,8 @@ def probe(address: str, *, timeout: float | None = None) -> None:
             return  # a web socket server waits for the client's request: Dask's connect asks
         if scheme == "tls":
             return  # the server waits for the client's TLS hello: Dask's connect, under its deadline, says
-        deadline = t0 + timeout
+        limit = min(timeout, SILENT_LIMIT_S)
+        deadline = t0 + limit
         first = _recv(sock, min(deadline, time.monotonic() + SPEAKS_FIRST_S), address)
         if first is None:  # silent so far: an HTTP server waits for a request; ask it what it is
             try:
@@ -124,7 +129,7 @@ def probe(address: str, *, timeout: float | None = None) -> None:
             first = _recv(sock, deadline, address)
         if first is None:
             raise _fail(address, "something there accepts connections but says nothing: no Dask handshake within "
-                                 f"{timeout:g} s (a Dask scheduler speaks first); {_HINT}")
+                                 f"{limit:g} s (a Dask scheduler speaks first); {_HINT}")
         if first == b"":
             raise _fail(address, "something there accepted the connection and closed it: not a Dask scheduler; "
                                  f"{_HINT}")
