@@ -16,8 +16,9 @@ from nbst.cli import main
 
 #: Every command that writes a file: (id, arguments, output). In the arguments ``{out}`` is the
 #: output file's path and ``{dir}`` the first folder of ``output`` (a command's ``--out-dir``);
-#: ``{sol}`` is a solution of over5. ``output`` is the output's path in the scratch folder. The
-#: commands run with small budgets: they must refuse before or instead of writing, whatever the work.
+#: ``{sol}`` is a solution of over5 and ``{crash}`` a crash file (one rollout of the t-bone script).
+#: ``output`` is the output's path in the scratch folder. The commands run with small budgets: they
+#: must refuse before or instead of writing, whatever the work.
 WRITERS = [
     ("plot-problem", ["plot", "problem", "over5", "-o", "{out}"], "fig.png"),
     ("plot-trajectories", ["plot", "trajectories", "over5", "{sol}", "-o", "{out}"], "fig.svg"),
@@ -40,6 +41,19 @@ WRITERS = [
     ("bowl-throw-still", ["bowl", "throw", "--board", "10", "--at", "arrows", "--still", "{out}"], "t.png"),
     ("bowl-pocket", ["bowl", "pocket", "--samples", "1", "--boards", "17.5:17.5:1", "--angles", "6:6:1", "-o", "{out}"],
      "pocket.png"),
+    ("bowl-throw-json", ["bowl", "throw", "--board", "10", "--at", "arrows", "-o", "{out}"], "t.json"),
+    ("bowl-throw-video", ["bowl", "throw", "--board", "10", "--at", "arrows", "--video", "{out}", "--size", "64x64",
+                          "--fps", "4"], "t.mp4"),
+    ("bowl-frame", ["bowl", "frame", "--board", "10", "--at", "arrows", "-o", "{out}"], "frame.json"),
+    ("crash-solve", ["crash", "solve", "t-bone", "-o", "{out}", "--max-rollouts", "8", "--jobs", "1", "--seed", "1"],
+     "crash.json"),
+    ("crash-reconstruct", ["crash", "reconstruct", "crossing-case", "-o", "{out}", "--max-rollouts", "8", "--jobs",
+                           "1", "--seed", "1"], "rec.json"),
+    ("crash-probability", ["crash", "probability", "{crash}", "--samples", "2", "--jobs", "1", "-o", "{out}"],
+     "prob.json"),
+    ("render-crash-mp4", ["render", "{crash}", "-o", "{out}", "--size", "64x64", "--fps", "4"], "crash.mp4"),
+    ("render-crash-gif", ["render", "{crash}", "-o", "{out}", "--size", "64x64", "--fps", "4"], "crash.gif"),
+    ("render-crash-still", ["render", "{crash}", "--still", "0", "-o", "{out}"], "crash.png"),
 ]
 #: What may be at the output path, and the word the refusal must use for it.
 KINDS = {"link-to-file": "symbolic link", "dangling-link": "symbolic link", "fifo": "FIFO", "folder": "folder"}
@@ -52,6 +66,29 @@ def sol(tmp_path_factory):
     v = [[0.0, 0.0]] * 5
     (d / "sol.json").write_text(json.dumps({"problem": "over5", "velocities": v}))
     return str(d / "sol.json")
+
+
+@pytest.fixture(scope="module")
+def crash(tmp_path_factory):
+    """A crash file as ``nbst crash solve`` writes one: one seeded rollout of the built-in t-bone
+    script (what it meets does not matter here; the commands must refuse before they replay it)."""
+    pytest.importorskip("mujoco")
+    import numpy as np
+
+    from nbst.models.crash import crashfile, run, space
+    from nbst.models.crash.script import load_script
+
+    s = load_script("t-bone")
+    sp = space.space_of(s)
+    intents = sp.intents(np.random.default_rng(3).random((1, sp.dim)))
+    R = run.Runner(s, jobs=1, batch=1)
+    res = R.run(intents)
+    d = crashfile.crash_dict(s, R.xml, R.model, intents[0], res.qpos0[0], res.qvel0[0], res.controls[0],
+                             res.final_qpos[0], res.outcomes[0], seed=3, period_steps=R.period)
+    R.close()
+    f = tmp_path_factory.mktemp("crash") / "t-bone.json"
+    f.write_text(json.dumps(d, allow_nan=False))
+    return str(f)
 
 
 def _plant(path, kind: str, elsewhere):
@@ -79,7 +116,7 @@ def _mode(path) -> int:
 @pytest.mark.parametrize("kind", list(KINDS))
 @pytest.mark.parametrize("cmd,argv,output", WRITERS, ids=[w[0] for w in WRITERS])
 def test_no_command_writes_through_a_link_or_into_a_special_file(cmd, argv, output, kind, tmp_path, sol, capsys,
-                                                                 monkeypatch):
+                                                                 monkeypatch, request):
     monkeypatch.chdir(tmp_path)
     out = tmp_path / output
     elsewhere = tmp_path / "elsewhere" / "notes.conf"
@@ -87,7 +124,9 @@ def test_no_command_writes_through_a_link_or_into_a_special_file(cmd, argv, outp
     keep = _plant(out, kind, elsewhere)
     before = _mode(out)
     folder = str(tmp_path / output.split("/")[0])  # {dir}: the output's first folder
-    args = [a.replace("{out}", str(out)).replace("{sol}", sol).replace("{dir}", folder) for a in argv]
+    crash = request.getfixturevalue("crash") if "{crash}" in argv else ""
+    args = [a.replace("{out}", str(out)).replace("{sol}", sol).replace("{dir}", folder).replace("{crash}", crash)
+            for a in argv]
     rc = main(args)
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2, (rc, err)
