@@ -125,3 +125,75 @@ def test_bowl_solve_bar_ends_where_the_summary_does(tmp_path, capsys):
     m = re.search(r"after ([\d,]+) rollouts", summary)
     assert m and m.group(1) == bar["n"] and f" in {bar['t']}," in summary, (bar.group(0), summary)
     assert "ETA" not in err  # a budget it stops short of: no ETA over it
+
+
+# crash solve, crash reconstruct and render CRASH.json: the crash commands are issue 32's; crash
+# solve's summary now quotes its bar's count and clock (it said "(54 s)" under a bar at 54.2 s).
+
+#: A short two-car crossing (A eastbound meets B northbound in about 1.6 s; B's rest is evidence).
+CRASH = {
+    "kind": "nbst-crash-script", "name": "short",
+    "road": {"layout": "intersection", "width": 7, "length": 80},
+    "duration": 2.5,
+    "vehicles": [
+        {"name": "A", "type": "sedan", "start": {"x": -22, "y": -1.75, "heading": 0}, "speed": [45, 55],
+         "driver": {"aim": {"x": [0, 4], "y": -1.75}, "arrive": [1.5, 1.8], "after_impact": "brake"},
+         "fate": {"hits": ["B"], "rest": {"x": 5, "y": 5, "radius": 40}}},
+        {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -22, "heading": 90}, "speed": [45, 55],
+         "driver": {"aim": {"x": 1.75, "y": [-2, 2]}, "arrive": [1.5, 1.8]},
+         "fate": {"hits": ["A"], "rest": {"x": 5, "y": 5, "radius": 40}}},
+    ],
+}
+
+
+@pytest.fixture(scope="module")
+def crash_script(tmp_path_factory):
+    pytest.importorskip("mujoco")
+    p = tmp_path_factory.mktemp("crash") / "short.json"
+    p.write_text(json.dumps(CRASH))
+    return p
+
+
+@pytest.fixture(scope="module")
+def crash_file(crash_script):
+    out = crash_script.parent / "crash.json"
+    assert main(["crash", "solve", str(crash_script), "-o", str(out), "--seed", "1", "--max-rollouts", "24",
+                 "--jobs", "1", "--no-ladder", "-q"]) in (0, 1)
+    return out
+
+
+@pytest.mark.slow
+def test_crash_solve_bar_ends_where_the_summary_does(crash_script, tmp_path, capsys):
+    rc = main(["crash", "solve", str(crash_script), "-o", str(tmp_path / "c.json"), "--seed", "1", "--max-rollouts",
+               "24", "--jobs", "1", "--no-ladder"])
+    assert rc in (0, 1)
+    err = capsys.readouterr().err
+    bar = _finals(err)["crash short"]
+    summary = [ln for ln in err.splitlines() if ln.startswith("crash short: ") and " after " in ln][-1]
+    rollouts = json.loads((tmp_path / "c.json").read_text())["search"]["rollouts"]
+    assert bar["n"] == f"{rollouts:,}" and f"after {bar['n']} rollouts in {bar['t']}," in summary, (bar.group(0), summary)
+    assert "ETA" not in err  # a budget it may stop short of: no ETA over it
+
+
+@pytest.mark.slow
+def test_crash_reconstruct_bar_ends_where_the_summary_does(crash_script, tmp_path, capsys):
+    rc = main(["crash", "reconstruct", str(crash_script), "-o", str(tmp_path / "r.json"), "--seed", "1",
+               "--max-rollouts", "24", "--jobs", "1"])
+    assert rc in (0, 1)
+    cap = capsys.readouterr()
+    bar = _finals(cap.err)["reconstruct short"]
+    m = re.search(r"in ([\d,]+) rollouts", cap.out)
+    assert m and m.group(1) == bar["n"], (bar.group(0), cap.out)
+
+
+@pytest.mark.slow
+def test_render_crash_bar_ends_where_the_summary_does(crash_file, tmp_path, capsys):
+    pytest.importorskip("moderngl")
+    out = tmp_path / "c.mp4"
+    assert main(["render", str(crash_file), "-o", str(out), "--size", "64x48", "--fps", "4", "--hold", "0"]) == 0
+    err = capsys.readouterr().err
+    bar = _finals(err)[f"nbst render: {out.name}"]
+    summary = [ln for ln in err.splitlines() if ln.startswith(f"nbst render: wrote {out}")][0]
+    assert bar["n"] == bar["total"] and f": {bar['n']} frames," in summary and f" in {bar['t']};" in summary, \
+        (bar.group(0), summary)
+    assert all(ln.count("ETA") <= 1 for ln in err.splitlines())

@@ -209,7 +209,7 @@ def write_crash(path, d: dict) -> None:
 
 def cmd_solve(args) -> int:
     from nbst.outputs import prepare_output, sigterm_as_interrupt
-    from nbst.progress import progress_bar
+    from nbst.progress import command_start, count_text, progress_bar, seconds_text
 
     from nbst.models.crash import crashfile, search
 
@@ -223,8 +223,8 @@ def cmd_solve(args) -> int:
         if args.quiet:
             return
         if not bar:
-            bar.append(progress_bar(total=args.max_rollouts, unit="rollout", file=sys.stderr, dynamic_ncols=True,
-                                    desc=f"crash {script.name}", smoothing=0.1))
+            bar.append(progress_bar(total=args.max_rollouts, unit="rollout", file=sys.stderr, bound=True,
+                                    start=command_start(), desc=f"crash {script.name}"))
         bar[0].update(p.rollouts - bar[0].n)
         bar[0].set_postfix_str(f"best cost {p.best_cost:.3g}, signature {p.best_signature}, "
                                f"{p.sequences} contact sequences", refresh=False)
@@ -234,7 +234,7 @@ def cmd_solve(args) -> int:
         res = search.solve(script, seed=seed, max_rollouts=args.max_rollouts, runner=runner, callback=progress,
                            ladder=not args.no_ladder)
     if bar:
-        bar[0].close()
+        bar[0].close(n=res.rollouts)
     b = res.best
     S = search.space_of(script)
     intents = S.intents(b.u[None])[0]
@@ -266,8 +266,9 @@ def cmd_solve(args) -> int:
         if moving:
             more += (f"; {', '.join(moving)} still moving at the end ({script.duration:g} s): the pose then, not a "
                      "rest position (a longer duration lets it stop)")
-        print(f"crash {script.name}: {met}, signature {b.outcome.signature_text(script.n)} after {res.rollouts} "
-              f"rollouts ({res.wall_time:.0f} s), seed {seed}{more}; wrote {args.output}", file=sys.stderr)
+        took = seconds_text(bar[0].seconds if bar else res.wall_time)  # the bar's count and clock
+        print(f"crash {script.name}: {met}, signature {b.outcome.signature_text(script.n)} after "
+              f"{count_text(res.rollouts)} rollouts in {took}, seed {seed}{more}; wrote {args.output}", file=sys.stderr)
     if stopped == "interrupted":
         return 130
     return 0 if b.outcome.solved else 1
