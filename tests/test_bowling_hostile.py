@@ -237,3 +237,26 @@ def test_foul_line_solve_states_its_ladder_and_require_robust_exits_by_it(tmp_pa
     last = _final_bar_line(err, "bowl solve leave 7,10")
     n, secs = re.search(r": ([\d,]+) of at most [\d,]+ frames in ([\d.]+ s)", last).groups()
     assert f"; {n} frames in {secs};" in err, (last, err)
+
+
+@pytest.mark.slow
+def test_a_5m_atlas_folder_says_which_throw_files_it_skips(tmp_path, capsys):
+    """A damaged subset file in an atlas folder is skipped and said, one line naming the file and
+    its field, never silently dropped; the command still runs (the search may find it again)."""
+    from nbst.models.bowling.deck import throwfile as deckfile
+
+    out = tmp_path / "A"
+    argv = ["bowl", "atlas", "--out-dir", out, "--max-rollouts", "0", "--no-robustness", "-q", "--jobs", "1"]
+    rc, _, err = _main(argv, capsys)
+    assert rc == 0 and "skipped" not in err, err
+    d = json.loads(Path(deckfile.SHIPPED_ATLAS).read_text())["shots"][0]
+    d["scene"] = "scene.xml"
+    d["qpos0"][3] = int("7" * 320)
+    name = "subset-" + "_".join(map(str, d["down"])) + ".json"
+    (out / name).write_text(json.dumps(d))
+    (out / "subset-0_11.json").write_text("{}")
+    rc, _, err = _main(argv, capsys)
+    said = [ln for ln in err.splitlines() if "skipped" in ln]
+    assert rc == 0 and len(said) == 2, err
+    assert any(name in ln and "qpos0[3]" in ln and "too large" in ln for ln in said), said
+    assert any("subset-0_11.json" in ln and "pins 1-10" in ln for ln in said), said

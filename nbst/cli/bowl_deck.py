@@ -139,7 +139,9 @@ def cmd_atlas(args) -> int:
         L = runner_of(args, args.jobs or default_jobs())
     except ValueError as e:
         return err("atlas", str(e))  # nbst.cluster.connect names --cluster and the address
-    files, deliveries = folder.resume(out)
+    files, deliveries, skipped = folder.resume(out)
+    for _, why in skipped:  # said, not silently dropped: the search finds the subset again if it can
+        print(f"nbst bowl atlas: skipped {why} (the search finds its subset again if it can)", file=sys.stderr)
     bar = None
 
     def on_progress(n, found) -> None:

@@ -135,25 +135,28 @@ def prepare(out_dir, from_atlas=None) -> Path:
     return out
 
 
-def resume(out: Path) -> tuple[dict, dict]:
-    """The throws already in the folder: ({mask: file}, {mask: (4,) delivery}); files that fail
-    the throw-file checks are skipped (and found again if the search finds them)."""
+def resume(out: Path) -> tuple[dict, dict, list]:
+    """The throws already in the folder: ({mask: file}, {mask: (4,) delivery}, [(file, why)]);
+    files that fail the throw-file checks are skipped, each with its one-line reason (naming the file) (and found
+    again if the search finds their subset)."""
     from nbst.models.bowling import deck
 
-    files, deliveries = {}, {}
+    files, deliveries, skipped = {}, {}, []
     for f in out.glob("subset-*.json"):
         try:
             m = pinfall.mask_from_pins(int(p) for p in f.stem.split("-", 1)[1].split("_"))
         except ValueError:
+            skipped.append((f, f"{f}: its name is not subset-<pins>.json with pins 1-10"))
             continue
         try:
             d = throwfile.load(f)
-        except throwfile.ThrowFileError:
+        except throwfile.ThrowFileError as e:
+            skipped.append((f, str(e)))
             continue
         files[m] = f
         if "launch" in d:
             deliveries[m] = np.array([float(d["launch"][k]) for k in deck.KEYS])
-    return files, deliveries
+    return files, deliveries, sorted(skipped)
 
 
 class AtlasRun:
