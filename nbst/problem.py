@@ -32,7 +32,7 @@ class ProblemError(InputError):
     ``disks[3].radius``, or ``""`` for the whole file) and ``reason``.
     """
 
-    def __init__(self, source: str, field: str, reason: str):
+    def __init__(self, source: str | Path, field: str, reason: str):
         self.source, self.field, self.reason = str(source), field, reason
         where = f"{self.source}: {field}" if field else self.source
         super().__init__(plain(f"{where}: {reason}"))  # one printable line, whatever the file held
@@ -112,10 +112,10 @@ class Problem:
         R as floats."""
         ka = self.__dict__.get("_kernel_arrays")
         if ka is None:
-            ka = KernelArrays(*(np.ascontiguousarray(a, dtype=np.float64)
-                                for a in (self.start, self.target, self.radius, self.mass)),
-                              float(self.box[0]), float(self.box[1]), float(self.t_final),
-                              float(self.target_radius))
+            start, target, radius, mass = (np.ascontiguousarray(a, dtype=np.float64)
+                                           for a in (self.start, self.target, self.radius, self.mass))
+            ka = KernelArrays(start, target, radius, mass, float(self.box[0]), float(self.box[1]),
+                              float(self.t_final), float(self.target_radius))
             object.__setattr__(self, "_kernel_arrays", ka)  # a cache, not state: the problem stays frozen
         return ka
 

@@ -9,6 +9,7 @@ from functools import cached_property
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 from nbst.constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, PARALLEL_BATCH, WALL_NAMES, many_body,
                             max_events_for)
@@ -56,7 +57,8 @@ def _check_velocities(problem: Problem, V: np.ndarray) -> None:
         raise ValueError("noncueable disks must have zero initial velocity")
 
 
-def evaluate(problem: Problem, V, *, max_events: int | None = None, jobs: int | None = None):
+def evaluate(problem: Problem, V: ArrayLike, *, max_events: int | None = None,
+             jobs: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Simulate a batch of candidate velocity sets (no per-trial Python).
 
     Args:
@@ -79,7 +81,8 @@ def evaluate(problem: Problem, V, *, max_events: int | None = None, jobs: int | 
     return final, cost, sig
 
 
-def evaluate_events(problem: Problem, V, *, max_events: int | None = None, jobs: int | None = None):
+def evaluate_events(problem: Problem, V: ArrayLike, *, max_events: int | None = None,
+                    jobs: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`evaluate`, also returning each run's number of events: (final, cost, signature,
     n_events (B,) int64)."""
     V = np.ascontiguousarray(V, dtype=np.float64)
@@ -328,7 +331,7 @@ def _replay_at(x0, v0, times, ev_i, ev_j, ev_s, ts, slot, out, want_velocity=Fal
 EVENT_DTYPE = np.dtype([("time", "f8"), ("kind", "i1"), ("i", "i4"), ("j", "i4")])
 
 
-def simulate(problem: Problem, velocities, *, max_events: int | None = None) -> Trajectory:
+def simulate(problem: Problem, velocities: ArrayLike, *, max_events: int | None = None) -> Trajectory:
     """Simulate one motion exactly and keep its events (for rendering, MuJoCo checks, reports).
 
     From ``CELLS_MIN_DISKS`` disks it runs on the cell-grid kernel (the same events).
