@@ -67,7 +67,8 @@ def main(argv=None) -> int:
     print("| change | breakpoint ft | breakpoint board | entry deg | board at pins |\n|---|---|---|---|---|")
     base = lane.throw(TYPICAL, "house")
     cases = [("none (mu_oil 0.04, mu_dry 0.20, diff 0.040)", {}, None)]
-    cases += [(f"mu_oil x{k:g} ({lane.MU_OIL * k:.3f})", {"mu_oil": lane.MU_OIL * k}, None) for k in (0.8, 1.2)]
+    cases += [(f"mu_oil x{k:g} ({lane.MU_OIL * k:.3f})", {"law": lane.OilLaw(mu_oil=lane.MU_OIL * k)}, None)
+              for k in (0.8, 1.2)]
     cases += [(f"mu_dry x{k:g} ({lane.MU_DRY * k:.2f})", {}, lane.Ball(friction=lane.MU_DRY * k)) for k in (0.8, 1.2)]
     cases += [(f"diff {dd:.2f} in", {}, lane.Ball(diff=dd)) for dd in (0.0, 0.06)]
     for label, kw, ball in cases:
@@ -83,7 +84,7 @@ def main(argv=None) -> int:
     n = 3 if args.quick else 10
     t0 = time.perf_counter()
     for k in range(n):
-        lane.lane_spec("house", lane.Ball(rg=2.50 + 0.001 * k), TYPICAL, pins=True).compile()
+        lane.lane_spec(lane.Ball(rg=2.50 + 0.001 * k), TYPICAL, pins=True).compile()
     build = (time.perf_counter() - t0) / n
     lane.throw(TYPICAL, "house")  # compiled and cached
     t0 = time.perf_counter()
@@ -91,7 +92,7 @@ def main(argv=None) -> int:
         r = lane.throw(TYPICAL, "house")
     per = (time.perf_counter() - t0) / n
     steps = int(round(r.seconds_to_pins / lane.TIMESTEP)) + 1
-    model = lane.build_model("house", None, TYPICAL, pins=False)
+    model = lane.build_model(None, TYPICAL, pins=False)
     t0 = time.perf_counter()
     for _ in range(n):
         d = mujoco.MjData(model)

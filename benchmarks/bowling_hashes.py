@@ -59,8 +59,8 @@ import hashlib, mujoco, numpy as np
 from nbst.models.bowling import lane, scene
 build = getattr(lane, "lane_spec", None) or lane.build_spec
 specs = [scene.build_spec(), build(), build(pins=False),
-         build("sport", lane.Ball(weight_lb=14, rg=2.6, diff=0.05, friction=0.25),
-               lane.Delivery(hand="left", board=30, angle=-1, rpm=400, rotation=70, tilt=30), mu_oil=0.05)]
+         build(lane.Ball(weight_lb=14, rg=2.6, diff=0.05, friction=0.25),
+               lane.Delivery(hand="left", board=30, angle=-1, rpm=400, rotation=70, tilt=30))]
 for spec in specs:
     m = spec.compile()
     buf = np.zeros(mujoco.mj_sizeModel(m), dtype=np.uint8)

@@ -136,7 +136,7 @@ def record_throw(delivery, oil: str = "house", ball=None, *, standing=None, time
             raise
         result = None  # the picture still shows it; the readout says so
     m = model if model is not None else frame.frame_model(
-        oil, ball, timestep=frame.TIMESTEP if timestep is None else timestep)
+        ball, timestep=frame.TIMESTEP if timestep is None else timestep)
     ball_geom = m.geom("ball").id
     pin_geoms = {g for g in range(m.ngeom) if m.body(int(m.geom_bodyid[g])).name.startswith("pin")}
     qs: list = []
@@ -248,7 +248,7 @@ def ball_texture(throw: Throw, size=TEXTURE_SIZE) -> np.ndarray:
             grown |= np.roll(track, 1, axis=1) | np.roll(track, -1, axis=1)
             track = grown
         img[track.reshape(-1)] = TRACK_RGB
-    marks = [(lane.pin_axis(throw.delivery), PIN_DOT_IN / 2 / R_in, PIN_DOT_RGB, None)]
+    marks = [(lane.pin_axis(throw.delivery, throw.ball.pin_pap_in), PIN_DOT_IN / 2 / R_in, PIN_DOT_RGB, None)]
     marks += [(p, r, HOLE_RGB, HOLE_RIM_RGB) for p, r in grip_holes(throw.delivery)]
     for p, r, rgb, rim in marks:
         c = dirs @ p.astype(np.float32)
@@ -266,23 +266,32 @@ def _rect(x0, x1, y0, y1, rgb) -> np.ndarray:
     return _flat_poly([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], rgb)
 
 
-def lane_solids(oil: str, hand: str = "right") -> np.ndarray:
-    """(V, 9) triangles of the lane's solids: approach, the pattern's cells shaded by oil, the
-    back end, deck, gutters, pit and kickbacks."""
+#: The oil is shaded over cells of one board by this many ft; a film of OIL_FULL_UM or more
+#: is the full OIL_SHADE.
+OIL_CELL_FT = 2.0
+OIL_FULL_UM = 3.0
+
+
+def lane_solids(oil, hand: str = "right") -> np.ndarray:
+    """(V, 9) triangles of the lane's solids: approach, the lane shaded by the pattern's film
+    (darker where there is more oil), deck, gutters, pit and kickbacks."""
     from nbst.models.bowling import lane, scene
 
     hw, gw = scene.LANE_WIDTH / 2, scene.GUTTER_WIDTH
     x_end = scene.PIT_EDGE_X + scene.PIT_LENGTH
     parts = [_box(lane.FOUL_LINE_X - APPROACH_DRAWN, lane.FOUL_LINE_X, -hw - gw - 0.3, hw + gw + 0.3, -0.05, 0.0,
                   APPROACH_RGB)]
-    pat = lane.pattern(oil)
+    g = lane.pattern(oil).grid()  # (board, 0.25 ft) film, um; index 0: the right-hander's board 1
+    per = int(round(OIL_CELL_FT / lane.DX_FT))
     x0 = lane.FOUL_LINE_X
-    for to_ft, bands in pat.segments:
-        x1 = float(lane.ft_to_x(to_ft))
-        for lo, hi, u in bands:
-            ya, yb = sorted((float(lane.board_to_y(lo - 0.5, hand)), float(lane.board_to_y(hi + 0.5, hand))))
-            parts.append(_box(x0, x1, ya, yb, -0.05, 0.0, tuple(c * (1 - OIL_SHADE * u) for c in LANE_RGB)))
+    for j0 in range(0, g.shape[1], per):
+        x1 = float(lane.ft_to_x(min(j0 + per, g.shape[1]) * lane.DX_FT))
+        for i in range(lane.N_BOARDS):
+            u = min(float(g[i, j0:j0 + per].mean()) / OIL_FULL_UM, 1.0)
+            ya, yb = float(lane.board_to_y(i + 0.5)), float(lane.board_to_y(i + 1.5))
+            parts.append(_rect(x0, x1, min(ya, yb), max(ya, yb), tuple(c * (1 - OIL_SHADE * u) for c in LANE_RGB)))
         x0 = x1
+    parts.append(_box(lane.FOUL_LINE_X, x0, -hw, hw, -0.05, -0.0005, LANE_RGB))
     parts += [
         _box(x0, scene.DECK_FRONT_X, -hw, hw, -0.05, 0.0, LANE_RGB),
         _box(scene.DECK_FRONT_X, scene.PIT_EDGE_X, -hw, hw, -0.05, 0.0, DECK_RGB),

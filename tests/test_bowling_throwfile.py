@@ -17,7 +17,7 @@ mujoco = pytest.importorskip("mujoco")
 from nbst.models.bowling import lane  # noqa: E402
 from nbst.models.bowling.lane import frame, noise, spares, throwfile
 
-TYPICAL = lane.Delivery(board=10.0, at="arrows", angle=1.5)
+TYPICAL = lane.Delivery(board=20.0, at="foul", angle=2.82, rpm=350.0, rotation=45.0, tilt=12.0)
 
 
 @pytest.fixture(scope="module")
@@ -181,10 +181,14 @@ HOSTILE = [
     (_set(("outcome", "down"), [11]), "outcome.down", "1..10"),
     (_set(("outcome", "leave"), [10]), "outcome.leave", "split"),
     (_set(("outcome", "settled"), 1), "outcome.settled", "true or false"),
-    (_set(("outcome", "cap_hit"), True), "outcome.cap_hit", "differ"),
+    (lambda d: d["outcome"].__setitem__("cap_hit", d["outcome"]["settled"]), "outcome.cap_hit", "differ"),
     (_set(("outcome", "timestep"), 1.0), "outcome.timestep", "outside"),
     (_set(("outcome", "entry_angle_deg"), 1e300), "outcome.entry_angle_deg", "outside"),
-    (_set(("oil",), "wet"), "oil", "no oil pattern"),
+    (_set(("oil",), "wet"), "oil", "not the name of its oil_pattern"),
+    (lambda d: (d.pop("oil_pattern"), d.__setitem__("oil", "wet")), "oil", "no oil pattern"),
+    (_set(("oil_pattern", "forward", "volume_ml"), -1), "oil_pattern: forward.volume_ml", "[0"),
+    (_set(("oil_pattern", "forward", "units"), [1.0]), "oil_pattern: forward.units", "39 numbers"),
+    (_set(("scene",), "lane-9"), "scene", "unknown lane scene"),
     (_set(("ball", "rg"), 2.9), "ball.rg", "USBC"),
     (_set(("ball", "diff"), 0.07), "ball.diff", "USBC"),
     (_set(("ball", "friction"), 0.5), "ball.friction", "USBC"),
@@ -200,7 +204,9 @@ HOSTILE = [
     (_set(("probability", "noise", "rpm"), 100.0), "probability.noise.rpm", "standard deviation"),
     (_set(("probability", "leaves"), {"": 1}), "probability.leaves", "add up"),
     (_set(("probability", "leaves"), {"x": 4}), 'probability.leaves["x"]', "joined by '-'"),
-    (_set(("probability", "leaves"), {"": 1, "6-10": 2, "9": 1}), "probability.k", "leaves give"),
+    (lambda d: d["probability"].__setitem__("leaves", {"": (d["probability"]["k"] + 1) % 5,
+                                                        "9": 4 - (d["probability"]["k"] + 1) % 5}),
+     "probability.k", "leaves give"),
     (_drop("probability", "want"), "probability.want", "missing"),
     (_set(("ladder",), [{"timestep": 0.001}]), "ladder[0].leave", "missing"),
     (_set(("ladder",), []), "ladder", "list of 1.."),
@@ -280,7 +286,7 @@ def test_bowl_frame_throws_the_ball_of_its_flags_and_the_file_records_it(tmp_pat
     # the flags' ball is the one thrown: its entry board is the direct run's, and not the default ball's
     assert got["board_at_pins"] == pytest.approx(mine.board_at_pins, abs=1e-9)
     assert abs(mine.board_at_pins - default.board_at_pins) > 0.05
-    assert throwfile.load(out)["ball"] == {"weight_lb": 15.0, "rg": 2.70, "diff": 0.055, "friction": 0.30}
+    assert throwfile.load(out)["ball"] == lane.Ball(rg=2.70, diff=0.055, friction=0.30).to_dict()
     rc, stdout, _ = _main(["bowl", "replay", out, "--json"], capsys)
     assert rc == 0 and json.loads(stdout)["match"]
     _refused(argv + ["--rg", "2.9"], capsys, "ball.rg", "2.46")

@@ -418,8 +418,9 @@ def replay_throw(args) -> int:
         if bad:
             return err("replay", bad)
         d = throwfile.load(args.file)
+        throwfile.replayable(d, args.file)  # another scene's throw: one line
         try:   # the replay of throwfile.replay, recorded: its model, oil, ball, pins standing and timestep
-            th = bowling_throw.record_throw(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]),
+            th = bowling_throw.record_throw(lane.Delivery(**d["delivery"]), throwfile.oil_of(d), lane.Ball(**d["ball"]),
                                            standing=d["standing"], timestep=float(d["outcome"]["timestep"]))
         except (lane.LaneError, frame.FrameError, MujocoError) as e:
             return err("replay", f"{args.file}: delivery: {e}")

@@ -6,10 +6,13 @@ thrown down the full 60 ft lane, over an oil pattern, with a ball in the ball ma
 settled and counted as USBC counts pinfall (:mod:`.frame`). Modules, from the bottom:
 
 * :mod:`.units` -- boards, feet, mph, the hand; :class:`LaneError`;
-* :mod:`.oil` -- oil patterns as data, registered once (:data:`PATTERNS`);
-* :mod:`.ball` -- :class:`Ball` within USBC's limits;
-* :mod:`.delivery` -- :class:`Delivery` and the release it gives (spin axes, pin axis);
-* :mod:`.scene` -- the full lane laid out for the shared scene (:func:`layout`, :func:`build_model`);
+* :mod:`.oil` -- oil pattern files, the film they lay, the film-to-friction law, the lane's
+  oil now (:class:`OilField`); the shipped patterns registered once (:data:`PATTERNS`);
+* :mod:`.ball` -- :class:`Ball` within USBC's limits (RG, differentials, layout, cover);
+* :mod:`.delivery` -- :class:`Delivery` and the release it gives (spin axes, the ball's axes);
+* :mod:`.scene` -- the full lane laid out for the shared scene (:func:`layout`, :func:`build_model`;
+  :data:`SCENE` names it in files);
+* :mod:`.friction` -- Coulomb friction at the contact and the oil lane and cover trade (numba);
 * :mod:`.phases` -- the ball alone down the lane (:func:`throw`, :class:`ThrowResult`);
 * :mod:`.frame` -- a throw into the pins, settled, USBC pinfall (:func:`.frame.run_frame`);
 * :mod:`.noise` -- the release noise and the probability of an outcome;
@@ -21,7 +24,8 @@ settled and counted as USBC counts pinfall (:mod:`.frame`). Modules, from the bo
 This package re-exports the foundation's names (units, oil, ball, delivery, scene, phases), so
 ``lane.Delivery``, ``lane.board_to_y``, ``lane.throw`` read as one vocabulary; the modules above
 the foundation are imported by name (``from nbst.models.bowling.lane import frame``).
-Importing it imports numpy and the shipped oil patterns' JSON, not mujoco.
+Importing it imports numpy and reads the shipped oil pattern files, not mujoco or numba
+(:mod:`.friction` is imported by the step loops when they run).
 """
 from __future__ import annotations
 

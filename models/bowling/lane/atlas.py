@@ -167,14 +167,23 @@ def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, s
     ({mask: (7,) point}): batches of :data:`._archive.BATCH` children of the :data:`NEAREST`
     subsets nearest the request (Hamming distance; nearer ones drawn more often: weight
     1 / (1 + distance)^2), each moved by a Gaussian step at one of :data:`SCALES`; every new
-    subset seen joins the archive. Stops at the first exact hit or after ``budget`` frames.
+    subset seen joins the archive. Stops at the first exact hit or after ``budget`` frames. A
+    request the archive holds is confirmed with one frame first (an archive grown on another
+    lane scene holds starts, not answers): if that frame gives something else, the search runs.
     Returns (the point or None, the grown archive, frames run); ``on_batch(frames, best
     distance)`` after each batch. An empty archive starts from uniform throws."""
     rng = np.random.default_rng(seed)
     arch = {int(m): np.asarray(x, dtype=float) for m, x in elites.items() if m}
-    if target in arch:
-        return arch[target], arch, 0
     frames = 0
+    if target in arch:  # confirmed with one frame: an archive of another scene holds starts, not answers
+        x = arch.pop(target)
+        got, _ = throw_masks(runner, x[None])
+        frames = 1
+        if int(got[0]) == target:
+            arch[target] = x
+            return x, arch, frames
+        if got[0] and int(got[0]) not in arch:
+            arch[int(got[0])] = x
     while frames < budget:
         n = min(_archive.BATCH, budget - frames)
         if arch:

@@ -1,13 +1,16 @@
 """A bowling ball in the ball maker's units, within USBC's limits.
 
-* **Ball** (:class:`Ball`): weight (lb), RG and RG differential (in), coverstock friction,
-  checked against USBC's limits (RG 2.46-2.80 in, differential <= 0.06 in, friction <= 0.32,
-  at most 16 lb) with one-line errors naming the field. Inertia: ``I = m RG^2`` about the
-  low-RG (pin) axis and ``m (RG + diff)^2`` about the two axes across it (a symmetric core:
-  differential = high RG - low RG). The pin axis is placed :data:`PIN_TO_PAP_IN` inches of arc
-  from the positive axis point (PAP, the hand-side end of the release's spin axis), towards
-  the top of the ball: an assumed layout. The coverstock friction is the ball's friction on
-  the dry lane (the back end); on full oil every ball gets :data:`MU_OIL`.
+* **Ball** (:class:`Ball`): weight (lb), RG, RG differential and intermediate differential
+  (in), coverstock friction, how fast the cover absorbs the oil it picks up, and the layout
+  (pin and mass bias to the PAP, inches of arc), checked against USBC's limits (RG 2.46-2.80
+  in, differential <= 0.06 in, friction <= 0.32, at most 16 lb) with one-line errors naming the
+  field. Principal moments (:meth:`Ball.principal_inertia`), as ball makers define them
+  (differential = high RG - low RG; intermediate differential = high RG - intermediate RG):
+  ``m RG^2`` about the low-RG (pin) axis, ``m (RG + diff - intdiff)^2`` about the
+  intermediate axis (towards the mass bias), ``m (RG + diff)^2`` about the high axis. Where
+  the axes point at release is the layout (:func:`.delivery.principal_axes`). The coverstock
+  friction is the ball's friction on the dry lane; on a full film every ball gets
+  :data:`MU_OIL` (:class:`.oil.OilLaw`).
 
 Pure numpy.
 """
@@ -39,10 +42,17 @@ class Ball:
     rg: float = 2.50
     diff: float = 0.040
     friction: float = MU_DRY
+    intdiff: float = 0.0
+    #: Layout (inches of arc from the PAP): the pin (low-RG axis) and the mass bias (asymmetric cores).
+    pin_pap_in: float = 4.5
+    mb_pap_in: float = 6.0
+    #: Seconds in which the cover absorbs all but 1/e of the oil it carries (a reactive cover;
+    #: 0: never, a plastic or urethane cover that keeps its oil ring).
+    absorb_s: float = 1.0
 
     def check(self) -> Ball:
         """The ball, or LaneError naming the first field outside USBC's limits."""
-        for k in ("weight_lb", "rg", "diff", "friction"):
+        for k in ("weight_lb", "rg", "diff", "friction", "intdiff", "pin_pap_in", "mb_pap_in", "absorb_s"):
             v = getattr(self, k)
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
                 raise LaneError(f"ball.{k}: must be a finite number, got {v!r}")
@@ -54,6 +64,15 @@ class Ball:
             raise LaneError(f"ball.diff: RG differential {self.diff:g} in is outside USBC's 0..{DIFF_MAX:.2f} in")
         if not 0.0 < self.friction <= FRICTION_MAX:
             raise LaneError(f"ball.friction: coverstock friction {self.friction:g} is outside USBC's (0, {FRICTION_MAX:.2f}]")
+        if not 0.0 <= self.intdiff <= self.diff:
+            raise LaneError(f"ball.intdiff: intermediate differential {self.intdiff:g} in is outside 0..the "
+                            f"differential {self.diff:g} in")
+        for k in ("pin_pap_in", "mb_pap_in"):
+            if not 0.0 <= getattr(self, k) <= 13.35:
+                raise LaneError(f"ball.{k}: {getattr(self, k):g} in of arc is outside 0..13.35 in (half the ball's "
+                                f"circumference)")
+        if not 0.0 <= self.absorb_s <= 1000.0:
+            raise LaneError(f"ball.absorb_s: {self.absorb_s:g} s is outside 0..1000 s (0: the cover never absorbs)")
         if self.friction <= MU_OIL:
             raise LaneError(f"ball.friction: coverstock friction {self.friction:g} must exceed the oil's {MU_OIL:g}")
         return self
@@ -63,9 +82,10 @@ class Ball:
         return self.weight_lb * LB
 
     def principal_inertia(self) -> np.ndarray:
-        """(3,) kg m^2: about the pin (low-RG) axis, then the two high axes."""
+        """(3,) kg m^2: about the pin (low-RG) axis, the intermediate axis, the high axis."""
         lo, hi = self.rg * scene.INCH, (self.rg + self.diff) * scene.INCH
-        return self.mass * np.array([lo * lo, hi * hi, hi * hi])
+        mid = (self.rg + self.diff - self.intdiff) * scene.INCH
+        return self.mass * np.array([lo * lo, mid * mid, hi * hi])
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -10,9 +10,12 @@
   ``a_side`` along the travel direction with the sign that hooks towards the pocket
   (opposite the travel for a right-hander), ``a_up`` vertical with the PAP end tipped up.
 
-The ball's pin (low-RG) axis is placed :data:`PIN_TO_PAP_IN` inches of arc from the positive
-axis point (PAP, the hand-side end of the release's spin axis), towards the top of the ball:
-an assumed layout (:func:`pin_axis`).
+The ball's layout (:func:`principal_axes`): its pin (low-RG) axis is placed ``pin_pap_in``
+inches of arc from the positive axis point (PAP, the hand-side end of the release's spin
+axis), towards the top of the ball (default :data:`PIN_TO_PAP_IN`: an assumed layout); its
+intermediate axis (towards the mass bias, which matters when the core is asymmetric) is
+placed ``mb_pap_in`` inches of arc from the PAP, a quarter turn round the PAP from the pin,
+then made square to the pin axis; the high axis completes the frame.
 
 Pure numpy.
 """
@@ -26,10 +29,13 @@ import numpy as np
 from nbst.models.bowling import scene
 from nbst.models.bowling.lane.units import ARROWS_FT, BOARD_WIDTH, FOUL_LINE_X, FT, MPH, LaneError, board_to_y, hand_sign
 
-__all__ = ["PIN_TO_PAP_IN", "Delivery", "spin_axes", "quat_x_to", "quat_to_mat", "pin_axis", "initial_state"]
+__all__ = ["PIN_TO_PAP_IN", "MB_TO_PAP_IN", "Delivery", "spin_axes", "quat_x_to", "quat_of_mat", "quat_to_mat",
+           "pin_axis", "principal_axes", "initial_state"]
 
-#: Assumed layout: the pin (low-RG axis) 4 1/2 in of arc from the PAP, towards the top of the ball.
+#: Assumed layout: the pin (low-RG axis) 4 1/2 in of arc from the PAP, towards the top of the ball,
+#: and the mass bias 6 in from the PAP.
 PIN_TO_PAP_IN = 4.5
+MB_TO_PAP_IN = 6.0
 
 
 @dataclass(frozen=True)
@@ -97,14 +103,50 @@ def quat_x_to(p: np.ndarray) -> list:
     return list(q / np.linalg.norm(q))
 
 
-def pin_axis(d: Delivery) -> np.ndarray:
-    """The ball's pin (low-RG) axis at release: PIN_TO_PAP_IN of arc from the PAP, towards the top."""
+def pin_axis(d: Delivery, pin_pap_in: float = PIN_TO_PAP_IN) -> np.ndarray:
+    """The ball's pin (low-RG) axis at release: ``pin_pap_in`` of arc from the PAP, towards the top."""
+    return principal_axes(d, pin_pap_in)[:, 0]
+
+
+def principal_axes(d: Delivery, pin_pap_in: float = PIN_TO_PAP_IN, mb_pap_in: float = MB_TO_PAP_IN) -> np.ndarray:
+    """(3, 3) world-frame principal axes of the ball at release, as columns: the pin (low RG),
+    the intermediate axis (towards the mass bias) and the high axis (see the module docstring)."""
     _, w, pap = spin_axes(d)
     z = np.array([0.0, 0.0, 1.0])
     n = z - np.dot(z, w) * w
     n = n / np.linalg.norm(n) if np.linalg.norm(n) > 1e-9 else np.cross(w, [0.0, 1.0, 0.0])
-    beta = PIN_TO_PAP_IN / (scene.BALL_RADIUS / scene.INCH)
-    return math.cos(beta) * pap + math.sin(beta) * n
+    r_in = scene.BALL_RADIUS / scene.INCH
+    beta = pin_pap_in / r_in
+    e_pin = math.cos(beta) * pap + math.sin(beta) * n
+    side = np.cross(pap, n)
+    gam = mb_pap_in / r_in
+    mb = math.cos(gam) * pap + math.sin(gam) * side
+    e_mid = mb - np.dot(mb, e_pin) * e_pin
+    if np.linalg.norm(e_mid) < 1e-9:  # the mass bias on the pin: any axis square to it
+        e_mid = np.cross(e_pin, n if abs(np.dot(e_pin, n)) < 0.9 else side)
+    e_mid /= np.linalg.norm(e_mid)
+    return np.column_stack([e_pin, e_mid, np.cross(e_pin, e_mid)])
+
+
+def quat_of_mat(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method), w >= 0."""
+    R = np.asarray(R, dtype=float)
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    if tr > 0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        q = [s / 4, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
+    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = [(R[2, 1] - R[1, 2]) / s, s / 4, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s]
+    elif R[1, 1] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = [(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, s / 4, (R[1, 2] + R[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, s / 4]
+    q = np.array(q)
+    q = q if q[0] >= 0 else -q
+    return q / np.linalg.norm(q)
 
 
 def initial_state(d: Delivery) -> tuple[np.ndarray, np.ndarray]:

@@ -1,20 +1,25 @@
 """A frame from the foul line: the delivery of :mod:`.lane` run into the pins until they come to
 rest, and the settled outcome counted as USBC counts pinfall.
 
-* **Scene**: :func:`nbst.models.bowling.lane.scene.lane_spec` with the pins (one compiled model per oil pattern, ball,
-  timestep and oil friction, :func:`frame_model`). The delivery only sets the initial state:
-  the ball's inertia axes are placed by turning the ball body (a sphere: its contact is the
-  same in any orientation) instead of recompiling, so one model serves every throw of a
-  Monte Carlo batch. Pins not in play (a spare's leave) are parked standing on the floor
-  plane behind the approach, out of reach, and left out of the outcome.
-* **Run**: steps of ``h`` (1 ms default; the ladder runs 0.5 and 0.25 ms too), checked every
-  :data:`CHECK_EVERY` s. The frame is **settled** when the ball has reached the pins (or left
-  the lane) and is in the pit or slower than :data:`REST_SPEED`, and every pin in play that
-  is not in the pit moves slower than :data:`REST_SPEED` and turns slower than
-  :data:`REST_SPIN`, for :data:`REST_HOLD` s in a row. The **cap**: :data:`CAP_AFTER_PINS` s
-  after the ball reaches the head pin's line (or :data:`.lane.MAX_SECONDS` if it never does);
-  a capped frame says so. ``extra_s`` runs on past the settle (or the cap) before reading
-  the outcome: the check that the outcome is settled.
+* **Scene**: :func:`nbst.models.bowling.lane.scene.lane_spec` with the pins (one compiled model per ball
+  and timestep, :func:`frame_model`; the oil is not in the model). The delivery only sets the
+  initial state: the ball's inertia axes are placed by turning the ball body (a sphere: its
+  contact is the same in any orientation) instead of recompiling, so one model serves every
+  throw of a Monte Carlo batch. Pins not in play (a spare's leave) are parked standing on the
+  floor plane behind the approach, out of reach, and left out of the outcome.
+* **Run**: steps of ``h`` (1 ms default; the ladder runs 0.5 and 0.25 ms too). While the ball
+  is on the lane, one step at a time with its friction from the oil (:mod:`.friction`; the
+  lane's :class:`.oil.OilField` is worn in place: a fresh one of the pattern unless a series
+  passes its own); then checked every :data:`CHECK_EVERY` s. The frame is **settled** when the
+  ball has reached the pins (or left the lane) and is in the pit or slower than
+  :data:`REST_SPEED`, and every pin in play that is not in the pit moves slower than
+  :data:`REST_SPEED` and turns slower than :data:`REST_SPIN`, for :data:`REST_HOLD` s in a row.
+  The **sweep**: a pinsetter counts the pins :data:`SWEEP_AFTER_PINS` s after the ball reaches
+  the head pin's line, settled or not (Brunswick's Sync scoring manual: the picture is taken
+  1.5-3 s after the ball detect, "1500-3000 milliseconds is a typical setting"; the detect sits
+  just past the pins), or :data:`.lane.MAX_SECONDS` after the release if it never does; a frame
+  counted at the sweep before it settled says so (``cap_hit``). ``extra_s`` runs on past the
+  settle (or the sweep) before reading the outcome: the check that the outcome is settled.
 * **Pinfall** (USBC Playing Rules 6a and 6b, 2012-13 rulebook, as quoted at
   ballreviews.com/miscellaneous/rules-question-300958; docs/bowling.md quotes them): a pin
   is down when it is knocked down (its axis tilts past :data:`nbst.models.bowling.pinfall.DOWN_TILT_DEG`), off the
@@ -48,8 +53,11 @@ REST_SPEED = 0.01
 REST_SPIN = 0.1
 REST_HOLD = 0.2
 CHECK_EVERY = 0.01
-#: The cap: this long after the ball reaches the head pin's line (s).
-CAP_AFTER_PINS = 6.0
+#: The pinsetter's sweep: the pins are counted this long after the ball reaches the head pin's
+#: line (s): the ball detect ~0.1 s later, then a 2.5 s delay (the middle of Brunswick's typical
+#: 1.5-3 s).
+SWEEP_AFTER_PINS = 2.6
+CAP_AFTER_PINS = SWEEP_AFTER_PINS
 #: The partitions beside the deck (the scene's kickbacks and lane dividers).
 PARTITIONS = ("wall_left", "wall_right")
 #: Where pins not in play are parked: standing on the floor plane, behind the approach.
@@ -83,6 +91,7 @@ class FrameResult:
     cap_hit: bool
     seconds: float
     extra_s: float = 0.0
+    oil_ml: dict = field(default_factory=dict)  # the ball's trade with the lane (friction.BallOnLane.oil_ml)
     final_qpos: np.ndarray | None = field(default=None, repr=False)
 
     @property
@@ -105,41 +114,30 @@ class FrameResult:
 
 
 @lru_cache(maxsize=16)
-def _compiled(oil, ball: lane.Ball, timestep: float, mu_oil: float):
-    m = lane.lane_spec(oil, ball, lane.Delivery(), pins=True, mu_oil=mu_oil).compile()
+def _compiled(ball: lane.Ball, timestep: float):
+    m = lane.lane_spec(ball, lane.Delivery(), pins=True).compile()
     m.opt.timestep = timestep
     return m
 
 
-def frame_model(oil: str = "house", ball: lane.Ball | None = None, *, timestep: float = TIMESTEP,
-                mu_oil: float = lane.MU_OIL):
-    """The lane with pins, compiled once per (oil, ball, timestep, mu_oil) and shared read-only."""
+def frame_model(ball: lane.Ball | None = None, *, timestep: float = TIMESTEP):
+    """The lane with pins, compiled once per (ball, timestep) and shared read-only (the oil is
+    the step loop's, not the model's)."""
+    if isinstance(ball, str):
+        raise FrameError("frame_model: the oil is no longer part of the model; pass the ball only")
     ball = (ball or lane.Ball()).check()
     if not (isinstance(timestep, (int, float)) and 1e-5 <= timestep <= 0.002):
         raise FrameError(f"timestep: must be in [1e-05, 0.002] s (the contacts' time constant is 8 ms), got {timestep!r}")
-    if not (isinstance(mu_oil, (int, float)) and 0.0 < mu_oil < ball.friction):
-        raise FrameError(f"mu_oil: must be in (0, the ball's friction), got {mu_oil!r}")
-    if isinstance(oil, str):
-        lane.pattern(oil)  # an unknown name: LaneError, one line
-    return _compiled(oil, ball, float(timestep), float(mu_oil))
+    return _compiled(ball, float(timestep))
 
 
-def _qmul(a, b) -> np.ndarray:
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
-
-
-def _qmat(q) -> np.ndarray:
-    return lane.quat_to_mat(np.asarray(q, dtype=float)[None])[0]
-
-
-def initial_qpos_qvel(model, delivery: lane.Delivery, standing=None) -> tuple[np.ndarray, np.ndarray]:
+def initial_qpos_qvel(model, delivery: lane.Delivery, standing=None, ball: lane.Ball | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """(qpos, qvel) at release: the pins in ``standing`` (pin numbers; default all ten) on their
-    spots, the others parked; the ball at the foul line as :func:`.lane.initial_state`, its body
-    turned so that its inertia axes are those :func:`nbst.models.bowling.lane.scene.layout` gives ``delivery``."""
+    spots, the others parked; the ball at the foul line (:func:`.lane.release_state`: its body
+    turned so its principal axes are where ``ball``'s layout puts them for ``delivery``)."""
     delivery = delivery.check()
+    ball = (ball or lane.Ball()).check()
     standing = set(scene.PIN_NUMBERS if standing is None else standing)
     qpos = np.array(model.qpos0, dtype=float)
     qvel = np.zeros(model.nv)
@@ -147,17 +145,9 @@ def initial_qpos_qvel(model, delivery: lane.Delivery, standing=None) -> tuple[np
     for k, n in enumerate(scene.PIN_NUMBERS):
         if n not in standing:
             qpos[adr[k]:adr[k] + 7] = [PARK_X - PARK_STEP * k, 0.0, scene.FLOOR_Z, 1.0, 0.0, 0.0, 0.0]
-    b = model.body("ball")
-    q0 = np.array(model.body_iquat[b.id])  # the model's ball: laid out for the default delivery
-    qd = np.array(lane.quat_x_to(lane.pin_axis(delivery)))
-    q = _qmul(qd, q0 * np.array([1.0, -1.0, -1.0, -1.0]))
-    q /= np.linalg.norm(q)
-    pos, v, w = lane.initial_state(delivery)
     j = model.joint("ball_free")
     qa, va = int(j.qposadr[0]), int(j.dofadr[0])
-    qpos[qa:qa + 7] = [*pos, *q]
-    qvel[va:va + 3] = v
-    qvel[va + 3:va + 6] = _qmat(q).T @ w  # the free joint's angular velocity is in the body frame
+    qpos[qa:qa + 7], qvel[va:va + 6] = lane.release_state(model, delivery, ball)
     return qpos, qvel
 
 
@@ -195,34 +185,39 @@ def _pin_moving(model, data, in_play_idx) -> bool:
     return False
 
 
-def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None = None, *,
-              standing=None, timestep: float = TIMESTEP, extra_s: float = 0.0, mu_oil: float = lane.MU_OIL,
-              model=None, record=None) -> FrameResult:
-    """Throw ``delivery`` at the pins in ``standing`` (default all ten) and run until they settle
-    (or the cap), then ``extra_s`` more; the USBC outcome (see the module docstring).
+def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = None, *,
+              standing=None, timestep: float = TIMESTEP, extra_s: float = 0.0, law: lane.OilLaw = lane.LAW,
+              field: lane.OilField | None = None, model=None, record=None) -> FrameResult:
+    """Throw ``delivery`` at the pins in ``standing`` (default all ten) on ``oil`` (a pattern, its
+    name or file; ``field``: the lane's oil now, worn in place: a series) and run until they settle
+    (or the sweep), then ``extra_s`` more; the USBC outcome (see the module docstring).
 
     Args:
         delivery: what the bowler does (``lane.Delivery``); checked first.
-        oil: the name of a registered oil pattern.
+        oil: the oil pattern: a registered pattern's name, a pattern file's path or a ``lane.Pattern``.
         ball: the ball (``lane.Ball``; None: the default ball).
         standing: the pins standing before the throw, numbers 1..10 (None: all ten).
         timestep: MuJoCo's timestep, seconds.
-        extra_s: seconds run after the pins settle, 0..60.
-        mu_oil: the ball-lane friction coefficient on oil.
-        model: a compiled frame model to reuse (``frame_model(oil, ball, ...)``), or None.
+        extra_s: seconds run after the pins settle (or the sweep), 0..60.
+        law: the film-to-friction law (``lane.OilLaw``; default the fitted ``lane.LAW``).
+        field: the lane's oil now (``lane.OilField``), worn in place by this throw (a series);
+            None: a fresh lane of ``oil``.
+        model: a compiled frame model to reuse (``frame_model(ball, timestep=...)``), or None.
         record: None, or ``record(data)`` called with the ``MjData`` at release and after every
             step (the same steps, one at a time: the same states as without it); it must only
             read ``data``.
 
     Returns:
         A :class:`FrameResult`: the pins in play, down and left, counted as USBC counts pinfall
-        (with the knocked, off-deck and dead-wood pins apart), whether it settled, and the ball's
-        board and entry angle at the pins.
+        (with the knocked, off-deck and dead-wood pins apart), whether it settled before the
+        sweep, the ball's board and entry angle at the pins, and the oil it took.
 
     Raises:
         FrameError: a bad ``standing`` or ``extra_s`` (one line).
     """
     import mujoco
+
+    from nbst.models.bowling.lane.friction import BallOnLane
 
     delivery = delivery.check()
     in_play = sorted(set(scene.PIN_NUMBERS if standing is None else standing))
@@ -230,11 +225,14 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
         raise FrameError(f"standing: pins must be numbers 1..10 (at least one), got {in_play!r}")
     if not (isinstance(extra_s, (int, float)) and 0.0 <= extra_s <= 60.0):
         raise FrameError(f"extra_s: must be in [0, 60] s, got {extra_s!r}")
-    m = model if model is not None else frame_model(oil, ball, timestep=timestep, mu_oil=mu_oil)
+    ball = (ball or lane.Ball()).check()
+    pat = lane.pattern(oil)
+    m = model if model is not None else frame_model(ball, timestep=timestep)
     h = float(m.opt.timestep)
     d = mujoco.MjData(m)
-    qpos0, qvel0 = initial_qpos_qvel(m, delivery, in_play)
+    qpos0, qvel0 = initial_qpos_qvel(m, delivery, in_play, ball)
     d.qpos[:], d.qvel[:] = qpos0, qvel0
+    bol = BallOnLane(m, ball, lane.OilField.fresh(pat) if field is None else field, law)
     k = max(1, int(round(CHECK_EVERY / h)))
     bq = int(m.joint("ball_free").qposadr[0])
     bv = int(m.joint("ball_free").dofadr[0])
@@ -258,6 +256,23 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
     if record is not None:
         record(d)
     with mujoco_warnings_raise():
+        # the ball on the lane: one step at a time, its friction from the oil under it
+        while d.qpos[bq] < scene.DECK_FRONT_X and abs(d.qpos[bq + 1]) < half and d.time < cap - 1e-9:
+            prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+            bol.step(d)
+            mujoco.mj_step(m, d)
+            if record is not None:
+                record(d)
+        bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
+        if bx >= scene.DECK_FRONT_X and prev[0][0] < scene.DECK_FRONT_X and abs(by) < half:
+            f = (scene.DECK_FRONT_X - prev[0][0]) / (bx - prev[0][0])
+            y = prev[0][1] + f * (by - prev[0][1])
+            v = prev[1] + f * (d.qvel[bv:bv + 3] - prev[1])
+            s = lane.hand_sign(delivery.hand)
+            board = float(lane.y_to_board(y - v[1] / v[0] * scene.DECK_FRONT_X, delivery.hand))
+            angle = float(math.degrees(math.atan2(s * v[1], v[0])))
+        prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+        d.xfrc_applied[:] = 0.0
         while True:
             step(k)
             bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
@@ -293,11 +308,11 @@ def run_frame(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | Non
     knocked, off_deck, partition = settled_pinfall(m, d, in_play)
     down = sorted(set(knocked) | set(off_deck) | set(partition)) if not left_lane else []
     return FrameResult(
-        delivery=delivery.to_dict(), oil=oil if isinstance(oil, str) else oil.name, timestep=h, in_play=in_play,
+        delivery=delivery.to_dict(), oil=pat.name, timestep=h, in_play=in_play,
         down=down, leave=[n for n in in_play if n not in down], knocked=knocked, off_deck=off_deck,
         partition=partition, ball_left_lane=left_lane, ball_at_pins_s=t_pins, board_at_pins=board,
         entry_angle_deg=angle, settled=settle is not None, settle_s=settle, cap_hit=settle is None,
-        seconds=float(d.time), extra_s=float(extra_s), final_qpos=d.qpos.copy())
+        seconds=float(d.time), extra_s=float(extra_s), oil_ml=bol.oil_ml(), final_qpos=d.qpos.copy())
 
 
 def ladder(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None = None, *, standing=None,
@@ -310,14 +325,14 @@ def ladder(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None =
 _WORKER: dict = {}
 
 
-def _worker_init(oil, ball, timestep, mu_oil) -> None:
-    _WORKER["model"] = frame_model(oil, ball, timestep=timestep, mu_oil=mu_oil)
-    _WORKER["oil"], _WORKER["ball"] = oil, ball
+def _worker_init(oil, ball, timestep, law) -> None:
+    _WORKER["model"] = frame_model(ball, timestep=timestep)
+    _WORKER["oil"], _WORKER["ball"], _WORKER["law"] = oil, ball, law
 
 
 def _worker_run(delivery, standing, extra_s=0.0) -> FrameResult:
     return run_frame(delivery, _WORKER["oil"], _WORKER["ball"], standing=standing, model=_WORKER["model"],
-                     extra_s=extra_s)
+                     extra_s=extra_s, law=_WORKER["law"])
 
 
 class FrameRunner:
@@ -328,12 +343,13 @@ class FrameRunner:
     :class:`~nbst.models.mjsearch.pool.WorkerPool`: they die with this process, even when it
     is killed by SIGKILL."""
 
-    def __init__(self, oil: str = "house", ball: lane.Ball | None = None, *, timestep: float = TIMESTEP,
-                 jobs: int = 1, mu_oil: float = lane.MU_OIL):
-        self.oil, self.ball = oil, (ball or lane.Ball()).check()
-        self.model = frame_model(oil, self.ball, timestep=timestep, mu_oil=mu_oil)
+    def __init__(self, oil="house", ball: lane.Ball | None = None, *, timestep: float = TIMESTEP,
+                 jobs: int = 1, law: lane.OilLaw = lane.LAW):
+        self.pattern = lane.pattern(oil)
+        self.oil, self.ball, self.law = oil, (ball or lane.Ball()).check(), law.check()
+        self.model = frame_model(self.ball, timestep=timestep)
         self.jobs = max(1, int(jobs))
-        self._args = (oil, self.ball, float(timestep), float(mu_oil))
+        self._args = (self.pattern, self.ball, float(timestep), self.law)
         self._pool = None
 
     def _get_pool(self):
@@ -352,8 +368,9 @@ class FrameRunner:
     def __exit__(self, *exc):
         self.close()
 
-    def one(self, delivery: lane.Delivery, standing=None, extra_s: float = 0.0) -> FrameResult:
-        return run_frame(delivery, self.oil, self.ball, standing=standing, model=self.model, extra_s=extra_s)
+    def one(self, delivery: lane.Delivery, standing=None, extra_s: float = 0.0, field=None) -> FrameResult:
+        return run_frame(delivery, self.pattern, self.ball, standing=standing, model=self.model, extra_s=extra_s,
+                         law=self.law, field=field)
 
     def map(self, deliveries, standing=None, on_done=None, extra_s: float = 0.0) -> list[FrameResult]:
         """Frames of ``deliveries`` in order (each run ``extra_s`` past its settle); ``on_done()``

@@ -1,131 +1,354 @@
-"""Oil patterns as data, registered once: the friction a pattern puts under the ball.
+"""Oil as data: pattern files, the film they lay on the lane, and the law from film to friction.
 
-* **Oil** (``oil_patterns.json``, :func:`load_patterns`): a pattern is a length and a grid of
-  (distance segment x board band) cells of relative oil ``u`` in [0, 1]; each cell is a box
-  whose friction ``mu = mu_dry - (mu_dry - MU_OIL) u`` rules the ball's contact
-  (``priority = 1``, as the zones of :mod:`.scene`). Past the pattern the dry back end
-  (``mu_dry``) runs to the pin deck of :mod:`.scene`.
+* **Pattern file** (``nbst-oil-pattern``, one pattern per JSON file, :func:`load_pattern`), in a
+  pattern sheet's terms: the machine's **forward** pass and, optionally, its **reverse** pass,
+  each with its oil distance (``length_ft`` from the foul line), its volume (``volume_ml``, as a
+  sheet's forward and reverse totals) and its lateral shape: ``units`` per board (39 numbers,
+  board 1 the right-hander's right edge, as a sheet's oil-per-board graph) or ``loads``
+  (``[[from_left, to_right, n], ...]``: ``n`` loads from board ``from_left`` counted from the
+  left edge to board ``to_right`` counted from the right edge, as a sheet's load table:
+  ``[2, 2, 3]`` is "2L-2R, 3 loads"). Units are relative: the pass's volume is spread over its
+  boards in their proportion (the absolute size of a "unit" is not published where we could
+  read it, so a volume is required). An optional ``taper_ft``/``taper_to`` thins the last
+  ``taper_ft`` ft of a pass linearly to ``taper_to`` of its load (the brushes' buff-out).
+  Every problem is one :class:`~.units.LaneError` line naming the file and the field.
+* **Film** (:meth:`Pattern.grid`): oil thickness in micrometres (um = ml/m^2) on cells of one
+  board x :data:`DX_FT` from the foul line to the pin deck, the passes added. A right-hander
+  and a left-hander share the grid (it is indexed by the lane's own y, not by the hand), so a
+  left-hander plays the mirrored side (:class:`OilField`: the lane's state, which a series
+  of throws wears, see :mod:`.friction`).
+* **Law** (:class:`OilLaw`): the friction at the contact is
+  ``mu = mu_oil + (mu_cover - mu_oil) exp(-h / h0)`` with ``h`` the film under the contact (lane
+  film + the film the ball's cover carries there), ``mu_oil`` = 0.04 (full film, Frohlich),
+  ``mu_cover`` the ball's coverstock friction on the dry lane, and ``h0`` fitted
+  (docs/bowling.md: a typical release breaks at 40-45 ft on boards 5-8 of the house shot).
 
-The shipped patterns (``oil_patterns.json`` beside this module) are registered once in
-:data:`PATTERNS` (an :class:`nbst.registry.Registry`), which the command line's ``--oil``
-choices, its help and the docs read.
+The shipped patterns (``patterns/*.json`` beside this module) are registered once in
+:data:`PATTERNS` (an :class:`nbst.registry.Registry`); :func:`pattern` resolves a registered
+name or a pattern file's path.
 
-Pure Python (json); reading the patterns file goes through :func:`load_patterns`.
+Pure Python and numpy; reading a pattern file goes through :mod:`nbst.models.bowling.files`.
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from nbst.models.bowling import scene
-from nbst.models.bowling.lane.units import N_BOARDS, LaneError, x_to_ft
+import numpy as np
+
+from nbst.models.bowling import files, scene
+from nbst.models.bowling.lane.units import BOARD_WIDTH, FT, N_BOARDS, LaneError, x_to_ft
 from nbst.registry import Registry
 
-__all__ = ["MU_OIL", "MU_DRY", "PATTERNS_FILE", "PATTERNS", "Pattern", "load_patterns", "pattern", "friction"]
+__all__ = ["MU_OIL", "MU_DRY", "FORMAT", "PATTERNS_DIR", "PATTERNS", "DX_FT", "NX", "Pass", "Pattern", "OilLaw",
+           "LAW", "OilField", "load_pattern", "pattern_from_dict", "pattern", "oil_name"]
 
 #: Friction of a full oil film (Frohlich's figure, as scene.MU_OIL) and of the dry lane for
 #: the default ball (scene.MU_DRY); the ball's coverstock friction replaces the latter.
 MU_OIL = scene.MU_OIL
 MU_DRY = scene.MU_DRY
+FORMAT = "nbst-oil-pattern"
+VERSION = 1
+PATTERNS_DIR = Path(__file__).with_name("patterns")
+#: The film grid: cells of one board by DX_FT ft, from the foul line to the pin deck's front.
+DX_FT = 0.25
+NX = int(math.floor(float(x_to_ft(scene.DECK_FRONT_X)) / DX_FT))
+CELL_AREA = BOARD_WIDTH * DX_FT * FT  # m^2
+#: The shipped patterns, in the order they are listed.
+SHIPPED = ("house", "house-short", "house-long", "sport-short", "sport", "sport-long", "short", "flat", "uniform")
 
-PATTERNS_FILE = Path(__file__).with_name("oil_patterns.json")
+
+@dataclass(frozen=True)
+class Pass:
+    """One pass of the lane machine: oil to ``length_ft``, ``volume_ml`` in all, ``units`` per board
+    (39, board 1 the right-hander's right edge), the last ``taper_ft`` thinning to ``taper_to``."""
+
+    length_ft: float
+    volume_ml: float
+    units: tuple
+    taper_ft: float = 0.0
+    taper_to: float = 1.0
+
+    def shape_x(self, ft: np.ndarray) -> np.ndarray:
+        ft = np.asarray(ft, dtype=float)
+        s = np.where(ft < self.length_ft, 1.0, 0.0)
+        if self.taper_ft > 0:
+            t0 = self.length_ft - self.taper_ft
+            ramp = 1.0 - (1.0 - self.taper_to) * (ft - t0) / self.taper_ft
+            s = np.where((ft > t0) & (ft < self.length_ft), ramp, s)
+        return s
+
+    def to_dict(self) -> dict:
+        d = {"length_ft": self.length_ft, "volume_ml": self.volume_ml, "units": list(self.units)}
+        if self.taper_ft:
+            d["taper_ft"], d["taper_to"] = self.taper_ft, self.taper_to
+        return d
 
 
 @dataclass(frozen=True)
 class Pattern:
-    """An oil pattern: ``length_ft`` and ``segments``: ((to_ft, ((first, last, oil), ...)), ...)."""
+    """An oil pattern: its passes (forward first). See the module docstring."""
 
     name: str
     description: str
-    length_ft: float
-    segments: tuple
+    passes: tuple
 
-    def oil_at(self, ft: float, board: float) -> float:
-        """Relative oil at ``ft`` past the foul line on (continuous) ``board``: 0 past the pattern."""
-        b = min(max(int(math.floor(board + 0.5)), 1), N_BOARDS) if board == board else 1
-        start = 0.0
-        for to_ft, bands in self.segments:
-            if start <= ft < to_ft:
-                return next(u for lo, hi, u in bands if lo <= b <= hi)
-            start = to_ft
-        return 0.0
+    @property
+    def length_ft(self) -> float:
+        """Where the pattern ends (the longest pass)."""
+        return max(p.length_ft for p in self.passes)
+
+    @property
+    def volume_ml(self) -> float:
+        return float(sum(p.volume_ml for p in self.passes))
+
+    def grid(self) -> np.ndarray:
+        """(N_BOARDS, NX) oil film, um, cell centres (a new array each call)."""
+        return _grid(self).copy()
+
+    def film_at(self, ft: float, board: float) -> float:
+        """Film (um) at ``ft`` past the foul line on (continuous, right-hander's) ``board``; 0 past the pattern."""
+        j = int(math.floor(ft / DX_FT))
+        if not 0 <= j < NX or not board == board:
+            return 0.0
+        i = min(max(int(math.floor(board - 0.5)), 0), N_BOARDS - 1)
+        return float(_grid(self)[i, j])
 
     def symmetric(self) -> bool:
         """Whether board b and board 40 - b carry the same oil everywhere (mirror-symmetric)."""
-        return all(self.oil_at(to - 1e-6, b) == self.oil_at(to - 1e-6, N_BOARDS + 1 - b)
-                   for to, _ in self.segments for b in range(1, N_BOARDS + 1))
+        g = _grid(self)
+        return bool(np.allclose(g, g[::-1], rtol=1e-12, atol=1e-15))
+
+    def ratio(self, ft: float = 10.0) -> float:
+        """Inside over outside at ``ft``: the mean film of boards 18-22 over that of boards 3 and 37
+        (our reading of USBC's "oil in the middle compared to the outside")."""
+        g = _grid(self)[:, min(int(ft / DX_FT), NX - 1)]
+        out = (g[2] + g[36]) / 2
+        return float(g[17:22].mean() / out) if out > 0 else math.inf
+
+    def to_dict(self) -> dict:
+        """The pattern as a pattern file's content (:func:`pattern_from_dict` reads it back)."""
+        d = {"format": FORMAT, "version": VERSION, "name": self.name, "description": self.description,
+             "forward": self.passes[0].to_dict()}
+        if len(self.passes) > 1:
+            d["reverse"] = self.passes[1].to_dict()
+        return d
 
 
-def _pattern(name: str, d, where: str) -> Pattern:
+@lru_cache(maxsize=64)
+def _grid(p: Pattern) -> np.ndarray:
+    xs = (np.arange(NX) + 0.5) * DX_FT
+    g = np.zeros((N_BOARDS, NX))
+    for ps in p.passes:
+        lat = np.asarray(ps.units, dtype=float)
+        cells = np.outer(lat, ps.shape_x(xs))
+        total = cells.sum() * CELL_AREA
+        if total > 0:
+            g += cells * (ps.volume_ml / total)  # ml / m^2 = um
+    g.setflags(write=False)
+    return g
+
+
+@dataclass(frozen=True)
+class OilLaw:
+    """Film to friction, and how the ball's cover trades oil with the lane (see :mod:`.friction`).
+
+    ``mu_oil``: friction on a full film; ``h0_um``: the film at which the dry excess falls to 1/e;
+    ``exchange``: the share of the film difference that the contact band evens out as lane and
+    cover pass through it; ``band_in``: the width of the contact band (the track's width)."""
+
+    mu_oil: float = MU_OIL
+    h0_um: float = 0.2
+    exchange: float = 0.3
+    band_in: float = 1.0
+
+    def mu(self, mu_cover: float, h_um: float) -> float:
+        return self.mu_oil + (mu_cover - self.mu_oil) * math.exp(-h_um / self.h0_um)
+
+    def check(self, mu_cover: float | None = None) -> OilLaw:
+        for k, (lo, hi) in {"mu_oil": (0.0, 0.3), "h0_um": (1e-3, 100.0), "exchange": (0.0, 1.0),
+                            "band_in": (0.05, 4.0)}.items():
+            v = getattr(self, k)
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or not lo < v <= hi:
+                raise LaneError(f"oil law {k}: must be a number in ({lo:g}, {hi:g}], got {v!r}")
+        if mu_cover is not None and not self.mu_oil < mu_cover:
+            raise LaneError(f"mu_oil: {self.mu_oil:g} must be below the ball's coverstock friction {mu_cover:g}")
+        return self
+
+
+#: The law the lane runs (its h0 fitted: docs/bowling.md, benchmarks/bench_ball_motion.py).
+LAW = OilLaw()
+
+
+class OilField:
+    """The lane's oil now: ``h`` (N_BOARDS, NX) film (um) by board (the lane's y: index 0 is the
+    right-hander's board 1) and distance; the throws of a series share one and wear it."""
+
+    def __init__(self, h: np.ndarray, name: str = ""):
+        self.h = np.ascontiguousarray(h, dtype=np.float64)
+        if self.h.shape != (N_BOARDS, NX):
+            raise LaneError(f"oil field: must be {N_BOARDS} x {NX} cells, got {self.h.shape}")
+        self.name = name
+
+    @classmethod
+    def fresh(cls, pat: Pattern) -> OilField:
+        return cls(pat.grid(), pat.name)
+
+    def copy(self) -> OilField:
+        return OilField(self.h.copy(), self.name)
+
+    def total_ml(self) -> float:
+        return float(self.h.sum() * CELL_AREA)
+
+    def ml_past(self, ft: float) -> float:
+        """Oil (ml) from ``ft`` past the foul line to the deck."""
+        j = int(math.ceil(ft / DX_FT))
+        return float(self.h[:, j:].sum() * CELL_AREA)
+
+
+# --------------------------------------------------------------------------- files
+
+
+def _num(v, where: str, lo: float, hi: float, *, open_lo: bool = False) -> float:
+    if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+        raise LaneError(f"{where}: must be a number, got {v!r}")
+    if v < lo or v > hi or (open_lo and v == lo):
+        raise LaneError(f"{where}: must be in {'(' if open_lo else '['}{lo:g}, {hi:g}], got {v!r}")
+    return float(v)
+
+
+def _units(d: dict, where: str) -> tuple:
+    if ("units" in d) == ("loads" in d):
+        raise LaneError(f"{where}: give either units (39 numbers, board 1..39) or loads ([[from_left, to_right, n], "
+                        f"...]), not {'both' if 'units' in d else 'neither'}")
+    if "units" in d:
+        u = d["units"]
+        if not isinstance(u, list) or len(u) != N_BOARDS:
+            raise LaneError(f"{where}.units: must be a list of {N_BOARDS} numbers (board 1..{N_BOARDS}), got "
+                            f"{len(u) if isinstance(u, list) else type(u).__name__}")
+        out = tuple(_num(v, f"{where}.units[{k}]", 0.0, 1e6) for k, v in enumerate(u))
+    else:
+        loads = d["loads"]
+        if not isinstance(loads, list) or not loads:
+            raise LaneError(f"{where}.loads: must be a non-empty list of [from_left, to_right, n]")
+        acc = np.zeros(N_BOARDS)
+        for k, row in enumerate(loads):
+            w = f"{where}.loads[{k}]"
+            if not isinstance(row, list) or len(row) != 3:
+                raise LaneError(f"{w}: must be [from_left, to_right, n] (e.g. [2, 2, 3]: 2L-2R, 3 loads), got {row!r}")
+            a = _num(row[0], f"{w}[0]", 1, N_BOARDS)
+            b = _num(row[1], f"{w}[1]", 1, N_BOARDS)
+            n = _num(row[2], f"{w}[2]", 0, 1e6)
+            if a != int(a) or b != int(b):
+                raise LaneError(f"{w}: boards must be whole numbers, got {row[0]!r}, {row[1]!r}")
+            lo, hi = int(b), N_BOARDS + 1 - int(a)  # right-hander's boards: to_right .. 40 - from_left
+            if lo > hi:
+                raise LaneError(f"{w}: {int(a)}L to {int(b)}R crosses itself (no board between)")
+            acc[lo - 1:hi] += n
+        out = tuple(float(v) for v in acc)
+    if sum(out) <= 0:
+        raise LaneError(f"{where}: the units must not all be zero")
+    return out
+
+
+def _pass(d, where: str) -> Pass:
     if not isinstance(d, dict):
-        raise LaneError(f"{where}: a pattern must be an object")
-    length = d.get("length_ft")
-    deck_ft = float(x_to_ft(scene.DECK_FRONT_X))
-    if not isinstance(length, (int, float)) or isinstance(length, bool) or not 0 < length <= deck_ft:
-        raise LaneError(f"{where}.length_ft: must be a number in (0, {deck_ft:.2f}] ft (the pin deck), got {length!r}")
-    segs = d.get("segments")
-    if not isinstance(segs, list) or not segs:
-        raise LaneError(f"{where}.segments: must be a non-empty list")
-    out, prev = [], 0.0
-    for k, s in enumerate(segs):
-        w = f"{where}.segments[{k}]"
-        to = s.get("to_ft") if isinstance(s, dict) else None
-        if not isinstance(to, (int, float)) or isinstance(to, bool) or not prev < to <= length:
-            raise LaneError(f"{w}.to_ft: must increase past {prev:g} ft and stay within length_ft {length:g}, got {to!r}")
-        bands = s.get("bands")
-        if not isinstance(bands, list) or not bands:
-            raise LaneError(f"{w}.bands: must be a non-empty list of [first_board, last_board, oil]")
-        nxt, bs = 1, []
-        for j, b in enumerate(bands):
-            if (not isinstance(b, list) or len(b) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                                  for v in b)):
-                raise LaneError(f"{w}.bands[{j}]: must be [first_board, last_board, oil], got {b!r}")
-            lo, hi, u = b
-            if lo != nxt or not lo <= hi <= N_BOARDS or int(lo) != lo or int(hi) != hi:
-                raise LaneError(f"{w}.bands[{j}]: boards must run on from board {nxt} to at most {N_BOARDS}, got {lo}..{hi}")
-            if not 0.0 <= u <= 1.0:
-                raise LaneError(f"{w}.bands[{j}]: oil must be in [0, 1] (relative oil), got {u!r}")
-            bs.append((int(lo), int(hi), float(u)))
-            nxt = int(hi) + 1
-        if nxt != N_BOARDS + 1:
-            raise LaneError(f"{w}.bands: must cover boards 1..{N_BOARDS}, stop at {nxt - 1}")
-        out.append((float(to), tuple(bs)))
-        prev = float(to)
-    if prev != length:
-        raise LaneError(f"{where}.segments: the last segment must end at length_ft {length:g}, ends at {prev:g}")
-    return Pattern(name, str(d.get("description", "")), float(length), tuple(out))
+        raise LaneError(f"{where}: must be an object (length_ft, volume_ml, units or loads)")
+    deck_ft = NX * DX_FT
+    length = _num(d.get("length_ft"), f"{where}.length_ft", 0.0, deck_ft, open_lo=True)
+    vol = _num(d.get("volume_ml"), f"{where}.volume_ml", 0.0, 200.0)
+    taper = _num(d.get("taper_ft", 0.0), f"{where}.taper_ft", 0.0, length)
+    to = _num(d.get("taper_to", 1.0), f"{where}.taper_to", 0.0, 1.0)
+    return Pass(length, vol, _units(d, where), taper, to)
 
 
-@lru_cache(maxsize=None)
-def load_patterns(path: str | None = None) -> dict:
-    """{name: Pattern} from the patterns file (default: the shipped ``oil_patterns.json``)."""
-    p = Path(path) if path else PATTERNS_FILE
+def pattern_from_dict(doc, src: str = "<pattern>") -> Pattern:
+    """A pattern file's decoded content -> Pattern; LaneError naming ``src`` and the field."""
+    if not isinstance(doc, dict):
+        raise LaneError(f"{src}: a pattern file must be a JSON object")
+    if doc.get("format") != FORMAT:
+        raise LaneError(f"{src}: format: must be {FORMAT!r}, got {doc.get('format')!r}")
+    if doc.get("version") != VERSION:
+        raise LaneError(f"{src}: version: must be {VERSION}, got {doc.get('version')!r}")
+    name = doc.get("name")
+    if not isinstance(name, str) or not name.strip() or len(name) > 80 or not name.isprintable():
+        raise LaneError(f"{src}: name: must be a short printable text, got {name!r}")
+    desc = doc.get("description", "")
+    if not isinstance(desc, str) or len(desc) > 400:
+        raise LaneError(f"{src}: description: must be a text of at most 400 characters")
+    passes = [_pass(doc.get("forward"), f"{src}: forward")]
+    if doc.get("reverse") is not None:
+        passes.append(_pass(doc["reverse"], f"{src}: reverse"))
+    if sum(p.volume_ml for p in passes) <= 0:
+        raise LaneError(f"{src}: volume_ml: the passes hold no oil")
+    return Pattern(name.strip(), desc, tuple(passes))
+
+
+@lru_cache(maxsize=64)
+def _load(path: str, mtime_ns: int) -> Pattern:
     try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as e:
-        raise LaneError(f"{p.name}: cannot read the oil patterns: {e}") from None
-    pats = doc.get("patterns") if isinstance(doc, dict) else None
-    if not isinstance(pats, dict) or not pats:
-        raise LaneError(f"{p.name}: patterns: must be an object of named patterns")
-    return {n: _pattern(n, d, f"{p.name}: patterns.{n}") for n, d in pats.items()}
+        doc = files.read_doc(path)
+    except files.BowlingFileError as e:
+        raise LaneError(str(e)) from None
+    return pattern_from_dict(doc, Path(path).name)
 
 
-def pattern(name: str) -> Pattern:
-    pats = load_patterns()
-    if name not in pats:
-        raise LaneError(f"oil: no pattern {name!r}; patterns: {', '.join(sorted(pats))}")
-    return pats[name]
+def load_pattern(path) -> Pattern:
+    """The pattern of a pattern file (read through the bowling files' gate); LaneError in one line."""
+    import os
+
+    p = str(path)
+    try:
+        files.regular_file(p)
+        return _load(p, os.stat(p).st_mtime_ns)
+    except files.BowlingFileError as e:
+        raise LaneError(str(e)) from None
+    except OSError as e:
+        raise LaneError(f"{p}: cannot read ({e.strerror or e})") from None
 
 
-def friction(oil: float, mu_dry: float, mu_oil: float = MU_OIL) -> float:
-    """Lane friction under relative oil ``oil`` (0 = dry lane, 1 = full oil)."""
-    return mu_dry - (mu_dry - mu_oil) * oil
+def pattern(oil) -> Pattern:
+    """A Pattern from a Pattern, a registered name, or a pattern file's path (``*.json``)."""
+    if isinstance(oil, Pattern):
+        return oil
+    if isinstance(oil, str) and oil in PATTERNS:
+        return PATTERNS[oil]
+    if isinstance(oil, str) and oil.lower().endswith(".json"):
+        return load_pattern(oil)
+    raise LaneError(f"oil: no pattern {oil!r}; patterns: {', '.join(PATTERNS.names())}, or a pattern file (.json)")
 
 
-#: The oil patterns by name, registered once (the shipped file's, in its order).
+def argtype(flag: str = "--oil"):
+    """An argparse ``type=``: a registered pattern's name (any case) or a pattern file (``*.json``,
+    read and checked here: one line naming the file and field)."""
+    names = PATTERNS.argtype(flag)
+
+    def parse(text: str):
+        import argparse
+
+        if text.lower().endswith(".json"):
+            try:
+                load_pattern(text)
+            except LaneError as e:
+                raise argparse.ArgumentTypeError(str(e)) from None
+            return text
+        return names(text)
+
+    parse.__name__ = "oil pattern"
+    return parse
+
+
+def oil_name(oil) -> str:
+    """The name a throw records for ``oil`` (a pattern's own name)."""
+    return pattern(oil).name
+
+
+#: The oil patterns by name, registered once (the shipped files, in SHIPPED's order).
 PATTERNS: Registry[Pattern] = Registry("oil pattern")
-for _name, _pat in load_patterns().items():
-    PATTERNS.register(_name, _pat, help=_pat.description)
+for _name in SHIPPED:
+    _pat = load_pattern(PATTERNS_DIR / f"{_name}.json")
+    if _pat.name != _name:
+        raise LaneError(f"{_name}.json: name: {_pat.name!r} must be the file's name {_name!r}")
+    PATTERNS.register(_name, _pat, help=f"{_pat.length_ft:g} ft, {_pat.volume_ml:g} ml, {_pat.ratio():.0f}:1")

@@ -1,8 +1,8 @@
 """What bowlers ask of a lane: the pocket map, carry, and the best throw at each common spare.
 
 * **Aiming** (:func:`aim_entry`): a delivery that reaches a given board at the head pin's line
-  with a given entry angle. The release is the typical one of :mod:`.lane` (17 mph, 300 rpm,
-  15 deg tilt); the axis rotation (which sets the entry angle) and the launch angle (which
+  with a given entry angle. The release is the typical one (:data:`STRIKE`: 17 mph, 350 rpm,
+  12 deg tilt); the axis rotation (which sets the entry angle) and the launch angle (which
   sets the board) are found by Newton's method with finite differences on :func:`.lane.throw`
   (the ball alone), started from the nearest throws of a coarse table over foul board,
   rotation and launch angle.
@@ -41,18 +41,21 @@ import numpy as np
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, robust
 
-#: The strike line: the typical release over the 10 board at the arrows, 1.5 deg out (lane.py).
-STRIKE = lane.Delivery(board=10.0, at="arrows", angle=1.5)
+#: The strike line: the typical (league-200) release, 17 mph, 350 rpm, 45 deg rotation, 12 deg tilt,
+#: from board 20 at the foul line, 2.82 deg out: the ball alone reaches board 17.5 at the head pin
+#: (docs/bowling.md; ``phases.aim_angle``). Its target arrow is where the straight line crosses the arrows.
+STRIKE = lane.Delivery(board=20.0, at="foul", angle=2.82, mph=17.0, rpm=350.0, rotation=45.0, tilt=12.0)
 STRIKE_FOUL = STRIKE.foul_board()
-STRIKE_ARROW = 10.0
+STRIKE_ARROW = STRIKE_FOUL - math.tan(math.radians(STRIKE.angle)) * lane.ARROWS_FT * lane.FT / lane.BOARD_WIDTH
 #: The straight spare ball: end over end, no tilt, 200 rpm, 17 mph.
 SPARE_BALL = dict(mph=17.0, rpm=200.0, rotation=0.0, tilt=0.0)
 #: The USBC pocket: boards 17-18 at 4-6 deg entry; board 17.5 at ~6 deg is the published peak.
 POCKET_BOARDS = (17.0, 18.0)
 POCKET_PEAK = (17.5, 6.0)
-#: The pocket map's best cell (docs/bowling.md): the typical release (17 mph, 300 rpm, tilt 15)
-#: aimed at board 17.5 at 6 deg by the launch angle and the axis rotation (``aim_entry``).
-POCKET_CELL = lane.Delivery(board=22.0, at="foul", angle=1.6105595330681906, rotation=68.48689904701298)
+#: The published pocket's cell: the typical release (17 mph, 350 rpm, tilt 12) aimed at board 17.5
+#: at 6 deg by the launch angle and the axis rotation (``aim_entry(17.5, 6.0)``; it strikes without noise).
+POCKET_CELL = lane.Delivery(board=26.0, at="foul", angle=3.4196087627856704, mph=17.0, rpm=350.0,
+                            rotation=77.99200056425856, tilt=12.0)
 
 #: The common leaves of issue 22 (pins standing), the pins whose mean is the aim point, and the
 #: 3-6-9 system's move of the feet in boards (+ towards the hand side, as the system's "right").
@@ -78,7 +81,7 @@ def leave_pins(name: str) -> list[int]:
 
 #: The coarse table that starts :func:`aim_entry`'s search: foul boards, axis rotations (more
 #: rotation hooks harder: the entry angle's knob) and launch angles.
-TABLE_FOUL = (STRIKE_FOUL, 18.0, 22.0, 26.0)
+TABLE_FOUL = (16.0, STRIKE_FOUL, 23.0, 26.0)
 TABLE_ROTATION = tuple(range(10, 91, 10))
 TABLE_ANGLE = tuple(np.arange(-1.0, 5.01, 0.5))
 
@@ -404,6 +407,6 @@ def pocket_figure(pm: PocketMap, *, title: str = ""):
         ax.set_yticks(pm.angles)
     fig.legend(*axs[0].get_legend_handles_labels(), loc="outside lower center", fontsize=8)
     fig.colorbar(im, ax=list(axs), label="strike probability", shrink=0.9)
-    fig.suptitle(title or "Pocket map from the foul line (house oil, 17 mph, 300 rpm, default release noise)",
+    fig.suptitle(title or "Pocket map from the foul line (house oil, 17 mph, 350 rpm, default release noise)",
                  fontsize=11)
     return fig

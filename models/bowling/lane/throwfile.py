@@ -5,8 +5,10 @@ and a ball maker's units; ``nbst bowl frame -o THROW.json`` writes it, ``nbst bo
 runs it again (:func:`replay_file`) and compares the pins down::
 
     {"format": "nbst-bowling-throw", "version": 1,
-     "oil": "house",                       # a pattern name of oil_patterns.json
-     "ball": Ball.to_dict(),               # weight_lb, rg, diff, friction (USBC limits)
+     "scene": "lane-2",                    # the lane scene it was thrown on (absent: "lane-1")
+     "oil": "house",                       # the pattern's name
+     "oil_pattern": Pattern.to_dict(),     # the pattern itself (a pattern file's content)
+     "ball": Ball.to_dict(),               # weight_lb, rg, diff, friction, intdiff, layout, absorb_s
      "delivery": Delivery.to_dict(),       # hand, board, at, angle, mph, rpm, rotation, tilt
      "standing": [1, ..., 10],             # pins in play before the throw
      "requested": {"down": [...]} | null,  # what the thrower asked for, if anything
@@ -20,9 +22,19 @@ gave the outcome ``want`` (the pins down counted as a success; for ``bowl frame`
 play: a strike or the spare), ``p = k/n`` and its 95 % Wilson interval ``[lo, hi]``, and how
 often each leave came up. ``ladder`` is the same delivery thrown at each timestep of the
 engine-robustness ladder, and whether it ``kept`` the outcome there (the same pins left as the
-outcome's; files written before ``kept`` existed lack it and still load). A frame is replayed
-with :func:`.frame.run_frame` at the outcome's ``timestep`` and the default oil friction
-(:data:`.lane.MU_OIL`); it is deterministic, so the pins down are the file's.
+outcome's; files written before ``kept`` existed lack it and still load). A frame is replayed with :func:`.frame.run_frame` at the outcome's
+``timestep`` on a fresh lane of the file's own pattern with the lane's oil law
+(:data:`.lane.LAW`); it is deterministic, so the pins down are the file's. The outcome of one
+throw is a sample: the probability (under the release noise) is the result; a throw whose
+outcome holds at h = 1, 0.5 and 0.25 ms is one a replay on another machine also keeps.
+
+**Scenes.** A file names the lane scene it was thrown on (``scene``); a file without one was
+thrown on ``lane-1``, issue 22's scene (MuJoCo's soft friction on boxes of relative oil). A
+throw is replayed only on its own scene: :func:`replay` refuses any other in one line (its
+outcome stands as recorded), while :func:`load` and :func:`load_atlas` still read it (the
+shipped foul-line atlas was grown on lane-1: its throws start searches, they are not answers).
+A lane-1 file names a registered pattern and a ball of four fields (weight, RG, differential,
+coverstock); the fields added since take their defaults.
 
 A **throw atlas** is ``{"format": "nbst-bowling-throw-atlas", "version": 1, "oil", "ball",
 "noise", "throws": [throw, ...]}``: every throw on the atlas's oil and ball, its probability
@@ -39,6 +51,9 @@ beyond the schema are ignored, as in 5 m throw files. The 5 m throw files of
 
 Compute apart from I/O: :func:`throw_dict`, :func:`check_throw`, :func:`replay` take values;
 :func:`load`, :func:`load_atlas` and :func:`replay_file` read files; nothing here writes.
+
+Length: two file formats (a throw and an atlas of them), their writers and their field-by-field
+checkers belong together (the schema is read in one place); ~560 lines.
 """
 from __future__ import annotations
 
@@ -49,6 +64,8 @@ from nbst.models.bowling import files, lane, scene
 from nbst.models.bowling.lane import frame, noise as _noise
 
 FORMAT = "nbst-bowling-throw"
+#: Scenes a file may name; a file without ``scene`` was thrown on the first.
+SCENES = ("lane-1", lane.SCENE)
 ATLAS_FORMAT = "nbst-bowling-throw-atlas"
 VERSION = 1
 #: The most throws an atlas holds: one per subset of a full rack (1,023) and per spare leave
@@ -69,12 +86,15 @@ ThrowFileError = files.BowlingFileError
 (every bowling file's error: one ``except`` catches them all)."""
 
 BALL_KEYS = tuple(asdict(lane.Ball()))
+#: The ball of lane-1 files: the fields before issue 34 (the others take their defaults).
+BALL_KEYS_1 = ("weight_lb", "rg", "diff", "friction")
 DELIVERY_KEYS = tuple(asdict(lane.Delivery()))
 OUTCOME_KEYS = ("down", "leave", "settled", "settle_s", "cap_hit", "board_at_pins", "entry_angle_deg", "timestep")
 ESTIMATE_KEYS = ("k", "n", "p", "lo", "hi", "seed", "noise", "leaves", "want")
-THROW_KEYS = ("format", "version", "oil", "ball", "delivery", "standing", "requested", "outcome", "probability",
-              "ladder")
-ATLAS_KEYS = ("format", "version", "oil", "ball", "noise", "throws")
+THROW_KEYS = ("format", "version", "scene", "oil", "oil_pattern", "ball", "delivery", "standing", "requested",
+              "outcome", "probability", "ladder")
+ATLAS_KEYS = ("format", "version", "scene", "oil", "oil_pattern", "ball", "noise", "throws")
+ATLAS_REQUIRED = ("format", "version", "oil", "ball", "noise", "throws")
 FULL_RACK = list(scene.PIN_NUMBERS)
 
 _fail = files.fail
@@ -113,8 +133,9 @@ def throw_dict(result: frame.FrameResult, *, oil: str, ball=None, requested=None
     if result.extra_s:
         raise ValueError(f"result: ran {result.extra_s:g} s past the settle; a throw file records the frame "
                          f"as it settled (extra_s 0), which is what a replay runs")
-    if result.oil != oil:
-        raise ValueError(f"oil: {oil!r} is not the frame's oil {result.oil!r}")
+    pat = lane.pattern(oil)
+    if result.oil != pat.name:
+        raise ValueError(f"oil: {pat.name!r} is not the frame's oil {result.oil!r}")
     ball_d = _as_dict(ball if ball is not None else lane.Ball())
     if not isinstance(ball_d, dict) or set(ball_d) != set(BALL_KEYS):
         raise ValueError(f"ball: must be a lane.Ball (or its dict: {', '.join(BALL_KEYS)}), got {ball!r}")
@@ -133,7 +154,9 @@ def throw_dict(result: frame.FrameResult, *, oil: str, ball=None, requested=None
     d = {
         "format": FORMAT,
         "version": VERSION,
-        "oil": oil,
+        "scene": lane.SCENE,
+        "oil": pat.name,
+        "oil_pattern": pat.to_dict(),
         "ball": {k: ball_d[k] for k in BALL_KEYS},
         "delivery": {k: result.delivery[k] for k in DELIVERY_KEYS},
         "standing": list(result.in_play),
@@ -151,11 +174,13 @@ def throw_dict(result: frame.FrameResult, *, oil: str, ball=None, requested=None
         raise ValueError(str(e).removeprefix("throw: ")) from None
 
 
-def atlas_dict(throws, *, oil: str, ball=None, noise=None) -> dict:
+def atlas_dict(throws, *, oil, ball=None, noise=None) -> dict:
     """A throw atlas of ``throws`` (throw dicts, kept in the order given) on ``oil`` and
     ``ball``, with probabilities under ``noise`` (:class:`.noise.Noise` or its dict; default
     :data:`.noise.DEFAULT`). Checked (:func:`check_atlas`); ValueError names the field."""
-    a = {"format": ATLAS_FORMAT, "version": VERSION, "oil": oil,
+    pat = lane.pattern(oil)
+    a = {"format": ATLAS_FORMAT, "version": VERSION, "scene": lane.SCENE, "oil": pat.name,
+         "oil_pattern": pat.to_dict(),
          "ball": _as_dict(ball if ball is not None else lane.Ball()),
          "noise": _as_dict(noise if noise is not None else _noise.DEFAULT), "throws": list(throws)}
     try:
@@ -171,8 +196,13 @@ def _ordered(d: dict, keys) -> dict:
     return out
 
 
+OIL_KEYS = ("format", "version", "name", "description", "forward", "reverse")
+
+
 def _ordered_throw(t: dict) -> dict:
     t = _ordered(t, THROW_KEYS)
+    if isinstance(t.get("oil_pattern"), dict):
+        t["oil_pattern"] = _ordered(t["oil_pattern"], OIL_KEYS)
     for k, keys in (("ball", BALL_KEYS), ("delivery", DELIVERY_KEYS), ("outcome", OUTCOME_KEYS),
                     ("probability", ESTIMATE_KEYS)):
         if isinstance(t.get(k), dict):
@@ -191,6 +221,8 @@ def dumps(d: dict) -> str:
     back). ValueError on a non-finite number."""
     if d.get("format") == ATLAS_FORMAT:
         d = _ordered(d, ATLAS_KEYS)
+        if isinstance(d.get("oil_pattern"), dict):
+            d["oil_pattern"] = _ordered(d["oil_pattern"], OIL_KEYS)
         d["ball"] = _ordered(d["ball"], BALL_KEYS) if isinstance(d.get("ball"), dict) else d.get("ball")
         d["noise"] = _ordered(d["noise"], _noise.KEYS) if isinstance(d.get("noise"), dict) else d.get("noise")
         d["throws"] = [_ordered_throw(t) if isinstance(t, dict) else t for t in d.get("throws", [])]
@@ -280,8 +312,9 @@ def _lane_value(make, src, field: str):
 
 
 def check_ball(b, src, field: str = "ball") -> lane.Ball:
-    """The :class:`.lane.Ball` of a ball object, within USBC's limits; ThrowFileError otherwise."""
-    _object(b, src, field, BALL_KEYS)
+    """The :class:`.lane.Ball` of a ball object, within USBC's limits; ThrowFileError otherwise.
+    The fields added since lane-1 (:data:`BALL_KEYS_1`) may be missing: they take their defaults."""
+    _object(b, src, field, BALL_KEYS_1)
     _exact_keys(b, BALL_KEYS, src, field)
     return _lane_value(lambda: lane.Ball(**b).check(), src, field)
 
@@ -301,11 +334,33 @@ def check_noise(n, src, field: str = "noise") -> _noise.Noise:
     return _lane_value(lambda: _noise.Noise(**n).check(), src, field)
 
 
-def check_oil(oil, src, field: str = "oil") -> str:
-    pats = lane.load_patterns()
-    if not isinstance(oil, str) or oil not in pats:
-        _fail(src, field, f"no oil pattern {json.dumps(oil)[:40]}; patterns: {', '.join(sorted(pats))}")
-    return oil
+def check_scene(d: dict, src, field: str = "scene") -> str:
+    """The scene a file names (absent: "lane-1"), one of :data:`SCENES`."""
+    sc = d.get("scene", SCENES[0])
+    if sc not in SCENES:
+        _fail(src, field, f"unknown lane scene {json.dumps(sc)[:40]}; this nbst knows {', '.join(SCENES)}")
+    return sc
+
+
+def check_oil(d: dict, src, pre: str = "") -> lane.Pattern:
+    """The pattern a file names: its own ``oil_pattern`` (a pattern file's content, whose name
+    must be ``oil``) or, without one, a registered pattern's name."""
+    oil = d.get("oil")
+    if not isinstance(oil, str):
+        _fail(src, pre + "oil", f"must be a pattern's name, got {json.dumps(oil)[:40]}")
+    embedded = d.get("oil_pattern")
+    if embedded is None:
+        if oil not in lane.PATTERNS:
+            _fail(src, pre + "oil", f"no oil pattern {json.dumps(oil)[:40]} (and no oil_pattern); patterns: "
+                                    f"{', '.join(lane.PATTERNS.names())}")
+        return lane.PATTERNS[oil]
+    try:
+        pat = lane.pattern_from_dict(embedded, f"{src}: {pre}oil_pattern")
+    except lane.LaneError as e:
+        raise ThrowFileError(str(e)) from None
+    if pat.name != oil:
+        _fail(src, pre + "oil", f"{oil!r} is not the name of its oil_pattern {pat.name!r}")
+    return pat
 
 
 def _check_timestep(d: dict, key: str, src, field: str) -> float:
@@ -365,7 +420,8 @@ def check_throw(d, src, pre: str = "") -> dict:
         _fail(src, bad[0], f"must be a finite number, got {bad[1]}")
     if d["version"] != VERSION or isinstance(d["version"], bool):
         _fail(src, pre + "version", f"this nbst reads version {VERSION}, got {json.dumps(d['version'])[:40]}")
-    check_oil(d["oil"], src, pre + "oil")
+    check_scene(d, src, pre + "scene")
+    check_oil(d, src, pre)
     check_ball(d["ball"], src, pre + "ball")
     check_delivery(d["delivery"], src, pre + "delivery")
     standing = _pin_list(d["standing"], src, pre + "standing", empty=False)
@@ -421,7 +477,7 @@ def check_atlas(a, src) -> dict:
     atlas's noise, no two throws with the same pins standing and down. Returns ``a``."""
     if not isinstance(a, dict) or a.get("format") != ATLAS_FORMAT:
         _fail(src, "", f"not an nbst bowling throw atlas (format must be {ATLAS_FORMAT!r})")
-    for k in ATLAS_KEYS:
+    for k in ATLAS_REQUIRED:
         if k not in a:
             _fail(src, k, "missing")
     if a["version"] != VERSION or isinstance(a["version"], bool):
@@ -429,7 +485,8 @@ def check_atlas(a, src) -> dict:
     bad = files.non_finite({k: a[k] for k in ("ball", "noise")}, "")
     if bad:
         _fail(src, bad[0], f"must be a finite number, got {bad[1]}")
-    check_oil(a["oil"], src)
+    scene_ = check_scene(a, src)
+    check_oil(a, src)
     ball = check_ball(a["ball"], src)
     nz = check_noise(a["noise"], src)
     throws = a["throws"]
@@ -439,6 +496,8 @@ def check_atlas(a, src) -> dict:
     for i, t in enumerate(throws):
         pre = f"throws[{i}]."
         check_throw(t, src, pre)
+        if t.get("scene", SCENES[0]) != scene_:
+            _fail(src, pre + "scene", f"{t.get('scene', SCENES[0])!r} is not the atlas's scene {scene_!r}")
         if t["oil"] != a["oil"]:
             _fail(src, pre + "oil", f"{t['oil']!r} is not the atlas's oil {a['oil']!r}")
         if lane.Ball(**t["ball"]) != ball:
@@ -482,22 +541,41 @@ def lookup(atlas: dict, down) -> dict | None:
     return None
 
 
-def replay(d: dict, *, model=None) -> frame.FrameResult:
+def replayable(d: dict, src="throw") -> None:
+    """Nothing if the checked throw ``d`` was thrown on this nbst's scene; else ThrowFileError,
+    one line: a throw replays only on the scene it names."""
+    sc = d.get("scene", SCENES[0])
+    if sc != lane.SCENE:
+        _fail(src, "scene", f"thrown on the {sc} lane scene (issue 22's soft-contact friction on relative oil); this "
+                            f"nbst runs {lane.SCENE} (Coulomb friction from the oil film) and does not replay it: its "
+                            f"outcome stands as recorded")
+
+
+def oil_of(d: dict) -> lane.Pattern:
+    """The pattern of a checked throw dict."""
+    return check_oil(d, "throw")
+
+
+def replay(d: dict, *, model=None, src="throw") -> frame.FrameResult:
     """Run the throw of a checked throw dict again: :func:`.frame.run_frame` with its delivery,
-    oil, ball and pins standing at the outcome's timestep (``model``: a compiled
-    :func:`.frame.frame_model` of the same oil, ball and timestep, to reuse)."""
-    return frame.run_frame(lane.Delivery(**d["delivery"]), d["oil"], lane.Ball(**d["ball"]), standing=d["standing"],
+    pattern (a fresh lane), ball and pins standing at the outcome's timestep (``model``: a
+    compiled :func:`.frame.frame_model` of the same ball and timestep, to reuse). A throw of
+    another scene is refused (:func:`replayable`)."""
+    replayable(d, src)
+    return frame.run_frame(lane.Delivery(**d["delivery"]), oil_of(d), lane.Ball(**d["ball"]), standing=d["standing"],
                            timestep=float(d["outcome"]["timestep"]), model=model)
 
 
 def replay_file(path) -> tuple[dict, frame.FrameResult, bool]:
     """(throw dict, the replayed frame, whether its pins down are the file's) of a throw file.
-    MuJoCo's warnings (a diverging state) become a ThrowFileError naming the file."""
+    MuJoCo's warnings (a diverging state) become a ThrowFileError naming the file; a throw of
+    another scene is refused in one line."""
     from nbst.errors import MujocoError
 
     d = load(path)
+    replayable(d, path)
     try:
-        r = replay(d)
+        r = replay(d, src=path)
     except MujocoError as e:
         raise ThrowFileError(f"{path}: delivery: {e}") from None
     return d, r, r.down == sorted(d["outcome"]["down"])
