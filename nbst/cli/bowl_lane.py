@@ -49,9 +49,9 @@ def register_frame(bowl) -> None:
     """``nbst bowl frame``, ``spares`` and ``pocket``: frames from the foul line (models/bowling/frame.py)."""
     f = bowl.add_parser("frame", help="one delivery from the foul line into the pins: the settled USBC pinfall",
                         description="Throw one delivery (as bowl throw) down the full lane into the pins and run "
-                                    "MuJoCo until every pin rests (or 6 s after the ball reaches the head pin), then "
-                                    "count pinfall as USBC does: knocked down, off the deck, in the gutter, or "
-                                    "leaning on the kickback (dead wood). Options: the timestep ladder, a longer "
+                                    "MuJoCo until every pin rests (or until the pinsetter's sweep, 2.6 s after the "
+                                    "ball reaches the head pin), then count pinfall as USBC does: knocked down, off "
+                                    "the deck, in the gutter, or leaning on the kickback (dead wood). Options: the timestep ladder, a longer "
                                     "run, and the probability of the outcome under release noise (docs/bowling.md).",
                         epilog="Example: nbst bowl frame --board 10 --at arrows --angle 1.5 --timesteps --probability 40")
     delivery_flags(f)
@@ -281,15 +281,15 @@ def frame_lines(doc: dict) -> list[str]:
         out.append("gutter ball   the ball left the lane before the pins: no pinfall (USBC 6b.1)")
     if r["board_at_pins"] is not None:
         out.append(f"entry         board {r['board_at_pins']:.1f} at {r['entry_angle_deg']:.1f} deg")
-    out.append(f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: the cap was hit at %.2f s' % r['seconds']}"
+    out.append(f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: counted at the sweep, %.2f s' % r['seconds']}"
                f" (ball at the head pin {r['ball_at_pins_s']:.2f} s)" if r["ball_at_pins_s"] is not None else
-               f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: capped'}")
+               f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: counted at the sweep'}")
     if "longer" in doc:
         g = doc["longer"]
         out.append(f"{g['extra_s']:g} s longer  leave {pins_text(g['leave'])}: {'same' if g['same'] else 'CHANGED'}")
     for x in doc.get("ladder", []):
         out.append(f"h = {1000 * x['timestep']:g} ms".ljust(14) + f"leave {pins_text(x['leave'])}"
-                   + (f", settled at {x['settle_s']:.2f} s" if x["settle_s"] is not None else ", capped"))
+                   + (f", settled at {x['settle_s']:.2f} s" if x["settle_s"] is not None else ", counted at the sweep"))
     if "probability" in doc:
         e = doc["probability"]
         top = ", ".join(f"{k or 'none'} {v}" for k, v in list(e["leaves"].items())[:5])
