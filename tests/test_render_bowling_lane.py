@@ -249,8 +249,10 @@ def test_cli_writes_a_still_and_an_mp4_with_the_expected_frames(gl, throw, tmp_p
 
     png, mp4 = tmp_path / "t.png", tmp_path / "t.mp4"
     # the fixture's delivery, given at the foul line (--at arrows would be aimed along the ball's path)
-    assert main(["bowl", "throw", "--board", repr(TYPICAL.foul_board()), "--at", "foul", "--still", str(png),
-                 "--size", "320x180", "--video", str(mp4), "--fps", "8"]) == 0
+    assert main(["bowl", "throw", "--board", repr(TYPICAL.foul_board()), "--at", "foul", "--angle", repr(TYPICAL.angle),
+                 "--mph", repr(TYPICAL.mph), "--rpm", repr(TYPICAL.rpm), "--rotation", repr(TYPICAL.rotation),
+                 "--tilt", repr(TYPICAL.tilt), "--still", str(png), "--size", "320x180", "--video", str(mp4),
+                 "--fps", "8"]) == 0
     assert Image.open(png).size == (320, 180)
     expected = len(bt.frame_times(throw, 8.0))
     reader = imageio_ffmpeg.read_frames(str(mp4))
