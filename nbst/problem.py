@@ -51,6 +51,14 @@ class KernelArrays(NamedTuple):
     R: float
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only view of ``a``: the kernels see one array type (numba compiles a writable and a
+    read-only array as two signatures), whether the problem came from a file or from the constructor."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
 @dataclass(frozen=True, eq=False)
 class Problem:
     """A validated problem. Arrays are read-only. Build one with :func:`load_problem` or
@@ -112,7 +120,7 @@ class Problem:
         R as floats."""
         ka = self.__dict__.get("_kernel_arrays")
         if ka is None:
-            start, target, radius, mass = (np.ascontiguousarray(a, dtype=np.float64)
+            start, target, radius, mass = (_read_only(np.ascontiguousarray(a, dtype=np.float64))
                                            for a in (self.start, self.target, self.radius, self.mass))
             ka = KernelArrays(start, target, radius, mass, float(self.box[0]), float(self.box[1]),
                               float(self.t_final), float(self.target_radius))
