@@ -418,7 +418,7 @@ class Renderer3D(FrameRenderer):
         self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
-        from nbst.render.scene2d import trail_capsules
+        from nbst.render.motion2d import trail_capsules
         return trail_capsules(self.motion, t, self.trail_half, self.colors, min_step=np.sqrt(1e-9))  # world units
 
     def release(self) -> None:

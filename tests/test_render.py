@@ -10,7 +10,8 @@ import pytest
 
 from nbst import load_problem, simulate
 from nbst.render import style
-from nbst.render.scene2d import Layout, Renderer2D, SampledMotion, trail_points
+from nbst.render.motion2d import SampledMotion, trail_points
+from nbst.render.scene2d import Layout, Renderer2D
 
 SIZE = (480, 360)
 
@@ -898,7 +899,7 @@ def test_trails_are_exact_segments_between_each_disks_own_events(thousand):
     ends on the exact motion, its midpoint lies on it too (straight flight between a disk's
     events), and there are N + (disk appearances in events inside the window) segments at
     most, not N x (all events)."""
-    from nbst.render.scene2d import trail_segments
+    from nbst.render.motion2d import trail_segments
 
     p, tr = thousand
     t, w = 2.5, style.TRAIL_SECONDS

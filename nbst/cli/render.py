@@ -234,7 +234,7 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
     try:
         motion, ghost = tr, None
         if args.source in ("mujoco", "both"):
-            from nbst.render.scene2d import SampledMotion
+            from nbst.render.motion2d import SampledMotion
             sample_t = np.unique(np.concatenate((times, frame_times(problem.t_final, 120.0))))
             if bar is not None:
                 bar.note(f"replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo")
