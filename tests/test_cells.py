@@ -44,6 +44,7 @@ def _read_only(a):
 
 def record(kernel, work, args, cap=500_000):
     x0, v, rad, mass, W, H, tf = args
+    v = _read_only(np.array(v, dtype=np.float64))  # as simulate hands them over: read-only
     n = x0.shape[0]
     fin, vel = np.empty((n, 2)), np.empty((n, 2))
     et, ei, ej, es = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, 8))

@@ -98,8 +98,16 @@ def test_images_are_every_image_within_the_bounce_range():
     assert images(0, 5).shape == (61, 2)
 
 
+def _read_only(a):
+    """A read-only float64 copy: the arrays a Problem hands the kernel (the signature the warm-up compiled)."""
+    a = np.array(a, dtype=np.float64)
+    a.flags.writeable = False
+    return a
+
+
 def _record(x0, v0, radius, mass, W, H, t_final, cap=20000):
     n = len(x0)
+    x0, v0, radius, mass = (_read_only(a) for a in (x0, v0, radius, mass))
     ev_t, ev_i, ev_j, ev_s = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty((cap, 8))
     final, vel = np.empty((n, 2)), np.empty((n, 2))
     st, n_ev, n_dd, n_w = run(x0, v0, radius, mass, W, H, t_final, alloc_work(n), final, vel, 10 ** 6, ev_t, ev_i,
