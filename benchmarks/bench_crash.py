@@ -103,6 +103,11 @@ def _solve(sc, seed, budget):
     return r, time.perf_counter() - t0, time.process_time() - c0
 
 
+def _met_at(r) -> str:
+    """When a search first met the script at its own step (before the ladder's verdict)."""
+    return "never met at 2 ms" if r.first_met is None else f"met at 2 ms after {r.first_met} rollouts"
+
+
 def chain() -> None:
     import numpy as np
 
@@ -115,7 +120,7 @@ def chain() -> None:
         n = r.rollouts if r.best.accepted else None
         got.append(n if n is not None else float("inf"))
         first.append(r.first_met if r.first_met is not None else float("inf"))
-        print(f"  seed {seed}: met at 2 ms after {r.first_met} rollouts; "
+        print(f"  seed {seed}: {_met_at(r)}; "
               f"{'met on the ladder (1, 0.5 ms too) after ' + str(n) if n else 'never on the ladder in 1500'} "
               f"(best cost {r.best.cost:.3g}, signature {r.best.outcome.signature_text(3)}), {wall:.0f} s wall, "
               f"{cpu:.0f} s CPU", flush=True)
@@ -134,7 +139,7 @@ def planted() -> None:
         r, wall, cpu = _solve(sc, 1, 3000)
         ok = r.best.accepted
         solved += ok
-        print(f"  planted {100 + k}: {len(d['order'])} contacts; met at 2 ms after {r.first_met}; "
+        print(f"  planted {100 + k}: {len(d['order'])} contacts; {_met_at(r)}; "
               f"{'solved (on the ladder) in ' + str(r.rollouts) if ok else 'NOT solved on the ladder'}"
               f" (best cost {r.best.cost:.3g}, signature {r.best.outcome.signature_text(3)}), {wall:.0f} s wall",
               flush=True)
