@@ -201,7 +201,7 @@ HOSTILE = [
     (_set(("probability", "k"), 5), "probability.k", "at most n"),
     (_set(("probability", "n"), 4.0), "probability.n", "whole number"),
     (_set(("probability", "seed"), -1), "probability.seed", "outside"),
-    (_set(("probability", "noise", "rpm"), 100.0), "probability.noise.rpm", "standard deviation"),
+    (_set(("probability", "noise", "rpm"), 300.0), "probability.noise.rpm", "standard deviation"),
     (_set(("probability", "leaves"), {"": 1}), "probability.leaves", "add up"),
     (_set(("probability", "leaves"), {"x": 4}), 'probability.leaves["x"]', "joined by '-'"),
     (lambda d: d["probability"].__setitem__("leaves", {"": (d["probability"]["k"] + 1) % 5,

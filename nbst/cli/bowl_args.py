@@ -183,3 +183,25 @@ def check_picture_args(args) -> str | None:
 def wants_picture(args) -> bool:
     """Whether any picture flag (--video, --still, --still-time, --size, --fps) was given."""
     return any(getattr(args, a, None) is not None for a in ("video", "still", "still_time", "size", "fps"))
+
+
+#: The bowler profiles (models/bowling/lane/profiles.py; a test checks the two lists agree).
+BOWLERS = ("pro", "league200", "league150", "twohander")
+#: The delivery flags' defaults: --bowler refuses a delivery flag moved from them.
+_DELIVERY_DEFAULTS = {"board": 10.0, "at": "arrows", "angle": 1.5, "mph": 17.0, "rpm": 300.0, "rotation": 45.0,
+                      "tilt": 15.0, "angle_sigma": 0.15}
+
+
+def bowler_of(args):
+    """(the delivery, the noise) of --bowler, or (None, None) without it; ValueError (one line) when a
+    delivery flag is given with it."""
+    if getattr(args, "bowler", None) is None:
+        return None, None
+    from nbst.models.bowling.lane import profiles
+
+    moved = [k for k, v in _DELIVERY_DEFAULTS.items() if getattr(args, k) != v]
+    if moved:
+        raise ValueError(f"--bowler: sets the release and its noise; drop --{moved[0].replace('_', '-')}")
+    p = profiles.profile(args.bowler)
+    k = float(args.noise_scale)
+    return p.delivery(args.hand), profiles.scaled(p.noise, k)

@@ -14,8 +14,8 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import (ball_flags, ball_of, check_picture_args, delivery_flags, delivery_of, err, mc_flags,
-                                oil_flag, picture_flags, pin_list, pins_text, wants_picture)
+from nbst.cli.bowl_args import (BOWLERS, ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
+                                delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, wants_picture)
 from nbst.parallel import default_jobs
 
 
@@ -56,6 +56,12 @@ def register_frame(bowl) -> None:
                         epilog="Example: nbst bowl frame --board 10 --at arrows --angle 1.5 --timesteps --probability 40")
     delivery_flags(f)
     ball_flags(f)
+    f.add_argument("--bowler", default=None, choices=BOWLERS,
+                   help="throw a bowler profile's strike ball (its release and line, aimed at board 17.5 on the "
+                        "fresh house shot) and, with --probability, its correlated release noise (times "
+                        "--noise-scale): pro 18.6 mph 436 rpm, league200 17 mph 350 rpm, league150 15.5 mph 250 rpm, "
+                        "twohander 18 mph 520 rpm (docs/bowling.md); --hand mirrors it; the other delivery flags "
+                        "may not be given with it")
     f.add_argument("--leave", default=None, metavar="PINS",
                    help="pins standing before the throw, e.g. 10 or 2,4,5,8 (default: a full rack)")
     f.add_argument("--timesteps", action="store_true", help="also run it at h = 0.5 and 0.25 ms (the ladder)")
@@ -205,7 +211,8 @@ def cmd_frame(args) -> int:
 
     try:
         ball = ball_of(args)
-        d = lane.aim_at_arrows(delivery_of(args), args.oil, ball)  # --at arrows: along the ball's real path
+        bd, bnz = bowler_of(args)
+        d = bd if bd is not None else lane.aim_at_arrows(delivery_of(args), args.oil, ball)  # --at arrows: real path
         standing = None if args.leave is None else sorted(
             n for n in range(1, 11) if pin_list(args.leave, "--leave") >> (n - 1) & 1)
         if args.output:
@@ -227,8 +234,8 @@ def cmd_frame(args) -> int:
             bar = _bar(args, args.probability, "noisy throws")
             k = float(args.noise_scale)
             D = noise.DEFAULT
-            nz = noise.Noise(board=D.board * k, angle=args.angle_sigma * k, mph=D.mph * k, rpm=D.rpm * k,
-                             rotation=D.rotation * k, tilt=D.tilt * k)
+            nz = bnz if bnz is not None else noise.Noise(board=D.board * k, angle=args.angle_sigma * k, mph=D.mph * k,
+                                                         rpm=D.rpm * k, rotation=D.rotation * k, tilt=D.tilt * k)
             with frame.FrameRunner(args.oil, ball, jobs=args.jobs or default_jobs()) as R:
                 est, _ = noise.probability(d, args.probability, args.seed, runner=R, standing=standing, noise=nz,
                                            on_done=lambda: bar.update(1))

@@ -16,6 +16,7 @@ settled and counted as USBC counts pinfall (:mod:`.frame`). Modules, from the bo
 * :mod:`.phases` -- the ball alone down the lane (:func:`throw`, :class:`ThrowResult`);
 * :mod:`.frame` -- a throw into the pins, settled, USBC pinfall (:func:`.frame.run_frame`);
 * :mod:`.noise` -- the release noise and the probability of an outcome;
+* :mod:`.profiles` -- bowler profiles: a strike ball and a correlated release noise each;
 * :mod:`.robust` -- the delivery most likely to give an outcome;
 * :mod:`.spares` -- aiming, the pocket map, the best delivery at each spare;
 * :mod:`.atlas` -- the atlas from the foul line (one delivery per subset, its probability);

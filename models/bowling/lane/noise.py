@@ -11,7 +11,12 @@ standard deviations in :data:`DEFAULT`):
   as a bowler who "hits the mark" does; at the pins, 60 ft out, it alone spreads the ball
   by 1.8 boards;
 * **speed**: 0.3 mph; **rev rate**: 15 rpm; **axis rotation**: 5 deg (issue 22's figures);
-* **axis tilt**: 0 (held; an option).
+* **axis tilt**: 0 (held; an option);
+* **correlations** (optional, 0 by default: independent draws): speed with revs
+  (``corr_mph_rpm``) and axis rotation with revs (``corr_rotation_rpm``), for the bowler
+  profiles (:mod:`.profiles`). The standard normal draws are mixed by the Cholesky factor of the
+  correlation matrix before they are scaled; with both at 0 the draws are the independent ones,
+  bit for bit, and :meth:`Noise.to_dict` leaves the two fields out (files as before).
 
 Draws are clipped to the delivery's limits (rotation and tilt to [0, 90] deg, board to
 [1, 39]). Everything is drawn from one ``numpy`` generator seeded by the caller, in a fixed
@@ -31,6 +36,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
+import numpy as np
 
 from nbst.models.bowling import lane
 from nbst.models.bowling.lane import frame
@@ -50,19 +56,46 @@ class Noise:
     rpm: float = 15.0
     rotation: float = 5.0
     tilt: float = 0.0
+    corr_mph_rpm: float = 0.0
+    corr_rotation_rpm: float = 0.0
 
     def check(self) -> Noise:
         for k, v in asdict(self).items():
-            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or not 0 <= v <= 20:
-                raise ValueError(f"noise.{k}: a standard deviation must be a number in [0, 20], got {v!r}")
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+                raise ValueError(f"noise.{k}: must be a finite number, got {v!r}")
+            if k in CORR_KEYS:
+                if not -0.9 <= v <= 0.9:
+                    raise ValueError(f"noise.{k}: a correlation must be in [-0.9, 0.9], got {v!r}")
+            elif not 0 <= v <= (200 if k == "rpm" else 20):
+                raise ValueError(f"noise.{k}: a standard deviation must be a number in [0, "
+                                 f"{200 if k == 'rpm' else 20}], got {v!r}")
+        if self.corr_mph_rpm ** 2 + self.corr_rotation_rpm ** 2 >= 0.99:
+            raise ValueError(f"noise.corr_rotation_rpm: with corr_mph_rpm {self.corr_mph_rpm:g} the correlations "
+                             f"must have squares summing below 0.99 (a valid correlation matrix)")
         return self
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        for k in CORR_KEYS:  # independent noise: the fields of files written before they existed
+            if d[k] == 0.0:
+                del d[k]
+        return d
+
+    def mix(self, draws):
+        """(n, 6) independent standard normal ``draws`` (columns :data:`KEYS`) made correlated as
+        stated (the Cholesky factor of the correlation matrix); unchanged when both are 0."""
+        if self.corr_mph_rpm == 0.0 and self.corr_rotation_rpm == 0.0:
+            return draws
+        c = np.eye(len(KEYS))
+        i, j, k = KEYS.index("mph"), KEYS.index("rpm"), KEYS.index("rotation")
+        c[i, j] = c[j, i] = self.corr_mph_rpm
+        c[k, j] = c[j, k] = self.corr_rotation_rpm
+        return np.asarray(draws) @ np.linalg.cholesky(c).T
 
 
-DEFAULT = Noise()
 KEYS = ("board", "angle", "mph", "rpm", "rotation", "tilt")
+CORR_KEYS = ("corr_mph_rpm", "corr_rotation_rpm")
+DEFAULT = Noise()
 
 
 def sample(delivery: lane.Delivery, n: int, seed: int, noise: Noise = DEFAULT) -> list[lane.Delivery]:
@@ -72,7 +105,7 @@ def sample(delivery: lane.Delivery, n: int, seed: int, noise: Noise = DEFAULT) -
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"samples: must be a whole number >= 1, got {n!r}")
     base = replace(delivery, board=delivery.foul_board(), at="foul")
-    draws = normal_draws(seed, n, len(KEYS))  # a fixed order: row per throw, column per key
+    draws = noise.mix(normal_draws(seed, n, len(KEYS)))  # a fixed order: row per throw, column per key
     X = perturb([getattr(base, k) for k in KEYS], [getattr(noise, k) for k in KEYS], draws,
                 [CLIP[k][0] for k in KEYS], [CLIP[k][1] for k in KEYS])
     return [replace(base, **{k: float(v) for k, v in zip(KEYS, row)}) for row in X]

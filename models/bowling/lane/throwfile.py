@@ -330,7 +330,7 @@ def check_delivery(d, src, field: str = "delivery") -> lane.Delivery:
 
 def check_noise(n, src, field: str = "noise") -> _noise.Noise:
     _object(n, src, field, _noise.KEYS)
-    _exact_keys(n, _noise.KEYS, src, field)
+    _exact_keys(n, _noise.KEYS + _noise.CORR_KEYS, src, field)
     return _lane_value(lambda: _noise.Noise(**n).check(), src, field)
 
 

@@ -1,0 +1,69 @@
+"""Bowler profiles (issue 34): the correlated release noise and each profile's strike ball."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from nbst.models.bowling import lane
+from nbst.models.bowling.lane import noise, profiles, throwfile
+
+
+def test_the_correlated_draws_have_the_stated_sigmas_and_correlations():
+    nz = profiles.PRO_NOISE
+    base = lane.Delivery(board=20, at="foul", angle=0.0, mph=17, rpm=350, rotation=45, tilt=12)
+    xs = noise.sample(base, 4000, 7, nz)
+    a = np.array([[getattr(d, k) for k in noise.KEYS] for d in xs])
+    sd = a.std(axis=0)
+    for k, s in zip(noise.KEYS, sd):  # within 4 standard errors (se of a sd: sigma / sqrt(2n))
+        assert abs(s - getattr(nz, k)) <= 4 * getattr(nz, k) / np.sqrt(2 * 4000) + 1e-12, k
+    c = np.corrcoef(a.T)
+    i, j, r = noise.KEYS.index("mph"), noise.KEYS.index("rpm"), noise.KEYS.index("rotation")
+    assert c[i, j] == pytest.approx(0.5, abs=0.05) and c[r, j] == pytest.approx(-0.3, abs=0.05)
+    assert abs(c[0, 1]) < 0.05  # board and launch angle stay independent
+
+
+def test_independent_noise_draws_and_writes_as_before():
+    base = lane.Delivery(board=20, at="foul", angle=1.0)
+    draws = np.random.default_rng(3).standard_normal((5, 6))
+    assert noise.DEFAULT.mix(draws) is draws  # no correlation: the draws untouched, bit for bit
+    assert set(noise.DEFAULT.to_dict()) == set(noise.KEYS)  # the files of before
+    assert noise.sample(base, 3, 1) == noise.sample(base, 3, 1, replace(noise.DEFAULT, corr_mph_rpm=0.0))
+    with pytest.raises(ValueError, match="noise.corr_mph_rpm"):
+        replace(noise.DEFAULT, corr_mph_rpm=0.95).check()
+    with pytest.raises(ValueError, match="noise.corr_rotation_rpm"):
+        replace(noise.DEFAULT, corr_mph_rpm=0.8, corr_rotation_rpm=0.7).check()
+    d = profiles.PRO_NOISE.to_dict()
+    assert throwfile.check_noise(d, "t.json") == profiles.PRO_NOISE
+
+
+@pytest.mark.parametrize("name", profiles.NAMES)
+def test_each_profiles_strike_ball_reaches_the_pocket_board_on_the_house_shot(name):
+    r = lane.throw(profiles.profile(name).strike, "house")
+    assert r.board_at_pins == pytest.approx(17.5, abs=0.1)  # boards (aimed to 0.05 by phases.aim_angle)
+    assert 1.5 <= r.entry_angle_deg <= 6.5
+
+
+def test_the_cli_knows_the_profiles_and_refuses_a_delivery_flag_beside_one():
+    from nbst.cli import bowl_args
+
+    assert bowl_args.BOWLERS == profiles.NAMES
+    out = subprocess.run([sys.executable, "-m", "nbst.cli", "bowl", "frame", "--bowler", "pro", "--board", "20"],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1 and "drop --board" in out.stderr
+    with pytest.raises(ValueError, match="--bowler: no profile"):
+        profiles.profile("amateur")
+
+
+@pytest.mark.slow
+def test_bowl_frame_throws_the_profiles_strike_ball_and_records_its_noise(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "nbst.cli", "bowl", "frame", "--bowler", "pro", "--probability", "2",
+                          "--jobs", "1", "-o", "t.json"], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    d = throwfile.load(tmp_path / "t.json")
+    assert lane.Delivery(**d["delivery"]) == profiles.profile("pro").strike
+    assert d["probability"]["noise"] == profiles.PRO_NOISE.to_dict()
