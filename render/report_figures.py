@@ -42,6 +42,19 @@ def _figure(size):
     return Figure(figsize=size, layout="constrained")
 
 
+def _box_figure(p):
+    """A figure of the problem's box to scale (the overlay's both forms): (figure, its axes)."""
+    from matplotlib.patches import Rectangle
+
+    fig = _figure((6.5, 6.5 * p.height / p.width + 0.4))
+    ax = fig.add_subplot(1, 1, 1)
+    ax.set_xlim(-0.02 * p.width, 1.02 * p.width)
+    ax.set_ylim(-0.02 * p.height, 1.02 * p.height)
+    ax.set_aspect("equal")
+    ax.add_patch(Rectangle((0, 0), p.width, p.height, fill=False, lw=1.5, color="0.3"))
+    return fig, ax
+
+
 def overlay_figure(val):
     """Trajectories, in nbst's visual language (:mod:`nbst.palette`): exact paths in a
     shade of each disk's class colour (solid cueable, dashed noncueable), MuJoCo's
@@ -49,8 +62,6 @@ def overlay_figure(val):
     final position a thin outline circle (MuJoCo's dotted black), its target a small
     hollow circle numbered with the disk, with the dotted neighbourhood of radius R.
     The legend sits below the box."""
-    from matplotlib.patches import Rectangle
-
     from nbst.render.figures import (circle_handle, draw_final, draw_start, draw_target, legend_below,
                                      line_handle, mark_handles)
 
@@ -62,12 +73,7 @@ def overlay_figure(val):
     ts = np.union1d(ts, ex.events["time"])
     xe = ex.at(ts)
     xm = mj.at(ts)
-    fig = _figure((6.5, 6.5 * p.height / p.width + 0.4))
-    ax = fig.add_subplot(1, 1, 1)
-    ax.set_xlim(-0.02 * p.width, 1.02 * p.width)
-    ax.set_ylim(-0.02 * p.height, 1.02 * p.height)
-    ax.set_aspect("equal")
-    ax.add_patch(Rectangle((0, 0), p.width, p.height, fill=False, lw=1.5, color="0.3"))
+    fig, ax = _box_figure(p)
     shades = palette.disk_shades(p.cueable)
     mj_ink = palette.hex_color(palette.INK)
     for i in range(p.n):
@@ -106,7 +112,7 @@ def _overlay_many(val):
     largest final error are numbered, with their MuJoCo path dotted black over a thicker exact path
     and their final positions as outline circles."""
     from matplotlib.collections import LineCollection, PatchCollection
-    from matplotlib.patches import Circle, Rectangle
+    from matplotlib.patches import Circle
 
     from nbst.problem import display_name
     from nbst.render.figures import circle_handle, legend_below, line_handle
@@ -115,12 +121,7 @@ def _overlay_many(val):
     ex, mj = val.exact, val.mujoco
     # the exact paths are straight between events: their keyframes plus t_final draw them exactly
     ts = np.union1d(np.linspace(0.0, p.t_final, 200), ex.events["time"])
-    fig = _figure((6.5, 6.5 * p.height / p.width + 0.4))
-    ax = fig.add_subplot(1, 1, 1)
-    ax.set_xlim(-0.02 * p.width, 1.02 * p.width)
-    ax.set_ylim(-0.02 * p.height, 1.02 * p.height)
-    ax.set_aspect("equal")
-    ax.add_patch(Rectangle((0, 0), p.width, p.height, fill=False, lw=1.5, color="0.3"))
+    fig, ax = _box_figure(p)
     cols = [palette.hex_color(c) for c in palette.class_colors(p.cueable)]
     lw = float(np.clip(60.0 / np.sqrt(p.n), 0.25, 1.0))
     xe = ex.at(ts)  # (T, N, 2): T ~ 200 + events (48 MB at 1,000 disks and 3,000 events)
