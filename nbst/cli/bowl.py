@@ -37,8 +37,15 @@ DESCRIPTION = (
     "atlas), clamped to what a bowler can throw.")
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "bowl": "10-pin bowling in MuJoCo: find a delivery that knocks down given pins",
+}
+
+
 def register(sub) -> None:
-    p = sub.add_parser("bowl", help="10-pin bowling in MuJoCo: find a delivery that knocks down given pins",
+    p = sub.add_parser("bowl", help=COMMANDS["bowl"],
                        description=DESCRIPTION)
     bowl = p.add_subparsers(dest="bowl_command", metavar="SUBCOMMAND", parser_class=type(p))
     p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])

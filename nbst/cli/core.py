@@ -9,15 +9,23 @@ from nbst.problem import builtin_names, load_problem
 from nbst.solution import load_solution
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "problems": "list the built-in problems, or show one",
+    "simulate": "simulate a solution exactly and report where the disks end",
+}
+
+
 def register(sub) -> None:
-    p = sub.add_parser("problems", help="list the built-in problems, or show one",
+    p = sub.add_parser("problems", help=COMMANDS["problems"],
                        description="List the built-in problems (name, disks, cueable, radius, box, t_final, R), "
                                    "or print one as JSON with `nbst problems NAME` (or `nbst problems show NAME`).")
     p.add_argument("words", nargs="*", metavar="[show] NAME",
                    help="print this problem's JSON (a built-in name or a path); `show` is optional")
     p.set_defaults(func=cmd_problems)
 
-    p = sub.add_parser("simulate", help="simulate a solution exactly and report where the disks end",
+    p = sub.add_parser("simulate", help=COMMANDS["simulate"],
                        description="Simulate PROBLEM with the initial velocities in SOLUTION (a solution JSON "
                                    "file, e.g. from `nbst solve`) and report final positions, L2 cost, signature "
                                    "(1 = disk ends within R of its target), order and event counts. Cost, "

@@ -18,8 +18,15 @@ ROBUST = Bounded("robust", 12, 1_000_000, integer=True)
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "crash": "a multi-vehicle crash on MuJoCo: script it, solve it, replay it, reconstruct one",
+}
+
+
 def register(sub) -> None:
-    p = sub.add_parser("crash", help="a multi-vehicle crash on MuJoCo: script it, solve it, replay it, reconstruct one",
+    p = sub.add_parser("crash", help=COMMANDS["crash"],
                        description="The paper's second challenge (docs/crash.md): several vehicles, each driven by "
                                    "a partially autonomous driver, crash as a script says (whom each hits and in what "
                                    "order, its impact speed or delta-V, where it ends up and facing where, how it "

@@ -55,8 +55,15 @@ def _common(p, *, runs: int, trials: int, entries: str) -> None:
     p.add_argument("--json", action="store_true", help="print the summary rows as JSON instead of a table")
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "experiment": "curves, ablation and comparisons of the search and baselines",
+}
+
+
 def register(sub) -> None:
-    p = sub.add_parser("experiment", help="curves, ablation and comparisons of the search and baselines",
+    p = sub.add_parser("experiment", help=COMMANDS["experiment"],
                        description="Run many independent searches and summarize them: best-so-far cost curves "
                                    "(the paper's Figures 5/6), the ablation of variants A-H plus nbst and the "
                                    "baselines (Figures 7/8), and success rates over problem sets. Finished runs "

@@ -29,9 +29,15 @@ LONG_STAGE_S = 1.0
 ANNOUNCE_SIMULATION_FROM = 1000
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "generate": "make a problem with a known exact solution: planted, or a formation (text/image)",
+}
+
+
 def register(sub) -> None:
-    p = sub.add_parser(
-        "generate", help="make a problem with a known exact solution: planted, or a formation (text/image)",
+    p = sub.add_parser("generate", help=COMMANDS["generate"],
         description="Make a problem whose exact solution is known. --planted N: random starts and cue velocities "
                     "(each noncueable disk is struck by a cueable one), simulated exactly; the targets are where "
                     "the disks end, and the file carries the planted velocities under \"planted\". "

@@ -4,9 +4,12 @@ Exit codes: 0 success, 1 a check failed (e.g. ``validate --strict``), 2 bad inpu
 or usage (one line on stderr, never a traceback), 130 interrupted.
 
 Each feature registers its own subcommands: a module listed in ``COMMAND_MODULES``
-defines ``register(subparsers)``, which adds parsers whose ``func(args) -> int``
-does the work. Registration must stay light (no mujoco/moderngl/numba import):
-heavy imports go inside ``func``.
+defines ``COMMANDS`` (its top-level command names and their help lines) and
+``register(subparsers)``, which adds parsers whose ``func(args) -> int`` does the work.
+Registration must stay light (no mujoco/moderngl/numba import): heavy imports go
+inside ``func``. A run builds the arguments of the command asked for only; the other
+commands are listed by name and help line (``nbst --help`` builds none), so a command's
+registry lookups (solver, variant, oil-pattern names) cost nothing to the others.
 """
 from __future__ import annotations
 
@@ -43,7 +46,11 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {plain(message)} (see `{self.prog} --help`)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``nbst`` parser. ``only=None`` builds every command's arguments (the docs and the
+    tests walk them); ``only="NAME"`` builds that command's module and lists the other
+    commands by name and help line; ``only=""`` lists them all, building none (``nbst --help``).
+    The listing is the same either way (tests/test_cli_lazy.py)."""
     parser = _Parser(
         prog="nbst",
         description="N-body spacetime constraints: find initial velocities that bring N colliding disks "
@@ -54,10 +61,19 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"nbst {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMAND_MODULES:
-        if importlib.util.find_spec(name) is None:  # feature not built yet
-            continue
-        importlib.import_module(name).register(sub)
+        module = importlib.import_module(name)
+        if only is None or only in module.COMMANDS:
+            module.register(sub)
+        else:
+            for command, line in module.COMMANDS.items():
+                sub.add_parser(command, help=line, add_help=False)
     return parser
+
+
+def asked_command(argv: list[str]) -> str:
+    """The command named in ``argv`` (the first word that is not an option: the top-level
+    options take no value), or "" when there is none."""
+    return next((word for word in argv if not word.startswith("-")), "")
 
 
 def main(argv=None) -> int:
@@ -74,8 +90,9 @@ def main(argv=None) -> int:
     guard = interrupt_once()
     guard.__enter__()
     try:
-        parser = build_parser()
-        args = parser.parse_args(argv)
+        words = sys.argv[1:] if argv is None else list(argv)
+        parser = build_parser(only=asked_command(words))
+        args = parser.parse_args(words)
         if not getattr(args, "func", None):
             parser.print_help(sys.stderr)
             return 2

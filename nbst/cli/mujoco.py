@@ -34,8 +34,17 @@ def _add_scene_options(p) -> None:
 MJCF_PROGRESS_MIN_N = 2000
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "mjcf": "write the MuJoCo scene (MJCF XML) of a problem and solution",
+    "validate": "run a solution in MuJoCo and compare it with the exact simulator",
+    "gallery": "regenerate the MuJoCo scene gallery (models/scenes/NAME/)",
+}
+
+
 def register(sub) -> None:
-    p = sub.add_parser("mjcf", help="write the MuJoCo scene (MJCF XML) of a problem and solution",
+    p = sub.add_parser("mjcf", help=COMMANDS["mjcf"],
                        description="Write PROBLEM (and the initial velocities of SOLUTION, as keyframe `initial`) "
                                    "as a MuJoCo MJCF scene built with mujoco.MjSpec: zero gravity, four walls, "
                                    "each disk a body with x/y slide joints and a frictionless elastic sphere, "
@@ -51,7 +60,7 @@ def register(sub) -> None:
     add_quiet(p, f"no progress line (shown from {MJCF_PROGRESS_MIN_N:,} disks) and no status line")
     p.set_defaults(func=cmd_mjcf)
 
-    p = sub.add_parser("validate", help="run a solution in MuJoCo and compare it with the exact simulator",
+    p = sub.add_parser("validate", help=COMMANDS["validate"],
                        description="Run SOLUTION in MuJoCo to t_final and compare with nbst's exact simulator: "
                                    "per-disk final position error, cost and signature under each, the collision "
                                    "sequences matched in order (time offsets), kinetic energy drift, and the first "
@@ -90,7 +99,7 @@ def register(sub) -> None:
                         "order (log-log plot in report.html). H/32 takes 32x the steps of H")
     p.set_defaults(func=cmd_validate)
 
-    p = sub.add_parser("gallery", help="regenerate the MuJoCo scene gallery (models/scenes/NAME/)",
+    p = sub.add_parser("gallery", help=COMMANDS["gallery"],
                        description="For each built-in problem (or the NAMEs given) write "
                                    "DIR/NAME/{problem.json, solution.json, scene.xml, preview.png}. The solution is "
                                    "the better of DIR/NAME/solution.json (if present) and a fresh `nbst.search."

@@ -20,9 +20,16 @@ DPI = Bounded("dpi", 10, 1200, integer=True)
 SIZE = Size()
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "render": "render a solution's motion to MP4, GIF or a PNG still (headless OpenGL)",
+    "plot": "draw the paper's figures (problem; trajectories) with matplotlib",
+}
+
+
 def register(sub) -> None:
-    p = sub.add_parser(
-        "render", help="render a solution's motion to MP4, GIF or a PNG still (headless OpenGL)",
+    p = sub.add_parser("render", help=COMMANDS["render"],
         description="Render the motion of PROBLEM under the initial velocities in SOLUTION: disks\n"
                     "(amber cueable, blue noncueable), target markers, target rings of radius R that\n"
                     "light up while their disk is inside, a time readout. Positions are exact at every\n"
@@ -76,7 +83,7 @@ def register(sub) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("plot", help="draw the paper's figures (problem; trajectories) with matplotlib",
+    p = sub.add_parser("plot", help=COMMANDS["plot"],
                        description="Figures in the manner of the paper: `plot problem` as its Figures 1-2 (disks "
                                    "at their starts, small circles at the targets, arrows start -> target, broken "
                                    "for noncueable disks); `plot trajectories` as its Figures 3-4 (each disk's path, "

@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 from nbst.cli.args import JOBS, MAX_TRIALS, SEED, TARGET_COST, TRIALS_MAX, Bounded, with_limits
 from nbst.cli.flags import add_seed
-from nbst.search.variants import DEFAULT_VARIANT
 from nbst.warmup import COLD_COMPILE_SECONDS
 
 PATIENCE = Bounded("patience", 0, TRIALS_MAX, integer=True)
@@ -25,12 +24,18 @@ def _algorithm_help() -> str:
             "docs/experiments.md): " + SOLVERS.help_text())
 
 
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "solve": "find initial velocities that bring every disk to its target",
+}
+
+
 def register(sub) -> None:
     from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, VARIANTS
     from nbst.solvers import SIGNATURE, SOLVERS
 
-    p = sub.add_parser(
-        "solve", help="find initial velocities that bring every disk to its target",
+    p = sub.add_parser("solve", help=COMMANDS["solve"],
         description="Search for initial velocities that bring every disk of PROBLEM to its target at t_final "
                     "(nbst's search by default; the paper's signature-based evolutionary search with --variant A, "
                     "or one of its simplified variants B-H), "
@@ -135,7 +140,7 @@ def _options(args, problem) -> _Options:
     overwrite its input) and the options that apply to the solver asked for."""
     from nbst.outputs import prepare_output
     from nbst.problem import ProblemError
-    from nbst.search.variants import roundoff_cost
+    from nbst.search.variants import DEFAULT_VARIANT, roundoff_cost
     from nbst.solvers import SIGNATURE, SOLVERS
 
     prepare_output(args.output, inputs=(args.problem,))
