@@ -185,6 +185,17 @@ def _pin_moving(model, data, in_play_idx) -> bool:
     return False
 
 
+def _entry(prev, pos, vel, hand: str) -> tuple[float, float]:
+    """(entry board, entry angle in degrees) where the ball crossed the deck front between the
+    step before (``prev``: its position and velocity) and now (``pos``, ``vel``), interpolated
+    linearly; the board is where that line meets the pins' row, as a bowler reads it."""
+    f = (scene.DECK_FRONT_X - prev[0][0]) / (pos[0] - prev[0][0])
+    y = prev[0][1] + f * (pos[1] - prev[0][1])
+    v = prev[1] + f * (vel - prev[1])
+    board = float(lane.y_to_board(y - v[1] / v[0] * scene.DECK_FRONT_X, hand))
+    return board, float(math.degrees(math.atan2(lane.hand_sign(hand) * v[1], v[0])))
+
+
 def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = None, *,
               standing=None, timestep: float = TIMESTEP, extra_s: float = 0.0, law: lane.OilLaw = lane.LAW,
               field: lane.OilField | None = None, model=None, record=None) -> FrameResult:
@@ -265,12 +276,7 @@ def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = Non
                 record(d)
         bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
         if bx >= scene.DECK_FRONT_X and prev[0][0] < scene.DECK_FRONT_X and abs(by) < half:
-            f = (scene.DECK_FRONT_X - prev[0][0]) / (bx - prev[0][0])
-            y = prev[0][1] + f * (by - prev[0][1])
-            v = prev[1] + f * (d.qvel[bv:bv + 3] - prev[1])
-            s = lane.hand_sign(delivery.hand)
-            board = float(lane.y_to_board(y - v[1] / v[0] * scene.DECK_FRONT_X, delivery.hand))
-            angle = float(math.degrees(math.atan2(s * v[1], v[0])))
+            board, angle = _entry(prev, d.qpos[bq:bq + 3], d.qvel[bv:bv + 3], delivery.hand)
         prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
         d.xfrc_applied[:] = 0.0
         while True:
@@ -279,12 +285,7 @@ def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = Non
             if t_pins is None and bx < 0.0 and abs(by) > half and bx < scene.DECK_FRONT_X:
                 left_lane = True
             if board is None and bx >= scene.DECK_FRONT_X and prev[0][0] < scene.DECK_FRONT_X and not left_lane:
-                f = (scene.DECK_FRONT_X - prev[0][0]) / (bx - prev[0][0])
-                y = prev[0][1] + f * (by - prev[0][1])
-                v = prev[1] + f * (d.qvel[bv:bv + 3] - prev[1])
-                s = lane.hand_sign(delivery.hand)
-                board = float(lane.y_to_board(y - v[1] / v[0] * scene.DECK_FRONT_X, delivery.hand))
-                angle = float(math.degrees(math.atan2(s * v[1], v[0])))
+                board, angle = _entry(prev, d.qpos[bq:bq + 3], d.qvel[bv:bv + 3], delivery.hand)
             if t_pins is None and bx >= 0.0:
                 t_pins = float(d.time)
                 cap = t_pins + CAP_AFTER_PINS
