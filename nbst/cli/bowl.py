@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import sys
 
-from nbst.cli import bowl_deck, bowl_foul, bowl_lane
+from nbst.cli import bowl_deck, bowl_foul, bowl_lane, bowl_series
 from nbst.cli.args import SEED, with_limits
 from nbst.cli.bowl_args import err, leave, picture_flags, pins_down, runner_args, wants_picture
 from nbst.cli.flags import add_out_dir, add_seed
@@ -138,6 +138,7 @@ def register(sub) -> None:
     a.set_defaults(func=cmd_atlas)
 
     bowl_lane.register(bowl)
+    bowl_series.register(bowl)
 
 
 def cmd_solve(args) -> int:

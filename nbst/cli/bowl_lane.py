@@ -16,6 +16,7 @@ from pathlib import Path
 from nbst.cli.args import Bounded
 from nbst.cli.bowl_args import (BOWLERS, ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
                                 delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, wants_picture)
+from nbst.cli.bowl_series import path_plot_flag, write_path_plot
 from nbst.parallel import default_jobs
 
 
@@ -41,6 +42,7 @@ def register_throw(bowl) -> None:
     ball_flags(t)
     t.add_argument("-o", "--output", default=None, metavar="THROW.json", help="also write the phases as JSON")
     t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
+    path_plot_flag(t)
     picture_flags(t, "the throw's frame on all ten pins (as bowl frame runs it)")
     t.set_defaults(func=cmd_throw)
 
@@ -148,7 +150,7 @@ def cmd_throw(args) -> int:
     from nbst.outputs import prepare_output
 
     for option, path in (("-o", args.output), ("--video", getattr(args, "video", None)),
-                         ("--still", getattr(args, "still", None))):
+                         ("--still", getattr(args, "still", None)), ("--path-plot", args.path_plot)):
         if path:  # before the throw: a link, a FIFO or a folder is refused in one line
             prepare_output(path, option=option)
     try:
@@ -162,6 +164,9 @@ def cmd_throw(args) -> int:
         if bad:
             return err("throw", bad)
     doc = r.to_dict()
+    bad = write_path_plot(args.path_plot, [r], oil=args.oil) if args.path_plot else None
+    if bad:
+        return err("throw", bad)
     if args.output:
         from nbst.outputs import OutputError, write_text_atomic
         from nbst.solution import dumps_strict

@@ -20,6 +20,7 @@ settled and counted as USBC counts pinfall (:mod:`.frame`). Modules, from the bo
 * :mod:`.robust` -- the delivery most likely to give an outcome;
 * :mod:`.spares` -- aiming, the pocket map, the best delivery at each spare;
 * :mod:`.atlas` -- the atlas from the foul line (one delivery per subset, its probability);
+* :mod:`.transition` -- games in order on one lane that every ball wears (lane transition, moves);
 * :mod:`.throwfile` -- throw files and throw atlases, checked input.
 
 This package re-exports the foundation's names (units, oil, ball, delivery, scene, phases), so

@@ -42,7 +42,7 @@ from nbst.models.bowling import files, scene
 from nbst.models.bowling.lane.units import BOARD_WIDTH, FT, N_BOARDS, LaneError, x_to_ft
 from nbst.registry import Registry
 
-__all__ = ["MU_OIL", "MU_DRY", "FORMAT", "PATTERNS_DIR", "PATTERNS", "DX_FT", "NX", "Pass", "Pattern", "OilLaw",
+__all__ = ["MU_OIL", "MU_DRY", "FORMAT", "PATTERNS_DIR", "PATTERNS", "DX_FT", "NX", "CELL_AREA", "Pass", "Pattern", "OilLaw",
            "LAW", "OilField", "load_pattern", "pattern_from_dict", "pattern", "oil_name"]
 
 #: Friction of a full oil film (Frohlich's figure, as scene.MU_OIL) and of the dry lane for

@@ -1,0 +1,377 @@
+"""Lane transition: games bowled in order on one lane whose oil every ball wears (issue 34).
+
+* **The lane** is one :class:`.oil.OilField`, fresh from the pattern at the start of a run.
+  Every ball (strike and spare balls alike) is a frame of :func:`.frame.run_frame` on it: its
+  track takes oil onto the cover and lays some down where the lane is drier than the cover's
+  ring (carry-down past the pattern's end), the cover absorbs part of it, and the bowler wipes
+  the ball before the next throw (each ball starts with a dry cover; :mod:`.friction`). The
+  grid is the lane's own, not the hand's, so a left-hander plays the mirrored side: fresh oil
+  for the other hand.
+* **The bowlers** (:func:`lineup`): a profile (:mod:`.profiles`), ``n`` bowlers alternating
+  frames as in league play, a share of them left-handed. Each throws the profile's strike ball
+  (the line it was aimed on over the fresh house shot) with the profile's correlated release
+  noise, drawn from its own stream (``seed``, bowler): the same seed gives the same releases
+  whether the bowler moves or not (common random numbers, a paired comparison).
+* **Spares**: the straight spare ball (:data:`SPARE_BALL`, 17 mph, 200 rpm) through the middle
+  of the leave, from across the lane, aimed once per leave on the fresh pattern (the
+  bowler's spare system), under the same noise.
+* **Moves** (``move``): ``"none"`` keeps the line; ``"auto"`` reads where the last
+  :data:`MOVE_AFTER` strike balls crossed the head pin's line and, when their mean is more than
+  :data:`MOVE_MISS` boards high (left of the pocket for a right-hander) or light, makes the
+  coach's "2 and 1" move: feet 2 boards and target 1 board in the same direction (in when high,
+  out when light). Measured on the house shot, one such move shifts the pro's ball at the pins by
+  1.6-2.5 boards (docs/bowling.md).
+* **Readings**: each ball's board and entry angle at the pins (the frame's), its breakpoint
+  (the ball alone, :func:`.phases.throw`, on a copy of the lane as it was: the same ball path),
+  whether a strike ball hit the pocket (:data:`POCKET`: boards 16.5-18.5, issue 34's window),
+  the pins, and the oil it moved. :func:`summary` gives the per-game figures per hand, and
+  :func:`score` USBC's score of a bowler's game.
+
+A run is a plain dict (the series file's ``runs`` entries, :func:`series_dict`); :class:`Run`
+builds it ball by ball, so an interrupted run keeps every finished ball. Compute only: no files
+written, no printing.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from nbst.models.bowling import lane, scene
+from nbst.models.bowling.lane import frame, noise, phases, profiles
+from nbst.models.bowling.lane.oil import DX_FT, NX, OilField, OilLaw, pattern
+
+__all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS",
+           "SPARE_BALL", "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
+           "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws"]
+
+FORMAT = "nbst-bowling-series"
+VERSION = 1
+MOVES = ("none", "auto")
+#: A strike ball hits the pocket when it crosses the head pin's line on these boards (issue 34's window).
+POCKET = (16.5, 18.5)
+TARGET_BOARD = 17.5
+#: "2 and 1": feet and target boards of one move.
+MOVE_FEET, MOVE_TARGET = 2.0, 1.0
+#: A move follows the mean of the last MOVE_AFTER strike balls missing by more than MOVE_MISS boards.
+MOVE_AFTER, MOVE_MISS = 3, 1.0
+SPARE_BALL = dict(mph=17.0, rpm=200.0, rotation=0.0, tilt=0.0)
+MAX_GAMES, MAX_LINEUP = 30, 8
+#: Paths are kept every PATH_FT ft; oil maps rounded to MAP_DECIMALS (um).
+PATH_FT = 0.5
+MAP_DECIMALS = 6
+#: Draws per bowler and game: at most 21 balls (9 frames x 2 + 3 in the tenth).
+_ROWS_PER_GAME = 21
+
+
+class TransitionError(lane.LaneError):
+    """Bad input to a series: one line naming the field."""
+
+
+@dataclass(frozen=True)
+class Bowler:
+    """One bowler of the lineup: the profile's strike ball for ``hand`` and its noise."""
+
+    index: int
+    hand: str
+    strike: lane.Delivery
+    noise: noise.Noise
+
+
+def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0) -> list[Bowler]:
+    """``n`` bowlers of ``profile``, ``lefty_share`` of them left-handed (a whole number of them;
+    the left-handers bowl after the right-handers in each frame)."""
+    p = profiles.profile(profile)
+    if not (isinstance(n, int) and 1 <= n <= MAX_LINEUP):
+        raise TransitionError(f"lineup: must be a whole number of bowlers in 1..{MAX_LINEUP}, got {n!r}")
+    if not (isinstance(lefty_share, (int, float)) and 0.0 <= lefty_share <= 1.0):
+        raise TransitionError(f"lefty-share: must be a share in [0, 1], got {lefty_share!r}")
+    lefties = lefty_share * n
+    if abs(lefties - round(lefties)) > 1e-9:
+        raise TransitionError(f"lefty-share: {lefty_share:g} of {n} bowler{'s' if n > 1 else ''} is {lefties:g} "
+                              f"left-handers; give a share that makes a whole number (e.g. --lineup 4 --lefty-share 0.25)")
+    k = int(round(lefties))
+    nz = profiles.scaled(p.noise, float(noise_scale)).check()
+    return [Bowler(i, "left" if i >= n - k else "right", p.delivery("left" if i >= n - k else "right"), nz)
+            for i in range(n)]
+
+
+def _arrow_board(d: lane.Delivery) -> float:
+    return d.foul_board() - math.tan(math.radians(d.angle)) * lane.ARROWS_FT * lane.FT / lane.BOARD_WIDTH
+
+
+def moved(strike: lane.Delivery, feet: float, target: float) -> lane.Delivery:
+    """``strike`` with the feet moved ``feet`` boards and the target arrow ``target`` boards, in the
+    bowler's own boards (+: in, away from the hand's gutter): the foul-line board and the launch
+    angle of the line through the two."""
+    fb = strike.foul_board() + feet
+    ab = _arrow_board(strike) + target
+    angle = math.degrees(math.atan((fb - ab) * lane.BOARD_WIDTH / (lane.ARROWS_FT * lane.FT)))
+    return replace(strike, board=float(fb), at="foul", angle=float(angle))
+
+
+def move_for(boards) -> int:
+    """The bowler's move after strike balls that crossed the head pin's line on ``boards`` (the
+    latest last; None for a ball that never got there): +1 "2 and 1" in (the last MOVE_AFTER hit
+    high on average), -1 out (light), 0 stay."""
+    last = [b for b in list(boards)[-MOVE_AFTER:] if b is not None]
+    if len(last) < MOVE_AFTER:
+        return 0
+    miss = float(np.mean(last)) - TARGET_BOARD
+    return 1 if miss > MOVE_MISS else -1 if miss < -MOVE_MISS else 0
+
+
+def spare_line(pins, hand: str, oil, ball: lane.Ball | None = None) -> lane.Delivery:
+    """The straight spare ball (:data:`SPARE_BALL`) through the middle of ``pins``, from across the
+    lane, its launch angle corrected once so the ball alone on the fresh ``oil`` crosses the head
+    pin's line where the straight line does."""
+    spots = scene.pin_spots()
+    x, y = np.mean([spots[p - 1] for p in pins], axis=0)
+    b_aim = float(lane.y_to_board(y, hand))
+    foul = float(np.clip(40.0 - b_aim, 6.0, 34.0))
+    y_f = float(lane.board_to_y(foul, hand))
+    dx = x - lane.FOUL_LINE_X
+    angle = math.degrees(math.atan2(-lane.hand_sign(hand) * (y - y_f), dx))
+    want = float(lane.y_to_board(y_f + (y - y_f) * (0 - lane.FOUL_LINE_X) / dx, hand))
+    d = lane.Delivery(hand=hand, board=foul, at="foul", angle=angle, **SPARE_BALL).check()
+    try:
+        got = phases.throw(d, oil, ball).board_at_pins
+    except lane.LaneError:
+        return d
+    per_deg = math.radians(1.0) * (0 - lane.FOUL_LINE_X) / lane.BOARD_WIDTH
+    return replace(d, angle=float(np.clip(angle + (got - want) / per_deg, -10, 10)))
+
+
+def score(rolls) -> list[int]:
+    """USBC's running score after each frame of a game, from its rolls (pins down per ball, in order)."""
+    rolls = list(rolls)
+    out, total, i = [], 0, 0
+    for _ in range(10):
+        if i >= len(rolls):
+            break
+        if rolls[i] == 10:
+            total += 10 + sum(rolls[i + 1:i + 3])
+            i += 1
+        elif i + 1 < len(rolls) and rolls[i] + rolls[i + 1] == 10:
+            total += 10 + sum(rolls[i + 2:i + 3])
+            i += 2
+        else:
+            total += sum(rolls[i:i + 2])
+            i += 2
+        out.append(total)
+    return out
+
+
+def film_along(field: OilField, ft: np.ndarray, board: np.ndarray, hand: str, at_ft: float) -> float:
+    """The film (um) on ``field`` under a path (``ft``, ``board`` in ``hand``'s boards) at ``at_ft``."""
+    b = phases.board_at(np.asarray(ft), np.asarray(board), at_ft)
+    y = float(lane.board_to_y(b, hand))
+    i = min(max(int(math.floor((y + scene.LANE_WIDTH / 2) / lane.BOARD_WIDTH)), 0), lane.N_BOARDS - 1)
+    return float(field.h[i, min(int(at_ft / DX_FT), NX - 1)])
+
+
+def _path(r: phases.ThrowResult) -> dict:
+    ft = np.arange(0.0, r.path["ft"][-1], PATH_FT)
+    return {"ft": [float(v) for v in ft], "board": [round(float(v), 3) for v in np.interp(ft, r.path["ft"], r.path["board"])]}
+
+
+def _map(field: OilField) -> list:
+    return [[round(float(v), MAP_DECIMALS) for v in row] for row in field.h]
+
+
+class Run:
+    """One run of a series: ``games`` games by ``bowlers`` on one lane of ``oil``, moving as ``move``
+    says. :meth:`play` adds every ball to :attr:`balls` as it finishes (an interrupted run keeps
+    them); :meth:`to_dict` is the run as the series file holds it."""
+
+    def __init__(self, bowlers: list[Bowler], games: int, seed: int, move: str = "none", oil="house",
+                 ball: lane.Ball | None = None, law: OilLaw = lane.LAW):
+        if move not in MOVES:
+            raise TransitionError(f"move: must be one of {', '.join(MOVES)}, got {move!r}")
+        if not (isinstance(games, int) and 1 <= games <= MAX_GAMES):
+            raise TransitionError(f"games: must be a whole number in 1..{MAX_GAMES}, got {games!r}")
+        self.bowlers, self.games, self.seed, self.move = bowlers, games, int(seed), move
+        self.pattern = pattern(oil)
+        self.ball = (ball or lane.Ball()).check()
+        self.law = law.check(self.ball.friction)
+        self.field = OilField.fresh(self.pattern)
+        self.before = _map(self.field)
+        self._done = self.field.h.copy()  # the lane after the last finished ball
+        self.balls: list[dict] = []
+        self.rolls = {(b.index, g): [] for b in bowlers for g in range(games)}
+        self.lines = {b.index: [0.0, 0.0] for b in bowlers}  # feet, target
+        self.readings: dict = {b.index: [] for b in bowlers}
+        self.moves: list[dict] = []
+        self._spares: dict = {}
+        self._draws = {}
+        for b in bowlers:
+            rng = np.random.default_rng([self.seed, b.index])
+            self._draws[b.index] = b.noise.mix(rng.standard_normal((games * _ROWS_PER_GAME, len(noise.KEYS))))
+        self._used = {b.index: 0 for b in bowlers}
+
+    def _noisy(self, b: Bowler, d: lane.Delivery) -> lane.Delivery:
+        row = self._draws[b.index][self._used[b.index]]
+        self._used[b.index] += 1
+        x = noise.perturb([getattr(d, k) for k in noise.KEYS], [getattr(b.noise, k) for k in noise.KEYS], row[None],
+                          [noise.CLIP[k][0] for k in noise.KEYS], [noise.CLIP[k][1] for k in noise.KEYS])[0]
+        return replace(d, **{k: float(v) for k, v in zip(noise.KEYS, x)}).check()
+
+    def _aimed(self, b: Bowler, standing) -> lane.Delivery:
+        if len(standing) == 10:
+            return moved(b.strike, *self.lines[b.index])
+        key = (tuple(standing), b.hand)
+        if key not in self._spares:
+            self._spares[key] = spare_line(standing, b.hand, self.pattern, self.ball)
+        return self._spares[key]
+
+    def _ball(self, b: Bowler, game: int, frame_no: int, roll: int, standing: list) -> dict:
+        d = self._noisy(b, self._aimed(b, standing))
+        full = len(standing) == 10
+        try:  # the ball alone on the lane as it is now (a copy): breakpoint and path
+            t = phases.throw(d, self.pattern, self.ball, law=self.law, field=self.field.copy())
+        except lane.LaneError:
+            t = None
+        r = frame.run_frame(d, self.pattern, self.ball, standing=standing, law=self.law, field=self.field)
+        board = r.board_at_pins
+        rec = {"n": len(self.balls) + 1, "game": game + 1, "frame": frame_no, "roll": roll, "bowler": b.index,
+               "hand": b.hand, "standing": list(standing), "line": list(self.lines[b.index]) if full else None,
+               "delivery": d.to_dict(), "down": r.down, "leave": r.leave, "board_at_pins": board,
+               "entry_angle_deg": r.entry_angle_deg,
+               "breakpoint_ft": None if t is None else t.breakpoint_ft,
+               "breakpoint_board": None if t is None else t.breakpoint_board,
+               "pocket": (board is not None and POCKET[0] <= board <= POCKET[1]) if full else None,
+               "strike": full and not r.leave, "oil": {k: float(v) for k, v in r.oil_ml.items()},
+               "path": _path(t) if (t is not None and full) else None}
+        self.balls.append(rec)
+        self.rolls[(b.index, game)].append(len(r.down))
+        self._done = self.field.h.copy()
+        if full and self.move == "auto":
+            self.readings[b.index].append(board)
+            m = move_for(self.readings[b.index])
+            if m:
+                ln = self.lines[b.index]
+                ln[0] += m * MOVE_FEET
+                ln[1] += m * MOVE_TARGET
+                self.readings[b.index] = []
+                self.moves.append({"after_ball": rec["n"], "bowler": b.index, "feet": ln[0], "target": ln[1]})
+        return rec
+
+    def _frame(self, b: Bowler, game: int, k: int, on_ball) -> None:
+        standing = list(range(1, 11))
+        rolls = 3 if k == 10 else 2
+        for roll in range(1, rolls + 1):
+            rec = self._ball(b, game, k, roll, standing)
+            if on_ball is not None:
+                on_ball(rec)
+            left = rec["leave"]
+            if k < 10:
+                if not left:
+                    return
+                standing = left
+                continue
+            # the tenth frame: a fresh rack after a strike or a spare; a third ball only after one
+            if roll == 1:
+                standing = left or list(range(1, 11))
+            elif roll == 2:
+                first_strike = self.balls[-2]["strike"]
+                if not first_strike and left:
+                    return
+                standing = left or list(range(1, 11))
+
+    def play(self, on_ball=None, on_frame=None) -> None:
+        """Bowl the games: frame by frame, each bowler in turn; ``on_ball(record)`` after each ball
+        and ``on_frame()`` after each bowler's frame."""
+        for g in range(self.games):
+            for k in range(1, 11):
+                for b in self.bowlers:
+                    self._frame(b, g, k, on_ball)
+                    if on_frame is not None:
+                        on_frame()
+
+    def to_dict(self) -> dict:
+        """The run: its settings, every ball, the moves, the oil before and after, the scores and the summary."""
+        scores = {f"{b.index}": [score(self.rolls[(b.index, g)]) for g in range(self.games)] for b in self.bowlers}
+        d = {"move": self.move, "seed": self.seed, "games": self.games,
+             "bowlers": [{"index": b.index, "hand": b.hand, "strike": b.strike.to_dict(), "noise": b.noise.to_dict()}
+                         for b in self.bowlers],
+             "balls": self.balls, "moves": self.moves, "scores": scores,
+             "oil": {"pattern": self.pattern.name, "length_ft": self.pattern.length_ft, "dx_ft": DX_FT,
+                     "before": self.before, "after": _map(OilField(self._done))}}
+        d["summary"] = summary(d)
+        return d
+
+
+def summary(run: dict) -> list[dict]:
+    """Per game and hand: strike balls, pocket hits (and the rate with its 95 % Wilson interval),
+    strikes, the mean breakpoint (ft and board), entry angle and board at the pins, the oil on the
+    lane and past the pattern's end after the game."""
+    out = []
+    for g in sorted({b["game"] for b in run["balls"]}):
+        for hand in ("right", "left"):
+            first = [b for b in run["balls"] if b["game"] == g and b["hand"] == hand and len(b["standing"]) == 10]
+            if not first:
+                continue
+            k = sum(1 for b in first if b["pocket"])
+            lo, hi = noise.wilson(k, len(first))
+
+            def mean(key):
+                v = [b[key] for b in first if b[key] is not None]
+                return float(np.mean(v)) if v else None
+
+            out.append({"game": g, "hand": hand, "strike_balls": len(first), "pocket_hits": k,
+                        "pocket_rate": k / len(first), "pocket_lo": lo, "pocket_hi": hi,
+                        "strikes": sum(1 for b in first if b["strike"]), "breakpoint_ft": mean("breakpoint_ft"),
+                        "breakpoint_board": mean("breakpoint_board"), "entry_angle_deg": mean("entry_angle_deg"),
+                        "board_at_pins": mean("board_at_pins"),
+                        "oil_taken_ml": float(sum(b["oil"]["taken"] for b in run["balls"] if b["game"] == g))})
+    return out
+
+
+def series_dict(runs: list[Run], *, profile: str, lineup_n: int, lefty_share: float, interrupted: bool = False) -> dict:
+    """The series file's content (``format`` :data:`FORMAT`): the settings, then each run."""
+    r0 = runs[0]
+    return {"format": FORMAT, "version": VERSION, "bowler": profile, "lineup": lineup_n, "lefty_share": lefty_share,
+            "games": r0.games, "seed": r0.seed, "oil": r0.pattern.name, "ball": r0.ball.to_dict(),
+            "law": {"mu_oil": r0.law.mu_oil, "h0_um": r0.law.h0_um, "exchange": r0.law.exchange,
+                    "band_in": r0.law.band_in},
+            "pocket_boards": list(POCKET), "interrupted": bool(interrupted), "runs": [r.to_dict() for r in runs]}
+
+
+def check_series(doc, src: str = "<series>") -> dict:
+    """A series file's decoded content, checked enough to draw and summarise; TransitionError naming
+    ``src`` and the field."""
+    if not isinstance(doc, dict):
+        raise TransitionError(f"{src}: a series file must be a JSON object")
+    if doc.get("format") != FORMAT:
+        raise TransitionError(f"{src}: format: must be {FORMAT!r}, got {doc.get('format')!r}")
+    if doc.get("version") != VERSION:
+        raise TransitionError(f"{src}: version: must be {VERSION}, got {doc.get('version')!r}")
+    runs = doc.get("runs")
+    if not isinstance(runs, list) or not runs:
+        raise TransitionError(f"{src}: runs: must be a non-empty list")
+    for k, r in enumerate(runs):
+        for key in ("balls", "oil", "move", "summary"):
+            if not isinstance(r, dict) or key not in r:
+                raise TransitionError(f"{src}: runs[{k}].{key}: missing")
+        m = r["oil"].get("before"), r["oil"].get("after")
+        if any(np.shape(x) != (lane.N_BOARDS, NX) for x in m):
+            raise TransitionError(f"{src}: runs[{k}].oil: before and after must be {lane.N_BOARDS} x {NX} films")
+    return doc
+
+
+def identical_throws(delivery: lane.Delivery, n: int, oil="house", ball: lane.Ball | None = None, *,
+                     at_ft: float = 20.0) -> list[dict]:
+    """``n`` identical throws of ``delivery``, the ball alone, on one lane that they wear: per throw
+    the film (um) under its track at ``at_ft`` before it ran, its board and entry angle at the pins,
+    and the oil (ml) past the pattern's end after it."""
+    pat = pattern(oil)
+    field = OilField.fresh(pat)
+    out = []
+    for _ in range(n):
+        before = field.copy()
+        r = phases.throw(delivery, pat, ball, field=field)
+        out.append({"film_um": film_along(before, r.path["ft"], r.path["board"], delivery.hand, at_ft),
+                    "board_at_pins": r.board_at_pins, "entry_angle_deg": r.entry_angle_deg,
+                    "past_ml": field.ml_past(pat.length_ft), "lane_ml": field.total_ml(), "oil": r.path["oil"]})
+    return out
