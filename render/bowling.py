@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nbst.render import style
-from nbst.render.gl import FrameRenderer, FrameTarget, create_context
+from nbst.render.gl import FrameRenderer, FrameTarget
 from nbst.render.scene3d import look_at, perspective
 
 #: Slow motion around impact: this many times slower from IMPACT_WINDOW[0] s before
@@ -402,23 +402,13 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.video import render_video, write_png
+    from nbst.render.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
-    ctx = create_context()
-    try:
-        r = BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw)
-        try:
-            if still is not None:
-                write_png(output, r.render(float(np.clip(still, 0.0, motion.times[-1]))))
-                return 1
-            fps = float(fps or style.DEFAULT_FPS)
-            times = frame_times(motion, fps) if times is None else times
-            return render_video(r, times, output, fps=fps, progress=progress)
-        finally:
-            r.release()
-    finally:
-        ctx.release()
+    return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw), output,
+                         still=None if still is None else np.clip(still, 0.0, motion.times[-1]),
+                         times=lambda r, fps: frame_times(motion, fps) if times is None else times,
+                         fps=fps, progress=progress)
 
 
 def render_file(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None) -> int:

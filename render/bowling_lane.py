@@ -30,7 +30,7 @@ from nbst.render.bowling_throw import (BEHIND_AHEAD, BEHIND_BACK, BEHIND_FOV, BE
                                        OVERHEAD_FROM_FT, OVERHEAD_SHARE, TRAIL_HALF_WIDTH, TRAIL_HALF_WIDTH_OVERHEAD,
                                        TRAIL_RGB, Throw, ball_texture, frame_times, lane_marks, lane_solids,
                                        ortho_panel, still_time)
-from nbst.render.gl import FrameRenderer, FrameTarget, create_context
+from nbst.render.gl import FrameRenderer, FrameTarget
 from nbst.render.scene3d import look_at, perspective
 from nbst.render.solids import ribbon  # shared with the crash video
 
@@ -450,21 +450,13 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.video import render_video, write_png
+    from nbst.render.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
-    ctx = create_context()
-    try:
-        r = LaneRenderer(ctx, throw, size=size, camera=camera, asked=asked, probability=probability,
-                         probability_note=probability_note, expected=expected, no_request=no_request)
-        try:
-            if still is not None:
-                t = still_time(throw) if still < 0 else float(np.clip(still, 0.0, throw.motion.times[-1]))
-                write_png(output, r.render(t))
-                return 1
-            fps = float(fps or style.DEFAULT_FPS)
-            return render_video(r, frame_times(throw, fps, hold=hold), output, fps=fps, progress=progress)
-        finally:
-            r.release()
-    finally:
-        ctx.release()
+    if still is not None:
+        still = still_time(throw) if still < 0 else np.clip(still, 0.0, throw.motion.times[-1])
+    return render_output(lambda ctx: LaneRenderer(ctx, throw, size=size, camera=camera, asked=asked,
+                                                  probability=probability, probability_note=probability_note,
+                                                  expected=expected, no_request=no_request),
+                         output, still=still, times=lambda r, fps: frame_times(throw, fps, hold=hold),
+                         fps=fps, progress=progress)

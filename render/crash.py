@@ -32,7 +32,7 @@ from nbst.render import crash_scene as cs
 from nbst.render import style
 from nbst.render.bowling import FS, VS
 from nbst.render.crash_motion import frame_times, slow_windows, slowed
-from nbst.render.gl import FrameRenderer, FrameTarget, create_context
+from nbst.render.gl import FrameRenderer, FrameTarget
 from nbst.render.scene3d import look_at, perspective
 
 CAMERAS = ("overhead", "behind", "both")
@@ -490,21 +490,12 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.video import render_video, write_png
+    from nbst.render.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
-    ctx = create_context()
-    try:
-        r = CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera, follow=follow)
-        try:
-            if still is not None:
-                write_png(output, r.render(float(np.clip(still, 0.0, motion.duration))))
-                return 1
-            fps = float(fps or style.DEFAULT_FPS)
-            if times is None:
-                times = frame_times(motion.duration, fps, r.windows, hold=hold)
-            return render_video(r, times, output, fps=fps, progress=progress)
-        finally:
-            r.release()
-    finally:
-        ctx.release()
+    return render_output(lambda ctx: CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera,
+                                                   follow=follow),
+                         output, still=None if still is None else np.clip(still, 0.0, motion.duration),
+                         times=lambda r, fps: (frame_times(motion.duration, fps, r.windows, hold=hold)
+                                               if times is None else times),
+                         fps=fps, progress=progress)

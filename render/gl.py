@@ -57,6 +57,17 @@ class FrameRenderer:
     motion_name: str | None = None
     ghost_name: str = "MuJoCo"
 
+    def _show(self, ctx, problem, motion, ghost, *, trails: bool, motion_name: str | None,
+              ghost_name: str | None, title: str | None) -> None:
+        """Keep what a disk view shows: the context, the problem, the motion drawn as disks and
+        the ghost drawn as rings with their names, whether trails are drawn, and the title."""
+        self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
+        self.motion_name = motion_name
+        if ghost_name:
+            self.ghost_name = ghost_name
+        self.trails = bool(trails)
+        self.title = problem.name if title is None else title
+
     def readout(self, t: float, inside: np.ndarray, ghost_inside: np.ndarray | None = None) -> list[str]:
         """The text lines of the time readout, one fact a line (none wraps): the title, the
         time, and how many disks are within R of their targets (``inside``), for each motion

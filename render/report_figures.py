@@ -158,6 +158,18 @@ def _overlay_many(val):
     return fig
 
 
+def _reference_lines(ax, val, floor: float) -> bool:
+    """The error plot's reference lines: the tolerance, the round-off floor (where a curve
+    reaches it) and the first divergence. Returns whether the floor is drawn (its legend entry)."""
+    ax.axhline(val.tol, color="black", ls="-.", lw=0.9)
+    at_floor = bool((np.asarray(val.error_curve) < floor).any())
+    if at_floor:
+        ax.axhline(floor, color="0.55", ls=(0, (1, 2)), lw=0.9, zorder=0)
+    if val.diverge:
+        ax.axvline(val.diverge["time"], color="black", ls=":", lw=1.1)
+    return at_floor
+
+
 def _spread(y, gap: float, hi: float = 1.0) -> np.ndarray:
     """Positions near ``y`` (axes fractions), at least ``gap`` apart and at most ``hi``:
     where to write the numbers at the ends of curves so that none overlap."""
@@ -206,12 +218,7 @@ def error_figure(val):
         col = palette.hex_color(shades[i])
         ax.semilogy(ts, err[:, i], palette.path_style(p.cueable[i]), color=col, lw=1, label=f"_disk {i}",
                     marker=palette.disk_marker(i), markevery=list(idx), ms=4.5, mfc="white", mec=col, mew=1.0)
-    ax.axhline(val.tol, color="black", ls="-.", lw=0.9)
-    at_floor = bool((np.asarray(val.error_curve) < floor).any())
-    if at_floor:
-        ax.axhline(floor, color="0.55", ls=(0, (1, 2)), lw=0.9, zorder=0)
-    if val.diverge:
-        ax.axvline(val.diverge["time"], color="black", ls=":", lw=1.1)
+    at_floor = _reference_lines(ax, val, floor)
     for t in val.exact.events["time"]:
         ax.axvline(t, color="0.88", lw=0.5, zorder=0)
     ax.set_xlabel("time (s)")
@@ -270,12 +277,7 @@ def _error_many(val):
     cols = [palette.hex_color(c) for c in palette.class_colors(p.cueable)]
     for i in worst:
         ax.semilogy(ts, err[:, i], palette.path_style(p.cueable[i]), color=cols[i], lw=0.9, zorder=2.5)
-    ax.axhline(val.tol, color="black", ls="-.", lw=0.9)
-    at_floor = bool((np.asarray(val.error_curve) < floor).any())
-    if at_floor:
-        ax.axhline(floor, color="0.55", ls=(0, (1, 2)), lw=0.9, zorder=0)
-    if val.diverge:
-        ax.axvline(val.diverge["time"], color="black", ls=":", lw=1.1)
+    at_floor = _reference_lines(ax, val, floor)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("|MuJoCo - exact| (units)")
     ax.set_xlim(0, p.t_final)

@@ -352,14 +352,10 @@ class Renderer2D(FrameRenderer):
 
         from nbst.render.shapes import text_cell
 
-        self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
-        self.motion_name = motion_name
-        if ghost_name:
-            self.ghost_name = ghost_name
-        self.trails = bool(trails)
+        self._show(ctx, problem, motion, ghost, trails=trails, motion_name=motion_name, ghost_name=ghost_name,
+                   title=title)
         self.target = FrameTarget(ctx, size)
         self.size = self.target.size
-        self.title = problem.name if title is None else title
         # the readout lives in the top-left corner, one fact a line, at the frame's text size when
         # it ends above the box (a wide box, e.g. a formation of text, leaves room above it) or
         # left of it; else smaller type where its longest line would reach the box, never under

@@ -150,15 +150,11 @@ class Renderer3D(FrameRenderer):
         import moderngl
         import trimesh
 
-        self.ctx, self.problem, self.motion, self.ghost = ctx, problem, motion, ghost
-        self.motion_name = motion_name
-        if ghost_name:
-            self.ghost_name = ghost_name
-        self.trails = bool(trails)
+        self._show(ctx, problem, motion, ghost, trails=trails, motion_name=motion_name, ghost_name=ghost_name,
+                   title=title)
         self._mgl = moderngl
         self.target = FrameTarget(ctx, size, samples=style.MSAA_SAMPLES, depth=True)
         self.size = self.target.size
-        self.title = problem.name if title is None else title
         p = problem
         W, H = p.box
         short = min(W, H)

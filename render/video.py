@@ -464,6 +464,38 @@ def render_video(renderer, times, path, *, fps, progress=None) -> int:
     return n
 
 
+def render_output(make_renderer, output, *, still=None, times=None, fps=None, progress=None) -> int:
+    """Make a headless GL context and on it a frame renderer, write ``output``, release both.
+
+    Args:
+        make_renderer: ``make_renderer(ctx)`` -> a frame renderer (``render(t)``, ``size``,
+            ``release()``) on the context.
+        output: the .png (with ``still``), .mp4 or .gif to write.
+        still: None for a video; seconds: the one frame of a PNG.
+        times: ``times(renderer, fps)`` -> the frames' times, seconds of the motion.
+        fps: frames per second (default ``style.DEFAULT_FPS``).
+        progress: None, or an object whose ``update(1)`` is called after each frame.
+
+    Returns:
+        The number of frames written (1 for a still).
+    """
+    from nbst.render.gl import create_context
+
+    ctx = create_context()
+    try:
+        renderer = make_renderer(ctx)
+        try:
+            if still is not None:
+                write_png(output, renderer.render(float(still)))
+                return 1
+            fps = float(fps or style.DEFAULT_FPS)
+            return render_video(renderer, times(renderer, fps), output, fps=fps, progress=progress)
+        finally:
+            renderer.release()
+    finally:
+        ctx.release()
+
+
 def write_png(path, frame: np.ndarray) -> None:
     """Write one (H, W, 3) uint8 frame as PNG."""
     from PIL import Image
