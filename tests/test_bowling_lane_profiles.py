@@ -48,13 +48,22 @@ def test_each_profiles_strike_ball_reaches_the_pocket_board_on_the_house_shot(na
     assert 1.5 <= r.entry_angle_deg <= 6.5
 
 
-def test_the_cli_knows_the_profiles_and_refuses_a_delivery_flag_beside_one():
+def test_the_cli_knows_the_profiles_and_a_delivery_flag_beside_one_overrides_that_part():
     from nbst.cli import bowl_args
+    from nbst.cli.main import build_parser
 
     assert bowl_args.BOWLERS == profiles.NAMES
-    out = subprocess.run([sys.executable, "-m", "nbst.cli", "bowl", "frame", "--bowler", "pro", "--board", "20"],
-                         capture_output=True, text=True, timeout=120)
-    assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1 and "drop --board" in out.stderr
+    parse = build_parser().parse_args
+    pro = profiles.profile("pro").strike
+    d, nz = bowl_args.bowler_of(parse(["bowl", "frame", "--bowler", "pro"]))
+    assert d == pro and nz == profiles.PRO_NOISE
+    d, _ = bowl_args.bowler_of(parse(["bowl", "frame", "--bowler", "pro", "--rpm", "300", "--board", "20", "--at",
+                                      "foul"]))
+    assert (d.rpm, d.board, d.at) == (300.0, 20.0, "foul") and (d.mph, d.angle) == (pro.mph, pro.angle)
+    d, _ = bowl_args.bowler_of(parse(["bowl", "throw", "--bowler", "league150", "--board", "12"]))
+    assert (d.board, d.at) == (12.0, "arrows")   # a --board without --at is at the arrows, its default
+    _, nz = bowl_args.bowler_of(parse(["bowl", "frame", "--bowler", "pro", "--noise-scale", "0"]))
+    assert nz.board == 0.0 and nz.rpm == 0.0
     with pytest.raises(ValueError, match="--bowler: no profile"):
         profiles.profile("amateur")
 

@@ -6,8 +6,8 @@ and the pins down); a throw file records both.
 * the deck half, deliveries 5 m before the pins (y, speed, angle, spin): ``bowl solve``,
   ``bowl atlas`` (:mod:`nbst.cli.bowl_deck`);
 * the lane half, deliveries from the foul line in a bowler's units (hand, board, angle, mph,
-  rpm, axis rotation and tilt): ``bowl throw``, ``frame``, ``spares``, ``pocket``
-  (:mod:`nbst.cli.bowl_lane`), and ``bowl solve --foul-line|--robust``, ``bowl atlas
+  rpm, axis rotation and tilt): ``bowl throw``, ``frame`` (:mod:`nbst.cli.bowl_lane`), ``spares``,
+  ``pocket``, ``advise`` (:mod:`nbst.cli.bowl_advise`), and ``bowl solve --foul-line|--robust``, ``bowl atlas
   --foul-line`` (:mod:`nbst.cli.bowl_foul`);
 * ``bowl replay`` runs either half's throw file again (here).
 
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import sys
 
-from nbst.cli import bowl_deck, bowl_foul, bowl_lane, bowl_series
+from nbst.cli import bowl_advise, bowl_deck, bowl_foul, bowl_lane, bowl_series
 from nbst.cli.args import SEED, with_limits
 from nbst.cli.bowl_args import err, leave, picture_flags, pins_down, runner_args, wants_picture
 from nbst.cli.flags import add_out_dir, add_seed
@@ -139,6 +139,7 @@ def register(sub) -> None:
 
     bowl_lane.register(bowl)
     bowl_series.register(bowl)
+    bowl_advise.register(bowl)
 
 
 def cmd_solve(args) -> int:

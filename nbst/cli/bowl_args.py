@@ -96,23 +96,75 @@ def oil_flag(t) -> None:
                         "board; docs/bowling.md)")
 
 
-def delivery_flags(t) -> None:
-    """The delivery flags of ``bowl throw`` and ``bowl frame``: one vocabulary, one help text."""
-    t.add_argument("--hand", choices=("right", "left"), default="right", help="bowling hand (default right)")
-    t.add_argument("--board", type=Bounded("board", 1, 39), default=10.0, metavar="B",
-                   help="board where the ball is at --at (default 10; 1..39, fractions allowed)")
-    t.add_argument("--at", choices=("foul", "arrows"), default="arrows",
+#: The delivery flags' defaults (a --bowler's release replaces them; a flag given beside it overrides it).
+DELIVERY_DEFAULTS = {"hand": "right", "board": 10.0, "at": "arrows", "angle": 1.5, "mph": 17.0, "rpm": 300.0,
+                     "rotation": 45.0, "tilt": 15.0}
+
+
+def bowler_flag(t, what: str = "throw") -> None:
+    """--bowler P: a profile's release as the default release and its correlated noise."""
+    t.add_argument("--bowler", default=None, choices=BOWLERS,
+                   help=f"{what} as this bowler profile: its strike ball (release and line, aimed at board 17.5 on the "
+                        "fresh house shot) is the default release and its correlated release noise gives the "
+                        "probabilities: pro 18.6 mph 436 rpm, league200 17 mph 350 rpm, league150 15.5 mph 250 rpm, "
+                        "twohander 18 mph 520 rpm (docs/bowling.md); --hand mirrors it; a delivery flag given beside "
+                        "it overrides that part of the release; recorded in the output")
+
+
+def delivery_flags(t, *, bowler: bool = True) -> None:
+    """The delivery flags of ``bowl throw`` and ``bowl frame``: one vocabulary, one help text
+    (defaults :data:`DELIVERY_DEFAULTS`, filled by :func:`delivery_of`, so that a flag given
+    beside --bowler is told from one left out)."""
+    D = DELIVERY_DEFAULTS
+    t.add_argument("--hand", choices=("right", "left"), default=None, help="bowling hand (default right)")
+    t.add_argument("--board", type=Bounded("board", 1, 39), default=None, metavar="B",
+                   help=f"board where the ball is at --at (default {D['board']:g}; 1..39, fractions allowed)")
+    t.add_argument("--at", choices=("foul", "arrows"), default=None,
                    help="where --board is: at the foul line, or where the ball crosses the arrows, 15 ft out, "
                         "along its real path (the board at the foul line is found by running the ball alone; "
                         "default arrows)")
-    t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=1.5, metavar="DEG",
-                   help="launch angle from straight down the lane, + out towards board 1 (default 1.5)")
-    t.add_argument("--mph", type=Bounded("mph", 5, 30, unit="mph"), default=17.0, help="release speed (default 17)")
-    t.add_argument("--rpm", type=Bounded("rpm", 0, 800, unit="rpm"), default=300.0, help="rev rate (default 300)")
-    t.add_argument("--rotation", type=Bounded("rotation", 0, 90, unit="deg"), default=45.0, metavar="DEG",
-                   help="axis rotation: 0 end over end, 90 pure side spin (default 45)")
-    t.add_argument("--tilt", type=Bounded("tilt", 0, 90, unit="deg"), default=15.0, metavar="DEG",
-                   help="axis tilt: 0 a horizontal spin axis (default 15)")
+    t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=None, metavar="DEG",
+                   help=f"launch angle from straight down the lane, + out towards board 1 (default {D['angle']:g})")
+    t.add_argument("--stance", type=Bounded("stance", 1, 60), default=None, metavar="B",
+                   help="where the bowler stands: the board of the slide foot on the approach (walking straight); "
+                        "the ball is released %g boards towards the hand (a medium frame's ball-to-foot "
+                        "separation, docs/bowling.md); with --target instead of --board/--at/--angle" % STANCE_SEP)
+    t.add_argument("--target", type=target_board, default=None, metavar="ARROW",
+                   help="where the bowler looks: an arrow (1st-arrow .. 7th-arrow, boards 5..35; e.g. 2nd-arrow) or "
+                        "a board at the arrows, 15 ft out; the launch angle is found so the ball's real path "
+                        "crosses it (needs --stance)")
+    t.add_argument("--mph", type=Bounded("mph", 5, 30, unit="mph"), default=None,
+                   help=f"release speed (default {D['mph']:g})")
+    t.add_argument("--rpm", type=Bounded("rpm", 0, 800, unit="rpm"), default=None, help=f"rev rate (default {D['rpm']:g})")
+    t.add_argument("--rotation", type=Bounded("rotation", 0, 90, unit="deg"), default=None, metavar="DEG",
+                   help=f"axis rotation: 0 end over end, 90 pure side spin (default {D['rotation']:g})")
+    t.add_argument("--tilt", type=Bounded("tilt", 0, 90, unit="deg"), default=None, metavar="DEG",
+                   help=f"axis tilt: 0 a horizontal spin axis (default {D['tilt']:g})")
+    if bowler:
+        bowler_flag(t)
+
+
+#: Boards between the ball and the slide foot at release (a medium men's frame: about 7 boards,
+#: Rich Jacobson, "How to know you're lined up properly", richjacobsonbowling.com; assumed for every bowler).
+STANCE_SEP = 7.0
+#: The arrows' boards, counted from the bowling hand's edge.
+ARROWS = {"1st": 5.0, "2nd": 10.0, "3rd": 15.0, "4th": 20.0, "5th": 25.0, "6th": 30.0, "7th": 35.0}
+
+
+def target_board(text: str) -> float:
+    """``--target``: "2nd-arrow" (or "2nd arrow", "arrow2", "2nd") -> board 10; a number -> that board."""
+    t = str(text).strip().lower().replace("_", "-").replace(" ", "-")
+    for k, b in ARROWS.items():
+        if t in (f"{k}-arrow", k, f"arrow{k[0]}", f"arrow-{k[0]}"):
+            return b
+    try:
+        b = float(t)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an arrow (1st-arrow .. 7th-arrow) or a board 1..39, got {text!r}") \
+            from None
+    if not (1.0 <= b <= 39.0):
+        raise argparse.ArgumentTypeError(f"a board at the arrows must be 1..39, got {text!r}")
+    return b
 
 
 def ball_flags(t) -> None:
@@ -125,12 +177,48 @@ def ball_flags(t) -> None:
                    help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
 
 
-def delivery_of(args):
-    """The delivery of the :func:`delivery_flags`, checked (LaneError naming the field)."""
+def given(args) -> dict:
+    """The delivery flags given on the command line (not left at None), by name."""
+    keys = (*DELIVERY_DEFAULTS, "stance", "target")
+    return {k: getattr(args, k) for k in keys if getattr(args, k, None) is not None}
+
+
+def delivery_of(args, base=None):
+    """The delivery of the :func:`delivery_flags`, checked (LaneError naming the field): ``base``
+    (a --bowler's strike ball) or :data:`DELIVERY_DEFAULTS`, with every flag given put over it. A
+    --board given without --at is at the arrows (its default); --stance/--target give the board at
+    the foul line and a target the caller aims through (:func:`stance_target`)."""
+    from dataclasses import replace
+
     from nbst.models.bowling import lane
 
-    return lane.Delivery(hand=args.hand, board=args.board, at=args.at, angle=args.angle, mph=args.mph,
-                         rpm=args.rpm, rotation=args.rotation, tilt=args.tilt).check()
+    g = given(args)
+    st = stance_target(args)
+    d = lane.Delivery(**DELIVERY_DEFAULTS) if base is None else base
+    over = {k: v for k, v in g.items() if k in DELIVERY_DEFAULTS}
+    if "board" in over and "at" not in over:
+        over["at"] = DELIVERY_DEFAULTS["at"]
+    if st is not None:
+        over.update(board=st[0], at="foul")
+    return replace(d, **over).check()
+
+
+def stance_target(args):
+    """(board at the foul line, target board at the arrows) of --stance/--target, or None; ValueError
+    (one line) when only one is given, or beside --board/--at/--angle."""
+    s, t = getattr(args, "stance", None), getattr(args, "target", None)
+    if s is None and t is None:
+        return None
+    if s is None or t is None:
+        raise ValueError("--stance and --target go together: where you stand and where you look")
+    clash = [f for f in ("board", "at", "angle") if getattr(args, f, None) is not None]
+    if clash:
+        raise ValueError(f"--{clash[0]}: --stance/--target set the line; drop --{clash[0]}")
+    foul = float(s) - STANCE_SEP
+    if not 1.0 <= foul <= 39.0:
+        raise ValueError(f"--stance {s:g}: the ball would be released on board {foul:g} ({STANCE_SEP:g} boards towards "
+                         "the hand), off the lane (1..39)")
+    return foul, float(t)
 
 
 def ball_of(args):
@@ -187,21 +275,19 @@ def wants_picture(args) -> bool:
 
 #: The bowler profiles (models/bowling/lane/profiles.py; a test checks the two lists agree).
 BOWLERS = ("pro", "league200", "league150", "twohander")
-#: The delivery flags' defaults: --bowler refuses a delivery flag moved from them.
-_DELIVERY_DEFAULTS = {"board": 10.0, "at": "arrows", "angle": 1.5, "mph": 17.0, "rpm": 300.0, "rotation": 45.0,
-                      "tilt": 15.0, "angle_sigma": 0.15}
 
 
 def bowler_of(args):
-    """(the delivery, the noise) of --bowler, or (None, None) without it; ValueError (one line) when a
-    delivery flag is given with it."""
+    """(the delivery, the noise) of --bowler (with every delivery flag given put over its strike
+    ball, :func:`delivery_of`; the noise times --noise-scale where the command has one), or (None,
+    None) without --bowler."""
     if getattr(args, "bowler", None) is None:
         return None, None
     from nbst.models.bowling.lane import profiles
 
-    moved = [k for k, v in _DELIVERY_DEFAULTS.items() if getattr(args, k) != v]
-    if moved:
-        raise ValueError(f"--bowler: sets the release and its noise; drop --{moved[0].replace('_', '-')}")
     p = profiles.profile(args.bowler)
-    k = float(args.noise_scale)
-    return p.delivery(args.hand), profiles.scaled(p.noise, k)
+    hand = getattr(args, "hand", None) or "right"
+    base = p.delivery(hand)
+    d = delivery_of(args, base) if hasattr(args, "board") else base
+    k = getattr(args, "noise_scale", None)
+    return d, profiles.scaled(p.noise, 1.0 if k is None else float(k))

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import err
+from nbst.cli.bowl_args import bowler_flag, err
 
 #: Frames of the fresh probability estimate (``--samples``) and of ``--robust``'s search.
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
@@ -47,6 +47,7 @@ def add_solve_flags(s) -> None:
                         "timestep of the ladder (h = 1, 0.5 and 0.25 ms)")
     g.add_argument("--samples", type=SAMPLES, default=SOLVE_SAMPLES, metavar="N",
                    help=f"noisy throws of the probability estimate (default {SOLVE_SAMPLES})")
+    bowler_flag(g, "(with --foul-line) measure the probability and climb it")
 
 
 def add_atlas_flags(a) -> None:
@@ -108,6 +109,12 @@ def cmd_solve(args) -> int:
     from nbst.models.mjsearch.ladder import kept_text
 
     bad = _refuse(args, SOLVE_5M_ONLY, "deliveries", "--foul-line/--robust")
+    strike, nz = None, noise.DEFAULT
+    if args.bowler is not None:
+        from nbst.models.bowling.lane import profiles
+
+        strike = profiles.profile(args.bowler).strike
+        nz = profiles.profile(args.bowler).noise
     if bad is None and args.distance != "hamming":
         bad = "--distance is for the 5 m deliveries; it does not apply with --foul-line/--robust"
     if bad:
@@ -150,8 +157,8 @@ def cmd_solve(args) -> int:
                     if args.robust is not None:
                         state["stage"] = "robust"
                         bar.note("--robust: climbing the probability")
-                        res = robust.maximise(robust_starts(d, want), want=want, runner=R, budget=args.robust,
-                                              seed=seed, n=args.samples, on_done=bar.update)
+                        res = robust.maximise(robust_starts(d, want, strike), want=want, runner=R, budget=args.robust,
+                                              seed=seed, n=args.samples, on_done=bar.update, noise=nz)
                         bar.set(frames + res.frames)  # the ladder's frames ran in this process
                         state["robust"] = res
                         if R.one(res.delivery).down == want:
@@ -163,7 +170,8 @@ def cmd_solve(args) -> int:
                     if args.robust is None or state.get("kept_start"):
                         state["stage"] = "probability"
                         bar.note("the probability under the release noise")
-                        est, _ = noise.probability(d, args.samples, seed, runner=R, want=want, on_done=bar.update)
+                        est, _ = noise.probability(d, args.samples, seed, runner=R, want=want, on_done=bar.update,
+                                                   noise=nz)
                         state["est"] = est
                         bar.note("the timestep ladder")
                         state["ladder"] = frame.ladder(d)
@@ -185,6 +193,10 @@ def cmd_solve(args) -> int:
         bar.update()
         doc = throwfile.throw_dict(r, oil=foul_atlas.OIL, requested=want, estimate=state["est"], want=want,
                                    ladder=state["ladder"])
+        from nbst.models.bowling.lane import advise, names
+
+        doc.update(bowler=args.bowler, names=names.names(r.in_play, r.leave, r.board_at_pins, r.entry_angle_deg,
+                                                          d.hand), note=advise.SAMPLE_NOTE)
         with signals_deferred(reraise=False) as late:
             write_text_atomic(Path(args.output), throwfile.dumps(doc))
     except (OutputError, ValueError) as e:
@@ -197,7 +209,8 @@ def cmd_solve(args) -> int:
     line = (f"pins down {got}, leave {','.join(map(str, r.leave)) or 'none'}; from the foul line: {_delivery_text(d)}")
     if state["est"] is not None:
         e = state["est"]
-        line += f"; probability {e.text()} under the release noise, seed {seed}"
+        line += (f"; probability {e.text()} under the release noise"
+                 + (f" of bowler {args.bowler}" if args.bowler else "") + f", seed {seed}")
     steps, kept = throwfile.ladder_kept(doc)
     if steps:
         line += f"; {kept_text(steps, kept)}"
@@ -231,7 +244,7 @@ def cmd_solve(args) -> int:
     return 0
 
 
-def robust_starts(found, want) -> list:
+def robust_starts(found, want, strike=None) -> list:
     """The starts of ``--robust``: the throw found (the atlas's or the search's), and for a strike
     (all ten down) also the strike line and the pocket map's best cell (``spares.STRIKE``,
     ``spares.POCKET_CELL``), which strike about 40 % under the default noise where a strike
@@ -239,7 +252,8 @@ def robust_starts(found, want) -> list:
     its common noisy throws."""
     from nbst.models.bowling.lane import spares
 
-    return [found] + ([spares.STRIKE, spares.POCKET_CELL] if len(want) == 10 else [])
+    extra = [spares.STRIKE, spares.POCKET_CELL] + ([] if strike is None else [strike.check()])
+    return [found] + (extra if len(want) == 10 else [])
 
 
 def cmd_atlas(args) -> int:

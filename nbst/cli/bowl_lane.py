@@ -14,14 +14,16 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import (BOWLERS, ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
-                                delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, wants_picture)
+from nbst.cli.bowl_args import (ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
+                                delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, stance_target,
+                                wants_picture)
 from nbst.cli.bowl_series import path_plot_flag, write_path_plot
 from nbst.parallel import default_jobs
 
 
 def register(bowl) -> None:
-    """The lane half's subcommands on ``nbst bowl``'s subparsers."""
+    """The lane half's subcommands ``throw`` and ``frame`` on ``nbst bowl``'s subparsers (``spares``,
+    ``pocket`` and ``advise``: :mod:`nbst.cli.bowl_advise`)."""
     register_throw(bowl)
     register_frame(bowl)
 
@@ -40,7 +42,9 @@ def register_throw(bowl) -> None:
     delivery_flags(t)
     oil_flag(t)
     ball_flags(t)
-    t.add_argument("-o", "--output", default=None, metavar="THROW.json", help="also write the phases as JSON")
+    t.add_argument("-o", "--output", default=None, metavar="THROW.json",
+                   help="also write the phases as JSON, with the line (stance, target, breakpoint, entry), the hit's "
+                        "name and the --bowler")
     t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
     path_plot_flag(t)
     picture_flags(t, "the throw's frame on all ten pins (as bowl frame runs it)")
@@ -58,12 +62,6 @@ def register_frame(bowl) -> None:
                         epilog="Example: nbst bowl frame --board 10 --at arrows --angle 1.5 --timesteps --probability 40")
     delivery_flags(f)
     ball_flags(f)
-    f.add_argument("--bowler", default=None, choices=BOWLERS,
-                   help="throw a bowler profile's strike ball (its release and line, aimed at board 17.5 on the "
-                        "fresh house shot) and, with --probability, its correlated release noise (times "
-                        "--noise-scale): pro 18.6 mph 436 rpm, league200 17 mph 350 rpm, league150 15.5 mph 250 rpm, "
-                        "twohander 18 mph 520 rpm (docs/bowling.md); --hand mirrors it; the other delivery flags "
-                        "may not be given with it")
     f.add_argument("--leave", default=None, metavar="PINS",
                    help="pins standing before the throw, e.g. 10 or 2,4,5,8 (default: a full rack)")
     f.add_argument("--timesteps", action="store_true", help="also run it at h = 0.5 and 0.25 ms (the ladder)")
@@ -75,58 +73,14 @@ def register_frame(bowl) -> None:
     f.add_argument("--noise-scale", type=Bounded("noise-scale", 0, 10), default=1.0, metavar="F",
                    help="multiply every release-noise sigma by F (default 1: 1/2 board, 0.15 deg, 0.3 mph, 15 rpm, "
                         "5 deg rotation)")
-    f.add_argument("--angle-sigma", type=Bounded("angle-sigma", 0, 5, unit="deg"), default=0.15, metavar="DEG",
-                   help="the launch angle's sigma before --noise-scale (default 0.15, an assumption: docs/bowling.md)")
+    f.add_argument("--angle-sigma", type=Bounded("angle-sigma", 0, 5, unit="deg"), default=None, metavar="DEG",
+                   help="the launch angle's sigma before --noise-scale (default 0.15, or the --bowler's; an "
+                        "assumption: docs/bowling.md)")
     f.add_argument("-o", "--output", default=None, metavar="THROW.json",
                    help="also write the throw file: delivery, ball, oil, pins standing, the settled outcome, and the "
                         "--probability estimate and --timesteps ladder when given; bowl replay runs it again")
     mc_flags(f, 40, "estimate")
     f.set_defaults(func=cmd_frame)
-
-    s = bowl.add_parser("spares", help="the throw converting each common leave with the highest probability",
-                        description="For each leave, the 3-6-9 system's line (the strike ball, feet moved 3/6/9 "
-                                    "boards, same target arrow) and straight spare balls (cross-lane at 17 and 21 mph, "
-                                    "from the middle and straight down the boards, at the leave's aim point and 1-2 "
-                                    "boards either side) are "
-                                    "screened on --screen noisy throws each; the best is polished by a robust "
-                                    "search (--polish) and measured on --samples, beside the 3-6-9 line "
-                                    "(docs/bowling.md).",
-                        epilog="Example: nbst bowl spares --leaves 10,7 --samples 40")
-    s.add_argument("--leaves", default=None, metavar="L1,L2",
-                   help="leaves to shoot, '-' joining pins, ',' between leaves (default: 10, 7, 4, 6, 2-4-5-8, "
-                        "3-6-10, 1-2-4, 1-3-6, 2-8, 3-9, 7-10)")
-    s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
-                   help="noisy throws per candidate in the screening (default 12)")
-    s.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=None, metavar="N",
-                   help="noisy frames per leave for polishing the pick with a robust search (an evolution "
-                        "strategy on common noisy throws; skipped where the pick converted every screening "
-                        "throw or nothing converted); default 40 x --screen (480); 0: no polish")
-    mc_flags(s, 60, "measured throw")
-    s.set_defaults(func=cmd_spares)
-
-    p = bowl.add_parser("pocket", help="pocket map: strike probability over board x entry angle (a PNG), and carry",
-                        description="Aim a delivery at each (board at the head pin, entry angle) cell, run --samples "
-                                    "noisy frames of it, and draw the strike probability as a heatmap beside the "
-                                    "strike share of all frames by actual entry; carry = strikes / pocket hits "
-                                    "(actual board 17-18). The published pocket (17.5, ~6 deg) is marked.",
-                        epilog="Example: nbst bowl pocket -o pocket.png --samples 40")
-    p.add_argument("-o", "--output", required=True, metavar="MAP.png", help="the heatmap (PNG)")
-    p.add_argument("--boards", default="15.5:19.5:1", metavar="A:B:STEP", help="boards (default 15.5:19.5:1)")
-    p.add_argument("--angles", default="2:7:1", metavar="A:B:STEP", help="entry angles, deg (default 2:7:1)")
-    mc_flags(p, 40, "cell")
-    p.set_defaults(func=cmd_pocket)
-
-
-def _grid(text: str, flag: str, lo: float, hi: float) -> list:
-    import numpy as np
-
-    try:
-        a, b, st = (float(v) for v in text.split(":"))
-    except ValueError:
-        raise ValueError(f"{flag}: must be A:B:STEP (numbers), got {text!r}") from None
-    if not (lo <= a <= b <= hi and st > 0 and (b - a) / st <= 40):
-        raise ValueError(f"{flag}: need {lo:g} <= A <= B <= {hi:g}, STEP > 0 and at most 41 values, got {text!r}")
-    return [round(float(v), 6) for v in np.arange(a, b + st / 2, st)]
 
 
 def _bar(args, total: int, desc: str):
@@ -135,18 +89,35 @@ def _bar(args, total: int, desc: str):
     return progress_bar(total=total, desc=desc, unit="frame", disable=args.quiet, file=sys.stderr)
 
 
-def write_throw(path, r, oil: str, ball, *, ladder=None, estimate=None) -> None:
-    """Write THROW.json (models/bowling/throwfile.py) for frame ``r`` thrown with ``ball``, atomically."""
+def write_throw(path, r, oil: str, ball, *, ladder=None, estimate=None, extra=None) -> None:
+    """Write THROW.json (models/bowling/throwfile.py) for frame ``r`` thrown with ``ball``, atomically;
+    ``extra``: the keys beside the schema's (line, names, bowler, note)."""
     from nbst.outputs import write_text_atomic
 
     from nbst.models.bowling.lane import throwfile
 
-    write_text_atomic(Path(path), throwfile.dumps(throwfile.throw_dict(r, oil=oil, ball=ball, ladder=ladder,
-                                                                       estimate=estimate)))
+    d = throwfile.throw_dict(r, oil=oil, ball=ball, ladder=ladder, estimate=estimate)
+    write_text_atomic(Path(path), throwfile.dumps({**d, **(extra or {})}))
+
+
+def the_delivery(args, oil, ball):
+    """(the delivery, the --bowler's noise or None) of a throwing command's flags: the --bowler's
+    strike ball (or the defaults) with the flags given over it, aimed along the ball's real path
+    (--at arrows: its board at the arrows; --stance/--target: the launch angle through the target)."""
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import advise
+
+    bd, bnz = bowler_of(args)
+    d = bd if bd is not None else delivery_of(args)
+    st = stance_target(args)
+    if st is not None:
+        return advise.aim_target(d, st[1], oil, ball), bnz
+    return lane.aim_at_arrows(d, oil, ball), bnz
 
 
 def cmd_throw(args) -> int:
     from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import advise
     from nbst.outputs import prepare_output
 
     for option, path in (("-o", args.output), ("--video", getattr(args, "video", None)),
@@ -155,7 +126,7 @@ def cmd_throw(args) -> int:
             prepare_output(path, option=option)
     try:
         ball = ball_of(args)
-        d = lane.aim_at_arrows(delivery_of(args), args.oil, ball)  # --at arrows: along the ball's real path
+        d, _ = the_delivery(args, args.oil, ball)
         r = lane.throw(d, args.oil, ball)
     except ValueError as e:
         return err("throw", str(e))
@@ -167,6 +138,7 @@ def cmd_throw(args) -> int:
     bad = write_path_plot(args.path_plot, [r], oil=args.oil) if args.path_plot else None
     if bad:
         return err("throw", bad)
+    doc.update(bowler=args.bowler, line=advise.line_of(r), note=advise.SAMPLE_NOTE)
     if args.output:
         from nbst.outputs import OutputError, write_text_atomic
         from nbst.solution import dumps_strict
@@ -180,31 +152,45 @@ def cmd_throw(args) -> int:
 
         print_json(doc)
         return 0
-    for line in throw_lines(r):
+    for line in throw_lines(r, bowler=args.bowler):
         print(line)
     return 0
 
 
-def throw_lines(r) -> list[str]:
+def line_lines(ln: dict) -> list[str]:
+    """The line (advise.line_of) as readout lines: stance and target, breakpoint, entry and the hit."""
+    from nbst.models.bowling.lane.advise import arrow_text
+
+    bp = ("none (the ball never moved out)" if ln["breakpoint_ft"] is None
+          else f"{ln['breakpoint_ft']:.1f} ft, board {ln['breakpoint_board']:.1f}")
+    return [f"stance       board {ln['stance_board']:.1f} (the ball released on board {ln['foul_board']:.1f}, "
+            f"{ln['separation_boards']:g} boards from the slide foot)",
+            f"target       {arrow_text(ln['target_board'])} at the arrows, where the ball's path crosses 15 ft",
+            f"breakpoint   {bp}",
+            f"at the pins  board {ln['entry_board']:.1f}, entry angle {ln['entry_angle_deg']:.1f} deg"
+            + (f": {ln['hit']}" if ln.get("hit") else "")]
+
+
+def throw_lines(r, bowler: str | None = None) -> list[str]:
     """The phases of a throw (lane.ThrowResult) as lines, in bowler's units."""
+    from nbst.models.bowling.lane import advise
+
     d = r.delivery
 
     def ft(v):
         return "none" if v is None else f"{v:.1f} ft"
 
-    bp = ("none (the ball never moved out)" if r.breakpoint_ft is None
-          else f"{r.breakpoint_ft:.1f} ft, board {r.breakpoint_board:.1f}")
+    ln = advise.line_of(r)
     return [
         f"delivery     {d['hand']}-handed, {d['mph']:g} mph, {d['rpm']:g} rpm, rotation {d['rotation']:g} deg, "
-        f"tilt {d['tilt']:g} deg, angle {d['angle']:g} deg; oil {r.oil}",
+        f"tilt {d['tilt']:g} deg, angle {d['angle']:.2f} deg; oil {r.oil}" + (f"; bowler {bowler}" if bowler else ""),
         f"ball         {r.ball['weight_lb']:g} lb, RG {r.ball['rg']:g} in, diff {r.ball['diff']:g} in, "
         f"cover {r.ball['friction']:g}",
-        f"boards       foul line {r.board_at_foul_line:.1f}, arrows {r.board_at_arrows:.1f}",
+        *line_lines(ln),
         f"skid         {'none (no hook)' if r.skid_ft is None else ft(r.skid_ft) + ' (the hook starts)'}",
-        f"breakpoint   {bp}",
         f"roll         {ft(r.roll_ft)}",
-        f"at the pins  board {r.board_at_pins:.1f}, entry angle {r.entry_angle_deg:.1f} deg, "
-        f"{r.speed_pins_mph:.1f} mph (lost {r.speed_lost_mph:.1f} mph), {r.seconds_to_pins:.2f} s",
+        f"speed        {r.speed_pins_mph:.1f} mph at the pins (lost {r.speed_lost_mph:.1f} mph), {r.seconds_to_pins:.2f} s",
+        f"note         the ball alone, no noise: {advise.SAMPLE_NOTE} (bowl frame --probability N)",
     ]
 
 
@@ -214,20 +200,24 @@ def cmd_frame(args) -> int:
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import frame, noise
 
+    from nbst.models.bowling.lane import advise, names
+
     try:
         ball = ball_of(args)
-        bd, bnz = bowler_of(args)
-        d = bd if bd is not None else lane.aim_at_arrows(delivery_of(args), args.oil, ball)  # --at arrows: real path
+        d, bnz = the_delivery(args, args.oil, ball)
         standing = None if args.leave is None else sorted(
             n for n in range(1, 11) if pin_list(args.leave, "--leave") >> (n - 1) & 1)
         if args.output:
             prepare_output(args.output)
+        line = advise.line_of(lane.throw(d, args.oil, ball))   # the ball alone: stance, target, breakpoint
     except (ValueError, argparse.ArgumentTypeError, OutputError) as e:
         return err("frame", str(e))
     r = lad = est = None
     try:
         r = frame.run_frame(d, args.oil, ball, standing=standing)
-        doc = {"frame": r.to_dict()}
+        nm = names.names(r.in_play, r.leave, r.board_at_pins, r.entry_angle_deg, d.hand)
+        extra = {"bowler": args.bowler, "line": line, "names": nm, "note": advise.SAMPLE_NOTE}
+        doc = {"frame": r.to_dict(), **extra}
         if args.longer:
             r2 = frame.run_frame(d, args.oil, ball, standing=standing, extra_s=args.longer)
             doc["longer"] = {"extra_s": args.longer, "leave": r2.leave, "same": r2.leave == r.leave}
@@ -239,8 +229,12 @@ def cmd_frame(args) -> int:
             bar = _bar(args, args.probability, "noisy throws")
             k = float(args.noise_scale)
             D = noise.DEFAULT
-            nz = bnz if bnz is not None else noise.Noise(board=D.board * k, angle=args.angle_sigma * k, mph=D.mph * k,
+            nz = bnz if bnz is not None else noise.Noise(board=D.board * k, angle=D.angle * k, mph=D.mph * k,
                                                          rpm=D.rpm * k, rotation=D.rotation * k, tilt=D.tilt * k)
+            if args.angle_sigma is not None:
+                from dataclasses import replace
+
+                nz = replace(nz, angle=float(args.angle_sigma) * k)
             with frame.FrameRunner(args.oil, ball, jobs=args.jobs or default_jobs()) as R:
                 est, _ = noise.probability(d, args.probability, args.seed, runner=R, standing=standing, noise=nz,
                                            on_done=lambda: bar.update(1))
@@ -250,7 +244,7 @@ def cmd_frame(args) -> int:
         if args.output and r is not None:  # the frame is done: keep it (without what was cut short)
             try:
                 with signals_deferred(reraise=False):
-                    write_throw(args.output, r, args.oil, ball, ladder=lad)
+                    write_throw(args.output, r, args.oil, ball, ladder=lad, extra=extra)
             except (OutputError, ValueError) as e:
                 return err("frame", str(e))
             print(f"nbst bowl frame: interrupted; wrote the frame without the unfinished parts to {args.output}",
@@ -263,7 +257,7 @@ def cmd_frame(args) -> int:
     if args.output:
         try:
             with signals_deferred(reraise=False) as late:
-                write_throw(args.output, r, args.oil, ball, ladder=lad, estimate=est)
+                write_throw(args.output, r, args.oil, ball, ladder=lad, estimate=est, extra=extra)
         except (OutputError, ValueError) as e:
             return err("frame", str(e))
         if late:
@@ -282,11 +276,22 @@ def cmd_frame(args) -> int:
 
 
 def frame_lines(doc: dict) -> list[str]:
+    from nbst.models.bowling.lane import advise, names
+
     r = doc["frame"]
     what = "strike" if len(r["in_play"]) == 10 and not r["leave"] else ("converted" if not r["leave"] else "")
     out = [f"pins in play  {pins_text(r['in_play'])}",
            f"down          {pins_text(r['down'])}" + (f"  ({what})" if what else ""),
            f"leave         {pins_text(r['leave'])}"]
+    if doc.get("names"):
+        out.append(f"named         {names.text(doc['names'])}")
+    if doc.get("bowler"):
+        out.append(f"bowler        {doc['bowler']}")
+    if doc.get("line"):
+        ln = doc["line"]
+        out.append(f"line          stance board {ln['stance_board']:.1f}, target {advise.arrow_text(ln['target_board'])}"
+                   + ("" if ln["breakpoint_ft"] is None else
+                      f", breakpoint {ln['breakpoint_ft']:.1f} ft on board {ln['breakpoint_board']:.1f}"))
     if r["partition"]:
         out.append(f"dead wood     {pins_text(r['partition'])} leaning on the kickback (USBC 6a.4)")
     if r["ball_left_lane"]:
@@ -307,109 +312,10 @@ def frame_lines(doc: dict) -> list[str]:
         top = ", ".join(f"{k or 'none'} {v}" for k, v in list(e["leaves"].items())[:5])
         out.append(f"probability   {100 * e['p']:.0f}% converted ({e['k']}/{e['n']}; 95% CI {100 * e['lo']:.0f}-"
                    f"{100 * e['hi']:.0f}%), seed {e['seed']}; leaves: {top}")
+        out.append(f"note          {advise.SAMPLE_NOTE}: the probability above is the result")
+    else:
+        out.append(f"note          {advise.SAMPLE_NOTE}: run --probability N for it")
     return out
-
-
-def cmd_spares(args) -> int:
-    from nbst.models.bowling import lane
-    from nbst.models.bowling.lane import frame, spares
-
-    names = list(spares.LEAVES) if args.leaves is None else [x.strip() for x in args.leaves.split(",") if x.strip()]
-    try:
-        lane.pattern(args.oil)
-        for nm in names:
-            if nm not in spares.LEAVES:
-                raise ValueError(f"--leaves: {nm!r} is not one of the common leaves ({', '.join(spares.LEAVES)})")
-    except ValueError as e:
-        return err("spares", str(e))
-    out = []
-    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures,
-    # then at most the polish's budget and its measure (a skipped polish leaves the bar short of its total)
-    polish = spares.POLISH_PER_SCREEN * args.screen if args.polish is None else args.polish
-    total = sum(2 * args.samples + (23 + 2 * ("-" in nm)) * args.screen + (polish + args.samples) * (polish > 0)
-                for nm in names)
-    bar = _bar(args, total, "spare frames")
-    try:
-        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
-            for nm in names:
-                res = spares.best_spare(nm, args.samples, args.seed, runner=R, screen=args.screen,
-                                        on_done=lambda: bar.update(1), polish=polish)
-                out.append(res.to_dict())
-                if not args.json:
-                    bar.clear() if hasattr(bar, "clear") else None
-                    print(spare_line(out[-1]), flush=True)
-    except KeyboardInterrupt:
-        bar.close()
-        print(f"nbst bowl spares: interrupted after {len(out)} of {len(names)} leaves", file=sys.stderr)
-        return 130
-    bar.close()
-    if args.json:
-        from nbst.cli.args import print_json
-
-        print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "polish": polish,
-                    "spares": out})
-    return 0
-
-
-def spare_line(r: dict) -> str:
-    e, s, b = r["estimate"], r["system_369_estimate"], r["best"]
-    return (f"{r['leave']:>8}  best: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
-            f"{b['mph']:.1f} mph, {b['rpm']:.0f} rpm, rotation {b['rotation']:.0f})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
-            f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)   3-6-9 line (board {r['system_369']['board']:.1f}): "
-            f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
-            + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(pins_text(x[1]) for x in r["ladder"]))
-
-
-def cmd_pocket(args) -> int:
-    from nbst.models.bowling import lane
-    from nbst.models.bowling.lane import frame, spares
-
-    try:
-        boards = _grid(args.boards, "--boards", 1, 39)
-        angles = _grid(args.angles, "--angles", 0, 10)
-        lane.pattern(args.oil)
-        if not args.output.lower().endswith(".png"):
-            raise ValueError(f"{args.output}: -o must name a .png file")
-    except ValueError as e:
-        return err("pocket", str(e))
-    from nbst.outputs import atomic_path, prepare_output
-
-    prepare_output(args.output)  # before the frames: a link, a FIFO or a folder is refused in one line
-    bar = _bar(args, args.samples * len(boards) * len(angles), "pocket frames")
-    try:
-        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
-            pm = spares.pocket_map(boards, angles, args.samples, args.seed, runner=R, on_done=lambda: bar.update(1))
-    except KeyboardInterrupt:
-        bar.close()
-        print("nbst bowl pocket: interrupted; nothing written", file=sys.stderr)
-        return 130
-    bar.close()
-    fig = spares.pocket_figure(pm)
-    with atomic_path(args.output) as tmp:  # the one writer: whole PNG or the previous file
-        fig.savefig(tmp)
-    b, a, p, k = pm.best()
-    ks, ns = pm.carry()
-    kc, nc = pm.carry(angles=(4.0, 6.0))
-    from nbst.models.bowling.lane.noise import wilson
-
-    doc = {"best": {"board": b, "angle": a, "p": p, "k": k, "n": pm.n}, "carry": {"strikes": ks, "pocket_hits": ns},
-           "carry_4_6_deg": {"strikes": kc, "pocket_hits": nc}, "map": pm.to_dict(), "output": args.output}
-    if args.json:
-        from nbst.cli.args import print_json
-
-        doc["map"].pop("hits")
-        print_json(doc)
-        return 0
-    lo, hi = wilson(k, pm.n)
-    print(f"wrote {args.output}: {len(boards)} boards x {len(angles)} angles, {pm.n} noisy throws per cell, seed {pm.seed}")
-    print(f"best cell  board {b:g} at {a:g} deg: strike {100 * p:.0f}% ({k}/{pm.n}; 95% CI {100 * lo:.0f}-{100 * hi:.0f}%)")
-    for label, (kk, nn) in (("carry (actual board 17-18, any angle)", (ks, ns)), ("carry (17-18 at 4-6 deg)", (kc, nc))):
-        if nn:
-            l2, h2 = wilson(kk, nn)
-            print(f"{label}: {100 * kk / nn:.0f}% ({kk}/{nn}; 95% CI {100 * l2:.0f}-{100 * h2:.0f}%)")
-        else:
-            print(f"{label}: no pocket hits")
-    return 0
 
 
 def replay_throw(args) -> int:

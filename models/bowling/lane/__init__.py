@@ -10,6 +10,7 @@ settled and counted as USBC counts pinfall (:mod:`.frame`). Modules, from the bo
   oil now (:class:`OilField`); the shipped patterns registered once (:data:`PATTERNS`);
 * :mod:`.ball` -- :class:`Ball` within USBC's limits (RG, differentials, layout, cover);
 * :mod:`.delivery` -- :class:`Delivery` and the release it gives (spin axes, the ball's axes);
+* :mod:`.names` -- the names of hits and leaves (pocket, light, split by USBC, ringing 10, ...);
 * :mod:`.scene` -- the full lane laid out for the shared scene (:func:`layout`, :func:`build_model`;
   :data:`SCENE` names it in files);
 * :mod:`.friction` -- Coulomb friction at the contact and the oil lane and cover trade (numba);
@@ -21,7 +22,8 @@ settled and counted as USBC counts pinfall (:mod:`.frame`). Modules, from the bo
 * :mod:`.spares` -- aiming, the pocket map, the best delivery at each spare;
 * :mod:`.atlas` -- the atlas from the foul line (one delivery per subset, its probability);
 * :mod:`.transition` -- games in order on one lane that every ball wears (lane transition, moves);
-* :mod:`.throwfile` -- throw files and throw atlases, checked input.
+* :mod:`.throwfile` -- throw files and throw atlases, checked input;
+* :mod:`.advise` -- a bowler's line (stance, target, breakpoint, entry) and a coach's advice.
 
 This package re-exports the foundation's names (units, oil, ball, delivery, scene, phases), so
 ``lane.Delivery``, ``lane.board_to_y``, ``lane.throw`` read as one vocabulary; the modules above

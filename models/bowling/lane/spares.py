@@ -66,6 +66,19 @@ LEAVES = {
 }
 
 
+def leave_spec(name: str) -> tuple[tuple, int]:
+    """(the pins whose mean is the aim point, the 3-6-9 move in boards) of a leave: the table's for
+    the common leaves (:data:`LEAVES`), else every pin standing, and 3 boards per half pin
+    spacing of their mean off the 1-5 line (the system's 2/4/7 and 3/6/10 steps), at most 9."""
+    if name in LEAVES:
+        return LEAVES[name]
+    pins = leave_pins(name)
+    spots = scene.pin_spots()
+    y = float(np.mean([spots[p - 1][1] for p in pins]))   # + towards the 7 pin (a right-hander's left)
+    halves = int(round(y / (scene.PIN_SPACING / 2)))
+    return tuple(pins), int(max(-9, min(9, 3 * halves)))
+
+
 def leave_pins(name: str) -> list[int]:
     try:
         pins = sorted(int(p) for p in name.split("-"))
@@ -177,9 +190,9 @@ class PocketMap:
 
 
 def pocket_map(boards, angles, n: int, seed: int, *, runner: frame.FrameRunner, nz: noise.Noise = noise.DEFAULT,
-               on_cell=None, on_done=None) -> PocketMap:
+               on_cell=None, on_done=None, base: lane.Delivery = STRIKE) -> PocketMap:
     """Strike probability over (board at the pins x entry angle), ``n`` noisy throws per cell
-    (cell c's throws are seeded ``seed + c``)."""
+    (cell c's throws are seeded ``seed + c``); ``base``: the release aimed (its speed, revs, tilt)."""
     p = np.full((len(angles), len(boards)), np.nan)
     k = np.zeros((len(angles), len(boards)), dtype=int)
     deliveries, hits = {}, []
@@ -187,7 +200,7 @@ def pocket_map(boards, angles, n: int, seed: int, *, runner: frame.FrameRunner, 
     for j, a in enumerate(angles):
         for i, b in enumerate(boards):
             try:
-                d, _ = aim_entry(b, a, oil=runner.oil, ball=runner.ball)
+                d, _ = aim_entry(b, a, oil=runner.oil, ball=runner.ball, base=base)
             except ValueError:
                 c += 1
                 if on_cell is not None:
@@ -207,13 +220,15 @@ def pocket_map(boards, angles, n: int, seed: int, *, runner: frame.FrameRunner, 
 # --------------------------------------------------------------------------- spares
 
 
-def system_369(name: str) -> lane.Delivery:
-    """The 3-6-9 system's throw at a leave: the strike ball from the strike line's foul board moved
-    by the system's boards, over the same target arrow."""
-    _, move = LEAVES[name]
-    foul = STRIKE_FOUL - move
-    angle = math.degrees(math.atan((foul - STRIKE_ARROW) * lane.BOARD_WIDTH / (lane.ARROWS_FT * lane.FT)))
-    return replace(STRIKE, board=float(foul), at="foul", angle=float(angle))
+def system_369(name: str, strike: lane.Delivery = STRIKE) -> lane.Delivery:
+    """The 3-6-9 system's throw at a leave: the strike ball (default :data:`STRIKE`; a bowler's) from
+    its foul board moved by the system's boards, over the same target arrow (its straight line's)."""
+    _, move = leave_spec(name)
+    s_foul = strike.foul_board()
+    s_arrow = s_foul - math.tan(math.radians(strike.angle)) * lane.ARROWS_FT * lane.FT / lane.BOARD_WIDTH
+    foul = float(np.clip(s_foul - move, 1.0, 39.0))
+    angle = math.degrees(math.atan((foul - s_arrow) * lane.BOARD_WIDTH / (lane.ARROWS_FT * lane.FT)))
+    return replace(strike, board=float(foul), at="foul", angle=float(angle))
 
 
 def aim_point(pins) -> tuple[float, float]:
@@ -263,13 +278,14 @@ class SpareResult:
         return asdict(self)
 
 
-def candidates(name: str, *, oil: str = "house", ball=None) -> list:
+def candidates(name: str, *, oil: str = "house", ball=None, strike: lane.Delivery = STRIKE) -> list:
     """(label, delivery) of every throw :func:`best_spare` tries at leave ``name``: the 3-6-9 line
-    first, then the straight spare balls (aim offsets up to 2 boards, 3 on a multi-pin leave)."""
-    key, _ = LEAVES[name]
+    (from ``strike``) first, then the straight spare balls (aim offsets up to 2 boards, 3 on a
+    multi-pin leave)."""
+    key, _ = leave_spec(name)
     x, y = aim_point(key)
     wide = (0.0, -1.0, 1.0, -2.0, 2.0) + ((-3.0, 3.0) if len(leave_pins(name)) > 1 else ())
-    out = [("3-6-9", system_369(name))]
+    out = [("3-6-9", system_369(name, strike))]
     down_board = float(lane.y_to_board(y))  # straight down the boards: drives a front pin into the one behind
     for offs, foul, mph in ((wide, None, 17.0), (wide[:5], None, 21.0), ((0.0, -1.0, 1.0), 20.0, 17.0),
                             ((0.0, -1.0, 1.0), down_board, 17.0)):
@@ -286,7 +302,8 @@ POLISH_PER_SCREEN = 40
 
 
 def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, screen: int = 12,
-               nz: noise.Noise = noise.DEFAULT, on_done=None, polish: int | None = None) -> SpareResult:
+               nz: noise.Noise = noise.DEFAULT, on_done=None, polish: int | None = None,
+               strike: lane.Delivery | None = None) -> SpareResult:
     """The candidate of :func:`candidates` that converts leave ``name`` best. Screening: ``screen``
     noisy throws each; the best three get ``2 * screen`` more and their noise-free throw is run
     at h = 1, 0.5 and 0.25 ms; the pick is the most conversions among those three whose ladder
@@ -299,10 +316,10 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     pick converted all of its ``3 * screen`` screening throws, or no candidate converted any.
     The polished throw replaces the pick when its noise-free throw converts at every timestep
     of the ladder (it is never worse than the pick on the polish's own screen)."""
-    if name not in LEAVES:
-        raise ValueError(f"leave: {name!r} is not one of the common leaves ({', '.join(LEAVES)})")
     standing = leave_pins(name)
-    cands = candidates(name, oil=runner.oil, ball=runner.ball)
+    if len(standing) == 10:
+        raise ValueError(f"leave: {name!r} is all ten pins: a first ball, not a spare")
+    cands = candidates(name, oil=runner.oil, ball=runner.ball, strike=STRIKE if strike is None else strike)
     k = {}
     for c, (label, d) in enumerate(cands):
         est, _ = noise.probability(d, screen, seed + 1000 + c, runner=runner, standing=standing, noise=nz,

@@ -1,0 +1,187 @@
+"""A bowler's line and a coach's advice: where to stand and where to look.
+
+* **The line** (:func:`line_of`): a throw's stance board, target at the arrows (the board where
+  the ball's *real* path crosses 15 ft, named by its nearest arrow), breakpoint, and board and
+  entry angle at the head pin's line. The stance is the board of the slide foot on the
+  approach: the ball is released :data:`STANCE_SEP` boards towards the bowling hand (a medium
+  men's frame, about 7 boards between the ball and the slide foot: Rich Jacobson, "How to know
+  you're lined up properly", richjacobsonbowling.com; assumed for every bowler, and a straight
+  walk, no drift).
+* **Aiming through a target** (:func:`aim_target`): the launch angle that makes the ball's real
+  path, from a given board at the foul line, cross a given board at the arrows (Newton's step
+  with the straight-line slope, each step one run of the ball alone).
+* **Spare advice** (:func:`advise_leave`): the spare tool's best line at the leave
+  (:func:`.spares.best_spare` under the bowler's noise), said as stance and target, with the
+  conversion probability and its 95 % Wilson interval.
+* **Strike advice after a frame** (:func:`move_after`): the hit named (:mod:`.names`), and the
+  move the coaching rule gives: *move in the direction of the miss* -- a light hit (the ball
+  right of the pocket, for a right-hander) moves feet and eyes right, towards the hand; a high
+  or Brooklyn hit moves them left -- in the **2-and-1** ratio (feet 2 boards, target 1 board,
+  the same way: "The fundamentals of target line adjustments", Bowling This Month,
+  2017-03-20), one step per :data:`BOARDS_PER_STEP` boards the ball missed the pocket's middle
+  by (at least one). The advice is checked on the lane: the moved line is thrown (the ball
+  alone, no noise) and its board at the pins reported beside the old one.
+
+Compute only: no files, no printing.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+from nbst.models.bowling import lane
+from nbst.models.bowling.lane import names as _names
+
+__all__ = ["STANCE_SEP", "ARROW_BOARDS", "BOARDS_PER_STEP", "POCKET_MIDDLE", "stance_of", "arrow_text", "line_of",
+           "aim_target", "Move", "move_after", "LeaveAdvice", "advise_leave", "SAMPLE_NOTE"]
+
+#: Boards from the slide foot to the ball at release (assumed; see the module docstring).
+STANCE_SEP = 7.0
+#: The arrows' boards (counted from the bowling hand's edge), 15 ft past the foul line.
+ARROW_BOARDS = (5, 10, 15, 20, 25, 30, 35)
+#: One 2-and-1 step per this many boards of miss at the pins (assumed: a step moves the target
+#: one board, and a board at the arrows is about two at the pins for a ball that hooks back).
+BOARDS_PER_STEP = 2.0
+#: The pocket's middle (right-hander's board at the head pin's line).
+POCKET_MIDDLE = 17.5
+#: What every readout says of one throw.
+SAMPLE_NOTE = ("one throw's outcome is a sample (a timestep or a hair of release changes it); its probability "
+               "over noisy throws is the result")
+
+
+def stance_of(foul_board: float) -> float:
+    """The stance (slide-foot board) of a ball released on ``foul_board``."""
+    return float(foul_board) + STANCE_SEP
+
+
+def arrow_text(board: float) -> str:
+    """``board 10.3 (2nd arrow +0.3)``: a board at the arrows and its nearest arrow."""
+    i = min(range(len(ARROW_BOARDS)), key=lambda k: abs(ARROW_BOARDS[k] - board))
+    nth = ("1st", "2nd", "3rd", "4th", "5th", "6th", "7th")[i]
+    off = board - ARROW_BOARDS[i]
+    return f"board {board:.1f} ({nth} arrow{'' if abs(off) < 0.05 else f' {off:+.1f}'})"
+
+
+def line_of(r) -> dict:
+    """The line of a ball-alone throw (:class:`.lane.ThrowResult`): stance, release board, target
+    at the arrows (the real path's crossing), breakpoint, entry board and angle, and their names."""
+    return {"stance_board": stance_of(r.board_at_foul_line), "separation_boards": STANCE_SEP,
+            "foul_board": float(r.board_at_foul_line), "target_board": float(r.board_at_arrows),
+            "target": arrow_text(r.board_at_arrows), "breakpoint_ft": r.breakpoint_ft,
+            "breakpoint_board": r.breakpoint_board, "entry_board": float(r.board_at_pins),
+            "entry_angle_deg": float(r.entry_angle_deg), "hit": _names.hit_name(r.board_at_pins)}
+
+
+def aim_target(delivery: lane.Delivery, target: float, oil="house", ball=None, *, tol: float = 0.05,
+               iters: int = 8) -> lane.Delivery:
+    """``delivery`` (its board at the foul line kept) with the launch angle whose ball, alone,
+    crosses board ``target`` at the arrows within ``tol`` boards; LaneError (one line) otherwise."""
+    d = replace(delivery.check(), board=delivery.foul_board(), at="foul")
+    per_deg = lane.ARROWS_FT * lane.FT * math.radians(1.0) / lane.BOARD_WIDTH   # boards per degree, straight
+    a = math.degrees(math.atan((d.board - target) * lane.BOARD_WIDTH / (lane.ARROWS_FT * lane.FT)))
+    for _ in range(iters):
+        d = replace(d, angle=float(min(10.0, max(-10.0, a)))).check()
+        _, p, _, _, _ = lane.run(d, oil, ball)
+        ft = lane.x_to_ft(p[:, 0])
+        if ft[-1] < lane.ARROWS_FT:
+            raise lane.LaneError(f"target: from board {d.board:.1f} the ball leaves the lane before the arrows")
+        off = lane.board_at(ft, lane.y_to_board(p[:, 1], d.hand), lane.ARROWS_FT) - target
+        if abs(off) <= tol:
+            return d
+        a += off / per_deg
+    raise lane.LaneError(f"target: no launch angle from board {d.board:.1f} crosses board {target:g} at the arrows")
+
+
+@dataclass
+class Move:
+    """A strike-line move after a frame: the names of the hit and leave, the steps (2-and-1, +
+    left: towards higher boards, away from the hand), the new stance and target, and the moved
+    line's board at the pins (the ball alone) beside the old one."""
+
+    names: dict
+    steps: int
+    direction: str
+    stance_board: float
+    target_board: float
+    new_stance_board: float
+    new_target_board: float
+    board_at_pins: float | None
+    new_board_at_pins: float | None
+    delivery: dict
+    text: str
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -> Move:
+    """The move after a frame (a throw file's dict, :mod:`.throwfile`): see the module docstring.
+    ``check``: throw the moved line (the ball alone) and report its board at the pins."""
+    d = lane.Delivery(**frame_doc["delivery"])
+    o = frame_doc["outcome"]
+    nm = _names.names(frame_doc["standing"], o["leave"], o["board_at_pins"], o["entry_angle_deg"], d.hand)
+    b = o["board_at_pins"]
+    miss = 0.0 if b is None else float(b) - POCKET_MIDDLE   # + high (left of the pocket for a right-hander)
+    steps = 0 if nm["hit"] == "pocket" or b is None else max(1, int(round(abs(miss) / BOARDS_PER_STEP)))
+    sign = 1.0 if miss > 0 else -1.0    # high: left (higher boards); light: right (towards the hand)
+    here = lane.throw(d, oil, ball)
+    stance, target = stance_of(here.board_at_foul_line), float(here.board_at_arrows)
+    ns, nt = stance + sign * 2 * steps, target + sign * steps
+    nd = d
+    new_b = None
+    if steps:
+        nd = aim_target(replace(d, board=ns - STANCE_SEP, at="foul"), nt, oil, ball)
+        if check:
+            new_b = float(lane.throw(nd, oil, ball).board_at_pins)
+    way = ("left" if sign > 0 else "right") if d.hand == "right" else ("right" if sign > 0 else "left")
+    phrase = _names.text(nm)
+    if steps:
+        txt = (f"{phrase}: move {steps} {way} (feet {2 * steps} boards, eyes {steps}: stand on {ns:.0f}, look at "
+               f"{arrow_text(nt)})")
+    else:
+        txt = f"{phrase}: stay (stand on {stance:.0f}, look at {arrow_text(target)})"
+    return Move(names=nm, steps=steps, direction=way if steps else "stay", stance_board=stance, target_board=target,
+                new_stance_board=ns, new_target_board=nt, board_at_pins=None if b is None else float(b),
+                new_board_at_pins=new_b, delivery=nd.to_dict(), text=txt)
+
+
+@dataclass
+class LeaveAdvice:
+    """Where to stand and look at a leave, the conversion probability (k of n, 95 % Wilson), the
+    ball, and the spare tool's account (:class:`.spares.SpareResult` as a dict)."""
+
+    leave: str
+    names: list
+    stance_board: float
+    target_board: float
+    target: str
+    delivery: dict
+    estimate: dict
+    label: str
+    spare: dict
+    text: str
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=None, screen: int = 12,
+                 polish: int | None = None, on_done=None) -> LeaveAdvice:
+    """The advice at ``leave`` ('-' joined pins): :func:`.spares.best_spare` under ``noise`` (a
+    bowler's), said as stance and target (the real path's crossing of the arrows)."""
+    from nbst.models.bowling.lane import noise as _noise, spares
+
+    nz = noise if noise is not None else _noise.DEFAULT
+    res = spares.best_spare(leave, n, seed, runner=runner, screen=screen, nz=nz, on_done=on_done, polish=polish,
+                            strike=strike)
+    d = lane.Delivery(**res.best)
+    r = lane.throw(d, runner.oil, runner.ball)
+    e = res.estimate
+    standing = spares.leave_pins(leave)
+    nm = _names.leave_names(range(1, 11), standing)
+    stance, target = stance_of(r.board_at_foul_line), float(r.board_at_arrows)
+    txt = (f"leave {leave}{' (' + ', '.join(nm) + ')' if nm else ''}: stand on {stance:.1f}, look at "
+           f"{arrow_text(target)}, {d.mph:.1f} mph {d.rpm:.0f} rpm ({res.best_label}): converts {100 * e['p']:.0f}% "
+           f"({e['k']}/{e['n']}; 95% CI {100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)")
+    return LeaveAdvice(leave=leave, names=nm, stance_board=stance, target_board=target, target=arrow_text(target),
+                       delivery=res.best, estimate=e, label=res.best_label, spare=res.to_dict(), text=txt)

@@ -1,0 +1,320 @@
+"""``nbst bowl spares``, ``pocket`` and ``advise``: what a coach asks of the lane half -- the best
+line at each leave, the pocket map, and where to stand and look (models/bowling/lane/spares.py,
+advise.py, names.py).
+
+Every readout names the leave (:mod:`nbst.models.bowling.lane.names`) and says that one
+throw's outcome is a sample and its probability the result.
+"""
+from __future__ import annotations
+
+import sys
+
+from nbst.cli.args import Bounded
+from nbst.cli.bowl_args import bowler_flag, bowler_of, err, mc_flags
+from nbst.cli.bowl_lane import _bar
+from nbst.parallel import default_jobs
+
+
+def register(bowl) -> None:
+    """``spares``, ``pocket`` and ``advise`` on ``nbst bowl``'s subparsers."""
+    s = bowl.add_parser("spares", help="the throw converting a leave (any, or each common one) with the highest "
+                                       "probability",
+                        description="For each leave, the 3-6-9 system's line (the strike ball, feet moved 3/6/9 "
+                                    "boards, same target arrow) and straight spare balls (cross-lane at 17 and 21 mph, "
+                                    "from the middle and straight down the boards, at the leave's aim point and 1-2 "
+                                    "boards either side) are "
+                                    "screened on --screen noisy throws each; the best is polished by a robust "
+                                    "search (--polish) and measured on --samples, beside the 3-6-9 line "
+                                    "(docs/bowling.md).",
+                        epilog="Example: nbst bowl spares --leaves 10,7 --samples 40")
+    which = s.add_mutually_exclusive_group()
+    which.add_argument("--leave", default=None, metavar="PINS",
+                       help="one leave to shoot, its pins standing: --leave 3,10 (any pins 1..10 but all ten)")
+    which.add_argument("--leaves", default=None, metavar="L1,L2",
+                       help="leaves to shoot, '-' joining pins, ',' between leaves, any leave (default: 10, 7, 4, 6, "
+                            "2-4-5-8, 3-6-10, 1-2-4, 1-3-6, 2-8, 3-9, 7-10)")
+    bowler_flag(s, "shoot")
+    s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
+                   help="noisy throws per candidate in the screening (default 12)")
+    s.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=None, metavar="N",
+                   help="noisy frames per leave for polishing the pick with a robust search (an evolution "
+                        "strategy on common noisy throws; skipped where the pick converted every screening "
+                        "throw or nothing converted); default 40 x --screen (480); 0: no polish")
+    mc_flags(s, 60, "measured throw")
+    s.set_defaults(func=cmd_spares)
+
+    p = bowl.add_parser("pocket", help="pocket map: strike probability over board x entry angle (a PNG), and carry",
+                        description="Aim a delivery at each (board at the head pin, entry angle) cell, run --samples "
+                                    "noisy frames of it, and draw the strike probability as a heatmap beside the "
+                                    "strike share of all frames by actual entry; carry = strikes / pocket hits "
+                                    "(actual board 17-18). The published pocket (17.5, ~6 deg) is marked.",
+                        epilog="Example: nbst bowl pocket -o pocket.png --samples 40")
+    p.add_argument("-o", "--output", required=True, metavar="MAP.png", help="the heatmap (PNG)")
+    p.add_argument("--boards", default="15.5:19.5:1", metavar="A:B:STEP", help="boards (default 15.5:19.5:1)")
+    p.add_argument("--angles", default="2:7:1", metavar="A:B:STEP", help="entry angles, deg (default 2:7:1)")
+    bowler_flag(p, "aim")
+    mc_flags(p, 40, "cell")
+    p.set_defaults(func=cmd_pocket)
+    register_advise(bowl)
+
+
+def register_advise(bowl) -> None:
+    a = bowl.add_parser("advise", help="where to stand and where to look: at a leave, or after a frame",
+                        description="A coach's advice in a bowler's units. --leave PINS: the spare tool's best line "
+                                    "at the leave (bowl spares, under the --bowler's release noise), said as the "
+                                    "stance board and the target at the arrows (where the ball's real path crosses "
+                                    "them), with the conversion probability and its 95%% Wilson interval. --after "
+                                    "THROW.json (a frame's throw file, bowl frame -o): the hit and the leave named, "
+                                    "and the move: in the direction of the miss, feet 2 boards and eyes 1 per step "
+                                    "(the 2-and-1 move), the moved line thrown (the ball alone) to show where it "
+                                    "now meets the pins (docs/bowling.md).",
+                        epilog="Examples: nbst bowl advise --bowler league200 --leave 10 --samples 40; "
+                               "nbst bowl frame --bowler pro -o f.json && nbst bowl advise --after f.json")
+    what = a.add_mutually_exclusive_group(required=True)
+    what.add_argument("--leave", default=None, metavar="PINS", help="the leave: pins standing, e.g. 10 or 3,10")
+    what.add_argument("--after", default=None, metavar="THROW.json", help="a frame's throw file (bowl frame -o)")
+    bowler_flag(a, "advise")
+    a.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
+                   help="--leave: noisy throws per candidate line in the screening (default 12)")
+    a.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=0, metavar="N",
+                   help="--leave: noisy frames polishing the pick (bowl spares --polish; default 0: none)")
+    mc_flags(a, 60, "measured line")
+    a.set_defaults(func=cmd_advise)
+
+
+def cmd_advise(args) -> int:
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import advise, frame, noise, throwfile
+
+    if args.after is not None:
+        try:
+            d = throwfile.load(args.after)
+            throwfile.replayable(d, args.after)
+            mv = advise.move_after(d, throwfile.oil_of(d), lane.Ball(**d["ball"]))
+        except (throwfile.ThrowFileError, ValueError) as e:
+            return err("advise", str(e))
+        doc = {"after": str(args.after), **mv.to_dict(), "note": _note()}
+        if args.json:
+            from nbst.cli.args import print_json
+
+            print_json(doc)
+            return 0
+        print(mv.text)
+        if mv.steps:
+            print(f"check: the moved line, the ball alone, meets the pins on board {mv.new_board_at_pins:.1f} "
+                  f"(this frame's: {mv.board_at_pins:.1f}; the pocket 17-18)")
+        lv = d["outcome"]["leave"]
+        if lv:
+            print(f"spare: nbst bowl advise --leave {','.join(map(str, lv))}"
+                  + (f" --bowler {args.bowler}" if args.bowler else ""))
+        print(f"note: {_note()}")
+        return 0
+    args.leaves = None
+    try:
+        (leave,) = leaves_of(args)
+        lane.pattern(args.oil)
+        strike, nz = bowler_of(args)
+    except ValueError as e:
+        return err("advise", str(e))
+    nz = noise.DEFAULT if nz is None else nz
+    bar = _bar(args, spare_frames(leave, args.screen, args.samples, args.polish), "advise frames")
+    try:
+        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            adv = advise.advise_leave(leave, args.samples, args.seed, runner=R, noise=nz, strike=strike,
+                                      screen=args.screen, polish=args.polish, on_done=lambda: bar.update(1))
+    except KeyboardInterrupt:
+        bar.close()
+        print("nbst bowl advise: interrupted; no advice", file=sys.stderr)
+        return 130
+    except ValueError as e:
+        bar.close()
+        return err("advise", str(e))
+    bar.close()
+    doc = {**adv.to_dict(), "bowler": args.bowler, "noise": nz.to_dict(), "seed": args.seed, "note": _note()}
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json(doc)
+        return 0
+    print(adv.text + (f"; bowler {args.bowler}" if args.bowler else ""))
+    print(f"note: {_note()}")
+    return 0
+
+
+def spare_frames(leave: str, screen: int, samples: int, polish: int) -> int:
+    """Frames :func:`.spares.best_spare` runs at ``leave`` at most (its candidates screened, three
+    screened more, the two measures, the polish and its measure)."""
+    return 2 * samples + (23 + 2 * ("-" in leave)) * screen + (polish + samples) * (polish > 0)
+
+
+def _grid(text: str, flag: str, lo: float, hi: float) -> list:
+    import numpy as np
+
+    try:
+        a, b, st = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ValueError(f"{flag}: must be A:B:STEP (numbers), got {text!r}") from None
+    if not (lo <= a <= b <= hi and st > 0 and (b - a) / st <= 40):
+        raise ValueError(f"{flag}: need {lo:g} <= A <= B <= {hi:g}, STEP > 0 and at most 41 values, got {text!r}")
+    return [round(float(v), 6) for v in np.arange(a, b + st / 2, st)]
+
+
+def cmd_spares(args) -> int:
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import frame, spares
+
+    try:
+        names = leaves_of(args)
+        lane.pattern(args.oil)
+        strike, nz = bowler_of(args)
+    except ValueError as e:
+        return err("spares", str(e))
+    from nbst.models.bowling.lane import noise
+
+    nz = noise.DEFAULT if nz is None else nz
+    out = []
+    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures,
+    # then at most the polish's budget and its measure (a skipped polish leaves the bar short of its total)
+    polish = spares.POLISH_PER_SCREEN * args.screen if args.polish is None else args.polish
+    total = sum(spare_frames(nm, args.screen, args.samples, polish) for nm in names)
+    bar = _bar(args, total, "spare frames")
+    try:
+        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            for nm in names:
+                res = spares.best_spare(nm, args.samples, args.seed, runner=R, screen=args.screen,
+                                        on_done=lambda: bar.update(1), polish=polish, nz=nz, strike=strike)
+                out.append(spare_doc(res))
+                if not args.json:
+                    bar.clear() if hasattr(bar, "clear") else None
+                    print(spare_line(out[-1]), flush=True)
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"nbst bowl spares: interrupted after {len(out)} of {len(names)} leaves", file=sys.stderr)
+        return 130
+    bar.close()
+    if args.json:
+        from nbst.cli.args import print_json
+
+        print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "polish": polish,
+                    "bowler": args.bowler, "noise": nz.to_dict(), "note": _note(), "spares": out})
+    else:
+        print(f"note: {_note()}")
+    return 0
+
+
+def _note() -> str:
+    from nbst.models.bowling.lane.advise import SAMPLE_NOTE
+
+    return SAMPLE_NOTE
+
+
+def leaves_of(args) -> list[str]:
+    """The leaves of ``bowl spares`` ('-' joined pins): --leave (one, pins by commas), --leaves
+    (several), or the common ones; ValueError (one line) for a pin outside 1..10, an empty leave
+    (a strike: nothing to shoot) or all ten standing (a first ball)."""
+    from nbst.models.bowling.lane import spares
+
+    if args.leave is not None:
+        raw, flag = [args.leave], "--leave"
+    elif args.leaves is not None:
+        raw, flag = [x.strip() for x in args.leaves.split(",")], "--leaves"
+    else:
+        return list(spares.LEAVES)
+    out = []
+    for nm in raw:
+        t = nm.strip().lower()
+        if t in ("", "none", "strike", "x"):
+            raise ValueError(f"{flag}: {nm.strip() or 'an empty leave'!r} leaves nothing standing (a strike): name the "
+                             "pins standing, e.g. 3,10")
+        try:
+            pins = spares.leave_pins(t.replace(",", "-") if flag == "--leave" else t)
+        except ValueError:
+            raise ValueError(f"{flag}: pins must be distinct numbers 1..10, got {nm.strip()!r}") from None
+        if len(pins) == 10:
+            raise ValueError(f"{flag}: {nm.strip()!r} is all ten pins standing: a first ball, not a spare")
+        out.append("-".join(map(str, pins)))
+    return out
+
+
+def spare_doc(res) -> dict:
+    """A spare result (spares.SpareResult) as a dict, with its leave's names."""
+    from nbst.models.bowling.lane import names, spares
+
+    d = res.to_dict()
+    d["names"] = names.leave_names(range(1, 11), spares.leave_pins(res.leave))
+    return d
+
+
+def _left(leave) -> str:
+    return "converted" if not leave else "left: " + ",".join(map(str, leave))
+
+
+def spare_line(r: dict) -> str:
+    e, s, b = r["estimate"], r["system_369_estimate"], r["best"]
+    nm = f" ({', '.join(r['names'])})" if r.get("names") else ""
+    return (f"{r['leave']:>8}{nm}  best: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
+            f"{b['mph']:.1f} mph, {b['rpm']:.0f} rpm, rotation {b['rotation']:.0f})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
+            f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)   3-6-9 line (board {r['system_369']['board']:.1f}): "
+            f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
+            + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(_left(x[1]) for x in r["ladder"]))
+
+
+def cmd_pocket(args) -> int:
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import frame, spares
+
+    try:
+        boards = _grid(args.boards, "--boards", 1, 39)
+        angles = _grid(args.angles, "--angles", 0, 10)
+        lane.pattern(args.oil)
+        if not args.output.lower().endswith(".png"):
+            raise ValueError(f"{args.output}: -o must name a .png file")
+        strike, nz = bowler_of(args)
+    except ValueError as e:
+        return err("pocket", str(e))
+    from nbst.models.bowling.lane import noise
+
+    nz = noise.DEFAULT if nz is None else nz
+    base = spares.STRIKE if strike is None else strike
+    from nbst.outputs import atomic_path, prepare_output
+
+    prepare_output(args.output)  # before the frames: a link, a FIFO or a folder is refused in one line
+    bar = _bar(args, args.samples * len(boards) * len(angles), "pocket frames")
+    try:
+        with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
+            pm = spares.pocket_map(boards, angles, args.samples, args.seed, runner=R, on_done=lambda: bar.update(1),
+                                   nz=nz, base=base)
+    except KeyboardInterrupt:
+        bar.close()
+        print("nbst bowl pocket: interrupted; nothing written", file=sys.stderr)
+        return 130
+    bar.close()
+    fig = spares.pocket_figure(pm)
+    with atomic_path(args.output) as tmp:  # the one writer: whole PNG or the previous file
+        fig.savefig(tmp)
+    b, a, p, k = pm.best()
+    ks, ns = pm.carry()
+    kc, nc = pm.carry(angles=(4.0, 6.0))
+    from nbst.models.bowling.lane.noise import wilson
+
+    doc = {"best": {"board": b, "angle": a, "p": p, "k": k, "n": pm.n}, "carry": {"strikes": ks, "pocket_hits": ns},
+           "carry_4_6_deg": {"strikes": kc, "pocket_hits": nc}, "map": pm.to_dict(), "output": args.output,
+           "bowler": args.bowler, "note": _note()}
+    if args.json:
+        from nbst.cli.args import print_json
+
+        doc["map"].pop("hits")
+        print_json(doc)
+        return 0
+    lo, hi = wilson(k, pm.n)
+    print(f"wrote {args.output}: {len(boards)} boards x {len(angles)} angles, {pm.n} noisy throws per cell, seed {pm.seed}"
+          + (f", bowler {args.bowler} (its release and noise)" if args.bowler else ""))
+    print(f"best cell  board {b:g} at {a:g} deg: strike {100 * p:.0f}% ({k}/{pm.n}; 95% CI {100 * lo:.0f}-{100 * hi:.0f}%)")
+    for label, (kk, nn) in (("carry (actual board 17-18, any angle)", (ks, ns)), ("carry (17-18 at 4-6 deg)", (kc, nc))):
+        if nn:
+            l2, h2 = wilson(kk, nn)
+            print(f"{label}: {100 * kk / nn:.0f}% ({kk}/{nn}; 95% CI {100 * l2:.0f}-{100 * h2:.0f}%)")
+        else:
+            print(f"{label}: no pocket hits")
+    print(f"note: {_note()}")
+    return 0
