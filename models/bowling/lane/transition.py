@@ -19,8 +19,8 @@
   :data:`MOVE_AFTER` strike balls crossed the head pin's line and, when their mean is more than
   :data:`MOVE_MISS` boards high (left of the pocket for a right-hander) or light, makes the
   coach's "2 and 1" move: feet 2 boards and target 1 board in the same direction (in when high,
-  out when light). Measured on the house shot, one such move shifts the pro's ball at the pins by
-  1.6-2.5 boards (docs/bowling.md).
+  out when light). One such move shifts the pro's ball at the pins by about 2 boards (1.6-2.7,
+  measured on the house shot fresh and after 10-30 identical balls, 2026-12-03; docs/bowling.md).
 * **Readings**: each ball's board and entry angle at the pins (the frame's), its breakpoint
   (the ball alone, :func:`.phases.throw`, on a copy of the lane as it was: the same ball path),
   whether a strike ball hit the pocket (:data:`POCKET`: boards 16.5-18.5, issue 34's window),
