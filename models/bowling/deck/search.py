@@ -32,7 +32,7 @@ Generator, and nothing else touches numpy's global random state in between).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -72,20 +72,25 @@ class Progress:
 
 
 @dataclass
-class SearchResult:
-    """Best delivery found for ``target`` (a 10-bit mask), and how the search went."""
+class SearchResult(restarts.Found):
+    """Best delivery found for ``target`` (a 10-bit mask), and how the search went: the rollout
+    room's :class:`~nbst.models.mjsearch.restarts.Found` (``stopped``: "found" | "budget" |
+    "interrupted"; ``archive``: mask -> (4,) delivery), read in bowling's words."""
 
-    target: int
-    delivery: np.ndarray         # (4,) y, speed, angle, spin
-    mask: int
-    hamming: int
-    cost: float
-    rollouts: int
-    restarts: int
-    stopped: str                 # "found" | "budget" | "interrupted"
-    seed: int
-    wall_time: float
-    archive: dict = field(default_factory=dict)   # mask -> (4,) delivery
+    @property
+    def delivery(self) -> np.ndarray:
+        """(4,) y, speed, angle, spin, 5 m before the pins (``x``)."""
+        return self.x
+
+    @property
+    def mask(self) -> int:
+        """The pins it knocks down, a 10-bit mask (``signature``)."""
+        return self.signature
+
+    @property
+    def hamming(self) -> int:
+        """Pins off the request (``distance``, Hamming by default)."""
+        return self.distance
 
 
 def to_unit(delivery) -> np.ndarray:
@@ -191,9 +196,7 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
     finally:
         if own:
             L.close()
-    return SearchResult(target=target, delivery=f.x, mask=f.signature, hamming=f.distance, cost=f.cost,
-                        rollouts=f.rollouts, restarts=f.restarts, stopped=f.stopped, seed=int(seed),
-                        wall_time=f.wall_time, archive=f.archive)
+    return SearchResult(**vars(f))
 
 
 def robustness(runner: deck.Runner, delivery, mask: int, *, lateral_max: float = 0.05,
