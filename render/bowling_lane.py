@@ -67,8 +67,21 @@ void main() {
 """
 
 
+#: The cameras: behind the bowler (following the ball), overhead over the back of the lane, both
+#: side by side, and the pin-deck close-up.
+CAMERAS = ("behind", "overhead", "both", "deck")
+#: The pin-deck camera (m; y towards the bowling hand's side, the pocket's): 1.5 m in front of the
+#: head pin, 0.40 m up, looking at the middle of the rack at a pin's height, 42 deg of view.
+DECK_EYE = (-1.5, -0.30, 0.40)
+DECK_TARGET = (0.45, 0.0, 0.32)
+DECK_FOV = 42.0
+#: Boards from the slide foot to the ball at release (models/bowling/lane/advise.py's STANCE_SEP).
+STANCE_SEP = 7.0
+
+
 class LaneRenderer(FrameRenderer):
-    """Frames of a recorded throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both.
+    """Frames of a recorded throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both |
+    deck (the pin-deck close-up).
     ``asked`` (pins the throw was meant to knock down), ``probability`` (of the outcome, 0..1) and
     ``probability_note`` (e.g. its sample size and interval) add readout lines when given;
     ``expected`` (the pins down a throw file records) adds a line only when the recorded frame
@@ -83,8 +96,8 @@ class LaneRenderer(FrameRenderer):
         from nbst.models.bowling import lane, pin, scene
         from nbst.render.shapes import Text, text_cell
 
-        if camera not in ("behind", "overhead", "both"):
-            raise ValueError(f"camera must be behind, overhead or both, got {camera!r}")
+        if camera not in CAMERAS:
+            raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         self.ctx, self.throw, self.motion, self.camera = ctx, throw, throw.motion, camera
         self.size = tuple(size)
         self.asked = None if asked is None else sorted(int(p) for p in asked)
@@ -101,7 +114,7 @@ class LaneRenderer(FrameRenderer):
         else:
             self.panels = {camera: (0, 0, w, h)}
         px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
-        text_w = self.panels.get("behind", self.panels.get("overhead"))[2]
+        text_w = next(iter(self.panels.values()))[2] if len(self.panels) == 1 else self.panels["behind"][2]
         chars = max(len(s) for s in self.readout(float(self.motion.times[-1])))
         while px > style.MIN_READOUT_PX and chars * text_cell(px)[0] > text_w - 16:
             px -= 1
@@ -166,7 +179,14 @@ class LaneRenderer(FrameRenderer):
         k = self.step_at(t)
         out = []
         for cam, vp in self.panels.items():
-            if cam == "behind":
+            if cam == "deck":   # the pin-deck close-up: fixed, low, in front of the pins, on the pocket's side
+                s = lane.hand_sign(self.hand)
+                eye = np.array([DECK_EYE[0], s * DECK_EYE[1], DECK_EYE[2]])
+                tgt = np.array(DECK_TARGET)
+                proj = perspective(DECK_FOV, vp[2] / h, 0.1, 20.0)
+                flip = np.diag([1.0, -1.0, 1.0, 1.0])
+                out.append((vp, flip @ proj @ look_at(eye, tgt, np.array([0.0, 0.0, 1.0])), eye, cam))
+            elif cam == "behind":
                 bx = min(float(self.motion.ball[k, 0]), float(lane.ft_to_x(FOLLOW_STOP_FT)))
                 eye = np.array([bx - BEHIND_BACK, 0.0, BEHIND_HEIGHT])
                 tgt = np.array([bx + BEHIND_AHEAD, 0.0, 0.0])
@@ -204,7 +224,8 @@ class LaneRenderer(FrameRenderer):
 
         lines = [f"throw   {d.hand}-handed, {d.mph:.1f} mph, {d.rpm:.0f} rpm",
                  f"axis    rotation {d.rotation:.0f} deg, tilt {d.tilt:.0f} deg",
-                 f"line    board {d.foul_board():.1f} at the foul line, {d.angle:+.1f} deg out",
+                 f"line    board {d.foul_board():.1f} at the foul line, {d.angle:+.1f} deg out "
+                 f"(stance {d.foul_board() + STANCE_SEP:.1f})",
                  f"oil     {th.oil} ({lane.pattern(th.oil).length_ft:.0f} ft); ball {b.weight_lb:g} lb, "
                  f"RG {b.rg:.2f}, diff {b.diff:.3f}"]
         if r is None:
@@ -237,6 +258,13 @@ class LaneRenderer(FrameRenderer):
             if k == len(m.times) - 1:
                 tail = "" if self.asked is None else (" = asked" if now == self.asked else ", not asked")
                 lines.append(f"result  down {pins(now)}{leave_of(now)}{tail}")
+                if r is not None:
+                    from nbst.models.bowling.lane import names
+
+                    nm = names.names(play, [n for n in play if n not in now], r.board_at_pins, r.entry_angle_deg,
+                                     d.hand)
+                    lines.append(f"named   {names.text(nm)}")
+                lines.append("note    one throw is a sample; its probability is the result")
                 if self.expected is not None and now != self.expected:
                     lines.append(f"file    down {pins(self.expected)}: this run differs")
             else:
@@ -261,7 +289,8 @@ class LaneRenderer(FrameRenderer):
         cw, ch = self.text.cell
         scw, sch = self.small.cell
         titles = {"behind": "behind the bowler: the full lane, 60 ft to the head pin",
-                  "overhead": f"overhead from {lane.x_to_ft(self.overhead_x[0] + 0.3):.0f} ft"}
+                  "overhead": f"overhead from {lane.x_to_ft(self.overhead_x[0] + 0.3):.0f} ft",
+                  "deck": "the pin deck, close up"}
         k = self.step_at(t)
         down = (pinfall.pins_of(int(self.motion.down_masks[k])) if self.motion.down_masks is not None else [])
         for vp, vpm, _, cam in views:
@@ -270,12 +299,12 @@ class LaneRenderer(FrameRenderer):
                 title = title.split(":")[0]
             self.text.draw_halo(size, self.text.layout([title], vp[0] + (vp[2] - cw * len(title)) / 2, 0.3 * ch),
                                 style.TEXT, style.TEXT_HALO)
-            if cam == "behind":
+            if cam in ("behind", "deck"):
                 self._behind_labels(vp, vpm, k, down)
             else:
                 self._overhead_labels(vp, vpm, down)
         vp = self.panels.get("behind", next(iter(self.panels.values())))
-        y0 = 1.5 * ch if "behind" in self.panels else H - (len(self.readout(t)) + 0.5) * ch
+        y0 = 1.5 * ch if ("behind" in self.panels or "deck" in self.panels) else H - (len(self.readout(t)) + 0.5) * ch
         self.text.draw_halo(size, self.text.layout(self.readout(t), vp[0] + 0.6 * cw, y0), style.TEXT,
                             style.TEXT_HALO)
 
@@ -435,7 +464,7 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
         output: the .mp4, .gif or .png to write.
         still: None for a video; seconds from the release: one frame then (clipped to the
             motion); a negative value: :func:`still_time`.
-        camera: behind | overhead | both.
+        camera: behind | overhead | both | deck (the pin deck close up).
         size: (width, height) pixels (default 1280 x 720).
         fps: frames per second (default 60).
         hold: seconds the last frame is held.

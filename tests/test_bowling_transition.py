@@ -87,10 +87,8 @@ def test_two_and_one_moves_feet_two_boards_and_the_target_one():
     assert T._arrow_board(m) - T._arrow_board(d) == pytest.approx(1.0, abs=1e-9)
     assert m.angle > d.angle  # more angle out: the line opens
     assert T.moved(d, 0.0, 0.0).angle == pytest.approx(d.angle, abs=1e-9)
-    n = T.MOVE_AFTER
-    assert T.move_for([19.0] * n) == 1 and T.move_for([16.0] * n) == -1 and T.move_for([17.0] + [19.0] * n) == 1
-    assert T.move_for([19.0, 17.5, 16.9] + [17.5] * (n - 3)) == 0 and T.move_for([19.0] * (n - 1)) == 0
-    assert T.move_for([19.0] * (n - 1) + [None]) == 0
+    assert T.move_for([19.0, 18.9, 18.8]) == 1 and T.move_for([16.0, 16.2, 16.4]) == -1
+    assert T.move_for([19.0, 17.5, 16.9]) == 0 and T.move_for([19.0, 19.0]) == 0 and T.move_for([19, None, 19]) == 0
 
 
 def test_two_and_one_in_brings_a_high_ball_back_towards_the_pocket():

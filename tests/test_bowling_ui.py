@@ -102,6 +102,8 @@ def test_a_lone_10_is_flat_solid_or_ringing_by_angle_and_hit():
     (["bowl", "throw", "--stance", "5", "--target", "2nd-arrow"], ("--stance", "off the lane")),
     (["bowl", "frame", "--bowler", "amateur"], ("--bowler",)),
     (["bowl", "pocket", "-o", "p.png", "--bowler", "x"], ("--bowler",)),
+    (["bowl", "throw", "--camera", "deck"], ("--camera", "--video or --still")),
+    (["bowl", "throw", "--camera", "top", "--still", "a.png"], ("--camera",)),
 ])
 def test_bad_leaves_bowlers_and_stances_are_one_line_exit_2(argv, words, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -123,6 +125,18 @@ def test_the_parser_defaults_only_what_is_not_given():
     d = bowl_args.delivery_of(args)
     assert (d.board, d.at, d.rpm, d.mph) == (20.0, "foul", 350.0, bowl_args.DELIVERY_DEFAULTS["mph"])
     assert [bowl_args.target_board(t) for t in ("1st-arrow", "2nd arrow", "4th", "12.5")] == [5.0, 10.0, 20.0, 12.5]
+
+
+def test_any_leave_has_an_aim_and_a_3_6_9_move_from_its_pins():
+    from nbst.models.bowling.lane import profiles, spares
+
+    assert spares.leave_spec("7") == spares.LEAVES["7"]
+    assert spares.leave_spec("3-10") == ((3, 10), -6)     # the mean of the 3 and 10: 2 half spacings right
+    assert spares.leave_spec("4-6") == ((4, 6), 0)        # the middle
+    assert spares.leave_spec("2-7") == ((2, 7), 6)
+    pro = profiles.profile("pro").strike
+    d = spares.system_369("3-10", pro)
+    assert d.foul_board() == pytest.approx(pro.foul_board() + 6) and (d.mph, d.rpm) == (pro.mph, pro.rpm)
 
 
 # --------------------------------------------------------------------------- the line
@@ -199,3 +213,23 @@ def test_the_advisors_line_at_the_10_converts_it_without_noise(capsys):
     r = frame.run_frame(lane.Delivery(**doc["delivery"]), "house", standing=[10])
     assert r.converted
     assert 1 <= doc["stance_board"] <= 46 and 1 <= doc["target_board"] <= 39
+
+
+@pytest.mark.slow
+def test_bowl_frame_records_the_bowler_the_line_the_names_and_the_note(tmp_path, capsys):
+    """``--bowler pro --rpm 400``: the pro's line at 400 rpm (the flag overrides), and the throw
+    file says so: bowler, line (stance = release board + 7), names, the sample note; it replays."""
+    from nbst.models.bowling.lane import advise, profiles, throwfile
+
+    out = tmp_path / "t.json"
+    rc, text, err = _main(["bowl", "frame", "--bowler", "pro", "--rpm", "400", "-o", out], capsys)
+    assert rc == 0, err
+    d = throwfile.load(out)
+    raw = json.loads(out.read_text())
+    pro = profiles.profile("pro").strike
+    assert d["delivery"]["rpm"] == 400.0 and d["delivery"]["mph"] == pro.mph and raw["bowler"] == "pro"
+    assert raw["line"]["stance_board"] == pytest.approx(d["delivery"]["board"] + advise.STANCE_SEP)
+    assert raw["names"]["leave"] and raw["names"]["hit"] == names.hit_name(d["outcome"]["board_at_pins"])
+    assert "sample" in raw["note"] and "named" in text and "sample" in text
+    rc, text, err = _main(["bowl", "replay", out], capsys)
+    assert rc == 0 and "named" in text, err

@@ -83,6 +83,9 @@ def picture_flags(p, what: str) -> None:
                    help="the --still's moment, seconds after the release")
     p.add_argument("--size", default=None, metavar="WxH", help="frame size of --video/--still (default 1280x720)")
     p.add_argument("--fps", type=Bounded("fps", 1, 240), default=None, help="--video's frames per second (default 60)")
+    p.add_argument("--camera", choices=("both", "behind", "overhead", "deck"), default=None,
+                   help="--video/--still's view: both (behind the bowler and overhead, side by side; default), "
+                        "behind, overhead, or deck (the pin deck close up: the ball into the pins, the pins flying)")
 
 
 def oil_flag(t) -> None:
@@ -250,7 +253,7 @@ def check_picture_args(args) -> str | None:
         return f"--still {still}: use a .png file"
     if video is not None and still is not None and str(video) == str(still):
         return f"--video and --still name the same file {video}"
-    for flag, attr in (("--still-time", "still_time"), ("--size", "size"), ("--fps", "fps")):
+    for flag, attr in (("--still-time", "still_time"), ("--size", "size"), ("--fps", "fps"), ("--camera", "camera")):
         if getattr(args, attr, None) is not None and video is None and still is None:
             return f"{flag}: needs --video or --still"
     if getattr(args, "fps", None) is not None and still is not None and video is None:
@@ -270,7 +273,7 @@ def check_picture_args(args) -> str | None:
 
 def wants_picture(args) -> bool:
     """Whether any picture flag (--video, --still, --still-time, --size, --fps) was given."""
-    return any(getattr(args, a, None) is not None for a in ("video", "still", "still_time", "size", "fps"))
+    return any(getattr(args, a, None) is not None for a in ("video", "still", "still_time", "size", "fps", "camera"))
 
 
 #: The bowler profiles (models/bowling/lane/profiles.py; a test checks the two lists agree).

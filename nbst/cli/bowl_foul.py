@@ -104,8 +104,8 @@ def cmd_solve(args) -> int:
     from nbst.outputs import OutputError, prepare_output, signals_deferred, sigterm_as_interrupt, write_text_atomic
     from nbst.parallel import default_jobs
 
-    from nbst.models.bowling import pinfall, subsets
-    from nbst.models.bowling.lane import atlas as foul_atlas, frame, noise, robust, throwfile
+    from nbst.models.bowling import lane, pinfall, subsets
+    from nbst.models.bowling.lane import advise, atlas as foul_atlas, frame, names, noise, robust, throwfile
     from nbst.models.mjsearch.ladder import kept_text
 
     bad = _refuse(args, SOLVE_5M_ONLY, "deliveries", "--foul-line/--robust")
@@ -193,10 +193,13 @@ def cmd_solve(args) -> int:
         bar.update()
         doc = throwfile.throw_dict(r, oil=foul_atlas.OIL, requested=want, estimate=state["est"], want=want,
                                    ladder=state["ladder"])
-        from nbst.models.bowling.lane import advise, names
-
-        doc.update(bowler=args.bowler, names=names.names(r.in_play, r.leave, r.board_at_pins, r.entry_angle_deg,
-                                                          d.hand), note=advise.SAMPLE_NOTE)
+        try:
+            ln = advise.line_of(lane.throw(d, foul_atlas.OIL))
+        except lane.LaneError:   # a ball that leaves the lane has no line to the pins
+            ln = None
+        doc.update(bowler=args.bowler, line=ln,
+                   names=names.names(r.in_play, r.leave, r.board_at_pins, r.entry_angle_deg, d.hand),
+                   note=advise.SAMPLE_NOTE)
         with signals_deferred(reraise=False) as late:
             write_text_atomic(Path(args.output), throwfile.dumps(doc))
     except (OutputError, ValueError) as e:
@@ -206,7 +209,8 @@ def cmd_solve(args) -> int:
         R.close()
     got = ",".join(map(str, r.down)) or "none"
     bar.close(note=f"pins down {got}")
-    line = (f"pins down {got}, leave {','.join(map(str, r.leave)) or 'none'}; from the foul line: {_delivery_text(d)}")
+    line = (f"pins down {got}, leave {','.join(map(str, r.leave)) or 'none'} ({names.text(doc['names'])}); "
+            f"from the foul line: {_delivery_text(d)}")
     if state["est"] is not None:
         e = state["est"]
         line += (f"; probability {e.text()} under the release noise"

@@ -124,13 +124,16 @@ def cmd_throw(args) -> int:
                          ("--still", getattr(args, "still", None)), ("--path-plot", args.path_plot)):
         if path:  # before the throw: a link, a FIFO or a folder is refused in one line
             prepare_output(path, option=option)
+    bad = check_picture_args(args) if wants_picture(args) else None
+    if bad:
+        return err("throw", bad)
     try:
         ball = ball_of(args)
         d, _ = the_delivery(args, args.oil, ball)
         r = lane.throw(d, args.oil, ball)
     except ValueError as e:
         return err("throw", str(e))
-    if args.video or args.still or args.still_time is not None or args.size or args.fps is not None:
+    if wants_picture(args):
         bad = picture_from_args(args, d, ball)
         if bad:
             return err("throw", bad)
@@ -351,8 +354,13 @@ def replay_throw(args) -> int:
         print_json({"throw": str(args.file), "down": r.down, "expected": want, "leave": r.leave,
                     "expected_leave": sorted(d["outcome"]["leave"]), "match": ok})
     else:
+        from nbst.models.bowling.lane import advise, names
+
+        nm = names.names(r.in_play, r.leave, r.board_at_pins, r.entry_angle_deg, d["delivery"]["hand"])
         print(f"pins down  {','.join(map(str, r.down)) or 'none'}  (leave {pins_text(r.leave)})")
         print(f"expected   {','.join(map(str, want)) or 'none'}  ({'match' if ok else 'DIFFERENT'})")
+        print(f"named      {names.text(nm)}")
+        print(f"note       {advise.SAMPLE_NOTE}")
     if picture:
         bad = write_pictures(args, th, prog="nbst bowl replay", **bowling_throw.throw_file_readout(d))
         if bad:
@@ -373,12 +381,13 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
 
     size = tuple(int(v) for v in str(args.size).lower().split("x")) if getattr(args, "size", None) else None
     st = getattr(args, "still_time", None)
+    camera = getattr(args, "camera", None) or "both"
     if st is not None and st > th.motion.times[-1]:
         return f"--still-time {st:g}: the throw lasts {th.motion.times[-1]:.2f} s"
     try:
         if getattr(args, "still", None):
             prepare_output(args.still, option="--still")
-            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size, **readout)
+            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size, camera=camera, **readout)
             print(f"{prog}: wrote {args.still}", file=sys.stderr)
         if getattr(args, "video", None):
             prepare_output(args.video, option="--video")
@@ -387,7 +396,7 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
 
             bar = progress_bar(total=len(frame_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
             try:
-                n = render_throw(th, args.video, size=size, fps=fps, progress=bar, **readout)
+                n = render_throw(th, args.video, size=size, fps=fps, progress=bar, camera=camera, **readout)
             finally:
                 bar.close()
             print(f"{prog}: wrote {args.video} ({n} frames)", file=sys.stderr)

@@ -170,9 +170,12 @@ def leave_names(standing, leave, board: float | None = None, angle: float | None
 
 
 def names(standing, leave, board: float | None = None, angle: float | None = None, hand: str = "right") -> dict:
-    """``{"hit": ..., "angle": "flat" | None, "leave": [...]}`` for a frame (see the module)."""
-    flat = "flat" if angle is not None and math.isfinite(angle) and angle < FLAT_DEG else None
-    return {"hit": hit_name(board, hand), "angle": flat, "leave": leave_names(standing, leave, board, angle, hand)}
+    """``{"hit": ..., "angle": "flat" | None, "leave": [...]}`` for a frame (see the module); the hit
+    and angle are named for a strike ball (a full rack) only, None for a spare ball."""
+    full = len(set(standing)) == 10
+    flat = "flat" if full and angle is not None and math.isfinite(angle) and angle < FLAT_DEG else None
+    return {"hit": hit_name(board, hand) if full else None, "angle": flat,
+            "leave": leave_names(standing, leave, board, angle, hand)}
 
 
 def text(n: dict) -> str:

@@ -1,4 +1,4 @@
-"""What bowlers ask of a lane: the pocket map, carry, and the best throw at each common spare.
+"""What bowlers ask of a lane: the pocket map, carry, and the best throw at any spare leave.
 
 * **Aiming** (:func:`aim_entry`): a delivery that reaches a given board at the head pin's line
   with a given entry angle. The release is the typical one (:data:`STRIKE`: 17 mph, 350 rpm,
@@ -11,8 +11,10 @@
   frames, pooled and binned by where each ball actually crossed the deck front (its board
   carried to the head pin's line, and its heading), give the strike share by actual entry:
   **carry**, the share of pocket hits (actual board 17-18, the USBC pocket) that strike.
-* **Spares** (:func:`best_spare`): for a leave, candidate throws are the 3-6-9 system's line
-  (:func:`system_369`) with the strike ball, and a straight spare ball (end over end, 200 rpm):
+* **Spares** (:func:`best_spare`): for a leave (any pins standing but all ten; the common ones
+  of :data:`LEAVES` have their aim pins and 3-6-9 moves tabled, others aim at the mean of
+  their pins, :func:`leave_spec`), candidate throws are the 3-6-9 system's line
+  (:func:`system_369`) with the strike ball (a bowler's, when given), and a straight spare ball (end over end, 200 rpm):
   cross-lane at 17 and 21 mph at the leave's aim point and at points 1 and 2 boards either
   side (3 too at 17 mph on a multi-pin leave), and at 17 mph from the middle (board 20) and
   from the aim point's own board (straight down the boards) at the aim point and 1 board

@@ -46,7 +46,8 @@ Both come in through the gate of :mod:`nbst.models.bowling.files` (a regular fil
 integer too large for a float), then
 :func:`check_throw` / :func:`check_atlas` check every field: one
 :class:`ThrowFileError` line naming the file and the field (``throws[3].ball.rg``). Keys
-beyond the schema are ignored, as in 5 m throw files. The 5 m throw files of
+beyond the schema are ignored, as in 5 m throw files (the CLI adds ``bowler``, ``line``,
+``names`` and ``note`` for people: :mod:`.advise`, :mod:`.names`). The 5 m throw files of
 :mod:`nbst.models.bowling.deck.throwfile` are a different format.
 
 Compute apart from I/O: :func:`throw_dict`, :func:`check_throw`, :func:`replay` take values;
