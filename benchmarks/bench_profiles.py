@@ -6,7 +6,7 @@ For each profile of ``models/bowling/lane/profiles.py``: ``--n`` noisy throws of
 (its correlated release noise, seed ``--seed``; the same seed for every profile) into a full rack
 on a fresh house shot (the lane is not worn between throws: no transition), each a settled USBC
 frame at h = 1 ms. Prints the strike %, with its 95 % Wilson interval; the pocket-hit rate (the
-ball's centre at the deck front on boards 16.5-18.5, issue 34's pocket); carry (strikes of the
+ball on boards 16.5-18.5 at the head pin's line, entering at 4-6 deg: issue 34's pocket); carry (strikes of the
 pocket hits) with its interval; the spread of the ball at the pins (sd of board and entry angle);
 the most frequent leaves; seconds. Published figures to read them against (docs/bowling.md):
 PBA 61 % strikes, 74 % carry of pocket hits.
@@ -22,6 +22,7 @@ from nbst.models.bowling import lane
 from nbst.models.bowling.lane import frame, noise, profiles
 
 POCKET = (16.5, 18.5)
+ENTRY = (4.0, 6.0)
 
 
 def main() -> None:
@@ -41,7 +42,8 @@ def main() -> None:
             est, res = noise.probability(p.strike, args.n, args.seed, runner=run, noise=p.noise)
             boards = np.array([r.board_at_pins if r.board_at_pins is not None else np.nan for r in res])
             angles = np.array([r.entry_angle_deg if r.entry_angle_deg is not None else np.nan for r in res])
-            pocket = [(b >= POCKET[0]) & (b <= POCKET[1]) for b in boards]
+            pocket = [(b >= POCKET[0]) & (b <= POCKET[1]) & (a >= ENTRY[0]) & (a <= ENTRY[1])
+                      for b, a in zip(boards, angles)]
             hits = int(sum(pocket))
             carried = sum(1 for r, h in zip(res, pocket) if h and r.converted)
             lo, hi = noise.wilson(carried, hits) if hits else (float("nan"), float("nan"))

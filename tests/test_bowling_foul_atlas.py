@@ -163,7 +163,8 @@ def test_the_shipped_atlas_holds_each_subset_once_with_its_probability():
 
 def test_the_shipped_atlas_is_of_the_previous_scene_and_a_replay_of_its_throws_is_refused_in_one_line(tmp_path):
     """The shipped atlas was grown on lane-1 (issue 22's soft friction): its throws do not replay on
-    lane-2, and nbst says so in one line rather than reporting a different outcome."""
+    today's scene, and nbst says so in one line rather than reporting a different outcome; a lane-2
+    throw (the pins before the carry fit) is refused the same way."""
     a = throwfile.load_atlas(foul_atlas.SHIPPED)
     t = a["throws"][0]
     with pytest.raises(throwfile.ThrowFileError) as e:
@@ -173,6 +174,9 @@ def test_the_shipped_atlas_is_of_the_previous_scene_and_a_replay_of_its_throws_i
     f.write_text(throwfile.dumps(t))
     p = _nbst("bowl", "replay", str(f))
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "lane-1" in p.stderr and "Traceback" not in p.stderr
+    with pytest.raises(throwfile.ThrowFileError) as e:
+        throwfile.replay({**t, "scene": "lane-2"})
+    assert "lane-2" in str(e.value) and "carry fit" in str(e.value) and "\n" not in str(e.value)
 
 
 def _nbst(*argv):
@@ -183,7 +187,7 @@ def _nbst(*argv):
 
 
 def test_cli_solve_from_the_foul_line_answers_from_the_atlas_with_a_probability(tmp_path):
-    """The shipped atlas (lane-1) starts the search; what is written is thrown on lane-2 and replays."""
+    """The shipped atlas (lane-1) starts the search; what is written is thrown on today's scene and replays."""
     out = tmp_path / "throw.json"
     p = _nbst("bowl", "solve", "--foul-line", "--leave", "10", "-o", str(out), "--samples", "6", "--seed", "2",
               "--jobs", "1", "--max-rollouts", "48", "-q")

@@ -32,6 +32,10 @@ HEIGHT_IN = 15.0
 HEAD_POINTS = 8
 #: Pin mass, kg: the middle of USBC's 3 lb 6 oz .. 3 lb 10 oz (1.531 .. 1.644 kg).
 MASS = 1.588
+#: USBC's limits on the pin's weight (kg) and on its centre of gravity's height above the base (in:
+#: 5 40/64 .. 5 60/64 in, bowl.com/specs/systemBowling/pins.aspx).
+MASS_LIMITS = (1.531, 1.644)
+COM_LIMITS_IN = (5 + 40 / 64, 5 + 60 / 64)
 #: Segments around the axis: visual mesh (smooth) and collision pieces (a 16-gon is
 #: within 2 % of the circle; fewer vertices keep MuJoCo's convex collisions fast).
 VISUAL_SEGMENTS = 48
@@ -111,3 +115,49 @@ def geometry() -> PinGeometry:
     return PinGeometry(visual_vertices=np.asarray(solid.vertices, dtype=np.float32),
                        visual_faces=np.asarray(solid.faces, dtype=np.int32), pieces=tuple(pieces),
                        mass=MASS, com=com, inertia=inertia, volume=float(solid.volume))
+
+
+def _slices(n: int = 4000) -> tuple[np.ndarray, np.ndarray, float]:
+    """(z, r, dz): the solid of :func:`profile` cut into ``n`` slices (midpoints), metres."""
+    rz = profile()
+    dz = rz[-1, 1] / n
+    z = (np.arange(n) + 0.5) * dz
+    return z, np.interp(z, rz[:, 1], rz[:, 0]), dz
+
+
+def mass_properties(mass: float = MASS, com_in: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(com (3,), principal inertia (3,)) of a pin of ``mass`` (kg) whose centre of gravity is
+    ``com_in`` inches above the base (None: the uniform solid's, :func:`geometry`).
+
+    A real pin is not uniform (a maple core, a plastic coat, a hollow): its weight and centre of
+    gravity are what USBC limits (:data:`MASS_LIMITS`, :data:`COM_LIMITS_IN`). Here the density
+    varies linearly along the axis, rho(z) = rho0 (1 + a (z - z0)) (z0: the uniform solid's
+    centre), with ``a`` set so the centre lands at ``com_in``; the inertia is the uniform
+    solid's (:func:`geometry`, from the mesh) times the ratio of the graded to the uniform
+    slice integrals, so ``com_in`` None, or the uniform centre, gives :func:`geometry`'s values
+    scaled by ``mass / MASS``. ValueError outside USBC's limits."""
+    geo = geometry()
+    lo, hi = MASS_LIMITS
+    if not lo - 1e-9 <= mass <= hi + 1e-9:
+        raise ValueError(f"pin mass: must be within USBC's {lo}..{hi} kg, got {mass!r}")
+    if com_in is None:
+        return geo.com.copy(), geo.inertia * (mass / MASS)
+    clo, chi = COM_LIMITS_IN
+    if not clo - 1e-9 <= com_in <= chi + 1e-9:
+        raise ValueError(f"pin centre of gravity: must be within USBC's {clo:.4f}..{chi:.4f} in, got {com_in!r}")
+    z, r, dz = _slices()
+    area = np.pi * r**2
+    z0 = float((z * area).sum() / area.sum())
+    a = (com_in * INCH - z0) * area.sum() / float((area * (z - z0) ** 2).sum())
+
+    def moments(w):
+        m = (w * area).sum()
+        c = (w * area * z).sum() / m
+        izz = (w * np.pi * r**4 / 2).sum() / m
+        ixx = (w * (np.pi * r**4 / 4 + area * (z - c) ** 2)).sum() / m
+        return c, np.array([ixx, ixx, izz])
+
+    c1, i1 = moments(1.0 + a * (z - z0))
+    _, i0 = moments(np.ones_like(z))
+    com = np.array([0.0, 0.0, c1])
+    return com, geo.inertia / MASS * mass * (i1 / i0)

@@ -13,8 +13,11 @@ deck half's ball starts :data:`BALL_START_X` before the head pin, on the end of 
 * **pins**: spots on an equilateral triangle of 12 in sides, numbered as USBC (1 in
   front; 2 and 3 behind it, 2 on the bowler's left; 7 left and 10 right in the back
   row). Each pin: a free body ``pin{n}`` standing on its spot, 4 convex mesh pieces
-  for collision, a smooth visual mesh, explicit mass/inertia of the uniform solid
-  (:mod:`.pin`).
+  for collision, a smooth visual mesh, explicit mass/inertia (:mod:`.pin`): the uniform
+  solid's in the 5 m deck half (:data:`DECK_PINS`, issue 22), and in the lane half
+  (:data:`LANE_PINS`) a pin graded along its axis so its centre of gravity sits at USBC's
+  lowest, 5 40/64 in: the one parameter the carry fit of issue 34 moved (PBA's 74 % carry of
+  pocket hits; docs/bowling.md).
 * **ball**: 8.5 in (0.2159 m; USBC allows 8.500 .. 8.595 in), 6.8 kg (15 lb), uniform
   sphere (radius of gyration 2.69 in, inside USBC's 2.43 .. 2.80 in), a free body ``ball``.
 * **gutters**: 9.25 in wide, 1.875 in deep, concave (an arc of 6 tilted boxes) along
@@ -34,7 +37,7 @@ Compute only: functions return a spec, a model or XML text.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -70,6 +73,39 @@ BALL_MASS = 6.8
 #: Contacts: ball and pins (calibrated), static surfaces (critically damped).
 SOLREF_BODY = (0.008, 0.2)
 SOLREF_STATIC = (0.008, 1.0)
+#: The floor plane under everything (catches strays).
+MU_FLOOR = 0.2
+
+
+@dataclass(frozen=True)
+class Pins:
+    """The pins' physical parameters: mass (kg) and centre of gravity (inches above the base; None:
+    the uniform solid's, :func:`.pin.geometry`), both inside USBC's limits; sliding friction and
+    contact damping ratio (``solref = (0.008, zeta)``) of ball-pin and pin-pin contacts; the pin
+    deck's friction (pins and ball on the deck)."""
+
+    mass: float
+    com_in: float | None
+    mu_ball_pin: float
+    mu_pin_pin: float
+    zeta_ball_pin: float
+    zeta_pin_pin: float
+    mu_deck: float
+
+    def separate(self) -> bool:
+        """Whether ball-pin and pin-pin contacts differ (then the ball's geom priority rules its contacts
+        with the pins: see :func:`build_spec`)."""
+        return (self.mu_ball_pin, self.zeta_ball_pin) != (self.mu_pin_pin, self.zeta_pin_pin)
+
+
+#: The 5 m deck half's pins (issue 22; not fitted): kept so its shipped atlas and shot files replay.
+DECK_PINS = Pins(mass=pinmod.MASS, com_in=None, mu_ball_pin=MU_BALL_PIN, mu_pin_pin=MU_BALL_PIN,
+                 zeta_ball_pin=SOLREF_BODY[1], zeta_pin_pin=SOLREF_BODY[1], mu_deck=MU_DECK)
+#: The lane half's pins, fitted to PBA's carry of pocket hits (74 %; issue 34): the centre of gravity at
+#: USBC's lowest, 5 40/64 in (the uniform solid's is 5.80 in), the rest as the deck half's. The pro's 213
+#: pocket hits carry 158 (74 %) with it, 191 (90 %) with the uniform pin (benchmarks/bench_carry_fit.py,
+#: docs/bowling.md "Pin carry, fitted").
+LANE_PINS = replace(DECK_PINS, com_in=pinmod.COM_LIMITS_IN[0])
 #: Pit: floor depth below the lane, length behind the pit edge; walls' height and thickness.
 PIT_DEPTH = 0.25
 PIT_LENGTH = 0.9
@@ -167,12 +203,13 @@ def build_spec(lane: LaneLayout | None = None, *, pins: bool = True):
     x_end = PIT_EDGE_X + PIT_LENGTH
     floor = wb.add_geom(name="floor", type=G.mjGEOM_PLANE, pos=[(LANE_START_X + x_end) / 2, 0, FLOOR_Z],
                         size=[20.0, 20.0, 0.1], rgba=WALL_RGBA)
-    _static(floor, MU_DECK)
+    _static(floor, MU_FLOOR)
+    pp = DECK_PINS if lane is None else LANE_PINS
 
     slab = 0.05  # half-thickness of the lane boxes
     zones = (("oil", LANE_START_X, OIL_END_X, MU_OIL, OIL_RGBA),
              ("backend", OIL_END_X, DECK_FRONT_X, MU_DRY, LANE_RGBA),
-             ("deck", DECK_FRONT_X, PIT_EDGE_X, MU_DECK, DECK_RGBA))
+             ("deck", DECK_FRONT_X, PIT_EDGE_X, pp.mu_deck, DECK_RGBA))
     for name, x0, x1, mu, rgba in zones:
         if lane is not None and name != "deck":
             continue  # the lane's own cells replace these (after the pit, below)
@@ -236,18 +273,19 @@ def build_spec(lane: LaneLayout | None = None, *, pins: bool = True):
     vis.uservert = geo.visual_vertices.ravel().tolist()
     vis.userface = geo.visual_faces.ravel().tolist()
 
+    com, inertia = pinmod.mass_properties(pp.mass, pp.com_in)
     for n, (x, y) in zip(PIN_NUMBERS, pin_spots()):
         if not pins:
             break
         body = wb.add_body(name=f"pin{n}", pos=[float(x), float(y), 0.0])
         body.add_freejoint(name=f"pin{n}_free")
         body.explicitinertial = True
-        body.mass = geo.mass
-        body.ipos = [_six(c) for c in geo.com]  # 6 digits: MuJoCo writes <inertial> so, exactly
-        body.inertia = [_six(c) for c in geo.inertia]
+        body.mass = pp.mass
+        body.ipos = [_six(c) for c in com]  # 6 digits: MuJoCo writes <inertial> so, exactly
+        body.inertia = [_six(c) for c in inertia]
         for k, mesh in enumerate(piece_names):
             g = body.add_geom(name=f"pin{n}_c{k}", type=G.mjGEOM_MESH, meshname=mesh, rgba=PIN_RGBA, group=3)
-            _body_contact(g)
+            _body_contact(g, pp.mu_pin_pin, pp.zeta_pin_pin)
         v = body.add_geom(name=f"pin{n}_visual", type=G.mjGEOM_MESH, meshname="pin_visual", rgba=PIN_RGBA, group=1)
         v.contype = v.conaffinity = 0
 
@@ -255,7 +293,12 @@ def build_spec(lane: LaneLayout | None = None, *, pins: bool = True):
     ball.add_freejoint(name="ball_free")
     g = ball.add_geom(name="ball", type=G.mjGEOM_SPHERE, size=[BALL_RADIUS, 0, 0],
                       mass=BALL_MASS if lane is None else lane.ball_mass, rgba=BALL_RGBA)
-    _body_contact(g)
+    _body_contact(g, pp.mu_ball_pin, pp.zeta_ball_pin)
+    if pp.separate():  # the ball's own contact with the pins: it outranks them, the surfaces outrank it
+        g.priority = 1
+        for geom in spec.geoms:
+            if geom.priority >= 1 and geom.name != "ball":
+                geom.priority = 2
     if lane is not None:  # the ball maker's inertia: explicit, its axes turned by iquat
         ball.explicitinertial = True
         ball.mass = lane.ball_mass
@@ -294,11 +337,11 @@ def _static(geom, mu: float) -> None:
     geom.solref = list(SOLREF_STATIC)
 
 
-def _body_contact(geom) -> None:
+def _body_contact(geom, mu: float = MU_BALL_PIN, zeta: float = SOLREF_BODY[1]) -> None:
     geom.contype = geom.conaffinity = 1
     geom.condim = 3
-    geom.friction = [MU_BALL_PIN, 0.0, 0.0]
-    geom.solref = list(SOLREF_BODY)
+    geom.friction = [mu, 0.0, 0.0]
+    geom.solref = [SOLREF_BODY[0], zeta]
 
 
 def build_model():

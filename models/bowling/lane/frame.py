@@ -185,6 +185,66 @@ def _pin_moving(model, data, in_play_idx) -> bool:
     return False
 
 
+def _in_play(standing) -> list:
+    in_play = sorted(set(scene.PIN_NUMBERS if standing is None else standing))
+    if not in_play or any(n not in scene.PIN_NUMBERS for n in in_play):
+        raise FrameError(f"standing: pins must be numbers 1..10 (at least one), got {in_play!r}")
+    return in_play
+
+
+@dataclass
+class DeckStart:
+    """A frame's state where the ball reaches the deck front (or leaves the lane, or the time cap):
+    its lane phase done. ``run_frame(..., start=s)`` runs the pin deck from here, so one lane phase
+    serves many pin decks (the carry fit, benchmarks/bench_carry_fit.py: the pins' parameters do
+    not touch the ball before it reaches them). ``time``, ``qpos``, ``qvel``: the state; ``prev``:
+    the ball's (position, velocity) one step before; ``board``, ``angle``: where it crossed the deck
+    front, carried to the head pin's line (None when it did not); ``oil_ml``: its trade with the
+    lane; ``in_play``: the pins in play."""
+
+    time: float
+    qpos: np.ndarray
+    qvel: np.ndarray
+    prev: tuple
+    board: float | None
+    angle: float | None
+    oil_ml: dict
+    in_play: list
+
+
+def _lane_phase(m, d, delivery, in_play, ball, pat, law, field, record) -> DeckStart:
+    """Release ``delivery`` on the fresh ``d`` and step it, the ball's friction from the oil, until
+    the ball reaches the deck front, leaves the lane or the time cap; ``d`` is left there."""
+    import mujoco
+
+    from nbst.models.bowling.lane.friction import BallOnLane
+
+    qpos0, qvel0 = initial_qpos_qvel(m, delivery, in_play, ball)
+    d.qpos[:], d.qvel[:] = qpos0, qvel0
+    bol = BallOnLane(m, ball, lane.OilField.fresh(pat) if field is None else field, law)
+    bq = int(m.joint("ball_free").qposadr[0])
+    bv = int(m.joint("ball_free").dofadr[0])
+    half = scene.LANE_WIDTH / 2
+    board = angle = None
+    prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+    if record is not None:
+        record(d)
+    # the ball on the lane: one step at a time, its friction from the oil under it
+    while d.qpos[bq] < scene.DECK_FRONT_X and abs(d.qpos[bq + 1]) < half and d.time < lane.MAX_SECONDS - 1e-9:
+        prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+        bol.step(d)
+        mujoco.mj_step(m, d)
+        if record is not None:
+            record(d)
+    bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
+    if bx >= scene.DECK_FRONT_X and prev[0][0] < scene.DECK_FRONT_X and abs(by) < half:
+        board, angle = _entry(prev, d.qpos[bq:bq + 3], d.qvel[bv:bv + 3], delivery.hand)
+    prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
+    d.xfrc_applied[:] = 0.0
+    return DeckStart(time=float(d.time), qpos=d.qpos.copy(), qvel=d.qvel.copy(), prev=prev, board=board,
+                     angle=angle, oil_ml=bol.oil_ml(), in_play=list(in_play))
+
+
 def _entry(prev, pos, vel, hand: str) -> tuple[float, float]:
     """(entry board, entry angle in degrees) where the ball crossed the deck front between the
     step before (``prev``: its position and velocity) and now (``pos``, ``vel``), interpolated
@@ -196,9 +256,25 @@ def _entry(prev, pos, vel, hand: str) -> tuple[float, float]:
     return board, float(math.degrees(math.atan2(lane.hand_sign(hand) * v[1], v[0])))
 
 
+def deck_start(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = None, *, standing=None,
+               timestep: float = TIMESTEP, law: lane.OilLaw = lane.LAW, field: lane.OilField | None = None,
+               model=None) -> DeckStart:
+    """The lane phase of :func:`run_frame` alone (the same steps): the :class:`DeckStart` where
+    its ball reaches the deck front; ``run_frame(delivery, ..., start=...)`` then runs the pins."""
+    import mujoco
+
+    delivery = delivery.check()
+    ball = (ball or lane.Ball()).check()
+    m = model if model is not None else frame_model(ball, timestep=timestep)
+    d = mujoco.MjData(m)
+    with mujoco_warnings_raise():
+        return _lane_phase(m, d, delivery, _in_play(standing), ball, lane.pattern(oil), law, field, None)
+
+
 def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = None, *,
               standing=None, timestep: float = TIMESTEP, extra_s: float = 0.0, law: lane.OilLaw = lane.LAW,
-              field: lane.OilField | None = None, model=None, record=None) -> FrameResult:
+              field: lane.OilField | None = None, model=None, record=None, start: DeckStart | None = None
+              ) -> FrameResult:
     """Throw ``delivery`` at the pins in ``standing`` (default all ten) on ``oil`` (a pattern, its
     name or file; ``field``: the lane's oil now, worn in place: a series) and run until they settle
     (or the sweep), then ``extra_s`` more; the USBC outcome (see the module docstring).
@@ -217,6 +293,9 @@ def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = Non
         record: None, or ``record(data)`` called with the ``MjData`` at release and after every
             step (the same steps, one at a time: the same states as without it); it must only
             read ``data``.
+        start: None, or the :class:`DeckStart` of this delivery (:func:`deck_start`, with the same
+            ball, oil and pins in play) to run the pin deck from, on ``model`` (a copy whose pins'
+            parameters differ: the carry fit); ``record`` then sees the deck's steps only.
 
     Returns:
         A :class:`FrameResult`: the pins in play, down and left, counted as USBC counts pinfall
@@ -228,12 +307,8 @@ def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = Non
     """
     import mujoco
 
-    from nbst.models.bowling.lane.friction import BallOnLane
-
     delivery = delivery.check()
-    in_play = sorted(set(scene.PIN_NUMBERS if standing is None else standing))
-    if not in_play or any(n not in scene.PIN_NUMBERS for n in in_play):
-        raise FrameError(f"standing: pins must be numbers 1..10 (at least one), got {in_play!r}")
+    in_play = _in_play(standing)
     if not (isinstance(extra_s, (int, float)) and 0.0 <= extra_s <= 60.0):
         raise FrameError(f"extra_s: must be in [0, 60] s, got {extra_s!r}")
     ball = (ball or lane.Ball()).check()
@@ -241,20 +316,24 @@ def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = Non
     m = model if model is not None else frame_model(ball, timestep=timestep)
     h = float(m.opt.timestep)
     d = mujoco.MjData(m)
-    qpos0, qvel0 = initial_qpos_qvel(m, delivery, in_play, ball)
-    d.qpos[:], d.qvel[:] = qpos0, qvel0
-    bol = BallOnLane(m, ball, lane.OilField.fresh(pat) if field is None else field, law)
+    if start is None:
+        with mujoco_warnings_raise():
+            start = _lane_phase(m, d, delivery, in_play, ball, pat, law, field, record)
+    else:
+        d.time = start.time
+        d.qpos[:], d.qvel[:] = start.qpos, start.qvel
+        in_play = list(start.in_play)
     k = max(1, int(round(CHECK_EVERY / h)))
     bq = int(m.joint("ball_free").qposadr[0])
     bv = int(m.joint("ball_free").dofadr[0])
     idx = [scene.PIN_NUMBERS.index(n) for n in in_play]
     half = scene.LANE_WIDTH / 2
-    t_pins = board = angle = None
+    t_pins = None
+    board, angle, prev = start.board, start.angle, start.prev
     left_lane = False
     still_since = None
     settle = None
     cap = lane.MAX_SECONDS
-    prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
 
     def step(n: int) -> None:
         if record is None:
@@ -264,21 +343,7 @@ def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = Non
             mujoco.mj_step(m, d)
             record(d)
 
-    if record is not None:
-        record(d)
     with mujoco_warnings_raise():
-        # the ball on the lane: one step at a time, its friction from the oil under it
-        while d.qpos[bq] < scene.DECK_FRONT_X and abs(d.qpos[bq + 1]) < half and d.time < cap - 1e-9:
-            prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
-            bol.step(d)
-            mujoco.mj_step(m, d)
-            if record is not None:
-                record(d)
-        bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
-        if bx >= scene.DECK_FRONT_X and prev[0][0] < scene.DECK_FRONT_X and abs(by) < half:
-            board, angle = _entry(prev, d.qpos[bq:bq + 3], d.qvel[bv:bv + 3], delivery.hand)
-        prev = (d.qpos[bq:bq + 3].copy(), d.qvel[bv:bv + 3].copy())
-        d.xfrc_applied[:] = 0.0
         while True:
             step(k)
             bx, by = float(d.qpos[bq]), float(d.qpos[bq + 1])
@@ -313,7 +378,7 @@ def run_frame(delivery: lane.Delivery, oil="house", ball: lane.Ball | None = Non
         down=down, leave=[n for n in in_play if n not in down], knocked=knocked, off_deck=off_deck,
         partition=partition, ball_left_lane=left_lane, ball_at_pins_s=t_pins, board_at_pins=board,
         entry_angle_deg=angle, settled=settle is not None, settle_s=settle, cap_hit=settle is None,
-        seconds=float(d.time), extra_s=float(extra_s), oil_ml=bol.oil_ml(), final_qpos=d.qpos.copy())
+        seconds=float(d.time), extra_s=float(extra_s), oil_ml=dict(start.oil_ml), final_qpos=d.qpos.copy())
 
 
 def ladder(delivery: lane.Delivery, oil: str = "house", ball: lane.Ball | None = None, *, standing=None,

@@ -24,12 +24,15 @@ from nbst.models.bowling.lane.delivery import Delivery, principal_axes, quat_of_
 from nbst.models.bowling.lane.units import (ARROW_BOARDS, ARROWS_FT, BOARD_WIDTH, FOUL_LINE_X, LANE_START_X,
                                             board_to_y, ft_to_x)
 
-__all__ = ["SCENE", "LANE_GEOM", "PIN_LANE_GEOM", "layout", "lane_spec", "build_model", "ball_quat"]
+__all__ = ["SCENE", "EARLIER_SCENES", "LANE_GEOM", "PIN_LANE_GEOM", "layout", "lane_spec", "build_model", "ball_quat"]
 
-#: The lane half's scene, as throw and atlas files name it: "lane-2" is this one (a frictionless
-#: lane contact with Coulomb friction from the oil film, issue 34); "lane-1" (files without a
-#: scene) was issue 22's (MuJoCo's soft friction on boxes of relative oil).
-SCENE = "lane-2"
+#: The lane half's scene, as throw and atlas files name it: "lane-3" is this one (lane-2's lane with
+#: the pins fitted to carry, ``scene.LANE_PINS``, issue 34); "lane-2" had a frictionless lane contact
+#: with Coulomb friction from the oil film and issue 22's pins; "lane-1" (files without a scene) was
+#: issue 22's (MuJoCo's soft friction on boxes of relative oil).
+SCENE = "lane-3"
+#: The scenes before it, oldest first (throw files name them; they replay only on their own).
+EARLIER_SCENES = ("lane-1", "lane-2")
 LANE_GEOM = "lane_surface"
 PIN_LANE_GEOM = "lane_surface_pins"
 
@@ -72,7 +75,7 @@ def lane_spec(ball: Ball | None = None, delivery: Delivery | None = None, *, pin
     p.contype = p.conaffinity = 4
     p.priority = 1
     p.condim = 3
-    p.friction = [scene.MU_DECK, 0.0, 0.0]
+    p.friction = [scene.LANE_PINS.mu_deck, 0.0, 0.0]
     p.solref = list(scene.SOLREF_STATIC)
     b = spec.geom("ball")
     b.contype = b.conaffinity = 1 | 2

@@ -66,7 +66,7 @@ from nbst.models.bowling.lane import frame, noise as _noise
 
 FORMAT = "nbst-bowling-throw"
 #: Scenes a file may name; a file without ``scene`` was thrown on the first.
-SCENES = ("lane-1", lane.SCENE)
+SCENES = (*lane.EARLIER_SCENES, lane.SCENE)
 ATLAS_FORMAT = "nbst-bowling-throw-atlas"
 VERSION = 1
 #: The most throws an atlas holds: one per subset of a full rack (1,023) and per spare leave
@@ -547,8 +547,10 @@ def replayable(d: dict, src="throw") -> None:
     one line: a throw replays only on the scene it names."""
     sc = d.get("scene", SCENES[0])
     if sc != lane.SCENE:
-        _fail(src, "scene", f"thrown on the {sc} lane scene (issue 22's soft-contact friction on relative oil); this "
-                            f"nbst runs {lane.SCENE} (Coulomb friction from the oil film) and does not replay it: its "
+        what = ("issue 22's soft-contact friction on relative oil" if sc == "lane-1" else
+                "issue 22's pins, before the carry fit")
+        _fail(src, "scene", f"thrown on the {sc} lane scene ({what}); this nbst runs {lane.SCENE} (Coulomb "
+                            f"friction from the oil film, pins fitted to carry) and does not replay it: its "
                             f"outcome stands as recorded")
 
 
