@@ -2,6 +2,7 @@
 
     nice -n 10 python benchmarks/bench_transition.py [--bowler pro] [--games 3] [--seeds 1-6] [--lineup 1]
                                                      [--lefty-share 0] [--jobs 1]
+    nice -n 10 python benchmarks/bench_transition.py --part sensitivity [--throws 20]
 
 For each seed: the series of ``nbst bowl series --move both`` (models/bowling/lane/transition.py):
 ``--games`` games by ``--lineup`` bowlers of the profile on one fresh house shot that every ball wears,
@@ -12,6 +13,12 @@ pins, breakpoint (ft, board) and entry angle, the moves made, the mean score; th
 game 1 to the last game and the paired difference in pocket hits (auto minus none, over the same
 releases); the oil taken from the lane, left on it and carried past the pattern's end; seconds.
 Seeds run in ``--jobs`` processes (each series on one core).
+
+``--part sensitivity``: the assumed oil-exchange constants (the share of the film difference that
+lane and cover even out, ``OilLaw.exchange``, 0.3; the cover's absorption time, ``Ball.absorb_s``,
+1 s: no published figure) halved and doubled, on ``--throws`` identical throws of issue 34's typical
+release (the ball alone, no noise): the oil a throw takes, the film under the track at 20 ft, the
+board at the pins after 10 and after all throws, and the oil carried past the pattern's end.
 """
 from __future__ import annotations
 
@@ -21,6 +28,9 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
+from dataclasses import replace
+
+from nbst.models.bowling import lane
 from nbst.models.bowling.lane import noise, transition as T
 from nbst.models.bowling.lane.oil import CELL_AREA
 
@@ -33,7 +43,7 @@ def _seeds(text: str) -> list[int]:
 def one(seed: int, args) -> dict:
     t0 = time.time()
     bowlers = T.lineup(args.bowler, args.lineup, args.lefty_share)
-    runs = [T.Run(bowlers, args.games, seed, m, "house") for m in ("none", "auto")]
+    runs = [T.Run(bowlers, args.games, seed, m, "house") for m in args.moves.split(",")]
     for r in runs:
         r.play()
     doc = T.series_dict(runs, profile=args.bowler, lineup_n=args.lineup, lefty_share=args.lefty_share)
@@ -46,15 +56,43 @@ def one(seed: int, args) -> dict:
     return doc
 
 
+TYPICAL = lane.Delivery(board=23.0, at="foul", angle=3.627, mph=17.0, rpm=400.0, rotation=45.0, tilt=10.0)
+
+
+def sensitivity(n: int) -> None:
+    print(f"## transition's assumed constants: {n} identical throws of the typical release (17 mph, 400 rpm, "
+          f"45/10, board 23 at 3.627 deg), the ball alone, fresh house shot\n")
+    print("| setting | oil taken, throw 1 / throw n (ul) | film at 20 ft, throw 1 -> n (um) | board at pins: 1, 10, n | "
+          "past 40 ft after n (ul) | s |\n|---|---|---|---|---|---|")
+    b0 = lane.Ball()
+    for label, law, ball in (("as shipped: exchange 0.3, absorb 1 s", lane.LAW, b0),
+                             ("exchange 0.15", replace(lane.LAW, exchange=0.15), b0),
+                             ("exchange 0.6", replace(lane.LAW, exchange=0.6), b0),
+                             ("absorb 0.5 s", lane.LAW, replace(b0, absorb_s=0.5)),
+                             ("absorb 2 s", lane.LAW, replace(b0, absorb_s=2.0))):
+        t0 = time.time()
+        out = T.identical_throws(TYPICAL, n, "house", ball, law=law)
+        b = [o["board_at_pins"] for o in out]
+        print(f"| {label} | {1e3 * out[0]['oil']['taken']:.1f} / {1e3 * out[-1]['oil']['taken']:.1f} | "
+              f"{out[0]['film_um']:.2f} -> {out[-1]['film_um']:.2f} | {b[0]:.2f}, {b[min(9, n - 1)]:.2f}, {b[-1]:.2f} | "
+              f"{1e3 * out[-1]['past_ml']:.1f} | {time.time() - t0:.0f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
+    ap.add_argument("--part", choices=("drift", "sensitivity"), default="drift")
+    ap.add_argument("--throws", type=int, default=20, help="--part sensitivity: identical throws (default 20)")
     ap.add_argument("--bowler", default="pro")
     ap.add_argument("--games", type=int, default=3)
     ap.add_argument("--seeds", default="1-6", help="seeds A-B (default 1-6)")
     ap.add_argument("--lineup", type=int, default=1)
     ap.add_argument("--lefty-share", type=float, default=0.0)
     ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--moves", default="none,auto", help="the runs of each series (default none,auto)")
     args = ap.parse_args()
+    if args.part == "sensitivity":
+        sensitivity(args.throws)
+        return
     seeds = _seeds(args.seeds)
     t0 = time.time()
     if args.jobs > 1:
@@ -67,7 +105,8 @@ def main() -> None:
     print("| move | game | hand | pocket hits (95 % CI) | strikes | board at pins | breakpoint | entry | moves | "
           "score |\n|---|---|---|---|---|---|---|---|---|---|")
     pooled = {}
-    for m in (0, 1):
+    nm = len(docs[0]["runs"])
+    for m in range(nm):
         for g in range(1, args.games + 1):
             for hand in ("right", "left"):
                 rows = [s for d in docs for s in d["runs"][m]["summary"] if s["game"] == g and s["hand"] == hand]
@@ -94,17 +133,17 @@ def main() -> None:
                       f"{avg('entry_angle_deg'):.2f} deg | {moves} | {np.mean(scores):.0f} |")
     last = args.games
     print()
-    for m, name in ((0, "none"), (1, "auto")):
+    for m, name in enumerate(args.moves.split(",")):
         for hand in ("right", "left"):
             if (m, 1, hand) in pooled:
                 (k1, n1), (k3, n3) = pooled[(m, 1, hand)], pooled[(m, last, hand)]
                 print(f"move {name}, {hand}: pocket hits game 1 {100 * k1 / n1:.0f} % -> game {last} "
                       f"{100 * k3 / n3:.0f} % ({100 * (k3 / n3 - k1 / n1):+.0f} points)")
-    for g in range(1, last + 1):
+    for g in range(1, last + 1 if nm == 2 else 1):
         a = sum(pooled.get((1, g, h), (0, 0))[0] for h in ("right", "left"))
         b = sum(pooled.get((0, g, h), (0, 0))[0] for h in ("right", "left"))
         print(f"game {g}: pocket hits with moves minus without, same releases: {a - b:+d}")
-    for m in (0, 1):
+    for m in range(nm):
         o = [d["runs"][m]["oil"] for d in docs]
         taken = [sum(b["oil"]["taken"] for b in d["runs"][m]["balls"]) for d in docs]
         nb = [len(d["runs"][m]["balls"]) for d in docs]
@@ -112,7 +151,7 @@ def main() -> None:
               f"(lane {np.mean([x['before_ml'] for x in o]):.2f} -> {np.mean([x['after_ml'] for x in o]):.3f} ml); "
               f"past the pattern's end {np.mean([x['past_before_ml'] for x in o]) * 1000:.1f} -> "
               f"{np.mean([x['past_after_ml'] for x in o]) * 1000:.1f} ul")
-    print(f"\n{len(seeds)} series x 2 runs in {time.time() - t0:.0f} s on {args.jobs} process(es) "
+    print(f"\n{len(seeds)} series x {nm} run(s) in {time.time() - t0:.0f} s on {args.jobs} process(es) "
           f"({np.mean([d['seconds'] for d in docs]):.0f} s a series)")
 
 

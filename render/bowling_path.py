@@ -123,17 +123,22 @@ def transition_figure(doc: dict, *, title: str = ""):
     for run in runs:
         c = COLOURS.get(run["move"], "0.3")
         first = [b for b in run["balls"] if len(b["standing"]) == 10]
-        n = np.array([b["n"] for b in first])
+        hands = sorted({b["hand"] for b in first}, reverse=True)  # right first
         lab = f"move {run['move']}" + (f" ({len(run['moves'])} moves)" if run["move"] != "none" else "")
-        for ax, key in zip(left[:3], ("board_at_pins", "breakpoint_board", "entry_angle_deg")):
-            v = np.array([np.nan if b[key] is None else b[key] for b in first], dtype=float)
-            ax.plot(n, v, "o", color=c, ms=3, alpha=0.55)
-            w = min(10, len(v))
-            if w >= 2:
-                ok = np.isfinite(v)
-                run_mean = np.array([np.nanmean(v[max(0, i - w + 1):i + 1]) if ok[max(0, i - w + 1):i + 1].any()
-                                     else np.nan for i in range(len(v))])
-                ax.plot(n, run_mean, "-", color=c, lw=1.6, label=f"{lab}: mean of the last {w}")
+        for hand in hands:
+            mine = [b for b in first if b["hand"] == hand]
+            n = np.array([b["n"] for b in mine])
+            for ax, key in zip(left[:3], ("board_at_pins", "breakpoint_board", "entry_angle_deg")):
+                v = np.array([np.nan if b[key] is None else b[key] for b in mine], dtype=float)
+                ax.plot(n, v, "o" if hand == "right" else "s", color=c, ms=3, alpha=0.55,
+                        mfc=c if hand == "right" else "none")
+                w = min(10, len(v))
+                if w >= 2:
+                    ok = np.isfinite(v)
+                    run_mean = np.array([np.nanmean(v[max(0, i - w + 1):i + 1]) if ok[max(0, i - w + 1):i + 1].any()
+                                         else np.nan for i in range(len(v))])
+                    ax.plot(n, run_mean, color=c, lw=1.6, ls="-" if hand == "right" else ":",
+                            label=f"{lab}{', ' + hand + '-handed' if len(hands) > 1 else ''}: mean of the last {w}")
         for s in run["summary"]:
             games = [b for b in first if b["game"] == s["game"] and b["hand"] == s["hand"]]
             if not games:
@@ -149,9 +154,8 @@ def transition_figure(doc: dict, *, title: str = ""):
                 ax.axvline(m["after_ball"] + 0.5, color=c, lw=0.6, ls=":", alpha=0.7)
     left[0].axhspan(lo, hi, color="#2e7d32", alpha=0.1, lw=0)
     left[0].set_ylabel("board at the pins")
-    left[0].set_title(f"{doc.get('bowler', '')}: strike balls on one lane ({doc.get('lineup', 1)} bowler(s), "
-                      f"{doc.get('games', '?')} games, {doc.get('oil', '')}, seed {doc.get('seed')}); "
-                      f"green band: the pocket {lo:g}-{hi:g}; dotted lines: moves", fontsize=9)
+    left[0].set_title(f"strike balls (boards in the bowler's own numbering); green: the pocket {lo:g}-{hi:g}; "
+                      f"thin dotted lines: moves", fontsize=9)
     left[1].set_ylabel("breakpoint board")
     left[2].set_ylabel("entry angle (deg)")
     left[3].set_ylabel("pocket hits per game (%)")
@@ -180,8 +184,8 @@ def transition_figure(doc: dict, *, title: str = ""):
     _lane_marks(ax, runs[0]["oil"].get("length_ft"))
     ax.set_title(f"oil change, move {runs[0]['move']} (um; red: taken, blue: laid down)", fontsize=9)
     fig.colorbar(im, ax=ax, pad=0.01, fraction=0.04)
-    if title:
-        fig.suptitle(title, fontsize=10)
+    fig.suptitle(title or f"{doc.get('bowler', '')}: {doc.get('games', '?')} games by {doc.get('lineup', 1)} "
+                          f"bowler(s) on one lane of {doc.get('oil', '')} oil, seed {doc.get('seed')}", fontsize=10)
     return fig
 
 

@@ -87,8 +87,10 @@ def test_two_and_one_moves_feet_two_boards_and_the_target_one():
     assert T._arrow_board(m) - T._arrow_board(d) == pytest.approx(1.0, abs=1e-9)
     assert m.angle > d.angle  # more angle out: the line opens
     assert T.moved(d, 0.0, 0.0).angle == pytest.approx(d.angle, abs=1e-9)
-    assert T.move_for([19.0, 18.9, 18.8]) == 1 and T.move_for([16.0, 16.2, 16.4]) == -1
-    assert T.move_for([19.0, 17.5, 16.9]) == 0 and T.move_for([19.0, 19.0]) == 0 and T.move_for([19, None, 19]) == 0
+    n = T.MOVE_AFTER
+    assert T.move_for([19.0] * n) == 1 and T.move_for([16.0] * n) == -1 and T.move_for([17.0] + [19.0] * n) == 1
+    assert T.move_for([19.0, 17.5, 16.9] + [17.5] * (n - 3)) == 0 and T.move_for([19.0] * (n - 1)) == 0
+    assert T.move_for([19.0] * (n - 1) + [None]) == 0
 
 
 def test_two_and_one_in_brings_a_high_ball_back_towards_the_pocket():
@@ -152,6 +154,17 @@ def test_a_series_file_round_trips_and_the_same_seed_gives_the_same_releases(tmp
         T.check_series({**doc, "format": "x"}, "s.json")
 
 
+def _main(argv, capsys) -> tuple[int, str]:
+    """``nbst ARGV`` in this process (argparse's refusals exit through SystemExit): (exit code, stderr)."""
+    from nbst.cli.main import main
+
+    try:
+        rc = main([str(a) for a in argv])
+    except SystemExit as e:
+        rc = e.code
+    return rc, capsys.readouterr().err
+
+
 def _cli(*argv, timeout=120):
     return subprocess.run(NBST + ["bowl", "series", *map(str, argv)], capture_output=True, text=True, timeout=timeout,
                           cwd=ROOT)
@@ -165,25 +178,24 @@ def _cli(*argv, timeout=120):
     (["--move", "sometimes"], ["--move"]),
     (["--rg", "3.5"], ["ball.rg"]),
 ])
-def test_bad_flags_exit_2_with_one_line(tmp_path, argv, words):
-    out = _cli("-o", tmp_path / "s.json", *argv)
-    assert out.returncode == 2, out.stderr
-    lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in out.stderr, out.stderr
+def test_bad_flags_exit_2_with_one_line(tmp_path, capsys, argv, words):
+    rc, err = _main(["bowl", "series", "-o", tmp_path / "s.json", *argv], capsys)
+    assert rc == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
     for w in words:
         assert w in lines[0], lines[0]
     assert not (tmp_path / "s.json").exists()
 
 
-def test_bowl_throw_path_plot_wants_a_png(tmp_path):
-    out = subprocess.run(NBST + ["bowl", "throw", "--path-plot", str(tmp_path / "p.jpg")], capture_output=True,
-                         text=True, timeout=120, cwd=ROOT)
-    assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1 and "--path-plot" in out.stderr
+def test_bowl_throw_path_plot_wants_a_png(tmp_path, capsys):
+    rc, err = _main(["bowl", "throw", "--path-plot", tmp_path / "p.jpg"], capsys)
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "--path-plot" in err, err
 
 
-def test_an_output_that_is_a_folder_is_refused_before_any_ball(tmp_path):
-    out = _cli("-o", tmp_path)
-    assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1, out.stderr
+def test_an_output_that_is_a_folder_is_refused_before_any_ball(tmp_path, capsys):
+    rc, err = _main(["bowl", "series", "-o", tmp_path], capsys)
+    assert rc == 2 and len(err.strip().splitlines()) == 1, err
 
 
 @pytest.mark.slow

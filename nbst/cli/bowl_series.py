@@ -26,7 +26,7 @@ def register(bowl) -> None:
                     "some down past the pattern's end, and the next ball meets the lane as it left it. --lineup "
                     "bowlers alternate frames (--lefty-share of them left-handed: their side of the lane is fresh). "
                     "With --move auto each bowler makes the coach's '2 and 1' move (feet 2 boards, target 1 board, in "
-                    "when the last 3 strike balls hit high, out when light); --move both bowls the same releases "
+                    "when the last 5 strike balls hit high on average, out when light); --move both bowls the same releases "
                     "twice, without and with moves. Prints, per game: pocket hits (boards 16.5-18.5), strikes, the "
                     "mean breakpoint, entry angle and board at the pins, and the scores; writes the series file "
                     "(every ball, the moves, the oil before and after). Ctrl-C writes the balls bowled so far "
@@ -34,10 +34,11 @@ def register(bowl) -> None:
         epilog="Example: nbst bowl series --bowler pro --games 3 --move both -o series.json --figure drift.png "
                "--path-plot paths.png")
     s.add_argument("--bowler", default="pro", choices=BOWLERS,
-                   help="the bowler profile (default pro): its strike ball and correlated release noise")
+                   help="the bowler profile (default pro): its strike ball (aimed at board 17.5 on the fresh lane "
+                        "with this ball) and correlated release noise")
     s.add_argument("--games", type=GAMES, default=3, metavar="N", help="games per bowler (default 3; 1..30)")
     s.add_argument("--move", choices=("none", "auto", "both"), default="none",
-                   help="none: keep the line (default); auto: '2 and 1' moves after 3 strike balls high or light on "
+                   help="none: keep the line (default); auto: '2 and 1' moves after 5 strike balls high or light on "
                         "average (more than 1 board from 17.5); both: the series twice, the same releases")
     s.add_argument("--lineup", type=LINEUP, default=1, metavar="N",
                    help="bowlers on the lane, alternating frames as in league play (default 1; 1..8)")
@@ -77,7 +78,7 @@ def cmd_series(args) -> int:
         for o, p in outs:
             prepare_output(p, option=o)
         ball = ball_of(args)
-        bowlers = T.lineup(args.bowler, args.lineup, args.lefty_share, args.noise_scale)
+        bowlers = T.lineup(args.bowler, args.lineup, args.lefty_share, args.noise_scale, args.oil, ball)
         moves = ("none", "auto") if args.move == "both" else (args.move,)
         runs = [T.Run(bowlers, args.games, seed, m, args.oil, ball) for m in moves]
     except (ValueError, OutputError) as e:

@@ -12,15 +12,15 @@
   (the line it was aimed on over the fresh house shot) with the profile's correlated release
   noise, drawn from its own stream (``seed``, bowler): the same seed gives the same releases
   whether the bowler moves or not (common random numbers, a paired comparison).
-* **Spares**: the straight spare ball (:data:`SPARE_BALL`, 17 mph, 200 rpm) through the middle
-  of the leave, from across the lane, aimed once per leave on the fresh pattern (the
-  bowler's spare system), under the same noise.
+* **Spares**: the straight spare ball (:data:`.spares.SPARE_BALL`, 17 mph, 200 rpm) through the
+  middle of the leave, from across the lane, aimed once per leave on the fresh pattern (the
+  bowler's spare system, :func:`.spares.straight_at`), under the same noise.
 * **Moves** (``move``): ``"none"`` keeps the line; ``"auto"`` reads where the last
   :data:`MOVE_AFTER` strike balls crossed the head pin's line and, when their mean is more than
   :data:`MOVE_MISS` boards high (left of the pocket for a right-hander) or light, makes the
   coach's "2 and 1" move: feet 2 boards and target 1 board in the same direction (in when high,
-  out when light). Measured on the house shot, one such move shifts the pro's ball at the pins by
-  1.6-2.5 boards (docs/bowling.md).
+  out when light). One such move shifts the pro's ball at the pins by about 2 boards (1.6-2.7,
+  measured on the house shot fresh and after 10-30 identical balls, 2026-12-03; docs/bowling.md).
 * **Readings**: each ball's board and entry angle at the pins (the frame's), its breakpoint
   (the ball alone, :func:`.phases.throw`, on a copy of the lane as it was: the same ball path),
   whether a strike ball hit the pocket (:data:`POCKET`: boards 16.5-18.5, issue 34's window),
@@ -39,11 +39,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from nbst.models.bowling import lane, scene
-from nbst.models.bowling.lane import frame, noise, phases, profiles
+from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
 from nbst.models.bowling.lane.oil import DX_FT, NX, OilField, OilLaw, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS",
-           "SPARE_BALL", "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
+           "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
            "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws"]
 
 FORMAT = "nbst-bowling-series"
@@ -55,8 +55,7 @@ TARGET_BOARD = 17.5
 #: "2 and 1": feet and target boards of one move.
 MOVE_FEET, MOVE_TARGET = 2.0, 1.0
 #: A move follows the mean of the last MOVE_AFTER strike balls missing by more than MOVE_MISS boards.
-MOVE_AFTER, MOVE_MISS = 3, 1.0
-SPARE_BALL = dict(mph=17.0, rpm=200.0, rotation=0.0, tilt=0.0)
+MOVE_AFTER, MOVE_MISS = 5, 1.0
 MAX_GAMES, MAX_LINEUP = 30, 8
 #: Paths are kept every PATH_FT ft; oil maps rounded to MAP_DECIMALS (um).
 PATH_FT = 0.5
@@ -79,9 +78,12 @@ class Bowler:
     noise: noise.Noise
 
 
-def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0) -> list[Bowler]:
+def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0, oil="house",
+           ball: lane.Ball | None = None) -> list[Bowler]:
     """``n`` bowlers of ``profile``, ``lefty_share`` of them left-handed (a whole number of them;
-    the left-handers bowl after the right-handers in each frame)."""
+    the left-handers bowl after the right-handers in each frame). The strike ball is the profile's
+    line, aimed again at board 17.5 on the fresh ``oil`` with ``ball`` when they are not the house
+    shot and the default ball it was aimed for."""
     p = profiles.profile(profile)
     if not (isinstance(n, int) and 1 <= n <= MAX_LINEUP):
         raise TransitionError(f"lineup: must be a whole number of bowlers in 1..{MAX_LINEUP}, got {n!r}")
@@ -93,8 +95,10 @@ def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: floa
                               f"left-handers; give a share that makes a whole number (e.g. --lineup 4 --lefty-share 0.25)")
     k = int(round(lefties))
     nz = profiles.scaled(p.noise, float(noise_scale)).check()
-    return [Bowler(i, "left" if i >= n - k else "right", p.delivery("left" if i >= n - k else "right"), nz)
-            for i in range(n)]
+    ball = (ball or lane.Ball()).check()
+    same = pattern(oil) == pattern("house") and ball == lane.Ball()
+    line = {h: p.delivery(h) if same else profiles.strike_ball(profile, oil, ball, h) for h in {"right", "left"}}
+    return [Bowler(i, "left" if i >= n - k else "right", line["left" if i >= n - k else "right"], nz) for i in range(n)]
 
 
 def _arrow_board(d: lane.Delivery) -> float:
@@ -123,24 +127,10 @@ def move_for(boards) -> int:
 
 
 def spare_line(pins, hand: str, oil, ball: lane.Ball | None = None) -> lane.Delivery:
-    """The straight spare ball (:data:`SPARE_BALL`) through the middle of ``pins``, from across the
-    lane, its launch angle corrected once so the ball alone on the fresh ``oil`` crosses the head
-    pin's line where the straight line does."""
-    spots = scene.pin_spots()
-    x, y = np.mean([spots[p - 1] for p in pins], axis=0)
-    b_aim = float(lane.y_to_board(y, hand))
-    foul = float(np.clip(40.0 - b_aim, 6.0, 34.0))
-    y_f = float(lane.board_to_y(foul, hand))
-    dx = x - lane.FOUL_LINE_X
-    angle = math.degrees(math.atan2(-lane.hand_sign(hand) * (y - y_f), dx))
-    want = float(lane.y_to_board(y_f + (y - y_f) * (0 - lane.FOUL_LINE_X) / dx, hand))
-    d = lane.Delivery(hand=hand, board=foul, at="foul", angle=angle, **SPARE_BALL).check()
-    try:
-        got = phases.throw(d, oil, ball).board_at_pins
-    except lane.LaneError:
-        return d
-    per_deg = math.radians(1.0) * (0 - lane.FOUL_LINE_X) / lane.BOARD_WIDTH
-    return replace(d, angle=float(np.clip(angle + (got - want) / per_deg, -10, 10)))
+    """The straight spare ball (:data:`.spares.SPARE_BALL`: 17 mph, 200 rpm) through the middle of
+    ``pins``, from across the lane, aimed on the fresh ``oil`` (:func:`.spares.straight_at`)."""
+    x, y = spares.aim_point(pins)
+    return spares.straight_at(x, y, hand=hand, oil=oil, ball=ball)
 
 
 def score(rolls) -> list[int]:
@@ -361,7 +351,7 @@ def check_series(doc, src: str = "<series>") -> dict:
 
 
 def identical_throws(delivery: lane.Delivery, n: int, oil="house", ball: lane.Ball | None = None, *,
-                     at_ft: float = 20.0) -> list[dict]:
+                     law: OilLaw = lane.LAW, at_ft: float = 20.0) -> list[dict]:
     """``n`` identical throws of ``delivery``, the ball alone, on one lane that they wear: per throw
     the film (um) under its track at ``at_ft`` before it ran, its board and entry angle at the pins,
     and the oil (ml) past the pattern's end after it."""
@@ -370,7 +360,7 @@ def identical_throws(delivery: lane.Delivery, n: int, oil="house", ball: lane.Ba
     out = []
     for _ in range(n):
         before = field.copy()
-        r = phases.throw(delivery, pat, ball, field=field)
+        r = phases.throw(delivery, pat, ball, law=law, field=field)
         out.append({"film_um": film_along(before, r.path["ft"], r.path["board"], delivery.hand, at_ft),
                     "board_at_pins": r.board_at_pins, "entry_angle_deg": r.entry_angle_deg,
                     "past_ml": field.ml_past(pat.length_ft), "lane_ml": field.total_ml(), "oil": r.path["oil"]})
