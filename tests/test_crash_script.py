@@ -137,6 +137,18 @@ def test_impossible_fates_are_refused():
     d = base()
     d["vehicles"][0]["fate"] = {"delta_v": [10, 20]}
     refuse(d, "vehicles[0].fate.delta_v", ["whom it hits"])
+    d = base()
+    d["vehicles"][0]["fate"] = {"impact_at": {"x": 0, "y": -1.75}}
+    refuse(d, "vehicles[0].fate.impact_at", ["whom it hits"])
+    d = base()
+    d["vehicles"][0]["fate"]["impact_at"] = {"x": 0, "y": -1.75, "radius": 0}
+    refuse(d, "vehicles[0].fate.impact_at.radius", ["outside"])
+    d = base()
+    d["vehicles"][0]["fate"]["impact_at"] = {"x": 900, "y": -1.75}
+    refuse(d, "vehicles[0].fate.impact_at", ["map"])
+    d = base()
+    d["vehicles"][0]["fate"]["impact_at"] = {"x": 0.5, "y": -1.75}
+    assert S.script_from_dict(d).vehicles[0].fate.impact_at == (0.5, -1.75, 0.5)  # 0.5 m unless given
 
 
 def test_the_file_gate_refuses_nan_huge_integers_and_other_kinds(tmp_path):

@@ -96,6 +96,8 @@ def fate_dict(script: Script, i: int) -> dict:
             d[k + "_kmh"] = [r.lo * 3.6, r.hi * 3.6]
     if f.rest is not None:
         d["rest"] = {"x": f.rest[0], "y": f.rest[1], "radius": f.rest[2]}
+    if f.impact_at is not None:
+        d["impact_at"] = {"x": f.impact_at[0], "y": f.impact_at[1], "radius": f.impact_at[2]}
     if f.heading is not None:
         d["heading"] = {"deg": math.degrees(f.heading[0]), "tol": math.degrees(f.heading[1])}
     if f.quarter_turns is not None:
@@ -265,14 +267,15 @@ def replay(d: dict, script: Script, model, *, on_step=None):
     rec = out_mod.Recorder(L, 1, dt)
     rec.begin(md.qpos[None])
     vi = L.qvel[:, None] + np.arange(2)
+    pxy = L.qpos[:, None] + np.arange(2)
     for k in range(nstep):
         if k % ps == 0:
             md.ctrl[:] = rows[k // ps]
             if k:
                 rec.period(md.qpos[None])
-        vel = md.qvel[vi][None]
+        vel, pos = md.qvel[vi][None], md.qpos[pxy][None]
         mujoco.mj_step(model, md)
-        rec.step((k + 1) * dt, md.sensordata[None], vel)
+        rec.step((k + 1) * dt, md.sensordata[None], vel, pos)
         if on_step is not None:
             on_step(k + 1, md)
     rec.finish(md.qpos[None], md.qvel[None])

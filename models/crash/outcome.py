@@ -61,6 +61,7 @@ class Recorder:
         self.hit_first = np.full((nsim, n), np.nan)   # first vehicle contact
         self.impact_speed = np.full((nsim, n), np.nan)
         self.impact_heading = np.full((nsim, n), np.nan)
+        self.impact_pos = np.full((nsim, n, 2), np.nan)  # CoM (x, y) just before its first vehicle contact
         self.curb = np.full((nsim, n), np.nan)
         self.barrier = np.full((nsim, n), np.nan)
         self.roll = np.zeros((nsim, n))
@@ -81,10 +82,10 @@ class Recorder:
         q = qpos[:, self.L.qpos[:, None] + np.arange(3, 7)]
         self.roll_prev, self.yaw_prev = _roll(q), drv.yaw_of(q)
 
-    def step(self, t: float, sensordata: np.ndarray, vel_before: np.ndarray) -> np.ndarray:
+    def step(self, t: float, sensordata: np.ndarray, vel_before: np.ndarray, pos_before: np.ndarray) -> np.ndarray:
         """After a step ending at time ``t``: ``sensordata`` (nsim, nsensordata), the vehicles'
-        planar velocities before the step (nsim, n, 2). Returns (nsim, n) bool: touched anything
-        this step."""
+        planar velocities and CoM positions before the step (nsim, n, 2). Returns (nsim, n) bool:
+        touched anything this step."""
         L = self.L
         touched = np.zeros(self.touch.shape, bool)
         if not sensordata[:, self._any].any():
@@ -104,6 +105,7 @@ class Recorder:
                 self.hit_first[first, i] = t
                 self.impact_speed[first, i] = np.hypot(*vel_before[first, i].T)
                 self.impact_heading[first, i] = np.arctan2(vel_before[first, i, 1], vel_before[first, i, 0])
+                self.impact_pos[first, i] = pos_before[first, i]
                 touched[:, i] |= got
         for arr, adr in ((self.curb, L.curb_adr), (self.barrier, L.barrier_adr)):
             if adr[0] < 0:
@@ -160,6 +162,7 @@ class VehicleOutcome:
     hits: list            # [(other index, first contact time s)] in time order
     impact_speed: float   # m/s just before its first vehicle contact (NaN: none)
     impact_heading: float  # rad: its direction of travel then
+    impact_pos: tuple     # (x, y) m: its CoM then (NaN: none)
     delta_v: float        # m/s in its first vehicle impact (NaN: none)
     rest: tuple           # (x, y, heading rad)
     quarter_turns: int
@@ -175,7 +178,9 @@ class VehicleOutcome:
         r = lambda x, k=3: None if x is None or (isinstance(x, float) and math.isnan(x)) else round(float(x), k)  # noqa: E731
         return {"name": self.name, "hits": [{"vehicle": names[j], "t": r(t)} for j, t in self.hits],
                 "impact_speed_kmh": r(self.impact_speed * KMH, 2),
-                "impact_heading_deg": r(math.degrees(self.impact_heading), 2), "delta_v_kmh": r(self.delta_v * KMH, 2),
+                "impact_heading_deg": r(math.degrees(self.impact_heading), 2),
+                "impact_pos": {"x": r(self.impact_pos[0]), "y": r(self.impact_pos[1])},
+                "delta_v_kmh": r(self.delta_v * KMH, 2),
                 "rest": {"x": r(self.rest[0]), "y": r(self.rest[1]), "heading_deg": r(math.degrees(self.rest[2]), 2)},
                 "quarter_turns": self.quarter_turns, "roll_deg": r(math.degrees(self.roll), 1),
                 "attitude": self.attitude, "spin_deg": r(math.degrees(self.spin), 1),
@@ -228,7 +233,8 @@ def outcomes(rec: Recorder, names: list[str], mass: np.ndarray) -> list[Outcome]
             att = "upright" if up > COS45 else ("roof" if up < -COS45 else "side")
             vs.append(VehicleOutcome(
                 name=nm, hits=[(j, t) for j, t in hits], impact_speed=float(rec.impact_speed[s, i]),
-                impact_heading=float(rec.impact_heading[s, i]), delta_v=dv,
+                impact_heading=float(rec.impact_heading[s, i]),
+                impact_pos=(float(rec.impact_pos[s, i, 0]), float(rec.impact_pos[s, i, 1])), delta_v=dv,
                 rest=(float(rec.final["pos"][s, i, 0]), float(rec.final["pos"][s, i, 1]), float(rec.final["yaw"][s, i])),
                 quarter_turns=turns, roll=roll, attitude=att, spin=float(rec.yaw[s, i]), curb=float(rec.curb[s, i]),
                 barrier=float(rec.barrier[s, i]), moving=bool(rec.final["speed"][s, i] > REST_SPEED)))
@@ -283,6 +289,12 @@ def judge(o: Outcome, script: Script, min_dist: np.ndarray | None = None) -> Out
             d = math.hypot(vo.rest[0] - f.rest[0], vo.rest[1] - f.rest[1])
             ok["rest"] = d <= f.rest[2]
             c += W_METRE * max(0.0, d - f.rest[2]) + W_CENTRE * min(d / f.rest[2], 2.0)
+        if f.impact_at is not None:
+            d = math.hypot(vo.impact_pos[0] - f.impact_at[0], vo.impact_pos[1] - f.impact_at[1])
+            d = d if math.isfinite(d) else math.inf
+            ok["impact_at"] = d <= f.impact_at[2]
+            c += W_METRE * max(0.0, d - f.impact_at[2]) + W_CENTRE * min(d / f.impact_at[2], 2.0) \
+                if math.isfinite(d) else W_CONTACT / 2
         if f.heading is not None:
             err = abs(float(_wrap(vo.rest[2] - f.heading[0])))
             ok["heading"] = err <= f.heading[1]

@@ -80,19 +80,24 @@ def _plant(seed: int, template: str, radius: float, heading_tol: float, need_con
 
 
 def planted_script(seed: int, *, template: str = "intersection3", radius: float = 2.0, heading_tol: float = 20.0,
-                   need_contacts: int = 1) -> tuple[dict, np.ndarray]:
-    """(script dict, hidden unit point): the template with the fates of hidden random intents."""
+                   need_contacts: int = 2) -> tuple[dict, np.ndarray]:
+    """(script dict, hidden unit point): the template with the fates of hidden random intents
+    that make at least ``need_contacts`` vehicle contacts (2: a chain worth the name, not one
+    collision and a bystander)."""
     d, u, _ = _plant(seed, template, radius, heading_tol, need_contacts)
     return d, u
 
 
 def planted_case(seed: int, *, template: str = "crossing2", radius: float = 1.0,
-                 heading_tol: float = 10.0) -> tuple[dict, list]:
+                 heading_tol: float = 10.0, impact_radius: float | None = 0.5) -> tuple[dict, list]:
     """(case dict, truth): a reconstruction case from a hidden crash of ``template`` (the fates:
     whom each hit, rest within ``radius`` m, heading within ``heading_tol`` deg; no speeds), and
     the truth per vehicle: {"impact_speed": m/s, "impact_heading": rad}."""
     d, _, o = _plant(seed, template, radius, heading_tol, 1)
     d["name"] = f"planted-case-{template}-{seed}"
-    for v in d["vehicles"]:
+    for v, vo in zip(d["vehicles"], o.vehicles):
         v["fate"].pop("attitude", None)
+        if impact_radius is not None:
+            v["fate"]["impact_at"] = {"x": round(vo.impact_pos[0], 3), "y": round(vo.impact_pos[1], 3),
+                                      "radius": impact_radius}
     return d, [{"impact_speed": v.impact_speed, "impact_heading": v.impact_heading} for v in o.vehicles]

@@ -113,7 +113,8 @@ class Runner:
         touched = np.zeros((s, L.n), bool)
         vi = L.qvel[:, None] + np.arange(2)
         pi, qi, vel = L.qpos[:, None] + np.arange(3), L.qpos[:, None] + np.arange(3, 7), L.qvel[:, None] + np.arange(3)
-        vel0 = [qvel0[:, vi]]
+        pxy = L.qpos[:, None] + np.arange(2)
+        vel0 = [qvel0[:, vi], qpos0[:, pxy]]
 
         def controller(v):
             u = drv.controls(v.t, self.fleet, intents, state, v.qpos[:, pi], v.qpos[:, qi], v.qvel[:, vel],
@@ -126,8 +127,8 @@ class Runner:
             return row
 
         def observer(v):
-            touched[:] |= rec.step(v.t, v.sensordata, vel0[0])
-            vel0[0] = v.qvel[:, vi]  # a copy (fancy indexing): the velocities before the next step
+            touched[:] |= rec.step(v.t, v.sensordata, vel0[0], vel0[1])
+            vel0[0], vel0[1] = v.qvel[:, vi], v.qpos[:, pxy]  # copies (fancy indexing): the state before the next step
 
         out = self.stepper.run(qpos0, qvel0, self.nstep, period=self.period, controller=controller, observer=observer)
         if not np.isfinite(out.final_qpos).all():

@@ -120,6 +120,7 @@ class Fate:
     impact_speed: Range | None = None   # m/s at its first contact with a vehicle
     delta_v: Range | None = None        # m/s in its first vehicle impact
     rest: tuple | None = None           # (x, y, radius) m
+    impact_at: tuple | None = None      # (x, y, radius) m: its CoM at its first vehicle contact
     heading: tuple | None = None        # (angle, tolerance) rad
     quarter_turns: tuple | None = None  # (lo, hi) of |roll| / 90 deg, rounded
     attitude: str | None = None
@@ -128,7 +129,8 @@ class Fate:
     barrier: bool | None = None
 
     def asks(self) -> bool:
-        return any(v is not None for v in (self.hits, self.impact_speed, self.delta_v, self.rest, self.heading,
+        return any(v is not None for v in (self.hits, self.impact_speed, self.delta_v, self.rest, self.impact_at,
+                                          self.heading,
                                           self.quarter_turns, self.attitude, self.spin, self.curb, self.barrier))
 
 
@@ -176,7 +178,7 @@ TOP_KEYS = ("kind", "schema_version", "name", "description", "road", "duration",
 ROAD_KEYS = ("layout", "width", "length", "radius", "angle", "curb", "friction", "surface", "barriers")
 VEHICLE_KEYS = ("name", "type", "start", "speed", "driver", "fate")
 DRIVER_KEYS = ("aim", "waypoints", "arrive", "brake_at", "slide", "follow", "after_impact", "after_steer")
-FATE_KEYS = ("hits", "impact_speed", "delta_v", "rest", "heading", "quarter_turns", "attitude", "spin", "strikes")
+FATE_KEYS = ("hits", "impact_speed", "delta_v", "rest", "impact_at", "heading", "quarter_turns", "attitude", "spin", "strikes")
 #: Headway of the footprint check (m): starts closer than this overlap.
 START_CLEARANCE = 0.05
 
@@ -364,6 +366,13 @@ def _fate(c: Fields, f, p: str, road, names: list, me: int) -> Fate:
         x, y = c.number(r["x"], f"{p}.rest.x"), c.number(r["y"], f"{p}.rest.y")
         _in_map(c, road, (x, y), f"{p}.rest")
         kw["rest"] = (x, y, c.number(r.get("radius", 2.0), f"{p}.rest.radius", *LIMITS["rest_radius"], "m"))
+    if "impact_at" in f:
+        if not kw.get("hits"):
+            c.fail(f"{p}.impact_at", "is where it was at its first impact, so the fate must list whom it hits")
+        r = c.obj(f["impact_at"], f"{p}.impact_at", ("x", "y", "radius"), required=("x", "y"))
+        x, y = c.number(r["x"], f"{p}.impact_at.x"), c.number(r["y"], f"{p}.impact_at.y")
+        _in_map(c, road, (x, y), f"{p}.impact_at")
+        kw["impact_at"] = (x, y, c.number(r.get("radius", 0.5), f"{p}.impact_at.radius", *LIMITS["rest_radius"], "m"))
     if "heading" in f:
         h = c.obj(f["heading"], f"{p}.heading", ("deg", "tol"), required=("deg",))
         kw["heading"] = (math.radians(c.number(h["deg"], f"{p}.heading.deg", -3600.0, 3600.0, "degrees")),

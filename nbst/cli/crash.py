@@ -80,13 +80,16 @@ def register(sub) -> None:
 
     c = cr.add_parser("reconstruct", help="from the vehicles' rest positions back to their speeds before the crash",
                       description="Read CASE (a crash script whose fates are the evidence: each vehicle's rest "
-                                  "position and heading with their tolerances, whom it hit; its drivers' ranges "
-                                  "bound the unknowns) and find every set of pre-impact intents whose crash meets "
-                                  "the evidence: first a fit (the crash search), then the spread around the fits. "
-                                  "Prints each vehicle's impact speed and heading as ranges over every fit (the "
-                                  "median is the estimate) and writes the fit nearest the estimate as a crash file "
-                                  "with the ranges in its `reconstruction` (replay and render it as any crash file). "
-                                  "docs/crash.md compares the method with PC-Crash's optimiser.",
+                                  "position and heading with their tolerances, whom it hit, optionally where it "
+                                  "was at the impact (impact_at); its drivers' ranges bound the unknowns) and find "
+                                  "every set of pre-impact intents whose crash meets the evidence: first a fit (two "
+                                  "vehicles with impact positions: the momentum seed from the slides to rest, "
+                                  "momentum corrections, then CMA-ES; else the crash search), then the spread "
+                                  "around the fits. Prints each vehicle's impact speed and heading: the estimate "
+                                  "(the fit of least squares against the evidence) and the range over every fit; "
+                                  "writes the estimate as a crash file with the ranges in its `reconstruction` "
+                                  "(replay and render it as any crash file). docs/crash.md compares the method "
+                                  "with PC-Crash's optimiser.",
                       epilog="Exit 0: fits found; 1: no fit within --max-rollouts (the nearest crash is written); "
                              "2: bad input; 130: interrupted.")
     c.add_argument("case", metavar="CASE", help="a crash script of evidence (JSON file or built-in name)")
@@ -185,6 +188,8 @@ def cmd_check(args) -> int:
             asks.append("hits " + (", ".join(names[j] for j in f.hits) or "nobody"))
         if f.rest is not None:
             asks.append(f"rests within {f.rest[2]:g} m of ({f.rest[0]:g}, {f.rest[1]:g})")
+        if f.impact_at is not None:
+            asks.append(f"at the impact within {f.impact_at[2]:g} m of ({f.impact_at[0]:g}, {f.impact_at[1]:g})")
         if f.heading is not None:
             asks.append(f"facing {math.degrees(f.heading[0]):g} +- {math.degrees(f.heading[1]):g} deg")
         if f.quarter_turns is not None:
@@ -359,8 +364,8 @@ def cmd_reconstruct(args) -> int:
             if s is None:
                 print(f"  {v['name']}: no fit")
                 continue
-            print(f"  {v['name']}: impact speed {s['median']:.1f} km/h (fits {s['min']:.1f}-{s['max']:.1f}), "
-                  f"heading {h['median']:.0f} deg ({h['min']:.0f} to {h['max']:.0f})")
+            print(f"  {v['name']}: impact speed {s['estimate']:.1f} km/h (fits {s['min']:.1f}-{s['max']:.1f}), "
+                  f"heading {h['estimate']:.0f} deg ({h['min']:.0f} to {h['max']:.0f})")
     if rec.interrupted:
         return 130
     return 0 if rec.found else 1
