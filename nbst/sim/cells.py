@@ -47,8 +47,8 @@ import numpy as np
 from numba import njit
 
 from nbst.constants import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
-from nbst.sim.kernel import (STATUS_OK, STATUS_OVERFLOW, alloc_work, cost_signature_words, event_guard, run,
-                             stall_limits)
+from nbst.sim.kernel import (STATUS_OK, STATUS_OVERFLOW, alloc_work, cost_signature_words, event_guard, record_event,
+                             run, stall_limits)
 from nbst.sim.primitives import INF, elastic_impulse, pair_tau, wall_tau
 
 __all__ = ["CELLS_MIN_DISKS", "CellWork", "alloc_cells", "evaluate_words_kernel", "grid_shape", "run_cells"]
@@ -450,18 +450,8 @@ def run_cells(x0, v0, radius, mass, W, H, t_final, w, out_final, out_vel, max_ev
             if n_ev >= cap:
                 status = STATUS_OVERFLOW
                 break
-            ev_t[n_ev] = te
-            ev_i[n_ev] = i
-            ev_j[n_ev] = jj
-            ev_state[n_ev, 0] = S[i, X]
-            ev_state[n_ev, 1] = S[i, Y]
-            ev_state[n_ev, 2] = S[i, VX]
-            ev_state[n_ev, 3] = S[i, VY]
-            if jj >= 0:
-                ev_state[n_ev, 4] = S[jj, X]
-                ev_state[n_ev, 5] = S[jj, Y]
-                ev_state[n_ev, 6] = S[jj, VX]
-                ev_state[n_ev, 7] = S[jj, VY]
+            record_event(ev_t, ev_i, ev_j, ev_state, n_ev, te, i, jj,
+                         S[i, X], S[i, Y], S[i, VX], S[i, VY], S[jj, X], S[jj, Y], S[jj, VX], S[jj, VY])
         n_ev += 1
     t_stop = t_final if status == STATUS_OK else t_last  # never extrapolate past the last event
     for i in range(n):

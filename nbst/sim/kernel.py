@@ -94,6 +94,34 @@ def event_guard(te: float, n_ev: int, max_events: int, t_inst: float, n_inst: in
     return STATUS_OK, t_inst, n_inst
 
 
+@njit(cache=True, inline="always")
+def record_event(ev_t, ev_i, ev_j, ev_state, e, te, i, j, xi, yi, vxi, vyi, xj, yj, vxj, vyj):
+    # Sixteen parameters on purpose: both event kernels record an event through this one
+    # inlined store, each from its own state layout.
+    """Both event kernels' record of event ``e``: its time ``te``, disk ``i`` and partner ``j``
+    (-1 for a wall) and their states after it; the j half is left as it was for a wall."""
+    ev_t[e] = te
+    ev_i[e] = i
+    ev_j[e] = j
+    ev_state[e, 0] = xi
+    ev_state[e, 1] = yi
+    ev_state[e, 2] = vxi
+    ev_state[e, 3] = vyi
+    if j >= 0:
+        ev_state[e, 4] = xj
+        ev_state[e, 5] = yj
+        ev_state[e, 6] = vxj
+        ev_state[e, 7] = vyj
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _dist2(final, target, i):
+    """Squared distance of disk ``i``'s final position from its target."""
+    dx = final[i, 0] - target[i, 0]
+    dy = final[i, 1] - target[i, 1]
+    return dx * dx + dy * dy
+
+
 # --------------------------------------------------------------------------- the kernel
 
 class Work(NamedTuple):
@@ -306,18 +334,8 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
             if n_ev >= cap:
                 status = STATUS_OVERFLOW
                 break
-            ev_t[n_ev] = te
-            ev_i[n_ev] = i
-            ev_j[n_ev] = jj
-            ev_state[n_ev, 0] = px[i]
-            ev_state[n_ev, 1] = py[i]
-            ev_state[n_ev, 2] = vx[i]
-            ev_state[n_ev, 3] = vy[i]
-            if jj >= 0:
-                ev_state[n_ev, 4] = px[jj]
-                ev_state[n_ev, 5] = py[jj]
-                ev_state[n_ev, 6] = vx[jj]
-                ev_state[n_ev, 7] = vy[jj]
+            record_event(ev_t, ev_i, ev_j, ev_state, n_ev, te, i, jj,
+                         px[i], py[i], vx[i], vy[i], px[jj], py[jj], vx[jj], vy[jj])
         n_ev += 1
     t_stop = t_final if status == STATUS_OK else t_last  # never extrapolate past the last event
     for i in range(n):
@@ -335,9 +353,7 @@ def cost_signature(final, target, R):
     sig = np.int64(0)
     R2 = R * R
     for i in range(final.shape[0]):
-        dx = final[i, 0] - target[i, 0]
-        dy = final[i, 1] - target[i, 1]
-        d2 = dx * dx + dy * dy
+        d2 = _dist2(final, target, i)
         cost += d2
         if d2 <= R2:
             sig |= np.int64(1) << np.int64(i)
@@ -378,9 +394,7 @@ def cost_signature_words(final, target, R, words):
     for w in range(words.shape[0]):
         words[w] = np.uint64(0)
     for i in range(final.shape[0]):
-        dx = final[i, 0] - target[i, 0]
-        dy = final[i, 1] - target[i, 1]
-        d2 = dx * dx + dy * dy
+        d2 = _dist2(final, target, i)
         cost += d2
         if d2 <= R2:
             words[i >> 6] |= np.uint64(1) << np.uint64(i & 63)
