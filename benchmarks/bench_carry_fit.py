@@ -19,12 +19,14 @@ line, entering at 4-6 deg); flush hits (boards 17-18 at 4-6 deg) that leave the 
 standing alone; the pro's strike %; 3-10, 10 and 7 conversion; frames counted at the sweep
 before they settled (caps).
 
-**Parts.** ``sweep``: each parameter moved to its limit on its own (the sensitivity table);
-``fit``: a small grid over the fitted parameters (pin centre of gravity, pin-deck friction),
-chosen to bring carry to PBA's 74 % (the fit sees carry only); ``heldout``: the chosen setting's
-10-pin and 7-pin conversion and flush-hit 10s and 4s, which the fit did not see. Results go to
-``--cache`` (default ``~/.cache/nbst/carry_fit``) as they come: a rerun skips what is there
-(resumable; delete the folder to start again).
+**Parts.** ``fit``: a grid over the pin's centre of gravity and the pin-deck friction, on the pocket
+hits only (the fit sees carry alone: PBA's 74 %); ``spares``: the spare throws at each noise scale of
+``--spare-scales`` (the pro's spare noise is fitted to PBA's 3-10, 10 and 7); ``heldout``: every first
+ball (the strike rate, which no fit saw), the flush hits' solid 10s and 4s, the spares at the pro's
+spare noise, and with ``--timestep`` the pocket hits' pin deck again at that step; ``sweep``: each
+parameter moved on its own from ``--setting`` (default: the scene's fitted pins), the sensitivity
+table. Results go to ``--cache`` (default ``~/.cache/nbst/carry_fit``) as they come: a rerun skips
+what is there (resumable; delete the folder to start again).
 """
 from __future__ import annotations
 
@@ -79,7 +81,7 @@ def pin_deck_model(base, prm: dict):
     """A copy of the frame model ``base`` with the pins' parameters of ``prm`` (keys of :data:`DEFAULTS`)."""
     import mujoco
 
-    p = {**DEFAULTS, **prm}
+    p = {**DEFAULTS, **{k: v for k, v in prm.items() if k != "h"}}
     m = _contacts().contact_model(base, bp_mu=p["bp_mu"], pp_mu=p["pp_mu"], bp_zeta=p["bp_zeta"], pp_zeta=p["pp_zeta"])
     for name in ("lane_deck", "lane_surface_pins"):
         m.geom_friction[m.geom(name).id, 0] = p["deck_mu"]
@@ -98,8 +100,9 @@ _W: dict = {}
 
 
 def _init(prm: dict) -> None:
-    _W["m"] = pin_deck_model(frame.frame_model(), prm)
-    _W["spot"] = float({**DEFAULTS, **prm}["spot_mm"]) / 1000
+    _W["m"] = pin_deck_model(frame.frame_model(timestep=float(prm.get("h", frame.TIMESTEP))),
+                             {k: v for k, v in prm.items() if k != "h"})
+    _W["spot"] = float({**DEFAULTS, **prm}["spot_mm"]) / 1000  # "h": the pin deck's timestep (s)
 
 
 def _replay(delivery, start, i: int) -> tuple:
@@ -230,7 +233,7 @@ def parse_setting(text: str) -> dict:
     out = {}
     for kv in filter(None, text.split(",")):
         k, v = kv.split("=")
-        if k not in DEFAULTS:
+        if k not in DEFAULTS and k != "h":
             raise SystemExit(f"--setting: no parameter {k!r}; parameters: {', '.join(DEFAULTS)}")
         out[k] = float(v)
     return out
@@ -252,6 +255,8 @@ def main() -> None:
     ap.add_argument("--grid", default="5.796,5.87,5.9375;0.2,0.25,0.3",
                     help="fit grid 'com1,com2,..;mu1,mu2,..' (pin centre of gravity, in; pin-deck friction)")
     ap.add_argument("--setting", default="", help="parameters moved from the scene's, 'key=value,...'")
+    ap.add_argument("--timestep", type=float, default=None,
+                    help="part heldout: also replay the pocket hits' pin deck at this step (s; the lane phase stays 1 ms)")
     args = ap.parse_args()
     tag = f"n{args.n}_x{args.scale:g}_s{args.spares}_seed{args.seed}"
     scales = sorted({float(x) for x in args.spare_scales.split(",")} | {args.spare_scale})
@@ -277,6 +282,9 @@ def main() -> None:
     if args.part in ("heldout", "all"):
         print(f"\n## held out: every first ball, flush hits, spares at noise x{args.spare_scale:g}\n")
         run_settings([base], throws, args.cache, tag, args.jobs, sk, everything=True)
+        if args.timestep:
+            print(f"\n## the pocket hits' pin deck at h = {args.timestep * 1000:g} ms\n")
+            run_settings([{**base, "h": args.timestep}], throws, args.cache, tag, args.jobs)
     if args.part in ("sweep", "all"):
         print(f"\n## sensitivity: one parameter at a time from the setting, spares at noise x{args.spare_scale:g}\n")
         run_settings([{**base, **s} for s in SWEEP], throws, args.cache, tag, args.jobs, sk)
