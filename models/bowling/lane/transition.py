@@ -10,8 +10,9 @@
 * **The bowlers** (:func:`lineup`): a profile (:mod:`.profiles`), ``n`` bowlers alternating
   frames as in league play, a share of them left-handed. Each throws the profile's strike ball
   (the line it was aimed on over the fresh house shot) with the profile's correlated release
-  noise, drawn from its own stream (``seed``, bowler): the same seed gives the same releases
-  whether the bowler moves or not (common random numbers, a paired comparison).
+  noise (the strike ball's and, on a spare, the spare ball's: :meth:`.profiles.Profile.spare`),
+  drawn from its own stream (``seed``, bowler): the same seed gives the same releases whether
+  the bowler moves or not (common random numbers, a paired comparison).
 * **Spares**: the straight spare ball (:data:`.spares.SPARE_BALL`, 17 mph, 200 rpm) through the
   middle of the leave, from across the lane, aimed once per leave on the fresh pattern (the
   bowler's spare system, :func:`.spares.straight_at`), under the same noise.
@@ -76,6 +77,7 @@ class Bowler:
     hand: str
     strike: lane.Delivery
     noise: noise.Noise
+    spare_noise: noise.Noise | None = None
 
 
 def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0, oil="house",
@@ -95,10 +97,12 @@ def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: floa
                               f"left-handers; give a share that makes a whole number (e.g. --lineup 4 --lefty-share 0.25)")
     k = int(round(lefties))
     nz = profiles.scaled(p.noise, float(noise_scale)).check()
+    nzs = profiles.scaled(p.spare(), float(noise_scale)).check()
     ball = (ball or lane.Ball()).check()
     same = pattern(oil) == pattern("house") and ball == lane.Ball()
     line = {h: p.delivery(h) if same else profiles.strike_ball(profile, oil, ball, h) for h in {"right", "left"}}
-    return [Bowler(i, "left" if i >= n - k else "right", line["left" if i >= n - k else "right"], nz) for i in range(n)]
+    return [Bowler(i, "left" if i >= n - k else "right", line["left" if i >= n - k else "right"], nz, nzs)
+            for i in range(n)]
 
 
 def _arrow_board(d: lane.Delivery) -> float:
@@ -196,14 +200,15 @@ class Run:
         self._spares: dict = {}
         self._draws = {}
         for b in bowlers:
-            rng = np.random.default_rng([self.seed, b.index])
+            rng = np.random.default_rng([self.seed, b.index])  # the correlations are the shape's, both noises
             self._draws[b.index] = b.noise.mix(rng.standard_normal((games * _ROWS_PER_GAME, len(noise.KEYS))))
         self._used = {b.index: 0 for b in bowlers}
 
-    def _noisy(self, b: Bowler, d: lane.Delivery) -> lane.Delivery:
+    def _noisy(self, b: Bowler, d: lane.Delivery, spare: bool) -> lane.Delivery:
         row = self._draws[b.index][self._used[b.index]]
         self._used[b.index] += 1
-        x = noise.perturb([getattr(d, k) for k in noise.KEYS], [getattr(b.noise, k) for k in noise.KEYS], row[None],
+        nz = b.spare_noise if spare and b.spare_noise is not None else b.noise
+        x = noise.perturb([getattr(d, k) for k in noise.KEYS], [getattr(nz, k) for k in noise.KEYS], row[None],
                           [noise.CLIP[k][0] for k in noise.KEYS], [noise.CLIP[k][1] for k in noise.KEYS])[0]
         return replace(d, **{k: float(v) for k, v in zip(noise.KEYS, x)}).check()
 
@@ -216,8 +221,8 @@ class Run:
         return self._spares[key]
 
     def _ball(self, b: Bowler, game: int, frame_no: int, roll: int, standing: list) -> dict:
-        d = self._noisy(b, self._aimed(b, standing))
         full = len(standing) == 10
+        d = self._noisy(b, self._aimed(b, standing), spare=not full)
         try:  # the ball alone on the lane as it is now (a copy): breakpoint and path
             t = phases.throw(d, self.pattern, self.ball, law=self.law, field=self.field.copy())
         except lane.LaneError:
@@ -283,8 +288,8 @@ class Run:
         """The run: its settings, every ball, the moves, the oil before and after, the scores and the summary."""
         scores = {f"{b.index}": [score(self.rolls[(b.index, g)]) for g in range(self.games)] for b in self.bowlers}
         d = {"move": self.move, "seed": self.seed, "games": self.games,
-             "bowlers": [{"index": b.index, "hand": b.hand, "strike": b.strike.to_dict(), "noise": b.noise.to_dict()}
-                         for b in self.bowlers],
+             "bowlers": [{"index": b.index, "hand": b.hand, "strike": b.strike.to_dict(), "noise": b.noise.to_dict(),
+                          "spare_noise": (b.spare_noise or b.noise).to_dict()} for b in self.bowlers],
              "balls": self.balls, "moves": self.moves, "scores": scores,
              "oil": {"pattern": self.pattern.name, "length_ft": self.pattern.length_ft, "dx_ft": DX_FT,
                      "before": self.before, "after": _map(OilField(self._done))}}
