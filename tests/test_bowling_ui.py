@@ -229,7 +229,9 @@ def test_bowl_frame_records_the_bowler_the_line_the_names_and_the_note(tmp_path,
     pro = profiles.profile("pro").strike
     assert d["delivery"]["rpm"] == 400.0 and d["delivery"]["mph"] == pro.mph and raw["bowler"] == "pro"
     assert raw["line"]["stance_board"] == pytest.approx(d["delivery"]["board"] + advise.STANCE_SEP)
-    assert raw["names"]["leave"] and raw["names"]["hit"] == names.hit_name(d["outcome"]["board_at_pins"])
+    o = d["outcome"]
+    assert raw["names"] == names.names(d["standing"], o["leave"], o["board_at_pins"], o["entry_angle_deg"])
+    assert raw["names"]["hit"] == names.hit_name(o["board_at_pins"]) is not None
     assert "sample" in raw["note"] and "named" in text and "sample" in text
     rc, text, err = _main(["bowl", "replay", out], capsys)
     assert rc == 0 and "named" in text, err
