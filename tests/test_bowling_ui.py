@@ -235,3 +235,17 @@ def test_bowl_frame_records_the_bowler_the_line_the_names_and_the_note(tmp_path,
     assert "sample" in raw["note"] and "named" in text and "sample" in text
     rc, text, err = _main(["bowl", "replay", out], capsys)
     assert rc == 0 and "named" in text, err
+
+
+def test_spare_commands_throw_with_the_profiles_spare_noise():
+    """--bowler on a spare command takes the profile's spare noise; on a strike ball its strike noise."""
+    import argparse
+
+    from nbst.cli.bowl_args import bowler_of
+    from nbst.models.bowling.lane import profiles
+
+    args = argparse.Namespace(bowler="pro")
+    pro = profiles.profile("pro")
+    assert bowler_of(args)[1] == pro.noise
+    assert bowler_of(args, spare=True)[1] == pro.spare()
+    assert pro.spare() != pro.noise  # the pro's spare noise is fitted on its own

@@ -113,7 +113,7 @@ def cmd_advise(args) -> int:
     try:
         (leave,) = leaves_of(args)
         lane.pattern(args.oil)
-        strike, nz = bowler_of(args)
+        strike, nz = bowler_of(args, spare=True)
     except ValueError as e:
         return err("advise", str(e))
     nz = noise.DEFAULT if nz is None else nz
@@ -166,7 +166,7 @@ def cmd_spares(args) -> int:
     try:
         names = leaves_of(args)
         lane.pattern(args.oil)
-        strike, nz = bowler_of(args)
+        strike, nz = bowler_of(args, spare=True)
     except ValueError as e:
         return err("spares", str(e))
     from nbst.models.bowling.lane import noise

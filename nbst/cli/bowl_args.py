@@ -280,10 +280,10 @@ def wants_picture(args) -> bool:
 BOWLERS = ("pro", "league200", "league150", "twohander")
 
 
-def bowler_of(args):
+def bowler_of(args, *, spare: bool = False):
     """(the delivery, the noise) of --bowler (with every delivery flag given put over its strike
-    ball, :func:`delivery_of`; the noise times --noise-scale where the command has one), or (None,
-    None) without --bowler."""
+    ball, :func:`delivery_of`; the noise of its strike ball, or of its spare throws with
+    ``spare``, times --noise-scale where the command has one), or (None, None) without --bowler."""
     if getattr(args, "bowler", None) is None:
         return None, None
     from nbst.models.bowling.lane import profiles
@@ -293,4 +293,4 @@ def bowler_of(args):
     base = p.delivery(hand)
     d = delivery_of(args, base) if hasattr(args, "board") else base
     k = getattr(args, "noise_scale", None)
-    return d, profiles.scaled(p.noise, 1.0 if k is None else float(k))
+    return d, profiles.scaled(p.spare() if spare else p.noise, 1.0 if k is None else float(k))
