@@ -132,7 +132,9 @@ def cmd_solve(args) -> int:
              else f"down {','.join(map(str, want))}")
     ladder_frames = len(frame.LADDER) * (robust.LADDER_TRIES if args.robust is not None else 1)
     after = (args.robust if args.robust is not None else 0) + args.samples + ladder_frames + 1
-    bar = progress.Bar(f"bowl solve {asked}", (0 if target in elites else args.max_rollouts) + after, unit="frame",
+    # the budget whether or not the atlas holds the request: an atlas grown on another lane scene holds
+    # starts, and when its throw misses here the search runs (foul_atlas.seek)
+    bar = progress.Bar(f"bowl solve {asked}", args.max_rollouts + after, unit="frame",
                        bound=True, start=progress.command_start(), quiet=args.quiet)
     state = {"point": None, "est": None, "ladder": None, "stage": "search", "frames": 0, "from_atlas": target in elites}
     arch = dict(elites)
