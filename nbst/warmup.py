@@ -7,7 +7,8 @@ first solve; later runs load the cached code in about a second.
 
 * ``python -m nbst.warmup`` (run by ``scripts/setup.sh``) compiles every kernel
   the main job uses (simulate, evaluate, both search loops, polish, Jacobian)
-  by running each once on a built-in problem, and fills the cache.
+  by running each once on a built-in problem, and the bowling lane's friction
+  kernel by one short throw, and fills the cache.
 * :func:`is_cold` tells whether a kernel has nothing in the cache yet, so a
   command can say ``compiling numba kernels (one time, ~N s)`` before it waits.
 """
@@ -65,6 +66,23 @@ def other_kernels() -> tuple:
 
     return (jacobian_from_events, late_impact_errors, aim_routes, run_cells, evaluate_words_kernel, _keyframes,
             _replay_at, pair_contact)
+
+
+def lane_kernels() -> tuple:
+    """The bowling lane's kernel: the friction and oil at the ball's contact, called before every
+    step of every throw from the foul line (``nbst bowl throw/frame/solve --foul-line/...``)."""
+    from nbst.models.bowling.lane.friction import contact_step
+
+    return (contact_step,)
+
+
+def warm_lane() -> None:
+    """Compile the lane's kernel with the arrays a throw passes it: one short throw of the default
+    delivery (the ball alone on the house shot; MuJoCo's model compile included, under a second)."""
+    from nbst.models.bowling.lane import phases
+    from nbst.models.bowling.lane.delivery import Delivery
+
+    phases.run(Delivery(at="foul", board=20.0, angle=2.0), "house")
 
 
 def many_disks_problem(n: int = 144):
@@ -144,6 +162,8 @@ def warm_all(log=None, *, parallel: bool = False) -> float:
         final_jacobian(p, v)
         analyze(p, v, timestep=0.00025)
     log(f"simulator ready ({time.perf_counter() - t0:.0f} s)")
+    warm_lane()
+    log(f"bowling lane ready ({time.perf_counter() - t0:.0f} s)")
     if search is not None and search.wait() == 0:
         log(f"searches ready ({time.perf_counter() - t0:.0f} s, compiled beside it)")
     else:  # one core, or the second process failed: here, one after the other
@@ -183,7 +203,7 @@ def main(argv=None) -> int:
         warm_search()
         return 0
     quiet = "-q" in argv or "--quiet" in argv
-    cold = is_cold(*search_kernels(), *other_kernels())
+    cold = is_cold(*search_kernels(), *other_kernels(), *lane_kernels())
     talk = cold and not quiet
     if talk:
         print(compile_message(), file=sys.stderr, flush=True)

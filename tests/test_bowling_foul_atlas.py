@@ -237,3 +237,41 @@ def test_robust_strike_starts_include_throws_that_strike_without_noise(runner):
         # aimed at the pocket: the ball enters within a board of 17.5 (the published pocket)
         assert abs(r.board_at_pins - spares.POCKET_PEAK[0]) < 1.0
     assert robust_starts(found, [10]) == [found]  # any other outcome: the throw found alone
+
+
+@pytest.mark.slow
+def test_cli_atlas_from_another_scenes_atlas_throws_its_deliveries_again_with_a_bowlers_noise(tmp_path):
+    """``bowl atlas --foul-line --from`` an atlas of another lane scene: each of its deliveries is
+    thrown once on this scene and archived by what it knocks down here (not by the file's outcome);
+    ``--bowler`` gives the probabilities the profile's noise, and the atlas records both; a resumed run
+    does not throw them again."""
+    from nbst.models.bowling.lane import profiles
+
+    a = throwfile.load_atlas(foul_atlas.SHIPPED)
+    old = {**a, "scene": "lane-2", "throws": [{**t, "scene": "lane-2"} for t in a["throws"][:2]]}
+    src = tmp_path / "old.json"
+    src.write_text(throwfile.dumps(old))
+    out = tmp_path / "run"
+    argv = ("bowl", "atlas", "--foul-line", "--out-dir", str(out), "--from", str(src), "--max-rollouts", "0",
+            "--samples", "2", "--seed", "3", "--jobs", "1", "--bowler", "pro", "-q")
+    p = _nbst(*argv)
+    assert p.returncode == 0, p.stderr
+    arch = foul_atlas.archive_from_doc(json.loads((out / "archive.json").read_text()), "archive.json")
+    got = throwfile.load_atlas(out / "foul_atlas.json")
+    assert got["scene"] == lane.SCENE and got["bowler"] == "pro"
+    assert noise.Noise(**got["noise"]) == profiles.profile("pro").noise != noise.DEFAULT
+    ds = [lane.Delivery(**t["delivery"]) for t in old["throws"]]
+    with frame.FrameRunner(foul_atlas.OIL, jobs=1) as R:
+        here = [pinfall.mask_from_pins(r.down) for r in R.map(ds)]
+    first = {m: d for m, d in reversed(list(zip(here, ds))) if m}
+    assert first  # keyed by what they knock down on this scene, the first throw of a subset its elite
+    for m, d in first.items():
+        assert np.array_equal(arch.elite[m], foul_atlas.point_of(d))
+    for t in got["throws"]:
+        assert t["probability"]["n"] == 2 and noise.Noise(**t["probability"]["noise"]) == profiles.profile("pro").noise
+    n = arch.rollouts
+    assert n >= 2
+    p = _nbst(*argv)  # resumed: the checkpoint holds them; nothing is thrown again
+    assert p.returncode == 0, p.stderr
+    again = foul_atlas.archive_from_doc(json.loads((out / "archive.json").read_text()), "archive.json")
+    assert again.rollouts == n

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import bowler_flag, err
+from nbst.cli.bowl_args import BOWLERS, bowler_flag, err
 
 #: Frames of the fresh probability estimate (``--samples``) and of ``--robust``'s search.
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
@@ -59,9 +59,15 @@ def add_atlas_flags(a) -> None:
                         "is missing, then each subset's throw run --samples times under the release noise "
                         "(its probability), at h = 0.5 and 0.25 ms, and 2 s longer. Writes DIR/foul_atlas.json "
                         "(one throw per subset), DIR/summary.md, DIR/checks.json and DIR/archive.json (the "
-                        "search, to resume)")
+                        "search, to resume). --from ATLAS.json starts from an atlas file: one of this lane scene "
+                        "as it is; one of another scene (the file's \"scene\") by throwing each of its deliveries "
+                        "once here, archived by what it knocks down here")
     g.add_argument("--samples", type=SAMPLES, default=ATLAS_SAMPLES, metavar="N",
                    help=f"--foul-line: noisy throws per subset's probability (default {ATLAS_SAMPLES})")
+    g.add_argument("--bowler", default=None, choices=BOWLERS,
+                   help="--foul-line: each subset's probability under this bowler profile's correlated release "
+                        "noise (its strike ball's: docs/bowling.md, \"Bowler profiles\") instead of the default "
+                        "noise; the atlas file records the profile and the noise (the search is the same)")
 
 
 def _refuse(args, flags, what: str, how: str) -> str | None:
@@ -262,6 +268,12 @@ def robust_starts(found, want, strike=None) -> list:
     return [found] + (extra if len(want) == 10 else [])
 
 
+def lane_scene() -> str:
+    from nbst.models.bowling import lane
+
+    return lane.SCENE
+
+
 def cmd_atlas(args) -> int:
     """``bowl atlas --foul-line``: the search, the mirror step and each subset's measures of
     :class:`nbst.models.bowling.lane.folder.FoulAtlasRun`, with progress and Ctrl-C handling."""
@@ -277,16 +289,19 @@ def cmd_atlas(args) -> int:
         return err("atlas", bad)
     if args.method != "elites":
         return err("atlas", "--method: the foul-line atlas uses elites only")
+    nz = None
+    if args.bowler is not None:
+        from nbst.models.bowling.lane import profiles
+
+        nz = profiles.profile(args.bowler).noise
     try:
         out = prepare_output(args.out, directory=True, option="--out-dir")
         run = FoulAtlasRun(out, seed=args.seed if args.seed is not None else 1, jobs=args.jobs or default_jobs(),
-                           from_atlas=args.from_atlas)
+                           from_atlas=args.from_atlas, bowler=args.bowler, **({} if nz is None else {"nz": nz}))
     except (OutputError, ValueError, OSError, files.BowlingFileError) as e:
         return err("atlas", str(e))
     interrupted = False
-    bar = progress.Bar("bowl atlas --foul-line: search", args.max_rollouts, unit="frame", bound=True,
-                       start=progress.command_start(), quiet=args.quiet)
-    pb = None
+    bar = pb = None
 
     def on_batch(frames, found) -> None:
         bar.set(frames)
@@ -295,6 +310,15 @@ def cmd_atlas(args) -> int:
     try:
         with sigterm_as_interrupt():
             try:
+                if run.starts:  # an atlas of another lane scene: its deliveries thrown again here first
+                    rb = progress.Bar(f"bowl atlas --foul-line: --from's {len(run.starts)} throws on {lane_scene()}",
+                                      len(run.starts), unit="frame", start=progress.command_start(), quiet=args.quiet)
+                    try:
+                        run.rethrow(on_done=rb.update)
+                    finally:
+                        rb.close(note=f"{len(run.archive.elite)} subsets")
+                bar = progress.Bar("bowl atlas --foul-line: search", args.max_rollouts, unit="frame", bound=True,
+                                   start=progress.command_start(), quiet=args.quiet)
                 run.grow(args.max_rollouts, on_batch=on_batch)
                 bar.close(note=f"{len(run.archive.elite)} subsets")
                 run.mirror()
@@ -311,14 +335,16 @@ def cmd_atlas(args) -> int:
     except (OutputError, ValueError) as e:
         return err("atlas", str(e))
     finally:
-        bar.close()
+        if bar is not None:
+            bar.close()
         if pb is not None:
             pb.close(note=f"{len(run.done)} subsets measured")
         run.close()
     last = pb if pb is not None else bar
+    took = f" in {progress.seconds_text(last.seconds)}" if last is not None else ""
     msg = (f"{len(run.done)} subsets with their probability ({len(run.archive.elite)} found in "
            f"{run.archive.rollouts} frames searched{f', {progress.count_text(pb.n)} frames measuring them' if pb else ''}"
-           f") in {progress.seconds_text(last.seconds)}; wrote {run.atl}, {run.summ}")
+           f"){took}; wrote {run.atl}, {run.summ}")
     if interrupted:
         print(f"nbst bowl atlas: interrupted; what ran is written: {msg}", file=sys.stderr)
         return 130

@@ -258,6 +258,18 @@ def archive_from_doc(doc, src) -> subsets.Archive:
     return a
 
 
+def rethrow(runner: frame.FrameRunner, archive: subsets.Archive, X, on_done=None) -> list[int]:
+    """Throw each point of ``X`` ((n, 7)) once on this scene and archive it by what it knocks
+    down here (parentless, like a uniform throw; the first throw of a subset is its elite): an
+    atlas grown on another lane scene is a set of deliveries, not of answers. Returns the new
+    masks; the frames count in the archive's rollouts."""
+    X = np.asarray(X, dtype=float).reshape(-1, DIM)
+    if not len(X):
+        return []
+    masks = [pinfall.mask_from_pins(r.down) for r in runner.map([delivery_of(x) for x in X], on_done=on_done)]
+    return archive.add(X, masks, None)
+
+
 def mirror_step(runner: frame.FrameRunner, archive: subsets.Archive) -> list[int]:
     """For each elite whose mirrored subset is not archived, its delivery with the other hand:
     one frame each, archived by its own outcome (parentless). Returns the new masks."""

@@ -35,16 +35,23 @@ class FoulAtlasRun:
     """The foul-line atlas of one folder (see the module docstring). ``seed`` seeds the search
     and the noisy throws; ``jobs`` processes run the frames (at h = 1, 0.5 and 0.25 ms)."""
 
-    def __init__(self, out: Path, *, seed: int, jobs: int, from_atlas=None, nz: noise.Noise = noise.DEFAULT):
-        self.out, self.seed, self.nz = Path(out), int(seed), nz
+    def __init__(self, out: Path, *, seed: int, jobs: int, from_atlas=None, nz: noise.Noise = noise.DEFAULT,
+                 bowler: str | None = None):
+        self.out, self.seed, self.nz, self.bowler = Path(out), int(seed), nz, bowler
+        self.starts: list = []  # deliveries of an atlas of another scene, to throw again first
         self.ckpt, self.atl, self.summ = self.out / "archive.json", self.out / "foul_atlas.json", self.out / "summary.md"
         self.checks_path = self.out / "checks.json"
         if self.ckpt.exists():
             self.archive = atlas.archive_from_doc(files.read_doc(self.ckpt), self.ckpt)
         elif from_atlas:
             old = throwfile.load_atlas(from_atlas)
-            self.archive = subsets.Archive.from_elites({pinfall.mask_from_pins(t["outcome"]["down"]): atlas.point_of(
-                lane.Delivery(**t["delivery"])) for t in old["throws"] if t["outcome"]["down"]})
+            full = [t for t in old["throws"] if t["standing"] == throwfile.FULL_RACK and t["outcome"]["down"]]
+            if old.get("scene", throwfile.SCENES[0]) == lane.SCENE:  # this scene's answers: kept as they are
+                self.archive = subsets.Archive.from_elites({pinfall.mask_from_pins(t["outcome"]["down"]): atlas.point_of(
+                    lane.Delivery(**t["delivery"])) for t in full})
+            else:  # another scene's: its deliveries, thrown again here (:meth:`rethrow`)
+                self.archive = subsets.Archive()
+                self.starts = [atlas.point_of(lane.Delivery(**t["delivery"])) for t in full]
         else:
             self.archive = subsets.Archive()
         self.done: dict = {}
@@ -83,6 +90,8 @@ class FoulAtlasRun:
         from nbst.outputs import signals_deferred, write_text_atomic
 
         a = throwfile.atlas_dict([self.done[m] for m in sorted(self.done)], oil=atlas.OIL, noise=self.nz)
+        if self.bowler is not None:
+            a["bowler"] = self.bowler  # whose release noise the probabilities are (for people; not checked)
         with signals_deferred(reraise=False):
             self.checkpoint()
             write_text_atomic(self.atl, throwfile.dumps(a), option=OPTION)
@@ -91,6 +100,17 @@ class FoulAtlasRun:
             write_text_atomic(self.summ, summary_md(a, self.checks, self.archive), option=OPTION)
 
     # -------------------------------------------------------------------------- the stages
+
+    def rethrow(self, on_done=None) -> list[int]:
+        """The ``--from`` atlas's deliveries when it was grown on another lane scene: each thrown
+        once here and archived by what it knocks down here (:func:`.atlas.rethrow`); then a
+        checkpoint, so a resumed run does not throw them again. Returns the new masks."""
+        if not self.starts:
+            return []
+        new = atlas.rethrow(self.runners[0], self.archive, self.starts, on_done=on_done)
+        self.starts = []
+        self.checkpoint()
+        return new
 
     def grow(self, budget: int, on_batch=None) -> None:
         """Spend ``budget`` frames on the search; ``on_batch(frames this run, subsets)`` after each

@@ -51,6 +51,10 @@ __all__ = ["N_CELLS", "G", "LIFT_TOL", "cover_cells", "contact_step", "BallOnLan
 #: Cells of the cover's oil grid (about 0.4 in apart: the 1 in track band covers ~4 of them).
 N_CELLS = 2048
 G = 9.81
+#: :func:`contact_step` scans the cover's cells within this angle (rad) of the contact point's
+#: polar angle: wider than the band's half-width (1 in: 0.12 rad) plus the lattice's largest gap
+#: to its nearest cell (0.03 rad at 2,048 cells); the kernel checks it and scans every cell when not.
+SCAN_RAD = 0.2
 #: The ball is on the lane while its centre is less than this above R (m).
 LIFT_TOL = 1e-3
 #: acc's entries.
@@ -132,22 +136,55 @@ def contact_step(qpos, qvel, xfrc, lane_h, cover, cells, prm, iinv_body, acc):  
     # the contact point in the ball's frame: R^T (0, 0, -1)
     c0, c1, c2 = -Rm[2, 0], -Rm[2, 1], -Rm[2, 2]
     band_cos = prm[P_BAND_COS]
+    # the cells under the band, found once per step (their indices in ``band``, in cell order):
+    # the cosines first (a loop without branches, which the compiler vectorises), then the scan
+    # Only the cells of a Fibonacci lattice (:func:`cover_cells`: cell k at height 1 - 2 (k + 1/2) / n)
+    # whose polar angle is within SCAN_RAD of the contact's can be within SCAN_RAD of it: one range of k.
+    # The band and the nearest cell lie inside it whenever the nearest is nearer than SCAN_RAD (always,
+    # for the lattice's spacing); else every cell is scanned. Either way the same cells, in the same order.
+    nc = cells.shape[0]
+    phc = math.acos(min(1.0, max(-1.0, c2)))
+    k0 = int(math.floor((1.0 - math.cos(max(0.0, phc - SCAN_RAD))) * nc / 2.0 - 0.5)) - 2
+    k1 = int(math.ceil((1.0 - math.cos(min(math.pi, phc + SCAN_RAD))) * nc / 2.0 - 0.5)) + 3
+    k0 = min(max(k0, 0), nc)
+    k1 = min(k1, nc)
+    dots = np.empty(nc)
+    for k in range(k0, k1):
+        dots[k] = cells[k, 0] * c0 + cells[k, 1] * c1 + cells[k, 2] * c2
+    best = -2.0
+    for k in range(k0, k1):
+        if dots[k] > best:
+            best = dots[k]
+    if best <= math.cos(SCAN_RAD) + 1e-9 or band_cos <= math.cos(SCAN_RAD) + 1e-9:  # scan them all
+        for k in range(0, k0):
+            dots[k] = cells[k, 0] * c0 + cells[k, 1] * c1 + cells[k, 2] * c2
+        for k in range(k1, nc):
+            dots[k] = cells[k, 0] * c0 + cells[k, 1] * c1 + cells[k, 2] * c2
+        k0 = 0
+        k1 = nc
+    band = np.empty(nc, dtype=np.int64)
     nn = 0
     hsum = 0.0
     best = -2.0
     kbest = 0
-    for k in range(cells.shape[0]):
-        d = cells[k, 0] * c0 + cells[k, 1] * c1 + cells[k, 2] * c2
+    for k in range(k0, k1):
+        d = dots[k]
         if d > band_cos:
+            band[nn] = k
             nn += 1
             hsum += cover[k]
         if d > best:
             best = d
             kbest = k
-    if nn == 0:
+    nb = nn  # cells the exchange touches (``band[:nb]``)
+    if nn == 0:  # the band falls between cells: the nearest one's film (the exchange: any as near within 1e-12)
         nn = 1
         hsum = cover[kbest]
         band_cos = best - 1e-12
+        for k in range(k0, k1):
+            if dots[k] > band_cos:
+                band[nb] = k
+                nb += 1
     hsum *= scale
     hb = hsum / nn
     mu = prm[P_MU_OIL] + (prm[P_MU_COVER] - prm[P_MU_OIL]) * math.exp(-(hl + hb) / prm[P_H0])
@@ -165,18 +202,17 @@ def contact_step(qpos, qvel, xfrc, lane_h, cover, cells, prm, iinv_body, acc):  
             dv = min(dv, hl * CELL_AREA)
             lane_h[i, j] = hl - dv / CELL_AREA
             add = dv / (nn * cell_b) / scale
-            for k in range(cells.shape[0]):
-                if cells[k, 0] * c0 + cells[k, 1] * c1 + cells[k, 2] * c2 > band_cos:
-                    cover[k] += add
-                    acc[A_SUM] += add
+            for t_ in range(nb):
+                cover[band[t_]] += add
+                acc[A_SUM] += add
         elif dv < 0.0 and hsum > 0.0:
             f = min(-dv / (hsum * cell_b), 1.0)
             moved = 0.0
-            for k in range(cells.shape[0]):
-                if cells[k, 0] * c0 + cells[k, 1] * c1 + cells[k, 2] * c2 > band_cos:
-                    take = cover[k] * f
-                    cover[k] -= take
-                    moved += take
+            for t_ in range(nb):
+                k = band[t_]
+                take = cover[k] * f
+                cover[k] -= take
+                moved += take
             acc[A_SUM] -= moved
             dv = -moved * scale * cell_b
             lane_h[i, j] = hl - dv / CELL_AREA
