@@ -51,10 +51,12 @@ ENTRY = (4.0, 6.0)
 SPARE_LEAVES = {"3-10": (3, 10), "10": (10,), "7": (7,)}
 #: The lane half's pins (``scene.LANE_PINS``): ball-pin / pin-pin friction and damping ratio, pin-deck
 #: friction, pin mass (kg) and centre of gravity (in above the base; None: the uniform solid's), the pins'
-#: scatter about their spots (mm; the scene has none).
+#: scatter about their spots (mm; the scene has none), and the kickbacks' contact damping ratio (the side
+#: walls beside the deck; the scene's static surfaces are critically damped, 1: a pin does not bounce back).
 _P = scene.LANE_PINS
 DEFAULTS = dict(bp_mu=_P.mu_ball_pin, pp_mu=_P.mu_pin_pin, bp_zeta=_P.zeta_ball_pin, pp_zeta=_P.zeta_pin_pin,
-                deck_mu=_P.mu_deck, pin_mass=_P.mass, pin_com_in=_P.com_in, spot_mm=0.0)
+                deck_mu=_P.mu_deck, pin_mass=_P.mass, pin_com_in=_P.com_in, spot_mm=0.0,
+                kick_zeta=scene.SOLREF_STATIC[1])
 #: One parameter at a time, to its range (USBC's limits for the pin; assumed ranges for the rest).
 SWEEP = [
     {}, {"pin_com_in": pin.COM_LIMITS_IN[0] + 0.1}, {"pin_com_in": None},
@@ -85,6 +87,8 @@ def pin_deck_model(base, prm: dict):
     m = _contacts().contact_model(base, bp_mu=p["bp_mu"], pp_mu=p["pp_mu"], bp_zeta=p["bp_zeta"], pp_zeta=p["pp_zeta"])
     for name in ("lane_deck", "lane_surface_pins"):
         m.geom_friction[m.geom(name).id, 0] = p["deck_mu"]
+    for name in ("wall_left", "wall_right"):  # the kickbacks (the walls run the lane's length)
+        m.geom_solref[m.geom(name).id, 1] = p["kick_zeta"]
     com, inertia = pin.mass_properties(p["pin_mass"], p["pin_com_in"])
     for n in scene.PIN_NUMBERS:
         b = m.body(f"pin{n}").id

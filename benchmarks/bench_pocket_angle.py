@@ -1,0 +1,219 @@
+"""Flush pocket hits against entry angle (issue 34): do the fitted pins ever leave a solid 4?
+
+    python benchmarks/bench_pocket_angle.py [--releases "pro:4,6,7,8;twohander:8"] [--n 200]
+                                            [--seed 1] [--jobs 1] [--setting key=value,...] [--cache DIR]
+    python benchmarks/bench_pocket_angle.py --restitution [--setting kick_zeta=0.2]
+
+Bowlers' lore (a right-hander): a ball that comes in too strong, too high or at too much angle
+leaves the 4 (the 2 pin goes round the 4, or drives behind it), the 4-7, the 4-9 or worse: "a
+high hit on the 1-3 pocket can tend to leave combinations such as a 4 pin, 9 pin, 4-7, 4-9,
+4-6-7-9-10" (bowl.com, "Looking for the Perfect Strike"); "when you leave the 4-pin, this is an
+indication that the ball is too high in the pocket" (Denver Bowling, "I Got A Bad Break", 2005).
+
+**The throws.** For each release of ``--releases`` (a profile's strike ball: its speed, revs and
+tilt) and each entry angle listed, :func:`.spares.aim_entry` finds the line (foul board, launch
+angle, axis rotation) whose ball alone crosses the head pin's line on board 17.5 at that angle
+(the axis rotation is the entry angle's knob); ``--n`` noisy copies of it under the pro's fitted
+strike-ball noise (``profiles.PRO_NOISE``; the two-hander's is the same), seed ``--seed`` + the
+bucket's index. Each throw's lane phase runs once (``frame.deck_start``, cached); the pin deck is
+then run from there on the scene's fitted pins, or on a copy with ``--setting``'s pins
+(``bench_carry_fit.pin_deck_model``: the bounded probe of one parameter, e.g. ``kick_zeta``, the
+kickbacks' contact damping ratio; ``--restitution`` prints a pin's rebound off the kickback).
+
+**Figures.** Every throw is binned by where its ball actually entered (board and angle at the
+head pin's line, the deck start's): flush hits (boards 17-18) and high pocket hits (18-19) per
+whole-degree bin of entry angle; per bin the strikes, the solid 10s as ``names.leave_names`` names
+them, the 4 left alone (``names``' solid 4 on a pocket hit), and the leaves with the 4 in them
+(4-7, 4-9, 4-7-10 ...), with Wilson 95 % intervals. Results go to ``--cache`` as they come
+(resumable).
+"""
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import pickle
+import time
+from pathlib import Path
+
+import numpy as np
+
+from nbst.models.bowling.lane import frame, names, noise, profiles, spares
+
+
+def _carry_fit():
+    path = Path(__file__).resolve().parent / "bench_carry_fit.py"
+    spec = importlib.util.spec_from_file_location("bench_carry_fit", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+CF = _carry_fit()
+FLUSH = (17.0, 18.0)
+HIGH = (18.0, 19.0)
+#: The throws whose pin deck is run: the ball on these boards at the head pin's line (the tables' span).
+REPLAYED = (16.5, 19.0)
+
+
+def parse_releases(text: str) -> list:
+    """[(profile, angle), ...] of 'pro:4,6;twohander:8'."""
+    out = []
+    for part in filter(None, text.split(";")):
+        name, angles = part.split(":")
+        profiles.profile(name)
+        out += [(name, float(a)) for a in angles.split(",")]
+    return out
+
+
+def capture(cache: Path, buckets: list, n: int, seed: int) -> dict:
+    """Per bucket (profile, angle): the aimed line and ``n`` noisy throws with their deck starts."""
+    path = cache / f"angle_starts_n{n}_seed{seed}.pkl"
+    out = pickle.loads(path.read_bytes()) if path.exists() else {}
+    m = frame.frame_model()
+    for b, (name, ang) in enumerate(buckets):
+        k = f"{name}@{ang:g}"
+        if k in out:
+            continue
+        t0 = time.time()
+        d, r = spares.aim_entry(17.5, ang, base=profiles.profile(name).delivery())
+        throws = noise.sample(d, n, seed + b, profiles.PRO_NOISE)
+        out[k] = {"line": d.to_dict(), "alone": (r.board_at_pins, r.entry_angle_deg),
+                  "throws": [(dv, frame.deck_start(dv, model=m)) for dv in throws]}
+        print(f"{k}: line from board {d.foul_board():.1f} at the foul line, {d.angle:+.2f} deg, rotation "
+              f"{d.rotation:.1f} deg, {d.mph:g} mph {d.rpm:g} rpm: alone board {r.board_at_pins:.2f} at "
+              f"{r.entry_angle_deg:.2f} deg; {n} deck starts in {time.time() - t0:.0f} s", flush=True)
+        cache.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp")
+        tmp.write_bytes(pickle.dumps(out))
+        os.replace(tmp, path)
+    return out
+
+
+def replay(starts: dict, buckets: list, prm: dict, jobs: int) -> list:
+    """(bucket, board, angle, leave, cap) of every throw that reached the pins on :data:`REPLAYED`'s
+    boards, its pin deck on the setting ``prm``."""
+    calls, tags = [], []
+    for name, ang in buckets:
+        for i, (dv, st) in enumerate(starts[f"{name}@{ang:g}"]["throws"]):
+            if st.board is not None and REPLAYED[0] <= st.board <= REPLAYED[1]:
+                calls.append((dv, st, i))
+                tags.append((f"{name}@{ang:g}", st.board, st.angle))
+    if jobs <= 1:
+        CF._init(prm)
+        res = [CF._replay(*c) for c in calls]
+    else:
+        from nbst.models.mjsearch.pool import WorkerPool
+
+        with WorkerPool(jobs, CF._init, (prm,)) as pool:
+            res = pool.map(CF._replay, calls)
+    return [(*t, list(lv), cap) for t, (lv, cap) in zip(tags, res)]
+
+
+def kickback_restitution(prm: dict, speed: float = 3.0, phases: int = 8) -> tuple:
+    """(mean, min, max) restitution of the 7 pin thrown sideways into the left kickback at ``speed``
+    (m/s), upright, 0.3 m above the deck, gravity off, over ``phases`` start offsets within one
+    step's travel, on the pin deck model of setting ``prm``: minus its sideways speed after the
+    bounce over that before."""
+    import mujoco
+
+    m = CF.pin_deck_model(frame.frame_model(), prm)
+    m.opt.gravity[:] = 0.0
+    m.opt.enableflags &= ~int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+    wall = m.geom("wall_left").id
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    face = d.geom_xpos[wall][1] - m.geom_size[wall][1]
+    ja, va = m.joint("pin7_free").qposadr[0], m.joint("pin7_free").dofadr[0]
+    es = []
+    for ph in np.arange(phases) / phases:
+        d = mujoco.MjData(m)
+        d.qpos[ja + 2] += 0.3
+        d.qpos[ja + 1] = face - 0.0605 - 0.02 - ph * speed * m.opt.timestep  # the belly (r 6.05 cm) 2 cm off
+        d.qvel[va + 1] = speed
+        for _ in range(200):
+            mujoco.mj_step(m, d)
+        es.append(-float(d.qvel[va + 1]) / speed)
+    return float(np.mean(es)), min(es), max(es)
+
+
+def _ci(k: int, n: int) -> str:
+    if not n:
+        return "-"
+    lo, hi = noise.wilson(k, n)
+    return f"{k} ({100 * lo:.0f}-{100 * hi:.0f} %)"
+
+
+def table(rows: list, boards: tuple, label: str) -> None:
+    """Per whole-degree bin of actual entry angle: hits on ``boards``, strikes, solid 10s (``names``), the
+    4 alone (named a solid 4 on a pocket hit), leaves with the 4, the commonest leaves."""
+    print(f"\n### {label}: boards {boards[0]:g}-{boards[1]:g} at the head pin's line, binned by actual entry angle\n")
+    print("| entry angle | hits | strikes | solid 10 | the 4 alone | leaves with the 4 | commonest leaves |")
+    print("|---|---|---|---|---|---|---|")
+    sel = [r for r in rows if boards[0] <= r[1] <= boards[1]]
+    tot = np.zeros(5, dtype=int)
+    for a in range(3, 10):
+        bin_ = [r for r in sel if a - 0.5 <= r[2] < a + 0.5]
+        if not bin_:
+            continue
+        nm = [names.leave_names(range(1, 11), r[3], r[1], r[2]) for r in bin_]
+        k = np.array([len(bin_), sum(not r[3] for r in bin_), sum("solid 10" in x for x in nm),
+                      sum(r[3] == [4] for r in bin_), sum(4 in r[3] for r in bin_)])
+        tot += k
+        c: dict = {}
+        for r in bin_:
+            if r[3]:
+                s = "-".join(map(str, r[3]))
+                c[s] = c.get(s, 0) + 1
+        top = ", ".join(f"{s} {v}" for s, v in sorted(c.items(), key=lambda kv: -kv[1])[:5])
+        print(f"| {a - 0.5:g}-{a + 0.5:g} deg | {k[0]} | {_ci(k[1], k[0])} | {_ci(k[2], k[0])} | {_ci(k[3], k[0])} "
+              f"| {_ci(k[4], k[0])} | {top} |")
+    print(f"| all | {tot[0]} | {_ci(tot[1], tot[0])} | {_ci(tot[2], tot[0])} | {_ci(tot[3], tot[0])} "
+          f"| {_ci(tot[4], tot[0])} | |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
+    ap.add_argument("--releases", default="pro:4,6,7,8;twohander:8",
+                    help="profile:angle,angle;... (the strike balls aimed at board 17.5 at each entry angle)")
+    ap.add_argument("--n", type=int, default=200, help="noisy throws per (release, angle) (default 200)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--setting", default="", help="pins moved from the scene's, 'key=value,...' (bench_carry_fit)")
+    ap.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "nbst" / "pocket_angle")
+    ap.add_argument("--restitution", action="store_true",
+                    help="print the pin-kickback restitution of the setting and stop")
+    args = ap.parse_args()
+    buckets = parse_releases(args.releases)
+    prm = CF.parse_setting(args.setting)
+    if args.restitution:
+        e, lo, hi = kickback_restitution(prm)
+        print(f"setting {CF.key(prm)}: a pin into the kickback at 3 m/s rebounds at {e:.2f} ({lo:.2f}-{hi:.2f} "
+              "over 8 phases of a step)")
+        return
+    starts = capture(args.cache, buckets, args.n, args.seed)
+    path = args.cache / f"angle_results_n{args.n}_seed{args.seed}.json"
+    done = json.loads(path.read_text()) if path.exists() else {}
+    k = f"{CF.key(prm)}|{args.releases}"
+    if k not in done:
+        t0 = time.time()
+        done[k] = replay(starts, buckets, prm, args.jobs)
+        print(f"pin decks ({CF.key(prm)}): {len(done[k])} in {time.time() - t0:.0f} s", flush=True)
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps(done))
+        os.replace(tmp, path)
+    rows = done[k]
+    caps = sum(r[4] for r in rows)
+    total = sum(len(v["throws"]) for v in starts.values())
+    print(f"\nsetting: {CF.key(prm)}; {len(rows)} throws reached the pins on boards "
+          f"{REPLAYED[0]:g}-{REPLAYED[1]:g} of {total}, {caps} read at the sweep")
+    table(rows, FLUSH, "flush hits")
+    table(rows, HIGH, "high pocket hits")
+    pocket = [r for r in rows if 16.5 <= r[1] <= 18.5 and 4.0 <= r[2] <= 6.0]
+    carried = sum(not r[3] for r in pocket)
+    print(f"\ncarry of these throws' pocket hits (16.5-18.5 at 4-6 deg): {_ci(carried, len(pocket))} of {len(pocket)}")
+
+
+if __name__ == "__main__":
+    main()
