@@ -78,9 +78,10 @@ def _refuse(args, flags, what: str, how: str) -> str | None:
     return None
 
 
-def shipped_elites() -> dict:
-    """{mask: (6,) point} of the shipped foul-line atlas, read through the throw-file gate;
-    {} with a one-line warning when it cannot be read."""
+def shipped_elites() -> tuple[dict, bool]:
+    """({mask: (7,) point}, whether it was grown on this nbst's lane scene) of the shipped foul-line
+    atlas, read through the throw-file gate; ({}, False) with a one-line warning when it cannot be
+    read. An atlas of this scene holds answers; one of another scene, starts of searches."""
     from nbst.models.bowling import lane, pinfall
     from nbst.models.bowling.lane import atlas as foul_atlas, throwfile
 
@@ -90,9 +91,10 @@ def shipped_elites() -> dict:
         from nbst.domain import plain
 
         print(f"nbst bowl solve: warning: the shipped foul-line atlas is not used: {plain(str(e))}", file=sys.stderr)
-        return {}
-    return {pinfall.mask_from_pins(t["outcome"]["down"]): foul_atlas.point_of(lane.Delivery(**t["delivery"]))
-            for t in a["throws"] if t["standing"] == throwfile.FULL_RACK and t["outcome"]["down"]}
+        return {}, False
+    return ({pinfall.mask_from_pins(t["outcome"]["down"]): foul_atlas.point_of(lane.Delivery(**t["delivery"]))
+             for t in a["throws"] if t["standing"] == throwfile.FULL_RACK and t["outcome"]["down"]},
+            a.get("scene", throwfile.SCENES[0]) == lane.SCENE)
 
 
 def _delivery_text(d) -> str:
@@ -133,16 +135,17 @@ def cmd_solve(args) -> int:
         return err("solve", str(e))
     seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
     jobs = args.jobs or default_jobs()
-    elites = {} if args.no_atlas else shipped_elites()
+    elites, answers = ({}, False) if args.no_atlas else shipped_elites()
+    direct = answers and target in elites  # the atlas of this scene holds it: its throw, no search
     asked = (f"leave {','.join(str(n) for n in range(1, 11) if n not in want) or 'none'}" if args.leave is not None
              else f"down {','.join(map(str, want))}")
     ladder_frames = len(frame.LADDER) * (robust.LADDER_TRIES if args.robust is not None else 1)
     after = (args.robust if args.robust is not None else 0) + args.samples + ladder_frames + 1
-    # the budget whether or not the atlas holds the request: an atlas grown on another lane scene holds
+    # the budget unless this scene's atlas holds the request: an atlas grown on another lane scene holds
     # starts, and when its throw misses here the search runs (foul_atlas.seek)
-    bar = progress.Bar(f"bowl solve {asked}", args.max_rollouts + after, unit="frame",
+    bar = progress.Bar(f"bowl solve {asked}", (0 if direct else args.max_rollouts) + after, unit="frame",
                        bound=True, start=progress.command_start(), quiet=args.quiet)
-    state = {"point": None, "est": None, "ladder": None, "stage": "search", "frames": 0, "from_atlas": target in elites}
+    state = {"point": None, "est": None, "ladder": None, "stage": "search", "frames": 0, "from_atlas": False}
     arch = dict(elites)
     interrupted = False
 
@@ -155,8 +158,9 @@ def cmd_solve(args) -> int:
         with sigterm_as_interrupt():
             try:
                 point, arch, frames = foul_atlas.seek(R, elites, target, budget=args.max_rollouts, seed=seed,
-                                                      on_batch=on_batch)
+                                                      on_batch=on_batch, trusted=answers)
                 state["frames"] = frames
+                state["from_atlas"] = point is not None and target in elites and frames <= 1
                 if point is None:
                     state["stage"] = "not found"
                 else:

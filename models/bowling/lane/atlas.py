@@ -162,19 +162,23 @@ NEAREST = 8
 
 
 def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, seed: int,
-         on_batch=None) -> tuple[np.ndarray | None, dict, int]:
+         on_batch=None, trusted: bool = False) -> tuple[np.ndarray | None, dict, int]:
     """A throw whose pins down are exactly ``target`` (a mask), from the archive ``elites``
     ({mask: (7,) point}): batches of :data:`._archive.BATCH` children of the :data:`NEAREST`
     subsets nearest the request (Hamming distance; nearer ones drawn more often: weight
     1 / (1 + distance)^2), each moved by a Gaussian step at one of :data:`SCALES`; every new
     subset seen joins the archive. Stops at the first exact hit or after ``budget`` frames. A
-    request the archive holds is confirmed with one frame first (an archive grown on another
-    lane scene holds starts, not answers): if that frame gives something else, the search runs.
+    request the archive holds is its answer with no frame when ``trusted`` (an archive grown on
+    this lane scene: a frame is deterministic), else confirmed with one frame first (an archive
+    grown on another lane scene holds starts, not answers): if that frame gives something else,
+    the search runs.
     Returns (the point or None, the grown archive, frames run); ``on_batch(frames, best
     distance)`` after each batch. An empty archive starts from uniform throws."""
     rng = np.random.default_rng(seed)
     arch = {int(m): np.asarray(x, dtype=float) for m, x in elites.items() if m}
     frames = 0
+    if trusted and target in arch:
+        return arch[target], arch, 0
     if target in arch:  # confirmed with one frame: an archive of another scene holds starts, not answers
         x = arch.pop(target)
         got, _ = throw_masks(runner, x[None])

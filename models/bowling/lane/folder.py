@@ -118,6 +118,7 @@ class FoulAtlasRun:
         import time
 
         last = [time.monotonic()]
+        self.start = self.archive.rollouts  # the search's own frames (after any --from re-throws)
 
         def batch(a, new) -> None:
             if on_batch is not None:

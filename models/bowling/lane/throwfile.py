@@ -31,8 +31,9 @@ outcome holds at h = 1, 0.5 and 0.25 ms is one a replay on another machine also 
 **Scenes.** A file names the lane scene it was thrown on (``scene``); a file without one was
 thrown on ``lane-1``, issue 22's scene (MuJoCo's soft friction on boxes of relative oil). A
 throw is replayed only on its own scene: :func:`replay` refuses any other in one line (its
-outcome stands as recorded), while :func:`load` and :func:`load_atlas` still read it (the
-shipped foul-line atlas was grown on lane-1: its throws start searches, they are not answers).
+outcome stands as recorded), while :func:`load` and :func:`load_atlas` still read it (an atlas
+of an earlier scene holds starts of searches, not answers: ``nbst bowl atlas --foul-line --from``
+throws its deliveries again on this scene; the shipped foul-line atlas names this scene).
 A lane-1 file names a registered pattern and a ball of four fields (weight, RG, differential,
 coverstock); the fields added since take their defaults.
 
