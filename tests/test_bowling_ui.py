@@ -102,6 +102,8 @@ def test_a_lone_10_is_flat_solid_or_ringing_by_angle_and_hit():
     (["bowl", "throw", "--stance", "5", "--target", "2nd-arrow"], ("--stance", "off the lane")),
     (["bowl", "frame", "--bowler", "amateur"], ("--bowler",)),
     (["bowl", "pocket", "-o", "p.png", "--bowler", "x"], ("--bowler",)),
+    (["bowl", "solve", "--leave", "10", "-o", "t.json", "--bowler", "pro"], ("--bowler", "--foul-line")),
+    (["bowl", "atlas", "--out-dir", "a", "--bowler", "pro"], ("--bowler", "--foul-line")),
     (["bowl", "throw", "--camera", "deck"], ("--camera", "--video or --still")),
     (["bowl", "throw", "--camera", "top", "--still", "a.png"], ("--camera",)),
 ])

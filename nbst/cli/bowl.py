@@ -142,15 +142,25 @@ def register(sub) -> None:
     bowl_advise.register(bowl)
 
 
+#: Why ``--bowler`` is refused without ``--foul-line``: a 5 m throw is an exact initial state, with no
+#: bowler's release or noise to take from a profile (it was ignored, silently, before).
+BOWLER_5M = ("--bowler is a bowler's release and noise from the foul line; a 5 m throw is an exact "
+             "initial state with neither: add --foul-line")
+
+
 def cmd_solve(args) -> int:
     if args.foul_line or args.robust is not None:
         return bowl_foul.cmd_solve(args)
+    if args.bowler is not None:
+        return err("solve", BOWLER_5M)
     return bowl_deck.cmd_solve(args)
 
 
 def cmd_atlas(args) -> int:
     if args.foul_line:
         return bowl_foul.cmd_atlas(args)
+    if args.bowler is not None:
+        return err("atlas", BOWLER_5M)
     return bowl_deck.cmd_atlas(args)
 
 
