@@ -296,13 +296,22 @@ def test_nbst_mjcf_exports_the_crash_scene_with_its_keyframe_and_controls(short,
 
 
 @pytest.mark.slow
-def test_a_planted_script_is_met_by_its_hidden_intents():
-    from nbst.models.crash import planted
+def test_the_benchmarks_planted_scripts_ask_two_contacts_and_their_hidden_intents_meet_them():
+    """Seeds 100-109 are bench_crash's planted set: each asks a chain of at least two vehicle
+    contacts (hits and global order alike), with rest regions of 2 m and headings of 20 deg, and
+    its hidden intents meet it at the script's step (its fates were read from that very rollout)
+    and, by the search's own acceptance, at 1 and 0.5 ms too: a known answer that counts."""
+    from nbst.models.crash import planted, search
 
-    d, u = planted.planted_script(3, template="intersection3")
-    s = script.script_from_dict(d)
-    o = run.Runner(s).run(space.space_of(s).intents(u[None])).outcomes[0]
-    assert o.solved  # the fates were read from this very rollout (bitwise determinism)
+    for seed in range(100, 110):
+        d, u = planted.planted_script(seed)
+        assert len(d["order"]) >= 2, seed
+        assert sum(len(v["fate"]["hits"]) for v in d["vehicles"]) == 2 * len(d["order"]), seed  # each contact, both sides
+        assert all(v["fate"]["rest"]["radius"] == 2.0 and v["fate"]["heading"]["tol"] == 20.0 for v in d["vehicles"])
+        s = script.script_from_dict(d)
+        o = run.Runner(s).run(space.space_of(s).intents(u[None])).outcomes[0]
+        assert o.solved and len(o.contacts) == len(d["order"]), seed
+        assert search.ladder_check(s, run.scene_text(s), space.space_of(s))(search.Trial(u=u, outcome=o)), seed
 
 
 def test_reconstruction_ranges_cover_every_fit(short):

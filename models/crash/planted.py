@@ -3,7 +3,8 @@
 A **planted script** runs hidden driver intents, drawn uniformly within a template's ranges, and
 writes what happened as the fates (whom each hit and in what order, where it came to rest and
 facing where, its attitude), with the tolerances asked: a search must find intents that do the
-same, and one is known to exist. A **planted case** does the same for reconstruction, and keeps
+same, and one is known to exist (by default one that also holds at 1 and 0.5 ms, as the
+search's acceptance asks: :func:`holds_on_ladder`). A **planted case** does the same for reconstruction, and keeps
 the hidden truth (each vehicle's impact speed and heading) for the comparison.
 
 Templates (:data:`TEMPLATES`): ``crossing2`` (a sedan and an SUV meeting at an intersection,
@@ -21,6 +22,7 @@ import numpy as np
 
 from nbst.models.crash import script as script_mod
 from nbst.models.crash.run import Runner
+from nbst.models.crash.search import LADDER
 from nbst.models.crash.space import space_of
 
 _ROAD = {"layout": "intersection", "width": 7, "length": 120, "curb": 0.15}
@@ -46,9 +48,9 @@ TEMPLATES = {
 }
 
 
-def _run_hidden(template: dict, rng: np.random.Generator, need_contacts: int, tries: int = 64):
-    """(script of the template, hidden unit point, its outcome) with at least ``need_contacts``
-    vehicle contacts, drawn until one has them (within ``tries`` batches)."""
+def _hidden(template: dict, rng: np.random.Generator, need_contacts: int, tries: int = 64):
+    """(script of the template, hidden unit point, its outcome) of every drawn rollout with at least
+    ``need_contacts`` vehicle contacts, in the order drawn (``tries`` batches at most)."""
     s = script_mod.script_from_dict(copy.deepcopy(template), source="<planted template>")
     S = space_of(s)
     R = Runner(s)
@@ -58,15 +60,13 @@ def _run_hidden(template: dict, rng: np.random.Generator, need_contacts: int, tr
             res = R.run(S.intents(U))
             for u, o in zip(U, res.outcomes):
                 if len(o.contacts) >= need_contacts and all(v.rest == v.rest for v in o.vehicles):
-                    return s, u, o
+                    yield s, u, o
     finally:
         R.close()
-    raise RuntimeError("no planted crash with enough contacts in the tries allowed")
 
 
-def _plant(seed: int, template: str, radius: float, heading_tol: float, need_contacts: int):
-    rng = np.random.default_rng([int(seed), 32])
-    s, u, o = _run_hidden(TEMPLATES[template], rng, need_contacts)
+def _fates(template: str, seed: int, s, o, radius: float, heading_tol: float) -> dict:
+    """The template with the outcome ``o`` written as its fates."""
     d = copy.deepcopy(TEMPLATES[template])
     names = s.names()
     d["name"] = f"planted-{template}-{seed}"
@@ -76,15 +76,45 @@ def _plant(seed: int, template: str, radius: float, heading_tol: float, need_con
                      "heading": {"deg": round(math.degrees(vo.rest[2]), 2), "tol": heading_tol},
                      "attitude": vo.attitude}
     d["order"] = [[names[i], names[j]] for i, j in o.sequence]
-    return d, u, o
+    return d
+
+
+def holds_on_ladder(d: dict, u: np.ndarray, timesteps=LADDER) -> bool:
+    """Whether the intents of unit point ``u`` meet script ``d`` with the same contact sequence at
+    every one of ``timesteps`` too (the search's acceptance: :func:`.search.ladder_check`)."""
+    s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
+    want = tuple(tuple(s.names().index(n) for n in pair) for pair in d["order"])
+    intents = space_of(s).intents(u[None])
+    for h in timesteps:
+        R = Runner(s, timestep=h, batch=1)
+        try:
+            o = R.run(intents).outcomes[0]
+        finally:
+            R.close()
+        if not (o.solved and o.sequence == want):
+            return False
+    return True
+
+
+def _plant(seed: int, template: str, radius: float, heading_tol: float, need_contacts: int, ladder=None):
+    rng = np.random.default_rng([int(seed), 32])
+    for s, u, o in _hidden(TEMPLATES[template], rng, need_contacts):
+        d = _fates(template, seed, s, o, radius, heading_tol)
+        if ladder is None or holds_on_ladder(d, u, ladder):
+            return d, u, o
+    raise RuntimeError("no planted crash with enough contacts in the tries allowed")
 
 
 def planted_script(seed: int, *, template: str = "intersection3", radius: float = 2.0, heading_tol: float = 20.0,
-                   need_contacts: int = 2) -> tuple[dict, np.ndarray]:
+                   need_contacts: int = 2, ladder=LADDER) -> tuple[dict, np.ndarray]:
     """(script dict, hidden unit point): the template with the fates of hidden random intents
     that make at least ``need_contacts`` vehicle contacts (2: a chain worth the name, not one
-    collision and a bystander)."""
-    d, u, _ = _plant(seed, template, radius, heading_tol, need_contacts)
+    collision and a bystander) and, ``ladder`` not None, that keep meeting those fates with the
+    same contact sequence at each of its timesteps (s): the search counts a script as solved
+    only so (:data:`.search.LADDER`), and a planted script promises an answer that counts.
+    ``ladder=None`` plants the first draw with enough contacts, whatever the ladder says (at
+    seeds 100-109 half of those answers lose their own script at 1 or 0.5 ms: docs/crash.md)."""
+    d, u, _ = _plant(seed, template, radius, heading_tol, need_contacts, ladder)
     return d, u
 
 
