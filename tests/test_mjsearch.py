@@ -323,6 +323,33 @@ def test_robust_maximise_climbs_the_probability_of_a_window():
     assert again.best == res.best and again.frames == res.frames
 
 
+class _WideWindow(_Window):
+    """Success when x + noise lands in [-2, 2] (P = 0.95 at x = 0); counts its candidates."""
+
+    def __init__(self):
+        self.made = 0
+
+    def make(self, x):
+        self.made += 1
+        if self.made > 3000:
+            raise RuntimeError("maximise is still proposing after 3,000 candidates")
+        return float(x[0])
+
+    def judge(self, r):
+        return abs(r) <= 2.0, 0, "in" if abs(r) <= 2.0 else "out"
+
+
+def test_robust_maximise_ends_when_the_budget_left_fits_no_new_candidate():
+    """From the best x = 0 nothing is accepted, the step narrows to STEP_MIN and the cross-entropy
+    steps repeat points already run; once what is left of the budget fits no new candidate the
+    search ends (it looped for ever: nbst bowl spares hung in the 10 pin's polish on lane-3)."""
+    for budget, seed in ((522, 1), (614, 5)):
+        P = _WideWindow()
+        res = robust.maximise(P, [0.0], budget=budget, seed=seed, n=50)
+        assert res.frames <= budget + 1 and P.made < 500  # a few hundred proposals at most
+        assert budget - (res.frames - 1) < 2 * res.history[0]["m"]  # the budget was (nearly) spent
+
+
 def test_the_ladder_says_which_timesteps_keep_an_outcome():
     lad = ladder.climb(lambda h: round(math.sin(1 / h)), (0.001, 0.0005, 0.00025), wanted=1)
     assert lad.outcomes == [1, 1, -1] and lad.kept == [0.001, 0.0005] and not lad.holds

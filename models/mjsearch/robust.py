@@ -235,6 +235,7 @@ def maximise(problem: Problem, starts: list, *, budget: int, seed: int, n: int, 
         gen = 0
         while True:
             gen += 1
+            frames0 = S.frames
             k_inc, _ = S.score(inc, idx)
             if k_inc == m:  # every common copy gives the outcome: the screen cannot tell better
                 break
@@ -285,6 +286,11 @@ def maximise(problem: Problem, starts: list, *, budget: int, seed: int, n: int, 
                             "accepted": acc})
             if len(full) < len(up):
                 break  # the budget is spent
+            if S.frames == frames0 and not acc:
+                # Nothing ran: every candidate that fitted was run before (the cross-entropy
+                # steps repeat once the step is at STEP_MIN) and no new one fits what is left
+                # of the budget; nothing can change, so the search is over (it looped for ever).
+                break
     except KeyboardInterrupt:
         best = S.of(inc) if inc is not None else starts[0]
         raise Interrupted(best, None if inc is None else (S.score(inc, idx)[0], m), S.frames, history) from None
