@@ -82,8 +82,8 @@ def shipped_elites() -> tuple[dict, bool]:
     """({mask: (7,) point}, whether it was grown on this nbst's lane scene) of the shipped foul-line
     atlas, read through the throw-file gate; ({}, False) with a one-line warning when it cannot be
     read. An atlas of this scene holds answers; one of another scene, starts of searches."""
-    from nbst.models.bowling import lane, pinfall
     from nbst.models.bowling.lane import atlas as foul_atlas, throwfile
+    from nbst.models.bowling.lane.folder import atlas_points
 
     try:
         a = throwfile.load_atlas(foul_atlas.SHIPPED)
@@ -92,9 +92,7 @@ def shipped_elites() -> tuple[dict, bool]:
 
         print(f"nbst bowl solve: warning: the shipped foul-line atlas is not used: {plain(str(e))}", file=sys.stderr)
         return {}, False
-    return ({pinfall.mask_from_pins(t["outcome"]["down"]): foul_atlas.point_of(lane.Delivery(**t["delivery"]))
-             for t in a["throws"] if t["standing"] == throwfile.FULL_RACK and t["outcome"]["down"]},
-            a.get("scene", throwfile.SCENES[0]) == lane.SCENE)
+    return atlas_points(a)
 
 
 def _delivery_text(d) -> str:

@@ -21,7 +21,7 @@ from pathlib import Path
 from nbst.models.bowling import files, lane, pinfall, subsets
 from nbst.models.bowling.lane import atlas, frame, noise, throwfile
 
-__all__ = ["CHUNK", "CHECKPOINT_S", "FoulAtlasRun", "summary_md"]
+__all__ = ["CHUNK", "CHECKPOINT_S", "FoulAtlasRun", "atlas_points", "summary_md"]
 
 #: Subsets whose probability, ladder and longer run are measured between two writes of the atlas.
 CHUNK = 16
@@ -29,6 +29,16 @@ CHUNK = 16
 CHECKPOINT_S = 30.0
 #: The option that names the folder (in the writer's error messages).
 OPTION = "--out-dir"
+
+
+def atlas_points(doc: dict) -> tuple[dict, bool]:
+    """({mask: (7,) point} of a foul-line atlas document's full-rack throws that knock a pin
+    down, in file order; whether the atlas was thrown on this nbst's lane scene): an atlas of
+    this scene holds answers, one of another scene deliveries to throw again (a file without
+    ``scene`` is lane-1's)."""
+    points = {pinfall.mask_from_pins(t["outcome"]["down"]): atlas.point_of(lane.Delivery(**t["delivery"]))
+              for t in doc["throws"] if t["standing"] == throwfile.FULL_RACK and t["outcome"]["down"]}
+    return points, doc.get("scene", throwfile.SCENES[0]) == lane.SCENE
 
 
 class FoulAtlasRun:
@@ -44,14 +54,12 @@ class FoulAtlasRun:
         if self.ckpt.exists():
             self.archive = atlas.archive_from_doc(files.read_doc(self.ckpt), self.ckpt)
         elif from_atlas:
-            old = throwfile.load_atlas(from_atlas)
-            full = [t for t in old["throws"] if t["standing"] == throwfile.FULL_RACK and t["outcome"]["down"]]
-            if old.get("scene", throwfile.SCENES[0]) == lane.SCENE:  # this scene's answers: kept as they are
-                self.archive = subsets.Archive.from_elites({pinfall.mask_from_pins(t["outcome"]["down"]): atlas.point_of(
-                    lane.Delivery(**t["delivery"])) for t in full})
+            points, here = atlas_points(throwfile.load_atlas(from_atlas))
+            if here:  # this scene's answers: kept as they are
+                self.archive = subsets.Archive.from_elites(points)
             else:  # another scene's: its deliveries, thrown again here (:meth:`rethrow`)
                 self.archive = subsets.Archive()
-                self.starts = [atlas.point_of(lane.Delivery(**t["delivery"])) for t in full]
+                self.starts = list(points.values())
         else:
             self.archive = subsets.Archive()
         self.done: dict = {}

@@ -137,7 +137,7 @@ def contact_step(qpos, qvel, xfrc, lane_h, cover, cells, prm, iinv_body, acc):  
     c0, c1, c2 = -Rm[2, 0], -Rm[2, 1], -Rm[2, 2]
     band_cos = prm[P_BAND_COS]
     # the cells under the band, found once per step (their indices in ``band``, in cell order):
-    # the cosines first (a loop without branches, which the compiler vectorises), then the scan
+    # the cosines first (a loop without branches, which the compiler vectorises), then the scan.
     # Only the cells of a Fibonacci lattice (:func:`cover_cells`: cell k at height 1 - 2 (k + 1/2) / n)
     # whose polar angle is within SCAN_RAD of the contact's can be within SCAN_RAD of it: one range of k.
     # The band and the nearest cell lie inside it whenever the nearest is nearer than SCAN_RAD (always,
