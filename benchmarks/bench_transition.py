@@ -3,6 +3,7 @@
     nice -n 10 python benchmarks/bench_transition.py [--bowler pro] [--games 3] [--seeds 1-6] [--lineup 1]
                                                      [--lefty-share 0] [--jobs 1]
     nice -n 10 python benchmarks/bench_transition.py --part sensitivity [--throws 20]
+    nice -n 10 python benchmarks/bench_transition.py --part depletion [--seeds 1-4] [--lineup 4]
 
 For each seed: the series of ``nbst bowl series --move both`` (models/bowling/lane/transition.py):
 ``--games`` games by ``--lineup`` bowlers of the profile on one fresh house shot that every ball wears,
@@ -19,6 +20,18 @@ lane and cover even out, ``OilLaw.exchange``, 0.3; the cover's absorption time, 
 1 s: no published figure) halved and doubled, on ``--throws`` identical throws of issue 34's typical
 release (the ball alone, no noise): the oil a throw takes, the film under the track at 20 ft, the
 board at the pins after 10 and after all throws, and the oil carried past the pattern's end.
+
+``--part depletion``: the exchange share against the one published figure we found for how fast play
+takes oil off a lane. Kegel's tape tests at the 2013 WTBA World Championships (Ted Thompson, "Who do
+you follow?", Kegel's *The Inside Line*, 25 November 2013): when players play a similar line on a fresh
+pattern, "over 40 percent of the lane conditioner can be removed from that area throughout the
+ENTIRE length of the applied oil pattern" by the time about 4-5 games have been bowled on the lane.
+Here ``--lineup`` pros (default 4) bowl one game each on a fresh house shot (so 4 games on the lane,
+every ball, strike and spare), no moves, at exchange 0.15, 0.3 (as shipped) and 0.6, seeds
+``--seeds``. Read like a tape: at every 0.25 ft from 5 ft to 2 ft short of the pattern's end, the
+board that lost the largest share of its oil, and the share lost by the 3, 5 and 7 boards centred on
+it (the area of play: its width is our choice, and the table gives all three); the mean over those
+distances, per seed, and the share of the whole pattern taken.
 """
 from __future__ import annotations
 
@@ -78,14 +91,49 @@ def sensitivity(n: int) -> None:
               f"{1e3 * out[-1]['past_ml']:.1f} | {time.time() - t0:.0f} |", flush=True)
 
 
+def _area_of_play(before: np.ndarray, after: np.ndarray, dx_ft: float, length_ft: float, width: int) -> float:
+    """Mean over distances (5 ft .. length - 2 ft) of the share of oil lost by the ``width`` boards
+    centred on the board that lost the largest share there (boards with a film above 0.05 um)."""
+    half = width // 2
+    shares = []
+    for j in range(int(5 / dx_ft), int((length_ft - 2) / dx_ft)):
+        b, a = before[:, j], after[:, j]
+        lost = np.where(b > 0.05, 1 - a / np.maximum(b, 1e-12), -1.0)
+        k = int(np.argmax(lost))
+        w = slice(max(k - half, 0), k + half + 1)
+        shares.append(1 - a[w].sum() / b[w].sum())
+    return float(np.mean(shares))
+
+
+def depletion(seeds: list[int], n: int) -> None:
+    print(f"## oil taken from the area of play: {n} pros, one game each on a fresh house shot ({n} games on the "
+          f"lane), no moves; Kegel (WTBA 2013): over 40 % after about 4-5 games on the lane\n")
+    print("| exchange | seed | balls on the lane | area of play lost: 3 / 5 / 7 boards | whole pattern lost | s |\n"
+          "|---|---|---|---|---|---|")
+    for ex in (0.15, 0.3, 0.6):
+        law = replace(lane.LAW, exchange=ex)
+        for seed in seeds:
+            t0 = time.time()
+            r = T.Run(T.lineup("pro", n), 1, seed, "none", "house", law=law)
+            r.play()
+            d = r.to_dict()
+            before, after = np.asarray(d["oil"]["before"]), np.asarray(d["oil"]["after"])
+            dx, length = d["oil"]["dx_ft"], d["oil"]["length_ft"]
+            shares = [_area_of_play(before, after, dx, length, w) for w in (3, 5, 7)]
+            j = int(np.ceil(length / dx))
+            whole = 1 - after[:, :j].sum() / before[:, :j].sum()
+            print(f"| {ex:g} | {seed} | {len(d['balls'])} | {' / '.join(f'{100 * x:.0f} %' for x in shares)} | "
+                  f"{100 * whole:.1f} % | {time.time() - t0:.0f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
-    ap.add_argument("--part", choices=("drift", "sensitivity"), default="drift")
+    ap.add_argument("--part", choices=("drift", "sensitivity", "depletion"), default="drift")
     ap.add_argument("--throws", type=int, default=20, help="--part sensitivity: identical throws (default 20)")
     ap.add_argument("--bowler", default="pro")
     ap.add_argument("--games", type=int, default=3)
-    ap.add_argument("--seeds", default="1-6", help="seeds A-B (default 1-6)")
-    ap.add_argument("--lineup", type=int, default=1)
+    ap.add_argument("--seeds", default=None, help="seeds A-B (default 1-6; --part depletion 1-4)")
+    ap.add_argument("--lineup", type=int, default=None, help="bowlers on the lane (default 1; --part depletion 4)")
     ap.add_argument("--lefty-share", type=float, default=0.0)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--moves", default="none,auto", help="the runs of each series (default none,auto)")
@@ -93,6 +141,10 @@ def main() -> None:
     if args.part == "sensitivity":
         sensitivity(args.throws)
         return
+    if args.part == "depletion":
+        depletion(_seeds(args.seeds or "1-4"), args.lineup or 4)
+        return
+    args.seeds, args.lineup = args.seeds or "1-6", args.lineup or 1
     seeds = _seeds(args.seeds)
     t0 = time.time()
     if args.jobs > 1:
