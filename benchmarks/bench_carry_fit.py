@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.models.bowling import lane, pin, scene
+from nbst.models.bowling import lane, pin, pinfall, scene
 from nbst.models.bowling.lane import frame, noise, profiles, spares
 from nbst.models.mjsearch.pool import WorkerPool
 
@@ -51,8 +51,10 @@ ENTRY = (4.0, 6.0)
 SPARE_LEAVES = {"3-10": (3, 10), "10": (10,), "7": (7,)}
 #: The lane half's pins (``scene.LANE_PINS``): ball-pin / pin-pin friction and damping ratio, pin-deck
 #: friction, pin mass (kg) and centre of gravity (in above the base; None: the uniform solid's), the pins'
-#: scatter about their spots (mm; the scene has none), and the kickbacks' contact damping ratio (the side
-#: walls beside the deck; the scene's static surfaces are critically damped, 1: a pin does not bounce back).
+#: scatter about their spots (mm: the sigma of each pin's x and y offset, normal, drawn per throw from its
+#: index, the same in every setting; :func:`scatter`; the scene has none), and the kickbacks' contact
+#: damping ratio (the side walls beside the deck; the scene's static surfaces are critically damped, 1: a
+#: pin does not bounce back).
 _P = scene.LANE_PINS
 DEFAULTS = dict(bp_mu=_P.mu_ball_pin, pp_mu=_P.mu_pin_pin, bp_zeta=_P.zeta_ball_pin, pp_zeta=_P.zeta_pin_pin,
                 deck_mu=_P.mu_deck, pin_mass=_P.mass, pin_com_in=_P.com_in, spot_mm=0.0,
@@ -109,15 +111,21 @@ def _init(prm: dict) -> None:
     _W["spot"] = float({**DEFAULTS, **prm}["spot_mm"]) / 1000  # "h": the pin deck's timestep (s)
 
 
+def scatter(model, start, spot_m: float, seed: int):
+    """A copy of the deck start ``start`` with every pin moved off its spot, as a pinsetter might set
+    it: each pin's x and y offsets drawn normal with sigma ``spot_m`` (m) from ``seed`` (pins 1..10
+    in turn), the pin still upright at rest on the deck (its height and turn kept)."""
+    out = copy.copy(start)
+    out.qpos = start.qpos.copy()
+    rng = np.random.default_rng(seed)
+    for a in pinfall.pin_addresses(model):
+        out.qpos[a:a + 2] += rng.normal(0.0, spot_m, 2)
+    return out
+
+
 def _replay(delivery, start, i: int) -> tuple:
     if _W["spot"] > 0:  # the pinsetter's spotting error: each pin off its spot, seeded by the throw
-        start = copy.copy(start)
-        start.qpos = start.qpos.copy()
-        rng = np.random.default_rng(10_000 + i)
-        from nbst.models.bowling import pinfall
-
-        for a in pinfall.pin_addresses(_W["m"]):
-            start.qpos[a:a + 2] += rng.normal(0.0, _W["spot"], 2)
+        start = scatter(_W["m"], start, _W["spot"], 10_000 + i)
     r = frame.run_frame(delivery, model=_W["m"], start=start)
     return tuple(r.leave), bool(r.cap_hit)
 

@@ -18,7 +18,9 @@ strike-ball noise (``profiles.PRO_NOISE``; the two-hander's is the same), seed `
 bucket's index. Each throw's lane phase runs once (``frame.deck_start``, cached); the pin deck is
 then run from there on the scene's fitted pins, or on a copy with ``--setting``'s pins
 (``bench_carry_fit.pin_deck_model``: the bounded probe of one parameter, e.g. ``kick_zeta``, the
-kickbacks' contact damping ratio; ``--restitution`` prints a pin's rebound off the kickback).
+kickbacks' contact damping ratio; ``--restitution`` prints a pin's rebound off the kickback), or with
+the pins set off their spots (``spot_mm``: ``bench_carry_fit.scatter``, each pin's x and y offset
+normal with that sigma, drawn anew for every throw of every bucket, the same draws in every run).
 
 **Figures.** Every throw is binned by where its ball actually entered (board and angle at the
 head pin's line, the deck start's): flush hits (boards 17-18) and high pocket hits (18-19) per
@@ -55,6 +57,9 @@ FLUSH = (17.0, 18.0)
 HIGH = (18.0, 19.0)
 #: The throws whose pin deck is run: the ball on these boards at the head pin's line (the tables' span).
 REPLAYED = (16.5, 19.0)
+#: The pin scatter's seeds (``--setting spot_mm=``): throw i of bucket b draws its pins' offsets from
+#: seed 10,000 + SPOT_SEED (b + 1) + i (``bench_carry_fit._replay``), apart from every other throw's.
+SPOT_SEED = 1_000_000
 
 
 def parse_releases(text: str) -> list:
@@ -95,10 +100,10 @@ def replay(starts: dict, buckets: list, prm: dict, jobs: int) -> list:
     """(bucket, board, angle, leave, cap) of every throw that reached the pins on :data:`REPLAYED`'s
     boards, its pin deck on the setting ``prm``."""
     calls, tags = [], []
-    for name, ang in buckets:
+    for b, (name, ang) in enumerate(buckets):
         for i, (dv, st) in enumerate(starts[f"{name}@{ang:g}"]["throws"]):
             if st.board is not None and REPLAYED[0] <= st.board <= REPLAYED[1]:
-                calls.append((dv, st, i))
+                calls.append((dv, st, SPOT_SEED * (b + 1) + i))  # each throw its own pin scatter
                 tags.append((f"{name}@{ang:g}", st.board, st.angle))
     if jobs <= 1:
         CF._init(prm)

@@ -88,3 +88,36 @@ def test_the_fit_model_with_the_scenes_values_is_the_scene(model):
     m = fit.pin_deck_model(model, {})
     for attr in ("body_mass", "body_ipos", "body_inertia", "geom_friction", "geom_solref"):
         assert np.allclose(getattr(m, attr), getattr(model, attr), rtol=1e-5, atol=1e-9), attr
+
+
+def test_the_pin_scatter_moves_each_pin_on_the_deck_and_leaves_it_standing_still(model):
+    # bench_pocket_angle's probe of a pinsetter's spotting error (--setting spot_mm=...): the pins
+    # are moved where the ball reaches the deck, so they must stand there at rest, apart, as set
+    import mujoco
+
+    fit = _bench("bench_carry_fit")
+    st = frame.deck_start(spares.straight_at(*spares.aim_point((10,))), model=model)  # a full rack
+    before = st.qpos.copy()
+    sigma = 0.006  # the probe's largest setting, 6 mm
+    a, b = fit.scatter(model, st, sigma, 10_000), fit.scatter(model, st, sigma, 10_000)
+    assert np.array_equal(a.qpos, b.qpos) and np.array_equal(st.qpos, before)  # seeded; the start kept
+    p0, p1 = pinfall.poses(model, st.qpos), pinfall.poses(model, a.qpos)
+    off = np.linalg.norm(p1[:, :2] - p0[:, :2], axis=1)
+    assert np.all(off > 0) and off.max() < 5 * sigma * np.sqrt(2)  # every pin moved, none absurdly
+    assert np.array_equal(p1[:, 2:], p0[:, 2:])  # its height and its turn kept: upright on the deck
+    # the spots are 12 in apart and a pin's belly is 4.766 in across: no two pins touch
+    gaps = [np.linalg.norm(p1[i, :2] - p1[j, :2]) for i in range(10) for j in range(i)]
+    assert min(gaps) > 4.766 * INCH
+    # with the ball out of reach, the moved pins stay where they were set, upright and at rest
+    d = mujoco.MjData(model)
+    d.qpos[:] = a.qpos
+    bq = int(model.joint("ball_free").qposadr[0])
+    d.qpos[bq:bq + 2] = (-10.0, 0.0)
+    dof = [int(model.joint(f"pin{n}_free").dofadr[0]) for n in scene.PIN_NUMBERS]
+    fastest = 0.0
+    for _ in range(300):  # 0.3 s, longer than the ball takes from the deck front to the last row
+        mujoco.mj_step(model, d)
+        fastest = max(fastest, max(np.linalg.norm(d.qvel[v:v + 3]) for v in dof))
+    p2 = pinfall.poses(model, d.qpos)
+    assert fastest < 1e-3  # m/s: a pin set on the deck does not slide or rock
+    assert np.abs(p2[:, :3] - p1[:, :3]).max() < 1e-4 and not pinfall.tilted(p2).any()
