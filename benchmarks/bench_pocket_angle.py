@@ -3,6 +3,7 @@
     python benchmarks/bench_pocket_angle.py [--releases "pro:4,6,7,8;twohander:8"] [--n 200]
                                             [--seed 1] [--jobs 1] [--setting key=value,...] [--cache DIR]
     python benchmarks/bench_pocket_angle.py --restitution [--setting kick_zeta=0.2]
+    python benchmarks/bench_pocket_angle.py --two-pin [--setting spot_mm=6]
 
 Bowlers' lore (a right-hander): a ball that comes in too strong, too high or at too much angle
 leaves the 4 (the 2 pin goes round the 4, or drives behind it), the 4-7, the 4-9 or worse: "a
@@ -27,7 +28,8 @@ head pin's line, the deck start's): flush hits (boards 17-18) and high pocket hi
 whole-degree bin of entry angle; per bin the strikes, the solid 10s as ``names.leave_names`` names
 them, the 4 left alone (``names``' solid 4 on a pocket hit), and the leaves with the 4 in them
 (4-7, 4-9, 4-7-10 ...), with Wilson 95 % intervals. Results go to ``--cache`` as they come
-(resumable).
+(resumable). ``--two-pin``: on the flush hits, the first body to touch the 4 and the line the 2 pin
+is sent along (:func:`two_pin_paths`).
 """
 from __future__ import annotations
 
@@ -41,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nbst.models.bowling import scene
 from nbst.models.bowling.lane import frame, names, noise, profiles, spares
 
 
@@ -60,6 +63,9 @@ REPLAYED = (16.5, 19.0)
 #: The pin scatter's seeds (``--setting spot_mm=``): throw i of bucket b draws its pins' offsets from
 #: seed 10,000 + SPOT_SEED (b + 1) + i (``bench_carry_fit._replay``), apart from every other throw's.
 SPOT_SEED = 1_000_000
+#: How long after it first moves the 2 pin's heading is read (s): past its collision with the head
+#: pin or the ball (a contact lasts about 8 ms), before it reaches the 4 (about 50 ms at 4 m/s).
+TWO_PIN_S = 0.015
 
 
 def parse_releases(text: str) -> list:
@@ -143,6 +149,59 @@ def kickback_restitution(prm: dict, speed: float = 3.0, phases: int = 8) -> tupl
     return float(np.mean(es)), min(es), max(es)
 
 
+def two_pin_paths(starts: dict, buckets: list, prm: dict) -> list:
+    """(first body to touch the 4, the 2 pin's heading in degrees left of down-lane, how far its
+    line passes from where the 4 stood, in m) of every flush hit, its pin deck on the setting ``prm``
+    (scattered as :func:`replay` scatters it). The heading is the 2 pin's centre of mass's over the
+    step :data:`TWO_PIN_S` after it first moved 2 mm from where it stood (or the step it first
+    touches the 4, if sooner): the line it was sent along, straight."""
+    CF._init(prm)
+    m = CF._W["m"]
+    pins = {m.body(f"pin{n}").id: f"pin{n}" for n in scene.PIN_NUMBERS}
+    ball = int(m.jnt_bodyid[m.joint("ball_free").id])
+    deck = {m.geom(g).id for g in ("lane_deck", "lane_surface_pins")}
+    b2, b4 = m.body("pin2").id, m.body("pin4").id
+
+    def who(g: int) -> str:
+        b = int(m.geom_bodyid[g])
+        return pins.get(b) or ("ball" if b == ball else m.geom(g).name or f"geom {g}")
+
+    out = []
+    for b, (name, ang) in enumerate(buckets):
+        for i, (dv, st) in enumerate(starts[f"{name}@{ang:g}"]["throws"]):
+            if st.board is None or not FLUSH[0] <= st.board <= FLUSH[1]:
+                continue
+            if CF._W["spot"] > 0:
+                st = CF.scatter(m, st, CF._W["spot"], 10_000 + SPOT_SEED * (b + 1) + i)
+            s: dict = {"first": None, "moved": None, "line": None, "prev": None, "set": None}
+
+            def rec(d, s=s) -> None:
+                for c in d.contact[:d.ncon]:
+                    g1, g2 = int(c.geom1), int(c.geom2)
+                    for a, o in ((g1, g2), (g2, g1)):
+                        if s["first"] is None and int(m.geom_bodyid[a]) == b4 and o not in deck:
+                            s["first"] = who(o)
+                x = d.xipos[b2][:2].copy()
+                if s["set"] is None:  # where the 2 and the 4 stand (their spots, or off them: the scatter)
+                    s["set"], s["four"] = x, d.xipos[b4][:2].copy()
+                if s["line"] is None:
+                    if s["moved"] is None and np.linalg.norm(x - s["set"]) > 0.002:
+                        s["moved"] = d.time
+                    if s["moved"] is not None and (s["first"] is not None or d.time - s["moved"] >= TWO_PIN_S):
+                        s["line"] = (x, x - s["prev"])
+                s["prev"] = x
+
+            frame.run_frame(dv, model=m, start=st, record=rec)
+            if s["line"] is None:  # the 2 pin never moved
+                out.append((s["first"], float("nan"), float("nan")))
+                continue
+            x, v = s["line"]
+            u = v / np.linalg.norm(v)
+            r = s["four"] - x
+            out.append((s["first"], float(np.degrees(np.arctan2(v[1], v[0]))), float(abs(u[0] * r[1] - u[1] * r[0]))))
+    return out
+
+
 def _ci(k: int, n: int) -> str:
     if not n:
         return "-"
@@ -189,6 +248,8 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "nbst" / "pocket_angle")
     ap.add_argument("--restitution", action="store_true",
                     help="print the pin-kickback restitution of the setting and stop")
+    ap.add_argument("--two-pin", action="store_true",
+                    help="on the flush hits: what touches the 4 first, and the line the 2 pin is sent along")
     args = ap.parse_args()
     buckets = parse_releases(args.releases)
     prm = CF.parse_setting(args.setting)
@@ -198,6 +259,22 @@ def main() -> None:
               "over 8 phases of a step)")
         return
     starts = capture(args.cache, buckets, args.n, args.seed)
+    if args.two_pin:
+        t0 = time.time()
+        rows = two_pin_paths(starts, buckets, prm)
+        first: dict = {}
+        for r in rows:
+            first[r[0]] = first.get(r[0], 0) + 1
+        h, miss = (np.array([r[k] for r in rows if r[1] == r[1]]) for k in (1, 2))
+        miss = 1000 * miss
+        s2, s4 = (np.array(xy) for xy in scene.pin_spots()[1:4:2])
+        print(f"setting {CF.key(prm)}: {len(rows)} flush hits ({time.time() - t0:.0f} s); the first to touch the 4: "
+              + ", ".join(f"{k} {v}" for k, v in sorted(first.items(), key=lambda kv: -kv[1])))
+        print(f"the 2 pin's heading: {h.min():.1f} to {h.max():.1f} deg left of down-lane (median {np.median(h):.1f}; "
+              f"the 2-4 line {np.degrees(np.arctan2(*(s4 - s2)[::-1])):.1f}); its line passes the 4 at "
+              f"{miss.min():.0f} to {miss.max():.0f} mm (median {np.median(miss):.0f}; 5-95 %: "
+              f"{np.percentile(miss, 5):.0f}-{np.percentile(miss, 95):.0f}); two bellies: 121 mm")
+        return
     path = args.cache / f"angle_results_n{args.n}_seed{args.seed}.json"
     done = json.loads(path.read_text()) if path.exists() else {}
     k = f"{CF.key(prm)}|{args.releases}"
