@@ -66,6 +66,11 @@ LADDER = (0.001, 0.0005)
 FRAGILE = 0.1  # small: a fragile crash stays a parent (its neighbours may hold on the ladder)
 #: CMA-ES: initial step (unit cube), generations without a lower cost that end a restart.
 SIGMA0, STALL = 0.12, 6
+#: Polishing (the best trial's contacts right): restarts in a row that leave the best's cost as it
+#: was before the next restart starts from another trial with the contacts right, at least one
+#: SIGMA0 step's length (SIGMA0 x sqrt(dim), unit cube) from every polishing restart's start so
+#: far; RIGHT_KEPT such trials are kept (the cheapest).
+SPENT, RIGHT_KEPT = 3, 256
 
 
 @dataclass(eq=False)
@@ -136,6 +141,9 @@ class _Search:
         self.history: list = []
         self.first_met: int | None = None
         self.full = (1 << space.n) - 1
+        self.right: list[Trial] = []     # trials with the contacts right (the cheapest RIGHT_KEPT)
+        self.starts: list[np.ndarray] = []  # where the polishing restarts started
+        self.spent = 0                   # polishing restarts in a row that left the best's cost as it was
 
     @property
     def left(self) -> int:
@@ -162,6 +170,8 @@ class _Search:
                     self.rollouts += len(LADDER)  # counted: the ladder's rollouts are rollouts too
                 if self.keep is not None:
                     self.keep(t)
+                if self.contacts_right(t):
+                    self.right.append(t)
                 cur = self.archive.get(o.sequence)
                 if cur is None or t.cost < cur.cost:
                     self.archive[o.sequence] = t
@@ -169,6 +179,9 @@ class _Search:
                         (self.best.accepted, self.best.outcome.solved, -self.best.cost):
                     self.best = t
             self.rollouts += len(chunk)
+            if len(self.right) > 2 * RIGHT_KEPT:
+                self.right.sort(key=lambda t: t.cost)
+                del self.right[RIGHT_KEPT:]
             self.history.append((self.rollouts, float(self.best.cost)))
             if self.callback:
                 self.callback(Progress(self.rollouts, self.best.cost, self.best.outcome.signature_text(self.S.n),
@@ -264,11 +277,22 @@ class _Search:
 
     def restart_point(self, k: int) -> tuple[Trial, float]:
         """The k-th restart's start and step: from the best trial when its contacts are right,
-        at steps of SIGMA0, SIGMA0 / 3 and SIGMA0 / 9 in turn (fine-tuning); else alternately
-        from the best (SIGMA0) and from the archive's contact sequences nearest the script's
-        (SIGMA0 / 3), in turn."""
+        at steps of SIGMA0, SIGMA0 / 3 and SIGMA0 / 9 in turn (fine-tuning); once :data:`SPENT`
+        such restarts in a row have left the best's cost as it was (its funnel spent), from the
+        cheapest other trial with the contacts right at least one SIGMA0 step (SIGMA0 x
+        sqrt(dim)) from every polishing start so far, at SIGMA0 (another funnel; the best again when there is none); else
+        alternately from the best (SIGMA0) and from the archive's contact sequences nearest the
+        script's (SIGMA0 / 3), in turn."""
         if self.contacts_right(self.best):
-            return self.best, SIGMA0 / (3 ** (k % 3))
+            start, sigma = self.best, SIGMA0 / (3 ** (k % 3))
+            if self.spent >= SPENT:
+                spread = SIGMA0 * math.sqrt(self.S.dim)
+                far = [t for t in sorted(self.right, key=lambda t: t.cost)
+                       if all(np.linalg.norm(t.u - p) >= spread for p in self.starts)]
+                if far:
+                    start, sigma = far[0], SIGMA0
+            self.starts.append(start.u)
+            return start, sigma
         if k % 2 == 0 or not self.archive:
             return self.best, SIGMA0
         want = list(self.S.script.order or _fate_sequence(self.S.script))
@@ -279,6 +303,7 @@ class _Search:
         import cma
 
         start, sigma = self.restart_point(k)
+        polishing, before = self.contacts_right(self.best), self.best.cost
         es = cma.CMAEvolutionStrategy(start.u.tolist(), sigma,
                                       {"bounds": [0.0, 1.0], "popsize": BATCH, "verbose": -9,
                                        "seed": int(self.rng.integers(1, 2**31 - 1))})
@@ -296,6 +321,8 @@ class _Search:
                 best_here, stalled = min(costs), 0
             else:
                 stalled += 1
+        if polishing:
+            self.spent = 0 if self.best.cost < before - 1e-9 else self.spent + 1
 
 
 def _fate_sequence(script) -> list:
