@@ -401,8 +401,8 @@ def test_reconstruct_recovers_the_planted_crossing_from_its_rest_and_impact_posi
 
 def test_polishing_restarts_move_to_another_funnel_once_the_best_ones_is_spent():
     """With the best trial's contacts right, restarts start from it (at steps SIGMA0, /3, /9);
-    once SPENT of them in a row left its cost as it was, the next starts from the cheapest
-    trial with the contacts right at least one SIGMA0 step from every start so far (a near one
+    once SPENT of them in a row left its cost as it was (and it does not meet the script at its
+    own step), the next starts from the cheapest trial with the contacts right at least one SIGMA0 step from every start so far (a near one
     is passed over), at SIGMA0; with none left, from the best again. No rollout is run."""
     from types import SimpleNamespace
 
@@ -425,5 +425,8 @@ def test_polishing_restarts_move_to_another_funnel_once_the_best_ones_is_spent()
     srch.spent = search.SPENT
     spread = search.SIGMA0 * math.sqrt(sp.dim)
     assert np.linalg.norm(near.u - best.u) < spread <= np.linalg.norm(far.u - best.u)
-    assert srch.restart_point(2) == (far, search.SIGMA0)
-    assert srch.restart_point(3)[0] is best  # every trial with the contacts right is near a start
+    best.outcome.solved = True  # met at its own step, fragile on the ladder: polished where it is
+    assert srch.restart_point(2) == (best, search.SIGMA0 / 9)
+    best.outcome.solved = False
+    assert srch.restart_point(3) == (far, search.SIGMA0)
+    assert srch.restart_point(4)[0] is best  # every trial with the contacts right is near a start

@@ -67,9 +67,9 @@ FRAGILE = 0.1  # small: a fragile crash stays a parent (its neighbours may hold 
 #: CMA-ES: initial step (unit cube), generations without a lower cost that end a restart.
 SIGMA0, STALL = 0.12, 6
 #: Polishing (the best trial's contacts right): restarts in a row that leave the best's cost as it
-#: was before the next restart starts from another trial with the contacts right, at least one
-#: SIGMA0 step's length (SIGMA0 x sqrt(dim), unit cube) from every polishing restart's start so
-#: far; RIGHT_KEPT such trials are kept (the cheapest).
+#: was (the best not met at its own step) before the next restart starts from another trial with
+#: the contacts right, at least one SIGMA0 step's length (SIGMA0 x sqrt(dim), unit cube) from
+#: every polishing restart's start so far; RIGHT_KEPT such trials are kept (the cheapest).
 SPENT, RIGHT_KEPT = 3, 256
 
 
@@ -278,14 +278,16 @@ class _Search:
     def restart_point(self, k: int) -> tuple[Trial, float]:
         """The k-th restart's start and step: from the best trial when its contacts are right,
         at steps of SIGMA0, SIGMA0 / 3 and SIGMA0 / 9 in turn (fine-tuning); once :data:`SPENT`
-        such restarts in a row have left the best's cost as it was (its funnel spent), from the
-        cheapest other trial with the contacts right at least one SIGMA0 step (SIGMA0 x
-        sqrt(dim)) from every polishing start so far, at SIGMA0 (another funnel; the best again when there is none); else
+        such restarts in a row have left the best's cost as it was (its funnel spent) and the best
+        does not meet the script at its own step (one that does, fragile on the ladder, is
+        polished where it is), from the cheapest other trial with the contacts right at least one
+        SIGMA0 step (SIGMA0 x sqrt(dim)) from every polishing start so far, at SIGMA0 (another
+        funnel; the best again when there is none); else
         alternately from the best (SIGMA0) and from the archive's contact sequences nearest the
         script's (SIGMA0 / 3), in turn."""
         if self.contacts_right(self.best):
             start, sigma = self.best, SIGMA0 / (3 ** (k % 3))
-            if self.spent >= SPENT:
+            if self.spent >= SPENT and not self.best.outcome.solved:
                 spread = SIGMA0 * math.sqrt(self.S.dim)
                 far = [t for t in sorted(self.right, key=lambda t: t.cost)
                        if all(np.linalg.norm(t.u - p) >= spread for p in self.starts)]
