@@ -25,7 +25,11 @@ that vehicle holds (the paper's i-acceptable). Around the paper's population:
   operations (every batch once the best trial's contacts are right), ending after :data:`STALL`
   generations without a lower cost: from the best trial and from the archive's sequences nearest
   the script's in turn while the contacts are wrong; from the best trial at steps of
-  :data:`SIGMA0`, a third and a ninth of it once they are right (fine-tuning rest poses).
+  :data:`SIGMA0`, a third and a ninth of it once they are right (fine-tuning rest poses), and,
+  once :data:`SPENT` of those in a row left its cost as it was, from the cheapest other trial
+  with the contacts right away from every start so far (another funnel: near a planted script's
+  hidden answer the met region is a narrow funnel, and a search polishing one spent funnel
+  stalls there for thousands of rollouts).
 
 The search stops at the first trial that meets the script (every bit set and the global
 order) and keeps meeting it at 1 and 0.5 ms (the **ladder**: a crash that only the 2 ms step
