@@ -4,6 +4,7 @@
                                             [--seed 1] [--jobs 1] [--setting key=value,...] [--cache DIR]
     python benchmarks/bench_pocket_angle.py --restitution [--setting kick_zeta=0.2]
     python benchmarks/bench_pocket_angle.py --two-pin [--setting spot_mm=6]
+    python benchmarks/bench_pocket_angle.py --collision-segments 32 [--two-pin]   # the pins as 32-gons (probe)
 
 Bowlers' lore (a right-hander): a ball that comes in too strong, too high or at too much angle
 leaves the 4 (the 2 pin goes round the 4, or drives behind it), the 4-7, the 4-9 or worse: "a
@@ -43,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.models.bowling import scene
+from nbst.models.bowling import pin, scene
 from nbst.models.bowling.lane import frame, names, noise, profiles, spares
 
 
@@ -248,9 +249,19 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "nbst" / "pocket_angle")
     ap.add_argument("--restitution", action="store_true",
                     help="print the pin-kickback restitution of the setting and stop")
+    ap.add_argument("--collision-segments", type=int, default=None, metavar="N",
+                    help="probe: the pins' collision pieces as N-gons instead of the scene's "
+                         f"{pin.COLLISION_SEGMENTS} (one process: --jobs 1)")
     ap.add_argument("--two-pin", action="store_true",
                     help="on the flush hits: what touches the 4 first, and the line the 2 pin is sent along")
     args = ap.parse_args()
+    segments = ""
+    if args.collision_segments is not None and args.collision_segments != pin.COLLISION_SEGMENTS:
+        if args.jobs != 1 or not 8 <= args.collision_segments <= 128:
+            ap.error("--collision-segments: 8..128, with --jobs 1 (the pins are rebuilt in this process only)")
+        pin.COLLISION_SEGMENTS = args.collision_segments  # before any model is compiled
+        pin.geometry.cache_clear()
+        segments = f"|segments={args.collision_segments}"
     buckets = parse_releases(args.releases)
     prm = CF.parse_setting(args.setting)
     if args.restitution:
@@ -268,7 +279,7 @@ def main() -> None:
         h, miss = (np.array([r[k] for r in rows if r[1] == r[1]]) for k in (1, 2))
         miss = 1000 * miss
         s2, s4 = (np.array(xy) for xy in scene.pin_spots()[1:4:2])
-        print(f"setting {CF.key(prm)}: {len(rows)} flush hits ({time.time() - t0:.0f} s); the first to touch the 4: "
+        print(f"setting {CF.key(prm)}{segments}: {len(rows)} flush hits ({time.time() - t0:.0f} s); the first to touch the 4: "
               + ", ".join(f"{k} {v}" for k, v in sorted(first.items(), key=lambda kv: -kv[1])))
         print(f"the 2 pin's heading: {h.min():.1f} to {h.max():.1f} deg left of down-lane (median {np.median(h):.1f}; "
               f"the 2-4 line {np.degrees(np.arctan2(*(s4 - s2)[::-1])):.1f}); its line passes the 4 at "
@@ -277,7 +288,7 @@ def main() -> None:
         return
     path = args.cache / f"angle_results_n{args.n}_seed{args.seed}.json"
     done = json.loads(path.read_text()) if path.exists() else {}
-    k = f"{CF.key(prm)}|{args.releases}"
+    k = f"{CF.key(prm)}|{args.releases}{segments}"
     if k not in done:
         t0 = time.time()
         done[k] = replay(starts, buckets, prm, args.jobs)
@@ -288,7 +299,7 @@ def main() -> None:
     rows = done[k]
     caps = sum(r[4] for r in rows)
     total = sum(len(v["throws"]) for v in starts.values())
-    print(f"\nsetting: {CF.key(prm)}; {len(rows)} throws reached the pins on boards "
+    print(f"\nsetting: {CF.key(prm)}{segments}; {len(rows)} throws reached the pins on boards "
           f"{REPLAYED[0]:g}-{REPLAYED[1]:g} of {total}, {caps} read at the sweep")
     table(rows, FLUSH, "flush hits")
     table(rows, HIGH, "high pocket hits")
