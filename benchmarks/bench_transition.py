@@ -26,7 +26,7 @@ takes oil off a lane. Kegel's tape tests at the 2013 WTBA World Championships (T
 you follow?", Kegel's *The Inside Line*, 25 November 2013): when players play a similar line on a fresh
 pattern, "over 40 percent of the lane conditioner can be removed from that area throughout the
 ENTIRE length of the applied oil pattern" by the time about 4-5 games have been bowled on the lane.
-Here ``--lineup`` pros (default 4) bowl one game each on a fresh house shot (so 4 games on the lane,
+Here ``--lineup`` bowlers of ``--bowler`` (default 4 pros) bowl one game each on a fresh house shot (so 4 games on the lane,
 every ball, strike and spare), no moves, at exchange 0.15, 0.3 (as shipped) and 0.6, seeds
 ``--seeds``. Read like a tape: at every 0.25 ft from 5 ft to 2 ft short of the pattern's end, the
 board that lost the largest share of its oil, and the share lost by the 3, 5 and 7 boards centred on
@@ -105,8 +105,8 @@ def _area_of_play(before: np.ndarray, after: np.ndarray, dx_ft: float, length_ft
     return float(np.mean(shares))
 
 
-def depletion(seeds: list[int], n: int) -> None:
-    print(f"## oil taken from the area of play: {n} pros, one game each on a fresh house shot ({n} games on the "
+def depletion(seeds: list[int], n: int, bowler: str = "pro") -> None:
+    print(f"## oil taken from the area of play: {n} bowlers of profile {bowler}, one game each on a fresh house shot ({n} games on the "
           f"lane), no moves; Kegel (WTBA 2013): over 40 % after about 4-5 games on the lane\n")
     print("| exchange | seed | balls on the lane | area of play lost: 3 / 5 / 7 boards | whole pattern lost | s |\n"
           "|---|---|---|---|---|---|")
@@ -114,7 +114,7 @@ def depletion(seeds: list[int], n: int) -> None:
         law = replace(lane.LAW, exchange=ex)
         for seed in seeds:
             t0 = time.time()
-            r = T.Run(T.lineup("pro", n), 1, seed, "none", "house", law=law)
+            r = T.Run(T.lineup(bowler, n), 1, seed, "none", "house", law=law)
             r.play()
             d = r.to_dict()
             before, after = np.asarray(d["oil"]["before"]), np.asarray(d["oil"]["after"])
@@ -142,7 +142,7 @@ def main() -> None:
         sensitivity(args.throws)
         return
     if args.part == "depletion":
-        depletion(_seeds(args.seeds or "1-4"), args.lineup or 4)
+        depletion(_seeds(args.seeds or "1-4"), args.lineup or 4, args.bowler)
         return
     args.seeds, args.lineup = args.seeds or "1-6", args.lineup or 1
     seeds = _seeds(args.seeds)
