@@ -134,21 +134,31 @@ def chain() -> None:
           f"0.5 ms {med:g} (target <= 1,500: {'met' if med <= 1500 else 'NOT met'})")
 
 
+def _seeds(text: str) -> list[int]:
+    """--planted-seeds: comma-separated integers."""
+    try:
+        return [int(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of integer seeds: {text!r}") from None
+
+
 def planted() -> None:
     from nbst.models.crash import planted as pl, script
     from nbst.models.mjsearch.probability import wilson
 
-    first, seeds = ARGS.planted_from, [int(x) for x in ARGS.planted_seeds.split(",")]
+    first, seeds = ARGS.planted_from, ARGS.planted_seeds
+    scripts = []  # planted once (planting runs rollouts and ladder checks), searched once per seed
+    for k in range(first, first + ARGS.planted):
+        d, _ = pl.planted_script(100 + k, ladder=None if ARGS.planted_unchecked else pl.LADDER)
+        scripts.append((100 + k, len(d["order"]), script.script_from_dict(d)))
     total = 0
     for seed in seeds:
         solved = 0
-        for k in range(first, first + ARGS.planted):
-            d, _ = pl.planted_script(100 + k, ladder=None if ARGS.planted_unchecked else pl.LADDER)
-            sc = script.script_from_dict(d)
-            r, wall, cpu = _solve(sc, seed, 3000)
+        for name, contacts, sc in scripts:
+            r, wall, _ = _solve(sc, seed, 3000)
             ok = r.best.accepted
             solved += ok
-            print(f"  planted {100 + k}, seed {seed}: {len(d['order'])} contacts; {_met_at(r)}; "
+            print(f"  planted {name}, seed {seed}: {contacts} contacts; {_met_at(r)}; "
                   f"{'solved (on the ladder) in ' + str(r.rollouts) if ok else 'NOT solved on the ladder'}"
                   f" (best cost {r.best.cost:.3g}, signature {r.best.outcome.signature_text(3)}), {wall:.0f} s wall",
                   flush=True)
@@ -285,7 +295,7 @@ def main(argv=None) -> int:
     ap.add_argument("--planted-unchecked", action="store_true",
                     help="planted part: plant the first hidden crash with two contacts whether or not it holds at 1 "
                          "and 0.5 ms (the set of 53c4570; default: only hidden crashes that hold on the ladder)")
-    ap.add_argument("--planted-seeds", default="1", metavar="S,...",
+    ap.add_argument("--planted-seeds", type=_seeds, default=[1], metavar="S,...",
                     help="search seeds of the planted part (default 1); with several, every script is searched "
                          "once per seed and the share solved is given with its Wilson 95 %% interval")
     ap.add_argument("--recon-budget", type=int, default=800, help="rollouts per reconstruction (default 800)")
