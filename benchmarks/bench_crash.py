@@ -18,6 +18,9 @@ Parts (default: all, in this order; each prints its figures and its target, met 
   0.5 ms, unless ``--planted-unchecked``; the same tolerances), 3,000 rollouts each: how many
   are solved (target >= 8 of 10), for each of ``--planted-seeds`` (default 1; with several, the
   share of all those searches solved, with its Wilson interval: one seed's count is a sample);
+* ``funnels``: around each of the ``--planted`` planted scripts' hidden answers, how many of 32
+  neighbours (a Gaussian step of 0.002 to 0.04 in each continuous coordinate of the unit cube)
+  meet the script at 2 ms: the width of its met funnel, which tells how hard it is for a search;
 * ``builtins``: every built-in script solved (3,000 rollouts, seed 1) and its signature at 1
   and 0.5 ms (the ladder; the rollover among them);
 * ``recon``: ``--planted`` planted 2-car crashes reconstructed from their rest poses (1 m,
@@ -40,7 +43,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-PARTS = ("physics", "speed", "chain", "planted", "builtins", "recon", "probability", "sensitivity")
+PARTS = ("physics", "speed", "chain", "planted", "funnels", "builtins", "recon", "probability", "sensitivity")
 ARGS = None
 
 
@@ -170,6 +173,18 @@ def planted() -> None:
         lo, hi = wilson(total, n)
         print(f"all {len(seeds)} seeds: {total} of {n} searches solved ({100 * total / n:.0f} %, Wilson 95 % "
               f"{100 * lo:.0f}-{100 * hi:.0f} %; the target is 80 %)")
+
+
+def funnels() -> None:
+    from nbst.models.crash import planted as pl
+
+    first = ARGS.planted_from
+    print("  neighbours of the hidden answer that meet the script at 2 ms, of 32, by step: "
+          + ", ".join(f"{h:g}" for h in pl.FUNNEL_STEPS))
+    for k in range(first, first + ARGS.planted):
+        d, u = pl.planted_script(100 + k, ladder=None if ARGS.planted_unchecked else pl.LADDER)
+        met = pl.funnel(d, u, jobs=ARGS.jobs)
+        print(f"  planted {100 + k}: " + "  ".join(f"{m:2d}" for m in met), flush=True)
 
 
 def builtins() -> None:

@@ -314,6 +314,17 @@ def test_the_benchmarks_planted_scripts_ask_two_contacts_and_their_hidden_intent
         assert search.ladder_check(s, run.scene_text(s), space.space_of(s))(search.Trial(u=u, outcome=o)), seed
 
 
+@pytest.mark.slow
+def test_the_funnel_probe_counts_the_neighbours_that_meet_a_planted_script():
+    """planted.funnel: at a step of 0 every neighbour is the hidden answer itself (the batch's
+    simulations are independent and alike), so all meet the script; half the unit cube away the
+    crash is another one, and few do (the benchmark's funnel widths rest on this count)."""
+    from nbst.models.crash import planted
+
+    d, u = planted.planted_script(101)
+    assert planted.funnel(d, u, steps=(0.0, 0.5), n=16) == [16, pytest.approx(0, abs=4)]
+
+
 def test_reconstruction_ranges_cover_every_fit(short):
     from nbst.models.crash import reconstruct, search
 

@@ -118,6 +118,30 @@ def planted_script(seed: int, *, template: str = "intersection3", radius: float 
     return d, u
 
 
+#: The funnel probe's steps (unit cube): a Gaussian step of each continuous coordinate.
+FUNNEL_STEPS = (0.002, 0.005, 0.01, 0.02, 0.04)
+
+
+def funnel(d: dict, u: np.ndarray, steps=FUNNEL_STEPS, n: int = 32, seed: int = 0, jobs: int = 1) -> list[int]:
+    """How many of ``n`` neighbours of the unit point ``u`` meet script ``d`` at its own step, for
+    each Gaussian step of ``steps`` (unit cube; the continuous coordinates move, the after-impact
+    choices stay; the points are clipped into the cube): the width of the met funnel around a
+    planted script's hidden answer, which tells how hard the script is for a search (docs/crash.md)."""
+    s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
+    S = space_of(s)
+    moves = np.array([isinstance(r, script_mod.Range) for _, _, r in S.coords], float)
+    rng = np.random.default_rng([int(seed), 33])
+    R = Runner(s, jobs=jobs)
+    try:
+        out = []
+        for step in steps:
+            U = np.clip(u + step * moves * rng.standard_normal((n, S.dim)), 0.0, 1.0)
+            out.append(sum(o.solved for o in R.run(S.intents(U)).outcomes))
+        return out
+    finally:
+        R.close()
+
+
 def planted_case(seed: int, *, template: str = "crossing2", radius: float = 1.0,
                  heading_tol: float = 10.0, impact_radius: float | None = 0.5) -> tuple[dict, list]:
     """(case dict, truth): a reconstruction case from a hidden crash of ``template`` (the fates:
