@@ -1,7 +1,7 @@
 """The crash model's figures and the issue's targets (docs/crash.md).
 
     python benchmarks/bench_crash.py [--part P ...] [--jobs K] [--seeds 5] [--planted 10] [--planted-from 0]
-        [--planted-seeds 1] [--planted-unchecked] [--recon-budget 800]
+        [--planted-seeds 1] [--planted-unchecked] [--planted-min-p P] [--recon-budget 800]
 
 Parts (default: all, in this order; each prints its figures and its target, met or not):
 
@@ -18,6 +18,11 @@ Parts (default: all, in this order; each prints its figures and its target, met 
   0.5 ms, unless ``--planted-unchecked``; the same tolerances), 3,000 rollouts each: how many
   are solved (target >= 8 of 10), for each of ``--planted-seeds`` (default 1; with several, the
   share of all those searches solved, with its Wilson interval: one seed's count is a sample);
+  with ``--planted-min-p P``, only hidden answers that 32 noisy re-drives meet at least that
+  often are planted (a crash its drivers could stage again; not the target's set);
+* ``hidden``: for each of the ``--planted`` planted scripts, how often its hidden answer,
+  re-driven 100 times with the driver noise, meets its own fates (Wilson 95 %), and the
+  outcomes seen: whether the planted fates are a crash or a lucky draw;
 * ``funnels``: around each of the ``--planted`` planted scripts' hidden answers, how many of 32
   neighbours (a Gaussian step of 0.002 to 0.04 in each continuous coordinate of the unit cube)
   meet the script at 2 ms: the width of its met funnel, which tells how hard it is for a search;
@@ -43,7 +48,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-PARTS = ("physics", "speed", "chain", "planted", "funnels", "builtins", "recon", "probability", "sensitivity")
+PARTS = ("physics", "speed", "chain", "planted", "hidden", "funnels", "builtins", "recon", "probability", "sensitivity")
 ARGS = None
 
 
@@ -145,6 +150,17 @@ def _seeds(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(f"not a comma-separated list of integer seeds: {text!r}") from None
 
 
+def _share(text: str) -> float:
+    """--planted-min-p: a share in [0, 1]."""
+    try:
+        p = float(text)
+    except ValueError:
+        p = math.nan
+    if not 0.0 <= p <= 1.0:
+        raise argparse.ArgumentTypeError(f"not a share between 0 and 1: {text!r}")
+    return p
+
+
 def planted() -> None:
     from nbst.models.crash import planted as pl, script
     from nbst.models.mjsearch.probability import wilson
@@ -152,7 +168,7 @@ def planted() -> None:
     first, seeds = ARGS.planted_from, ARGS.planted_seeds
     scripts = []  # planted once (planting runs rollouts and ladder checks), searched once per seed
     for k in range(first, first + ARGS.planted):
-        d, _ = pl.planted_script(100 + k, ladder=None if ARGS.planted_unchecked else pl.LADDER)
+        d, _ = _planted(pl, 100 + k)
         scripts.append((100 + k, len(d["order"]), script.script_from_dict(d)))
     total = 0
     for seed in seeds:
@@ -166,13 +182,38 @@ def planted() -> None:
                   f" (best cost {r.best.cost:.3g}, signature {r.best.outcome.signature_text(3)}), {wall:.0f} s wall",
                   flush=True)
         total += solved
-        print(f"planted 3-car scripts {100 + first}-{99 + first + ARGS.planted}, seed {seed}: {solved} of "
+        print(f"planted 3-car scripts {100 + first}-{99 + first + ARGS.planted}{_which()}, seed {seed}: {solved} of "
               f"{ARGS.planted} solved within 3,000 rollouts (target >= 8 of 10)")
     if len(seeds) > 1:
         n = ARGS.planted * len(seeds)
         lo, hi = wilson(total, n)
         print(f"all {len(seeds)} seeds: {total} of {n} searches solved ({100 * total / n:.0f} %, Wilson 95 % "
               f"{100 * lo:.0f}-{100 * hi:.0f} %; the target is 80 %)")
+
+
+def _planted(pl, seed: int):
+    """The planted script of ``seed`` as the options ask: (script dict, hidden unit point)."""
+    return pl.planted_script(seed, ladder=None if ARGS.planted_unchecked else pl.LADDER, min_p=ARGS.planted_min_p)
+
+
+def _which() -> str:
+    return "" if ARGS.planted_min_p is None else f" (hidden answers met by >= {ARGS.planted_min_p:g} of noisy re-drives)"
+
+
+def hidden() -> None:
+    from nbst.models.crash import planted as pl
+
+    first, few = ARGS.planted_from, 0
+    print(f"  the hidden answer re-driven 100 times with the driver noise: how often it meets its own fates{_which()}")
+    for k in range(first, first + ARGS.planted):
+        d, u = _planted(pl, 100 + k)
+        e = pl.hidden_probability(d, u, copies=100, jobs=ARGS.jobs)
+        few += e.p <= 0.1
+        top = ", ".join(f"{lab} {c}" for lab, c in sorted(e.outcomes.items(), key=lambda x: -x[1])[:3])
+        print(f"  planted {100 + k}: {e.k} of {e.n} (Wilson 95 % {100 * e.lo:.0f}-{100 * e.hi:.0f} %); most seen: {top}",
+              flush=True)
+    print(f"hidden answers met by at most 10 % of their noisy re-drives: {few} of {ARGS.planted} "
+          "(signature per vehicle, + met, * order wrong)")
 
 
 def funnels() -> None:
@@ -182,7 +223,7 @@ def funnels() -> None:
     print("  neighbours of the hidden answer that meet the script at 2 ms, of 32, by step: "
           + ", ".join(f"{h:g}" for h in pl.FUNNEL_STEPS))
     for k in range(first, first + ARGS.planted):
-        d, u = pl.planted_script(100 + k, ladder=None if ARGS.planted_unchecked else pl.LADDER)
+        d, u = _planted(pl, 100 + k)
         met = pl.funnel(d, u, jobs=ARGS.jobs)
         print(f"  planted {100 + k}: " + "  ".join(f"{m:2d}" for m in met), flush=True)
 
@@ -310,6 +351,9 @@ def main(argv=None) -> int:
     ap.add_argument("--planted-unchecked", action="store_true",
                     help="planted part: plant the first hidden crash with two contacts whether or not it holds at 1 "
                          "and 0.5 ms (the set of 53c4570; default: only hidden crashes that hold on the ladder)")
+    ap.add_argument("--planted-min-p", type=_share, default=None, metavar="P",
+                    help="planted, hidden and funnels parts: plant only hidden answers that at least a share P (0-1) "
+                         "of 32 noisy re-drives meet (default: any; the target's set)")
     ap.add_argument("--planted-seeds", type=_seeds, default=[1], metavar="S,...",
                     help="search seeds of the planted part (default 1); with several, every script is searched "
                          "once per seed and the share solved is given with its Wilson 95 %% interval")

@@ -4,7 +4,8 @@ A **planted script** runs hidden driver intents, drawn uniformly within a templa
 writes what happened as the fates (whom each hit and in what order, where it came to rest and
 facing where, its attitude), with the tolerances asked: a search must find intents that do the
 same, and one is known to exist (by default one that also holds at 1 and 0.5 ms, as the
-search's acceptance asks: :func:`holds_on_ladder`). A **planted case** does the same for reconstruction, and keeps
+search's acceptance asks: :func:`holds_on_ladder`; and, ``min_p`` given, one that its own
+drivers, re-driven with the driver noise, meet that often: :func:`hidden_probability`). A **planted case** does the same for reconstruction, and keeps
 the hidden truth (each vehicle's impact speed and heading) for the comparison.
 
 Templates (:data:`TEMPLATES`): ``crossing2`` (a sedan and an SUV meeting at an intersection,
@@ -96,25 +97,53 @@ def holds_on_ladder(d: dict, u: np.ndarray, timesteps=LADDER) -> bool:
     return True
 
 
-def _plant(seed: int, template: str, radius: float, heading_tol: float, need_contacts: int, ladder=None):
+#: Noisy re-drives (and their seed) of a hidden answer for :func:`hidden_probability`.
+COPIES, COPIES_SEED = 32, 0
+
+
+def hidden_probability(d: dict, u: np.ndarray, copies: int = COPIES, seed: int = COPIES_SEED, jobs: int = 1):
+    """How often the hidden intents of unit point ``u``, re-driven ``copies`` times with the driver
+    noise (:data:`.robust.NOISE`, common random numbers of ``seed``), meet script ``d`` at its own
+    step: a :class:`.robust.Estimate` (k of n, the Wilson interval, the outcomes seen). A crash whose
+    fates its own drivers meet only by luck is a chaotic outcome (docs/crash.md)."""
+    from nbst.models.crash import robust
+
+    s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
+    R = Runner(s, jobs=jobs)
+    try:
+        return robust.probability(R, space_of(s).intents(u[None])[0], copies, seed)
+    finally:
+        R.close()
+
+
+def _plant(seed: int, template: str, radius: float, heading_tol: float, need_contacts: int, ladder=None,
+           min_p: float | None = None, tries: int = 64):
     rng = np.random.default_rng([int(seed), 32])
-    for s, u, o in _hidden(TEMPLATES[template], rng, need_contacts):
+    for s, u, o in _hidden(TEMPLATES[template], rng, need_contacts, tries):
         d = _fates(template, seed, s, o, radius, heading_tol)
+        if min_p is not None and hidden_probability(d, u).p < min_p:
+            continue
         if ladder is None or holds_on_ladder(d, u, ladder):
             return d, u, o
     raise RuntimeError("no planted crash with enough contacts in the tries allowed")
 
 
 def planted_script(seed: int, *, template: str = "intersection3", radius: float = 2.0, heading_tol: float = 20.0,
-                   need_contacts: int = 2, ladder=LADDER) -> tuple[dict, np.ndarray]:
+                   need_contacts: int = 2, ladder=LADDER, min_p: float | None = None) -> tuple[dict, np.ndarray]:
     """(script dict, hidden unit point): the template with the fates of hidden random intents
     that make at least ``need_contacts`` vehicle contacts (2: a chain worth the name, not one
     collision and a bystander) and, ``ladder`` not None, that keep meeting those fates with the
     same contact sequence at each of its timesteps (s): the search counts a script as solved
     only so (:data:`.search.LADDER`), and a planted script promises an answer that counts.
     ``ladder=None`` plants the first draw with enough contacts, whatever the ladder says (at
-    seeds 100-109 half of those answers lose their own script at 1 or 0.5 ms: docs/crash.md)."""
-    d, u, _ = _plant(seed, template, radius, heading_tol, need_contacts, ladder)
+    seeds 100-109 half of those answers lose their own script at 1 or 0.5 ms: docs/crash.md).
+    ``min_p`` not None plants only a hidden answer that :func:`hidden_probability` (32 noisy
+    re-drives) finds met at least that often: a crash its drivers could stage again, not a lucky
+    draw (most draws are; at 0.25, 4 of 80 draws measured qualify: docs/crash.md)."""
+    d, u, _ = _plant(seed, template, radius, heading_tol, need_contacts, ladder, min_p,
+                     tries=64 if min_p is None else 512)
+    if min_p is not None:
+        d["name"] += f"-p{min_p:g}"
     return d, u
 
 
