@@ -121,9 +121,9 @@ def _plant(seed: int, template: str, radius: float, heading_tol: float, need_con
     rng = np.random.default_rng([int(seed), 32])
     for s, u, o in _hidden(TEMPLATES[template], rng, need_contacts, tries):
         d = _fates(template, seed, s, o, radius, heading_tol)
-        if min_p is not None and hidden_probability(d, u).p < min_p:
+        if ladder is not None and not holds_on_ladder(d, u, ladder):
             continue
-        if ladder is None or holds_on_ladder(d, u, ladder):
+        if min_p is None or hidden_probability(d, u).p >= min_p:  # after the ladder: 32 rollouts, not 2
             return d, u, o
     raise RuntimeError("no planted crash with enough contacts in the tries allowed")
 
