@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import SolveError
 from nbst.models.crash import road as road_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import vehicle as veh
@@ -215,7 +216,7 @@ def impact(type_name: str, speed_kmh: float, *, timestep: float = TIMESTEP, othe
                           momentum_before=float(mass[0] * before[0] + mass[1] * before[1]),
                           momentum_after=float(mass[0] * after[0] + mass[1] * after[1]),
                           delta_v_impulse_kmh=float(J / mass[1] * 3.6), delta_v_kmh=float((after[1] - before[1]) * 3.6))
-    raise RuntimeError("the vehicles never touched")
+    raise SolveError(f"restitution check at {speed_kmh:g} km/h: the vehicles never touched")
 
 
 @dataclass(frozen=True)
@@ -260,7 +261,7 @@ def barrier(type_name: str, speed_kmh: float = 56.0, *, timestep: float = TIMEST
             dur = d.time - timestep - t0
             return Barrier(speed_kmh=speed_kmh, duration=float(dur), mean_g=float((before - after) / dur / G),
                            restitution=float(-after / before), penetration=float(pen))
-    raise RuntimeError("the vehicle never reached the barrier")
+    raise SolveError(f"barrier check at {speed_kmh:g} km/h: the vehicle never reached the barrier")
 
 
 def restitution_curve(type_name: str = "sedan", speeds_kmh=(15, 20, 30, 40, 50, 60), *,

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from nbst.errors import SolveError
 from nbst.models.crash import script as script_mod
 from nbst.models.crash.run import Runner
 from nbst.models.crash.search import LADDER
@@ -125,7 +126,8 @@ def _plant(seed: int, template: str, radius: float, heading_tol: float, need_con
             continue
         if min_p is None or hidden_probability(d, u).p >= min_p:  # after the ladder: 32 rollouts, not 2
             return d, u, o
-    raise RuntimeError("no planted crash with enough contacts in the tries allowed")
+    raise SolveError(f"planted crash (seed {seed}, template {template!r}): none with {need_contacts} contacts "
+                     f"in the {tries} tries allowed")
 
 
 def planted_script(seed: int, *, template: str = "intersection3", radius: float = 2.0, heading_tol: float = 20.0,

@@ -10,7 +10,10 @@ Exit codes: 0 written, 2 bad input (one line), 130 interrupted (no partial file 
 """
 from __future__ import annotations
 
+import argparse
 import sys
+
+from nbst.cli.args import Size
 
 #: Flags of ``nbst render`` that draw disk problems only; an error on a crash file.
 DISK_ONLY_FLAGS = (("trails", False, "--trails"), ("labels", None, "--labels"), ("view", None, "--view"),
@@ -63,11 +66,9 @@ def cmd_render_crash(args) -> int:
     from nbst.render.video import MAX_FRAMES
 
     if isinstance(args.size, str):
-        from nbst.cli.args import Size
-
         try:
             args.size = Size()(args.size)
-        except Exception as e:  # argparse.ArgumentTypeError
+        except argparse.ArgumentTypeError as e:
             return _err(f"--size: {e}")
     bad = check_flags(args)
     if bad:
