@@ -45,6 +45,7 @@ from nbst.models.crash.outcome import _wrap as out_wrap
 from nbst.models.crash.run import BATCH
 from nbst.models.crash.space import space_of
 from nbst.models.crash.vehicle import G
+from nbst.seeds import check_seed
 
 #: Share of the budget the fit stage may use before the spread starts (it starts earlier when a fit is found).
 FIT_SHARE = 0.7
@@ -149,7 +150,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = 2000, runner=None, jobs:
     momentum = applies(case)
     share = FIT_SHARE_MOMENTUM if momentum else FIT_SHARE
     fit_budget = min(int(max_rollouts), max(BATCH, int(share * max_rollouts)))
-    rng = np.random.default_rng([int(seed), 32])
+    seed = check_seed(seed, what="seed")
+    rng = np.random.default_rng([seed, 32])
     interrupted = False
     if momentum:
         seen: list = []

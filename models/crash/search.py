@@ -55,6 +55,7 @@ from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
 from nbst.models.crash.run import BATCH
 from nbst.models.crash.space import Space, space_of
+from nbst.seeds import check_seed
 
 #: Rollouts of the initial population (capped at a quarter of the budget).
 EXPLORE = 64
@@ -428,6 +429,7 @@ def solve(script, *, seed: int, max_rollouts: int = 1500, runner=None, jobs: int
     own = runner is None
     R = Runner(script, jobs=jobs) if own else runner
     S = space_of(script)
+    seed = check_seed(seed, what="seed")
     rng = np.random.default_rng(seed)
     s = _Search(S, R, rng, max_rollouts, callback, keep, ladder_check(script, R.xml, S) if ladder else None)
     t0 = time.perf_counter()

@@ -12,6 +12,7 @@ import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, print_json, with_limits
 from nbst.cli.flags import add_quiet, add_seed
+from nbst.seeds import resolve_seed
 
 ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
 ROBUST = Bounded("robust", 12, 1_000_000, integer=True)
@@ -206,9 +207,8 @@ def cmd_check(args) -> int:
 
 
 def _seed(args) -> int:
-    import numpy as np
-
-    return args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
+    """The seed given, or one drawn (nbst.seeds: one range for every drawn seed), recorded in the file."""
+    return resolve_seed(args.seed, what="--seed")
 
 
 def write_crash(path, d: dict) -> None:
