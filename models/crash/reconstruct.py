@@ -117,7 +117,7 @@ def ranges_of(fits: list, n: int) -> list:
     return out
 
 
-def reconstruct(case, *, seed: int, max_rollouts: int = 2000, runner=None, jobs: int = 1,
+def reconstruct(case, *, seed: int, max_rollouts: int = search_mod.DEFAULT_MAX_ROLLOUTS, runner=None, jobs: int = 1,
                 callback=None) -> Reconstruction:
     """Every fit of ``case`` (a Script whose fates are the evidence) within ``max_rollouts``.
 

@@ -31,6 +31,11 @@ from nbst.models.crash.space import Space
 
 #: The timestep ladder (s): the crash's 2 ms, then halved twice.
 LADDER = (0.002, 0.001, 0.0005)
+#: Noisy copies a probability is estimated from when none is given (``nbst crash probability
+#: --samples``; ``nbst crash solve --robust``'s fresh estimate).
+DEFAULT_SAMPLES = 100
+#: The robust maximiser's budget of noisy rollouts when none is given (``nbst crash solve --robust``).
+DEFAULT_ROBUST_BUDGET = 600
 #: Driver noise: standard deviation of each intent (SI).
 NOISE = {"speed": 0.5, "aim_x": 0.2, "aim_y": 0.2, "arrive": 0.1, "brake_at": 0.1, "slide_at": 0.1,
          "slide_steer": math.radians(1.0), "slide_power": 0.05, "headway": 0.05, "reaction": 0.1,

@@ -57,6 +57,9 @@ from nbst.models.crash.run import BATCH
 from nbst.models.crash.space import Space, space_of
 from nbst.seeds import check_seed
 
+#: The search's budget when none is given, in rollouts (ladder checks included): ``nbst crash
+#: solve``'s and ``reconstruct``'s ``--max-rollouts`` default, and the budget of docs/crash.md's figures.
+DEFAULT_MAX_ROLLOUTS = 3000
 #: Rollouts of the initial population (capped at a quarter of the budget).
 EXPLORE = 64
 #: The paper's limits: trials per signature, and the population past which culling starts.
@@ -400,7 +403,7 @@ def ladder_check(script, xml: str, space: Space, timesteps=LADDER):
     return check
 
 
-def solve(script, *, seed: int, max_rollouts: int = 1500, runner=None, jobs: int = 1, callback=None,
+def solve(script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, runner=None, jobs: int = 1, callback=None,
           explore: int = EXPLORE, keep=None, ladder: bool = True) -> SearchResult:
     """Search driver intents that meet ``script``; see the module docstring.
 

@@ -27,6 +27,9 @@ COMMANDS = {
 
 
 def register(sub) -> None:
+    from nbst.models.crash.robust import DEFAULT_ROBUST_BUDGET, DEFAULT_SAMPLES
+    from nbst.models.crash.search import DEFAULT_MAX_ROLLOUTS
+
     p = sub.add_parser("crash", help=COMMANDS["crash"],
                        description="The paper's second challenge (docs/crash.md): several vehicles, each driven by "
                                    "a partially autonomous driver, crash as a script says (whom each hits and in what "
@@ -61,18 +64,19 @@ def register(sub) -> None:
     v.add_argument("script", metavar="SCRIPT", help="built-in name (see `nbst crash scripts`) or a JSON file")
     v.add_argument("-o", "--output", required=True, metavar="CRASH.json", help="where to write the crash")
     add_seed(v, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
-    v.add_argument("--max-rollouts", type=ROLLOUTS, default=3000, metavar="N",
-                   help=with_limits("rollout budget of the search (default 3000)", ROLLOUTS))
+    v.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
+                   help=with_limits(f"rollout budget of the search (default {DEFAULT_MAX_ROLLOUTS})", ROLLOUTS))
     _runner_flags(v)
-    v.add_argument("--robust", type=ROBUST, nargs="?", const=600, default=None, metavar="BUDGET",
+    v.add_argument("--robust", type=ROBUST, nargs="?", const=DEFAULT_ROBUST_BUDGET, default=None, metavar="BUDGET",
                    help=with_limits("after the search, maximise the probability that the script is met under "
                                     "driver noise (the rollout room's robust maximiser: common random numbers, "
-                                    "successive halving; BUDGET noisy rollouts, default 600) and write the pick, "
+                                    f"successive halving; BUDGET noisy rollouts, default {DEFAULT_ROBUST_BUDGET}) and "
+                                    "write the pick, "
                                     "the latest that keeps its outcome at 2, 1 and 0.5 ms", ROBUST))
     v.add_argument("--samples", type=SAMPLES, default=None, metavar="N",
                    help=with_limits("also estimate the probability that the crash written meets the script under "
                                     "driver noise from N noisy rollouts, with its 95 %% Wilson interval (default: "
-                                    "none; 100 with --robust)", SAMPLES))
+                                    f"none; {DEFAULT_SAMPLES} with --robust)", SAMPLES))
     v.add_argument("--no-ladder", action="store_true",
                    help="accept a crash that meets the script at the script's step only (by default the search "
                         "goes on until one also meets it at 1 and 0.5 ms, and the file records that ladder)")
@@ -96,8 +100,9 @@ def register(sub) -> None:
     c.add_argument("case", metavar="CASE", help="a crash script of evidence (JSON file or built-in name)")
     c.add_argument("-o", "--output", required=True, metavar="REC.json", help="where to write the reconstruction")
     add_seed(c, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
-    c.add_argument("--max-rollouts", type=ROLLOUTS, default=3000, metavar="N",
-                   help=with_limits("rollout budget, fit and spread together (default 3000)", ROLLOUTS))
+    c.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
+                   help=with_limits(f"rollout budget, fit and spread together (default {DEFAULT_MAX_ROLLOUTS})",
+                                    ROLLOUTS))
     _runner_flags(c)
     c.add_argument("--json", action="store_true", help="print the reconstruction as one JSON object")
     add_quiet(c, "no progress bar and no summary")
@@ -110,8 +115,8 @@ def register(sub) -> None:
                                   "that meets the script with its 95 %% Wilson interval, and the outcomes seen. "
                                   "The same --seed gives the same copies (common random numbers).")
     b.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
-    b.add_argument("--samples", type=SAMPLES, default=100, metavar="N",
-                   help=with_limits("noisy rollouts (default 100)", SAMPLES))
+    b.add_argument("--samples", type=SAMPLES, default=DEFAULT_SAMPLES, metavar="N",
+                   help=with_limits(f"noisy rollouts (default {DEFAULT_SAMPLES})", SAMPLES))
     b.add_argument("--seed", type=SEED, default=1, help=f"noise seed [{SEED.limits}] (default 1)")
     b.add_argument("-o", "--output", default=None, metavar="OUT.json",
                    help="also write the crash file with this estimate in its `probability`")
@@ -298,7 +303,7 @@ def _after_search(args, script, runner, S, best, intents, seed):
     if args.robust is not None and best.outcome.solved:
         from nbst.models.mjsearch import robust as room
 
-        n = args.samples or 100
+        n = args.samples or robust.DEFAULT_SAMPLES
         P = robust.Problem(S, runner, runner.xml)
         mx = room.maximise(P, [intents], budget=args.robust, seed=seed, n=n, ladder=not args.no_ladder)
         intents = mx.best
