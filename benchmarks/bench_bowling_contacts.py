@@ -56,7 +56,7 @@ from nbst.models.bowling import pin as pinmod
 #: The defaults: ball-pin and pin-pin friction, damping ratio (scene.py).
 MU0 = scene.MU_BALL_PIN
 TC0, ZETA0 = scene.SOLREF_BODY
-#: The pocket cell's delivery (docs/bowling.md, "The pocket map and carry").
+#: The pocket cell's delivery (docs/results/bowling.md, "The pocket map and carry").
 POCKET = lane.Delivery(board=22.0, at="foul", angle=1.6105595330681906, rotation=68.48689904701298)
 #: Spare picks of docs/bowling.md's table (straight spare ball, rounded as printed there).
 SPARE_PICKS = {

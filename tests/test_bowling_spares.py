@@ -1,7 +1,7 @@
 """The spare tool's lines at the corner pins (issue 34): under the pro's fitted spare noise the
 pick at the 7 is the straight spare ball cross-lane from the right half of the lane for a
 right-hander, and it converts as PBA players do on television (95.5 % of 333 7 pins, ESPN The
-Magazine, Feb. 2011; docs/bowling.md "Any leave": 95 of 100, seed 1)."""
+Magazine, Feb. 2011; docs/results/bowling.md "Any leave": 95 of 100, seed 1)."""
 from __future__ import annotations
 
 import pytest

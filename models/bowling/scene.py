@@ -104,7 +104,7 @@ DECK_PINS = Pins(mass=pinmod.MASS, com_in=None, mu_ball_pin=MU_BALL_PIN, mu_pin_
 #: The lane half's pins, fitted to PBA's carry of pocket hits (74 %; issue 34): the centre of gravity at
 #: USBC's lowest, 5 40/64 in (the uniform solid's is 5.80 in), the rest as the deck half's. The pro's 213
 #: pocket hits carry 158 (74 %) with it, 191 (90 %) with the uniform pin (benchmarks/bench_carry_fit.py,
-#: docs/bowling.md "Pin carry, fitted").
+#: docs/results/bowling.md "Pin carry, fitted").
 LANE_PINS = replace(DECK_PINS, com_in=pinmod.COM_LIMITS_IN[0])
 #: Pit: floor depth below the lane, length behind the pit edge; walls' height and thickness.
 PIT_DEPTH = 0.25

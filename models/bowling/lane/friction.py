@@ -3,7 +3,7 @@
 Why not MuJoCo's own friction: its soft contact lifts a sliding, spinning ball off the lane
 (no contact in most steps of a throw, up to 0.7 mm of lift) and delivers only 75-90 % of
 Coulomb's friction at mu 0.1-0.2, a share that changes with the slip and the timestep
-(docs/bowling.md, "The ball on the lane"). So the lane is a **frictionless** MuJoCo contact
+(docs/results/bowling.md, "The ball on the lane"). So the lane is a **frictionless** MuJoCo contact
 (condim 1: MuJoCo keeps the normal force and the ball on the lane) and this module applies the
 friction by hand, before every step, at the contact point (:func:`contact_step`, one numba
 kernel on arrays; ``xfrc_applied`` carries it into ``mj_step``):
