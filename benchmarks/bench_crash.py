@@ -88,7 +88,7 @@ def speed() -> None:
 
     s = script.load_script("chain3")
     S = space.space_of(s)
-    R = run.Runner(s, jobs=1)
+    R = run.CrashRunner(s, jobs=1)
     U = np.random.default_rng(0).random((16, S.dim))
     R.run(S.intents(U[:1]))  # warm
     t0 = time.process_time()
@@ -193,7 +193,8 @@ def planted() -> None:
 
 def _planted(pl, seed: int):
     """The planted script of ``seed`` as the options ask: (script dict, hidden unit point)."""
-    return pl.planted_script(seed, ladder=None if ARGS.planted_unchecked else pl.LADDER, min_p=ARGS.planted_min_p)
+    return pl.planted_script(seed, ladder=None if ARGS.planted_unchecked else pl.LADDER_CHECK_TIMESTEPS,
+                             min_p=ARGS.planted_min_p)
 
 
 def _which() -> str:
@@ -282,7 +283,7 @@ def probability() -> None:
     if not r.best.outcome.solved:
         print("t-bone not solved: no probability")
         return
-    R = run.Runner(sc, jobs=ARGS.jobs)
+    R = run.CrashRunner(sc, jobs=ARGS.jobs)
     t0 = time.perf_counter()
     est = robust.probability(R, space.space_of(sc).intents(r.best.u[None])[0], 100, seed=1)
     wall = time.perf_counter() - t0
@@ -306,7 +307,7 @@ def sensitivity() -> None:
     base = r.best.outcome
 
     def variant(name, change):
-        R = run.Runner(sc, jobs=1, edit=change)  # the change made before the batch copies the model
+        R = run.CrashRunner(sc, jobs=1, edit=change)  # the change made before the batch copies the model
         o = R.run(intents).outcomes[0]
         R.close()
         moved = [math.hypot(a.rest[0] - b.rest[0], a.rest[1] - b.rest[1]) for a, b in zip(o.vehicles, base.vehicles)]

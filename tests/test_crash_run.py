@@ -28,13 +28,13 @@ def short():
     s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
     sp = space.space_of(s)
     U = np.random.default_rng(3).random((3, sp.dim))
-    R = run.Runner(s, jobs=1)
+    R = run.CrashRunner(s, jobs=1)
     return s, sp, U, R, R.run(sp.intents(U))
 
 
 def test_jobs_do_not_change_a_rollout(short):
     s, sp, U, R, res = short
-    res2 = run.Runner(s, jobs=2).run(sp.intents(U))
+    res2 = run.CrashRunner(s, jobs=2).run(sp.intents(U))
     assert np.array_equal(res.final_qpos, res2.final_qpos)  # bitwise determinism is the claim
     assert np.array_equal(res.controls, res2.controls)
 
@@ -84,7 +84,7 @@ def test_pure_pursuit_reaches_an_aim_point_off_the_heading():
          "vehicles": [{"name": "A", "type": "sedan", "start": {"x": -30, "y": 0, "heading": 0}, "speed": 30,
                        "driver": {"aim": {"x": 0, "y": 10}}}]}
     s = script.script_from_dict(d)
-    R = run.Runner(s)
+    R = run.CrashRunner(s)
     import mujoco
 
     res = R.run(space.space_of(s).intents(np.zeros((1, 0))))
@@ -105,7 +105,7 @@ def test_reaction_braking_stops_the_car_as_locked_wheels_do():
          "vehicles": [{"name": "A", "type": "sedan", "start": {"x": -80, "y": -1.75, "heading": 0}, "speed": 72,
                        "driver": {"brake_at": 0.5}}]}
     s = script.script_from_dict(d)
-    res = run.Runner(s).run(space.space_of(s).intents(np.zeros((1, 0))))
+    res = run.CrashRunner(s).run(space.space_of(s).intents(np.zeros((1, 0))))
     v = res.outcomes[0].vehicles[0]
     travelled = v.rest[0] + 80
     assert not v.moving
@@ -124,8 +124,8 @@ def test_a_changed_road_friction_reaches_the_rollouts():
     def wet(m):
         m.geom_friction[m.geom("ground").id, 0] = 0.5
 
-    dry = run.Runner(s).run(intents).outcomes[0].vehicles[0]
-    R = run.Runner(s, edit=wet)
+    dry = run.CrashRunner(s).run(intents).outcomes[0].vehicles[0]
+    R = run.CrashRunner(s, edit=wet)
     assert R.model.geom_friction[R.model.geom("ground").id, 0] == 0.5
     v = R.run(intents).outcomes[0].vehicles[0]
     assert not v.moving and not dry.moving
@@ -164,7 +164,7 @@ def test_replay_says_which_vehicles_rest_and_which_still_move_at_the_end(short, 
         "vehicles": [{"name": "A", "type": "sedan", "start": {"x": -80, "y": -1.75, "heading": 0}, "speed": 72,
                       "driver": {"brake_at": 0.5}}]})
     s, sp, U, R, res = short  # 2.5 s: both still moving
-    Rb = run.Runner(braked)
+    Rb = run.CrashRunner(braked)
     ib = space.space_of(braked).intents(np.zeros((1, 0)))
     rb = Rb.run(ib)
     f = tmp_path / "c.json"
@@ -248,7 +248,7 @@ def test_a_dask_cluster_gives_the_same_rollouts(short):
 
     s, sp, U, R, res = short
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as lc:
-        C = run.ClusterRunner(s, lc.scheduler_address)
+        C = run.CrashClusterRunner(s, lc.scheduler_address)
         try:
             got = C.run(sp.intents(U))
         finally:
@@ -309,7 +309,7 @@ def test_the_benchmarks_planted_scripts_ask_two_contacts_and_their_hidden_intent
         assert sum(len(v["fate"]["hits"]) for v in d["vehicles"]) == 2 * len(d["order"]), seed  # each contact, both sides
         assert all(v["fate"]["rest"]["radius"] == 2.0 and v["fate"]["heading"]["tol"] == 20.0 for v in d["vehicles"])
         s = script.script_from_dict(d)
-        o = run.Runner(s).run(space.space_of(s).intents(u[None])).outcomes[0]
+        o = run.CrashRunner(s).run(space.space_of(s).intents(u[None])).outcomes[0]
         assert o.solved and len(o.contacts) == len(d["order"]), seed
         assert search.ladder_check(s, run.scene_text(s), space.space_of(s))(search.Trial(u=u, outcome=o)), seed
 
@@ -338,7 +338,7 @@ def test_a_planted_script_with_min_p_has_a_hidden_answer_its_noisy_drivers_meet_
     e = planted.hidden_probability(d, u)
     assert e.n == 32 and e.k >= 4 and e.lo <= e.p <= e.hi
     s = script.script_from_dict(d)
-    o = run.Runner(s).run(space.space_of(s).intents(u[None])).outcomes[0]
+    o = run.CrashRunner(s).run(space.space_of(s).intents(u[None])).outcomes[0]
     assert o.solved
     assert search.ladder_check(s, run.scene_text(s), space.space_of(s))(search.Trial(u=u, outcome=o))
     d0, u0 = planted.planted_script(100)

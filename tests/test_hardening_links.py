@@ -81,7 +81,7 @@ def crash(tmp_path_factory):
     s = load_script("t-bone")
     sp = space.space_of(s)
     intents = sp.intents(np.random.default_rng(3).random((1, sp.dim)))
-    R = run.Runner(s, jobs=1, batch=1)
+    R = run.CrashRunner(s, jobs=1, batch=1)
     res = R.run(intents)
     d = crashfile.crash_dict(s, R.xml, R.model, intents[0], res.qpos0[0], res.qvel0[0], res.controls[0],
                              res.final_qpos[0], res.outcomes[0], seed=3, period_steps=R.period)

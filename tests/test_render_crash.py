@@ -1,4 +1,4 @@
-"""The crash video (render/crash*.py): what a viewer checks, never golden pixels. A vehicle shows
+"""The crash video (render/crash/): what a viewer checks, never golden pixels. A vehicle shows
 its colour where the replay has it, projected by the renderer's own camera; the impact ring
 appears at the contact's time and not before; slow motion adds the frames its windows say; the
 readout's marks are the judged fates; the CLI writes a still and a video that decodes with the
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from nbst.models.crash import crashfile, run, script, space
-from nbst.render import crash, crash_motion, crash_readout, crash_scene
+from nbst.render.crash import motion as crash_motion, readout as crash_readout, scene as crash_scene, video as crash
 
 SIZE = (800, 450)
 #: A short crossing (2.5 s): A eastbound T-bones B northbound at about 1.6 s and brakes; B's fate
@@ -38,7 +38,7 @@ def crash_file(tmp_path_factory):
     s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
     sp = space.space_of(s)
     U = np.random.default_rng(3).random((1, sp.dim))
-    R = run.Runner(s, jobs=1, batch=1)
+    R = run.CrashRunner(s, jobs=1, batch=1)
     res = R.run(sp.intents(U))
     d = crashfile.crash_dict(s, R.xml, R.model, sp.intents(U)[0], res.qpos0[0], res.qvel0[0], res.controls[0],
                              res.final_qpos[0], res.outcomes[0], seed=3, period_steps=R.period)
@@ -55,7 +55,7 @@ def loaded(crash_file):
 @pytest.fixture(scope="module")
 def gl():
     """The only place this file creates a GL context (EGL, headless)."""
-    from nbst.render.gl import create_context
+    from nbst.render.core.gl import create_context
 
     ctx = create_context()
     yield ctx
@@ -232,7 +232,7 @@ def test_the_readout_fits_its_box_and_labels_stay_in_their_panels(gl, loaded, si
 
 
 def test_the_atlas_writes_the_readout_signs(gl):
-    from nbst.render.shapes import Text, glyph_index
+    from nbst.render.core.shapes import Text, glyph_index
 
     t = Text(gl, 20)
     try:

@@ -17,7 +17,7 @@ Rooms, bottom up (the layer contract in pyproject.toml lists them):
 
 Importing this package imports nothing heavy; the submodules that need MuJoCo import it. The
 entry points below load their module on first use: :func:`script_from_dict` and the registered
-scripts :data:`SCRIPTS` (``nbst.models.crash.script``), :func:`solve` and :class:`SearchResult`
+scripts :data:`SCRIPTS` (``nbst.models.crash.script``), :func:`solve` and :class:`CrashResult`
 (``nbst.models.crash.search``), :func:`reconstruct` and :class:`Reconstruction`
 (``nbst.models.crash.reconstruct``).
 """
@@ -25,10 +25,10 @@ from __future__ import annotations
 
 import importlib
 
-__all__ = ["SCRIPTS", "Script", "script_from_dict", "solve", "SearchResult", "reconstruct", "Reconstruction"]
+__all__ = ["SCRIPTS", "Script", "script_from_dict", "solve", "CrashResult", "reconstruct", "Reconstruction"]
 
 _LAZY = {"SCRIPTS": "script", "Script": "script", "script_from_dict": "script", "solve": "search",
-         "SearchResult": "search", "reconstruct": "reconstruct", "Reconstruction": "reconstruct"}
+         "CrashResult": "search", "reconstruct": "reconstruct", "Reconstruction": "reconstruct"}
 
 
 def __getattr__(name):

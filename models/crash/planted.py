@@ -23,8 +23,8 @@ import numpy as np
 
 from nbst.errors import SolveError
 from nbst.models.crash import script as script_mod
-from nbst.models.crash.run import Runner
-from nbst.models.crash.search import LADDER
+from nbst.models.crash.run import CrashRunner
+from nbst.models.crash.search import LADDER_CHECK_TIMESTEPS
 from nbst.models.crash.space import space_of
 
 _ROAD = {"layout": "intersection", "width": 7, "length": 120, "curb": 0.15}
@@ -55,7 +55,7 @@ def _hidden(template: dict, rng: np.random.Generator, need_contacts: int, tries:
     ``need_contacts`` vehicle contacts, in the order drawn (``tries`` batches at most)."""
     s = script_mod.script_from_dict(copy.deepcopy(template), source="<planted template>")
     S = space_of(s)
-    R = Runner(s)
+    R = CrashRunner(s)
     try:
         for _ in range(tries):
             U = rng.random((16, S.dim))
@@ -81,14 +81,14 @@ def _fates(template: str, seed: int, s, o, radius: float, heading_tol: float) ->
     return d
 
 
-def holds_on_ladder(d: dict, u: np.ndarray, timesteps=LADDER) -> bool:
+def holds_on_ladder(d: dict, u: np.ndarray, timesteps=LADDER_CHECK_TIMESTEPS) -> bool:
     """Whether the intents of unit point ``u`` meet script ``d`` with the same contact sequence at
     every one of ``timesteps`` too (the search's acceptance: :func:`.search.ladder_check`)."""
     s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
     want = tuple(tuple(s.names().index(n) for n in pair) for pair in d["order"])
     intents = space_of(s).intents(u[None])
     for h in timesteps:
-        R = Runner(s, timestep=h, batch=1)
+        R = CrashRunner(s, timestep=h, batch=1)
         try:
             o = R.run(intents).outcomes[0]
         finally:
@@ -110,7 +110,7 @@ def hidden_probability(d: dict, u: np.ndarray, copies: int = COPIES, seed: int =
     from nbst.models.crash import robust
 
     s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
-    R = Runner(s, jobs=jobs)
+    R = CrashRunner(s, jobs=jobs)
     try:
         return robust.probability(R, space_of(s).intents(u[None])[0], copies, seed)
     finally:
@@ -131,12 +131,14 @@ def _plant(seed: int, template: str, radius: float, heading_tol: float, need_con
 
 
 def planted_script(seed: int, *, template: str = "intersection3", radius: float = 2.0, heading_tol: float = 20.0,
-                   need_contacts: int = 2, ladder=LADDER, min_p: float | None = None) -> tuple[dict, np.ndarray]:
+                   need_contacts: int = 2, ladder=LADDER_CHECK_TIMESTEPS,
+                   min_p: float | None = None) -> tuple[dict, np.ndarray]:
     """(script dict, hidden unit point): the template with the fates of hidden random intents
     that make at least ``need_contacts`` vehicle contacts (2: a chain worth the name, not one
     collision and a bystander) and, ``ladder`` not None, that keep meeting those fates with the
     same contact sequence at each of its timesteps (s): the search counts a script as solved
-    only so (:data:`.search.LADDER`), and a planted script promises an answer that counts.
+    only so (:data:`.search.LADDER_CHECK_TIMESTEPS`), and a planted script promises an answer
+    that counts.
     ``ladder=None`` plants the first draw with enough contacts, whatever the ladder says (at
     seeds 100-109 half of those answers lose their own script at 1 or 0.5 ms: docs/crash.md).
     ``min_p`` not None plants only a hidden answer that :func:`hidden_probability` (32 noisy
@@ -162,7 +164,7 @@ def funnel(d: dict, u: np.ndarray, steps=FUNNEL_STEPS, n: int = 32, seed: int = 
     S = space_of(s)
     moves = np.array([isinstance(r, script_mod.Range) for _, _, r in S.coords], float)
     rng = np.random.default_rng([int(seed), 33])
-    R = Runner(s, jobs=jobs)
+    R = CrashRunner(s, jobs=jobs)
     try:
         out = []
         for step in steps:

@@ -126,20 +126,20 @@ def reconstruct(case, *, seed: int, max_rollouts: int = search_mod.DEFAULT_MAX_R
         seed: the seed; the same seed gives the same fits whatever ``jobs``.
         max_rollouts: the budget, in rollouts: the crash search for fits first, then Gaussian
             children of the fits that spread them.
-        runner: a ``nbst.models.crash.run.Runner`` for this case to reuse, or None: one is made
+        runner: a ``nbst.models.crash.run.CrashRunner`` for this case to reuse, or None: one is made
             with ``jobs`` threads and closed at the end.
         jobs: threads of the runner made here.
-        callback: None, or called with a ``Progress`` after each batch.
+        callback: None, or called with a ``CrashProgress`` after each batch.
 
     Returns:
         A :class:`Reconstruction`: the fits in the order found, the best trial, the rollouts,
         and per vehicle the range (min, median, max) of impact speed, heading and delta-V over
         the fits (``to_dict`` gives them in km/h and degrees); ``interrupted`` after Ctrl-C.
     """
-    from nbst.models.crash.run import Runner
+    from nbst.models.crash.run import CrashRunner
 
     own = runner is None
-    R = Runner(case, jobs=jobs) if own else runner
+    R = CrashRunner(case, jobs=jobs) if own else runner
     S = space_of(case)
     fits: list = []
 
@@ -160,7 +160,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = search_mod.DEFAULT_MAX_R
             seen.append(t)
             keep(t)
         def told(p):  # the fits found so far, as the search reports its archive
-            callback(search_mod.Progress(p.rollouts, p.best_cost, p.best_signature, bool(fits), len(fits)))
+            callback(search_mod.CrashProgress(p.rollouts, p.best_cost, p.best_signature, bool(fits),
+                                              len(fits)))
         try:
             used = momentum_fit(case, R, S, fit_budget, rng, keep_all, told if callback else None)
         except KeyboardInterrupt:
@@ -191,7 +192,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = search_mod.DEFAULT_MAX_R
                     best = t
             used += k
             if callback:
-                callback(search_mod.Progress(used, best.cost, best.outcome.signature_text(case.n), True, len(fits)))
+                callback(search_mod.CrashProgress(used, best.cost, best.outcome.signature_text(case.n), True,
+                                                  len(fits)))
     except KeyboardInterrupt:
         interrupted = True
     finally:
@@ -308,8 +310,9 @@ class _Fitter:
             out.append(t)
         self.used += len(U)
         if self.callback:
-            self.callback(search_mod.Progress(self.used, self.best.cost, self.best.outcome.signature_text(self.case.n),
-                                              self.best.outcome.solved, 0))
+            self.callback(search_mod.CrashProgress(self.used, self.best.cost,
+                                                   self.best.outcome.signature_text(self.case.n),
+                                                   self.best.outcome.solved, 0))
         return out
 
     def cma(self, t, fn, rng, sigma: float = SIGMA_FINAL):

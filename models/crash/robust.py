@@ -11,9 +11,10 @@ paired copies.
 
 :func:`probability`: the share of ``n`` noisy copies that meet the script, with its 95 %
 Wilson interval, and how often each outcome came up. :func:`ladder`: the same intents run at
-2, 1 and 0.5 ms (:data:`LADDER`; the drivers keep their 20 ms period): a crash is a result when
-its outcome (signature, order, met) holds at every rung. :class:`Problem` is the crash as the
-room's :func:`~nbst.models.mjsearch.robust.maximise` sees it (``nbst crash solve --robust``).
+2, 1 and 0.5 ms (:data:`.run.TIMESTEP_LADDER`; the drivers keep their 20 ms period): a crash
+is a result when its outcome (signature, order, met) holds at every rung.
+:class:`RobustCrashProblem` is the crash as the room's
+:func:`~nbst.models.mjsearch.robust.maximise` sees it (``nbst crash solve --robust``).
 
 Compute only.
 """
@@ -25,12 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from nbst.models.crash import driver as drv
-from nbst.models.crash.run import Runner
+from nbst.models.crash.run import TIMESTEP_LADDER, CrashRunner
 from nbst.models.crash.script import Range
 from nbst.models.crash.space import Space
 
-#: The timestep ladder (s): the crash's 2 ms, then halved twice.
-LADDER = (0.002, 0.001, 0.0005)
 #: Noisy copies a probability is estimated from when none is given (``nbst crash probability
 #: --samples``; ``nbst crash solve --robust``'s fresh estimate).
 DEFAULT_SAMPLES = 100
@@ -98,7 +97,7 @@ def estimate_of(outcomes, seed: int) -> Estimate:
     return Estimate(prob=Probability.of(k, len(outcomes)), seed=int(seed), outcomes=counts(label(o) for o in outcomes))
 
 
-def probability(runner: Runner, intents: np.ndarray, n: int, seed: int, *, on_batch=None) -> Estimate:
+def probability(runner: CrashRunner, intents: np.ndarray, n: int, seed: int, *, on_batch=None) -> Estimate:
     """The probability that ``intents`` meet the script under driver noise (``n`` copies of ``seed``)."""
     copies = noisy(np.asarray(intents, dtype=float), n, seed)
     outs = []
@@ -109,13 +108,13 @@ def probability(runner: Runner, intents: np.ndarray, n: int, seed: int, *, on_ba
     return estimate_of(outs, seed)
 
 
-def ladder(script, xml: str, intents: np.ndarray, timesteps=LADDER):
+def ladder(script, xml: str, intents: np.ndarray, timesteps=TIMESTEP_LADDER):
     """The intents run at each timestep (the same scene text): a ``mjsearch.ladder.Ladder`` of
     (signature, met, contact sequence); ``wanted`` is the first rung's."""
     from nbst.models.mjsearch.ladder import climb
 
     def run(h):
-        R = Runner(script, xml=xml, timestep=h, batch=1)
+        R = CrashRunner(script, xml=xml, timestep=h, batch=1)
         try:
             return R.run(np.asarray(intents, dtype=float)[None]).outcomes[0]
         finally:
@@ -131,11 +130,11 @@ def ladder_rows(lad) -> list:
             for h, o in zip(lad.timesteps, lad.results)]
 
 
-class Problem:
+class RobustCrashProblem:
     """The crash as :func:`nbst.models.mjsearch.robust.maximise` sees it: a candidate is an intent
     set (n, len(INTENT)); a point is the search space's coordinates, each in its noise sigma."""
 
-    def __init__(self, space: Space, runner: Runner, xml: str):
+    def __init__(self, space: Space, runner: CrashRunner, xml: str):
         self.S, self.R, self.xml = space, runner, xml
         sig = sigma_row()
         self.scale = np.array([sig[f] if isinstance(r, Range) and sig[f] > 0 else 1.0 for _, f, r in space.coords])

@@ -1,6 +1,6 @@
 """Closed-loop crash rollouts: a batch of simulations of one script, drivers in the loop.
 
-:class:`Runner` compiles the script's scene from its XML text (:mod:`.scene`; the model every
+:class:`CrashRunner` compiles the script's scene from its XML text (:mod:`.scene`; the model every
 rollout and replay runs on), and runs batches of driver intents (:mod:`.driver`) on a
 ``mujoco.batch.Batch`` of ``jobs`` threads. Each step is one ``Batch.step()`` for the whole
 batch, after which the contact sensors are read (:class:`.outcome.Recorder`); every
@@ -28,6 +28,10 @@ from nbst.models.crash.script import Script
 
 #: Simulations per batch: a fixed number, so that a search's path does not depend on --jobs.
 BATCH = 16
+#: The timestep ladder (s): the crash's 2 ms, then halved twice. A crash is a result when its
+#: outcome holds at every rung (:func:`.robust.ladder`); the search checks the finer rungs
+#: (:data:`.search.LADDER_CHECK_TIMESTEPS`).
+TIMESTEP_LADDER = (0.002, 0.001, 0.0005)
 
 
 def scene_vehicles(script: Script) -> list[scene_mod.SceneVehicle]:
@@ -54,7 +58,7 @@ class Rollouts:
     final_qpos: np.ndarray
 
 
-class Runner:
+class CrashRunner:
     """Runs batches of intents for ``script`` (see the module docstring); ``timestep`` overrides
     the script's (the ladder), ``xml`` reuses a scene text (a result file's), ``edit`` changes
     the compiled model before the batch is made from it (a parameter's sensitivity: the batch
@@ -147,7 +151,7 @@ class Runner:
         self.stepper.close()
 
 
-#: Per worker process: (scene text, timestep) -> a one-thread Runner of the script (built on first use).
+#: Per worker process: (scene text, timestep) -> a one-thread CrashRunner of the script (built on first use).
 _WORKER_RUNNERS: dict = {}
 
 
@@ -159,15 +163,15 @@ def _run_on_worker(intents: list, raw: dict, xml: str, timestep: float) -> list:
     key = (xml, timestep)
     R = _WORKER_RUNNERS.get(key)
     if R is None:
-        R = _WORKER_RUNNERS[key] = Runner(script_from_dict(raw), jobs=1, xml=xml, timestep=timestep)
+        R = _WORKER_RUNNERS[key] = CrashRunner(script_from_dict(raw), jobs=1, xml=xml, timestep=timestep)
     r = R.run(np.array(intents))
     return list(zip(r.outcomes, r.min_dist, r.qpos0, r.qvel0, r.controls, r.final_qpos))
 
 
-class ClusterRunner(Runner):
-    """A :class:`Runner` whose batches run on the workers of a Dask scheduler (``--cluster``):
+class CrashClusterRunner(CrashRunner):
+    """A :class:`CrashRunner` whose batches run on the workers of a Dask scheduler (``--cluster``):
     each batch is cut into one chunk per worker (:func:`nbst.models.mjsearch.cluster.map_chunks`),
-    every worker runs its chunk with a one-thread Runner of the same scene text, and the results
+    every worker runs its chunk with a one-thread CrashRunner of the same scene text, and the results
     come back in order: the same bits as ``--jobs K`` (a rollout depends on its intents only)."""
 
     def __init__(self, script: Script, address: str, **kw):

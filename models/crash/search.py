@@ -53,7 +53,7 @@ import numpy as np
 
 from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
-from nbst.models.crash.run import BATCH
+from nbst.models.crash.run import BATCH, TIMESTEP_LADDER
 from nbst.models.crash.space import Space, space_of
 from nbst.seeds import check_seed
 
@@ -61,16 +61,17 @@ from nbst.seeds import check_seed
 #: solve``'s and ``reconstruct``'s ``--max-rollouts`` default, and the budget of docs/crash.md's figures.
 DEFAULT_MAX_ROLLOUTS = 3000
 #: Rollouts of the initial population (capped at a quarter of the budget).
-EXPLORE = 64
+CRASH_EXPLORE = 64
 #: The paper's limits: trials per signature, and the population past which culling starts.
 PER_SIGNATURE, POPULATION = 8, 64
 #: Creep: the Gaussian step (unit cube) of one vehicle's block.
 CREEP = 0.05
 #: Batches of the paper's operations between CMA-ES restarts.
 GA_BATCHES = 3
-#: The ladder a trial that meets the script must hold on (s; the script's own step first), and the
-#: cost added to one that does not (it meets the script only at its own step: search on).
-LADDER = (0.001, 0.0005)
+#: The finer rungs of :data:`.run.TIMESTEP_LADDER` (s) a trial that meets the script at its own
+#: step must also meet (one rollout each), and the cost added to one that does not (it meets the
+#: script only at its own step: search on).
+LADDER_CHECK_TIMESTEPS = TIMESTEP_LADDER[1:]
 FRAGILE = 0.1  # small: a fragile crash stays a parent (its neighbours may hold on the ladder)
 #: CMA-ES: initial step (unit cube), generations without a lower cost that end a restart.
 SIGMA0, STALL = 0.12, 6
@@ -109,7 +110,7 @@ class Trial:
 
 
 @dataclass
-class Progress:
+class CrashProgress:
     """What the search reports after each batch."""
 
     rollouts: int
@@ -120,7 +121,7 @@ class Progress:
 
 
 @dataclass
-class SearchResult:
+class CrashResult:
     """The best trial, how the search went and the archive (contact sequence -> best cost)."""
 
     best: Trial
@@ -175,7 +176,7 @@ class _Search:
                     self.first_met = self.rollouts + i + 1
                 if o.solved and self.check is not None:
                     t.holds = bool(self.check(t))
-                    self.rollouts += len(LADDER)  # counted: the ladder's rollouts are rollouts too
+                    self.rollouts += len(LADDER_CHECK_TIMESTEPS)  # counted: the ladder's rollouts are rollouts too
                 if self.keep is not None:
                     self.keep(t)
                 if self.contacts_right(t):
@@ -192,7 +193,7 @@ class _Search:
                 del self.right[RIGHT_KEPT:]
             self.history.append((self.rollouts, float(self.best.cost)))
             if self.callback:
-                self.callback(Progress(self.rollouts, self.best.cost, self.best.outcome.signature_text(self.S.n),
+                self.callback(CrashProgress(self.rollouts, self.best.cost, self.best.outcome.signature_text(self.S.n),
                                        self.solved, len(self.archive)))
             if self.solved:
                 break
@@ -386,12 +387,12 @@ def directed(space: Space, rng: np.random.Generator, u: np.ndarray | None = None
     return out
 
 
-def ladder_check(script, xml: str, space: Space, timesteps=LADDER):
+def ladder_check(script, xml: str, space: Space, timesteps=LADDER_CHECK_TIMESTEPS):
     """``check(trial) -> bool``: the trial's intents meet the script with the same contact
     sequence at every one of ``timesteps`` too (one rollout each)."""
-    from nbst.models.crash.run import Runner
+    from nbst.models.crash.run import CrashRunner
 
-    runners = [Runner(script, xml=xml, timestep=h, batch=1) for h in timesteps]
+    runners = [CrashRunner(script, xml=xml, timestep=h, batch=1) for h in timesteps]
 
     def check(t: Trial) -> bool:
         intents = space.intents(t.u[None])
@@ -404,7 +405,7 @@ def ladder_check(script, xml: str, space: Space, timesteps=LADDER):
 
 
 def solve(script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, runner=None, jobs: int = 1, callback=None,
-          explore: int = EXPLORE, keep=None, ladder: bool = True) -> SearchResult:
+          explore: int = CRASH_EXPLORE, keep=None, ladder: bool = True) -> CrashResult:
     """Search driver intents that meet ``script``; see the module docstring.
 
     Args:
@@ -412,25 +413,25 @@ def solve(script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, runner
             of ``SCRIPTS``).
         seed: the seed; the same seed gives the same result whatever ``jobs``.
         max_rollouts: the budget, in rollouts (ladder checks included).
-        runner: a ``nbst.models.crash.run.Runner`` for this script to reuse (its threads then
+        runner: a ``nbst.models.crash.run.CrashRunner`` for this script to reuse (its threads then
             apply), or None: one is made with ``jobs`` threads and closed at the end.
         jobs: threads of the runner made here.
-        callback: None, or called with a :class:`Progress` after each batch.
+        callback: None, or called with a :class:`CrashProgress` after each batch.
         explore: rollouts of the initial population (half uniform, half directed).
         keep: None, or ``keep(trial)`` called for every rollout (reconstruction collects its fits so).
-        ladder: a trial that meets the script counts only when it also does at :data:`LADDER`
-            (two more rollouts, counted in the budget); one that does not costs :data:`FRAGILE`
-            more and the search goes on.
+        ladder: a trial that meets the script counts only when it also does at
+            :data:`LADDER_CHECK_TIMESTEPS` (two more rollouts, counted in the budget); one that
+            does not costs :data:`FRAGILE` more and the search goes on.
 
     Returns:
-        A :class:`SearchResult`: the best trial (its intents, outcome and controls), the rollouts
+        A :class:`CrashResult`: the best trial (its intents, outcome and controls), the rollouts
         and restarts used, ``stopped`` ("found", "budget" or "interrupted": Ctrl-C returns the
         best so far), the seed, the wall time, the archive and the history.
     """
-    from nbst.models.crash.run import Runner
+    from nbst.models.crash.run import CrashRunner
 
     own = runner is None
-    R = Runner(script, jobs=jobs) if own else runner
+    R = CrashRunner(script, jobs=jobs) if own else runner
     S = space_of(script)
     seed = check_seed(seed, what="seed")
     rng = np.random.default_rng(seed)
@@ -462,7 +463,7 @@ def solve(script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, runner
         stopped = "interrupted"
         if s.best is None:
             raise
-    return SearchResult(best=s.best, rollouts=s.rollouts, restarts=restarts, stopped=stopped, seed=int(seed),
+    return CrashResult(best=s.best, rollouts=s.rollouts, restarts=restarts, stopped=stopped, seed=int(seed),
                         wall_time=time.perf_counter() - t0,
                         archive={k: float(t.cost) for k, t in s.archive.items()}, history=s.history,
                         first_met=s.first_met)

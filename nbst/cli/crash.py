@@ -152,8 +152,8 @@ def _runner(args, script, xml=None):
     from nbst.models.crash import run
 
     if getattr(args, "cluster", None):
-        return run.ClusterRunner(script, args.cluster, xml=xml)
-    return run.Runner(script, jobs=args.jobs or default_jobs(), xml=xml)
+        return run.CrashClusterRunner(script, args.cluster, xml=xml)
+    return run.CrashRunner(script, jobs=args.jobs or default_jobs(), xml=xml)
 
 
 def _load(name):
@@ -246,7 +246,7 @@ def cmd_solve(args) -> int:
         bar[0].set_postfix_str(f"best cost {p.best_cost:.3g}, signature {p.best_signature}, "
                                f"{p.sequences} contact sequences", refresh=False)
 
-    progress(search.Progress(0, float("inf"), "0" * script.n, False, 0))
+    progress(search.CrashProgress(0, float("inf"), "0" * script.n, False, 0))
     with sigterm_as_interrupt():
         res = search.solve(script, seed=seed, max_rollouts=args.max_rollouts, runner=runner, callback=progress,
                            ladder=not args.no_ladder)
@@ -304,7 +304,7 @@ def _after_search(args, script, runner, S, best, intents, seed):
         from nbst.models.mjsearch import robust as room
 
         n = args.samples or robust.DEFAULT_SAMPLES
-        P = robust.Problem(S, runner, runner.xml)
+        P = robust.RobustCrashProblem(S, runner, runner.xml)
         mx = room.maximise(P, [intents], budget=args.robust, seed=seed, n=n, ladder=not args.no_ladder)
         intents = mx.best
         r = runner.run(intents[None])
