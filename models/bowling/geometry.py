@@ -37,6 +37,8 @@ import math
 
 import numpy as np
 
+from nbst.errors import InputError
+
 INCH = 0.0254
 #: Pin spacing (USBC: 12 in between neighbouring spots) = scene.PIN_SPACING.
 PIN_SPACING = 12.0 * INCH
@@ -155,7 +157,7 @@ def classify(*, touch: str = "front") -> dict[int, str]:
     elif touch == "any":
         must = np.zeros_like(inside)
     elif touch != "front":
-        raise ValueError(f"touch must be front, all or any, got {touch!r}")
+        raise InputError(f"touch must be front, all or any, got {touch!r}")
     pairs = np.unique(np.column_stack([_masks(inside), _masks(must)]), axis=0)  # distinct corridors
     adj = neighbours()
     out = {}

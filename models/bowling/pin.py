@@ -19,6 +19,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from nbst.errors import InputError
+
 INCH = 0.0254
 #: (height, diameter) in inches, base to the start of the head cap.
 PROFILE_IN = (
@@ -135,16 +137,16 @@ def mass_properties(mass: float = MASS, com_in: float | None = None) -> tuple[np
     centre), with ``a`` set so the centre lands at ``com_in``; the inertia is the uniform
     solid's (:func:`geometry`, from the mesh) times the ratio of the graded to the uniform
     slice integrals, so ``com_in`` None, or the uniform centre, gives :func:`geometry`'s values
-    scaled by ``mass / MASS``. ValueError outside USBC's limits."""
+    scaled by ``mass / MASS``. InputError outside USBC's limits."""
     geo = geometry()
     lo, hi = MASS_LIMITS
     if not lo - 1e-9 <= mass <= hi + 1e-9:
-        raise ValueError(f"pin mass: must be within USBC's {lo}..{hi} kg, got {mass!r}")
+        raise InputError(f"pin mass: must be within USBC's {lo}..{hi} kg, got {mass!r}")
     if com_in is None:
         return geo.com.copy(), geo.inertia * (mass / MASS)
     clo, chi = COM_LIMITS_IN
     if not clo - 1e-9 <= com_in <= chi + 1e-9:
-        raise ValueError(f"pin centre of gravity: must be within USBC's {clo:.4f}..{chi:.4f} in, got {com_in!r}")
+        raise InputError(f"pin centre of gravity: must be within USBC's {clo:.4f}..{chi:.4f} in, got {com_in!r}")
     z, r, dz = _slices()
     area = np.pi * r**2
     z0 = float((z * area).sum() / area.sum())

@@ -10,7 +10,8 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import bowler_flag, bowler_of, err, mc_flags
+from nbst.cli.bowl_args import bowler_flag, bowler_of, mc_flags, number
+from nbst.errors import InputError
 from nbst.cli.bowl_lane import _bar
 from nbst.parallel import default_jobs
 
@@ -87,12 +88,9 @@ def cmd_advise(args) -> int:
     from nbst.models.bowling.lane import advise, frame, noise, throwfile
 
     if args.after is not None:
-        try:
-            d = throwfile.load(args.after)
-            throwfile.replayable(d, args.after)
-            mv = advise.move_after(d, throwfile.oil_of(d), lane.Ball(**d["ball"]))
-        except (throwfile.ThrowFileError, ValueError) as e:
-            return err("advise", str(e))
+        d = throwfile.load(args.after)
+        throwfile.replayable(d, args.after)
+        mv = advise.move_after(d, throwfile.oil_of(d), lane.Ball(**d["ball"]))
         doc = {"after": str(args.after), **mv.to_dict(), "note": _note()}
         if args.json:
             from nbst.cli.args import print_json
@@ -110,12 +108,9 @@ def cmd_advise(args) -> int:
         print(f"note: {_note()}")
         return 0
     args.leaves = None
-    try:
-        (leave,) = leaves_of(args)
-        lane.pattern(args.oil)
-        strike, nz = bowler_of(args, spare=True)
-    except ValueError as e:
-        return err("advise", str(e))
+    (leave,) = leaves_of(args)
+    lane.pattern(args.oil)
+    strike, nz = bowler_of(args, spare=True)
     nz = noise.DEFAULT if nz is None else nz
     bar = _bar(args, spare_frames(leave, args.screen, args.samples, args.polish), "advise frames")
     try:
@@ -126,9 +121,9 @@ def cmd_advise(args) -> int:
         bar.close()
         print("nbst bowl advise: interrupted; no advice", file=sys.stderr)
         return 130
-    except ValueError as e:
+    except BaseException:   # an error (one line from nbst.cli.main) ends the bar first
         bar.close()
-        return err("advise", str(e))
+        raise
     bar.close()
     doc = {**adv.to_dict(), "bowler": args.bowler, "noise": nz.to_dict(), "seed": args.seed, "note": _note()}
     if args.json:
@@ -150,12 +145,12 @@ def spare_frames(leave: str, screen: int, samples: int, polish: int) -> int:
 def _grid(text: str, flag: str, lo: float, hi: float) -> list:
     import numpy as np
 
-    try:
-        a, b, st = (float(v) for v in text.split(":"))
-    except ValueError:
-        raise ValueError(f"{flag}: must be A:B:STEP (numbers), got {text!r}") from None
+    parts = [number(v) for v in text.split(":")]
+    if len(parts) != 3 or None in parts:
+        raise InputError(f"{flag}: must be A:B:STEP (numbers), got {text!r}")
+    a, b, st = (float(v) for v in parts if v is not None)
     if not (lo <= a <= b <= hi and st > 0 and (b - a) / st <= 40):
-        raise ValueError(f"{flag}: need {lo:g} <= A <= B <= {hi:g}, STEP > 0 and at most 41 values, got {text!r}")
+        raise InputError(f"{flag}: need {lo:g} <= A <= B <= {hi:g}, STEP > 0 and at most 41 values, got {text!r}")
     return [round(float(v), 6) for v in np.arange(a, b + st / 2, st)]
 
 
@@ -163,12 +158,9 @@ def cmd_spares(args) -> int:
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import frame, spares
 
-    try:
-        names = leaves_of(args)
-        lane.pattern(args.oil)
-        strike, nz = bowler_of(args, spare=True)
-    except ValueError as e:
-        return err("spares", str(e))
+    names = leaves_of(args)
+    lane.pattern(args.oil)
+    strike, nz = bowler_of(args, spare=True)
     from nbst.models.bowling.lane import noise
 
     nz = noise.DEFAULT if nz is None else nz
@@ -210,8 +202,9 @@ def _note() -> str:
 
 def leaves_of(args) -> list[str]:
     """The leaves of ``bowl spares`` ('-' joined pins): --leave (one, pins by commas), --leaves
-    (several), or the common ones; ValueError (one line) for a pin outside 1..10, an empty leave
+    (several), or the common ones; InputError (one line) for a pin outside 1..10, an empty leave
     (a strike: nothing to shoot) or all ten standing (a first ball)."""
+    from nbst.models.bowling import lane
     from nbst.models.bowling.lane import spares
 
     if args.leave is not None:
@@ -224,14 +217,14 @@ def leaves_of(args) -> list[str]:
     for nm in raw:
         t = nm.strip().lower()
         if t in ("", "none", "strike", "x"):
-            raise ValueError(f"{flag}: {nm.strip() or 'an empty leave'!r} leaves nothing standing (a strike): name the "
+            raise InputError(f"{flag}: {nm.strip() or 'an empty leave'!r} leaves nothing standing (a strike): name the "
                              "pins standing, e.g. 3,10")
         try:
             pins = spares.leave_pins(t.replace(",", "-") if flag == "--leave" else t)
-        except ValueError:
-            raise ValueError(f"{flag}: pins must be distinct numbers 1..10, got {nm.strip()!r}") from None
+        except lane.LaneError:   # the library names its parameter (leave); here the flag is named
+            raise InputError(f"{flag}: pins must be distinct numbers 1..10, got {nm.strip()!r}") from None
         if len(pins) == 10:
-            raise ValueError(f"{flag}: {nm.strip()!r} is all ten pins standing: a first ball, not a spare")
+            raise InputError(f"{flag}: {nm.strip()!r} is all ten pins standing: a first ball, not a spare")
         out.append("-".join(map(str, pins)))
     return out
 
@@ -263,15 +256,12 @@ def cmd_pocket(args) -> int:
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import frame, spares
 
-    try:
-        boards = _grid(args.boards, "--boards", 1, 39)
-        angles = _grid(args.angles, "--angles", 0, 10)
-        lane.pattern(args.oil)
-        if not args.output.lower().endswith(".png"):
-            raise ValueError(f"{args.output}: -o must name a .png file")
-        strike, nz = bowler_of(args)
-    except ValueError as e:
-        return err("pocket", str(e))
+    boards = _grid(args.boards, "--boards", 1, 39)
+    angles = _grid(args.angles, "--angles", 0, 10)
+    lane.pattern(args.oil)
+    if not args.output.lower().endswith(".png"):
+        raise InputError(f"{args.output}: -o must name a .png file")
+    strike, nz = bowler_of(args)
     from nbst.models.bowling.lane import noise
 
     nz = noise.DEFAULT if nz is None else nz

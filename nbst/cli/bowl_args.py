@@ -7,9 +7,27 @@ inside the functions that need them.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
+from nbst.errors import InputError
+
+_INT = re.compile(r"[+-]?[0-9]+")
+_FLOAT = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?")
+_SIZE = re.compile(r"([0-9]+)x([0-9]+)")
+
+
+def number(text: str) -> float | None:
+    """``text`` as a finite decimal number (blanks around it allowed), or None when it is not one."""
+    t = str(text).strip()
+    return float(t) if _FLOAT.fullmatch(t) else None
+
+
+def size_of(text: str) -> tuple[int, int] | None:
+    """``--size`` "WxH" as (width, height) in pixels, or None when it is not two whole numbers."""
+    m = _SIZE.fullmatch(str(text).strip().lower().replace(" ", ""))
+    return (int(m.group(1)), int(m.group(2))) if m else None
 
 
 def err(cmd: str, msg: str) -> int:
@@ -24,11 +42,11 @@ def pin_list(text: str, flag: str | None = None) -> int:
     """Pin numbers "1,2,4,7" -> 10-bit mask (bit n-1 = pin n). ``flag`` names the option in the
     message (argparse names it itself for a ``type=``: then leave it out, so it is said once)."""
     pre = f"{flag}: " if flag else ""
-    try:
-        pins = [int(p) for p in text.strip().replace(" ", "").split(",") if p]
-    except ValueError:
+    words = [p for p in text.strip().replace(" ", "").split(",") if p]
+    if not all(_INT.fullmatch(p) for p in words):
         raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 separated by commas (e.g. 1,2,4,7), "
-                                         f"got {text!r}") from None
+                                         f"got {text!r}")
+    pins = [int(p) for p in words]
     bad = [p for p in pins if not 1 <= p <= 10]
     if bad or not pins:
         raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 (at least one), got {text!r}")
@@ -76,7 +94,7 @@ def picture_flags(p, what: str) -> None:
     p.add_argument("--video", default=None, metavar="OUT.mp4",
                    help=f"also film {what} (.mp4 or .gif; 3D, behind the bowler and overhead, from the release until "
                         "the pins settle, slow motion at impact; the pins down drawn at the end are the frame's "
-                        "outcome; render/bowling_lane.py)")
+                        "outcome; render/bowling/lane.py)")
     p.add_argument("--still", default=None, metavar="OUT.png",
                    help="also draw one frame as PNG (by default just before the ball meets the pins)")
     p.add_argument("--still-time", type=Bounded("still-time", 0, 30, unit="s"), default=None, metavar="S",
@@ -160,11 +178,9 @@ def target_board(text: str) -> float:
     for k, b in ARROWS.items():
         if t in (f"{k}-arrow", k, f"arrow{k[0]}", f"arrow-{k[0]}"):
             return b
-    try:
-        b = float(t)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an arrow (1st-arrow .. 7th-arrow) or a board 1..39, got {text!r}") \
-            from None
+    b = number(t)
+    if b is None:
+        raise argparse.ArgumentTypeError(f"expected an arrow (1st-arrow .. 7th-arrow) or a board 1..39, got {text!r}")
     if not (1.0 <= b <= 39.0):
         raise argparse.ArgumentTypeError(f"a board at the arrows must be 1..39, got {text!r}")
     return b
@@ -207,19 +223,19 @@ def delivery_of(args, base=None):
 
 
 def stance_target(args):
-    """(board at the foul line, target board at the arrows) of --stance/--target, or None; ValueError
+    """(board at the foul line, target board at the arrows) of --stance/--target, or None; InputError
     (one line) when only one is given, or beside --board/--at/--angle."""
     s, t = getattr(args, "stance", None), getattr(args, "target", None)
     if s is None and t is None:
         return None
     if s is None or t is None:
-        raise ValueError("--stance and --target go together: where you stand and where you look")
+        raise InputError("--stance and --target go together: where you stand and where you look")
     clash = [f for f in ("board", "at", "angle") if getattr(args, f, None) is not None]
     if clash:
-        raise ValueError(f"--{clash[0]}: --stance/--target set the line; drop --{clash[0]}")
+        raise InputError(f"--{clash[0]}: --stance/--target set the line; drop --{clash[0]}")
     foul = float(s) - STANCE_SEP
     if not 1.0 <= foul <= 39.0:
-        raise ValueError(f"--stance {s:g}: the ball would be released on board {foul:g} ({STANCE_SEP:g} boards towards "
+        raise InputError(f"--stance {s:g}: the ball would be released on board {foul:g} ({STANCE_SEP:g} boards towards "
                          "the hand), off the lane (1..39)")
     return foul, float(t)
 
@@ -260,10 +276,10 @@ def check_picture_args(args) -> str | None:
         return "--fps: sets --video's frame rate; a --still is one frame"
     size = getattr(args, "size", None)
     if size is not None:
-        try:
-            w, h = (int(v) for v in str(size).lower().split("x"))
-        except ValueError:
+        wh = size_of(size)
+        if wh is None:
             return f"--size {size}: expected WxH, e.g. 1280x720"
+        w, h = wh
         if not (16 <= w <= 8192 and 16 <= h <= 8192):
             return f"--size {size}: width and height must be 16..8192 pixels"
         if video is not None and str(video).lower().endswith(".mp4") and (w % 2 or h % 2):

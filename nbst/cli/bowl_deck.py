@@ -12,6 +12,7 @@ import sys
 
 from nbst.cli.args import Bounded
 from nbst.cli.bowl_args import err
+from nbst.seeds import resolve_seed
 
 #: Rollout budgets, capped at 1e7: 500x `bowl atlas`'s default budget; past it a typo (an
 #: extra zero or ten) is likelier than a plan.
@@ -37,8 +38,6 @@ def runner_of(args, jobs: int):
 
 
 def cmd_solve(args) -> int:
-    import numpy as np
-
     from nbst import progress
     from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt
     from nbst.parallel import default_jobs
@@ -48,7 +47,7 @@ def cmd_solve(args) -> int:
 
     target = args.down if args.down is not None else args.leave
     prepare_output(args.output)
-    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
+    seed = resolve_seed(args.seed, what="--seed")
     jobs = args.jobs or default_jobs()
     want = pinfall.pins_of(target)
     archive: dict = {}
@@ -58,10 +57,7 @@ def cmd_solve(args) -> int:
             from nbst.domain import plain
 
             print(f"nbst bowl solve: warning: the shipped atlas is not used: {plain(why)}", file=sys.stderr)
-    try:
-        L = runner_of(args, jobs)
-    except ValueError as e:
-        return err("solve", str(e))  # nbst.cluster.connect names --cluster and the address
+    L = runner_of(args, jobs)  # nbst.cluster.connect's InputError names --cluster and the address
     probes = 0 if args.no_robustness else ROBUSTNESS_ROLLOUTS[1]
     bar = progress.Bar(f"bowl solve {','.join(map(str, want))}", args.max_rollouts + probes, unit="rollout",
                        bound=True, start=progress.command_start(), quiet=args.quiet)
@@ -135,10 +131,7 @@ def cmd_atlas(args) -> int:
         out = folder.prepare(args.out, args.from_atlas)
     except throwfile.ThrowFileError as e:
         return err("atlas", str(e))
-    try:
-        L = runner_of(args, args.jobs or default_jobs())
-    except ValueError as e:
-        return err("atlas", str(e))  # nbst.cluster.connect names --cluster and the address
+    L = runner_of(args, args.jobs or default_jobs())  # nbst.cluster.connect's InputError names --cluster
     files, deliveries, skipped = folder.resume(out)
     for _, why in skipped:  # said, not silently dropped: the search finds the subset again if it can
         print(f"nbst bowl atlas: skipped {why} (the search finds its subset again if it can)", file=sys.stderr)

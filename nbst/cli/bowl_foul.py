@@ -16,6 +16,7 @@ from pathlib import Path
 
 from nbst.cli.args import Bounded
 from nbst.cli.bowl_args import BOWLERS, bowler_flag, err
+from nbst.seeds import resolve_seed
 
 #: Frames of the fresh probability estimate (``--samples``) and of ``--robust``'s search.
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
@@ -131,7 +132,7 @@ def cmd_solve(args) -> int:
         prepare_output(args.output)
     except OutputError as e:
         return err("solve", str(e))
-    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
+    seed = resolve_seed(args.seed, what="--seed")
     jobs = args.jobs or default_jobs()
     elites, answers = ({}, False) if args.no_atlas else shipped_elites()
     direct = answers and target in elites  # the atlas of this scene holds it: its throw, no search
@@ -212,9 +213,9 @@ def cmd_solve(args) -> int:
                    note=advise.SAMPLE_NOTE)
         with signals_deferred(reraise=False) as late:
             write_text_atomic(Path(args.output), throwfile.dumps(doc))
-    except (OutputError, ValueError) as e:
+    except BaseException:   # an error (one line from nbst.cli.main) ends the bar first
         bar.close()
-        return err("solve", str(e))
+        raise
     finally:
         R.close()
     got = ",".join(map(str, r.down)) or "none"
@@ -280,7 +281,7 @@ def cmd_atlas(args) -> int:
     """``bowl atlas --foul-line``: the search, the mirror step and each subset's measures of
     :class:`nbst.models.bowling.lane.folder.FoulAtlasRun`, with progress and Ctrl-C handling."""
     from nbst import progress
-    from nbst.outputs import OutputError, prepare_output, sigterm_as_interrupt
+    from nbst.outputs import prepare_output, sigterm_as_interrupt
     from nbst.parallel import default_jobs
 
     from nbst.models.bowling import files
@@ -296,11 +297,11 @@ def cmd_atlas(args) -> int:
         from nbst.models.bowling.lane import profiles
 
         nz = profiles.profile(args.bowler).noise
+    out = prepare_output(args.out, directory=True, option="--out-dir")
     try:
-        out = prepare_output(args.out, directory=True, option="--out-dir")
         run = FoulAtlasRun(out, seed=args.seed if args.seed is not None else 1, jobs=args.jobs or default_jobs(),
                            from_atlas=args.from_atlas, bowler=args.bowler, **({} if nz is None else {"nz": nz}))
-    except (OutputError, ValueError, OSError, files.BowlingFileError) as e:
+    except (OSError, files.BowlingFileError) as e:   # a file in the folder or --from's: one line naming it
         return err("atlas", str(e))
     interrupted = False
     bar = pb = None
@@ -334,8 +335,6 @@ def cmd_atlas(args) -> int:
             except KeyboardInterrupt:
                 interrupted = True
         run.write_all()
-    except (OutputError, ValueError) as e:
-        return err("atlas", str(e))
     finally:
         if bar is not None:
             bar.close()

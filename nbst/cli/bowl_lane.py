@@ -15,8 +15,8 @@ from pathlib import Path
 
 from nbst.cli.args import Bounded
 from nbst.cli.bowl_args import (ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
-                                delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, stance_target,
-                                wants_picture)
+                                delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, size_of,
+                                stance_target, wants_picture)
 from nbst.cli.bowl_series import path_plot_flag, write_path_plot
 from nbst.parallel import default_jobs
 
@@ -127,12 +127,9 @@ def cmd_throw(args) -> int:
     bad = check_picture_args(args) if wants_picture(args) else None
     if bad:
         return err("throw", bad)
-    try:
-        ball = ball_of(args)
-        d, _ = the_delivery(args, args.oil, ball)
-        r = lane.throw(d, args.oil, ball)
-    except ValueError as e:
-        return err("throw", str(e))
+    ball = ball_of(args)
+    d, _ = the_delivery(args, args.oil, ball)
+    r = lane.throw(d, args.oil, ball)
     if wants_picture(args):
         bad = picture_from_args(args, d, ball)
         if bad:
@@ -143,13 +140,10 @@ def cmd_throw(args) -> int:
         return err("throw", bad)
     doc.update(bowler=args.bowler, line=advise.line_of(r), note=advise.SAMPLE_NOTE)
     if args.output:
-        from nbst.outputs import OutputError, write_text_atomic
+        from nbst.outputs import write_text_atomic
         from nbst.solution import dumps_strict
 
-        try:
-            write_text_atomic(Path(args.output), dumps_strict(doc, indent=1) + "\n")
-        except OutputError as e:
-            return err("throw", str(e))
+        write_text_atomic(Path(args.output), dumps_strict(doc, indent=1) + "\n")
     if args.json:
         from nbst.cli.args import print_json
 
@@ -198,7 +192,7 @@ def throw_lines(r, bowler: str | None = None) -> list[str]:
 
 
 def cmd_frame(args) -> int:
-    from nbst.outputs import OutputError, prepare_output, signals_deferred
+    from nbst.outputs import prepare_output, signals_deferred
 
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import frame, noise
@@ -213,7 +207,7 @@ def cmd_frame(args) -> int:
         if args.output:
             prepare_output(args.output)
         line = advise.line_of(lane.throw(d, args.oil, ball))   # the ball alone: stance, target, breakpoint
-    except (ValueError, argparse.ArgumentTypeError, OutputError) as e:
+    except argparse.ArgumentTypeError as e:  # --leave's pins (pin_list words it as argparse would)
         return err("frame", str(e))
     r = lad = est = None
     try:
@@ -245,24 +239,16 @@ def cmd_frame(args) -> int:
             doc["probability"] = est.to_dict()
     except KeyboardInterrupt:
         if args.output and r is not None:  # the frame is done: keep it (without what was cut short)
-            try:
-                with signals_deferred(reraise=False):
-                    write_throw(args.output, r, args.oil, ball, ladder=lad, extra=extra)
-            except (OutputError, ValueError) as e:
-                return err("frame", str(e))
+            with signals_deferred(reraise=False):
+                write_throw(args.output, r, args.oil, ball, ladder=lad, extra=extra)
             print(f"nbst bowl frame: interrupted; wrote the frame without the unfinished parts to {args.output}",
                   file=sys.stderr)
             return 130
         print("nbst bowl frame: interrupted", file=sys.stderr)
         return 130
-    except ValueError as e:
-        return err("frame", str(e))
     if args.output:
-        try:
-            with signals_deferred(reraise=False) as late:
-                write_throw(args.output, r, args.oil, ball, ladder=lad, estimate=est, extra=extra)
-        except (OutputError, ValueError) as e:
-            return err("frame", str(e))
+        with signals_deferred(reraise=False) as late:
+            write_throw(args.output, r, args.oil, ball, ladder=lad, estimate=est, extra=extra)
         if late:
             print(f"nbst bowl frame: interrupted; wrote {args.output}", file=sys.stderr)
             return 130
@@ -325,7 +311,7 @@ def replay_throw(args) -> int:
     """``bowl replay THROW.json``: the frame again from the foul line; exit 1 if its pins down differ.
     With --video/--still, the frame is recorded as it runs (one run) and filmed with the file's readout."""
     from nbst.models.bowling.lane import throwfile
-    from nbst.render import bowling_throw
+    from nbst.render.bowling import throw as bowling_throw
 
     picture = wants_picture(args)
     if not picture:
@@ -374,12 +360,12 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
     expected, no_request. A progress line on stderr for the video and one line per file written. Returns a
     one-line error, or None."""
     from nbst.outputs import OutputError, prepare_output
-    from nbst.render import style
-    from nbst.render.bowling_lane import render_throw
-    from nbst.render.bowling_throw import frame_times
-    from nbst.render.gl import RenderError
+    from nbst.render.core import style
+    from nbst.render.bowling.lane import render_throw
+    from nbst.render.bowling.throw import frame_times
+    from nbst.render.core.gl import RenderError
 
-    size = tuple(int(v) for v in str(args.size).lower().split("x")) if getattr(args, "size", None) else None
+    size = size_of(args.size) if getattr(args, "size", None) else None
     st = getattr(args, "still_time", None)
     camera = getattr(args, "camera", None) or "both"
     if st is not None and st > th.motion.times[-1]:
@@ -411,7 +397,7 @@ def picture_from_args(args, delivery, ball) -> str | None:
     from nbst.errors import MujocoError
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import frame
-    from nbst.render.bowling_throw import record_throw
+    from nbst.render.bowling.throw import record_throw
 
     bad = check_picture_args(args)
     if bad:

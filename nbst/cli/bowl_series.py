@@ -1,5 +1,5 @@
 """``nbst bowl series``: games bowled in order on one lane that every ball wears (lane transition,
-models/bowling/lane/transition.py), with the drift figure and the path plot (render/bowling_path.py).
+models/bowling/lane/transition.py), with the drift figure and the path plot (render/bowling/path.py).
 
 Also :func:`write_path_plot`, the Specto-style plot of one throw that ``bowl throw --path-plot``
 writes. Light at import: the bowling modules are imported inside the command.
@@ -9,8 +9,10 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import SEED, Bounded
-from nbst.cli.bowl_args import BOWLERS, ball_flags, ball_of, err, oil_flag
+from nbst.cli.bowl_args import BOWLERS, ball_flags, ball_of, oil_flag
 from nbst.cli.flags import add_seed
+from nbst.errors import InputError
+from nbst.seeds import resolve_seed
 
 GAMES = Bounded("games", 1, 30, integer=True)
 LINEUP = Bounded("lineup", 1, 8, integer=True)
@@ -62,27 +64,22 @@ def register(bowl) -> None:
 
 
 def cmd_series(args) -> int:
-    import numpy as np
-
-    from nbst.outputs import OutputError, prepare_output, signals_deferred, write_text_atomic
+    from nbst.outputs import prepare_output, signals_deferred, write_text_atomic
     from nbst.progress import progress_bar
 
     from nbst.models.bowling.lane import transition as T
 
-    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % (2**31))
-    try:
-        outs = [(o, p) for o, p in (("-o", args.output), ("--figure", args.figure), ("--path-plot", args.path_plot))
-                if p is not None]
-        if len({str(p) for _, p in outs}) < len(outs):
-            raise ValueError("-o, --figure and --path-plot must name different files")
-        for o, p in outs:
-            prepare_output(p, option=o)
-        ball = ball_of(args)
-        bowlers = T.lineup(args.bowler, args.lineup, args.lefty_share, args.noise_scale, args.oil, ball)
-        moves = ("none", "auto") if args.move == "both" else (args.move,)
-        runs = [T.Run(bowlers, args.games, seed, m, args.oil, ball) for m in moves]
-    except (ValueError, OutputError) as e:
-        return err("series", str(e))
+    seed = resolve_seed(args.seed, what="--seed")
+    outs = [(o, p) for o, p in (("-o", args.output), ("--figure", args.figure), ("--path-plot", args.path_plot))
+            if p is not None]
+    if len({str(p) for _, p in outs}) < len(outs):
+        raise InputError("-o, --figure and --path-plot must name different files")
+    for o, p in outs:
+        prepare_output(p, option=o)
+    ball = ball_of(args)
+    bowlers = T.lineup(args.bowler, args.lineup, args.lefty_share, args.noise_scale, args.oil, ball)
+    moves = ("none", "auto") if args.move == "both" else (args.move,)
+    runs = [T.Run(bowlers, args.games, seed, m, args.oil, ball) for m in moves]
     bar = progress_bar(total=len(runs) * args.games * args.lineup * 10, desc="frames", unit="frame",
                        disable=args.quiet, file=sys.stderr)
 
@@ -103,24 +100,18 @@ def cmd_series(args) -> int:
         if not any(r.balls for r in runs):
             print("nbst bowl series: interrupted before the first ball; nothing written", file=sys.stderr)
             return 130
-        try:
-            with signals_deferred(reraise=False):
-                doc = write(True)
-        except OutputError as e:
-            return err("series", str(e))
+        with signals_deferred(reraise=False):
+            doc = write(True)
         n = sum(len(r.balls) for r in runs)
         print(f"nbst bowl series: interrupted; wrote the {n} balls bowled so far to {args.output}", file=sys.stderr)
         return 130
-    except ValueError as e:
+    except BaseException:   # an error (one line from nbst.cli.main) ends the bar first
         bar.close()
-        return err("series", str(e))
+        raise
     bar.close()
-    try:
-        with signals_deferred(reraise=False) as late:
-            doc = write(False)
-            pictures(doc, args.figure, args.path_plot)
-    except (OutputError, ValueError) as e:
-        return err("series", str(e))
+    with signals_deferred(reraise=False) as late:
+        doc = write(False)
+        pictures(doc, args.figure, args.path_plot)
     if args.json:
         from nbst.cli.args import print_json
 
@@ -137,7 +128,7 @@ def cmd_series(args) -> int:
 
 def pictures(doc: dict, figure, path_plot) -> None:
     """Write the drift figure and the series' path plot of ``doc`` (a series file's content)."""
-    from nbst.render import bowling_path as P
+    from nbst.render.bowling import path as P
 
     if figure:
         P.save(P.transition_figure(doc), figure, option="--figure")
@@ -182,7 +173,7 @@ def path_plot_flag(p) -> None:
     """``--path-plot PATH.png`` of ``bowl throw``."""
     p.add_argument("--path-plot", type=png, default=None, metavar="PATH.png",
                    help="also draw the ball's path, Specto-style: board against distance over the oil, the width "
-                        "exaggerated, the breakpoint marked (render/bowling_path.py)")
+                        "exaggerated, the breakpoint marked (render/bowling/path.py)")
 
 
 def write_path_plot(path, results, *, oil=None, option: str = "--path-plot", prog: str = "nbst bowl throw") -> str | None:
@@ -190,7 +181,7 @@ def write_path_plot(path, results, *, oil=None, option: str = "--path-plot", pro
     one line on stderr when written. Returns a one-line error, or None."""
     from nbst.models.bowling import lane
     from nbst.outputs import OutputError
-    from nbst.render import bowling_path as P
+    from nbst.render.bowling import path as P
 
     pat = lane.pattern(oil) if oil is not None else None
     paths = [{"ft": r.path["ft"], "board": r.path["board"], "hand": r.delivery["hand"], "breakpoint_ft": r.breakpoint_ft,

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from nbst.errors import InputError
+
 from nbst.models.bowling import deck, subsets
 from nbst.models.bowling.deck import search
 from nbst.models.bowling.subsets import N_SUBSETS, Archive, parent_weights, size_table  # noqa: F401 (the atlas's names)
@@ -109,5 +111,5 @@ def run(runner: deck.Runner, archive: Archive, *, method: str, budget: int, seed
             if callback:
                 callback(archive)
     else:
-        raise ValueError(f"method must be elites, uniform or targeted, got {method!r}")
+        raise InputError(f"method must be elites, uniform or targeted, got {method!r}")
     return archive

@@ -36,6 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import InputError
+
 from nbst.models.bowling import deck, geometry, pinfall, subsets
 
 from nbst.models.mjsearch import archive as _archive
@@ -139,7 +141,7 @@ def soft_distance(model, final_qpos, target: int) -> np.ndarray:
 def scorer(runner: deck.Runner, target: int, distance: str = "hamming"):
     """``evaluate(deliveries) -> (masks, Hamming distances, costs)`` of a batch, for the room's search."""
     if distance not in ("hamming", "geometry"):
-        raise ValueError(f"distance must be hamming or geometry, got {distance!r}")
+        raise InputError(f"distance must be hamming or geometry, got {distance!r}")
     dist = hamming if distance == "hamming" else geometry_distance
 
     def evaluate(chunk):
@@ -182,7 +184,7 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
         archive.
     """
     if not 0 < int(target) <= geometry.N_SUBSETS:
-        raise ValueError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")
+        raise InputError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")
     target = int(target)
     own = runner is None
     L = deck.Runner(jobs=jobs) if own else runner

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.models.bowling import lane, pinfall, subsets
+from nbst.models.bowling import files, lane, pinfall, subsets
 from nbst.models.bowling.lane import frame, noise
 from nbst.models.mjsearch import archive as _archive
 
@@ -224,13 +224,13 @@ def archive_doc(a: subsets.Archive, seed: int) -> dict:
 
 
 def archive_from_doc(doc, src) -> subsets.Archive:
-    """An archive from :func:`archive_doc`'s dict; ValueError (one line naming ``src`` and the
+    """An archive from :func:`archive_doc`'s dict; BowlingFileError (one line naming ``src`` and the
     field) on anything else: a mask outside 1..1023, a point that is not 6 finite numbers in
     :data:`BOUNDS`, counts that are not whole numbers >= -1."""
     import math
 
     def fail(field, why):
-        raise ValueError(f"{src}: {field}: {why}")
+        raise files.BowlingFileError(f"{src}: {field}: {why}")
 
     if not isinstance(doc, dict) or doc.get("format") != ARCHIVE_FORMAT:
         fail("format", f"must be {ARCHIVE_FORMAT!r}")

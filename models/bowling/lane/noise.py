@@ -62,15 +62,15 @@ class Noise:
     def check(self) -> Noise:
         for k, v in asdict(self).items():
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
-                raise ValueError(f"noise.{k}: must be a finite number, got {v!r}")
+                raise lane.LaneError(f"noise.{k}: must be a finite number, got {v!r}")
             if k in CORR_KEYS:
                 if not -0.9 <= v <= 0.9:
-                    raise ValueError(f"noise.{k}: a correlation must be in [-0.9, 0.9], got {v!r}")
+                    raise lane.LaneError(f"noise.{k}: a correlation must be in [-0.9, 0.9], got {v!r}")
             elif not 0 <= v <= (200 if k == "rpm" else 20):
-                raise ValueError(f"noise.{k}: a standard deviation must be a number in [0, "
+                raise lane.LaneError(f"noise.{k}: a standard deviation must be a number in [0, "
                                  f"{200 if k == 'rpm' else 20}], got {v!r}")
         if self.corr_mph_rpm ** 2 + self.corr_rotation_rpm ** 2 >= 0.99:
-            raise ValueError(f"noise.corr_rotation_rpm: with corr_mph_rpm {self.corr_mph_rpm:g} the correlations "
+            raise lane.LaneError(f"noise.corr_rotation_rpm: with corr_mph_rpm {self.corr_mph_rpm:g} the correlations "
                              f"must have squares summing below 0.99 (a valid correlation matrix)")
         return self
 
@@ -103,7 +103,7 @@ def sample(delivery: lane.Delivery, n: int, seed: int, noise: Noise = DEFAULT) -
     delivery = delivery.check()
     noise = noise.check()
     if not (isinstance(n, int) and n >= 1):
-        raise ValueError(f"samples: must be a whole number >= 1, got {n!r}")
+        raise lane.LaneError(f"samples: must be a whole number >= 1, got {n!r}")
     base = replace(delivery, board=delivery.foul_board(), at="foul")
     draws = noise.mix(normal_draws(seed, n, len(KEYS)))  # a fixed order: row per throw, column per key
     X = perturb([getattr(base, k) for k in KEYS], [getattr(noise, k) for k in KEYS], draws,
@@ -139,9 +139,9 @@ def wanted(want) -> list | None:
     try:
         pins = sorted(int(p) for p in want)
     except (TypeError, ValueError):
-        raise ValueError(f"want: pins must be numbers 1..10, got {want!r}") from None
+        raise lane.LaneError(f"want: pins must be numbers 1..10, got {want!r}") from None
     if any(not 1 <= p <= 10 for p in pins) or len(set(pins)) != len(pins):
-        raise ValueError(f"want: pins must be distinct numbers 1..10, got {want!r}")
+        raise lane.LaneError(f"want: pins must be distinct numbers 1..10, got {want!r}")
     return pins
 
 

@@ -60,7 +60,7 @@ PRO_SCALE = 0.5
 PRO_NOISE = scaled(NOISE_SHAPE, PRO_SCALE)
 #: The pro's spare-ball noise: the shape times PRO_SPARE_SCALE, fitted to PBA's televised spares (3-10
 #: 48.6 %, 10 pin 95.9 %, 7 pin 95.5 %; ESPN The Magazine, 2011): at the strike ball's noise the 3-10
-#: converts 89 of 100 (benchmarks/bench_carry_fit.py, docs/bowling.md "Pin carry, fitted").
+#: converts 89 of 100 (benchmarks/bench_carry_fit.py, docs/results/bowling.md "Pin carry, fitted").
 PRO_SPARE_SCALE = 1.25
 PRO_SPARE_NOISE = scaled(NOISE_SHAPE, PRO_SPARE_SCALE)
 #: The league bowlers' sigmas, as multiples of the shape (assumed).
@@ -108,9 +108,9 @@ NAMES = tuple(PROFILES)
 
 
 def profile(name: str) -> Profile:
-    """The profile called ``name``; ValueError (one line, the names) for any other."""
+    """The profile called ``name``; LaneError (one line, the names) for any other."""
     if name not in PROFILES:
-        raise ValueError(f"--bowler: no profile {name!r}; profiles: {', '.join(NAMES)}")
+        raise lane.LaneError(f"bowler: no profile {name!r}; profiles: {', '.join(NAMES)}")
     return PROFILES[name]
 
 

@@ -162,17 +162,17 @@ def maximise(starts, *, standing=None, want=None, runner: frame.FrameRunner, bud
     want = noise_mod.wanted(want)
     in_play = sorted(set(range(1, 11) if standing is None else standing))
     if want is not None and not set(want) <= set(in_play):
-        raise ValueError(f"want: pins {want} are not all in play ({in_play})")
+        raise lane.LaneError(f"want: pins {want} are not all in play ({in_play})")
     if not (isinstance(budget, int) and budget >= 1):
-        raise ValueError(f"budget: must be a whole number of frames >= 1, got {budget!r}")
+        raise lane.LaneError(f"budget: must be a whole number of frames >= 1, got {budget!r}")
     if not (isinstance(n, int) and n >= 1):
-        raise ValueError(f"n: must be a whole number >= 1, got {n!r}")
+        raise lane.LaneError(f"n: must be a whole number >= 1, got {n!r}")
     starts = [starts] if isinstance(starts, lane.Delivery) else list(starts)
     if not starts:
-        raise ValueError("starts: give at least one delivery")
+        raise lane.LaneError("starts: give at least one delivery")
     starts = [replace(d.check(), board=d.foul_board(), at="foul") for d in starts]
     if len({d.hand for d in starts}) > 1:
-        raise ValueError("starts: every start must be thrown with the same hand")
+        raise lane.LaneError("starts: every start must be thrown with the same hand")
     P = Release(starts[0], standing=in_play, want=want, runner=runner, nz=nz, on_done=on_done)
     got = _robust.maximise(P, starts, budget=budget, seed=seed, n=n, ladder=ladder)
     return RobustResult(delivery=got.best, start=got.start, want=want, standing=in_play, estimate=got.fresh,

@@ -40,6 +40,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from nbst.errors import SolveError
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, robust
 
@@ -85,9 +86,9 @@ def leave_pins(name: str) -> list[int]:
     try:
         pins = sorted(int(p) for p in name.split("-"))
     except ValueError:
-        raise ValueError(f"leave: pins must be numbers 1..10 joined by '-', got {name!r}") from None
+        raise lane.LaneError(f"leave: pins must be numbers 1..10 joined by '-', got {name!r}") from None
     if not pins or any(not 1 <= p <= 10 for p in pins) or len(set(pins)) != len(pins):
-        raise ValueError(f"leave: pins must be distinct numbers 1..10 joined by '-', got {name!r}")
+        raise lane.LaneError(f"leave: pins must be distinct numbers 1..10 joined by '-', got {name!r}")
     return pins
 
 
@@ -128,7 +129,7 @@ def aim_entry(board: float, entry_deg: float, *, oil: str = "house", ball: lane.
               base: lane.Delivery = STRIKE, tol=(0.15, 0.2), iters: int = 8):
     """(delivery, ThrowResult): a release (the typical one's speed, revs and tilt) whose ball,
     alone, crosses the head pin's line on ``board`` at ``entry_deg``: from the nearest throws of
-    :func:`aim_table`, Newton's method on (axis rotation, launch angle) at their foul board; ValueError
+    :func:`aim_table`, Newton's method on (axis rotation, launch angle) at their foul board; SolveError
     (one line) when none converges."""
     table = aim_table(oil, ball, base)
     near = sorted(table, key=lambda t: (t[3] - board) ** 2 + (4 * (t[4] - entry_deg)) ** 2)[:3]
@@ -154,7 +155,7 @@ def aim_entry(board: float, entry_deg: float, *, oil: str = "house", ball: lane.
             except (lane.LaneError, np.linalg.LinAlgError):
                 break
             x = np.clip(x + np.clip(dx, -np.array([10.0, 0.5]), np.array([10.0, 0.5])), lo, hi)
-    raise ValueError(f"aim: no release reaches board {board:g} at {entry_deg:g} deg (from the {len(near)} nearest "
+    raise SolveError(f"aim: no release reaches board {board:g} at {entry_deg:g} deg (from the {len(near)} nearest "
                      f"table throws, {iters} Newton steps each)")
 
 
@@ -203,7 +204,7 @@ def pocket_map(boards, angles, n: int, seed: int, *, runner: frame.FrameRunner, 
         for i, b in enumerate(boards):
             try:
                 d, _ = aim_entry(b, a, oil=runner.oil, ball=runner.ball, base=base)
-            except ValueError:
+            except SolveError:
                 c += 1
                 if on_cell is not None:
                     on_cell(b, a, None)
@@ -320,7 +321,7 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     of the ladder (it is never worse than the pick on the polish's own screen)."""
     standing = leave_pins(name)
     if len(standing) == 10:
-        raise ValueError(f"leave: {name!r} is all ten pins: a first ball, not a spare")
+        raise lane.LaneError(f"leave: {name!r} is all ten pins: a first ball, not a spare")
     cands = candidates(name, oil=runner.oil, ball=runner.ball, strike=STRIKE if strike is None else strike)
     k = {}
     for c, (label, d) in enumerate(cands):

@@ -62,6 +62,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, is_dataclass
 
+from nbst import seeds
 from nbst.models.bowling import files, lane, scene
 from nbst.models.bowling.lane import frame, noise as _noise
 
@@ -80,8 +81,8 @@ MAX_LADDER = 16
 BOARD_RANGE = (-60.0, 100.0)
 ANGLE_RANGE = (-90.0, 90.0)
 SECONDS_MAX = 120.0
-#: Largest seed (numpy's SeedSequence and nbst's --seed take any seed up to this).
-SEED_MAX = 2**63 - 1
+#: Largest seed: nbst's one seed range (:data:`nbst.seeds.SEED_MAX`).
+SEED_MAX = seeds.SEED_MAX
 
 ThrowFileError = files.BowlingFileError
 """A throw or throw-atlas file that cannot be read: one line naming the file and the field
@@ -131,16 +132,16 @@ def throw_dict(result: frame.FrameResult, *, oil: str, ball=None, requested=None
     mask; default: the estimate's own ``want`` if it has one, else every pin in play, as
     :func:`.noise.estimate` counts by default). ``ladder``: the
     same throw at other timesteps (FrameResults, or dicts with ``timestep`` and ``leave``).
-    The result is checked (:func:`check_throw`); ValueError names the field."""
+    The result is checked (:func:`check_throw`); ThrowFileError names the field."""
     if result.extra_s:
-        raise ValueError(f"result: ran {result.extra_s:g} s past the settle; a throw file records the frame "
+        raise ThrowFileError(f"result: ran {result.extra_s:g} s past the settle; a throw file records the frame "
                          f"as it settled (extra_s 0), which is what a replay runs")
     pat = lane.pattern(oil)
     if result.oil != pat.name:
-        raise ValueError(f"oil: {pat.name!r} is not the frame's oil {result.oil!r}")
+        raise ThrowFileError(f"oil: {pat.name!r} is not the frame's oil {result.oil!r}")
     ball_d = _as_dict(ball if ball is not None else lane.Ball())
     if not isinstance(ball_d, dict) or set(ball_d) != set(BALL_KEYS):
-        raise ValueError(f"ball: must be a lane.Ball (or its dict: {', '.join(BALL_KEYS)}), got {ball!r}")
+        raise ThrowFileError(f"ball: must be a lane.Ball (or its dict: {', '.join(BALL_KEYS)}), got {ball!r}")
     est = _as_dict(estimate)
     if est is not None:
         w = want if want is not None else est.get("want")  # an Estimate that carries its own want
@@ -173,13 +174,13 @@ def throw_dict(result: frame.FrameResult, *, oil: str, ball=None, requested=None
     try:
         return check_throw(d, "throw")
     except ThrowFileError as e:
-        raise ValueError(str(e).removeprefix("throw: ")) from None
+        raise ThrowFileError(str(e).removeprefix("throw: ")) from None
 
 
 def atlas_dict(throws, *, oil, ball=None, noise=None) -> dict:
     """A throw atlas of ``throws`` (throw dicts, kept in the order given) on ``oil`` and
     ``ball``, with probabilities under ``noise`` (:class:`.noise.Noise` or its dict; default
-    :data:`.noise.DEFAULT`). Checked (:func:`check_atlas`); ValueError names the field."""
+    :data:`.noise.DEFAULT`). Checked (:func:`check_atlas`); ThrowFileError names the field."""
     pat = lane.pattern(oil)
     a = {"format": ATLAS_FORMAT, "version": VERSION, "scene": lane.SCENE, "oil": pat.name,
          "oil_pattern": pat.to_dict(),
@@ -188,7 +189,7 @@ def atlas_dict(throws, *, oil, ball=None, noise=None) -> dict:
     try:
         return check_atlas(a, "atlas")
     except ThrowFileError as e:
-        raise ValueError(str(e).removeprefix("atlas: ")) from None
+        raise ThrowFileError(str(e).removeprefix("atlas: ")) from None
 
 
 def _ordered(d: dict, keys) -> dict:
