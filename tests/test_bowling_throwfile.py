@@ -210,6 +210,20 @@ HOSTILE = [
     (_drop("probability", "want"), "probability.want", "missing"),
     (_set(("ladder",), [{"timestep": 0.001}]), "ladder[0].leave", "missing"),
     (_set(("ladder",), []), "ladder", "list of 1.."),
+    # every recorded output to its domain, as the replayed fields (issue 45: a 320-digit settle_s replayed, exit 0)
+    (_set(("outcome", "settle_s"), int("7" * 320)), "outcome.settle_s", "too large (320 digits)"),
+    (_set(("outcome", "settle_s"), 10 ** 300), "outcome.settle_s", "outside"),
+    (_set(("outcome", "settle_s"), 1e300), "outcome.settle_s", "outside"),
+    (_set(("outcome", "settle_s"), -0.5), "outcome.settle_s", "outside"),
+    (_set(("outcome", "board_at_pins"), int("7" * 320)), "outcome.board_at_pins", "too large (320 digits)"),
+    (_set(("outcome", "board_at_pins"), 10 ** 300), "outcome.board_at_pins", "outside"),
+    (_set(("outcome", "entry_angle_deg"), -10 ** 300), "outcome.entry_angle_deg", "outside"),
+    (_set(("outcome", "timestep"), int("7" * 320)), "outcome.timestep", "too large (320 digits)"),
+    (_set(("outcome", "timestep"), 10 ** 300), "outcome.timestep", "outside"),
+    (_set(("probability", "seed"), int("7" * 320)), "probability.seed", "too large (320 digits)"),
+    (_set(("probability", "seed"), 2 ** 64), "probability.seed", "outside"),
+    (_set(("probability", "hi"), 10 ** 300), "probability.hi", "outside"),
+    (_set(("ladder", 0, "timestep"), 10 ** 300), "ladder[0].timestep", "outside"),
 ]
 
 

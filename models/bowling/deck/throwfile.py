@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.errors import MujocoError
+from nbst.errors import InputError, MujocoError
 from nbst.models.bowling import deck, files, pinfall, scene
 from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
@@ -99,7 +99,7 @@ def dumps(d: dict) -> str:
     """JSON text; floats by ``repr`` (Python's json does), so qpos0/qvel0 read back exactly."""
     for k in ("qpos0", "qvel0"):
         if not all(math.isfinite(v) for v in d[k]):
-            raise ValueError(f"{k} has a non-finite number")
+            raise InputError(f"{k} has a non-finite number")
     return json.dumps(d, indent=1) + "\n"
 
 
@@ -183,7 +183,37 @@ def check_throw(d, src, pre: str = "") -> dict:
         if not isinstance(la, dict) or not all(isinstance(la.get(k), (int, float)) and not isinstance(la.get(k), bool)
                                                for k in deck.KEYS):
             _fail(src, pre + "launch", f"must hold the numbers {', '.join(deck.KEYS)}")
+        for k in deck.KEYS:  # a recorded output: within the delivery's own bounds, as the search clamps it
+            lo, hi = deck.BOUNDS[k]
+            if not lo <= la[k] <= hi:
+                _fail(src, f"{pre}launch.{k}", f"{la[k]:g} is outside [{lo:g}, {hi:g}]")
+    _recorded(d, src, pre)
     return d
+
+
+def _recorded(d: dict, src, pre: str) -> None:
+    """The recorded outputs beside the replayed fields, each to its domain when present: the
+    timestep, the Hamming distance, whether it was found, the robustness probes' figures."""
+    def number(v, field: str, lo: float, hi: float, integer: bool = False) -> None:
+        if isinstance(v, bool) or not isinstance(v, int if integer else (int, float)) or not lo <= v <= hi:
+            kind = "a whole number" if integer else "a number"
+            _fail(src, pre + field, f"must be {kind} in [{lo:g}, {hi:g}], got {json.dumps(v)[:40]}")
+
+    if "timestep" in d:
+        number(d["timestep"], "timestep", 1e-6, 0.1)
+    if "hamming" in d:
+        number(d["hamming"], "hamming", 0, 10, integer=True)
+    if "found" in d and not isinstance(d["found"], bool):
+        _fail(src, pre + "found", f"must be true or false, got {json.dumps(d['found'])[:40]}")
+    rob = d.get("robustness")
+    if rob is not None:
+        if not isinstance(rob, dict):
+            _fail(src, pre + "robustness", "must be an object or null")
+        for k, v in rob.items():
+            if k.endswith("_rollouts"):
+                number(v, f"robustness.{k}", 0, 10_000_000, integer=True)
+            elif k in ("lateral_m", "speed_m_s"):
+                number(v, f"robustness.{k}", 0, 1_000)
 
 
 def resolve_scene(doc_path, name: str, src, field: str = "scene") -> Path:
