@@ -86,7 +86,7 @@ def main(argv=None) -> int:
 
 def curve(args) -> int:
     from nbst.cli.render import parse_size
-    from nbst.render.gl import create_context
+    from nbst.render.core.gl import create_context
     from nbst.render.scene2d import Renderer2D
 
     sizes = [int(x) for x in args.sizes.split(",")] if args.sizes else list(QUICK_CURVE if args.quick else CURVE)
@@ -142,7 +142,7 @@ def _mp4_fps(r, times, fps) -> float:
     state: the render loop waits for a free buffer, so past the first MP4_SETTLE frames it
     runs at the pace of the slower of the two. ffmpeg's start and the file's end (both a
     fixed cost of about half a second a video) are left out."""
-    from nbst.render.video import VideoWriter, encode
+    from nbst.render.core.video import VideoWriter, encode
 
     stamps = []
 
@@ -172,10 +172,10 @@ def _best(fn, repeat: int) -> float:
 def parts(args) -> int:
 
     from nbst import load_problem, load_solution, simulate
-    from nbst.render import style
+    from nbst.render.core import style
     from nbst.cli.render import make_renderer, parse_size
-    from nbst.render.gl import create_context
-    from nbst.render.video import VideoWriter, encode, frame_times, render_video
+    from nbst.render.core.gl import create_context
+    from nbst.render.core.video import VideoWriter, encode, frame_times, render_video
 
     if args.problem.startswith("grid-") and args.problem[5:].isdigit():  # the curve's problem at one N
         p, v, tr = grid_problem(int(args.problem[5:]))

@@ -47,10 +47,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     w, h = (int(v) for v in args.size.lower().split("x"))
 
-    from nbst.render import crash
-    from nbst.render.crash_motion import frame_times, slow_windows
-    from nbst.render.gl import FrameTarget, create_context
-    from nbst.render import style
+    from nbst.render.crash import video as crash
+    from nbst.render.crash.motion import frame_times, slow_windows
+    from nbst.render.core.gl import FrameTarget, create_context
+    from nbst.render.core import style
 
     tmp = Path(tempfile.mkdtemp(prefix="nbst-bench-crash-"))
     path = args.crash

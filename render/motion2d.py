@@ -12,8 +12,8 @@ import numpy as np
 
 from nbst.constants import EVENT_DISK
 
-from nbst.render import style
-from nbst.render.shapes import CAPSULE_DTYPE
+from nbst.render.core import style
+from nbst.render.core.shapes import CAPSULE_DTYPE
 
 class SampledMotion:
     """Positions known at sample times: times (T,) increasing, positions (T, N, 2).

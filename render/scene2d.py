@@ -18,10 +18,10 @@ import numpy as np
 
 from nbst import palette
 
-from nbst.render import style
-from nbst.render.gl import FrameRenderer, FrameTarget
+from nbst.render.core import style
+from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.motion2d import trail_capsules
-from nbst.render.shapes import CIRCLE_DTYPE, Capsules, Circles, Rect, Text
+from nbst.render.core.shapes import CIRCLE_DTYPE, Capsules, Circles, Rect, Text
 
 
 class Layout:
@@ -72,7 +72,7 @@ class Labels:
     upper left, in the disk's colour over a dark halo. ``on_disk`` says which is which."""
 
     def __init__(self, ctx, problem, rpx, colors=None):
-        from nbst.render.shapes import digit_height
+        from nbst.render.core.shapes import digit_height
 
         rpx = np.broadcast_to(np.asarray(rpx, float), (problem.n,))
         self.px = px = int(np.clip(np.median(rpx) * style.LABEL_FRAC, style.MIN_LABEL_PX, style.MAX_LABEL_PX))
@@ -329,7 +329,7 @@ def draw_legend(circles, text, size, x: float, y: float, max_w: float, max_h: fl
 class Renderer2D(FrameRenderer):
     """Renders ``motion`` of ``problem`` at any time to an (H, W, 3) uint8 frame.
 
-    ctx     : a moderngl context (see :func:`nbst.render.gl.create_context`)
+    ctx     : a moderngl context (see :func:`nbst.render.core.gl.create_context`)
     motion  : the disks' motion, ``at(t) -> (N, 2)`` (a Trajectory, or SampledMotion)
     ghost   : optional second motion drawn as rings on top (MuJoCo replay)
     trails  : draw the last TRAIL_SECONDS of every path, fading with age
@@ -350,7 +350,7 @@ class Renderer2D(FrameRenderer):
                  ghost_name: str | None = None):
         import moderngl
 
-        from nbst.render.shapes import text_cell
+        from nbst.render.core.shapes import text_cell
 
         self._show(ctx, problem, motion, ghost, trails=trails, motion_name=motion_name, ghost_name=ghost_name,
                    title=title)

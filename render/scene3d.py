@@ -15,9 +15,10 @@ import math
 
 import numpy as np
 
-from nbst.render import style
-from nbst.render.gl import FrameRenderer, FrameTarget
-from nbst.render.shapes import CAPSULE_FS_IO, CAPSULE_VS_IO, Circles, Text
+from nbst.render.core import style
+from nbst.render.core.camera import look_at, mesh_arrays, perspective
+from nbst.render.core.gl import FrameRenderer, FrameTarget
+from nbst.render.core.shapes import CAPSULE_FS_IO, CAPSULE_VS_IO, Circles, Text
 
 MESH_VS = """#version 330
 uniform mat4 u_mvp;
@@ -98,46 +99,6 @@ TRAIL_Z = 1.05
 INST_DTYPE = np.dtype([("offset", "f4", 3), ("scale", "f4", 3), ("color", "f4", 3)])
 
 
-def _mesh_arrays(mesh) -> np.ndarray:
-    """Unshared vertices with per-face-corner normals: flat caps, smooth sides for
-    shapes of revolution about z (cylinder, annulus), flat faces for boxes.
-    Returns (V, 6) float32: position, normal."""
-    tris = mesh.vertices[mesh.faces]  # (F, 3, 3)
-    fn = mesh.face_normals  # (F, 3)
-    normals = np.repeat(fn[:, None, :], 3, axis=1).copy()
-    side = np.abs(fn[:, 2]) < 0.5
-    if side.any():
-        radial = tris[side].copy()
-        radial[..., 2] = 0.0
-        L = np.linalg.norm(radial, axis=2, keepdims=True)
-        radial = np.where(L > 1e-9, radial / np.maximum(L, 1e-9), normals[side])
-        # outward or inward surface (an annulus's inner wall): follow the face normal's side
-        sign = np.sign((radial * fn[side][:, None, :]).sum(axis=2, keepdims=True))
-        normals[side] = radial * np.where(sign == 0, 1.0, sign)
-    return np.concatenate([tris, normals], axis=2).reshape(-1, 6).astype("f4")
-
-
-def look_at(eye, target, up) -> np.ndarray:
-    f = np.asarray(target, float) - eye
-    f /= np.linalg.norm(f)
-    s = np.cross(f, up)
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
-    m = np.eye(4)
-    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
-    m[:3, 3] = -m[:3, :3] @ eye
-    return m
-
-
-def perspective(fov_y_deg, aspect, near, far) -> np.ndarray:
-    f = 1.0 / math.tan(math.radians(fov_y_deg) / 2)
-    m = np.zeros((4, 4))
-    m[0, 0], m[1, 1] = f / aspect, f
-    m[2, 2], m[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
-    m[3, 2] = -1.0
-    return m
-
-
 class Renderer3D(FrameRenderer):
     """Renders ``motion`` of ``problem`` in 3D at any time: (H, W, 3) uint8 frames.
 
@@ -165,7 +126,7 @@ class Renderer3D(FrameRenderer):
         self._vbos = []
 
         def mesh_vao(mesh, capacity):
-            vbo = ctx.buffer(_mesh_arrays(mesh).tobytes())
+            vbo = ctx.buffer(mesh_arrays(mesh).tobytes())
             inst = ctx.buffer(reserve=capacity * INST_DTYPE.itemsize, dynamic=True)
             vao = ctx.vertex_array(self.prog, [(vbo, "3f 3f", "in_pos", "in_normal"),
                                                (inst, "3f 3f 3f/i", "in_offset", "in_scale", "in_color")])
@@ -218,7 +179,7 @@ class Renderer3D(FrameRenderer):
         self._ghosts["color"] = style.GHOST[:3]
         self.trail_prog = None
         if self.trails:
-            from nbst.render.shapes import CAPSULE_DTYPE, _Instanced
+            from nbst.render.core.shapes import CAPSULE_DTYPE, _Instanced
             self.trail = _Instanced(ctx, TRAIL_VS, TRAIL_FS, CAPSULE_DTYPE, "2f 2f 2f 1f 3f",
                                     ("in_p0", "in_p1", "in_alpha", "in_half", "in_color"), capacity=1024)
             self.trail_prog = tp = self.trail.prog
@@ -245,7 +206,7 @@ class Renderer3D(FrameRenderer):
         self.circles = Circles(ctx)
         self.circles.set_view(self.size)
         # the target markers as an image-space overlay: a ring of the marker's projected radius
-        from nbst.render.shapes import CIRCLE_DTYPE
+        from nbst.render.core.shapes import CIRCLE_DTYPE
         # at the height of the pucks' top faces, so a puck resting on its target has its marker
         # concentric with its top (and its number); widened to ring that number, as in 2D
         self._target_centre_px = self.to_pixels(p.target, z=self.puck_h)

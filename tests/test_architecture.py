@@ -63,7 +63,7 @@ def test_an_import_graph_tool_sees_inside_models_and_render():
     nbst.models and nbst.render are seen, as installed."""
     code = ("import grimp; g = grimp.build_graph('nbst', cache_dir=None);"
             "print(g.direct_import_exists(importer='nbst.models.bowling.lane.frame', imported='nbst.models.bowling.scene'),"
-            " g.direct_import_exists(importer='nbst.render.video', imported='nbst.render.gl'),"
+            " g.direct_import_exists(importer='nbst.render.core.video', imported='nbst.render.core.gl'),"
             " len([m for m in g.modules if m.startswith(('nbst.models.', 'nbst.render.'))]) > 20)")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
                          capture_output=True, text=True, timeout=300)

@@ -275,12 +275,12 @@ def test_cli_not_found_writes_the_nearest_and_exits_1(tmp_path, capsys):
     assert _bowl("bowl", "replay", str(out)) == 0
 
 
-# --- rendering (render/bowling.py) ------------------------------------------------------------
+# --- rendering (render/bowling/deck.py) ------------------------------------------------------------
 
 @pytest.fixture(scope="module")
 def gl():
     """The only place this file creates a GL context (EGL, headless)."""
-    from nbst.render.gl import create_context
+    from nbst.render.core.gl import create_context
 
     ctx = create_context()
     yield ctx
@@ -289,7 +289,7 @@ def gl():
 
 def test_render_draws_the_ball_where_the_replay_has_it(gl, seven):
     from nbst.cli.render import cmd_render_throw
-    from nbst.render import bowling as rb
+    from nbst.render.bowling import deck as rb
 
     path, _ = seven
     d = deckfile.load(path)
@@ -359,7 +359,7 @@ def test_render_shot_still_and_bad_output(gl, seven, tmp_path, capsys):
     import argparse
 
     from nbst.cli.render import cmd_render_throw
-    from nbst.render import bowling as rb
+    from nbst.render.bowling import deck as rb
 
     path, _ = seven
     assert rb.is_throw_file(path) and not rb.is_throw_file(ROOT / "pyproject.toml")

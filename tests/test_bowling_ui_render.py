@@ -1,4 +1,4 @@
-"""The pin-deck close-up camera (render/bowling_lane.py, ``--camera deck``): the whole rack in the
+"""The pin-deck close-up camera (render/bowling/lane.py, ``--camera deck``): the whole rack in the
 frame, the head pin in front, drawn where the camera projects it; the readout names the result."""
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from nbst.models.bowling import lane, scene
-from nbst.render import bowling_lane as bl
-from nbst.render import bowling_throw as bt
+from nbst.render.bowling import lane as bl
+from nbst.render.bowling import throw as bt
 
 SIZE = (640, 360)
 TYPICAL = lane.Delivery(hand="right", board=20, at="foul", angle=2.82, mph=17, rpm=350, rotation=45, tilt=12)
@@ -15,7 +15,7 @@ TYPICAL = lane.Delivery(hand="right", board=20, at="foul", angle=2.82, mph=17, r
 
 @pytest.fixture(scope="module")
 def deck():
-    from nbst.render.gl import create_context
+    from nbst.render.core.gl import create_context
 
     ctx = create_context()
     th = bt.record_throw(TYPICAL, "house")

@@ -181,7 +181,7 @@ def test_stale_partial_files_of_dead_writers_are_removed(tmp_path):
 
 
 def test_video_writer_removes_stale_partial_videos(tmp_path):
-    from nbst.render.video import VideoWriter
+    from nbst.render.core.video import VideoWriter
 
     stale = tmp_path / f".v.partial-{_dead_pid()}.mp4"
     stale.write_bytes(b"half a video")
@@ -260,13 +260,13 @@ def test_a_video_cut_short_anywhere_is_seen(tmp_path, ext):
     """check_video reads the container: a file cut at any point (a full disk) is not a whole video,
     and one with fewer frames than were sent is not the video asked for."""
     pytest.importorskip("moderngl")
-    from nbst.render.video import check_video
+    from nbst.render.core.video import check_video
 
     data = _video(tmp_path, ext)
     whole = tmp_path / f"whole{ext}"
     whole.write_bytes(data)
     kind = ext[1:]
-    from nbst.render.video import frame_times
+    from nbst.render.core.video import frame_times
 
     frames = len(frame_times(2.0, 8.0, hold=1.0)) if kind == "mp4" else 1  # a GIF may merge repeated frames
     assert check_video(whole, kind, frames) is None

@@ -17,10 +17,10 @@ ENTRY_POINTS = [
     "nbst.solution.load_solution",            # nbst.load_solution
     "nbst.solution.save_solution",            # nbst.save_solution
     "nbst.models.scene.scene_xml",            # nbst.models.scene_xml: nbst mjcf's export
-    "nbst.render.video.render_video",         # nbst.render.render_video
-    "nbst.render.crash.render_crash",         # nbst.render.render_crash
-    "nbst.render.bowling_lane.render_throw",  # nbst.render.render_throw
-    "nbst.render.bowling.render_motion",      # nbst.render.render_motion
+    "nbst.render.core.video.render_video",    # nbst.render.render_video
+    "nbst.render.crash.video.render_crash",   # nbst.render.render_crash
+    "nbst.render.bowling.lane.render_throw",  # nbst.render.render_throw
+    "nbst.render.bowling.deck.render_motion", # nbst.render.render_motion
     "nbst.models.crash.search.solve",         # nbst.models.crash.solve
     "nbst.models.crash.reconstruct.reconstruct",  # nbst.models.crash.reconstruct
     "nbst.models.bowling.lane.phases.throw",  # nbst.models.bowling.lane.throw

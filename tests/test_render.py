@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from nbst import load_problem, simulate
-from nbst.render import style
+from nbst.render.core import style
 from nbst.render.motion2d import SampledMotion, trail_points
 from nbst.render.scene2d import Layout, Renderer2D
 
@@ -19,7 +19,7 @@ SIZE = (480, 360)
 @pytest.fixture(scope="module")
 def gl():
     """The only place a GL context is created in the tests (EGL, headless)."""
-    from nbst.render.gl import create_context
+    from nbst.render.core.gl import create_context
     ctx = create_context()
     yield ctx
     ctx.release()
@@ -455,7 +455,7 @@ def test_labels_number_each_target_with_its_disk(gl, mk):
     assert changed.any() and not (changed & ~expected).any()
     # the numbers are the disk indices: one glyph per digit, "10" and "11" two each
     from nbst.render.scene2d import target_label_instances
-    from nbst.render.shapes import FIRST_CHAR, Text
+    from nbst.render.core.shapes import FIRST_CHAR, Text
     t = Text(gl, 12)
     try:
         inst = target_label_instances(t, centres, marker_px)
@@ -616,7 +616,7 @@ def test_disk_numbers_are_legible_at_every_disk_size(gl, size):
     """over5's radius-10 disks are ~8 px on screen at 720p: their numbers are still at least
     9 px tall (a digit's ink; "0" read as "8" at 6 px), on the disk where they fit and beside
     it where they do not; the dark digits on a disk are really there, that tall."""
-    from nbst.render.shapes import digit_height
+    from nbst.render.core.shapes import digit_height
     p = load_problem("over5")
     tr = simulate(p, np.zeros((p.n, 2)))
     r = Renderer2D(gl, p, tr, size=size, labels=True)
@@ -651,7 +651,7 @@ def test_ghost_rings_carry_their_disk_numbers_and_a_legend(gl):
     """--source both --labels: each MuJoCo ring has its disk's number beside it (white), and
     the legend names the rings."""
     from nbst.render.scene2d import ghost_label_instances, legend_entries
-    from nbst.render.shapes import FIRST_CHAR
+    from nbst.render.core.shapes import FIRST_CHAR
     p = load_problem("over5")
     tr = simulate(p, np.zeros((p.n, 2)))
     ts = np.linspace(0, p.t_final, 11)
@@ -916,7 +916,7 @@ def test_trails_are_exact_segments_between_each_disks_own_events(thousand):
 def test_glyph_runs_lay_out_as_text_layout_does(gl):
     """The one-gather layout of many numbers gives the same glyph instances as laying out
     each number on its own; the halo atlas is the union of the glyph shifted by 1 px."""
-    from nbst.render.shapes import Text
+    from nbst.render.core.shapes import Text
 
     t = Text(gl, 12)
     try:

@@ -1,4 +1,4 @@
-"""The picture of a throw from the foul line (render/bowling_lane.py): what a viewer checks,
+"""The picture of a throw from the foul line (render/bowling/lane.py): what a viewer checks,
 never golden pixels. Marks are found where the renderer's own camera projects them (the
 projection is the camera's; the marks' world positions come from models/bowling/lane.py), the
 pin numbers where the diagram puts them, the ball's marks turning with its quaternion, and the
@@ -12,8 +12,8 @@ import pytest
 
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, spares
-from nbst.render import bowling_lane as bl
-from nbst.render import bowling_throw as bt
+from nbst.render.bowling import lane as bl
+from nbst.render.bowling import throw as bt
 from nbst.models.bowling import pinfall
 
 SIZE = (960, 540)
@@ -23,7 +23,7 @@ TYPICAL = lane.Delivery(hand="right", board=20, at="foul", angle=2.82, mph=17, r
 @pytest.fixture(scope="module")
 def gl():
     """The only place this file creates a GL context (EGL, headless)."""
-    from nbst.render.gl import create_context
+    from nbst.render.core.gl import create_context
 
     ctx = create_context()
     yield ctx

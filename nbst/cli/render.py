@@ -9,7 +9,7 @@ import argparse
 import sys
 
 from nbst.cli.args import Bounded, Size, with_limits
-from nbst.render import style
+from nbst.render.core import style
 
 FPS = Bounded("fps", 0.0, 240.0, lo_open=True)
 SPEED = Bounded("speed", 0.0, 1e6, lo_open=True)
@@ -142,10 +142,10 @@ def cmd_render(args) -> int:
     from nbst.problem import load_problem
     from nbst.solution import load_solution
 
-    from nbst.render.bowling import is_throw_file
-    from nbst.render.gl import RenderError
+    from nbst.render.bowling.deck import is_throw_file
+    from nbst.render.core.gl import RenderError
 
-    from nbst.render.crash import crash_kind
+    from nbst.render.crash.video import crash_kind
 
     ck = crash_kind(args.problem)  # sniffs the first bytes only; the crash file's gate reads it, capped
     if ck == "crash":
@@ -201,7 +201,7 @@ def cmd_render(args) -> int:
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
     try:  # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
         if kind != "png":
-            from nbst.render.video import MAX_FRAMES, check_frames
+            from nbst.render.core.video import MAX_FRAMES, check_frames
             if args.max_frames is not None and args.max_frames < 1:
                 return _err("render", f"--max-frames {args.max_frames}: must be >= 1")
             check_frames(problem.t_final, fps, speed=args.speed, hold=args.hold,
@@ -228,8 +228,8 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
     import numpy as np
 
     from nbst.progress import Bar, command_start, count_text, seconds_text
-    from nbst.render.gl import create_context
-    from nbst.render.video import frame_times, render_video, write_png
+    from nbst.render.core.gl import create_context
+    from nbst.render.core.video import frame_times, render_video, write_png
 
     if kind == "png":
         times = np.array([float(args.still)])
@@ -306,7 +306,7 @@ def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, t
 
 def mujoco_positions(problem, velocities, times):
     """Disk centres (T, N, 2) from the MuJoCo replay, or a one-line RenderError."""
-    from nbst.render.gl import RenderError
+    from nbst.render.core.gl import RenderError
     try:
         from nbst.models import rollout
     except ImportError:
@@ -317,7 +317,7 @@ def mujoco_positions(problem, velocities, times):
 
 def _not_bowling(args) -> int | None:
     """Exit 2 with one line when PROBLEM is a bowling throw or atlas file (not a disk problem)."""
-    from nbst.render.bowling import bowling_kind
+    from nbst.render.bowling.deck import bowling_kind
 
     kind = bowling_kind(args.problem)
     if kind:
@@ -378,7 +378,7 @@ def _save(fig, args, save_figure) -> int:
 
 def _check_throw_flags(args, duration: float | None = None) -> str | None:
     """The first problem with ``nbst render THROW.json``'s flags (a 5 m throw file), as one line, or None."""
-    from nbst.render.bowling import DISK_ONLY_FLAGS, FPS_MAX
+    from nbst.render.bowling.deck import DISK_ONLY_FLAGS, FPS_MAX
 
     given = [flag for attr, default, flag in DISK_ONLY_FLAGS
              if getattr(args, attr, default) not in (default, None, False)]
@@ -405,16 +405,16 @@ def _check_throw_flags(args, duration: float | None = None) -> str | None:
 def cmd_render_throw(args) -> int:
     """``nbst render THROW.json -o OUT [--still T] [--camera C] [--size WxH] [--fps F] [--hold S] [-q]``
     (``cmd_render`` dispatches here when its first argument is a 5 m throw file; the recording and
-    the frames are :mod:`nbst.render.bowling`'s)."""
+    the frames are :mod:`nbst.render.bowling.deck`'s)."""
     import sys
 
     from nbst.domain import plain
     from nbst.models.bowling.deck import throwfile
     from nbst.outputs import prepare_output
 
-    from nbst.render import style
-    from nbst.render.bowling import frame_times, load_motion, render_motion
-    from nbst.render.gl import RenderError
+    from nbst.render.core import style
+    from nbst.render.bowling.deck import frame_times, load_motion, render_motion
+    from nbst.render.core.gl import RenderError
 
     def err(msg) -> int:
         print(f"nbst render: error: {plain(msg)}", file=sys.stderr)
@@ -450,7 +450,7 @@ def cmd_render_throw(args) -> int:
     fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
     hold = getattr(args, "hold", None)
     times = frame_times(motion, fps, hold=1.0 if hold is None else float(hold))
-    from nbst.render.video import MAX_FRAMES
+    from nbst.render.core.video import MAX_FRAMES
 
     limit = getattr(args, "max_frames", None) or MAX_FRAMES
     if still is None and len(times) > limit:

@@ -60,10 +60,10 @@ def cmd_render_crash(args) -> int:
     from nbst.outputs import prepare_output, sigterm_as_interrupt
     from nbst.progress import Bar, command_start, count_text, seconds_text
 
-    from nbst.render import style
-    from nbst.render.crash import render_crash
-    from nbst.render.crash_motion import SLOW, frame_times, impact_times, record, slow_windows
-    from nbst.render.video import MAX_FRAMES
+    from nbst.render.core import style
+    from nbst.render.crash.video import render_crash
+    from nbst.render.crash.motion import SLOW, frame_times, impact_times, record, slow_windows
+    from nbst.render.core.video import MAX_FRAMES
 
     if isinstance(args.size, str):
         try:

@@ -9,7 +9,7 @@ in slow motion (:data:`SLOW`) from just before the first ball-pin contact.
 
 Compute apart from I/O: :func:`record` returns the motion, :class:`BowlingRenderer`
 returns frames; :func:`render_file` is the thin writer (``nbst render``'s handler is
-``nbst.cli.render.cmd_render_throw``). The shading (:data:`SHADE`) is both bowling videos'.
+``nbst.cli.render.cmd_render_throw``). The shading is the core's (:mod:`nbst.render.core.shaders`).
 
 Length: ~525 lines, past the house's ~500: recording, the two cameras and the readout of
 one throw share the scene's meshes and the throw's timing, and read best together.
@@ -21,9 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nbst.render import style
-from nbst.render.gl import FrameRenderer, FrameTarget
-from nbst.render.scene3d import look_at, perspective
+from nbst.render.core import style
+from nbst.render.core.gl import FrameRenderer, FrameTarget
+from nbst.render.core.shaders import SOLID_FS, SOLID_VS
+from nbst.render.core.camera import look_at, perspective
 
 #: Slow motion around impact: this many times slower from IMPACT_WINDOW[0] s before
 #: the first ball-pin contact to IMPACT_WINDOW[1] s after it.
@@ -38,52 +39,6 @@ BACKGROUND = (0.10, 0.11, 0.13)
 #: Overhead view: each pin's number is written on the deck this far (m) in front of its spot,
 #: clear of the standing pin (belly radius 0.061 m) and of the spot in front (0.264 m).
 PIN_LABEL_BACK = 0.11
-
-VS = """#version 330
-uniform mat4 u_vp;
-uniform mat4 u_model;
-in vec3 in_pos;
-in vec3 in_normal;
-in vec3 in_color;
-out vec3 v_normal;
-out vec3 v_world;
-out vec3 v_color;
-void main() {
-    vec4 w = u_model * vec4(in_pos, 1.0);
-    v_world = w.xyz;
-    v_normal = mat3(u_model) * in_normal;
-    v_color = in_color;
-    gl_Position = u_vp * w;
-}
-"""
-#: The bowling scenes' shading, one GLSL function for both videos' shaders (the pins and lane
-#: here, the textured ball of :mod:`nbst.render.bowling_lane`): ambient 0.35 plus 0.65 Lambert,
-#: and a Blinn-Phong highlight (exponent 40, weight 0.3); the normal is turned towards the eye
-#: (the pins' meshes and the lane's flat solids are drawn from either side).
-SHADE = """
-vec3 shade(vec3 color, vec3 normal, vec3 world, vec3 light, vec3 eye) {
-    vec3 n = normalize(normal);
-    vec3 v = normalize(eye - world);
-    if (dot(n, v) < 0.0) n = -n;
-    float diff = max(dot(n, light), 0.0);
-    vec3 h = normalize(light + v);
-    float spec = pow(max(dot(n, h), 0.0), 40.0) * 0.3;
-    return color * (0.35 + 0.65 * diff) + vec3(spec);
-}
-"""
-FS = """#version 330
-uniform vec3 u_light;
-uniform vec3 u_eye;
-in vec3 v_normal;
-in vec3 v_world;
-in vec3 v_color;
-out vec4 f_color;
-""" + SHADE + """
-void main() {
-    f_color = vec4(shade(v_color, v_normal, v_world, u_light, u_eye), 1.0);
-}
-"""
-
 
 @dataclass(frozen=True)
 class Motion:
@@ -189,7 +144,7 @@ class BowlingRenderer(FrameRenderer):
         import trimesh
 
         from nbst.models.bowling import pin, scene
-        from nbst.render.shapes import Text
+        from nbst.render.core.shapes import Text
 
         if camera not in ("behind", "overhead", "both"):
             raise ValueError(f"camera must be behind, overhead or both, got {camera!r}")
@@ -200,13 +155,13 @@ class BowlingRenderer(FrameRenderer):
         panel_w = self.size[0] // n_cams
         px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
         chars = max(len(line) for line in self.readout(float(motion.times[-1])))
-        from nbst.render.shapes import text_cell
+        from nbst.render.core.shapes import text_cell
         while px > style.MIN_READOUT_PX and chars * text_cell(px)[0] > panel_w - 16:
             px -= 1
         self.text = Text(ctx, px)
         self.pin_text = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.024 * min(self.size)))))
         self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
-        self.prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
+        self.prog = ctx.program(vertex_shader=SOLID_VS, fragment_shader=SOLID_FS)
         self._mgl = moderngl
         L = np.array([0.3, 0.4, 1.0])
         self.prog["u_light"].value = tuple(L / np.linalg.norm(L))
@@ -402,7 +357,7 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.video import render_output
+    from nbst.render.core.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
     return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw), output,

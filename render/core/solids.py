@@ -2,7 +2,7 @@
 scene both build from (one place, not a copy in each).
 
 Rows are float32-ready (V, 9): position, normal, colour (RGB 0..1), unshared triangles, as the
-bowling videos' lit shader (``nbst.render.bowling.VS``/``FS``) takes them.
+bowling videos' lit shader (``nbst.render.core.shaders.SOLID_VS``/``SOLID_FS``) takes them.
 
 Compute only (numpy; trimesh for the box).
 """

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.render import style
-from nbst.render.gl import RenderError
+from nbst.render.core import style
+from nbst.render.core.gl import RenderError
 
 
 def video_kind(path) -> str:
@@ -479,7 +479,7 @@ def render_output(make_renderer, output, *, still=None, times=None, fps=None, pr
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.gl import create_context
+    from nbst.render.core.gl import create_context
 
     ctx = create_context()
     try:

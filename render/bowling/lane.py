@@ -1,7 +1,7 @@
 """A throw from the foul line in 3D (``nbst bowl throw --video/--still``): the full 60 ft lane
 with its marks, a ball whose grip and track turn with it, numbered pins and a readout.
 
-The throw is recorded, and the lane and ball laid out, by :mod:`nbst.render.bowling_throw`;
+The throw is recorded, and the lane and ball laid out, by :mod:`nbst.render.bowling.throw`;
 this module draws them.
 
 * **Cameras**: ``behind`` (from behind the bowler, following the ball until it is
@@ -24,15 +24,16 @@ import math
 
 import numpy as np
 
-from nbst.render import style
-from nbst.render.bowling import BACKGROUND, FS, PIN_RED, PIN_WHITE, SHADE, STRIPES_IN, VS, _flat, _pose
-from nbst.render.bowling_throw import (BEHIND_AHEAD, BEHIND_BACK, BEHIND_FOV, BEHIND_HEIGHT, FOLLOW_STOP_FT, LEGEND,
+from nbst.render.core import style
+from nbst.render.bowling.deck import BACKGROUND, PIN_RED, PIN_WHITE, STRIPES_IN, _flat, _pose
+from nbst.render.core.shaders import SHADE, SOLID_FS, SOLID_VS
+from nbst.render.bowling.throw import (BEHIND_AHEAD, BEHIND_BACK, BEHIND_FOV, BEHIND_HEIGHT, FOLLOW_STOP_FT, LEGEND,
                                        OVERHEAD_FROM_FT, OVERHEAD_SHARE, TRAIL_HALF_WIDTH, TRAIL_HALF_WIDTH_OVERHEAD,
                                        TRAIL_RGB, Throw, ball_texture, frame_times, lane_marks, lane_solids,
                                        ortho_panel, still_time)
-from nbst.render.gl import FrameRenderer, FrameTarget
-from nbst.render.scene3d import look_at, perspective
-from nbst.render.solids import ribbon  # shared with the crash video
+from nbst.render.core.gl import FrameRenderer, FrameTarget
+from nbst.render.core.camera import look_at, perspective
+from nbst.render.core.solids import ribbon  # shared with the crash video
 
 BALL_VS = """#version 330
 uniform mat4 u_vp;
@@ -94,7 +95,7 @@ class LaneRenderer(FrameRenderer):
         import trimesh
 
         from nbst.models.bowling import lane, pin, scene
-        from nbst.render.shapes import Text, text_cell
+        from nbst.render.core.shapes import Text, text_cell
 
         if camera not in CAMERAS:
             raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
@@ -121,7 +122,7 @@ class LaneRenderer(FrameRenderer):
         self.text = Text(ctx, px)
         self.small = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.022 * min(self.size)))))
         self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
-        self.prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
+        self.prog = ctx.program(vertex_shader=SOLID_VS, fragment_shader=SOLID_FS)
         self.ball_prog = ctx.program(vertex_shader=BALL_VS, fragment_shader=BALL_FS)
         L = np.array([0.3, 0.4, 1.0])
         for p in (self.prog, self.ball_prog):
@@ -460,7 +461,7 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
     """Render a recorded throw to ``output``: a .png at time ``still``, else a .mp4/.gif video.
 
     Args:
-        throw: the recorded throw from the foul line (``nbst.render.bowling_throw.record_throw``).
+        throw: the recorded throw from the foul line (``nbst.render.bowling.throw.record_throw``).
         output: the .mp4, .gif or .png to write.
         still: None for a video; seconds from the release: one frame then (clipped to the
             motion); a negative value: :func:`still_time`.
@@ -479,7 +480,7 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.video import render_output
+    from nbst.render.core.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
     if still is not None:

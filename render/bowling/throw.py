@@ -1,5 +1,5 @@
 """A throw from the foul line, recorded for the picture: its motion, the ball's texture and the
-lane's solids and marks (what :class:`nbst.render.bowling_lane.LaneRenderer` draws).
+lane's solids and marks (what :class:`nbst.render.bowling.lane.LaneRenderer` draws).
 
 * **Motion** (:func:`record_throw`): the frame of :mod:`nbst.models.bowling.lane.frame` itself:
   ``frame.run_frame`` with a recording hook, so the same compiled model (``frame.frame_model``),
@@ -28,9 +28,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nbst.render.bowling import BALL_RGB, Motion
-from nbst.render.solids import box as _box, flat_poly as _flat_poly  # shared with the crash video
-from nbst.render.bowling import frame_times as _deck_frame_times
+from nbst.render.bowling.deck import BALL_RGB, Motion
+from nbst.render.core.solids import box as _box, flat_poly as _flat_poly  # shared with the crash video
+from nbst.render.bowling.deck import frame_times as _deck_frame_times
 
 #: Guide dots (ft past the foul line) on these boards, counted from either edge.
 DOTS_FT = 7.0

@@ -1,7 +1,7 @@
 """A crash in 3D (``nbst render CRASH.json``): the road, the vehicles, their marks and the readout.
 
-The motion is the crash file's own replay (:mod:`nbst.render.crash_motion`); everything drawn
-comes from the file (:mod:`nbst.render.crash_scene`): the road and the vehicles are the
+The motion is the crash file's own replay (:mod:`nbst.render.crash.motion`); everything drawn
+comes from the file (:mod:`nbst.render.crash.scene`): the road and the vehicles are the
 scene's own geoms (their MJCF sizes, poses and colours), placed each frame by
 ``mj_kinematics`` from the recorded ``qpos``, so the wheels spin and steer as their joints do.
 
@@ -15,8 +15,8 @@ scene's own geoms (their MJCF sizes, poses and colours), placed each frame by
   vehicle's trail, skid marks and scrapes, and an impact ring at each first contact point
   from the moment of contact, labelled with the pair and the time (drawn over the vehicles in
   the overhead view, as a crash diagram marks its points of impact).
-* **Readout** (:mod:`nbst.render.crash_readout`) in a column on the right; slow motion around
-  each impact (:func:`nbst.render.crash_motion.frame_times`).
+* **Readout** (:mod:`nbst.render.crash.readout`) in a column on the right; slow motion around
+  each impact (:func:`nbst.render.crash.motion.frame_times`).
 
 Compute apart from I/O: :class:`CrashRenderer` returns frames; :func:`render_crash` is the thin
 writer the CLI calls; :func:`crash_kind` sniffs a file's kind.
@@ -27,13 +27,13 @@ import math
 
 import numpy as np
 
-from nbst.render import crash_readout as ro
-from nbst.render import crash_scene as cs
-from nbst.render import style
-from nbst.render.bowling import FS, VS
-from nbst.render.crash_motion import frame_times, slow_windows, slowed
-from nbst.render.gl import FrameRenderer, FrameTarget
-from nbst.render.scene3d import look_at, perspective
+from nbst.render.crash import readout as ro
+from nbst.render.crash import scene as cs
+from nbst.render.core import style
+from nbst.render.core.shaders import SOLID_FS, SOLID_VS
+from nbst.render.crash.motion import frame_times, slow_windows, slowed
+from nbst.render.core.gl import FrameRenderer, FrameTarget
+from nbst.render.core.camera import look_at, perspective
 
 CAMERAS = ("overhead", "behind", "both")
 #: Share of the frame's width the readout column takes, and the most it takes where its text
@@ -70,7 +70,7 @@ void main() {
     gl_Position = u_vp * vec4(in_pos, 1.0);
 }
 """
-#: A mark shows from its time on (crash_scene's rows): a ribbon whose vertices carry the times
+#: A mark shows from its time on (the crash scene's rows): a ribbon whose vertices carry the times
 #: they were laid grows between two samples as the frame's time passes.
 MARK_FS = """#version 330
 uniform float u_t;
@@ -114,7 +114,7 @@ def chase_yaw(times: np.ndarray, yaw: np.ndarray, tau: float = CHASE_TAU) -> np.
 class CrashRenderer(FrameRenderer):
     """Frames of a recorded crash: ``render(t)`` -> (H, W, 3) uint8.
 
-    d, script, model: ``crashfile.load``'s; motion: ``crash_motion.record``'s; camera: overhead |
+    d, script, model: ``crashfile.load``'s; motion: ``nbst.render.crash.motion.record``'s; camera: overhead |
     behind | both; follow: the chased vehicle's index (behind and both)."""
 
     def __init__(self, ctx, d: dict, script, model, motion, *, size=style.DEFAULT_SIZE, camera: str = "overhead",
@@ -123,7 +123,7 @@ class CrashRenderer(FrameRenderer):
         import mujoco
 
         from nbst.models.crash import crashfile
-        from nbst.render.shapes import Text, text_cell
+        from nbst.render.core.shapes import Text, text_cell
 
         if camera not in CAMERAS:
             raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
@@ -164,7 +164,7 @@ class CrashRenderer(FrameRenderer):
         self.text = Text(ctx, px)
         self.small = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.018 * min(self.size)))))
         self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
-        self.prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
+        self.prog = ctx.program(vertex_shader=SOLID_VS, fragment_shader=SOLID_FS)
         L = np.asarray(LIGHT) / np.linalg.norm(LIGHT)
         self.prog["u_light"].value = tuple(L)
         self.mprog = ctx.program(vertex_shader=MARK_VS, fragment_shader=MARK_FS)
@@ -403,7 +403,7 @@ class CrashRenderer(FrameRenderer):
         return vp[0] <= col < vp[0] + vp[2] and vp[1] <= row < vp[1] + vp[3]
 
     def _scale_bar(self, vp, vpm) -> None:
-        from nbst.render.shapes import Rect
+        from nbst.render.core.shapes import Rect
 
         _, ppm = top_view(self.bounds, vp)
         L = max((b for b in SCALE_BARS if b * ppm <= vp[2] / 4), default=SCALE_BARS[0])
@@ -463,7 +463,7 @@ def load(path):
     """(crash dict, Script, MjModel, CrashMotion) of the crash file ``path``: read through the crash
     file's gate (``crashfile.load``: one line naming the field) and replayed."""
     from nbst.models.crash import crashfile
-    from nbst.render.crash_motion import record
+    from nbst.render.crash.motion import record
 
     d, script, model = crashfile.load(path)
     return d, script, model, record(d, script, model)
@@ -477,20 +477,20 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
     Args:
         d, script, model: the checked crash file, its script and its MuJoCo model, as
             ``nbst.models.crash.crashfile.load`` returns them.
-        motion: the replayed motion (``nbst.render.crash_motion.record(d, script, model)``).
+        motion: the replayed motion (``nbst.render.crash.motion.record(d, script, model)``).
         output: the .mp4, .gif or .png to write.
         still: None for a video; seconds: one frame at that time (clipped to the motion).
         camera: overhead | behind | both.
         follow: the index of the vehicle the behind camera chases.
         size, fps: (width, height) pixels and frames per second (default 1280 x 720, 60).
         hold: seconds the last frame is held.
-        times: the frames' times (default :func:`.crash_motion.frame_times`: slowed at impacts).
+        times: the frames' times (default :func:`nbst.render.crash.motion.frame_times`: slowed at impacts).
         progress: None, or an object whose ``update(1)`` is called after each frame.
 
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.video import render_output
+    from nbst.render.core.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
     return render_output(lambda ctx: CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera,

@@ -4,13 +4,13 @@ the marks on the road (lane lines, targets, trails, skids, scrapes, impacts).
 Two row layouts, both float32:
 
 * **solids** (V, 9): position, normal, colour: triangles shaded by the bowling videos' lit shader
-  (``nbst.render.bowling.VS``/``FS``): the static scene baked in world coordinates
+  (``nbst.render.core.shaders.SOLID_VS``/``SOLID_FS``): the static scene baked in world coordinates
   (:func:`static_solids`), each vehicle geom in its own frame (:func:`geom_solid`);
 * **marks** (V, 8): position, RGBA, time: flat triangles on the road, each drawn from its time on
   (``-1``: always), so a ribbon whose vertices carry the times they were laid grows as the
   frame's time passes (:func:`ribbon_marks`).
 
-Compute only: numpy (and trimesh for the meshes); the GL lives in :mod:`nbst.render.crash`.
+Compute only: numpy (and trimesh for the meshes); the GL lives in :mod:`nbst.render.crash.video`.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from nbst.render.solids import box as _box, flat_poly as _flat_poly, ribbon as _ribbon
+from nbst.render.core.solids import box as _box, flat_poly as _flat_poly, ribbon as _ribbon
 
 #: Colours.
 GLASS = (0.16, 0.20, 0.26)
@@ -296,10 +296,10 @@ def tyre_solid(radius: float, half_width: float) -> np.ndarray:
     """(V, 9) a tyre about the y axis: black tread and sidewalls, grey faces with two light spokes."""
     import trimesh
 
-    from nbst.render.scene3d import _mesh_arrays
+    from nbst.render.core.camera import mesh_arrays
 
     m = trimesh.creation.cylinder(radius=radius, height=2 * half_width, sections=TYRE_SIDES)
-    pn = _mesh_arrays(m).astype(float)                     # (V, 6), axis along z
+    pn = mesh_arrays(m).astype(float)                     # (V, 6), axis along z
     tri = pn[:, :3].reshape(-1, 3, 3)
     cap = np.abs(pn[:, 5].reshape(-1, 3)[:, 0]) > 0.5
     ang = np.arctan2(tri[:, :, 1].mean(1), tri[:, :, 0].mean(1))

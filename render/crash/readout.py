@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from nbst.render.crash_motion import SLOW, slowed
+from nbst.render.crash.motion import SLOW, slowed
 
 OK, NO = "\u2713", "\u2717"
 DV = "\u0394v"

@@ -1,0 +1,8 @@
+"""The shared GL core of nbst.render, under every world's room (the disks, bowling, the crash):
+the one headless GL context and frame target (:mod:`.gl`), the 2D shapes and text
+(:mod:`.shapes`), the 3D solids (:mod:`.solids`), shaders (:mod:`.shaders`) and cameras
+(:mod:`.camera`), the look (:mod:`.style`) and the frame times and the video and PNG
+writers (:mod:`.video`). Importing it loads none of them (nor moderngl)."""
+from __future__ import annotations
+
+__all__: list[str] = []
