@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from nbst.errors import InputError
+
 #: Scale motions (:func:`gas_motion`): area fraction of the disks, radius (units), speeds
 #: (units/s) and duration (s). At this density a disk's mean free path is pi r / (2 phi) ~ 200
 #: units, about one collision per disk per second at the speeds drawn, plus wall bounces near
@@ -31,13 +33,13 @@ def gas_motion(n: int, *, seed: int = 1, t_final: float = GAS_T_FINAL, fraction:
 
     n = int(n)
     if n < 1:
-        raise ValueError(f"n must be >= 1, got {n}")
+        raise InputError(f"n must be >= 1, got {n}")
     r = GAS_RADIUS
     side = float(np.sqrt(n * np.pi * r * r / fraction))
     k = int(np.ceil(np.sqrt(n)))
     pitch = side / k
     if pitch < 2 * r * (1 + 1e-9):
-        raise ValueError(f"fraction {fraction:g} is too dense for a square grid")
+        raise InputError(f"fraction {fraction:g} is too dense for a square grid")
     ij = np.array([(a, b) for a in range(k) for b in range(k)][:n], dtype=float)
     start = (ij + 0.5) * pitch
     rng = np.random.default_rng(seed)

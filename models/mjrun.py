@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.problem import Problem
 
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT, build_model
@@ -63,10 +64,10 @@ def steps_needed(t_end: float, timestep: float) -> int:
 
 def check_steps(t_end: float, timestep: float, max_steps: int = MAX_STEPS, *,
                 hint: str = "raise it with --max-steps N or use a coarser --timestep") -> int:
-    """The step count, or ValueError (one line: why, and ``hint``: what changes it) above ``max_steps``."""
+    """The step count, or InputError (one line: why, and ``hint``: what changes it) above ``max_steps``."""
     steps = steps_needed(t_end, timestep)
     if steps > max_steps:
-        raise ValueError(f"t = {t_end:g} s at timestep {timestep:g} s is {steps:,} MuJoCo steps, over the limit "
+        raise InputError(f"t = {t_end:g} s at timestep {timestep:g} s is {steps:,} MuJoCo steps, over the limit "
                          f"of {max_steps:,} (each step's state is kept); {hint}")
     return steps
 
@@ -155,7 +156,7 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
     """Step the problem's scene from keyframe ``initial`` to ``t_end`` (default t_final).
 
     velocities : (N, 2) float, units/s
-    max_steps  : ValueError, before any work, if reaching t_end takes more steps (``check_steps``);
+    max_steps  : InputError, before any work, if reaching t_end takes more steps (``check_steps``);
                  aligned stepping: RuntimeError past max_steps accepted steps + micro-steps
     stepping   : "fixed" or "aligned" (module docstring)
     progress   : None or a callable progress(k): k more simulated steps of h done (every
@@ -165,7 +166,7 @@ def run_mujoco(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMEST
     import time as _time
 
     if stepping not in STEPPINGS:
-        raise ValueError(f"stepping must be one of {', '.join(STEPPINGS)}, got {stepping!r}")
+        raise InputError(f"stepping must be one of {', '.join(STEPPINGS)}, got {stepping!r}")
     t_end = float(problem.t_final if t_end is None else t_end)
     steps = check_steps(t_end, timestep, max_steps)
 
@@ -351,7 +352,7 @@ def rollout(problem: Problem, velocities, times, *, timestep: float = DEFAULT_TI
     """
     ts = np.asarray(times, dtype=float).reshape(-1)
     if ts.size and (np.any(np.diff(ts) < 0) or ts[0] < 0 or ts[-1] > problem.t_final * (1 + 1e-12)):
-        raise ValueError(f"times must be sorted and lie in [0, t_final = {problem.t_final:g}]")
+        raise InputError(f"times must be sorted and lie in [0, t_final = {problem.t_final:g}]")
     t_end = float(ts[-1]) if ts.size else 0.0
     run = run_mujoco(problem, velocities, timestep=timestep, unit=unit, t_end=t_end, max_steps=max_steps)
     return run.at(ts)

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst import palette
 from nbst.problem import Problem
 
@@ -72,9 +73,9 @@ class SceneOptions:
 
     def __post_init__(self):
         if not (np.isfinite(self.timestep) and self.timestep > 0):
-            raise ValueError(f"timestep must be a finite number > 0, got {self.timestep!r}")
+            raise InputError(f"timestep must be a finite number > 0, got {self.timestep!r}")
         if not (np.isfinite(self.unit) and self.unit > 0):
-            raise ValueError(f"unit must be a finite number > 0, got {self.unit!r}")
+            raise InputError(f"unit must be a finite number > 0, got {self.unit!r}")
 
     @property
     def stiffness(self) -> float:
@@ -103,7 +104,7 @@ def build_spec(problem: Problem, velocities=None, *, timestep: float = DEFAULT_T
     n = problem.n
     v = np.zeros((n, 2)) if velocities is None else np.asarray(velocities, dtype=float)
     if v.shape != (n, 2):
-        raise ValueError(f"velocities must have shape ({n}, 2), got {v.shape}")
+        raise InputError(f"velocities must have shape ({n}, 2), got {v.shape}")
     u = opt.unit
     W, H = (float(problem.box[0]) * u, float(problem.box[1]) * u)
     rmax = float(problem.radius.max()) * u
@@ -296,7 +297,7 @@ def full_precision(xml: str, spec, *, exact_attrs: dict | None = None, spec_name
             vals = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
             tokens = text.split()
             if len(tokens) > vals.size:
-                raise ValueError(f"MJCF {tag} {key}: {len(tokens)} numbers written, the spec has {vals.size}")
+                raise AssertionError(f"MJCF {tag} {key}: {len(tokens)} numbers written, the spec has {vals.size}")
             return f'{key}="{" ".join(_exact(x, float32) for x in vals[:len(tokens)])}"'
 
         return f"<{tag}{_ATTR.sub(attr, attrs)}{end}>"

@@ -68,6 +68,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from nbst.errors import InputError, MujocoError
+
 #: Default overlap tolerance, relative to ``model.stat.extent``: the touch is located so that the
 #: deepest new overlap is at most this (1e-15 x 0.8 m = 8e-16 m, a few ulps of a coordinate; the
 #: micro-step stays exact at any overlap MuJoCo reports, k eps h_c = 2u). An impact then errs by
@@ -268,10 +270,10 @@ def step_aligned(model, data, t_end: float, *, h: float | None = None, tol: floa
     """
     h = float(model.opt.timestep if h is None else h)
     if not (math.isfinite(h) and h > 0):
-        raise ValueError(f"h must be a finite number > 0, got {h!r}")
+        raise InputError(f"h must be a finite number > 0, got {h!r}")
     tol = float(TOL_REL * max(float(model.stat.extent), 1e-300) if tol is None else tol)
     if not (math.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be a finite number > 0, got {tol!r}")
+        raise InputError(f"tol must be a finite number > 0, got {tol!r}")
     st = _Stepper(model, data, h, tol)
     stats = AlignedStats()
     t0_wall = _time.perf_counter()
@@ -288,7 +290,7 @@ def step_aligned(model, data, t_end: float, *, h: float | None = None, tol: floa
             if left <= 4 * math.ulp(max(abs(t_end), 1.0)):
                 break
             if stats.steps + stats.impacts >= cap:
-                raise RuntimeError(f"aligned stepping: over max_steps = {max_steps} at t = {t0:g} s")
+                raise MujocoError(f"aligned stepping: over max_steps = {max_steps} at t = {t0:g} s")
             pending = _advance(st, stats, min(h, left))
             stats.steps += 1
             if on_step is not None:
@@ -448,7 +450,7 @@ def _resolve(st: _Stepper, stats: AlignedStats, on_event, on_step) -> None:
         try:
             st.step(hc)
             if d.warning[mj_badqacc].number > n_bad:
-                raise RuntimeError(f"aligned stepping: MuJoCo found the micro-step unstable at t = {float(d.time):g} s "
+                raise MujocoError(f"aligned stepping: MuJoCo found the micro-step unstable at t = {float(d.time):g} s "
                                    f"(micro-step {hc:.3g} s)")
         finally:
             m.geom_contype[:] = st.contype0
@@ -466,7 +468,7 @@ def _resolve(st: _Stepper, stats: AlignedStats, on_event, on_step) -> None:
                 on_event(t_touch, key[0], key[1], u)
         if on_step is not None:
             on_step(d)
-    raise RuntimeError(f"aligned stepping: more than {limit} impacts at t = {float(d.time):g} s (a jam: bodies "
+    raise MujocoError(f"aligned stepping: more than {limit} impacts at t = {float(d.time):g} s (a jam: bodies "
                        f"pinned between walls bounce without end)")
 
 

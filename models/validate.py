@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.problem import Problem
 
 from nbst.models.convergence import convergence_study, entry, fit_order, staged as run_stage
@@ -376,7 +377,7 @@ def choose_stepping(problem: Problem, exact, timestep: float, requested: str = "
     if requested in STEPPINGS:
         return requested, f"--stepping {requested} requested"
     if requested != "auto":
-        raise ValueError(f"stepping must be auto, fixed or aligned, got {requested!r}")
+        raise InputError(f"stepping must be auto, fixed or aligned, got {requested!r}")
     n = problem.n
     if n <= AUTO_FIXED_MAX_N:
         return "fixed", (f"auto: fixed steps for at most {AUTO_FIXED_MAX_N} disks ({n} here); "
@@ -399,7 +400,7 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
              convergence: bool = False, sensitivity: bool | None = None, progress=None) -> Validation:
     """Run ``velocities`` (N, 2, units/s) in MuJoCo and in the exact simulator; compare (see module doc).
 
-    max_steps   : ValueError before any work if t_final needs more MuJoCo steps
+    max_steps   : InputError before any work if t_final needs more MuJoCo steps
                   (default ``nbst.models.mjrun.MAX_STEPS``); the convergence ladder skips the
                   step sizes that need more
     stepping    : "auto" (``choose_stepping``), "fixed" or "aligned" (``nbst.models.mjrun.STEPPINGS``)
@@ -416,7 +417,7 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
     from nbst.models.mjrun import MAX_STEPS, check_steps, run_final, run_mujoco, steps_needed
 
     if not (np.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be > 0, got {tol!r}")
+        raise InputError(f"tol must be > 0, got {tol!r}")
     max_steps = MAX_STEPS if max_steps is None else int(max_steps)
     check_steps(problem.t_final, timestep, max_steps)
     t0 = time.perf_counter()

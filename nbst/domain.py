@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import unicodedata
 
+from nbst.errors import InputError
+
 
 # --------------------------------------------------------------------------- the JSON text
 
@@ -130,3 +132,22 @@ def plain(s) -> str:
         return s
     return "".join(ascii(ch)[1:-1] if _unprintable(ch) else ch for ch in s)
 
+
+def parse_number(text: str, *, integer: bool = False) -> int | float:
+    """A number written as text: an integer (underscores allowed) or a float.
+
+    Args:
+        text: the text, blanks around it ignored.
+        integer: read an ``int`` rather than a ``float``.
+
+    Returns:
+        the number (a float may be ``inf`` or ``nan``: the caller bounds it).
+
+    Raises:
+        InputError: the text is not a number of that kind.
+    """
+    t = str(text).strip()
+    try:
+        return int(t.replace("_", "")) if integer else float(t)
+    except (ValueError, OverflowError):
+        raise InputError(f"must be {'an integer' if integer else 'a number'}, got {text!r}") from None

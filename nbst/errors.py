@@ -7,7 +7,8 @@ otherwise). Library callers can catch the base, or one branch:
 - :class:`InputError`: a file, field or argument nbst refuses (problems, solutions, shot and
   throw files, formations, bowling deliveries). Also a ``ValueError``, as it always was.
 - :class:`OutputError`: an output path that cannot be written (a folder, a device, a full disk).
-- :class:`SolveError`: a search that cannot run as asked.
+- :class:`SolveError`: a search that cannot run as asked. Also a ``ValueError``: a parameter
+  out of its domain was one before.
 - :class:`MujocoError`: MuJoCo warned (a diverging or non-finite state, a bad model).
 - :class:`RenderError`: rendering cannot proceed (no GL, bad size, encoder failure).
 
@@ -33,7 +34,7 @@ class OutputError(NbstError):
     """An output path that cannot be written; the message names the path and the reason."""
 
 
-class SolveError(NbstError):
+class SolveError(NbstError, ValueError):
     """A search that cannot run as asked (a parameter out of its domain, a solver that does not exist)."""
 
 

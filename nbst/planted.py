@@ -22,6 +22,7 @@ import time
 import numpy as np
 from numba import njit
 
+from nbst.errors import InputError, SolveError
 from nbst.problem import Problem, problem_from_dict
 from nbst.search.aim import strike_velocity
 from nbst.sim import simulate
@@ -145,23 +146,27 @@ def planted(n: int, *, noncue: int = 0, radius: float = 15.0, seed: int, box=Non
 
     box: (W, H), or None for ``default_box(n)``. progress: None, or ``progress(stage, done, total)``,
     called between placement batches and before and after the exact simulation.
-    Raises ValueError when the request cannot be met (no cueable disk, disks do not fit).
+
+    Raises:
+        InputError: ``n``, ``noncue``, ``radius`` or ``box`` cannot be met (no cueable disk, the
+            disks do not fit).
+        SolveError: the planted motion needs more events than the simulator's cap.
     """
     if box is None:
         box = default_box(n)
     if n < 1:
-        raise ValueError("--planted needs at least 1 disk")
+        raise InputError(f"n (the number of disks) must be at least 1, got {n}")
     if not 0 <= noncue < n:
-        raise ValueError(f"--noncue must be between 0 and {n - 1} (at least one disk must be cueable)")
+        raise InputError(f"noncue must be between 0 and {n - 1} (at least one disk must be cueable), got {noncue}")
     if radius <= 0 or 2 * radius >= min(box):
-        raise ValueError(f"--radius must be > 0 and fit the {box[0]:g} x {box[1]:g} box")
+        raise InputError(f"radius must be > 0 and fit the {box[0]:g} x {box[1]:g} box, got {radius:g}")
     rng = np.random.default_rng(seed)
     W, H = box
     r = float(radius)
     starts, placed = place_disks(rng, n, r, box, progress=progress)
     if placed < n:
-        raise ValueError(f"could not place {n} disks of radius {r:g} in the {W:g} x {H:g} box "
-                         f"({place_tries(n):,} tries placed {placed:,}); use a smaller --radius or a larger --box")
+        raise InputError(f"could not place {n} disks of radius {r:g} in the {W:g} x {H:g} box "
+                         f"({place_tries(n):,} tries placed {placed:,}); use a smaller radius or a larger box")
     cue = np.arange(n) < n - noncue
     ang = rng.uniform(0, 2 * np.pi, n)
     speed = rng.uniform(*SPEED_RANGE, n) * speed_scale(n, box) / t_final
@@ -192,8 +197,8 @@ def planted(n: int, *, noncue: int = 0, radius: float = 15.0, seed: int, box=Non
         progress("simulating the planted motion", 0, 1)
     tr = simulate(problem_from_dict(d), v)
     if tr.truncated:
-        raise ValueError(f"the planted motion of {n} disks needs more events than the simulator's cap "
-                         f"({tr.events.size:,} events by t = {tr.t_end:.3g} s); use fewer disks or a larger --box")
+        raise SolveError(f"the planted motion of {n} disks needs more events than the simulator's cap "
+                         f"({tr.events.size:,} events by t = {tr.t_end:.3g} s); use fewer disks or a larger box")
     if progress is not None:
         progress("simulating the planted motion", 1, 1)
     final = np.clip(tr.final_positions, r, np.array([W - r, H - r]))  # round-off at a wall

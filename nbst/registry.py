@@ -61,12 +61,12 @@ class Registry(Generic[T]):
 
     def register(self, name: str, value: T, *, help: str = "", aliases: tuple[str, ...] = ()) -> T:
         """Add ``value`` under ``name`` (and ``aliases``); returns ``value``. A name or alias that
-        is already taken raises ValueError (each choice is registered once)."""
+        is already taken raises InputError (each choice is registered once)."""
         if not name or name != name.strip():
-            raise ValueError(f"{self.what} name {name!r}: must be non-empty, without surrounding blanks")
+            raise InputError(f"{self.what} name {name!r}: must be non-empty, without surrounding blanks")
         for key in (name, *aliases):
             if self._fold(key) in self._keys:
-                raise ValueError(f"{self.what} {key!r} is already registered")
+                raise InputError(f"{self.what} {key!r} is already registered")
         self._entries[name] = Entry(name, value, help, tuple(aliases))
         for key in (name, *aliases):
             self._keys[self._fold(key)] = name

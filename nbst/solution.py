@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.domain import MAX_BOX_CROSSINGS
 from nbst.outputs import dumps_strict, json_safe, write_json_atomic  # noqa: F401 - dumps_strict re-exported
 from nbst.problem import Problem, ProblemError, _Checker, box_crossings, read_json
@@ -100,7 +101,7 @@ class SolveResult:
         for key in RESULT_KEYS:
             mine = getattr(self, key)
             if not _same(mine, typed[key]):
-                raise ValueError(f"SolveResult.{key} = {mine!r} but meta[{key!r}] = {typed[key]!r}: "
+                raise InputError(f"SolveResult.{key} = {mine!r} but meta[{key!r}] = {typed[key]!r}: "
                                  "build a result with SolveResult.from_meta or with_meta")
 
     @classmethod

@@ -23,6 +23,8 @@ from typing import Callable
 
 import numpy as np
 
+from nbst.errors import InputError
+
 
 @dataclass
 class Views:
@@ -69,7 +71,7 @@ class BatchRunner:
         B, m = self.batch, self.model
         s = len(qpos0)
         if s > self.size:
-            raise ValueError(f"run: {s} simulations; this runner holds {self.size}")
+            raise InputError(f"run: {s} simulations; this runner holds {self.size}")
         ids = None if s == self.size else np.arange(s)
         B.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE.value)
         qpos, qvel, ctrl, sensordata = B.qpos, B.qvel, B.ctrl, B.sensordata

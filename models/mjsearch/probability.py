@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import InputError
+
 #: Wilson interval's z for 95 %.
 Z95 = 1.959963984540054
 
@@ -28,7 +30,7 @@ Z95 = 1.959963984540054
 def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
     """The Wilson score interval for ``k`` successes in ``n`` trials (95 % by default)."""
     if n <= 0 or not 0 <= k <= n:
-        raise ValueError(f"wilson: need 0 <= k <= n and n > 0, got k={k}, n={n}")
+        raise InputError(f"wilson: need 0 <= k <= n and n > 0, got k={k}, n={n}")
     p = k / n
     den = 1 + z * z / n
     mid = (p + z * z / (2 * n)) / den

@@ -38,6 +38,7 @@ from typing import Callable
 
 import numpy as np
 
+from nbst.errors import SolveError
 from nbst.models.mjsearch.archive import BATCH, Space
 
 #: Uniform exploration before CMA-ES restarts (capped at a quarter of the budget).
@@ -217,7 +218,7 @@ def search(evaluate: Callable, space: Space, target: int, *, seed: int, max_roll
     if ev.best is None:
         if stopped == "interrupted":
             raise KeyboardInterrupt
-        raise ValueError("max_rollouts must allow at least one rollout")
+        raise SolveError("max_rollouts must allow at least one rollout")
     cost, dist, sig, x = ev.best
     return Found(target=int(target), x=x, signature=sig, distance=dist, cost=cost, rollouts=ev.rollouts,
                  restarts=restarts, stopped=stopped, seed=int(seed), wall_time=time.perf_counter() - t0,

@@ -48,6 +48,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from nbst.errors import SolveError
+
 #: Candidates per generation: along the cross-entropy direction, and Gaussian.
 ALONG = (0.5, 1.0, 2.0)
 GAUSS = 5
@@ -198,11 +200,11 @@ def maximise(problem: Problem, starts: list, *, budget: int, seed: int, n: int, 
     the outcome; ``budget``: noisy rollouts for the search; ``n``: copies of the fresh
     estimate (seed ``seed``). See the module docstring for the method."""
     if not (isinstance(budget, int) and budget >= 1):
-        raise ValueError(f"budget: must be a whole number of frames >= 1, got {budget!r}")
+        raise SolveError(f"budget: must be a whole number of frames >= 1, got {budget!r}")
     if not (isinstance(n, int) and n >= 1):
-        raise ValueError(f"n: must be a whole number >= 1, got {n!r}")
+        raise SolveError(f"n: must be a whole number >= 1, got {n!r}")
     if not starts:
-        raise ValueError("starts: give at least one")
+        raise SolveError("starts: give at least one")
     moved = np.asarray(problem.moved, dtype=float)
     ss = np.random.SeedSequence([int(seed), SALT])
     screen_seed = int(ss.generate_state(1, np.uint64)[0] >> 1)

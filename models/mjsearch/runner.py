@@ -47,7 +47,7 @@ from typing import Callable
 
 import numpy as np
 
-from nbst.errors import MujocoError
+from nbst.errors import InputError, MujocoError
 
 #: A closed-loop controller: (rollout index, step, MjData at that step) -> (nu,) control.
 Controller = Callable[[int, int, object], np.ndarray]
@@ -120,7 +120,7 @@ class Runner:
         import mujoco
 
         if (duration is None) == (nstep is None):
-            raise ValueError("Runner: give duration or nstep (one of them)")
+            raise InputError("Runner: give duration or nstep (one of them)")
         self.model = model
         self.jobs = max(1, int(jobs or os.cpu_count() or 1))
         self.nstep = int(nstep) if nstep is not None else n_steps(model, duration)
@@ -247,9 +247,9 @@ class Runner:
         B = len(states0)
         if controller is not None:
             if control is not None:
-                raise ValueError("run: give control (open loop) or controller (closed loop), not both")
+                raise InputError("run: give control (open loop) or controller (closed loop), not both")
             if not (isinstance(chunk, int) and chunk >= 1):
-                raise ValueError(f"run: a controller needs chunk, a whole number of steps >= 1, got {chunk!r}")
+                raise InputError(f"run: a controller needs chunk, a whole number of steps >= 1, got {chunk!r}")
             jobs = [(i, s) for i, s in enumerate(states0)]
 
             def one(job):

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from nbst.domain import parse_number
+from nbst.errors import InputError
 from nbst.problem import ProblemError
 
 
@@ -56,8 +58,8 @@ class Bounded:
     def __call__(self, text: str):
         t = str(text).strip()
         try:
-            v = int(t.replace("_", "")) if self.integer else float(t)
-        except (ValueError, OverflowError):
+            v = parse_number(t, integer=self.integer)
+        except InputError:
             kind = "an integer" if self.integer else "a number"
             raise argparse.ArgumentTypeError(f"{self.what} must be {kind}, got {text!r}") from None
         bad = (not self.integer and v != v) or (not self.integer and abs(v) == float("inf"))

@@ -180,13 +180,11 @@ def cmd_generate(args) -> int:
         from nbst.planted import planted
 
         stages = _Stages(args.quiet, announce=args.planted >= ANNOUNCE_SIMULATION_FROM)
-        try:
+        try:  # an InputError (no cueable disk, the disks do not fit) reaches main's one line
             problem, v = planted(args.planted, noncue=args.noncue or 0, radius=args.radius, seed=seed, box=box,
                                  t_final=args.t_final,
                                  target_radius=args.target_radius if args.target_radius is not None
                                  else PLANTED_TARGET_RADIUS, name=args.name, progress=stages)
-        except ValueError as e:
-            return _refuse(str(e))
         finally:
             stages.close()
         info = problem.raw["planted"]

@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
+from nbst.errors import SolveError
 from nbst.search.ops import rng_uniform
 from nbst.sim.primitives import fold, images, mirror, pair_tau, strike_ratio
 
@@ -262,7 +263,7 @@ def bank_shot(problem, i, kx, ky):
 
 def strike(problem, c, s, T=None):
     """(velocity (2,), t_hit) for cue disk c to send resting disk s straight to T
-    (default: s's target) at t_final; raises ValueError when c is on the wrong side."""
+    (default: s's target) at t_final; raises SolveError when c is on the wrong side."""
     T = problem.target[s] if T is None else np.asarray(T, float)
     out = np.empty(2)
     t_hit = strike_velocity(np.ascontiguousarray(problem.start[c]), float(problem.radius[c]), float(problem.mass[c]),
@@ -270,7 +271,7 @@ def strike(problem, c, s, T=None):
                             float(problem.mass[s]), np.ascontiguousarray(T, dtype=float),
                             float(problem.t_final), out)
     if t_hit < 0:
-        raise ValueError(f"disk {c} cannot strike disk {s} towards {tuple(T)}: it would come from the far side")
+        raise SolveError(f"disk {c} cannot strike disk {s} towards {tuple(T)}: it would come from the far side")
     return out, t_hit
 
 

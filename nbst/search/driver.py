@@ -144,7 +144,7 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = D
     rec_v = np.zeros((max_trials // record_every if record_every > 0 else 0, problem.n, 2))
     if params.nbst_loop:
         if record_every > 0:
-            raise ValueError("record_every is supported by the paper's loop only (variants A-H)")
+            raise SolveError("record_every is supported by the paper's loop only (variants A-H)")
         advance: _NbstStepper | _PaperStepper = _NbstStepper(problem, params, s, prm, seed)
     else:
         advance = _PaperStepper(problem, params, s, prm, rec_v)

@@ -12,6 +12,7 @@ from typing import Callable
 
 import numpy as np
 
+from nbst.errors import SolveError
 from nbst.constants import MAX_EVENTS
 from nbst.problem import Problem, ProblemError
 from nbst.search.loop import OP_NAMES as OP_NAMES_PAPER
@@ -132,7 +133,7 @@ class SearchParams:
     robust_polish: int = ROBUST_POLISH
 
     def __post_init__(self) -> None:
-        """Check every field on its own; a bad one raises ValueError naming it."""
+        """Check every field on its own; a bad one raises SolveError naming it."""
         for name, ok, want in _FIELD_RULES:
             value = getattr(self, name)
             try:
@@ -140,7 +141,7 @@ class SearchParams:
             except (TypeError, ValueError):
                 good = False
             if not good:
-                raise ValueError(f"SearchParams.{name}: must be {want}, got {value!r}")
+                raise SolveError(f"SearchParams.{name}: must be {want}, got {value!r}")
 
     @property
     def nbst_loop(self) -> bool:

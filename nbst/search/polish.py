@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from nbst.errors import InputError
 from nbst.problem import Problem
 from nbst.search.ops import limit_crossings
 from nbst.sim import STATUS_OK, alloc_work, cost_signature, run
@@ -216,7 +217,7 @@ def polish(problem: Problem, velocities, *, max_sims: int = 100, tol: float = 0.
     """
     v = np.array(velocities, dtype=np.float64, order="C")
     if v.shape != (problem.n, 2):
-        raise ValueError(f"velocities have shape {v.shape}; expected ({problem.n}, 2)")
+        raise InputError(f"velocities have shape {v.shape}; expected ({problem.n}, 2)")
     cue = np.flatnonzero(problem.cueable).astype(np.int64)
     n = problem.n
     scratch = alloc_polish(n, cue.size, POLISH_EVENT_CAP)

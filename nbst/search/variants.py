@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from nbst.errors import SolveError
 from nbst.constants import ROUNDOFF_REL
 from nbst.registry import Registry
 
@@ -60,7 +61,7 @@ class Variant:
 
 def _box_width(problem: Problem | None) -> Mapping[str, Any]:
     if problem is None:
-        raise ValueError("variant E needs the problem (R = box width)")
+        raise SolveError("variant E needs the problem (R = box width)")
     return {"signature_radius": float(problem.width), "init_population": 60, "sig_limit": 60}
 
 

@@ -11,6 +11,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from nbst.errors import InputError
 from nbst.constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, PARALLEL_BATCH, WALL_NAMES, many_body,
                             max_events_for)
 from nbst.problem import Problem
@@ -50,11 +51,11 @@ def signature_words_to_int(words) -> int:
 
 def _check_velocities(problem: Problem, V: np.ndarray) -> None:
     if V.shape[-2:] != (problem.n, 2):
-        raise ValueError(f"velocities have shape {V.shape}; expected (..., {problem.n}, 2) for problem {problem.name!r}")
+        raise InputError(f"velocities have shape {V.shape}; expected (..., {problem.n}, 2) for problem {problem.name!r}")
     if not np.all(np.isfinite(V)):
-        raise ValueError("velocities must be finite")
+        raise InputError("velocities must be finite")
     if np.any(V[..., ~problem.cueable, :] != 0.0):
-        raise ValueError("noncueable disks must have zero initial velocity")
+        raise InputError("noncueable disks must have zero initial velocity")
 
 
 def evaluate(problem: Problem, V: ArrayLike, *, max_events: int | None = None,
@@ -87,7 +88,7 @@ def evaluate_events(problem: Problem, V: ArrayLike, *, max_events: int | None = 
     n_events (B,) int64)."""
     V = np.ascontiguousarray(V, dtype=np.float64)
     if V.ndim != 3:
-        raise ValueError(f"V must have shape (B, N, 2), got {V.shape}")
+        raise InputError(f"V must have shape (B, N, 2), got {V.shape}")
     _check_velocities(problem, V)
     ka = problem.kernel_arrays()
     n = problem.n
@@ -221,7 +222,7 @@ class Trajectory:
         """
         ts = np.asarray(t, dtype=float)
         if np.any(ts < 0.0) or np.any(ts > self.problem.t_final * (1 + 1e-12)):
-            raise ValueError(f"t must lie in [0, t_final = {self.problem.t_final}]")
+            raise InputError(f"t must lie in [0, t_final = {self.problem.t_final}]")
         if self.truncated:
             ts = np.minimum(ts, self.end_time)
         if self._dense(replay):
@@ -351,7 +352,7 @@ def simulate(problem: Problem, velocities: ArrayLike, *, max_events: int | None 
         v0 = v0.view()      # (numba compiles writable and read-only arrays apart; the cell-grid
         v0.setflags(write=False)  # kernel takes ~1 min a signature on a cold cache)
     if v0.ndim != 2:
-        raise ValueError(f"velocities must have shape (N, 2), got {v0.shape}")
+        raise InputError(f"velocities must have shape (N, 2), got {v0.shape}")
     _check_velocities(problem, v0)
     ka = problem.kernel_arrays()
     x0 = ka.start

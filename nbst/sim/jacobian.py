@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from nbst.errors import InputError, SolveError
 from nbst.problem import Problem
 from nbst.sim.kernel import STATUS_OK, alloc_work, run
 from nbst.sim.primitives import contact_normal, impulse_share, replay_event, wall_axis
@@ -186,7 +187,7 @@ def event_record(problem: Problem, velocities, *, max_events: int = 100_000):
         if st == STATUS_OK:
             break
         if n_ev < cap:  # truncated by max_events (or stalled), not by the buffer
-            raise RuntimeError("the motion needs more events than max_events (or jams); no Jacobian")
+            raise SolveError("the motion needs more events than max_events (or jams); no Jacobian")
         cap *= 4
     return final, n_ev, ev_t[:n_ev].copy(), ev_i[:n_ev].copy(), ev_j[:n_ev].copy(), ev_s[:n_ev].copy()
 
@@ -216,7 +217,7 @@ def transition_jacobian(problem: Problem, velocities, t: float, *, max_events: i
     """
     t = float(t)
     if not 0.0 <= t <= float(problem.t_final):
-        raise ValueError(f"t must lie in [0, t_final = {problem.t_final}], got {t}")
+        raise InputError(f"t must lie in [0, t_final = {problem.t_final}], got {t}")
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
     ka = problem.kernel_arrays()
     _, n_ev, ev_t, ev_i, ev_j, ev_s = event_record(problem, v0, max_events=max_events)

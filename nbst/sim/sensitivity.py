@@ -60,6 +60,7 @@ import math
 import numpy as np
 from numba import njit
 
+from nbst.errors import InputError
 from nbst.problem import Problem
 from nbst.sim.jacobian import carry_tangents, event_record, jacobian_from_events
 from nbst.sim.primitives import IMPACT_NONE, IMPACT_PAIR, IMPACT_WALL, contact_normal, impulse_share, replay_event
@@ -180,7 +181,7 @@ def analyze(problem: Problem, velocities, *, timestep: float | None = None) -> d
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
     n = problem.n
     if v0.shape != (n, 2):
-        raise ValueError(f"velocities must have shape ({n}, 2), got {v0.shape}")
+        raise InputError(f"velocities must have shape ({n}, 2), got {v0.shape}")
     ka = problem.kernel_arrays()
     mass = ka.mass
     cue = np.flatnonzero(problem.cueable).astype(np.int64)
@@ -209,7 +210,7 @@ def analyze(problem: Problem, velocities, *, timestep: float | None = None) -> d
         return out
     h = float(timestep)
     if not (math.isfinite(h) and h > 0.0):
-        raise ValueError(f"timestep must be a finite number > 0, got {timestep!r}")
+        raise InputError(f"timestep must be a finite number > 0, got {timestep!r}")
     err = np.empty((n_ev, n, 2))
     errn = np.empty((n_ev, n, 2))
     impact = np.empty(n_ev, np.int64)

@@ -23,6 +23,9 @@ With ``jobs`` = 1 its two islands take turns in threads of this process, chunk b
 core): the result of ``jobs`` = 2. A portfolio island whose search stops by patience with budget
 left restarts with the next configuration from a fresh seed (``run_island``). On an all-cueable
 problem the planner never runs: one search, no portfolio (``portfolio_for``).
+
+Length: the parent's lockstep rounds (``_Rounds``, ``solve_islands``) and the islands' side of
+them (``_island_body``, its process, thread and Dask hosts) are one protocol, read together.
 """
 from __future__ import annotations
 
@@ -38,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from nbst.errors import SolveError
 from nbst.outputs import signals_deferred
 from nbst.problem import Problem
 from nbst.search.params import SearchProgress
@@ -265,7 +269,7 @@ class _Rounds:
         for k in sorted(self.live):
             try:
                 if not self.conns[k].poll(ISLAND_TIMEOUT):
-                    raise RuntimeError(f"island {k} stopped answering")
+                    raise SolveError(f"island {k} stopped answering")
                 with signals_deferred():  # a message taken is a message booked: a Ctrl-C waits for it
                     self._book(k, self.conns[k].recv(), waiting)
             except (EOFError, OSError):  # the worker died (killed): lost, the others go on
@@ -293,7 +297,7 @@ class _Rounds:
             self.trials[k] = msg[2].trials
             self.live.discard(k)
         else:
-            raise RuntimeError(f"island {k} failed: {msg[2]}")
+            raise SolveError(f"island {k} failed: {msg[2]}")
 
     def answer_pending(self) -> None:
         """Give the waiting workers the word (also those a Ctrl-C left unanswered); a Ctrl-C cannot
@@ -349,7 +353,7 @@ def solve_islands(problem: Problem, *, jobs: int, seed: int | None = None, algor
     """
     jobs = int(jobs)
     if jobs < 1:
-        raise ValueError(f"jobs must be >= 1, got {jobs}")
+        raise SolveError(f"jobs must be >= 1, got {jobs}")
     algorithm = SOLVERS.parse(algorithm, source="<search parameters>", field="algorithm")
     if SOLVERS[algorithm].one_process(problem):
         return run_solver(algorithm, problem, SolveRequest(seed=seed, max_trials=max_trials, patience=patience,
