@@ -56,14 +56,14 @@ def physics() -> None:
     from nbst.models.crash import checks, vehicle
 
     print("braking on locked wheels (m): type, v0 m/s, mu, measured, v^2/2 mu g, error")
-    for t in vehicle.TYPES:
+    for t in vehicle.VEHICLE_TYPES:
         for v in (20.0, 30.0):
             for mu in (0.8, 0.5):
                 d = checks.braking_distance(t, v, mu)
                 th = v * v / (2 * mu * vehicle.G)
                 print(f"  {t:6s} {v:4.0f} {mu:4.2f} {d:7.2f} {th:7.2f} {100 * (d / th - 1):+6.2f} %")
     print("tilt table (deg): type, uphill wheels lift, tips over, atan(SSF)")
-    for t, vt in vehicle.TYPES.items():
+    for t, vt in ((e.name, e.value) for e in vehicle.VEHICLE_TYPES.entries()):
         r = checks.tilt_angle(t)
         print(f"  {t:6s} {r.lift_deg:6.2f} {r.tip_deg:6.2f} {math.degrees(math.atan(vt.ssf)):6.2f}")
     print("restitution, sedan into a standing sedan: closing km/h, e, band, contact ms, momentum after/before")
@@ -75,7 +75,7 @@ def physics() -> None:
     print("NCAP frontal, 56 km/h into a rigid wall: type, pulse ms, mean g, restitution, penetration m "
           f"(bracket {checks.NCAP_DURATION_S[0] * 1e3:.0f}-{checks.NCAP_DURATION_S[1] * 1e3:.0f} ms, "
           f"{checks.NCAP_MEAN_G[0]:.0f}-{checks.NCAP_MEAN_G[1]:.0f} g)")
-    for t in vehicle.TYPES:
+    for t in vehicle.VEHICLE_TYPES:
         r = checks.barrier(t, 56.0)
         print(f"  {t:6s} {1e3 * r.duration:5.0f} {r.mean_g:6.1f} {r.restitution:6.3f} {r.penetration:6.3f}")
 

@@ -11,7 +11,12 @@ from nbst.models.crash import checks, vehicle
 G = vehicle.G
 
 
-@pytest.mark.parametrize("type_name", sorted(vehicle.TYPES))
+def _all_types():
+    """Every registered vehicle type, in registration order."""
+    return [vehicle.VEHICLE_TYPES[name] for name in vehicle.VEHICLE_TYPES]
+
+
+@pytest.mark.parametrize("type_name", sorted(vehicle.VEHICLE_TYPES))
 @pytest.mark.parametrize("speed", [20.0, 30.0])
 @pytest.mark.parametrize("mu", [0.8, 0.5], ids=["dry", "wet"])
 def test_braking_distance_is_v2_over_2_mu_g(type_name, speed, mu):
@@ -23,27 +28,27 @@ def test_braking_distance_is_v2_over_2_mu_g(type_name, speed, mu):
 
 
 def test_ssf_is_track_over_twice_the_cg_height():
-    for vt in vehicle.TYPES.values():
+    for vt in _all_types():
         assert vt.track / (2 * vt.cg_height) == pytest.approx(vt.ssf, rel=1e-12)
 
 
 def test_the_scene_carries_the_vehicles_mass():
     from nbst.models.crash import road, scene
 
-    vs = [scene.SceneVehicle(f"v{i}", vt, 10.0 * i, 0.0, 0.0) for i, vt in enumerate(vehicle.TYPES.values())]
+    vs = [scene.SceneVehicle(f"v{i}", vt, 10.0 * i, 0.0, 0.0) for i, vt in enumerate(_all_types())]
     m = scene.build_spec(road.Road(layout="straight"), vs, timestep=0.002).compile()
     L = scene.layout(m, len(vs))
-    for mass, vt in zip(L.mass, vehicle.TYPES.values()):
+    for mass, vt in zip(L.mass, _all_types()):
         assert mass == pytest.approx(vt.mass, rel=1e-9)  # body + 4 corners: exact by construction
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("type_name", sorted(vehicle.TYPES))
+@pytest.mark.parametrize("type_name", sorted(vehicle.VEHICLE_TYPES))
 def test_tilt_table_tips_at_the_static_stability_factor(type_name):
     # a rigid vehicle tips when the resultant of gravity passes over the low wheels: tan = SSF.
     # 2 degrees (the issue's tolerance): the springs let the body roll and rise a little first.
     r = checks.tilt_angle(type_name)
-    rigid = math.degrees(math.atan(vehicle.TYPES[type_name].ssf))
+    rigid = math.degrees(math.atan(vehicle.VEHICLE_TYPES[type_name].ssf))
     assert abs(r.tip_deg - rigid) <= 2.0, (r, rigid)
     assert r.lift_deg <= r.tip_deg + checks.TILT_RESOLUTION  # the uphill wheels lift before it tips
 
@@ -71,7 +76,7 @@ def test_restitution_falls_with_impact_speed_inside_the_published_band():
     assert e[0] - e[-1] >= 0.05, curve
 
 
-@pytest.mark.parametrize("type_name", sorted(vehicle.TYPES))
+@pytest.mark.parametrize("type_name", sorted(vehicle.VEHICLE_TYPES))
 def test_ncap_frontal_pulse_in_the_published_range(type_name):
     r = checks.barrier(type_name, 56.0)
     lo, hi = checks.NCAP_DURATION_S

@@ -211,3 +211,39 @@ def test_crash_commands_refuse_bad_input_in_one_line(tmp_path, capsys):
         assert err.count("\n") == 0 and "Traceback" not in err, err
         for w in words:
             assert w in err, (argv, err)
+
+
+def test_every_vehicle_file_is_registered_once_and_read_exactly():
+    """A vehicle type is one data file (models/crash/vehicles/) and one registry entry; the file's
+    numbers are the type's, bit for bit (the scenes and replays depend on them)."""
+    from importlib import resources
+
+    from nbst.models.crash import vehicle as V
+
+    folder = resources.files("nbst.models.crash").joinpath("vehicles")
+    files = sorted(f.name for f in folder.iterdir() if f.name.endswith(".json"))
+    assert files == sorted(f"{n}.json" for n in V.VEHICLE_TYPES)
+    for name in V.VEHICLE_TYPES:
+        d = json.loads(folder.joinpath(f"{name}.json").read_text(encoding="utf-8"))
+        vt = V.VEHICLE_TYPES[name]
+        assert vt.name == name and all(getattr(vt, k) == v for k, v in d.items() if k not in ("kind", "schema_version"))
+    assert V.VEHICLE_TYPES["sedan"].mass == 1450.0 and V.VEHICLE_TYPES["suv"].power == 200e3
+
+
+@pytest.mark.parametrize("edit, words", [
+    ({"mass": "heavy"}, "mass: must be a finite number"),
+    ({"wings": 2}, "wings: unknown field"),
+    ({"label": 3}, "label: must be a string"),
+    ({"kind": "nbst-crash-script"}, "kind 'nbst-crash-vehicle'"),
+])
+def test_a_bad_vehicle_file_is_refused_naming_the_field(edit, words):
+    from nbst.errors import InputError
+    from nbst.models.crash import vehicle as V
+
+    d = {"kind": V.VEHICLE_KIND, "schema_version": 1, **{k: v for k, v in vars(V.VEHICLE_TYPES["van"]).items()}}
+    assert V.vehicle_type_from_dict(d) == V.VEHICLE_TYPES["van"]
+    with pytest.raises(InputError, match=words):
+        V.vehicle_type_from_dict({**d, **edit}, source="van.json")
+    del d["mass"]
+    with pytest.raises(InputError, match="mass: missing"):
+        V.vehicle_type_from_dict(d)

@@ -65,7 +65,7 @@ def braking_distance(type_name: str, speed: float, mu: float, *, timestep: float
     road = road_mod.Road(layout="straight", width=12.0, length=max(200.0, 2 * speed ** 2 / (mu * G) + 40),
                          friction=mu)
     x0 = -road.length / 2 + 10
-    v = scene_mod.SceneVehicle("v0", veh.TYPES[type_name], x0, 0.0, 0.0)
+    v = scene_mod.SceneVehicle("v0", veh.VEHICLE_TYPES[type_name], x0, 0.0, 0.0)
     _, m = _model(road, [v], timestep)
     d = mujoco.MjData(m)
     d.qpos[:], d.qvel[:] = scene_mod.initial_state(m, [v], [speed])
@@ -115,7 +115,7 @@ def tilt_angle(type_name: str, *, timestep: float = TIMESTEP, table_friction: fl
     import mujoco
 
     road = road_mod.Road(layout="straight", width=12.0, length=40.0, friction=table_friction)
-    v = scene_mod.SceneVehicle("v0", veh.TYPES[type_name], 0.0, 0.0, 0.0)
+    v = scene_mod.SceneVehicle("v0", veh.VEHICLE_TYPES[type_name], 0.0, 0.0, 0.0)
     _, m = _model(road, [v], timestep)
     d = mujoco.MjData(m)
     L = scene_mod.layout(m, 1)
@@ -188,7 +188,7 @@ def impact(type_name: str, speed_kmh: float, *, timestep: float = TIMESTEP, othe
     import mujoco
 
     road = road_mod.Road(layout="straight", width=12.0, length=200.0)
-    a, b = veh.TYPES[type_name], veh.TYPES[other or type_name]
+    a, b = veh.VEHICLE_TYPES[type_name], veh.VEHICLE_TYPES[other or type_name]
     gap = (a.a + a.front_overhang) + (b.length - b.a - b.front_overhang) + 0.5  # CoM to CoM: 0.5 m between bumpers
     vs = [scene_mod.SceneVehicle("v0", a, -gap, 0.0, 0.0), scene_mod.SceneVehicle("v1", b, 0.0, 0.0, 0.0)]
     _, m = _model(road, vs, timestep)
@@ -235,7 +235,7 @@ def barrier(type_name: str, speed_kmh: float = 56.0, *, timestep: float = TIMEST
     """A vehicle of ``type_name`` at ``speed_kmh`` square into a rigid wall (a barrier 2 m tall)."""
     import mujoco
 
-    vt = veh.TYPES[type_name]
+    vt = veh.VEHICLE_TYPES[type_name]
     front = vt.a + vt.front_overhang
     wall_x = 5.0
     road = road_mod.Road(layout="straight", width=12.0, length=200.0,

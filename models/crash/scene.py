@@ -125,7 +125,7 @@ def settled(type_name: str, timestep: float) -> tuple:
     import mujoco
 
     r = road_mod.Road(layout="straight", width=10.0, length=40.0)
-    spec = build_spec(r, [SceneVehicle("v0", veh.TYPES[type_name], 0.0, 0.0, 0.0)], timestep=timestep)
+    spec = build_spec(r, [SceneVehicle("v0", veh.VEHICLE_TYPES[type_name], 0.0, 0.0, 0.0)], timestep=timestep)
     m = spec.compile()
     d = mujoco.MjData(m)
     mujoco.mj_step(m, d, nstep=int(round(SETTLE_TIME / timestep)))

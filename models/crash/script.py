@@ -269,7 +269,7 @@ def _in_map(c: Fields, road, p, path: str) -> None:
 
 
 def _vehicle(c: Fields, v: dict, p: str, road, duration: float, names: list, me: int) -> VehicleScript:
-    t = c.choice(v["type"], f"{p}.type", tuple(veh.TYPES))
+    t = c.choice(v["type"], f"{p}.type", veh.VEHICLE_TYPES.names())
     s = c.obj(v["start"], f"{p}.start", ("x", "y", "heading"), required=("x", "y", "heading"))
     x, y = c.number(s["x"], f"{p}.start.x"), c.number(s["y"], f"{p}.start.y")
     _in_map(c, road, (x, y), f"{p}.start")
@@ -277,7 +277,7 @@ def _vehicle(c: Fields, v: dict, p: str, road, duration: float, names: list, me:
     speed = _rng(c.range(v["speed"], f"{p}.speed", *LIMITS["speed"], "km/h"), KMH)
     driver = _driver(c, v.get("driver", {}), f"{p}.driver", road, duration, names, me)
     fate = _fate(c, v.get("fate", {}), f"{p}.fate", road, names, me)
-    return VehicleScript(name=names[me], vtype=veh.TYPES[t], x=x, y=y, heading=heading, speed=speed,
+    return VehicleScript(name=names[me], vtype=veh.VEHICLE_TYPES[t], x=x, y=y, heading=heading, speed=speed,
                          driver=driver, fate=fate)
 
 

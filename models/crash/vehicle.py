@@ -5,7 +5,8 @@ vehicle's centre of mass (CoM), so a free joint's position is the CoM and its qu
 vehicle's attitude. Units: m, kg, s, N, rad inside; the script and the reports speak km/h
 and degrees.
 
-**Types** (:data:`TYPES`; sources and the assumed parameters in docs/crash.md):
+**Types** (:data:`VEHICLE_TYPES`, one data file each in ``models/crash/vehicles/``; sources and
+the assumed parameters in docs/crash.md):
 
 * ``sedan``: a mid-size sedan (2018 Toyota Camry class: 4.88 x 1.83 x 1.45 m, wheelbase
   2.82 m), 1,450 kg, track 1.58 m, SSF 1.41;
@@ -41,10 +42,16 @@ Compute only: functions add elements to an ``MjSpec`` or return numbers.
 """
 from __future__ import annotations
 
+import dataclasses
+import json
 import math
 from dataclasses import dataclass
+from importlib import resources
 
 import numpy as np
+
+from nbst.errors import InputError
+from nbst.registry import Registry
 
 G = 9.81
 #: Corner names, in the order of every per-corner array.
@@ -53,6 +60,8 @@ CORNERS = ("fl", "fr", "rl", "rr")
 CONTROLS = ("steer_fl", "steer_fr", "drive_rl", "drive_rr", "brake_fl", "brake_fr", "brake_rl", "brake_rr")
 #: Collision bits: static world (road, curbs, barriers), tyres, bodies.
 BIT_STATIC, BIT_TYRE, BIT_BODY = 1, 2, 4
+#: The ``kind`` of a vehicle type's data file.
+VEHICLE_KIND = "nbst-crash-vehicle"
 
 
 @dataclass(frozen=True)
@@ -85,7 +94,7 @@ TYRE_SOLREF = (0.01, 1.0)
 
 @dataclass(frozen=True)
 class VehicleType:
-    """A built-in vehicle type (SI units). ``front_weight`` is the static share on the front axle."""
+    """A vehicle type (SI units). ``front_weight`` is the static share on the front axle."""
 
     name: str
     label: str
@@ -143,23 +152,50 @@ class VehicleType:
                 "inertia_kg_m2": [_six(ix), _six(iy), _six(iz)], "wheel_radius_m": self.wheel_radius}
 
 
-TYPES = {
-    "sedan": VehicleType(
-        name="sedan", label="mid-size sedan", mass=1450.0, length=4.88, width=1.83, height=1.445,
-        wheelbase=2.82, track=1.58, ssf=1.41, front_weight=0.60, wheel_radius=0.334, wheel_width=0.215,
-        clearance=0.14, belt=0.95, cabin_length=2.6, cabin_offset=0.25, front_overhang=1.0,
-        source="2018 Toyota Camry class dimensions; SSF 1.41: NHTSA HS 809 868, passenger cars MY2003"),
-    "suv": VehicleType(
-        name="suv", label="mid-size SUV", mass=2000.0, length=4.90, width=1.93, height=1.75,
-        wheelbase=2.86, track=1.65, ssf=1.17, front_weight=0.55, wheel_radius=0.37, wheel_width=0.245,
-        clearance=0.20, belt=1.10, cabin_length=3.3, cabin_offset=0.45, front_overhang=0.95, power=200e3,
-        source="mid-size SUV class; SSF 1.17: NHTSA HS 809 868, SUVs MY2003"),
-    "van": VehicleType(
-        name="van", label="full-size van", mass=2500.0, length=5.53, width=2.05, height=2.10,
-        wheelbase=3.30, track=1.72, ssf=1.12, front_weight=0.55, wheel_radius=0.37, wheel_width=0.235,
-        clearance=0.18, belt=1.15, cabin_length=4.3, cabin_offset=0.45, front_overhang=0.95,
-        source="full-size van class; SSF 1.12: NHTSA HS 809 868, full-size vans MY2003"),
-}
+def vehicle_type_from_dict(d: object, *, source: str = "<vehicle type>") -> VehicleType:
+    """A vehicle type from its decoded data file (``models/crash/vehicles/NAME.json``).
+
+    Args:
+        d: the decoded JSON object: ``kind`` "nbst-crash-vehicle", ``schema_version`` 1, and the
+            fields of :class:`VehicleType` (SI units; those with a default may be left out).
+        source: how a refusal names the file.
+
+    Returns:
+        the :class:`VehicleType`.
+
+    Raises:
+        InputError: not such an object, a field missing, unknown or not of its type (one line
+            naming ``source`` and the field).
+    """
+    if not isinstance(d, dict) or d.get("kind") != VEHICLE_KIND or d.get("schema_version") != 1:
+        raise InputError(f"{source}: must be a JSON object with kind {VEHICLE_KIND!r} and schema_version 1")
+    fields = {f.name: f for f in dataclasses.fields(VehicleType)}
+    values = {k: v for k, v in d.items() if k not in ("kind", "schema_version")}
+    for k, v in values.items():
+        f = fields.get(k)
+        if f is None:
+            raise InputError(f"{source}: {k}: unknown field; the fields are {', '.join(fields)}")
+        text = f.type == "str"
+        if (not isinstance(v, str)) if text else (isinstance(v, bool) or not isinstance(v, (int, float))
+                                                 or not math.isfinite(v)):
+            raise InputError(f"{source}: {k}: must be {'a string' if text else 'a finite number'}, got {v!r}")
+    missing = [k for k, f in fields.items() if f.default is dataclasses.MISSING and k not in values]
+    if missing:
+        raise InputError(f"{source}: {missing[0]}: missing")
+    return VehicleType(**{k: v if isinstance(v, str) else float(v) for k, v in values.items()})
+
+
+def _builtin(file: str) -> VehicleType:
+    text = resources.files("nbst.models.crash").joinpath("vehicles", file).read_text(encoding="utf-8")
+    return vehicle_type_from_dict(json.loads(text), source=f"<built-in vehicle {file}>")
+
+
+#: The built-in vehicle types, registered once (a script's ``type`` names one; listed in this
+#: order): a new one is a JSON file in ``models/crash/vehicles/`` and one line here.
+VEHICLE_TYPES: Registry[VehicleType] = Registry("vehicle type")
+VEHICLE_TYPES.register("sedan", _builtin("sedan.json"), help="a mid-size sedan (2018 Toyota Camry class), 1,450 kg")
+VEHICLE_TYPES.register("suv", _builtin("suv.json"), help="a mid-size SUV, 2,000 kg")
+VEHICLE_TYPES.register("van", _builtin("van.json"), help="a full-size van (light truck), 2,500 kg")
 
 
 def _six(x: float) -> float:
