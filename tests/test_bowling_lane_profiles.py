@@ -52,7 +52,7 @@ def test_the_cli_knows_the_profiles_and_a_delivery_flag_beside_one_overrides_tha
     from nbst.cli import bowl_args
     from nbst.cli.main import build_parser
 
-    assert bowl_args.BOWLERS == profiles.NAMES
+    assert bowl_args.bowlers() == profiles.NAMES == profiles.PROFILES.names()   # read from the registry
     parse = build_parser().parse_args
     pro = profiles.profile("pro").strike
     d, nz = bowl_args.bowler_of(parse(["bowl", "frame", "--bowler", "pro"]))
@@ -77,3 +77,39 @@ def test_bowl_frame_throws_the_profiles_strike_ball_and_records_its_noise(tmp_pa
     d = throwfile.load(tmp_path / "t.json")
     assert lane.Delivery(**d["delivery"]) == profiles.profile("pro").strike
     assert d["probability"]["noise"] == profiles.PRO_NOISE.to_dict()
+
+
+def test_a_profile_carries_its_board_and_scale_and_is_one_registry_entry_and_one_file(tmp_path):
+    """The profiles are a registry of objects read from data files: each carries its foul-line board and
+    its noise scale; a new profile is one file and one entry (issue 45)."""
+    for name in profiles.NAMES:
+        p = profiles.PROFILES[name]
+        assert p.foul_board == p.strike.board and p.strike.at == "foul"
+        assert p.noise == profiles.scaled(profiles.NOISE_SHAPE, p.noise_scale)
+        assert (profiles.PROFILES_DIR / f"{name}.json").is_file()
+    assert [profiles.PROFILES[n].foul_board for n in profiles.NAMES] == [23.0, 20.0, 14.0, 26.0]
+    assert [profiles.PROFILES[n].noise_scale for n in ("league200", "league150")] == [1.8, 3.0]
+    assert not hasattr(profiles, "FOUL_BOARDS") and not hasattr(profiles, "LEAGUE_SCALE")
+    doc = json.loads((profiles.PROFILES_DIR / "league150.json").read_text())
+    f = tmp_path / "novice.json"
+    f.write_text(json.dumps({**doc, "name": "novice", "mph": 13.0, "noise_scale": 4.0}))
+    novice = profiles.load_profile(f)
+    profiles.PROFILES.register("novice", novice, help=novice.description)
+    try:
+        assert profiles.profile("novice").strike.mph == 13.0 and "novice" in profiles.PROFILES.names()
+    finally:
+        profiles.PROFILES.unregister("novice")
+    f.write_text(json.dumps({**doc, "mph": float("nan")}))
+    with pytest.raises(lane.LaneError, match="mph"):
+        profiles.load_profile(f)
+
+
+def test_the_balls_are_a_registry_and_the_cli_reads_its_defaults():
+    from nbst.cli.main import build_parser
+    from nbst.cli import bowl_args
+
+    assert lane.BALLS[lane.DEFAULT_BALL] == lane.Ball()   # the default ball, field for field
+    args = build_parser().parse_args(["bowl", "throw"])
+    assert args.ball == lane.DEFAULT_BALL and bowl_args.ball_of(args) == lane.Ball()
+    args = build_parser().parse_args(["bowl", "throw", "--rg", "2.6"])
+    assert bowl_args.ball_of(args) == replace(lane.Ball(), rg=2.6)

@@ -122,14 +122,28 @@ DELIVERY_DEFAULTS = {"hand": "right", "board": 10.0, "at": "arrows", "angle": 1.
                      "rotation": 45.0, "tilt": 15.0}
 
 
+def bowlers() -> tuple[str, ...]:
+    """The bowler profiles' names (:data:`nbst.models.bowling.lane.profiles.PROFILES`), read when a
+    parser is built (the profiles' module reads their data files)."""
+    from nbst.models.bowling.lane.profiles import NAMES
+
+    return NAMES
+
+
+def bowlers_text() -> str:
+    """Each profile's name, speed and rev rate, from the registry, for the help texts."""
+    from nbst.models.bowling.lane.profiles import PROFILES
+
+    return ", ".join(f"{e.name} {e.value.strike.mph:g} mph {e.value.strike.rpm:g} rpm" for e in PROFILES.entries())
+
+
 def bowler_flag(t, what: str = "throw") -> None:
     """--bowler P: a profile's release as the default release and its correlated noise."""
-    t.add_argument("--bowler", default=None, choices=BOWLERS,
+    t.add_argument("--bowler", default=None, choices=bowlers(),
                    help=f"{what} as this bowler profile: its strike ball (release and line, aimed at board 17.5 on the "
                         "fresh house shot) is the default release and its correlated release noise gives the "
-                        "probabilities: pro 18.6 mph 436 rpm, league200 17 mph 350 rpm, league150 15.5 mph 250 rpm, "
-                        "twohander 18 mph 520 rpm (docs/bowling.md); --hand mirrors it; a delivery flag given beside "
-                        "it overrides that part of the release; recorded in the output")
+                        f"probabilities: {bowlers_text()} (docs/bowling.md); --hand mirrors it; a delivery flag given "
+                        "beside it overrides that part of the release; recorded in the output")
 
 
 def delivery_flags(t, *, bowler: bool = True) -> None:
@@ -187,13 +201,23 @@ def target_board(text: str) -> float:
 
 
 def ball_flags(t) -> None:
-    """The ball flags of ``bowl throw`` and ``bowl frame`` (the ball maker's units; lane.Ball checks them)."""
-    t.add_argument("--weight", type=float, default=15.0, metavar="LB", help="ball weight, lb (default 15; at most 16)")
-    t.add_argument("--rg", type=float, default=2.50, metavar="IN", help="ball RG, in (default 2.50; USBC 2.46..2.80)")
-    t.add_argument("--diff", type=float, default=0.040, metavar="IN",
-                   help="RG differential, in (default 0.040; USBC at most 0.060)")
-    t.add_argument("--cover", type=float, default=0.20, metavar="MU",
-                   help="coverstock friction on the dry lane (default 0.20; USBC at most 0.32)")
+    """The ball flags of ``bowl throw`` and ``bowl frame`` (the ball maker's units; lane.Ball checks
+    them): --ball names one of :data:`nbst.models.bowling.lane.ball.BALLS` (its fields the defaults
+    of the others, which override them)."""
+    from nbst.models.bowling.lane.ball import BALLS, DEFAULT_BALL
+
+    b = BALLS[DEFAULT_BALL]
+    t.add_argument("--ball", default=DEFAULT_BALL, choices=BALLS.names(),
+                   help=f"the ball (default {DEFAULT_BALL}): {BALLS.help_text()}; --weight, --rg, --diff and --cover "
+                        "given beside it override its fields")
+    t.add_argument("--weight", type=float, default=None, metavar="LB",
+                   help=f"ball weight, lb (default the ball's, {b.weight_lb:g}; at most 16)")
+    t.add_argument("--rg", type=float, default=None, metavar="IN",
+                   help=f"ball RG, in (default the ball's, {b.rg:.2f}; USBC 2.46..2.80)")
+    t.add_argument("--diff", type=float, default=None, metavar="IN",
+                   help=f"RG differential, in (default the ball's, {b.diff:.3f}; USBC at most 0.060)")
+    t.add_argument("--cover", type=float, default=None, metavar="MU",
+                   help=f"coverstock friction on the dry lane (default the ball's, {b.friction:.2f}; USBC at most 0.32)")
 
 
 def given(args) -> dict:
@@ -241,10 +265,16 @@ def stance_target(args):
 
 
 def ball_of(args):
-    """The ball of the :func:`ball_flags`, checked (LaneError naming the field outside USBC's limits)."""
-    from nbst.models.bowling import lane
+    """The ball of the :func:`ball_flags`: --ball's, with every field flag given over it, checked
+    (LaneError naming the field outside USBC's limits)."""
+    from dataclasses import replace
 
-    return lane.Ball(weight_lb=args.weight, rg=args.rg, diff=args.diff, friction=args.cover).check()
+    from nbst.models.bowling.lane.ball import BALLS, DEFAULT_BALL
+
+    base = BALLS[getattr(args, "ball", None) or DEFAULT_BALL]
+    over = {k: getattr(args, a) for k, a in (("weight_lb", "weight"), ("rg", "rg"), ("diff", "diff"),
+                                              ("friction", "cover")) if getattr(args, a, None) is not None}
+    return replace(base, **over).check()
 
 
 def mc_flags(t, samples: int, what: str) -> None:
@@ -290,10 +320,6 @@ def check_picture_args(args) -> str | None:
 def wants_picture(args) -> bool:
     """Whether any picture flag (--video, --still, --still-time, --size, --fps) was given."""
     return any(getattr(args, a, None) is not None for a in ("video", "still", "still_time", "size", "fps", "camera"))
-
-
-#: The bowler profiles (models/bowling/lane/profiles.py; a test checks the two lists agree).
-BOWLERS = ("pro", "league200", "league150", "twohander")
 
 
 def bowler_of(args, *, spare: bool = False):

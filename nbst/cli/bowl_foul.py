@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import BOWLERS, bowler_flag, err
+from nbst.cli.bowl_args import bowler_flag, bowlers, err
 from nbst.seeds import resolve_seed
 
 #: Frames of the fresh probability estimate (``--samples``) and of ``--robust``'s search.
@@ -65,7 +65,7 @@ def add_atlas_flags(a) -> None:
                         "once here, archived by what it knocks down here")
     g.add_argument("--samples", type=SAMPLES, default=ATLAS_SAMPLES, metavar="N",
                    help=f"--foul-line: noisy throws per subset's probability (default {ATLAS_SAMPLES})")
-    g.add_argument("--bowler", default=None, choices=BOWLERS,
+    g.add_argument("--bowler", default=None, choices=bowlers(),
                    help="--foul-line: each subset's probability under this bowler profile's correlated release "
                         "noise (its strike ball's: docs/bowling.md, \"Bowler profiles\") instead of the default "
                         "noise; the atlas file records the profile and the noise (the search is the same)")

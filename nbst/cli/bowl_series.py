@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import SEED, Bounded
-from nbst.cli.bowl_args import BOWLERS, ball_flags, ball_of, oil_flag
+from nbst.cli.bowl_args import ball_flags, ball_of, bowlers, oil_flag
 from nbst.cli.flags import add_seed
 from nbst.errors import InputError
 from nbst.seeds import resolve_seed
@@ -35,8 +35,10 @@ def register(bowl) -> None:
                     "(exit 130). The same --seed gives the same series (docs/bowling.md).",
         epilog="Example: nbst bowl series --bowler pro --games 3 --move both -o series.json --figure drift.png "
                "--path-plot paths.png")
-    s.add_argument("--bowler", default="pro", choices=BOWLERS,
-                   help="the bowler profile (default pro): its strike ball (aimed at board 17.5 on the fresh lane "
+    from nbst.models.bowling.lane.profiles import DEFAULT_PROFILE
+
+    s.add_argument("--bowler", default=DEFAULT_PROFILE, choices=bowlers(),
+                   help=f"the bowler profile (default {DEFAULT_PROFILE}): its strike ball (aimed at board 17.5 on the fresh lane "
                         "with this ball) and correlated release noise")
     s.add_argument("--games", type=GAMES, default=3, metavar="N", help="games per bowler (default 3; 1..30)")
     s.add_argument("--move", choices=("none", "auto", "both"), default="none",

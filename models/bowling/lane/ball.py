@@ -11,21 +11,28 @@
   the axes point at release is the layout (:func:`.delivery.principal_axes`). The coverstock
   friction is the ball's friction on the dry lane; on a full film every ball gets
   :data:`MU_OIL` (:class:`.oil.OilLaw`).
+* **Balls** (:data:`BALLS`): the named balls, a :class:`nbst.registry.Registry`, each read from
+  its data file ``balls/<name>.json``; :data:`DEFAULT_BALL` is the one thrown when none is named
+  (``Ball()``'s fields). Adding one is one line and one file.
 
 Pure numpy.
 """
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
 
 import numpy as np
 
 from nbst.models.bowling import scene
 from nbst.models.bowling.lane.oil import MU_DRY, MU_OIL
 from nbst.models.bowling.lane.units import LB, LaneError
+from nbst.registry import Registry
 
-__all__ = ["RG_RANGE", "DIFF_MAX", "FRICTION_MAX", "WEIGHT_MAX_LB", "Ball"]
+__all__ = ["RG_RANGE", "DIFF_MAX", "FRICTION_MAX", "WEIGHT_MAX_LB", "Ball", "BALLS", "BALLS_DIR", "DEFAULT_BALL",
+           "load_ball"]
 
 #: USBC ball limits.
 RG_RANGE = (2.46, 2.80)
@@ -89,3 +96,47 @@ class Ball:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+#: Where the balls' data files are: one JSON per ball, ``<name>.json`` (package data).
+BALLS_DIR = Path(__file__).with_name("balls")
+BALL_FORMAT = "nbst-bowling-ball"
+
+
+def load_ball(path) -> Ball:
+    """A named ball from its data file (``balls/<name>.json``: its :class:`Ball` fields).
+
+    Args:
+        path: the ball's JSON file (format ``nbst-bowling-ball``, version 1).
+
+    Returns:
+        the :class:`Ball`, checked against USBC's limits.
+
+    Raises:
+        LaneError: not a ball file, an unknown field, or a field outside USBC's limits (the
+            message names the file and the field).
+    """
+    p = Path(path)
+    doc = json.loads(p.read_text(encoding="utf-8"))
+    if not isinstance(doc, dict) or doc.get("format") != BALL_FORMAT or doc.get("version") != 1:
+        raise LaneError(f"{p}: format: must be {BALL_FORMAT!r}, version 1")
+    keys = {f.name for f in fields(Ball)}
+    extra = sorted(set(doc) - keys - {"format", "version", "name", "description"})
+    if extra:
+        raise LaneError(f"{p}: {extra[0]}: unknown field (a ball's fields are {', '.join(sorted(keys))})")
+    try:
+        return Ball(**{k: doc[k] for k in keys if k in doc}).check()
+    except LaneError as e:
+        raise LaneError(f"{p}: {e}") from None
+
+
+def _help(name: str) -> str:
+    return json.loads((BALLS_DIR / f"{name}.json").read_text(encoding="utf-8")).get("description", "")
+
+
+#: The named balls, registered once each from its data file, in this order.
+BALLS: Registry[Ball] = Registry("ball")
+for _name in ("reactive",):
+    BALLS.register(_name, load_ball(BALLS_DIR / f"{_name}.json"), help=_help(_name))
+#: The ball thrown when none is named: ``Ball()``, field for field.
+DEFAULT_BALL = "reactive"

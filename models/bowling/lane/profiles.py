@@ -1,6 +1,7 @@
 """Bowler profiles (issue 34): a typical strike ball and a correlated release noise per kind of bowler.
 
-:data:`PROFILES` holds four (:class:`Profile`), right-handed (``--hand left`` mirrors them: a
+:data:`PROFILES` (a :class:`nbst.registry.Registry`) holds four (:class:`Profile`), each read from its data
+file ``bowlers/<name>.json``, right-handed (``--hand left`` mirrors them: a
 left-hander's lane is a right-hander's mirrored):
 
 =========== ======== ===== ======== ===== ====================================================
@@ -14,7 +15,7 @@ twohander    18.0     520   40       5     PBA League 2020: 4 of the top 5 rev r
                                            two-handers, the top 570 rpm; tilt assumed
 =========== ======== ===== ======== ===== ====================================================
 
-Each strike ball's line is its foul-line board (:data:`FOUL_BOARDS`, chosen so the ball breaks
+Each strike ball's line is its foul-line board (:attr:`Profile.foul_board`, chosen so the ball breaks
 on the house shot's outside boards) and the launch angle that brings the ball alone to board
 17.5 at the head pin on the fresh house shot (``phases.aim_angle``; the angles are stored,
 :func:`strike_ball` re-aims for another pattern or ball).
@@ -26,25 +27,36 @@ assumed (:data:`NOISE_SHAPE`): issue 22's sigmas (board 1/2, launch angle 0.15 d
 both), axis rotation and revs -0.3 (turning the hand more trades revs for side roll). Its size is
 fitted for the pro (issue 34's carry fit): the strike ball's to PBA's pocket-hit rate
 (:data:`PRO_SCALE`), the spare ball's to PBA's televised spares (:data:`PRO_SPARE_SCALE`). The
-league bowlers' sigmas are the shape's times :data:`LEAGUE_SCALE` (1.8 and 3, assumed), for strike
+league bowlers' sigmas are the shape's times their :attr:`Profile.noise_scale` (1.8 and 3, assumed), for strike
 and spare balls alike; the two-hander's are the pro's.
 
 Compute only.
 """
 from __future__ import annotations
 
+import json
+import math
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from nbst.models.bowling import lane
 from nbst.models.bowling.lane.noise import Noise
+from nbst.registry import Registry
 
-__all__ = ["Profile", "PROFILES", "NAMES", "FOUL_BOARDS", "LEAGUE_SCALE", "NOISE_SHAPE", "PRO_SCALE", "PRO_NOISE",
-           "PRO_SPARE_SCALE", "PRO_SPARE_NOISE",
-           "profile", "scaled", "strike_ball"]
+__all__ = ["Profile", "PROFILES", "NAMES", "DEFAULT_PROFILE", "PROFILES_DIR", "NOISE_SHAPE", "PRO_SCALE", "PRO_NOISE",
+           "PRO_SPARE_SCALE", "PRO_SPARE_NOISE", "load_profile", "profile", "scaled", "strike_ball"]
 
 
 def scaled(nz: Noise, k: float) -> Noise:
-    """``nz`` with every standard deviation times ``k`` (the correlations kept)."""
+    """``nz`` with every standard deviation times ``k`` (the correlations kept).
+
+    Args:
+        nz: the noise to scale.
+        k: the factor of every standard deviation (board, angle, mph, rpm, rotation, tilt).
+
+    Returns:
+        a new :class:`.noise.Noise`; ``nz`` itself is unchanged.
+    """
     return replace(nz, board=nz.board * k, angle=nz.angle * k, mph=nz.mph * k, rpm=nz.rpm * k,
                    rotation=nz.rotation * k, tilt=nz.tilt * k)
 
@@ -53,34 +65,33 @@ def scaled(nz: Noise, k: float) -> Noise:
 #: the two correlations.
 NOISE_SHAPE = Noise(board=0.5, angle=0.15, mph=0.3, rpm=15.0, rotation=5.0, tilt=2.0, corr_mph_rpm=0.5,
                     corr_rotation_rpm=-0.3)
-#: The pro's strike-ball noise: the shape times PRO_SCALE, fitted so the pro's strike ball hits the pocket
-#: (boards 16.5-18.5 at the head pin, entering at 4-6 deg) as often as PBA's televised finalists did, 54 of
-#: 66 (82 %; Jason Thomas, PBA.com): 0.5 gives 80.5 % of 200 throws (benchmarks/bench_carry_fit.py).
-PRO_SCALE = 0.5
-PRO_NOISE = scaled(NOISE_SHAPE, PRO_SCALE)
-#: The pro's spare-ball noise: the shape times PRO_SPARE_SCALE, fitted to PBA's televised spares (3-10
-#: 48.6 %, 10 pin 95.9 %, 7 pin 95.5 %; ESPN The Magazine, 2011): at the strike ball's noise the 3-10
-#: converts 89 of 100 (benchmarks/bench_carry_fit.py, docs/results/bowling.md "Pin carry, fitted").
-PRO_SPARE_SCALE = 1.25
-PRO_SPARE_NOISE = scaled(NOISE_SHAPE, PRO_SPARE_SCALE)
-#: The league bowlers' sigmas, as multiples of the shape (assumed).
-LEAGUE_SCALE = {"league200": 1.8, "league150": 3.0}
-#: Foul-line boards of the strike balls (right-handed).
-FOUL_BOARDS = {"pro": 23.0, "league200": 20.0, "league150": 14.0, "twohander": 26.0}
 
 
 @dataclass(frozen=True)
 class Profile:
     """A kind of bowler: the strike ball (a right-handed :class:`.lane.Delivery` at the foul line)
-    and the release noise around it."""
+    and the release noise around it.
+
+    ``foul_board`` is the strike ball's board at the foul line; ``noise_scale`` and
+    ``spare_noise_scale`` are its sigmas as multiples of :data:`NOISE_SHAPE` (the strike ball's,
+    and the spare throws', None: the strike ball's), as its data file states them.
+    """
 
     name: str
     description: str
     strike: lane.Delivery
     noise: Noise
     spare_noise: Noise | None = None
+    foul_board: float = 0.0
+    noise_scale: float = 1.0
+    spare_noise_scale: float | None = None
 
     def delivery(self, hand: str = "right") -> lane.Delivery:
+        """The strike ball thrown with ``hand`` (a left-hander's is the mirror image).
+
+        Raises:
+            LaneError: ``hand`` is neither "right" nor "left".
+        """
         return replace(self.strike, hand=hand).check()
 
     def spare(self) -> Noise:
@@ -88,34 +99,107 @@ class Profile:
         return self.noise if self.spare_noise is None else self.spare_noise
 
 
-def _p(name, description, mph, rpm, rotation, tilt, angle, noise, spare_noise=None) -> Profile:
-    d = lane.Delivery(board=FOUL_BOARDS[name], at="foul", angle=angle, mph=mph, rpm=rpm, rotation=rotation, tilt=tilt)
-    return Profile(name, description, d.check(), noise.check(), None if spare_noise is None else spare_noise.check())
+#: Where the profiles' data files are: one JSON per profile, ``<name>.json`` (package data).
+PROFILES_DIR = Path(__file__).with_name("bowlers")
+#: A profile file's format and the fields it holds, each a number but name and description.
+PROFILE_FORMAT = "nbst-bowler-profile"
+_NUMBERS = ("foul_board", "angle", "mph", "rpm", "rotation", "tilt", "noise_scale")
 
 
-#: The launch angles: ``phases.aim_angle`` to board 17.5 on the fresh house shot, the default ball.
-PROFILES = {p.name: p for p in (
-    _p("pro", "PBA pro: 18.6 mph, 436 rpm (PBA League 2020 means)", 18.6, 436.0, 50.0, 12.0, 3.0578, PRO_NOISE,
-       PRO_SPARE_NOISE),
-    _p("league200", "200-average league bowler: 17 mph, 350 rpm (assumed)", 17.0, 350.0, 45.0, 12.0, 2.8188,
-       scaled(NOISE_SHAPE, LEAGUE_SCALE["league200"])),
-    _p("league150", "150-average league bowler: 15.5 mph, 250 rpm (assumed)", 15.5, 250.0, 30.0, 15.0, 1.3773,
-       scaled(NOISE_SHAPE, LEAGUE_SCALE["league150"])),
-    _p("twohander", "two-handed: 18 mph, 520 rpm (PBA League 2020's top rev rates)", 18.0, 520.0, 40.0, 5.0, 3.9612,
-       PRO_NOISE, PRO_SPARE_NOISE),
-)}
-NAMES = tuple(PROFILES)
+def load_profile(path) -> Profile:
+    """A bowler profile from its data file (``bowlers/<name>.json``): the strike ball's line and
+    release, and its noise as multiples of :data:`NOISE_SHAPE`.
+
+    Args:
+        path: the profile's JSON file (format ``nbst-bowler-profile``, version 1).
+
+    Returns:
+        the :class:`Profile`, its strike ball and noises checked.
+
+    Raises:
+        LaneError: a field is missing, not a finite number, or outside the delivery's or the
+            noise's limits (the message names the file and the field).
+    """
+    p = Path(path)
+    doc = json.loads(p.read_text(encoding="utf-8"))
+    if not isinstance(doc, dict) or doc.get("format") != PROFILE_FORMAT or doc.get("version") != 1:
+        raise lane.LaneError(f"{p}: format: must be {PROFILE_FORMAT!r}, version 1")
+    for k in ("name", "description", *_NUMBERS):
+        if k not in doc:
+            raise lane.LaneError(f"{p}: {k}: missing")
+        v = doc[k]
+        if k in _NUMBERS and (isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)):
+            raise lane.LaneError(f"{p}: {k}: must be a finite number, got {v!r}")
+    spare_k = doc.get("spare_noise_scale")
+    try:
+        strike = lane.Delivery(board=doc["foul_board"], at="foul", angle=doc["angle"], mph=doc["mph"], rpm=doc["rpm"],
+                               rotation=doc["rotation"], tilt=doc["tilt"]).check()
+        nz = scaled(NOISE_SHAPE, doc["noise_scale"]).check()
+        spare = None if spare_k is None else scaled(NOISE_SHAPE, spare_k).check()
+    except lane.LaneError as e:
+        raise lane.LaneError(f"{p}: {e}") from None
+    return Profile(doc["name"], doc["description"], strike, nz, spare, foul_board=doc["foul_board"],
+                   noise_scale=doc["noise_scale"], spare_noise_scale=spare_k)
+
+
+#: The bowler profiles by name, registered once each from its data file, in this order. Adding one
+#: is one line here and one file in ``bowlers/``. The launch angles in the files are
+#: ``phases.aim_angle`` to board 17.5 on the fresh house shot with the default ball.
+PROFILES: Registry[Profile] = Registry("bowler profile")
+for _name in ("pro", "league200", "league150", "twohander"):
+    _prof = load_profile(PROFILES_DIR / f"{_name}.json")
+    if _prof.name != _name:
+        raise lane.LaneError(f"{_name}.json: name: {_prof.name!r} must be the file's name {_name!r}")
+    PROFILES.register(_name, _prof, help=_prof.description)
+NAMES = PROFILES.names()
+#: The profile ``bowl series`` bowls when none is named.
+DEFAULT_PROFILE = "pro"
+
+#: The pro's strike-ball noise: the shape times PRO_SCALE, fitted so the pro's strike ball hits the pocket
+#: (boards 16.5-18.5 at the head pin, entering at 4-6 deg) as often as PBA's televised finalists did, 54 of
+#: 66 (82 %; Jason Thomas, PBA.com): 0.5 gives 80.5 % of 200 throws (benchmarks/bench_carry_fit.py).
+#: The pro's data file holds it (``noise_scale``).
+PRO_SCALE = PROFILES["pro"].noise_scale
+PRO_NOISE = PROFILES["pro"].noise
+#: The pro's spare-ball noise: the shape times PRO_SPARE_SCALE, fitted to PBA's televised spares (3-10
+#: 48.6 %, 10 pin 95.9 %, 7 pin 95.5 %; ESPN The Magazine, 2011): at the strike ball's noise the 3-10
+#: converts 89 of 100 (benchmarks/bench_carry_fit.py, docs/results/bowling.md "Pin carry, fitted").
+PRO_SPARE_SCALE = PROFILES["pro"].spare_noise_scale
+PRO_SPARE_NOISE = PROFILES["pro"].spare()
 
 
 def profile(name: str) -> Profile:
-    """The profile called ``name``; LaneError (one line, the names) for any other."""
+    """The profile called ``name`` (any case).
+
+    Args:
+        name: a name of :data:`PROFILES`.
+
+    Returns:
+        the :class:`Profile`.
+
+    Raises:
+        LaneError: no profile has that name (one line, the names).
+    """
     if name not in PROFILES:
         raise lane.LaneError(f"bowler: no profile {name!r}; profiles: {', '.join(NAMES)}")
     return PROFILES[name]
 
 
 def strike_ball(name: str, oil="house", ball: lane.Ball | None = None, hand: str = "right") -> lane.Delivery:
-    """The profile's strike ball aimed again (its launch angle) at board 17.5 on ``oil`` with ``ball``."""
+    """The profile's strike ball aimed again (its launch angle) at board 17.5 on ``oil`` with ``ball``.
+
+    Args:
+        name: the profile's name.
+        oil: the oil pattern (a name of :data:`.oil.PATTERNS` or a pattern).
+        ball: the ball (default: :class:`.lane.Ball`'s defaults).
+        hand: "right" or "left".
+
+    Returns:
+        the strike ball's :class:`.lane.Delivery`, its launch angle re-aimed.
+
+    Raises:
+        LaneError: an unknown profile or hand.
+    """
     from nbst.models.bowling.lane import phases
 
     d, _ = phases.aim_angle(profile(name).delivery(hand), 17.5, oil, ball)
