@@ -329,7 +329,7 @@ def test_the_funnel_probe_counts_the_neighbours_that_meet_a_planted_script():
 def test_a_planted_script_with_min_p_has_a_hidden_answer_its_noisy_drivers_meet_that_often():
     """planted_script(min_p=...): the hidden answer meets its fates at 2, 1 and 0.5 ms, as every
     planted one does, and at least that share of its 32 noisy re-drives meet them too (most
-    random three-car crashes are met by none: docs/crash.md), a share hidden_probability reports
+    random three-car crashes are met by none: docs/results/crash.md), a share hidden_probability reports
     again with the same seed; the script is named apart from the target's set."""
     from nbst.models.crash import planted, search
 

@@ -35,7 +35,7 @@ KMH = 3.6
 COS45 = math.sqrt(0.5)
 #: A vehicle is at rest under this speed (m/s).
 REST_SPEED = 0.5
-#: Cost weights (docs/crash.md): a wrong or missing contact, a metre outside a rest region,
+#: Cost weights (docs/results/crash.md): a wrong or missing contact, a metre outside a rest region,
 #: 30 degrees outside a heading tolerance, a quarter turn, a wrong attitude or strike, 10 km/h
 #: outside a speed band, 45 degrees of spin.
 W_CONTACT, W_NEAR, W_METRE, W_HEADING, W_TURN, W_ATTITUDE, W_STRIKE, W_KMH, W_SPIN = \

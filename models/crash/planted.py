@@ -106,7 +106,7 @@ def hidden_probability(d: dict, u: np.ndarray, copies: int = COPIES, seed: int =
     """How often the hidden intents of unit point ``u``, re-driven ``copies`` times with the driver
     noise (:data:`.robust.NOISE`, common random numbers of ``seed``), meet script ``d`` at its own
     step: a :class:`.robust.Estimate` (k of n, the Wilson interval, the outcomes seen). A crash whose
-    fates its own drivers meet only by luck is a chaotic outcome (docs/crash.md)."""
+    fates its own drivers meet only by luck is a chaotic outcome (docs/results/crash.md)."""
     from nbst.models.crash import robust
 
     s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
@@ -143,7 +143,7 @@ def planted_script(seed: int, *, template: str = "intersection3", radius: float 
     seeds 100-109 half of those answers lose their own script at 1 or 0.5 ms: docs/crash.md).
     ``min_p`` not None plants only a hidden answer that :func:`hidden_probability` (32 noisy
     re-drives) finds met at least that often: a crash its drivers could stage again, not a lucky
-    draw (most draws are; at 0.25, 4 of 80 draws measured qualify: docs/crash.md)."""
+    draw (most draws are; at 0.25, 4 of 80 draws measured qualify: docs/results/crash.md)."""
     d, u, _ = _plant(seed, template, radius, heading_tol, need_contacts, ladder, min_p,
                      tries=64 if min_p is None else 512)
     if min_p is not None:
@@ -159,7 +159,7 @@ def funnel(d: dict, u: np.ndarray, steps=FUNNEL_STEPS, n: int = 32, seed: int = 
     """How many of ``n`` neighbours of the unit point ``u`` meet script ``d`` at its own step, for
     each Gaussian step of ``steps`` (unit cube; the continuous coordinates move, the after-impact
     choices stay; the points are clipped into the cube): the width of the met funnel around a
-    planted script's hidden answer, which tells how hard the script is for a search (docs/crash.md)."""
+    planted script's hidden answer, which tells how hard the script is for a search (docs/results/crash.md)."""
     s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
     S = space_of(s)
     moves = np.array([isinstance(r, script_mod.Range) for _, _, r in S.coords], float)

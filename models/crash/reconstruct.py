@@ -28,7 +28,7 @@ The answer is every fit within the tolerances, summarised per vehicle as ranges 
 median, highest) of the impact speed (its speed just before its first vehicle contact), its
 direction of travel then, and its delta-V; the **estimate** is the fit of least squares
 against the evidence (:func:`residuals`, in units of the tolerances: the middle of the
-evidence, where the hidden crash lies). docs/crash.md compares the method, point by point,
+evidence, where the hidden crash lies). docs/results/crash.md compares the method, point by point,
 with PC-Crash's optimiser (Moser and Steffan, SAE 980373).
 
 Compute only.

@@ -46,7 +46,7 @@ SURFACES = {"dry": 0.8, "wet": 0.5}
 AFTER_IMPACT = ("brake", "coast", "hold")
 ATTITUDES = ("upright", "side", "roof")
 
-#: The accepted domain, each limit with why (docs/crash.md has the same table).
+#: The accepted domain, each limit with why (docs/results/crash.md has the same table).
 LIMITS = {
     "width": (3.0, 30.0),        # m: a one-lane road to a wide boulevard
     "length": (20.0, 1000.0),    # m: room for a vehicle to start and stop; a bounded map

@@ -16,7 +16,7 @@ the assumed parameters in docs/crash.md):
 
 The SSFs are NHTSA's sales-weighted averages of model year 2003 for each class (NHTSA report
 HS 809 868); the CoM height follows from SSF = track / (2 h). The moments of inertia are the
-usual approximations (assumed; docs/crash.md names their sensitivity): yaw ``m a b`` (dynamic
+usual approximations (assumed; docs/results/crash.md names their sensitivity): yaw ``m a b`` (dynamic
 index 1), pitch 0.9 x yaw, roll ``m (0.39 track)^2``.
 
 **Model** (per vehicle, names prefixed by the vehicle's ``prefix``):
