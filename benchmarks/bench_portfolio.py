@@ -16,7 +16,7 @@ time; for the portfolio also which configuration produced the written solution. 
 summary: the median cost per configuration and how many seeds each configuration is the
 best (ties shared) or at least as good as the best ablation. Problems: the built-ins by
 name, ``planted:N:NONCUE:SEED`` for ``nbst generate --planted N --noncue NONCUE --seed
-SEED``, and ``planted-set[:TRIALS]`` for the 20 instances of results.md's planner section
+SEED``, and ``planted-set[:TRIALS]`` for the 20 instances of docs/results/disks.md's planner section
 (N = 6, 10, 14, 20, NONCUE = round(N/4), problem seeds 1-5). Runs are interleaved per seed,
 so load drifts hit every configuration alike.
 

@@ -18,7 +18,7 @@ Parts:
 
 Rates are best-of-3 wall times on a shared machine; ratios are against N = 100 of the same run.
 ``--figure`` writes the log-log figure docs/figures/scale.png; ``--markdown`` prints the tables
-for docs/results.md.
+for docs/results/disks.md.
 """
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
-"""Regenerate the "Experiments (issue 5)" numbers and figures of docs/results.md.
+"""Regenerate the "Experiments (issue 5)" numbers and figures of docs/results/disks.md.
 
     python benchmarks/results_experiments.py [--out nbst-experiments] [--workers 2] [--cluster ADDRESS]
 
-Runs exactly the commands quoted in docs/results.md (finished runs under OUT/runs are
+Runs exactly the commands quoted in docs/results/disks.md (finished runs under OUT/runs are
 reused, so a second call only redraws), generates the planted sets with ``nbst generate``
 and copies the figures to docs/figures/. The tables are printed and left in OUT/*.md.
 About 15 minutes on 2 busy cores.

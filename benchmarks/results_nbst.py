@@ -1,6 +1,6 @@
 """Results of nbst's own search (variant "nbst", issue 4): benchmark runs, not tests.
 
-Prints Markdown tables (paste into docs/results.md):
+Prints Markdown tables (paste into docs/results/disks.md):
 
     python benchmarks/results_nbst.py targets      # diamond-s14, tiny, over5 against the issue's targets
     python benchmarks/results_nbst.py ablation     # each addition off, one at a time

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 3's result runs for docs/results.md (benchmark runs, not tests). Prints markdown.
+"""Issue 3's result runs for docs/results/disks.md (benchmark runs, not tests). Prints markdown.
 
     python benchmarks/results_search.py                 # tiny (20 seeds), diamond-s14 and over5 (5 x 400k)
     python benchmarks/results_search.py --variants      # also variants A-H, 5 seeds x 400k, both problems

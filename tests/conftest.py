@@ -92,7 +92,7 @@ SLOW = frozenset({
     "tests/test_docs.py::test_every_command_in_the_doc_runs[install.md]",
     "tests/test_docs.py::test_every_command_in_the_doc_runs[mujoco.md]",
     "tests/test_docs.py::test_every_command_in_the_doc_runs[render.md]",
-    "tests/test_docs.py::test_every_command_in_the_doc_runs[results.md]",
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[results/disks.md]",
     "tests/test_experiments.py::test_cli_ablation_outputs",
     "tests/test_experiments.py::test_cli_curves_outputs",
     "tests/test_experiments.py::test_process_pool_equals_in_process",

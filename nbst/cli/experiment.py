@@ -68,7 +68,7 @@ def register(sub) -> None:
                                    "(the paper's Figures 5/6), the ablation of variants A-H plus nbst and the "
                                    "baselines (Figures 7/8), and success rates over problem sets. Finished runs "
                                    "are kept under DIR/runs and reused: rerun a command to resume it.",
-                       epilog="Details and measured results: docs/experiments.md, docs/results.md.")
+                       epilog="Details and measured results: docs/experiments.md, docs/results/disks.md.")
     s = p.add_subparsers(dest="action", metavar="ACTION")
     c = s.add_parser("curves", help="best-so-far cost against trials (PNG, SVG, CSV)",
                      description="Best cost so far against trials for R runs of each entry (the paper's "

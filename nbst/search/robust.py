@@ -27,7 +27,7 @@ shift of the start moves the impact geometry of every first collision by the sam
 whenever it happens, where a velocity error would be negligible for an early impact. The
 per-impact error |dv| h with a uniformly random phase averages ~ v h / 2 for a relative speed
 v, hence SHIFT_STEPS = 0.5; measured on over5 solutions, the median final error under these
-shifts matches MuJoCo's per-disk error within a factor ~2 (docs/results.md, "Robust
+shifts matches MuJoCo's per-disk error within a factor ~2 (docs/results/disks.md, "Robust
 solutions"). The score does not run MuJoCo (``import nbst`` does not import it).
 
 Everything is a function of the seed: the draws come from streams of their own

@@ -33,11 +33,11 @@ DEFAULT_MAX_TRIALS = 1_000_000
 DEFAULT_PATIENCE = 100_000
 
 #: Variant "nbst": the paper's A plus every addition of ``nbst.search.nbst_loop`` (see docs/search.md
-#: and the ablation in docs/results.md for what each contributes).
+#: and the ablation in docs/results/disks.md for what each contributes).
 NBST_DEFAULTS: Mapping[str, Any] = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_weight=0.3, strike_weight=0.1,
                                         polish=True, straight_start=True, planner=True)
 # The adaptive operator schedule (adapt=True) and restarts (restart=20_000) are built and
-# measured but off: the ablation (docs/results.md) showed no gain from either.
+# measured but off: the ablation (docs/results/disks.md) showed no gain from either.
 
 _THIRD = 1.0 / 3.0
 
