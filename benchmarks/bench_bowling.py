@@ -4,7 +4,7 @@
 
 Prints launches/s (2.5 s shots, 1 ms steps) for the same N uniform throws:
 
-* nbst's runner (``deck.Runner``): sleeping on, MjData reset before every launch,
+* nbst's runner (``deck.DeliveryRunner``): sleeping on, MjData reset before every launch,
   one ``mujoco.rollout`` call per launch on each of K threads, final state only;
 * one ``mujoco.rollout`` call per batch over K reused MjData (no reset), sleeping on:
   speed, and how many launches end bitwise different from the reset-per-launch runner;
@@ -73,7 +73,7 @@ def main(argv=None) -> int:
 
     ref = None
     for k in threads:
-        with deck.Runner(model, jobs=k) as L:
+        with deck.DeliveryRunner(model, jobs=k) as L:
             st = np.array([L.initial_state(*deck.initial_qpos_qvel(model, x)) for x in X])
             t = time.perf_counter()
             f = L.run_states(st)
@@ -124,7 +124,7 @@ def outcomes(n: int, *, seed: int, jobs) -> int:
 
     X = search.from_unit(np.random.default_rng(seed).random((n, 4)))
     t = time.perf_counter()
-    with deck.Runner(jobs=jobs) as L:
+    with deck.DeliveryRunner(jobs=jobs) as L:
         masks = np.concatenate([L.throw(X[i:i + 64])[0] for i in range(0, n, 64)])
     dt = time.perf_counter() - t
     c = Counter(int(m) for m in masks)
@@ -144,10 +144,10 @@ def atlas_ablation(n: int, *, seed: int, jobs: int, methods) -> int:
 
     print(f"atlas ablation: {n} launches per method from an empty archive, seed {seed}, {jobs} thread(s)")
     quarters = [n // 4, n // 2, 3 * n // 4, n]
-    with deck.Runner(jobs=jobs) as L:
+    with deck.DeliveryRunner(jobs=jobs) as L:
         for method in methods:
             t = time.perf_counter()
-            a = atlas.run(L, atlas.Archive(), method=method, budget=n, seed=seed)
+            a = atlas.run(L, atlas.SubsetArchive(), method=method, budget=n, seed=seed)
             dt = time.perf_counter() - t
             at = [max((s for r, s in a.curve if r <= q), default=0) for q in quarters]
             sizes = ", ".join(f"{k}: {g}" for k, g, _ in atlas.size_table(a.elite))

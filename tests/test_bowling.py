@@ -36,7 +36,7 @@ def model():
 
 @pytest.fixture(scope="module")
 def launcher(model):
-    with deck.Runner(model, jobs=2) as L:
+    with deck.DeliveryRunner(model, jobs=2) as L:
         yield L
 
 
@@ -175,7 +175,7 @@ def test_rollouts_are_bit_identical_to_a_fresh_plain_replay(model, launcher):
     st = np.array([launcher.initial_state(*deck.initial_qpos_qvel(model, x)) for x in X])
     f = launcher.run_states(st)
     np.testing.assert_array_equal(launcher.run_states(st[::-1])[::-1], f)
-    with deck.Runner(model, jobs=1) as one:
+    with deck.DeliveryRunner(model, jobs=1) as one:
         np.testing.assert_array_equal(one.run_states(st[:3]), f[:3])
     m2 = mujoco.MjModel.from_xml_string(deckfile.scene_with_start(*deck.initial_qpos_qvel(model, X[0])))
     for i in (0, 1):
@@ -296,7 +296,7 @@ def test_render_draws_the_ball_where_the_replay_has_it(gl, seven):
     model = mujoco.MjModel.from_xml_path(str(path.parent / d["scene"]))
     motion = rb.record(d, model)
     assert motion.down == d["down"] and 0 < motion.impact < d["duration"]
-    times = rb.frame_times(motion, 30.0, hold=0.0)
+    times = rb.motion_times(motion, 30.0, hold=0.0)
     assert np.all(np.diff(times) > 0) and times[-1] <= d["duration"]
     dt = np.diff(times)
     assert dt.max() == pytest.approx(1 / 30) and dt.min() == pytest.approx(1 / 30 / rb.SLOW)  # slow motion

@@ -91,7 +91,7 @@ def test_shipped_atlas_has_no_subset_the_corridor_rule_excludes():
 def test_emitter_batches_depend_on_the_seed_and_archive_only():
     from nbst.models.bowling.deck import atlas
 
-    a = atlas.Archive.from_elites({7: np.array([0.3, 7.0, 0.0, 0.0]), 1023: np.array([0.05, 8.0, 0.0, -10.0])})
+    a = atlas.SubsetArchive.from_elites({7: np.array([0.3, 7.0, 0.0, 0.0]), 1023: np.array([0.05, 8.0, 0.0, -10.0])})
     X1, p1 = atlas.emit(a, np.random.default_rng(5))
     X2, p2 = atlas.emit(a, np.random.default_rng(5))
     np.testing.assert_array_equal(X1, X2)
@@ -109,8 +109,8 @@ def test_emitter_run_is_reproducible_for_any_jobs():
 
     runs = []
     for jobs in (1, 2):
-        with deck.Runner(jobs=jobs) as L:
-            a = atlas.Archive.from_elites({1023: np.array([0.05, 8.0, 0.0, -10.0])})
+        with deck.DeliveryRunner(jobs=jobs) as L:
+            a = atlas.SubsetArchive.from_elites({1023: np.array([0.05, 8.0, 0.0, -10.0])})
             runs.append(atlas.run(L, a, method="elites", budget=32, seed=4))
     assert runs[0].rollouts == runs[1].rollouts == 32
     assert sorted(runs[0].elite) == sorted(runs[1].elite)

@@ -60,9 +60,9 @@ def test_a_left_handers_mirrored_spare_converts_the_mirrored_pin(runner):
 
 
 def test_grow_is_reproducible_from_the_seed_on_one_and_two_processes(runner):
-    a1 = foul_atlas.grow(runner, atlas.Archive(), budget=24, seed=5)
+    a1 = foul_atlas.grow(runner, atlas.SubsetArchive(), budget=24, seed=5)
     with frame.FrameRunner(foul_atlas.OIL, jobs=2) as R2:
-        a2 = foul_atlas.grow(R2, atlas.Archive(), budget=24, seed=5)
+        a2 = foul_atlas.grow(R2, atlas.SubsetArchive(), budget=24, seed=5)
     assert a1.rollouts == a2.rollouts == 24
     assert sorted(a1.elite) == sorted(a2.elite) and a1.elite
     for m in a1.elite:
@@ -73,7 +73,7 @@ def test_grow_is_reproducible_from_the_seed_on_one_and_two_processes(runner):
 
 
 def test_the_probability_counts_exactly_the_subset(runner):
-    a = foul_atlas.grow(runner, atlas.Archive(), budget=16, seed=2)
+    a = foul_atlas.grow(runner, atlas.SubsetArchive(), budget=16, seed=2)
     m = max(a.elite, key=lambda k: bin(k).count("1"))
     est = foul_atlas.probabilities(runner, {m: a.elite[m]}, n=4, seed=3)[m]
     frames = runner.map(noise.sample(foul_atlas.delivery_of(a.elite[m]), 4, 3))
@@ -82,7 +82,7 @@ def test_the_probability_counts_exactly_the_subset(runner):
 
 
 def test_the_mirror_step_throws_the_other_hand_once_per_unmirrored_subset(runner):
-    a = foul_atlas.grow(runner, atlas.Archive(), budget=16, seed=6)
+    a = foul_atlas.grow(runner, atlas.SubsetArchive(), budget=16, seed=6)
     todo = [m for m in a.elite if foul_atlas.mirror(m) not in a.elite]
     before, n0 = dict(a.elite), a.rollouts
     new = foul_atlas.mirror_step(runner, a)
@@ -90,13 +90,13 @@ def test_the_mirror_step_throws_the_other_hand_once_per_unmirrored_subset(runner
     for m in new:
         assert m not in before
         assert foul_atlas.hand_of(a.elite[m]) in ("left", "right")
-    assert foul_atlas.mirror_step(runner, atlas.Archive()) == []
+    assert foul_atlas.mirror_step(runner, atlas.SubsetArchive()) == []
 
 
 def test_noisy_throws_harvest_new_subsets_with_themselves_as_elites(runner):
-    a = foul_atlas.grow(runner, atlas.Archive(), budget=16, seed=2)
+    a = foul_atlas.grow(runner, atlas.SubsetArchive(), budget=16, seed=2)
     m = max(a.elite, key=lambda k: bin(k).count("1"))
-    b = atlas.Archive(rollouts=7)
+    b = atlas.SubsetArchive(rollouts=7)
     b.elite[m] = a.elite[m]
     _, throws, results = foul_atlas.probabilities(runner, {m: a.elite[m]}, n=6, seed=3, frames=True)
     new = foul_atlas.harvest(b, throws, results)
@@ -131,7 +131,7 @@ def test_seek_grows_the_archive_with_what_its_children_knock_down(runner):
 
 
 def test_the_archive_checkpoint_round_trips_and_refuses_hostile_content():
-    a = atlas.Archive(rollouts=40)
+    a = atlas.SubsetArchive(rollouts=40)
     a.elite[3] = _point(0.25, 1.0)
     a.seen[3], a.found_at[3] = 2, 17
     doc = json.loads(json.dumps(foul_atlas.archive_doc(a, seed=9)))

@@ -17,7 +17,7 @@ import numpy as np
 from nbst.models.bowling import geometry
 from nbst.models.mjsearch import archive as _archive
 
-__all__ = ["N_SUBSETS", "ALL_DOWN", "SIZE_TOTAL", "SIZE_FLOOR", "HIT_BONUS", "size_of", "hamming", "Archive",
+__all__ = ["N_SUBSETS", "ALL_DOWN", "SIZE_TOTAL", "SIZE_FLOOR", "HIT_BONUS", "size_of", "hamming", "SubsetArchive",
            "parent_weights", "emit", "size_table"]
 
 N_SUBSETS = geometry.N_SUBSETS
@@ -39,7 +39,7 @@ def hamming(a, b) -> np.ndarray:
     return np.array([int(v).bit_count() for v in np.ravel(x)]).reshape(np.shape(x))
 
 
-class Archive(_archive.Archive):
+class SubsetArchive(_archive.Archive):
     """Subsets found so far (the rollout room's archive keyed by the mask of pins down): mask ->
     elite (the first delivery that gave it), how often seen, when found, and for the emitter how
     many children each parent had and how many found a new subset."""

@@ -31,10 +31,10 @@ def runner_of(args, jobs: int):
     from nbst.models.bowling import deck
 
     if getattr(args, "cluster", None):
-        from nbst.models.bowling.deck.cluster import ClusterRunner
+        from nbst.models.bowling.deck.cluster import DeliveryClusterRunner
 
-        return ClusterRunner(args.cluster)
-    return deck.Runner(jobs=jobs)
+        return DeliveryClusterRunner(args.cluster)
+    return deck.DeliveryRunner(jobs=jobs)
 
 
 def cmd_solve(args) -> int:

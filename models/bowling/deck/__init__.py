@@ -7,7 +7,7 @@ for a requested set of pins down, and an atlas one for as many of the 1,023 subs
 budget finds; both run on the rollout room (:mod:`nbst.models.mjsearch`). Modules, from the
 bottom:
 
-* :mod:`.delivery` -- :class:`Delivery`, its initial state, :class:`Runner` (rollouts on K threads);
+* :mod:`.delivery` -- :class:`Delivery`, its initial state, :class:`DeliveryRunner` (rollouts on K threads);
 * :mod:`.cluster` -- the same runner's rollouts on a Dask cluster;
 * :mod:`.search` -- a delivery for a requested set of pins (CMA-ES restarts), robustness probes;
 * :mod:`.atlas` -- one delivery per subset (MAP-Elites, uniform or targeted);
@@ -15,7 +15,7 @@ bottom:
 * :mod:`.folder` -- an atlas folder on disk: its throw files, resuming, the summaries;
 * :mod:`.figure` -- the atlas's picture.
 
-This package re-exports :mod:`.delivery`'s names (``deck.Delivery``, ``deck.Runner``,
+This package re-exports :mod:`.delivery`'s names (``deck.Delivery``, ``deck.DeliveryRunner``,
 ``deck.BOUNDS``). Importing it imports numpy, not mujoco.
 """
 from __future__ import annotations

@@ -1,11 +1,11 @@
 """The atlas: one delivery per subset of pins down, for as many of the 1,023 subsets as a budget finds.
 
 Three ways to spend a delivery budget (``method``), all on one archive keyed by subset
-(:class:`Archive`, the rollout room's :mod:`nbst.models.mjsearch.archive`: the first delivery
+(:class:`SubsetArchive`, the rollout room's :mod:`nbst.models.mjsearch.archive`: the first delivery
 that gave each subset is its **elite**):
 
 * ``"uniform"``: deliveries uniform over :data:`.delivery.BOUNDS` (random search).
-* ``"elites"`` (MAP-Elites style, the default): after :data:`EXPLORE` uniform deliveries
+* ``"elites"`` (MAP-Elites style, the default): after :data:`nbst.models.mjsearch.archive.EXPLORE` uniform deliveries
   when the archive is empty, each batch of :data:`search.BATCH` deliveries holds
   :data:`UNIFORM_PER_BATCH` uniform deliveries and children of archived elites: a parent
   is drawn with weight :func:`parent_weights` (subsets of sizes with low coverage, seen
@@ -30,11 +30,9 @@ from nbst.errors import InputError
 
 from nbst.models.bowling import deck, subsets
 from nbst.models.bowling.deck import search
-from nbst.models.bowling.subsets import N_SUBSETS, Archive, parent_weights, size_table  # noqa: F401 (the atlas's names)
+from nbst.models.bowling.subsets import N_SUBSETS, SubsetArchive, parent_weights, size_table  # noqa: F401 (the atlas's names)
 from nbst.models.mjsearch import archive as _archive
 
-#: Uniform deliveries that start an empty archive before the emitter takes over.
-EXPLORE = _archive.EXPLORE
 #: Uniform deliveries in each batch of 16 of the emitter (keeps finding what no elite is near).
 UNIFORM_PER_BATCH = _archive.UNIFORM_PER_BATCH
 #: Gaussian steps of a child, in the unit cube (per coordinate): ~0.4 mm, 4 mm, 42 mm
@@ -42,15 +40,15 @@ UNIFORM_PER_BATCH = _archive.UNIFORM_PER_BATCH
 SCALES = search.SCALES
 
 
-def emit(a: Archive, rng: np.random.Generator, n: int = search.BATCH, *,
+def emit(a: SubsetArchive, rng: np.random.Generator, n: int = search.BATCH, *,
          selection: str = "biased") -> tuple[np.ndarray, np.ndarray]:
     """One batch of the MAP-Elites emitter (:func:`.subsets.emit`) in the 5 m delivery space:
     ((n, 4) deliveries, (n,) parent masks, -1 = uniform)."""
     return subsets.emit(a, rng, search.SPACE, n, selection=selection)
 
 
-def run(runner: deck.Runner, archive: Archive, *, method: str, budget: int, seed: int,
-        per_subset: int = 200, on_new=None, callback=None) -> Archive:
+def run(runner: deck.DeliveryRunner, archive: SubsetArchive, *, method: str, budget: int, seed: int,
+        per_subset: int = 200, on_new=None, callback=None) -> SubsetArchive:
     """Spend ``budget`` deliveries growing ``archive`` with ``method`` ("elites", "uniform",
     "targeted", or "elites-plain": the emitter with uniform parent selection); ``on_new(masks)``
     after each batch that found new subsets (to save them), ``callback(archive)`` after each
@@ -77,7 +75,7 @@ def run(runner: deck.Runner, archive: Archive, *, method: str, budget: int, seed
             if callback:
                 callback(a)
 
-        _archive.grow(lambda X: runner.throw(X)[0], archive, rng, search.SPACE, budget=budget, explore=EXPLORE,
+        _archive.grow(lambda X: runner.throw(X)[0], archive, rng, search.SPACE, budget=budget, explore=_archive.EXPLORE,
                       batch=search.BATCH, selection="biased" if method == "elites" else "uniform",
                       weights=parent_weights, on_batch=on_batch)
     elif method == "targeted":

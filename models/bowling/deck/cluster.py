@@ -1,6 +1,6 @@
 """Throw the deck half's deliveries on a Dask cluster (``nbst bowl solve|atlas --cluster ADDRESS``).
 
-:class:`ClusterRunner` is the rollout room's :class:`~nbst.models.mjsearch.cluster.ClusterRunner`
+:class:`DeliveryClusterRunner` is the rollout room's :class:`~nbst.models.mjsearch.cluster.ClusterRunner`
 with the deliveries of :mod:`.delivery`: each batch of initial states is cut into one
 contiguous chunk per worker, each worker runs its chunk with a one-thread runner of its own
 (built once per worker process from the same MjSpec scene, :func:`nbst.models.bowling.scene.build_model`,
@@ -18,10 +18,10 @@ from nbst.models.bowling import scene
 from nbst.models.bowling.deck.delivery import DURATION, Deliveries
 from nbst.models.mjsearch import cluster
 
-__all__ = ["ClusterRunner"]
+__all__ = ["DeliveryClusterRunner"]
 
 
-class ClusterRunner(Deliveries, cluster.ClusterRunner):
+class DeliveryClusterRunner(Deliveries, cluster.ClusterRunner):
     """A deck runner whose rollouts run on the workers of a Dask ``client`` (or address)."""
 
     def __init__(self, client, *, duration: float = DURATION):

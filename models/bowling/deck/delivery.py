@@ -17,7 +17,7 @@ the rule of :mod:`.pinfall` (tilted past 45 degrees or off the deck); its **sign
 Throws are bit-identical on replay: every delivery starts from a freshly reset ``MjData`` with
 only ``qpos``/``qvel`` set (sleeping is on, and a reused MjData can carry sleep state that the
 state ``mujoco.rollout`` sets does not cover: the calibration note saw 2/60 deliveries change
-that way, benchmarks/bench_bowling.py 0/48; rare is not never). :class:`Runner` throws on K
+that way, benchmarks/bench_bowling.py 0/48; rare is not never). :class:`DeliveryRunner` throws on K
 threads with the rollout room's runner (:mod:`nbst.models.mjsearch.runner`): each a
 ``mujoco.rollout`` call on the thread's own MjData, reset before every delivery, keeping only
 the final state.
@@ -35,7 +35,7 @@ from nbst.models.mjsearch import runner
 from nbst.models.mjsearch.runner import check_state, data_warnings, mujoco_warnings_raise
 
 __all__ = ["DURATION", "BOUNDS", "KEYS", "LO", "HI", "Delivery", "clamp", "initial_qpos_qvel", "replay_final_qpos",
-           "n_steps", "Deliveries", "Runner"]
+           "n_steps", "Deliveries", "DeliveryRunner"]
 
 #: Length of a throw (s): ~1 s to reach the pins at 5 m/s, then >= 1.5 s of pin action.
 DURATION = 2.5
@@ -137,7 +137,7 @@ class Deliveries:
         return pinfall.mask_of(down), down
 
 
-class Runner(Deliveries, runner.Runner):
+class DeliveryRunner(Deliveries, runner.Runner):
     """Throws deliveries on ``jobs`` threads with ``mujoco.rollout`` (the rollout room's
     :class:`~nbst.models.mjsearch.runner.Runner`: an MjData per thread, reset before each
     delivery, so a throw depends on its delivery only); results in input order."""

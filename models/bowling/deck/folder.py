@@ -169,7 +169,7 @@ class AtlasRun:
                  robustness: bool = True, on_progress=None):
         self.runner, self.out, self.files, self.deliveries = runner, out, files, deliveries
         self.seed, self.method, self.robustness, self.on_progress = seed, method, robustness, on_progress
-        self.arch = atlasmod.Archive.from_elites(deliveries)
+        self.arch = atlasmod.SubsetArchive.from_elites(deliveries)
         self.probes = 0
 
     def add_robustness(self, mask: int, f: Path) -> None:

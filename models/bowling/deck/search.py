@@ -43,8 +43,6 @@ from nbst.models.bowling import deck, geometry, pinfall, subsets
 from nbst.models.mjsearch import archive as _archive
 from nbst.models.mjsearch import restarts
 
-#: Uniform exploration deliveries before CMA-ES restarts (capped at a quarter of the budget).
-EXPLORE = restarts.EXPLORE
 #: Uniform deliveries after each restart (new subsets to restart from; a search never stops
 #: exploring, so a subset that only random throws find is still found).
 EXPLORE_BETWEEN = restarts.EXPLORE_BETWEEN
@@ -64,7 +62,7 @@ SPACE = _archive.box_space(deck.LO, deck.HI, SCALES)
 
 
 @dataclass
-class Progress:
+class DeckProgress:
     """What a search reports after each batch (to a progress bar)."""
 
     rollouts: int
@@ -74,7 +72,7 @@ class Progress:
 
 
 @dataclass
-class SearchResult(restarts.Found):
+class DeckResult(restarts.Found):
     """Best delivery found for ``target`` (a 10-bit mask), and how the search went: the rollout
     room's :class:`~nbst.models.mjsearch.restarts.Found` (``stopped``: "found" | "budget" |
     "interrupted"; ``archive``: mask -> (4,) delivery), read in bowling's words."""
@@ -138,7 +136,7 @@ def soft_distance(model, final_qpos, target: int) -> np.ndarray:
     return np.abs(soft - want).sum(axis=-1)
 
 
-def scorer(runner: deck.Runner, target: int, distance: str = "hamming"):
+def scorer(runner: deck.DeliveryRunner, target: int, distance: str = "hamming"):
     """``evaluate(deliveries) -> (masks, Hamming distances, costs)`` of a batch, for the room's search."""
     if distance not in ("hamming", "geometry"):
         raise InputError(f"distance must be hamming or geometry, got {distance!r}")
@@ -155,9 +153,9 @@ def scorer(runner: deck.Runner, target: int, distance: str = "hamming"):
 
 
 def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None = None,
-          runner: deck.Runner | None = None, callback=None, explore: int = EXPLORE,
+          runner: deck.DeliveryRunner | None = None, callback=None, explore: int = restarts.EXPLORE,
           archive: dict | None = None, explore_between: int = EXPLORE_BETWEEN,
-          distance: str = "hamming") -> SearchResult:
+          distance: str = "hamming") -> DeckResult:
     """Search for a delivery that knocks down exactly the pins of ``target`` (a 10-bit mask).
 
     Stops at the first exact hit or after ``max_rollouts`` deliveries; Ctrl-C
@@ -169,8 +167,8 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
         seed: the seed; the same seed gives the same delivery whatever ``jobs``.
         max_rollouts: the budget, in deliveries run.
         jobs: threads of the runner made here (None: every core).
-        runner: a ``deck.Runner`` to reuse (its jobs then apply), or None.
-        callback: None, or called with a :class:`Progress` after each batch.
+        runner: a ``deck.DeliveryRunner`` to reuse (its jobs then apply), or None.
+        callback: None, or called with a :class:`DeckProgress` after each batch.
         explore: uniform deliveries before the CMA-ES restarts (capped at a quarter of the budget).
         archive: deliveries already known by subset (mask -> (4,) delivery; e.g. the atlas's),
             used as restart points; with ``explore=0`` the search starts from them directly.
@@ -178,7 +176,7 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
         distance: "hamming" or "geometry" (:func:`geometry_distance`) in the cost.
 
     Returns:
-        A :class:`SearchResult`: the best delivery (y, speed, angle, spin 5 m before the pins),
+        A :class:`DeckResult`: the best delivery (y, speed, angle, spin 5 m before the pins),
         the pins it knocks down, its Hamming distance to ``target``, the rollouts and restarts
         used, ``stopped`` ("found", "budget" or "interrupted"), the seed, the wall time and the
         archive.
@@ -187,10 +185,10 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
         raise InputError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")
     target = int(target)
     own = runner is None
-    L = deck.Runner(jobs=jobs) if own else runner
+    L = deck.DeliveryRunner(jobs=jobs) if own else runner
     try:
         evaluate, dist = scorer(L, target, distance)
-        cb = None if callback is None else (lambda p: callback(Progress(p.rollouts, p.best_distance,
+        cb = None if callback is None else (lambda p: callback(DeckProgress(p.rollouts, p.best_distance,
                                                                         p.best_signature, p.signatures)))
         f = restarts.search(evaluate, SPACE, target, seed=seed, max_rollouts=max_rollouts, archive=archive,
                             prior=lambda m: float(dist(m, target)) + SOFT_WEIGHT * 10, clip=deck.clamp,
@@ -198,10 +196,10 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
     finally:
         if own:
             L.close()
-    return SearchResult(**vars(f))
+    return DeckResult(**vars(f))
 
 
-def robustness(runner: deck.Runner, delivery, mask: int, *, lateral_max: float = 0.05,
+def robustness(runner: deck.DeliveryRunner, delivery, mask: int, *, lateral_max: float = 0.05,
                speed_max: float = 0.5, steps: int = 10) -> dict:
     """Largest lateral (m) and speed (m/s) changes that keep ``mask``, by bisection.
 
@@ -246,7 +244,7 @@ LADDER_LATERAL_M = 0.05e-3 * 2.0 ** np.arange(11)
 LADDER_SPEED_M_S = 0.5e-3 * 2.0 ** np.arange(11)
 
 
-def robustness_ladder(runner: deck.Runner, delivery, mask: int, *, lateral=LADDER_LATERAL_M,
+def robustness_ladder(runner: deck.DeliveryRunner, delivery, mask: int, *, lateral=LADDER_LATERAL_M,
                       speed=LADDER_SPEED_M_S) -> dict:
     """Cheap robustness for the atlas: the largest rung d of a doubling ladder at which the
     deliveries at -d and +d both keep ``mask``, by binary search over the rungs (4 checks of 2

@@ -7,7 +7,7 @@ each with the probability of its subset under the release noise.
   the atlas's oil pattern. A left-hander's lane is a right-hander's mirrored (:mod:`.lane`),
   so a left-handed throw reaches the mirror images of what right-handed throws reach.
 * **Search** (:func:`grow`): the 5 m atlas's MAP-Elites emitter (:func:`.atlas.emit`, with
-  this space): :data:`.atlas.EXPLORE` uniform throws into an empty archive, then batches of
+  this space): :data:`nbst.models.mjsearch.archive.EXPLORE` uniform throws into an empty archive, then batches of
   :data:`._archive.BATCH` holding 2 uniform throws and children of archived elites, a child
   moved from its parent by a Gaussian step in the unit cube at one of :data:`SCALES`. Every
   throw is a settled USBC frame (:func:`.frame.run_frame`); its subset is the pins down.
@@ -107,8 +107,8 @@ def throw_masks(runner: frame.FrameRunner, X) -> tuple[list[int], list[frame.Fra
     return [pinfall.mask_from_pins(r.down) for r in results], results
 
 
-def grow(runner: frame.FrameRunner, archive: subsets.Archive, *, budget: int, seed: int,
-         on_batch=None) -> subsets.Archive:
+def grow(runner: frame.FrameRunner, archive: subsets.SubsetArchive, *, budget: int, seed: int,
+         on_batch=None) -> subsets.SubsetArchive:
     """Spend ``budget`` frames growing ``archive`` (elites are (7,) points: :data:`KEYS`, hand)
     with the rollout room's MAP-Elites loop (:func:`nbst.models.mjsearch.archive.grow`); a
     child keeps its parent's hand. ``on_batch(archive, new_masks)`` after each batch
@@ -138,7 +138,7 @@ def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int,
     return (out, throws, results) if frames else out
 
 
-def harvest(archive: subsets.Archive, throws, results) -> list[int]:
+def harvest(archive: subsets.SubsetArchive, throws, results) -> list[int]:
     """Subsets that noisy throws (of :func:`probabilities`) knocked down and the archive lacks:
     each joins with its throw as the elite, when that delivery lies inside the delivery space's
     ranges (the noise may carry it out). The frames have run already: the archive's frame
@@ -214,7 +214,7 @@ def seek(runner: frame.FrameRunner, elites: dict, target: int, *, budget: int, s
     return None, arch, frames
 
 
-def archive_doc(a: subsets.Archive, seed: int) -> dict:
+def archive_doc(a: subsets.SubsetArchive, seed: int) -> dict:
     """The search's state as a JSON-able dict (elites as points of :data:`KEYS`)."""
     return {"format": ARCHIVE_FORMAT, "version": ARCHIVE_VERSION, "seed": int(seed), "keys": [*KEYS, "hand"],
             "rollouts": int(a.rollouts),
@@ -223,7 +223,7 @@ def archive_doc(a: subsets.Archive, seed: int) -> dict:
             "found_at": {str(m): int(a.found_at.get(m, -1)) for m in sorted(a.elite)}}
 
 
-def archive_from_doc(doc, src) -> subsets.Archive:
+def archive_from_doc(doc, src) -> subsets.SubsetArchive:
     """An archive from :func:`archive_doc`'s dict; BowlingFileError (one line naming ``src`` and the
     field) on anything else: a mask outside 1..1023, a point that is not 6 finite numbers in
     :data:`BOUNDS`, counts that are not whole numbers >= -1."""
@@ -241,7 +241,7 @@ def archive_from_doc(doc, src) -> subsets.Archive:
     n = doc.get("rollouts")
     if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 10**9:
         fail("rollouts", "must be a whole number in [0, 1e9]")
-    a = subsets.Archive(rollouts=n)
+    a = subsets.SubsetArchive(rollouts=n)
     el = doc.get("elites")
     if not isinstance(el, dict) or len(el) > subsets.N_SUBSETS:
         fail("elites", "must be an object of at most 1,023 subsets")
@@ -262,7 +262,7 @@ def archive_from_doc(doc, src) -> subsets.Archive:
     return a
 
 
-def rethrow(runner: frame.FrameRunner, archive: subsets.Archive, X, on_done=None) -> list[int]:
+def rethrow(runner: frame.FrameRunner, archive: subsets.SubsetArchive, X, on_done=None) -> list[int]:
     """Throw each point of ``X`` ((n, 7)) once on this scene and archive it by what it knocks
     down here (parentless, like a uniform throw; the first throw of a subset is its elite): an
     atlas grown on another lane scene is a set of deliveries, not of answers. Returns the new
@@ -274,7 +274,7 @@ def rethrow(runner: frame.FrameRunner, archive: subsets.Archive, X, on_done=None
     return archive.add(X, masks, None)
 
 
-def mirror_step(runner: frame.FrameRunner, archive: subsets.Archive) -> list[int]:
+def mirror_step(runner: frame.FrameRunner, archive: subsets.SubsetArchive) -> list[int]:
     """For each elite whose mirrored subset is not archived, its delivery with the other hand:
     one frame each, archived by its own outcome (parentless). Returns the new masks."""
     todo = [m for m in sorted(archive.elite) if mirror(m) not in archive.elite]

@@ -56,12 +56,12 @@ class FoulAtlasRun:
         elif from_atlas:
             points, here = atlas_points(throwfile.load_atlas(from_atlas))
             if here:  # this scene's answers: kept as they are
-                self.archive = subsets.Archive.from_elites(points)
+                self.archive = subsets.SubsetArchive.from_elites(points)
             else:  # another scene's: its deliveries, thrown again here (:meth:`rethrow`)
-                self.archive = subsets.Archive()
+                self.archive = subsets.SubsetArchive()
                 self.starts = list(points.values())
         else:
-            self.archive = subsets.Archive()
+            self.archive = subsets.SubsetArchive()
         self.done: dict = {}
         if self.atl.exists():
             for t in throwfile.load_atlas(self.atl)["throws"]:
