@@ -149,7 +149,7 @@ def cmd_render(args) -> int:
 
     ck = crash_kind(args.problem)  # sniffs the first bytes only; the crash file's gate reads it, capped
     if ck == "crash":
-        from nbst.cli.render_crash import cmd_render_crash
+        from nbst.cli.crash.render import cmd_render_crash
 
         return cmd_render_crash(args)
     if ck == "script":

@@ -1,149 +1,18 @@
-"""Subcommands ``nbst crash scripts|check|solve|replay|probability|reconstruct`` (docs/crash.md).
+"""The ``nbst crash`` subcommands themselves (registered by :mod:`nbst.cli.crash`): each takes the
+parsed arguments and returns the exit code (0 done, 1 a check failed, 2 bad input, 130
+interrupted; docs/crash.md).
 
-Registration is light: mujoco and cma are imported inside the commands.
-
-Exit codes: 0 done (solve: the script met; replay: the file reproduced bit for bit), 1 a check
-failed (solve: not met within the budget, the nearest crash written; replay: the replay
-differs), 2 bad input, 130 interrupted (solve: the best crash so far written).
+Light at import: the crash room, mujoco and cma are imported inside the commands.
 """
 from __future__ import annotations
 
 import sys
 
-from nbst.cli.args import JOBS, SEED, Bounded, print_json, with_limits
-from nbst.cli.flags import add_quiet, add_seed
+from nbst.cli.args import print_json
 from nbst.seeds import resolve_seed
 
-ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
-ROBUST = Bounded("robust", 12, 1_000_000, integer=True)
-SAMPLES = Bounded("samples", 1, 100_000, integer=True)
-
-
-#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
-#: them without building their arguments (nbst.cli.main builds only the command asked for).
-COMMANDS = {
-    "crash": "a multi-vehicle crash on MuJoCo: script it, solve it, replay it, reconstruct one",
-}
-
-
-def register(sub) -> None:
-    from nbst.models.crash.robust import DEFAULT_ROBUST_BUDGET, DEFAULT_SAMPLES
-    from nbst.models.crash.search import DEFAULT_MAX_ROLLOUTS
-
-    p = sub.add_parser("crash", help=COMMANDS["crash"],
-                       description="The paper's second challenge (docs/crash.md): several vehicles, each driven by "
-                                   "a partially autonomous driver, crash as a script says (whom each hits and in what "
-                                   "order, its impact speed or delta-V, where it ends up and facing where, how it "
-                                   "rolls). Units: metres, km/h, degrees, seconds.")
-    cr = p.add_subparsers(dest="crash_command", metavar="SUBCOMMAND", parser_class=type(p))
-    p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
-
-    s = cr.add_parser("scripts", help="list the built-in crash scripts",
-                      description="List the built-in crash scripts (models/crash/scripts/): name, vehicles, "
-                                  "what the script asks.")
-    s.add_argument("--json", action="store_true", help="print one JSON object per script")
-    s.set_defaults(func=cmd_scripts)
-
-    c = cr.add_parser("check", help="validate a crash script (exit 0, or 2 with one line naming the field)",
-                      description="Read SCRIPT through the input gate and print what it asks: the road, each "
-                                  "vehicle, its driver's ranges and its fate.")
-    c.add_argument("script", metavar="SCRIPT", help="built-in name (see `nbst crash scripts`) or a JSON file")
-    c.set_defaults(func=cmd_check)
-
-    v = cr.add_parser("solve", help="search driver intents that make the crash happen as scripted",
-                      description="Search each vehicle's driver intent (speed, aim point, arrival time, reactions, "
-                                  "after-impact behaviour; within the script's ranges) for a crash that meets the "
-                                  "script: the paper's signature search (one bit per vehicle whose fates hold, "
-                                  "crossover of whole per-vehicle blocks), a MAP-Elites archive keyed by the contact "
-                                  "sequence, CMA-ES restarts. Writes the crash file (CRASH.json: the scene, the "
-                                  "initial state, the realised controls, the outcome) that `nbst crash replay` and "
-                                  "`nbst render` read. Ctrl-C writes the best crash so far (exit 130). The same "
-                                  "--seed gives the same crash for any --jobs.",
-                      epilog="Example: nbst crash solve t-bone -o tbone.json --seed 1. Exit 0: met; 1: not met "
-                             "within --max-rollouts (the nearest crash is written); 2: bad input; 130: interrupted.")
-    v.add_argument("script", metavar="SCRIPT", help="built-in name (see `nbst crash scripts`) or a JSON file")
-    v.add_argument("-o", "--output", required=True, metavar="CRASH.json", help="where to write the crash")
-    add_seed(v, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
-    v.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
-                   help=with_limits(f"rollout budget of the search (default {DEFAULT_MAX_ROLLOUTS})", ROLLOUTS))
-    _runner_flags(v)
-    v.add_argument("--robust", type=ROBUST, nargs="?", const=DEFAULT_ROBUST_BUDGET, default=None, metavar="BUDGET",
-                   help=with_limits("after the search, maximise the probability that the script is met under "
-                                    "driver noise (the rollout room's robust maximiser: common random numbers, "
-                                    f"successive halving; BUDGET noisy rollouts, default {DEFAULT_ROBUST_BUDGET}) and "
-                                    "write the pick, "
-                                    "the latest that keeps its outcome at 2, 1 and 0.5 ms", ROBUST))
-    v.add_argument("--samples", type=SAMPLES, default=None, metavar="N",
-                   help=with_limits("also estimate the probability that the crash written meets the script under "
-                                    "driver noise from N noisy rollouts, with its 95 %% Wilson interval (default: "
-                                    f"none; {DEFAULT_SAMPLES} with --robust)", SAMPLES))
-    v.add_argument("--no-ladder", action="store_true",
-                   help="accept a crash that meets the script at the script's step only (by default the search "
-                        "goes on until one also meets it at 1 and 0.5 ms, and the file records that ladder)")
-    add_quiet(v, "no progress bar and no summary line")
-    v.set_defaults(func=cmd_solve)
-
-    c = cr.add_parser("reconstruct", help="from the vehicles' rest positions back to their speeds before the crash",
-                      description="Read CASE (a crash script whose fates are the evidence: each vehicle's rest "
-                                  "position and heading with their tolerances, whom it hit, optionally where it "
-                                  "was at the impact (impact_at); its drivers' ranges bound the unknowns) and find "
-                                  "every set of pre-impact intents whose crash meets the evidence: first a fit (two "
-                                  "vehicles with impact positions: the momentum seed from the slides to rest, "
-                                  "momentum corrections, then CMA-ES; else the crash search), then the spread "
-                                  "around the fits. Prints each vehicle's impact speed and heading: the estimate "
-                                  "(the fit of least squares against the evidence) and the range over every fit; "
-                                  "writes the estimate as a crash file with the ranges in its `reconstruction` "
-                                  "(replay and render it as any crash file). docs/crash.md compares the method "
-                                  "with PC-Crash's optimiser.",
-                      epilog="Exit 0: fits found; 1: no fit within --max-rollouts (the nearest crash is written); "
-                             "2: bad input; 130: interrupted.")
-    c.add_argument("case", metavar="CASE", help="a crash script of evidence (JSON file or built-in name)")
-    c.add_argument("-o", "--output", required=True, metavar="REC.json", help="where to write the reconstruction")
-    add_seed(c, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
-    c.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
-                   help=with_limits(f"rollout budget, fit and spread together (default {DEFAULT_MAX_ROLLOUTS})",
-                                    ROLLOUTS))
-    _runner_flags(c)
-    c.add_argument("--json", action="store_true", help="print the reconstruction as one JSON object")
-    add_quiet(c, "no progress bar and no summary")
-    c.set_defaults(func=cmd_reconstruct)
-
-    b = cr.add_parser("probability", help="the probability that a crash file's intents meet its script under "
-                                          "driver noise",
-                      description="Run N noisy copies of CRASH.json's driver intents (speed +-0.5 m/s, aim "
-                                  "+-0.2 m, times +-0.1 s, steering +-1 deg: docs/crash.md) and print the share "
-                                  "that meets the script with its 95 %% Wilson interval, and the outcomes seen. "
-                                  "The same --seed gives the same copies (common random numbers).")
-    b.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
-    b.add_argument("--samples", type=SAMPLES, default=DEFAULT_SAMPLES, metavar="N",
-                   help=with_limits(f"noisy rollouts (default {DEFAULT_SAMPLES})", SAMPLES))
-    b.add_argument("--seed", type=SEED, default=1, help=f"noise seed [{SEED.limits}] (default 1)")
-    b.add_argument("-o", "--output", default=None, metavar="OUT.json",
-                   help="also write the crash file with this estimate in its `probability`")
-    _runner_flags(b)
-    b.add_argument("--json", action="store_true", help="print the estimate as one JSON object")
-    add_quiet(b, "no progress bar")
-    b.set_defaults(func=cmd_probability)
-
-    r = cr.add_parser("replay", help="replay a crash file with plain mj_step and check it bit for bit",
-                      description="Replay CRASH.json from its own scene, initial state and recorded controls with "
-                                  "a plain mj_step loop (docs/crash.md has the same recipe in a few lines of "
-                                  "MuJoCo), check that the final state equals the file's bit for bit and that the "
-                                  "outcome read again is the file's, and print the outcome.",
-                      epilog="Exit 0: reproduced; 1: it differs; 2: bad input.")
-    r.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
-    r.add_argument("--json", action="store_true", help="print one JSON object: identical, outcome")
-    r.set_defaults(func=cmd_replay)
-
-
-def _runner_flags(p) -> None:
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--jobs", type=JOBS, default=None, metavar="K",
-                   help=with_limits("threads running the rollouts (default: all cores); any K gives the same crash",
-                                    JOBS))
-    g.add_argument("--cluster", default=None, metavar="ADDRESS",
-                   help="run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; the same "
-                        "crash as --jobs for the same seed")
+__all__ = ["cmd_scripts", "cmd_check", "cmd_solve", "cmd_reconstruct", "cmd_probability", "cmd_replay",
+           "write_crash"]
 
 
 def _runner(args, script, xml=None):

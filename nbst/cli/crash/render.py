@@ -1,4 +1,5 @@
-"""``nbst render CRASH.json -o crash.mp4`` (``nbst render`` dispatches here on a crash file).
+"""``nbst render CRASH.json -o crash.mp4`` (``nbst render``, :mod:`nbst.cli.render`, dispatches
+here on a crash file).
 
 A crash file from ``nbst crash solve`` is filmed from its own replay (docs/render.md, "A
 crash"): ``--camera overhead`` (the default) a true-scale view from above; ``--follow NAME`` a
@@ -14,6 +15,8 @@ import argparse
 import sys
 
 from nbst.cli.args import Size
+
+__all__ = ["DISK_ONLY_FLAGS", "FPS_MAX", "check_flags", "cmd_render_crash"]
 
 #: Flags of ``nbst render`` that draw disk problems only; an error on a crash file.
 DISK_ONLY_FLAGS = (("trails", False, "--trails"), ("labels", None, "--labels"), ("view", None, "--view"),
@@ -62,8 +65,8 @@ def cmd_render_crash(args) -> int:
 
     from nbst.render.core import style
     from nbst.render.crash.video import render_crash
-    from nbst.render.crash.motion import SLOW, frame_times, impact_times, record, slow_windows
-    from nbst.render.core.video import MAX_FRAMES
+    from nbst.render.core.times import MAX_FRAMES, frame_times
+    from nbst.render.crash.motion import SLOW, impact_times, record, slow_windows
 
     if isinstance(args.size, str):
         try:
@@ -89,8 +92,8 @@ def cmd_render_crash(args) -> int:
     size = tuple(args.size) if args.size else (style.GIF_SIZE if kind == "gif" else style.DEFAULT_SIZE)
     fps = float(args.fps) if args.fps is not None else float(style.GIF_FPS if kind == "gif" else style.DEFAULT_FPS)
     # the frames, from the file's impacts (the replay's, when it reproduces the file)
-    times = frame_times(script.duration, fps, slow_windows(impact_times(d["outcome"]), script.duration),
-                        hold=args.hold)
+    times = frame_times(script.duration, fps, windows=slow_windows(impact_times(d["outcome"]), script.duration),
+                        slow=SLOW, hold=args.hold)
     limit = args.max_frames or MAX_FRAMES
     if kind != "png" and len(times) > limit:
         return _err(f"{len(times):,} frames at --fps {fps:g}; at most {limit:,} (--max-frames)")
@@ -104,7 +107,7 @@ def cmd_render_crash(args) -> int:
         motion = record(d, script, model)
         windows = slow_windows([im.t for im in motion.impacts], motion.duration)
         if kind != "png":
-            times = frame_times(motion.duration, fps, windows, hold=args.hold)
+            times = frame_times(motion.duration, fps, windows=windows, slow=SLOW, hold=args.hold)
             bar.total = len(times)
             bar.note("")
         with sigterm_as_interrupt():   # kill: the partial video is removed as on Ctrl-C
