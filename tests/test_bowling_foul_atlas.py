@@ -1,5 +1,5 @@
 """The atlas from the foul line and `nbst bowl solve --foul-line/--robust` (issue 22):
-models/bowling/foul_atlas.py, nbst/cli/bowl_foul.py."""
+models/bowling/foul_atlas.py, nbst/cli/bowl/foul.py."""
 from __future__ import annotations
 
 import json
@@ -244,7 +244,7 @@ def test_cli_atlas_refuses_a_hostile_checkpoint_in_one_line(tmp_path):
 def test_robust_strike_starts_include_throws_that_strike_without_noise(runner):
     """--robust for a strike also starts from the strike line and the pocket cell: each must
     strike without noise (a start that misses could never be the pick)."""
-    from nbst.cli.bowl_foul import robust_starts
+    from nbst.cli.bowl.foul import robust_starts
     from nbst.models.bowling.lane import spares
 
     found = foul_atlas.delivery_of(_point(0.5))

@@ -282,7 +282,7 @@ def test_plot_problem_says_it_is_a_bowling_shot(good, tmp_path, capsys):
 # --- bowl solve --leave -----------------------------------------------------------------------
 
 def test_leave_means_the_pins_left_standing():
-    from nbst.cli import bowl_args
+    from nbst.cli.bowl import args as bowl_args
 
     assert bowl_args.leave("7,10") == pinfall.mask_from_pins([1, 2, 3, 4, 5, 6, 8, 9])
     assert bowl_args.leave("none") == 1023 and bowl_args.pins_down("strike") == 1023

@@ -49,7 +49,7 @@ def test_each_profiles_strike_ball_reaches_the_pocket_board_on_the_house_shot(na
 
 
 def test_the_cli_knows_the_profiles_and_a_delivery_flag_beside_one_overrides_that_part():
-    from nbst.cli import bowl_args
+    from nbst.cli.bowl import args as bowl_args
     from nbst.cli.main import build_parser
 
     assert bowl_args.bowlers() == profiles.NAMES == profiles.PROFILES.names()   # read from the registry
@@ -106,7 +106,7 @@ def test_a_profile_carries_its_board_and_scale_and_is_one_registry_entry_and_one
 
 def test_the_balls_are_a_registry_and_the_cli_reads_its_defaults():
     from nbst.cli.main import build_parser
-    from nbst.cli import bowl_args
+    from nbst.cli.bowl import args as bowl_args
 
     assert lane.BALLS[lane.DEFAULT_BALL] == lane.Ball()   # the default ball, field for field
     args = build_parser().parse_args(["bowl", "throw"])

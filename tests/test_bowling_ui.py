@@ -117,7 +117,7 @@ def test_bad_leaves_bowlers_and_stances_are_one_line_exit_2(argv, words, capsys,
 
 
 def test_the_parser_defaults_only_what_is_not_given():
-    from nbst.cli import bowl_args
+    from nbst.cli.bowl import args as bowl_args
     from nbst.cli.main import build_parser
     from nbst.models.bowling.lane import advise
 
@@ -243,7 +243,7 @@ def test_spare_commands_throw_with_the_profiles_spare_noise():
     """--bowler on a spare command takes the profile's spare noise; on a strike ball its strike noise."""
     import argparse
 
-    from nbst.cli.bowl_args import bowler_of
+    from nbst.cli.bowl.args import bowler_of
     from nbst.models.bowling.lane import profiles
 
     args = argparse.Namespace(bowler="pro")

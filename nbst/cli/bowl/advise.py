@@ -10,9 +10,9 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import bowler_flag, bowler_of, mc_flags, number
+from nbst.cli.bowl.args import bowler_flag, bowler_of, mc_flags, number
 from nbst.errors import InputError
-from nbst.cli.bowl_lane import _bar
+from nbst.cli.bowl.lane import _bar
 from nbst.parallel import default_jobs
 
 

@@ -1,9 +1,9 @@
 """``nbst bowl solve --foul-line/--robust`` and ``nbst bowl atlas --foul-line``: deliveries from the
 foul line in a bowler's units (models/bowling/lane/atlas.py, robust.py, throwfile.py, folder.py).
 
-``bowl.py`` owns the parsers of ``solve`` and ``atlas``; it adds the flags below to them and
+:mod:`nbst.cli.bowl` owns the parsers of ``solve`` and ``atlas``; it adds the flags below to them and
 hands a run over here when ``--foul-line`` or ``--robust`` is given. The 5 m deliveries are
-``bowl_deck.py``'s.
+:mod:`nbst.cli.bowl.deck`'s.
 
 Exit codes as ``bowl solve``/``bowl atlas``: 0 done, 1 the request was not found within the
 budget (the nearest throw is written), 2 bad input, 130 interrupted (the best throw so far,
@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import bowler_flag, bowlers, err
+from nbst.cli.bowl.args import bowler_flag, bowlers, err
 from nbst.seeds import resolve_seed
 
 #: Frames of the fresh probability estimate (``--samples``) and of ``--robust``'s search.

@@ -4,11 +4,11 @@ The words: a **delivery** is what the bowler does, a **throw** is its result (th
 and the pins down); a throw file records both.
 
 * the deck half, deliveries 5 m before the pins (y, speed, angle, spin): ``bowl solve``,
-  ``bowl atlas`` (:mod:`nbst.cli.bowl_deck`);
+  ``bowl atlas`` (:mod:`nbst.cli.bowl.deck`);
 * the lane half, deliveries from the foul line in a bowler's units (hand, board, angle, mph,
-  rpm, axis rotation and tilt): ``bowl throw``, ``frame`` (:mod:`nbst.cli.bowl_lane`), ``spares``,
-  ``pocket``, ``advise`` (:mod:`nbst.cli.bowl_advise`), and ``bowl solve --foul-line|--robust``, ``bowl atlas
-  --foul-line`` (:mod:`nbst.cli.bowl_foul`);
+  rpm, axis rotation and tilt): ``bowl throw``, ``frame`` (:mod:`nbst.cli.bowl.lane`), ``spares``,
+  ``pocket``, ``advise`` (:mod:`nbst.cli.bowl.advise`), and ``bowl solve --foul-line|--robust``, ``bowl atlas
+  --foul-line`` (:mod:`nbst.cli.bowl.foul`);
 * ``bowl replay`` runs either half's throw file again (here).
 
 Registration is light: mujoco and cma are imported inside the commands.
@@ -23,10 +23,13 @@ from __future__ import annotations
 
 import sys
 
-from nbst.cli import bowl_advise, bowl_deck, bowl_foul, bowl_lane, bowl_series
+from nbst.cli.bowl import advise as bowl_advise, deck as bowl_deck, foul as bowl_foul, lane as bowl_lane
+from nbst.cli.bowl import series as bowl_series
 from nbst.cli.args import SEED, with_limits
-from nbst.cli.bowl_args import err, leave, picture_flags, pins_down, runner_args, wants_picture
+from nbst.cli.bowl.args import err, leave, picture_flags, pins_down, runner_args, wants_picture
 from nbst.cli.flags import add_out_dir, add_seed
+
+__all__ = ["COMMANDS", "DESCRIPTION", "BOWLER_5M", "register", "cmd_solve", "cmd_atlas", "cmd_replay"]
 
 DESCRIPTION = (
     "Ten-pin bowling, synthesized on MuJoCo rollouts (docs/bowling.md): a USBC lane with oil, pins and a "
@@ -166,7 +169,7 @@ def cmd_atlas(args) -> int:
 
 def cmd_replay(args) -> int:
     """``bowl replay FILE``: a foul-line throw file replays from the foul line
-    (:func:`.bowl_lane.replay_throw`), a 5 m throw file from its scene with plain MuJoCo."""
+    (:func:`nbst.cli.bowl.lane.replay_throw`), a 5 m throw file from its scene with plain MuJoCo."""
     from nbst.models.bowling import files
     from nbst.models.bowling.deck import throwfile as deckfile
     from nbst.models.bowling.lane import throwfile as lanefile

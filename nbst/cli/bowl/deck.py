@@ -11,7 +11,7 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import err
+from nbst.cli.bowl.args import err
 from nbst.seeds import resolve_seed
 
 #: Rollout budgets, capped at 1e7: 500x `bowl atlas`'s default budget; past it a typo (an

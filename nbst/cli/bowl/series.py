@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import SEED, Bounded
-from nbst.cli.bowl_args import ball_flags, ball_of, bowlers, oil_flag
+from nbst.cli.bowl.args import ball_flags, ball_of, bowlers, oil_flag
 from nbst.cli.flags import add_seed
 from nbst.errors import InputError
 from nbst.seeds import resolve_seed

@@ -3,7 +3,7 @@ line in a bowler's units (models/bowling/lane/), and the replay of a foul-line t
 
 The delivery flags (hand, board at the foul line or the arrows, launch angle, mph, rpm, axis
 rotation and tilt) and the ball flags (weight, RG, differential, coverstock) are one vocabulary
-for every subcommand (:mod:`nbst.cli.bowl_args`). The work is the library's: the ball's phases
+for every subcommand (:mod:`nbst.cli.bowl.args`). The work is the library's: the ball's phases
 (:mod:`nbst.models.bowling.lane.phases`), frames (:mod:`.frame`), noise, spares and the pocket
 map (:mod:`.spares`), throw files (:mod:`.throwfile`).
 """
@@ -14,16 +14,16 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl_args import (ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
+from nbst.cli.bowl.args import (ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
                                 delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, size_of,
                                 stance_target, wants_picture)
-from nbst.cli.bowl_series import path_plot_flag, write_path_plot
+from nbst.cli.bowl.series import path_plot_flag, write_path_plot
 from nbst.parallel import default_jobs
 
 
 def register(bowl) -> None:
     """The lane half's subcommands ``throw`` and ``frame`` on ``nbst bowl``'s subparsers (``spares``,
-    ``pocket`` and ``advise``: :mod:`nbst.cli.bowl_advise`)."""
+    ``pocket`` and ``advise``: :mod:`nbst.cli.bowl.advise`)."""
     register_throw(bowl)
     register_frame(bowl)
 
@@ -362,7 +362,7 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
     from nbst.outputs import OutputError, prepare_output
     from nbst.render.core import style
     from nbst.render.bowling.lane import render_throw
-    from nbst.render.bowling.throw import frame_times
+    from nbst.render.bowling.throw import throw_times
     from nbst.render.core.gl import RenderError
 
     size = size_of(args.size) if getattr(args, "size", None) else None
@@ -380,7 +380,7 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
             fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
             from nbst.progress import progress_bar
 
-            bar = progress_bar(total=len(frame_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
+            bar = progress_bar(total=len(throw_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
             try:
                 n = render_throw(th, args.video, size=size, fps=fps, progress=bar, camera=camera, **readout)
             finally:
