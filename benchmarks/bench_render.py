@@ -175,7 +175,8 @@ def parts(args) -> int:
     from nbst.render.core import style
     from nbst.cli.render import make_renderer, parse_size
     from nbst.render.core.gl import create_context
-    from nbst.render.core.video import VideoWriter, encode, frame_times, render_video
+    from nbst.render.core.times import frame_times
+    from nbst.render.core.video import VideoWriter, encode, render_video
 
     if args.problem.startswith("grid-") and args.problem[5:].isdigit():  # the curve's problem at one N
         p, v, tr = grid_problem(int(args.problem[5:]))

@@ -48,7 +48,8 @@ def main(argv=None) -> int:
     w, h = (int(v) for v in args.size.lower().split("x"))
 
     from nbst.render.crash import video as crash
-    from nbst.render.crash.motion import frame_times, slow_windows
+    from nbst.render.core.times import frame_times
+    from nbst.render.crash.motion import SLOW, slow_windows
     from nbst.render.core.gl import FrameTarget, create_context
     from nbst.render.core import style
 
@@ -85,8 +86,8 @@ def main(argv=None) -> int:
         ms = (time.perf_counter() - t) / len(times) * 1e3
         r.release()
         out = tmp / f"{camera}.mp4"
-        ft = frame_times(motion.duration, style.DEFAULT_FPS, slow_windows([im.t for im in motion.impacts],
-                                                                          motion.duration))
+        ft = frame_times(motion.duration, style.DEFAULT_FPS, slow=SLOW, hold=1.0,
+                         windows=slow_windows([im.t for im in motion.impacts], motion.duration))
         t = time.perf_counter()
         n = crash.render_crash(d, script, model, motion, out, camera=camera, follow=follow or 0, size=(w, h),
                                fps=style.DEFAULT_FPS, times=ft)

@@ -266,7 +266,7 @@ def test_a_video_cut_short_anywhere_is_seen(tmp_path, ext):
     whole = tmp_path / f"whole{ext}"
     whole.write_bytes(data)
     kind = ext[1:]
-    from nbst.render.core.video import frame_times
+    from nbst.render.core.times import frame_times
 
     frames = len(frame_times(2.0, 8.0, hold=1.0)) if kind == "mp4" else 1  # a GIF may merge repeated frames
     assert check_video(whole, kind, frames) is None

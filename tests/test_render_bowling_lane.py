@@ -254,7 +254,7 @@ def test_cli_writes_a_still_and_an_mp4_with_the_expected_frames(gl, throw, tmp_p
                  "--tilt", repr(TYPICAL.tilt), "--still", str(png), "--size", "320x180", "--video", str(mp4),
                  "--fps", "8"]) == 0
     assert Image.open(png).size == (320, 180)
-    expected = len(bt.frame_times(throw, 8.0))
+    expected = len(bt.throw_times(throw, 8.0))
     reader = imageio_ffmpeg.read_frames(str(mp4))
     meta = next(reader)
     assert tuple(meta["size"]) == (320, 180) and meta["fps"] == pytest.approx(8.0)

@@ -12,7 +12,8 @@ import pytest
 from nbst import load_problem, simulate
 from nbst.cli import main
 from nbst.render.core import style
-from nbst.render.core.video import VideoWriter, frame_times
+from nbst.render.core.times import frame_times
+from nbst.render.core.video import VideoWriter
 from nbst.solution import make_solution, save_solution
 
 

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from nbst.models.crash import crashfile, run, script, space
+from nbst.render.core.times import frame_times
 from nbst.render.crash import motion as crash_motion, readout as crash_readout, scene as crash_scene, video as crash
 
 SIZE = (800, 450)
@@ -145,14 +146,14 @@ def test_slow_motion_adds_the_frames_its_windows_say():
     w = crash_motion.slow_windows([2.0, 2.3, 5.9], T)
     a, b = crash_motion.SLOW_WINDOW
     assert w == [(2.0 - a, 2.3 + b), (5.9 - a, T)]     # overlapping windows merge; clipped to the end
-    plain = crash_motion.frame_times(T, fps, [], hold=0.0)
-    slow = crash_motion.frame_times(T, fps, w, hold=0.0)
+    plain = frame_times(T, fps, hold=0.0)
+    slow = frame_times(T, fps, windows=w, slow=crash_motion.SLOW, hold=0.0)
     extra = (crash_motion.SLOW - 1) * fps * sum(e - s for s, e in w)
     assert abs(len(slow) - len(plain) - extra) <= 1
     assert slow[0] == 0.0 and slow[-1] == T and np.all(np.diff(slow) > 0)
     inside = np.diff(slow)[(slow[:-1] >= w[0][0] + 1e-9) & (slow[1:] <= w[0][1] - 1e-9)]
     assert np.allclose(inside, 1 / (fps * crash_motion.SLOW))
-    held = crash_motion.frame_times(T, fps, w, hold=1.0)
+    held = frame_times(T, fps, windows=w, slow=crash_motion.SLOW, hold=1.0)
     assert len(held) == len(slow) + 30 and np.all(held[len(slow):] == T)
 
 
@@ -272,8 +273,8 @@ def test_cli_writes_a_still_and_a_video_with_the_frames_its_times_give(crash_fil
     err = capsys.readouterr().err
     assert "bit for bit" in err and "slow motion around 1 impact" in err
     d, s, model, m = crash.load(crash_file)
-    want = len(crash_motion.frame_times(m.duration, 12.0, crash_motion.slow_windows([im.t for im in m.impacts], m.duration),
-                                        hold=0.5))
+    want = len(frame_times(m.duration, 12.0, windows=crash_motion.slow_windows([im.t for im in m.impacts], m.duration),
+                           slow=crash_motion.SLOW, hold=0.5))
     rd = imageio.get_reader(mp4)
     assert sum(1 for _ in rd) == want and rd.get_meta_data()["fps"] == 12.0
     assert f"{want} frames" in err and not list(tmp_path.glob(".*partial*"))

@@ -201,7 +201,7 @@ def cmd_render(args) -> int:
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
     try:  # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
         if kind != "png":
-            from nbst.render.core.video import MAX_FRAMES, check_frames
+            from nbst.render.core.times import MAX_FRAMES, check_frames
             if args.max_frames is not None and args.max_frames < 1:
                 return _err("render", f"--max-frames {args.max_frames}: must be >= 1")
             check_frames(problem.t_final, fps, speed=args.speed, hold=args.hold,
@@ -229,7 +229,8 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
 
     from nbst.progress import Bar, command_start, count_text, seconds_text
     from nbst.render.core.gl import create_context
-    from nbst.render.core.video import frame_times, render_video, write_png
+    from nbst.render.core.times import frame_times
+    from nbst.render.core.video import render_video, write_png
 
     if kind == "png":
         times = np.array([float(args.still)])
@@ -413,7 +414,7 @@ def cmd_render_throw(args) -> int:
     from nbst.outputs import prepare_output
 
     from nbst.render.core import style
-    from nbst.render.bowling.deck import frame_times, load_motion, render_motion
+    from nbst.render.bowling.deck import load_motion, motion_times, render_motion
     from nbst.render.core.gl import RenderError
 
     def err(msg) -> int:
@@ -449,8 +450,8 @@ def cmd_render_throw(args) -> int:
         return err(bad)
     fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
     hold = getattr(args, "hold", None)
-    times = frame_times(motion, fps, hold=1.0 if hold is None else float(hold))
-    from nbst.render.core.video import MAX_FRAMES
+    times = motion_times(motion, fps, hold=1.0 if hold is None else float(hold))
+    from nbst.render.core.times import MAX_FRAMES
 
     limit = getattr(args, "max_frames", None) or MAX_FRAMES
     if still is None and len(times) > limit:

@@ -24,6 +24,7 @@ import numpy as np
 from nbst.render.core import style
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
+from nbst.render.core.times import frame_times
 from nbst.render.core.camera import look_at, perspective
 
 #: Slow motion around impact: this many times slower from IMPACT_WINDOW[0] s before
@@ -101,16 +102,11 @@ def slow_window(motion: Motion) -> tuple[float, float]:
     return max(0.0, motion.impact - IMPACT_WINDOW[0]), min(T, motion.impact + IMPACT_WINDOW[1])
 
 
-def frame_times(motion: Motion, fps: float, *, hold: float = 1.0) -> np.ndarray:
-    """Simulated time of each video frame: real time, slowed SLOW x around the impact, then a hold."""
-    T = float(motion.times[-1])
+def motion_times(motion: Motion, fps: float, *, hold: float = 1.0) -> np.ndarray:
+    """Simulated time of each video frame (:func:`nbst.render.core.times.frame_times`): real time,
+    slowed SLOW x in :func:`slow_window`, the last frame at the motion's end, then ``hold`` s."""
     a, b = slow_window(motion)
-    out, t = [], 0.0
-    while t <= T:
-        out.append(t)
-        t += (1.0 / SLOW if a <= t < b else 1.0) / fps
-    out.extend([T] * int(round(hold * fps)))
-    return np.array(out)
+    return frame_times(float(motion.times[-1]), fps, windows=[(a, b)] if b > a else [], slow=SLOW, hold=hold)
 
 
 def _quat_mat(q) -> np.ndarray:
@@ -350,7 +346,7 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
         still: None for a video; seconds: one frame at that time (clipped to the motion).
         camera: behind | overhead | both.
         size: (width, height) pixels (default 1280 x 720).
-        times: the frames' times (default :func:`frame_times` at ``fps``).
+        times: the frames' times (default :func:`motion_times` at ``fps``).
         fps: frames per second (default 60).
         progress: None, or an object whose ``update(1)`` is called after each frame.
 
@@ -362,7 +358,7 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
     size = tuple(size or style.DEFAULT_SIZE)
     return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw), output,
                          still=None if still is None else np.clip(still, 0.0, motion.times[-1]),
-                         times=lambda r, fps: frame_times(motion, fps) if times is None else times,
+                         times=lambda r, fps: motion_times(motion, fps) if times is None else times,
                          fps=fps, progress=progress)
 
 

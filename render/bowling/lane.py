@@ -15,7 +15,7 @@ this module draws them.
   probability.
 
 Compute apart from I/O: :class:`LaneRenderer` returns frames; :func:`render_throw` is the thin
-writer the CLI calls (``nbst.cli.bowl_lane`` checks the flags and prints what was written).
+writer the CLI calls (``nbst.cli.bowl.lane`` checks the flags and prints what was written).
 
 """
 from __future__ import annotations
@@ -29,7 +29,7 @@ from nbst.render.bowling.deck import BACKGROUND, PIN_RED, PIN_WHITE, STRIPES_IN,
 from nbst.render.core.shaders import SHADE, SOLID_FS, SOLID_VS
 from nbst.render.bowling.throw import (BEHIND_AHEAD, BEHIND_BACK, BEHIND_FOV, BEHIND_HEIGHT, FOLLOW_STOP_FT, LEGEND,
                                        OVERHEAD_FROM_FT, OVERHEAD_SHARE, TRAIL_HALF_WIDTH, TRAIL_HALF_WIDTH_OVERHEAD,
-                                       TRAIL_RGB, Throw, ball_texture, frame_times, lane_marks, lane_solids,
+                                       TRAIL_RGB, Throw, ball_texture, throw_times, lane_marks, lane_solids,
                                        ortho_panel, still_time)
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.camera import look_at, perspective
@@ -488,5 +488,5 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
     return render_output(lambda ctx: LaneRenderer(ctx, throw, size=size, camera=camera, asked=asked,
                                                   probability=probability, probability_note=probability_note,
                                                   expected=expected, no_request=no_request),
-                         output, still=still, times=lambda r, fps: frame_times(throw, fps, hold=hold),
+                         output, still=still, times=lambda r, fps: throw_times(throw, fps, hold=hold),
                          fps=fps, progress=progress)

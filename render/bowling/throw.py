@@ -30,7 +30,7 @@ import numpy as np
 
 from nbst.render.bowling.deck import BALL_RGB, Motion
 from nbst.render.core.solids import box as _box, flat_poly as _flat_poly  # shared with the crash video
-from nbst.render.bowling.deck import frame_times as _deck_frame_times
+from nbst.render.bowling.deck import motion_times
 
 #: Guide dots (ft past the foul line) on these boards, counted from either edge.
 DOTS_FT = 7.0
@@ -171,10 +171,10 @@ def record_throw(delivery, oil: str = "house", ball=None, *, standing=None, time
                  in_play=tuple(fr.in_play))
 
 
-def frame_times(throw: Throw, fps: float, *, hold: float = 1.0) -> np.ndarray:
+def throw_times(throw: Throw, fps: float, *, hold: float = 1.0) -> np.ndarray:
     """Simulated time of each video frame: real time from the release, slowed around the first
-    ball-pin contact as ``nbst render THROW.json`` is (render.bowling.frame_times), then a hold."""
-    return _deck_frame_times(throw.motion, fps, hold=hold)
+    ball-pin contact as ``nbst render THROW.json`` is (:func:`nbst.render.bowling.deck.motion_times`), then a hold."""
+    return motion_times(throw.motion, fps, hold=hold)
 
 
 # --------------------------------------------------------------------------- the ball's texture

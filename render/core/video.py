@@ -10,7 +10,6 @@ yuv420p with a bilinear scaler (its default bicubic one cost ~5 ms a frame).
 """
 from __future__ import annotations
 
-import math
 import os
 import queue
 import threading
@@ -30,52 +29,6 @@ def video_kind(path) -> str:
     if ext in (".mp4", ".m4v", ".mov"):
         return "mp4"
     raise RenderError(f"{path}: unknown video extension {ext or '(none)'!r}; use .mp4 or .gif (or --still T with .png)")
-
-
-#: Most frames one video may have unless ``--max-frames`` says otherwise: 30 minutes at
-#: 60 fps, hours of rendering and gigabytes of MP4. A t_final of 1e6 s at 60 fps would be
-#: 60 million frames (days of rendering, a 480 MB time array before the first frame).
-MAX_FRAMES = 108_000
-
-
-def frame_count(t_final: float, fps: float, *, speed: float = 1.0, hold: float = 0.0) -> int:
-    """How many frames ``frame_times`` returns, computed without building them (may be huge)."""
-    if not (fps > 0 and speed > 0 and hold >= 0):
-        raise ValueError("fps and speed must be > 0, hold >= 0")
-    x = t_final / (speed / fps) + 1e-9
-    if not math.isfinite(x) or x > 2**62:
-        return 2**62
-    n = int(math.floor(x)) + 1
-    if (n - 1) * (speed / fps) < t_final - 1e-12:
-        n += 1
-    return n + int(round(hold * fps))
-
-
-def check_frames(t_final: float, fps: float, *, speed: float = 1.0, hold: float = 0.0,
-                 max_frames: int = MAX_FRAMES) -> int:
-    """The frame count, or ValueError (one line: why, and which options change it) above ``max_frames``."""
-    n = frame_count(t_final, fps, speed=speed, hold=hold)
-    if n > max_frames:
-        raise ValueError(f"t_final = {t_final:g} s at {fps:g} fps and --speed {speed:g} is {n:,} frames, over the "
-                         f"limit of {max_frames:,}; raise it with --max-frames N, or shorten the video with a "
-                         f"higher --speed (simulated seconds per second of video) or a lower --fps")
-    return n
-
-
-def frame_times(t_final: float, fps: float, *, speed: float = 1.0, hold: float = 0.0) -> np.ndarray:
-    """Simulation times of the frames: k * speed / fps for k = 0, 1, ... up to and
-    including t_final (the last frame is at t_final exactly), then ``hold`` seconds
-    of video at t_final."""
-    if not (fps > 0 and speed > 0 and hold >= 0):
-        raise ValueError("fps and speed must be > 0, hold >= 0")
-    step = speed / fps
-    n = int(math.floor(t_final / step + 1e-9)) + 1
-    t = np.arange(n) * step
-    if t[-1] < t_final - 1e-12:
-        t = np.append(t, t_final)
-    t[-1] = min(t[-1], t_final)
-    extra = int(round(hold * fps))
-    return np.concatenate((t, np.full(extra, t_final))) if extra else t
 
 
 class VideoWriter:

@@ -13,8 +13,8 @@
 * **Impacts**: the vehicle-to-vehicle contacts of the judged outcome (first contact time and
   point, each vehicle's delta-V) and the first curb or barrier strike of each vehicle (the
   outcome's time; the point where the step's contact with the curb or barrier was).
-* **Frame times** (:func:`frame_times`): real time, slowed :data:`SLOW` x from
-  :data:`SLOW_WINDOW` [0] s before each impact to [1] s after it (overlapping windows merge),
+* **Frame times** (:func:`nbst.render.core.times.frame_times` over :func:`slow_windows`): real
+  time, slowed :data:`SLOW` x from :data:`SLOW_WINDOW` [0] s before each impact to [1] s after it (overlapping windows merge),
   then a hold; sim time is a piecewise-linear function of video time, so a window adds
   ``(SLOW - 1) x its length x fps`` frames.
 
@@ -294,28 +294,6 @@ def slow_windows(times, duration: float, window=SLOW_WINDOW) -> list[tuple[float
         else:
             out.append((a, b))
     return out
-
-
-def frame_times(duration: float, fps: float, windows, *, slow: float = SLOW, hold: float = 1.0) -> np.ndarray:
-    """Sim time of each frame: frame k at video time k / fps, sim time advancing 1 / ``slow`` as
-    fast inside ``windows`` (merged, sorted), the last frame at ``duration`` exactly, then
-    ``hold`` s of video at ``duration``."""
-    if not (fps > 0 and slow >= 1 and duration > 0 and hold >= 0):
-        raise ValueError("fps > 0, slow >= 1, duration > 0 and hold >= 0")
-    s_knots, v_knots = [0.0], [0.0]
-    for a, b in windows:
-        for s, rate in ((a, 1.0), (b, slow)):
-            v_knots.append(v_knots[-1] + (s - s_knots[-1]) * rate)
-            s_knots.append(s)
-    v_knots.append(v_knots[-1] + duration - s_knots[-1])
-    s_knots.append(duration)
-    video = v_knots[-1]
-    k = np.arange(int(math.floor(video * fps + 1e-9)) + 1)
-    t = np.interp(k / fps, v_knots, s_knots)
-    if t[-1] < duration - 1e-12:
-        t = np.append(t, duration)
-    t[-1] = duration
-    return np.concatenate((t, np.full(int(round(hold * fps)), duration)))
 
 
 def slowed(t: float, windows) -> bool:

@@ -16,7 +16,7 @@ scene's own geoms (their MJCF sizes, poses and colours), placed each frame by
   from the moment of contact, labelled with the pair and the time (drawn over the vehicles in
   the overhead view, as a crash diagram marks its points of impact).
 * **Readout** (:mod:`nbst.render.crash.readout`) in a column on the right; slow motion around
-  each impact (:func:`nbst.render.crash.motion.frame_times`).
+  each impact (:func:`nbst.render.core.times.frame_times`).
 
 Compute apart from I/O: :class:`CrashRenderer` returns frames; :func:`render_crash` is the thin
 writer the CLI calls; :func:`crash_kind` sniffs a file's kind.
@@ -31,7 +31,8 @@ from nbst.render.crash import readout as ro
 from nbst.render.crash import scene as cs
 from nbst.render.core import style
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
-from nbst.render.crash.motion import frame_times, slow_windows, slowed
+from nbst.render.core.times import frame_times
+from nbst.render.crash.motion import SLOW, slow_windows, slowed
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.camera import look_at, perspective
 
@@ -484,7 +485,7 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
         follow: the index of the vehicle the behind camera chases.
         size, fps: (width, height) pixels and frames per second (default 1280 x 720, 60).
         hold: seconds the last frame is held.
-        times: the frames' times (default :func:`nbst.render.crash.motion.frame_times`: slowed at impacts).
+        times: the frames' times (default :func:`nbst.render.core.times.frame_times`: slowed at impacts).
         progress: None, or an object whose ``update(1)`` is called after each frame.
 
     Returns:
@@ -496,6 +497,6 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
     return render_output(lambda ctx: CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera,
                                                    follow=follow),
                          output, still=None if still is None else np.clip(still, 0.0, motion.duration),
-                         times=lambda r, fps: (frame_times(motion.duration, fps, r.windows, hold=hold)
+                         times=lambda r, fps: (frame_times(motion.duration, fps, windows=r.windows, slow=SLOW, hold=hold)
                                                if times is None else times),
                          fps=fps, progress=progress)
