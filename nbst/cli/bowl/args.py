@@ -77,7 +77,21 @@ def leave(text: str) -> int:
 
 
 def pins_text(pins) -> str:
+    """Pins as a leave is written ("3-6-10"), or "none"."""
     return "-".join(str(p) for p in pins) if pins else "none"
+
+
+def asked_text(down: list[int], leave: bool) -> str:
+    """What ``bowl solve`` was asked for, in the words it was asked in: "leave 7,10" for
+    ``--leave`` (the pins left standing, not the pins knocked down), "down 1,2,4,7" for ``--down``.
+
+    Args:
+        down: the pins asked to be knocked down (the pins of the request's mask).
+        leave: whether the request came as ``--leave``.
+    """
+    if leave:
+        return f"leave {','.join(str(n) for n in range(1, 11) if n not in down) or 'none'}"
+    return f"down {','.join(map(str, down))}"
 
 
 def runner_args(parser, same: str) -> None:

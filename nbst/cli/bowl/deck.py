@@ -11,7 +11,7 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl.args import err
+from nbst.cli.bowl.args import asked_text, err
 from nbst.seeds import resolve_seed
 
 #: Rollout budgets, capped at 1e7: 500x `bowl atlas`'s default budget; past it a typo (an
@@ -59,12 +59,13 @@ def cmd_solve(args) -> int:
             print(f"nbst bowl solve: warning: the shipped atlas is not used: {plain(why)}", file=sys.stderr)
     L = runner_of(args, jobs)  # nbst.cluster.connect's InputError names --cluster and the address
     probes = 0 if args.no_robustness else ROBUSTNESS_ROLLOUTS[1]
-    bar = progress.Bar(f"bowl solve {','.join(map(str, want))}", args.max_rollouts + probes, unit="rollout",
+    leave = args.leave is not None   # the bar names what was asked: the leave, or the pins down
+    bar = progress.Bar(f"bowl solve {asked_text(want, leave)}", args.max_rollouts + probes, unit="rollout",
                        bound=True, start=progress.command_start(), quiet=args.quiet)
 
     def on_batch(p) -> None:
         bar.set(p.rollouts)
-        near = ",".join(map(str, pinfall.pins_of(p.best_mask))) or "none"
+        near = asked_text(pinfall.pins_of(p.best_mask), leave)
         bar.note(f"nearest {near} ({p.best_hamming} off), {p.subsets} subsets seen")
 
     try:
@@ -99,7 +100,7 @@ def cmd_solve(args) -> int:
     finally:
         L.close()
     got = ",".join(map(str, pinfall.pins_of(res.mask))) or "none"
-    bar.close(note=f"pins down {got}")
+    bar.close(note=asked_text(pinfall.pins_of(res.mask), True) if leave else f"pins down {got}")
     how = " (the shipped atlas's throw, confirmed)" if from_atlas else ""
     extra = f" ({res.rollouts} search, {bar.n - res.rollouts} robustness)" if bar.n != res.rollouts else ""
     line = (f"pins down {got} ({res.hamming} off the request) after {progress.count_text(bar.n)} "

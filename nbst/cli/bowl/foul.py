@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from nbst.cli.args import Bounded
-from nbst.cli.bowl.args import bowler_flag, bowlers, err
+from nbst.cli.bowl.args import asked_text, bowler_flag, bowlers, err
 from nbst.seeds import resolve_seed
 
 #: Frames of the fresh probability estimate (``--samples``) and of ``--robust``'s search.
@@ -136,8 +136,7 @@ def cmd_solve(args) -> int:
     jobs = args.jobs or default_jobs()
     elites, answers = ({}, False) if args.no_atlas else shipped_elites()
     direct = answers and target in elites  # the atlas of this scene holds it: its throw, no search
-    asked = (f"leave {','.join(str(n) for n in range(1, 11) if n not in want) or 'none'}" if args.leave is not None
-             else f"down {','.join(map(str, want))}")
+    asked = asked_text(want, args.leave is not None)
     ladder_frames = len(frame.LADDER) * (robust.LADDER_TRIES if args.robust is not None else 1)
     after = (args.robust if args.robust is not None else 0) + args.samples + ladder_frames + 1
     # the budget unless this scene's atlas holds the request: an atlas grown on another lane scene holds
@@ -219,7 +218,7 @@ def cmd_solve(args) -> int:
     finally:
         R.close()
     got = ",".join(map(str, r.down)) or "none"
-    bar.close(note=f"pins down {got}")
+    bar.close(note=asked_text(r.down, True) if args.leave is not None else f"pins down {got}")
     line = (f"pins down {got}, leave {','.join(map(str, r.leave)) or 'none'} ({names.text(doc['names'])}); "
             f"from the foul line: {_delivery_text(d)}")
     if state["est"] is not None:
