@@ -1,4 +1,4 @@
-"""The written map names what exists: every dotted ``nbst.…`` name in docs/*.md, README.md and
+"""The written map names what exists: every dotted ``nbst.…`` name in docs/*.md, docs/results/*.md, README.md and
 the docstrings of nbst, models/ and render/ (modules, classes, functions, and attribute
 docstrings: a string after an assignment, or a ``#:`` comment) resolves to a module, or to an
 attribute of one, or to a field of a class. A name that fails is fixed where it is written."""
@@ -20,7 +20,8 @@ SOURCES = ("nbst", "models", "render")
 
 
 def _in_docs():
-    for f in [*sorted((ROOT / "docs").glob("*.md")), ROOT / "README.md"]:
+    docs = ROOT / "docs"
+    for f in [*sorted(docs.glob("*.md")), *sorted((docs / "results").glob("*.md")), ROOT / "README.md"]:
         for i, line in enumerate(f.read_text(encoding="utf-8").splitlines(), 1):
             for m in NAME.finditer(line):
                 yield m.group(0), f"{f.relative_to(ROOT)}:{i}"
