@@ -26,7 +26,8 @@ def gas_motion(n: int, *, seed: int = 1, t_final: float = GAS_T_FINAL, fraction:
     sized so that they cover ``fraction`` of its area (fixed density: the box grows as sqrt(N)),
     with velocities of random direction and speed in :data:`GAS_SPEED` (seeded). Each target is
     where the exact simulator takes its disk at t_final, so the motion is an exact solution
-    (cost 0) with real collisions and wall bounces; target radius 2r.
+    (cost 0) with real collisions and wall bounces; target radius 2r. ``seed`` defaults to 1 on
+    purpose: a benchmark fixture is the same motion on every run (``gas_motion(N)`` names it).
     """
     from nbst.problem import problem_from_dict
     from nbst.sim import simulate

@@ -14,6 +14,7 @@ from nbst.search import run_search, solve
 from nbst.search.aim import pair_contact
 from nbst.search.local import conflicts, subproblem
 from nbst.search.many import ManyParams, run_many
+from nbst.search.variants import SolveRequest
 from nbst.sim import simulate
 
 
@@ -133,7 +134,7 @@ def test_the_signature_search_refuses_many_disks():
     from nbst.search import driver
 
     with pytest.raises(SolveError, match="at most 63 disks"):
-        driver.run_search(_grid(64), seed=1, max_trials=10)
+        driver.run_search(_grid(64), SolveRequest(seed=1, max_trials=10))
     r = run_search(_grid(64), seed=1, max_trials=10)
     assert r.result.meta["order"] == 64
 

@@ -8,10 +8,10 @@ import sys
 from nbst.domain import parse_number
 from nbst.errors import InputError
 from nbst.problem import ProblemError
+from nbst.seeds import SEED_MAX
 
 
 #: Limits shared by several commands' flags (each flag's --help states its range).
-SEED_MAX = 2**63 - 1  # numpy's SeedSequence and the kernels' int64 state take any seed up to this
 TRIALS_MAX = 10**12  # a trillion trials: days of search, far past any budget nbst has needed
 JOBS_MAX = 256  # processes on this machine (each a full search or worker)
 RUNS_MAX = 100_000  # runs per entry of an experiment

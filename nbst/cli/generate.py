@@ -9,6 +9,7 @@ from nbst import domain as D
 from nbst.cli.args import SEED, Bounded, with_limits
 from nbst.cli.flags import add_quiet, add_seed
 from nbst.domain import MAX_DISKS
+from nbst.seeds import resolve_seed
 
 DISKS = Bounded("disk count", 1, MAX_DISKS, integer=True)
 #: --disks of a formation (nbst.formation.MAX_FORMATION_DISKS: the swap passes check every pair).
@@ -152,7 +153,7 @@ def cmd_generate(args) -> int:
     if args.solution:
         prepare_output(args.solution, option="--solution", inputs=inputs, outputs=(args.output,))
 
-    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**31)
+    seed = resolve_seed(args.seed, what="--seed")
     box = tuple(args.box) if args.box is not None else None
     if formation:
         from nbst.formation import FormationError

@@ -3,10 +3,15 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from nbst.cli.args import JOBS, MAX_TRIALS, SEED, TARGET_COST, TRIALS_MAX, Bounded, with_limits
 from nbst.cli.flags import add_seed
+from nbst.seeds import resolve_seed
 from nbst.warmup import COLD_COMPILE_SECONDS
+
+if TYPE_CHECKING:
+    from nbst.search.variants import SolveRequest
 
 PATIENCE = Bounded("patience", 0, TRIALS_MAX, integer=True)
 
@@ -128,10 +133,7 @@ class _Options:
     """A solve's options once checked (the seed drawn, so that even the straight start records it)."""
 
     algorithm: str
-    variant: str | None  # None: a solver without variants
-    robust: bool
-    target_cost: float
-    seed: int
+    request: SolveRequest  # seed (drawn), budget, patience, target cost, variant (None: a solver without), robust
     label: str
 
 
@@ -140,7 +142,7 @@ def _options(args, problem) -> _Options:
     overwrite its input) and the options that apply to the solver asked for."""
     from nbst.outputs import prepare_output
     from nbst.problem import ProblemError
-    from nbst.search.variants import DEFAULT_VARIANT, roundoff_cost
+    from nbst.search.variants import DEFAULT_VARIANT, SolveRequest, roundoff_cost
     from nbst.solvers import SIGNATURE, SOLVERS
 
     prepare_output(args.output, inputs=(args.problem,))
@@ -151,16 +153,16 @@ def _options(args, problem) -> _Options:
         if given and not takes_variants:
             raise ProblemError("<arguments>", option, f"applies to --algorithm {SIGNATURE} only, not {algorithm}")
     label = (args.variant if takes_variants else algorithm) + (", robust" if robust else "")
-    return _Options(algorithm=algorithm, variant=args.variant if takes_variants else None, robust=robust,
-                    target_cost=roundoff_cost(problem) if args.target_cost is None else args.target_cost,
-                    seed=args.seed if args.seed is not None else _draw_seed(), label=label)
+    request = SolveRequest(seed=resolve_seed(args.seed, what="--seed"), max_trials=args.max_trials,
+                           patience=args.patience, variant=args.variant if takes_variants else None, robust=robust,
+                           target_cost=roundoff_cost(problem) if args.target_cost is None else args.target_cost)
+    return _Options(algorithm=algorithm, request=request, label=label)
 
 
 def _straight(args, problem, o: _Options):
     from nbst.search import straight_start
 
-    return straight_start(problem, seed=o.seed, max_trials=args.max_trials, patience=args.patience,
-                          target_cost=o.target_cost, variant=o.variant)
+    return straight_start(problem, o.request)
 
 
 def cmd_solve(args) -> int:
@@ -186,12 +188,12 @@ def cmd_solve(args) -> int:
                 # the many-body search stops after rounds without a better motion, long before its
                 # trial budget as a rule: no total (so no ETA over --max-trials)
                 bar = _Progress(args, problem, o.label,
-                                None if many_body(problem.n) and o.variant is not None else args.max_trials)
+                                None if many_body(problem.n) and o.request.variant is not None else args.max_trials)
                 if not args.quiet:  # a cold numba cache: say so before the first kernel compiles
                     from nbst.warmup import announce, search_kernels
 
                     announce(search_kernels())
-                from nbst.solvers.islands import solve_islands
+                from nbst.solvers.islands import run_islands
 
                 fallback = _straight(args, problem, o)
             bar.report(_first_report(fallback))
@@ -204,9 +206,8 @@ def cmd_solve(args) -> int:
 
                 jobs = default_jobs()
             # K islands on K cores, or (the many-body search past 63 disks) one search on K threads
-            result = solve_islands(problem, jobs=jobs, algorithm=o.algorithm, seed=o.seed,
-                                   max_trials=args.max_trials, patience=args.patience, target_cost=o.target_cost,
-                                   variant=o.variant, robust=o.robust, callback=bar.report, cluster=client)
+            result = run_islands(problem, o.request, jobs=jobs, algorithm=o.algorithm, callback=bar.report,
+                                 cluster=client)
         finally:
             if client is not None:
                 client.close()
@@ -218,7 +219,7 @@ def cmd_solve(args) -> int:
     from nbst.progress import since_start
 
     seconds = bar.seconds if bar is not None else since_start()
-    return _summary(args, problem, result, o.target_cost, interrupted or late, seconds)
+    return _summary(args, problem, result, o.request.target_cost, interrupted or late, seconds)
 
 
 def _write(args, problem, o: _Options, result, fallback, bar):
@@ -239,12 +240,6 @@ def _write(args, problem, o: _Options, result, fallback, bar):
         except KeyboardInterrupt:
             late = True
     raise KeyboardInterrupt  # not reached: the second attempt holds every signal
-
-
-def _draw_seed() -> int:
-    import numpy as np
-
-    return int(np.random.default_rng().integers(2**63))
 
 
 def _first_report(r):

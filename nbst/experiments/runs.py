@@ -146,7 +146,10 @@ _safe = safe_name  # the name nbst.cli.experiment imports
 
 def make_specs(problems: Iterable[Problem], entries: Iterable[str], *, runs: int, trials: int, seed: int = 1,
                target_cost: float | None = None) -> list[RunSpec]:
-    """runs x entries x problems specs; run k uses seed ``seed + k`` (the same seeds for every entry)."""
+    """runs x entries x problems specs; run k uses seed ``seed + k`` (the same seeds for every entry).
+
+    ``seed`` defaults to 1 on purpose: an experiment is a fixed, repeatable set of runs.
+    """
     problems, entries = list(problems), list(entries)
     return [RunSpec(problem=p.to_dict(), entry=e, seed=seed + k, trials=int(trials), target_cost=target_cost)
             for p in problems for e in entries for k in range(int(runs))]
@@ -154,12 +157,13 @@ def make_specs(problems: Iterable[Problem], entries: Iterable[str], *, runs: int
 
 def run_one(spec: RunSpec) -> dict:
     """Run one spec (pure: the same spec gives the same result, except wall time)."""
-    from nbst.solvers import SIGNATURE, solve_with
+    from nbst.solvers import SIGNATURE, SolveRequest, run_solver
 
     problem = problem_from_dict(spec.problem, source=f"<experiment {spec.problem_name}>")
     variant = spec.entry in variant_entries()
-    result = solve_with(SIGNATURE if variant else spec.entry, problem, seed=spec.seed, max_trials=spec.trials,
-                        patience=0, target_cost=spec.target_cost, variant=spec.entry if variant else None)
+    request = SolveRequest(seed=spec.seed, max_trials=spec.trials, patience=0, target_cost=spec.target_cost,
+                           variant=spec.entry if variant else None)
+    result = run_solver(SIGNATURE if variant else spec.entry, problem, request)
     m = result.meta  # the run file keeps these of the solution's keys, in this order
     keep = ("algorithm", "cost", "signature", "order", "trials", "seed", "stopped", "wall_time", "trials_per_s",
             "first_full_order_trial", "nbst_version", "history", "restarts")

@@ -70,20 +70,21 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from nbst.search.api import run_many_search, run_search, solve, straight_start
+    from nbst.search.api import run_many_search, run_request, run_search, solve, straight_start
     from nbst.search.driver import SearchRun
     from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, ProgressCallback, SearchParams, SearchProgress,
                                     StopReason, mirror_images, variant_params)
     from nbst.search.variants import (DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, NBST_DEFAULTS, VARIANTS,
-                                      Variant, roundoff_cost)
+                                      SolveRequest, Variant, roundoff_cost)
 
 #: Each public name and the module it is defined in (loaded on first use).
 _HOMES = {
-    "solve": "api", "run_search": "api", "run_many_search": "api", "straight_start": "api",
+    "solve": "api", "run_search": "api", "run_request": "api", "run_many_search": "api", "straight_start": "api",
     "SearchRun": "driver", "roundoff_cost": "variants",
     "ALGORITHM": "params", "ALGORITHM_NBST": "params", "ProgressCallback": "params", "SearchParams": "params",
     "SearchProgress": "params", "StopReason": "params", "mirror_images": "params", "variant_params": "params",
     "DEFAULT_MAX_TRIALS": "variants", "DEFAULT_PATIENCE": "variants", "DEFAULT_VARIANT": "variants", "NBST_DEFAULTS": "variants", "VARIANTS": "variants", "Variant": "variants",
+    "SolveRequest": "variants",
 }
 
 __all__ = sorted(_HOMES)

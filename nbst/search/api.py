@@ -18,10 +18,11 @@ from nbst.search.driver import SearchRun
 from nbst.search.driver import run_search as _signature_search
 from nbst.search.many import ALGORITHM_MANY, ManyParams, run_many
 from nbst.search.params import ProgressCallback, SearchParams, check_run
-from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, roundoff_cost
+from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, SolveRequest, roundoff_cost
+from nbst.seeds import resolve_seed
 from nbst.solution import SolveResult
 
-__all__ = ["ALGORITHM_STRAIGHT", "run_many_search", "run_search", "solve", "straight_start"]
+__all__ = ["ALGORITHM_STRAIGHT", "run_many_search", "run_request", "run_search", "solve", "straight_start"]
 
 
 def solve(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
@@ -67,9 +68,9 @@ def solve(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAUL
         SolveError: an option that does not apply to this problem's search.
         InputError: a bad option (a negative budget, an unknown variant).
     """
-    return run_search(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
-                      variant=variant, params=params, robust=robust, jobs=jobs, callback=callback, chunk=chunk,
-                      many=many).result
+    request = SolveRequest(seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                           variant=variant, robust=robust, jobs=jobs)
+    return run_request(problem, request, params=params, callback=callback, chunk=chunk, many=many).result
 
 
 def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
@@ -87,31 +88,59 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = D
         A ``SearchRun``: ``result`` (the :class:`~nbst.solution.SolveResult`), the final
         population's ``velocities``, ``costs`` and ``signatures``, and ``recorded``. Past 63
         disks the population is the one solution.
+
+    Raises:
+        SolveError: an option that does not apply to this problem's search.
     """
+    request = SolveRequest(seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                           variant=variant, robust=robust, jobs=jobs)
+    return run_request(problem, request, params=params, callback=callback, chunk=chunk, many=many,
+                       record_every=record_every)
+
+
+def run_request(problem: Problem, request: SolveRequest, *, params: SearchParams | None = None,
+                callback: ProgressCallback | None = None, chunk: int = 2048, many: ManyParams | None = None,
+                record_every: int = 0) -> SearchRun:
+    """:func:`run_search` with its settings as one object: what the solvers' registry calls.
+
+    Args:
+        problem: the problem, any number of disks.
+        request: seed, budget, patience, target cost, variant, robust mode and threads
+            (:class:`~nbst.search.variants.SolveRequest`; a None patience or variant: the
+            search's defaults).
+        params, callback, chunk, many, record_every: as :func:`run_search`.
+
+    Returns:
+        A ``SearchRun``, as :func:`run_search`.
+
+    Raises:
+        SolveError: an option that does not apply to this problem's search.
+    """
+    robust, jobs = request.robust, request.jobs
     if not many_body(problem.n):
         if many is not None:
             raise SolveError(f"many (ManyParams) applies to problems of more than {GA_MAX_DISKS} disks; "
                              f"{problem.name!r} has {problem.n}")
-        return _signature_search(problem, seed=seed, max_trials=max_trials, patience=patience,
-                                 target_cost=target_cost, variant=variant, params=params, callback=callback,
-                                 chunk=chunk, record_every=record_every, robust=robust)
+        return _signature_search(problem, request, params=params, callback=callback, chunk=chunk,
+                                 record_every=record_every)
     for name, given in (("params", params is not None), ("robust", bool(robust)), ("record_every", record_every > 0)):
         if given:
             raise SolveError(f"{name} applies to problems of at most {GA_MAX_DISKS} disks (the signature search); "
                              f"{problem.name!r} has {problem.n}: the many-body search runs, set it with many=")
-    return run_many_search(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
-                           variant=variant, callback=callback, jobs=jobs, many=many)
+    return run_many_search(problem, dataclasses.replace(request, jobs=jobs), callback=callback, many=many)
 
 
-def run_many_search(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
-                    patience: int = DEFAULT_PATIENCE, target_cost: float | None = None, variant: str = DEFAULT_VARIANT,
-                    callback: ProgressCallback | None = None, jobs: int | None = None,
+def run_many_search(problem: Problem, request: SolveRequest, *, callback: ProgressCallback | None = None,
                     many: ManyParams | None = None) -> SearchRun:
     """The many-body search (``nbst.search.many.run_many``) on ``problem``, any N, with the result a
     solution file records (:func:`run_search` runs it past 63 disks).
 
-    Args: as :func:`solve`; ``variant`` is that of each conflict's sub-search (ignored when
-        ``many`` is given); ``target_cost`` None means round-off level (``roundoff_cost``).
+    Args:
+        problem: the problem, any number of disks.
+        request: as :func:`run_request`; its ``variant`` is that of each conflict's sub-search
+            (ignored when ``many`` is given), its ``target_cost`` None means round-off level
+            (``roundoff_cost``), its ``jobs`` the threads candidates are simulated on.
+        callback, many: as :func:`solve`.
 
     Returns:
         A ``SearchRun`` whose population is the one solution; ``result.many`` holds the search's
@@ -121,12 +150,13 @@ def run_many_search(problem: Problem, *, seed: int | None = None, max_trials: in
     from nbst.sim import evaluate
     from nbst.solution import signature_string
 
-    seed = int(np.random.default_rng().integers(2**63)) if seed is None else int(seed)
-    check_run(int(max_trials), int(patience), seed)
-    prm = many or ManyParams(variant=variant)
+    seed = resolve_seed(request.seed)
+    max_trials, patience, target_cost = int(request.max_trials), request.patience_or_default, request.target_cost
+    check_run(max_trials, patience, seed)
+    prm = many or ManyParams(variant=request.variant_or_default)
     tc = roundoff_cost(problem) if target_cost is None else float(target_cost)
-    run = run_many(problem, seed=seed, max_trials=int(max_trials), patience=int(patience), target_cost=tc,
-                   callback=callback, params=prm, jobs=jobs)
+    run = run_many(problem, seed=seed, max_trials=max_trials, patience=patience, target_cost=tc,
+                   callback=callback, params=prm, jobs=request.jobs)
     v = run.velocities
     _, c, sg = evaluate(problem, v[None], jobs=1)
     sig = int(sg[0])
@@ -147,9 +177,7 @@ def run_many_search(problem: Problem, *, seed: int | None = None, max_trials: in
 ALGORITHM_STRAIGHT = "straight-start"
 
 
-def straight_start(problem: Problem, *, seed: int, max_trials: int = DEFAULT_MAX_TRIALS,
-                   patience: int = DEFAULT_PATIENCE, target_cost: float | None = None,
-                   variant: str | None = DEFAULT_VARIANT, stopped: str | None = None) -> SolveResult:
+def straight_start(problem: Problem, request: SolveRequest, *, stopped: str | None = None) -> SolveResult:
     """The motion every search starts from, as a result: each cueable disk straight at its target
     (``problem.straight_velocities()``), simulated once (no trial counted). What ``nbst solve``
     writes when it is stopped before a search has a result of its own (a signal during the
@@ -157,8 +185,9 @@ def straight_start(problem: Problem, *, seed: int, max_trials: int = DEFAULT_MAX
 
     Args:
         problem: the problem.
-        seed: the seed the search was (or would have been) run with: recorded, as always.
-        max_trials, patience, target_cost, variant: the search's options, recorded as a search's are.
+        request: the search's settings, recorded as a search's are (its ``seed``, the seed the
+            search was or would have been run with, must be given; a None ``patience``: the
+            signature search's default; ``variant`` as given: None for a solver without one).
         stopped: why no search result replaced it ("interrupted"), or None.
 
     Returns:
@@ -172,8 +201,9 @@ def straight_start(problem: Problem, *, seed: int, max_trials: int = DEFAULT_MAX
     _, c, sg = evaluate(problem, v[None], jobs=1)
     sig = int(sg[0])
     meta = {"algorithm": ALGORITHM_STRAIGHT, "cost": float(c[0]), "signature": signature_string(sig, problem.n),
-            "order": sig.bit_count(), "trials": 0, "seed": int(seed), "variant": variant,
-            "max_trials": int(max_trials), "patience": int(patience), "target_cost": target_cost,
+            "order": sig.bit_count(), "trials": 0, "seed": int(request.seed), "variant": request.variant,
+            "max_trials": int(request.max_trials), "patience": request.patience_or_default,
+            "target_cost": request.target_cost,
             "stopped": stopped, "wall_time": 0.0, "trials_per_s": None, "nbst_version": __version__,
             "history": []}
     return SolveResult.from_meta(problem, v, meta)

@@ -23,7 +23,8 @@ from nbst.search.loop import ChunkResult
 from nbst.search.ops import CULL_SUBSUMED, CULL_WORST, Population
 from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, ProgressCallback, SearchParams, SearchProgress,
                                 StopReason, check_run, mirror_images, variant_params)
-from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, VARIANTS, roundoff_cost
+from nbst.search.variants import VARIANTS, SolveRequest
+from nbst.seeds import resolve_seed
 from nbst.solution import SolveResult
 
 #: Room of the improvement history at the start (doubled whenever the loop fills it).
@@ -97,23 +98,22 @@ class SearchRun:
     recorded: np.ndarray  # (M, N, 2) candidates of every record_every-th trial (empty unless asked)
 
 
-def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = DEFAULT_MAX_TRIALS,
-               patience: int = DEFAULT_PATIENCE, target_cost: float | None = None,
-               variant: str = DEFAULT_VARIANT, params: SearchParams | None = None,
-               callback: ProgressCallback | None = None, chunk: int = 2048, record_every: int = 0,
-               robust: bool | None = None) -> SearchRun:
+def run_search(problem: Problem, request: SolveRequest, *, params: SearchParams | None = None,
+               callback: ProgressCallback | None = None, chunk: int = 2048, record_every: int = 0) -> SearchRun:
     """The signature search on ``problem`` (at most 63 disks): the best solution and the final population.
 
     Args:
         problem: the problem, at most ``GA_MAX_DISKS`` = 63 disks (``nbst.search.solve`` sends
             larger ones to the many-body search).
-        seed: int >= 0; None draws one (recorded in the result). Same seed, same parameters: the
-            same solution, bit for bit (chunking does not matter).
-        max_trials: trial budget (one trial = one simulated candidate, initialize included).
-        patience: stop after this many trials without improvement (0: never).
-        target_cost: stop once the best cost is <= this (None: never).
-        variant: a name of ``nbst.search.variants.VARIANTS`` ("nbst", the default; "A" the paper's
-            full algorithm; "B".."H" its simplified variants); ignored when ``params`` is given.
+        request: the run's settings (:class:`~nbst.search.variants.SolveRequest`):
+            ``seed`` (None draws one, recorded in the result; same seed, same parameters: the
+            same solution, bit for bit, chunking aside), ``max_trials`` (one trial = one
+            simulated candidate, initialize included), ``patience`` (trials without improvement;
+            0: never; None: ``DEFAULT_PATIENCE``), ``target_cost`` (None: never), ``variant``
+            (a name of ``VARIANTS``, None: "nbst"; ignored when ``params`` is given) and
+            ``robust`` (True: return the most noise-robust top-order solution found rather than
+            the cheapest, ``nbst.search.robust``, setting ``params.robust``; None: as ``params``
+            says). ``jobs`` is not used: the signature search runs on one core.
         params: every knob of the search (default: the variant's).
         callback: called with a :class:`SearchProgress` after every chunk; a truthy return stops
             the search. A KeyboardInterrupt (Ctrl-C, or raised by the callback) stops it too: the
@@ -122,8 +122,6 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = D
             the archive's cadence, so a robust result is reproducible for one chunk).
         record_every: k > 0 also returns the candidate velocities of trials k, 2k, ... (the
             paper's loop only; for benchmarks and analysis).
-        robust: True: return the most noise-robust top-order solution found rather than the
-            cheapest (``nbst.search.robust``; sets ``params.robust``); None: as ``params`` says.
 
     Returns:
         A :class:`SearchRun`: the result (:class:`~nbst.solution.SolveResult`) and the final population.
@@ -132,11 +130,11 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = D
         raise SolveError(f"the signature search's compiled loop takes at most {GA_MAX_DISKS} disks (problem "
                          f"{problem.name!r} has {problem.n}); nbst.search.solve runs the many-body search for it")
     if params is None:
-        params = variant_params(variant, problem)
-    if robust is not None:
-        params = dataclasses.replace(params, robust=bool(robust))
-    max_trials, patience = int(max_trials), int(patience)
-    seed = int(np.random.default_rng().integers(2**63)) if seed is None else int(seed)
+        params = variant_params(request.variant_or_default, problem)
+    if request.robust is not None:
+        params = dataclasses.replace(params, robust=bool(request.robust))
+    max_trials, patience, target_cost = int(request.max_trials), request.patience_or_default, request.target_cost
+    seed = resolve_seed(request.seed)
     check_run(max_trials, patience, seed)
     prm = _pack(problem, params, max_trials=max_trials, patience=patience, target_cost=target_cost,
                 record_every=int(record_every))

@@ -37,6 +37,7 @@ from nbst.constants import GA_MAX_DISKS
 from nbst.problem import Problem
 from nbst.search.local import conflicts, labels, must_be_struck, nearest, subproblem
 from nbst.search.params import ProgressCallback, SearchProgress, StopReason
+from nbst.search.variants import SolveRequest
 
 __all__ = ["ALGORITHM_MANY", "ManyParams", "ManyRun", "run_many"]
 
@@ -430,8 +431,9 @@ class _Search:
                          margin=prm.window * float(problem.radius.max()) * (1 + k))
         for _ in range(prm.searches):
             budget = prm.sub_trials_per_disk * idx.size
-            run = signature_search(win, seed=int(rng.integers(2**62)), max_trials=budget, patience=budget,
-                                   target_cost=tol, variant=prm.variant)
+            run = signature_search(win, SolveRequest(seed=int(rng.integers(2**62)), max_trials=budget,
+                                                     patience=budget, target_cost=tol, variant=prm.variant,
+                                                     robust=None))
             used = run.result.trials
             self.stats["sub_trials"] += used
             self.trials += used * idx.size / n

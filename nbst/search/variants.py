@@ -21,8 +21,8 @@ from nbst.registry import Registry
 if TYPE_CHECKING:
     from nbst.problem import Problem
 
-__all__ = ["DEFAULT_MAX_TRIALS", "DEFAULT_PATIENCE", "DEFAULT_VARIANT", "NBST_DEFAULTS", "VARIANTS", "Variant",
-           "roundoff_cost"]
+__all__ = ["DEFAULT_MAX_TRIALS", "DEFAULT_PATIENCE", "DEFAULT_VARIANT", "NBST_DEFAULTS", "VARIANTS", "SolveRequest",
+           "Variant", "roundoff_cost"]
 
 #: The variant ``nbst.search.solve`` and ``nbst solve`` run unless told otherwise.
 DEFAULT_VARIANT = "nbst"
@@ -40,6 +40,46 @@ NBST_DEFAULTS: Mapping[str, Any] = dict(op_weights=(0.2, 0.1, 0.1, 0.2), bank_we
 # measured but off: the ablation (docs/results/disks.md) showed no gain from either.
 
 _THIRD = 1.0 / 3.0
+
+
+@dataclass(frozen=True)
+class SolveRequest:
+    """What one search is asked to do: the settings every hop passes on as one object
+    (``nbst.search.solve`` builds it from its keywords; the islands, the solvers' registry and the
+    experiments hand it down unchanged).
+
+    seed        : int >= 0; None: the solver draws one (and records it)
+    max_trials  : trial budget (one trial = one simulated candidate)
+    patience    : stop after this many trials without improvement (0: never); None: the
+                  solver's default (``DEFAULT_PATIENCE`` for the signature search, none for a
+                  baseline)
+    target_cost : stop once the best cost is <= this (None: never; the many-body search:
+                  round-off level)
+    variant     : the signature search's variant (``VARIANTS``); None: its default
+                  (``DEFAULT_VARIANT``). Solvers that take no variant refuse any other.
+    robust      : the signature search's robust mode (``nbst solve --robust``); None: as its
+                  ``SearchParams`` say
+    jobs        : threads of a search that runs in one process (the many-body search); None:
+                  every core
+    """
+
+    seed: int | None = None
+    max_trials: int = DEFAULT_MAX_TRIALS
+    patience: int | None = None
+    target_cost: float | None = None
+    variant: str | None = None
+    robust: bool | None = False
+    jobs: int | None = None
+
+    @property
+    def patience_or_default(self) -> int:
+        """``patience``, or the signature search's ``DEFAULT_PATIENCE`` where it is None."""
+        return DEFAULT_PATIENCE if self.patience is None else int(self.patience)
+
+    @property
+    def variant_or_default(self) -> str:
+        """``variant``, or ``DEFAULT_VARIANT`` where it is None (or empty)."""
+        return self.variant or DEFAULT_VARIANT
 
 
 def roundoff_cost(problem: Problem) -> float:

@@ -62,6 +62,7 @@ import numpy as np
 
 from nbst._version import __version__
 from nbst.problem import Problem, ProblemError
+from nbst.seeds import resolve_seed
 from nbst.solution import SolveResult
 
 if TYPE_CHECKING:
@@ -201,11 +202,7 @@ def _check_args(max_trials: int, patience: int, seed) -> int:
         raise ProblemError("<search parameters>", "max_trials", f"must be >= 1, got {max_trials}")
     if int(patience) < 0:
         raise ProblemError("<search parameters>", "patience", f"must be >= 0 (0 = no patience limit), got {patience}")
-    if seed is None:
-        seed = int(np.random.default_rng().integers(2**63))
-    if int(seed) < 0:
-        raise ProblemError("<search parameters>", "seed", f"must be >= 0, got {seed}")
-    return int(seed)
+    return resolve_seed(seed)
 
 
 def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: dict,

@@ -26,6 +26,7 @@ from nbst.constants import many_body
 from nbst.problem import Problem, ProblemError
 from nbst.registry import Registry
 from nbst.solution import SolveResult
+from nbst.search.variants import SolveRequest
 from nbst.solvers.baselines import BASELINE_PATIENCE, solve_cma, solve_de, solve_ga, solve_random
 
 if TYPE_CHECKING:
@@ -36,32 +37,6 @@ __all__ = ["SOLVERS", "SIGNATURE", "SolveRequest", "Solver", "SolverInfo", "regi
 
 #: The signature search's name among the solvers.
 SIGNATURE = "signature"
-
-
-@dataclass(frozen=True)
-class SolveRequest:
-    """What one search is asked to do (a solver's options besides the problem and the callback).
-
-    seed        : int >= 0; None: the solver draws one (and records it)
-    max_trials  : trial budget (one trial = one simulated candidate)
-    patience    : stop after this many trials without improvement (0: never); None: the
-                  solver's default (100,000 for the signature search, none for a baseline)
-    target_cost : stop once the best cost is <= this (None: never; the many-body search:
-                  round-off level)
-    variant     : the signature search's variant (``nbst.search.variants.VARIANTS``); None:
-                  its default. Solvers that take no variant refuse any other.
-    robust      : the signature search's robust mode (``nbst solve --robust``)
-    jobs        : threads of a search that runs in one process (the many-body search); None:
-                  every core
-    """
-
-    seed: int | None = None
-    max_trials: int = 1_000_000
-    patience: int | None = None
-    target_cost: float | None = None
-    variant: str | None = None
-    robust: bool = False
-    jobs: int | None = None
 
 
 class Solver(Protocol):
@@ -151,37 +126,24 @@ def _default_variant() -> str:
 
 def _signature(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
     """``nbst.search.solve``: its defaults apply where the request leaves a choice open."""
-    from nbst.search.api import solve
-    from nbst.search.variants import DEFAULT_PATIENCE
+    from nbst.search.api import run_request
 
-    return solve(problem, seed=request.seed, max_trials=request.max_trials,
-                 patience=DEFAULT_PATIENCE if request.patience is None else request.patience,
-                 target_cost=request.target_cost, variant=request.variant or _default_variant(),
-                 robust=request.robust, jobs=request.jobs, callback=callback)
+    return run_request(problem, request, callback=callback).result
 
 
 def _patience(request: SolveRequest) -> int:
     return BASELINE_PATIENCE if request.patience is None else request.patience
 
 
-def _cma(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
-    return solve_cma(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
+def _baseline(solve: Callable[..., SolveResult]) -> Solver:
+    """A baseline of ``nbst.solvers.baselines`` as a registered solver: the request's settings,
+    its patience ``BASELINE_PATIENCE`` where the request leaves it open."""
+
+    def run(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
+        return solve(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
                      target_cost=request.target_cost, callback=callback)
 
-
-def _de(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
-    return solve_de(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
-                    target_cost=request.target_cost, callback=callback)
-
-
-def _ga(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
-    return solve_ga(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
-                    target_cost=request.target_cost, callback=callback)
-
-
-def _random(problem: Problem, request: SolveRequest, callback: ProgressCallback | None) -> SolveResult:
-    return solve_random(problem, seed=request.seed, max_trials=request.max_trials, patience=_patience(request),
-                        target_cost=request.target_cost, callback=callback)
+    return run
 
 
 def _many_body(problem: Problem) -> bool:
@@ -191,7 +153,7 @@ def _many_body(problem: Problem) -> bool:
 register_solver(SIGNATURE, _signature, variants=True, one_process=_many_body,
                 help="nbst's signature search (the default; --variant picks nbst's search, the paper's A or its "
                      "variants B-H; past 63 disks the many-body search, one process)")
-register_solver("cma", _cma, help="CMA-ES (pycma), IPOP restarts from the straight-line velocities")
-register_solver("de", _de, help="differential evolution (scipy, best1bin)")
-register_solver("ga", _ga, help="a standard steady-state real-coded GA")
-register_solver("random", _random, help="random search: directed or uniform randomize per disk")
+register_solver("cma", _baseline(solve_cma), help="CMA-ES (pycma), IPOP restarts from the straight-line velocities")
+register_solver("de", _baseline(solve_de), help="differential evolution (scipy, best1bin)")
+register_solver("ga", _baseline(solve_ga), help="a standard steady-state real-coded GA")
+register_solver("random", _baseline(solve_random), help="random search: directed or uniform randomize per disk")

@@ -46,6 +46,7 @@ from nbst.outputs import signals_deferred
 from nbst.problem import Problem
 from nbst.search.params import SearchProgress
 from nbst.search.variants import DEFAULT_MAX_TRIALS
+from nbst.seeds import SEED_MAX, resolve_seed
 from nbst.solution import SolveResult
 from nbst.solvers.dispatch import SIGNATURE, SOLVERS, SolveRequest, run_solver
 
@@ -90,7 +91,7 @@ def island_seeds(seed: int, jobs: int) -> list[int]:
     """K independent seeds derived from ``seed`` (non-negative int64s)."""
     if jobs == 1:
         return [int(seed)]
-    return [int(s.generate_state(1, np.uint64)[0] & np.uint64(2**63 - 1))
+    return [int(s.generate_state(1, np.uint64)[0] & np.uint64(SEED_MAX))
             for s in np.random.SeedSequence(int(seed)).spawn(int(jobs))]
 
 
@@ -169,7 +170,7 @@ def restart_seed(seed: int, j: int) -> int:
     """The seed of a portfolio island's j-th search: ``seed`` itself for j = 0, then derived."""
     if j == 0:
         return int(seed)
-    return int(np.random.SeedSequence([int(seed), int(j)]).generate_state(1, np.uint64)[0] & np.uint64(2**63 - 1))
+    return int(np.random.SeedSequence([int(seed), int(j)]).generate_state(1, np.uint64)[0] & np.uint64(SEED_MAX))
 
 
 def _give(baton) -> None:
@@ -351,19 +352,40 @@ def solve_islands(problem: Problem, *, jobs: int, seed: int | None = None, algor
         island), with ``trials`` the sum over islands, ``island`` and ``islands`` set. Ctrl-C
         stops all islands and returns the best so far (``stopped == "interrupted"``).
     """
+    request = SolveRequest(seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
+                           variant=variant, robust=robust)
+    return run_islands(problem, request, jobs=jobs, algorithm=algorithm, callback=callback, cluster=cluster,
+                       portfolio=portfolio)
+
+
+def run_islands(problem: Problem, request: SolveRequest, *, jobs: int, algorithm: str = SIGNATURE,
+                callback: ProgressCallback | None = None, cluster=None, portfolio: bool = True) -> SolveResult:
+    """:func:`solve_islands` with the search's settings as one object (what ``nbst solve`` builds).
+
+    Args:
+        problem: the problem.
+        request: seed (None draws one), the total budget ``max_trials`` (each island gets
+            ceil(max_trials / K)), patience (per island), target cost, variant and robust mode
+            (:class:`~nbst.search.variants.SolveRequest`; its ``jobs`` is not read: ``jobs`` is).
+        jobs, algorithm, callback, cluster, portfolio: as :func:`solve_islands`.
+
+    Returns:
+        The best island's :class:`~nbst.solution.SolveResult`, as :func:`solve_islands`.
+
+    Raises:
+        SolveError: ``jobs`` < 1, or an island failed.
+        InputError: an unknown algorithm, or a seed out of range.
+    """
     jobs = int(jobs)
     if jobs < 1:
         raise SolveError(f"jobs must be >= 1, got {jobs}")
     algorithm = SOLVERS.parse(algorithm, source="<search parameters>", field="algorithm")
     if SOLVERS[algorithm].one_process(problem):
-        return run_solver(algorithm, problem, SolveRequest(seed=seed, max_trials=max_trials, patience=patience,
-                                                           target_cost=target_cost, variant=variant,
-                                                           robust=robust, jobs=jobs), callback)
-    if seed is None:
-        seed = int(np.random.default_rng().integers(2**63))
-    configs = portfolio_for(problem, algorithm, variant=variant, robust=robust) if portfolio else None
-    request = SolveRequest(seed=seed, max_trials=max_trials, patience=patience, target_cost=target_cost,
-                           variant=variant, robust=robust)
+        return run_solver(algorithm, problem, dataclasses.replace(request, jobs=jobs), callback)
+    seed = resolve_seed(request.seed)
+    variant, max_trials, target_cost = request.variant, request.max_trials, request.target_cost
+    configs = portfolio_for(problem, algorithm, variant=variant, robust=bool(request.robust)) if portfolio else None
+    request = dataclasses.replace(request, seed=seed, jobs=None)
     if jobs == 1 and configs is None:
         return run_solver(algorithm, problem, request, callback)
     threads = jobs == 1  # the portfolio on one core: its islands take turns in threads of this process
