@@ -1,0 +1,63 @@
+"""``nbst.scene.solve``: the one typed way in to the scene search (docs/scene.md).
+
+Loads and checks the fates (``nbst.scene.scenefile.load_fates``), rolls the scene out on ``jobs``
+threads (``nbst.scene.rollout.SceneSim``) and runs the paper's per-body signature search
+(``nbst.scene.search.signature_search``) from one seed (``nbst.seeds``).
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+from typing import Callable
+
+from nbst.errors import SolveError
+from nbst.scene.fates import Fates
+from nbst.scene.scenefile import check_against_model, compile_scene, load_fates
+from nbst.scene.rollout import SceneSim
+from nbst.scene.search import DEFAULT_MAX_ROLLOUTS, SceneProgress, signature_search
+from nbst.scene.solution import SceneResult
+from nbst.seeds import check_random_state, resolve_seed
+
+__all__ = ["solve"]
+
+
+def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, seed: int | None = None,
+          max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int = 1,
+          callback: Callable[[SceneProgress], None] | None = None) -> SceneResult:
+    """Find initial velocities (and offsets) of a scene's free bodies that meet their fates.
+
+    Args:
+        scene: the MJCF file, overriding the fates' ``"scene"``; None: the fates' own.
+        fates: a fates file (``"format": "nbst-fates"``), a built-in example's name
+            (``nbst scene examples``), or already checked :class:`~nbst.scene.fates.Fates`.
+        seed: the seed (an integer in [0, 2^63-1]); None draws one (recorded in the result).
+        max_rollouts: the rollout budget, >= 1.
+        jobs: threads rolling the scene out (>= 1); any value gives the same result.
+        callback: called with a :class:`~nbst.scene.search.SceneProgress` after each batch.
+
+    Returns:
+        the :class:`~nbst.scene.solution.SceneResult`: the best rollout (every fate met when
+        ``met``), the rollouts spent, why it stopped, the seed.
+
+    Raises:
+        FatesError: the fates file or its scene is refused (one line naming the file and field).
+        InputError: the seed is not an integer in range.
+        SolveError: ``max_rollouts`` or ``jobs`` is not an integer >= 1.
+    """
+    for name, v in (("max_rollouts", max_rollouts), ("jobs", jobs)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+            raise SolveError(f"{name} must be an integer >= 1, got {v!r}")
+    s = resolve_seed(seed)
+    if isinstance(fates, Fates):
+        f = fates if scene is None else dataclasses.replace(fates, scene=Path(scene))
+        model = compile_scene(f)
+        check_against_model(f, model)
+    else:
+        f, model = load_fates(fates, scene=scene)
+    with SceneSim(f, model, jobs=jobs) as sim:
+        r = signature_search(sim, rng=check_random_state(s), max_rollouts=max_rollouts, callback=callback)
+        nstep, key = sim.nstep, sim.key
+    return SceneResult(fates=f, model=model, best=r.best, met=r.best.judgement.met and not r.best.warnings,
+                       rollouts=r.rollouts, stopped=r.stopped, seed=s, max_rollouts=max_rollouts,
+                       wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key)

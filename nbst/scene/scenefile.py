@@ -1,0 +1,200 @@
+"""The scene side of a fates file: the MJCF's files, its compilation, the names against the model.
+
+:func:`load_fates` is the way in: it reads the fates file (``nbst.scene.fates.parse_fates``),
+checks the MJCF's files (:func:`check_scene_files`: ``<include>``, mesh, texture, hfield and skin
+files must lie under the scene's folder, meshes at most :data:`~nbst.scene.fates.MAX_MESH_BYTES`),
+compiles the scene with MuJoCo (:func:`compile_scene`: MuJoCo's message, with the line, when it
+will not) and checks the fates' names against the model (:func:`check_against_model`: bodies,
+geoms, free joints, the keyframe, the step cap). Every refusal is one line naming the file and the
+field (:class:`~nbst.scene.fates.FatesError`).
+
+mujoco is imported only inside the functions that need it.
+"""
+from __future__ import annotations
+
+import difflib
+import os
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+from nbst.files import read_regular
+from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
+                              read_fates_json)
+
+__all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates"]
+
+#: The MJCF elements whose attributes name files, and the <compiler> folder each resolves under.
+_FILE_ATTRS = {"include": (("file",), None), "mesh": (("file",), "meshdir"), "skin": (("file",), "meshdir"),
+               "hfield": (("file",), "texturedir"),
+               "texture": (("file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"),
+                           "texturedir"),
+               "model": (("file",), None)}
+
+def _inside(path: Path, folder: Path) -> bool:
+    try:
+        return os.path.commonpath([os.path.realpath(path), os.path.realpath(folder)]) == os.path.realpath(folder)
+    except ValueError:
+        return False
+
+
+def check_scene_files(scene: Path, *, source: str = "") -> list[Path]:
+    """Refuse an MJCF whose ``<include>``, mesh, texture, hfield or skin files lie outside its folder.
+
+    The XML is parsed (with each ``<include>`` in turn, to any depth); a file attribute is resolved
+    as MuJoCo does, under ``<compiler meshdir|texturedir|assetdir>`` when set, relative to the
+    scene's folder; links are followed before the check.
+
+    Args:
+        scene: the MJCF file.
+        source: the fates file, for messages (defaults to the scene).
+
+    Returns:
+        the files the scene reads (the scene first), each checked.
+
+    Raises:
+        FatesError: a file outside the folder, a mesh over :data:`MAX_MESH_BYTES`, a missing file,
+            XML that does not parse.
+    """
+    folder = scene.resolve().parent
+    where = source or str(scene)
+    seen: list[Path] = []
+    dirs = {"meshdir": "", "texturedir": "", "assetdir": ""}
+
+    def parse(path: Path, field: str) -> ET.Element:
+        data = read_regular(path, max_bytes=MAX_SCENE_BYTES, what="MJCF file", allow_empty=False)
+        if b"<!ENTITY" in data or b"<!DOCTYPE" in data:
+            raise FatesError(where, field, f"{path}: a DOCTYPE or ENTITY declaration is not read in a scene")
+        try:
+            return ET.fromstring(data)
+        except ET.ParseError as e:
+            raise FatesError(where, field, f"{path}: not XML ({e})") from None
+
+    def walk(path: Path, field: str, depth: int) -> None:
+        if depth > 16:
+            raise FatesError(where, field, f"{path}: <include> nested deeper than 16")
+        seen.append(path)
+        root = parse(path, field)
+        for c in root.iter("compiler"):
+            for k in dirs:
+                if c.get(k) is not None:
+                    dirs[k] = c.get(k) or ""
+        for el in root.iter():
+            spec = _FILE_ATTRS.get(el.tag)
+            if spec is None:
+                continue
+            attrs, dirkey = spec
+            for a in attrs:
+                name = el.get(a)
+                if not name:
+                    continue
+                sub = dirs[dirkey] if dirkey and dirs[dirkey] else dirs["assetdir"] if dirkey else ""
+                f = Path(name) if os.path.isabs(name) else folder / sub / name
+                what = f"scene: <{el.tag} {a}=\"{name}\">"
+                if not _inside(f, folder):
+                    raise FatesError(where, what, f"{f} is outside the scene's folder {folder}; a scene reads "
+                                                  f"only files under its folder")
+                if el.tag == "include":
+                    walk(f, what, depth + 1)
+                    continue
+                try:
+                    size = os.stat(f).st_size
+                except OSError as e:
+                    raise FatesError(where, what, f"{f}: {e.strerror or e}") from None
+                if el.tag == "mesh" and size > MAX_MESH_BYTES:
+                    raise FatesError(where, what, f"{f}: {size:,} bytes, larger than the {MAX_MESH_BYTES:,} bytes "
+                                                  f"a scene's mesh may have")
+                seen.append(f)
+
+    walk(scene, "scene", 0)
+    return seen
+
+
+def compile_scene(fates: Fates) -> Any:
+    """The compiled ``mujoco.MjModel`` of the fates' scene, its timestep set.
+
+    Raises:
+        FatesError: MuJoCo will not compile it (its message, with the line), or the scene's files
+            are refused (:func:`check_scene_files`).
+    """
+    import mujoco
+
+    check_scene_files(fates.scene, source=fates.source)
+    try:
+        model = mujoco.MjModel.from_xml_path(str(fates.scene))
+    except ValueError as e:
+        msg = "; ".join(line.strip() for line in str(e).splitlines() if line.strip())
+        raise FatesError(fates.source, "scene", f"{fates.scene}: MuJoCo will not compile it: {msg}") from None
+    if fates.timestep is not None:
+        model.opt.timestep = fates.timestep
+    return model
+
+
+def check_against_model(fates: Fates, model: Any) -> None:
+    """Refuse names the model does not have, and a controlled body without a free joint.
+
+    Raises:
+        FatesError: a body, geom or key that is not in the model; a controlled body whose first
+            joint is not free; a duration past :data:`MAX_STEPS` steps.
+    """
+    import mujoco
+
+    src = _Src(fates.source)
+
+    def body_id(name: str, field: str) -> int:
+        i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        if i < 0:
+            names = [model.body(k).name for k in range(model.nbody)]
+            near = difflib.get_close_matches(name, names, n=1)
+            raise src.fail(field, f"no body {name!r} in {fates.scene.name}" + (f" (did you mean {near[0]!r}?)"
+                                                                             if near else ""))
+        return i
+
+    if fates.keyframe is not None and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe) < 0:
+        raise src.fail("keyframe", f"no key {fates.keyframe!r} in {fates.scene.name}")
+    steps = int(round(fates.duration / model.opt.timestep))
+    if steps > MAX_STEPS:
+        raise src.fail("duration", f"{fates.duration:g} s at a {model.opt.timestep:g} s timestep is {steps:,} steps, "
+                                   f"more than the {MAX_STEPS:,} a rollout may take")
+    if steps < 1:
+        raise src.fail("duration", f"{fates.duration:g} s is shorter than one timestep ({model.opt.timestep:g} s)")
+    for c in fates.controls:
+        b = body_id(c.body, f"controls.{c.body}")
+        j = int(model.body_jntadr[b])
+        if model.body_jntnum[b] < 1 or model.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE:
+            raise src.fail(f"controls.{c.body}", f"body {c.body!r} has no free joint; only free bodies can be "
+                                                 f"given velocities")
+    for fa in fates.fates:
+        body_id(fa.body, f"fates.{fa.body}")
+        for key, names in (("hits", fa.hits), ("never_hits", fa.never_hits)):
+            for n in names:
+                if (mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) < 0
+                        and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n) < 0):
+                    raise src.fail(f"fates.{fa.body}.{key}", f"no body or geom {n!r} in {fates.scene.name}")
+                if n == fa.body:
+                    raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} is the body itself")
+
+
+def load_fates(path: str | os.PathLike, *, scene: str | os.PathLike | None = None) -> tuple[Fates, Any]:
+    """Read and check a fates file and compile its scene.
+
+    Args:
+        path: the fates JSON file, or the name of a built-in example (``nbst scene examples``).
+        scene: an MJCF path that overrides the file's ``"scene"``.
+
+    Returns:
+        ``(fates, model)``: the checked :class:`Fates` and the compiled ``mujoco.MjModel``.
+
+    Raises:
+        FatesError: anything refused (module docstring); one line naming the file and the field.
+    """
+    from nbst.scene.builtin import example_path
+
+    p = Path(path)
+    if not p.exists() and (ex := example_path(str(path))) is not None:
+        p = ex
+    doc = read_fates_json(p)
+    fates = parse_fates(doc, str(path), folder=p.resolve().parent, scene=scene)
+    model = compile_scene(fates)
+    check_against_model(fates, model)
+    return fates, model

@@ -1,0 +1,216 @@
+"""The scene solution file (``"format": "nbst-scene-solution"``, version 1) and its replay.
+
+A solution file records what the search found (docs/scene.md, "The solution file"): the fates file
+and the scene it was solved for (absolute paths, and the scene's SHA-256), the timestep and steps,
+the controls chosen per body, the initial state (``qpos0``, ``qvel0``; JSON keeps every float's
+bits), the final state the search saw, the verdict of every fate, the seed, the search's numbers
+and the versions of nbst and MuJoCo.
+
+:func:`replay_solution` rolls ``qpos0``/``qvel0`` out with the plain ``mj_step`` loop of
+docs/scene.md (``nbst.scene.rollout.replay``) and compares the final state with the file's, bit for
+bit; it also judges the fates again.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from nbst._version import __version__
+from nbst.errors import InputError
+from nbst.files import read_regular
+from nbst.scene.fates import Fates
+from nbst.scene.scenefile import load_fates
+from nbst.scene.judge import Judgement, signature_text
+from nbst.scene.rollout import SceneRollout, SceneSim, replay
+
+__all__ = ["SOLUTION_FORMAT", "SOLUTION_VERSION", "SceneSolutionError", "SceneResult", "SceneReplay",
+           "solution_dict", "read_solution", "replay_solution", "file_sha256"]
+
+SOLUTION_FORMAT = "nbst-scene-solution"
+SOLUTION_VERSION = 1
+_MAX_BYTES = 64 * 2**20
+
+
+class SceneSolutionError(InputError):
+    """A scene solution file nbst refuses: one line, ``FILE: FIELD: why``."""
+
+
+@dataclass(frozen=True)
+class SceneResult:
+    """What ``nbst.scene.solve`` returns.
+
+    Args:
+        fates: the checked fates solved for.
+        model: the compiled ``mujoco.MjModel`` (its timestep set).
+        best: the best rollout found: its controls, initial and final state, verdicts.
+        met: every fate met (and MuJoCo did not warn).
+        rollouts: rollouts spent.
+        stopped: ``"met"``, ``"budget"`` or ``"interrupted"``.
+        seed: the seed used (drawn when none was given).
+        max_rollouts: the budget asked.
+        wall_time: seconds.
+        signatures: distinct signatures seen.
+        nstep: steps per rollout.
+        key: the keyframe's index (-1: none).
+    """
+
+    fates: Fates
+    model: Any
+    best: SceneRollout
+    met: bool
+    rollouts: int
+    stopped: str
+    seed: int
+    max_rollouts: int
+    wall_time: float
+    signatures: int
+    nstep: int
+    key: int
+
+    @property
+    def judgement(self) -> Judgement:
+        return self.best.judgement
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """The SHA-256 of a file's bytes, in hex."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _controls(fates: Fates, x: np.ndarray) -> dict:
+    out: dict = {}
+    for c, sl in zip(fates.controls, fates.blocks()):
+        v = x[sl]
+        out[c.body] = {part: [float(a) for a in v[3 * k:3 * k + 3]] for k, (part, _) in enumerate(c.parts())}
+    return out
+
+
+def solution_dict(res: SceneResult) -> dict:
+    """The solution file's JSON object for a result (see the module docstring)."""
+    import mujoco
+
+    f, b = res.fates, res.best
+    src = Path(f.source)
+    return {
+        "format": SOLUTION_FORMAT, "version": SOLUTION_VERSION,
+        "fates": f.source,
+        "fates_file": str(src.resolve()) if src.is_file() else None,
+        "scene": str(f.scene.resolve()),
+        "scene_sha256": file_sha256(f.scene),
+        "keyframe": f.keyframe,
+        "timestep": float(res.model.opt.timestep),
+        "nstep": res.nstep,
+        "duration": f.duration,
+        "met": res.met,
+        "signature": signature_text(b.signature),
+        "cost": b.cost,
+        "controls": _controls(f, b.x),
+        "x": [float(a) for a in b.x],
+        "qpos0": [float(a) for a in b.qpos0],
+        "qvel0": [float(a) for a in b.qvel0],
+        "final": {"qpos": [float(a) for a in b.qpos], "qvel": [float(a) for a in b.qvel]},
+        "verdicts": b.judgement.to_dict()["bodies"],
+        "warnings": list(b.warnings),
+        "seed": res.seed,
+        "search": {"rollouts": res.rollouts, "stopped": res.stopped, "max_rollouts": res.max_rollouts,
+                   "wall_time_s": round(res.wall_time, 2), "signatures": res.signatures},
+        "versions": {"nbst": __version__, "mujoco": mujoco.__version__},
+    }
+
+
+def _floats(doc: dict, key: str, n: int, path: str) -> np.ndarray:
+    v: Any = doc
+    for k in key.split("."):
+        v = v.get(k) if isinstance(v, dict) else None
+    if not isinstance(v, list) or len(v) != n or not all(
+            isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in v):
+        raise SceneSolutionError(f"{path}: {key}: must be a list of {n} finite numbers")
+    return np.array(v, dtype=float)
+
+
+def read_solution(path: str | os.PathLike) -> dict:
+    """Read a solution file and check its format, version and fields' types.
+
+    Args:
+        path: the solution JSON file.
+
+    Returns:
+        the JSON object (its arrays still lists; :func:`replay_solution` checks their lengths
+        against the model).
+
+    Raises:
+        SceneSolutionError: not JSON, another format or version, a field missing or of the wrong type.
+    """
+    data = read_regular(path, max_bytes=_MAX_BYTES, what="scene solution file", allow_empty=False)
+    try:
+        doc = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError) as e:
+        raise SceneSolutionError(f"{path}: not JSON ({e})") from None
+    if not isinstance(doc, dict) or doc.get("format") != SOLUTION_FORMAT:
+        raise SceneSolutionError(f"{path}: format: not a scene solution (expected {SOLUTION_FORMAT!r})")
+    if doc.get("version") != SOLUTION_VERSION:
+        raise SceneSolutionError(f"{path}: version: must be {SOLUTION_VERSION}, got {doc.get('version')!r}")
+    for key, kind in (("scene", str), ("nstep", int), ("timestep", float), ("qpos0", list), ("qvel0", list),
+                      ("final", dict), ("x", list)):
+        v = doc.get(key)
+        ok = isinstance(v, kind) or (kind is float and isinstance(v, int))
+        if not ok or isinstance(v, bool):
+            raise SceneSolutionError(f"{path}: {key}: missing or not a {kind.__name__}")
+    if doc.get("fates_file") is None and not isinstance(doc.get("fates"), str):
+        raise SceneSolutionError(f"{path}: fates: missing")
+    return doc
+
+
+@dataclass(frozen=True)
+class SceneReplay:
+    """What :func:`replay_solution` found.
+
+    Args:
+        same: the plain ``mj_step`` loop ends in the file's final state, bit for bit.
+        judgement: the fates judged again on the replayed motion.
+        qpos: (nq,) the replayed final qpos; qvel: (nv,) its qvel.
+        scene_changed: the scene's SHA-256 differs from the file's.
+    """
+
+    same: bool
+    judgement: Judgement
+    qpos: np.ndarray
+    qvel: np.ndarray
+    scene_changed: bool
+
+
+def replay_solution(path: str | os.PathLike) -> SceneReplay:
+    """Replay a solution file with the plain ``mj_step`` loop and compare, bit for bit.
+
+    Args:
+        path: the solution file.
+
+    Returns:
+        the :class:`SceneReplay`.
+
+    Raises:
+        SceneSolutionError: the file is refused, or its state does not fit the model.
+        FatesError: its fates file or scene is refused.
+    """
+    doc = read_solution(path)
+    fates_path = doc.get("fates_file") or doc["fates"]
+    fates, model = load_fates(fates_path, scene=doc["scene"])
+    model.opt.timestep = float(doc["timestep"])
+    nq, nv = int(model.nq), int(model.nv)
+    q0, v0 = _floats(doc, "qpos0", nq, str(path)), _floats(doc, "qvel0", nv, str(path))
+    qf, vf = _floats(doc, "final.qpos", nq, str(path)), _floats(doc, "final.qvel", nv, str(path))
+    x = _floats(doc, "x", fates.dim, str(path))
+    with SceneSim(fates, model) as sim:
+        q, v = replay(model, q0, v0, int(doc["nstep"]), key=sim.key)
+        judged = sim.rollout(x)
+    same = (q.tobytes() == qf.tobytes() and v.tobytes() == vf.tobytes()
+            and judged.qpos0.tobytes() == q0.tobytes() and judged.qvel0.tobytes() == v0.tobytes())
+    changed = doc.get("scene_sha256") not in (None, file_sha256(fates.scene))
+    return SceneReplay(same=same, judgement=judged.judgement, qpos=q, qvel=v, scene_changed=changed)
