@@ -16,19 +16,20 @@ Rooms, bottom up (the layer contract in pyproject.toml lists them):
   :mod:`.planted`: scripts and cases with a known answer.
 
 Importing this package imports nothing heavy; the submodules that need MuJoCo import it. The
-entry points below load their module on first use: :func:`script_from_dict` and the registered
-scripts :data:`SCRIPTS` (``nbst.models.crash.script``), :func:`solve` and :class:`CrashResult`
-(``nbst.models.crash.search``), :func:`reconstruct` and :class:`Reconstruction`
-(``nbst.models.crash.reconstruct``).
+entry points below load their module on first use: :func:`script_from_dict`, :func:`load_script`
+and the registered scripts :data:`SCRIPTS` (``nbst.models.crash.script``), :func:`solve` and
+:class:`CrashResult` (``nbst.models.crash.search``), :func:`reconstruct` and
+:class:`Reconstruction` (``nbst.models.crash.reconstruct``).
 """
 from __future__ import annotations
 
 import importlib
 
-__all__ = ["SCRIPTS", "Script", "script_from_dict", "solve", "CrashResult", "reconstruct", "Reconstruction"]
+__all__ = ["SCRIPTS", "Script", "script_from_dict", "load_script", "solve", "CrashResult", "reconstruct",
+           "Reconstruction"]
 
-_LAZY = {"SCRIPTS": "script", "Script": "script", "script_from_dict": "script", "solve": "search",
-         "CrashResult": "search", "reconstruct": "reconstruct", "Reconstruction": "reconstruct"}
+_LAZY = {"SCRIPTS": "script", "Script": "script", "script_from_dict": "script", "load_script": "script",
+         "solve": "search", "CrashResult": "search", "reconstruct": "reconstruct", "Reconstruction": "reconstruct"}
 
 
 def __getattr__(name):

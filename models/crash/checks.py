@@ -26,6 +26,11 @@ from nbst.models.crash import road as road_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import vehicle as veh
 
+__all__ = ["TIMESTEP", "RESTITUTION_SPEEDS", "RESTITUTION_MAX", "RESTITUTION_MIN", "RESTITUTION_HIGH_SPEED",
+           "NCAP_DURATION_S", "NCAP_MEAN_G", "restitution_band", "braking_distance", "Tilt",
+           "TILT_RESOLUTION", "TILT_RATE", "TILT_HOLD", "tilt_angle", "Impact", "impact", "Barrier",
+           "barrier", "restitution_curve"]
+
 G = veh.G
 #: Step of the checks (s): the crash search's own step.
 TIMESTEP = 0.002

@@ -44,7 +44,12 @@ from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import vehicle as veh
-from nbst.models.crash.script import AFTER_IMPACT, Script
+from nbst.models.crash.script import AFTER_IMPACT, Script, ScriptError, script_from_dict
+from nbst.problem import ProblemError, read_json
+
+__all__ = ["KIND", "SCHEMA_VERSION", "QPOS_MAX", "QVEL_MAX", "CTRL_MAX", "MAX_XML_CHARS", "CrashFileError",
+           "intents_dict", "fate_dict", "outcome_dict", "crash_dict", "load", "intents_array",
+           "controls_array", "replay", "export_xml"]
 
 KIND = "nbst-crash"
 SCHEMA_VERSION = 1
@@ -176,9 +181,6 @@ def _vector(d, key, src, bound, n=None) -> np.ndarray:
 
 def load(path):
     """(crash dict, Script, MjModel) of a crash file, everything checked (see the module docstring)."""
-    from nbst.models.crash.script import ScriptError, script_from_dict
-    from nbst.problem import ProblemError, read_json
-
     try:
         d = read_json(path)
     except ProblemError as e:

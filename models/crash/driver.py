@@ -42,6 +42,10 @@ import numpy as np
 
 from nbst.models.crash import vehicle as veh
 
+__all__ = ["PERIOD", "INTENT", "IX", "AFTER_BRAKE", "AFTER_COAST", "AFTER_HOLD", "LOOKAHEAD_MIN", "REACHED",
+           "STEER_RATE", "KV", "ACCEL", "DECEL", "VMAX", "IDM_A", "IDM_B", "IDM_S0", "IDM_DELTA", "IDM_PANIC",
+           "DriverState", "Fleet", "yaw_of", "ackermann", "controls"]
+
 #: The drivers act every PERIOD seconds (the controls hold in between).
 PERIOD = 0.02
 INTENT = ("speed", "aim_x", "aim_y", "arrive", "brake_at", "slide_at", "slide_steer", "slide_power", "headway",

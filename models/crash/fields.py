@@ -13,6 +13,8 @@ import math
 from nbst.domain import bad_text, plain
 from nbst.errors import InputError
 
+__all__ = ["ScriptError", "Fields", "jtype"]
+
 
 class ScriptError(InputError):
     """A crash script nbst refuses: ``source``, ``field`` (a path) and ``reason``, one line."""

@@ -30,6 +30,10 @@ from nbst.models.crash import driver as drv
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash.script import Script
 
+__all__ = ["KMH", "COS45", "REST_SPEED", "W_CONTACT", "W_NEAR", "W_METRE", "W_HEADING", "W_TURN",
+           "W_ATTITUDE", "W_STRIKE", "W_KMH", "W_SPIN", "W_CENTRE", "Recorder", "VehicleOutcome", "Outcome",
+           "outcomes", "judge"]
+
 KMH = 3.6
 #: cos(45 deg): the up axis's vertical part that splits upright / side / roof.
 COS45 = math.sqrt(0.5)

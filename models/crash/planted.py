@@ -22,10 +22,14 @@ import math
 import numpy as np
 
 from nbst.errors import SolveError
+from nbst.models.crash import robust
 from nbst.models.crash import script as script_mod
 from nbst.models.crash.run import CrashRunner
 from nbst.models.crash.search import LADDER_CHECK_TIMESTEPS
 from nbst.models.crash.space import space_of
+
+__all__ = ["TEMPLATES", "holds_on_ladder", "COPIES", "COPIES_SEED", "hidden_probability", "planted_script",
+           "FUNNEL_STEPS", "funnel", "planted_case"]
 
 _ROAD = {"layout": "intersection", "width": 7, "length": 120, "curb": 0.15}
 TEMPLATES = {
@@ -107,8 +111,6 @@ def hidden_probability(d: dict, u: np.ndarray, copies: int = COPIES, seed: int =
     noise (:data:`.robust.NOISE`, common random numbers of ``seed``), meet script ``d`` at its own
     step: a :class:`.robust.Estimate` (k of n, the Wilson interval, the outcomes seen). A crash whose
     fates its own drivers meet only by luck is a chaotic outcome (docs/results/crash.md)."""
-    from nbst.models.crash import robust
-
     s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
     R = CrashRunner(s, jobs=jobs)
     try:

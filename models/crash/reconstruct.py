@@ -37,15 +37,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
 from nbst.models.crash import search as search_mod
 from nbst.models.crash.outcome import _wrap as out_wrap
-from nbst.models.crash.run import BATCH
+from nbst.models.crash.run import BATCH, CrashRunner
+from nbst.models.crash.script import Script
 from nbst.models.crash.space import space_of
 from nbst.models.crash.vehicle import G
 from nbst.seeds import check_seed
+
+__all__ = ["FIT_SHARE", "FIT_SHARE_MOMENTUM", "SCALES", "MAX_FITS", "Reconstruction", "METHOD_SEARCH",
+           "METHOD_MOMENTUM", "ranges_of", "reconstruct", "ROUNDS", "SPEED_TOL", "LM_ROUND", "FD_STEP",
+           "MAX_STEP", "SIGMA_FINAL", "GAIN", "START", "MISS", "applies", "slide_speed", "momentum_speeds",
+           "residuals", "momentum_fit"]
 
 #: Share of the budget the fit stage may use before the spread starts (it starts earlier when a fit is found).
 FIT_SHARE = 0.7
@@ -117,27 +124,33 @@ def ranges_of(fits: list, n: int) -> list:
     return out
 
 
-def reconstruct(case, *, seed: int, max_rollouts: int = search_mod.DEFAULT_MAX_ROLLOUTS, runner=None, jobs: int = 1,
-                callback=None) -> Reconstruction:
+def reconstruct(case: Script, *, seed: int, max_rollouts: int = search_mod.DEFAULT_MAX_ROLLOUTS,
+                runner: CrashRunner | None = None, jobs: int = 1,
+                callback: Callable[[search_mod.CrashProgress], object] | None = None) -> Reconstruction:
     """Every fit of ``case`` (a Script whose fates are the evidence) within ``max_rollouts``.
 
     Args:
         case: the crash script whose fates are the evidence (rest positions, headings, ...).
-        seed: the seed; the same seed gives the same fits whatever ``jobs``.
+        seed: an integer in [0, 2^63-1]; the same seed gives the same fits whatever ``jobs``.
         max_rollouts: the budget, in rollouts: the crash search for fits first, then Gaussian
             children of the fits that spread them.
         runner: a ``nbst.models.crash.run.CrashRunner`` for this case to reuse, or None: one is made
             with ``jobs`` threads and closed at the end.
         jobs: threads of the runner made here.
-        callback: None, or called with a ``CrashProgress`` after each batch.
+        callback: None, or called with a :class:`~nbst.models.crash.search.CrashProgress` after
+            each batch.
 
     Returns:
-        A :class:`Reconstruction`: the fits in the order found, the best trial, the rollouts,
-        and per vehicle the range (min, median, max) of impact speed, heading and delta-V over
-        the fits (``to_dict`` gives them in km/h and degrees); ``interrupted`` after Ctrl-C.
-    """
-    from nbst.models.crash.run import CrashRunner
+        A :class:`Reconstruction`: the fits in the order found (search trials: ``u`` (dim,)
+        unit-cube point, ``outcome``, ``controls`` (periods, nu), ...), the best trial, the
+        rollouts, and per vehicle the range (min, median, max) of impact speed (m/s), heading
+        (rad) and delta-V (m/s) over the fits (``to_dict`` gives them in km/h and degrees);
+        ``interrupted`` after Ctrl-C.
 
+    Raises:
+        InputError: ``seed`` is not an integer in [0, 2^63-1].
+        MujocoError: a rollout diverged (a non-finite state).
+    """
     own = runner is None
     R = CrashRunner(case, jobs=jobs) if own else runner
     S = space_of(case)

@@ -26,6 +26,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from nbst.models.crash.vehicle import BIT_STATIC
+
+__all__ = ["MAP_MARGIN", "CURB_WIDTH", "BARRIER_THICKNESS", "ARC_PIECE", "GROUND_RGBA", "ROAD_RGBA",
+           "CURB_RGBA", "BARRIER_RGBA", "ROAD_SOLREF", "LAYOUTS", "Barrier", "Road", "add_road"]
+
 #: How far the map reaches past the carriageway's bounding box (m).
 MAP_MARGIN = 30.0
 #: Curb stones: width (m); barriers: thickness (m).
@@ -175,8 +180,6 @@ def _segment_box(parent, name, a, b, width, height, rgba, *, z0=0.0, contact=Tru
 def _static(geom, mu) -> None:
     """A static surface: contype 1 (it touches tyres and bodies), priority 1 (its friction ``mu``
     rules the tyres), critically damped."""
-    from nbst.models.crash.vehicle import BIT_STATIC
-
     geom.contype, geom.conaffinity = BIT_STATIC, 0
     geom.condim = 3
     geom.priority = 1

@@ -27,8 +27,13 @@ import numpy as np
 
 from nbst.models.crash import driver as drv
 from nbst.models.crash.run import TIMESTEP_LADDER, CrashRunner
-from nbst.models.crash.script import Range
+from nbst.models.crash.script import AFTER_IMPACT, Range
 from nbst.models.crash.space import Space
+from nbst.models.mjsearch.ladder import climb
+from nbst.models.mjsearch.probability import Probability, counts, normal_draws, perturb
+
+__all__ = ["DEFAULT_SAMPLES", "DEFAULT_ROBUST_BUDGET", "NOISE", "CLIP", "sigma_row", "noisy", "label",
+           "Estimate", "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem"]
 
 #: Noisy copies a probability is estimated from when none is given (``nbst crash probability
 #: --samples``; ``nbst crash solve --robust``'s fresh estimate).
@@ -53,8 +58,6 @@ def sigma_row() -> np.ndarray:
 def noisy(intents: np.ndarray, m: int, seed: int) -> np.ndarray:
     """(m, n, len(INTENT)) noisy copies of ``intents`` (n, len(INTENT)); copy i is the same draw
     for every intent set (common random numbers). Off behaviours (NaN) stay off."""
-    from nbst.models.mjsearch.probability import normal_draws, perturb
-
     n, P = intents.shape
     lo = np.full((n, P), -np.inf)
     hi = np.full((n, P), np.inf)
@@ -91,8 +94,6 @@ class Estimate:
 
 
 def estimate_of(outcomes, seed: int) -> Estimate:
-    from nbst.models.mjsearch.probability import Probability, counts
-
     k = sum(1 for o in outcomes if o.solved)
     return Estimate(prob=Probability.of(k, len(outcomes)), seed=int(seed), outcomes=counts(label(o) for o in outcomes))
 
@@ -111,8 +112,6 @@ def probability(runner: CrashRunner, intents: np.ndarray, n: int, seed: int, *, 
 def ladder(script, xml: str, intents: np.ndarray, timesteps=TIMESTEP_LADDER):
     """The intents run at each timestep (the same scene text): a ``mjsearch.ladder.Ladder`` of
     (signature, met, contact sequence); ``wanted`` is the first rung's."""
-    from nbst.models.mjsearch.ladder import climb
-
     def run(h):
         R = CrashRunner(script, xml=xml, timestep=h, batch=1)
         try:
@@ -143,7 +142,7 @@ class RobustCrashProblem:
         self.hi = np.array([r.hi if isinstance(r, Range) else 0.0 for _, _, r in space.coords])
 
     def _values(self, cand) -> np.ndarray:
-        return np.array([cand[i, f] if isinstance(r, Range) else float(r.index(drv_after(cand[i, f])))
+        return np.array([cand[i, f] if isinstance(r, Range) else float(r.index(_after_name(cand[i, f])))
                          for i, f, r in self.S.coords])
 
     def project(self, x):
@@ -159,7 +158,7 @@ class RobustCrashProblem:
             if isinstance(r, Range):
                 cand[i, f] = np.clip(v[k], r.lo, r.hi)
             else:
-                cand[i, f] = drv_index(r[int(np.clip(round(v[k]), 0, len(r) - 1))])
+                cand[i, f] = _after_code(r[int(np.clip(round(v[k]), 0, len(r) - 1))])
         return cand
 
     def point(self, cand):
@@ -185,13 +184,11 @@ class RobustCrashProblem:
         return probability(self.R, cand, n, seed)
 
 
-def drv_after(code: float) -> str:
-    from nbst.models.crash.script import AFTER_IMPACT
-
+def _after_name(code: float) -> str:
+    """The after-impact choice an intent column's code stands for."""
     return AFTER_IMPACT[int(code)]
 
 
-def drv_index(choice: str) -> float:
-    from nbst.models.crash.script import AFTER_IMPACT
-
+def _after_code(choice: str) -> float:
+    """The intent column's code of an after-impact choice."""
     return float(AFTER_IMPACT.index(choice))

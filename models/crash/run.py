@@ -21,10 +21,17 @@ from typing import Callable
 
 import numpy as np
 
+from nbst.cluster import connect
+from nbst.errors import MujocoError
 from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
 from nbst.models.crash import scene as scene_mod
-from nbst.models.crash.script import Script
+from nbst.models.crash.script import Script, script_from_dict
+from nbst.models.mjsearch.batch import BatchRunner
+from nbst.models.mjsearch.cluster import map_chunks
+
+__all__ = ["BATCH", "TIMESTEP_LADDER", "scene_vehicles", "scene_text", "Rollouts", "CrashRunner",
+           "CrashClusterRunner"]
 
 #: Simulations per batch: a fixed number, so that a search's path does not depend on --jobs.
 BATCH = 16
@@ -66,8 +73,6 @@ class CrashRunner:
 
     def __init__(self, script: Script, *, jobs: int = 1, timestep: float | None = None, xml: str | None = None,
                  batch: int = BATCH, edit: Callable | None = None):
-        from nbst.models.mjsearch.batch import BatchRunner
-
         self.script = script
         self.xml = scene_text(script) if xml is None else xml
         self.model = scene_mod.model_from_xml(self.xml)
@@ -136,8 +141,6 @@ class CrashRunner:
 
         out = self.stepper.run(qpos0, qvel0, self.nstep, period=self.period, controller=controller, observer=observer)
         if not np.isfinite(out.final_qpos).all():
-            from nbst.errors import MujocoError
-
             bad = int((~np.isfinite(out.final_qpos).all(axis=1)).sum())
             raise MujocoError(f"the simulation diverged (non-finite state) in {bad} of {s} rollouts")
         rec.finish(out.final_qpos, out.final_qvel)
@@ -158,8 +161,6 @@ _WORKER_RUNNERS: dict = {}
 def _run_on_worker(intents: list, raw: dict, xml: str, timestep: float) -> list:
     """On a Dask worker: the rollouts of ``intents`` (a list of (n, len(INTENT)) arrays), as
     per-rollout tuples (outcome, min_dist, qpos0, qvel0, controls, final_qpos)."""
-    from nbst.models.crash.script import script_from_dict
-
     key = (xml, timestep)
     R = _WORKER_RUNNERS.get(key)
     if R is None:
@@ -175,14 +176,10 @@ class CrashClusterRunner(CrashRunner):
     come back in order: the same bits as ``--jobs K`` (a rollout depends on its intents only)."""
 
     def __init__(self, script: Script, address: str, **kw):
-        from nbst.cluster import connect
-
         super().__init__(script, jobs=1, **kw)
         self.client = connect(address)
 
     def _batch(self, intents: np.ndarray) -> Rollouts:
-        from nbst.models.mjsearch.cluster import map_chunks
-
         got = map_chunks(self.client, _run_on_worker, list(intents), self.script.raw, self.xml, self.dt)
         o, md, q0, v0, c, q = zip(*got)
         return Rollouts(outcomes=list(o), min_dist=np.array(md), qpos0=np.array(q0), qvel0=np.array(v0),

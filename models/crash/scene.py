@@ -32,6 +32,10 @@ import numpy as np
 
 from nbst.models.crash import road as road_mod
 from nbst.models.crash import vehicle as veh
+from nbst.models.scene import full_precision
+
+__all__ = ["COLOURS", "PAIR_SIZE", "STRIKE_SIZE", "SETTLE_TIME", "SceneVehicle", "vehicle_prefix",
+           "build_spec", "scene_xml", "model_from_xml", "settled", "initial_state", "Layout", "layout"]
 
 #: Vehicle colours (RGBA), in script order; the renderer reads them from the geoms.
 COLOURS = ((0.80, 0.12, 0.12, 1.0), (0.15, 0.35, 0.80, 1.0), (0.95, 0.75, 0.10, 1.0), (0.15, 0.60, 0.25, 1.0),
@@ -102,8 +106,6 @@ def _contact_sensor(spec, name, subtree, other, kind, *, pos: bool) -> None:
 def scene_xml(spec) -> str:
     """MJCF text of ``spec`` whose model equals ``spec.compile()``'s bit for bit (see the module
     docstring); the keyframes at full precision."""
-    from nbst.models.scene import full_precision
-
     spec.compile()
     return full_precision(spec.to_xml(), spec, exact_attrs={"key": ("time", "qpos", "qvel", "ctrl")})
 

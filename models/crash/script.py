@@ -35,8 +35,15 @@ import numpy as np
 
 from nbst.models.crash import road as road_mod
 from nbst.models.crash.fields import Fields, ScriptError, jtype as _jtype
-from nbst.registry import Registry
 from nbst.models.crash import vehicle as veh
+from nbst.problem import ProblemError, parse_json, read_json
+from nbst.registry import Registry
+
+__all__ = ["KIND", "SCHEMA_VERSION", "KMH", "SURFACES", "AFTER_IMPACT", "ATTITUDES", "LIMITS", "MAX_VEHICLES",
+           "MAX_BARRIERS", "MAX_WAYPOINTS", "MAX_NAME_CHARS", "MAX_DESCRIPTION_CHARS", "Range", "Driver",
+           "Fate", "VehicleScript", "Script", "TOP_KEYS", "ROAD_KEYS", "VEHICLE_KEYS", "DRIVER_KEYS",
+           "FATE_KEYS", "START_CLEARANCE", "script_from_dict", "attitude_of_turns", "footprint", "SCRIPTS",
+           "builtin_names", "builtin_text", "load_script"]
 
 KIND = "nbst-crash-script"
 SCHEMA_VERSION = 1
@@ -184,7 +191,20 @@ START_CLEARANCE = 0.05
 
 
 def script_from_dict(d: Any, *, source: str = "<dict>") -> Script:
-    """Validate a decoded crash script and build a :class:`Script` (see the module docstring)."""
+    """Validate a decoded crash script and build a :class:`Script` (see the module docstring).
+
+    Args:
+        d: the decoded JSON object of an ``nbst-crash-script`` (km/h, degrees and metres, as
+            docs/crash.md's "The script" writes them).
+        source: how a refusal names the script (its file name).
+
+    Returns:
+        the :class:`Script`, in SI units (m/s, rad), with ``raw`` the decoded object.
+
+    Raises:
+        ScriptError: (an :class:`nbst.errors.InputError`) anything the gate refuses, in one line
+            naming ``source``, the field as a path (``vehicles[1].fate.rest.x``) and the problem.
+    """
     c = Fields(source)
     c.obj(d, "", TOP_KEYS, required=("kind", "road", "duration", "vehicles"))
     if d["kind"] != KIND:
@@ -538,11 +558,21 @@ def builtin_text(name: str) -> str:
     return resources.files("nbst.models.crash").joinpath("scripts", SCRIPTS[name]).read_text(encoding="utf-8")
 
 
-def load_script(name_or_path) -> Script:
+def load_script(name_or_path: str | Path) -> Script:
     """A crash script by built-in name (``t-bone``) or by path to a JSON file (an existing file
-    wins); ScriptError (one line) for anything nbst refuses."""
-    from nbst.problem import ProblemError, parse_json, read_json
+    wins).
 
+    Args:
+        name_or_path: a name of :data:`SCRIPTS`, or the path of a script file.
+
+    Returns:
+        the validated :class:`Script` (:func:`script_from_dict`).
+
+    Raises:
+        ScriptError: (an :class:`nbst.errors.InputError`) no such file or built-in (with the
+            nearest built-in names), a file that is not JSON, or anything the gate refuses: one
+            line naming the file and the field.
+    """
     s = str(name_or_path)
     p = Path(s)
     try:

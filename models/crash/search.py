@@ -48,14 +48,20 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
 from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
-from nbst.models.crash.run import BATCH, TIMESTEP_LADDER
+from nbst.models.crash.run import BATCH, TIMESTEP_LADDER, CrashRunner
+from nbst.models.crash.script import Script
 from nbst.models.crash.space import Space, space_of
 from nbst.seeds import check_seed
+
+__all__ = ["DEFAULT_MAX_ROLLOUTS", "CRASH_EXPLORE", "PER_SIGNATURE", "POPULATION", "CREEP", "GA_BATCHES",
+           "LADDER_CHECK_TIMESTEPS", "FRAGILE", "SIGMA0", "STALL", "SPENT", "RIGHT_KEPT", "Trial",
+           "CrashProgress", "CrashResult", "directed", "ladder_check", "solve"]
 
 #: The search's budget when none is given, in rollouts (ladder checks included): ``nbst crash
 #: solve``'s and ``reconstruct``'s ``--max-rollouts`` default, and the budget of docs/crash.md's figures.
@@ -122,17 +128,19 @@ class CrashProgress:
 
 @dataclass
 class CrashResult:
-    """The best trial, how the search went and the archive (contact sequence -> best cost)."""
+    """What :func:`solve` returns: the best trial, how the search went and the archive (contact
+    sequence -> best cost)."""
 
     best: Trial
     rollouts: int
     restarts: int
     stopped: str            # "found" | "budget" | "interrupted"
     seed: int
-    wall_time: float
-    archive: dict
-    history: list           # (rollouts, best cost) after each batch
+    wall_time: float        # s
+    archive: dict[tuple, float]
+    history: list[tuple[int, float]]  # (rollouts, best cost) after each batch
     first_met: int | None = None  # rollouts when a trial first met the script at its own step
+
 
 def _order_bits(sig: int) -> int:
     return bin(sig).count("1")
@@ -387,11 +395,10 @@ def directed(space: Space, rng: np.random.Generator, u: np.ndarray | None = None
     return out
 
 
-def ladder_check(script, xml: str, space: Space, timesteps=LADDER_CHECK_TIMESTEPS):
+def ladder_check(script: Script, xml: str, space: Space,
+                 timesteps: tuple[float, ...] = LADDER_CHECK_TIMESTEPS) -> Callable[[Trial], bool]:
     """``check(trial) -> bool``: the trial's intents meet the script with the same contact
     sequence at every one of ``timesteps`` too (one rollout each)."""
-    from nbst.models.crash.run import CrashRunner
-
     runners = [CrashRunner(script, xml=xml, timestep=h, batch=1) for h in timesteps]
 
     def check(t: Trial) -> bool:
@@ -404,14 +411,15 @@ def ladder_check(script, xml: str, space: Space, timesteps=LADDER_CHECK_TIMESTEP
     return check
 
 
-def solve(script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, runner=None, jobs: int = 1, callback=None,
-          explore: int = CRASH_EXPLORE, keep=None, ladder: bool = True) -> CrashResult:
+def solve(script: Script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, runner: CrashRunner | None = None,
+          jobs: int = 1, callback: Callable[[CrashProgress], object] | None = None, explore: int = CRASH_EXPLORE,
+          keep: Callable[[Trial], object] | None = None, ladder: bool = True) -> CrashResult:
     """Search driver intents that meet ``script``; see the module docstring.
 
     Args:
         script: the crash script (``nbst.models.crash.script.script_from_dict``, or a built-in
-            of ``SCRIPTS``).
-        seed: the seed; the same seed gives the same result whatever ``jobs``.
+            of ``SCRIPTS`` through ``nbst.models.crash.script.load_script``).
+        seed: an integer in [0, 2^63-1]; the same seed gives the same result whatever ``jobs``.
         max_rollouts: the budget, in rollouts (ladder checks included).
         runner: a ``nbst.models.crash.run.CrashRunner`` for this script to reuse (its threads then
             apply), or None: one is made with ``jobs`` threads and closed at the end.
@@ -424,12 +432,19 @@ def solve(script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, runner
             does not costs :data:`FRAGILE` more and the search goes on.
 
     Returns:
-        A :class:`CrashResult`: the best trial (its intents, outcome and controls), the rollouts
-        and restarts used, ``stopped`` ("found", "budget" or "interrupted": Ctrl-C returns the
-        best so far), the seed, the wall time, the archive and the history.
-    """
-    from nbst.models.crash.run import CrashRunner
+        A :class:`CrashResult`: the best trial (``best.u``: (dim,) float64 unit-cube point, its
+        intents ``space_of(script).intents(best.u[None])[0]``: (n, len(INTENT)); ``best.controls``:
+        (periods, nu) realised controls; ``best.qpos0``, ``best.final_qpos``: (nq,); ``best.qvel0``:
+        (nv,); ``best.outcome``), the rollouts and restarts used, ``stopped`` ("found", "budget"
+        or "interrupted": Ctrl-C returns the best so far), the seed, the wall time, the archive
+        and the history.
 
+    Raises:
+        InputError: ``seed`` is not an integer in [0, 2^63-1].
+        MujocoError: a rollout diverged (a non-finite state).
+        KeyboardInterrupt: Ctrl-C before the first batch ended (after it, the best so far is
+            returned).
+    """
     own = runner is None
     R = CrashRunner(script, jobs=jobs) if own else runner
     S = space_of(script)

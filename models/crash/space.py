@@ -22,6 +22,8 @@ import numpy as np
 from nbst.models.crash import driver as drv
 from nbst.models.crash.script import AFTER_IMPACT, Range, Script
 
+__all__ = ["STRAIGHT_AHEAD", "Space", "space_of"]
+
 #: How far ahead (m) a driver without an aim point looks.
 STRAIGHT_AHEAD = 200.0
 

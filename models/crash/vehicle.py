@@ -53,6 +53,11 @@ import numpy as np
 from nbst.errors import InputError
 from nbst.registry import Registry
 
+__all__ = ["G", "CORNERS", "CONTROLS", "BIT_STATIC", "BIT_TYRE", "BIT_BODY", "VEHICLE_KIND", "BodyContact",
+           "BODY_CONTACT", "TYRE_FRICTION", "BRAKE_KV", "TYRE_SOLREF", "VehicleType",
+           "vehicle_type_from_dict", "VEHICLE_TYPES", "control_names", "corner_positions", "heading_quat",
+           "add_vehicle"]
+
 G = 9.81
 #: Corner names, in the order of every per-corner array.
 CORNERS = ("fl", "fr", "rl", "rr")

@@ -6,9 +6,16 @@ Light at import: the crash room, mujoco and cma are imported inside the commands
 """
 from __future__ import annotations
 
+import json
+import math
 import sys
 
+import numpy as np
+
 from nbst.cli.args import print_json
+from nbst.outputs import prepare_output, sigterm_as_interrupt, write_text_atomic
+from nbst.parallel import default_jobs
+from nbst.progress import command_start, count_text, progress_bar, seconds_text
 from nbst.seeds import resolve_seed
 
 __all__ = ["cmd_scripts", "cmd_check", "cmd_solve", "cmd_reconstruct", "cmd_probability", "cmd_replay",
@@ -16,8 +23,6 @@ __all__ = ["cmd_scripts", "cmd_check", "cmd_solve", "cmd_reconstruct", "cmd_prob
 
 
 def _runner(args, script, xml=None):
-    from nbst.parallel import default_jobs
-
     from nbst.models.crash import run
 
     if getattr(args, "cluster", None):
@@ -50,8 +55,6 @@ def cmd_scripts(args) -> int:
 
 
 def cmd_check(args) -> int:
-    import math
-
     s = _load(args.script)
     print(f"{s.name}: {s.road.layout} road, {s.road.width:g} m wide, friction {s.road.friction:g}"
           + (f", curbs {s.road.curb:g} m" if s.road.curb else "") + f"; {s.duration:g} s at {s.timestep * 1e3:g} ms")
@@ -86,17 +89,10 @@ def _seed(args) -> int:
 
 
 def write_crash(path, d: dict) -> None:
-    from nbst.outputs import write_text_atomic
-
-    import json
-
     write_text_atomic(path, json.dumps(d, indent=1, allow_nan=False) + "\n")
 
 
 def cmd_solve(args) -> int:
-    from nbst.outputs import prepare_output, sigterm_as_interrupt
-    from nbst.progress import command_start, count_text, progress_bar, seconds_text
-
     from nbst.models.crash import crashfile, search
 
     script = _load(args.script)
@@ -163,8 +159,6 @@ def cmd_solve(args) -> int:
 def _after_search(args, script, runner, S, best, intents, seed):
     """The robust maximiser (--robust), the ladder and the probability (--samples) of the crash
     found: (the trial to write, its intents, the file's extra fields)."""
-    import numpy as np
-
     from nbst.models.crash import robust
     from nbst.models.crash.search import Trial
 
@@ -194,9 +188,6 @@ def _after_search(args, script, runner, S, best, intents, seed):
 
 
 def cmd_reconstruct(args) -> int:
-    from nbst.outputs import prepare_output, sigterm_as_interrupt
-    from nbst.progress import progress_bar
-
     from nbst.models.crash import crashfile, reconstruct
     from nbst.models.crash.space import space_of
 
@@ -246,9 +237,6 @@ def cmd_reconstruct(args) -> int:
 
 
 def cmd_probability(args) -> int:
-    from nbst.outputs import prepare_output
-    from nbst.progress import progress_bar
-
     from nbst.models.crash import crashfile, robust
 
     d, script, model = crashfile.load(args.crash)
@@ -276,8 +264,6 @@ def cmd_probability(args) -> int:
 
 
 def cmd_replay(args) -> int:
-    import numpy as np
-
     from nbst.models.crash import crashfile
 
     d, script, model = crashfile.load(args.crash)

@@ -13,8 +13,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from nbst.cli.args import Size
+from nbst.domain import plain
+from nbst.outputs import prepare_output, sigterm_as_interrupt
+from nbst.progress import Bar, command_start, count_text, seconds_text
 
 __all__ = ["DISK_ONLY_FLAGS", "FPS_MAX", "check_flags", "cmd_render_crash"]
 
@@ -25,8 +29,6 @@ FPS_MAX = 240.0
 
 
 def _err(msg: str) -> int:
-    from nbst.domain import plain
-
     print(f"nbst render: error: {plain(msg)}", file=sys.stderr)
     return 2
 
@@ -57,11 +59,7 @@ def check_flags(args) -> str | None:
 def cmd_render_crash(args) -> int:
     """``nbst render CRASH.json -o OUT [--still T] [--camera C] [--follow NAME] [--size WxH] [--fps F]
     [--hold S] [--max-frames N] [-q]``: every flag is checked against the file before the replay."""
-    from pathlib import Path
-
     from nbst.models.crash import crashfile
-    from nbst.outputs import prepare_output, sigterm_as_interrupt
-    from nbst.progress import Bar, command_start, count_text, seconds_text
 
     from nbst.render.core import style
     from nbst.render.crash.video import render_crash
