@@ -5,7 +5,7 @@ Three ways to spend a delivery budget (``method``), all on one archive keyed by 
 that gave each subset is its **elite**):
 
 * ``"uniform"``: deliveries uniform over :data:`.delivery.BOUNDS` (random search).
-* ``"elites"`` (MAP-Elites style, the default): after :data:`nbst.models.mjsearch.archive.EXPLORE` uniform deliveries
+* ``"elites"`` (MAP-Elites style, the default): after :data:`nbst.models.mjsearch.archive.EXPLORE_EMPTY` uniform deliveries
   when the archive is empty, each batch of :data:`search.BATCH` deliveries holds
   :data:`UNIFORM_PER_BATCH` uniform deliveries and children of archived elites: a parent
   is drawn with weight :func:`parent_weights` (subsets of sizes with low coverage, seen
@@ -33,6 +33,10 @@ from nbst.models.bowling.deck import search
 from nbst.models.bowling.subsets import N_SUBSETS, SubsetArchive, parent_weights, size_table  # noqa: F401 (the atlas's names)
 from nbst.models.mjsearch import archive as _archive
 
+#: The rollout budget of each targeted solve (``method="targeted"``; ``nbst bowl atlas --per-subset``'s default).
+PER_SUBSET = 200
+#: The search budget of ``nbst bowl atlas`` when none is given (rollouts; robustness probes not counted).
+DEFAULT_BUDGET = 20_000
 #: Uniform deliveries in each batch of 16 of the emitter (keeps finding what no elite is near).
 UNIFORM_PER_BATCH = _archive.UNIFORM_PER_BATCH
 #: Gaussian steps of a child, in the unit cube (per coordinate): ~0.4 mm, 4 mm, 42 mm
@@ -48,7 +52,7 @@ def emit(a: SubsetArchive, rng: np.random.Generator, n: int = search.BATCH, *,
 
 
 def run(runner: deck.DeliveryRunner, archive: SubsetArchive, *, method: str, budget: int, seed: int,
-        per_subset: int = 200, on_new=None, callback=None) -> SubsetArchive:
+        per_subset: int = PER_SUBSET, on_new=None, callback=None) -> SubsetArchive:
     """Spend ``budget`` deliveries growing ``archive`` with ``method`` ("elites", "uniform",
     "targeted", or "elites-plain": the emitter with uniform parent selection); ``on_new(masks)``
     after each batch that found new subsets (to save them), ``callback(archive)`` after each
@@ -75,7 +79,7 @@ def run(runner: deck.DeliveryRunner, archive: SubsetArchive, *, method: str, bud
             if callback:
                 callback(a)
 
-        _archive.grow(lambda X: runner.throw(X)[0], archive, rng, search.SPACE, budget=budget, explore=_archive.EXPLORE,
+        _archive.grow(lambda X: runner.throw(X)[0], archive, rng, search.SPACE, budget=budget, explore=_archive.EXPLORE_EMPTY,
                       batch=search.BATCH, selection="biased" if method == "elites" else "uniform",
                       weights=parent_weights, on_batch=on_batch)
     elif method == "targeted":

@@ -209,7 +209,7 @@ class AtlasRun:
             if self.on_progress:
                 self.on_progress(k + 1, len(self.arch))
 
-    def search(self, budget: int, *, per_subset: int = 200) -> None:
+    def search(self, budget: int, *, per_subset: int = atlasmod.PER_SUBSET) -> None:
         """Spend ``budget`` rollouts growing the folder (:func:`.atlas.run`). KeyboardInterrupt
         propagates; what ran is written."""
         def progress(arch):

@@ -52,6 +52,8 @@ BATCH = _archive.BATCH
 POPSIZE = restarts.POPSIZE
 SIGMA0 = restarts.SIGMA0
 STALL_GENERATIONS = restarts.STALL_GENERATIONS
+#: The rollout budget of :func:`solve` when none is given (``nbst bowl solve --max-rollouts``'s default).
+DEFAULT_MAX_ROLLOUTS = 3000
 #: Weight of the soft distance (in Hamming units per pin): < 1/10, so it only breaks ties.
 SOFT_WEIGHT = 0.05
 #: Gaussian steps of an atlas child, in the unit cube (per coordinate): ~0.4 mm, 4 mm, 42 mm
@@ -152,8 +154,8 @@ def scorer(runner: deck.DeliveryRunner, target: int, distance: str = "hamming"):
     return evaluate, dist
 
 
-def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None = None,
-          runner: deck.DeliveryRunner | None = None, callback=None, explore: int = restarts.EXPLORE,
+def solve(target: int, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int | None = None,
+          runner: deck.DeliveryRunner | None = None, callback=None, explore: int = restarts.EXPLORE_FIRST,
           archive: dict | None = None, explore_between: int = EXPLORE_BETWEEN,
           distance: str = "hamming") -> DeckResult:
     """Search for a delivery that knocks down exactly the pins of ``target`` (a 10-bit mask).
@@ -199,8 +201,14 @@ def solve(target: int, *, seed: int, max_rollouts: int = 3000, jobs: int | None 
     return DeckResult(**vars(f))
 
 
+#: Bisection rounds of :func:`robustness` per axis, and the rollouts it spends: on each of 2 axes, 4 at
+#: the largest change and, when that fails, ``ROBUSTNESS_STEPS`` rounds of 4 (fewest, most).
+ROBUSTNESS_STEPS = 10
+ROBUSTNESS_ROLLOUTS = (2 * 4, 2 * (4 + ROBUSTNESS_STEPS * 4))
+
+
 def robustness(runner: deck.DeliveryRunner, delivery, mask: int, *, lateral_max: float = 0.05,
-               speed_max: float = 0.5, steps: int = 10) -> dict:
+               speed_max: float = 0.5, steps: int = ROBUSTNESS_STEPS) -> dict:
     """Largest lateral (m) and speed (m/s) changes that keep ``mask``, by bisection.
 
     A change d passes when the deliveries at -d, -d/2, +d/2 and +d all give ``mask``

@@ -31,14 +31,16 @@ from dataclasses import asdict, dataclass, replace
 
 from nbst.models.bowling import lane
 from nbst.models.bowling.lane import names as _names
+from nbst.models.bowling.lane import spares
 
 __all__ = ["STANCE_SEP", "ARROW_BOARDS", "BOARDS_PER_STEP", "POCKET_MIDDLE", "stance_of", "arrow_text", "line_of",
            "aim_target", "Move", "move_after", "LeaveAdvice", "advise_leave", "SAMPLE_NOTE"]
 
 #: Boards from the slide foot to the ball at release (assumed; see the module docstring).
 STANCE_SEP = 7.0
-#: The arrows' boards (counted from the bowling hand's edge), 15 ft past the foul line.
-ARROW_BOARDS = (5, 10, 15, 20, 25, 30, 35)
+#: The arrows' boards (counted from the bowling hand's edge), 15 ft past the foul line: the lane's
+#: (:data:`.units.ARROW_BOARDS`).
+ARROW_BOARDS = lane.ARROW_BOARDS
 #: One 2-and-1 step per this many boards of miss at the pins (assumed: a step moves the target
 #: one board, and a board at the arrows is about two at the pins for a ball that hooks back).
 BOARDS_PER_STEP = 2.0
@@ -165,11 +167,11 @@ class LeaveAdvice:
         return asdict(self)
 
 
-def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=None, screen: int = 12,
+def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=None, screen: int = spares.SCREEN,
                  polish: int | None = None, on_done=None) -> LeaveAdvice:
     """The advice at ``leave`` ('-' joined pins): :func:`.spares.best_spare` under ``noise`` (a
     bowler's), said as stance and target (the real path's crossing of the arrows)."""
-    from nbst.models.bowling.lane import noise as _noise, spares
+    from nbst.models.bowling.lane import noise as _noise
 
     nz = noise if noise is not None else _noise.DEFAULT
     res = spares.best_spare(leave, n, seed, runner=runner, screen=screen, nz=nz, on_done=on_done, polish=polish,

@@ -300,11 +300,13 @@ def candidates(name: str, *, oil: str = "house", ball=None, strike: lane.Deliver
     return out
 
 
+#: Noisy throws per candidate in the screening when none is given (``bowl spares|advise --screen``'s default).
+SCREEN = 12
 #: The polish's default budget, in frames per leave: this many times ``screen``.
 POLISH_PER_SCREEN = 40
 
 
-def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, screen: int = 12,
+def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, screen: int = SCREEN,
                nz: noise.Noise = noise.DEFAULT, on_done=None, polish: int | None = None,
                strike: lane.Delivery | None = None) -> SpareResult:
     """The candidate of :func:`candidates` that converts leave ``name`` best. Screening: ``screen``

@@ -48,6 +48,11 @@ COMMANDS = {
 
 
 def register(sub) -> None:
+    """``nbst bowl`` and its subcommands on the top-level subparsers ``sub``; the defaults they show
+    are the library's (:mod:`nbst.models.bowling.deck.search`, :mod:`.atlas`), read here, when the
+    parser is built."""
+    from nbst.models.bowling.deck import atlas, search
+
     p = sub.add_parser("bowl", help=COMMANDS["bowl"],
                        description=DESCRIPTION)
     bowl = p.add_subparsers(dest="bowl_command", metavar="SUBCOMMAND", parser_class=type(p))
@@ -73,8 +78,8 @@ def register(sub) -> None:
                            "(every other pin down); 'none' = a strike")
     s.add_argument("-o", "--output", required=True, metavar="THROW.json", help="where to write the throw")
     add_seed(s, type=SEED, resumable=False)
-    s.add_argument("--max-rollouts", type=bowl_deck.SOLVE_ROLLOUTS, default=3000, metavar="N",
-                   help=with_limits("rollout budget (default 3000)", bowl_deck.SOLVE_ROLLOUTS))
+    s.add_argument("--max-rollouts", type=bowl_deck.SOLVE_ROLLOUTS, default=search.DEFAULT_MAX_ROLLOUTS, metavar="N",
+                   help=with_limits(f"rollout budget (default {search.DEFAULT_MAX_ROLLOUTS})", bowl_deck.SOLVE_ROLLOUTS))
     runner_args(s, "the same throw as --jobs for the same seed")
     s.add_argument("--distance", choices=("hamming", "geometry"), default="hamming",
                    help="distance between subsets that ranks restart points: hamming (pins that differ; "
@@ -82,7 +87,7 @@ def register(sub) -> None:
     s.add_argument("--no-robustness", action="store_true",
                    help="skip the robustness probes after the search (%d to %d more rollouts: on each of 2 axes, "
                         "4 at the largest change, then 10 bisection rounds of 4 if that fails; the throw file "
-                        "records how many ran)" % bowl_deck.ROBUSTNESS_ROLLOUTS)
+                        "records how many ran)" % search.ROBUSTNESS_ROLLOUTS)
     s.add_argument("--no-atlas", action="store_true",
                    help="search from scratch; by default the search starts from the shipped atlas's throws "
                         "(models/bowling/deck/atlas.json, one for each of 328 subsets): a request it holds "
@@ -120,14 +125,14 @@ def register(sub) -> None:
                                     "DIR/atlas.json. Rerunning resumes: the throws already in DIR are the archive. "
                                     "With --foul-line, an atlas of bowlers' deliveries from the foul line instead.")
     add_out_dir(a, dest="out", required=True, old=("--out",), help="output folder")
-    a.add_argument("--max-rollouts", type=bowl_deck.ATLAS_ROLLOUTS, default=20000, metavar="N",
-                   help=with_limits("search rollout budget of this run (default 20000; robustness probes not "
-                                    "counted)", bowl_deck.ATLAS_ROLLOUTS))
+    a.add_argument("--max-rollouts", type=bowl_deck.ATLAS_ROLLOUTS, default=atlas.DEFAULT_BUDGET, metavar="N",
+                   help=with_limits(f"search rollout budget of this run (default {atlas.DEFAULT_BUDGET}; robustness "
+                                    "probes not counted)", bowl_deck.ATLAS_ROLLOUTS))
     a.add_argument("--method", choices=("elites", "targeted", "uniform"), default="elites",
                    help="how to spend the budget (default elites)")
-    a.add_argument("--per-subset", type=bowl_deck.PER_SUBSET, default=200, metavar="N",
-                   help=with_limits("--method targeted: rollout budget of each targeted solve (default 200)",
-                                    bowl_deck.PER_SUBSET))
+    a.add_argument("--per-subset", type=bowl_deck.PER_SUBSET, default=atlas.PER_SUBSET, metavar="N",
+                   help=with_limits(f"--method targeted: rollout budget of each targeted solve (default "
+                                    f"{atlas.PER_SUBSET})", bowl_deck.PER_SUBSET))
     a.add_argument("--from", dest="from_atlas", metavar="ATLAS.json", default=None,
                    help="start from the throws of this atlas file (e.g. models/bowling/deck/atlas.json): they "
                         "are written into DIR first (those not there yet), then the search resumes from them")

@@ -17,7 +17,10 @@ from nbst.parallel import default_jobs
 
 
 def register(bowl) -> None:
-    """``spares``, ``pocket`` and ``advise`` on ``nbst bowl``'s subparsers."""
+    """``spares``, ``pocket`` and ``advise`` on ``nbst bowl``'s subparsers (their defaults read from
+    :mod:`nbst.models.bowling.lane.spares`)."""
+    from nbst.models.bowling.lane import spares
+
     s = bowl.add_parser("spares", help="the throw converting a leave (any, or each common one) with the highest "
                                        "probability",
                         description="For each leave, the 3-6-9 system's line (the strike ball, feet moved 3/6/9 "
@@ -32,15 +35,16 @@ def register(bowl) -> None:
     which.add_argument("--leave", default=None, metavar="PINS",
                        help="one leave to shoot, its pins standing: --leave 3,10 (any pins 1..10 but all ten)")
     which.add_argument("--leaves", default=None, metavar="L1,L2",
-                       help="leaves to shoot, '-' joining pins, ',' between leaves, any leave (default: 10, 7, 4, 6, "
-                            "2-4-5-8, 3-6-10, 1-2-4, 1-3-6, 2-8, 3-9, 7-10)")
+                       help="leaves to shoot, '-' joining pins, ',' between leaves, any leave (default: "
+                            f"{', '.join(spares.LEAVES)})")
     bowler_flag(s, "shoot")
-    s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
-                   help="noisy throws per candidate in the screening (default 12)")
+    s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=spares.SCREEN, metavar="M",
+                   help=f"noisy throws per candidate in the screening (default {spares.SCREEN})")
     s.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=None, metavar="N",
                    help="noisy frames per leave for polishing the pick with a robust search (an evolution "
                         "strategy on common noisy throws; skipped where the pick converted every screening "
-                        "throw or nothing converted); default 40 x --screen (480); 0: no polish")
+                        f"throw or nothing converted); default {spares.POLISH_PER_SCREEN} x --screen "
+                        f"({spares.POLISH_PER_SCREEN * spares.SCREEN}); 0: no polish")
     mc_flags(s, 60, "measured throw")
     s.set_defaults(func=cmd_spares)
 
@@ -60,6 +64,9 @@ def register(bowl) -> None:
 
 
 def register_advise(bowl) -> None:
+    """``advise`` on ``nbst bowl``'s subparsers."""
+    from nbst.models.bowling.lane import spares
+
     a = bowl.add_parser("advise", help="where to stand and where to look: at a leave, or after a frame",
                         description="A coach's advice in a bowler's units. --leave PINS: the spare tool's best line "
                                     "at the leave (bowl spares, under the --bowler's release noise), said as the "
@@ -75,8 +82,8 @@ def register_advise(bowl) -> None:
     what.add_argument("--leave", default=None, metavar="PINS", help="the leave: pins standing, e.g. 10 or 3,10")
     what.add_argument("--after", default=None, metavar="THROW.json", help="a frame's throw file (bowl frame -o)")
     bowler_flag(a, "advise")
-    a.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=12, metavar="M",
-                   help="--leave: noisy throws per candidate line in the screening (default 12)")
+    a.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=spares.SCREEN, metavar="M",
+                   help=f"--leave: noisy throws per candidate line in the screening (default {spares.SCREEN})")
     a.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=0, metavar="N",
                    help="--leave: noisy frames polishing the pick (bowl spares --polish; default 0: none)")
     mc_flags(a, 60, "measured line")

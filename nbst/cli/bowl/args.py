@@ -164,6 +164,8 @@ def delivery_flags(t, *, bowler: bool = True) -> None:
     """The delivery flags of ``bowl throw`` and ``bowl frame``: one vocabulary, one help text
     (defaults :data:`DELIVERY_DEFAULTS`, filled by :func:`delivery_of`, so that a flag given
     beside --bowler is told from one left out)."""
+    from nbst.models.bowling.lane.advise import STANCE_SEP
+
     D = DELIVERY_DEFAULTS
     t.add_argument("--hand", choices=("right", "left"), default=None, help="bowling hand (default right)")
     t.add_argument("--board", type=Bounded("board", 1, 39), default=None, metavar="B",
@@ -193,17 +195,21 @@ def delivery_flags(t, *, bowler: bool = True) -> None:
         bowler_flag(t)
 
 
-#: Boards between the ball and the slide foot at release (a medium men's frame: about 7 boards,
-#: Rich Jacobson, "How to know you're lined up properly", richjacobsonbowling.com; assumed for every bowler).
-STANCE_SEP = 7.0
-#: The arrows' boards, counted from the bowling hand's edge.
-ARROWS = {"1st": 5.0, "2nd": 10.0, "3rd": 15.0, "4th": 20.0, "5th": 25.0, "6th": 30.0, "7th": 35.0}
+_ORDINALS = ("1st", "2nd", "3rd", "4th", "5th", "6th", "7th")
+
+
+def arrows() -> dict[str, float]:
+    """The arrows by ordinal ("1st" .. "7th") and their boards, counted from the bowling hand's edge
+    (the lane's :data:`nbst.models.bowling.lane.units.ARROW_BOARDS`)."""
+    from nbst.models.bowling.lane.units import ARROW_BOARDS
+
+    return {k: float(b) for k, b in zip(_ORDINALS, ARROW_BOARDS)}
 
 
 def target_board(text: str) -> float:
     """``--target``: "2nd-arrow" (or "2nd arrow", "arrow2", "2nd") -> board 10; a number -> that board."""
     t = str(text).strip().lower().replace("_", "-").replace(" ", "-")
-    for k, b in ARROWS.items():
+    for k, b in arrows().items():
         if t in (f"{k}-arrow", k, f"arrow{k[0]}", f"arrow-{k[0]}"):
             return b
     b = number(t)
@@ -263,6 +269,8 @@ def delivery_of(args, base=None):
 def stance_target(args):
     """(board at the foul line, target board at the arrows) of --stance/--target, or None; InputError
     (one line) when only one is given, or beside --board/--at/--angle."""
+    from nbst.models.bowling.lane.advise import STANCE_SEP
+
     s, t = getattr(args, "stance", None), getattr(args, "target", None)
     if s is None and t is None:
         return None

@@ -19,9 +19,6 @@ from nbst.seeds import resolve_seed
 SOLVE_ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
 ATLAS_ROLLOUTS = Bounded("max-rollouts", 0, 10_000_000, integer=True)
 PER_SUBSET = Bounded("per-subset", 1, 10_000_000, integer=True)
-#: How many rollouts ``search.robustness`` spends (2 axes; per axis 4 at the largest change and,
-#: when that fails, 10 bisection rounds of 4): stated in --help, measured in each throw's file.
-ROBUSTNESS_ROLLOUTS = (2 * 4, 2 * (4 + 10 * 4))
 
 
 def runner_of(args, jobs: int):
@@ -58,7 +55,7 @@ def cmd_solve(args) -> int:
 
             print(f"nbst bowl solve: warning: the shipped atlas is not used: {plain(why)}", file=sys.stderr)
     L = runner_of(args, jobs)  # nbst.cluster.connect's InputError names --cluster and the address
-    probes = 0 if args.no_robustness else ROBUSTNESS_ROLLOUTS[1]
+    probes = 0 if args.no_robustness else search.ROBUSTNESS_ROLLOUTS[1]
     leave = args.leave is not None   # the bar names what was asked: the leave, or the pins down
     bar = progress.Bar(f"bowl solve {asked_text(want, leave)}", args.max_rollouts + probes, unit="rollout",
                        bound=True, start=progress.command_start(), quiet=args.quiet)
