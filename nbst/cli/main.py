@@ -30,6 +30,7 @@ COMMAND_MODULES = (
     "nbst.cli.mujoco",
     "nbst.cli.bowl",
     "nbst.cli.crash",
+    "nbst.cli.scene",
     "nbst.cli.render",
 )
 

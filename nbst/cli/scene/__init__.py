@@ -1,0 +1,90 @@
+"""``nbst scene examples|check|solve|replay`` (docs/scene.md): bring your own MuJoCo scene.
+
+* this package registers the subcommands (light: the arguments only; their defaults are the
+  library's, ``nbst.scene.search.DEFAULT_MAX_ROLLOUTS``);
+* :mod:`.commands` runs them.
+
+Exit codes, as ``nbst crash``: 0 done (solve: every fate met; replay: the file reproduced bit for
+bit), 1 a check failed (solve: not met within the budget, the nearest solution written; replay:
+the replay differs), 2 bad input (one line naming the file and the field; nothing written), 130
+interrupted (solve: the best solution so far written).
+"""
+from __future__ import annotations
+
+import sys
+
+from nbst.cli.args import JOBS, SEED, Bounded, with_limits
+from nbst.cli.flags import add_quiet, add_seed
+from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_replay, cmd_solve
+
+__all__ = ["COMMANDS", "register", "ROLLOUTS"]
+
+#: --max-rollouts' domain.
+ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
+
+#: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
+#: them without building their arguments (nbst.cli.main builds only the command asked for).
+COMMANDS = {
+    "scene": "bring your own MuJoCo scene: say what must happen to its bodies, solve it, replay it",
+}
+
+_FATES_HELP = "a fates file (JSON, \"format\": \"nbst-fates\") or a built-in example's name (see `nbst scene examples`)"
+
+
+def register(sub) -> None:
+    from nbst.scene.search import DEFAULT_MAX_ROLLOUTS
+
+    p = sub.add_parser("scene", help=COMMANDS["scene"],
+                       description="Your own MJCF scene (docs/scene.md): a fates file names the scene, the free "
+                                   "bodies whose initial velocities (and offsets) the search may choose, and what "
+                                   "must happen to each body (where it rests, where it is at a time, which regions "
+                                   "it passes, which axis ends up, what it hits in what order, what it never hits, "
+                                   "that it ends at rest or never moves). Units: metres, seconds, radians (degrees "
+                                   "where named).")
+    sc = p.add_subparsers(dest="scene_command", metavar="SUBCOMMAND", parser_class=type(p))
+    p.set_defaults(func=lambda args: (p.print_help(sys.stderr), 2)[1])
+
+    e = sc.add_parser("examples", help="list the built-in example scenes",
+                      description="List the built-in example scenes (nbst/scene/examples/): name and what must "
+                                  "happen.")
+    e.add_argument("--json", action="store_true", help="print one JSON object per example")
+    e.set_defaults(func=cmd_examples)
+
+    c = sc.add_parser("check", help="validate a fates file and its scene (exit 0, or 2 with one line naming the "
+                                    "file and field)",
+                      description="Read FATES and its scene through the input gate (the fates' fields, the scene's "
+                                  "files under its folder, MuJoCo's compilation, the names) and print what it asks.")
+    c.add_argument("fates", metavar="FATES", help=_FATES_HELP)
+    c.add_argument("--scene", default=None, metavar="SCENE.xml", help="use this MJCF instead of the fates' \"scene\"")
+    c.set_defaults(func=cmd_check)
+
+    v = sc.add_parser("solve", help="search initial velocities that make the fates happen",
+                      description="Search the controlled bodies' initial velocities (and offsets; within the fates' "
+                                  "ranges) for a motion that meets every fate: the paper's signature search (one bit "
+                                  "per body whose fates hold, crossover of whole per-body blocks, creep, directed "
+                                  "and uniform randomize, elitism). Writes the solution file (SOL.json: the initial "
+                                  "state, the controls, every fate's verdict, the seed, the versions) that `nbst "
+                                  "scene replay` reads. Ctrl-C writes the best solution so far (exit 130). The same "
+                                  "--seed gives the same solution for any --jobs.",
+                      epilog="Example: nbst scene solve snake-eyes -o dice.json --seed 1. Exit 0: met; 1: not met "
+                             "within --max-rollouts (the nearest solution is written); 2: bad input; 130: "
+                             "interrupted.")
+    v.add_argument("fates", metavar="FATES", help=_FATES_HELP)
+    v.add_argument("-o", "--output", required=True, metavar="SOL.json", help="where to write the solution")
+    v.add_argument("--scene", default=None, metavar="SCENE.xml", help="use this MJCF instead of the fates' \"scene\"")
+    add_seed(v, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
+    v.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
+                   help=with_limits(f"rollout budget of the search (default {DEFAULT_MAX_ROLLOUTS})", ROLLOUTS))
+    v.add_argument("--jobs", type=JOBS, default=None, metavar="K",
+                   help=with_limits("threads running the rollouts (default: all cores); any K gives the same "
+                                    "solution", JOBS))
+    add_quiet(v, "no progress bar and no summary line")
+    v.set_defaults(func=cmd_solve)
+
+    r = sc.add_parser("replay", help="replay a solution with a plain mj_step loop and check it bit for bit",
+                      description="Replay SOL.json from its initial state with the plain mj_step loop of "
+                                  "docs/scene.md, compare the final state with the file's bit for bit, and judge "
+                                  "the fates again. Exit 0: reproduced; 1: it differs.")
+    r.add_argument("solution", metavar="SOL.json", help="a solution file written by `nbst scene solve`")
+    r.add_argument("--json", action="store_true", help="print the result as JSON")
+    r.set_defaults(func=cmd_replay)

@@ -1,0 +1,135 @@
+"""The ``nbst scene`` subcommands themselves (registered by :mod:`nbst.cli.scene`): each takes the
+parsed arguments and returns the exit code (0 done, 1 a check failed, 2 bad input, 130
+interrupted; docs/scene.md).
+
+Light at import: nbst.scene's modules (and mujoco) are imported inside the commands.
+"""
+from __future__ import annotations
+
+import math
+import sys
+
+from nbst.cli.args import print_json
+from nbst.outputs import prepare_output, sigterm_as_interrupt, write_json_atomic
+from nbst.parallel import default_jobs
+from nbst.progress import command_start, count_text, progress_bar, seconds_text
+from nbst.seeds import resolve_seed
+
+__all__ = ["cmd_examples", "cmd_check", "cmd_solve", "cmd_replay", "asks_text"]
+
+
+def asks_text(fate) -> str:
+    """What one body's fates ask, in words."""
+    out = []
+
+    def region(r) -> str:
+        if r.center is not None:
+            return f"within {r.radius:g} m of ({', '.join(f'{a:g}' for a in r.center)})"
+        return (f"in the box ({', '.join(f'{a:g}' for a in r.lo)})-({', '.join(f'{a:g}' for a in r.hi)})")
+
+    if fate.rest_in is not None:
+        out.append("rests " + region(fate.rest_in))
+    for t, r in fate.at:
+        out.append(f"at {t:g} s {region(r)}")
+    if fate.through:
+        out.append(f"passes {len(fate.through)} region(s) in order")
+    if fate.up is not None:
+        axis, d = fate.up
+        out.append(f"ends with its axis ({', '.join(f'{a:.3g}' for a in axis)}) within {d:g} deg of up")
+    if fate.hits:
+        out.append("hits " + ", then ".join(fate.hits))
+    if fate.never_hits:
+        out.append("never hits " + ", ".join(fate.never_hits))
+    if fate.at_rest:
+        out.append("ends at rest")
+    if fate.still:
+        out.append("never moves")
+    return "; ".join(out)
+
+
+def cmd_examples(args) -> int:
+    from nbst.scene.builtin import example_description, example_names
+
+    rows = [{"name": n, "description": example_description(n)} for n in example_names()]
+    if args.json:
+        print_json(rows)
+        return 0
+    for r in rows:
+        print(f"{r['name']:14s} {r['description']}")
+    return 0
+
+
+def cmd_check(args) -> int:
+    from nbst.scene.scenefile import load_fates
+
+    f, model = load_fates(args.fates, scene=args.scene)
+    steps = int(round(f.duration / model.opt.timestep))
+    print(f"{args.fates}: scene {f.scene}" + (f", key {f.keyframe}" if f.keyframe else "")
+          + f"; {f.duration:g} s at {model.opt.timestep * 1e3:g} ms ({steps:,} steps)")
+    for c in f.controls:
+        ranges = "; ".join(f"{part} " + ", ".join(f"[{a:g}, {b:g}]" for a, b in zip(r.lo, r.hi))
+                           for part, r in c.parts())
+        print(f"  controls {c.body}: {ranges}")
+    for fa in f.fates:
+        print(f"  fates {fa.body}: {asks_text(fa)}")
+    return 0
+
+
+def cmd_solve(args) -> int:
+    from nbst.scene.api import solve
+    from nbst.scene.scenefile import load_fates
+    from nbst.scene.search import SceneProgress
+    from nbst.scene.solution import solution_dict
+
+    fates, _ = load_fates(args.fates, scene=args.scene)  # bad input: exit 2 before anything is written
+    prepare_output(args.output, inputs=[args.fates])
+    seed = resolve_seed(args.seed, what="--seed")
+    bar: list = []
+    name = fates.source
+
+    def progress(p: SceneProgress) -> None:
+        if args.quiet:
+            return
+        if not bar:
+            bar.append(progress_bar(total=args.max_rollouts, unit="rollout", file=sys.stderr, bound=True,
+                                    start=command_start(), desc=f"scene {name}"))
+        bar[0].update(p.rollouts - bar[0].n)
+        cost = f"{p.best_cost:.3g}" if math.isfinite(p.best_cost) else "inf"
+        bar[0].set_postfix_str(f"best cost {cost}, signature {p.best_signature}, {p.signatures} signatures",
+                               refresh=False)
+
+    with sigterm_as_interrupt():
+        res = solve(args.scene, fates, seed=seed, max_rollouts=args.max_rollouts, jobs=args.jobs or default_jobs(),
+                    callback=progress)
+    if bar:
+        bar[0].close(n=res.rollouts)
+    write_json_atomic(args.output, solution_dict(res))
+    if not args.quiet:
+        b = res.best
+        met = "met" if res.met else f"not met (cost {b.cost:.3g})"
+        took = seconds_text(bar[0].seconds if bar else res.wall_time)
+        warn = f"; MuJoCo warned: {', '.join(b.warnings)}" if b.warnings else ""
+        print(f"scene {name}: {met}, signature {res.judgement.to_dict()['signature']} after "
+              f"{count_text(res.rollouts)} rollouts in {took}, seed {seed}{warn}; wrote {args.output}",
+              file=sys.stderr)
+    if res.stopped == "interrupted":
+        return 130
+    return 0 if res.met else 1
+
+
+def cmd_replay(args) -> int:
+    from nbst.scene.solution import replay_solution
+
+    r = replay_solution(args.solution)
+    d = r.judgement.to_dict()
+    if args.json:
+        print_json({"identical": r.same, "scene_changed": r.scene_changed, "met": d["met"],
+                    "signature": d["signature"], "bodies": d["bodies"]})
+        return 0 if r.same else 1
+    changed = "; the scene file changed since it was solved" if r.scene_changed else ""
+    print(f"{args.solution}: {'reproduced bit for bit' if r.same else 'DIFFERS'} (plain mj_step loop); "
+          f"{'met' if d['met'] else 'not met'}, signature {d['signature']}{changed}")
+    for b in r.judgement.bodies:
+        for v in b.fates:
+            print(f"  {b.body} {v.fate}: {'met' if v.met else 'NOT met'} ({v.happened})")
+    return 0 if r.same else 1
