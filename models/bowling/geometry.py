@@ -39,6 +39,11 @@ import numpy as np
 
 from nbst.errors import InputError
 
+__all__ = ["INCH", "PIN_SPACING", "PIN_RADIUS", "BALL_RADIUS", "LANE_WIDTH", "Y_LANE", "GUTTER_WIDTH", "Y_MAX",
+           "THETA_MAX", "REACH", "Y_STEP", "THETA_STEP", "PINS", "ALL_DOWN", "N_SUBSETS", "pin_spots",
+           "neighbours", "gap", "columns", "paths", "corridors", "classify", "size_of", "counts", "compare",
+           "summary_lines"]
+
 INCH = 0.0254
 #: Pin spacing (USBC: 12 in between neighbouring spots) = scene.PIN_SPACING.
 PIN_SPACING = 12.0 * INCH

@@ -21,6 +21,10 @@ import numpy as np
 
 from nbst.errors import InputError
 
+__all__ = ["INCH", "PROFILE_IN", "HEIGHT_IN", "HEAD_POINTS", "MASS", "MASS_LIMITS", "COM_LIMITS_IN",
+           "VISUAL_SEGMENTS", "COLLISION_SEGMENTS", "CUTS_IN", "profile", "PinGeometry", "geometry",
+           "mass_properties"]
+
 INCH = 0.0254
 #: (height, diameter) in inches, base to the start of the head cap.
 PROFILE_IN = (

@@ -43,6 +43,14 @@ import numpy as np
 
 from nbst.models.bowling import pin as pinmod
 
+__all__ = ["INCH", "TIMESTEP", "LANE_WIDTH", "GUTTER_WIDTH", "GUTTER_DEPTH", "PIN_SPACING", "PIT_EDGE_X",
+           "DECK_FRONT_X", "OIL_END_X", "BALL_START_X", "LANE_START_X", "MU_OIL", "MU_DRY", "MU_DECK",
+           "MU_BALL_PIN", "BALL_RADIUS", "BALL_MASS", "SOLREF_BODY", "SOLREF_STATIC", "MU_FLOOR", "Pins",
+           "DECK_PINS", "LANE_PINS", "PIT_DEPTH", "PIT_LENGTH", "WALL_HEIGHT", "WALL_THICKNESS", "FLOOR_Z",
+           "SLEEP_TOLERANCE", "GUTTER_PIECES", "GUTTER_SHELL", "LANE_RGBA", "OIL_RGBA", "DECK_RGBA", "GUTTER_RGBA",
+           "WALL_RGBA", "PIN_RGBA", "BALL_RGBA", "PIN_NUMBERS", "pin_spots", "pin_names", "LaneLayout",
+           "build_spec", "build_model", "scene_xml"]
+
 INCH = 0.0254
 #: Simulation step (s). Solref time constants stay >= 8 steps (see the note above).
 TIMESTEP = 0.001

@@ -33,6 +33,9 @@ from nbst.models.bowling.deck import search
 from nbst.models.bowling.subsets import N_SUBSETS, SubsetArchive, parent_weights, size_table  # noqa: F401 (the atlas's names)
 from nbst.models.mjsearch import archive as _archive
 
+__all__ = ["PER_SUBSET", "DEFAULT_BUDGET", "UNIFORM_PER_BATCH", "SCALES", "emit", "run", "N_SUBSETS", "SubsetArchive",
+           "parent_weights", "size_table"]
+
 #: The rollout budget of each targeted solve (``method="targeted"``; ``nbst bowl atlas --per-subset``'s default).
 PER_SUBSET = 200
 #: The search budget of ``nbst bowl atlas`` when none is given (rollouts; robustness probes not counted).

@@ -11,6 +11,8 @@ import math
 
 from nbst.models.bowling import geometry
 
+__all__ = ["PER_ROW", "atlas_figure", "save"]
+
 #: Triangles per row of a block.
 PER_ROW = 16
 

@@ -43,6 +43,11 @@ from nbst.models.bowling import deck, geometry, pinfall, subsets
 from nbst.models.mjsearch import archive as _archive
 from nbst.models.mjsearch import restarts
 
+__all__ = ["EXPLORE_BETWEEN", "BATCH", "POPSIZE", "SIGMA0", "STALL_GENERATIONS", "DEFAULT_MAX_ROLLOUTS",
+           "SOFT_WEIGHT", "SCALES", "SPACE", "DeckProgress", "DeckResult", "to_unit", "from_unit", "hamming",
+           "NEIGHBOUR_EXTRA", "geometry_distance", "soft_distance", "scorer", "solve", "ROBUSTNESS_STEPS",
+           "ROBUSTNESS_ROLLOUTS", "robustness", "LADDER_LATERAL_M", "LADDER_SPEED_M_S", "robustness_ladder"]
+
 #: Uniform deliveries after each restart (new subsets to restart from; a search never stops
 #: exploring, so a subset that only random throws find is still found).
 EXPLORE_BETWEEN = restarts.EXPLORE_BETWEEN

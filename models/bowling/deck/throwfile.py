@@ -35,6 +35,12 @@ from nbst.errors import InputError, MujocoError
 from nbst.models.bowling import deck, files, pinfall, scene
 from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
+__all__ = ["SCHEMA_VERSION", "KIND", "ThrowFileError", "scene_with_start", "rule", "throw_dict", "dumps",
+           "MAX_SCENE_BYTES", "QPOS_MAX", "QVEL_MAX", "MAX_STEPS", "SHIPPED_SCENE", "SHIPPED_ATLAS",
+           "SCENE_JOINTS", "regular_file", "read_doc", "check_throw", "resolve_scene", "read_scene_text",
+           "load_scene", "check_against_scene", "load", "load_with_scene", "ATLAS_KIND", "load_atlas", "replay",
+           "replay_file"]
+
 SCHEMA_VERSION = 1
 KIND = "nbst-bowling-shot"
 

@@ -7,7 +7,7 @@ each with the probability of its subset under the release noise.
   the atlas's oil pattern. A left-hander's lane is a right-hander's mirrored (:mod:`.lane`),
   so a left-handed throw reaches the mirror images of what right-handed throws reach.
 * **Search** (:func:`grow`): the 5 m atlas's MAP-Elites emitter (:func:`.atlas.emit`, with
-  this space): :data:`nbst.models.mjsearch.archive.EXPLORE` uniform throws into an empty archive, then batches of
+  this space): :data:`nbst.models.mjsearch.archive.EXPLORE_EMPTY` uniform throws into an empty archive, then batches of
   :data:`._archive.BATCH` holding 2 uniform throws and children of archived elites, a child
   moved from its parent by a Gaussian step in the unit cube at one of :data:`SCALES`. Every
   throw is a settled USBC frame (:func:`.frame.run_frame`); its subset is the pins down.
@@ -42,6 +42,11 @@ import numpy as np
 from nbst.models.bowling import files, lane, pinfall, subsets
 from nbst.models.bowling.lane import frame, noise
 from nbst.models.mjsearch import archive as _archive
+
+__all__ = ["OIL", "SHIPPED", "ARCHIVE_FORMAT", "ARCHIVE_VERSION", "BOUNDS", "KEYS", "DIM", "LO", "HI",
+           "MIRROR_PIN", "SCALES", "to_unit", "from_unit", "SPACE", "hand_of", "delivery_of", "point_of", "mirror",
+           "throw_masks", "grow", "probabilities", "harvest", "NEAREST", "seek", "archive_doc", "archive_from_doc",
+           "rethrow", "mirror_step"]
 
 #: The oil pattern of the shipped atlas (the default ball), and the shipped atlas itself.
 OIL = "house"
@@ -118,7 +123,7 @@ def grow(runner: frame.FrameRunner, archive: subsets.SubsetArchive, *, budget: i
         X[kids, len(KEYS)] = [a.elite[int(p)][len(KEYS)] for p in parents[kids]]  # the parent's hand
 
     return _archive.grow(lambda X: throw_masks(runner, X)[0], archive, np.random.default_rng(seed), SPACE,
-                         budget=budget, explore=_archive.EXPLORE, batch=_archive.BATCH, weights=subsets.parent_weights,
+                         budget=budget, explore=_archive.EXPLORE_EMPTY, batch=_archive.BATCH, weights=subsets.parent_weights,
                          adopt=adopt, on_batch=on_batch)
 
 

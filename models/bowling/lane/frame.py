@@ -45,6 +45,10 @@ from nbst.models.mjsearch.runner import data_warnings, mujoco_warnings_raise
 from nbst.models.mjsearch.ladder import climb
 from nbst.models.mjsearch.pool import WorkerPool
 
+__all__ = ["TIMESTEP", "LADDER", "REST_SPEED", "REST_SPIN", "REST_HOLD", "CHECK_EVERY", "SWEEP_AFTER_PINS",
+           "CAP_AFTER_PINS", "PARTITIONS", "PARK_X", "PARK_STEP", "FrameError", "FrameResult", "frame_model",
+           "initial_qpos_qvel", "settled_pinfall", "DeckStart", "deck_start", "run_frame", "ladder", "FrameRunner"]
+
 #: Default step (s) and the ladder of the engine-robustness check.
 TIMESTEP = lane.TIMESTEP
 LADDER = (0.001, 0.0005, 0.00025)

@@ -41,6 +41,10 @@ import numpy as np
 from nbst.models.bowling import lane
 from nbst.models.bowling.lane import frame
 from nbst.models.mjsearch.probability import Z95, normal_draws, perturb, wilson  # noqa: F401 (re-exported)
+
+__all__ = ["CLIP", "Noise", "KEYS", "CORR_KEYS", "DEFAULT", "sample", "Estimate", "wanted", "success", "estimate",
+           "probability", "Z95", "wilson"]
+
 #: Ranges the draws are clipped to (a Delivery's own limits).
 CLIP = {"board": (1.0, 39.0), "angle": (-10.0, 10.0), "mph": (5.0, 30.0), "rpm": (0.0, 800.0),
         "rotation": (0.0, 90.0), "tilt": (0.0, 90.0)}

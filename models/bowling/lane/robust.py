@@ -68,6 +68,8 @@ from nbst.models.mjsearch import robust as _robust
 from nbst.models.mjsearch.robust import (ALONG, GAUSS, LADDER_TRIES, NARROW, SCREEN_DIV, SCREEN_MAX,  # noqa: F401
                                          SCREEN_MIN, SECOND_RUNG, STEP0, STEP_MAX, STEP_MIN, WIDEN, Interrupted)
 
+__all__ = ["KEYS", "RobustResult", "Release", "maximise", "Interrupted", "LADDER_TRIES"]
+
 #: Parameters searched (the tilt is carried, and moved only when the noise moves it).
 KEYS = ("board", "angle", "mph", "rpm", "rotation", "tilt")
 
@@ -96,7 +98,7 @@ class RobustResult:
 
 
 class Release:
-    """The rollout room's :class:`~nbst.models.mjsearch.robust.Problem` for a bowler's release:
+    """The rollout room's :class:`~nbst.models.mjsearch.robust.RobustProblem` for a bowler's release:
     candidates are Deliveries (the board at the foul line), points their :data:`KEYS` in noise
     sigmas, noisy copies :func:`.noise.sample`'s, run as frames on the pins ``standing``."""
 

@@ -44,6 +44,11 @@ from nbst.errors import SolveError
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, robust
 
+__all__ = ["STRIKE", "STRIKE_FOUL", "STRIKE_ARROW", "SPARE_BALL", "POCKET_BOARDS", "POCKET_PEAK", "POCKET_CELL",
+           "LEAVES", "leave_spec", "leave_pins", "TABLE_FOUL", "TABLE_ROTATION", "TABLE_ANGLE", "aim_table",
+           "aim_entry", "PocketMap", "pocket_map", "system_369", "aim_point", "straight_at", "SpareResult",
+           "candidates", "SCREEN", "POLISH_PER_SCREEN", "best_spare", "pocket_figure"]
+
 #: The strike line: the typical (league-200) release, 17 mph, 350 rpm, 45 deg rotation, 12 deg tilt,
 #: from board 20 at the foul line, 2.82 deg out: the ball alone reaches board 17.5 at the head pin
 #: (docs/bowling.md; ``phases.aim_angle``). Its target arrow is where the straight line crosses the arrows.

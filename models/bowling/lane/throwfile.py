@@ -66,6 +66,13 @@ from nbst import seeds
 from nbst.models.bowling import files, lane, scene
 from nbst.models.bowling.lane import frame, noise as _noise
 
+__all__ = ["FORMAT", "SCENES", "ATLAS_FORMAT", "VERSION", "MAX_THROWS", "MAX_LADDER", "BOARD_RANGE", "ANGLE_RANGE",
+           "SECONDS_MAX", "SEED_MAX", "ThrowFileError", "BALL_KEYS", "BALL_KEYS_1", "DELIVERY_KEYS",
+           "OUTCOME_KEYS", "ESTIMATE_KEYS", "THROW_KEYS", "ATLAS_KEYS", "ATLAS_REQUIRED", "FULL_RACK",
+           "throw_dict", "atlas_dict", "OIL_KEYS", "dumps", "check_ball", "check_delivery", "check_noise",
+           "check_scene", "check_oil", "check_throw", "ladder_kept", "check_atlas", "is_throw", "load",
+           "load_atlas", "lookup", "replayable", "oil_of", "replay", "replay_file"]
+
 FORMAT = "nbst-bowling-throw"
 #: Scenes a file may name; a file without ``scene`` was thrown on the first.
 SCENES = (*lane.EARLIER_SCENES, lane.SCENE)

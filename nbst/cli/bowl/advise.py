@@ -15,6 +15,9 @@ from nbst.errors import InputError
 from nbst.cli.bowl.lane import _bar
 from nbst.parallel import default_jobs
 
+__all__ = ["register", "register_advise", "cmd_advise", "spare_frames", "cmd_spares", "leaves_of", "spare_doc",
+           "spare_line", "cmd_pocket"]
+
 
 def register(bowl) -> None:
     """``spares``, ``pocket`` and ``advise`` on ``nbst bowl``'s subparsers (their defaults read from

@@ -13,6 +13,11 @@ import sys
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.errors import InputError
 
+__all__ = ["number", "size_of", "err", "pin_list", "pins_down", "leave", "pins_text", "asked_text", "runner_args",
+           "picture_flags", "oil_flag", "DELIVERY_DEFAULTS", "bowlers", "bowlers_text", "bowler_flag",
+           "delivery_flags", "arrows", "target_board", "ball_flags", "given", "delivery_of", "stance_target",
+           "ball_of", "mc_flags", "check_picture_args", "wants_picture", "bowler_of"]
+
 _INT = re.compile(r"[+-]?[0-9]+")
 _FLOAT = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?")
 _SIZE = re.compile(r"([0-9]+)x([0-9]+)")

@@ -14,6 +14,8 @@ from nbst.cli.args import Bounded
 from nbst.cli.bowl.args import asked_text, err
 from nbst.seeds import resolve_seed
 
+__all__ = ["SOLVE_ROLLOUTS", "ATLAS_ROLLOUTS", "PER_SUBSET", "runner_of", "cmd_solve", "cmd_atlas"]
+
 #: Rollout budgets, capped at 1e7: 500x `bowl atlas`'s default budget; past it a typo (an
 #: extra zero or ten) is likelier than a plan.
 SOLVE_ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)

@@ -18,6 +18,10 @@ from nbst.cli.args import Bounded
 from nbst.cli.bowl.args import asked_text, bowler_flag, bowlers, err
 from nbst.seeds import resolve_seed
 
+__all__ = ["SAMPLES", "ROBUST", "ROBUST_DEFAULT", "SOLVE_SAMPLES", "ATLAS_SAMPLES", "SOLVE_5M_ONLY",
+           "ATLAS_5M_ONLY", "add_solve_flags", "add_atlas_flags", "shipped_elites", "cmd_solve", "robust_starts",
+           "lane_scene", "cmd_atlas"]
+
 #: Frames of the fresh probability estimate (``--samples``) and of ``--robust``'s search.
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
 ROBUST = Bounded("robust", 1, 1_000_000, integer=True)

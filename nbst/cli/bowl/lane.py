@@ -20,6 +20,10 @@ from nbst.cli.bowl.args import (ball_flags, ball_of, bowler_of, check_picture_ar
 from nbst.cli.bowl.series import path_plot_flag, write_path_plot
 from nbst.parallel import default_jobs
 
+__all__ = ["register", "register_throw", "register_frame", "write_throw", "the_delivery", "cmd_throw",
+           "line_lines", "throw_lines", "cmd_frame", "frame_lines", "replay_throw", "write_pictures",
+           "picture_from_args"]
+
 
 def register(bowl) -> None:
     """The lane half's subcommands ``throw`` and ``frame`` on ``nbst bowl``'s subparsers (``spares``,

@@ -14,6 +14,9 @@ from nbst.cli.flags import add_seed
 from nbst.errors import InputError
 from nbst.seeds import resolve_seed
 
+__all__ = ["GAMES", "LINEUP", "register", "cmd_series", "pictures", "series_lines", "png", "path_plot_flag",
+           "write_path_plot"]
+
 GAMES = Bounded("games", 1, 30, integer=True)
 LINEUP = Bounded("lineup", 1, 8, integer=True)
 
