@@ -1,6 +1,6 @@
 """The convergence study of a validation: fixed steps at h, h/2, ... h/32 and aligned stepping.
 
-``convergence_study`` runs the ladder (:data:`LADDER`; the scene rebuilt per step, k = 2/h^2),
+``convergence_study`` runs the ladder (:data:`CONVERGENCE_LADDER`; the scene rebuilt per step, k = 2/h^2),
 one entry per run with its max final error against the exact motion, its signature and cost;
 ``fit_order`` fits the order of the fixed-step error on the entries :data:`FIT_RULE` picks.
 ``staged`` runs one stage under a progress bar and returns its seconds (the bar's), shared with
@@ -13,7 +13,7 @@ import numpy as np
 from nbst.problem import Problem
 
 #: Convergence ladder: h divided by these.
-LADDER = (1, 2, 4, 8, 16, 32)
+CONVERGENCE_LADDER = (1, 2, 4, 8, 16, 32)
 #: Which ladder entries the order is fitted on, and why (also written into the report).
 FIT_RULE = ("fixed-step entries that keep the exact signature with a max error below the smallest disk radius "
             "(first order: the collision sequence is unchanged) and above 1e-9 units (round-off)")
@@ -61,7 +61,7 @@ def entry(problem: Problem, ex, final, steps, wall, *, h, divisor, stepping="fix
 
 def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, max_steps: int,
                       aligned=None, fixed=None, progress=None) -> list:
-    """Fixed steps at timestep / LADDER and aligned stepping at timestep: one entry each.
+    """Fixed steps at timestep / CONVERGENCE_LADDER and aligned stepping at timestep: one entry each.
 
     aligned / fixed : a MujocoRun already made (aligned at h / fixed at h) to reuse
     An entry whose steps exceed max_steps is kept with ``skipped`` saying so.
@@ -69,7 +69,7 @@ def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, 
     from nbst.models.mjrun import run_final, run_mujoco, steps_needed
 
     out = []
-    for div in LADDER:
+    for div in CONVERGENCE_LADDER:
         h = timestep / div
         n = steps_needed(problem.t_final, h)
         if n > max_steps:

@@ -151,13 +151,13 @@ def test_scene_loaded_from_mjcf_text():
 def test_convergence_errors_fall_with_h():
     # one wall bounce at 300 units/s and one collision, 1 s at h = 1 ms: the fixed-step error is
     # first order (|dv| h per impact), so h/32 must be ~32x below h; aligned far below both
-    from nbst.models.convergence import LADDER, convergence_study, fit_order
+    from nbst.models.convergence import CONVERGENCE_LADDER, convergence_study, fit_order
     p = make_problem([[700, 400], [300, 400]], 10.0, t_final=1.0)
     v = np.array([[300.0, 0.0], [150.0, 30.0]])
     ex = simulate(p, v)
     conv = convergence_study(p, v, ex, timestep=1e-3, unit=UNIT, max_steps=10**6)
     fixed = [e for e in conv if e["stepping"] == "fixed"]
-    assert [e["divisor"] for e in fixed] == list(LADDER)
+    assert [e["divisor"] for e in fixed] == list(CONVERGENCE_LADDER)
     assert fixed[-1]["max_error"] < fixed[0]["max_error"] / 10
     aligned = [e for e in conv if e["stepping"] == "aligned"]
     assert len(aligned) == 1 and aligned[0]["h"] is None and aligned[0]["max_error"] < 1e-6

@@ -35,7 +35,7 @@ import numpy as np
 #: Vectors per batch (fixed, so that results do not depend on the threads that run them).
 BATCH = 16
 #: Uniform vectors that start an empty archive before the emitter takes over.
-EXPLORE = 256
+EXPLORE_EMPTY = 256
 #: Uniform vectors in each emitter batch (keeps finding what no elite is near).
 UNIFORM_PER_BATCH = 2
 #: Parent weight floor of a group whose signatures are all found (children land in other groups).
@@ -170,7 +170,7 @@ def emit(a: Archive, rng: np.random.Generator, space: Space, n: int = BATCH, *, 
 
 
 def grow(evaluate: Callable, archive: Archive, rng: np.random.Generator, space: Space, *, budget: int,
-         explore: int = EXPLORE, batch: int = BATCH, selection: str = "biased", weights: Callable | None = None,
+         explore: int = EXPLORE_EMPTY, batch: int = BATCH, selection: str = "biased", weights: Callable | None = None,
          adopt: Callable | None = None, on_batch: Callable | None = None) -> Archive:
     """Spend ``budget`` rollouts growing ``archive``: ``explore`` uniform vectors (batches of
     ``batch``) when it is empty, then :func:`emit` batches. ``evaluate((B, D) vectors) -> (B,)

@@ -42,7 +42,7 @@ from nbst.errors import SolveError
 from nbst.models.mjsearch.archive import BATCH, Space
 
 #: Uniform exploration before CMA-ES restarts (capped at a quarter of the budget).
-EXPLORE = 200
+EXPLORE_FIRST = 200
 #: Uniform vectors after each restart (new signatures to restart from).
 EXPLORE_BETWEEN = 16
 #: CMA-ES: population, initial step (unit cube), generations without progress per restart.
@@ -147,7 +147,7 @@ class Evaluator:
 
 
 def search(evaluate: Callable, space: Space, target: int, *, seed: int, max_rollouts: int, archive: dict | None = None,
-           prior: Callable | None = None, clip: Callable | None = None, callback=None, explore: int = EXPLORE,
+           prior: Callable | None = None, clip: Callable | None = None, callback=None, explore: int = EXPLORE_FIRST,
            explore_between: int = EXPLORE_BETWEEN, batch: int = BATCH, popsize: int = POPSIZE,
            sigma0: float = SIGMA0, stall: int = STALL_GENERATIONS) -> Found:
     """A vector whose signature is ``target``; see the module docstring.

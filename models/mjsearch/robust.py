@@ -2,14 +2,14 @@
 
 :func:`maximise` climbs the probability that a rollout gives the wanted outcome under the
 caller's noise, from one or more starts. It knows nothing of the model: the caller passes a
-:class:`Problem` (how to turn a point into a candidate and back, how to draw its noisy copies
+:class:`RobustProblem` (how to turn a point into a candidate and back, how to draw its noisy copies
 with common random numbers, how to run and judge them, the timestep ladder, the fresh
 estimate).
 
 **Method** (a (1+lambda) evolution strategy with a cross-entropy step, on paired trials):
 
-* **Scaled coordinates.** The Problem's points measure each parameter in its noise sigma, so a
-  step of 1 is as far as one sigma of the noise; ``Problem.moved`` masks the coordinates the
+* **Scaled coordinates.** The RobustProblem's points measure each parameter in its noise sigma, so a
+  step of 1 is as far as one sigma of the noise; ``RobustProblem.moved`` masks the coordinates the
   search may move.
 * **Common random numbers.** Every candidate is scored on the *same* ``m`` noisy copies (one
   screen seed, derived from ``seed``): two candidates differ only on the copies whose outcome
@@ -28,14 +28,14 @@ estimate).
   it (x 0.7), within [0.25, 3]. The search ends when the budget is spent or the incumbent
   gives the outcome on every one of the ``m`` copies.
 * **The pick** is the latest incumbent whose noise-free rollout keeps the outcome at every
-  timestep of the ladder (``Problem.ladder``), going back along the accepted incumbents (at
+  timestep of the ladder (``RobustProblem.ladder``), going back along the accepted incumbents (at
   most 3 tried; the best on the screen if none holds: ``ladder_holds`` False). Its
-  probability is then measured **afresh** (``Problem.fresh``, ``n`` copies of the seed
+  probability is then measured **afresh** (``RobustProblem.fresh``, ``n`` copies of the seed
   ``seed`` itself, which the search never used): the screen score is biased upwards.
 
 **Budget** is in noisy rollouts: the search stops before running more than ``budget``; the
 ladder's and the fresh estimate's rollouts come on top (``frames`` counts the search's and
-the ladder's). The result depends on ``seed`` only, when ``Problem.run`` returns results in
+the ladder's). The result depends on ``seed`` only, when ``RobustProblem.run`` returns results in
 order. **Ctrl-C**: a KeyboardInterrupt is raised again as :class:`Interrupted` with the
 incumbent so far.
 
@@ -66,7 +66,7 @@ LADDER_TRIES = 3
 SALT = 22
 
 
-class Problem(Protocol):
+class RobustProblem(Protocol):
     """What :func:`maximise` needs to know of a model; candidates are the caller's objects."""
 
     moved: np.ndarray  # (D,) 1.0 where the search may move the coordinate, else 0.0
@@ -135,7 +135,7 @@ class Maximum:
 class _Search:
     """The bookkeeping of one search: candidates, their results on the common copies, rollouts."""
 
-    def __init__(self, problem: Problem, seed: int):
+    def __init__(self, problem: RobustProblem, seed: int):
         self.P, self.seed = problem, seed
         self.frames = 0
         self.points: list[np.ndarray] = []
@@ -195,7 +195,7 @@ class _Search:
         return Screen(k=self.score(c, idx)[0], n=len(idx), labels=labels)
 
 
-def maximise(problem: Problem, starts: list, *, budget: int, seed: int, n: int, ladder: bool = True) -> Maximum:
+def maximise(problem: RobustProblem, starts: list, *, budget: int, seed: int, n: int, ladder: bool = True) -> Maximum:
     """The candidate near ``starts`` (candidates of ``problem``) with the highest probability of
     the outcome; ``budget``: noisy rollouts for the search; ``n``: copies of the fresh
     estimate (seed ``seed``). See the module docstring for the method."""

@@ -148,9 +148,9 @@ def run_search(problem: Problem, request: SolveRequest, *, params: SearchParams 
         advance = _PaperStepper(problem, params, s, prm, rec_v)
     archive = None
     if params.robust:
-        from nbst.search.robust import Archive
+        from nbst.search.robust import RobustArchive
 
-        archive = Archive(n=problem.n, size=params.robust_archive)  # size 0 keeps nothing: the search's best alone
+        archive = RobustArchive(n=problem.n, size=params.robust_archive)  # size 0: the search's best alone
     t0 = time.perf_counter()
     stopped = _run_chunks(advance, s, int(chunk), archive, callback, t0)
     wall = time.perf_counter() - t0

@@ -229,7 +229,7 @@ def robust_score(problem: Problem, velocities, *, seed: int = 0, samples: int = 
     return score(problem, velocities, zeta, smax, timestep=timestep, quantile=quantile).row(0)
 
 
-class Archive:
+class RobustArchive:
     """The distinct population members of the highest order seen, the ``size`` cheapest."""
 
     def __init__(self, n: int, size: int = ARCHIVE_SIZE):
