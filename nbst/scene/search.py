@@ -319,6 +319,7 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
     if S.best is None:  # interrupted before the first batch came back: roll out the middle of the ranges
         mid = np.full(len(S.lo), 0.5)
         S.best = _Member(mid, sim.rollout(S.x_of(mid)))
-    tell()
+    if stopped != "interrupted":
+        tell()
     return SceneSearchResult(best=S.best.r, rollouts=S.rollouts, stopped=stopped,
                              wall_time=time.perf_counter() - t0, signatures=len(S.seen))

@@ -1,0 +1,248 @@
+"""Controls to state and the rollout (nbst.scene.rollout), the search (nbst.scene.search), solve
+and the solution file: physical facts with tolerances, the same result for a seed whatever the
+threads, replay bit for bit with the plain mj_step loop of docs/scene.md, Ctrl-C keeping the best
+so far, the CLI's exits."""
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nbst.cli.main import main
+from nbst.scene import api as scene_api
+from nbst.scene.api import solve
+from nbst.scene.judge import rotate
+from nbst.scene.rollout import SceneSim, conjugate, replay
+from nbst.scene.scenefile import load_fates
+from nbst.scene.search import signature_search
+from nbst.scene.solution import read_solution, replay_solution, solution_dict
+
+SPACE = """<mujoco model="space">
+  <option timestep="0.005" gravity="0 0 0"/>
+  <worldbody>
+    <body name="ball" pos="0 0 1"><freejoint/><geom type="sphere" size="0.05"/></body>
+  </worldbody>
+  <keyframe><key name="turned" qpos="0.1 0.2 1 0.7071067811865476 0 0 0.7071067811865476"/></keyframe>
+</mujoco>
+"""
+
+TOSS = """<mujoco model="toss">
+  <option timestep="0.01"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="3 3 0.1"/>
+    <geom name="wall" type="box" pos="2.0 0 0.5" size="0.05 1 0.5"/>
+    <body name="ball" pos="0 0 0.3"><freejoint/><geom name="ball_g" type="sphere" size="0.05"/></body>
+    <body name="cube" pos="0 0.5 0.05"><freejoint/><geom type="box" size="0.05 0.05 0.05"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+TOSS_FATES = {"format": "nbst-fates", "version": 1, "scene": "toss.xml", "duration": 0.6,
+              "controls": {"ball": {"linvel": [[0, 4], [-1, 1], [0, 3]], "angvel": [[0, 0], [0, 0], [0, 0]]},
+                           "cube": {"linvel": [[0, 3], [-1, 1], [0, 2]]}},
+              "fates": {"ball": {"at": [{"t": 0.3, "in": {"center": [0.6, 0, 0.4], "radius": 0.1}}],
+                                 "never_hits": ["wall"]},
+                        "cube": {"rest_in": {"min": [0.5, 0.2, 0], "max": [1.0, 0.8, 0.2]}}}}
+
+
+@pytest.fixture
+def space(tmp_path):
+    (tmp_path / "space.xml").write_text(SPACE)
+    doc = {"format": "nbst-fates", "version": 1, "scene": "space.xml", "keyframe": "turned", "duration": 1.0,
+           "controls": {"ball": {"linvel": [[-1, 1], [-1, 1], [-1, 1]], "angvel": [[-9, 9], [-9, 9], [-9, 9]],
+                                 "pos": [[-0.5, 0.5], [-0.5, 0.5], [-0.5, 0.5]]}},
+           "fates": {"ball": {"rest_in": {"center": [0, 0, 1], "radius": 0.2}}}}
+    (tmp_path / "space.json").write_text(json.dumps(doc))
+    return load_fates(tmp_path / "space.json")
+
+
+@pytest.fixture
+def toss(tmp_path):
+    (tmp_path / "toss.xml").write_text(TOSS)
+    (tmp_path / "toss.json").write_text(json.dumps(TOSS_FATES))
+    return tmp_path / "toss.json"
+
+
+@pytest.fixture
+def impossible(tmp_path):
+    """The toss, but the cube must rest 1.5 m up in the air."""
+    (tmp_path / "toss.xml").write_text(TOSS)
+    doc = json.loads(json.dumps(TOSS_FATES))
+    doc["fates"]["cube"]["rest_in"] = {"min": [0.5, 0.2, 1.5], "max": [1.0, 0.8, 2.0]}
+    (tmp_path / "impossible.json").write_text(json.dumps(doc))
+    return tmp_path / "impossible.json"
+
+
+def test_world_velocities_reach_the_free_joint_in_its_frames(space):
+    f, model = space
+    sim = SceneSim(f, model)
+    w, v, off = np.array([1.0, 2.0, -3.0]), np.array([0.3, -0.2, 0.1]), np.array([0.1, 0.0, -0.2])
+    qpos, qvel = sim.initial_state(np.concatenate([v, w, off]))
+    q = qpos[3:7]
+    assert np.allclose(qpos[:3], [0.2, 0.2, 0.8], atol=1e-15)  # the key's position plus the offset
+    assert np.array_equal(qvel[:3], v)  # linear: world frame, as given
+    assert np.allclose(rotate(q, qvel[3:6]), w, atol=1e-14)  # angular: stored in the body frame
+    assert np.allclose(qvel[3:6], [2.0, -1.0, -3.0], atol=1e-14)  # the key turns the body 90 deg about z
+
+
+def test_a_free_ball_without_gravity_keeps_the_commanded_world_spin_and_velocity(space):
+    """The physical fact: a sphere (isotropic inertia) with no gravity and no contact spins about
+    the commanded world axis at the commanded rate, and its centre moves at the commanded velocity."""
+    import mujoco
+
+    f, model = space
+    sim = SceneSim(f, model)
+    w, v = np.array([1.0, 2.0, -3.0]), np.array([0.3, -0.2, 0.1])
+    qpos0, qvel0 = sim.initial_state(np.concatenate([v, w, np.zeros(3)]))
+    d = mujoco.MjData(model)
+    d.qpos[:], d.qvel[:] = qpos0, qvel0
+    n = 100  # 0.5 s: a turn of 1.87 rad, under pi (a quaternion tells angles up to pi)
+    for _ in range(n):
+        mujoco.mj_step(model, d)
+    t = n * model.opt.timestep
+    assert np.allclose(d.qpos[:3], qpos0[:3] + v * t, atol=1e-9)
+    assert np.allclose(rotate(d.qpos[3:7], d.qvel[3:6]), w, atol=1e-9)
+    # the turn from start to end is |w| t about w
+    dq = np.empty(4)
+    mujoco.mju_mulQuat(dq, d.qpos[3:7], conjugate(qpos0[3:7]))
+    angle = 2 * math.acos(min(1.0, abs(dq[0])))
+    axis = np.sign(dq[0]) * dq[1:] / np.linalg.norm(dq[1:])
+    assert abs(angle - (np.linalg.norm(w) * t) % (2 * math.pi)) < 1e-6
+    assert np.allclose(axis, w / np.linalg.norm(w), atol=1e-6)
+
+
+def test_the_rollout_is_the_plain_mj_step_loop_bit_for_bit(toss):
+    f, model = load_fates(toss)
+    with SceneSim(f, model) as sim:
+        x = (f.bounds()[0] + f.bounds()[1]) / 2
+        r = sim.rollout(x)
+        q, v = replay(model, r.qpos0, r.qvel0, sim.nstep)
+    assert q.tobytes() == r.qpos.tobytes() and v.tobytes() == r.qvel.tobytes()
+
+
+def test_touches_are_first_contacts(toss):
+    f, model = load_fates(toss)
+    with SceneSim(f, model) as sim:
+        r = sim.rollout(np.array([4.0, 0, 3.0, 0, 0, 0, 0, 0, 0]))  # the ball thrown hard at the wall
+        assert not r.judgement.bodies[0].fates[1].met and r.judgement.bodies[0].fates[1].happened == "touched wall"
+        r = sim.rollout(np.array([0.5, 0, 0.5, 0, 0, 0, 0, 0, 0]))
+        assert r.judgement.bodies[0].fates[1].met
+
+
+def test_the_search_meets_the_toss_and_a_seed_gives_the_same_result_for_any_jobs(toss):
+    a = solve(None, toss, seed=7, max_rollouts=600, jobs=1)
+    b = solve(None, toss, seed=7, max_rollouts=600, jobs=2)
+    assert a.met and a.stopped == "met" and a.rollouts < 600
+    assert a.rollouts == b.rollouts and a.best.x.tobytes() == b.best.x.tobytes()
+    assert a.best.qpos.tobytes() == b.best.qpos.tobytes()
+    c = solve(None, toss, seed=8, max_rollouts=600, jobs=1)
+    assert c.best.x.tobytes() != a.best.x.tobytes()
+
+
+def test_ctrl_c_returns_the_best_so_far(impossible):
+    f, model = load_fates(impossible)
+    seen = []
+
+    def stop(p):
+        seen.append(p.rollouts)
+        if p.rollouts >= 16:
+            raise KeyboardInterrupt
+
+    with SceneSim(f, model) as sim:
+        r = signature_search(sim, rng=np.random.default_rng(1), max_rollouts=10_000, callback=stop)
+    assert r.stopped == "interrupted" and r.rollouts == 16 and math.isfinite(r.best.cost)
+
+
+def test_solution_file_replays_bit_for_bit_with_the_docs_loop(toss, tmp_path):
+    import mujoco
+
+    res = solve(None, toss, seed=3, max_rollouts=64)
+    d = solution_dict(res)
+    p = tmp_path / "sol.json"
+    p.write_text(json.dumps(d))
+    sol = read_solution(p)
+    # the loop of docs/scene.md, "Replay by hand"
+    model = mujoco.MjModel.from_xml_path(sol["scene"])
+    model.opt.timestep = sol["timestep"]
+    data = mujoco.MjData(model)
+    if sol["keyframe"] is not None:
+        mujoco.mj_resetDataKeyframe(model, data, model.key(sol["keyframe"]).id)
+    data.qpos[:] = sol["qpos0"]
+    data.qvel[:] = sol["qvel0"]
+    for _ in range(sol["nstep"]):
+        mujoco.mj_step(model, data)
+    assert np.array(sol["final"]["qpos"]).tobytes() == data.qpos.tobytes()
+    assert np.array(sol["final"]["qvel"]).tobytes() == data.qvel.tobytes()
+    r = replay_solution(p)
+    assert r.same and not r.scene_changed and r.judgement.signature == res.best.signature
+
+
+def test_cli_solve_replay_and_their_exits(toss, impossible, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(toss), "-o", str(out), "--seed", "7", "--max-rollouts", "600",
+                 "--jobs", "2", "-q"]) == 0
+    d = json.loads(out.read_text())
+    assert d["format"] == "nbst-scene-solution" and d["met"] and d["seed"] == 7
+    assert set(d["versions"]) == {"nbst", "mujoco"} and d["verdicts"]["cube"]["met"]
+    assert main(["scene", "replay", str(out)]) == 0
+    assert "reproduced bit for bit" in capsys.readouterr().out
+    # a changed final state no longer replays
+    d["final"]["qpos"][0] += 1e-12
+    out.write_text(json.dumps(d))
+    assert main(["scene", "replay", str(out)]) == 1
+    # not met within the budget: exit 1, the nearest written
+    assert main(["scene", "solve", str(impossible), "-o", str(out), "--seed", "7", "--max-rollouts", "40", "-q"]) == 1
+    assert json.loads(out.read_text())["met"] is False
+    # interrupted: the best so far written, exit 130
+    original = scene_api.signature_search
+
+    def interrupted(sim, *, rng, max_rollouts, callback=None):
+        def stop(p):
+            if p.rollouts >= 16:
+                raise KeyboardInterrupt
+        return original(sim, rng=rng, max_rollouts=max_rollouts, callback=stop)
+
+    monkeypatch.setattr(scene_api, "signature_search", interrupted)
+    out.unlink()
+    assert main(["scene", "solve", str(impossible), "-o", str(out), "--seed", "7", "-q"]) == 130
+    d = json.loads(out.read_text())
+    assert d["search"]["stopped"] == "interrupted" and d["search"]["rollouts"] == 16
+
+
+def test_cli_examples_and_check(capsys):
+    assert main(["scene", "examples"]) == 0
+    out = capsys.readouterr().out
+    assert "snake-eyes" in out and "egg-in-cup" in out
+    assert main(["scene", "check", "snake-eyes"]) == 0
+    assert "within 20 deg of up" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["snake-eyes", "egg-in-cup"])
+def test_the_built_in_examples_are_solved_and_replay(name, tmp_path):
+    res = solve(None, name, seed=1, max_rollouts=2000)
+    assert res.met, (name, res.rollouts, res.best.judgement.to_dict())
+    p = tmp_path / "sol.json"
+    p.write_text(json.dumps(solution_dict(res)))
+    assert replay_solution(p).same
+
+
+def test_the_dice_have_real_pips():
+    """Face 1 is the body's +z face: one pip there, six on -z, and opposite faces sum to 7."""
+    import mujoco
+
+    from nbst.scene.builtin import example_path
+
+    p = example_path("snake-eyes")
+    assert p is not None
+    m = mujoco.MjModel.from_xml_path(str(Path(p).with_suffix(".xml")))
+    die = m.body("die1").id
+    pips = [g for g in range(m.ngeom) if m.geom_bodyid[g] == die and m.geom_contype[g] == 0]
+    faces = {}
+    for g in pips:
+        pos = m.geom_pos[g]
+        k = int(np.argmax(np.abs(pos)))
+        faces[(k, int(np.sign(pos[k])))] = faces.get((k, int(np.sign(pos[k]))), 0) + 1
+    assert faces[(2, 1)] == 1 and faces[(2, -1)] == 6
+    assert all(faces[(k, 1)] + faces[(k, -1)] == 7 for k in range(3))
