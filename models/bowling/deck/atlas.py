@@ -59,7 +59,24 @@ def run(runner: deck.DeliveryRunner, archive: SubsetArchive, *, method: str, bud
     """Spend ``budget`` deliveries growing ``archive`` with ``method`` ("elites", "uniform",
     "targeted", or "elites-plain": the emitter with uniform parent selection); ``on_new(masks)``
     after each batch that found new subsets (to save them), ``callback(archive)`` after each
-    batch. KeyboardInterrupt propagates (what ran is kept)."""
+    batch. KeyboardInterrupt propagates (what ran is kept).
+
+    Args:
+        runner: the :class:`.delivery.DeliveryRunner` (or the cluster's) that throws the deliveries.
+        archive: the :class:`SubsetArchive` to grow (resumed as it is).
+        method: "elites", "elites-plain", "uniform" or "targeted".
+        budget: deliveries to spend on top of ``archive.rollouts``.
+        seed: the seed of every random number.
+        per_subset: rollouts of each targeted solve.
+        on_new: called with the new masks after a batch that found any.
+        callback: called with the archive after each batch.
+
+    Returns:
+        ``archive``, grown.
+
+    Raises:
+        InputError: an unknown ``method``.
+    """
     rng = np.random.default_rng(seed)
     end = archive.rollouts + int(budget)
 

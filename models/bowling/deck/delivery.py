@@ -77,7 +77,14 @@ class Delivery:
 
 
 def clamp(x) -> np.ndarray:
-    """Delivery arrays, (..., 4) float, clipped to :data:`BOUNDS`."""
+    """Delivery arrays clipped to :data:`BOUNDS`.
+
+    Args:
+        x: (..., 4) float array of deliveries (y, speed, angle, spin; columns :data:`KEYS`).
+
+    Returns:
+        (..., 4) float64 array, each column within its bound.
+    """
     return np.clip(np.asarray(x, dtype=float), LO, HI)
 
 
@@ -88,6 +95,13 @@ def initial_qpos_qvel(model, delivery) -> tuple[np.ndarray, np.ndarray]:
     (BALL_START_X, y, radius), identity orientation, rolling without slip at ``speed``
     along the direction ``angle``, plus ``spin`` about that direction. The free joint's
     angular velocity is in the body frame, equal to the world frame at identity.
+
+    Args:
+        model: the deck scene's ``mujoco.MjModel``.
+        delivery: a :class:`Delivery` or a (4,) float array (y, speed, angle, spin; :data:`KEYS`).
+
+    Returns:
+        (qpos (nq,), qvel (nv,)) float64 arrays.
     """
     y, speed, angle, spin = clamp(delivery.as_array() if isinstance(delivery, Delivery) else delivery)
     qpos = np.array(model.qpos0, dtype=float)
@@ -106,8 +120,20 @@ def initial_qpos_qvel(model, delivery) -> tuple[np.ndarray, np.ndarray]:
 
 def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.ndarray:
     """Final qpos from a fresh ``MjData`` and a plain ``mj_step`` loop: the slow reference.
-    Non-finite states are refused before stepping, and MuJoCo's warnings raise
-    :class:`~nbst.errors.MujocoError` (nothing is written to ``MUJOCO_LOG.TXT``)."""
+
+    Args:
+        model: the deck scene's ``mujoco.MjModel``.
+        qpos0: (nq,) float array, the start's positions (:func:`initial_qpos_qvel`).
+        qvel0: (nv,) float array, the start's velocities.
+        duration: seconds to step.
+
+    Returns:
+        (nq,) float64 array, the positions at the end.
+
+    Raises:
+        MujocoError: a non-finite start (refused before stepping) or a MuJoCo warning while stepping
+            (nothing is written to ``MUJOCO_LOG.TXT``).
+    """
     import mujoco
 
     check_state(qpos0, qvel0)
@@ -123,6 +149,15 @@ def replay_final_qpos(model, qpos0, qvel0, duration: float = DURATION) -> np.nda
 
 
 def n_steps(model, duration: float = DURATION) -> int:
+    """Steps of ``model``'s timestep in ``duration`` seconds (the rollout room's count).
+
+    Args:
+        model: a ``mujoco.MjModel``.
+        duration: seconds.
+
+    Returns:
+        the number of steps a rollout of ``duration`` runs.
+    """
     return runner.n_steps(model, duration)
 
 

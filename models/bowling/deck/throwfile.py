@@ -302,7 +302,17 @@ def check_against_scene(d: dict, model, src, pre: str = "") -> None:
 
 def load(path) -> dict:
     """Read and check a throw file (not its scene: :func:`load_with_scene`); ThrowFileError
-    naming the file and field."""
+    naming the file and field.
+
+    Args:
+        path: a 5 m throw file.
+
+    Returns:
+        the checked throw dict.
+
+    Raises:
+        ThrowFileError: the file or a field refused (one line, file and field).
+    """
     return check_throw(read_doc(path), path)
 
 
@@ -365,7 +375,17 @@ def replay(model, qpos0, qvel0, duration: float, rule_: dict | None = None) -> l
 
 
 def replay_file(path) -> tuple[dict, list[int]]:
-    """(throw dict, pins down) replaying ``path`` with its own scene file."""
+    """(throw dict, pins down) replaying ``path`` with its own scene file.
+
+    Args:
+        path: a 5 m throw file (its scene beside it, or the shipped scene).
+
+    Returns:
+        (the checked throw dict, the pins down after the replay, sorted).
+
+    Raises:
+        ThrowFileError: the file, its scene or a field refused, or MuJoCo warned.
+    """
     d, model, _ = load_with_scene(path)
     try:
         return d, replay(model, d["qpos0"], d["qvel0"], float(d["duration"]))

@@ -77,7 +77,14 @@ class Delivery:
 
 
 def spin_axes(d: Delivery) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(travel direction, unit spin vector (right-hand rule), PAP direction) at release, world frame."""
+    """(travel direction, unit spin vector (right-hand rule), PAP direction) at release, world frame.
+
+    Args:
+        d: the delivery (its hand, angle, axis rotation and tilt).
+
+    Returns:
+        three (3,) float64 unit vectors.
+    """
     s = hand_sign(d.hand)
     a = math.radians(d.angle)
     t = np.array([math.cos(a), -s * math.sin(a), 0.0])  # + angle: towards board 1
@@ -150,7 +157,14 @@ def quat_of_mat(R: np.ndarray) -> np.ndarray:
 
 
 def initial_state(d: Delivery) -> tuple[np.ndarray, np.ndarray]:
-    """(position (3,), linear velocity (3,), angular velocity (3,) world frame) at the foul line."""
+    """The ball's state at release, at the foul line, world frame.
+
+    Args:
+        d: the delivery (checked by the caller).
+
+    Returns:
+        (position (3,), linear velocity (3,), angular velocity (3,)) float64 arrays, world frame.
+    """
     t, w, _ = spin_axes(d)
     y = float(board_to_y(d.foul_board(), d.hand))
     pos = np.array([FOUL_LINE_X, y, scene.BALL_RADIUS])

@@ -103,7 +103,20 @@ DEFAULT = Noise()
 
 
 def sample(delivery: lane.Delivery, n: int, seed: int, noise: Noise = DEFAULT) -> list[lane.Delivery]:
-    """``n`` noisy copies of ``delivery`` (board given at the foul line), reproducible from ``seed``."""
+    """``n`` noisy copies of ``delivery`` (board given at the foul line), reproducible from ``seed``.
+
+    Args:
+        delivery: the aimed release.
+        n: how many (a whole number >= 1).
+        seed: the seed of the draws.
+        noise: the standard deviations and correlations (:class:`Noise`).
+
+    Returns:
+        ``n`` :class:`.lane.Delivery`, each at the foul line, clipped to :data:`CLIP`.
+
+    Raises:
+        LaneError: the delivery, the noise or ``n`` refused.
+    """
     delivery = delivery.check()
     noise = noise.check()
     if not (isinstance(n, int) and n >= 1):
@@ -174,7 +187,24 @@ def probability(delivery: lane.Delivery, n: int, seed: int, *, runner: frame.Fra
                 noise: Noise = DEFAULT, on_done=None, want=None) -> tuple[Estimate, list]:
     """(the estimate that ``delivery`` converts the pins in ``standing`` (default: a strike) under
     ``noise``, or with ``want`` knocks down exactly those pins; the frames) from ``n`` noisy
-    throws run by ``runner``."""
+    throws run by ``runner``.
+
+    Args:
+        delivery: the aimed release (:class:`.lane.Delivery`).
+        n: noisy throws (a whole number >= 1).
+        seed: the seed of the draws (an int in ``[0, 2**63-1]``): the same seed, the same throws.
+        runner: the :class:`.frame.FrameRunner` that runs the frames (its oil, ball and jobs).
+        standing: the pins standing before the throw (None: all ten).
+        noise: the release noise (:class:`Noise`).
+        on_done: called after each frame (a progress bar).
+        want: the pins to knock down exactly (None: convert every pin in play).
+
+    Returns:
+        (:class:`Estimate`, the n :class:`.frame.FrameResult`).
+
+    Raises:
+        LaneError: the delivery, the noise, ``n`` or ``want`` refused.
+    """
     want = wanted(want)
     throws = sample(delivery, n, seed, noise)
     results = runner.map(throws, standing=standing, on_done=on_done)

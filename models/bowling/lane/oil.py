@@ -265,7 +265,18 @@ def _pass(d, where: str) -> Pass:
 
 
 def pattern_from_dict(doc, src: str = "<pattern>") -> Pattern:
-    """A pattern file's decoded content -> Pattern; LaneError naming ``src`` and the field."""
+    """A pattern file's decoded content as a :class:`Pattern`.
+
+    Args:
+        doc: the decoded JSON object.
+        src: how messages name its source (a file's path).
+
+    Returns:
+        the :class:`Pattern`, every field checked.
+
+    Raises:
+        LaneError: a field missing or outside its domain (one line naming ``src`` and the field).
+    """
     if not isinstance(doc, dict):
         raise LaneError(f"{src}: a pattern file must be a JSON object")
     if doc.get("format") != FORMAT:
@@ -296,7 +307,17 @@ def _load(path: str, mtime_ns: int) -> Pattern:
 
 
 def load_pattern(path) -> Pattern:
-    """The pattern of a pattern file (read through the bowling files' gate); LaneError in one line."""
+    """The pattern of a pattern file (read through the bowling files' gate).
+
+    Args:
+        path: an ``nbst-oil-pattern`` JSON file.
+
+    Returns:
+        the :class:`Pattern`.
+
+    Raises:
+        LaneError: the file cannot be read, or a field is refused (one line naming the file and field).
+    """
     import os
 
     p = str(path)
@@ -310,7 +331,17 @@ def load_pattern(path) -> Pattern:
 
 
 def pattern(oil) -> Pattern:
-    """A Pattern from a Pattern, a registered name, or a pattern file's path (``*.json``)."""
+    """A Pattern from a Pattern, a registered name, or a pattern file's path (``*.json``).
+
+    Args:
+        oil: a :class:`Pattern`, a name of :data:`PATTERNS` (any case), or a pattern file's path.
+
+    Returns:
+        the :class:`Pattern`.
+
+    Raises:
+        LaneError: no pattern of that name, or a pattern file that is refused.
+    """
     if isinstance(oil, Pattern):
         return oil
     if isinstance(oil, str) and oil in PATTERNS:
@@ -341,7 +372,17 @@ def argtype(flag: str = "--oil"):
 
 
 def oil_name(oil) -> str:
-    """The name a throw records for ``oil`` (a pattern's own name)."""
+    """The name a throw records for ``oil`` (a pattern's own name).
+
+    Args:
+        oil: as :func:`pattern` takes it.
+
+    Returns:
+        the pattern's name.
+
+    Raises:
+        LaneError: as :func:`pattern`.
+    """
     return pattern(oil).name
 
 

@@ -114,7 +114,15 @@ def _ball_model(ball: Ball, timestep: float):
 
 
 def ball_model(ball: Ball | None = None, timestep: float = TIMESTEP):
-    """The ball alone on the lane (no pins), compiled once per ball and timestep."""
+    """The ball alone on the lane (no pins), compiled once per ball and timestep.
+
+    Args:
+        ball: the ball (None: the default ball).
+        timestep: the step (s).
+
+    Returns:
+        a ``mujoco.MjModel``.
+    """
     if not (isinstance(timestep, (int, float)) and 1e-5 <= timestep <= 0.002):
         raise LaneError(f"timestep: must be in [1e-05, 0.002] s, got {timestep!r}")
     return _ball_model((ball or Ball()).check(), float(timestep))
@@ -126,7 +134,24 @@ def run(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: OilLa
     over a gutter, or MAX_SECONDS pass): (t, pos (n,3), vel (n,3), omega_world (n,3), extra) per
     step, the release state first; ``extra``: the body-frame angular velocity (n,3), the contact's
     friction per step (when ``record_mu``; else empty) and the :class:`.friction.BallOnLane` (its
-    oil bookkeeping). ``field``: the lane's oil (worn in place; default a fresh one of ``oil``)."""
+    oil bookkeeping). ``field``: the lane's oil (worn in place; default a fresh one of ``oil``).
+
+    Args:
+        delivery: the delivery (checked first).
+        oil: the oil pattern (a name, a pattern file or a :class:`.oil.Pattern`).
+        ball: the ball (None: the default ball).
+        law: the film-to-friction law.
+        field: the lane's oil now, worn in place (None: a fresh lane of ``oil``).
+        timestep: the step (s).
+        cover: the oil film the cover carries at release, (N_CELLS,) float array (None: fresh and dry).
+        record_mu: whether to record the contact's friction per step.
+
+    Returns:
+        (t (n,), pos (n, 3), vel (n, 3), omega_world (n, 3), extra) float64 arrays, as above.
+
+    Raises:
+        LaneError: the delivery, ball or oil is refused.
+    """
     import mujoco
 
     from nbst.models.bowling.lane.friction import A_MU, BallOnLane
@@ -252,7 +277,24 @@ def aim_angle(delivery: Delivery, board: float = 17.5, oil="house", ball: Ball |
     """The launch angle that brings ``delivery`` (its board at the foul line, speed, revs, axis
     kept) to ``board`` at the head pin's line, the ball alone (``field`` is copied, not worn):
     (the aimed delivery, its throw). A bracketed secant (Illinois) on the angle, within
-    ``angles``; LaneError (one line) when no angle in the range reaches the board."""
+    ``angles``; LaneError (one line) when no angle in the range reaches the board.
+
+    Args:
+        delivery: the release to aim (:class:`Delivery`; its board is taken at the foul line).
+        board: the board to reach at the head pin's line.
+        oil: the oil pattern (a name of :data:`.oil.PATTERNS`, a pattern file or a :class:`.oil.Pattern`).
+        ball: the ball (None: the default ball).
+        law: the film-to-friction law.
+        field: the lane's oil now (copied, not worn); None: a fresh lane of ``oil``.
+        tol: how near ``board`` the ball must come (boards).
+        angles: the launch angles (deg) searched, low and high.
+
+    Returns:
+        (the aimed :class:`Delivery`, its :class:`ThrowResult`).
+
+    Raises:
+        LaneError: the delivery is refused, or no angle in ``angles`` reaches ``board``.
+    """
     base = replace(delivery.check(), board=delivery.foul_board(), at="foul")
 
     def f(a: float):
@@ -324,7 +366,22 @@ def aim_at_arrows(delivery: Delivery, oil="house", ball: Ball | None = None, *, 
     shows (Newton's step with slope 1: a board moved at the foul line moves the crossing by about
     a board), each correction one run of the ball alone. A delivery given at the foul line is
     returned as it is. LaneError when the ball leaves the lane before the arrows or no foul
-    board within ``iters`` runs crosses there."""
+    board within ``iters`` runs crosses there.
+
+    Args:
+        delivery: the delivery (``at="arrows"`` to be aimed; ``at="foul"`` returned as it is).
+        oil: the oil pattern (a name, a pattern file or a :class:`.oil.Pattern`).
+        ball: the ball (None: the default ball).
+        law: the film-to-friction law.
+        tol: how near the asked board the ball must cross the arrows (boards).
+        iters: runs of the ball alone at most.
+
+    Returns:
+        the foul-line :class:`Delivery` (``at="foul"``).
+
+    Raises:
+        LaneError: as above.
+    """
     delivery = delivery.check()
     if delivery.at != "arrows":
         return delivery

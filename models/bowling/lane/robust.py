@@ -159,7 +159,27 @@ def maximise(starts, *, standing=None, want=None, runner: frame.FrameRunner, bud
     """The release near ``starts`` (a Delivery or several, the same hand) with the highest
     probability of the outcome on the pins in ``standing`` (default all ten): every pin in play
     down, or exactly the pins of ``want`` down. ``budget``: noisy frames for the search; ``n``:
-    throws of the fresh estimate (seed ``seed``). See the module docstring for the method."""
+    throws of the fresh estimate (seed ``seed``). See the module docstring for the method.
+
+    Args:
+        starts: a :class:`.lane.Delivery` or several (the same hand).
+        standing: the pins standing (None: all ten).
+        want: the pins to knock down exactly (None: convert every pin in play).
+        runner: the :class:`.frame.FrameRunner` that runs the frames.
+        budget: noisy frames of the search (a whole number >= 1).
+        seed: the seed of the search and of the fresh estimate.
+        noise: the release noise.
+        on_done: called after each frame.
+        ladder: whether to prefer a pick that keeps its outcome at every timestep of the ladder.
+        n: throws of the fresh estimate (a whole number >= 1).
+
+    Returns:
+        a :class:`RobustResult` (the pick, its fresh estimate, the screens, the ladder, the frames run).
+
+    Raises:
+        LaneError: a start, ``want``, ``budget``, ``n`` or the noise refused.
+        Interrupted: on Ctrl-C (a KeyboardInterrupt carrying the best delivery so far).
+    """
     nz = noise.check()
     want = noise_mod.wanted(want)
     in_play = sorted(set(range(1, 11) if standing is None else standing))

@@ -43,7 +43,18 @@ def ball_quat(delivery: Delivery, ball: Ball):
 
 
 def layout(ball: Ball | None = None, delivery: Delivery | None = None) -> scene.LaneLayout:
-    """The full lane for ``ball`` (default :class:`Ball`) with its axes placed for ``delivery``."""
+    """The full lane for ``ball`` (default :class:`Ball`) with its axes placed for ``delivery``.
+
+    Args:
+        ball: the ball (None: the default ball).
+        delivery: the delivery whose release orients the ball's axes (None: the default delivery).
+
+    Returns:
+        the shared scene's :class:`nbst.models.bowling.scene.LaneLayout` of the 60 ft lane.
+
+    Raises:
+        LaneError: the ball or the delivery outside its limits.
+    """
     ball = (ball or Ball()).check()
     delivery = (delivery or Delivery()).check()
     half_w = scene.LANE_WIDTH / 2
@@ -92,5 +103,17 @@ def _model(ball: Ball, delivery: Delivery, pins: bool):
 
 
 def build_model(ball: Ball | None = None, delivery: Delivery | None = None, *, pins: bool = True):
-    """The compiled model of :func:`lane_spec` (cached by its arguments)."""
+    """The compiled model of :func:`lane_spec` (cached by its arguments).
+
+    Args:
+        ball: the ball (None: the default ball).
+        delivery: the delivery whose release orients the ball (None: the default).
+        pins: False for the ball alone (no pins).
+
+    Returns:
+        a ``mujoco.MjModel`` (mujoco is imported here, not at import of the package).
+
+    Raises:
+        LaneError: the ball or the delivery outside its limits.
+    """
     return _model((ball or Ball()).check(), (delivery or Delivery()).check(), pins)

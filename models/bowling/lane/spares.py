@@ -200,7 +200,23 @@ class PocketMap:
 def pocket_map(boards, angles, n: int, seed: int, *, runner: frame.FrameRunner, nz: noise.Noise = noise.DEFAULT,
                on_cell=None, on_done=None, base: lane.Delivery = STRIKE) -> PocketMap:
     """Strike probability over (board at the pins x entry angle), ``n`` noisy throws per cell
-    (cell c's throws are seeded ``seed + c``); ``base``: the release aimed (its speed, revs, tilt)."""
+    (cell c's throws are seeded ``seed + c``); ``base``: the release aimed (its speed, revs, tilt).
+
+    Args:
+        boards: boards at the head pin's line, the map's columns.
+        angles: entry angles (deg), its rows.
+        n: noisy throws per cell.
+        seed: the seed of the first cell.
+        runner: the :class:`.frame.FrameRunner`.
+        nz: the release noise.
+        on_cell: called with (board, angle, estimate or None: no release reaches the cell) per cell.
+        on_done: called after each frame.
+        base: the release aimed at each cell.
+
+    Returns:
+        a :class:`PocketMap`: p (len(angles), len(boards)) float64 array (NaN where no release
+        reaches the cell) and its counts.
+    """
     p = np.full((len(angles), len(boards)), np.nan)
     k = np.zeros((len(angles), len(boards)), dtype=int)
     deliveries, hits = {}, []
@@ -325,7 +341,25 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     (the same throws' noise as the pick's measurement: a paired before/after). Skipped when the
     pick converted all of its ``3 * screen`` screening throws, or no candidate converted any.
     The polished throw replaces the pick when its noise-free throw converts at every timestep
-    of the ladder (it is never worse than the pick on the polish's own screen)."""
+    of the ladder (it is never worse than the pick on the polish's own screen).
+
+    Args:
+        name: the leave, pins standing joined by '-' ("3-10").
+        n: throws of each fresh measure.
+        seed: the seed of the measures (the screening uses seeds derived from it).
+        runner: the :class:`.frame.FrameRunner` (its oil and ball).
+        screen: noisy throws per candidate in the screening.
+        nz: the release noise.
+        on_done: called after each frame.
+        polish: noisy frames of the polish (None: ``POLISH_PER_SCREEN * screen``; 0: none).
+        strike: the bowler's strike ball, for the 3-6-9 line (None: :data:`STRIKE`).
+
+    Returns:
+        a :class:`SpareResult`.
+
+    Raises:
+        LaneError: a leave that is not distinct pins 1..10, or all ten.
+    """
     standing = leave_pins(name)
     if len(standing) == 10:
         raise lane.LaneError(f"leave: {name!r} is all ten pins: a first ball, not a spare")

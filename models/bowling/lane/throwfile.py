@@ -537,7 +537,17 @@ def load(path) -> dict:
 
 
 def load_atlas(path) -> dict:
-    """Read and check a throw atlas (:func:`check_atlas`); ThrowFileError naming the file and field."""
+    """Read and check a throw atlas (:func:`check_atlas`); ThrowFileError naming the file and field.
+
+    Args:
+        path: a throw atlas file.
+
+    Returns:
+        the checked atlas dict.
+
+    Raises:
+        ThrowFileError: the file or a field refused (one line, file and field).
+    """
     return check_atlas(files.read_doc(path), path)
 
 
@@ -581,7 +591,18 @@ def replay(d: dict, *, model=None, src="throw") -> frame.FrameResult:
 def replay_file(path) -> tuple[dict, frame.FrameResult, bool]:
     """(throw dict, the replayed frame, whether its pins down are the file's) of a throw file.
     MuJoCo's warnings (a diverging state) become a ThrowFileError naming the file; a throw of
-    another scene is refused in one line."""
+    another scene is refused in one line.
+
+    Args:
+        path: a foul-line throw file.
+
+    Returns:
+        (the checked throw dict, the replayed :class:`.frame.FrameResult`, whether its pins down
+        are the file's).
+
+    Raises:
+        ThrowFileError: the file or a field refused, another scene's throw, or MuJoCo warned.
+    """
     from nbst.errors import MujocoError
 
     d = load(path)

@@ -44,26 +44,73 @@ class LaneError(InputError):
 
 
 def hand_sign(hand: str) -> int:
-    """+1 for a right-hander, -1 for a left-hander (the mirror in y)."""
+    """+1 for a right-hander, -1 for a left-hander (the mirror in y).
+
+    Args:
+        hand: "right" or "left".
+
+    Returns:
+        +1 or -1.
+
+    Raises:
+        LaneError: any other ``hand``.
+    """
     if hand not in ("right", "left"):
         raise LaneError(f"hand: must be 'right' or 'left', got {hand!r}")
     return 1 if hand == "right" else -1
 
 
 def board_to_y(board, hand: str = "right"):
-    """Lateral position (m, + = bowler's left) of a (continuous) board number for ``hand``."""
+    """Lateral position (m, + = bowler's left) of a (continuous) board number for ``hand``.
+
+    Args:
+        board: a board number or an array of them (board 1 at the bowling hand's edge).
+        hand: "right" or "left" (a left-hander's boards are mirrored).
+
+    Returns:
+        y (m), a float64 array of ``board``'s shape.
+
+    Raises:
+        LaneError: ``hand`` is neither "right" nor "left".
+    """
     return hand_sign(hand) * (-scene.LANE_WIDTH / 2 + (np.asarray(board, dtype=float) - 0.5) * BOARD_WIDTH)
 
 
 def y_to_board(y, hand: str = "right"):
-    """The (continuous) board number of a lateral position ``y`` (m) for ``hand``."""
+    """The (continuous) board number of a lateral position ``y`` (m) for ``hand``.
+
+    Args:
+        y: lateral positions (m, + = bowler's left), a number or an array.
+        hand: "right" or "left".
+
+    Returns:
+        the board numbers, a float64 array of ``y``'s shape (the inverse of :func:`board_to_y`).
+
+    Raises:
+        LaneError: ``hand`` is neither "right" nor "left".
+    """
     return (hand_sign(hand) * np.asarray(y, dtype=float) + scene.LANE_WIDTH / 2) / BOARD_WIDTH + 0.5
 
 
 def ft_to_x(ft):
-    """x (m) of a distance in feet past the foul line."""
+    """x (m) of a distance in feet past the foul line.
+
+    Args:
+        ft: feet past the foul line, a number or an array.
+
+    Returns:
+        x (m) in the scene's frame, a float64 array of ``ft``'s shape.
+    """
     return FOUL_LINE_X + np.asarray(ft, dtype=float) * FT
 
 
 def x_to_ft(x):
+    """Feet past the foul line of an x (m) in the scene's frame (the inverse of :func:`ft_to_x`).
+
+    Args:
+        x: x (m), a number or an array.
+
+    Returns:
+        feet past the foul line, a float64 array of ``x``'s shape.
+    """
     return (np.asarray(x, dtype=float) - FOUL_LINE_X) / FT
