@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from nbst.constants import EVENT_DISK
+from nbst.errors import InputError
 
 from nbst.render.core import style
 from nbst.render.core.shapes import CAPSULE_DTYPE
@@ -25,7 +26,7 @@ class SampledMotion:
         self.times = np.asarray(times, float)
         self.positions = np.asarray(positions, float)
         if self.positions.ndim != 3 or self.positions.shape[0] != self.times.shape[0]:
-            raise ValueError("positions must have shape (T, N, 2) matching times (T,)")
+            raise InputError("positions must have shape (T, N, 2) matching times (T,)")
 
     def at(self, t):
         ts = np.asarray(t, float)

@@ -132,6 +132,46 @@ def test_bad_options_give_one_line_and_exit_2(tmp_path, straight, capsys, argv, 
     assert not list(tmp_path.iterdir())  # nothing written
 
 
+@pytest.mark.parametrize("argv", [["chain3.jsn"], ["chain3.jsn", "-o", "v.mp4"], ["chain3.jsn", "s.json", "-o", "v.mp4"]])
+def test_a_missing_input_file_is_named_with_what_render_takes(tmp_path, capsys, argv, monkeypatch):
+    """A typo (chain3.jsn for chain3.json) says the file does not exist and which files render takes,
+    with or without -o, exit 2, one line, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    try:
+        rc = main(["render", *argv, "-q"])
+    except SystemExit as e:
+        rc = e.code
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "chain3.jsn: no such file" in err
+    assert "crash file" in err and "solution" in err and "throw file" in err
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("name", ["v.mov", "v.m4v", "v.avi", "v"])
+def test_an_unlisted_output_extension_is_refused_for_every_input(tmp_path, straight, capsys, name):
+    """The help lists .mp4 and .gif (and .png with --still): -o v.mov is refused in one line, exit
+    2, before any work, for a problem and a crash file alike (not written as QuickTime)."""
+    p, sol = straight
+    crash = tmp_path / "crash.json"
+    crash.write_text('{"kind": "nbst-crash", "version": 1}')
+    for inputs in (["diamond-s14", sol], [str(crash)]):
+        rc = main(["render", *inputs, "-o", str(tmp_path / name), "-q"])
+        err = capsys.readouterr().err.strip()
+        assert rc == 2 and "unknown output format" in err and ".mp4 or .gif" in err and len(err.splitlines()) == 1
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["crash.json"]
+
+
+def test_the_video_writer_takes_only_the_listed_extensions(tmp_path):
+    from nbst.errors import RenderError
+    from nbst.render.core.video import video_kind
+
+    assert video_kind("a.MP4") == "mp4" and video_kind("a.gif") == "gif"
+    for name in ("a.mov", "a.m4v", "a.png", "a"):
+        with pytest.raises(RenderError, match="unknown video extension"):
+            video_kind(tmp_path / name)
+
+
 def test_bad_solution_is_a_one_line_error(tmp_path, capsys):
     bad = tmp_path / "bad.json"
     bad.write_text('{"velocities": [[1, 2]]}')

@@ -8,14 +8,34 @@ from __future__ import annotations
 import argparse
 import sys
 
-from nbst.cli.args import Bounded, Size, with_limits
+from pathlib import Path
+
+import numpy as np
+
+from nbst.cli.args import Bounded, Size, exact_motion, with_limits
+from nbst.domain import plain
+from nbst.errors import InputError, RenderError
+from nbst.outputs import atomic_path, prepare_output, sigterm_as_interrupt
+from nbst.problem import builtin_names, load_problem
+from nbst.progress import Bar, command_start, count_text, progress_bar, seconds_text
+from nbst.render.bowling.deck import (DISK_ONLY_FLAGS, FPS_MAX, bowling_kind, is_throw_file, load_motion, motion_times,
+                                      render_motion)
 from nbst.render.core import style
+from nbst.render.core.gl import create_context
+from nbst.render.core.times import MAX_FRAMES, frame_count, frame_times
+from nbst.render.core.video import render_video, write_png
+from nbst.render.crash.video import crash_kind
+from nbst.render import figures
+from nbst.render.motion2d import SampledMotion
+from nbst.render.scene2d import Renderer2D, auto_labels
+from nbst.render.scene3d import Renderer3D
+from nbst.solution import load_solution
 
 FPS = Bounded("fps", 0.0, 240.0, lo_open=True)
 SPEED = Bounded("speed", 0.0, 1e6, lo_open=True)
 HOLD = Bounded("hold", 0.0, 60.0, unit="s")
 STILL = Bounded("still time", 0.0, 1e6, unit="s")
-MAX_FRAMES = Bounded("max frames", 1, 10_000_000, integer=True)
+MAX_FRAMES_FLAG = Bounded("max frames", 1, 10_000_000, integer=True)
 DPI = Bounded("dpi", 10, 1200, integer=True)
 SIZE = Size()
 
@@ -47,7 +67,7 @@ def register(sub) -> None:
     p.add_argument("solution", nargs="?",
                    help="path to a solution JSON file (e.g. from `nbst solve`); omit it when PROBLEM is a bowling "
                         "5 m throw file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")
-    p.add_argument("-o", "--output", required=True, metavar="PATH", help="output file: .mp4, .gif, or .png with --still")
+    p.add_argument("-o", "--output", metavar="PATH", help="output file (required): .mp4, .gif, or .png with --still")
     p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
                    help="5 m bowling throws: behind the ball, overhead, or both side by side (default both); "
                         "crash files: overhead (default), behind the --follow vehicle, or both")
@@ -77,9 +97,9 @@ def register(sub) -> None:
     p.add_argument("--still", type=STILL, default=None, metavar="T",
                    help="write only the frame at time T (seconds, in [0, t_final]; for a bowling throw in [0, its "
                         f"duration]) to a .png [{STILL.limits}]")
-    p.add_argument("--max-frames", type=MAX_FRAMES, default=None, metavar="N",
+    p.add_argument("--max-frames", type=MAX_FRAMES_FLAG, default=None, metavar="N",
                    help=with_limits("refuse a video of more than N frames (default 108,000: 30 minutes at 60 fps)",
-                                    MAX_FRAMES))
+                                    MAX_FRAMES_FLAG))
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=cmd_render)
 
@@ -125,28 +145,43 @@ def _err(cmd: str, msg: str) -> int:
 
 
 def parse_size(s: str) -> tuple[int, int]:
-    """'1280x720' -> (1280, 720); ValueError with a one-line reason otherwise."""
+    """'1280x720' -> (1280, 720); InputError (a ValueError) with a one-line reason otherwise."""
     parts = s.lower().replace("*", "x").split("x")
     if len(parts) != 2 or not all(x.strip().isdigit() for x in parts):
-        raise ValueError(f"--size {s!r}: expected WIDTHxHEIGHT in pixels, e.g. 1280x720")
+        raise InputError(f"--size {s!r}: expected WIDTHxHEIGHT in pixels, e.g. 1280x720")
     w, h = int(parts[0]), int(parts[1])
     if not (16 <= w <= 8192 and 16 <= h <= 8192):
-        raise ValueError(f"--size {s}: width and height must be 16..8192 pixels")
+        raise InputError(f"--size {s}: width and height must be 16..8192 pixels")
     return w, h
 
 
+#: The files ``nbst render`` writes, by extension (the help lists them; anything else is refused).
+OUTPUT_SUFFIXES = (".mp4", ".gif", ".png")
+#: What ``nbst render`` takes, said when it is given something else.
+TAKES = ("nbst render takes a problem (a built-in name or a problem .json) and its solution, a crash file "
+         "(`nbst crash solve`), or a 5 m bowling throw file (`nbst bowl solve`)")
+
+
+def check_render_args(args) -> int | None:
+    """Exit status 2 (after one line) when the input file is missing or the output is not a file
+    ``nbst render`` writes, else None; before any work, for every kind of input."""
+
+    if not Path(args.problem).exists() and args.problem not in builtin_names():
+        return _err("render", f"{args.problem}: no such file, and no built-in problem of that name; {TAKES}")
+    if args.output is None:
+        return _err("render", "-o PATH is required: the .mp4 or .gif to write (or a .png with --still T)")
+    ext = Path(args.output).suffix.lower()
+    if ext not in OUTPUT_SUFFIXES:
+        return _err("render", f"-o {args.output}: unknown output format {ext or '(no extension)'!r}; "
+                              f"use .mp4 or .gif, or .png with --still T")
+    return None
+
+
 def cmd_render(args) -> int:
-    from pathlib import Path
 
-    from nbst.cli.args import exact_motion
-    from nbst.problem import load_problem
-    from nbst.solution import load_solution
-
-    from nbst.render.bowling.deck import is_throw_file
-    from nbst.render.core.gl import RenderError
-
-    from nbst.render.crash.video import crash_kind
-
+    bad = check_render_args(args)
+    if bad is not None:
+        return bad
     ck = crash_kind(args.problem)  # sniffs the first bytes only; the crash file's gate reads it, capped
     if ck == "crash":
         from nbst.cli.crash.render import cmd_render_crash
@@ -162,7 +197,7 @@ def cmd_render(args) -> int:
     args.view, args.source = args.view or "2d", args.source or "analytic"
     args.speed = 1.0 if args.speed is None else args.speed
     if args.solution is None:
-        return _err("render", "give PROBLEM and SOLUTION (or one 5 m bowling throw file from `nbst bowl solve`)")
+        return _err("render", f"{args.problem} is a problem: give its SOLUTION too; {TAKES}")
     if args.camera is not None:
         return _err("render", "--camera applies to 5 m bowling throw files only")
 
@@ -174,16 +209,10 @@ def cmd_render(args) -> int:
         kind = "png"
     elif ext == ".png":
         return _err("render", f"{out.name}: a .png output needs --still T (the time of the frame)")
-    elif ext not in (".mp4", ".m4v", ".mov", ".gif"):
-        return _err("render", f"{out.name}: unknown output format {ext or '(no extension)'!r}; use .mp4, .gif, "
-                              "or .png with --still T")
     else:
         kind = "gif" if ext == ".gif" else "mp4"
-    try:
-        size = (parse_size(args.size) if isinstance(args.size, str) else args.size) if args.size else \
-            (style.GIF_SIZE if kind == "gif" else style.DEFAULT_SIZE)
-    except ValueError as e:
-        return _err("render", str(e))
+    size = (parse_size(args.size) if isinstance(args.size, str) else args.size) if args.size else \
+        (style.GIF_SIZE if kind == "gif" else style.DEFAULT_SIZE)  # a bad text: InputError, main's one line
     if kind == "mp4" and (size[0] % 2 or size[1] % 2):
         return _err("render", f"--size {size[0]}x{size[1]}: H.264 (yuv420p) needs an even width and height")
     fps = args.fps if args.fps is not None else (style.GIF_FPS if kind == "gif" else style.DEFAULT_FPS)
@@ -199,23 +228,26 @@ def cmd_render(args) -> int:
     tr = exact_motion(problem, args.solution, sol.velocities)  # one line, before any work, if it truncates
     if args.still is not None and not (0 <= args.still <= problem.t_final):
         return _err("render", f"--still {args.still:g}: must lie in [0, t_final = {problem.t_final:g}] seconds")
-    try:  # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
-        if kind != "png":
-            from nbst.render.core.times import MAX_FRAMES, check_frames
-            if args.max_frames is not None and args.max_frames < 1:
-                return _err("render", f"--max-frames {args.max_frames}: must be >= 1")
-            check_frames(problem.t_final, fps, speed=args.speed, hold=args.hold,
-                         max_frames=args.max_frames or MAX_FRAMES)
-        if args.source != "analytic":
+    # bounded work, before any: frames (and the MuJoCo replay's steps) grow with t_final
+    if kind != "png":
+        if args.max_frames is not None and args.max_frames < 1:
+            return _err("render", f"--max-frames {args.max_frames}: must be >= 1")
+        limit = args.max_frames or MAX_FRAMES
+        n = frame_count(problem.t_final, fps, speed=args.speed, hold=args.hold)
+        if n > limit:
+            return _err("render", f"t_final = {problem.t_final:g} s at {fps:g} fps and --speed {args.speed:g} is "
+                                  f"{n:,} frames, over the limit of {limit:,}; raise it with --max-frames N, or "
+                                  f"shorten the video with a higher --speed (simulated seconds per second of "
+                                  f"video) or a lower --fps")
+    if args.source != "analytic":
+        try:
             from nbst.models.mjrun import check_steps
             from nbst.models.scene import DEFAULT_TIMESTEP
+        except ImportError:
+            pass  # no MuJoCo replay in this install: mujoco_positions says so
+        else:  # past the limit: InputError, main's one line
             check_steps(problem.t_final, DEFAULT_TIMESTEP, hint="the MuJoCo replay cannot cover it: use "
                         "--source analytic")
-    except ValueError as e:
-        return _err("render", str(e))
-    except ImportError:
-        pass  # no MuJoCo replay in this install: mujoco_positions says so
-    from nbst.outputs import prepare_output, sigterm_as_interrupt
     prepare_output(out, inputs=(args.problem, args.solution))
     try:
         with sigterm_as_interrupt():  # kill: the partial video is removed as on Ctrl-C
@@ -225,12 +257,7 @@ def cmd_render(args) -> int:
 
 
 def _render(args, problem, tr, out, kind, size, fps) -> int:
-    import numpy as np
 
-    from nbst.progress import Bar, command_start, count_text, seconds_text
-    from nbst.render.core.gl import create_context
-    from nbst.render.core.times import frame_times
-    from nbst.render.core.video import render_video, write_png
 
     if kind == "png":
         times = np.array([float(args.still)])
@@ -242,7 +269,6 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
     try:
         motion, ghost = tr, None
         if args.source in ("mujoco", "both"):
-            from nbst.render.motion2d import SampledMotion
             sample_t = np.unique(np.concatenate((times, frame_times(problem.t_final, 120.0))))
             if bar is not None:
                 bar.note(f"replaying {problem.n} disks for {problem.t_final:g} s in MuJoCo")
@@ -294,20 +320,16 @@ def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, t
     labels: True, False, or None (only where legible: :func:`nbst.render.scene2d.labels_legible`).
     motion_name: what the disks show when it is not the exact motion ("MuJoCo" for --source mujoco)."""
     if view == "3d":
-        from nbst.render.scene2d import auto_labels
-        from nbst.render.scene3d import Renderer3D
         if labels is None:
             labels = auto_labels(problem, size)
         return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels,
                           motion_name=motion_name)
-    from nbst.render.scene2d import Renderer2D
     return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels,
                       motion_name=motion_name)
 
 
 def mujoco_positions(problem, velocities, times):
     """Disk centres (T, N, 2) from the MuJoCo replay, or a one-line RenderError."""
-    from nbst.render.core.gl import RenderError
     try:
         from nbst.models import rollout
     except ImportError:
@@ -318,7 +340,6 @@ def mujoco_positions(problem, velocities, times):
 
 def _not_bowling(args) -> int | None:
     """Exit 2 with one line when PROBLEM is a bowling throw or atlas file (not a disk problem)."""
-    from nbst.render.bowling.deck import bowling_kind
 
     kind = bowling_kind(args.problem)
     if kind:
@@ -330,41 +351,33 @@ def _not_bowling(args) -> int | None:
 
 
 def cmd_plot_problem(args) -> int:
-    from nbst.problem import load_problem
 
     if (rc := _not_bowling(args)) is not None:
         return rc
 
-    from nbst.render.figures import plot_problem, save_figure
     problem = load_problem(args.problem)
-    fig = plot_problem(problem)
-    return _save(fig, args, save_figure)
+    fig = figures.plot_problem(problem)
+    return _save(fig, args, figures.save_figure)
 
 
 def cmd_plot_trajectories(args) -> int:
-    from nbst.problem import load_problem
 
     if (rc := _not_bowling(args)) is not None:
         return rc
-    from nbst.cli.args import exact_motion
-    from nbst.solution import load_solution
 
-    from nbst.render.figures import plot_trajectories, save_figure
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)
-    fig = plot_trajectories(problem, exact_motion(problem, args.solution, sol.velocities))
-    return _save(fig, args, save_figure)
+    fig = figures.plot_trajectories(problem, exact_motion(problem, args.solution, sol.velocities))
+    return _save(fig, args, figures.save_figure)
 
 
 def _save(fig, args, save_figure) -> int:
-    from pathlib import Path
     if not 10 <= args.dpi <= 1200:
         return _err("plot", f"--dpi {args.dpi}: must be in 10..1200")
     ext = Path(args.output).suffix.lower()
     if ext not in (".png", ".pdf", ".svg"):
         return _err("plot", f"{Path(args.output).name}: unknown figure format {ext or '(no extension)'!r}; "
                             "use .png, .pdf or .svg")
-    from nbst.outputs import atomic_path, prepare_output
     prepare_output(args.output, inputs=(getattr(args, "problem", None), getattr(args, "solution", None)))
     with atomic_path(args.output) as tmp:  # a full disk leaves the previous figure, not a 0-byte one
         save_figure(fig, tmp, dpi=args.dpi)
@@ -379,7 +392,6 @@ def _save(fig, args, save_figure) -> int:
 
 def _check_throw_flags(args, duration: float | None = None) -> str | None:
     """The first problem with ``nbst render THROW.json``'s flags (a 5 m throw file), as one line, or None."""
-    from nbst.render.bowling.deck import DISK_ONLY_FLAGS, FPS_MAX
 
     given = [flag for attr, default, flag in DISK_ONLY_FLAGS
              if getattr(args, attr, default) not in (default, None, False)]
@@ -407,15 +419,9 @@ def cmd_render_throw(args) -> int:
     """``nbst render THROW.json -o OUT [--still T] [--camera C] [--size WxH] [--fps F] [--hold S] [-q]``
     (``cmd_render`` dispatches here when its first argument is a 5 m throw file; the recording and
     the frames are :mod:`nbst.render.bowling.deck`'s)."""
-    import sys
 
-    from nbst.domain import plain
     from nbst.models.bowling.deck import throwfile
-    from nbst.outputs import prepare_output
 
-    from nbst.render.core import style
-    from nbst.render.bowling.deck import load_motion, motion_times, render_motion
-    from nbst.render.core.gl import RenderError
 
     def err(msg) -> int:
         print(f"nbst render: error: {plain(msg)}", file=sys.stderr)
@@ -432,12 +438,7 @@ def cmd_render_throw(args) -> int:
         return err(bad)
     size = getattr(args, "size", None)
     if isinstance(size, str):
-        try:
-            w, h = (int(v) for v in size.lower().split("x"))
-        except ValueError:
-            return err(f"--size {size}: expected WxH, e.g. 1280x720")
-        if not (16 <= w <= 8192 and 16 <= h <= 8192):
-            return err(f"--size {size}: width and height must be 16..8192 pixels")
+        w, h = parse_size(size)  # InputError, main's one line
         if out.lower().endswith(".mp4") and (w % 2 or h % 2):
             return err(f"--size {size}: H.264 (yuv420p) needs an even width and height")
         size = (w, h)
@@ -451,7 +452,6 @@ def cmd_render_throw(args) -> int:
     fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
     hold = getattr(args, "hold", None)
     times = motion_times(motion, fps, hold=1.0 if hold is None else float(hold))
-    from nbst.render.core.times import MAX_FRAMES
 
     limit = getattr(args, "max_frames", None) or MAX_FRAMES
     if still is None and len(times) > limit:
@@ -459,8 +459,6 @@ def cmd_render_throw(args) -> int:
     prepare_output(out, inputs=(args.problem,))
     bar = None
     if not getattr(args, "quiet", False) and still is None:
-        from nbst.progress import progress_bar
-
         bar = progress_bar(total=len(times), unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
     try:
         n = render_motion(throw, motion, out, still=still, camera=getattr(args, "camera", None) or "both",

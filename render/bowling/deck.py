@@ -21,11 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.render.core import style
+from nbst.render.core.camera import look_at, perspective
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
 from nbst.render.core.times import frame_times
-from nbst.render.core.camera import look_at, perspective
 
 #: Slow motion around impact: this many times slower from IMPACT_WINDOW[0] s before
 #: the first ball-pin contact to IMPACT_WINDOW[1] s after it.
@@ -143,7 +144,7 @@ class BowlingRenderer(FrameRenderer):
         from nbst.render.core.shapes import Text
 
         if camera not in ("behind", "overhead", "both"):
-            raise ValueError(f"camera must be behind, overhead or both, got {camera!r}")
+            raise InputError(f"camera must be behind, overhead or both, got {camera!r}")
         self.ctx, self.motion, self.camera = ctx, motion, camera
         self.size = tuple(size)
         self.throw = throw or {}

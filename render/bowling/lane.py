@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.render.core import style
 from nbst.render.bowling.deck import BACKGROUND, PIN_RED, PIN_WHITE, STRIPES_IN, _flat, _pose
 from nbst.render.core.shaders import SHADE, SOLID_FS, SOLID_VS
@@ -98,7 +99,7 @@ class LaneRenderer(FrameRenderer):
         from nbst.render.core.shapes import Text, text_cell
 
         if camera not in CAMERAS:
-            raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
+            raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         self.ctx, self.throw, self.motion, self.camera = ctx, throw, throw.motion, camera
         self.size = tuple(size)
         self.asked = None if asked is None else sorted(int(p) for p in asked)

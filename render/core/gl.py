@@ -8,7 +8,7 @@ Mesa's llvmpipe renders off-screen through EGL with no display server once
 from __future__ import annotations
 
 import numpy as np
-from nbst.errors import RenderError  # re-exported here
+from nbst.errors import InputError, RenderError  # RenderError re-exported here
 
 
 def create_context():
@@ -133,7 +133,7 @@ class FrameTarget:
             out = self.new_frame(components)
         w, h = self.size
         if out.shape != (h, w, components) or out.dtype != np.uint8 or not out.flags.c_contiguous:
-            raise ValueError(f"frame buffer must be a C-contiguous ({h}, {w}, {components}) uint8 array")
+            raise InputError(f"frame buffer must be a C-contiguous ({h}, {w}, {components}) uint8 array")
         self.fbo.read_into(out, components=components, alignment=1)
         return out
 

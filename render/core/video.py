@@ -18,17 +18,23 @@ from pathlib import Path
 import numpy as np
 
 from nbst.render.core import style
-from nbst.render.core.gl import RenderError
+from nbst.errors import InputError, RenderError
+
+
+#: The video files written, by extension (anything else is refused: .mov would be QuickTime).
+VIDEO_SUFFIXES = {".mp4": "mp4", ".gif": "gif"}
 
 
 def video_kind(path) -> str:
-    """'mp4' or 'gif' from the file extension (.mp4/.m4v/.mov -> mp4)."""
+    """'mp4' or 'gif' from the file extension (:data:`VIDEO_SUFFIXES`).
+
+    Raises:
+        RenderError: any other extension (one line: the file and what is taken).
+    """
     ext = Path(path).suffix.lower()
-    if ext == ".gif":
-        return "gif"
-    if ext in (".mp4", ".m4v", ".mov"):
-        return "mp4"
-    raise RenderError(f"{path}: unknown video extension {ext or '(none)'!r}; use .mp4 or .gif (or --still T with .png)")
+    if ext in VIDEO_SUFFIXES:
+        return VIDEO_SUFFIXES[ext]
+    raise RenderError(f"{path}: unknown video extension {ext or '(none)'!r}; use .mp4 or .gif (or a .png still)")
 
 
 class VideoWriter:
@@ -145,7 +151,7 @@ class VideoWriter:
         self._check()
         if id(frame) not in self._ids:
             if frame.shape != self.frame_shape:
-                raise ValueError(f"frame shape {frame.shape}, expected {self.frame_shape}")
+                raise InputError(f"frame shape {frame.shape}, expected {self.frame_shape}")
             buf = self.acquire()
             np.copyto(buf, frame, casting="unsafe")
             frame = buf
@@ -226,23 +232,27 @@ def check_video(path, kind: str, frames: int) -> str | None:
     return _check_mp4(data, frames) if kind == "mp4" else _check_gif(data)
 
 
+class _Damaged(Exception):
+    """A container that does not parse (the reason: its message); caught where the file is checked."""
+
+
 def _boxes(data: bytes, start: int, end: int):
-    """(type, body start, body end) of the MP4 boxes that tile data[start:end]; ValueError if they do not."""
+    """(type, body start, body end) of the MP4 boxes that tile data[start:end]; _Damaged if they do not."""
     k = start
     while k < end:
         if end - k < 8:
-            raise ValueError(f"{end - k} stray bytes at the end")
+            raise _Damaged(f"{end - k} stray bytes at the end")
         size = int.from_bytes(data[k:k + 4], "big")
         kind = data[k + 4:k + 8].decode("latin-1")
         head = 8
         if size == 1:
             if end - k < 16:
-                raise ValueError("a box header is cut short")
+                raise _Damaged("a box header is cut short")
             size, head = int.from_bytes(data[k + 8:k + 16], "big"), 16
         elif size == 0:
             size = end - k
         if size < head or k + size > end:
-            raise ValueError(f"the box at byte {k:,} runs past the end of the file (cut short)")
+            raise _Damaged(f"the box at byte {k:,} runs past the end of the file (cut short)")
         yield kind, k + head, k + size
         k += size
 
@@ -264,7 +274,7 @@ def _check_mp4(data: bytes, frames: int) -> str | None:
                     break
             if span is not None and span[1] - span[0] >= 12:
                 samples = max(samples, int.from_bytes(data[span[0] + 8:span[0] + 12], "big"))
-    except ValueError as e:
+    except _Damaged as e:
         return str(e)
     if samples != frames:
         return f"{samples} frames in the file, {frames} sent to the encoder"
@@ -283,7 +293,7 @@ def _check_gif(data: bytes) -> str | None:
     def sub_blocks(k):
         while True:
             if k >= n:
-                raise ValueError("the GIF is cut short")
+                raise _Damaged("the GIF is cut short")
             size = data[k]
             k += 1 + size
             if size == 0:
@@ -306,7 +316,7 @@ def _check_gif(data: bytes) -> str | None:
                 images += 1
             else:
                 return f"an unknown GIF block 0x{b:02x} at byte {k}"
-    except ValueError as e:
+    except _Damaged as e:
         return str(e)
     if images == 0:
         return "the GIF has no image"

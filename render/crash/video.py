@@ -27,14 +27,15 @@ import math
 
 import numpy as np
 
-from nbst.render.crash import readout as ro
-from nbst.render.crash import scene as cs
+from nbst.errors import InputError
 from nbst.render.core import style
+from nbst.render.core.camera import look_at, perspective
+from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
 from nbst.render.core.times import frame_times
+from nbst.render.crash import readout as ro
+from nbst.render.crash import scene as cs
 from nbst.render.crash.motion import SLOW, slow_windows, slowed
-from nbst.render.core.gl import FrameRenderer, FrameTarget
-from nbst.render.core.camera import look_at, perspective
 
 CAMERAS = ("overhead", "behind", "both")
 #: Share of the frame's width the readout column takes, and the most it takes where its text
@@ -127,7 +128,7 @@ class CrashRenderer(FrameRenderer):
         from nbst.render.core.shapes import Text, text_cell
 
         if camera not in CAMERAS:
-            raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
+            raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         self.ctx, self.d, self.script, self.model, self.motion = ctx, d, script, model, motion
         self.camera, self.follow = camera, int(follow)
         self.size = tuple(int(v) for v in size)
