@@ -12,6 +12,8 @@ import numpy as np
 
 from nbst.problem import Problem
 
+__all__ = ["CONVERGENCE_LADDER", "FIT_RULE", "FIT_MIN_ERROR", "staged", "entry", "convergence_study", "fit_order"]
+
 #: Convergence ladder: h divided by these.
 CONVERGENCE_LADDER = (1, 2, 4, 8, 16, 32)
 #: Which ladder entries the order is fitted on, and why (also written into the report).

@@ -22,6 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["GALLERY_DIR", "FILES", "PREVIEW_SIZE", "PREVIEW_AMBIENT", "PREVIEW_DIFFUSE", "PREVIEW_NUMBER_PX",
+           "PREVIEW_CAPTION_PX", "PREVIEW_INK", "PREVIEW_TARGET_INK", "PREVIEW_MIN_PUCK_PX", "preview_png",
+           "build_entry", "main"]
+
 #: Default gallery folder: models/scenes next to this file.
 GALLERY_DIR = Path(__file__).resolve().parent / "scenes"
 #: Preview size (pixels).

@@ -9,6 +9,8 @@ import numpy as np
 
 from nbst.errors import InputError
 
+__all__ = ["GAS_AREA_FRACTION", "GAS_RADIUS", "GAS_SPEED", "GAS_T_FINAL", "gas_motion"]
+
 #: Scale motions (:func:`gas_motion`): area fraction of the disks, radius (units), speeds
 #: (units/s) and duration (s). At this density a disk's mean free path is pi r / (2 phi) ~ 200
 #: units, about one collision per disk per second at the speeds drawn, plus wall bounces near

@@ -19,6 +19,9 @@ from nbst.problem import Problem
 
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT, build_model
 
+__all__ = ["EVENT_DISK", "EVENT_WALL", "EVENT_DTYPE", "STEPPINGS", "MAX_STEPS", "RECORD_FLOATS", "PROGRESS_EVERY",
+           "record_stride", "steps_needed", "check_steps", "MujocoRun", "run_mujoco", "run_final", "rollout"]
+
 #: Event kinds, as in ``nbst.sim`` (0 disk-disk, 1 wall); j = partner disk or wall 0 left 1 right 2 bottom 3 top.
 EVENT_DISK, EVENT_WALL = 0, 1
 EVENT_DTYPE = np.dtype([("time", "f8"), ("kind", "i1"), ("i", "i4"), ("j", "i4")])

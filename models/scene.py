@@ -36,6 +36,11 @@ from nbst.errors import InputError
 from nbst import palette
 from nbst.problem import Problem
 
+__all__ = ["DEFAULT_TIMESTEP", "DEFAULT_UNIT", "SOLIMP", "WALL_THICKNESS_RADII", "WALL_HEIGHT_RADII",
+           "PUCK_HALF_HEIGHT_RADII", "PROGRESS_DISKS", "FLOOR_RGBA", "WALL_RGBA", "CUE_RGBA", "NONCUE_RGBA",
+           "TARGET_RGBA", "TARGET_DOT_RGBA", "SceneOptions", "safe_name", "build_spec", "build_model", "scene_xml",
+           "full_precision"]
+
 #: Default MuJoCo timestep (s). 1 ms errs ~0.14 deg on oblique collisions and lets
 #: a dense 14-disk scene drift ~12% in energy over 60 s; 0.25 ms: ~0.04 deg, <= 0.6%.
 DEFAULT_TIMESTEP = 0.00025

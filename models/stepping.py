@@ -70,6 +70,9 @@ import numpy as np
 
 from nbst.errors import InputError, MujocoError
 
+__all__ = ["TOL_REL", "TIE_TIME", "MAX_SEARCH", "MICRO_ACCEL", "SHARED_K", "MAX_MICRO_PER_GEOM", "AlignedStats",
+           "step_aligned"]
+
 #: Default overlap tolerance, relative to ``model.stat.extent``: the touch is located so that the
 #: deepest new overlap is at most this (1e-15 x 0.8 m = 8e-16 m, a few ulps of a coordinate; the
 #: micro-step stays exact at any overlap MuJoCo reports, k eps h_c = 2u). An impact then errs by

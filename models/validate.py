@@ -47,6 +47,10 @@ from nbst.problem import Problem
 from nbst.models.convergence import convergence_study, entry, fit_order, staged as run_stage
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
 
+__all__ = ["SCHEMA_VERSION", "AUTO_FIXED_MAX_N", "AUTO_MAX_COST_RATIO", "AUTO_TRIALS_PER_IMPACT", "SENSITIVITY_MAX_N",
+           "WORST_DISKS", "SUMMARY_STRING_MAX_N", "DIVERGE_TOL", "CURVE_SAMPLES", "COMPARE_CHUNK", "describe",
+           "Validation", "choose_stepping", "validate", "prediction_check"]
+
 SCHEMA_VERSION = 4  # 2: stepping, sensitivity, prediction_check, convergence, convergence_order;
 #                    3: stepping requested/reason/record_stride, final_error mean/median/worst;
 #                    4: mujoco.wall_time_s is the MuJoCo run's (its bar's), validate_wall_time_s the whole

@@ -26,6 +26,8 @@ import time
 
 from nbst.errors import InputError
 
+__all__ = ["CONNECT_TIMEOUT_S", "SPEAKS_FIRST_S", "SILENT_LIMIT_S", "SCHEMES", "split_address", "probe", "connect"]
+
 #: Seconds a connection may take, each stage (the probe, then Dask's own connect): long enough for
 #: a scheduler across a slow network, short enough that a wrong address is told within seconds.
 CONNECT_TIMEOUT_S = 10.0

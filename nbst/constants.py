@@ -4,6 +4,10 @@ The search's choices (what the paper leaves open) live in ``nbst.search``'s
 parameter table; this module holds those of the problem model and simulator.
 """
 
+__all__ = ["GA_MAX_DISKS", "many_body", "OVERLAP_RTOL", "MAX_EVENTS", "MAX_EVENTS_PER_DISK", "max_events_for",
+           "STALL_EVENTS_PER_DISK", "STALL_RTOL", "EVENT_BUFFER", "WALL_LEFT", "WALL_RIGHT", "WALL_BOTTOM", "WALL_TOP",
+           "WALL_NAMES", "EVENT_DISK", "EVENT_WALL", "ROUNDOFF_REL", "PARALLEL_BATCH"]
+
 #: Most disks for the signature search's compiled loop (nbst.search.loop / nbst_loop):
 #: its population keeps signatures as int64 bitmasks (bit i = disk i acceptable), and
 #: 63 keeps them positive. Larger problems are solved by the many-body search

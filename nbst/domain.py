@@ -18,6 +18,11 @@ from nbst.errors import InputError
 
 # --------------------------------------------------------------------------- the JSON text
 
+__all__ = ["MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_JSON_VALUES", "MAX_INT_DIGITS", "MAX_DISKS", "MAX_NAME_CHARS",
+           "MAX_DESCRIPTION_CHARS", "BOX_MIN", "BOX_MAX", "RADIUS_MIN_FRACTION", "MASS_MIN", "MASS_MAX",
+           "MAX_MASS_RATIO", "T_FINAL_MIN", "T_FINAL_MAX", "MAX_BOX_CROSSINGS", "BIDI_CONTROLS", "bad_text", "plain",
+           "parse_number"]
+
 #: Largest file read (bytes): a 63-disk problem is ~10 kB and a solution with
 #: its search history well under 1 MB; this stops a stray multi-GB file early.
 MAX_JSON_BYTES = 64 * 1024 * 1024

@@ -49,6 +49,12 @@ import numpy as np
 from nbst.errors import OutputError  # re-exported here
 
 
+__all__ = ["not_a_file", "refuse_not_a_file", "refuse_special", "refuse_same_file", "prepare_output", "partial_path",
+           "remove_stale_partials", "PartialFile", "atomic_path", "write_bytes_atomic", "write_text_atomic",
+           "json_safe", "dumps_strict", "write_json_atomic", "STOP_SIGNALS", "INSIST_S", "interrupt_once",
+           "ignore_stop_signals", "sigterm_as_interrupt", "signals_deferred", "signals_blocked", "PARENT_POLL_S",
+           "die_with_parent"]
+
 _SPECIAL = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
             (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
 

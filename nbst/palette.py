@@ -28,6 +28,12 @@ The marks (docs/render.md, "Visual language"):
 """
 from __future__ import annotations
 
+__all__ = ["CUEABLE", "NONCUEABLE", "SHADE_STEPS", "DISK_MARKERS", "INK", "TARGET_INK", "RING_INK", "WALL_BOUNCE",
+           "COLLISION", "WALL_BOUNCE_MARKER", "COLLISION_MARKER", "PATH_CUEABLE", "PATH_NONCUEABLE", "LEGEND_CUEABLE",
+           "LEGEND_NONCUEABLE", "LEGEND_START", "LEGEND_TARGET", "LEGEND_RING", "LEGEND_FINAL", "LEGEND_PATH_CUEABLE",
+           "LEGEND_PATH_NONCUEABLE", "LEGEND_WALL_BOUNCE", "LEGEND_COLLISION", "class_color", "class_colors", "shade",
+           "disk_shades", "disk_marker", "units", "path_style", "rgb8", "hex_color"]
+
 #: Cueable disks: warm amber; the paper's cue can strike them.
 CUEABLE = (0.97, 0.62, 0.18)
 

@@ -5,6 +5,9 @@ from __future__ import annotations
 import os
 
 
+__all__ = ["default_jobs"]
+
+
 def default_jobs() -> int:
     """Every core this process may use."""
     try:

@@ -23,6 +23,10 @@ from nbst.errors import InputError
 from nbst.files import FileRefused, read_regular
 from nbst.problem import ProblemError
 
+__all__ = ["IMAGE_EXTENSIONS", "MAX_IMAGE_BYTES", "MAX_IMAGE_PIXELS", "OTHER_PICTURE_EXTENSIONS", "MIN_LATTICE_PX",
+           "MAX_LATTICE_POINTS", "MAX_TEXT_CHARS", "TEXT_PX", "TEXT_FONT", "DARK_BELOW", "FormationError",
+           "is_image_source", "image_mask", "check_text", "text_mask", "lattice_size", "hex_lattice", "lattice_for"]
+
 #: A SRC ending in one of these is an image file; anything else is text to write.
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".gif", ".bmp", ".tif", ".tiff", ".webp")
 #: Largest image file read (bytes) and largest picture decoded (pixels): a 4K frame is

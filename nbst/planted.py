@@ -27,6 +27,10 @@ from nbst.problem import Problem, problem_from_dict
 from nbst.search.aim import strike_velocity
 from nbst.sim import simulate
 
+__all__ = ["START_GAP", "SPEED_RANGE", "PLACE_TRIES", "PLACE_TRIES_PER_DISK", "STRIKE_TRIES", "DEFAULT_SIDE",
+           "DENSITY_DISKS", "DEFAULT_BOX_UP_TO", "PLACE_BATCH", "speed_scale", "default_box", "place_tries",
+           "place_disks", "planted"]
+
 #: Extra gap between starts (units) so that planted starts are not in contact.
 START_GAP = 2.0
 #: Cue speeds are uniform in this fraction range of ``speed_scale`` per t_final: the box

@@ -22,6 +22,9 @@ from nbst.errors import InputError
 from nbst.files import FileRefused, read_regular
 from nbst.overlap import first_overlap
 
+__all__ = ["SCHEMA_VERSION", "ProblemError", "KernelArrays", "Problem", "builtin_names", "read_bytes_checked",
+           "read_json", "parse_json", "load_problem", "problem_from_dict", "box_crossings", "display_name"]
+
 SCHEMA_VERSION = 1
 
 

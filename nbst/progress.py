@@ -43,6 +43,9 @@ import threading
 import time
 from collections import deque
 
+__all__ = ["LOG_INTERVAL", "TTY_INTERVAL", "TICK_S", "FIRST_LINE_S", "ETA_MIN_S", "ETA_WINDOW_S", "start_clock",
+           "command_start", "since_start", "seconds_text", "count_text", "Bar", "progress_bar", "LineProgress"]
+
 #: Seconds between two progress lines when the stream is not a terminal (a log, a pipe, CI):
 #: often enough to see a run is alive, rare enough to keep a 10-minute run to ~60 lines.
 LOG_INTERVAL = 10.0

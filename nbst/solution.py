@@ -19,6 +19,9 @@ from nbst.domain import MAX_BOX_CROSSINGS
 from nbst.outputs import dumps_strict, json_safe, write_json_atomic  # noqa: F401 - dumps_strict re-exported
 from nbst.problem import Problem, ProblemError, _Checker, box_crossings, read_json
 
+__all__ = ["SCHEMA_VERSION", "Solution", "HistoryPoint", "RESULT_KEYS", "SolveResult", "signature_string",
+           "solution_from_dict", "load_solution", "make_solution", "checked_velocities", "save_solution"]
+
 SCHEMA_VERSION = 1
 
 

@@ -50,6 +50,43 @@ def test_every_package_declares_all():
     assert not missing, f"packages without __all__: {missing}"
 
 
+def public_modules() -> list[str]:
+    """Every public module under nbst/ (models/ and render/ through their links), as dotted names:
+    each package and each .py file whose name does not start with ``_`` (``__main__`` is a
+    script), inside packages none of whose names start with ``_`` either."""
+    out = []
+    for p in packages():
+        folder = ROOT.joinpath(*p.split("."))
+        if any(part.startswith("_") for part in p.split(".")):
+            continue
+        out.append(p)
+        out += [f"{p}.{f.stem}" for f in sorted(folder.glob("*.py")) if not f.name.startswith("_")]
+    return out
+
+
+def _module_file(module: str) -> Path:
+    path = ROOT.joinpath(*module.split("."))
+    return path / "__init__.py" if path.is_dir() else path.with_suffix(".py")
+
+
+def _declares_all(module: str) -> bool:
+    for node in ast.parse(_module_file(module).read_text(encoding="utf-8")).body:
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
+        if any(isinstance(t, ast.Name) and t.id == "__all__" for t in targets):
+            return True
+    return False
+
+
+def test_every_public_module_declares_all():
+    """Not only the packages: every public module says what it exports (``__all__``), so a reader,
+    a star import and the docs' tools see one list. Prints each module without one."""
+    modules = public_modules()
+    assert len(modules) > 100 and "nbst.search.driver" in modules and "nbst.models.mjsearch.runner" in modules
+    missing = [m for m in modules if not _declares_all(m)]
+    print("\n".join(f"{_module_file(m).relative_to(ROOT)}: no __all__" for m in missing))
+    assert not missing, f"{len(missing)} public modules without __all__: {missing}"
+
+
 def test_every_name_in_every_all_resolves():
     """``from package import name`` works for every name of every ``__all__`` (a lazy name loads its
     module; a submodule named there is imported), and no name is listed twice."""

@@ -32,6 +32,9 @@ from typing import Callable
 
 import numpy as np
 
+__all__ = ["BATCH", "EXPLORE_EMPTY", "UNIFORM_PER_BATCH", "GROUP_FLOOR", "HIT_BONUS", "Space", "box_space", "Archive",
+           "parent_weights", "emit", "grow"]
+
 #: Vectors per batch (fixed, so that results do not depend on the threads that run them).
 BATCH = 16
 #: Uniform vectors that start an empty archive before the emitter takes over.

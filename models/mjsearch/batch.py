@@ -26,6 +26,9 @@ import numpy as np
 from nbst.errors import InputError
 
 
+__all__ = ["Views", "BatchRollouts", "BatchRunner"]
+
+
 @dataclass
 class Views:
     """The running batch as the controller and the observer see it: ``s`` simulations, their

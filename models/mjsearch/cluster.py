@@ -23,6 +23,8 @@ import numpy as np
 from nbst.cluster import connect
 from nbst.models.mjsearch.runner import Rollouts, Runner
 
+__all__ = ["ClusterRunner", "map_chunks"]
+
 #: Per worker process: (factory, nstep) -> a one-thread Runner (built on first use).
 _WORKER_RUNNERS: dict = {}
 

@@ -13,6 +13,9 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 
+__all__ = ["Ladder", "climb", "kept_text"]
+
+
 @dataclass
 class Ladder:
     """``timesteps`` (s), each rung's ``outcome``, the ``wanted`` outcome, and the raw ``results``."""

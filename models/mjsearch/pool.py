@@ -20,6 +20,9 @@ import os
 from typing import Callable, Sequence
 
 
+__all__ = ["WorkerPool"]
+
+
 def _init(parent_pid: int, initializer, initargs) -> None:
     """Worker setup: die with the parent, ignore the stop signals, then the caller's setup."""
     from nbst.outputs import die_with_parent

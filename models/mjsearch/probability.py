@@ -23,6 +23,8 @@ import numpy as np
 
 from nbst.errors import InputError
 
+__all__ = ["Z95", "wilson", "Probability", "normal_draws", "perturb", "counts"]
+
 #: Wilson interval's z for 95 %.
 Z95 = 1.959963984540054
 

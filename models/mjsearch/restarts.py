@@ -41,6 +41,9 @@ import numpy as np
 from nbst.errors import SolveError
 from nbst.models.mjsearch.archive import BATCH, Space
 
+__all__ = ["EXPLORE_FIRST", "EXPLORE_BETWEEN", "POPSIZE", "SIGMA0", "STALL_GENERATIONS", "Progress", "Found",
+           "Evaluator", "search"]
+
 #: Uniform exploration before CMA-ES restarts (capped at a quarter of the budget).
 EXPLORE_FIRST = 200
 #: Uniform vectors after each restart (new signatures to restart from).

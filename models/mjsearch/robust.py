@@ -50,6 +50,10 @@ import numpy as np
 
 from nbst.errors import SolveError
 
+__all__ = ["ALONG", "GAUSS", "STEP0", "STEP_MIN", "STEP_MAX", "WIDEN", "NARROW", "SCREEN_DIV", "SCREEN_MIN",
+           "SCREEN_MAX", "SECOND_RUNG", "LADDER_TRIES", "SALT", "RobustProblem", "Interrupted", "Screen", "Maximum",
+           "maximise"]
+
 #: Candidates per generation: along the cross-entropy direction, and Gaussian.
 ALONG = (0.5, 1.0, 2.0)
 GAUSS = 5

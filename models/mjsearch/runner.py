@@ -49,6 +49,8 @@ import numpy as np
 
 from nbst.errors import InputError, MujocoError
 
+__all__ = ["Controller", "n_steps", "mujoco_warnings_raise", "data_warnings", "check_state", "Rollouts", "Runner"]
+
 #: A closed-loop controller: (rollout index, step, MjData at that step) -> (nu,) control.
 Controller = Callable[[int, int, object], np.ndarray]
 

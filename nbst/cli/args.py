@@ -11,6 +11,9 @@ from nbst.problem import ProblemError
 from nbst.seeds import SEED_MAX
 
 
+__all__ = ["TRIALS_MAX", "JOBS_MAX", "RUNS_MAX", "Bounded", "int_at_least", "with_limits", "SEED", "MAX_TRIALS",
+           "JOBS", "TARGET_COST", "nonnegative_cost", "Size", "cluster_client", "print_json", "exact_motion"]
+
 #: Limits shared by several commands' flags (each flag's --help states its range).
 TRIALS_MAX = 10**12  # a trillion trials: days of search, far past any budget nbst has needed
 JOBS_MAX = 256  # processes on this machine (each a full search or worker)

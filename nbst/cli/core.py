@@ -9,6 +9,8 @@ from nbst.problem import builtin_names, load_problem
 from nbst.solution import load_solution
 
 
+__all__ = ["COMMANDS", "register", "cmd_problems", "cmd_simulate"]
+
 #: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
 #: them without building their arguments (nbst.cli.main builds only the command asked for).
 COMMANDS = {

@@ -15,6 +15,10 @@ from nbst.cli.args import JOBS, MAX_TRIALS, RUNS_MAX, TARGET_COST, Bounded, clus
 from nbst.cli.flags import add_jobs, add_out_dir, add_quiet, add_seed, old_spelling
 from nbst.problem import display_name
 
+__all__ = ["RUNS", "FIRST_SEED", "COMMANDS", "register", "cmd_curves", "ABLATION_COLUMNS", "cmd_ablation",
+           "COMPARE_COLUMNS", "cmd_compare"]
+
+
 def _entry_help() -> str:
     """The entries, from the registries: the signature search's variants and the other solvers."""
     from nbst.search.variants import VARIANTS

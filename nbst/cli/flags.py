@@ -21,6 +21,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+__all__ = ["SEED_RULE", "old_spelling", "add_out_dir", "add_jobs", "add_quiet", "add_seed"]
+
 #: The one rule for --seed defaults, quoted in every --help.
 SEED_RULE = ("a command that makes one result (solve, bowl solve, generate) draws a seed and records it in "
              "the file; a command whose rerun resumes earlier work (experiment, bowl atlas, gallery) starts "

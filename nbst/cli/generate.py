@@ -11,6 +11,10 @@ from nbst.cli.flags import add_quiet, add_seed
 from nbst.domain import MAX_DISKS
 from nbst.seeds import resolve_seed
 
+__all__ = ["DISKS", "FORMATION_DISKS", "NONCUE", "RADIUS", "BOX", "T_FINAL", "TARGET_RADIUS", "PLANTED_TARGET_RADIUS",
+           "FORMATION_DISKS_DEFAULT", "LONG_STAGE_S", "ANNOUNCE_SIMULATION_FROM", "COMMANDS", "register",
+           "cmd_generate"]
+
 DISKS = Bounded("disk count", 1, MAX_DISKS, integer=True)
 #: --disks of a formation (nbst.formation.MAX_FORMATION_DISKS: the swap passes check every pair).
 FORMATION_DISKS = Bounded("disk count", 1, 20_000, integer=True)

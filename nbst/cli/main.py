@@ -21,6 +21,8 @@ from nbst._version import __version__
 from nbst.domain import plain
 from nbst.errors import NbstError
 
+__all__ = ["COMMAND_MODULES", "build_parser", "asked_command", "main"]
+
 #: Modules whose ``register(subparsers)`` adds subcommands, in ``--help`` order.
 COMMAND_MODULES = (
     "nbst.cli.core",

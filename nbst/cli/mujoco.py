@@ -12,6 +12,9 @@ from nbst.cli.flags import add_out_dir, add_quiet, add_seed
 from nbst.errors import NbstError
 
 
+__all__ = ["TIMESTEP", "UNIT", "TOL", "MAX_STEPS", "MJCF_PROGRESS_MIN_N", "COMMANDS", "register", "cmd_mjcf",
+           "cmd_validate", "PROGRESS_MIN_WORK", "cmd_gallery"]
+
 #: The flags' domains (each --help states its range). The time step: above 0.01 s contacts are too
 #: soft; below 1e-7 s a t_final of 1 s is already 10 million steps. The unit: on over5 (radius 10),
 #: MuJoCo refuses the scene at 1e-6 m per unit (bodies too light, one line) and stops with a

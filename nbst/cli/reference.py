@@ -11,6 +11,8 @@ import sys
 from nbst.cli.flags import SEED_RULE
 from nbst.cli.main import build_parser
 
+__all__ = ["INTRO", "markdown"]
+
 INTRO = f"""# Command-line reference
 
 Every subcommand of `nbst` and every flag it takes, written from the parser itself

@@ -13,6 +13,8 @@ from nbst.warmup import COLD_COMPILE_SECONDS
 if TYPE_CHECKING:
     from nbst.search.variants import SolveRequest
 
+__all__ = ["PATIENCE", "COMMANDS", "register", "cmd_solve"]
+
 PATIENCE = Bounded("patience", 0, TRIALS_MAX, integer=True)
 
 

@@ -11,6 +11,10 @@ from pathlib import Path
 
 from nbst.experiments.runs import fmt, solver_entries
 
+__all__ = ["FIG_SIZE", "DPI", "CURVE_FLOOR", "COLORS", "FAMILY_WORDS", "HATCH", "write_csv", "markdown_table",
+           "write_markdown", "MEMBER_SHADES", "MEMBER_STYLES", "entry_style", "save_figure", "plot_curves",
+           "plot_ablation"]
+
 #: Figure size (inches) and raster resolution: small files for the docs (tens of kB).
 FIG_SIZE = (7.0, 4.2)
 DPI = 110

@@ -29,6 +29,11 @@ from typing import Callable, Iterable
 from nbst.domain import plain
 from nbst.problem import Problem, ProblemError, problem_from_dict
 
+__all__ = ["SCHEMA_VERSION", "RUNS_DIR", "SIGNATURE_MEANS", "variant_entries", "solver_entries", "entries",
+           "parse_entry", "parse_entries", "problem_digest", "RunSpec", "MAX_NAME_PART", "safe_name", "make_specs",
+           "run_one", "RUN_FILE_MAX", "check_run_file", "run_path", "run_specs", "best_so_far", "curves_rows",
+           "ablation_rows", "solved_at", "compare_rows", "compare_detail_rows", "fmt"]
+
 SCHEMA_VERSION = 1
 #: Run files live under this folder of the output folder.
 RUNS_DIR = "runs"

@@ -27,6 +27,8 @@ from nbst.search.variants import VARIANTS, SolveRequest
 from nbst.seeds import resolve_seed
 from nbst.solution import SolveResult
 
+__all__ = ["HISTORY0", "SearchRun", "run_search", "SearchStats"]
+
 #: Room of the improvement history at the start (doubled whenever the loop fills it).
 HISTORY0 = 1024
 

@@ -20,6 +20,14 @@ from nbst.search.ops import (INS_CULLED, INS_FALLBACK, SIZE, Population, accepta
 from nbst.sim import alloc_work, cost_signature, run
 from nbst.sim.kernel import Work
 
+__all__ = ["LoopParams", "ProblemArrays", "problem_arrays", "SearchArrays", "ST_PHASE", "ST_TRIALS", "ST_INIT_TRIALS",
+           "ST_SINCE", "ST_REJECTED", "ST_CULLS", "ST_FALLBACK", "ST_FIRST_FULL", "ST_NHIST", "ST_BEST_SIG",
+           "ST_TRUNCATED", "ST_MAX_ORDER", "N_ST", "PHASE_INIT", "PHASE_GENERATE", "OP_CREEP", "OP_DIRECTED",
+           "OP_UNIFORM", "OP_CROSSOVER", "OP_NAMES", "ChunkResult", "RC_CHUNK_DONE", "RC_MAX_TRIALS", "RC_PATIENCE",
+           "RC_TARGET_COST", "RC_HISTORY_FULL", "LoopScratch", "loop_scratch", "stop_code", "evaluate_one",
+           "init_child", "select_parent", "mutate_one", "book_trial", "settle", "run_chunk"]
+
+
 class LoopParams(NamedTuple):
     """The loop's parameters (``nbst.search.driver`` builds them from ``SearchParams`` and the run
     options); numba compiles them as a tuple of scalars. Flags are ints (0 off)."""

@@ -62,6 +62,11 @@ from nbst.search.polish import POLISH_EVENT_CAP, alloc_polish, polish_kernel
 from nbst.search.robust import robust_eval
 from nbst.sim.primitives import mirror
 
+__all__ = ["OP_NAMES", "N_OPS", "OP_CREEP", "OP_DIRECTED", "OP_UNIFORM", "OP_CROSSOVER", "OP_BANK", "OP_STRIKE",
+           "OP_PLAN", "ROBUST_OFF", "ROBUST_AND", "ROBUST_PLAIN", "NbstParams", "QS_POLISH_RUNS", "QS_POLISH_SIMS",
+           "QS_POLISH_GAINS", "QS_RESTARTS", "QS_LOCAL_SIG", "QS_LOCAL_SINCE", "QS_ROBUST_SIMS", "QS_SIMS", "N_QS",
+           "NbstArrays", "Plans", "NbstScratch", "run_chunk_nbst"]
+
 # operators of the nbst variant: the paper's four (``nbst.search.loop.OP_NAMES``), then nbst's
 OP_NAMES = PAPER_OP_NAMES + ("bank", "strike", "plan")
 N_OPS = len(OP_NAMES)

@@ -33,6 +33,13 @@ from numba import njit
 
 from nbst.domain import MAX_BOX_CROSSINGS
 
+__all__ = ["SIZE", "NTAB", "BEST", "INS_DISPLACED", "INS_ADDED", "INS_SIG_LIMIT", "INS_CULLED", "INS_WORST",
+           "INS_FALLBACK", "CULL_SUBSUMED", "CULL_WORST", "SEARCH_MAX_CROSSINGS", "limit_crossings", "seed_state",
+           "rng_next", "rng_uniform", "rng_int", "rng_normal", "popcount", "Population", "new_population", "tab_find",
+           "sig_count", "pop_append", "pop_set", "pop_remove", "worst_member", "acceptable_counts", "select_senate",
+           "select_uniform", "directed_velocity", "uniform_velocity", "creep_velocity", "crossover", "cull_subsumed",
+           "insert", "insert_initial"]
+
 SIZE, NTAB, BEST = 0, 1, 2
 
 # insert() outcomes

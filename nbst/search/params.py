@@ -22,6 +22,9 @@ from nbst.search.variants import DEFAULT_VARIANT, NBST_DEFAULTS, VARIANTS
 from nbst.search.robust import ARCHIVE_SIZE as ROBUST_ARCHIVE, POLISH_TOP as ROBUST_POLISH, SAMPLES as ROBUST_SAMPLES, \
     SEARCH_SAMPLES as ROBUST_K, TIMESTEP as ROBUST_TIMESTEP
 
+__all__ = ["ALGORITHM", "ALGORITHM_NBST", "SearchParams", "StopReason", "variant_params", "mirror_images",
+           "SearchProgress", "ProgressCallback", "check_run"]
+
 ALGORITHM = "paper-signature-search"
 ALGORITHM_NBST = "nbst-signature-search"
 

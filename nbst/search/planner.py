@@ -56,6 +56,10 @@ from nbst.problem import Problem
 from nbst.sim import evaluate_kernel
 from nbst.sim.primitives import fold, images, impulse_share, mirror, transferred_speed
 
+__all__ = ["MIN_COS", "MAX_SPEED", "MAX_ROUTES_PER_LENGTH", "ROUTES_PER_CUE", "MOVED_EPS", "BANKS_PER_CUE", "BATCH",
+           "ROUTE_SHARE", "BANK_SHARE", "SWEEP_SHARE", "SWEEP_PASSES", "MIN_POPS", "POPS_PER_COMBINATION", "chain_aim",
+           "aim_routes", "PlanResult", "MAX_MASK_BITS", "plan"]
+
 #: A strike whose arrival direction makes a cosine below this with the line of centres is
 #: rejected: it transfers almost nothing, and its outcome is hypersensitive.
 MIN_COS = 0.02

@@ -45,6 +45,11 @@ from numba import njit
 from nbst.problem import Problem
 from nbst.search.loop import evaluate_one, loop_scratch, problem_arrays
 
+__all__ = ["TIMESTEP", "SHIFT_STEPS", "SEARCH_SAMPLES", "SAMPLES", "QUANTILE", "ARCHIVE_SIZE", "POLISH_TOP",
+           "POLISH_SIMS", "MARGIN_POWER", "SEARCH_STREAM", "CHOICE_STREAM", "draws", "shift_sigma", "shift_starts",
+           "RobustDraws", "robust_eval", "RobustScore", "score", "robust_score", "RobustArchive", "polish_on_target",
+           "choose"]
+
 #: The fixed step of the engine the solution must survive (s): MuJoCo's default in nbst.
 TIMESTEP = 0.00025
 #: Start shift std per axis, in steps of travel at the candidate's fastest speed (module doc).

@@ -19,6 +19,9 @@ from nbst.sim.cells import CELLS_MIN_DISKS, alloc_cells, evaluate_words_kernel, 
 from nbst.sim.kernel import (INF, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work, cost_signature,
                              cost_signature_words, evaluate_kernel, run)
 
+__all__ = ["DENSE_KEYFRAMES", "uses_cells", "signature_words_to_int", "evaluate", "evaluate_events", "Trajectory",
+           "EVENT_DTYPE", "simulate"]
+
 #: Largest keyframe table (events x disks) a ``Trajectory`` builds on its own for ``at``;
 #: past it ``at`` replays the event record (the same numbers, no K x N arrays: a 10,000-disk
 #: motion with 50,000 events would need 16 GB of keyframes).

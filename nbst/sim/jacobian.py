@@ -42,6 +42,10 @@ from nbst.sim.kernel import STATUS_OK, alloc_work, run
 from nbst.sim.primitives import contact_normal, impulse_share, replay_event, wall_axis
 
 
+__all__ = ["carry_tangents", "jacobian_from_events", "velocities_before", "transition_from_events", "event_record",
+           "final_jacobian", "transition_jacobian"]
+
+
 @njit(cache=True, error_model="numpy")
 def carry_tangents(mass, e0, n_ev, ev_t, ev_i, ev_j, ev_state, V, dQ, dV):
     """Carry intercept-form tangents dQ, dV (N, 2, P) through events e0 .. n_ev - 1, in place.

@@ -29,6 +29,10 @@ from numba import njit
 
 from nbst.constants import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT, WALL_TOP
 
+__all__ = ["INF", "IMPACT_NONE", "IMPACT_WALL", "IMPACT_PAIR", "pair_tau", "axis_tau", "wall_tau", "wall_axis",
+           "impulse_share", "transferred_speed", "strike_ratio", "elastic_impulse", "contact_normal", "replay_event",
+           "mirror", "fold", "images"]
+
 INF = math.inf
 
 #: ``replay_event`` outcomes: the event changed no velocity (a touch without approach),

@@ -65,6 +65,8 @@ from nbst.problem import Problem
 from nbst.sim.jacobian import carry_tangents, event_record, jacobian_from_events
 from nbst.sim.primitives import IMPACT_NONE, IMPACT_PAIR, IMPACT_WALL, contact_normal, impulse_share, replay_event
 
+__all__ = ["PHASE_SPREAD", "late_impact_errors", "analyze"]
+
 #: Worst case: a pair's turned normal counts (1 + PHASE_SPREAD) times its mid-step share;
 #: measured 0.79-1.40 times over the phase of the touch within its step (module docstring).
 PHASE_SPREAD = 0.5

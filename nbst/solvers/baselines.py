@@ -68,6 +68,11 @@ from nbst.solution import SolveResult
 if TYPE_CHECKING:
     from nbst.search.params import ProgressCallback
 
+__all__ = ["BASELINE_PATIENCE", "CMA_SIGMA0_FRACTION", "CMA_INCPOPSIZE", "GA_POP", "GA_TOURNAMENT",
+           "GA_MUTATION_FRACTION", "GA_BATCH", "DE_BOUNCES", "DE_POPSIZE", "RANDOM_BATCH", "MAX_BOUNCES",
+           "PROGRESS_EVERY", "BIG_COST", "solve_random", "solve_cma", "blas_single_thread", "solve_ga", "de_bounds",
+           "solve_de"]
+
 #: Patience of a baseline unless told otherwise: none (a baseline runs to its budget or target).
 BASELINE_PATIENCE = 0
 

@@ -53,6 +53,9 @@ from nbst.solvers.dispatch import SIGNATURE, SOLVERS, SolveRequest, run_solver
 if TYPE_CHECKING:
     from nbst.search.params import ProgressCallback
 
+__all__ = ["ISLAND_TIMEOUT", "PORTFOLIO", "portfolio_for", "IslandTask", "island_seeds", "RESTART_MIN_TRIALS",
+           "run_island", "restart_seed", "solve_islands", "run_islands"]
+
 #: Seconds the parent waits for an island's report before it declares the island lost.
 ISLAND_TIMEOUT = 600.0
 
