@@ -247,3 +247,13 @@ def test_a_bad_vehicle_file_is_refused_naming_the_field(edit, words):
     del d["mass"]
     with pytest.raises(InputError, match="mass: missing"):
         V.vehicle_type_from_dict(d)
+
+
+@pytest.mark.parametrize("kw, words", [({"seed": -1}, "seed must be an integer"),
+                                       ({"seed": 1, "max_rollouts": 0}, "max_rollouts must be a whole number")])
+def test_solve_refuses_a_bad_seed_or_budget_before_any_rollout(kw, words):
+    from nbst.errors import InputError
+    from nbst.models import crash
+
+    with pytest.raises(InputError, match=words):
+        crash.solve(S.load_script("t-bone"), **kw)

@@ -75,7 +75,7 @@ def intents_dict(script: Script, intents: np.ndarray) -> list[dict]:
     for i, _ in enumerate(script.vehicles):
         row = intents[i]
         g = lambda k: float(row[IX[k]])  # noqa: E731
-        d = {"speed_kmh": round(g("speed") * 3.6, 4)}
+        d: dict[str, object] = {"speed_kmh": round(g("speed") * 3.6, 4)}
         if math.isfinite(g("aim_x")):
             d["aim"] = [round(g("aim_x"), 4), round(g("aim_y"), 4)]
         for k in ("arrive", "brake_at", "slide_at", "slide_power", "headway", "reaction"):

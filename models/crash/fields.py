@@ -56,7 +56,7 @@ class Fields:
             self.fail(path, f"is too large ({len(str(abs(v)))} digits); numbers must be finite float64 values")
         if not math.isfinite(x):
             self.fail(path, f"must be finite, got {v}")
-        if lo is not None and not lo <= x <= hi:
+        if lo is not None and hi is not None and not lo <= x <= hi:
             self.fail(path, f"{x:g} is outside [{lo:g}, {hi:g}]" + (f" ({why})" if why else ""))
         return x
 
@@ -73,7 +73,7 @@ class Fields:
         x = self.number(v, path, lo, hi, why)
         return x, x
 
-    def integer(self, v, path: str, lo: int, hi: int) -> int:
+    def integer(self, v, path: str, lo: float, hi: float) -> int:
         if isinstance(v, bool) or not isinstance(v, int):
             self.fail(path, f"must be a whole number, got {jtype(v)}")
         if not lo <= v <= hi:

@@ -73,7 +73,7 @@ class Recorder:
         self.roll_prev = np.zeros((nsim, n))
         self.yaw_prev = np.zeros((nsim, n))
         self.min_dist = np.full((nsim, P), np.inf)
-        self.final = None
+        self.final: dict[str, np.ndarray] = {}  # set by finish: pos, yaw, up, speed
         self.pair_of = [[k for k, (a, b) in enumerate(L.pairs) if i in (a, b)] for i in range(n)]
         self._f = L.pair_adr.copy()
         self._F = L.pair_adr[:, None] + np.arange(1, 4)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import copy
 import math
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,7 @@ def _hidden(template: dict, rng: np.random.Generator, need_contacts: int, tries:
 
 def _fates(template: str, seed: int, s, o, radius: float, heading_tol: float) -> dict:
     """The template with the outcome ``o`` written as its fates."""
-    d = copy.deepcopy(TEMPLATES[template])
+    d: dict[str, Any] = copy.deepcopy(TEMPLATES[template])
     names = s.names()
     d["name"] = f"planted-{template}-{seed}"
     for v, vo in zip(d["vehicles"], o.vehicles):

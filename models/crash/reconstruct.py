@@ -69,7 +69,7 @@ class Reconstruction:
     """The fits of a case and what they say."""
 
     fits: list                  # Trials that meet the evidence, in the order found
-    best: object                # the trial of lowest cost (a fit when there is one)
+    best: search_mod.Trial      # the trial of lowest cost (a fit when there is one)
     rollouts: int
     fit_rollouts: int           # rollouts of the fit stage
     seed: int
@@ -152,7 +152,7 @@ def reconstruct(case: Script, *, seed: int, max_rollouts: int = search_mod.DEFAU
         MujocoError: a rollout diverged (a non-finite state).
     """
     own = runner is None
-    R = CrashRunner(case, jobs=jobs) if own else runner
+    R = runner if runner is not None else CrashRunner(case, jobs=jobs)
     S = space_of(case)
     fits: list = []
 
@@ -306,7 +306,7 @@ class _Fitter:
     def __init__(self, case, R, S, budget: int, keep, callback):
         self.case, self.R, self.S, self.budget, self.keep, self.callback = case, R, S, int(budget), keep, callback
         self.used = 0
-        self.best = None
+        self.best: search_mod.Trial | None = None
 
     def run(self, U: np.ndarray) -> list:
         U = np.clip(np.atleast_2d(U), 0.0, 1.0)[: max(0, self.budget - self.used)]
@@ -322,10 +322,10 @@ class _Fitter:
                 self.best = t
             out.append(t)
         self.used += len(U)
-        if self.callback:
-            self.callback(search_mod.CrashProgress(self.used, self.best.cost,
-                                                   self.best.outcome.signature_text(self.case.n),
-                                                   self.best.outcome.solved, 0))
+        best = self.best
+        if self.callback and best is not None:  # not None: U had a row
+            self.callback(search_mod.CrashProgress(self.used, best.cost, best.outcome.signature_text(self.case.n),
+                                                   best.outcome.solved, 0))
         return out
 
     def cma(self, t, fn, rng, sigma: float = SIGMA_FINAL):

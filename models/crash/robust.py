@@ -78,7 +78,7 @@ class Estimate:
     """The room's :class:`~nbst.models.mjsearch.probability.Probability` (k of n noisy copies met
     the script, its Wilson interval) with the seed and the outcomes seen ({label: count})."""
 
-    prob: object
+    prob: Probability
     seed: int
     outcomes: dict
 

@@ -423,13 +423,13 @@ def _fate(c: Fields, f, p: str, road, names: list, me: int) -> Fate:
                       math.radians(c.number(s.get("tol", 45.0), f"{p}.spin.tol", *LIMITS["spin_tol"], "degrees")))
     if "strikes" in f:
         s = c.obj(f["strikes"], f"{p}.strikes", ("curb", "barrier"))
-        for k in ("curb", "barrier"):
-            if k in s:
-                want = c.boolean(s[k], f"{p}.strikes.{k}")
-                has = road.curb > 0 if k == "curb" else bool(road.barriers)
+        for what in ("curb", "barrier"):
+            if what in s:
+                want = c.boolean(s[what], f"{p}.strikes.{what}")
+                has = road.curb > 0 if what == "curb" else bool(road.barriers)
                 if want and not has:
-                    c.fail(f"{p}.strikes.{k}", f"asks for a {k} strike, and the road has no {k}s")
-                kw[k] = want
+                    c.fail(f"{p}.strikes.{what}", f"asks for a {what} strike, and the road has no {what}s")
+                kw[what] = want
     return Fate(**kw)
 
 

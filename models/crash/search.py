@@ -46,12 +46,14 @@ Compute only.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
 from nbst.models.crash.run import BATCH, TIMESTEP_LADDER, CrashRunner
@@ -94,10 +96,10 @@ class Trial:
 
     u: np.ndarray
     outcome: out_mod.Outcome
-    controls: np.ndarray = field(repr=False, default=None)
-    qpos0: np.ndarray = field(repr=False, default=None)
-    qvel0: np.ndarray = field(repr=False, default=None)
-    final_qpos: np.ndarray = field(repr=False, default=None)
+    controls: np.ndarray | None = field(repr=False, default=None)
+    qpos0: np.ndarray | None = field(repr=False, default=None)
+    qvel0: np.ndarray | None = field(repr=False, default=None)
+    final_qpos: np.ndarray | None = field(repr=False, default=None)
     holds: bool | None = None   # the ladder's verdict on a trial that meets the script (None: not asked)
 
     @property
@@ -170,6 +172,12 @@ class _Search:
     def solved(self) -> bool:
         return self.best is not None and self.best.accepted
 
+    @property
+    def top(self) -> Trial:
+        """The best trial so far (there is one from the first rollout on)."""
+        assert self.best is not None, "no rollout yet"
+        return self.best
+
     def evaluate(self, U: np.ndarray) -> list[Trial]:
         U = np.clip(np.atleast_2d(U), 0.0, 1.0)[: max(0, self.left)]
         trials: list[Trial] = []
@@ -199,9 +207,9 @@ class _Search:
             if len(self.right) > 2 * RIGHT_KEPT:
                 self.right.sort(key=lambda t: t.cost)
                 del self.right[RIGHT_KEPT:]
-            self.history.append((self.rollouts, float(self.best.cost)))
+            self.history.append((self.rollouts, float(self.top.cost)))
             if self.callback:
-                self.callback(CrashProgress(self.rollouts, self.best.cost, self.best.outcome.signature_text(self.S.n),
+                self.callback(CrashProgress(self.rollouts, self.top.cost, self.top.outcome.signature_text(self.S.n),
                                        self.solved, len(self.archive)))
             if self.solved:
                 break
@@ -302,9 +310,9 @@ class _Search:
         funnel; the best again when there is none); else
         alternately from the best (SIGMA0) and from the archive's contact sequences nearest the
         script's (SIGMA0 / 3), in turn."""
-        if self.contacts_right(self.best):
-            start, sigma = self.best, SIGMA0 / (3 ** (k % 3))
-            if self.spent >= SPENT and not self.best.outcome.solved:
+        if self.contacts_right(self.top):
+            start, sigma = self.top, SIGMA0 / (3 ** (k % 3))
+            if self.spent >= SPENT and not self.top.outcome.solved:
                 spread = SIGMA0 * math.sqrt(self.S.dim)
                 far = [t for t in sorted(self.right, key=lambda t: t.cost)
                        if all(np.linalg.norm(t.u - p) >= spread for p in self.starts)]
@@ -313,7 +321,7 @@ class _Search:
             self.starts.append(start.u)
             return start, sigma
         if k % 2 == 0 or not self.archive:
-            return self.best, SIGMA0
+            return self.top, SIGMA0
         want = list(self.S.script.order or _fate_sequence(self.S.script))
         cells = sorted(self.archive.values(), key=lambda t: (out_mod._edit(list(t.outcome.sequence), want), t.cost))
         return cells[(k // 2) % len(cells)], SIGMA0 / 3
@@ -322,7 +330,7 @@ class _Search:
         import cma
 
         start, sigma = self.restart_point(k)
-        polishing, before = self.contacts_right(self.best), self.best.cost
+        polishing, before = self.contacts_right(self.top), self.top.cost
         es = cma.CMAEvolutionStrategy(start.u.tolist(), sigma,
                                       {"bounds": [0.0, 1.0], "popsize": BATCH, "verbose": -9,
                                        "seed": int(self.rng.integers(1, 2**31 - 1))})
@@ -341,7 +349,7 @@ class _Search:
             else:
                 stalled += 1
         if polishing:
-            self.spent = 0 if self.best.cost < before - 1e-9 else self.spent + 1
+            self.spent = 0 if self.top.cost < before - 1e-9 else self.spent + 1
 
 
 def _fate_sequence(script) -> list:
@@ -440,15 +448,17 @@ def solve(script: Script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS
         and the history.
 
     Raises:
-        InputError: ``seed`` is not an integer in [0, 2^63-1].
+        InputError: ``seed`` is not an integer in [0, 2^63-1], or ``max_rollouts`` is under 1.
         MujocoError: a rollout diverged (a non-finite state).
         KeyboardInterrupt: Ctrl-C before the first batch ended (after it, the best so far is
             returned).
     """
-    own = runner is None
-    R = CrashRunner(script, jobs=jobs) if own else runner
-    S = space_of(script)
     seed = check_seed(seed, what="seed")
+    if isinstance(max_rollouts, bool) or not isinstance(max_rollouts, numbers.Integral) or max_rollouts < 1:
+        raise InputError(f"max_rollouts must be a whole number of at least 1, got {max_rollouts!r}")
+    own = runner is None
+    R = runner if runner is not None else CrashRunner(script, jobs=jobs)
+    S = space_of(script)
     rng = np.random.default_rng(seed)
     s = _Search(S, R, rng, max_rollouts, callback, keep, ladder_check(script, R.xml, S) if ladder else None)
     t0 = time.perf_counter()
@@ -465,7 +475,7 @@ def solve(script: Script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS
                 s.insert(t, [])
             while not s.solved and s.left > 0:
                 # the paper's operations while contacts are wrong; one batch when only fine-tuning is left
-                for _ in range(1 if s.contacts_right(s.best) else GA_BATCHES):
+                for _ in range(1 if s.contacts_right(s.top) else GA_BATCHES):
                     if s.solved or s.left <= 0:
                         break
                     s.generation()
@@ -478,7 +488,9 @@ def solve(script: Script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS
         stopped = "interrupted"
         if s.best is None:
             raise
-    return CrashResult(best=s.best, rollouts=s.rollouts, restarts=restarts, stopped=stopped, seed=int(seed),
+    if own:
+        R.close()
+    return CrashResult(best=s.top, rollouts=s.rollouts, restarts=restarts, stopped=stopped, seed=int(seed),
                         wall_time=time.perf_counter() - t0,
                         archive={k: float(t.cost) for k, t in s.archive.items()}, history=s.history,
                         first_met=s.first_met)

@@ -47,6 +47,7 @@ import json
 import math
 from dataclasses import dataclass
 from importlib import resources
+from typing import Any
 
 import numpy as np
 
@@ -187,7 +188,8 @@ def vehicle_type_from_dict(d: object, *, source: str = "<vehicle type>") -> Vehi
     missing = [k for k, f in fields.items() if f.default is dataclasses.MISSING and k not in values]
     if missing:
         raise InputError(f"{source}: {missing[0]}: missing")
-    return VehicleType(**{k: v if isinstance(v, str) else float(v) for k, v in values.items()})
+    kwargs: dict[str, Any] = {k: v if isinstance(v, str) else float(v) for k, v in values.items()}
+    return VehicleType(**kwargs)
 
 
 def _builtin(file: str) -> VehicleType:

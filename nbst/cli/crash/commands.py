@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from typing import Any
 
 import numpy as np
 
@@ -39,7 +40,7 @@ def _load(name):
 def cmd_scripts(args) -> int:
     from nbst.models.crash.script import builtin_names, load_script
 
-    rows = []
+    rows: list[dict[str, Any]] = []
     for name in builtin_names():
         s = load_script(name)
         rows.append({"name": name, "vehicles": [f"{v.name} ({v.vtype.name})" for v in s.vehicles],
@@ -99,7 +100,7 @@ def cmd_solve(args) -> int:
     prepare_output(args.output)
     seed = _seed(args)
     runner = _runner(args, script)
-    bar = []
+    bar: list = []
 
     def progress(p) -> None:
         if args.quiet:
@@ -128,6 +129,7 @@ def cmd_solve(args) -> int:
                 b, intents, extra = _after_search(args, script, runner, S, b, intents, seed)
         except KeyboardInterrupt:
             stopped = "interrupted"
+    assert b.controls is not None  # every trial a search returns was rolled out
     d = crashfile.crash_dict(script, runner.xml, runner.model, intents, b.qpos0, b.qvel0, b.controls,
                              b.final_qpos, b.outcome, seed=seed, period_steps=runner.period,
                              search={"rollouts": res.rollouts, "restarts": res.restarts, "stopped": stopped,
@@ -212,6 +214,7 @@ def cmd_reconstruct(args) -> int:
         if bar is not None:
             bar.close()
     b = rec.best
+    assert b.controls is not None  # every trial a search returns was rolled out
     S = space_of(case)
     d = crashfile.crash_dict(case, runner.xml, runner.model, S.intents(b.u[None])[0], b.qpos0, b.qvel0, b.controls,
                              b.final_qpos, b.outcome, seed=seed, period_steps=runner.period)

@@ -104,7 +104,7 @@ def cmd_render_crash(args) -> int:
     try:
         motion = record(d, script, model)
         windows = slow_windows([im.t for im in motion.impacts], motion.duration)
-        if kind != "png":
+        if bar is not None:  # a video
             times = frame_times(motion.duration, fps, windows=windows, slow=SLOW, hold=args.hold)
             bar.total = len(times)
             bar.note("")
@@ -120,7 +120,7 @@ def cmd_render_crash(args) -> int:
         bar.close(n=n)
     if args.quiet:
         return 0
-    if kind == "png":
+    if bar is None:  # a still
         print(f"nbst render: wrote {out} ({size[0]}x{size[1]}, t = {args.still:g} s); {same}", file=sys.stderr)
     else:
         k = len(motion.impacts)
