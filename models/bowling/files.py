@@ -17,6 +17,7 @@ import stat
 from pathlib import Path
 
 from nbst.errors import InputError
+from nbst.problem import ProblemError, read_json
 
 __all__ = ["BowlingFileError", "regular_file", "read_doc", "fail", "non_finite", "too_large"]
 
@@ -81,8 +82,6 @@ def too_large(obj, path: str = ""):
 
 def read_doc(path):
     """Decoded JSON of a bowling file through the gate (see the module docstring)."""
-    from nbst.problem import ProblemError, read_json
-
     regular_file(path)
     try:
         doc = read_json(path)

@@ -42,6 +42,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from nbst.models.bowling import pin as pinmod
+from nbst.models.scene import full_precision
 
 __all__ = ["INCH", "TIMESTEP", "LANE_WIDTH", "GUTTER_WIDTH", "GUTTER_DEPTH", "PIN_SPACING", "PIT_EDGE_X",
            "DECK_FRONT_X", "OIL_END_X", "BALL_START_X", "LANE_START_X", "MU_OIL", "MU_DRY", "MU_DECK",
@@ -380,8 +381,6 @@ def scene_xml(spec=None) -> str:
     vertices, bodies' explicit inertia, rotated geoms. A model loaded from the text equals
     :func:`build_model`'s, bit for bit (tests/test_bowling.py).
     """
-    from nbst.models.scene import full_precision
-
     spec = build_spec() if spec is None else spec
     spec.compile()
     return full_precision(spec.to_xml(), spec, exact_attrs=_EXACT, spec_names=_SPEC_NAME, float32_attrs=("vertex",))

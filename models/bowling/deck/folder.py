@@ -25,8 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.models.bowling import geometry, pinfall, scene
+from nbst.models.bowling import geometry, pinfall, scene, deck
 from nbst.models.bowling.deck import atlas as atlasmod, figure, search, throwfile
+from nbst.outputs import write_text_atomic, prepare_output, atomic_path
 
 __all__ = ["throw_name", "write_throw", "atlas_json", "shipped_archive", "unpack_atlas", "prepare", "resume",
            "AtlasRun", "write_summaries", "summary_md"]
@@ -45,8 +46,6 @@ def write_throw(path, model, delivery, mask: int, *, shared_scene: str | None = 
     """Write THROW.json and its scene XML (``<stem>.scene.xml``, with keyframe ``shot``) beside
     it, atomically; with ``shared_scene`` the file names that scene (written by the caller).
     ``kw``: :func:`.throwfile.throw_dict`'s (requested, robustness, search)."""
-    from nbst.outputs import write_text_atomic
-
     path = Path(path)
     scene_name = shared_scene or f"{path.stem}.scene.xml"
     d = throwfile.throw_dict(model, delivery, scene_name=scene_name, down_mask=mask, **kw)
@@ -60,8 +59,6 @@ def atlas_json(folder, *, seed=None) -> Path:
     replays without nbst, ``{"kind": "nbst-bowling-atlas", "scene": "scene.xml", "shots":
     [throw, ...]}``, each throw with the throw-file keys (``scene`` relative to the atlas file),
     sorted by subset size, then pins. Files that do not pass the throw-file checks are left out."""
-    from nbst.outputs import write_text_atomic
-
     folder = Path(folder)
     throws = []
     for f in sorted(folder.glob("subset-*.json")):
@@ -85,7 +82,6 @@ def shipped_archive() -> tuple[dict, str | None]:
         a, _, _ = throwfile.load_atlas(throwfile.SHIPPED_ATLAS)
     except throwfile.ThrowFileError as e:
         return {}, str(e)
-    from nbst.models.bowling import deck
 
     return {pinfall.mask_from_pins(d["down"]): np.array([float(d["launch"][k]) for k in deck.KEYS])
             for d in a["shots"] if "launch" in d}, None
@@ -97,8 +93,6 @@ def unpack_atlas(atlas_path, folder) -> int:
     throws were written. Everything is checked before anything is written: the atlas through
     the throw-file gate (its scene inside its own folder, parsed by MuJoCo, every throw's shapes
     fitting it), and its scene must be this version's (the search continues in it)."""
-    from nbst.outputs import write_text_atomic
-
     folder = Path(folder)
     a, _, text = throwfile.load_atlas(atlas_path)
     if text != scene.scene_xml():
@@ -118,8 +112,6 @@ def unpack_atlas(atlas_path, folder) -> int:
 def prepare(out_dir, from_atlas=None) -> Path:
     """The output folder, with the ``from_atlas`` throws in it and this version's scene.xml;
     ThrowFileError (one line) when ``from_atlas`` is refused or the folder holds another scene."""
-    from nbst.outputs import prepare_output, write_text_atomic
-
     out = prepare_output(out_dir, directory=True, option=OPTION)
     if from_atlas:
         try:
@@ -139,8 +131,6 @@ def resume(out: Path) -> tuple[dict, dict, list]:
     """The throws already in the folder: ({mask: file}, {mask: (4,) delivery}, [(file, why)]);
     files that fail the throw-file checks are skipped, each with its one-line reason (naming the file) (and found
     again if the search finds their subset)."""
-    from nbst.models.bowling import deck
-
     files, deliveries, skipped = {}, {}, []
     for f in out.glob("subset-*.json"):
         try:
@@ -173,8 +163,6 @@ class AtlasRun:
         self.probes = 0
 
     def add_robustness(self, mask: int, f: Path) -> None:
-        from nbst.outputs import write_text_atomic
-
         d = throwfile.load(f)
         rob = search.robustness_ladder(self.runner, self.deliveries[mask], mask)
         self.probes += rob["lateral_m_rollouts"] + rob["speed_m_s_rollouts"]
@@ -222,8 +210,6 @@ class AtlasRun:
 
 def write_summaries(out: Path, run: AtlasRun, *, seconds: float) -> int:
     """summary.csv, summary.md, atlas.json and summary.png of the folder; returns the subsets held."""
-    from nbst.outputs import atomic_path, write_text_atomic
-
     have = {m: f.name for m, f in run.files.items()}
     buf = io.StringIO()
     w = csv.writer(buf)

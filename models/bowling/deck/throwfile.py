@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from nbst.errors import InputError, MujocoError
-from nbst.models.bowling import deck, files, pinfall, scene
+from nbst.models.bowling import deck, files, pinfall, scene, geometry
 from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
 __all__ = ["SCHEMA_VERSION", "KIND", "ThrowFileError", "scene_with_start", "rule", "throw_dict", "dumps",
@@ -333,8 +333,6 @@ def load_atlas(path):
     """(atlas dict, MjModel, scene XML text) of a 5 m atlas file, every throw (its ``shots``, the
     format's first name) checked like a throw file (field paths ``shots[i].qpos0``) against the
     atlas's scene."""
-    from nbst.models.bowling import geometry
-
     a = read_doc(path)
     if not isinstance(a, dict) or a.get("kind") != ATLAS_KIND:
         _fail(path, "", f"not an nbst bowling atlas (kind must be {ATLAS_KIND!r})")

@@ -30,8 +30,7 @@ import math
 from dataclasses import asdict, dataclass, replace
 
 from nbst.models.bowling import lane
-from nbst.models.bowling.lane import names as _names
-from nbst.models.bowling.lane import spares
+from nbst.models.bowling.lane import names as _names, spares, noise as _noise
 
 __all__ = ["STANCE_SEP", "ARROW_BOARDS", "BOARDS_PER_STEP", "POCKET_MIDDLE", "stance_of", "arrow_text", "line_of",
            "aim_target", "Move", "move_after", "LeaveAdvice", "advise_leave", "SAMPLE_NOTE"]
@@ -171,8 +170,6 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
                  polish: int | None = None, on_done=None) -> LeaveAdvice:
     """The advice at ``leave`` ('-' joined pins): :func:`.spares.best_spare` under ``noise`` (a
     bowler's), said as stance and target (the real path's crossing of the arrows)."""
-    from nbst.models.bowling.lane import noise as _noise
-
     nz = noise if noise is not None else _noise.DEFAULT
     res = spares.best_spare(leave, n, seed, runner=runner, screen=screen, nz=nz, on_done=on_done, polish=polish,
                             strike=strike)

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from nbst.models.bowling import files, lane, pinfall, subsets
 from nbst.models.bowling.lane import atlas, frame, noise, throwfile
+from nbst.outputs import write_text_atomic, signals_deferred
 
 __all__ = ["CHUNK", "CHECKPOINT_S", "FoulAtlasRun", "atlas_points", "summary_md"]
 
@@ -89,14 +90,10 @@ class FoulAtlasRun:
     # -------------------------------------------------------------------------- writing
 
     def checkpoint(self) -> None:
-        from nbst.outputs import write_text_atomic
-
         write_text_atomic(self.ckpt, json.dumps(atlas.archive_doc(self.archive, self.seed)) + "\n", option=OPTION)
 
     def write_all(self) -> None:
         """The checkpoint, the throw atlas, the checks and the summary (signals held until done)."""
-        from nbst.outputs import signals_deferred, write_text_atomic
-
         a = throwfile.atlas_dict([self.done[m] for m in sorted(self.done)], oil=atlas.OIL, noise=self.nz)
         if self.bowler is not None:
             a["bowler"] = self.bowler  # whose release noise the probabilities are (for people; not checked)

@@ -45,6 +45,7 @@ from nbst.models.bowling import scene
 from nbst.models.bowling.lane.ball import Ball
 from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, LAW, NX, OilField, OilLaw
 from nbst.models.bowling.lane.units import BOARD_WIDTH, FOUL_LINE_X, FT, N_BOARDS
+from nbst.models.bowling.lane.delivery import quat_to_mat
 
 __all__ = ["N_CELLS", "G", "LIFT_TOL", "cover_cells", "contact_step", "BallOnLane"]
 
@@ -288,7 +289,6 @@ class BallOnLane:
         prm[P_QADR], prm[P_VADR], prm[P_BODY] = int(j.qposadr[0]), int(j.dofadr[0]), bid
         self.prm = prm
         q = np.array(model.body_iquat[bid], dtype=float)
-        from nbst.models.bowling.lane.delivery import quat_to_mat
 
         Q = quat_to_mat(q[None])[0]
         self.iinv_body = np.ascontiguousarray(Q @ np.diag(1.0 / np.array(model.body_inertia[bid])) @ Q.T)

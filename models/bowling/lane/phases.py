@@ -25,8 +25,9 @@ from nbst.models.bowling import scene
 from nbst.models.bowling.lane.ball import Ball
 from nbst.models.bowling.lane.delivery import Delivery, initial_state, quat_to_mat
 from nbst.models.bowling.lane.oil import LAW, OilField, OilLaw, oil_name, pattern
-from nbst.models.bowling.lane.scene import ball_quat
+from nbst.models.bowling.lane.scene import ball_quat, lane_spec
 from nbst.models.bowling.lane.units import ARROWS_FT, MPH, LaneError, hand_sign, x_to_ft, y_to_board
+from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
 __all__ = ["TIMESTEP", "MAX_SECONDS", "ROLL_SLIP", "HOOK_SHARE", "BREAKPOINT_MIN", "FLARE_FT", "AIM_TOL", "ThrowResult",
            "release_state", "ball_model", "run", "throw", "flare_in", "aim_angle", "board_at", "aim_at_arrows"]
@@ -106,8 +107,6 @@ def release_state(model, delivery: Delivery, ball: Ball) -> tuple[np.ndarray, np
 
 @lru_cache(maxsize=16)
 def _ball_model(ball: Ball, timestep: float):
-    from nbst.models.bowling.lane.scene import lane_spec
-
     m = lane_spec(ball, Delivery(), pins=False).compile()
     m.opt.timestep = timestep
     return m
@@ -155,7 +154,6 @@ def run(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: OilLa
     import mujoco
 
     from nbst.models.bowling.lane.friction import A_MU, BallOnLane
-    from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
     delivery = delivery.check()
     ball = (ball or Ball()).check()

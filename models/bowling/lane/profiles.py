@@ -42,6 +42,7 @@ from pathlib import Path
 from nbst.models.bowling import lane
 from nbst.models.bowling.lane.noise import Noise
 from nbst.registry import Registry
+from nbst.models.bowling.lane import phases
 
 __all__ = ["Profile", "PROFILES", "NAMES", "DEFAULT_PROFILE", "PROFILES_DIR", "NOISE_SHAPE", "PRO_SCALE", "PRO_NOISE",
            "PRO_SPARE_SCALE", "PRO_SPARE_NOISE", "load_profile", "profile", "scaled", "strike_ball"]
@@ -200,7 +201,5 @@ def strike_ball(name: str, oil="house", ball: lane.Ball | None = None, hand: str
     Raises:
         LaneError: an unknown profile or hand.
     """
-    from nbst.models.bowling.lane import phases
-
     d, _ = phases.aim_angle(profile(name).delivery(hand), 17.5, oil, ball)
     return d

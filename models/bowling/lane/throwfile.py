@@ -65,6 +65,7 @@ from dataclasses import asdict, is_dataclass
 from nbst import seeds
 from nbst.models.bowling import files, lane, scene
 from nbst.models.bowling.lane import frame, noise as _noise
+from nbst.errors import MujocoError
 
 __all__ = ["FORMAT", "SCENES", "ATLAS_FORMAT", "VERSION", "MAX_THROWS", "MAX_LADDER", "BOARD_RANGE", "ANGLE_RANGE",
            "SECONDS_MAX", "SEED_MAX", "ThrowFileError", "BALL_KEYS", "BALL_KEYS_1", "DELIVERY_KEYS",
@@ -603,8 +604,6 @@ def replay_file(path) -> tuple[dict, frame.FrameResult, bool]:
     Raises:
         ThrowFileError: the file or a field refused, another scene's throw, or MuJoCo warned.
     """
-    from nbst.errors import MujocoError
-
     d = load(path)
     replayable(d, path)
     try:
