@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import sys
 
+from nbst.cli.args import SEED, print_json, with_limits
 from nbst.cli.bowl import advise as bowl_advise, deck as bowl_deck, foul as bowl_foul, lane as bowl_lane
 from nbst.cli.bowl import series as bowl_series
-from nbst.cli.args import SEED, with_limits
 from nbst.cli.bowl.args import err, leave, picture_flags, pins_down, runner_args, wants_picture
 from nbst.cli.flags import add_out_dir, add_seed
 
@@ -197,8 +197,6 @@ def cmd_replay(args) -> int:
     want = sorted(d["down"])
     ok = down == want
     if args.json:
-        from nbst.cli.args import print_json
-
         print_json({"throw": str(args.file), "down": down, "expected": want, "match": ok})
     else:
         print(f"pins down  {','.join(map(str, down)) or 'none'}")

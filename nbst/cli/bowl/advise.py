@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import sys
 
-from nbst.cli.args import Bounded
+from nbst.cli.args import Bounded, print_json
 from nbst.cli.bowl.args import bowler_flag, bowler_of, mc_flags, number
 from nbst.errors import InputError
 from nbst.cli.bowl.lane import _bar
 from nbst.parallel import default_jobs
+from nbst.outputs import atomic_path, prepare_output
 
 __all__ = ["register", "register_advise", "cmd_advise", "spare_frames", "cmd_spares", "leaves_of", "spare_doc",
            "spare_line", "cmd_pocket"]
@@ -103,8 +104,6 @@ def cmd_advise(args) -> int:
         mv = advise.move_after(d, throwfile.oil_of(d), lane.Ball(**d["ball"]))
         doc = {"after": str(args.after), **mv.to_dict(), "note": _note()}
         if args.json:
-            from nbst.cli.args import print_json
-
             print_json(doc)
             return 0
         print(mv.text)
@@ -137,8 +136,6 @@ def cmd_advise(args) -> int:
     bar.close()
     doc = {**adv.to_dict(), "bowler": args.bowler, "noise": nz.to_dict(), "seed": args.seed, "note": _note()}
     if args.json:
-        from nbst.cli.args import print_json
-
         print_json(doc)
         return 0
     print(adv.text + (f"; bowler {args.bowler}" if args.bowler else ""))
@@ -195,8 +192,6 @@ def cmd_spares(args) -> int:
         return 130
     bar.close()
     if args.json:
-        from nbst.cli.args import print_json
-
         print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "polish": polish,
                     "bowler": args.bowler, "noise": nz.to_dict(), "note": _note(), "spares": out})
     else:
@@ -276,7 +271,6 @@ def cmd_pocket(args) -> int:
 
     nz = noise.DEFAULT if nz is None else nz
     base = spares.STRIKE if strike is None else strike
-    from nbst.outputs import atomic_path, prepare_output
 
     prepare_output(args.output)  # before the frames: a link, a FIFO or a folder is refused in one line
     bar = _bar(args, args.samples * len(boards) * len(angles), "pocket frames")
@@ -301,8 +295,6 @@ def cmd_pocket(args) -> int:
            "carry_4_6_deg": {"strikes": kc, "pocket_hits": nc}, "map": pm.to_dict(), "output": args.output,
            "bowler": args.bowler, "note": _note()}
     if args.json:
-        from nbst.cli.args import print_json
-
         doc["map"].pop("hits")
         print_json(doc)
         return 0

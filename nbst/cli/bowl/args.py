@@ -12,6 +12,7 @@ import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.errors import InputError
+from nbst.domain import plain
 
 __all__ = ["number", "size_of", "err", "pin_list", "pins_down", "leave", "pins_text", "asked_text", "runner_args",
            "picture_flags", "oil_flag", "DELIVERY_DEFAULTS", "bowlers", "bowlers_text", "bowler_flag",
@@ -37,8 +38,6 @@ def size_of(text: str) -> tuple[int, int] | None:
 
 def err(cmd: str, msg: str) -> int:
     """One error line for ``nbst bowl CMD`` on stderr; the exit code 2 (every bowl subcommand)."""
-    from nbst.domain import plain
-
     print(f"nbst bowl {cmd}: error: {plain(msg)}", file=sys.stderr)
     return 2
 

@@ -13,6 +13,10 @@ import sys
 from nbst.cli.args import Bounded
 from nbst.cli.bowl.args import asked_text, err
 from nbst.seeds import resolve_seed
+from nbst import progress
+from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt
+from nbst.parallel import default_jobs
+from nbst.domain import plain
 
 __all__ = ["SOLVE_ROLLOUTS", "ATLAS_ROLLOUTS", "PER_SUBSET", "runner_of", "cmd_solve", "cmd_atlas"]
 
@@ -37,10 +41,6 @@ def runner_of(args, jobs: int):
 
 
 def cmd_solve(args) -> int:
-    from nbst import progress
-    from nbst.outputs import prepare_output, signals_deferred, sigterm_as_interrupt
-    from nbst.parallel import default_jobs
-
     from nbst.models.bowling import pinfall
     from nbst.models.bowling.deck import folder, search
 
@@ -53,8 +53,6 @@ def cmd_solve(args) -> int:
     if not args.no_atlas:
         archive, why = folder.shipped_archive()
         if why:
-            from nbst.domain import plain
-
             print(f"nbst bowl solve: warning: the shipped atlas is not used: {plain(why)}", file=sys.stderr)
     L = runner_of(args, jobs)  # nbst.cluster.connect's InputError names --cluster and the address
     probes = 0 if args.no_robustness else search.ROBUSTNESS_ROLLOUTS[1]
@@ -120,12 +118,8 @@ def cmd_solve(args) -> int:
 
 
 def cmd_atlas(args) -> int:
-    from nbst import progress
-
     from nbst.models.bowling import geometry
     from nbst.models.bowling.deck import folder, throwfile
-    from nbst.outputs import sigterm_as_interrupt
-    from nbst.parallel import default_jobs
 
     try:
         out = folder.prepare(args.out, args.from_atlas)

@@ -17,6 +17,10 @@ from pathlib import Path
 from nbst.cli.args import Bounded
 from nbst.cli.bowl.args import asked_text, bowler_flag, bowlers, err
 from nbst.seeds import resolve_seed
+from nbst import progress
+from nbst.outputs import OutputError, prepare_output, signals_deferred, sigterm_as_interrupt, write_text_atomic
+from nbst.parallel import default_jobs
+from nbst.domain import plain
 
 __all__ = ["SAMPLES", "ROBUST", "ROBUST_DEFAULT", "SOLVE_SAMPLES", "ATLAS_SAMPLES", "SOLVE_5M_ONLY",
            "ATLAS_5M_ONLY", "add_solve_flags", "add_atlas_flags", "shipped_elites", "cmd_solve", "robust_starts",
@@ -93,8 +97,6 @@ def shipped_elites() -> tuple[dict, bool]:
     try:
         a = throwfile.load_atlas(foul_atlas.SHIPPED)
     except (throwfile.ThrowFileError, OSError) as e:
-        from nbst.domain import plain
-
         print(f"nbst bowl solve: warning: the shipped foul-line atlas is not used: {plain(str(e))}", file=sys.stderr)
         return {}, False
     return atlas_points(a)
@@ -110,10 +112,6 @@ def cmd_solve(args) -> int:
     its nearest subsets), then --robust's climb or the probability, then the ladder; one progress
     bar over every frame, its clock the command's; the summary quotes the bar's count and seconds."""
     import numpy as np
-
-    from nbst import progress
-    from nbst.outputs import OutputError, prepare_output, signals_deferred, sigterm_as_interrupt, write_text_atomic
-    from nbst.parallel import default_jobs
 
     from nbst.models.bowling import lane, pinfall, subsets
     from nbst.models.bowling.lane import advise, atlas as foul_atlas, frame, names, noise, robust, throwfile
@@ -283,10 +281,6 @@ def lane_scene() -> str:
 def cmd_atlas(args) -> int:
     """``bowl atlas --foul-line``: the search, the mirror step and each subset's measures of
     :class:`nbst.models.bowling.lane.folder.FoulAtlasRun`, with progress and Ctrl-C handling."""
-    from nbst import progress
-    from nbst.outputs import prepare_output, sigterm_as_interrupt
-    from nbst.parallel import default_jobs
-
     from nbst.models.bowling import files
     from nbst.models.bowling.lane.folder import FoulAtlasRun
 

@@ -13,12 +13,16 @@ import argparse
 import sys
 from pathlib import Path
 
-from nbst.cli.args import Bounded
+from nbst.cli.args import Bounded, print_json
 from nbst.cli.bowl.args import (ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
                                 delivery_of, err, mc_flags, oil_flag, picture_flags, pin_list, pins_text, size_of,
                                 stance_target, wants_picture)
 from nbst.cli.bowl.series import path_plot_flag, write_path_plot
 from nbst.parallel import default_jobs
+from nbst.progress import progress_bar
+from nbst.outputs import write_text_atomic, prepare_output, signals_deferred, OutputError
+from nbst.errors import MujocoError
+from nbst.solution import dumps_strict
 
 __all__ = ["register", "register_throw", "register_frame", "write_throw", "the_delivery", "cmd_throw",
            "line_lines", "throw_lines", "cmd_frame", "frame_lines", "replay_throw", "write_pictures",
@@ -88,16 +92,12 @@ def register_frame(bowl) -> None:
 
 
 def _bar(args, total: int, desc: str):
-    from nbst.progress import progress_bar
-
     return progress_bar(total=total, desc=desc, unit="frame", disable=args.quiet, file=sys.stderr)
 
 
 def write_throw(path, r, oil: str, ball, *, ladder=None, estimate=None, extra=None) -> None:
     """Write THROW.json (models/bowling/throwfile.py) for frame ``r`` thrown with ``ball``, atomically;
     ``extra``: the keys beside the schema's (line, names, bowler, note)."""
-    from nbst.outputs import write_text_atomic
-
     from nbst.models.bowling.lane import throwfile
 
     d = throwfile.throw_dict(r, oil=oil, ball=ball, ladder=ladder, estimate=estimate)
@@ -122,7 +122,6 @@ def the_delivery(args, oil, ball):
 def cmd_throw(args) -> int:
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import advise
-    from nbst.outputs import prepare_output
 
     for option, path in (("-o", args.output), ("--video", getattr(args, "video", None)),
                          ("--still", getattr(args, "still", None)), ("--path-plot", args.path_plot)):
@@ -144,13 +143,8 @@ def cmd_throw(args) -> int:
         return err("throw", bad)
     doc.update(bowler=args.bowler, line=advise.line_of(r), note=advise.SAMPLE_NOTE)
     if args.output:
-        from nbst.outputs import write_text_atomic
-        from nbst.solution import dumps_strict
-
         write_text_atomic(Path(args.output), dumps_strict(doc, indent=1) + "\n")
     if args.json:
-        from nbst.cli.args import print_json
-
         print_json(doc)
         return 0
     for line in throw_lines(r, bowler=args.bowler):
@@ -196,8 +190,6 @@ def throw_lines(r, bowler: str | None = None) -> list[str]:
 
 
 def cmd_frame(args) -> int:
-    from nbst.outputs import prepare_output, signals_deferred
-
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import frame, noise
 
@@ -257,8 +249,6 @@ def cmd_frame(args) -> int:
             print(f"nbst bowl frame: interrupted; wrote {args.output}", file=sys.stderr)
             return 130
     if args.json:
-        from nbst.cli.args import print_json
-
         print_json(doc)
         return 0
     for line in frame_lines(doc):
@@ -321,7 +311,6 @@ def replay_throw(args) -> int:
     if not picture:
         d, r, ok = throwfile.replay_file(args.file)
     else:
-        from nbst.errors import MujocoError
         from nbst.models.bowling import lane
         from nbst.models.bowling.lane import frame
 
@@ -339,8 +328,6 @@ def replay_throw(args) -> int:
         ok = r.down == sorted(d["outcome"]["down"])
     want = sorted(d["outcome"]["down"])
     if args.json:
-        from nbst.cli.args import print_json
-
         print_json({"throw": str(args.file), "down": r.down, "expected": want, "leave": r.leave,
                     "expected_leave": sorted(d["outcome"]["leave"]), "match": ok})
     else:
@@ -363,7 +350,6 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
     the recorded throw ``th``; ``readout``: LaneRenderer's asked, probability, probability_note,
     expected, no_request. A progress line on stderr for the video and one line per file written. Returns a
     one-line error, or None."""
-    from nbst.outputs import OutputError, prepare_output
     from nbst.render.core import style
     from nbst.render.bowling.lane import render_throw
     from nbst.render.bowling.throw import throw_times
@@ -382,7 +368,6 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
         if getattr(args, "video", None):
             prepare_output(args.video, option="--video")
             fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
-            from nbst.progress import progress_bar
 
             bar = progress_bar(total=len(throw_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
             try:
@@ -398,7 +383,6 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
 def picture_from_args(args, delivery, ball) -> str | None:
     """``nbst bowl throw --video/--still``: record the throw's frame on all ten pins (as ``bowl
     frame`` runs it) and write the video and/or the still. Returns a one-line error, or None."""
-    from nbst.errors import MujocoError
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import frame
     from nbst.render.bowling.throw import record_throw

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import sys
 
-from nbst.cli.args import SEED, Bounded
+from nbst.cli.args import SEED, Bounded, print_json
 from nbst.cli.bowl.args import ball_flags, ball_of, bowlers, oil_flag
 from nbst.cli.flags import add_seed
 from nbst.errors import InputError
 from nbst.seeds import resolve_seed
+from nbst.outputs import prepare_output, signals_deferred, write_text_atomic, OutputError, dumps_strict
+from nbst.progress import progress_bar
 
 __all__ = ["GAMES", "LINEUP", "register", "cmd_series", "pictures", "series_lines", "png", "path_plot_flag",
            "write_path_plot"]
@@ -69,9 +71,6 @@ def register(bowl) -> None:
 
 
 def cmd_series(args) -> int:
-    from nbst.outputs import prepare_output, signals_deferred, write_text_atomic
-    from nbst.progress import progress_bar
-
     from nbst.models.bowling.lane import transition as T
 
     seed = resolve_seed(args.seed, what="--seed")
@@ -92,7 +91,6 @@ def cmd_series(args) -> int:
         done = [r for r in runs if r.balls]
         doc = T.series_dict(done, profile=args.bowler, lineup_n=args.lineup, lefty_share=args.lefty_share,
                             interrupted=interrupted)
-        from nbst.outputs import dumps_strict
 
         write_text_atomic(args.output, dumps_strict(doc) + "\n")
         return doc
@@ -118,8 +116,6 @@ def cmd_series(args) -> int:
         doc = write(False)
         pictures(doc, args.figure, args.path_plot)
     if args.json:
-        from nbst.cli.args import print_json
-
         print_json({"output": args.output, "seed": seed, "runs": [{"move": r["move"], "moves": r["moves"],
                     "scores": r["scores"], "summary": r["summary"]} for r in doc["runs"]]})
     else:
@@ -185,7 +181,6 @@ def write_path_plot(path, results, *, oil=None, option: str = "--path-plot", pro
     """The path plot of ``results`` (:class:`.lane.ThrowResult`, the ball alone) over ``oil``'s fresh film;
     one line on stderr when written. Returns a one-line error, or None."""
     from nbst.models.bowling import lane
-    from nbst.outputs import OutputError
     from nbst.render.bowling import path as P
 
     pat = lane.pattern(oil) if oil is not None else None
