@@ -181,9 +181,11 @@ def test_solution_file_replays_bit_for_bit_with_the_docs_loop(toss, tmp_path):
 def test_cli_solve_replay_and_their_exits(toss, impossible, tmp_path, capsys, monkeypatch):
     out = tmp_path / "sol.json"
     assert main(["scene", "solve", str(toss), "-o", str(out), "--seed", "7", "--max-rollouts", "600",
-                 "--jobs", "2", "-q"]) == 0
+                 "--jobs", "2", "--samples", "6", "-q"]) == 0
     d = json.loads(out.read_text())
     assert d["format"] == "nbst-scene-solution" and d["met"] and d["seed"] == 7
+    p = d["probability"]
+    assert p["n"] == 6 and 0 <= p["k"] <= 6 and p["lo"] <= p["p"] <= p["hi"] and len(p["noise"]) == 9
     assert set(d["versions"]) == {"nbst", "mujoco"} and d["verdicts"]["cube"]["met"]
     assert main(["scene", "replay", str(out)]) == 0
     assert "reproduced bit for bit" in capsys.readouterr().out

@@ -2,7 +2,8 @@
 
 Loads and checks the fates (``nbst.scene.scenefile.load_fates``), rolls the scene out on ``jobs``
 threads (``nbst.scene.rollout.SceneSim``) and runs the paper's per-body signature search
-(``nbst.scene.search.signature_search``) from one seed (``nbst.seeds``).
+(``nbst.scene.search.signature_search``) from one seed (``nbst.seeds``); on request, the
+probability that the answer holds under the fates' noise (``nbst.scene.search.noisy_probability``).
 """
 from __future__ import annotations
 
@@ -14,8 +15,8 @@ from typing import Callable
 from nbst.errors import SolveError
 from nbst.scene.fates import Fates
 from nbst.scene.scenefile import check_against_model, compile_scene, load_fates
-from nbst.scene.rollout import SceneSim
-from nbst.scene.search import DEFAULT_MAX_ROLLOUTS, SceneProgress, signature_search
+from nbst.scene.rollout import SceneSim, quiet_mujoco_warnings
+from nbst.scene.search import DEFAULT_MAX_ROLLOUTS, SceneProgress, noisy_probability, signature_search
 from nbst.scene.solution import SceneResult
 from nbst.seeds import check_random_state, resolve_seed
 
@@ -23,7 +24,7 @@ __all__ = ["solve"]
 
 
 def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, seed: int | None = None,
-          max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int = 1,
+          max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int = 1, samples: int = 0,
           callback: Callable[[SceneProgress], None] | None = None) -> SceneResult:
     """Find initial velocities (and offsets) of a scene's free bodies that meet their fates.
 
@@ -34,20 +35,23 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
         seed: the seed (an integer in [0, 2^63-1]); None draws one (recorded in the result).
         max_rollouts: the rollout budget, >= 1.
         jobs: threads rolling the scene out (>= 1); any value gives the same result.
+        samples: after the search (unless interrupted), estimate from this many noisy rollouts how
+            often the best controls meet every fate under the fates' ``"noise"`` (0: none).
         callback: called with a :class:`~nbst.scene.search.SceneProgress` after each batch.
 
     Returns:
         the :class:`~nbst.scene.solution.SceneResult`: the best rollout (every fate met when
-        ``met``), the rollouts spent, why it stopped, the seed.
+        ``met``), the rollouts spent (the search's; the samples apart), why it stopped, the seed,
+        the probability when ``samples`` > 0.
 
     Raises:
         FatesError: the fates file or its scene is refused (one line naming the file and field).
         InputError: the seed is not an integer in range.
-        SolveError: ``max_rollouts`` or ``jobs`` is not an integer >= 1.
+        SolveError: ``max_rollouts`` or ``jobs`` is not an integer >= 1, or ``samples`` one >= 0.
     """
-    for name, v in (("max_rollouts", max_rollouts), ("jobs", jobs)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-            raise SolveError(f"{name} must be an integer >= 1, got {v!r}")
+    for name, v, least in (("max_rollouts", max_rollouts, 1), ("jobs", jobs, 1), ("samples", samples, 0)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < least:
+            raise SolveError(f"{name} must be an integer >= {least}, got {v!r}")
     s = resolve_seed(seed)
     if isinstance(fates, Fates):
         f = fates if scene is None else dataclasses.replace(fates, scene=Path(scene))
@@ -55,9 +59,17 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
         check_against_model(f, model)
     else:
         f, model = load_fates(fates, scene=scene)
-    with SceneSim(f, model, jobs=jobs) as sim:
+    p = None
+    stopped = "budget"
+    with quiet_mujoco_warnings(), SceneSim(f, model, jobs=jobs) as sim:
         r = signature_search(sim, rng=check_random_state(s), max_rollouts=max_rollouts, callback=callback)
+        stopped = r.stopped
+        if samples and stopped != "interrupted":
+            try:
+                p = noisy_probability(sim, r.best.x, n=samples, seed=s)
+            except KeyboardInterrupt:
+                stopped = "interrupted"
         nstep, key = sim.nstep, sim.key
     return SceneResult(fates=f, model=model, best=r.best, met=r.best.judgement.met and not r.best.warnings,
-                       rollouts=r.rollouts, stopped=r.stopped, seed=s, max_rollouts=max_rollouts,
-                       wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key)
+                       rollouts=r.rollouts, stopped=stopped, seed=s, max_rollouts=max_rollouts,
+                       wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p)

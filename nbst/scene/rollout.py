@@ -28,16 +28,33 @@ from __future__ import annotations
 
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
 from nbst.errors import SolveError
+from nbst.models.mjsearch.runner import data_warnings
 from nbst.scene.fates import Fates
 from nbst.scene.judge import Judgement, Recording, judge, rotate
 
-__all__ = ["SceneRollout", "SceneSim", "replay", "conjugate"]
+__all__ = ["SceneRollout", "SceneSim", "replay", "conjugate", "quiet_mujoco_warnings"]
+
+
+@contextmanager
+def quiet_mujoco_warnings() -> Iterator[None]:
+    """While the block runs, MuJoCo's warnings (a diverging rollout) are neither printed nor
+    written to ``MUJOCO_LOG.TXT`` in the current folder; each rollout still counts them in its
+    ``MjData`` (:attr:`SceneRollout.warnings`). The process-wide hook is restored after."""
+    import mujoco
+
+    old = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda msg: None)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(old)
 
 
 def conjugate(quat: np.ndarray) -> np.ndarray:
@@ -201,7 +218,7 @@ class SceneSim:
             ang[i], lin[i] = vel[:3], vel[3:]
         rec = Recording(times=np.arange(n + 1) * h, pos=pos, quat=s.xquat[ids].copy(), linvel=lin, angvel=ang,
                         touches=tuple(touches))
-        warned = tuple(mujoco.mjtWarning(k).name for k in range(len(d.warning)) if d.warning[k].number > 0)
+        warned = tuple(data_warnings(d))
         return SceneRollout(x=np.array(x, dtype=float), qpos0=qpos0, qvel0=qvel0, qpos=d.qpos.copy(),
                             qvel=d.qvel.copy(), judgement=judge(self.fates, rec), warnings=warned)
 

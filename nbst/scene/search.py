@@ -38,10 +38,11 @@ from typing import Callable
 
 import numpy as np
 
+from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
 from nbst.scene.rollout import SceneRollout, SceneSim
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "SceneProgress",
-           "SceneSearchResult", "signature_search"]
+           "SceneSearchResult", "signature_search", "noisy_probability"]
 
 #: The rollout budget when none is given (the CLI's --max-rollouts default too).
 DEFAULT_MAX_ROLLOUTS = 3000
@@ -323,3 +324,26 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         tell()
     return SceneSearchResult(best=S.best.r, rollouts=S.rollouts, stopped=stopped,
                              wall_time=time.perf_counter() - t0, signatures=len(S.seen))
+
+
+def noisy_probability(sim: SceneSim, x: np.ndarray, *, n: int, seed: int) -> Probability:
+    """How often the controls ``x`` meet every fate under the fates' noise, with its 95 % Wilson interval.
+
+    ``n`` copies of ``x``, each coordinate plus sigma times a standard normal draw (the fates'
+    ``"noise"``, or the defaults), clipped into the ranges (the rollout room's
+    ``normal_draws``/``perturb``: the draws of ``seed``, common random numbers), rolled out.
+
+    Args:
+        sim: the scene's rollouts.
+        x: (D,) the controls vector.
+        n: noisy copies, >= 1.
+        seed: the draws' seed.
+
+    Returns:
+        the ``nbst.models.mjsearch.probability.Probability`` (k of n met).
+    """
+    f = sim.fates
+    lo, hi = f.bounds()
+    xs = perturb(x, f.noise(), normal_draws(seed, n, f.dim), lo, hi)
+    outs = sim.run(xs)
+    return Probability.of(sum(1 for r in outs if r.judgement.met and not r.warnings), n)

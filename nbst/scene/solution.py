@@ -25,10 +25,11 @@ import numpy as np
 from nbst._version import __version__
 from nbst.errors import InputError
 from nbst.files import read_regular
+from nbst.models.mjsearch.probability import Probability
 from nbst.scene.fates import Fates
 from nbst.scene.scenefile import load_fates
 from nbst.scene.judge import Judgement, signature_text
-from nbst.scene.rollout import SceneRollout, SceneSim, replay
+from nbst.scene.rollout import SceneRollout, SceneSim, quiet_mujoco_warnings, replay
 
 __all__ = ["SOLUTION_FORMAT", "SOLUTION_VERSION", "SceneSolutionError", "SceneResult", "SceneReplay",
            "solution_dict", "read_solution", "replay_solution", "file_sha256"]
@@ -59,6 +60,8 @@ class SceneResult:
         signatures: distinct signatures seen.
         nstep: steps per rollout.
         key: the keyframe's index (-1: none).
+        probability: how often the best controls meet every fate under the fates' noise (None:
+            not asked, or interrupted).
     """
 
     fates: Fates
@@ -73,6 +76,7 @@ class SceneResult:
     signatures: int
     nstep: int
     key: int
+    probability: Probability | None = None
 
     @property
     def judgement(self) -> Judgement:
@@ -122,6 +126,9 @@ def solution_dict(res: SceneResult) -> dict:
         "search": {"rollouts": res.rollouts, "stopped": res.stopped, "max_rollouts": res.max_rollouts,
                    "wall_time_s": round(res.wall_time, 2), "signatures": res.signatures},
         "versions": {"nbst": __version__, "mujoco": mujoco.__version__},
+        **({} if res.probability is None else {"probability": {
+            "k": res.probability.k, "n": res.probability.n, "p": res.probability.p, "lo": res.probability.lo,
+            "hi": res.probability.hi, "noise": [float(a) for a in f.noise()], "seed": res.seed}}),
     }
 
 
@@ -207,7 +214,7 @@ def replay_solution(path: str | os.PathLike) -> SceneReplay:
     q0, v0 = _floats(doc, "qpos0", nq, str(path)), _floats(doc, "qvel0", nv, str(path))
     qf, vf = _floats(doc, "final.qpos", nq, str(path)), _floats(doc, "final.qvel", nv, str(path))
     x = _floats(doc, "x", fates.dim, str(path))
-    with SceneSim(fates, model) as sim:
+    with quiet_mujoco_warnings(), SceneSim(fates, model) as sim:
         q, v = replay(model, q0, v0, int(doc["nstep"]), key=sim.key)
         judged = sim.rollout(x)
     same = (q.tobytes() == qf.tobytes() and v.tobytes() == vf.tobytes()

@@ -17,10 +17,12 @@ from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_quiet, add_seed
 from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_replay, cmd_solve
 
-__all__ = ["COMMANDS", "register", "ROLLOUTS"]
+__all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES"]
 
 #: --max-rollouts' domain.
 ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
+#: --samples' domain.
+SAMPLES = Bounded("samples", 1, 100_000, integer=True)
 
 #: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
 #: them without building their arguments (nbst.cli.main builds only the command asked for).
@@ -78,6 +80,10 @@ def register(sub) -> None:
     v.add_argument("--jobs", type=JOBS, default=None, metavar="K",
                    help=with_limits("threads running the rollouts (default: all cores); any K gives the same "
                                     "solution", JOBS))
+    v.add_argument("--samples", type=SAMPLES, default=None, metavar="N",
+                   help=with_limits("also estimate how often the solution written meets every fate under the "
+                                    "fates' noise (\"noise\", or the defaults of docs/scene.md) from N noisy "
+                                    "rollouts, with its 95 %% Wilson interval (default: none)", SAMPLES))
     add_quiet(v, "no progress bar and no summary line")
     v.set_defaults(func=cmd_solve)
 

@@ -100,7 +100,7 @@ def cmd_solve(args) -> int:
 
     with sigterm_as_interrupt():
         res = solve(args.scene, fates, seed=seed, max_rollouts=args.max_rollouts, jobs=args.jobs or default_jobs(),
-                    callback=progress)
+                    samples=args.samples or 0, callback=progress)
     if bar:
         bar[0].close(n=res.rollouts)
     write_json_atomic(args.output, solution_dict(res))
@@ -109,6 +109,8 @@ def cmd_solve(args) -> int:
         met = "met" if res.met else f"not met (cost {b.cost:.3g})"
         took = seconds_text(bar[0].seconds if bar else res.wall_time)
         warn = f"; MuJoCo warned: {', '.join(b.warnings)}" if b.warnings else ""
+        if res.probability is not None:
+            warn += f"; P {res.probability.text()} under the fates' noise"
         print(f"scene {name}: {met}, signature {res.judgement.to_dict()['signature']} after "
               f"{count_text(res.rollouts)} rollouts in {took}, seed {seed}{warn}; wrote {args.output}",
               file=sys.stderr)
