@@ -360,3 +360,27 @@ def test_cli_replay_films_a_throw_file_and_refuses_a_shot_file_in_one_line(spare
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--video" in err[0] and "use a .mp4 or .gif file" in err[0]
     assert not (tmp_path / "s.mp4").exists() and not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("oil", ["house", lane.pattern("house")])
+def test_the_oil_line_names_the_pattern_and_stays_in_its_panel(gl, throw, oil):
+    """The readout's oil line is what a bowler reads (the pattern's name, length and volume), never a
+    raw Pattern object, given a pattern or its name; every line of the text drawn ends inside the
+    behind panel, clear of the overhead panel and its pin legend."""
+    r = bl.LaneRenderer(gl, dataclasses.replace(throw, oil=oil), size=SIZE, camera="both")
+    try:
+        cw = r.text.cell[0]
+        left, _, width, _ = r.panels["behind"]
+        for t in (0.0, 1.5, float(throw.motion.times[-1])):
+            lines = r.readout(t)
+            (line,) = [s for s in lines if s.startswith("oil")]
+            assert line.startswith("oil     house (40 ft, 22 ml); ball 15 lb") and "Pattern(" not in line
+            assert left + 0.6 * cw + max(map(len, lines)) * cw <= left + width
+    finally:
+        r.release()
+
+
+def test_a_long_pattern_name_is_cut_on_the_oil_line():
+    long = dataclasses.replace(lane.pattern("house"), name="a very long pattern name from a pattern file")
+    text = bl.oil_summary(long)
+    assert text == "a very long pattern n... (40 ft, 22 ml)" and len(text.split(" (")[0]) == bl.OIL_NAME_CHARS

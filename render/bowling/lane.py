@@ -69,6 +69,20 @@ void main() {
 """
 
 
+#: The most characters of an oil pattern's name on the readout (a pattern file may name it in 80).
+OIL_NAME_CHARS = 24
+
+
+def oil_summary(oil) -> str:
+    """What a bowler reads of ``oil`` (a pattern, its registered name or its file): its name, its
+    length and its volume, e.g. ``house (40 ft, 22 ml)``; the name cut to OIL_NAME_CHARS."""
+    from nbst.models.bowling import lane
+
+    pat = lane.pattern(oil)
+    name = pat.name if len(pat.name) <= OIL_NAME_CHARS else pat.name[:OIL_NAME_CHARS - 3] + "..."
+    return f"{name} ({pat.length_ft:.0f} ft, {pat.volume_ml:.0f} ml)"
+
+
 #: The cameras: behind the bowler (following the ball), overhead over the back of the lane, both
 #: side by side, and the pin-deck close-up.
 CAMERAS = ("behind", "overhead", "both", "deck")
@@ -228,8 +242,7 @@ class LaneRenderer(FrameRenderer):
                  f"axis    rotation {d.rotation:.0f} deg, tilt {d.tilt:.0f} deg",
                  f"line    board {d.foul_board():.1f} at the foul line, {d.angle:+.1f} deg out "
                  f"(stance {d.foul_board() + STANCE_SEP:.1f})",
-                 f"oil     {th.oil} ({lane.pattern(th.oil).length_ft:.0f} ft); ball {b.weight_lb:g} lb, "
-                 f"RG {b.rg:.2f}, diff {b.diff:.3f}"]
+                 f"oil     {oil_summary(th.oil)}; ball {b.weight_lb:g} lb, RG {b.rg:.2f}, diff {b.diff:.3f}"]
         if r is None:
             lines.append("phases  none: the ball does not reach the pins on the lane")
         else:

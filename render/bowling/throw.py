@@ -90,7 +90,7 @@ LEGEND = (("ball's path", TRAIL_RGB), ("darker wood: oil", (0.60, 0.64, 0.70)),
 
 @dataclass(frozen=True)
 class Throw:
-    """A recorded throw: the motion (``render.bowling.Motion``: ball and pin poses each step, the
+    """A recorded throw: the motion (``nbst.render.bowling.deck.Motion``: ball and pin poses each step, the
     ball's orientation relative to its release), its phases (``lane.ThrowResult``, None for a ball
     that never reaches the pins), the settled frame it is (``frame.FrameResult``: its pins down
     are the last step's), the pins in play, and what made it."""
@@ -98,7 +98,7 @@ class Throw:
     motion: Motion
     result: object
     delivery: object
-    oil: str
+    oil: object         # a pattern name, file or Pattern (lane.pattern reads any)
     ball: object
     timestep: float
     frame: object = None
