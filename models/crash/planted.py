@@ -110,8 +110,8 @@ COPIES, COPIES_SEED = 32, 0
 def hidden_probability(d: dict, u: np.ndarray, copies: int = COPIES, seed: int = COPIES_SEED, jobs: int = 1):
     """How often the hidden intents of unit point ``u``, re-driven ``copies`` times with the driver
     noise (:data:`.robust.NOISE`, common random numbers of ``seed``), meet script ``d`` at its own
-    step: a :class:`.robust.Estimate` (k of n, the Wilson interval, the outcomes seen). A crash whose
-    fates its own drivers meet only by luck is a chaotic outcome (docs/results/crash.md)."""
+    step: a :class:`.robust.CrashEstimate` (k of n, the Wilson interval, the outcomes seen). A
+    crash whose fates its own drivers meet only by luck is a chaotic outcome (docs/results/crash.md)."""
     s = script_mod.script_from_dict(copy.deepcopy(d), source="<planted>")
     R = CrashRunner(s, jobs=jobs)
     try:

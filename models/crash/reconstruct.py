@@ -173,8 +173,7 @@ def reconstruct(case: Script, *, seed: int, max_rollouts: int = search_mod.DEFAU
             seen.append(t)
             keep(t)
         def told(p):  # the fits found so far, as the search reports its archive
-            callback(search_mod.CrashProgress(p.rollouts, p.best_cost, p.best_signature, bool(fits),
-                                              len(fits)))
+            callback(search_mod.CrashProgress(p.rollouts, p.best_cost, p.best_signature, bool(fits), len(fits)))
         try:
             used = momentum_fit(case, R, S, fit_budget, rng, keep_all, told if callback else None)
         except KeyboardInterrupt:

@@ -28,12 +28,12 @@ import numpy as np
 from nbst.models.crash import driver as drv
 from nbst.models.crash.run import TIMESTEP_LADDER, CrashRunner
 from nbst.models.crash.script import AFTER_IMPACT, Range
-from nbst.models.crash.space import Space
+from nbst.models.crash.space import CrashSpace
 from nbst.models.mjsearch.ladder import climb
 from nbst.models.mjsearch.probability import Probability, counts, normal_draws, perturb
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_ROBUST_BUDGET", "NOISE", "CLIP", "sigma_row", "noisy", "label",
-           "Estimate", "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem"]
+           "CrashEstimate", "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem"]
 
 #: Noisy copies a probability is estimated from when none is given (``nbst crash probability
 #: --samples``; ``nbst crash solve --robust``'s fresh estimate).
@@ -74,7 +74,7 @@ def label(o) -> str:
 
 
 @dataclass
-class Estimate:
+class CrashEstimate:
     """The room's :class:`~nbst.models.mjsearch.probability.Probability` (k of n noisy copies met
     the script, its Wilson interval) with the seed and the outcomes seen ({label: count})."""
 
@@ -93,12 +93,13 @@ class Estimate:
                 "noise": {k: NOISE[k] for k in NOISE}, "outcomes": dict(self.outcomes)}
 
 
-def estimate_of(outcomes, seed: int) -> Estimate:
+def estimate_of(outcomes, seed: int) -> CrashEstimate:
     k = sum(1 for o in outcomes if o.solved)
-    return Estimate(prob=Probability.of(k, len(outcomes)), seed=int(seed), outcomes=counts(label(o) for o in outcomes))
+    return CrashEstimate(prob=Probability.of(k, len(outcomes)), seed=int(seed),
+                         outcomes=counts(label(o) for o in outcomes))
 
 
-def probability(runner: CrashRunner, intents: np.ndarray, n: int, seed: int, *, on_batch=None) -> Estimate:
+def probability(runner: CrashRunner, intents: np.ndarray, n: int, seed: int, *, on_batch=None) -> CrashEstimate:
     """The probability that ``intents`` meet the script under driver noise (``n`` copies of ``seed``)."""
     copies = noisy(np.asarray(intents, dtype=float), n, seed)
     outs = []
@@ -133,7 +134,7 @@ class RobustCrashProblem:
     """The crash as :func:`nbst.models.mjsearch.robust.maximise` sees it: a candidate is an intent
     set (n, len(INTENT)); a point is the search space's coordinates, each in its noise sigma."""
 
-    def __init__(self, space: Space, runner: CrashRunner, xml: str):
+    def __init__(self, space: CrashSpace, runner: CrashRunner, xml: str):
         self.S, self.R, self.xml = space, runner, xml
         sig = sigma_row()
         self.scale = np.array([sig[f] if isinstance(r, Range) and sig[f] > 0 else 1.0 for _, f, r in space.coords])
@@ -180,7 +181,7 @@ class RobustCrashProblem:
         lad = ladder(self.R.script, self.xml, cand)
         return ladder_rows(lad), bool(lad.results[0].solved and lad.holds), len(lad.timesteps)
 
-    def fresh(self, cand, n: int, seed: int) -> Estimate:
+    def fresh(self, cand, n: int, seed: int) -> CrashEstimate:
         return probability(self.R, cand, n, seed)
 
 

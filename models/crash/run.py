@@ -30,7 +30,7 @@ from nbst.models.crash.script import Script, script_from_dict
 from nbst.models.mjsearch.batch import BatchRunner
 from nbst.models.mjsearch.cluster import map_chunks
 
-__all__ = ["BATCH", "TIMESTEP_LADDER", "scene_vehicles", "scene_text", "Rollouts", "CrashRunner",
+__all__ = ["BATCH", "TIMESTEP_LADDER", "scene_vehicles", "scene_text", "CrashRollouts", "CrashRunner",
            "CrashClusterRunner"]
 
 #: Simulations per batch: a fixed number, so that a search's path does not depend on --jobs.
@@ -53,7 +53,7 @@ def scene_text(script: Script) -> str:
 
 
 @dataclass
-class Rollouts:
+class CrashRollouts:
     """A batch's results: outcomes (judged), the closest approach per pair (s, pairs), the initial
     states, the realised controls (s, periods, nu) and the final qpos (s, nq)."""
 
@@ -102,17 +102,18 @@ class CrashRunner:
             v.append(b)
         return np.array(q), np.array(v)
 
-    def run(self, intents: np.ndarray) -> Rollouts:
+    def run(self, intents: np.ndarray) -> CrashRollouts:
         """Run intents (s, n, len(INTENT)) in batches of ``batch``; results in order."""
         intents = np.asarray(intents, dtype=float).reshape(-1, self.script.n, len(drv.INTENT))
         parts = [self._batch(intents[k:k + self.size]) for k in range(0, len(intents), self.size)]
-        return Rollouts(outcomes=[o for p in parts for o in p.outcomes],
-                        min_dist=np.concatenate([p.min_dist for p in parts]),
-                        qpos0=np.concatenate([p.qpos0 for p in parts]), qvel0=np.concatenate([p.qvel0 for p in parts]),
-                        controls=np.concatenate([p.controls for p in parts]),
-                        final_qpos=np.concatenate([p.final_qpos for p in parts]))
+        return CrashRollouts(outcomes=[o for p in parts for o in p.outcomes],
+                             min_dist=np.concatenate([p.min_dist for p in parts]),
+                             qpos0=np.concatenate([p.qpos0 for p in parts]),
+                             qvel0=np.concatenate([p.qvel0 for p in parts]),
+                             controls=np.concatenate([p.controls for p in parts]),
+                             final_qpos=np.concatenate([p.final_qpos for p in parts]))
 
-    def _batch(self, intents: np.ndarray) -> Rollouts:
+    def _batch(self, intents: np.ndarray) -> CrashRollouts:
         L, m = self.L, self.model
         s = len(intents)
         qpos0, qvel0 = self.initial(intents)
@@ -147,8 +148,8 @@ class CrashRunner:
         outs = out_mod.outcomes(rec, self.names, L.mass)
         for o, md in zip(outs, rec.min_dist):
             out_mod.judge(o, self.script, md)
-        return Rollouts(outcomes=outs, min_dist=rec.min_dist.copy(), qpos0=qpos0, qvel0=qvel0, controls=out.controls,
-                        final_qpos=out.final_qpos)
+        return CrashRollouts(outcomes=outs, min_dist=rec.min_dist.copy(), qpos0=qpos0, qvel0=qvel0,
+                             controls=out.controls, final_qpos=out.final_qpos)
 
     def close(self) -> None:
         self.stepper.close()
@@ -179,11 +180,11 @@ class CrashClusterRunner(CrashRunner):
         super().__init__(script, jobs=1, **kw)
         self.client = connect(address)
 
-    def _batch(self, intents: np.ndarray) -> Rollouts:
+    def _batch(self, intents: np.ndarray) -> CrashRollouts:
         got = map_chunks(self.client, _run_on_worker, list(intents), self.script.raw, self.xml, self.dt)
         o, md, q0, v0, c, q = zip(*got)
-        return Rollouts(outcomes=list(o), min_dist=np.array(md), qpos0=np.array(q0), qvel0=np.array(v0),
-                        controls=np.array(c), final_qpos=np.array(q))
+        return CrashRollouts(outcomes=list(o), min_dist=np.array(md), qpos0=np.array(q0), qvel0=np.array(v0),
+                             controls=np.array(c), final_qpos=np.array(q))
 
     def close(self) -> None:
         super().close()

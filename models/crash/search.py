@@ -58,7 +58,7 @@ from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
 from nbst.models.crash.run import BATCH, TIMESTEP_LADDER, CrashRunner
 from nbst.models.crash.script import Script
-from nbst.models.crash.space import Space, space_of
+from nbst.models.crash.space import CrashSpace, space_of
 from nbst.seeds import check_seed
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "CRASH_EXPLORE", "PER_SIGNATURE", "POPULATION", "CREEP", "GA_BATCHES",
@@ -149,7 +149,7 @@ def _order_bits(sig: int) -> int:
 
 
 class _Search:
-    def __init__(self, space: Space, runner, rng: np.random.Generator, max_rollouts: int, callback, keep=None,
+    def __init__(self, space: CrashSpace, runner, rng: np.random.Generator, max_rollouts: int, callback, keep=None,
                  check=None):
         self.S, self.R, self.rng = space, runner, rng
         self.max_rollouts, self.callback, self.keep, self.check = int(max_rollouts), callback, keep, check
@@ -210,7 +210,7 @@ class _Search:
             self.history.append((self.rollouts, float(self.top.cost)))
             if self.callback:
                 self.callback(CrashProgress(self.rollouts, self.top.cost, self.top.outcome.signature_text(self.S.n),
-                                       self.solved, len(self.archive)))
+                                            self.solved, len(self.archive)))
             if self.solved:
                 break
         return trials
@@ -364,7 +364,7 @@ def _fate_sequence(script) -> list:
     return seq
 
 
-def directed(space: Space, rng: np.random.Generator, u: np.ndarray | None = None) -> np.ndarray:
+def directed(space: CrashSpace, rng: np.random.Generator, u: np.ndarray | None = None) -> np.ndarray:
     """The paper's *directed randomize* for vehicles: a unit point whose drivers aim where their
     first victim will be at their arrival time (drawn in its range), the victim driving straight
     at its speed towards its own aim point; a vehicle that hits nobody aims at its rest region.
@@ -403,7 +403,7 @@ def directed(space: Space, rng: np.random.Generator, u: np.ndarray | None = None
     return out
 
 
-def ladder_check(script: Script, xml: str, space: Space,
+def ladder_check(script: Script, xml: str, space: CrashSpace,
                  timesteps: tuple[float, ...] = LADDER_CHECK_TIMESTEPS) -> Callable[[Trial], bool]:
     """``check(trial) -> bool``: the trial's intents meet the script with the same contact
     sequence at every one of ``timesteps`` too (one rollout each)."""
@@ -491,6 +491,6 @@ def solve(script: Script, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS
     if own:
         R.close()
     return CrashResult(best=s.top, rollouts=s.rollouts, restarts=restarts, stopped=stopped, seed=int(seed),
-                        wall_time=time.perf_counter() - t0,
-                        archive={k: float(t.cost) for k, t in s.archive.items()}, history=s.history,
-                        first_met=s.first_met)
+                       wall_time=time.perf_counter() - t0,
+                       archive={k: float(t.cost) for k, t in s.archive.items()}, history=s.history,
+                       first_met=s.first_met)

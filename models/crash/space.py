@@ -22,14 +22,14 @@ import numpy as np
 from nbst.models.crash import driver as drv
 from nbst.models.crash.script import AFTER_IMPACT, Range, Script
 
-__all__ = ["STRAIGHT_AHEAD", "Space", "space_of"]
+__all__ = ["STRAIGHT_AHEAD", "CrashSpace", "space_of"]
 
 #: How far ahead (m) a driver without an aim point looks.
 STRAIGHT_AHEAD = 200.0
 
 
 @dataclass(frozen=True)
-class Space:
+class CrashSpace:
     """The search space of a script: ``dim`` coordinates; ``blocks[i]`` the coordinates of vehicle
     i; ``base`` (n, len(INTENT)) the fixed values (NaN where off); ``coords`` [(vehicle, intent
     index, Range or choices)] per coordinate."""
@@ -73,8 +73,8 @@ class Space:
         return [f"{self.script.vehicles[i].name}.{drv.INTENT[f]}" for i, f, _ in self.coords]
 
 
-def space_of(script: Script) -> Space:
-    """The :class:`Space` of ``script`` (see the module docstring)."""
+def space_of(script: Script) -> CrashSpace:
+    """The :class:`CrashSpace` of ``script`` (see the module docstring)."""
     n, P = script.n, len(drv.INTENT)
     base = np.full((n, P), np.nan)
     coords: list = []
@@ -106,4 +106,4 @@ def space_of(script: Script) -> Space:
         else:
             base[i, IX["after"]] = AFTER_IMPACT.index(d.after_impact[0])
         blocks.append(tuple(range(start, len(coords))))
-    return Space(script=script, base=base, coords=tuple(coords), blocks=tuple(blocks))
+    return CrashSpace(script=script, base=base, coords=tuple(coords), blocks=tuple(blocks))
