@@ -35,6 +35,8 @@ COMMANDS = {
 
 
 def register(sub) -> None:
+    # the defaults are the library's; read here, when `nbst crash` is built, so that `nbst --help`
+    # loads no crash module (their registries, the vehicle files) at all
     from nbst.models.crash.robust import DEFAULT_ROBUST_BUDGET, DEFAULT_SAMPLES
     from nbst.models.crash.search import DEFAULT_MAX_ROLLOUTS
 
