@@ -121,6 +121,20 @@ def test_the_rollout_is_the_plain_mj_step_loop_bit_for_bit(toss):
     assert q.tobytes() == r.qpos.tobytes() and v.tobytes() == r.qvel.tobytes()
 
 
+def test_the_one_call_rollout_is_the_loop_too(space):
+    """A scene whose fates need only the end (rest_in) steps in one mj_step(nstep=n) call: the
+    same bits as the loop, the same verdict."""
+    f, model = space
+    with SceneSim(f, model) as sim:
+        assert not sim.per_step and not sim.pairs
+        r = sim.rollout(np.array([0.3, -0.2, 0.1, 1.0, 2.0, -3.0, 0.1, 0.0, -0.2]))
+        q, v = replay(model, r.qpos0, r.qvel0, sim.nstep, key=sim.key)
+    assert q.tobytes() == r.qpos.tobytes() and v.tobytes() == r.qvel.tobytes()
+    end = r.qpos[:3]  # (0.2, 0.2, 0.8) + (0.3, -0.2, 0.1) x 1 s, no gravity
+    assert np.allclose(end, [0.5, 0.0, 0.9], atol=1e-12)
+    assert abs(r.judgement.cost - max(0.0, float(np.linalg.norm(end - [0, 0, 1])) - 0.2)) < 1e-12
+
+
 def test_touches_are_first_contacts(toss):
     f, model = load_fates(toss)
     with SceneSim(f, model) as sim:

@@ -16,7 +16,9 @@ Anything not in the controls starts as in the model (or the keyframe).
 reads between the steps that change nothing in the simulation (positions of the fated bodies'
 origins, ``MjData.xpos``, after each step, which are those of the state the step started from;
 contacts listed by the step, for first touches; the final pose and velocities from a second
-``MjData``). So :func:`replay` (the loop written in docs/scene.md) gives the same final state bit
+``MjData``). When no fate needs a step but the last (no ``at``, ``through``, ``still``, ``hits``
+or ``never_hits``), the loop is one ``mj_step(model, data, nstep=n)`` call: the same steps, run in
+C with the GIL released, so the threads of :meth:`SceneSim.run` run side by side. So :func:`replay` (the loop written in docs/scene.md) gives the same final state bit
 for bit. A contact touches when its distance is <= 0.
 
 **Threads**: :meth:`SceneSim.run` rolls a batch out on ``jobs`` threads, each with its own
@@ -131,6 +133,8 @@ class SceneSim:
                     for g2 in theirs:
                         key = (int(min(g1, g2)), int(max(g1, g2)))
                         self.pairs.setdefault(key, []).append((i, name))
+        #: the judge needs the path at every step (``at``, ``through``, ``still``), not only the end
+        self.per_step = any(f.at or f.through or f.still for f in fates.fates)
         self._local = threading.local()
         self._pool = ThreadPoolExecutor(max_workers=self.jobs) if self.jobs > 1 else None
 
@@ -193,30 +197,40 @@ class SceneSim:
         d.qpos[:] = qpos0
         d.qvel[:] = qvel0
         ids, pairs, n = self.bodies, self.pairs, self.nstep
-        pos = np.empty((n + 1, len(ids), 3))
         touches: list[dict[str, float]] = [{} for _ in ids]
         h = float(m.opt.timestep)
-        for k in range(n):
-            mujoco.mj_step(m, d)
-            pos[k] = d.xpos[ids]  # the state this step started from
-            if pairs and d.ncon:
-                con = d.contact
-                for g, dist in zip(con.geom[:d.ncon], con.dist[:d.ncon]):
-                    hit = pairs.get((int(min(g[0], g[1])), int(max(g[0], g[1]))))
-                    if hit and dist <= 0:
-                        for i, name in hit:
-                            touches[i].setdefault(name, k * h)
+        if not (self.per_step or pairs):  # only the end is judged: one call, the same steps in C
+            s.qpos[:] = qpos0
+            mujoco.mj_kinematics(m, s)
+            first = s.xpos[ids].copy()
+            mujoco.mj_step(m, d, nstep=n)
+            pos = np.empty((2, len(ids), 3))
+            pos[0] = first
+            times = np.array([0.0, n * h])
+        else:
+            pos = np.empty((n + 1, len(ids), 3))
+            times = np.arange(n + 1) * h
+            for k in range(n):
+                mujoco.mj_step(m, d)
+                pos[k] = d.xpos[ids]  # the state this step started from
+                if pairs and d.ncon:
+                    con = d.contact
+                    for g, dist in zip(con.geom[:d.ncon], con.dist[:d.ncon]):
+                        hit = pairs.get((int(min(g[0], g[1])), int(max(g[0], g[1]))))
+                        if hit and dist <= 0:
+                            for i, name in hit:
+                                touches[i].setdefault(name, k * h)
         s.qpos[:] = d.qpos
         s.qvel[:] = d.qvel
         s.time = d.time
         mujoco.mj_forward(m, s)
-        pos[n] = s.xpos[ids]
+        pos[-1] = s.xpos[ids]
         vel = np.empty(6)
         lin, ang = np.empty((len(ids), 3)), np.empty((len(ids), 3))
         for i, b in enumerate(ids):
             mujoco.mj_objectVelocity(m, s, mujoco.mjtObj.mjOBJ_BODY, int(b), vel, 0)
             ang[i], lin[i] = vel[:3], vel[3:]
-        rec = Recording(times=np.arange(n + 1) * h, pos=pos, quat=s.xquat[ids].copy(), linvel=lin, angvel=ang,
+        rec = Recording(times=times, pos=pos, quat=s.xquat[ids].copy(), linvel=lin, angvel=ang,
                         touches=tuple(touches))
         warned = tuple(data_warnings(d))
         return SceneRollout(x=np.array(x, dtype=float), qpos0=qpos0, qvel0=qvel0, qpos=d.qpos.copy(),
