@@ -107,6 +107,7 @@ def test_a_bad_field_is_refused_in_one_line_naming_file_and_field(tmp_path, doc,
     (json.dumps(DOC).replace('"duration": 0.5', '"duration": Infinity'), "finite"),
     (json.dumps(DOC).replace('"duration": 0.5', '"duration": 1' + "0" * 40), "15 digits"),
     ('{"format": "nbst-fates", ', "not JSON"),
+    (json.dumps(DOC).replace('"duration": 0.5', '"duration": 0.5, "duration": 0.7'), "'duration' appears twice"),
 ])
 def test_non_finite_and_huge_numbers_are_refused(tmp_path, text, why):
     p = _write(tmp_path, text)
@@ -157,6 +158,7 @@ def test_files_outside_the_scenes_folder_are_refused(tmp_path):
         ('<compiler assetdir="/"/><asset><texture name="t" type="2d" file="etc/x.png"/></asset>', "texture"),
         ('<asset><hfield name="h" file="/etc/hostname"/></asset>', "hfield"),
         ('<asset><texture name="c" type="cube" fileup="../far.png"/></asset>', "texture"),
+        ('<worldbody><flexcomp name="f" type="mesh" file="../far.stl" dim="2"/></worldbody>', "flexcomp"),
     ]
     for extra, tag in cases:
         (scene / "s.xml").write_text(XML.replace('<option timestep="0.01"/>', extra))

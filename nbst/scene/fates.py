@@ -5,7 +5,7 @@ written by others are tried against them; an unknown key, a typo, is refused by 
 frozen dataclasses (:class:`Fates`, :class:`Control`, :class:`Fate`, :class:`Region`,
 :class:`Range3`). Refused: a missing or unknown key, a value of the wrong type, a NaN or infinite
 number or one past :data:`MAX_ABS` (an integer literal of more than 15 digits is refused before it
-is built), an inverted range (lo > hi) or one that is not two numbers (an empty one), a region of
+is built), a key given twice in one object, an inverted range (lo > hi) or one that is not two numbers (an empty one), a region of
 zero or negative size, an ``"at"`` time after the duration. Every refusal is one line naming the
 file and the field: :class:`FatesError` (an ``InputError``), exit 2. The scene side (the MJCF's
 files, MuJoCo's compilation, the names) is ``nbst.scene.scenefile``, whose ``load_fates`` is the
@@ -246,6 +246,15 @@ def _reject_constant(s: str) -> float:
     raise ValueError(f"{s} is not a finite number")
 
 
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict:
+    out: dict = {}
+    for k, v in pairs:
+        if k in out:
+            raise ValueError(f"the key {k!r} appears twice in one object")
+        out[k] = v
+    return out
+
+
 def _parse_int(s: str) -> int:
     if len(s.lstrip("-")) > 15:
         raise ValueError(f"the integer {s[:20]}... has more than 15 digits")
@@ -458,7 +467,8 @@ def read_fates_json(path: Path) -> Any:
     """The JSON document of a fates file, read through nbst's bounded reader (FatesError if it is not JSON)."""
     data = read_regular(path, max_bytes=MAX_FATES_BYTES, what="fates file", allow_empty=False)
     try:
-        return json.loads(data.decode("utf-8"), parse_constant=_reject_constant, parse_int=_parse_int)
+        return json.loads(data.decode("utf-8"), parse_constant=_reject_constant, parse_int=_parse_int,
+                          object_pairs_hook=_unique_keys)
     except UnicodeDecodeError:
         raise FatesError(path, "", "not a text file (not UTF-8)") from None
     except json.JSONDecodeError as e:

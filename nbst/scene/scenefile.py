@@ -1,8 +1,8 @@
 """The scene side of a fates file: the MJCF's files, its compilation, the names against the model.
 
 :func:`load_fates` is the way in: it reads the fates file (``nbst.scene.fates.parse_fates``),
-checks the MJCF's files (:func:`check_scene_files`: ``<include>``, mesh, texture, hfield and skin
-files must lie under the scene's folder, meshes at most :data:`~nbst.scene.fates.MAX_MESH_BYTES`),
+checks the MJCF's files (:func:`check_scene_files`: ``<include>``, mesh, texture, hfield, skin
+and flexcomp files must lie under the scene's folder, meshes at most :data:`~nbst.scene.fates.MAX_MESH_BYTES`),
 compiles the scene with MuJoCo (:func:`compile_scene`: MuJoCo's message, with the line, when it
 will not) and checks the fates' names against the model (:func:`check_against_model`: bodies,
 geoms, free joints, the keyframe, the step cap). Every refusal is one line naming the file and the
@@ -29,7 +29,7 @@ _FILE_ATTRS = {"include": (("file",), None), "mesh": (("file",), "meshdir"), "sk
                "hfield": (("file",), "texturedir"),
                "texture": (("file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"),
                            "texturedir"),
-               "model": (("file",), None)}
+               "flexcomp": (("file",), "meshdir"), "model": (("file",), None)}
 
 def _inside(path: Path, folder: Path) -> bool:
     try:
