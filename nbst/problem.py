@@ -151,7 +151,14 @@ class Problem:
 # --------------------------------------------------------------------------- built-ins
 
 def builtin_names() -> list[str]:
-    """Names of the built-in problems (registered in ``nbst.problems.PROBLEMS``), sorted."""
+    """Names of the built-in problems (registered in ``nbst.problems.PROBLEMS``), sorted.
+
+    Args:
+        (none)
+
+    Returns:
+        list of str: the names ``load_problem`` takes besides a path.
+    """
     from nbst.problems import PROBLEMS
 
     return sorted(PROBLEMS.names())

@@ -29,8 +29,13 @@ SCHEMA_VERSION = 1
 class Solution:
     """Initial velocities for a problem, plus what the solver knows about them.
 
-    velocities : (N, 2) float, units/s; zero rows for noncueable disks
-    meta       : every other key of the file (cost, signature, seed, history, ...)
+    Args:
+        problem: the problem the velocities are for.
+        velocities: (N, 2) float64 array, units/s; zero rows for noncueable disks.
+        meta: every other key of the file (cost, signature, seed, history, ...).
+
+    Returns:
+        The solution; ``save_solution`` writes it, ``load_solution`` reads it back.
     """
 
     problem: str

@@ -49,9 +49,18 @@ HIT_BONUS = 3.0
 
 @dataclass(frozen=True)
 class Space:
-    """A parameter space: ``dim`` coordinates, ``to_unit``/``from_unit`` maps to and from the unit
-    cube (``from_unit`` clips into the space's limits), and ``scales``: the standard deviations
-    (in the unit cube, per coordinate) of a child's Gaussian step, one drawn per child."""
+    """A parameter space, mapped to and from the unit cube.
+
+    Args:
+        dim: its coordinates, D.
+        to_unit: (n, D) vectors -> (n, D) unit-cube coordinates.
+        from_unit: (n, D) unit-cube coordinates -> (n, D) vectors, clipped into the space's limits.
+        scales: (k,) float64 array: the standard deviations (in the unit cube, per coordinate) of
+            a child's Gaussian step, one drawn per child.
+
+    Returns:
+        The space.
+    """
 
     dim: int
     to_unit: Callable
@@ -60,7 +69,15 @@ class Space:
 
 
 def box_space(lo, hi, scales) -> Space:
-    """The box [lo, hi] (per coordinate) as a :class:`Space`: unit = (x - lo) / (hi - lo)."""
+    """The box [lo, hi] (per coordinate) as a :class:`Space`: unit = (x - lo) / (hi - lo).
+
+    Args:
+        lo, hi: (D,) float64 arrays: the box's corners.
+        scales: the Gaussian steps' standard deviations in the unit cube.
+
+    Returns:
+        The :class:`Space`.
+    """
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
 
     def to_unit(x):
@@ -75,7 +92,21 @@ def box_space(lo, hi, scales) -> Space:
 @dataclass
 class Archive:
     """Signatures found so far: signature -> elite vector, how often seen, when found, and for
-    the emitter how many children each parent had and how many found a new signature."""
+    the emitter how many children each parent had and how many found a new signature.
+
+    Args:
+        elite: signature -> (D,) float64 array, the first vector that gave it.
+        seen: signature -> how many vectors gave it.
+        found_at: signature -> rollouts spent when it was found (-1: given).
+        children: signature -> children launched from its elite.
+        hits: signature -> children of it that found a new signature.
+        rollouts: rollouts run so far.
+        uniform: [vectors, new signatures] of the parentless (uniform) ones.
+        curve: (rollouts, signatures found) after each batch.
+
+    Returns:
+        The archive (empty by default; :meth:`from_elites` builds one).
+    """
 
     elite: dict = field(default_factory=dict)     # signature -> (D,) vector (the first that gave it)
     seen: dict = field(default_factory=dict)      # signature -> vectors that gave it
@@ -147,11 +178,23 @@ def parent_weights(a: Archive, keys: list, *, group: Callable | None = None, gro
 
 def emit(a: Archive, rng: np.random.Generator, space: Space, n: int = BATCH, *, selection: str = "biased",
          weights: Callable | None = None, uniform: int = UNIFORM_PER_BATCH) -> tuple[np.ndarray, np.ndarray]:
-    """One emitter batch: ((n, D) vectors, (n,) parent signatures, -1 = uniform). The first
-    ``uniform`` are uniform (all n when the archive is empty); each other is a parent's elite
-    plus a Gaussian step at a scale drawn from ``space.scales``. ``selection``: "biased"
-    (``weights(archive, keys)``, default :func:`parent_weights` without groups) or "uniform"
-    (every elite alike: plain MAP-Elites). Random numbers drawn in a fixed order."""
+    """One emitter batch. The first ``uniform`` are uniform (all n when the archive is empty);
+    each other is a parent's elite plus a Gaussian step at a scale drawn from ``space.scales``.
+    Random numbers drawn in a fixed order.
+
+    Args:
+        a: the archive.
+        rng: the ``numpy.random.Generator``.
+        space: the :class:`Space`.
+        n: vectors in the batch.
+        selection: "biased" (``weights(archive, keys)``, default :func:`parent_weights` without
+            groups) or "uniform" (every elite alike: plain MAP-Elites).
+        weights: the parent weights' function for "biased".
+        uniform: uniform vectors in the batch.
+
+    Returns:
+        ((n, D) float64 array of vectors, (n,) parent signatures, -1 = uniform).
+    """
     masks = sorted(a.elite)
     k = min(uniform, n) if masks else n
     u = rng.random((n, space.dim))               # always drawn: the stream does not depend on the archive
@@ -176,11 +219,25 @@ def grow(evaluate: Callable, archive: Archive, rng: np.random.Generator, space: 
          explore: int = EXPLORE_EMPTY, batch: int = BATCH, selection: str = "biased", weights: Callable | None = None,
          adopt: Callable | None = None, on_batch: Callable | None = None) -> Archive:
     """Spend ``budget`` rollouts growing ``archive``: ``explore`` uniform vectors (batches of
-    ``batch``) when it is empty, then :func:`emit` batches. ``evaluate((B, D) vectors) -> (B,)
-    signatures`` runs a batch; ``adopt(X, parents, archive)`` may change a batch's children
-    in place before it runs (e.g. keep a parent's discrete coordinate); ``on_batch(archive,
-    new_signatures)`` after each batch. The last batch is cut to the budget.
-    KeyboardInterrupt propagates; what ran is in ``archive``."""
+    ``batch``) when it is empty, then :func:`emit` batches. The last batch is cut to the budget.
+    KeyboardInterrupt propagates; what ran is in ``archive``.
+
+    Args:
+        evaluate: ``evaluate((B, D) vectors) -> (B,) signatures`` runs a batch.
+        archive: the :class:`Archive`, grown in place.
+        rng: the ``numpy.random.Generator``.
+        space: the :class:`Space`.
+        budget: rollouts to spend.
+        explore: uniform vectors into an empty archive.
+        batch: vectors per batch.
+        selection, weights: as :func:`emit`.
+        adopt: ``adopt(X, parents, archive)`` may change a batch's children in place before it
+            runs (e.g. keep a parent's discrete coordinate); None.
+        on_batch: ``on_batch(archive, new_signatures)`` after each batch; None.
+
+    Returns:
+        The archive.
+    """
     end = archive.rollouts + int(budget)
     n0 = min(int(explore), int(budget)) if not archive.elite else 0
     start = archive.rollouts

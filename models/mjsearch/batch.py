@@ -53,7 +53,16 @@ class BatchRollouts:
 
 
 class BatchRunner:
-    """Runs batches of at most ``size`` simulations of ``model`` on ``jobs`` threads."""
+    """Runs batches of at most ``size`` simulations of ``model`` on ``jobs`` threads.
+
+    Args:
+        model: a compiled ``mujoco.MjModel``.
+        jobs: threads.
+        size: the most simulations in one batch.
+
+    Returns:
+        The runner; ``run`` simulates a batch.
+    """
 
     def __init__(self, model, *, jobs: int = 1, size: int = 16):
         from mujoco import batch as mjbatch

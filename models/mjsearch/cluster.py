@@ -52,10 +52,13 @@ class ClusterRunner(Runner):
 
     Args:
         client: a ``dask.distributed.Client``, or a scheduler address (connected here and
-            closed by :meth:`close`; ValueError, one line, when it cannot be reached).
+            closed by :meth:`close`; an InputError, one line, when it cannot be reached).
         factory: a picklable function returning the compiled model (called here and once per
             worker process).
         duration, nstep: as :class:`~.runner.Runner`.
+
+    Returns:
+        The runner; ``run`` sends each batch to the workers, ``close`` ends them.
     """
 
     def __init__(self, client, factory: Callable, *, duration: float | None = None, nstep: int | None = None):

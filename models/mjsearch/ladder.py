@@ -18,7 +18,17 @@ __all__ = ["Ladder", "climb", "kept_text"]
 
 @dataclass
 class Ladder:
-    """``timesteps`` (s), each rung's ``outcome``, the ``wanted`` outcome, and the raw ``results``."""
+    """A timestep ladder's outcome.
+
+    Args:
+        timesteps: (s) each rung's timestep.
+        outcomes: each rung's outcome.
+        wanted: the wanted outcome.
+        results: the raw results of ``run``.
+
+    Returns:
+        The ladder; ``holds`` says whether every rung gave the wanted outcome.
+    """
 
     timesteps: list
     outcomes: list
@@ -38,8 +48,17 @@ class Ladder:
 
 def climb(run: Callable[[float], Any], timesteps, *, outcome: Callable[[Any], Any] = lambda r: r,
           wanted: Any = None) -> Ladder:
-    """Run ``run(h)`` for each ``h`` of ``timesteps`` (in order) and read ``outcome(result)``;
-    ``wanted`` defaults to the first rung's outcome."""
+    """Run ``run(h)`` for each ``h`` of ``timesteps`` (in order) and read ``outcome(result)``.
+
+    Args:
+        run: ``run(h) -> result``.
+        timesteps: the rungs, seconds.
+        outcome: ``outcome(result) -> outcome``.
+        wanted: the wanted outcome; None: the first rung's.
+
+    Returns:
+        The :class:`Ladder`.
+    """
     results = [run(float(h)) for h in timesteps]
     outs = [outcome(r) for r in results]
     return Ladder(timesteps=[float(h) for h in timesteps], outcomes=outs,

@@ -33,8 +33,17 @@ def _init(parent_pid: int, initializer, initargs) -> None:
 
 
 class WorkerPool:
-    """``jobs`` spawned processes, each set up by ``initializer(*initargs)`` (a module-level,
-    picklable function); :meth:`map` runs calls on them in input order."""
+    """``jobs`` spawned processes, each set up by ``initializer(*initargs)``; :meth:`map` runs
+    calls on them in input order.
+
+    Args:
+        jobs: processes.
+        initializer: a module-level, picklable function, called once in each process.
+        initargs: its arguments.
+
+    Returns:
+        The pool; ``close`` ends the processes.
+    """
 
     def __init__(self, jobs: int, initializer: Callable | None = None, initargs: tuple = ()):
         self.jobs = max(1, int(jobs))

@@ -30,7 +30,19 @@ Z95 = 1.959963984540054
 
 
 def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """The Wilson score interval for ``k`` successes in ``n`` trials (95 % by default)."""
+    """The Wilson score interval for ``k`` successes in ``n`` trials (95 % by default).
+
+    Args:
+        k: successes, 0 <= k <= n.
+        n: trials, > 0.
+        z: the normal quantile (1.96: 95 %).
+
+    Returns:
+        (lo, hi).
+
+    Raises:
+        InputError: k or n out of range.
+    """
     if n <= 0 or not 0 <= k <= n:
         raise InputError(f"wilson: need 0 <= k <= n and n > 0, got k={k}, n={n}")
     p = k / n
@@ -43,7 +55,17 @@ def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class Probability:
-    """``k`` of ``n`` trials gave the outcome: ``p`` = k/n and its 95 % Wilson interval."""
+    """``k`` of ``n`` trials gave the outcome: ``p`` = k/n and its 95 % Wilson interval.
+
+    Args:
+        k: the trials that gave it.
+        n: the trials.
+        p: k / n.
+        lo, hi: the 95 % Wilson interval.
+
+    Returns:
+        The estimate (frozen).
+    """
 
     k: int
     n: int
@@ -61,12 +83,31 @@ class Probability:
 
 
 def normal_draws(seed: int, n: int, dim: int) -> np.ndarray:
-    """(n, dim) standard-normal draws of ``seed``: row i perturbs copy i (common random numbers)."""
+    """Standard-normal draws of ``seed``: row i perturbs copy i (common random numbers).
+
+    Args:
+        seed: the seed.
+        n: copies.
+        dim: coordinates.
+
+    Returns:
+        (n, dim) float64 array.
+    """
     return np.random.default_rng(seed).standard_normal((n, dim))
 
 
 def perturb(base, sigma, draws, lo, hi) -> np.ndarray:
-    """(n, D) copies of ``base`` (D,): ``clip(base + sigma * draws[i], lo, hi)`` per coordinate."""
+    """Copies of ``base``: ``clip(base + sigma * draws[i], lo, hi)`` per coordinate.
+
+    Args:
+        base: (D,) float64 array.
+        sigma: (D,) float64 array, or a float: the noise's standard deviations.
+        draws: (n, D) standard-normal draws (:func:`normal_draws`).
+        lo, hi: (D,) limits.
+
+    Returns:
+        (n, D) float64 array.
+    """
     return np.clip(np.asarray(base, dtype=float) + np.asarray(sigma, dtype=float) * np.asarray(draws, dtype=float),
                    np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
 

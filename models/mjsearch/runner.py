@@ -98,9 +98,15 @@ def check_state(qpos, qvel) -> None:
 class Rollouts:
     """What :meth:`Runner.run` returns, rollouts in input order.
 
-    ``final``: (B, nstate) full physics states after the last step; ``control``: (B, nstep, nu)
-    controls applied (given or from the controller; None when neither); ``sensordata``:
-    (B, nstep, nsensordata) after each step (None unless asked for)."""
+    Args:
+        final: (nbatch, nstate) float64 array: full physics states after the last step.
+        control: (nbatch, nstep, nu) float64 array: the controls applied (given or from the
+            controller); None when neither.
+        sensordata: (nbatch, nstep, nsensordata) float64 array after each step; None unless asked.
+
+    Returns:
+        The rollouts (frozen).
+    """
 
     final: np.ndarray
     control: np.ndarray | None = None
@@ -115,6 +121,12 @@ class Runner:
         jobs: threads (default: all cores).
         duration: seconds per rollout (``nstep`` = duration / timestep), or
         nstep: steps per rollout (one of the two; ``run`` may override per call).
+
+    Returns:
+        The runner; ``run`` rolls out a batch, ``close`` ends the threads.
+
+    Raises:
+        InputError: neither or both of ``duration`` and ``nstep``.
     """
 
     def __init__(self, model, *, jobs: int | None = None, duration: float | None = None,

@@ -80,7 +80,9 @@ def run_search(problem: Problem, *, seed: int | None = None, max_trials: int = D
                chunk: int = 2048, many: ManyParams | None = None, record_every: int = 0) -> SearchRun:
     """:func:`solve`, also returning the final population (for benchmarks and analysis).
 
-    Args: as :func:`solve`, and
+    Args:
+        problem, seed, max_trials, patience, target_cost, variant: as :func:`solve`.
+        params, robust, jobs, callback, chunk, many: as :func:`solve`.
         record_every: k > 0 also returns the candidates of trials k, 2k, ... (the paper's loop
             only, up to 63 disks).
 

@@ -90,7 +90,16 @@ def _pack(problem: Problem, params: SearchParams, *, max_trials: int, patience: 
 class SearchRun:
     """A finished search: its result and the final population.
 
-    velocities : (P, N, 2) float, units/s; costs : (P,) float; signatures : (P,) int64 bitmasks
+    Args:
+        result: the :class:`~nbst.solution.SolveResult`.
+        velocities: (P, N, 2) float64 array, units/s: the final population's candidates.
+        costs: (P,) float64 array, units^2.
+        signatures: (P,) int64 array of bitmasks (bit i: disk i within R).
+        recorded: (M, N, 2) float64 array: the candidates of every ``record_every``-th trial
+            (empty unless asked).
+
+    Returns:
+        The run, as ``nbst.search.run_search`` returns it.
     """
 
     result: SolveResult

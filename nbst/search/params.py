@@ -33,63 +33,70 @@ ALGORITHM_NBST = "nbst-signature-search"
 class SearchParams:
     """Every knob of the signature search. Defaults are the paper's (A).
 
-    pop_limit        : population limit (paper: 200)
-    sig_limit        : members per signature (paper: 10)
-    diversity        : initialize until every disk is acceptable in this many members (paper: 5)
-    init_max_tries   : cap on initialize's trials if the diversity target is never met (open)
-    init_population  : > 0: initialize until the population has this many members instead (E: 60)
-    signature_radius : R used for signatures, None = the problem's (E: the box width)
-    max_bounces      : uniform randomize reaches images with |kx| + |ky| <= this (paper: 5)
-    creep_fraction   : creep std per axis = creep_fraction * R / t_final, units/s (open)
-    op_weights       : (creep, directed, uniform, crossover) probabilities (paper: 1/4 each)
-    p_directed_init  : initialize's chance of directed (vs uniform) randomize per disk (paper: 1/2)
-    senate           : Senate-like parent selection (B: off, uniform over members)
-    engineered       : genetically engineered crossover (D: off)
-    cull             : "subsumed" (paper) or "worst" (F)
-    elitism          : the best member is never deleted (G: off)
-    hard_limit       : culling fallback: above this size the worst member goes (open)
-    max_events       : per-simulation event cap (a truncated run scores cost inf)
-
-    nbst's additions (``nbst.search.nbst_loop``; all off in A-H, on in variant "nbst"):
-    polish           : Levenberg-Marquardt polish of promising children
-    polish_sims      : simulation budget of one polish
-    polish_ratio     : polish children of the best order within this factor of the best cost
-    bank_weight      : generate probability weight of the bank-shot operator
-    bank_bounces     : bank shots use images with at most this many bounces
-    strike_weight    : weight of the strike operator (used only if some disk is noncueable)
-    strike_bounces   : strikes aim at images of the target with at most this many bounces
-    adapt            : adapt operator probabilities from their recent success
-    adapt_rate       : rate of the success moving average
-    adapt_floor      : least probability of an enabled operator
-    straight_start   : initialize's first trial sends every cueable disk straight at its target
-    restart          : re-initialize around the best after this many trials without a
-                       local improvement (0: never)
-    planner          : run the backward planner (``nbst.search.planner``) first when some disk is
-                       noncueable; its best candidates are initialize's first trials
-    planner_trials   : the planner's simulations, at most (and at most a quarter of max_trials);
-                       every one counts as a trial
-    planner_chain    : longest strike chain the planner builds (cue -> noncueable -> ...)
-    planner_seeds    : planner candidates handed to the search
-    planner_polish_sims : polish budget of a planner candidate (instead of polish_sims)
-    planner_weight   : weight of the plan operator (the planner's routes; only after a planner run)
+    The fields from ``polish`` to ``planner_weight`` are nbst's additions
+    (``nbst.search.nbst_loop``; all off in A-H, on in variant "nbst"); those from ``robust`` on,
+    robust mode's.
 
     Robust mode (``nbst.search.robust``; off in every variant, ``nbst solve --robust``): candidates are
     scored by their worst cost under small shifts of the start positions (signature: the disks
     acceptable under all of them), and the solution is the most robust of an archive of
     top-order members, rescored under fresh shifts.
-    robust           : score every candidate under robust_k start shifts and choose the solution
-                       by its robust score instead of its cost
-    robust_k         : start shifts per candidate during the search (0: the search is plain and
-                       only the final choice is robust)
-    robust_signature : "and": a disk counts as acceptable only if it is in every shifted run;
-                       "plain": the unshifted signature (only the cost is the worst-case one)
-    robust_archive   : top-order population members kept for the final choice (0: the choice
-                       is among the search's best alone)
-    robust_samples   : start shifts per candidate in the final choice (fresh draws)
-    robust_timestep  : the engine step h (s) to survive: start shifts of std 0.5 h x the
-                       fastest speed per axis (``nbst.search.robust.SHIFT_STEPS``)
-    robust_polish    : candidates polished towards their on-target disks' target centres (and
-                       rescored; ``nbst.search.robust.polish_on_target``)
+
+    Args:
+        variant: the variant these parameters are (``variant_params``), recorded in the result.
+        pop_limit: population limit (paper: 200)
+        sig_limit: members per signature (paper: 10)
+        diversity: initialize until every disk is acceptable in this many members (paper: 5)
+        init_max_tries: cap on initialize's trials if the diversity target is never met (open)
+        init_population: > 0: initialize until the population has this many members instead (E: 60)
+        signature_radius: R used for signatures, None = the problem's (E: the box width)
+        max_bounces: uniform randomize reaches images with |kx| + |ky| <= this (paper: 5)
+        creep_fraction: creep std per axis = creep_fraction * R / t_final, units/s (open)
+        op_weights: (creep, directed, uniform, crossover) probabilities (paper: 1/4 each)
+        p_directed_init: initialize's chance of directed (vs uniform) randomize per disk (paper: 1/2)
+        senate: Senate-like parent selection (B: off, uniform over members)
+        engineered: genetically engineered crossover (D: off)
+        cull: "subsumed" (paper) or "worst" (F)
+        elitism: the best member is never deleted (G: off)
+        hard_limit: culling fallback: above this size the worst member goes (open)
+        max_events: per-simulation event cap (a truncated run scores cost inf)
+        polish: Levenberg-Marquardt polish of promising children
+        polish_sims: simulation budget of one polish
+        polish_ratio: polish children of the best order within this factor of the best cost
+        bank_weight: generate probability weight of the bank-shot operator
+        bank_bounces: bank shots use images with at most this many bounces
+        strike_weight: weight of the strike operator (used only if some disk is noncueable)
+        strike_bounces: strikes aim at images of the target with at most this many bounces
+        adapt: adapt operator probabilities from their recent success
+        adapt_rate: rate of the success moving average
+        adapt_floor: least probability of an enabled operator
+        straight_start: initialize's first trial sends every cueable disk straight at its target
+        restart: re-initialize around the best after this many trials without a
+            local improvement (0: never)
+        planner: run the backward planner (``nbst.search.planner``) first when some disk is
+            noncueable; its best candidates are initialize's first trials
+        planner_trials: the planner's simulations, at most (and at most a quarter of max_trials);
+            every one counts as a trial
+        planner_chain: longest strike chain the planner builds (cue -> noncueable -> ...)
+        planner_seeds: planner candidates handed to the search
+        planner_polish_sims: polish budget of a planner candidate (instead of polish_sims)
+        planner_weight: weight of the plan operator (the planner's routes; only after a planner run)
+        robust: score every candidate under robust_k start shifts and choose the solution
+            by its robust score instead of its cost
+        robust_k: start shifts per candidate during the search (0: the search is plain and
+            only the final choice is robust)
+        robust_signature: "and": a disk counts as acceptable only if it is in every shifted run;
+            "plain": the unshifted signature (only the cost is the worst-case one)
+        robust_archive: top-order population members kept for the final choice (0: the choice
+            is among the search's best alone)
+        robust_samples: start shifts per candidate in the final choice (fresh draws)
+        robust_timestep: the engine step h (s) to survive: start shifts of std 0.5 h x the
+            fastest speed per axis (``nbst.search.robust.SHIFT_STEPS``)
+        robust_polish: candidates polished towards their on-target disks' target centres (and
+            rescored; ``nbst.search.robust.polish_on_target``)
+
+    Returns:
+        The parameters (frozen, each field checked: a bad one raises a SolveError naming it).
     """
 
     variant: str = "A"
@@ -239,8 +246,17 @@ def variant_params(variant: str = DEFAULT_VARIANT, problem: Problem | None = Non
     """The parameters of a registered variant (``nbst.search.variants.VARIANTS``): nbst's search
     ("nbst"), the paper's variant A (full algorithm) or B-H (one simplification each).
 
-    E needs ``problem`` (its signature radius is the box width). An unknown name raises an
-    InputError listing the variants."""
+    Args:
+        variant: a name of ``VARIANTS`` (any case).
+        problem: the problem; variant E needs it (its signature radius is the box width).
+
+    Returns:
+        The variant's :class:`SearchParams`.
+
+    Raises:
+        InputError: an unknown name (the message lists the variants).
+        SolveError: variant E without a problem.
+    """
     name = VARIANTS.parse(variant, source="<search parameters>", field="variant")
     v = VARIANTS[name]
     changes = v.changes_for(problem) if v.changes_for is not None else v.changes
@@ -248,13 +264,33 @@ def variant_params(variant: str = DEFAULT_VARIANT, problem: Problem | None = Non
 
 
 def mirror_images(max_bounces: int) -> np.ndarray:
-    """(M, 2) int64 image indices (kx, ky) with |kx| + |ky| <= max_bounces (M = 61 for 5)."""
+    """The mirror images a uniform randomize or a bank shot may aim at.
+
+    Args:
+        max_bounces: the most wall bounces, |kx| + |ky|.
+
+    Returns:
+        (M, 2) int64 array of image indices (kx, ky) with |kx| + |ky| <= max_bounces (M = 61 for 5).
+    """
     return images(0, int(max_bounces))
 
 
 @dataclass(frozen=True)
 class SearchProgress:
-    """What a callback sees after each chunk of trials."""
+    """What a callback sees after each chunk of trials.
+
+    Args:
+        trials: trials spent so far (the islands: their sum).
+        best_cost: the best cost so far, units^2 (inf before the first trial).
+        best_order: how many disks the best candidate brings within R.
+        elapsed: seconds since the search started.
+        population: members in the population.
+        phase: "initialize", "generate", or the stage of another solver ("start", "sample", ...).
+        stall: None, or what a solver reports of its stall (the many-body search: idle rounds, limit).
+
+    Returns:
+        The progress record (frozen); a callback returning a truthy value stops the search.
+    """
 
     trials: int
     best_cost: float

@@ -48,19 +48,23 @@ class SolveRequest:
     (``nbst.search.solve`` builds it from its keywords; the islands, the solvers' registry and the
     experiments hand it down unchanged).
 
-    seed        : int >= 0; None: the solver draws one (and records it)
-    max_trials  : trial budget (one trial = one simulated candidate)
-    patience    : stop after this many trials without improvement (0: never); None: the
-                  solver's default (``DEFAULT_PATIENCE`` for the signature search, none for a
-                  baseline)
-    target_cost : stop once the best cost is <= this (None: never; the many-body search:
-                  round-off level)
-    variant     : the signature search's variant (``VARIANTS``); None: its default
-                  (``DEFAULT_VARIANT``). Solvers that take no variant refuse any other.
-    robust      : the signature search's robust mode (``nbst solve --robust``); None: as its
-                  ``SearchParams`` say
-    jobs        : threads of a search that runs in one process (the many-body search); None:
-                  every core
+    Args:
+        seed: int >= 0; None: the solver draws one (and records it)
+        max_trials: trial budget (one trial = one simulated candidate)
+        patience: stop after this many trials without improvement (0: never); None: the
+            solver's default (``DEFAULT_PATIENCE`` for the signature search, none for a
+            baseline)
+        target_cost: stop once the best cost is <= this (None: never; the many-body search:
+            round-off level)
+        variant: the signature search's variant (``VARIANTS``); None: its default
+            (``DEFAULT_VARIANT``). Solvers that take no variant refuse any other.
+        robust: the signature search's robust mode (``nbst solve --robust``); None: as its
+            ``SearchParams`` say
+        jobs: threads of a search that runs in one process (the many-body search); None:
+            every core
+
+    Returns:
+        The request (frozen); ``dataclasses.replace`` derives another.
     """
 
     seed: int | None = None
@@ -85,14 +89,31 @@ class SolveRequest:
 def roundoff_cost(problem: Problem) -> float:
     """The cost of a solution whose every disk ends ROUNDOFF_REL x max(W, H) from its
     target: N (ROUNDOFF_REL max(W, H))^2, units^2. Below it a search has nothing left to
-    gain (``nbst solve``'s default target cost)."""
+    gain (``nbst solve``'s default target cost).
+
+    Args:
+        problem: the problem.
+
+    Returns:
+        float: the cost, units^2.
+    """
     return problem.n * (ROUNDOFF_REL * max(problem.box)) ** 2
 
 
 @dataclass(frozen=True)
 class Variant:
     """One variant: what it is, and the ``SearchParams`` fields it sets (``changes``, or
-    ``changes_for(problem)`` where they depend on the problem)."""
+    ``changes_for(problem)`` where they depend on the problem).
+
+    Args:
+        description: one line, as ``nbst solve --help`` shows it.
+        changes: ``SearchParams`` field -> value, over the paper's defaults (A).
+        changes_for: ``changes_for(problem) -> changes`` where they depend on the problem
+            (variant E), else None.
+
+    Returns:
+        The variant, to register in ``VARIANTS``.
+    """
 
     description: str
     changes: Mapping[str, Any] = field(default_factory=dict)

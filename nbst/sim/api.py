@@ -80,6 +80,9 @@ def evaluate(problem: Problem, V: ArrayLike, *, max_events: int | None = None,
         disks, past that an object array of Python ints (bit i: disk i within R; the kernels
         keep multiword bitsets). cost is inf (signature 0) for a run that needed more than
         ``max_events`` events or jammed. ``evaluate_events`` returns the event counts too.
+
+    Raises:
+        InputError: ``V`` is not (B, N, 2), not finite, or moves a noncueable disk.
     """
     final, cost, sig, _ = evaluate_events(problem, V, max_events=max_events, jobs=jobs)
     return final, cost, sig
@@ -87,8 +90,17 @@ def evaluate(problem: Problem, V: ArrayLike, *, max_events: int | None = None,
 
 def evaluate_events(problem: Problem, V: ArrayLike, *, max_events: int | None = None,
                     jobs: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`evaluate`, also returning each run's number of events: (final, cost, signature,
-    n_events (B,) int64)."""
+    """:func:`evaluate`, also returning each run's number of events.
+
+    Args:
+        problem, V, max_events, jobs: as :func:`evaluate`.
+
+    Returns:
+        (final, cost, signature, n_events): as :func:`evaluate`, and n_events (B,) int64 array.
+
+    Raises:
+        InputError: ``V`` is not (B, N, 2), not finite, or moves a noncueable disk.
+    """
     V = np.ascontiguousarray(V, dtype=np.float64)
     if V.ndim != 3:
         raise InputError(f"V must have shape (B, N, 2), got {V.shape}")
@@ -137,25 +149,32 @@ def evaluate_events(problem: Problem, V: ArrayLike, *, max_events: int | None = 
 class Trajectory:
     """The exact motion of one simulation.
 
-    events     : structured (E,) array: time, kind (0 disk-disk, 1 wall), i, j
-                 (j = partner disk, or the wall 0 left, 1 right, 2 bottom, 3 top)
-    event_state: (E, 8) the participants' states after each event (xi, yi, vxi, vyi, xj, yj,
-                 vxj, vyj; the j half unused for a wall), as the kernel recorded them
-    times      : (K,) keyframe times: 0, then each event time (non-decreasing), K = E + 1
-    positions  : (K, N, 2) positions at those times (after the event)  } built on first use:
-    velocities : (K, N, 2) velocities just after those times           } K x N x 2 each
-    final_positions / final_velocities : (N, 2) at t_final
-    signature  : Python int, bit i iff disk i ends within R
-    truncated  : the run stopped before t_final (``max_events`` reached, or ``stalled``);
-                 the motion is exact up to ``t_end`` (its last event) and is held there:
-                 ``final_positions`` and ``at(t)`` for t > t_end are the positions at
-                 t_end, inside the box (never extrapolated through the walls)
-    stalled    : it stopped because of a jam (disks pinned between opposite walls
-                 bouncing infinitely often at one instant), not the event cap
-    t_end      : t_final, or the time of the last event of a truncated run
-
     ``at(t)`` gives the same numbers whether it reads the keyframes or, for a motion past
     ``DENSE_KEYFRAMES`` (events x disks), replays the event record without building them.
+    ``positions`` and ``velocities``, (K, N, 2) at the keyframe times (after each event), are
+    built on first use.
+
+    Args:
+        problem: the problem simulated.
+        initial_velocities: (N, 2) float64 array, units/s.
+        times: (K,) float64 array: keyframe times: 0, then each event time (non-decreasing),
+            K = E + 1.
+        events: (E,) structured array: time, kind (0 disk-disk, 1 wall), i, j (j = partner
+            disk, or the wall 0 left, 1 right, 2 bottom, 3 top).
+        event_state: (E, 8) float64 array: the participants' states after each event (xi, yi,
+            vxi, vyi, xj, yj, vxj, vyj; the j half unused for a wall), as the kernel recorded them.
+        final_positions, final_velocities: (N, 2) float64 arrays at t_final.
+        cost: the sum of squared final-target distances, units^2.
+        signature: Python int, bit i iff disk i ends within R.
+        truncated: the run stopped before t_final (``max_events`` reached, or ``stalled``); the
+            motion is exact up to ``t_end`` (its last event) and is held there: ``final_positions``
+            and ``at(t)`` for t > t_end are the positions at t_end, inside the box.
+        stalled: it stopped because of a jam (disks pinned between opposite walls bouncing
+            infinitely often at one instant), not the event cap.
+        t_end: t_final, or the time of the last event of a truncated run.
+
+    Returns:
+        The trajectory, as :func:`simulate` builds it.
     """
 
     problem: Problem
@@ -349,6 +368,9 @@ def simulate(problem: Problem, velocities: ArrayLike, *, max_events: int | None 
         A :class:`Trajectory`: the events, ``at(t)``, the final positions and velocities, the
         cost, the signature and order. A run that stops early (``max_events``, or a jam) comes
         back with ``truncated`` (and ``stalled``) set, cost inf, positions held at its last event.
+
+    Raises:
+        InputError: ``velocities`` is not (N, 2), not finite, or moves a noncueable disk.
     """
     v0 = np.ascontiguousarray(velocities, dtype=np.float64)
     if v0.flags.writeable:  # read-only, as a solution file's are: one signature of each kernel below

@@ -149,6 +149,12 @@ def alloc_work(n):
     Per-disk arrays are padded to a multiple of 16 lanes so the vectorized
     prediction loop has no scalar remainder; padding lanes have wall time -inf,
     which makes their horizon negative, so they never produce a prediction.
+
+    Args:
+        n: the number of disks.
+
+    Returns:
+        A :class:`Work` for ``n`` disks.
     """
     m = (n + 15) // 16 * 16
     return Work(np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.empty((n, n)),
@@ -235,17 +241,24 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
     # buffers, so the inputs stay flat arrays and the loop stays one function LLVM optimizes whole.
     """Simulate from t = 0 to t_final.
 
-    x0, v0      : (N, 2) start positions and velocities
-    work        : from ``alloc_work(N)``
-    out_final   : (N, 2) filled with positions at t_final (a run that stops early: at its
-                  last event's time, inside the box)
-    out_vel     : (N, 2) filled with velocities at t_final (or after the last event)
-    ev_*        : event record buffers of equal length (length 0: record nothing).
-                  ev_t time, ev_i / ev_j participants (ev_j = -1 - wall for a wall
-                  event), ev_state[e] = (xi, yi, vxi, vyi, xj, yj, vxj, vyj) after it.
-    returns (status, n_events, n_disk_disk, n_wall); status STATUS_TRUNCATED: max_events
-    reached before t_final, STATUS_STALLED: more than STALL_EVENTS_PER_DISK * N events
-    within STALL_RTOL * t_final seconds (a jam that would never end)
+    Args:
+        x0, v0: (N, 2) float64 arrays: start positions (units) and velocities (units/s).
+        radius, mass: (N,) float64 arrays.
+        W, H: the box, units.
+        t_final: seconds.
+        work: from ``alloc_work(N)``.
+        out_final: (N, 2) float64 array, filled with positions at t_final (a run that stops
+            early: at its last event's time, inside the box).
+        out_vel: (N, 2) float64 array, filled with velocities at t_final (or after the last event).
+        max_events: the event cap.
+        ev_t, ev_i, ev_j, ev_state: event record buffers of equal length (length 0: record
+            nothing): ev_t time, ev_i / ev_j participants (ev_j = -1 - wall for a wall event),
+            ev_state[e] = (xi, yi, vxi, vyi, xj, yj, vxj, vyj) after it.
+
+    Returns:
+        (status, n_events, n_disk_disk, n_wall); status STATUS_TRUNCATED: max_events reached
+        before t_final, STATUS_STALLED: more than STALL_EVENTS_PER_DISK * N events within
+        STALL_RTOL * t_final seconds (a jam that would never end).
     """
     px, py, vx, vy, tl, T, wall, rowmin, rowarg, tw, tmp, rad = work
     n = x0.shape[0]
@@ -348,7 +361,17 @@ def run(x0, v0, radius, mass, W, H, t_final, work, out_final, out_vel, max_event
 
 @njit(cache=True, inline="always", error_model="numpy")
 def cost_signature(final, target, R):
-    """(sum of squared final-target distances, bitmask: bit i iff disk i within R)."""
+    """The cost and signature of one run's final positions.
+
+    Args:
+        final: (N, 2) float64 array, units: the final positions.
+        target: (N, 2) float64 array, units: the targets.
+        R: the target radius, units.
+
+    Returns:
+        (cost, signature): the sum of squared final-target distances (units^2) and the bitmask
+        (bit i iff disk i ends within R).
+    """
     cost = 0.0
     sig = np.int64(0)
     R2 = R * R
@@ -364,8 +387,26 @@ def cost_signature(final, target, R):
 def evaluate_kernel(x0, V, radius, mass, target, W, H, t_final, R, max_events, final, cost, sig, n_events):
     # Fourteen parameters on purpose: the batch entry point over flat arrays (numba), called from
     # Python threads on slices of the output arrays.
-    """Batch: V (B, N, 2) -> final (B, N, 2), cost (B,), sig (B,), n_events (B,).
-    A run that hits max_events gets cost = inf and signature 0."""
+    """A batch of runs (compiled, parallel over the batch); a run that hits max_events gets
+    cost = inf and signature 0.
+
+    Args:
+        x0: (N, 2) float64 array, units: the start positions.
+        V: (B, N, 2) float64 array, units/s: the initial velocities of each run.
+        radius, mass: (N,) float64 arrays.
+        target: (N, 2) float64 array, units.
+        W, H: the box, units.
+        t_final: seconds.
+        R: the target radius, units.
+        max_events: the event cap per run.
+        final: (B, N, 2) float64 array, filled with the final positions.
+        cost: (B,) float64 array, filled with the costs.
+        sig: (B,) int64 array, filled with the signatures.
+        n_events: (B,) int64 array, filled with each run's events.
+
+    Returns:
+        None: the results are written into ``final``, ``cost``, ``sig`` and ``n_events``.
+    """
     n = x0.shape[0]
     work = alloc_work(n)
     vel = np.empty((n, 2))

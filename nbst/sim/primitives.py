@@ -46,11 +46,19 @@ IMPACT_NONE, IMPACT_WALL, IMPACT_PAIR = 0, 1, 2
 def pair_tau(dx, dy, dvx, dvy, s, h):
     """Time until two disks touch, if it is at most h; else inf.
 
-    (dx, dy) = pk - pi, (dvx, dvy) = vk - vi, s = contact distance, h = horizon.
     inf if they never touch within h (or are separating); 0 if round-off already
     has them overlapping and approaching. The horizon test needs no square root.
     The root is the numerically stable ``c / (-b + sqrt(b^2 - a c))`` of
     ``|dp + dv tau|^2 = s^2``.
+
+    Args:
+        dx, dy: pk - pi, units.
+        dvx, dvy: vk - vi, units/s.
+        s: the contact distance (the sum of the radii), units.
+        h: the horizon, seconds.
+
+    Returns:
+        float: the time to contact, seconds (inf: none within h).
     """
     b = dx * dvx + dy * dvy
     if b >= 0.0:
@@ -82,10 +90,21 @@ def axis_tau(x, v, r, L, wall_lo, wall_hi):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def wall_tau(x, y, vx, vy, r, W, H):
-    """(time until the disk touches a wall, which wall); x walls win ties.
+    """The next wall contact of one disk; x walls win ties.
 
     Only the wall a disk moves towards is predicted; a time that round-off makes
-    negative is clamped to 0 ("now")."""
+    negative is clamped to 0 ("now").
+
+    Args:
+        x, y: the disk's centre, units.
+        vx, vy: its velocity, units/s.
+        r: its radius, units.
+        W, H: the box, units.
+
+    Returns:
+        (time until the disk touches a wall in seconds, inf if never; which wall: 0 left,
+        1 right, 2 bottom, 3 top).
+    """
     tx, wx = axis_tau(x, vx, r, W, WALL_LEFT, WALL_RIGHT)
     ty, wy = axis_tau(y, vy, r, H, WALL_BOTTOM, WALL_TOP)
     if ty < tx:

@@ -281,7 +281,23 @@ def solve_random(problem: Problem, *, seed: int | None = None, max_trials: int =
                  patience: int = BASELINE_PATIENCE, target_cost: float | None = None,
                  callback: ProgressCallback | None = None,
                  p_directed: float = 0.5) -> SolveResult:
-    """Random search: independent candidates from directed / uniform randomize (see module doc)."""
+    """Random search: independent candidates from directed / uniform randomize (see module doc).
+
+    Args:
+        problem: the problem.
+        seed: int >= 0; None draws one (recorded in the result).
+        max_trials: trial budget (one trial = one simulated candidate).
+        patience: stop after this many trials without improvement (0: never).
+        target_cost: stop once the best cost is <= this, units^2 (None: never).
+        callback: None, or called with a ``SearchProgress``; a truthy return stops the search.
+        p_directed: each disk's chance of directed (vs uniform) randomize.
+
+    Returns:
+        The :class:`~nbst.solution.SolveResult` (its best so far when interrupted).
+
+    Raises:
+        InputError: a budget, patience or seed out of range.
+    """
     seed = _check_args(max_trials, patience, seed)
     rng = np.random.default_rng(seed)
     b = _Budget(problem, max_trials=int(max_trials), patience=int(patience), target_cost=target_cost,
@@ -305,8 +321,25 @@ def solve_cma(problem: Problem, *, seed: int | None = None, max_trials: int = 1_
 
     sigma0 = sigma0_fraction * R / t_final units/s; population 4 + 3 ln D, times
     ``incpopsize`` per restart. ``result.meta["restarts"]`` counts the restarts begun.
-    ``cma_options``: extra pycma options for every restart (e.g. ``{"maxiter": 5}``,
-    a stopping rule that ends each restart after 5 generations)."""
+
+    Args:
+        problem: the problem.
+        seed: int >= 0; None draws one (recorded in the result).
+        max_trials: trial budget (one trial = one simulated candidate).
+        patience: stop after this many trials without improvement (0: never).
+        target_cost: stop once the best cost is <= this, units^2 (None: never).
+        callback: None, or called with a ``SearchProgress``; a truthy return stops the search.
+        sigma0_fraction: the initial step as a fraction of R / t_final.
+        incpopsize: the population's factor per restart.
+        cma_options: extra pycma options for every restart (e.g. ``{"maxiter": 5}``, a stopping
+            rule that ends each restart after 5 generations).
+
+    Returns:
+        The :class:`~nbst.solution.SolveResult` (its best so far when interrupted).
+
+    Raises:
+        InputError: a budget, patience or seed out of range.
+    """
     import cma
 
     seed = _check_args(max_trials, patience, seed)
@@ -403,7 +436,25 @@ def solve_ga(problem: Problem, *, seed: int | None = None, max_trials: int = 1_0
              patience: int = BASELINE_PATIENCE, target_cost: float | None = None,
              callback: ProgressCallback | None = None, pop_size: int = GA_POP,
              mutation_fraction: float = GA_MUTATION_FRACTION, batch: int = GA_BATCH) -> SolveResult:
-    """A standard steady-state real-coded GA (see module doc)."""
+    """A standard steady-state real-coded GA (see module doc).
+
+    Args:
+        problem: the problem.
+        seed: int >= 0; None draws one (recorded in the result).
+        max_trials: trial budget (one trial = one simulated candidate).
+        patience: stop after this many trials without improvement (0: never).
+        target_cost: stop once the best cost is <= this, units^2 (None: never).
+        callback: None, or called with a ``SearchProgress``; a truthy return stops the search.
+        pop_size: the population.
+        mutation_fraction: the mutation's step, times R / t_final (units/s).
+        batch: children simulated per batch.
+
+    Returns:
+        The :class:`~nbst.solution.SolveResult` (its best so far when interrupted).
+
+    Raises:
+        InputError: a budget, patience or seed out of range.
+    """
     seed = _check_args(max_trials, patience, seed)
     rng = np.random.default_rng(seed)
     b = _Budget(problem, max_trials=int(max_trials), patience=int(patience), target_cost=target_cost,
@@ -465,7 +516,24 @@ def solve_de(problem: Problem, *, seed: int | None = None, max_trials: int = 1_0
              patience: int = BASELINE_PATIENCE, target_cost: float | None = None,
              callback: ProgressCallback | None = None, popsize: int = DE_POPSIZE,
              strategy: str = "best1bin") -> SolveResult:
-    """Differential evolution (scipy), exact trial accounting (see module doc)."""
+    """Differential evolution (scipy), exact trial accounting (see module doc).
+
+    Args:
+        problem: the problem.
+        seed: int >= 0; None draws one (recorded in the result).
+        max_trials: trial budget (one trial = one simulated candidate).
+        patience: stop after this many trials without improvement (0: never).
+        target_cost: stop once the best cost is <= this, units^2 (None: never).
+        callback: None, or called with a ``SearchProgress``; a truthy return stops the search.
+        popsize: scipy's population multiplier.
+        strategy: scipy's strategy ("best1bin").
+
+    Returns:
+        The :class:`~nbst.solution.SolveResult` (its best so far when interrupted).
+
+    Raises:
+        InputError: a budget, patience or seed out of range.
+    """
     from scipy.optimize import differential_evolution
 
     seed = _check_args(max_trials, patience, seed)

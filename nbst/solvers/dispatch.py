@@ -42,7 +42,16 @@ SIGNATURE = "signature"
 class Solver(Protocol):
     """A solver: the best velocities it finds for ``problem`` within ``request``; it calls
     ``callback`` with a ``SearchProgress`` every few thousand trials (a truthy return stops it)
-    and returns its best so far when interrupted (``stopped == "interrupted"``)."""
+    and returns its best so far when interrupted (``stopped == "interrupted"``).
+
+    Args:
+        problem: the problem.
+        request: seed, budget and stopping rules (:class:`~nbst.search.variants.SolveRequest`).
+        callback: None, or called with a ``SearchProgress``; a truthy return stops the search.
+
+    Returns:
+        The :class:`~nbst.solution.SolveResult`.
+    """
 
     def __call__(self, problem: Problem, request: SolveRequest,
                  callback: ProgressCallback | None) -> SolveResult: ...
@@ -56,10 +65,14 @@ def _never(problem: Problem) -> bool:
 class SolverInfo:
     """A registered solver.
 
-    run          : the solver
-    variants     : whether it takes ``variant`` and ``robust`` (the signature search)
-    one_process  : problems on which it runs one search in this process, using ``jobs`` as its
-                   own threads, instead of ``--jobs`` islands (the many-body search)
+    Args:
+        run: the solver (:class:`Solver`).
+        variants: whether it takes ``variant`` and ``robust`` (the signature search).
+        one_process: problems on which it runs one search in this process, using ``jobs`` as its
+            own threads, instead of ``--jobs`` islands (the many-body search).
+
+    Returns:
+        The entry ``SOLVERS`` holds under the solver's name.
     """
 
     run: Solver
@@ -72,14 +85,35 @@ SOLVERS: Registry[SolverInfo] = Registry("algorithm")
 
 def register_solver(name: str, run: Solver, *, help: str, variants: bool = False,
                     one_process: Callable[[Problem], bool] = _never) -> None:
-    """Add a solver to ``SOLVERS`` (see :class:`SolverInfo`); ``help`` is its one line in
-    ``nbst solve --help`` and the experiments' docs."""
+    """Add a solver to ``SOLVERS`` (see :class:`SolverInfo`).
+
+    Args:
+        name: its name (``nbst solve --algorithm NAME``).
+        run: the solver (:class:`Solver`).
+        help: its one line in ``nbst solve --help`` and the experiments' docs.
+        variants, one_process: as :class:`SolverInfo`.
+
+    Returns:
+        None.
+
+    Raises:
+        InputError: the name is empty or already registered.
+    """
     SOLVERS.register(name, SolverInfo(run, variants, one_process), help=help)
 
 
 def run_solver(algorithm: str, problem: Problem, request: SolveRequest,
                callback: ProgressCallback | None = None) -> SolveResult:
     """Run the registered solver ``algorithm`` (any case) on ``problem`` as ``request`` says.
+
+    Args:
+        algorithm: a name of ``SOLVERS`` (any case).
+        problem: the problem.
+        request: seed, budget and stopping rules (:class:`~nbst.search.variants.SolveRequest`).
+        callback: None, or called with a ``SearchProgress``; a truthy return stops the search.
+
+    Returns:
+        The solver's :class:`~nbst.solution.SolveResult`.
 
     Raises:
         InputError: an unknown algorithm, or a variant or robust mode for a solver without them.
