@@ -229,13 +229,13 @@ def test_cli_solve_replay_and_their_exits(toss, impossible, tmp_path, capsys, mo
 def test_cli_examples_and_check(capsys):
     assert main(["scene", "examples"]) == 0
     out = capsys.readouterr().out
-    assert "snake-eyes" in out and "egg-in-cup" in out
+    assert "snake-eyes" in out and "egg-in-cup" in out and "bank-shot" in out
     assert main(["scene", "check", "snake-eyes"]) == 0
     assert "within 20 deg of up" in capsys.readouterr().out
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["snake-eyes", "egg-in-cup"])
+@pytest.mark.parametrize("name", ["snake-eyes", "egg-in-cup", "bank-shot"])
 def test_the_built_in_examples_are_solved_and_replay(name, tmp_path):
     res = solve(None, name, seed=1, max_rollouts=2000)
     assert res.met, (name, res.rollouts, res.best.judgement.to_dict())

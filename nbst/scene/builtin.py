@@ -2,7 +2,8 @@
 
 Each is after the literature on constrained rigid-body animation (docs/scene.md): ``snake-eyes``
 (Barzel, Hughes & Wood 1996: two dice knocked off a table come up 1-1 in a marked square) and
-``egg-in-cup`` (Popovic et al. 2000: a thrown egg lands and stays in a cup). A fates path that is
+``egg-in-cup`` (Popovic et al. 2000: a thrown egg lands and stays in a cup) and ``bank-shot`` (a
+ball comes off the backboard and drops through the hoop: ``hits`` and ``through``). A fates path that is
 not a file but names one of these loads it (``nbst scene solve snake-eyes``).
 """
 from __future__ import annotations
