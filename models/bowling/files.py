@@ -15,6 +15,7 @@ import math
 import os
 import stat
 from pathlib import Path
+from typing import NoReturn
 
 from nbst.errors import InputError
 from nbst.problem import ProblemError, read_json
@@ -46,7 +47,7 @@ def regular_file(path, what: str = "") -> Path:
     return p
 
 
-def fail(src, field: str, why: str):
+def fail(src, field: str, why: str) -> NoReturn:
     raise BowlingFileError(f"{src}: {field}: {why}" if field else f"{src}: {why}")
 
 

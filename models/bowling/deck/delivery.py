@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 
@@ -166,9 +167,10 @@ class Deliveries:
 
     def throw(self, deliveries) -> tuple[np.ndarray, np.ndarray]:
         """(B, 4) delivery arrays -> (signatures (B,) int, pins down (B, 10) bool)."""
+        r: Any = self  # a mixin: the runner it is mixed into has the model and the state methods
         deliveries = np.atleast_2d(np.asarray(deliveries, dtype=float))
-        states = np.array([self.initial_state(*initial_qpos_qvel(self.model, x)) for x in deliveries])
-        down = pinfall.pins_down(self.model, self.final_qpos(self.run_states(states)))
+        states = np.array([r.initial_state(*initial_qpos_qvel(r.model, x)) for x in deliveries])
+        down = pinfall.pins_down(r.model, r.final_qpos(r.run_states(states)))
         return pinfall.mask_of(down), down
 
 

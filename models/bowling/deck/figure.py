@@ -33,7 +33,7 @@ def atlas_figure(found, *, title: str = ""):
     total_rows = sum(rows.values())
     W, H = label_w + PER_ROW * cell_w, total_rows * cell_h + (1.5 if title else 0.3)
     fig = Figure(figsize=(W * 0.28, H * 0.28), dpi=110)
-    ax = fig.add_axes([0, 0, 1, 1])
+    ax = fig.add_axes((0, 0, 1, 1))
     ax.set_xlim(0, W)
     ax.set_ylim(-H, 0)
     ax.set_aspect("equal")

@@ -22,11 +22,13 @@ import csv
 import io
 import json
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
 from nbst.models.bowling import geometry, pinfall, scene, deck
 from nbst.models.bowling.deck import atlas as atlasmod, figure, search, throwfile
+from nbst.models.bowling.subsets import SubsetArchive
 from nbst.outputs import write_text_atomic, prepare_output, atomic_path
 
 __all__ = ["throw_name", "write_throw", "atlas_json", "shipped_archive", "unpack_atlas", "prepare", "resume",
@@ -204,7 +206,7 @@ class AtlasRun:
             if self.on_progress:
                 self.on_progress(arch.rollouts, len(arch))
 
-        atlasmod.run(self.runner, self.arch, method=self.method, budget=budget, seed=self.seed,
+        atlasmod.run(self.runner, cast(SubsetArchive, self.arch), method=self.method, budget=budget, seed=self.seed,
                      per_subset=per_subset, on_new=self.on_new, callback=progress)
 
 

@@ -33,6 +33,7 @@ Generator, and nothing else touches numpy's global random state in between).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -187,12 +188,15 @@ def solve(target: int, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, j
         the pins it knocks down, its Hamming distance to ``target``, the rollouts and restarts
         used, ``stopped`` ("found", "budget" or "interrupted"), the seed, the wall time and the
         archive.
+
+    Raises:
+        InputError: ``target`` is not a subset of the 10 pins (1..1023), or ``distance`` is unknown.
     """
     if not 0 < int(target) <= geometry.N_SUBSETS:
         raise InputError(f"target must be a non-empty subset of the 10 pins (1..{geometry.N_SUBSETS}), got {target}")
     target = int(target)
     own = runner is None
-    L = deck.DeliveryRunner(jobs=jobs) if own else runner
+    L = deck.DeliveryRunner(jobs=jobs) if runner is None else runner
     try:
         evaluate, dist = scorer(L, target, distance)
         cb = None if callback is None else (lambda p: callback(DeckProgress(p.rollouts, p.best_distance,
@@ -221,7 +225,7 @@ def robustness(runner: deck.DeliveryRunner, delivery, mask: int, *, lateral_max:
     the answer is "these 4 probes keep it", not "every smaller change keeps it").
     """
     delivery = np.asarray(delivery, dtype=float)
-    out = {}
+    out: dict[str, Any] = {}
     for key, col, hi in (("lateral_m", 0, lateral_max), ("speed_m_s", 1, speed_max)):
         lo_ok, hi_bad = 0.0, hi
         probes_run = 0
@@ -267,7 +271,7 @@ def robustness_ladder(runner: deck.DeliveryRunner, delivery, mask: int, *, later
     not "every smaller change keeps it" (a rung that passes can sit above one that fails).
     """
     delivery = np.asarray(delivery, dtype=float)
-    out = {}
+    out: dict[str, Any] = {}
     for key, col, rungs in (("lateral_m", 0, np.asarray(lateral, float)), ("speed_m_s", 1, np.asarray(speed, float))):
         lo, hi, runs = -1, len(rungs), 0   # rung lo passes (-1: none), rung hi fails (len: beyond the top)
         while hi - lo > 1:

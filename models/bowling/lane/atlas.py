@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -122,9 +123,10 @@ def grow(runner: frame.FrameRunner, archive: subsets.SubsetArchive, *, budget: i
         kids = parents >= 0
         X[kids, len(KEYS)] = [a.elite[int(p)][len(KEYS)] for p in parents[kids]]  # the parent's hand
 
-    return _archive.grow(lambda X: throw_masks(runner, X)[0], archive, np.random.default_rng(seed), SPACE,
-                         budget=budget, explore=_archive.EXPLORE_EMPTY, batch=_archive.BATCH, weights=subsets.parent_weights,
-                         adopt=adopt, on_batch=on_batch)
+    grown = _archive.grow(lambda X: throw_masks(runner, X)[0], archive, np.random.default_rng(seed), SPACE,
+                          budget=budget, explore=_archive.EXPLORE_EMPTY, batch=_archive.BATCH, weights=subsets.parent_weights,
+                          adopt=adopt, on_batch=on_batch)
+    return cast(subsets.SubsetArchive, grown)
 
 
 def probabilities(runner: frame.FrameRunner, elites: dict, *, n: int, seed: int, nz: noise.Noise = noise.DEFAULT,

@@ -151,12 +151,12 @@ def quat_of_mat(R: np.ndarray) -> np.ndarray:
     else:
         s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
         q = [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, s / 4]
-    q = np.array(q)
-    q = q if q[0] >= 0 else -q
-    return q / np.linalg.norm(q)
+    qa = np.array(q)
+    qa = qa if qa[0] >= 0 else -qa
+    return qa / np.linalg.norm(qa)
 
 
-def initial_state(d: Delivery) -> tuple[np.ndarray, np.ndarray]:
+def initial_state(d: Delivery) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The ball's state at release, at the foul line, world frame.
 
     Args:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import cast
 
 from nbst.models.bowling import files, lane, pinfall, subsets
 from nbst.models.bowling.lane import atlas, frame, noise, throwfile
@@ -57,7 +58,7 @@ class FoulAtlasRun:
         elif from_atlas:
             points, here = atlas_points(throwfile.load_atlas(from_atlas))
             if here:  # this scene's answers: kept as they are
-                self.archive = subsets.SubsetArchive.from_elites(points)
+                self.archive = cast(subsets.SubsetArchive, subsets.SubsetArchive.from_elites(points))
             else:  # another scene's: its deliveries, thrown again here (:meth:`rethrow`)
                 self.archive = subsets.SubsetArchive()
                 self.starts = list(points.values())

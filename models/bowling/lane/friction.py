@@ -271,7 +271,7 @@ class BallOnLane:
         self.acc = np.zeros(N_ACC)
         self.acc[A_SCALE] = 1.0
         self.acc[A_SUM] = float(self.cover.sum())
-        self._views = None
+        self._views: tuple | None = None
         R = scene.BALL_RADIUS
         prm = np.zeros(N_PRM)
         prm[P_MASS] = float(model.body_mass[bid])

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -102,6 +103,11 @@ CORR_KEYS = ("corr_mph_rpm", "corr_rotation_rpm")
 DEFAULT = Noise()
 
 
+def _fields(row) -> dict[str, Any]:
+    """A row of drawn values as the delivery's fields (:data:`KEYS`), Python floats."""
+    return {k: float(v) for k, v in zip(KEYS, row)}
+
+
 def sample(delivery: lane.Delivery, n: int, seed: int, noise: Noise = DEFAULT) -> list[lane.Delivery]:
     """``n`` noisy copies of ``delivery`` (board given at the foul line), reproducible from ``seed``.
 
@@ -125,7 +131,7 @@ def sample(delivery: lane.Delivery, n: int, seed: int, noise: Noise = DEFAULT) -
     draws = noise.mix(normal_draws(seed, n, len(KEYS)))  # a fixed order: row per throw, column per key
     X = perturb([getattr(base, k) for k in KEYS], [getattr(noise, k) for k in KEYS], draws,
                 [CLIP[k][0] for k in KEYS], [CLIP[k][1] for k in KEYS])
-    return [replace(base, **{k: float(v) for k, v in zip(KEYS, row)}) for row in X]
+    return [replace(base, **_fields(row)) for row in X]
 
 
 @dataclass

@@ -217,6 +217,9 @@ def throw(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: Oil
     Returns:
         A :class:`ThrowResult` in bowler's units: the skid, breakpoint and roll (feet past the
         foul line, boards), the entry angle (degrees), the board at the pins and the track flare.
+
+    Raises:
+        LaneError: the delivery, the ball or the oil is refused (one line naming the field).
     """
     delivery = delivery.check()
     ball = (ball or Ball()).check()
@@ -242,10 +245,10 @@ def throw(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: Oil
     a[k:-k] = (v[2 * k:] - v[:-2 * k]) / (2 * k * h)
     a_perp = s * (v[:, 0] * a[:, 1] - v[:, 1] * a[:, 0]) / np.maximum(speed, 1e-9)
     peak = a_perp.max()
-    skid_i = int(np.argmax(a_perp >= HOOK_SHARE * peak)) if peak > 0.05 else None
+    skid_i: int | None = int(np.argmax(a_perp >= HOOK_SHARE * peak)) if peak > 0.05 else None
     # breakpoint: the ball's farthest board out, if it went out at least BREAKPOINT_MIN boards
-    bp_i = int(np.argmin(board))
-    bp_i = bp_i if board[0] - board[bp_i] >= BREAKPOINT_MIN and bp_i < len(board) - 1 else None
+    far = int(np.argmin(board))
+    bp_i = far if board[0] - board[far] >= BREAKPOINT_MIN and far < len(board) - 1 else None
     rolled = np.flatnonzero(slip_h < ROLL_SLIP)
     roll_i = int(rolled[0]) if len(rolled) else None
     # at the head pin's line: interpolate between the last two steps

@@ -59,6 +59,7 @@ Compute only: no files, no printing.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -110,7 +111,7 @@ class Release:
         self.moved = np.array([1.0 if k != "tilt" or nz.tilt > 0 else 0.0 for k in KEYS])  # the tilt: only if noisy
 
     def delivery(self, x) -> lane.Delivery:
-        kw = {}
+        kw: dict[str, Any] = {}
         for k, v in zip(KEYS, x):
             lo, hi = noise_mod.CLIP[k]
             kw[k] = float(np.clip(v * self.scale[k], lo, hi))

@@ -121,12 +121,12 @@ def _pins(pins) -> list[int]:
     return sorted({int(n) for n in pins})
 
 
-def _as_dict(x) -> dict:
+def _as_dict(x) -> dict | None:
     if x is None:
         return None
     if hasattr(x, "to_dict"):
         return x.to_dict()
-    if is_dataclass(x):
+    if is_dataclass(x) and not isinstance(x, type):
         return asdict(x)
     return dict(x)
 

@@ -36,11 +36,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
+from nbst.models.bowling.lane.noise import Noise
 from nbst.models.bowling.lane.oil import DX_FT, NX, OilField, OilLaw, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS",
@@ -76,8 +78,8 @@ class Bowler:
     index: int
     hand: str
     strike: lane.Delivery
-    noise: noise.Noise
-    spare_noise: noise.Noise | None = None
+    noise: Noise
+    spare_noise: Noise | None = None
 
 
 def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0, oil="house",
@@ -193,7 +195,7 @@ class Run:
         self.before = _map(self.field)
         self._done = self.field.h.copy()  # the lane after the last finished ball
         self.balls: list[dict] = []
-        self.rolls = {(b.index, g): [] for b in bowlers for g in range(games)}
+        self.rolls: dict[tuple[int, int], list] = {(b.index, g): [] for b in bowlers for g in range(games)}
         self.lines = {b.index: [0.0, 0.0] for b in bowlers}  # feet, target
         self.readings: dict = {b.index: [] for b in bowlers}
         self.moves: list[dict] = []
@@ -210,7 +212,8 @@ class Run:
         nz = b.spare_noise if spare and b.spare_noise is not None else b.noise
         x = noise.perturb([getattr(d, k) for k in noise.KEYS], [getattr(nz, k) for k in noise.KEYS], row[None],
                           [noise.CLIP[k][0] for k in noise.KEYS], [noise.CLIP[k][1] for k in noise.KEYS])[0]
-        return replace(d, **{k: float(v) for k, v in zip(noise.KEYS, x)}).check()
+        fields: dict[str, Any] = {k: float(v) for k, v in zip(noise.KEYS, x)}
+        return replace(d, **fields).check()
 
     def _aimed(self, b: Bowler, standing) -> lane.Delivery:
         if len(standing) == 10:

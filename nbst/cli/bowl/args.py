@@ -216,12 +216,12 @@ def target_board(text: str) -> float:
     for k, b in arrows().items():
         if t in (f"{k}-arrow", k, f"arrow{k[0]}", f"arrow-{k[0]}"):
             return b
-    b = number(t)
-    if b is None:
+    given = number(t)
+    if given is None:
         raise argparse.ArgumentTypeError(f"expected an arrow (1st-arrow .. 7th-arrow) or a board 1..39, got {text!r}")
-    if not (1.0 <= b <= 39.0):
+    if not (1.0 <= given <= 39.0):
         raise argparse.ArgumentTypeError(f"a board at the arrows must be 1..39, got {text!r}")
-    return b
+    return given
 
 
 def ball_flags(t) -> None:

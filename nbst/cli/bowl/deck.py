@@ -9,6 +9,7 @@ line quotes the bar's own count and seconds.
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 from nbst.cli.args import Bounded
 from nbst.cli.bowl.args import asked_text, err
@@ -129,7 +130,7 @@ def cmd_atlas(args) -> int:
     files, deliveries, skipped = folder.resume(out)
     for _, why in skipped:  # said, not silently dropped: the search finds the subset again if it can
         print(f"nbst bowl atlas: skipped {why} (the search finds its subset again if it can)", file=sys.stderr)
-    bar = None
+    bar: Any = None
 
     def on_progress(n, found) -> None:
         bar.set(n)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
 
 from nbst.cli.args import Bounded
 from nbst.cli.bowl.args import asked_text, bowler_flag, bowlers, err
@@ -145,7 +146,8 @@ def cmd_solve(args) -> int:
     # starts, and when its throw misses here the search runs (foul_atlas.seek)
     bar = progress.Bar(f"bowl solve {asked}", (0 if direct else args.max_rollouts) + after, unit="frame",
                        bound=True, start=progress.command_start(), quiet=args.quiet)
-    state = {"point": None, "est": None, "ladder": None, "stage": "search", "frames": 0, "from_atlas": False}
+    state: dict[str, Any] = {"point": None, "est": None, "ladder": None, "stage": "search", "frames": 0,
+                             "from_atlas": False}
     arch = dict(elites)
     interrupted = False
 
@@ -224,8 +226,8 @@ def cmd_solve(args) -> int:
     line = (f"pins down {got}, leave {','.join(map(str, r.leave)) or 'none'} ({names.text(doc['names'])}); "
             f"from the foul line: {_delivery_text(d)}")
     if state["est"] is not None:
-        e = state["est"]
-        line += (f"; probability {e.text()} under the release noise"
+        est = state["est"]
+        line += (f"; probability {est.text()} under the release noise"
                  + (f" of bowler {args.bowler}" if args.bowler else "") + f", seed {seed}")
     steps, kept = throwfile.ladder_kept(doc)
     if steps:
@@ -301,7 +303,8 @@ def cmd_atlas(args) -> int:
     except (OSError, files.BowlingFileError) as e:   # a file in the folder or --from's: one line naming it
         return err("atlas", str(e))
     interrupted = False
-    bar = pb = None
+    bar: Any = None
+    pb: Any = None
 
     def on_batch(frames, found) -> None:
         bar.set(frames)

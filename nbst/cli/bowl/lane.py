@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from nbst.cli.args import Bounded, print_json
 from nbst.cli.bowl.args import (ball_flags, ball_of, bowler_of, check_picture_args, delivery_flags,
@@ -202,14 +203,14 @@ def cmd_frame(args) -> int:
             n for n in range(1, 11) if pin_list(args.leave, "--leave") >> (n - 1) & 1)
         if args.output:
             prepare_output(args.output)
-        line = advise.line_of(lane.throw(d, args.oil, ball))   # the ball alone: stance, target, breakpoint
+        ball_line = advise.line_of(lane.throw(d, args.oil, ball))   # the ball alone: stance, target, breakpoint
     except argparse.ArgumentTypeError as e:  # --leave's pins (pin_list words it as argparse would)
         return err("frame", str(e))
     r = lad = est = None
     try:
         r = frame.run_frame(d, args.oil, ball, standing=standing)
         nm = names.names(r.in_play, r.leave, r.board_at_pins, r.entry_angle_deg, d.hand)
-        extra = {"bowler": args.bowler, "line": line, "names": nm, "note": advise.SAMPLE_NOTE}
+        extra = {"bowler": args.bowler, "line": ball_line, "names": nm, "note": advise.SAMPLE_NOTE}
         doc = {"frame": r.to_dict(), **extra}
         if args.longer:
             r2 = frame.run_frame(d, args.oil, ball, standing=standing, extra_s=args.longer)
@@ -308,6 +309,7 @@ def replay_throw(args) -> int:
     from nbst.render.bowling import throw as bowling_throw
 
     picture = wants_picture(args)
+    r: Any  # the replayed frame (a FrameResult), from the replay or from the recording
     if not picture:
         d, r, ok = throwfile.replay_file(args.file)
     else:
@@ -320,7 +322,8 @@ def replay_throw(args) -> int:
         d = throwfile.load(args.file)
         throwfile.replayable(d, args.file)  # another scene's throw: one line
         try:   # the replay of throwfile.replay, recorded: its model, oil, ball, pins standing and timestep
-            th = bowling_throw.record_throw(lane.Delivery(**d["delivery"]), throwfile.oil_of(d), lane.Ball(**d["ball"]),
+            th = bowling_throw.record_throw(lane.Delivery(**d["delivery"]), throwfile.oil_of(d),  # type: ignore[arg-type]
+                                           lane.Ball(**d["ball"]),
                                            standing=d["standing"], timestep=float(d["outcome"]["timestep"]))
         except (lane.LaneError, frame.FrameError, MujocoError) as e:
             return err("replay", f"{args.file}: delivery: {e}")
