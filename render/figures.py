@@ -22,6 +22,11 @@ import numpy as np
 from nbst import palette
 from nbst.problem import display_name
 
+__all__ = ["DISK_NUMBER_PT", "FIG_INCHES", "LEGEND_PT", "MANY_STAR_MS", "MIN_DISK_PT", "NUMBERS_MAX_DISKS",
+           "NUMBER_Z", "STAR_MS", "TARGET_NUMBER_PT", "TITLE_PT", "TITLE_SIGNATURE_MAX", "circle_handle",
+           "disk_paths", "draw_final", "draw_start", "draw_target", "event_points", "legend_below", "line_handle",
+           "mark_handles", "numbered", "plot_problem", "plot_trajectories", "save_figure", "target_marker_radius"]
+
 #: Figure size in inches for a square box; scaled to the box's aspect.
 FIG_INCHES = 6.0
 #: Font sizes (points): disk numbers on the disks, target numbers, legends, titles.
@@ -253,7 +258,14 @@ def legend_below(fig, entries, *, ncol: int = 2, fontsize: float = LEGEND_PT, gr
 def plot_problem(problem, *, rings: bool = True):
     """The problem as the paper's Figures 1-2: numbered disks at their starts,
     numbered targets, arrows start -> target (broken for noncueable disks).
-    rings: also draw each target's neighbourhood of radius R (dotted)."""
+
+    Args:
+        problem: the :class:`nbst.Problem`.
+        rings: also draw each target's neighbourhood of radius R (dotted).
+
+    Returns:
+        The matplotlib Figure (no pyplot: :func:`save_figure` writes it).
+    """
     from matplotlib.patches import FancyArrowPatch
 
     p = problem
@@ -289,7 +301,16 @@ def plot_trajectories(problem, trajectory, *, rings: bool = True):
     its final position (thin outline circle), wall bounces (black dots) and disk-disk
     collisions (red stars, at the contact point), numbered targets (small circles)
     and, with ``rings``, their dotted neighbourhoods. Each path line is labelled
-    ``_path i``; the legend sits below the box."""
+    ``_path i``; the legend sits below the box.
+
+    Args:
+        problem: the :class:`nbst.Problem`.
+        trajectory: its exact motion (:func:`nbst.simulate`'s trajectory).
+        rings: also draw each target's neighbourhood of radius R (dotted).
+
+    Returns:
+        The matplotlib Figure.
+    """
     p, tr = problem, trajectory
     fig, ax = _figure(p)
     shades = palette.disk_shades(p.cueable)
@@ -374,7 +395,13 @@ def disk_paths(trajectory) -> list[np.ndarray]:
 
 
 def save_figure(fig, path, *, dpi: int = 150) -> None:
-    """Write a figure (format from the extension)."""
+    """Write a figure, its format from the extension (.png, .pdf, .svg), making its folder.
+
+    Args:
+        fig: the matplotlib Figure.
+        path: the file to write.
+        dpi: dots per inch of a raster format.
+    """
     from pathlib import Path
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(str(path), dpi=dpi)

@@ -16,6 +16,8 @@ from nbst.errors import InputError
 from nbst.render.core import style
 from nbst.render.core.shapes import CAPSULE_DTYPE
 
+__all__ = ["SampledMotion", "trail_capsules", "trail_points", "trail_segments"]
+
 class SampledMotion:
     """Positions known at sample times: times (T,) increasing, positions (T, N, 2).
 

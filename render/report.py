@@ -19,10 +19,13 @@ import html
 import numpy as np
 
 from nbst import palette
+from nbst.models.validate import describe
 from nbst.solution import dumps_strict
 
 from nbst.render.report_figures import (EVENT_ROWS, MANY_DISKS, WORST_ROWS, figure_convergence,
                                         figure_error, figure_overlay, figure_timeline, worst_disks)
+
+__all__ = ["JSON_LIST_MAX", "report_html"]
 
 #: Lists longer than this in the embedded JSON are summarised (report.json keeps them whole).
 JSON_LIST_MAX = 64
@@ -184,7 +187,14 @@ def _short_lists(x):
 
 
 def report_html(val) -> str:
-    """The whole page as text (every figure embedded)."""
+    """The HTML cross-validation report of ``nbst validate --out-dir``, every figure embedded.
+
+    Args:
+        val: the validation (:func:`nbst.models.validate.validate`'s result).
+
+    Returns:
+        The whole page as text.
+    """
     d = val.to_dict()
     esc = html.escape
     p = val.problem
@@ -230,7 +240,6 @@ def report_html(val) -> str:
             cells.append(f"<tr><td style='text-align:left'>{esc(text)}</td><td>{o}</td></tr>")
         return note + "<table><tr><th>event (exact time)</th><th>offset</th></tr>" + "".join(cells) + "</table>"
 
-    from nbst.models.validate import describe
     evs = {"exact": val.exact.events, "mujoco": val.mujoco.events}
 
     div = d["divergence"]

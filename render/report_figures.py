@@ -14,6 +14,13 @@ import io
 import numpy as np
 
 from nbst import palette
+from nbst.problem import display_name
+from nbst.render.figures import (circle_handle, draw_final, draw_start, draw_target, legend_below, line_handle,
+                                 mark_handles)
+
+__all__ = ["DPI", "EVENT_ROWS", "MANY_DISKS", "MANY_EVENTS", "WORST_CURVES", "WORST_ROWS", "convergence_figure",
+           "error_figure", "error_floor", "figure_convergence", "figure_error", "figure_overlay", "figure_timeline",
+           "overlay_figure", "timeline_figure", "worst_disks"]
 
 #: Figure resolution (dots per inch); figures are ~7 in wide.
 DPI = 110
@@ -62,8 +69,6 @@ def overlay_figure(val):
     final position a thin outline circle (MuJoCo's dotted black), its target a small
     hollow circle numbered with the disk, with the dotted neighbourhood of radius R.
     The legend sits below the box."""
-    from nbst.render.figures import (circle_handle, draw_final, draw_start, draw_target, legend_below,
-                                     line_handle, mark_handles)
 
     p = val.problem
     if p.n > MANY_DISKS:
@@ -89,7 +94,6 @@ def overlay_figure(val):
     entries += [(line_handle(mj_ink, ":", lw=1.0), "MuJoCo path"),
                 (circle_handle(ec=mj_ink, lw=1.0, ls=":"), "final position, MuJoCo")]
     legend_below(fig, entries)
-    from nbst.problem import display_name
     how = (f"aligned stepping, probe step {val.timestep * 1e3:g} ms" if getattr(val, "stepping", "fixed") == "aligned"
            else f"fixed steps of {val.timestep * 1e3:g} ms")
     ax.set_title(f"{display_name(p.name)}: paths, exact (nbst) and MuJoCo ({how})", fontsize=9)
@@ -114,8 +118,6 @@ def _overlay_many(val):
     from matplotlib.collections import LineCollection, PatchCollection
     from matplotlib.patches import Circle
 
-    from nbst.problem import display_name
-    from nbst.render.figures import circle_handle, legend_below, line_handle
 
     p = val.problem
     ex, mj = val.exact, val.mujoco
@@ -200,7 +202,6 @@ def error_figure(val):
     so curves are told apart by shape as well as colour (colour-blind readers), and
     numbered at its right end; errors below the floor (``error_floor``) are drawn on
     it, and the legend says so. The legend below names every disk."""
-    from nbst.render.figures import legend_below, line_handle
 
     p = val.problem
     if p.n > MANY_DISKS:
@@ -261,7 +262,6 @@ def _error_many(val):
     """The error over time for many disks: the largest over all disks, the median, the band of the
     10th-90th percentiles, and the :data:`WORST_CURVES` disks with the largest final error as
     numbered curves; the tolerance and the first divergence as in the per-disk figure."""
-    from nbst.render.figures import legend_below, line_handle
 
     p = val.problem
     fig = _figure((7.5, 3.4))
@@ -304,7 +304,6 @@ def _error_many(val):
 def _timeline_many(val):
     """Events per time bin for many events: exact events matched in the MuJoCo motion, exact events
     it lacks, and MuJoCo events the exact motion lacks (bins of t_final / 100)."""
-    from nbst.render.figures import legend_below, line_handle
 
     ex, mj = val.exact.events, val.mujoco.events
     T = val.problem.t_final
@@ -337,7 +336,6 @@ def timeline_figure(val):
     """Events on a time axis: exact above, MuJoCo below, matched pairs joined. The
     marks of ``nbst plot trajectories``: a disk-disk collision a red star, a wall
     bounce a black dot; an event only one motion has is drawn hollow."""
-    from nbst.render.figures import legend_below, line_handle
 
     ex, mj = val.exact.events, val.mujoco.events
     if len(ex) + len(mj) > MANY_EVENTS:
@@ -387,7 +385,6 @@ def convergence_figure(val):
     """Max final error against the step size h (log-log): the fixed-step entries (filled:
     used for the fitted order, hollow: not), the fitted line, and aligned stepping's error as
     a horizontal line (it has no single h). Legend below."""
-    from nbst.render.figures import legend_below, line_handle
 
     ink = palette.hex_color(palette.INK)
     fit_ink = palette.hex_color(palette.RING_INK)

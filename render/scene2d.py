@@ -21,7 +21,11 @@ from nbst import palette
 from nbst.render.core import style
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.motion2d import trail_capsules
-from nbst.render.core.shapes import CIRCLE_DTYPE, Capsules, Circles, Rect, Text
+from nbst.render.core.shapes import CIRCLE_DTYPE, Capsules, Circles, Rect, Text, digit_height, text_cell
+
+__all__ = ["Labels", "Layout", "Renderer2D", "auto_labels", "covered_by_own_disk", "draw_legend",
+           "ghost_label_instances", "keep_apart", "labels_legible", "legend_entries", "marker_radii",
+           "markers_outside", "target_label_boxes", "target_label_instances", "target_label_px"]
 
 
 class Layout:
@@ -72,7 +76,6 @@ class Labels:
     upper left, in the disk's colour over a dark halo. ``on_disk`` says which is which."""
 
     def __init__(self, ctx, problem, rpx, colors=None):
-        from nbst.render.core.shapes import digit_height
 
         rpx = np.broadcast_to(np.asarray(rpx, float), (problem.n,))
         self.px = px = int(np.clip(np.median(rpx) * style.LABEL_FRAC, style.MIN_LABEL_PX, style.MAX_LABEL_PX))
@@ -350,7 +353,6 @@ class Renderer2D(FrameRenderer):
                  ghost_name: str | None = None):
         import moderngl
 
-        from nbst.render.core.shapes import text_cell
 
         self._show(ctx, problem, motion, ghost, trails=trails, motion_name=motion_name, ghost_name=ghost_name,
                    title=title)

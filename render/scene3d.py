@@ -18,7 +18,12 @@ import numpy as np
 from nbst.render.core import style
 from nbst.render.core.camera import look_at, mesh_arrays, perspective
 from nbst.render.core.gl import FrameRenderer, FrameTarget
-from nbst.render.core.shapes import CAPSULE_FS_IO, CAPSULE_VS_IO, Circles, Text
+from nbst.render.motion2d import trail_capsules
+from nbst.render.scene2d import (Labels, covered_by_own_disk, draw_legend, ghost_label_instances, legend_entries,
+                                 target_label_instances, target_label_px)
+from nbst.render.core.shapes import CAPSULE_DTYPE, CAPSULE_FS_IO, CAPSULE_VS_IO, CIRCLE_DTYPE, Circles, Text, _Instanced
+
+__all__ = ["INST_DTYPE", "MESH_FS", "MESH_VS", "TRAIL_FS", "TRAIL_VS", "TRAIL_Z", "Renderer3D"]
 
 MESH_VS = """#version 330
 uniform mat4 u_mvp;
@@ -179,7 +184,6 @@ class Renderer3D(FrameRenderer):
         self._ghosts["color"] = style.GHOST[:3]
         self.trail_prog = None
         if self.trails:
-            from nbst.render.core.shapes import CAPSULE_DTYPE, _Instanced
             self.trail = _Instanced(ctx, TRAIL_VS, TRAIL_FS, CAPSULE_DTYPE, "2f 2f 2f 1f 3f",
                                     ("in_p0", "in_p1", "in_alpha", "in_half", "in_color"), capacity=1024)
             self.trail_prog = tp = self.trail.prog
@@ -196,7 +200,6 @@ class Renderer3D(FrameRenderer):
         self.labels = self.target_text = None
         self.rail_w = rw
         if labels:
-            from nbst.render.scene2d import Labels, target_label_px
             c = np.array([[W / 2, H / 2], [W / 2 + 1.0, H / 2]])
             px_per_unit = float(np.linalg.norm(np.diff(self.to_pixels(c, z=0.0), axis=0)))
             self.labels = Labels(ctx, p, p.radius * px_per_unit, self.colors)
@@ -206,7 +209,6 @@ class Renderer3D(FrameRenderer):
         self.circles = Circles(ctx)
         self.circles.set_view(self.size)
         # the target markers as an image-space overlay: a ring of the marker's projected radius
-        from nbst.render.core.shapes import CIRCLE_DTYPE
         # at the height of the pucks' top faces, so a puck resting on its target has its marker
         # concentric with its top (and its number); widened to ring that number, as in 2D
         self._target_centre_px = self.to_pixels(p.target, z=self.puck_h)
@@ -293,7 +295,6 @@ class Renderer3D(FrameRenderer):
 
     def _draw_legend(self) -> None:
         """Legend under the readout, left of the table, when there is room."""
-        from nbst.render.scene2d import draw_legend, legend_entries
         p = self.problem
         W, H = p.box
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
@@ -362,12 +363,10 @@ class Renderer3D(FrameRenderer):
         if self.labels is not None:
             tops = self.to_pixels(pos, z=self.puck_h)
             self.labels.draw(self.size, tops)
-            from nbst.render.scene2d import covered_by_own_disk, target_label_instances
             numbers = target_label_instances(self.target_text, self._target_centre_px, self._target_marker_px,
                                              avoid=self.labels.boxes(tops), skip=covered_by_own_disk(p, pos))
             self.target_text.draw_halo(self.size, numbers, style.TARGET_LABEL, style.TEXT_HALO)
             if self.ghost is not None:
-                from nbst.render.scene2d import ghost_label_instances
                 self.target_text.draw_halo(self.size, ghost_label_instances(
                     self.target_text, self.to_pixels(g, z=self.puck_h), self.labels.rpx), style.GHOST_LABEL,
                     style.TEXT_HALO)
@@ -375,7 +374,6 @@ class Renderer3D(FrameRenderer):
         self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
-        from nbst.render.motion2d import trail_capsules
         return trail_capsules(self.motion, t, self.trail_half, self.colors, min_step=np.sqrt(1e-9))  # world units
 
     def release(self) -> None:

@@ -31,6 +31,9 @@ from nbst.render.scene2d import Renderer2D, auto_labels
 from nbst.render.scene3d import Renderer3D
 from nbst.solution import load_solution
 
+__all__ = ["COMMANDS", "OUTPUT_SUFFIXES", "TAKES", "check_render_args", "cmd_plot_problem", "cmd_plot_trajectories",
+           "cmd_render", "cmd_render_throw", "make_renderer", "mujoco_positions", "parse_size", "register"]
+
 FPS = Bounded("fps", 0.0, 240.0, lo_open=True)
 SPEED = Bounded("speed", 0.0, 1e6, lo_open=True)
 HOLD = Bounded("hold", 0.0, 60.0, unit="s")

@@ -22,11 +22,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from nbst.errors import InputError
+from nbst.files import sniff_kind
 from nbst.render.core import style
 from nbst.render.core.camera import look_at, perspective
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
+from nbst.render.core.shapes import Text, text_cell
 from nbst.render.core.times import frame_times
+from nbst.render.core.video import render_output
+
+__all__ = ["BACKGROUND", "BALL_RGB", "DISK_ONLY_FLAGS", "FPS_MAX", "IMPACT_WINDOW", "PIN_LABEL_BACK", "PIN_RED",
+           "PIN_WHITE", "SLOW", "SNIFF_BYTES", "STRIPES_IN", "BowlingRenderer", "Motion", "bowling_kind",
+           "is_throw_file", "load_motion", "motion_times", "record", "render_file", "render_motion", "slow_window"]
 
 #: Slow motion around impact: this many times slower from IMPACT_WINDOW[0] s before
 #: the first ball-pin contact to IMPACT_WINDOW[1] s after it.
@@ -141,7 +148,6 @@ class BowlingRenderer(FrameRenderer):
         import trimesh
 
         from nbst.models.bowling import pin, scene
-        from nbst.render.core.shapes import Text
 
         if camera not in ("behind", "overhead", "both"):
             raise InputError(f"camera must be behind, overhead or both, got {camera!r}")
@@ -152,7 +158,6 @@ class BowlingRenderer(FrameRenderer):
         panel_w = self.size[0] // n_cams
         px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
         chars = max(len(line) for line in self.readout(float(motion.times[-1])))
-        from nbst.render.core.shapes import text_cell
         while px > style.MIN_READOUT_PX and chars * text_cell(px)[0] > panel_w - 16:
             px -= 1
         self.text = Text(ctx, px)
@@ -353,8 +358,11 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
 
     Returns:
         The number of frames written (1 for a still).
+
+    Raises:
+        InputError: an unknown camera.
+        RenderError: no GL context, an extension other than .mp4/.gif/.png, or the encoder failed (one line).
     """
-    from nbst.render.core.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
     return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw), output,
@@ -365,7 +373,18 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
 
 def render_file(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None) -> int:
     """Render the 5 m throw file ``path`` to ``output`` (.mp4/.gif video, or .png at time ``still``).
-    Returns the number of frames written."""
+
+    Args:
+        path: the throw file (``nbst bowl solve``).
+        output, still, camera, size, fps, progress: as :func:`render_motion`.
+
+    Returns:
+        The number of frames written (1 for a still).
+
+    Raises:
+        ThrowFileError: the file is not a 5 m throw file that replays (one line).
+        RenderError: no GL context, or the video cannot be written.
+    """
     throw, motion = load_motion(path)
     return render_motion(throw, motion, output, still=still, camera=camera, size=size, fps=fps, progress=progress)
 
@@ -379,7 +398,6 @@ def bowling_kind(path) -> str | None:
     """"throw" (a 5 m throw file) or "atlas" when ``path`` names a regular .json file whose first SNIFF_BYTES name
     an nbst bowling kind, else None. Reads at most SNIFF_BYTES (stat first: a FIFO or device
     is never opened), parses nothing."""
-    from nbst.files import sniff_kind
     from nbst.models.bowling.deck.throwfile import ATLAS_KIND, KIND
 
     # an atlas names its own kind before its throws' kind: the first found wins

@@ -25,16 +25,23 @@ import math
 import numpy as np
 
 from nbst.errors import InputError
-from nbst.render.core import style
+from nbst.models.bowling import lane, pin, pinfall, scene
+from nbst.models.bowling.lane import names
 from nbst.render.bowling.deck import BACKGROUND, PIN_RED, PIN_WHITE, STRIPES_IN, _flat, _pose
-from nbst.render.core.shaders import SHADE, SOLID_FS, SOLID_VS
 from nbst.render.bowling.throw import (BEHIND_AHEAD, BEHIND_BACK, BEHIND_FOV, BEHIND_HEIGHT, FOLLOW_STOP_FT, LEGEND,
                                        OVERHEAD_FROM_FT, OVERHEAD_SHARE, TRAIL_HALF_WIDTH, TRAIL_HALF_WIDTH_OVERHEAD,
-                                       TRAIL_RGB, Throw, ball_texture, throw_times, lane_marks, lane_solids,
-                                       ortho_panel, still_time)
-from nbst.render.core.gl import FrameRenderer, FrameTarget
+                                       TRAIL_RGB, Throw, ball_texture, lane_marks, lane_solids, ortho_panel,
+                                       still_time, throw_times)
+from nbst.render.core import style
 from nbst.render.core.camera import look_at, perspective
+from nbst.render.core.gl import FrameRenderer, FrameTarget
+from nbst.render.core.shaders import SHADE, SOLID_FS, SOLID_VS
+from nbst.render.core.shapes import Text, text_cell
 from nbst.render.core.solids import ribbon  # shared with the crash video
+from nbst.render.core.video import render_output
+
+__all__ = ["BALL_FS", "BALL_VS", "CAMERAS", "DECK_EYE", "DECK_FOV", "DECK_TARGET", "OIL_NAME_CHARS", "STANCE_SEP",
+           "LaneRenderer", "oil_summary", "render_throw"]
 
 BALL_VS = """#version 330
 uniform mat4 u_vp;
@@ -76,7 +83,6 @@ OIL_NAME_CHARS = 24
 def oil_summary(oil) -> str:
     """What a bowler reads of ``oil`` (a pattern, its registered name or its file): its name, its
     length and its volume, e.g. ``house (40 ft, 22 ml)``; the name cut to OIL_NAME_CHARS."""
-    from nbst.models.bowling import lane
 
     pat = lane.pattern(oil)
     name = pat.name if len(pat.name) <= OIL_NAME_CHARS else pat.name[:OIL_NAME_CHARS - 3] + "..."
@@ -109,8 +115,6 @@ class LaneRenderer(FrameRenderer):
         import moderngl
         import trimesh
 
-        from nbst.models.bowling import lane, pin, scene
-        from nbst.render.core.shapes import Text, text_cell
 
         if camera not in CAMERAS:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
@@ -189,7 +193,6 @@ class LaneRenderer(FrameRenderer):
     def views(self, t: float):
         """[(viewport, view-projection, eye, camera)] for the frame at time t. Pixels: column =
         vx + (ndc_x + 1) / 2 * vw, row = (ndc_y + 1) / 2 * H (row 0 at the top)."""
-        from nbst.models.bowling import lane, scene
 
         w, h = self.size
         k = self.step_at(t)
@@ -229,8 +232,6 @@ class LaneRenderer(FrameRenderer):
         """The text of the frame at ``t``: the throw, the oil and ball, the phases, the ball now,
         the pins down (at the end: the result), and the pins asked for and the probability when
         given."""
-        from nbst.models.bowling import lane
-        from nbst.models.bowling import pinfall
 
         th, d, r = self.throw, self.throw.delivery, self.throw.result
         b = th.ball
@@ -274,7 +275,6 @@ class LaneRenderer(FrameRenderer):
                 tail = "" if self.asked is None else (" = asked" if now == self.asked else ", not asked")
                 lines.append(f"result  down {pins(now)}{leave_of(now)}{tail}")
                 if r is not None:
-                    from nbst.models.bowling.lane import names
 
                     nm = names.names(play, [n for n in play if n not in now], r.board_at_pins, r.entry_angle_deg,
                                      d.hand)
@@ -296,8 +296,6 @@ class LaneRenderer(FrameRenderer):
         return lines
 
     def _overlay(self, t: float, views) -> None:
-        from nbst.models.bowling import lane
-        from nbst.models.bowling import pinfall
 
         size = self.size
         H = size[1]
@@ -334,7 +332,6 @@ class LaneRenderer(FrameRenderer):
     def _behind_labels(self, vp, vpm, k, down) -> None:
         """The standing pins' numbers above their heads, once neighbouring pins are far enough
         apart on screen for a number to fit between them."""
-        from nbst.models.bowling import scene
 
         if not len(self.motion.pins):
             return
@@ -364,7 +361,6 @@ class LaneRenderer(FrameRenderer):
     def pin_diagram(self, vp) -> list[tuple[int, float, float]]:
         """[(pin, column, row)] of the pin diagram's numbers (top-left of each label) in the
         overhead panel: the deck as a bowler sees it (7 8 9 10 at the back, the 1 in front)."""
-        from nbst.models.bowling import scene
 
         scw, sch = self.small.cell
         gap = 2.2 * scw
@@ -380,7 +376,6 @@ class LaneRenderer(FrameRenderer):
     def _overhead_labels(self, vp, vpm, down) -> None:
         """Distance ticks beside the lane (every 10 ft, the arrows and the foul line when in
         view) and the pin diagram (standing pins lit, pins down dim)."""
-        from nbst.models.bowling import lane, scene
 
         H = self.size[1]
         scw, sch = self.small.cell
@@ -493,8 +488,11 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
 
     Returns:
         The number of frames written (1 for a still).
+
+    Raises:
+        InputError: an unknown camera.
+        RenderError: no GL context, an extension other than .mp4/.gif/.png, or the encoder failed (one line).
     """
-    from nbst.render.core.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
     if still is not None:

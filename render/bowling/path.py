@@ -19,6 +19,7 @@ import numpy as np
 
 from nbst.models.bowling.lane.oil import CELL_AREA
 from nbst.models.bowling.lane.units import ARROW_BOARDS, ARROWS_FT
+from nbst.outputs import atomic_path
 
 __all__ = ["PATH_FIGSIZE", "path_figure", "transition_figure", "save", "lane_board"]
 
@@ -191,7 +192,6 @@ def transition_figure(doc: dict, *, title: str = ""):
 
 def save(fig, path, *, option: str = "-o") -> None:
     """Write ``fig`` as PNG to ``path`` through the one atomic writer."""
-    from nbst.outputs import atomic_path
 
     with atomic_path(path, option=option) as tmp:
         fig.savefig(tmp, format="png")

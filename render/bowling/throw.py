@@ -28,9 +28,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nbst.render.bowling.deck import BALL_RGB, Motion
+from nbst.models.bowling import lane, pinfall, scene
+from nbst.models.bowling.lane import frame
+from nbst.models.bowling.lane import quat_to_mat as _quat_to_mat
+from nbst.render.bowling.deck import BALL_RGB, Motion, motion_times
 from nbst.render.core.solids import box as _box, flat_poly as _flat_poly  # shared with the crash video
-from nbst.render.bowling.deck import motion_times
+
+__all__ = ["APPROACH_DRAWN", "APPROACH_RGB", "BOARD_LINE", "BOARD_LINE_5", "DECK_RGB", "DOTS_FT", "DOT_BOARDS",
+           "FINGER_GAP_IN", "FOLLOW_STOP_FT", "FOUL_RGB", "FOUL_WIDTH", "GRIP_FROM_PAP_IN", "GRIP_SPAN_IN",
+           "GUTTER_RGB", "HOLE_RGB", "HOLE_RIM_RGB", "KICKBACK_RGB", "LANE_RGB", "LEGEND", "MARK_RGB", "OIL_CELL_FT",
+           "OIL_FULL_UM", "OIL_SHADE", "OVERHEAD_FROM_FT", "OVERHEAD_SHARE", "PIN_DOT_IN", "PIN_DOT_RGB", "PIT_RGB",
+           "STILL_BEFORE_IMPACT", "TEXTURE_SIZE", "TRACK_DILATE_PX", "TRACK_RGB", "TRACK_SUBSTEPS",
+           "TRAIL_HALF_WIDTH", "TRAIL_HALF_WIDTH_OVERHEAD", "TRAIL_RGB", "Throw", "ball_texture", "board_lines",
+           "grip_holes", "lane_marks", "lane_solids", "ortho_panel", "record_throw", "still_time",
+           "throw_file_readout", "throw_times"]
 
 #: Guide dots (ft past the foul line) on these boards, counted from either edge.
 DOTS_FT = 7.0
@@ -117,15 +128,28 @@ def _qmul_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
                      w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=1)
 
 
-def record_throw(delivery, oil: str = "house", ball=None, *, standing=None, timestep: float | None = None,
+def record_throw(delivery, oil: object = "house", ball=None, *, standing=None, timestep: float | None = None,
                  model=None) -> Throw:
     """Record the frame of ``delivery`` (``lane.Delivery``) with ``ball`` on ``oil`` at the pins in
     ``standing`` (default all ten) exactly as :func:`nbst.models.bowling.lane.frame.run_frame` runs it
     (its model, initial state, steps and stop rule, through its ``record`` hook): every step's
-    poses, and the frame's result. Raises ``lane.LaneError``/``frame.FrameError`` (one line) for
-    bad input; MuJoCo's warnings raise :class:`~nbst.errors.MujocoError`."""
-    from nbst.models.bowling import lane, pinfall, scene
-    from nbst.models.bowling.lane import frame
+    poses, and the frame's result.
+
+    Args:
+        delivery: the release (``lane.Delivery``).
+        oil: the oil pattern: a registered name, a pattern file or a ``lane.Pattern``.
+        ball: the ball (``lane.Ball``; default the default ball).
+        standing: the pins standing before the throw (default all ten).
+        timestep: MuJoCo's timestep, s (default the frame's).
+        model: a compiled frame model to reuse (default built for ``ball`` and ``timestep``).
+
+    Returns:
+        The :class:`Throw`: motion (S steps: ball (S, 7) and pins (S, 10, 7) poses), phases, frame.
+
+    Raises:
+        LaneError, FrameError: bad input (one line).
+        MujocoError: MuJoCo warned (a non-finite or unstable state).
+    """
 
     delivery = delivery.check()
     ball = (ball or lane.Ball()).check()
@@ -191,7 +215,6 @@ def grip_holes(delivery) -> list[tuple[np.ndarray, float]]:
     """[(unit direction in the ball's body frame, angular radius)] of the two finger holes and the
     thumb hole: an assumed layout (module constants) placed from the release's PAP. The body frame
     is the world frame at release (the throw starts at the identity orientation)."""
-    from nbst.models.bowling import lane, scene
 
     R_in = scene.BALL_RADIUS / scene.INCH
     t, _, pap = lane.spin_axes(delivery)
@@ -221,8 +244,6 @@ def ball_texture(throw: Throw, size=TEXTURE_SIZE) -> np.ndarray:
     """(H, W, 3) uint8 equirectangular texture of the ball in its body frame: the track (the
     contact point's path in the body frame up to the first pin contact), the pin dot and the
     grip holes (each with a thin light rim)."""
-    from nbst.models.bowling import lane, scene
-    from nbst.models.bowling.lane import quat_to_mat as _quat_to_mat
 
     R_in = scene.BALL_RADIUS / scene.INCH
     dirs = _texel_dirs(size).reshape(-1, 3).astype(np.float32)
@@ -275,7 +296,6 @@ OIL_FULL_UM = 3.0
 def lane_solids(oil, hand: str = "right") -> np.ndarray:
     """(V, 9) triangles of the lane's solids: approach, the lane shaded by the pattern's film
     (darker where there is more oil), deck, gutters, pit and kickbacks."""
-    from nbst.models.bowling import lane, scene
 
     hw, gw = scene.LANE_WIDTH / 2, scene.GUTTER_WIDTH
     x_end = scene.PIT_EDGE_X + scene.PIT_LENGTH
@@ -307,7 +327,6 @@ def lane_solids(oil, hand: str = "right") -> np.ndarray:
 def board_lines() -> list[tuple[float, bool]]:
     """[(y of a board line, strong)] for the 40 lines at the boards' edges; a line a multiple of
     five boards from either edge of the lane is strong (board 5's and board 35's outer edges...)."""
-    from nbst.models.bowling import lane, scene
 
     out = []
     for j in range(lane.N_BOARDS + 1):
@@ -319,7 +338,6 @@ def board_lines() -> list[tuple[float, bool]]:
 def lane_marks(hand: str = "right") -> np.ndarray:
     """(V, 9) flat triangles of the marks on the lane: board lines, the foul line, the guide
     dots and the arrows (each pointing down the lane, centred 15 ft past the foul line)."""
-    from nbst.models.bowling import lane, scene
 
     hw = scene.LANE_WIDTH / 2
     parts = []

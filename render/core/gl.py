@@ -10,9 +10,18 @@ from __future__ import annotations
 import numpy as np
 from nbst.errors import InputError, RenderError  # RenderError re-exported here
 
+__all__ = ["FrameRenderer", "FrameTarget", "check_size", "create_context"]
+
 
 def create_context():
-    """A standalone moderngl context on EGL (headless). Caller releases it."""
+    """A standalone moderngl context on EGL (headless), OpenGL 3.3 at least. The caller releases it.
+
+    Returns:
+        The moderngl.Context.
+
+    Raises:
+        RenderError: moderngl is not installed, or EGL gives no context (one line naming the packages).
+    """
     try:
         import moderngl
     except ImportError as e:  # pragma: no cover - a dependency

@@ -12,6 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["ATLAS_COLS", "CAPSULE_DTYPE", "CAPSULE_FS", "CAPSULE_FS_IO", "CAPSULE_VS", "CAPSULE_VS_IO",
+           "CIRCLE_DTYPE", "CIRCLE_FS", "CIRCLE_VS", "EXTRA_CHARS", "RECT_FS", "RECT_VS", "TEXT_DTYPE", "TEXT_FS",
+           "TEXT_VS", "Capsules", "Circles", "GlyphRuns", "Rect", "Text", "digit_height", "glyph_atlas",
+           "glyph_index", "text_cell"]
+
 _NDC = """
 uniform vec2 u_view;  // frame size in px
 vec4 to_ndc(vec2 img) { return vec4(img / u_view * 2.0 - 1.0, 0.0, 1.0); }

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["box", "flat_poly", "ribbon"]
+
 
 def box(x0, x1, y0, y1, z0, z1, rgb) -> np.ndarray:
     """(36, 9) an axis-aligned box from (x0, y0, z0) to (x1, y1, z1), face normals, one colour."""

@@ -9,6 +9,18 @@ from __future__ import annotations
 
 from nbst import palette
 
+__all__ = ["AMBIENT", "BACKGROUND", "BOX_FLOOR", "BOX_WALL", "BOX_WALL_FRAC", "CAMERA_ELEVATION_DEG",
+           "CAMERA_FOV_DEG", "CUEABLE", "DEFAULT_FPS", "DEFAULT_SIZE", "DISK_RIM_FRAC", "DISK_RIM_SHADE", "GHOST",
+           "GHOST_LABEL", "GHOST_PX", "GIF_FPS", "GIF_SIZE", "LABEL", "LABELS_MIN_DISK_PX", "LABEL_FIT", "LABEL_FRAC",
+           "LEGEND_PITCH", "LEGEND_TEXT_FRAC", "LIGHT_DIR", "MARGIN_FRAC", "MARKER", "MARKER_FRAC", "MARKER_HALO",
+           "MARKER_HALO_PX", "MARKER_INSIDE_MAX", "MARKER_LABEL_GAP_PX", "MARKER_OUTSIDE_GAP_PX", "MARKER_OUTSIDE_PX",
+           "MARKER_PX", "MAX_TRAIL_POINTS", "MIN_BOX_SHARE", "MIN_DISK_PX", "MIN_LEGEND_PX", "MIN_MARKER_PX",
+           "MIN_READOUT_PX", "MIN_TRAIL_PX", "MSAA_SAMPLES", "NONCUEABLE", "PUCK_HEIGHT_FRAC", "QUEUE_FRAMES", "RAIL",
+           "RAIL_HEIGHT_FRAC", "RING_DIM", "RING_DIM_PX", "RING_LIT_ALPHA", "RING_LIT_FILL_ALPHA", "RING_LIT_PX",
+           "SWS_FLAGS", "TABLE", "TARGET_LABEL", "TARGET_LABEL_FRAC", "TEXT", "TEXT_DIM", "TEXT_FRAC", "TEXT_HALO",
+           "TRAIL_ALPHA", "TRAIL_SAMPLE_BUDGET", "TRAIL_SECONDS", "TRAIL_WIDTH_FRAC", "X264_CRF", "X264_PRESET",
+           "disk_colors", "rgb8", "trail_samples"]
+
 #: Frame background outside the box. Dark, so trails can be drawn with MAX
 #: blending (a trail colour must exceed the background in every channel).
 BACKGROUND = (0.055, 0.063, 0.078)

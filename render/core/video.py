@@ -19,6 +19,11 @@ import numpy as np
 
 from nbst.render.core import style
 from nbst.errors import InputError, RenderError
+from nbst.outputs import OutputError, PartialFile, atomic_path, signals_deferred
+from nbst.render.core.gl import create_context
+
+__all__ = ["VIDEO_SUFFIXES", "VideoWriter", "check_video", "encode", "render_output", "render_video", "video_kind",
+           "write_png"]
 
 
 #: The video files written, by extension (anything else is refused: .mov would be QuickTime).
@@ -47,7 +52,6 @@ class VideoWriter:
 
     def __init__(self, path, size, fps, *, rgba: bool = False, buffers: int = style.QUEUE_FRAMES,
                  crf: int = style.X264_CRF, preset: str = style.X264_PRESET):
-        from nbst.outputs import PartialFile
 
         self.final_path = str(path)
         self.kind = video_kind(path)
@@ -74,7 +78,6 @@ class VideoWriter:
             kw = dict(codec="gif", pix_fmt_out="pal8", quality=None,
                       output_params=["-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse=dither=bayer:bayer_scale=4",
                                      "-loop", "0"])
-        from nbst.outputs import signals_deferred
 
         try:
             with signals_deferred():  # ffmpeg and its partial file start together with the thread that ends them
@@ -163,7 +166,6 @@ class VideoWriter:
         to ``path``; with ``discard`` (or on an encoder error) delete it instead."""
         if self._closed:
             return
-        from nbst.outputs import signals_deferred
 
         with signals_deferred():  # a Ctrl-C now waits: the file is published, or the partial file removed
             self._close(discard)
@@ -190,7 +192,6 @@ class VideoWriter:
     def _publish(self) -> None:
         """Check the finished partial file (``check_video``), fsync it and rename it over the target
         (RenderError, one line, if any of it fails; the previous file stays)."""
-        from nbst.outputs import OutputError
 
         def check(path):
             why = check_video(path, self.kind, self.frames)
@@ -412,6 +413,10 @@ def render_video(renderer, times, path, *, fps, progress=None) -> int:
 
     Returns:
         The number of frames written.
+
+    Raises:
+        RenderError: an extension other than .mp4 or .gif, an odd size for MP4, or the encoder failed
+            (one line; no partial file is left and a previous file stays).
     """
     times = np.asarray(times, float)
     rgba = video_kind(path) == "mp4" and hasattr(renderer, "render_rgba")
@@ -442,7 +447,6 @@ def render_output(make_renderer, output, *, still=None, times=None, fps=None, pr
     Returns:
         The number of frames written (1 for a still).
     """
-    from nbst.render.core.gl import create_context
 
     ctx = create_context()
     try:
@@ -460,10 +464,17 @@ def render_output(make_renderer, output, *, still=None, times=None, fps=None, pr
 
 
 def write_png(path, frame: np.ndarray) -> None:
-    """Write one (H, W, 3) uint8 frame as PNG."""
+    """Write one frame as a PNG, whole or not at all (the previous file stays on an error).
+
+    Args:
+        path: the .png to write.
+        frame: (H, W, 3) uint8 array, RGB.
+
+    Raises:
+        OutputError: the file cannot be written (a full disk, a folder in the way).
+    """
     from PIL import Image
 
-    from nbst.outputs import atomic_path
 
     with atomic_path(path) as tmp:  # whole PNG or the previous file, never a truncated one
         Image.fromarray(np.ascontiguousarray(frame)).save(tmp, format="PNG")

@@ -27,6 +27,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+__all__ = ["MARK_DT", "MARK_GAP", "POSE_DT", "SCRAPE_HALF", "SKID_HEIGHT", "SKID_SLIP", "SLOW", "SLOW_WINDOW",
+           "CrashMotion", "Impact", "MarkRun", "impact_times", "record", "slow_windows", "slowed"]
+
 #: Poses are recorded at least this often (s): at 60 fps in 4x slow motion a frame is 4.2 ms
 #: of crash, so a frame is never more than a step from the pose it shows at 2 ms steps.
 POSE_DT = 0.002

@@ -25,6 +25,9 @@ import math
 
 from nbst.render.crash.motion import SLOW, slowed
 
+__all__ = ["COS45", "DEG", "DV", "FATES", "PM", "RESULT_CHARS", "asked_of", "colour_rows", "mark_masks", "readout",
+           "vehicle_lines", "widest"]
+
 OK, NO = "\u2713", "\u2717"
 DV = "\u0394v"
 DEG = "\u00b0"

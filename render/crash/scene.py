@@ -18,7 +18,13 @@ import math
 
 import numpy as np
 
+from nbst.render.core.camera import mesh_arrays
 from nbst.render.core.solids import box as _box, flat_poly as _flat_poly, ribbon as _ribbon
+
+__all__ = ["ARROW_MIN", "GLASS", "GROUND_DRAWN", "IMPACT", "MARKING", "SCRAPE", "SKID", "STRIKE", "TYRE", "WELL",
+           "arrow_xy", "body_box", "disc_xy", "geom_solid", "impact_marks", "lane_marks", "motion_marks",
+           "polyline_distance", "ribbon_marks", "static_solids", "strip_triangles", "target_marks", "tyre_solid",
+           "wedge_xy"]
 
 #: Colours.
 GLASS = (0.16, 0.20, 0.26)
@@ -296,7 +302,6 @@ def tyre_solid(radius: float, half_width: float) -> np.ndarray:
     """(V, 9) a tyre about the y axis: black tread and sidewalls, grey faces with two light spokes."""
     import trimesh
 
-    from nbst.render.core.camera import mesh_arrays
 
     m = trimesh.creation.cylinder(radius=radius, height=2 * half_width, sections=TYRE_SIDES)
     pn = mesh_arrays(m).astype(float)                     # (V, 6), axis along z

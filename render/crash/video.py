@@ -28,14 +28,21 @@ import math
 import numpy as np
 
 from nbst.errors import InputError
+from nbst.files import sniff_kind
 from nbst.render.core import style
 from nbst.render.core.camera import look_at, perspective
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
+from nbst.render.core.shapes import Rect, Text, text_cell
 from nbst.render.core.times import frame_times
+from nbst.render.core.video import render_output
 from nbst.render.crash import readout as ro
 from nbst.render.crash import scene as cs
-from nbst.render.crash.motion import SLOW, slow_windows, slowed
+from nbst.render.crash.motion import SLOW, record, slow_windows, slowed
+from nbst.render.scene2d import keep_apart
+
+__all__ = ["CAMERAS", "IMPACT_TEXT", "LIGHT", "MARK_FS", "MARK_VS", "PANEL", "SCALE_BARS", "SKY", "SNIFF_BYTES",
+           "CrashRenderer", "chase_yaw", "crash_kind", "load", "render_crash", "top_view"]
 
 CAMERAS = ("overhead", "behind", "both")
 #: Share of the frame's width the readout column takes, and the most it takes where its text
@@ -125,7 +132,6 @@ class CrashRenderer(FrameRenderer):
         import mujoco
 
         from nbst.models.crash import crashfile
-        from nbst.render.core.shapes import Text, text_cell
 
         if camera not in CAMERAS:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
@@ -370,7 +376,6 @@ class CrashRenderer(FrameRenderer):
                     col, row, _ = self.to_pixel(vp, vpm, (f["x"], f["y"] + f["radius"], 0.0))
                     if self._inside(vp, col, row):
                         placed.append(self._label(vp, nm, col - scw * len(nm) / 2, row - 1.1 * sch, self.colours[i]))
-            from nbst.render.scene2d import keep_apart
 
             for im in self.motion.impacts:
                 if im.t > t or not all(math.isfinite(c) for c in im.pos[:2]):
@@ -405,7 +410,6 @@ class CrashRenderer(FrameRenderer):
         return vp[0] <= col < vp[0] + vp[2] and vp[1] <= row < vp[1] + vp[3]
 
     def _scale_bar(self, vp, vpm) -> None:
-        from nbst.render.core.shapes import Rect
 
         _, ppm = top_view(self.bounds, vp)
         L = max((b for b in SCALE_BARS if b * ppm <= vp[2] / 4), default=SCALE_BARS[0])
@@ -454,7 +458,6 @@ SNIFF_BYTES = 4096
 def crash_kind(path) -> str | None:
     """"crash" (a crash file) or "script" (a crash script) when ``path`` names a regular .json
     file whose first SNIFF_BYTES name that kind, else None (``nbst.files.sniff_kind``)."""
-    from nbst.files import sniff_kind
     from nbst.models.crash.crashfile import KIND
     from nbst.models.crash.script import KIND as SCRIPT_KIND
 
@@ -465,7 +468,6 @@ def load(path):
     """(crash dict, Script, MjModel, CrashMotion) of the crash file ``path``: read through the crash
     file's gate (``crashfile.load``: one line naming the field) and replayed."""
     from nbst.models.crash import crashfile
-    from nbst.render.crash.motion import record
 
     d, script, model = crashfile.load(path)
     return d, script, model, record(d, script, model)
@@ -491,8 +493,11 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
 
     Returns:
         The number of frames written (1 for a still).
+
+    Raises:
+        InputError: an unknown camera.
+        RenderError: no GL context, an extension other than .mp4/.gif/.png, or the encoder failed (one line).
     """
-    from nbst.render.core.video import render_output
 
     size = tuple(size or style.DEFAULT_SIZE)
     return render_output(lambda ctx: CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera,
