@@ -219,3 +219,48 @@ def test_the_cli_refuses_a_folder_or_fifo_for_o(tmp_path, capsys):
     for target in (tmp_path, fifo):
         assert main(["scene", "solve", str(p), "-o", str(target), "-q", "--seed", "1", "--max-rollouts", "8"]) == 2
         assert capsys.readouterr().err.count("\n") == 1
+
+
+RICH = {"format": "nbst-fates", "version": 1, "scene": "t.xml", "keyframe": "high", "timestep": 0.01, "duration": 0.5,
+        "description": "x",
+        "controls": {"ball": {"linvel": [[0, 1], [-1, 1], [0, 0]], "angvel": [[0, 0], [0, 0], [-1, 1]],
+                              "pos": [[0, 0.1], [0, 0], [0, 0]]}},
+        "fates": {"ball": {"rest_in": {"min": [0, 0, 0], "max": [1, 1, 1]},
+                           "at": [{"t": 0.2, "in": {"center": [0, 0, 1], "radius": 0.5}}],
+                           "through": [{"center": [0, 0, 1], "radius": 0.5}], "up": {"axis": [0, 0, 1], "within_deg": 30},
+                           "hits": ["floor"], "never_hits": ["post_g"], "at_rest": True},
+                  "post": {"still": True}},
+        "noise": {"ball": {"linvel": 0.1, "angvel": [0.1, 0.2, 0.3], "pos": 0.001}}}
+
+
+def _leaves(doc, path=()):
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            yield from _leaves(v, path + (k,))
+    elif isinstance(doc, list):
+        for k, v in enumerate(doc):
+            yield from _leaves(v, path + (k,))
+    yield path
+
+
+def test_any_wrong_value_anywhere_is_a_fates_error_never_a_crash(tmp_path):
+    """Every key and element of a file that asks everything, replaced in turn by a value of each
+    wrong kind: the loader either accepts it or refuses it in one line (never a traceback)."""
+    f, _ = load_fates(_write(tmp_path, RICH))
+    assert f.fates[0].asks() == ["rest_in", "at", "through", "up", "hits", "never_hits", "at_rest"]
+    tried = 0
+    for path in _leaves(RICH):
+        if not path:
+            continue
+        for bad in (None, "x", [], True, -1, [[1, 2]]):
+            doc = copy.deepcopy(RICH)
+            d = doc
+            for k in path[:-1]:
+                d = d[k]
+            d[path[-1]] = bad
+            tried += 1
+            try:
+                load_fates(_write(tmp_path, doc))
+            except FatesError as e:
+                assert "\n" not in str(e)
+    assert tried > 400

@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
-from nbst.files import read_regular
+from nbst.files import FileRefused, read_regular
 from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
                               read_fates_json)
 
@@ -62,7 +62,10 @@ def check_scene_files(scene: Path, *, source: str = "") -> list[Path]:
     dirs = {"meshdir": "", "texturedir": "", "assetdir": ""}
 
     def parse(path: Path, field: str) -> ET.Element:
-        data = read_regular(path, max_bytes=MAX_SCENE_BYTES, what="MJCF file", allow_empty=False)
+        try:
+            data = read_regular(path, max_bytes=MAX_SCENE_BYTES, what="MJCF file", allow_empty=False)
+        except FileRefused as e:
+            raise FatesError(where, field, str(e)) from None
         if b"<!ENTITY" in data or b"<!DOCTYPE" in data:
             raise FatesError(where, field, f"{path}: a DOCTYPE or ENTITY declaration is not read in a scene")
         try:
