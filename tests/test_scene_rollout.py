@@ -262,3 +262,49 @@ def test_the_dice_have_real_pips():
         faces[(k, int(np.sign(pos[k])))] = faces.get((k, int(np.sign(pos[k]))), 0) + 1
     assert faces[(2, 1)] == 1 and faces[(2, -1)] == 6
     assert all(faces[(k, 1)] + faces[(k, -1)] == 7 for k in range(3))
+
+
+def test_export_plays_the_same_motion_from_its_keyframe(toss, tmp_path, capsys):
+    """`nbst scene export`: the scene with a key holding the initial state; reset to the key and
+    stepped with mj_step, it ends where replay does, bit for bit (a timestep set by the fates is
+    written on <option>)."""
+    import mujoco
+
+    doc = json.loads(toss.read_text())
+    doc["timestep"] = 0.005  # the fates override the model's 0.01
+    toss.write_text(json.dumps(doc))
+    sol, out = tmp_path / "sol.json", tmp_path / "elsewhere" / "scene.xml"
+    assert main(["scene", "solve", str(toss), "-o", str(sol), "--seed", "2", "--max-rollouts", "40", "-q"]) in (0, 1)
+    assert main(["scene", "export", str(sol), "-o", str(out)]) == 0
+    capsys.readouterr()
+    d = json.loads(sol.read_text())
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert m.opt.timestep == 0.005 and m.nkey == 1
+    data = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, data, m.key("nbst").id)
+    assert data.qpos.tobytes() == np.array(d["qpos0"]).tobytes()
+    for _ in range(d["nstep"]):
+        mujoco.mj_step(m, data)
+    q, v = replay_solution(sol).qpos, replay_solution(sol).qvel
+    assert data.qpos.tobytes() == q.tobytes() and data.qvel.tobytes() == v.tobytes()
+
+
+def test_export_of_a_scene_with_files_goes_beside_it(tmp_path, capsys):
+    """A scene that reads other files (an include) is exported into its own folder only: one line,
+    exit 2, nothing written elsewhere; beside it, the export works."""
+    (tmp_path / "scene").mkdir()
+    (tmp_path / "scene" / "ball.xml").write_text('<mujoco><worldbody><body name="ball" pos="0 0 0.3"><freejoint/>'
+                                                  '<geom type="sphere" size="0.05"/></body></worldbody></mujoco>')
+    (tmp_path / "scene" / "s.xml").write_text('<mujoco><worldbody><geom name="floor" type="plane" size="1 1 0.1"/>'
+                                              '</worldbody><include file="ball.xml"/></mujoco>')
+    fates = {"format": "nbst-fates", "version": 1, "scene": "scene/s.xml", "duration": 0.1,
+             "controls": {"ball": {"linvel": [[0, 1], [0, 0], [0, 0]]}},
+             "fates": {"ball": {"rest_in": {"center": [0, 0, 0], "radius": 5}}}}
+    (tmp_path / "f.json").write_text(json.dumps(fates))
+    sol = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(tmp_path / "f.json"), "-o", str(sol), "--seed", "1", "-q"]) == 0
+    out = tmp_path / "other" / "x.xml"
+    assert main(["scene", "export", str(sol), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "write the exported scene in" in err and not out.exists()
+    assert main(["scene", "export", str(sol), "-o", str(tmp_path / "scene" / "with-key.xml")]) == 0

@@ -6,7 +6,8 @@ initial velocities of the scene's free bodies. One module each, top to bottom:
 
 * :mod:`.api` -- :func:`solve`, the one typed way in;
 * :mod:`.solution` -- the solution file (``"nbst-scene-solution"``), :class:`SceneResult`,
-  :func:`replay_solution` (bit for bit with a plain ``mj_step`` loop);
+  :func:`replay_solution` (bit for bit with a plain ``mj_step`` loop), ``export_scene`` (the
+  scene with a keyframe holding the initial state);
 * :mod:`.search` -- the signature search (:func:`~.search.signature_search`);
 * :mod:`.rollout` -- controls to initial state, the recorded rollout (:class:`SceneSim`);
 * :mod:`.judge` -- each fate met or not, graded, and the signature;
@@ -27,12 +28,13 @@ from __future__ import annotations
 
 import importlib
 
-__all__ = ["solve", "SceneResult", "SceneReplay", "replay_solution", "solution_dict", "read_solution",
+__all__ = ["solve", "SceneResult", "SceneReplay", "replay_solution", "solution_dict", "read_solution", "export_scene",
            "load_fates", "Fates", "FatesError", "SceneSim", "signature_search", "example_names",
            "DEFAULT_MAX_ROLLOUTS", "api", "solution", "search", "rollout", "judge", "scenefile", "fates", "builtin"]
 
 _LAZY = {"solve": "api", "SceneResult": "solution", "SceneReplay": "solution", "replay_solution": "solution",
-         "solution_dict": "solution", "read_solution": "solution", "load_fates": "scenefile", "Fates": "fates",
+         "solution_dict": "solution", "read_solution": "solution", "export_scene": "solution",
+         "load_fates": "scenefile", "Fates": "fates",
          "FatesError": "fates", "SceneSim": "rollout", "signature_search": "search",
          "example_names": "builtin", "DEFAULT_MAX_ROLLOUTS": "search"}
 

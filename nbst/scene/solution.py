@@ -8,7 +8,9 @@ and the versions of nbst and MuJoCo.
 
 :func:`replay_solution` rolls ``qpos0``/``qvel0`` out with the plain ``mj_step`` loop of
 docs/scene.md (``nbst.scene.rollout.replay``) and compares the final state with the file's, bit for
-bit; it also judges the fates again.
+bit; it also judges the fates again. :func:`export_scene` writes the user's MJCF with one more
+keyframe, holding the found initial state at full precision: loaded in ``python -m mujoco.viewer``
+and reset to that key, it plays the same motion (checked bit for bit before the file is kept).
 """
 from __future__ import annotations
 
@@ -31,8 +33,11 @@ from nbst.scene.scenefile import load_fates
 from nbst.scene.judge import Judgement, signature_text
 from nbst.scene.rollout import SceneRollout, SceneSim, quiet_mujoco_warnings, replay
 
-__all__ = ["SOLUTION_FORMAT", "SOLUTION_VERSION", "SceneSolutionError", "SceneResult", "SceneReplay",
-           "solution_dict", "read_solution", "replay_solution", "file_sha256"]
+__all__ = ["SOLUTION_FORMAT", "SOLUTION_VERSION", "EXPORT_KEY", "SceneSolutionError", "SceneResult", "SceneReplay",
+           "solution_dict", "read_solution", "replay_solution", "file_sha256", "export_scene"]
+
+#: The name of the keyframe :func:`export_scene` adds (``nbst_1``, ... if the scene has one by that name).
+EXPORT_KEY = "nbst"
 
 SOLUTION_FORMAT = "nbst-scene-solution"
 SOLUTION_VERSION = 1
@@ -221,3 +226,98 @@ def replay_solution(path: str | os.PathLike) -> SceneReplay:
             and judged.qpos0.tobytes() == q0.tobytes() and judged.qvel0.tobytes() == v0.tobytes())
     changed = doc.get("scene_sha256") not in (None, file_sha256(fates.scene))
     return SceneReplay(same=same, judgement=judged.judgement, qpos=q, qvel=v, scene_changed=changed)
+
+
+def _key_text(values: np.ndarray) -> str:
+    return " ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
+
+
+def export_scene(path: str | os.PathLike, out: str | os.PathLike) -> str:
+    """Write the solution's scene with a keyframe holding its initial state (module docstring).
+
+    The MJCF's own text is kept (comments and every number as written); added: a ``<key>`` named
+    :data:`EXPORT_KEY` (time, qpos, qvel, act, ctrl and mocap of the solution's initial state, each
+    float written with all its digits) and, when the fates set one, the timestep on ``<option>``.
+    Before the file is kept, it is compiled, reset to the key and stepped ``nstep`` times with
+    ``mj_step``: the final state must be the solution's, bit for bit.
+
+    Args:
+        path: the solution file.
+        out: the MJCF to write; in the scene's folder when the scene reads other files (its
+            includes, meshes, textures are found relative to it).
+
+    Returns:
+        the keyframe's name.
+
+    Raises:
+        SceneSolutionError: the solution is refused, or ``out`` is in another folder while the
+            scene reads other files.
+        FatesError: its fates file or scene is refused.
+        OutputError: ``out`` cannot be written, or the exported scene does not replay bit for bit
+            (nothing is written then).
+    """
+    import xml.etree.ElementTree as ET
+
+    import mujoco
+
+    from nbst.outputs import atomic_path
+    from nbst.scene.scenefile import check_scene_files
+
+    doc = read_solution(path)
+    fates, model = load_fates(doc.get("fates_file") or doc["fates"], scene=doc["scene"])
+    model.opt.timestep = float(doc["timestep"])
+    files = check_scene_files(fates.scene, source=fates.source)
+    outp = Path(out)
+    if len(files) > 1 and outp.resolve().parent != fates.scene.resolve().parent:
+        raise SceneSolutionError(f"{out}: the scene reads other files ({files[1].name}, ...) found relative to its "
+                                 f"folder: write the exported scene in {fates.scene.resolve().parent}")
+    nq, nv = int(model.nq), int(model.nv)
+    q0, v0 = _floats(doc, "qpos0", nq, str(path)), _floats(doc, "qvel0", nv, str(path))
+    qf, vf = _floats(doc, "final.qpos", nq, str(path)), _floats(doc, "final.qvel", nv, str(path))
+    d = mujoco.MjData(model)
+    with SceneSim(fates, model) as sim:
+        sim._reset(d)
+    names = {model.key(k).name for k in range(model.nkey)}
+    name, k = EXPORT_KEY, 0
+    while name in names:
+        k += 1
+        name = f"{EXPORT_KEY}_{k}"
+    attrs = {"name": name, "time": repr(float(d.time)), "qpos": _key_text(q0), "qvel": _key_text(v0)}
+    if model.na:
+        attrs["act"] = _key_text(d.act)
+    if model.nu:
+        attrs["ctrl"] = _key_text(d.ctrl)
+    if model.nmocap:
+        attrs["mpos"], attrs["mquat"] = _key_text(d.mocap_pos), _key_text(d.mocap_quat)
+    text = fates.scene.read_text(encoding="utf-8")
+    root = ET.fromstring(text, parser=ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)))
+    if fates.timestep is not None:
+        options = root.findall("option")
+        if options:
+            options[-1].set("timestep", repr(float(doc["timestep"])))
+        else:
+            root.insert(0, ET.Element("option", {"timestep": repr(float(doc["timestep"]))}))
+    if len(root):
+        root[-1].tail = "\n  "
+    keyframe = ET.SubElement(root, "keyframe")
+    keyframe.text, keyframe.tail = "\n    ", "\n"
+    key = ET.SubElement(keyframe, "key", attrs)
+    key.tail = "\n  "
+    body = ET.tostring(root, encoding="unicode")
+
+    def check(partial: str) -> str | None:
+        try:
+            m = mujoco.MjModel.from_xml_path(partial)
+        except ValueError as e:
+            return f"MuJoCo will not compile it: {' '.join(str(e).split())}"
+        data = mujoco.MjData(m)
+        mujoco.mj_resetDataKeyframe(m, data, m.key(name).id)
+        for _ in range(int(doc["nstep"])):
+            mujoco.mj_step(m, data)
+        if data.qpos.tobytes() != qf.tobytes() or data.qvel.tobytes() != vf.tobytes():
+            return "reset to its key and stepped, it does not end in the solution's final state bit for bit"
+        return None
+
+    with atomic_path(out, check=check) as tmp:
+        Path(tmp).write_text(body + "\n", encoding="utf-8")
+    return name

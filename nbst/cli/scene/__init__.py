@@ -1,4 +1,4 @@
-"""``nbst scene examples|check|solve|replay`` (docs/scene.md): bring your own MuJoCo scene.
+"""``nbst scene examples|check|solve|replay|export`` (docs/scene.md): bring your own MuJoCo scene.
 
 * this package registers the subcommands (light: the arguments only; their defaults are the
   library's, ``nbst.scene.search.DEFAULT_MAX_ROLLOUTS``);
@@ -15,7 +15,7 @@ import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_quiet, add_seed
-from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_replay, cmd_solve
+from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_export, cmd_replay, cmd_solve
 
 __all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES"]
 
@@ -94,3 +94,15 @@ def register(sub) -> None:
     r.add_argument("solution", metavar="SOL.json", help="a solution file written by `nbst scene solve`")
     r.add_argument("--json", action="store_true", help="print the result as JSON")
     r.set_defaults(func=cmd_replay)
+
+    x = sc.add_parser("export", help="write the scene with a keyframe holding the solution's initial state",
+                      description="Write the solution's MJCF (its own text, comments and numbers as written) with "
+                                  "one more keyframe, `nbst`, holding the initial state at full precision (and the "
+                                  "fates' timestep on <option>, when they set one). Loaded in `python -m "
+                                  "mujoco.viewer` and reset to that key, it plays the same motion: before the file "
+                                  "is kept it is compiled, reset to the key and stepped, and must end in the "
+                                  "solution's final state bit for bit.")
+    x.add_argument("solution", metavar="SOL.json", help="a solution file written by `nbst scene solve`")
+    x.add_argument("-o", "--output", required=True, metavar="OUT.xml",
+                   help="the MJCF to write (in the scene's folder when the scene reads meshes, textures or includes)")
+    x.set_defaults(func=cmd_export)

@@ -15,7 +15,7 @@ from nbst.parallel import default_jobs
 from nbst.progress import command_start, count_text, progress_bar, seconds_text
 from nbst.seeds import resolve_seed
 
-__all__ = ["cmd_examples", "cmd_check", "cmd_solve", "cmd_replay", "asks_text"]
+__all__ = ["cmd_examples", "cmd_check", "cmd_solve", "cmd_replay", "cmd_export", "asks_text"]
 
 
 def asks_text(fate) -> str:
@@ -135,3 +135,14 @@ def cmd_replay(args) -> int:
         for v in b.fates:
             print(f"  {b.body} {v.fate}: {'met' if v.met else 'NOT met'} ({v.happened})")
     return 0 if r.same else 1
+
+
+def cmd_export(args) -> int:
+    from nbst.scene.solution import export_scene, read_solution
+
+    doc = read_solution(args.solution)
+    prepare_output(args.output, inputs=[args.solution, doc["scene"]])
+    key = export_scene(args.solution, args.output)
+    print(f"wrote {args.output}: {doc['scene']} with keyframe {key!r} (the solution's initial state); play it with "
+          f"python -m mujoco.viewer --mjcf={args.output}, then load key {key!r}")
+    return 0
