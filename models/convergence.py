@@ -8,6 +8,8 @@ one entry per run with its max final error against the exact motion, its signatu
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from nbst.problem import Problem
@@ -100,7 +102,7 @@ def fit_order(entries: list, problem: Problem) -> dict:
     rmin = float(np.min(problem.radius))
     pts = [e for e in entries if e["stepping"] == "fixed" and e["max_error"] is not None and e["same_signature"]
            and FIT_MIN_ERROR < e["max_error"] < rmin]
-    out = {"order": None, "points_h": [e["h"] for e in pts], "rule": FIT_RULE}
+    out: dict[str, Any] = {"order": None, "points_h": [e["h"] for e in pts], "rule": FIT_RULE}
     if len(pts) >= 2:
         x = np.log([e["h"] for e in pts])
         y = np.log([e["max_error"] for e in pts])

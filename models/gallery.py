@@ -18,6 +18,7 @@ import argparse
 import importlib.util
 import os
 import sys
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -98,14 +99,14 @@ def _annotate(rgb: np.ndarray, problem, pucks_px, pucks_r_px, targets_px) -> np.
         d.ellipse((tx - r, ty - r, tx + r, ty + r), fill=PREVIEW_TARGET_INK)
     if small.any():
         lines[1] += f" (pucks under {PREVIEW_MIN_PUCK_PX:g} px drawn at {PREVIEW_MIN_PUCK_PX:g})"
-    halo = dict(stroke_width=2, stroke_fill=(255, 255, 255))
-    for i in range(p.n):
-        s = str(i)
+    halo: dict[str, Any] = dict(stroke_width=2, stroke_fill=(255, 255, 255))
+    for k in range(p.n):
+        s = str(k)
         w = d.textlength(s, font=bold)
-        c, r = pucks_px[i], pucks_r_px[i]
+        c, r = pucks_px[k], pucks_r_px[k]
         off = 0.72 * r + 1
         d.text((c[0] - off - w, c[1] - off - PREVIEW_NUMBER_PX), s, font=bold, fill=PREVIEW_INK, **halo)
-        t = targets_px[i]
+        t = targets_px[k]
         d.text((t[0] + 4, t[1] - 4 - PREVIEW_NUMBER_PX), s, font=bold, fill=PREVIEW_TARGET_INK, **halo)
     y = rgb.shape[0] + 6
     for ln in lines:

@@ -269,7 +269,7 @@ def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps, 
     mass2 = np.repeat(np.asarray(problem.mass, dtype=float), 2) / (unit * unit)
     rec_t, rec_q, rec_e = [float(data.time)], [data.qpos.copy()], [0.5 * np.dot(mass2, data.qvel * data.qvel)]
     events = []
-    calls = [0, 0.0]  # on_step calls, simulated time reported to progress
+    calls: list = [0, 0.0]  # on_step calls, simulated time reported to progress
 
     def on_step(d):
         calls[0] += 1

@@ -65,6 +65,7 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 
@@ -157,7 +158,7 @@ class _Stepper:
         self.root = model.body_rootid.copy()
         self.spec = mujoco.mjtState.mjSTATE_INTEGRATION
         self.state = np.empty(mujoco.mj_stateSize(model, self.spec))
-        self.cache = None  # (dt, margin, contacts) of the current state, from the last trial
+        self.cache: Any = None  # (dt, margin, contacts) of the current state, from the last trial
         self.normal: dict = {}  # contact normal of each pair last detected
         # bodies that only translate (every joint from the world to them a slide joint)
         jt = model.jnt_type
@@ -337,7 +338,7 @@ def _advance(st: _Stepper, stats: AlignedStats, dt: float) -> bool:
     g1 = gmin(near1)
     if g1 >= 0.0:
         graze = [k for k in set(near0) & set(near1) - skip if near0[k][1] < 0.0 < near1[k][1]]
-        hit = None
+        hit: tuple | None = None
         if graze:
             s1 = st.save()
             hit = _graze(st, stats, trial, near0, near1, dt, graze, skip)

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import difflib
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -114,8 +115,8 @@ class Validation:
     timestep: float
     unit: float
     tol: float
-    exact: object  # nbst.sim.Trajectory
-    mujoco: object  # nbst.models.mjrun.MujocoRun
+    exact: Any  # nbst.sim.Trajectory
+    mujoco: Any  # nbst.models.mjrun.MujocoRun
     final_error: np.ndarray  # (N,) units
     mj_cost: float
     mj_signature: int

@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 import shlex
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -304,7 +305,7 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
     what = f"the glyphs of the text {src!r}" if kind == "text" else f"the dark pixels of the image {label}"
     cmd = (f"nbst generate --targets-from {shlex.quote(src)} --disks {n} --radius {r:g} --start {start} --seed {seed}"
            + (f" --box {W:g} {H:g}" if box is not None else "") + f" --t-final {t_final:g}")
-    d = {
+    d: dict[str, Any] = {
         "name": name or "-".join(filter(None, (how, _slug(src if kind == "text" else Path(src).stem)))),
         "description": (f"Formation: {n} disks (r={r:g}) start on a {'grid' if start == 'grid' else 'random jittered grid'} "
                         f"and end forming {what[:300]}"

@@ -198,7 +198,7 @@ def remove_stale_partials(target, *, suffix: str | None = None) -> list[Path]:
     t = Path(target)
     sufs = "|".join(re.escape(x) for x in {t.suffix, t.suffix if suffix is None else suffix})
     pat = re.compile(r"\." + re.escape(t.stem) + r"\.partial-(\d+)(?:-[0-9A-Za-z]+)?(?:" + sufs + ")$")
-    removed = []
+    removed: list = []
     try:
         names = os.listdir(t.parent if str(t.parent) else ".")
     except OSError:

@@ -97,7 +97,8 @@ def class_colors(cueable) -> list[tuple[float, float, float]]:
 
 def shade(color, step: float) -> tuple[float, float, float]:
     """``color`` mixed towards black by ``step`` (0: unchanged, 1: black)."""
-    return tuple(float(c) * (1.0 - step) for c in color[:3])
+    r, g, b = (float(c) * (1.0 - step) for c in color[:3])
+    return r, g, b
 
 
 def disk_shades(cueable) -> list[tuple[float, float, float]]:
@@ -128,7 +129,8 @@ def path_style(cueable) -> str:
 
 def rgb8(color) -> tuple[int, int, int]:
     """The 8-bit RGB of a 0..1 colour (alpha dropped): what a frame or a PNG holds."""
-    return tuple(int(round(max(0.0, min(1.0, float(x))) * 255)) for x in color[:3])
+    r, g, b = (int(round(max(0.0, min(1.0, float(x))) * 255)) for x in color[:3])
+    return r, g, b
 
 
 def hex_color(color) -> str:

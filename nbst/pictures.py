@@ -15,6 +15,7 @@ import math
 import os
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -49,7 +50,7 @@ MAX_TEXT_CHARS = 200
 #: Text is drawn this many pixels high per line (DejaVu Sans Bold): fine enough that the
 #: target lattice, a few pixels apart for thousands of disks, follows the glyphs.
 TEXT_PX = 160
-TEXT_FONT = {"family": "DejaVu Sans", "weight": "bold"}
+TEXT_FONT: dict[str, Any] = {"family": "DejaVu Sans", "weight": "bold"}
 #: A pixel is dark when its luminance (composited over white) is below this (0 black, 1 white).
 DARK_BELOW = 0.5
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -187,7 +188,7 @@ def planted(n: int, *, noncue: int = 0, radius: float = 15.0, seed: int, box=Non
             if strike_velocity(starts[c], r, mass[c], starts[s], r, mass[s], T, t_final, out) > 0:
                 v[c] = out
                 break
-    d = {
+    d: dict[str, Any] = {
         "name": name or f"planted-n{n}-k{noncue}-s{seed}",
         "description": f"Planted instance: {n} disks (r={r:g}), {noncue} noncueable; a zero-cost solution exists "
                        f"(nbst generate --planted {n} --noncue {noncue} --radius {r:g} --seed {seed}).",

@@ -170,7 +170,7 @@ def parent_weights(a: Archive, keys: list, *, group: Callable | None = None, gro
         total = np.asarray(group_total)
         found = np.bincount([group(m) for m in a.elite], minlength=len(total))
         gap = np.maximum(1.0 - found / total, floor)
-    w = np.array([(1.0 if gap is None else gap[group(m)]) / math.sqrt(a.seen.get(m, 1))
+    w = np.array([(1.0 if gap is None or group is None else gap[group(m)]) / math.sqrt(a.seen.get(m, 1))
                   * (1.0 + bonus * a.hits.get(m, 0)) / math.sqrt(1.0 + a.children.get(m, 0))
                   for m in keys])
     return w / w.sum()

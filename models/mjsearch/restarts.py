@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -93,7 +93,7 @@ class Evaluator:
         self.archive: dict[int, np.ndarray] = {}   # signature -> first vector that gave it
         self.order: dict[int, int] = {}   # signature -> discovery index (tie-break)
         self.elite: dict[int, tuple] = {}  # signature -> (cost, vector): the best of each for this target
-        self.best = None                  # (cost, distance, signature, vector)
+        self.best: Any = None             # (cost, distance, signature, vector)
 
     @property
     def left(self) -> int:

@@ -137,7 +137,7 @@ class Runner:
             raise InputError("Runner: give duration or nstep (one of them)")
         self.model = model
         self.jobs = max(1, int(jobs or os.cpu_count() or 1))
-        self.nstep = int(nstep) if nstep is not None else n_steps(model, duration)
+        self.nstep = int(nstep) if nstep is not None else n_steps(model, duration)  # type: ignore[arg-type]
         self.duration = float(duration) if duration is not None else self.nstep * float(model.opt.timestep)
         self._spec = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
         self.nstate = mujoco.mj_stateSize(model, self._spec)
@@ -237,7 +237,7 @@ class Runner:
             w.rollout.rollout(m, d, state[None, :], ctrl[None, n:n + c], nstep=c,
                               initial_warmstart=None if warm is None else warm[None, :], state=st, sensordata=sd)
             state = st[0, -1].copy()
-            if sensors:
+            if sdata is not None and sd is not None:  # sensors
                 sdata[n:n + c] = sd[0]
             n += c
         return state, ctrl, sdata

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import Any
 
 from nbst.domain import plain
 from nbst.problem import builtin_names, load_problem
@@ -102,7 +103,7 @@ def cmd_simulate(args) -> int:
     print(f"signature  {shown}  order {tr.order}/{problem.n}")
     print(f"events     {tr.n_disk_disk} disk-disk, {tr.n_wall} wall")
     d = ((tr.final_positions - problem.target) ** 2).sum(axis=1) ** 0.5
-    rows = range(problem.n)
+    rows: Any = range(problem.n)
     if many:  # the disks off target (at most 20), else the 5 farthest; --json has every disk
         off = np.flatnonzero(d > problem.target_radius)
         rows = (off[np.argsort(-d[off], kind="stable")] if off.size else np.argsort(-d, kind="stable"))[:20 if off.size

@@ -191,7 +191,7 @@ COMPARE_COLUMNS = [("entry", "entry"), ("problems", "problems"), ("runs", "runs"
 def _expand(problems: list[str]) -> list:
     from nbst.problem import ProblemError, load_problem
 
-    out = []
+    out: list = []
     for p in problems:
         path = Path(p)
         if path.is_dir():

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import time
+from typing import Any
 
 from nbst import domain as D
 from nbst.cli.args import SEED, Bounded, with_limits
@@ -93,8 +94,10 @@ class _Stages:
 
     def __init__(self, quiet: bool, announce: bool = False):
         self.quiet, self.announce = quiet, announce
-        self.stage, self.t0, self.bar = None, time.monotonic(), None
-        self.seconds = {}  # stage -> seconds from its first call to the next stage's (or its done = 1)
+        self.stage: str | None = None
+        self.t0 = time.monotonic()
+        self.bar: Any = None
+        self.seconds: dict[str, float] = {}  # stage -> seconds from its first call to the next stage's (or its done = 1)
 
     def _close(self):
         if self.bar is not None:
@@ -148,7 +151,7 @@ def cmd_generate(args) -> int:
     for flag, value in other:
         if value is not None:
             return _refuse(f"{flag} applies to {'--planted' if formation else '--targets-from'} only")
-    inputs = ()
+    inputs: tuple = ()
     if formation:
         from nbst.formation import is_image_source
 

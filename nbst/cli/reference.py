@@ -59,7 +59,7 @@ def _rows(parser: argparse.ArgumentParser) -> list[str]:
                                             else a.metavar or (a.dest.upper() if not a.choices else
                                                                "{" + ",".join(map(str, a.choices)) + "}"))
         else:
-            name, arg = a.metavar or a.dest, ""
+            name, arg = str(a.metavar or a.dest), ""
         rows.append(f"| `{name}` | {('`' + _cell(arg) + '`') if arg else ''} | {_cell(a.help or '')} |")
     return rows
 

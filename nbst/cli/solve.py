@@ -251,7 +251,7 @@ def _first_report(r):
     return SearchProgress(trials=0, best_cost=r.cost, best_order=r.order, elapsed=0.0, population=0, phase="start")
 
 
-def _summary(args, problem, r, target_cost: float, late: bool, seconds: float) -> int:
+def _summary(args, problem, r, target_cost: float | None, late: bool, seconds: float) -> int:
     """The summary line (and robust mode's line); the exit status. ``seconds``: the bar's, since the
     command began."""
     from nbst.constants import many_body

@@ -100,7 +100,8 @@ def entry_style(entry: str, entries: list[str]) -> tuple[str, str]:
     if kind == "nbst-ablated":
         k += 1  # never the plain nbst green
     f = 1.0 - MEMBER_SHADES[k % len(MEMBER_SHADES)]
-    return to_hex(tuple(c * f for c in base)), MEMBER_STYLES[k % len(MEMBER_STYLES)]
+    r, g, b = (c * f for c in base)
+    return to_hex((r, g, b)), MEMBER_STYLES[k % len(MEMBER_STYLES)]
 
 
 def save_figure(fig, stem: str | Path) -> list[Path]:

@@ -203,7 +203,7 @@ def straight_start(problem: Problem, request: SolveRequest, *, stopped: str | No
     _, c, sg = evaluate(problem, v[None], jobs=1)
     sig = int(sg[0])
     meta = {"algorithm": ALGORITHM_STRAIGHT, "cost": float(c[0]), "signature": signature_string(sig, problem.n),
-            "order": sig.bit_count(), "trials": 0, "seed": int(request.seed), "variant": request.variant,
+            "order": sig.bit_count(), "trials": 0, "seed": int(request.seed or 0), "variant": request.variant,
             "max_trials": int(request.max_trials), "patience": request.patience_or_default,
             "target_cost": request.target_cost,
             "stopped": stopped, "wall_time": 0.0, "trials_per_s": None, "nbst_version": __version__,

@@ -242,9 +242,9 @@ class PlanResult:
     costs: np.ndarray
     trials: int
     stats: dict
-    route_cue: np.ndarray = None
-    route_v: np.ndarray = None
-    route_mask: np.ndarray = None
+    route_cue: np.ndarray | None = None
+    route_v: np.ndarray | None = None
+    route_mask: np.ndarray | None = None
 
 
 class _Sim:
@@ -484,7 +484,8 @@ def _combine(pl: _Planning, lists, wide, sweeps: int) -> list:
     n, non, sim = pl.n, pl.non, pl.sim
     sweep_cost = sweeps * SWEEP_PASSES * sum(len(lst[1]) for lst in wide)
     combo_budget = max(1, sim.left - min(sim.left // SWEEP_SHARE, sweep_cost))
-    batch, picks = [], []
+    batch: list = []
+    picks: list = []
     renum = np.zeros(n, np.int64)  # masks over the noncueable disks only, renumbered 0..K-1
     renum[non] = np.arange(non.size)
     small = []

@@ -56,6 +56,7 @@ lists; None where a number would be infinite or undefined).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -199,7 +200,7 @@ def analyze(problem: Problem, velocities, *, timestep: float | None = None) -> d
     per_disk = np.array([_sigma(J[2 * i:2 * i + 2]) for i in range(n)])
     tol = [float(margin[i] / per_disk[i]) if per_disk[i] > 0.0 else None for i in range(n)]
     finite = [t for t in tol if t is not None]
-    out = {
+    out: dict[str, Any] = {
         "amplification": _num(_sigma(J)),
         "per_disk": [_num(x) for x in per_disk],
         "distance_per_disk": [_num(x) for x in d],
