@@ -133,6 +133,12 @@ class SceneSim:
                     for g2 in theirs:
                         key = (int(min(g1, g2)), int(max(g1, g2)))
                         self.pairs.setdefault(key, []).append((i, name))
+        #: geoms in some pair of interest (a cheap test of each step's contacts), and the first
+        #: touches to find (once all are found, the contacts are read no more)
+        self.involved = np.zeros(m.ngeom, dtype=bool)
+        for a, b in self.pairs:
+            self.involved[a] = self.involved[b] = True
+        self.to_find = sum(len({*f.hits, *f.never_hits}) for f in fates.fates)
         #: the judge needs the path at every step (``at``, ``through``, ``still``), not only the end
         self.per_step = any(f.at or f.through or f.still for f in fates.fates)
         self._local = threading.local()
@@ -210,16 +216,20 @@ class SceneSim:
         else:
             pos = np.empty((n + 1, len(ids), 3))
             times = np.arange(n + 1) * h
+            involved, left = self.involved, self.to_find
             for k in range(n):
                 mujoco.mj_step(m, d)
                 pos[k] = d.xpos[ids]  # the state this step started from
-                if pairs and d.ncon:
+                if left and d.ncon:
                     con = d.contact
-                    for g, dist in zip(con.geom[:d.ncon], con.dist[:d.ncon]):
-                        hit = pairs.get((int(min(g[0], g[1])), int(max(g[0], g[1]))))
-                        if hit and dist <= 0:
-                            for i, name in hit:
-                                touches[i].setdefault(name, k * h)
+                    geom = con.geom[:d.ncon]
+                    near = np.flatnonzero(involved[geom[:, 0]] & involved[geom[:, 1]] & (con.dist[:d.ncon] <= 0))
+                    for c in near:
+                        g0, g1 = int(geom[c, 0]), int(geom[c, 1])
+                        for i, name in pairs.get((min(g0, g1), max(g0, g1)), ()):
+                            if name not in touches[i]:
+                                touches[i][name] = k * h
+                                left -= 1
         s.qpos[:] = d.qpos
         s.qvel[:] = d.qvel
         s.time = d.time
