@@ -272,7 +272,7 @@ def legend_entries(problem, *, ghost: bool, labels: bool, long: bool = True, gho
     (saying that its number names its disk when targets are numbered), the lit ring
     that the readout's "on target" counts, the ring of the second motion when one is
     drawn. ``long=False``: the short words, for narrow margins."""
-    out = []
+    out: list[tuple[str, str, tuple[float, float, float] | None]] = []
     of = f" ({motion_name or 'exact'})" if (ghost or motion_name) and long else ""
     if problem.cueable.any():
         out.append((palette.LEGEND_CUEABLE + of, "disk", style.CUEABLE))
@@ -551,7 +551,7 @@ class Renderer2D(FrameRenderer):
             ghost_inside = self.inside(g)
             self._ghosts["center"] = self.layout.to_image(g)
             self.circles.draw(self._ghosts)
-        if self.labels is not None:
+        if self.labels is not None and self.target_text is not None:  # set together
             drawn = self.labels.drawn(self._disks["center"])
             self.labels.draw(self.size, self._disks["center"], drawn)
             numbers = target_label_instances(self.target_text, self.target_px, self.marker_px,

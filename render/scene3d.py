@@ -128,7 +128,7 @@ class Renderer3D(FrameRenderer):
         self.puck_h = style.PUCK_HEIGHT_FRAC * p.radius  # (N,)
         self.prog = ctx.program(vertex_shader=MESH_VS, fragment_shader=MESH_FS)
         self._setup_camera()
-        self._vbos = []
+        self._vbos: list = []
 
         def mesh_vao(mesh, capacity):
             vbo = ctx.buffer(mesh_arrays(mesh).tobytes())
@@ -360,7 +360,7 @@ class Renderer3D(FrameRenderer):
         ctx.blend_equation = mgl.FUNC_ADD
         # target markers (and numbers) over everything, in a dark halo, as in 2D: a puck never hides one
         self.circles.draw(self._marker_overlay)
-        if self.labels is not None:
+        if self.labels is not None and self.target_text is not None:  # set together
             tops = self.to_pixels(pos, z=self.puck_h)
             self.labels.draw(self.size, tops)
             numbers = target_label_instances(self.target_text, self._target_centre_px, self._target_marker_px,

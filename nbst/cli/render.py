@@ -300,6 +300,7 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
         if bar is not None:
             bar.close()
         raise
+    assert bar is not None  # a video (a still returned above)
     bar.close(n=n)
     if not args.quiet:
         print(f"nbst render: wrote {out}: {count_text(n)} frames, {size[0]}x{size[1]}, {fps:g} fps, "

@@ -229,7 +229,7 @@ class BowlingRenderer(FrameRenderer):
             out.append(((i * vw, 0, vw, h), flip @ proj @ look_at(eye, tgt, up), eye, cam))
         return out, k
 
-    def readout(self, t: float) -> list[str]:
+    def readout(self, t: float) -> list[str]:  # type: ignore[override]  # the disks' readout counts insides
         """The text of the frame at ``t``: what was asked, the pins down now (at the end: the
         result, and whether it is what was asked), the throw, the time and the slow motion."""
         from nbst.models.bowling import deck, pinfall

@@ -146,7 +146,7 @@ class LaneRenderer(FrameRenderer):
         L = np.array([0.3, 0.4, 1.0])
         for p in (self.prog, self.ball_prog):
             p["u_light"].value = tuple(L / np.linalg.norm(L))
-        self._bufs = []
+        self._bufs: list = []
 
         def vao(arr, prog=None, fmt="3f 3f 3f", names=("in_pos", "in_normal", "in_color")):
             buf = ctx.buffer(np.ascontiguousarray(arr, dtype="f4").tobytes())
@@ -228,7 +228,7 @@ class LaneRenderer(FrameRenderer):
 
     # ---------------------------------------------------------------- readout
 
-    def readout(self, t: float) -> list[str]:
+    def readout(self, t: float) -> list[str]:  # type: ignore[override]  # the disks' readout counts insides
         """The text of the frame at ``t``: the throw, the oil and ball, the phases, the ball now,
         the pins down (at the end: the result), and the pins asked for and the probability when
         given."""
@@ -288,8 +288,8 @@ class LaneRenderer(FrameRenderer):
             note = f" ({self.probability_note})" if self.probability_note else ""
             lines.append(f"chance  {100 * self.probability:.0f}%{note}")
         x, y = m.ball[k, 0], m.ball[k, 1]
-        a, b = max(k - 1, 0), min(k + 1, len(m.times) - 1)
-        v = float(np.hypot(*(m.ball[b, :2] - m.ball[a, :2]))) / max((b - a) * self.throw.timestep, 1e-12)
+        k0, k1 = max(k - 1, 0), min(k + 1, len(m.times) - 1)
+        v = float(np.hypot(*(m.ball[k1, :2] - m.ball[k0, :2]))) / max((k1 - k0) * self.throw.timestep, 1e-12)
         where = (f"{float(lane.x_to_ft(x)):4.1f} ft, board {float(lane.y_to_board(y, d.hand)):4.1f}"
                  if x < 0.0 and abs(y) < 0.6 else "past the head pin")
         lines.append(f"t {t:4.2f} s  ball {where}, {v / lane.MPH:4.1f} mph")
@@ -341,7 +341,8 @@ class LaneRenderer(FrameRenderer):
         b = self.to_pixel(vp, vpm, [0.0, scene.PIN_SPACING, 0.0], H)
         if abs(a[0] - b[0]) < 3.5 * scw:
             return
-        parts, boxes = [], []
+        parts: list = []
+        boxes: list = []
         for n, p in zip(scene.PIN_NUMBERS, self.pin_label_points(k)):   # front rows first: they keep theirs
             if n in down or n not in self.in_play:
                 continue
@@ -434,6 +435,7 @@ class LaneRenderer(FrameRenderer):
             self.marks_vao.render(mgl.TRIANGLES)
             if self.trail_vao is not None and n_trail > 1:
                 trail = self.trail_wide_vao if cam == "overhead" else self.trail_vao
+                assert trail is not None  # the two trails are made together
                 trail.render(mgl.TRIANGLE_STRIP, vertices=2 * n_trail)
             ctx.enable(mgl.DEPTH_TEST)
             for n, p in zip(range(1, 11), self.motion.pins[k]):

@@ -107,10 +107,10 @@ class Throw:
     are the last step's), the pins in play, and what made it."""
 
     motion: Motion
-    result: object
-    delivery: object
+    result: lane.ThrowResult | None
+    delivery: lane.Delivery
     oil: object         # a pattern name, file or Pattern (lane.pattern reads any)
-    ball: object
+    ball: lane.Ball
     timestep: float
     frame: object = None
     in_play: tuple = tuple(range(1, 11))
@@ -269,7 +269,8 @@ def ball_texture(throw: Throw, size=TEXTURE_SIZE) -> np.ndarray:
             grown |= np.roll(track, 1, axis=1) | np.roll(track, -1, axis=1)
             track = grown
         img[track.reshape(-1)] = TRACK_RGB
-    marks = [(lane.pin_axis(throw.delivery, throw.ball.pin_pap_in), PIN_DOT_IN / 2 / R_in, PIN_DOT_RGB, None)]
+    marks: list[tuple[np.ndarray, float, tuple, tuple | None]] = [
+        (lane.pin_axis(throw.delivery, throw.ball.pin_pap_in), PIN_DOT_IN / 2 / R_in, PIN_DOT_RGB, None)]
     marks += [(p, r, HOLE_RGB, HOLE_RIM_RGB) for p, r in grip_holes(throw.delivery)]
     for p, r, rgb, rim in marks:
         c = dirs @ p.astype(np.float32)
@@ -394,7 +395,7 @@ def still_time(throw: Throw) -> float:
 def throw_file_readout(d: dict) -> dict:
     """LaneRenderer's readout arguments for a checked throw file ``d`` (``throwfile.load``): the pins
     asked for (``requested``), the file's outcome, and its probability with n and 95 % CI."""
-    out = {"expected": sorted(d["outcome"]["down"])}
+    out: dict[str, object] = {"expected": sorted(d["outcome"]["down"])}
     if d.get("requested") is not None:
         out["asked"] = sorted(d["requested"]["down"])
     else:

@@ -50,6 +50,13 @@ class FrameRenderer:
     """What both views share: a subclass has ``draw(t)`` (draw the frame at time t into
     ``self.target``, a FrameTarget), ``problem`` and ``title``."""
 
+    target: FrameTarget
+    size: tuple[int, int]
+
+    def draw(self, t: float) -> None:
+        """Draw the frame at time ``t`` into ``self.target`` (each view its own)."""
+        raise NotImplementedError
+
     def render(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
         """The frame at time ``t`` (seconds, 0..t_final), into ``out`` if given: (H, W, 3) uint8."""
         self.draw(t)

@@ -10,6 +10,8 @@ first with no flip. Colours are premultiplied in the shaders; blending is
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = ["ATLAS_COLS", "CAPSULE_DTYPE", "CAPSULE_FS", "CAPSULE_FS_IO", "CAPSULE_VS", "CAPSULE_VS_IO",
@@ -380,7 +382,7 @@ class Text:
         self.ctx = ctx
         atlas, self.cell = glyph_atlas(px)
         self._atlas = atlas
-        self._halo = None  # the dilated atlas of draw_halo, made on first use
+        self._halo: tuple[int, Any, _Instanced] | None = None  # the dilated atlas of draw_halo, made on first use
         h, w = atlas.shape
         self.tex = ctx.texture((w, h), 1, np.ascontiguousarray(atlas).tobytes(), alignment=1)
         import moderngl
@@ -423,6 +425,7 @@ class Text:
             return
         if self._halo is None or self._halo[0] != px:
             self._make_halo(px)
+        assert self._halo is not None
         _, tex, batch = self._halo
         d = data.copy()
         d["pos"] -= px

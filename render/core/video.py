@@ -269,12 +269,14 @@ def _check_mp4(data: bytes, frames: int) -> str | None:
             if kind != "trak":
                 continue
             span = (a, b)
+            found: tuple[int, int] | None = span
             for step in ("mdia", "minf", "stbl", "stsz"):
-                span = next(((x, y) for k, x, y in _boxes(data, *span) if k == step), None)
-                if span is None:
+                found = next(((x, y) for k, x, y in _boxes(data, *span) if k == step), None)
+                if found is None:
                     break
-            if span is not None and span[1] - span[0] >= 12:
-                samples = max(samples, int.from_bytes(data[span[0] + 8:span[0] + 12], "big"))
+                span = found
+            if found is not None and found[1] - found[0] >= 12:
+                samples = max(samples, int.from_bytes(data[found[0] + 8:found[0] + 12], "big"))
     except _Damaged as e:
         return str(e)
     if samples != frames:

@@ -210,7 +210,9 @@ def static_solids(model, data) -> tuple[np.ndarray, np.ndarray, tuple]:
     from nbst.models.crash import scene as scene_mod
 
     movers = {model.body(scene_mod.vehicle_prefix(i)).id for i in range(_vehicles(model))}
-    ground, rest, ground_rgb = [], [], (0.0, 0.0, 0.0)
+    ground: list = []
+    rest: list = []
+    ground_rgb: tuple[float, ...] = (0.0, 0.0, 0.0)
     for g in range(model.ngeom):
         b = int(model.geom_bodyid[g])
         while b and b not in movers:

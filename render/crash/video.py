@@ -24,6 +24,7 @@ writer the CLI calls; :func:`crash_kind` sniffs a file's kind.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -137,7 +138,7 @@ class CrashRenderer(FrameRenderer):
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         self.ctx, self.d, self.script, self.model, self.motion = ctx, d, script, model, motion
         self.camera, self.follow = camera, int(follow)
-        self.size = tuple(int(v) for v in size)
+        self.size = (int(size[0]), int(size[1]))
         self._mgl, self._mj = moderngl, mujoco
         self.data = mujoco.MjData(model)
         n = script.n
@@ -176,7 +177,7 @@ class CrashRenderer(FrameRenderer):
         L = np.asarray(LIGHT) / np.linalg.norm(LIGHT)
         self.prog["u_light"].value = tuple(L)
         self.mprog = ctx.program(vertex_shader=MARK_VS, fragment_shader=MARK_FS)
-        self._objs = []
+        self._objs: list = []
         self.data.qpos[:] = motion.qpos[0]    # the start: the statics, and the wheels the arches are over
         mujoco.mj_kinematics(model, self.data)
         ground, statics, rgb = cs.static_solids(model, self.data)
@@ -190,7 +191,7 @@ class CrashRenderer(FrameRenderer):
         self.impact_vao = self._vao(cs.impact_marks(motion.impacts), marks=True)
         # the vehicles' geoms, one buffer per shape (equal vehicles share theirs); the lower body
         # has an arch over each wheel, placed from the wheels' poses at the start
-        self.geoms: list[tuple[int, bool, object]] = []    # (geom id, is a tyre, vao)
+        self.geoms: list[tuple[int, bool, Any]] = []    # (geom id, is a tyre, vao)
         self.heights = []
         cache: dict = {}
         for i in range(n):
@@ -202,8 +203,8 @@ class CrashRenderer(FrameRenderer):
                 key = (int(model.geom_type[g]), tuple(np.round(model.geom_size[g], 6)), tuple(model.geom_rgba[g]),
                        nm.endswith("_cabin"), "_tyre_" in nm, tuple(np.round(np.ravel(arches), 6)))
                 if key not in cache:
-                    rows = cs.geom_solid(model, g, arches)
-                    cache[key] = None if rows is None else self._vao(rows)
+                    solid = cs.geom_solid(model, g, arches)
+                    cache[key] = None if solid is None else self._vao(solid)
                 if cache[key] is not None:
                     self.geoms.append((g, "_tyre_" in nm, cache[key]))
             self.heights.append(script.vehicles[i].vtype.height)
@@ -226,7 +227,7 @@ class CrashRenderer(FrameRenderer):
     def _arches(self, i: int, g: int) -> list[tuple[float, float, float]]:
         """Wheel arches of vehicle ``i``'s body box ``g``: (x, half length, top z) in the box's frame."""
         R, p = self.data.geom_xmat[g].reshape(3, 3), self.data.geom_xpos[g]
-        out = []
+        out: list[tuple[float, float, float]] = []
         for c in ("fl", "fr", "rl", "rr"):
             t = self.model.geom(f"v{i}_tyre_{c}").id
             x, _, z = R.T @ (self.data.geom_xpos[t] - p)
@@ -248,10 +249,10 @@ class CrashRenderer(FrameRenderer):
                 keys.append(np.array([[r["x"] - r["radius"], r["y"] - r["radius"]],
                                       [r["x"] + r["radius"], r["y"] + r["radius"]]]))
         keys += [np.array([im.pos[:2]]) for im in m.impacts if all(math.isfinite(c) for c in im.pos[:2])]
-        keys = np.concatenate(keys)
+        places = np.concatenate(keys)
         path = m.pos[:, :, :2].reshape(-1, 2)
-        near = np.hypot(*(path[:, None, :] - keys[None]).transpose(2, 0, 1)).min(axis=1) <= OVERHEAD_LEAD
-        p = np.concatenate([keys, path[near]])
+        near = np.hypot(*(path[:, None, :] - places[None]).transpose(2, 0, 1)).min(axis=1) <= OVERHEAD_LEAD
+        p = np.concatenate([places, path[near]])
         lo, hi = p.min(axis=0) - OVERHEAD_MARGIN, p.max(axis=0) + OVERHEAD_MARGIN
         c, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, OVERHEAD_MIN / 2)
         _, _, vw, vh = self.panels["overhead"] if "overhead" in self.panels else (0, 0, 1, 1)
@@ -287,7 +288,7 @@ class CrashRenderer(FrameRenderer):
         c = vpm @ np.r_[np.asarray(p, float)[:3], 1.0]
         return vp[0] + (c[0] / c[3] + 1) / 2 * vp[2], vp[1] + (c[1] / c[3] + 1) / 2 * vp[3], c[3] > 0
 
-    def readout(self, t: float) -> list[str]:
+    def readout(self, t: float) -> list[str]:  # type: ignore[override]  # the disks' readout counts insides
         return ro.readout(t, self.motion, self.script, self.fates, self.labels, self.windows)
 
     # ---------------------------------------------------------------- drawing
