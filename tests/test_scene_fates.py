@@ -107,6 +107,7 @@ def test_a_bad_field_is_refused_in_one_line_naming_file_and_field(tmp_path, doc,
     (json.dumps(DOC).replace('"duration": 0.5', '"duration": Infinity'), "finite"),
     (json.dumps(DOC).replace('"duration": 0.5', '"duration": 1' + "0" * 40), "15 digits"),
     ('{"format": "nbst-fates", ', "not JSON"),
+    ("[" * 100_000 + "]" * 100_000, "nested too deeply"),
     (json.dumps(DOC).replace('"duration": 0.5', '"duration": 0.5, "duration": 0.7'), "'duration' appears twice"),
 ])
 def test_non_finite_and_huge_numbers_are_refused(tmp_path, text, why):

@@ -308,3 +308,17 @@ def test_export_of_a_scene_with_files_goes_beside_it(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "write the exported scene in" in err and not out.exists()
     assert main(["scene", "export", str(sol), "-o", str(tmp_path / "scene" / "with-key.xml")]) == 0
+
+
+@pytest.mark.parametrize("text, why", [
+    ("{", "not JSON"), ('{"format": "nbst-crash"}', "format"), ("[" * 100_000 + "]" * 100_000, "nested"),
+    ('{"format": "nbst-scene-solution", "version": 1, "scene": "x.xml"}', "nstep"),
+])
+def test_a_bad_solution_file_is_one_line_exit_2(tmp_path, capsys, text, why):
+    p = tmp_path / "sol.json"
+    p.write_text(text)
+    for argv in (["scene", "replay", str(p)], ["scene", "export", str(p), "-o", str(tmp_path / "x.xml")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and why in err and str(p) in err
+    assert not (tmp_path / "x.xml").exists()

@@ -242,22 +242,26 @@ class _Src:
         return FatesError(self.source, field, why)
 
 
+class _Refused(Exception):
+    """Raised by the JSON parser's hooks; the loader turns it into a FatesError."""
+
+
 def _reject_constant(s: str) -> float:
-    raise ValueError(f"{s} is not a finite number")
+    raise _Refused(f"{s} is not a finite number")
 
 
 def _unique_keys(pairs: list[tuple[str, Any]]) -> dict:
     out: dict = {}
     for k, v in pairs:
         if k in out:
-            raise ValueError(f"the key {k!r} appears twice in one object")
+            raise _Refused(f"the key {k!r} appears twice in one object")
         out[k] = v
     return out
 
 
 def _parse_int(s: str) -> int:
     if len(s.lstrip("-")) > 15:
-        raise ValueError(f"the integer {s[:20]}... has more than 15 digits")
+        raise _Refused(f"the integer {s[:20]}... has more than 15 digits")
     return int(s)
 
 
@@ -473,5 +477,7 @@ def read_fates_json(path: Path) -> Any:
         raise FatesError(path, "", "not a text file (not UTF-8)") from None
     except json.JSONDecodeError as e:
         raise FatesError(path, "", f"not JSON: {e.msg} at line {e.lineno}, column {e.colno}") from None
-    except ValueError as e:
+    except (_Refused, ValueError) as e:
         raise FatesError(path, "", f"not accepted: {e}") from None
+    except RecursionError:
+        raise FatesError(path, "", "not accepted: nested too deeply") from None

@@ -165,6 +165,8 @@ def read_solution(path: str | os.PathLike) -> dict:
         doc = json.loads(data.decode("utf-8"))
     except (UnicodeDecodeError, ValueError) as e:
         raise SceneSolutionError(f"{path}: not JSON ({e})") from None
+    except RecursionError:
+        raise SceneSolutionError(f"{path}: not accepted: nested too deeply") from None
     if not isinstance(doc, dict) or doc.get("format") != SOLUTION_FORMAT:
         raise SceneSolutionError(f"{path}: format: not a scene solution (expected {SOLUTION_FORMAT!r})")
     if doc.get("version") != SOLUTION_VERSION:
