@@ -87,6 +87,43 @@ def test_a_5m_throw_file_with_a_320_digit_integer_in_qpos0_is_one_line(tmp_path,
     _one_line(rc, err, "qpos0[3]", "too large")
 
 
+@pytest.mark.parametrize("mutate, field", [
+    (lambda d: d.__setitem__("timestep", 10 ** 300), "timestep"),
+    (lambda d: d.__setitem__("hamming", 11), "hamming"),
+    (lambda d: d.__setitem__("found", 1), "found"),
+    (lambda d: d["launch"].__setitem__("speed", 1e300), "launch.speed"),
+    (lambda d: d["robustness"].__setitem__("lateral_m", -1.0), "robustness.lateral_m"),
+    (lambda d: d["robustness"].__setitem__("speed_m_s_rollouts", 10 ** 300), "robustness.speed_m_s_rollouts"),
+])
+def test_a_5m_throw_file_s_recorded_outputs_go_to_their_domain(tmp_path, capsys, mutate, field):
+    """Every field of a 5 m throw, the recorded outputs beside the replayed state too, is checked
+    to its domain (issue 45): one line naming the file and the field, exit 2."""
+    import shutil
+
+    from nbst.models.bowling.deck import throwfile as deckfile
+
+    d = json.loads(Path(deckfile.SHIPPED_ATLAS).read_text())["shots"][0]
+    mutate(d)
+    shutil.copyfile(deckfile.SHIPPED_SCENE, tmp_path / "scene.xml")
+    (tmp_path / "t.json").write_text(json.dumps(d))
+    rc, _, err = _main(["bowl", "replay", tmp_path / "t.json"], capsys)
+    _one_line(rc, err, f"t.json: {field}:")
+
+
+def test_a_5m_atlas_s_seed_and_count_go_to_their_domain(tmp_path):
+    import shutil
+
+    from nbst.models.bowling.deck import throwfile as deckfile
+
+    shutil.copyfile(deckfile.SHIPPED_SCENE, tmp_path / "scene.xml")
+    for key, value in (("seed", -1), ("seed", 2 ** 63), ("subsets", 1024), ("subsets", "all")):
+        a = json.loads(Path(deckfile.SHIPPED_ATLAS).read_text())
+        a[key] = value
+        (tmp_path / "atlas.json").write_text(json.dumps(a))
+        with pytest.raises(deckfile.ThrowFileError, match=f"atlas.json: {key}:"):
+            deckfile.load_atlas(tmp_path / "atlas.json")
+
+
 def test_a_foul_line_atlas_or_checkpoint_with_a_400_digit_integer_is_one_line(tmp_path, capsys):
     """``bowl atlas --foul-line`` resumes from DIR/archive.json and DIR/foul_atlas.json: a huge
     integer in either is refused in one line before any frame runs."""

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from nbst.errors import InputError, MujocoError
+from nbst.seeds import SEED_MAX
 from nbst.models.bowling import deck, files, pinfall, scene, geometry
 from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
@@ -344,6 +345,12 @@ def load_atlas(path):
     shots = a["shots"]
     if not isinstance(shots, list) or len(shots) > geometry.N_SUBSETS:
         _fail(path, "shots", f"must be a list of at most {geometry.N_SUBSETS} throws (one per subset)")
+    seed = a.get("seed")  # recorded outputs, to their domains when present
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX):
+        _fail(path, "seed", f"must be null or a whole number in [0, 2^63-1], got {json.dumps(seed)[:40]}")
+    n = a.get("subsets")
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or not 0 <= n <= geometry.N_SUBSETS):
+        _fail(path, "subsets", f"must be a whole number in [0, {geometry.N_SUBSETS}], got {json.dumps(n)[:40]}")
     seen = set()
     for i, d in enumerate(shots):
         check_throw(d, path, f"shots[{i}].")
