@@ -42,8 +42,8 @@ from nbst.models.bowling import files, scene
 from nbst.models.bowling.lane.units import BOARD_WIDTH, FT, N_BOARDS, LaneError, x_to_ft
 from nbst.registry import Registry
 
-__all__ = ["MU_OIL", "MU_DRY", "FORMAT", "PATTERNS_DIR", "PATTERNS", "DX_FT", "NX", "CELL_AREA", "Pass", "Pattern", "OilLaw",
-           "LAW", "OilField", "load_pattern", "pattern_from_dict", "pattern", "oil_name"]
+__all__ = ["MU_OIL", "MU_DRY", "FORMAT", "PATTERNS_DIR", "PATTERNS", "DEFAULT_OIL", "DX_FT", "NX", "CELL_AREA",
+           "Pass", "Pattern", "OilLaw", "LAW", "OilField", "load_pattern", "pattern_from_dict", "pattern", "oil_name"]
 
 #: Friction of a full oil film (Frohlich's figure, as scene.MU_OIL) and of the dry lane for
 #: the default ball (scene.MU_DRY); the ball's coverstock friction replaces the latter.
@@ -58,6 +58,8 @@ NX = int(math.floor(float(x_to_ft(scene.DECK_FRONT_X)) / DX_FT))
 CELL_AREA = BOARD_WIDTH * DX_FT * FT  # m^2
 #: The shipped patterns, in the order they are listed.
 SHIPPED = ("house", "house-short", "house-long", "sport-short", "sport", "sport-long", "short", "flat", "uniform")
+#: The pattern a throw is bowled on when none is named (``--oil``'s default).
+DEFAULT_OIL = "house"
 
 
 @dataclass(frozen=True)

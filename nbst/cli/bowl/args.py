@@ -127,10 +127,10 @@ def picture_flags(p, what: str) -> None:
 def oil_flag(t) -> None:
     """--oil: a pattern registered in :data:`nbst.models.bowling.lane.oil.PATTERNS` (its names and
     descriptions are the choices and the help), or a pattern file."""
-    from nbst.models.bowling.lane.oil import PATTERNS, argtype
+    from nbst.models.bowling.lane.oil import DEFAULT_OIL, PATTERNS, argtype
 
-    t.add_argument("--oil", default="house", type=argtype("--oil"), metavar="PATTERN",
-                   help=f"oil pattern (default house): {PATTERNS.help_text()}; or a pattern file "
+    t.add_argument("--oil", default=DEFAULT_OIL, type=argtype("--oil"), metavar="PATTERN",
+                   help=f"oil pattern (default {DEFAULT_OIL}): {PATTERNS.help_text()}; or a pattern file "
                         "(nbst-oil-pattern JSON: forward/reverse passes with length, volume and units or loads per "
                         "board; docs/bowling.md)")
 
