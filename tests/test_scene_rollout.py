@@ -213,11 +213,11 @@ def test_cli_solve_replay_and_their_exits(toss, impossible, tmp_path, capsys, mo
     # interrupted: the best so far written, exit 130
     original = scene_api.signature_search
 
-    def interrupted(sim, *, rng, max_rollouts, callback=None):
+    def interrupted(sim, *, rng, max_rollouts, answers=1, callback=None):
         def stop(p):
             if p.rollouts >= 16:
                 raise KeyboardInterrupt
-        return original(sim, rng=rng, max_rollouts=max_rollouts, callback=stop)
+        return original(sim, rng=rng, max_rollouts=max_rollouts, answers=answers, callback=stop)
 
     monkeypatch.setattr(scene_api, "signature_search", interrupted)
     out.unlink()
@@ -322,3 +322,25 @@ def test_a_bad_solution_file_is_one_line_exit_2(tmp_path, capsys, text, why):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and why in err and str(p) in err
     assert not (tmp_path / "x.xml").exists()
+
+
+def test_answers_have_contact_sequences_of_their_own_and_each_replays(toss, tmp_path):
+    """--answers K (after Chenney & Forsyth): up to K solutions that meet every fate, each with a
+    different contact sequence; recording the sequences changes no bit of the search (the first
+    answer is the one found without them), and each answer replays bit for bit."""
+    doc = json.loads(toss.read_text())
+    doc["fates"]["ball"] = {"never_hits": ["cube"]}  # the ball may touch the floor, the wall, both or neither
+    toss.write_text(json.dumps(doc))
+    one = solve(None, toss, seed=7, max_rollouts=600)
+    res = solve(None, toss, seed=7, max_rollouts=600, answers=3, samples=4)
+    assert res.met and len(res.answers) == 3 and len(res.answer_probabilities) == 3
+    assert res.answers[0].x.tobytes() == one.best.x.tobytes() == res.best.x.tobytes()
+    sequences = [a.sequence for a in res.answers]
+    assert len(set(sequences)) == 3 and all(a.judgement.met for a in res.answers)
+    assert all(s and all("-" in t for t in s) for s in sequences)
+    for a in res.answers:
+        q, v = replay(res.model, a.qpos0, a.qvel0, res.nstep)
+        assert q.tobytes() == a.qpos.tobytes() and v.tobytes() == a.qvel.tobytes()
+    d = solution_dict(res)
+    assert [x["sequence"] for x in d["answers"]] == [list(s) for s in sequences]
+    assert d["answers"][0]["probability"]["n"] == 4

@@ -24,7 +24,7 @@ __all__ = ["solve"]
 
 
 def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, seed: int | None = None,
-          max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int = 1, samples: int = 0,
+          max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int = 1, samples: int = 0, answers: int = 1,
           callback: Callable[[SceneProgress], None] | None = None) -> SceneResult:
     """Find initial velocities (and offsets) of a scene's free bodies that meet their fates.
 
@@ -36,7 +36,10 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
         max_rollouts: the rollout budget, >= 1.
         jobs: threads rolling the scene out (>= 1); any value gives the same result.
         samples: after the search (unless interrupted), estimate from this many noisy rollouts how
-            often the best controls meet every fate under the fates' ``"noise"`` (0: none).
+            often the best controls meet every fate under the fates' ``"noise"`` (0: none); each
+            answer's too.
+        answers: look for up to this many solutions, each with a contact sequence of its own
+            (>= 1; see ``nbst.scene.search.signature_search``); the first is the best.
         callback: called with a :class:`~nbst.scene.search.SceneProgress` after each batch.
 
     Returns:
@@ -47,9 +50,11 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     Raises:
         FatesError: the fates file or its scene is refused (one line naming the file and field).
         InputError: the seed is not an integer in range.
-        SolveError: ``max_rollouts`` or ``jobs`` is not an integer >= 1, or ``samples`` one >= 0.
+        SolveError: ``max_rollouts``, ``jobs`` or ``answers`` is not an integer >= 1, or ``samples``
+            one >= 0.
     """
-    for name, v, least in (("max_rollouts", max_rollouts, 1), ("jobs", jobs, 1), ("samples", samples, 0)):
+    for name, v, least in (("max_rollouts", max_rollouts, 1), ("jobs", jobs, 1), ("samples", samples, 0),
+                           ("answers", answers, 1)):
         if isinstance(v, bool) or not isinstance(v, int) or v < least:
             raise SolveError(f"{name} must be an integer >= {least}, got {v!r}")
     s = resolve_seed(seed)
@@ -60,16 +65,22 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     else:
         f, model = load_fates(fates, scene=scene)
     p = None
+    ps: list = []
     stopped = "budget"
-    with quiet_mujoco_warnings(), SceneSim(f, model, jobs=jobs) as sim:
-        r = signature_search(sim, rng=check_random_state(s), max_rollouts=max_rollouts, callback=callback)
+    with quiet_mujoco_warnings(), SceneSim(f, model, jobs=jobs, sequences=answers > 1) as sim:
+        r = signature_search(sim, rng=check_random_state(s), max_rollouts=max_rollouts, answers=answers,
+                             callback=callback)
         stopped = r.stopped
         if samples and stopped != "interrupted":
             try:
                 p = noisy_probability(sim, r.best.x, n=samples, seed=s)
+                if answers > 1:
+                    ps = [p if a is r.best else noisy_probability(sim, a.x, n=samples, seed=s) for a in r.answers]
             except KeyboardInterrupt:
                 stopped = "interrupted"
+                p, ps = None, []
         nstep, key = sim.nstep, sim.key
     return SceneResult(fates=f, model=model, best=r.best, met=r.best.judgement.met and not r.best.warnings,
                        rollouts=r.rollouts, stopped=stopped, seed=s, max_rollouts=max_rollouts,
-                       wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p)
+                       wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p,
+                       answers=r.answers if answers > 1 else (), answer_probabilities=tuple(ps))

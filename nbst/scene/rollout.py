@@ -75,6 +75,9 @@ class SceneRollout:
         qpos: (nq,) final qpos; qvel: (nv,) final qvel.
         judgement: the fates judged.
         warnings: MuJoCo's warnings during the rollout (a diverging state), by name.
+        sequence: the contact sequence, when the sim records it (``sequences=True``): each fated
+            body's first touch of each other body, in time order, as ``"BODY-OTHER"`` (a geom of
+            the world body goes by its own name, when it has one: ``"die1-floor"``).
     """
 
     x: np.ndarray
@@ -84,6 +87,7 @@ class SceneRollout:
     qvel: np.ndarray
     judgement: Judgement
     warnings: tuple[str, ...]
+    sequence: tuple[str, ...] = ()
 
     @property
     def cost(self) -> float:
@@ -102,12 +106,15 @@ class SceneSim:
         fates: the checked fates.
         model: the compiled ``mujoco.MjModel`` (``nbst.scene.scenefile.load_fates`` gives both).
         jobs: threads for :meth:`run` (1: the calling thread).
+        sequences: also record each rollout's contact sequence (:attr:`SceneRollout.sequence`;
+            every step is then read).
     """
 
-    def __init__(self, fates: Fates, model: Any, *, jobs: int = 1):
+    def __init__(self, fates: Fates, model: Any, *, jobs: int = 1, sequences: bool = False):
         import mujoco
 
         self.fates, self.model, self.jobs = fates, model, max(1, int(jobs))
+        self.sequences = bool(sequences)
         m = model
         self.nstep = int(round(fates.duration / m.opt.timestep))
         self.key = (-1 if fates.keyframe is None
@@ -139,6 +146,12 @@ class SceneSim:
         for a, b in self.pairs:
             self.involved[a] = self.involved[b] = True
         self.to_find = sum(len({*f.hits, *f.never_hits}) for f in fates.fates)
+        # for the contact sequence: each geom's fated body index (-1: none) and the name it goes by
+        self.fated_of = np.full(m.ngeom, -1, dtype=int)
+        for i, b in enumerate(self.bodies):
+            self.fated_of[m.geom_bodyid == b] = i
+        self.touch_name = [m.body(int(m.geom_bodyid[g])).name if m.geom_bodyid[g] != 0 or not m.geom(g).name
+                           else m.geom(g).name for g in range(m.ngeom)]
         #: the judge needs the path at every step (``at``, ``through``, ``still``), not only the end
         self.per_step = any(f.at or f.through or f.still for f in fates.fates)
         self._local = threading.local()
@@ -205,7 +218,8 @@ class SceneSim:
         ids, pairs, n = self.bodies, self.pairs, self.nstep
         touches: list[dict[str, float]] = [{} for _ in ids]
         h = float(m.opt.timestep)
-        if not (self.per_step or pairs):  # only the end is judged: one call, the same steps in C
+        seq: list[str] = []
+        if not (self.per_step or pairs or self.sequences):  # only the end is judged: one call, the same steps in C
             s.qpos[:] = qpos0
             mujoco.mj_kinematics(m, s)
             first = s.xpos[ids].copy()
@@ -216,10 +230,21 @@ class SceneSim:
         else:
             pos = np.empty((n + 1, len(ids), 3))
             times = np.arange(n + 1) * h
-            involved, left = self.involved, self.to_find
+            involved, left, fated_of, names = self.involved, self.to_find, self.fated_of, self.touch_name
+            seen: set[tuple[int, str]] = set()
             for k in range(n):
                 mujoco.mj_step(m, d)
                 pos[k] = d.xpos[ids]  # the state this step started from
+                if self.sequences and d.ncon:
+                    con = d.contact
+                    geom = con.geom[:d.ncon]
+                    for c in np.flatnonzero(((fated_of[geom[:, 0]] >= 0) | (fated_of[geom[:, 1]] >= 0))
+                                            & (con.dist[:d.ncon] <= 0)):
+                        for a, b in ((int(geom[c, 0]), int(geom[c, 1])), (int(geom[c, 1]), int(geom[c, 0]))):
+                            i = int(fated_of[a])
+                            if i >= 0 and (i, names[b]) not in seen and names[b] != self.fates.fates[i].body:
+                                seen.add((i, names[b]))
+                                seq.append(f"{self.fates.fates[i].body}-{names[b]}")
                 if left and d.ncon:
                     con = d.contact
                     geom = con.geom[:d.ncon]
@@ -244,7 +269,8 @@ class SceneSim:
                         touches=tuple(touches))
         warned = tuple(data_warnings(d))
         return SceneRollout(x=np.array(x, dtype=float), qpos0=qpos0, qvel0=qvel0, qpos=d.qpos.copy(),
-                            qvel=d.qvel.copy(), judgement=judge(self.fates, rec), warnings=warned)
+                            qvel=d.qvel.copy(), judgement=judge(self.fates, rec), warnings=warned,
+                            sequence=tuple(seq))
 
     def run(self, xs: np.ndarray) -> list[SceneRollout]:
         """Roll out (B, D) controls vectors on ``jobs`` threads: B rollouts, in input order."""

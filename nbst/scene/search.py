@@ -18,7 +18,9 @@ with fates: set when all of that body's fates are met (``nbst.scene.judge``). As
   best of its signature and the child is not better (elitism); otherwise it joins, the worst of its
   signature leaving past :data:`PER_SIGNATURE`; past :data:`POPULATION` members the lowest-order
   signatures subsumed by higher-order ones are culled (not the best's);
-* the search stops when every bit is set (all fates met), or at the rollout budget.
+* the search stops when every bit is set (all fates met), or at the rollout budget. Asked for
+  several answers, it goes on until that many rollouts meet every fate, each with a contact
+  sequence of its own (Chenney & Forsyth 2000: the animator chooses).
 
 *Directed randomize* aims a body that has a place to be (``rest_in`` or ``at``): the velocity that
 would carry its origin ballistically (the model's gravity, no contacts) to a point of the region in a
@@ -80,6 +82,8 @@ class SceneSearchResult:
         stopped: ``"met"``, ``"budget"`` or ``"interrupted"``.
         wall_time: seconds.
         signatures: distinct signatures seen.
+        answers: rollouts that meet every fate, each with a contact sequence of its own, in the
+            order found (with ``answers`` > 1; else the best alone when it meets them).
     """
 
     best: SceneRollout
@@ -87,6 +91,7 @@ class SceneSearchResult:
     stopped: str
     wall_time: float
     signatures: int
+    answers: tuple[SceneRollout, ...] = ()
 
 
 class _Member:
@@ -102,7 +107,7 @@ def _better(a: SceneRollout, b: SceneRollout) -> bool:
 
 
 class _Search:
-    def __init__(self, sim: SceneSim, rng: np.random.Generator):
+    def __init__(self, sim: SceneSim, rng: np.random.Generator, want: int = 1):
         f = sim.fates
         self.sim, self.rng, self.fates = sim, rng, f
         self.lo, self.hi = f.bounds()
@@ -114,6 +119,8 @@ class _Search:
         self.pop: list[_Member] = []
         self.best: _Member | None = None
         self.seen: set[tuple[bool, ...]] = set()
+        self.want = want
+        self.answers: dict[tuple[str, ...], SceneRollout] = {}
         self.rollouts = 0
         # the origin of each controlled body at the start (for aiming), gravity
         mid = (self.lo + self.hi) / 2
@@ -225,6 +232,9 @@ class _Search:
     # -- population -------------------------------------------------------------------
     def note(self, m: _Member) -> None:
         self.seen.add(m.sig)
+        if (m.r.judgement.met and not m.r.warnings and m.r.sequence not in self.answers
+                and len(self.answers) < self.want):
+            self.answers[m.r.sequence] = m.r
         if self.best is None or _better(m.r, self.best.r):
             self.best = m
 
@@ -263,10 +273,13 @@ class _Search:
         self.add(m)
 
     def done(self) -> bool:
+        if self.want > 1:
+            return len(self.answers) >= self.want
         return self.best is not None and self.best.r.judgement.met and not self.best.r.warnings
 
 
 def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: int = DEFAULT_MAX_ROLLOUTS,
+                     answers: int = 1,
                      callback: Callable[[SceneProgress], None] | None = None) -> SceneSearchResult:
     """Search the controls with the paper's signature search (module docstring).
 
@@ -274,12 +287,15 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         sim: the scene's rollouts (its ``jobs`` threads roll each batch out).
         rng: the one random stream (``nbst.seeds.check_random_state(seed)``).
         max_rollouts: the rollout budget (>= 1).
+        answers: go on after every fate is met until this many rollouts meet them, each with a
+            contact sequence of its own (the animator's choice, after Chenney & Forsyth 2000; the
+            sim must record sequences, ``SceneSim(sequences=True)``), or the budget is spent.
         callback: called with a :class:`SceneProgress` after each batch.
 
     Returns:
         the :class:`SceneSearchResult` (the best rollout, also when interrupted).
     """
-    S = _Search(sim, rng)
+    S = _Search(sim, rng, want=answers)
     t0 = time.perf_counter()
     stopped = "budget"
 
@@ -323,7 +339,8 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
     if stopped != "interrupted":
         tell()
     return SceneSearchResult(best=S.best.r, rollouts=S.rollouts, stopped=stopped,
-                             wall_time=time.perf_counter() - t0, signatures=len(S.seen))
+                             wall_time=time.perf_counter() - t0, signatures=len(S.seen),
+                             answers=tuple(S.answers.values()))
 
 
 def noisy_probability(sim: SceneSim, x: np.ndarray, *, n: int, seed: int) -> Probability:

@@ -67,6 +67,9 @@ class SceneResult:
         key: the keyframe's index (-1: none).
         probability: how often the best controls meet every fate under the fates' noise (None:
             not asked, or interrupted).
+        answers: with ``answers`` > 1: the rollouts that meet every fate, each with a contact
+            sequence of its own, the best first.
+        answer_probabilities: each answer's probability (with ``samples``).
     """
 
     fates: Fates
@@ -82,6 +85,8 @@ class SceneResult:
     nstep: int
     key: int
     probability: Probability | None = None
+    answers: tuple[SceneRollout, ...] = ()
+    answer_probabilities: tuple[Probability, ...] = ()
 
     @property
     def judgement(self) -> Judgement:
@@ -99,6 +104,17 @@ def _controls(fates: Fates, x: np.ndarray) -> dict:
         v = x[sl]
         out[c.body] = {part: [float(a) for a in v[3 * k:3 * k + 3]] for k, (part, _) in enumerate(c.parts())}
     return out
+
+
+def _probability(p: Probability, f: Fates, seed: int) -> dict:
+    return {"k": p.k, "n": p.n, "p": p.p, "lo": p.lo, "hi": p.hi, "noise": [float(a) for a in f.noise()], "seed": seed}
+
+
+def _answer(r: SceneRollout, f: Fates, p: Probability | None, seed: int) -> dict:
+    return {"sequence": list(r.sequence), "controls": _controls(f, r.x), "x": [float(a) for a in r.x],
+            "qpos0": [float(a) for a in r.qpos0], "qvel0": [float(a) for a in r.qvel0],
+            "final": {"qpos": [float(a) for a in r.qpos], "qvel": [float(a) for a in r.qvel]},
+            **({} if p is None else {"probability": _probability(p, f, seed)})}
 
 
 def solution_dict(res: SceneResult) -> dict:
@@ -131,9 +147,10 @@ def solution_dict(res: SceneResult) -> dict:
         "search": {"rollouts": res.rollouts, "stopped": res.stopped, "max_rollouts": res.max_rollouts,
                    "wall_time_s": round(res.wall_time, 2), "signatures": res.signatures},
         "versions": {"nbst": __version__, "mujoco": mujoco.__version__},
-        **({} if res.probability is None else {"probability": {
-            "k": res.probability.k, "n": res.probability.n, "p": res.probability.p, "lo": res.probability.lo,
-            "hi": res.probability.hi, "noise": [float(a) for a in f.noise()], "seed": res.seed}}),
+        **({} if res.probability is None else {"probability": _probability(res.probability, f, res.seed)}),
+        **({} if not res.answers else {"answers": [
+            _answer(a, f, res.answer_probabilities[k] if k < len(res.answer_probabilities) else None, res.seed)
+            for k, a in enumerate(res.answers)]}),
     }
 
 

@@ -17,10 +17,12 @@ from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_quiet, add_seed
 from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_export, cmd_replay, cmd_solve
 
-__all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES"]
+__all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES", "ANSWERS"]
 
 #: --max-rollouts' domain.
 ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
+#: --answers' domain.
+ANSWERS = Bounded("answers", 1, 100, integer=True)
 #: --samples' domain.
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
 
@@ -84,6 +86,11 @@ def register(sub) -> None:
                    help=with_limits("also estimate how often the solution written meets every fate under the "
                                     "fates' noise (\"noise\", or the defaults of docs/scene.md) from N noisy "
                                     "rollouts, with its 95 %% Wilson interval (default: none)", SAMPLES))
+    v.add_argument("--answers", type=ANSWERS, default=1, metavar="K",
+                   help=with_limits("go on after every fate is met until K solutions meet them, each with a "
+                                    "contact sequence of its own (which body touches what, in what order): the "
+                                    "animator's choice, after Chenney & Forsyth; written under \"answers\", with "
+                                    "their probabilities when --samples is given (default 1)", ANSWERS))
     add_quiet(v, "no progress bar and no summary line")
     v.set_defaults(func=cmd_solve)
 
