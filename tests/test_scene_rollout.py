@@ -344,3 +344,18 @@ def test_answers_have_contact_sequences_of_their_own_and_each_replays(toss, tmp_
     d = solution_dict(res)
     assert [x["sequence"] for x in d["answers"]] == [list(s) for s in sequences]
     assert d["answers"][0]["probability"]["n"] == 4
+
+
+def test_replay_ladder_rolls_the_same_state_out_at_h_2_and_h_4(toss, tmp_path, capsys):
+    from nbst.scene.solution import ladder_solution
+
+    sol = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(toss), "-o", str(sol), "--seed", "7", "--max-rollouts", "600", "-q"]) == 0
+    lad = ladder_solution(sol)
+    assert lad.timesteps == [0.01, 0.005, 0.0025] and lad.outcomes[0] is True
+    assert [len(r.qpos0) for r in lad.results] == [14, 14, 14]
+    assert all(r.qpos0.tobytes() == lad.results[0].qpos0.tobytes() for r in lad.results)  # one initial state
+    rc = main(["scene", "replay", str(sol), "--ladder", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert out["identical"] and [r["met"] for r in out["ladder"]["rungs"]] == lad.outcomes
+    assert rc == (0 if lad.holds else 1)

@@ -8,7 +8,8 @@ and the versions of nbst and MuJoCo.
 
 :func:`replay_solution` rolls ``qpos0``/``qvel0`` out with the plain ``mj_step`` loop of
 docs/scene.md (``nbst.scene.rollout.replay``) and compares the final state with the file's, bit for
-bit; it also judges the fates again. :func:`export_scene` writes the user's MJCF with one more
+bit; it also judges the fates again. :func:`ladder_solution` rolls the same initial state out at
+h/2 and h/4: does the motion still meet its fates when the integrator is finer? :func:`export_scene` writes the user's MJCF with one more
 keyframe, holding the found initial state at full precision: loaded in ``python -m mujoco.viewer``
 and reset to that key, it plays the same motion (checked bit for bit before the file is kept).
 """
@@ -27,6 +28,7 @@ import numpy as np
 from nbst._version import __version__
 from nbst.errors import InputError
 from nbst.files import read_regular
+from nbst.models.mjsearch.ladder import Ladder, climb
 from nbst.models.mjsearch.probability import Probability
 from nbst.scene.fates import Fates
 from nbst.scene.scenefile import load_fates
@@ -34,7 +36,8 @@ from nbst.scene.judge import Judgement, signature_text
 from nbst.scene.rollout import SceneRollout, SceneSim, quiet_mujoco_warnings, replay
 
 __all__ = ["SOLUTION_FORMAT", "SOLUTION_VERSION", "EXPORT_KEY", "SceneSolutionError", "SceneResult", "SceneReplay",
-           "solution_dict", "read_solution", "replay_solution", "file_sha256", "export_scene"]
+           "solution_dict", "read_solution", "replay_solution", "ladder_solution", "file_sha256",
+           "export_scene"]
 
 #: The name of the keyframe :func:`export_scene` adds (``nbst_1``, ... if the scene has one by that name).
 EXPORT_KEY = "nbst"
@@ -245,6 +248,39 @@ def replay_solution(path: str | os.PathLike) -> SceneReplay:
             and judged.qpos0.tobytes() == q0.tobytes() and judged.qvel0.tobytes() == v0.tobytes())
     changed = doc.get("scene_sha256") not in (None, file_sha256(fates.scene))
     return SceneReplay(same=same, judgement=judged.judgement, qpos=q, qvel=v, scene_changed=changed)
+
+
+def ladder_solution(path: str | os.PathLike, *, divisors: tuple[int, ...] = (1, 2, 4)) -> Ladder:
+    """Does the solution still meet every fate at a finer timestep? The same initial state rolled
+    out for the same duration at h / k for each k of ``divisors`` (the rollout room's ladder).
+
+    Args:
+        path: the solution file.
+        divisors: the rungs, h / k each (h: the solution's timestep).
+
+    Returns:
+        the ``nbst.models.mjsearch.ladder.Ladder``: per rung, whether every fate is met; ``holds``
+        when all are; ``results`` the rollouts (their judgements say what happened).
+
+    Raises:
+        SceneSolutionError: the solution is refused.
+        FatesError: its fates file or scene is refused (or a rung's steps pass the cap).
+    """
+    from nbst.scene.scenefile import check_against_model
+
+    doc = read_solution(path)
+    fates, model = load_fates(doc.get("fates_file") or doc["fates"], scene=doc["scene"])
+    h = float(doc["timestep"])
+    x = _floats(doc, "x", fates.dim, str(path))
+
+    def run(step: float) -> SceneRollout:
+        model.opt.timestep = step
+        check_against_model(fates, model)  # the step cap, at this rung
+        with quiet_mujoco_warnings(), SceneSim(fates, model) as sim:
+            return sim.rollout(x)
+
+    return climb(run, [h / k for k in divisors], outcome=lambda r: bool(r.judgement.met and not r.warnings),
+                 wanted=True)
 
 
 def _key_text(values: np.ndarray) -> str:

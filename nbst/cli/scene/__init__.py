@@ -97,9 +97,13 @@ def register(sub) -> None:
     r = sc.add_parser("replay", help="replay a solution with a plain mj_step loop and check it bit for bit",
                       description="Replay SOL.json from its initial state with the plain mj_step loop of "
                                   "docs/scene.md, compare the final state with the file's bit for bit, and judge "
-                                  "the fates again. Exit 0: reproduced; 1: it differs.")
+                                  "the fates again. Exit 0: reproduced (and, with --ladder, met at h/2 and h/4 too); 1: it differs "
+                                  "(or the ladder does not hold).")
     r.add_argument("solution", metavar="SOL.json", help="a solution file written by `nbst scene solve`")
     r.add_argument("--json", action="store_true", help="print the result as JSON")
+    r.add_argument("--ladder", action="store_true",
+                   help="also roll the same initial state out at h/2 and h/4 and say whether every fate is still "
+                        "met (exit 1 if not)")
     r.set_defaults(func=cmd_replay)
 
     x = sc.add_parser("export", help="write the scene with a keyframe holding the solution's initial state",

@@ -122,21 +122,33 @@ def cmd_solve(args) -> int:
 
 
 def cmd_replay(args) -> int:
-    from nbst.scene.solution import replay_solution
+    from nbst.scene.solution import ladder_solution, replay_solution
 
     r = replay_solution(args.solution)
     d = r.judgement.to_dict()
+    lad = ladder_solution(args.solution) if args.ladder else None
+    ok = r.same and (lad is None or lad.holds)
     if args.json:
-        print_json({"identical": r.same, "scene_changed": r.scene_changed, "met": d["met"],
-                    "signature": d["signature"], "bodies": d["bodies"]})
-        return 0 if r.same else 1
+        out = {"identical": r.same, "scene_changed": r.scene_changed, "met": d["met"], "signature": d["signature"],
+               "bodies": d["bodies"]}
+        if lad is not None:
+            out["ladder"] = {"holds": lad.holds, "rungs": [{"timestep": h, "met": o, "signature":
+                                                            res.judgement.to_dict()["signature"]}
+                                                           for h, o, res in zip(lad.timesteps, lad.outcomes,
+                                                                                lad.results)]}
+        print_json(out)
+        return 0 if ok else 1
     changed = "; the scene file changed since it was solved" if r.scene_changed else ""
     print(f"{args.solution}: {'reproduced bit for bit' if r.same else 'DIFFERS'} (plain mj_step loop); "
           f"{'met' if d['met'] else 'not met'}, signature {d['signature']}{changed}")
     for b in r.judgement.bodies:
         for v in b.fates:
             print(f"  {b.body} {v.fate}: {'met' if v.met else 'NOT met'} ({v.happened})")
-    return 0 if r.same else 1
+    if lad is not None:
+        rungs = ", ".join(f"{h * 1e3:g} ms {'met' if o else 'NOT met'} ({res.judgement.to_dict()['signature']})"
+                          for h, o, res in zip(lad.timesteps, lad.outcomes, lad.results))
+        print(f"  ladder: {rungs}; {'holds' if lad.holds else 'does not hold'}")
+    return 0 if ok else 1
 
 
 def cmd_export(args) -> int:
