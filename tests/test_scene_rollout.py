@@ -213,11 +213,11 @@ def test_cli_solve_replay_and_their_exits(toss, impossible, tmp_path, capsys, mo
     # interrupted: the best so far written, exit 130
     original = scene_api.signature_search
 
-    def interrupted(sim, *, rng, max_rollouts, answers=1, callback=None):
+    def interrupted(sim, *, rng, max_rollouts, callback=None, **more):
         def stop(p):
             if p.rollouts >= 16:
                 raise KeyboardInterrupt
-        return original(sim, rng=rng, max_rollouts=max_rollouts, answers=answers, callback=stop)
+        return original(sim, rng=rng, max_rollouts=max_rollouts, callback=stop, **more)
 
     monkeypatch.setattr(scene_api, "signature_search", interrupted)
     out.unlink()
@@ -359,3 +359,16 @@ def test_replay_ladder_rolls_the_same_state_out_at_h_2_and_h_4(toss, tmp_path, c
     out = json.loads(capsys.readouterr().out)
     assert out["identical"] and [r["met"] for r in out["ladder"]["rungs"]] == lad.outcomes
     assert rc == (0 if lad.holds else 1)
+
+
+def test_solve_with_the_ladder_keeps_only_answers_met_at_h_2_and_h_4(toss, tmp_path):
+    """ladder=True: the answer also meets every fate at h/2 and h/4 (replayed there, it does);
+    without it the same seed's search is unchanged."""
+    from nbst.scene.solution import ladder_solution
+
+    res = solve(None, toss, seed=7, max_rollouts=1500, ladder=True)
+    assert res.met and res.ladder_held is True and res.ladder == (0.01, 0.005, 0.0025)
+    p = tmp_path / "sol.json"
+    p.write_text(json.dumps(solution_dict(res)))
+    assert json.loads(p.read_text())["ladder"]["holds"] is True
+    assert ladder_solution(p).holds

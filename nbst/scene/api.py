@@ -7,6 +7,7 @@ probability that the answer holds under the fates' noise (``nbst.scene.search.no
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import os
 from pathlib import Path
@@ -20,11 +21,15 @@ from nbst.scene.search import DEFAULT_MAX_ROLLOUTS, SceneProgress, noisy_probabi
 from nbst.scene.solution import SceneResult
 from nbst.seeds import check_random_state, resolve_seed
 
-__all__ = ["solve"]
+__all__ = ["solve", "LADDER"]
+
+#: The finer steps of ``ladder=True``: h/2 and h/4.
+LADDER = (2, 4)
 
 
 def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, seed: int | None = None,
           max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int = 1, samples: int = 0, answers: int = 1,
+          ladder: bool = False,
           callback: Callable[[SceneProgress], None] | None = None) -> SceneResult:
     """Find initial velocities (and offsets) of a scene's free bodies that meet their fates.
 
@@ -40,6 +45,8 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
             answer's too.
         answers: look for up to this many solutions, each with a contact sequence of its own
             (>= 1; see ``nbst.scene.search.signature_search``); the first is the best.
+        ladder: accept only answers that also meet every fate at h/2 and h/4 (the same initial
+            state rolled out at the finer steps; those rollouts count in the budget).
         callback: called with a :class:`~nbst.scene.search.SceneProgress` after each batch.
 
     Returns:
@@ -67,9 +74,16 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     p = None
     ps: list = []
     stopped = "budget"
+    finer = []
+    if ladder:
+        for k in LADDER:
+            mk = copy.copy(model)
+            mk.opt.timestep = model.opt.timestep / k
+            check_against_model(f, mk)  # the step cap, at this rung
+            finer.append(SceneSim(f, mk, sequences=answers > 1))
     with quiet_mujoco_warnings(), SceneSim(f, model, jobs=jobs, sequences=answers > 1) as sim:
         r = signature_search(sim, rng=check_random_state(s), max_rollouts=max_rollouts, answers=answers,
-                             callback=callback)
+                             ladder=tuple(finer), callback=callback)
         stopped = r.stopped
         if samples and stopped != "interrupted":
             try:
@@ -83,4 +97,6 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     return SceneResult(fates=f, model=model, best=r.best, met=r.best.judgement.met and not r.best.warnings,
                        rollouts=r.rollouts, stopped=stopped, seed=s, max_rollouts=max_rollouts,
                        wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p,
-                       answers=r.answers if answers > 1 else (), answer_probabilities=tuple(ps))
+                       answers=r.answers if answers > 1 else (), answer_probabilities=tuple(ps),
+                       ladder=tuple(float(model.opt.timestep) / k for k in (1, *LADDER)) if ladder else (),
+                       ladder_held=r.best_held)

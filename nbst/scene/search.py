@@ -18,6 +18,9 @@ with fates: set when all of that body's fates are met (``nbst.scene.judge``). As
   best of its signature and the child is not better (elitism); otherwise it joins, the worst of its
   signature leaving past :data:`PER_SIGNATURE`; past :data:`POPULATION` members the lowest-order
   signatures subsumed by higher-order ones are culled (not the best's);
+* with a ladder (finer timesteps, h/2 and h/4), a trial that meets every fate is rolled out there
+  too and counts only if it meets them there as well (each miss adds :data:`LADDER_PENALTY` to
+  its cost, so a trial that holds is better);
 * the search stops when every bit is set (all fates met), or at the rollout budget. Asked for
   several answers, it goes on until that many rollouts meet every fate, each with a contact
   sequence of its own (Chenney & Forsyth 2000: the animator chooses).
@@ -43,7 +46,7 @@ import numpy as np
 from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
 from nbst.scene.rollout import SceneRollout, SceneSim
 
-__all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "SceneProgress",
+__all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "LADDER_PENALTY", "SceneProgress",
            "SceneSearchResult", "signature_search", "noisy_probability"]
 
 #: The rollout budget when none is given (the CLI's --max-rollouts default too).
@@ -54,6 +57,8 @@ BATCH = 8
 POPULATION = 60
 #: Members kept per signature (the paper: 10).
 PER_SIGNATURE = 10
+#: The cost added to a trial that meets every fate for each finer step (the ladder) where it does not.
+LADDER_PENALTY = 0.01
 #: The initialisation ends when every bit is set in this many members (the paper: 5) ...
 INIT_PER_BIT = 3
 #: ... or after this many rollouts (and at most a tenth of the budget).
@@ -84,6 +89,8 @@ class SceneSearchResult:
         signatures: distinct signatures seen.
         answers: rollouts that meet every fate, each with a contact sequence of its own, in the
             order found (with ``answers`` > 1; else the best alone when it meets them).
+        best_held: with a ladder, whether the best also meets every fate at the finer steps (None:
+            no ladder, or the best does not meet them).
     """
 
     best: SceneRollout
@@ -92,22 +99,25 @@ class SceneSearchResult:
     wall_time: float
     signatures: int
     answers: tuple[SceneRollout, ...] = ()
+    best_held: bool | None = None
 
 
 class _Member:
-    __slots__ = ("u", "r", "sig")
+    __slots__ = ("u", "r", "sig", "cost", "held")
 
     def __init__(self, u: np.ndarray, r: SceneRollout):
-        self.u, self.r, self.sig = u, r, r.signature
+        self.u, self.r, self.sig, self.cost = u, r, r.signature, r.cost
+        #: with a ladder: every fate also met at each finer step (None: not looked at)
+        self.held: bool | None = None
 
 
-def _better(a: SceneRollout, b: SceneRollout) -> bool:
+def _better(a: _Member, b: _Member) -> bool:
     """a is better than b: more bits set, then lower cost."""
-    return (sum(a.signature), -a.cost) > (sum(b.signature), -b.cost)
+    return (sum(a.sig), -a.cost) > (sum(b.sig), -b.cost)
 
 
 class _Search:
-    def __init__(self, sim: SceneSim, rng: np.random.Generator, want: int = 1):
+    def __init__(self, sim: SceneSim, rng: np.random.Generator, want: int = 1, ladder: tuple[SceneSim, ...] = ()):
         f = sim.fates
         self.sim, self.rng, self.fates = sim, rng, f
         self.lo, self.hi = f.bounds()
@@ -120,6 +130,7 @@ class _Search:
         self.best: _Member | None = None
         self.seen: set[tuple[bool, ...]] = set()
         self.want = want
+        self.ladder = ladder
         self.answers: dict[tuple[str, ...], SceneRollout] = {}
         self.rollouts = 0
         # the origin of each controlled body at the start (for aiming), gravity
@@ -157,7 +168,7 @@ class _Search:
             if b is not None:
                 donor = min(self.pop, key=lambda m: m.r.judgement.bodies[b].cost)
             else:
-                donor = min(self.pop, key=lambda m: m.r.cost)
+                donor = min(self.pop, key=lambda m: m.cost)
             sl = self.blocks[i]
             u[sl] = donor.u[sl]
             self.creep(u, i, 0.04)
@@ -201,7 +212,7 @@ class _Search:
         s = sigs[int(self.rng.integers(len(sigs)))]
         mem = [m for m in among if m.sig == s]
         a, b = (mem[int(k)] for k in self.rng.integers(len(mem), size=2))
-        return a if a.r.cost <= b.r.cost else b  # a tournament of two inside the signature
+        return a if a.cost <= b.cost else b  # a tournament of two inside the signature
 
     def block_to_change(self, parent: _Member) -> int:
         unmet = [i for i, b in enumerate(self.bit) if b is None or not parent.sig[b]]
@@ -232,17 +243,21 @@ class _Search:
     # -- population -------------------------------------------------------------------
     def note(self, m: _Member) -> None:
         self.seen.add(m.sig)
-        if (m.r.judgement.met and not m.r.warnings and m.r.sequence not in self.answers
-                and len(self.answers) < self.want):
+        met = m.r.judgement.met and not m.r.warnings
+        if met and self.ladder:  # the finer steps: a miss there costs, and keeps the search going
+            fails = sum(not (r.judgement.met and not r.warnings) for r in (s.rollout(m.r.x) for s in self.ladder))
+            self.rollouts += len(self.ladder)
+            m.held, m.cost = fails == 0, m.cost + LADDER_PENALTY * fails
+        if met and m.held is not False and m.r.sequence not in self.answers and len(self.answers) < self.want:
             self.answers[m.r.sequence] = m.r
-        if self.best is None or _better(m.r, self.best.r):
+        if self.best is None or _better(m, self.best):
             self.best = m
 
     def add(self, m: _Member) -> None:
         self.pop.append(m)
         same = [x for x in self.pop if x.sig == m.sig]
         if len(same) > PER_SIGNATURE:
-            worst = max((x for x in same if x is not self.best), key=lambda x: x.r.cost, default=None)
+            worst = max((x for x in same if x is not self.best), key=lambda x: x.cost, default=None)
             if worst is not None:
                 self.pop.remove(worst)
         if len(self.pop) > POPULATION:
@@ -258,7 +273,7 @@ class _Search:
             gone = {s for s in subsumed if sum(s) == low}
             self.pop = [x for x in self.pop if x.sig not in gone]
         while len(self.pop) > POPULATION:
-            worst = max((x for x in self.pop if x is not self.best), key=lambda x: (-sum(x.sig), x.r.cost))
+            worst = max((x for x in self.pop if x is not self.best), key=lambda x: (-sum(x.sig), x.cost))
             self.pop.remove(worst)
 
     def insert(self, m: _Member, parents: tuple[_Member, ...]) -> None:
@@ -266,8 +281,8 @@ class _Search:
         same = [p for p in parents if p.sig == m.sig and p in self.pop]
         if same:
             p = same[int(self.rng.integers(len(same)))] if len(same) > 1 else same[0]
-            best_of_sig = min((x for x in self.pop if x.sig == p.sig), key=lambda x: x.r.cost)
-            if not (p is best_of_sig and m.r.cost >= p.r.cost):
+            best_of_sig = min((x for x in self.pop if x.sig == p.sig), key=lambda x: x.cost)
+            if not (p is best_of_sig and m.cost >= p.cost):
                 self.pop[self.pop.index(p)] = m
                 return
         self.add(m)
@@ -275,11 +290,12 @@ class _Search:
     def done(self) -> bool:
         if self.want > 1:
             return len(self.answers) >= self.want
-        return self.best is not None and self.best.r.judgement.met and not self.best.r.warnings
+        return (self.best is not None and self.best.r.judgement.met and not self.best.r.warnings
+                and self.best.held is not False)
 
 
 def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: int = DEFAULT_MAX_ROLLOUTS,
-                     answers: int = 1,
+                     answers: int = 1, ladder: tuple[SceneSim, ...] = (),
                      callback: Callable[[SceneProgress], None] | None = None) -> SceneSearchResult:
     """Search the controls with the paper's signature search (module docstring).
 
@@ -290,18 +306,21 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         answers: go on after every fate is met until this many rollouts meet them, each with a
             contact sequence of its own (the animator's choice, after Chenney & Forsyth 2000; the
             sim must record sequences, ``SceneSim(sequences=True)``), or the budget is spent.
+        ladder: sims of the same scene at finer timesteps (h/2, h/4): a trial that meets every fate
+            is rolled out on each too (those rollouts count in the budget), and is an answer only if
+            it meets them there as well; a miss adds :data:`LADDER_PENALTY` to its cost per rung.
         callback: called with a :class:`SceneProgress` after each batch.
 
     Returns:
         the :class:`SceneSearchResult` (the best rollout, also when interrupted).
     """
-    S = _Search(sim, rng, want=answers)
+    S = _Search(sim, rng, want=answers, ladder=ladder)
     t0 = time.perf_counter()
     stopped = "budget"
 
     def tell() -> None:
         if callback is not None and S.best is not None:
-            callback(SceneProgress(S.rollouts, S.best.r.cost, "".join("1" if b else "0" for b in S.best.sig),
+            callback(SceneProgress(S.rollouts, S.best.cost, "".join("1" if b else "0" for b in S.best.sig),
                                    len(S.pop), len(S.seen)))
 
     try:
@@ -340,7 +359,7 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         tell()
     return SceneSearchResult(best=S.best.r, rollouts=S.rollouts, stopped=stopped,
                              wall_time=time.perf_counter() - t0, signatures=len(S.seen),
-                             answers=tuple(S.answers.values()))
+                             answers=tuple(S.answers.values()), best_held=S.best.held)
 
 
 def noisy_probability(sim: SceneSim, x: np.ndarray, *, n: int, seed: int) -> Probability:

@@ -73,6 +73,8 @@ class SceneResult:
         answers: with ``answers`` > 1: the rollouts that meet every fate, each with a contact
             sequence of its own, the best first.
         answer_probabilities: each answer's probability (with ``samples``).
+        ladder: with ``ladder``: the timesteps asked, h first.
+        ladder_held: whether the best meets every fate at each of them (None: not asked or not met).
     """
 
     fates: Fates
@@ -90,6 +92,8 @@ class SceneResult:
     probability: Probability | None = None
     answers: tuple[SceneRollout, ...] = ()
     answer_probabilities: tuple[Probability, ...] = ()
+    ladder: tuple[float, ...] = ()
+    ladder_held: bool | None = None
 
     @property
     def judgement(self) -> Judgement:
@@ -151,6 +155,7 @@ def solution_dict(res: SceneResult) -> dict:
                    "wall_time_s": round(res.wall_time, 2), "signatures": res.signatures},
         "versions": {"nbst": __version__, "mujoco": mujoco.__version__},
         **({} if res.probability is None else {"probability": _probability(res.probability, f, res.seed)}),
+        **({} if not res.ladder else {"ladder": {"timesteps": list(res.ladder), "holds": bool(res.ladder_held)}}),
         **({} if not res.answers else {"answers": [
             _answer(a, f, res.answer_probabilities[k] if k < len(res.answer_probabilities) else None, res.seed)
             for k, a in enumerate(res.answers)]}),

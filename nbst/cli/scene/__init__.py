@@ -86,6 +86,9 @@ def register(sub) -> None:
                    help=with_limits("also estimate how often the solution written meets every fate under the "
                                     "fates' noise (\"noise\", or the defaults of docs/scene.md) from N noisy "
                                     "rollouts, with its 95 %% Wilson interval (default: none)", SAMPLES))
+    v.add_argument("--ladder", action="store_true",
+                   help="accept only a motion that also meets every fate at h/2 and h/4 (the same initial state "
+                        "rolled out at the finer steps; those rollouts count in --max-rollouts)")
     v.add_argument("--answers", type=ANSWERS, default=1, metavar="K",
                    help=with_limits("go on after every fate is met until K solutions meet them, each with a "
                                     "contact sequence of its own (which body touches what, in what order): the "

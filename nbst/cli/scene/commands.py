@@ -100,7 +100,7 @@ def cmd_solve(args) -> int:
 
     with sigterm_as_interrupt():
         res = solve(args.scene, fates, seed=seed, max_rollouts=args.max_rollouts, jobs=args.jobs or default_jobs(),
-                    samples=args.samples or 0, answers=args.answers, callback=progress)
+                    samples=args.samples or 0, answers=args.answers, ladder=args.ladder, callback=progress)
     if bar:
         bar[0].close(n=res.rollouts)
     write_json_atomic(args.output, solution_dict(res))
@@ -111,6 +111,8 @@ def cmd_solve(args) -> int:
         warn = f"; MuJoCo warned: {', '.join(b.warnings)}" if b.warnings else ""
         if res.probability is not None:
             warn += f"; P {res.probability.text()} under the fates' noise"
+        if args.ladder:
+            warn += "; kept at h/2 and h/4" if res.ladder_held else "; not kept at h/2 and h/4"
         if args.answers > 1:
             warn += f"; {len(res.answers)} of {args.answers} answers with contact sequences of their own"
         print(f"scene {name}: {met}, signature {res.judgement.to_dict()['signature']} after "
