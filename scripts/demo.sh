@@ -15,3 +15,5 @@ set -x
 "$NBST" validate "$PROBLEM" "$OUT/$PROBLEM.json" --out-dir "$OUT/$PROBLEM-validation"
 "$NBST" render "$PROBLEM" "$OUT/$PROBLEM.json" -o "$OUT/$PROBLEM.mp4" --trails --labels
 "$NBST" plot trajectories "$PROBLEM" "$OUT/$PROBLEM.json" -o "$OUT/$PROBLEM-paths.png"
+{ set +x; } 2>/dev/null
+echo "demo: done in ${SECONDS} s: $OUT/$PROBLEM.json, $OUT/$PROBLEM-validation/, $OUT/$PROBLEM.mp4, $OUT/$PROBLEM-paths.png"

@@ -5,7 +5,8 @@
 #  2. a project virtualenv, .venv/ in the checkout, made with the first python3 on PATH
 #     (>= 3.11; an active virtualenv's python is fine too);
 #  3. nbst and its test tools into .venv, at the exact versions of requirements.lock;
-#  4. numba's kernels compiled once into its cache (later runs start at once).
+#  4. numba's kernels compiled once into its cache, one process per core (later runs start at
+#     once); it says each group's time as it finishes.
 # Everything else (scripts/demo.sh, the tests) runs from .venv/bin. Run it again any
 # time: it redoes only what is missing or out of date.
 set -euo pipefail
@@ -60,4 +61,4 @@ fi
 
 # --- 4. numba kernels -----------------------------------------------------------
 "$VENV/bin/python" -m nbst.warmup
-say "done: $("$VENV/bin/nbst" --version); run tools as .venv/bin/nbst, tests as .venv/bin/python -m pytest -q -n auto -m \"not slow\""
+say "done in ${SECONDS} s: $("$VENV/bin/nbst" --version); run tools as .venv/bin/nbst, tests as .venv/bin/python -m pytest -q -n auto -m \"not slow\""

@@ -1,5 +1,6 @@
 """A newcomer's first hour: the README's commands, the lock file, the one-time compile
 message and the solve command's defaults."""
+import itertools
 import json
 import re
 import subprocess
@@ -155,3 +156,104 @@ def test_the_commands_compile_nothing_after_the_warm_up(tmp_path):
     assert r.returncode == 0, r.stderr[-2000:]
     new = json.loads(r.stdout.rsplit("NEW ", 1)[1])
     assert new == [], new
+
+
+def test_both_paths_of_the_warm_up_run_every_group(monkeypatch):
+    """One list, two paths: on one process the warm-up runs FIRST then every group of GROUPS here,
+    in order; on more, it runs FIRST here, then hands every group of GROUPS to the workers and runs
+    here any that a worker failed (issue 45: the warm-up compiles in parallel across cores)."""
+    from nbst import warmup
+
+    ran = []
+    for g in (warmup.FIRST, *warmup.GROUPS):
+        monkeypatch.setattr(warmup, g.function, lambda f=g.function: ran.append(f))
+    names = [g.function for g in warmup.GROUPS]
+    lines = []
+    warmup.warm_all(lines.append)
+    assert ran == [warmup.FIRST.function, *names]
+    assert [s.split(" ready (")[0] for s in lines] == [warmup.FIRST.name, *(g.name for g in warmup.GROUPS)]
+
+    handed = []
+
+    def workers(groups, n, done):
+        handed.extend(groups)
+        for g in groups[1:]:
+            done(g, 1.0)
+        return list(groups[:1])  # the first one "failed" in its worker
+
+    monkeypatch.setattr(warmup, "_in_workers", workers)
+    ran.clear()
+    lines.clear()
+    warmup.warm_all(lines.append, jobs=8)
+    assert handed == list(warmup.GROUPS)
+    assert ran == [warmup.FIRST.function, names[0]]  # the failed group, here
+    everyone = [warmup.FIRST.name, *(g.name for g in warmup.GROUPS)]
+    assert sorted(s.split(" ready (")[0] for s in lines) == sorted(everyone)
+
+
+def test_the_groups_are_distinct_functions_of_the_warm_up():
+    from nbst import warmup
+
+    groups = (warmup.FIRST, *warmup.GROUPS)
+    assert len({g.function for g in groups}) == len(groups) and len({g.name for g in groups}) == len(groups)
+    assert all(callable(getattr(warmup, g.function)) and g.function in warmup.__all__ for g in groups)
+
+
+def test_the_workers_run_groups_in_fresh_processes():
+    """The pool itself (spawned processes that import nbst.warmup and look the group up by name):
+    a group that runs is reported with its seconds, one that fails comes back to be run here."""
+    from nbst import warmup
+
+    done = []
+    groups = [warmup.KernelGroup("message", "compile_message"), warmup.KernelGroup("none", "no_such_function")]
+    failed = warmup._in_workers(groups, 2, lambda g, secs: done.append((g.name, secs)))
+    assert [name for name, _ in done] == ["message"] and 0.0 <= done[0][1] < 60.0
+    assert [g.name for g in failed] == ["none"]
+
+
+_GROUP_ALONE = "import sys; from nbst import warmup; getattr(warmup, sys.argv[1])()"
+
+
+def _index(cache: Path) -> dict[str, set[str]]:
+    """numba's index files under ``cache``: each kernel's file name and its compiled signatures."""
+    import pickle
+
+    out = {}
+    for f in cache.rglob("*.nbi"):
+        with f.open("rb") as fh:
+            pickle.load(fh)  # numba's version
+            _stamp, overloads = pickle.loads(fh.read())
+        out[f.name] = {repr(key[0]) for key in overloads}
+    return out
+
+
+@pytest.mark.slow
+def test_the_groups_compile_no_kernel_in_common(tmp_path):
+    """Each group run alone on a cold cache holding FIRST's kernels: no two groups add signatures to
+    one kernel's index (numba's index of a kernel is one file, read, extended and written back: two
+    processes adding to it at once lose one's addition, and may give two signatures one data file)."""
+    import os
+    import shutil
+    from concurrent.futures import ThreadPoolExecutor
+
+    from nbst import warmup
+
+    def run(function, cache):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+        r = subprocess.run([sys.executable, "-c", _GROUP_ALONE, function], capture_output=True, text=True,
+                           timeout=1500, env=env)
+        assert r.returncode == 0, r.stderr[-2000:]
+
+    first = tmp_path / "first"
+    run(warmup.FIRST.function, first)
+    base = _index(first)
+    for g in warmup.GROUPS:
+        shutil.copytree(first, tmp_path / g.function)
+    with ThreadPoolExecutor(2) as pool:
+        list(pool.map(lambda g: run(g.function, tmp_path / g.function), warmup.GROUPS))
+    added = {}
+    for g in warmup.GROUPS:
+        added[g.name] = {k for k, sigs in _index(tmp_path / g.function).items() if sigs - base.get(k, set())}
+        assert added[g.name], g.name  # each group compiles something
+    for a, b in itertools.combinations(added, 2):
+        assert not added[a] & added[b], (a, b, sorted(added[a] & added[b]))
