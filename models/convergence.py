@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from nbst.models.mjrun import run_final, run_mujoco, steps_needed
 from nbst.problem import Problem
 
 __all__ = ["CONVERGENCE_LADDER", "FIT_RULE", "FIT_MIN_ERROR", "staged", "entry", "convergence_study", "fit_order"]
@@ -70,8 +71,6 @@ def convergence_study(problem: Problem, v, ex, *, timestep: float, unit: float, 
     aligned / fixed : a MujocoRun already made (aligned at h / fixed at h) to reuse
     An entry whose steps exceed max_steps is kept with ``skipped`` saying so.
     """
-    from nbst.models.mjrun import run_final, run_mujoco, steps_needed
-
     out = []
     for div in CONVERGENCE_LADDER:
         h = timestep / div

@@ -23,6 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
+from nbst import palette
+from nbst.models.scene import DEFAULT_UNIT, PUCK_HALF_HEIGHT_RADII, build_model, scene_xml
+from nbst.outputs import write_bytes_atomic, write_text_atomic
+from nbst.problem import builtin_names, display_name, load_problem
+from nbst.solution import load_solution, make_solution, save_solution, write_json_atomic
+
 __all__ = ["GALLERY_DIR", "FILES", "PREVIEW_SIZE", "PREVIEW_AMBIENT", "PREVIEW_DIFFUSE", "PREVIEW_NUMBER_PX",
            "PREVIEW_CAPTION_PX", "PREVIEW_INK", "PREVIEW_TARGET_INK", "PREVIEW_MIN_PUCK_PX", "preview_png",
            "build_entry", "main"]
@@ -69,9 +75,6 @@ def _annotate(rgb: np.ndarray, problem, pucks_px, pucks_r_px, targets_px) -> np.
     in green) and a caption band below it (what the picture shows, what the marks mean)."""
     from matplotlib import font_manager
     from PIL import Image, ImageDraw, ImageFont
-
-    from nbst import palette
-    from nbst.problem import display_name
 
     bold = ImageFont.truetype(font_manager.findfont(font_manager.FontProperties(family="DejaVu Sans",
                                                                                 weight="bold")), PREVIEW_NUMBER_PX)
@@ -125,8 +128,6 @@ def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
     import mujoco
     from matplotlib import image as mpimg
 
-    from nbst.models.scene import DEFAULT_UNIT, PUCK_HALF_HEIGHT_RADII, build_model
-
     model = build_model(problem, velocities)
     model.vis.headlight.ambient[:] = PREVIEW_AMBIENT
     model.vis.headlight.diffuse[:] = 0.0
@@ -155,7 +156,6 @@ def preview_png(problem, velocities=None, *, size: int = PREVIEW_SIZE) -> bytes:
 
 def _stored(folder: Path, problem):
     from nbst.sim import simulate
-    from nbst.solution import load_solution
     path = folder / "solution.json"
     if not path.is_file():
         return None, np.inf
@@ -165,12 +165,7 @@ def _stored(folder: Path, problem):
 
 def build_entry(name: str, folder: Path, *, seed: int, max_trials: int, search: bool, log=print) -> dict:
     """Regenerate one gallery folder; returns what was done."""
-    from nbst.problem import load_problem
     from nbst.sim import simulate
-    from nbst.outputs import write_bytes_atomic, write_text_atomic
-    from nbst.solution import make_solution, save_solution, write_json_atomic
-
-    from nbst.models.scene import scene_xml
 
     problem = load_problem(name)
     folder.mkdir(parents=True, exist_ok=True)
@@ -203,7 +198,6 @@ def build_entry(name: str, folder: Path, *, seed: int, max_trials: int, search: 
 
 def main(argv=None) -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported: headless rendering
-    from nbst.problem import builtin_names
 
     ap = argparse.ArgumentParser(allow_abbrev=False, prog="python -m nbst.models.gallery",
                                  description=__doc__.split("\n\n")[0])

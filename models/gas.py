@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from nbst.errors import InputError
+from nbst.problem import problem_from_dict
 
 __all__ = ["GAS_AREA_FRACTION", "GAS_RADIUS", "GAS_SPEED", "GAS_T_FINAL", "gas_motion"]
 
@@ -31,7 +32,6 @@ def gas_motion(n: int, *, seed: int = 1, t_final: float = GAS_T_FINAL, fraction:
     (cost 0) with real collisions and wall bounces; target radius 2r. ``seed`` defaults to 1 on
     purpose: a benchmark fixture is the same motion on every run (``gas_motion(N)`` names it).
     """
-    from nbst.problem import problem_from_dict
     from nbst.sim import simulate
 
     n = int(n)

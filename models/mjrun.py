@@ -18,6 +18,7 @@ from nbst.errors import InputError
 from nbst.problem import Problem
 
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT, build_model
+from nbst.models.stepping import step_aligned
 
 __all__ = ["EVENT_DISK", "EVENT_WALL", "EVENT_DTYPE", "STEPPINGS", "MAX_STEPS", "RECORD_FLOATS", "PROGRESS_EVERY",
            "record_stride", "steps_needed", "check_steps", "MujocoRun", "run_mujoco", "run_final", "rollout"]
@@ -263,8 +264,6 @@ def _run_aligned(problem, model, data, owner, timestep, unit, t_end, max_steps, 
                  stride: int = 1) -> MujocoRun:
     """``run_mujoco`` with ``step_aligned``: a record after every accepted step and micro-step
     (every ``stride``-th of them when there are many disks, and always the last)."""
-    from nbst.models.stepping import step_aligned
-
     n = problem.n
     mass2 = np.repeat(np.asarray(problem.mass, dtype=float), 2) / (unit * unit)
     rec_t, rec_q, rec_e = [float(data.time)], [data.qpos.copy()], [0.5 * np.dot(mass2, data.qvel * data.qvel)]

@@ -34,7 +34,7 @@ import numpy as np
 
 from nbst.errors import InputError
 from nbst import palette
-from nbst.problem import Problem
+from nbst.problem import Problem, ProblemError
 
 __all__ = ["DEFAULT_TIMESTEP", "DEFAULT_UNIT", "SOLIMP", "WALL_THICKNESS_RADII", "WALL_HEIGHT_RADII",
            "PUCK_HALF_HEIGHT_RADII", "PROGRESS_DISKS", "FLOOR_RGBA", "WALL_RGBA", "CUE_RGBA", "NONCUE_RGBA",
@@ -199,7 +199,6 @@ def build_model(problem: Problem, velocities=None, *, timestep: float = DEFAULT_
 def _compile(spec, problem: Problem, unit: float):
     """``spec.compile()``; MuJoCo's refusal (e.g. bodies too small or too light in
     metres) becomes a one-line ProblemError that says which option to change."""
-    from nbst.problem import ProblemError
     try:
         return spec.compile()
     except ValueError as e:

@@ -46,7 +46,9 @@ from nbst.errors import InputError
 from nbst.problem import Problem
 
 from nbst.models.convergence import convergence_study, entry, fit_order, staged as run_stage
+from nbst.models.mjrun import MAX_STEPS, STEPPINGS, check_steps, run_final, run_mujoco, steps_needed
 from nbst.models.scene import DEFAULT_TIMESTEP, DEFAULT_UNIT
+from nbst.progress import count_text, seconds_text
 
 __all__ = ["SCHEMA_VERSION", "AUTO_FIXED_MAX_N", "AUTO_MAX_COST_RATIO", "AUTO_TRIALS_PER_IMPACT", "SENSITIVITY_MAX_N",
            "WORST_DISKS", "SUMMARY_STRING_MAX_N", "DIVERGE_TOL", "CURVE_SAMPLES", "COMPARE_CHUNK", "describe",
@@ -305,9 +307,6 @@ class Validation:
     def _run_text(self) -> str:
         """The MuJoCo run in the summary's first line: its steps of h (what its progress bar counts)
         and its seconds (the bar's clock: compiling and the rest of the validation are not in it)."""
-        from nbst.models.mjrun import steps_needed
-        from nbst.progress import count_text, seconds_text
-
         t = seconds_text(self._mujoco_seconds)
         st = self.mujoco.stats
         if self.stepping == "aligned" and st:
@@ -377,8 +376,6 @@ def choose_stepping(problem: Problem, exact, timestep: float, requested: str = "
     """(stepping, why): ``requested`` if it is "fixed" or "aligned"; for "auto", fixed up to
     :data:`AUTO_FIXED_MAX_N` disks, aligned above unless its estimated cost passes
     :data:`AUTO_MAX_COST_RATIO` x the fixed steps (``exact``: the exact motion, for its impacts)."""
-    from nbst.models.mjrun import STEPPINGS, steps_needed
-
     if requested in STEPPINGS:
         return requested, f"--stepping {requested} requested"
     if requested != "auto":
@@ -418,8 +415,6 @@ def validate(problem: Problem, velocities, *, timestep: float = DEFAULT_TIMESTEP
     import time
 
     from nbst.sim import simulate
-
-    from nbst.models.mjrun import MAX_STEPS, check_steps, run_final, run_mujoco, steps_needed
 
     if not (np.isfinite(tol) and tol > 0):
         raise InputError(f"tol must be > 0, got {tol!r}")

@@ -21,6 +21,7 @@ from nbst.domain import MAX_DISKS, bad_text, plain
 from nbst.errors import InputError
 from nbst.files import FileRefused, read_regular
 from nbst.overlap import first_overlap
+from nbst.problems import PROBLEMS
 
 __all__ = ["SCHEMA_VERSION", "ProblemError", "KernelArrays", "Problem", "builtin_names", "read_bytes_checked",
            "read_json", "parse_json", "load_problem", "problem_from_dict", "box_crossings", "display_name"]
@@ -159,14 +160,10 @@ def builtin_names() -> list[str]:
     Returns:
         list of str: the names ``load_problem`` takes besides a path.
     """
-    from nbst.problems import PROBLEMS
-
     return sorted(PROBLEMS.names())
 
 
 def _builtin_text(name: str) -> str:
-    from nbst.problems import PROBLEMS
-
     return resources.files("nbst.problems").joinpath(PROBLEMS[name]).read_text(encoding="utf-8")
 
 

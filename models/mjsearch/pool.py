@@ -19,14 +19,14 @@ from __future__ import annotations
 import os
 from typing import Callable, Sequence
 
+from nbst.outputs import die_with_parent, signals_blocked
+
 
 __all__ = ["WorkerPool"]
 
 
 def _init(parent_pid: int, initializer, initargs) -> None:
     """Worker setup: die with the parent, ignore the stop signals, then the caller's setup."""
-    from nbst.outputs import die_with_parent
-
     die_with_parent(parent_pid)
     if initializer is not None:
         initializer(*initargs)
@@ -64,8 +64,6 @@ class WorkerPool:
         result arrives (progress). An exception (or Ctrl-C) cancels the calls not started and
         propagates."""
         from concurrent.futures import as_completed
-
-        from nbst.outputs import signals_blocked
 
         pool = self._get()
         with signals_blocked():  # workers start on submit: no stop signal before they ignore it

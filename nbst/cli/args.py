@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 
+from nbst.constants import MAX_EVENTS
 from nbst.domain import parse_number
 from nbst.errors import InputError
 from nbst.problem import ProblemError
 from nbst.seeds import SEED_MAX
+from nbst.solution import dumps_strict
 
 
 __all__ = ["TRIALS_MAX", "JOBS_MAX", "RUNS_MAX", "Bounded", "int_at_least", "with_limits", "SEED", "MAX_TRIALS",
@@ -129,7 +131,6 @@ def cluster_client(args):
 
 def print_json(obj) -> None:
     """Print ``obj`` as strict JSON: NaN -> null, +/-inf -> "inf"/"-inf" (``docs/formats.md``)."""
-    from nbst.solution import dumps_strict
     sys.stdout.write(dumps_strict(obj, indent=1) + "\n")
 
 
@@ -138,7 +139,6 @@ def exact_motion(problem, solution_path, velocities):
     line, exit 2) when nbst cannot follow it to t_final: the event cap (``MAX_EVENTS``) or a jam
     of disks pinned between opposite walls. Every solution a command accepts simulates to the
     end, or is refused here, before any work that would use the motion."""
-    from nbst.constants import MAX_EVENTS
     from nbst.sim import simulate
 
     tr = simulate(problem, velocities)

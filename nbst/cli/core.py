@@ -5,6 +5,8 @@ import argparse
 import sys
 from typing import Any
 
+from nbst.cli.args import exact_motion, print_json
+from nbst.constants import many_body
 from nbst.domain import plain
 from nbst.problem import builtin_names, load_problem
 from nbst.solution import load_solution
@@ -42,8 +44,6 @@ def register(sub) -> None:
 
 
 def cmd_problems(args) -> int:
-    from nbst.cli.args import print_json
-
     words = list(args.words)
     if words[:1] == ["show"]:
         words = words[1:]
@@ -74,8 +74,6 @@ def _clip(s: str, n: int) -> str:
 
 
 def cmd_simulate(args) -> int:
-    from nbst.cli.args import exact_motion, print_json
-
     problem = load_problem(args.problem)
     sol = load_solution(args.solution, problem)
     tr = exact_motion(problem, args.solution, sol.velocities)
@@ -95,8 +93,6 @@ def cmd_simulate(args) -> int:
     print(f"problem    {problem.name}  ({problem.n} disks, t_final = {problem.t_final:g} s)")
     print(f"cost       {tr.cost:.6g}  (sum of squared distances to targets)")
     import numpy as np
-
-    from nbst.constants import many_body
 
     many = many_body(problem.n)
     shown = f"({problem.n} characters: --json)" if many else tr.signature_string

@@ -13,7 +13,8 @@ from pathlib import Path
 
 from nbst.cli.args import JOBS, MAX_TRIALS, RUNS_MAX, TARGET_COST, Bounded, cluster_client, with_limits
 from nbst.cli.flags import add_jobs, add_out_dir, add_quiet, add_seed, old_spelling
-from nbst.problem import display_name
+from nbst.outputs import prepare_output
+from nbst.problem import ProblemError, display_name, load_problem
 
 __all__ = ["RUNS", "FIRST_SEED", "COMMANDS", "register", "cmd_curves", "ABLATION_COLUMNS", "cmd_ablation",
            "COMPARE_COLUMNS", "cmd_compare"]
@@ -111,7 +112,6 @@ def _no_action(p) -> int:
 
 def _run(args, specs, desc: str):
     from nbst.experiments.runs import run_specs
-    from nbst.outputs import prepare_output
 
     prepare_output(args.out, directory=True, option="--out-dir")
     client = cluster_client(args)
@@ -137,7 +137,6 @@ def _emit(args, rows, table: str, files) -> None:
 def cmd_curves(args) -> int:
     from nbst.experiments import plots as P
     from nbst.experiments.runs import _safe, curves_rows, make_specs, parse_entries
-    from nbst.problem import load_problem
 
     problem = load_problem(args.problem)
     entries = parse_entries(args.algorithms)
@@ -163,7 +162,6 @@ ABLATION_COLUMNS = [("entry", "entry"), ("runs", "runs"), ("mean", "mean"), ("be
 def cmd_ablation(args) -> int:
     from nbst.experiments import plots as P
     from nbst.experiments.runs import _safe, ablation_rows, make_specs, parse_entries
-    from nbst.problem import load_problem
 
     problem = load_problem(args.problem)
     entries = parse_entries(args.algorithms)
@@ -189,8 +187,6 @@ COMPARE_COLUMNS = [("entry", "entry"), ("problems", "problems"), ("runs", "runs"
 
 
 def _expand(problems: list[str]) -> list:
-    from nbst.problem import ProblemError, load_problem
-
     out: list = []
     for p in problems:
         path = Path(p)

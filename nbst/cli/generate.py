@@ -10,7 +10,9 @@ from nbst import domain as D
 from nbst.cli.args import SEED, Bounded, with_limits
 from nbst.cli.flags import add_quiet, add_seed
 from nbst.domain import MAX_DISKS
+from nbst.outputs import prepare_output, write_json_atomic
 from nbst.seeds import resolve_seed
+from nbst.solution import make_solution
 
 __all__ = ["DISKS", "FORMATION_DISKS", "NONCUE", "RADIUS", "BOX", "T_FINAL", "TARGET_RADIUS", "PLANTED_TARGET_RADIUS",
            "FORMATION_DISKS_DEFAULT", "LONG_STAGE_S", "ANNOUNCE_SIMULATION_FROM", "COMMANDS", "register",
@@ -142,9 +144,6 @@ def _refuse(msg: str) -> int:
 
 def cmd_generate(args) -> int:
     import numpy as np
-
-    from nbst.outputs import prepare_output, write_json_atomic
-    from nbst.solution import make_solution
 
     formation = args.targets_from is not None
     other = (("--noncue", args.noncue),) if formation else (("--disks", args.disks), ("--start", args.start))

@@ -20,6 +20,8 @@ import sys
 from nbst._version import __version__
 from nbst.domain import plain
 from nbst.errors import NbstError
+from nbst.outputs import interrupt_once
+from nbst.progress import start_clock
 
 __all__ = ["COMMAND_MODULES", "build_parser", "asked_command", "main"]
 
@@ -86,9 +88,6 @@ def main(argv=None) -> int:
     Called as the program (``argv`` None), the signals are ignored from the moment the command
     ends (Python's shutdown would restore their default, fatal action), so a late signal cannot
     change the exit status; called with ``argv`` (tests), the handlers are restored."""
-    from nbst.outputs import interrupt_once
-    from nbst.progress import start_clock
-
     start_clock()  # every progress line and summary counts from here
     guard = interrupt_once()
     guard.__enter__()

@@ -10,6 +10,10 @@ import time
 from nbst.cli.args import MAX_TRIALS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_out_dir, add_quiet, add_seed
 from nbst.errors import NbstError
+from nbst.outputs import prepare_output, write_text_atomic
+from nbst.problem import load_problem
+from nbst.progress import Bar
+from nbst.solution import load_solution
 
 
 __all__ = ["TIMESTEP", "UNIT", "TOL", "MAX_STEPS", "MJCF_PROGRESS_MIN_N", "COMMANDS", "register", "cmd_mjcf",
@@ -121,8 +125,6 @@ def register(sub) -> None:
 def _velocities(problem, solution, *, whole_motion: bool = False):
     """A solution file's velocities (None without one); with ``whole_motion``, refused in one
     line when nbst cannot simulate them to t_final (``nbst.cli.args.exact_motion``)."""
-    from nbst.solution import load_solution
-
     if not solution:
         return None
     v = load_solution(solution, problem).velocities
@@ -134,8 +136,6 @@ def _velocities(problem, solution, *, whole_motion: bool = False):
 
 
 def cmd_mjcf(args) -> int:
-    from nbst.problem import load_problem
-
     from nbst.models.scene import scene_xml
 
     if _is_crash(args.problem):
@@ -143,11 +143,9 @@ def cmd_mjcf(args) -> int:
     problem = load_problem(args.problem)
     v = _velocities(problem, args.solution)
     if args.output != "-":
-        from nbst.outputs import prepare_output
         prepare_output(args.output, inputs=(args.problem, args.solution))
     bar = None
     if problem.n >= MJCF_PROGRESS_MIN_N and not args.quiet:
-        from nbst.progress import Bar
         bar = Bar("nbst mjcf: building the scene", problem.n, unit="disk", file=sys.stderr)
     try:
         xml = scene_xml(problem, v, timestep=args.timestep, unit=args.unit, progress=bar.update if bar else None)
@@ -157,7 +155,6 @@ def cmd_mjcf(args) -> int:
     if args.output == "-":
         sys.stdout.write(xml)
     else:
-        from nbst.outputs import write_text_atomic
         write_text_atomic(args.output, xml)
         if not args.quiet:
             print(f"nbst mjcf: wrote {args.output} ({problem.n} disks; view: python -m mujoco.viewer "
@@ -191,7 +188,6 @@ def _crash_mjcf(args) -> int:
     if args.output == "-":
         sys.stdout.write(xml)
         return 0
-    from nbst.outputs import prepare_output, write_text_atomic
 
     prepare_output(args.output, inputs=(args.problem,))
     write_text_atomic(args.output, xml)
@@ -202,8 +198,6 @@ def _crash_mjcf(args) -> int:
 
 
 def cmd_validate(args) -> int:
-    from nbst.problem import load_problem
-
     from nbst.models.mjrun import MAX_STEPS, check_steps
     from nbst.models.validate import validate
 
@@ -212,7 +206,6 @@ def cmd_validate(args) -> int:
     max_steps = args.max_steps or MAX_STEPS
     check_steps(problem.t_final, args.timestep, max_steps)  # before any work: memory grows with the steps
     if args.report:
-        from nbst.outputs import prepare_output
         prepare_output(args.report, directory=True, option="--out-dir", files=("report.json", "report.html"))
     progress = _progress(problem, args)
     # aligned stepping's jam, or a run past --max-steps: a MujocoError, main's one line
@@ -285,7 +278,6 @@ def _progress(problem, args):
     work = steps_needed(problem.t_final, args.timestep) * (problem.n + 4)
     if work < PROGRESS_MIN_WORK and not args.convergence:
         return None
-    from nbst.progress import Bar
 
     def factory(desc, total, unit):
         return Bar(f"nbst validate: {desc}", total, unit=unit, file=sys.stderr)
@@ -297,7 +289,6 @@ def cmd_gallery(args) -> int:
     argv = list(args.names) + ["--seed", str(args.seed), "--max-trials", str(args.max_trials)]
     if args.dir:
         from nbst.models.gallery import FILES
-        from nbst.outputs import prepare_output
         from nbst.problem import builtin_names
 
         prepare_output(args.dir, directory=True, option="--out-dir",

@@ -5,8 +5,13 @@ import sys
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from nbst.cli.args import JOBS, MAX_TRIALS, SEED, TARGET_COST, TRIALS_MAX, Bounded, with_limits
+from nbst import progress
+from nbst.cli.args import JOBS, MAX_TRIALS, SEED, TARGET_COST, TRIALS_MAX, Bounded, cluster_client, with_limits
 from nbst.cli.flags import add_seed
+from nbst.constants import many_body
+from nbst.outputs import prepare_output, signals_deferred, write_json_atomic
+from nbst.problem import ProblemError, load_problem
+from nbst.progress import count_text, seconds_text, since_start
 from nbst.seeds import resolve_seed
 from nbst.warmup import COLD_COMPILE_SECONDS
 
@@ -105,8 +110,6 @@ class _Progress:
     line and the summary quote the same trials, seconds, cost and disks on target."""
 
     def __init__(self, args, problem, label: str, total: int | None) -> None:
-        from nbst import progress
-
         self.problem = problem
         # --max-trials is a budget the search may stop short of (patience, target): no ETA over it
         self.bar = progress.Bar(f"solve {problem.name} ({label})", total, unit="trial", bound=True,
@@ -142,8 +145,6 @@ class _Options:
 def _options(args, problem) -> _Options:
     """The checks before any work: the output path (a long solve must not end unable to write, nor
     overwrite its input) and the options that apply to the solver asked for."""
-    from nbst.outputs import prepare_output
-    from nbst.problem import ProblemError
     from nbst.search.variants import DEFAULT_VARIANT, SolveRequest, roundoff_cost
     from nbst.solvers import SIGNATURE, SOLVERS
 
@@ -168,11 +169,6 @@ def _straight(args, problem, o: _Options):
 
 
 def cmd_solve(args) -> int:
-    from nbst.cli.args import cluster_client
-    from nbst.constants import many_body
-    from nbst.outputs import signals_deferred
-    from nbst.problem import load_problem
-
     problem = load_problem(args.problem)
     # Inside main's interrupt_once: the first Ctrl-C, SIGTERM or SIGHUP from here on stops the solve
     # and writes the best motion so far: the search's, or the straight start before it has one.
@@ -218,7 +214,6 @@ def cmd_solve(args) -> int:
     if o is None:  # stopped before the checks were done: nothing to write
         raise KeyboardInterrupt
     result, late = _write(args, problem, o, result, fallback, bar)
-    from nbst.progress import since_start
 
     seconds = bar.seconds if bar is not None else since_start()
     return _summary(args, problem, result, o.request.target_cost, interrupted or late, seconds)
@@ -227,8 +222,6 @@ def cmd_solve(args) -> int:
 def _write(args, problem, o: _Options, result, fallback, bar):
     """Write the result (the straight start if there is none yet), with signals held; returns
     (what was written, whether a signal came meanwhile)."""
-    from nbst.outputs import signals_deferred, write_json_atomic
-
     late = False
     for attempt in (1, 2):  # a first signal that lands between the search and this block: once more
         try:
@@ -254,8 +247,6 @@ def _first_report(r):
 def _summary(args, problem, r, target_cost: float | None, late: bool, seconds: float) -> int:
     """The summary line (and robust mode's line); the exit status. ``seconds``: the bar's, since the
     command began."""
-    from nbst.constants import many_body
-    from nbst.progress import count_text, seconds_text
     from nbst.search.api import ALGORITHM_STRAIGHT
 
     why = {"target_cost": ("cost at round-off level" if args.target_cost is None else f"cost <= {target_cost:g}"),

@@ -10,6 +10,7 @@ import io
 from pathlib import Path
 
 from nbst.experiments.runs import fmt, solver_entries
+from nbst.outputs import atomic_path, write_text_atomic
 
 __all__ = ["FIG_SIZE", "DPI", "CURVE_FLOOR", "COLORS", "FAMILY_WORDS", "HATCH", "write_csv", "markdown_table",
            "write_markdown", "MEMBER_SHADES", "MEMBER_STYLES", "entry_style", "save_figure", "plot_curves",
@@ -42,8 +43,6 @@ def write_csv(path: str | Path, rows: list[dict], columns: list[str]) -> None:
 
 
 def _write_text(path: str | Path, text: str) -> None:
-    from nbst.outputs import write_text_atomic
-
     write_text_atomic(path, text, option="--out")
 
 
@@ -106,8 +105,6 @@ def entry_style(entry: str, entries: list[str]) -> tuple[str, str]:
 
 def save_figure(fig, stem: str | Path) -> list[Path]:
     """Write ``stem.png`` and ``stem.svg``; returns the paths."""
-    from nbst.outputs import atomic_path
-
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     out = []

@@ -27,7 +27,8 @@ from pathlib import Path
 from typing import Callable, Iterable
 
 from nbst.domain import plain
-from nbst.problem import Problem, ProblemError, problem_from_dict
+from nbst.outputs import die_with_parent, signals_blocked, signals_deferred, write_json_atomic
+from nbst.problem import Problem, ProblemError, problem_from_dict, read_json
 
 __all__ = ["SCHEMA_VERSION", "RUNS_DIR", "SIGNATURE_MEANS", "variant_entries", "solver_entries", "entries",
            "parse_entry", "parse_entries", "problem_digest", "RunSpec", "MAX_NAME_PART", "safe_name", "make_specs",
@@ -232,8 +233,6 @@ def check_run_file(path: Path, spec: RunSpec) -> tuple[dict | None, str | None]:
     type, not finite, or out of its bounds); the caller reports ``why`` in one line and runs it
     again. The file goes through nbst's input gate (``nbst.problem.read_json``: a regular file,
     size and shape bounded), then every number through a finite and bounded test."""
-    from nbst.problem import read_json
-
     if not os.path.lexists(path):
         return None, None
     try:
@@ -287,8 +286,6 @@ def run_specs(specs: list[RunSpec], out_dir: str | Path, *, workers: int | None 
               results come back to this process, which writes them
     Returns the results in the order of ``specs``.
     """
-    from nbst.outputs import write_json_atomic
-
     out = Path(out_dir)
     results: list[dict | None] = [None] * len(specs)
     todo = []
@@ -350,8 +347,6 @@ def _worker_init(parent_pid: int) -> None:
     """Pool worker setup: leave Ctrl-C, SIGTERM and SIGHUP to the parent, which stops the workers
     (no traceback per worker), and die with the parent even when it is killed by SIGKILL
     (``nbst.outputs.die_with_parent``: PR_SET_PDEATHSIG on Linux, a getppid watchdog everywhere)."""
-    from nbst.outputs import die_with_parent
-
     die_with_parent(parent_pid)
 
 
@@ -360,7 +355,6 @@ def _run_pool(specs, todo, workers: int, done) -> None:
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     # spawn: numba's compiled state and fork do not mix; workers load the cached kernels
-    from nbst.outputs import signals_blocked, signals_deferred
 
     ex = ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=mp.get_context("spawn"),
                              initializer=_worker_init, initargs=(os.getpid(),))

@@ -11,6 +11,7 @@ import dataclasses
 
 import numpy as np
 
+from nbst._version import __version__
 from nbst.constants import GA_MAX_DISKS, many_body
 from nbst.errors import SolveError
 from nbst.problem import Problem
@@ -20,7 +21,8 @@ from nbst.search.many import ALGORITHM_MANY, ManyParams, run_many
 from nbst.search.params import ProgressCallback, SearchParams, check_run
 from nbst.search.variants import DEFAULT_MAX_TRIALS, DEFAULT_PATIENCE, DEFAULT_VARIANT, SolveRequest, roundoff_cost
 from nbst.seeds import resolve_seed
-from nbst.solution import SolveResult
+from nbst.sim import evaluate
+from nbst.solution import SolveResult, signature_string
 
 __all__ = ["ALGORITHM_STRAIGHT", "run_many_search", "run_request", "run_search", "solve", "straight_start"]
 
@@ -148,10 +150,6 @@ def run_many_search(problem: Problem, request: SolveRequest, *, callback: Progre
         A ``SearchRun`` whose population is the one solution; ``result.many`` holds the search's
         statistics (rounds, conflicts tried and solved, the largest conflict).
     """
-    from nbst._version import __version__
-    from nbst.sim import evaluate
-    from nbst.solution import signature_string
-
     seed = resolve_seed(request.seed)
     max_trials, patience, target_cost = int(request.max_trials), request.patience_or_default, request.target_cost
     check_run(max_trials, patience, seed)
@@ -195,10 +193,6 @@ def straight_start(problem: Problem, request: SolveRequest, *, stopped: str | No
     Returns:
         A :class:`~nbst.solution.SolveResult` with ``trials`` 0 and an empty history.
     """
-    from nbst._version import __version__
-    from nbst.sim import evaluate
-    from nbst.solution import signature_string
-
     v = np.array(problem.straight_velocities(), dtype=float)
     _, c, sg = evaluate(problem, v[None], jobs=1)
     sig = int(sg[0])

@@ -18,14 +18,17 @@ from nbst.constants import GA_MAX_DISKS, many_body
 from nbst.errors import SolveError
 from nbst.outputs import signals_deferred
 from nbst.problem import Problem
-from nbst.search import loop as _L
+from nbst.search import loop as _L, nbst_loop as S
 from nbst.search.loop import ChunkResult
-from nbst.search.ops import CULL_SUBSUMED, CULL_WORST, Population
+from nbst.search.ops import CULL_SUBSUMED, CULL_WORST, SIZE, Population, new_population, seed_state
 from nbst.search.params import (ALGORITHM, ALGORITHM_NBST, ProgressCallback, SearchParams, SearchProgress,
                                 StopReason, check_run, mirror_images, variant_params)
+from nbst.search.planner import plan
+from nbst.search.robust import SEARCH_STREAM, SHIFT_STEPS, RobustDraws, choose, draws
 from nbst.search.variants import VARIANTS, SolveRequest
 from nbst.seeds import resolve_seed
-from nbst.solution import SolveResult
+from nbst.sim import evaluate
+from nbst.solution import SolveResult, signature_string
 
 __all__ = ["HISTORY0", "SearchRun", "run_search", "SearchStats"]
 
@@ -50,8 +53,6 @@ class _State:
     @property
     def pop_size(self) -> int:
         """Members in the population now."""
-        from nbst.search.ops import SIZE
-
         return int(self.pop.state[SIZE])
 
     def arrays(self) -> _L.SearchArrays:
@@ -179,8 +180,6 @@ def run_search(problem: Problem, request: SolveRequest, *, params: SearchParams 
 
 def _new_state(problem: Problem, params: SearchParams, seed: int) -> _State:
     """The arrays of a fresh search: an empty population (room for hard_limit + 2), no best yet."""
-    from nbst.search.ops import new_population, seed_state
-
     st = np.zeros(_L.N_ST, np.int64)
     st[_L.ST_FIRST_FULL] = -1
     n = problem.n
@@ -220,9 +219,6 @@ def _run_chunks(advance, s: _State, chunk: int, archive, callback, t0: float) ->
 def _finish(problem: Problem, params: SearchParams, s: _State, advance, archive, seed: int, *, max_trials: int,
             patience: int, target_cost: float | None, stopped: StopReason, wall: float):
     """The written velocities (the best, or robust mode's choice) and the solution's ``meta``."""
-    from nbst.sim import evaluate
-    from nbst.solution import signature_string
-
     n = problem.n
     best_v = s.best_v.copy()
     cost = float(s.best_cost[0])
@@ -316,8 +312,6 @@ class SearchStats:
 def _robust_choice(problem: Problem, params: SearchParams, archive, best_v, best_cost: float, best_sig: int,
                    seed: int):
     """Robust mode's pick: the search's best first, then the archive; see ``nbst.search.robust``."""
-    from nbst.search.robust import choose
-
     V = np.concatenate([best_v[None], archive.V]) if archive.V.shape[0] else best_v[None]
     v, info = choose(problem, V, seed=seed, samples=params.robust_samples, timestep=params.robust_timestep,
                      polish_top=params.robust_polish)
@@ -354,9 +348,6 @@ class _NbstStepper:
     algorithm = ALGORITHM_NBST
 
     def __init__(self, problem: Problem, params: SearchParams, s: _State, prm: _L.LoopParams, seed: int):
-        from nbst.search import nbst_loop as S
-        from nbst.search.robust import SEARCH_STREAM, SHIFT_STEPS, RobustDraws, draws
-
         self.S, self.s, self.prm = S, s, prm
         self.op_names = S.OP_NAMES
         robust = (S.ROBUST_AND if params.robust_signature == "and" else S.ROBUST_PLAIN) \
@@ -398,8 +389,6 @@ class _NbstStepper:
 
     def _plan(self, problem: Problem, params: SearchParams, qs) -> None:
         """The backward planner's seeds and routes; its simulations are charged as trials."""
-        from nbst.search.planner import plan
-
         S, s, prm = self.S, self.s, self.prm
         planned = plan(problem, budget=min(params.planner_trials, prm.max_trials // 4),
                        max_chain=params.planner_chain, seeds=params.planner_seeds, sig_limit=params.sig_limit,

@@ -35,9 +35,13 @@ import numpy as np
 
 from nbst.constants import GA_MAX_DISKS
 from nbst.problem import Problem
+from nbst.search.aim import bank_velocity, pair_contact, strike_velocity
+from nbst.search.driver import run_search as signature_search
 from nbst.search.local import conflicts, labels, must_be_struck, nearest, subproblem
 from nbst.search.params import ProgressCallback, SearchProgress, StopReason
+from nbst.search.polish import polish
 from nbst.search.variants import SolveRequest
+from nbst.sim import evaluate, simulate
 
 __all__ = ["ALGORITHM_MANY", "ManyParams", "ManyRun", "run_many"]
 
@@ -116,8 +120,6 @@ def _candidates(problem: Problem, a: int, V: np.ndarray, err2: np.ndarray, miss2
     * a straight shot again (if a is not on one);
     * bank shots off one or two walls (images with |kx|, |ky| <= 1).
     """
-    from nbst.search.aim import bank_velocity, pair_contact
-
     ka = problem.kernel_arrays()
     W, H, T = ka.W, ka.H, ka.t_final
     out = []
@@ -154,10 +156,6 @@ def _strikes(problem: Problem, b: int, strikers: int, keep: int, polish_sims: in
     best are polished on the striker's velocity (b's landing and the striker's own, least
     squares) and offered polished and as aimed.
     """
-    from nbst.search.aim import bank_velocity, strike_velocity
-    from nbst.search.polish import polish
-    from nbst.sim import evaluate
-
     ka = problem.kernel_arrays()
     W, H, T = ka.W, ka.H, ka.t_final
     R2 = float(problem.target_radius) ** 2
@@ -199,8 +197,6 @@ class _Search:
 
     def __init__(self, problem: Problem, prm: ManyParams, V: np.ndarray, miss2: float, max_trials: int, report,
                  jobs: int = 1):
-        from nbst.sim import simulate
-
         self.jobs = int(jobs)
         self.problem, self.prm, self.miss2, self.max_trials = problem, prm, miss2, max_trials
         self.R2 = float(problem.target_radius) ** 2
@@ -226,8 +222,6 @@ class _Search:
     def evaluate(self, Vs):
         """Final positions of a batch of whole motions (``nbst.sim.evaluate`` on ``jobs`` threads;
         the scores do not depend on the threads)."""
-        from nbst.sim import evaluate
-
         self.trials += len(Vs)
         self.stats["whole_sims"] += len(Vs)
         return evaluate(self.problem, Vs, jobs=self.jobs)[0]
@@ -250,8 +244,6 @@ class _Search:
         """For each missing disk of ``disks``: the first candidate (``_candidates``, then a
         contact extended into a chain) that makes the whole motion better. Returns the new
         (V, tr, score, number of changes kept)."""
-        from nbst.search.polish import polish
-
         problem, prm, miss2, n = self.problem, self.prm, self.miss2, self.problem.n
         kept = 0
         for a in disks:
@@ -354,7 +346,6 @@ class _Search:
             Vq[1, loc] = rows
             self.trials += 2 * Q.size / problem.n
             self.stats["local_sims"] += 2
-            from nbst.sim import evaluate
 
             f2 = evaluate(sub, Vq, jobs=1)[0]
             s_old = self.score_final(f2[0], sub.target)
@@ -409,9 +400,6 @@ class _Search:
     def repair(self, idx, k, rng):
         """A conflict by its own polish, then by sub-searches in a window around it; the first
         repair that makes the whole motion better is kept."""
-        from nbst.search.driver import run_search as signature_search
-        from nbst.search.polish import polish
-
         problem, prm, miss2, n = self.problem, self.prm, self.miss2, self.problem.n
         if idx.size > prm.max_conflict:
             err2 = self.err2()[idx]

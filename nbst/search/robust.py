@@ -42,8 +42,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from nbst.constants import MAX_EVENTS
 from nbst.problem import Problem
 from nbst.search.loop import evaluate_one, loop_scratch, problem_arrays
+from nbst.search.ops import limit_crossings
+from nbst.search.polish import LAMBDA0, LAMBDA_DOWN, LAMBDA_MAX, LAMBDA_MIN, LAMBDA_UP, LAMBDA_UP_SINGULAR, RIDGE
+from nbst.sim import evaluate
+from nbst.sim.jacobian import final_jacobian
 
 __all__ = ["TIMESTEP", "SHIFT_STEPS", "SEARCH_SAMPLES", "SAMPLES", "QUANTILE", "ARCHIVE_SIZE", "POLISH_TOP",
            "POLISH_SIMS", "MARGIN_POWER", "SEARCH_STREAM", "CHOICE_STREAM", "draws", "shift_sigma", "shift_starts",
@@ -208,8 +213,6 @@ class RobustScore:
 def score(problem: Problem, V, zeta, smax, *, timestep: float = TIMESTEP, quantile: float = QUANTILE,
           max_events: int | None = None) -> RobustScore:
     """Score candidates V (M, N, 2), units/s, under the start shifts (zeta, smax) of :func:`draws`."""
-    from nbst.constants import MAX_EVENTS
-
     V = np.ascontiguousarray(np.asarray(V, dtype=np.float64).reshape(-1, problem.n, 2))
     M, K = V.shape[0], zeta.shape[0]
     cost = np.empty((M, K + 1))
@@ -276,11 +279,6 @@ def polish_on_target(problem: Problem, velocities, *, max_sims: int = POLISH_SIM
     losing an on-target disk. Returns (velocities (N, 2), simulations run). Analytic Jacobian
     (``nbst.sim.jacobian``), damping as ``nbst.search.polish``.
     """
-    from nbst.search.ops import limit_crossings
-    from nbst.search.polish import LAMBDA0, LAMBDA_DOWN, LAMBDA_MAX, LAMBDA_MIN, LAMBDA_UP, LAMBDA_UP_SINGULAR, RIDGE
-    from nbst.sim import evaluate
-    from nbst.sim.jacobian import final_jacobian
-
     v = np.array(velocities, dtype=np.float64)
     cue = np.flatnonzero(problem.cueable)
     cue_idx = cue.astype(np.int64)

@@ -18,6 +18,7 @@ from nbst.problem import Problem
 from nbst.sim.cells import CELLS_MIN_DISKS, alloc_cells, evaluate_words_kernel, run_cells
 from nbst.sim.kernel import (INF, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work, cost_signature,
                              cost_signature_words, evaluate_kernel, run)
+from nbst.solution import signature_string
 
 __all__ = ["DENSE_KEYFRAMES", "uses_cells", "signature_words_to_int", "evaluate", "evaluate_events", "Trajectory",
            "EVENT_DTYPE", "simulate"]
@@ -218,7 +219,6 @@ class Trajectory:
 
     @property
     def signature_string(self) -> str:
-        from nbst.solution import signature_string
         return signature_string(self.signature, self.problem.n)
 
     @property

@@ -50,6 +50,9 @@ Choices (each a module constant with its why):
 * ``random``: each trial sets every cueable disk by directed randomize or uniform
   randomize (probability 1/2 each), i.e. the paper's initialize without a
   population; batches of ``RANDOM_BATCH``.
+
+Length: four solvers over one budget (``_Budget``), one randomize and one result format; each
+solver's Args are written out (the public entry points), and split they would share the rest.
 """
 from __future__ import annotations
 
@@ -63,7 +66,7 @@ import numpy as np
 from nbst._version import __version__
 from nbst.problem import Problem, ProblemError
 from nbst.seeds import resolve_seed
-from nbst.solution import SolveResult
+from nbst.solution import SolveResult, signature_string
 
 if TYPE_CHECKING:
     from nbst.search.params import ProgressCallback
@@ -214,8 +217,6 @@ def _finish(problem: Problem, b: _Budget, *, algorithm: str, seed: int, params: 
             extra: dict[str, Any] | None = None) -> SolveResult:
     """The result of a baseline: its best (or the straight-line start if nothing finite was
     simulated), with ``meta`` in the file's order (``extra`` keys last)."""
-    from nbst.solution import signature_string
-
     wall = time.perf_counter() - b.t0
     if b.trials == 0 or not math.isfinite(b.best_cost):
         x = b.x0  # nothing finite simulated: report the straight-line start (one check simulation, not a trial)

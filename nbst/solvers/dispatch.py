@@ -26,7 +26,7 @@ from nbst.constants import many_body
 from nbst.problem import Problem, ProblemError
 from nbst.registry import Registry
 from nbst.solution import SolveResult
-from nbst.search.variants import SolveRequest
+from nbst.search.variants import DEFAULT_VARIANT, SolveRequest
 from nbst.solvers.baselines import BASELINE_PATIENCE, solve_cma, solve_de, solve_ga, solve_random
 
 if TYPE_CHECKING:
@@ -151,8 +151,6 @@ def solve_with(algorithm: str, problem: Problem, *, seed: int | None = None, max
 
 
 def _default_variant() -> str:
-    from nbst.search.variants import DEFAULT_VARIANT
-
     return DEFAULT_VARIANT
 
 

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from nbst.errors import SolveError
-from nbst.outputs import signals_deferred
+from nbst.outputs import die_with_parent, signals_blocked, signals_deferred
 from nbst.problem import Problem
 from nbst.search.params import SearchProgress
 from nbst.search.variants import DEFAULT_MAX_TRIALS
@@ -190,8 +190,6 @@ def _island(k: int, task: IslandTask, problem: Problem, conn, parent_pid: int, i
     decides and stops its islands) and dies with the parent, even one killed by SIGKILL
     (``die_with_parent``). The parent's ends of the pipes that fork copied here (``inherited``)
     are closed, so the parent's death also reads as end-of-file on this island's pipe."""
-    from nbst.outputs import die_with_parent
-
     die_with_parent(parent_pid)
     for c in inherited:
         c.close()
@@ -425,7 +423,6 @@ def run_islands(problem: Problem, request: SolveRequest, *, jobs: int, algorithm
                 procs.append(cluster.submit(_island_dask, k, tasks[k], problem, (up, down), pure=False))
                 rounds.live.add(k)
             return
-        from nbst.outputs import signals_blocked
 
         for k in range(1, n_islands):
             parent, child = ctx.Pipe()
