@@ -32,8 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nbst.errors import InputError
 from nbst import palette
+from nbst.errors import InputError
 from nbst.problem import Problem, ProblemError
 
 __all__ = ["DEFAULT_TIMESTEP", "DEFAULT_UNIT", "SOLIMP", "WALL_THICKNESS_RADII", "WALL_HEIGHT_RADII",

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from nbst.errors import InputError
 from nbst.domain import MAX_BOX_CROSSINGS
+from nbst.errors import InputError
 from nbst.outputs import dumps_strict, json_safe, write_json_atomic  # noqa: F401 - dumps_strict re-exported
 from nbst.problem import Problem, ProblemError, _Checker, box_crossings, read_json
 

@@ -12,8 +12,8 @@ from typing import Callable
 
 import numpy as np
 
-from nbst.errors import SolveError
 from nbst.constants import MAX_EVENTS
+from nbst.errors import SolveError
 from nbst.problem import Problem, ProblemError
 from nbst.search.loop import OP_NAMES as OP_NAMES_PAPER
 from nbst.search.nbst_loop import OP_NAMES as OP_NAMES_NBST

@@ -14,8 +14,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from nbst.errors import SolveError
 from nbst.constants import ROUNDOFF_REL
+from nbst.errors import SolveError
 from nbst.registry import Registry
 
 if TYPE_CHECKING:

@@ -11,9 +11,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
-from nbst.errors import InputError
 from nbst.constants import (EVENT_BUFFER, EVENT_DISK, EVENT_WALL, PARALLEL_BATCH, WALL_NAMES, many_body,
                             max_events_for)
+from nbst.errors import InputError
 from nbst.problem import Problem
 from nbst.sim.cells import CELLS_MIN_DISKS, alloc_cells, evaluate_words_kernel, run_cells
 from nbst.sim.kernel import (INF, STATUS_OVERFLOW, STATUS_STALLED, STATUS_TRUNCATED, alloc_work, cost_signature,

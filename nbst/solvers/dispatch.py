@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING, Protocol
 from nbst.constants import many_body
 from nbst.problem import Problem, ProblemError
 from nbst.registry import Registry
-from nbst.solution import SolveResult
 from nbst.search.variants import DEFAULT_VARIANT, SolveRequest
+from nbst.solution import SolveResult
 from nbst.solvers.baselines import BASELINE_PATIENCE, solve_cma, solve_de, solve_ga, solve_random
 
 if TYPE_CHECKING:
