@@ -46,7 +46,8 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
         answers: look for up to this many solutions, each with a contact sequence of its own
             (>= 1; see ``nbst.scene.search.signature_search``); the first is the best.
         ladder: accept only answers that also meet every fate at h/2 and h/4 (the same initial
-            state rolled out at the finer steps; those rollouts count in the budget).
+            state rolled out at the finer steps; those rollouts count in the budget); ``met`` then
+            says that the best does.
         callback: called with a :class:`~nbst.scene.search.SceneProgress` after each batch.
 
     Returns:
@@ -94,7 +95,8 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
                 stopped = "interrupted"
                 p, ps = None, []
         nstep, key = sim.nstep, sim.key
-    return SceneResult(fates=f, model=model, best=r.best, met=r.best.judgement.met and not r.best.warnings,
+    met = r.best.judgement.met and not r.best.warnings and (not ladder or r.best_held is True)
+    return SceneResult(fates=f, model=model, best=r.best, met=met,
                        rollouts=r.rollouts, stopped=stopped, seed=s, max_rollouts=max_rollouts,
                        wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p,
                        answers=r.answers if answers > 1 else (), answer_probabilities=tuple(ps),

@@ -59,7 +59,7 @@ class SceneResult:
         fates: the checked fates solved for.
         model: the compiled ``mujoco.MjModel`` (its timestep set).
         best: the best rollout found: its controls, initial and final state, verdicts.
-        met: every fate met (and MuJoCo did not warn).
+        met: every fate met (and MuJoCo did not warn; with ``ladder``, at the finer steps too).
         rollouts: rollouts spent.
         stopped: ``"met"``, ``"budget"`` or ``"interrupted"``.
         seed: the seed used (drawn when none was given).
