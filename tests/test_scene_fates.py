@@ -265,3 +265,23 @@ def test_any_wrong_value_anywhere_is_a_fates_error_never_a_crash(tmp_path):
             except FatesError as e:
                 assert "\n" not in str(e)
     assert tried > 400
+
+
+def test_a_mesh_under_meshdir_in_the_folder_is_read_and_solved(tmp_path):
+    """A scene no one here wrote: a mesh body (an OBJ tetrahedron under <compiler meshdir>), read,
+    compiled, rolled out and judged."""
+    from nbst.scene.api import solve
+
+    (tmp_path / "assets").mkdir()
+    (tmp_path / "assets" / "tet.obj").write_text("v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\n"
+                                                 "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    xml = ('<mujoco><compiler meshdir="assets"/><asset><mesh name="tet" file="tet.obj"/></asset>'
+           '<worldbody><geom name="floor" type="plane" size="2 2 0.1"/>'
+           '<body name="tet" pos="0 0 0.2"><freejoint/><geom type="mesh" mesh="tet"/></body></worldbody></mujoco>')
+    doc = {"format": "nbst-fates", "version": 1, "scene": "t.xml", "duration": 0.5,
+           "controls": {"tet": {"linvel": [[0, 2], [-0.5, 0.5], [0, 1]]}},
+           "fates": {"tet": {"rest_in": {"center": [0.4, 0, 0], "radius": 0.15}}}}
+    p = _write(tmp_path, doc, xml)
+    assert [f.name for f in check_scene_files(tmp_path / "t.xml")] == ["t.xml", "tet.obj"]
+    res = solve(None, p, seed=1, max_rollouts=400)
+    assert res.met and res.best.judgement.bodies[0].fates[0].met
