@@ -1,4 +1,4 @@
-"""``nbst scene examples|check|solve|replay|export`` (docs/scene.md): bring your own MuJoCo scene.
+"""``nbst scene examples|check|solve|replay|validate|export`` (docs/scene.md): bring your own MuJoCo scene.
 
 * this package registers the subcommands (light: the arguments only; their defaults are the
   library's, ``nbst.scene.search.DEFAULT_MAX_ROLLOUTS``);
@@ -6,7 +6,7 @@
 
 Exit codes, as ``nbst crash``: 0 done (solve: every fate met; replay: the file reproduced bit for
 bit), 1 a check failed (solve: not met within the budget, the nearest solution written; replay:
-the replay differs), 2 bad input (one line naming the file and the field; nothing written), 130
+the replay differs; validate --strict: a setting misses a fate), 2 bad input (one line naming the file and the field; nothing written), 130
 interrupted (solve: the best solution so far written).
 """
 from __future__ import annotations
@@ -14,8 +14,8 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
-from nbst.cli.flags import add_quiet, add_seed
-from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_export, cmd_replay, cmd_solve
+from nbst.cli.flags import add_out_dir, add_quiet, add_seed
+from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_export, cmd_replay, cmd_solve, cmd_validate
 
 __all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES", "ANSWERS"]
 
@@ -108,6 +108,37 @@ def register(sub) -> None:
                    help="also roll the same initial state out at h/2 and h/4 and say whether every fate is still "
                         "met (exit 1 if not)")
     r.set_defaults(func=cmd_replay)
+
+    from nbst.scene.validate import DEFAULT_VALIDATE_SAMPLES
+
+    w = sc.add_parser("validate", help="the physics cross-validation report: the solution's fates under MuJoCo's "
+                                       "integrators, solvers, cones, the timestep ladder and noise",
+                      description="Roll SOL.json's controls out again under MuJoCo's integrators (Euler, "
+                                  "implicitfast, RK4), constraint solvers (Newton, CG, PGS), friction cones "
+                                  "(pyramidal, elliptic) and the timestep ladder (h, h/2, h/4), one option of the "
+                                  "scene's <option> changed at a time, and judge every fate again (met or not, with "
+                                  "its graded cost); and estimate P(every fate met) under the fates' noise from "
+                                  "--samples noisy rollouts, with its 95 %% Wilson interval. Prints a line per "
+                                  "setting; --out-dir DIR writes index.html (a table per setting group, each fated "
+                                  "body's path from above under each setting over the fates' regions), its PNGs "
+                                  "and report.json (the same table).",
+                      epilog="Exit status: 0, or 1 with --strict when a setting misses a fate (the noise row "
+                             "apart: it is a probability); 2 on bad input. Example: nbst scene validate dice.json "
+                             "--out-dir dice-report")
+    w.add_argument("solution", metavar="SOL.json", help="a solution file written by `nbst scene solve`")
+    add_out_dir(w, dest="out_dir", help="write the report: DIR/index.html, its PNGs and DIR/report.json")
+    w.add_argument("--samples", type=SAMPLES, default=DEFAULT_VALIDATE_SAMPLES, metavar="N",
+                   help=with_limits(f"noisy rollouts of the noise row (default {DEFAULT_VALIDATE_SAMPLES})", SAMPLES))
+    w.add_argument("--seed", type=SEED, default=None,
+                   help=f"the noise draws' seed [{SEED.limits}] (default: the solution's seed, the draws of "
+                        "`nbst scene solve --samples`)")
+    w.add_argument("--jobs", type=JOBS, default=None, metavar="K",
+                   help=with_limits("threads running the noisy rollouts (default: all cores); any K gives the same "
+                                    "report", JOBS))
+    w.add_argument("--strict", action="store_true", help="exit 1 if any setting misses a fate")
+    w.add_argument("--json", action="store_true", help="print report.json's content instead of the summary")
+    add_quiet(w, "no summary (the report files and the exit code still tell)")
+    w.set_defaults(func=cmd_validate)
 
     x = sc.add_parser("export", help="write the scene with a keyframe holding the solution's initial state",
                       description="Write the solution's MJCF (its own text, comments and numbers as written) with "

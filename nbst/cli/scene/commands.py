@@ -15,7 +15,7 @@ from nbst.parallel import default_jobs
 from nbst.progress import command_start, count_text, progress_bar, seconds_text
 from nbst.seeds import resolve_seed
 
-__all__ = ["cmd_examples", "cmd_check", "cmd_solve", "cmd_replay", "cmd_export", "asks_text"]
+__all__ = ["cmd_examples", "cmd_check", "cmd_solve", "cmd_replay", "cmd_validate", "cmd_export", "asks_text"]
 
 
 def asks_text(fate) -> str:
@@ -151,6 +151,44 @@ def cmd_replay(args) -> int:
                           for h, o, res in zip(lad.timesteps, lad.outcomes, lad.results))
         print(f"  ladder: {rungs}; {'holds' if lad.holds else 'does not hold'}")
     return 0 if ok else 1
+
+
+def cmd_validate(args) -> int:
+    from pathlib import Path
+
+    from nbst.outputs import write_bytes_atomic
+    from nbst.render.scene_report import REPORT_FILES, scene_report_files
+    from nbst.scene.solution import read_solution
+    from nbst.scene.validate import validate_solution
+
+    read_solution(args.solution)  # bad input: exit 2 before anything is written
+    if args.out_dir:
+        prepare_output(args.out_dir, directory=True, option="--out-dir", files=REPORT_FILES)
+    val = validate_solution(args.solution, samples=args.samples, seed=args.seed, jobs=args.jobs or default_jobs())
+    if args.out_dir:
+        for name, data in scene_report_files(val).items():
+            write_bytes_atomic(Path(args.out_dir) / name, data, option="--out-dir")
+    if args.json:
+        print_json(val.to_dict())
+    elif not args.quiet:
+        p = val.probability
+        print(f"{args.solution}: {'every setting meets every fate' if val.all_met else 'NOT met under some settings'}"
+              f" (MuJoCo {val.mujoco}, {val.fates.duration:g} s)")
+        for r in val.rows:
+            worst = "" if r.met else "; " + ", ".join(
+                f"{b.body} {v.fate} ({v.happened})" for b in r.rollout.judgement.bodies for v in b.fates if not v.met)
+            warn = f"; MuJoCo warned: {', '.join(r.rollout.warnings)}" if r.rollout.warnings else ""
+            print(f"  {r.group:10s} {r.setting:13s} {r.timestep * 1e3:7g} ms  {'met' if r.met else 'NOT met':7s} "
+                  f"cost {r.rollout.cost:.3g}{worst}{warn}")
+        print(f"  {'noise':10s} {p.n} samples  P(every fate) {p.p:.3g} [{p.lo:.3g}, {p.hi:.3g}] (95 % Wilson, seed "
+              f"{val.noise_seed})")
+        if args.out_dir:
+            print(f"report     {args.out_dir}/index.html, {args.out_dir}/report.json")
+    if args.strict and not val.all_met:
+        failed = ", ".join(f"{r.group} {r.setting}" for r in val.rows if not r.met)
+        print(f"nbst scene validate: --strict: the fates are not met under {failed}", file=sys.stderr)
+        return 1
+    return 0
 
 
 def cmd_export(args) -> int:

@@ -1,0 +1,147 @@
+"""`nbst scene validate` (nbst.scene.validate, nbst.render.scene_report): a built-in example's
+solution tabled under every setting (integrators, solvers, cones, the timestep ladder) and noise;
+the scene's own row is the replay; the noise row is the room's --samples machinery; a bad out-dir
+is refused in one line, exit 2; the page opens in headless Chromium when it is installed."""
+import json
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nbst.cli.main import main
+from nbst.render.scene_report import REPORT_FILES
+from nbst.scene.validate import CONES, DIVISORS, GROUPS, INTEGRATORS, SOLVERS, validate_solution
+
+SAMPLES = 6
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    """snake-eyes solved at seed 1 within a small budget (a few seconds), and its validation."""
+    from nbst.outputs import write_json_atomic
+    from nbst.scene import solve, solution_dict
+
+    folder = tmp_path_factory.mktemp("scene-validate")
+    res = solve(None, "snake-eyes", seed=1, max_rollouts=300)
+    sol = folder / "dice.json"
+    write_json_atomic(sol, solution_dict(res))
+    return sol, validate_solution(str(sol), samples=SAMPLES)
+
+
+def _expected() -> list[tuple[str, str]]:
+    return [("scene", "as the scene"), *(("integrator", n) for n in INTEGRATORS), *(("solver", n) for n in SOLVERS),
+            *(("cone", n) for n in CONES), *(("timestep", "h" if k == 1 else f"h/{k}") for k in DIVISORS)]
+
+
+def test_the_report_has_every_setting_row(solved, tmp_path, capsys):
+    sol, val = solved
+    assert [(r.group, r.setting) for r in val.rows] == _expected()
+    assert {r.integrator for r in val.group("integrator")} == set(INTEGRATORS)
+    assert {r.solver for r in val.group("solver")} == set(SOLVERS)
+    assert {r.cone for r in val.group("cone")} == set(CONES)
+    h = val.scene_row.timestep
+    assert [(r.timestep, r.nstep) for r in val.group("timestep")] == [
+        (h / k, val.scene_row.nstep * k) for k in DIVISORS]
+    for r in val.rows:  # every fate of every body judged under every setting
+        assert [b.body for b in r.rollout.judgement.bodies] == [f.body for f in val.fates.fates]
+        assert r.met == (r.rollout.judgement.met and not r.rollout.warnings)
+        assert set(r.paths) == {f.body for f in val.fates.fates}
+    out = tmp_path / "report"
+    code = main(["scene", "validate", str(sol), "--out-dir", str(out), "--samples", str(SAMPLES)])
+    assert code == 0
+    assert "report" in capsys.readouterr().out
+    assert sorted(os.listdir(out)) == sorted(REPORT_FILES)
+    doc = json.loads((out / "report.json").read_text())
+    assert doc["format"] == "nbst-scene-validation"
+    assert [(r["group"], r["setting"]) for r in doc["rows"]] == _expected()
+    assert [r["met"] for r in doc["rows"]] == [r.met for r in val.rows]
+    assert doc["all_met"] == val.all_met and doc["noise"]["n"] == SAMPLES
+    page = (out / "index.html").read_text()
+    for g in GROUPS:
+        assert f"paths-{g}.png" in page
+    assert all((out / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in REPORT_FILES if n.endswith(".png"))
+
+
+def test_strict_exits_1_exactly_when_a_setting_misses_a_fate(solved, capsys):
+    sol, val = solved
+    assert main(["scene", "validate", str(sol), "--samples", "2", "-q"]) == 0
+    assert main(["scene", "validate", str(sol), "--samples", "2", "--strict", "-q"]) == (0 if val.all_met else 1)
+    err = capsys.readouterr().err
+    assert ("--strict" in err) == (not val.all_met)
+
+
+def test_the_scenes_row_agrees_with_replay(solved):
+    from nbst.scene.solution import replay_solution
+
+    sol, val = solved
+    rep = replay_solution(sol)
+    row = val.scene_row
+    assert rep.same and row.same_as_scene
+    assert row.rollout.judgement.to_dict() == rep.judgement.to_dict()
+    assert row.rollout.qpos.tobytes() == rep.qpos.tobytes() and row.rollout.qvel.tobytes() == rep.qvel.tobytes()
+    doc = json.loads(Path(sol).read_text())
+    assert row.met == doc["met"]
+    for g in GROUPS:  # the row of each group that is the scene's own setting is the same rollout
+        same = [r for r in val.group(g) if r.same_as_scene]
+        assert len(same) == 1 and same[0].rollout is row.rollout
+
+
+def test_the_noise_row_is_the_rooms_samples(solved):
+    from nbst.scene.rollout import SceneSim
+    from nbst.scene.scenefile import load_fates
+    from nbst.scene.search import noisy_probability
+
+    sol, val = solved
+    doc = json.loads(Path(sol).read_text())
+    fates, model = load_fates(doc["fates_file"] or doc["fates"], scene=doc["scene"])
+    model.opt.timestep = doc["timestep"]
+    with SceneSim(fates, model) as sim:
+        p = noisy_probability(sim, np.array(doc["x"]), n=SAMPLES, seed=doc["seed"])
+    assert p == val.probability and val.noise_seed == doc["seed"]
+    assert val.noisy_ends.shape == (SAMPLES, len(fates.fates), 3) and int(val.noisy_met.sum()) == p.k
+
+
+@pytest.mark.parametrize("kind", ["file", "fifo"])
+def test_a_bad_out_dir_is_refused_in_one_line(solved, tmp_path, capsys, kind):
+    sol, _ = solved
+    bad = tmp_path / "out"
+    if kind == "file":
+        bad.write_text("keep")
+    else:
+        os.mkfifo(bad)
+    assert main(["scene", "validate", str(sol), "--out-dir", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--out-dir" in err[0] and "expected a folder" in err[0]
+    assert sorted(os.listdir(tmp_path)) == ["out"]
+    if kind == "file":
+        assert bad.read_text() == "keep"
+
+
+def test_a_bad_solution_is_refused_in_one_line(tmp_path, capsys):
+    bad = tmp_path / "sol.json"
+    bad.write_text('{"format": "nbst-fates"}')
+    assert main(["scene", "validate", str(bad), "--out-dir", str(tmp_path / "r")]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="chromium is not installed")
+def test_the_page_opens_in_headless_chromium(solved, tmp_path):
+    sol, val = solved
+    out = tmp_path / "report"
+    assert main(["scene", "validate", str(sol), "--out-dir", str(out), "--samples", "2", "-q"]) == 0
+    shot = tmp_path / "shot.png"
+    cmd = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", f"--user-data-dir={tmp_path / 'profile'}",
+           "--window-size=1200,2400"]
+    dom = subprocess.run([*cmd, "--dump-dom", (out / "index.html").as_uri()], capture_output=True, text=True,
+                         timeout=120)
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    assert "Physics cross-validation" in dom.stdout and dom.stdout.count("<img") == len(GROUPS) + 1
+    assert dom.stdout.count("<tr>") >= len(val.rows) + len(GROUPS) + 1
+    run = subprocess.run([*cmd, f"--screenshot={shot}", (out / "index.html").as_uri()], capture_output=True,
+                         timeout=120)
+    assert run.returncode == 0 and shot.stat().st_size > 10_000
