@@ -33,11 +33,12 @@ __all__ = ["COLD_COMPILE_SECONDS", "FIRST", "GROUPS", "KernelGroup", "announce",
 
 Log = Callable[[str], None]
 
-#: What ``nbst solve --help`` quotes for a first solve's compile (nbst's search and the event
-#: kernel, in that one process, one core): about 90-110 s of CPU on the 2-core development
-#: machine (2026-12-06, cold cache). The warm-up itself quotes no figure: it says each group's
-#: time as it finishes.
-COLD_COMPILE_SECONDS = 120
+#: What ``nbst solve --help`` quotes for a first solve's compile (the event kernel and nbst's
+#: search, in the solve's process, on one core): 74 s of CPU for the whole of `nbst solve
+#: diamond-s14 --jobs 1` on a cold cache (2026-12-06, the 2-core development machine; 430 s of
+#: wall time there at load 10). The warm-up quotes no figure: it says each group's time as it
+#: finishes.
+COLD_COMPILE_SECONDS = 75
 
 
 @dataclass(frozen=True)
@@ -222,8 +223,8 @@ FIRST = KernelGroup("event kernel", "warm_events")
 #: :data:`FIRST`'s, in the cache before them: numba's index of a kernel's signatures is one file, and
 #: of two processes adding to it at once, one loses its addition), the slowest first (the order the
 #: processes take them in). Both paths of :func:`warm_all` run this list. Single-core CPU time on a
-#: cold cache after :data:`FIRST` (2026-12-06, the 2-core development machine): searches ~90 s,
-#: many-disk simulator ~80 s, bowling lane ~4 s; :data:`FIRST` ~17 s.
+#: cold cache after :data:`FIRST` (2026-12-06, the 2-core development machine): searches 94 s,
+#: many-disk simulator 80 s, bowling lane 4 s; :data:`FIRST` 17 s (docs/install.md).
 GROUPS: tuple[KernelGroup, ...] = (
     KernelGroup("searches", "warm_searches"),
     KernelGroup("many-disk simulator", "warm_many_disks"),
