@@ -36,6 +36,7 @@ COMMAND_MODULES = (
     "nbst.cli.crash",
     "nbst.cli.scene",
     "nbst.cli.render",
+    "nbst.cli.export",
 )
 
 

@@ -1,0 +1,223 @@
+"""The world-agnostic glTF 2.0 writer: bodies with their meshes, and per-body poses over time.
+
+A body is a name and its solids (a :class:`Solid`: a ``trimesh.Trimesh`` in the body's frame and an
+RGBA colour). :func:`write_glb` writes one node per body carrying one glTF mesh (a primitive per
+solid, each with a material whose ``baseColorFactor`` is the solid's RGBA; ``alphaMode`` BLEND
+below alpha 1), and one animation whose channels move each moving body: a ``translation`` and a
+``rotation`` sampler per body, LINEAR interpolation, over one shared time accessor. Bodies that
+never move (the floor, a road) are nodes without channels. The file is written with pygltflib (the
+binary container, one buffer) and atomically (:func:`nbst.outputs.write_bytes_atomic`).
+
+Storage is float32, as glTF requires for these accessors: positions, rotations and times are kept
+to float32's precision (relative 6e-8; a keyframe read back matches the replay's pose within
+1e-6 of the motion's extent). Rotations are MuJoCo's (w, x, y, z) written as glTF's (x, y, z, w),
+renormalised and made sign-continuous from keyframe to keyframe (q and -q are one rotation; a
+flip would make the LINEAR (slerp) interpolation take the long way round). Every accessor that
+the specification requires it of (POSITION, the animation's input) carries ``min`` and ``max``.
+
+Compute apart from I/O: :func:`gltf_document` builds the pygltflib document and its binary blob;
+:func:`write_glb` writes it.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from nbst.errors import InputError
+from nbst.outputs import write_bytes_atomic
+
+__all__ = ["Solid", "Body", "BodyMotion", "continuous_quaternions", "gltf_document", "write_glb"]
+
+
+@dataclass(frozen=True)
+class Solid:
+    """One solid of a body: a triangle mesh in the body's frame and its colour.
+
+    Args:
+        mesh: a ``trimesh.Trimesh`` (vertices in the body's frame, metres or the world's units).
+        rgba: (4,) colour, each channel in [0, 1].
+    """
+
+    mesh: Any
+    rgba: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Body:
+    """A body to write: its name, its solids, and whether it moves (a static body keeps the pose
+    of the motion's first keyframe and gets no animation channel)."""
+
+    name: str
+    solids: list[Solid] = field(default_factory=list)
+    moves: bool = True
+
+
+@dataclass(frozen=True)
+class BodyMotion:
+    """Bodies and their poses at keyframe times.
+
+    Args:
+        bodies: the bodies, in the order of the pose arrays' second axis.
+        times: (T,) float64 array, keyframe times in s, strictly increasing, from 0.
+        pos: (T, nbody, 3) float64 array, each body's origin in the world frame.
+        quat: (T, nbody, 4) float64 array, each body's orientation (w, x, y, z), MuJoCo's order.
+    """
+
+    bodies: list[Body]
+    times: np.ndarray
+    pos: np.ndarray
+    quat: np.ndarray
+
+    def check(self) -> BodyMotion:
+        """This motion if its shapes and values are usable, else :class:`~nbst.errors.InputError`."""
+        t, n = len(self.times), len(self.bodies)
+        if t < 1 or self.pos.shape != (t, n, 3) or self.quat.shape != (t, n, 4):
+            raise InputError(f"motion: poses of shape {self.pos.shape} and {self.quat.shape} do not fit {t} times "
+                             f"and {n} bodies")
+        if not (np.isfinite(self.times).all() and np.isfinite(self.pos).all() and np.isfinite(self.quat).all()):
+            raise InputError("motion: a time or pose is not finite")
+        if t > 1 and not (np.diff(self.times) > 0).all():
+            raise InputError("motion: times must increase")
+        return self
+
+
+def continuous_quaternions(quat: np.ndarray) -> np.ndarray:
+    """Unit quaternions along axis 0 with each one's sign chosen so that its dot product with the
+    previous is >= 0 (the same rotations; slerp then takes the short way).
+
+    Args:
+        quat: (T, ..., 4) float64 array.
+
+    Returns:
+        (T, ..., 4) float64 array, normalised and sign-continuous.
+    """
+    q = np.array(quat, dtype=np.float64)
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    for k in range(1, len(q)):
+        flip = np.sum(q[k] * q[k - 1], axis=-1) < 0
+        q[k][flip] *= -1.0
+    return q
+
+
+class _Blob:
+    """The one binary buffer, its buffer views and accessors, 4-byte aligned."""
+
+    def __init__(self, gl: Any, pg: Any) -> None:
+        self.gl, self.pg, self.data = gl, pg, bytearray()
+
+    def add(self, array: np.ndarray, kind: str, *, target: int | None = None, bounds: bool = False) -> int:
+        pg = self.pg
+        comp = pg.UNSIGNED_INT if array.dtype == np.uint32 else pg.FLOAT
+        raw = np.ascontiguousarray(array).tobytes()
+        self.data.extend(b"\0" * (-len(self.data) % 4))
+        self.gl.bufferViews.append(pg.BufferView(buffer=0, byteOffset=len(self.data), byteLength=len(raw),
+                                                 target=target))
+        self.data.extend(raw)
+        acc = pg.Accessor(bufferView=len(self.gl.bufferViews) - 1, componentType=comp, count=int(array.shape[0]),
+                          type=kind)
+        if bounds:
+            flat = array.reshape(array.shape[0], -1)
+            acc.min = [float(x) for x in flat.min(axis=0)]
+            acc.max = [float(x) for x in flat.max(axis=0)]
+        self.gl.accessors.append(acc)
+        return len(self.gl.accessors) - 1
+
+
+def _material(gl: Any, pg: Any, cache: dict, rgba: tuple[float, ...]) -> int:
+    key = tuple(round(float(c), 6) for c in rgba)
+    if key not in cache:
+        gl.materials.append(pg.Material(
+            name=f"rgba({', '.join(f'{c:g}' for c in key)})", doubleSided=True,
+            alphaMode=pg.BLEND if key[3] < 1.0 else pg.OPAQUE,
+            pbrMetallicRoughness=pg.PbrMetallicRoughness(baseColorFactor=list(key), metallicFactor=0.0,
+                                                         roughnessFactor=0.8)))
+        cache[key] = len(gl.materials) - 1
+    return int(cache[key])
+
+
+def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes]:
+    """The glTF document of ``motion`` and its binary buffer (not yet attached).
+
+    Args:
+        motion: the bodies and poses (checked here).
+        name: the scene's and the animation's name.
+
+    Returns:
+        ``(pygltflib.GLTF2, bytes)``.
+
+    Raises:
+        InputError: the motion's shapes or values are unusable.
+    """
+    import pygltflib as pg
+
+    motion = motion.check()
+    gl = pg.GLTF2(asset=pg.Asset(generator="nbst export", version="2.0"))
+    blob = _Blob(gl, pg)
+    materials: dict = {}
+    quat = continuous_quaternions(motion.quat)
+    nodes = []
+    for b, body in enumerate(motion.bodies):
+        q0 = quat[0, b]
+        node = pg.Node(name=body.name, translation=[float(x) for x in motion.pos[0, b]],
+                       rotation=[float(q0[1]), float(q0[2]), float(q0[3]), float(q0[0])])
+        prims = []
+        for s in body.solids:
+            m = s.mesh.smooth_shaded if len(s.mesh.faces) else s.mesh
+            if not len(m.faces):
+                continue
+            v = np.asarray(m.vertices, dtype=np.float32)
+            nrm = np.asarray(m.vertex_normals, dtype=np.float32)
+            idx = np.asarray(m.faces, dtype=np.uint32).reshape(-1)
+            prims.append(pg.Primitive(
+                attributes=pg.Attributes(POSITION=blob.add(v, pg.VEC3, target=pg.ARRAY_BUFFER, bounds=True),
+                                         NORMAL=blob.add(nrm, pg.VEC3, target=pg.ARRAY_BUFFER)),
+                indices=blob.add(idx, pg.SCALAR, target=pg.ELEMENT_ARRAY_BUFFER),
+                material=_material(gl, pg, materials, s.rgba)))
+        if prims:
+            gl.meshes.append(pg.Mesh(name=body.name, primitives=prims))
+            node.mesh = len(gl.meshes) - 1
+        gl.nodes.append(node)
+        nodes.append(len(gl.nodes) - 1)
+    gl.scenes.append(pg.Scene(name=name, nodes=nodes))
+    gl.scene = 0
+    moving = [b for b, body in enumerate(motion.bodies) if body.moves]
+    if moving and len(motion.times) > 1:
+        anim = pg.Animation(name=name)
+        t_acc = blob.add(np.asarray(motion.times, dtype=np.float32), pg.SCALAR, bounds=True)
+        for b in moving:
+            xyzw = quat[:, b][:, [1, 2, 3, 0]]
+            for path, values, kind in ((pg.TRANSLATION, motion.pos[:, b], pg.VEC3), (pg.ROTATION, xyzw, pg.VEC4)):
+                anim.samplers.append(pg.AnimationSampler(input=t_acc, interpolation=pg.ANIM_LINEAR,
+                                                         output=blob.add(np.asarray(values, np.float32), kind)))
+                anim.channels.append(pg.AnimationChannel(sampler=len(anim.samplers) - 1,
+                                                         target=pg.AnimationChannelTarget(node=nodes[b], path=path)))
+        gl.animations.append(anim)
+    gl.buffers.append(pg.Buffer(byteLength=len(blob.data)))
+    return gl, bytes(blob.data)
+
+
+def write_glb(path: str | os.PathLike, motion: BodyMotion, *, name: str = "nbst", option: str = "--gltf") -> int:
+    """Write ``motion`` as a binary glTF 2.0 file (.glb), atomically.
+
+    Args:
+        path: the output file (checked by :func:`nbst.outputs.write_bytes_atomic`: never a link,
+            FIFO or folder).
+        motion: the bodies and poses.
+        name: the scene's and the animation's name.
+        option: the output's name in a refusal's line.
+
+    Returns:
+        the file's size in bytes.
+
+    Raises:
+        InputError: the motion's shapes or values are unusable.
+        OutputError: the path cannot be written.
+    """
+    gl, data = gltf_document(motion, name=name)
+    gl.set_binary_blob(data)
+    raw = b"".join(gl.save_to_bytes())
+    write_bytes_atomic(path, raw, option=option)
+    return len(raw)
