@@ -2,8 +2,10 @@
 
 Each is after the literature on constrained rigid-body animation (docs/scene.md): ``snake-eyes``
 (Barzel, Hughes & Wood 1996: two dice knocked off a table come up 1-1 in a marked square) and
-``egg-in-cup`` (Popovic et al. 2000: a thrown egg lands and stays in a cup) and ``bank-shot`` (a
-ball comes off the backboard and drops through the hoop: ``hits`` and ``through``). A fates path that is
+``egg-in-cup`` (Popovic et al. 2000: a thrown egg lands and stays in a cup), ``bank-shot`` (a
+ball comes off the backboard and drops through the hoop: ``hits`` and ``through``), ``billiards``
+(the cue ball hits the 3, then the 8, which drops in the called pocket; no scratch) and
+``dominoes`` (a row of 10 falls in order and the last knocks a bell off its post). A fates path that is
 not a file but names one of these loads it (``nbst scene solve snake-eyes``).
 """
 from __future__ import annotations

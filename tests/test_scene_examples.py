@@ -1,0 +1,114 @@
+"""The built-in examples billiards and dominoes (issue 46, examples 4 and 5): they load and pass
+``nbst scene check``, a physics fact of each holds within a stated tolerance (MuJoCo 4.0.0, the
+scenes' own timesteps), and (slow) each is solved at seed 1 and replays bit for bit."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nbst.cli.main import main
+from nbst.scene.builtin import example_path
+
+mujoco = pytest.importorskip("mujoco")
+
+R_BALL = 0.028575  # a pool ball's radius, m (57.15 mm across)
+
+
+def _model(name: str):
+    p = example_path(name)
+    assert p is not None
+    return mujoco.MjModel.from_xml_path(str(Path(p).with_suffix(".xml")))
+
+
+@pytest.mark.parametrize("name", ["billiards", "dominoes"])
+def test_the_examples_are_listed_and_pass_check(name, capsys):
+    assert main(["scene", "examples"]) == 0
+    assert name in capsys.readouterr().out
+    assert main(["scene", "check", name]) == 0
+    assert "hits" in capsys.readouterr().out
+
+
+def test_billiards_pool_balls_and_six_holes():
+    """Balls of 57.15 mm and 0.17 kg; six pockets, each a tray (the body "catches") under a hole."""
+    m = _model("billiards")
+    for b in ("cue", "ball3", "ball8"):
+        g = m.body_geomadr[m.body(b).id]
+        assert m.geom_size[g][0] == pytest.approx(R_BALL) and m.body_mass[m.body(b).id] == pytest.approx(0.17)
+    trays = [m.geom(i).name for i in range(m.ngeom) if m.geom(i).name.startswith("tray_")]
+    assert len(trays) == 6
+
+
+def test_billiards_a_ball_at_rest_stays_within_a_tenth_of_a_millimetre():
+    """Measured: 1.5e-7 m over 1 s at 2 ms (tolerance 1e-4 m)."""
+    m = _model("billiards")
+    d = mujoco.MjData(m)
+    q0 = d.qpos.copy()
+    for _ in range(int(round(1.0 / m.opt.timestep))):
+        mujoco.mj_step(m, d)
+    assert np.abs(d.qpos[:3] - q0[:3]).max() < 1e-4
+    assert np.abs(d.qpos[7:10] - q0[7:10]).max() < 1e-4
+
+
+def test_billiards_a_rolling_ball_slows_at_the_stated_rolling_resistance():
+    """Rolling resistance 0.01 (MuJoCo's rolling friction 0.01 r) slows a rolling solid ball by
+    0.01 g / 1.4 = 0.070 m/s^2; measured 0.0694 m/s^2 between 0.5 s and 1.5 s (tolerance 10 %)."""
+    m = _model("billiards")
+    d = mujoco.MjData(m)
+    d.qpos[0:2] = -1.0, -0.4  # the cue ball, with 1.5 m of clear cloth ahead along +x
+    d.qvel[0] = 1.0
+    d.qvel[4] = 1.0 / R_BALL  # rolling: omega_y = v / r
+    h = m.opt.timestep
+    for _ in range(int(round(0.5 / h))):
+        mujoco.mj_step(m, d)
+    v1 = d.qvel[0]
+    for _ in range(int(round(1.0 / h))):
+        mujoco.mj_step(m, d)
+    assert (v1 - d.qvel[0]) / 1.0 == pytest.approx(0.01 * 9.81 / 1.4, rel=0.1)
+
+
+def test_dominoes_the_untouched_row_stays_still():
+    """Nothing pushed, over the fates' duration: every domino and the bell within 0.1 mm (measured
+    7.3e-5 m at 1 ms, 3.8e-5 m at 0.5 ms), well inside ``"still"``'s 1 cm."""
+    p = example_path("dominoes")
+    assert p is not None
+    duration = json.loads(p.read_text())["duration"]
+    m = _model("dominoes")
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    p0 = d.xpos.copy()
+    most = 0.0
+    for _ in range(int(round(duration / m.opt.timestep))):
+        mujoco.mj_step(m, d)
+        most = max(most, float(np.abs(d.xpos - p0).max()))
+    assert most < 1e-4
+
+
+@pytest.mark.slow
+def test_dominoes_fall_in_order_at_h_and_h_over_2():
+    """A middling push (0.12 m/s, 5 rad/s about +y) meets every fate at the scene's 1 ms and at 0.5 ms."""
+    from nbst.scene.rollout import SceneSim
+    from nbst.scene.scenefile import load_fates
+
+    fates, model = load_fates(str(example_path("dominoes")))
+    x = np.array([0.12, 0, 0, 0, 5.0, 0])
+    for h in (model.opt.timestep, model.opt.timestep / 2):
+        model.opt.timestep = h
+        with SceneSim(fates, model) as sim:
+            r = sim.rollout(x)
+        assert r.judgement.met and not r.warnings, (h, r.judgement.to_dict())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["billiards", "dominoes"])
+def test_the_example_is_solved_at_seed_1_and_replays(name, tmp_path):
+    from nbst.scene.api import solve
+    from nbst.scene.solution import replay_solution, solution_dict
+
+    res = solve(None, name, seed=1, max_rollouts=2000)
+    assert res.met, (name, res.rollouts, res.best.judgement.to_dict())
+    p = tmp_path / "sol.json"
+    p.write_text(json.dumps(solution_dict(res)))
+    assert replay_solution(p).same
