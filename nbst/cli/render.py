@@ -31,8 +31,8 @@ from nbst.render.scene2d import Renderer2D, auto_labels
 from nbst.render.scene3d import Renderer3D
 from nbst.solution import load_solution
 
-__all__ = ["COMMANDS", "OUTPUT_SUFFIXES", "TAKES", "check_render_args", "cmd_plot_problem", "cmd_plot_trajectories",
-           "cmd_render", "cmd_render_throw", "make_renderer", "mujoco_positions", "parse_size", "register"]
+__all__ = ["CAMERAS", "COMMANDS", "OUTPUT_SUFFIXES", "TAKES", "check_render_args", "cmd_plot_problem",
+           "cmd_plot_trajectories", "cmd_render", "cmd_render_throw", "make_renderer", "mujoco_positions", "parse_size", "register"]
 
 FPS = Bounded("fps", 0.0, 240.0, lo_open=True)
 SPEED = Bounded("speed", 0.0, 1e6, lo_open=True)
@@ -63,7 +63,8 @@ def register(sub) -> None:
                "  nbst render tbone.json -o tbone.mp4 --follow A         # a crash file (nbst crash solve)\n"
                "  nbst render over5 sol.json -o out/over5.gif\n"
                "  nbst render diamond-s14 sol.json --still 0 -o out/start.png\n"
-               "  nbst render diamond-s14 sol.json -o out/check.mp4 --source both   # MuJoCo replay as rings",
+               "  nbst render diamond-s14 sol.json -o out/check.mp4 --source both   # MuJoCo replay as rings\n"
+               "  nbst render sol.json -o dice.mp4                       # a scene solution (nbst scene solve)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("problem", help="built-in name or path to a problem JSON file (or a crash file from `nbst crash "
                                    "solve`, rendered in 3D alone, docs/render.md)")
@@ -71,9 +72,13 @@ def register(sub) -> None:
                    help="path to a solution JSON file (e.g. from `nbst solve`); omit it when PROBLEM is a bowling "
                         "5 m throw file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")
     p.add_argument("-o", "--output", metavar="PATH", help="output file (required): .mp4, .gif, or .png with --still")
-    p.add_argument("--camera", choices=["behind", "overhead", "both"], default=None,
+    p.add_argument("--camera", default=None, metavar="CAMERA",
                    help="5 m bowling throws: behind the ball, overhead, or both side by side (default both); "
-                        "crash files: overhead (default), behind the --follow vehicle, or both")
+                        "crash files: overhead (default), behind the --follow vehicle, or both; scene "
+                        "solutions: the name of one of the scene's own cameras (default: one that frames the "
+                        "bodies)")
+    p.add_argument("--clean", action="store_true",
+                   help="scene solutions only: no overlay text (no readout, no labels), the picture alone")
     p.add_argument("--follow", default=None, metavar="NAME",
                    help="crash files only: a chase camera behind vehicle NAME, beside the overhead view")
     p.add_argument("--fps", type=FPS, default=None,
@@ -162,7 +167,10 @@ def parse_size(s: str) -> tuple[int, int]:
 OUTPUT_SUFFIXES = (".mp4", ".gif", ".png")
 #: What ``nbst render`` takes, said when it is given something else.
 TAKES = ("nbst render takes a problem (a built-in name or a problem .json) and its solution, a crash file "
-         "(`nbst crash solve`), or a 5 m bowling throw file (`nbst bowl solve`)")
+         "(`nbst crash solve`), a 5 m bowling throw file (`nbst bowl solve`), or a scene solution (`nbst scene "
+         "solve`)")
+#: The cameras of the crash and the 5 m throw videos (a scene solution's are its model's, by name).
+CAMERAS = ("behind", "overhead", "both")
 
 
 def check_render_args(args) -> int | None:
@@ -185,6 +193,17 @@ def cmd_render(args) -> int:
     bad = check_render_args(args)
     if bad is not None:
         return bad
+    from nbst.render.scene.video import is_scene_solution
+
+    if is_scene_solution(args.problem):  # sniffs the first bytes only; the solution's reader checks it
+        from nbst.cli.render_scene import cmd_render_scene
+
+        return cmd_render_scene(args)
+    if getattr(args, "clean", False):
+        return _err("render", "--clean applies to scene solutions only (from `nbst scene solve`)")
+    if args.camera is not None and args.camera not in CAMERAS:
+        return _err("render", f"--camera {args.camera}: use {', '.join(CAMERAS)} (a camera by name: scene "
+                              f"solutions only)")
     ck = crash_kind(args.problem)  # sniffs the first bytes only; the crash file's gate reads it, capped
     if ck == "crash":
         from nbst.cli.crash.render import cmd_render_crash
@@ -475,3 +494,4 @@ def cmd_render_throw(args) -> int:
     if not getattr(args, "quiet", False):
         print(f"nbst render: wrote {out} ({n} frame{'s' if n != 1 else ''})", file=sys.stderr)
     return 0
+

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-__all__ = ["look_at", "mesh_arrays", "perspective"]
+__all__ = ["look_at", "mesh_arrays", "orthographic", "perspective"]
 
 
 def mesh_arrays(mesh) -> np.ndarray:
@@ -52,4 +52,13 @@ def perspective(fov_y_deg, aspect, near, far) -> np.ndarray:
     m[0, 0], m[1, 1] = f / aspect, f
     m[2, 2], m[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
     m[3, 2] = -1.0
+    return m
+
+
+def orthographic(left, right, bottom, top, near, far) -> np.ndarray:
+    """(4, 4) an orthographic projection of the box [left, right] x [bottom, top] x [-near, -far] in
+    eye coordinates (OpenGL's glOrtho): a directional light's shadow map, an overhead view."""
+    m = np.eye(4)
+    m[0, 0], m[1, 1], m[2, 2] = 2 / (right - left), 2 / (top - bottom), -2 / (far - near)
+    m[:3, 3] = -(right + left) / (right - left), -(top + bottom) / (top - bottom), -(far + near) / (far - near)
     return m

@@ -1,0 +1,94 @@
+"""A scene video's readout: per fated body, each fate asked and, on the last frames, what happened.
+
+One block per body with fates (its name in the body's mark colour), one line per fate saying what
+was asked (``rest_in box (0.70, -0.10, 0.00)-(0.90, 0.10, 0.05)``); from the motion's end on, a
+line under each saying what happened (the judge's own words, ``nbst.scene.judge``) with a check
+mark (met) or a cross (not met), and the signature line: one bit per body, 1 when every fate of
+that body is met (the search's signature). The fates are judged on the replay, at the end.
+
+Compute only: :func:`readout` returns text lines; :func:`marks` splits the marks out for colour.
+"""
+from __future__ import annotations
+
+from nbst.scene.fates import AT_REST_SPEED, STILL_DISTANCE, Fate, Fates, Region
+from nbst.scene.judge import Judgement, signature_text
+
+__all__ = ["OK", "NO", "region_text", "asked", "readout", "widest", "marks", "body_rows"]
+
+OK, NO = "\u2713", "\u2717"
+_DEG = "\u00b0"
+
+
+def _v(p) -> str:
+    return "(" + ", ".join(f"{float(c):.2f}" for c in p) + ")"
+
+
+def region_text(r: Region) -> str:
+    """A region in a few words: ``ball r 0.06 at (2.00, 0.00, 1.62)`` or ``box (lo)-(hi)``."""
+    if r.center is not None:
+        return f"ball r {r.radius:.3g} at {_v(r.center)}"
+    return f"box {_v(r.lo)}-{_v(r.hi)}"
+
+
+def asked(f: Fate) -> list[tuple[str, str]]:
+    """(fate, what it asks) for each fate of one body, in the judge's order."""
+    out: list[tuple[str, str]] = []
+    if f.rest_in is not None:
+        out.append(("rest_in", region_text(f.rest_in)))
+    if f.at:
+        out.append(("at", "; ".join(f"t {t:g} s in {region_text(r)}" for t, r in f.at)))
+    if f.through:
+        out.append(("through", f"{len(f.through)} region{'s' if len(f.through) > 1 else ''} in order "
+                               f"(numbered in the view)"))
+    if f.up is not None:
+        (ax, within) = f.up
+        out.append(("up", f"axis {_v(ax)} up within {within:g}{_DEG} (arrow)"))
+    if f.hits:
+        out.append(("hits", "first touches " + ", then ".join(f.hits)))
+    if f.never_hits:
+        out.append(("never_hits", "never touches " + ", ".join(f.never_hits)))
+    if f.at_rest:
+        out.append(("at_rest", f"ends at rest (under {AT_REST_SPEED:g} m/s)"))
+    if f.still:
+        out.append(("still", f"never moves over {STILL_DISTANCE * 100:g} cm"))
+    return out
+
+
+def readout(title: str, t: float, fates: Fates, judgement: Judgement, *, final: bool) -> list[str]:
+    """The readout's lines at time ``t``: the title and time, then per body its fates asked and,
+    when ``final``, what happened with a mark, and the signature."""
+    lines = [title, f"t = {t:5.2f} s"]
+    verdicts = {b.body: {v.fate: v for v in b.fates} for b in judgement.bodies}
+    for f in fates.fates:
+        lines.append(f.body)
+        for name, text in asked(f):
+            lines.append(f"  {name}: {text}")
+            v = verdicts.get(f.body, {}).get(name)
+            if final and v is not None:
+                lines.append(f"    {OK if v.met else NO} {v.happened}")
+    if final:
+        sig = signature_text(judgement.signature)
+        lines.append(f"signature {sig}: " + ("every fate met" if judgement.met else "not every fate met"))
+    return lines
+
+
+def body_rows(lines: list[str], fates: Fates) -> list[int]:
+    """Per line, the index of the fated body it names (a block's first line), else -1."""
+    names = [f.body for f in fates.fates]
+    return [names.index(s) if s in names else -1 for s in lines]
+
+
+def widest(title: str, fates: Fates, judgement: Judgement, duration: float) -> tuple[int, int]:
+    """(characters, lines) of the longest readout: the final one."""
+    lines = readout(title, duration, fates, judgement, final=True)
+    return max(len(s) for s in lines), len(lines)
+
+
+def marks(lines: list[str]) -> tuple[list[str], list[str], list[str]]:
+    """(the lines without marks, only the check marks, only the crosses): drawn in three colours
+    at the same place."""
+    def keep(s: str, chars: str) -> str:
+        return "".join(c if c in chars else " " for c in s)
+
+    return ([s.replace(OK, " ").replace(NO, " ") for s in lines], [keep(s, OK) for s in lines],
+            [keep(s, NO) for s in lines])

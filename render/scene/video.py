@@ -1,0 +1,490 @@
+"""A scene solution in 3D (``nbst render SOL.json``): any MJCF drawn with moderngl.
+
+* **The scene**: every geom MuJoCo's viewer shows by default (groups 0-2, alpha above 0) as its
+  type's solid (:mod:`nbst.render.scene.geoms`: plane, sphere, capsule, ellipsoid, cylinder, box,
+  mesh) in its material's or its own colour, posed each frame from the replay
+  (:mod:`nbst.render.scene.motion`); lit by the model's first light (else :data:`LIGHT`) with the
+  3D worlds' shading (``nbst.render.core.shaders.SHADE``) and shadows from a shadow map of that
+  light; planes carry a faint checker so the floor reads.
+* **The fates**: each region (``rest_in``, ``at``, ``through``, the hoops numbered in order) as a
+  translucent solid with its outline in its body's mark colour; an ``up`` axis as an arrow on the
+  body; each first touch (an impact) as a yellow ball from its time on, labelled with the pair.
+* **The readout** (:mod:`nbst.render.scene.readout`), top left: asked vs happened. ``clean``
+  draws no text at all.
+* **Cameras**: a model camera by name, else one that frames the fated and controlled bodies' paths
+  and their regions, from the front and above (:data:`AZIMUTH`, :data:`ELEVATION`).
+
+Compute apart from I/O: :class:`SceneRenderer` returns frames; :func:`render_scene` is the thin
+writer the CLI calls; :func:`is_scene_solution` sniffs a file.
+"""
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+import numpy as np
+
+from nbst.errors import InputError
+from nbst.files import sniff_kind
+from nbst.render.core import style
+from nbst.render.core.camera import look_at, orthographic, perspective
+from nbst.render.core.gl import FrameRenderer, FrameTarget
+from nbst.render.core.shapes import Rect, Text, text_cell
+from nbst.render.core.times import frame_times
+from nbst.render.core.video import render_output
+from nbst.render.scene import geoms as sg
+from nbst.render.scene import readout as ro
+from nbst.render.scene.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
+from nbst.render.scene.motion import SceneMotion, record
+from nbst.scene.fates import Fates
+from nbst.scene.solution import SOLUTION_FORMAT
+
+__all__ = ["AZIMUTH", "ELEVATION", "FILL", "FOV", "LIGHT", "MARKS", "READOUT_FRAC", "SKY", "IMPACT", "SHADOW_PX", "SceneRenderer",
+           "is_scene_solution", "render_scene", "default_camera", "camera_names"]
+
+#: The framing camera looks at the bodies from this azimuth (degrees from +x, about +z; -90: from
+#: -y, the front) and elevation (degrees above the horizon), with this vertical field of view.
+AZIMUTH, ELEVATION, FOV = -75.0, 20.0, 40.0
+#: ... as near as it can with every corner of the framed box within this share of the frame.
+FILL = 0.8
+#: Towards the light when the model has none (world frame).
+LIGHT = (0.35, -0.5, 1.0)
+SKY = (0.78, 0.84, 0.90)
+#: The fated bodies' mark colours (regions, arrows, names), in the fates' order, repeated.
+MARKS = ((0.95, 0.45, 0.10), (0.15, 0.55, 0.95), (0.85, 0.20, 0.60), (0.25, 0.70, 0.30), (0.55, 0.35, 0.85))
+IMPACT = (1.0, 0.82, 0.15)
+OK_RGB, NO_RGB = (0.35, 0.85, 0.40), (0.95, 0.32, 0.26)
+PANEL_RGBA = (0.08, 0.09, 0.11, 0.72)
+#: The readout's text height as a share of the frame's smaller side (smaller where it does not fit).
+READOUT_FRAC = 0.02
+#: The shadow map's side (px).
+SHADOW_PX = 2048
+#: Regions are drawn this opaque; their outlines this.
+REGION_ALPHA, OUTLINE_ALPHA = 0.16, 0.9
+
+def is_scene_solution(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a regular .json file whose first bytes name the scene solution format
+    (``nbst.files.sniff_kind``; the solution's reader checks it)."""
+    return sniff_kind(path, (("scene", SOLUTION_FORMAT),)) == "scene"
+
+
+def camera_names(model: Any) -> list[str]:
+    """The model's cameras by name (unnamed ones as ``#k``)."""
+    return [model.camera(c).name or f"#{c}" for c in range(int(model.ncam))]
+
+
+_CUBE = np.array([[(-1.0, 1.0)[(k >> i) & 1] for i in range(3)] for k in range(8)])
+
+
+def _focus(motion: SceneMotion, fates: Fates, model: Any) -> np.ndarray:
+    """(N, 3) the points the default camera frames: the controlled and fated bodies' paths (the
+    corners of their geoms' bounding cubes at every frame), their regions' corners, and what their
+    ``hits`` and ``never_hits`` name (planes aside), where it starts."""
+    import mujoco
+
+    bodies = {int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n))
+              for n in [c.body for c in fates.controls] + [f.body for f in fates.fates]}
+    pts = []
+    for f in fates.fates:   # what they must touch or miss (a backboard, a bell), but no plane
+        for n in (*f.hits, *f.never_hits):
+            b = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n))
+            gs = ([g for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) == b] if b > 0
+                  else [int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n))])
+            for g in gs:
+                if g >= 0 and int(model.geom_type[g]) != sg.PLANE:
+                    pts.append(motion.geom_xpos[0, g] + float(model.geom_rbound[g]) * _CUBE)
+    for b in bodies:
+        gs = [g for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) == b]
+        r = max((float(model.geom_rbound[g]) + float(np.linalg.norm(model.geom_pos[g])) for g in gs), default=0.05)
+        pts.append((motion.body_xpos[:, b, None, :] + r * _CUBE).reshape(-1, 3))
+    for f in fates.fates:
+        for reg in _regions(f):
+            if reg.center is not None:
+                pts.append(np.asarray(reg.center) + reg.radius * _CUBE)
+            else:
+                lo, hi = np.asarray(reg.lo, float), np.asarray(reg.hi, float)
+                pts.append((lo + hi) / 2 + (hi - lo) / 2 * _CUBE)
+    return np.concatenate(pts)
+
+
+def _regions(f: Any) -> list[Any]:
+    return ([f.rest_in] if f.rest_in is not None else []) + [r for _, r in f.at] + list(f.through)
+
+
+def default_camera(points: np.ndarray, aspect: float, free: tuple[float, float, float, float]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The camera that frames ``points`` (N, 3) from :data:`AZIMUTH` and :data:`ELEVATION`.
+
+    It stands 1.3 times the points' extent from their box's centre and looks at it with a
+    :data:`FOV` lens; then the picture is scaled and moved (an off-axis frustum) so that the
+    points' projections fill :data:`FILL` of the ``free`` part of the frame (x0, y0, x1, y1 in
+    normalised device coordinates, y down: the part the readout leaves).
+
+    Returns:
+        (eye (3,), target (3,), the (4, 4) view-projection, image row 0 at the top).
+    """
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    c = (lo + hi) / 2
+    az, el = math.radians(AZIMUTH), math.radians(ELEVATION)
+    d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    dist = 1.3 * max(float(np.linalg.norm(hi - lo)), 0.05)
+    eye = c + d * dist
+    flip = np.diag([1.0, -1.0, 1.0, 1.0])
+    vp = flip @ perspective(FOV, aspect, dist / 100, dist * 50) @ look_at(eye, c, np.array([0.0, 0.0, 1.0]))
+    p = vp @ np.c_[points, np.ones(len(points))].T
+    ndc = p[:2] / p[3]
+    (x0, y0), (x1, y1) = ndc.min(axis=1), ndc.max(axis=1)
+    fx0, fy0, fx1, fy1 = free
+    sc = FILL * min((fx1 - fx0) / max(x1 - x0, 1e-9), (fy1 - fy0) / max(y1 - y0, 1e-9))
+    tx, ty = (fx0 + fx1) / 2 - sc * (x0 + x1) / 2, (fy0 + fy1) / 2 - sc * (y0 + y1) / 2
+    shift = np.array([[sc, 0, 0, tx], [0, sc, 0, ty], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+    return eye, c, shift @ vp
+
+
+class SceneRenderer(FrameRenderer):
+    """Frames of a replayed scene solution: ``render(t)`` -> (H, W, 3) uint8.
+
+    Args:
+        ctx: the moderngl context.
+        motion, fates, model: :func:`nbst.render.scene.motion.record`'s.
+        size: (W, H) px.
+        camera: a model camera's name, or None for the framing camera.
+        clean: no text (no readout, no labels).
+        title: the readout's first line.
+
+    Raises:
+        InputError: ``camera`` names no camera of the model (one line listing those it has).
+    """
+
+    def __init__(self, ctx: Any, motion: SceneMotion, fates: Fates, model: Any, *, size=style.DEFAULT_SIZE,
+                 camera: str | None = None, clean: bool = False, title: str = ""):
+        import moderngl
+        import mujoco
+
+        self.ctx, self.motion, self.fates, self.model = ctx, motion, fates, model
+        self._mgl = moderngl
+        self.size = (int(size[0]), int(size[1]))
+        self.clean, self.title = bool(clean), title
+        w, h = self.size
+        names = camera_names(model)
+        self.cam = -1
+        if camera is not None:
+            if camera not in names:
+                have = ", ".join(names) if names else "none"
+                raise InputError(f"camera {camera!r}: the scene has no camera of that name (its cameras: {have})")
+            self.cam = names.index(camera)
+        # the light: the model's first, else LIGHT (towards the light, world frame)
+        d = mujoco.MjData(model)
+        mujoco.mj_forward(model, d)
+        L = -np.asarray(d.light_xdir[0], float) if model.nlight else np.asarray(LIGHT, float)
+        if np.linalg.norm(L) < 1e-9:
+            L = np.asarray(LIGHT, float)
+        self.light = L / np.linalg.norm(L)
+        points = _focus(motion, fates, model)
+        self.lo, self.hi = points.min(axis=0), points.max(axis=0)
+        span = float(np.linalg.norm(self.hi - self.lo))
+        self.span = span
+        self.checker = 10.0 ** round(math.log10(max(span, 1e-3) / 6))
+        # the geoms: one vertex array per distinct shape
+        self.prog = ctx.program(vertex_shader=SCENE_VS, fragment_shader=SCENE_FS)
+        self.dprog = ctx.program(vertex_shader=DEPTH_VS, fragment_shader=DEPTH_FS)
+        self._objs: list[Any] = [self.prog, self.dprog]
+        cache: dict = {}
+        self.items: list[tuple[int, Any, Any, tuple[float, float, float, float], bool]] = []  # g, vao, depth vao, rgba, plane
+        extent = max(3.0 * span, 1.0)
+        for g in sg.visible_geoms(model):
+            t = int(model.geom_type[g])
+            key = (t, tuple(np.round(model.geom_size[g], 9)), int(model.geom_dataid[g]) if t == sg.MESH else -1)
+            if key not in cache:
+                rows = sg.geom_rows(model, g, extent=extent)
+                cache[key] = None if rows is None else self._vaos(rows)
+            if cache[key] is not None:
+                vao, dvao = cache[key]
+                self.items.append((g, vao, dvao, sg.geom_rgba(model, g), t == sg.PLANE))
+        # the fates' marks
+        self.marks: list[tuple[Any, Any, tuple[float, ...]]] = []   # (solid vao, outline vao, rgb)
+        self.hoops: list[tuple[np.ndarray, str, tuple[float, ...]]] = []   # (centre, label, rgb)
+        self.arrows: list[tuple[int, np.ndarray, Any, tuple[float, ...]]] = []  # (body, axis, vao, rgb)
+        for i, f in enumerate(fates.fates):
+            rgb = MARKS[i % len(MARKS)]
+            for r in _regions(f):
+                vao, _ = self._vaos(sg.region_solid(r)[0])
+                self.marks.append((vao, self._lines(sg.region_outline(r)), rgb))
+            for k, r in enumerate(f.through):
+                top = r.mid()   # the label over the region's top
+                top[2] = top[2] + r.radius if r.center is not None else float(np.asarray(r.hi, float)[2])
+                self.hoops.append((top, f"{f.body} {k + 1}", rgb))
+            for t_at, r in f.at:
+                self.hoops.append((r.mid(), f"{f.body} t {t_at:g} s", rgb))
+            if f.up is not None:
+                b = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body))
+                gs = [g for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) == b]
+                reach = max((float(model.geom_rbound[g]) + float(np.linalg.norm(model.geom_pos[g])) for g in gs),
+                            default=0.05)
+                vao, _ = self._vaos(sg.arrow_solid(2.2 * reach, 0.05 * reach))
+                self.arrows.append((b, np.asarray(f.up[0], float), vao, rgb))
+        rb = [float(model.geom_rbound[g]) for g in range(int(model.ngeom))
+              if fates.fates and int(model.geom_bodyid[g]) in
+              {int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body)) for f in fates.fates}]
+        self.impact_vao, _ = self._vaos(sg.sphere_rows(0.3 * (min(rb) if rb else 0.02)))
+        # the shadow map: an orthographic view from the light over the focus (and a margin)
+        self.shadow_tex = ctx.depth_texture((SHADOW_PX, SHADOW_PX))
+        self.shadow_tex.compare_func = "<="
+        self.shadow_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self.shadow_tex.repeat_x = self.shadow_tex.repeat_y = False
+        self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_tex)
+        self._objs += [self.shadow_fbo, self.shadow_tex]
+        R = 1.5 * span
+        c = (self.lo + self.hi) / 2
+        up = np.array([0.0, 1.0, 0.0]) if abs(self.light[2]) > 0.99 else np.array([0.0, 0.0, 1.0])
+        self.light_vp = orthographic(-R, R, -R, R, 0.0, 8 * R) @ look_at(c + 4 * R * self.light, c, up)
+        self.texel = 1.0 / SHADOW_PX
+        self.offset = 2 * (2 * R / SHADOW_PX)
+        # text: the readout in the frame's top left, as large as READOUT_FRAC of the frame where
+        # its longest (final) lines fit; the framing camera frames the bodies beside or below it,
+        # whichever leaves more room (also with ``clean``: the same view, with or without text)
+        chars, rows_ = ro.widest(title, fates, motion.judgement, motion.duration)
+        px = max(style.MIN_READOUT_PX, int(round(READOUT_FRAC * min(self.size))))
+        while px > style.MIN_READOUT_PX and ((chars + 2) * text_cell(px)[0] > 0.6 * w or
+                                             (rows_ + 1) * text_cell(px)[1] > 0.95 * h):
+            px -= 1
+        cw, ch = text_cell(px)
+        fw, fh = min((chars + 1.5) * cw / w, 0.6), min((rows_ + 1) * ch / h, 0.6)
+        # the framing camera: beside the readout or below it, whichever shows the bodies larger
+        best = None
+        for free in ((-1 + 2 * fw, -1.0, 1.0, 1.0), (-1.0, -1 + 2 * fh, 1.0, 1.0)):
+            eye, look, vpm = default_camera(points, w / h, free)
+            if best is None or abs(vpm[0, 0]) > abs(best[2][0, 0]):
+                best = (eye, look, vpm)
+        assert best is not None
+        self.eye, self.look, self.vpm = best
+        self.text = self.small = None
+        self.rect = None
+        if not self.clean:
+            self.text = Text(ctx, px)
+            self.small = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.019 * min(self.size)))))
+            self.rect = Rect(ctx)
+        self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
+        #: the boxes (x0, y0, x1, y1) px of the text drawn in the last frame
+        self.overlay_boxes: list[tuple[float, float, float, float]] = []
+
+    # ---------------------------------------------------------------- buffers
+
+    def _vaos(self, rows: np.ndarray) -> tuple[Any, Any]:
+        buf = self.ctx.buffer(np.ascontiguousarray(rows, dtype="f4").tobytes())
+        vao = self.ctx.vertex_array(self.prog, [(buf, "3f 3f", "in_pos", "in_normal")])
+        dvao = self.ctx.vertex_array(self.dprog, [(buf, "3f 12x", "in_pos")])
+        self._objs += [vao, dvao, buf]
+        return vao, dvao
+
+    def _lines(self, pts: np.ndarray) -> Any:
+        rows = np.concatenate([pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1))], axis=1)
+        vao, _ = self._vaos(rows)
+        return vao
+
+    # ---------------------------------------------------------------- cameras
+
+    def view(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(the view-projection (4, 4), the eye (3,)) of the frame at ``t``; image row 0 at the top."""
+        w, h = self.size
+        flip = np.diag([1.0, -1.0, 1.0, 1.0])
+        if self.cam >= 0:
+            k = self.motion.index(t)
+            p, R = self.motion.cam_xpos[k, self.cam], self.motion.cam_xmat[k, self.cam]
+            v = np.eye(4)
+            v[:3, :3] = R.T
+            v[:3, 3] = -R.T @ p
+            fov = float(self.model.cam_fovy[self.cam])
+            near = max(float(self.model.vis.map.znear) * float(self.model.stat.extent), 1e-3)
+            return flip @ perspective(fov, w / h, near, 1e3 * near + 100.0 * self.span) @ v, p
+        return self.vpm, self.eye
+
+    def to_pixel(self, vpm: np.ndarray, p: np.ndarray) -> tuple[float, float, bool]:
+        """(column, row, in front of the camera) of the world point ``p``."""
+        c = vpm @ np.r_[np.asarray(p, float)[:3], 1.0]
+        w, h = self.size
+        return (c[0] / c[3] + 1) / 2 * w, (c[1] / c[3] + 1) / 2 * h, bool(c[3] > 0)
+
+    # ---------------------------------------------------------------- drawing
+
+    @staticmethod
+    def _pose(R: np.ndarray, p: np.ndarray) -> bytes:
+        m = np.eye(4, dtype="f4")
+        m[:3, :3], m[:3, 3] = R, p
+        return m.T.copy().tobytes()
+
+    def draw(self, t: float) -> None:
+        mgl, ctx = self._mgl, self.ctx
+        k = self.motion.index(t)
+        gx, gm = self.motion.geom_xpos[k], self.motion.geom_xmat[k]
+        bx, bm = self.motion.body_xpos[k], self.motion.body_xmat[k]
+        t_now = float(self.motion.times[k])
+        # the shadow map
+        self.shadow_fbo.use()
+        self.shadow_fbo.clear(depth=1.0)
+        ctx.enable(mgl.DEPTH_TEST)
+        ctx.disable(mgl.BLEND)
+        self.dprog["u_light_vp"].write(self.light_vp.T.astype("f4").tobytes())
+        for g, _, dvao, rgba, plane in self.items:
+            if not plane and rgba[3] >= 1.0:
+                self.dprog["u_model"].write(self._pose(gm[g], gx[g]))
+                dvao.render(mgl.TRIANGLES)
+        # the scene
+        fbo = self.target.draw_fbo
+        fbo.use()
+        fbo.clear(*SKY, 1.0, depth=1.0)
+        vpm, eye = self.view(t)
+        P = self.prog
+        P["u_vp"].write(vpm.T.astype("f4").tobytes())
+        P["u_light_vp"].write(self.light_vp.T.astype("f4").tobytes())
+        P["u_light"].value = tuple(float(c) for c in self.light)
+        P["u_eye"].value = tuple(float(c) for c in eye)
+        P["u_offset"].value = float(self.offset)
+        P["u_texel"].value = float(self.texel)
+        P["u_lit"].value = 1.0
+        self.shadow_tex.use(0)
+        P["u_shadow"].value = 0
+        for g, vao, _, rgba, plane in self.items:
+            if rgba[3] >= 1.0:
+                self._solid(vao, gm[g], gx[g], rgba, checker=self.checker if plane else 0.0)
+        for b, axis, vao, rgb in self.arrows:   # an up-axis: along the body-frame axis
+            z = bm[b] @ axis
+            z = z / max(float(np.linalg.norm(z)), 1e-12)
+            x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
+            x /= np.linalg.norm(x)
+            self._solid(vao, np.column_stack([x, np.cross(z, x), z]), bx[b], (*rgb, 1.0))
+        for im in self.motion.touches:
+            if im.t <= t_now:
+                self._solid(self.impact_vao, np.eye(3), np.asarray(im.pos), (*IMPACT, 1.0))
+        # the translucent: geoms, regions, then the outlines
+        ctx.enable(mgl.BLEND)
+        ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA
+        fbo.depth_mask = False
+        for g, vao, _, rgba, plane in self.items:
+            if rgba[3] < 1.0:
+                self._solid(vao, gm[g], gx[g], rgba, checker=self.checker if plane else 0.0)
+        for vao, _, rgb in self.marks:
+            self._solid(vao, np.eye(3), np.zeros(3), (*rgb, REGION_ALPHA))
+        P["u_lit"].value = 0.0
+        for _, lines, rgb in self.marks:
+            self._solid(lines, np.eye(3), np.zeros(3), (*rgb, OUTLINE_ALPHA), mode=mgl.LINES)
+        fbo.depth_mask = True
+        ctx.disable(mgl.DEPTH_TEST)
+        self.overlay_boxes = []
+        if not self.clean:
+            self._overlay(t, t_now, vpm)
+        ctx.disable(mgl.BLEND)
+
+    def _solid(self, vao: Any, R: np.ndarray, p: np.ndarray, rgba, *, checker: float = 0.0, mode: Any = None) -> None:
+        P = self.prog
+        P["u_model"].write(self._pose(R, p))
+        P["u_color"].value = tuple(float(c) for c in rgba)
+        P["u_checker"].value = float(checker)
+        vao.render(self._mgl.TRIANGLES if mode is None else mode)
+
+    def readout(self, t: float) -> list[str]:  # type: ignore[override]  # the disks' readout counts insides
+        final = t >= self.motion.duration - 1e-9
+        return ro.readout(self.title, t, self.fates, self.motion.judgement, final=final)
+
+    def _overlay(self, t: float, t_now: float, vpm: np.ndarray) -> None:
+        """The labels (hoops in order, ``at`` regions, impacts: each where it leaves the readout and
+        the labels before it clear) and the readout over its panel."""
+        assert self.text is not None and self.small is not None and self.rect is not None
+        size = self.size
+        scw, sch = self.small.cell
+        lines = self.readout(min(t, self.motion.duration))
+        tx = self.text
+        cw, ch = tx.cell
+        x0, y0 = 0.6 * cw, 0.4 * ch
+        box = (0.0, 0.0, x0 + (max(len(s) for s in lines) + 0.6) * cw, y0 + (len(lines) + 0.3) * ch)
+        placed = [box]
+        labels = [(c, lab, rgb, False) for c, lab, rgb in self.hoops]
+        labels += [(np.asarray(im.pos), f"{im.body}-{im.other} {im.t:.2f} s", IMPACT, True)
+                   for im in self.motion.touches if im.t <= t_now]
+        for centre, label, rgb, impact in labels:
+            col, row, front = self.to_pixel(vpm, centre)
+            if not (front and 0 <= col < size[0] and 0 <= row < size[1]):
+                continue
+            wl = scw * len(label)
+            spots = ([(col + 0.8 * scw, row + 0.2 * sch), (col + 0.8 * scw, row - 1.2 * sch),
+                      (col - 0.8 * scw - wl, row + 0.2 * sch), (col - 0.8 * scw - wl, row - 1.2 * sch),
+                      (col - wl / 2, row + 1.2 * sch), (col - wl / 2, row - 2.2 * sch)] if impact else
+                     [(col - wl / 2, row - 1.4 * sch), (col + 0.8 * scw, row - 0.5 * sch),
+                      (col - 0.8 * scw - wl, row - 0.5 * sch)])
+            for x, y in spots:
+                x = float(np.clip(x, 0, max(0, size[0] - wl)))
+                y = float(np.clip(y, 0, max(0, size[1] - sch)))
+                bx = (x - 1, y - 1, x + wl + 1, y + sch + 1)
+                if not any(bx[0] < q[2] and q[0] < bx[2] and bx[1] < q[3] and q[1] < bx[3] for q in placed):
+                    self._label(label, x, y, rgb)
+                    placed.append(bx)
+                    self.overlay_boxes.append(bx)
+                    break
+        self.rect.draw(size, box, fill=PANEL_RGBA, rim=PANEL_RGBA, stroke=0.0)
+        self.overlay_boxes.append(box)
+        plain, oks, nos = ro.marks(lines)
+        owner = ro.body_rows(lines, self.fates)
+        tx.draw(size, tx.layout([s if owner[j] < 0 else "" for j, s in enumerate(plain)], x0, y0), style.TEXT)
+        for j, s in enumerate(plain):
+            if owner[j] >= 0:
+                tx.draw(size, tx.layout([s], x0, y0 + j * ch), MARKS[owner[j] % len(MARKS)])
+        tx.draw(size, tx.layout(oks, x0, y0), OK_RGB)
+        tx.draw(size, tx.layout(nos, x0, y0), NO_RGB)
+
+    def _label(self, text: str, x: float, y: float, colour) -> None:
+        sm = self.small
+        assert sm is not None
+        sm.draw_halo(self.size, sm.layout([text], x, y), colour, style.TEXT_HALO)
+
+    def release(self) -> None:
+        for o in self._objs:
+            o.release()
+        for t in (self.text, self.small, self.rect):
+            if t is not None:
+                t.release()
+        self.target.release()
+
+
+def render_scene(path: str | os.PathLike, output: str | os.PathLike, *, still: float | None = None,
+                 camera: str | None = None, clean: bool = False, size=None, fps: float | None = None,
+                 speed: float = 1.0, hold: float = 1.0, progress=None) -> int:
+    """Render a scene solution's motion to ``output`` (.mp4/.gif, or a .png at time ``still``).
+
+    Args:
+        path: the scene solution file (``nbst scene solve -o``).
+        output: the .mp4, .gif or .png to write.
+        still: None for a video; seconds: the one frame of a PNG (clipped to the motion).
+        camera: a model camera's name; None: the camera that frames the bodies.
+        clean: no overlay text.
+        size, fps: (width, height) px and frames per second (default 1280 x 720, 60).
+        speed: simulated seconds per second of video.
+        hold: seconds of video holding the last frame.
+        progress: None, or an object whose ``update(1)`` is called after each frame.
+
+    Returns:
+        The number of frames written (1 for a still).
+
+    Raises:
+        SceneSolutionError, FatesError: the solution, its fates or its scene is refused (one line).
+        InputError: no camera of that name.
+        RenderError: no GL context, an extension other than .mp4/.gif/.png, or the encoder failed.
+    """
+    from nbst.render.scene.motion import load_solution_scene
+
+    doc, fates, model = load_solution_scene(path)
+    if camera is not None and camera not in camera_names(model):
+        have = ", ".join(camera_names(model)) or "none"
+        raise InputError(f"camera {camera!r}: the scene has no camera of that name (its cameras: {have})")
+    duration = int(doc["nstep"]) * float(doc["timestep"])
+    fps_ = float(fps or style.DEFAULT_FPS)
+    times = (np.array([min(max(float(still), 0.0), duration)]) if still is not None
+             else frame_times(duration, fps_, speed=speed, hold=hold))
+    # a still records the whole motion too: the framing camera frames the same paths as the video's
+    motion, fates, model = record(path, times if still is None else np.union1d(times, frame_times(duration, 30.0)))
+    size = tuple(size or style.DEFAULT_SIZE)
+    title = fates.scene.stem
+    return render_output(lambda ctx: SceneRenderer(ctx, motion, fates, model, size=size, camera=camera, clean=clean,
+                                                   title=title),
+                         output, still=None if still is None else float(times[0]),
+                         times=lambda r, f: times, fps=fps_, progress=progress)

@@ -1,0 +1,203 @@
+"""nbst render SOL.json: a scene solution drawn with moderngl (nbst.render.scene).
+
+Physical and visual facts on frames: a pixel at a body's projected centre has its colour (every
+geom type, a material's colour, a model camera by name), hidden groups and clear geoms are not
+drawn, the frame count is frame_times', a --clean frame differs from the annotated one only where
+the readout and labels are, the impacts are the judge's first touches, the replay is bit for bit;
+a bad camera name is one line, exit 2, nothing written.
+"""
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from nbst.cli.main import main
+from nbst.render.core.times import frame_times
+from nbst.render.scene import motion as sm
+from nbst.render.scene import video as sv
+from nbst.scene import solution_dict, solve
+
+SHAPES = """<mujoco model="shapes">
+  <option timestep="0.002"/>
+  <asset>
+    <mesh name="ico" file="ico.stl"/>
+    <material name="amber" rgba="0.9 0.5 0.1 1"/>
+  </asset>
+  <worldbody>
+    <light pos="0 0 4" dir="0.3 0.3 -1" directional="true"/>
+    <camera name="top" pos="0 0 4" fovy="60"/>
+    <geom name="floor" type="plane" size="3 3 0.05" rgba="0.5 0.5 0.5 1"/>
+    <geom name="cap" type="capsule" size="0.1" fromto="-1 0.6 0.1 -0.6 0.6 0.1" rgba="0.9 0.1 0.1 1"/>
+    <geom name="ell" type="ellipsoid" size="0.2 0.12 0.08" pos="0 0.6 0.08" rgba="0.1 0.8 0.1 1"/>
+    <geom name="cyl" type="cylinder" size="0.15 0.1" pos="0.8 0.6 0.1" rgba="0.1 0.1 0.9 1"/>
+    <geom name="box" type="box" size="0.15 0.15 0.1" pos="-0.8 -0.6 0.1" rgba="0.1 0.1 0.9 1" material="amber"/>
+    <geom name="mesh" type="mesh" mesh="ico" pos="0 -0.6 0.15" rgba="0.1 0.8 0.8 1"/>
+    <geom name="hidden" type="box" size="0.15 0.15 0.1" pos="0.8 -0.6 0.1" rgba="0.9 0.1 0.9 1" group="4"/>
+    <geom name="clear" type="sphere" size="0.15" pos="-0.8 0 0.15" rgba="0.9 0.1 0.1 0"/>
+    <body name="ball" pos="0.8 0 0.1">
+      <freejoint/>
+      <geom name="ball_g" type="sphere" size="0.1" rgba="0.6 0.2 0.8 1"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+SHAPES_FATES = {"format": "nbst-fates", "version": 1, "scene": "shapes.xml", "duration": 0.2,
+                "controls": {"ball": {"linvel": [[-0.01, 0.01], [-0.01, 0.01], [0, 0]]}},
+                "fates": {"ball": {"rest_in": {"center": [-0.4, 0, 0.1], "radius": 0.05}}}}
+
+
+def _write(res, path):
+    path.write_text(json.dumps(solution_dict(res)))
+    return path
+
+
+@pytest.fixture(scope="module")
+def solutions(tmp_path_factory):
+    """Each built-in's solution at seed 1 on a small budget (met or not: either is drawn), and the
+    shapes scene's."""
+    import trimesh
+
+    d = tmp_path_factory.mktemp("scene")
+    out = {name: _write(solve(None, name, seed=1, max_rollouts=budget), d / f"{name}.json")
+           for name, budget in (("snake-eyes", 16), ("bank-shot", 16), ("egg-in-cup", 4))}
+    (d / "shapes.xml").write_text(SHAPES)
+    trimesh.creation.icosphere(subdivisions=2, radius=0.15).export(d / "ico.stl")
+    (d / "shapes.json").write_text(json.dumps(SHAPES_FATES))
+    out["shapes"] = _write(solve(None, d / "shapes.json", seed=1, max_rollouts=4), d / "shapes-sol.json")
+    return out
+
+
+@pytest.fixture(scope="module")
+def gl():
+    """The only place this file creates a GL context (EGL, headless)."""
+    from nbst.render.core.gl import create_context
+
+    ctx = create_context()
+    yield ctx
+    ctx.release()
+
+
+def _frame(gl, path, t, *, size=(640, 360), **kw):
+    doc = json.loads(path.read_text())
+    motion, fates, model = sm.record(path, frame_times(doc["nstep"] * doc["timestep"], 30.0))
+    r = sv.SceneRenderer(gl, motion, fates, model, size=size, title="t", **kw)
+    try:
+        return r, r.render(t), r.view(t)[0], motion, model
+    finally:
+        r.release()
+
+
+def _chroma(c):
+    c = np.asarray(c, float)[:3]
+    return (c - c.min()) / max(c.max() - c.min(), 1e-9)
+
+
+def _has_colour(pixel, rgb, tol=0.2) -> bool:
+    """The pixel is lit ``rgb``: the same hue and saturation order, whatever its brightness."""
+    p = np.asarray(pixel, float) / 255
+    return bool(p.max() - p.min() > 0.15 and np.abs(_chroma(p) - _chroma(rgb)).max() < tol)
+
+
+def test_every_geom_type_in_its_colour_from_the_model_camera(gl, solutions):
+    """From the model's camera "top", each geom's top has its colour (a material's over the geom's
+    rgba); a group-4 geom and an alpha-0 geom are not drawn (the floor shows there)."""
+    r, img, vpm, motion, model = _frame(gl, solutions["shapes"], 0.0, camera="top", clean=True)
+    checks = {"cap": ((-0.8, 0.6, 0.2), (0.9, 0.1, 0.1)), "ell": ((0, 0.6, 0.16), (0.1, 0.8, 0.1)),
+              "cyl": ((0.8, 0.6, 0.2), (0.1, 0.1, 0.9)), "box": ((-0.8, -0.6, 0.2), (0.9, 0.5, 0.1)),
+              "mesh": ((0, -0.6, 0.3), (0.1, 0.8, 0.8)), "ball": ((0.8, 0, 0.2), (0.6, 0.2, 0.8))}
+    for name, (p, rgb) in checks.items():
+        col, row, front = r.to_pixel(vpm, p)
+        assert front
+        assert _has_colour(img[int(row), int(col)], rgb), (name, img[int(row), int(col)])
+    for p in ((0.8, -0.6, 0.2), (-0.8, 0.0, 0.3), (0.0, 0.0, 0.0)):   # hidden, clear, bare floor: grey
+        col, row, _ = r.to_pixel(vpm, p)
+        px = img[int(row), int(col)].astype(int)
+        assert px.max() - px.min() < 12 and px.min() > 60, px
+
+
+def test_ball_pixel_impacts_and_replay(gl, solutions):
+    """bank-shot: the ball in flight is drawn in its material's orange where it projects, from the
+    framing camera; the impacts drawn are the judge's first touches, at the same times; the
+    recorded replay ends in the solution's final state bit for bit."""
+    path = solutions["bank-shot"]
+    r, img, vpm, motion, model = _frame(gl, path, 0.3, clean=True)
+    assert motion.same
+    k = motion.index(0.3)
+    col, row, front = r.to_pixel(vpm, motion.body_xpos[k, model.body("ball").id])
+    assert front and 0 <= col < 640 and 0 <= row < 360
+    assert _has_colour(img[int(row), int(col)], (0.85, 0.4, 0.1)), img[int(row), int(col)]
+    hits = next(v for b in motion.judgement.bodies for v in b.fates if v.fate == "hits")
+    said = dict(re.findall(r"(\w+) at ([0-9.]+) s", hits.happened))
+    drawn = {t.other: f"{t.t:.3f}" for t in motion.touches if t.body == "ball"}
+    for name, when in said.items():
+        assert drawn[name] == when
+
+
+def test_clean_differs_only_under_the_readout(gl, solutions):
+    """A --clean frame is the annotated one without its text: equal outside the readout panel and
+    the labels, different inside the panel; the readout says asked and, on the last frame, what
+    happened with a mark per fate."""
+    path = solutions["snake-eyes"]
+    doc = json.loads(path.read_text())
+    end = doc["nstep"] * doc["timestep"]
+    r, text, _, motion, _ = _frame(gl, path, end)
+    _, clean, _, _, _ = _frame(gl, path, end, clean=True)
+    boxes = r.overlay_boxes
+    assert boxes
+    mask = np.zeros(text.shape[:2], bool)
+    for x0, y0, x1, y1 in boxes:
+        mask[max(0, int(y0) - 1):int(np.ceil(y1)) + 2, max(0, int(x0) - 1):int(np.ceil(x1)) + 2] = True
+    assert np.array_equal(text[~mask], clean[~mask])
+    x0, y0, x1, y1 = boxes[-1]   # the readout's panel, drawn last
+    assert (text[int(y0):int(y1), int(x0):int(x1)] != clean[int(y0):int(y1), int(x0):int(x1)]).any()
+    lines = r.readout(end)
+    nfates = sum(len(b.fates) for b in motion.judgement.bodies)
+    assert sum(s.strip().startswith(("\u2713", "\u2717")) for s in lines) == nfates
+    assert lines[-1].startswith("signature ")
+
+
+def _frames(solutions, tmp_path, name):
+    doc = json.loads(solutions[name].read_text())
+    duration = doc["nstep"] * doc["timestep"]
+    out = tmp_path / f"{name}.mp4"
+    n = sv.render_scene(solutions[name], out, size=(160, 96), fps=4.0, hold=0.5)
+    assert n == len(frame_times(duration, 4.0, hold=0.5)) and out.stat().st_size > 0
+
+
+def test_a_video_has_frame_times_frames(solutions, tmp_path):
+    """A scene solution renders to a video of exactly frame_times' frames."""
+    _frames(solutions, tmp_path, "bank-shot")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["snake-eyes", "egg-in-cup"])
+def test_each_builtin_renders(solutions, tmp_path, name):
+    """Every built-in's solution renders (the others of the test above)."""
+    _frames(solutions, tmp_path, name)
+
+
+def test_cli_camera_by_name_and_a_bad_one(solutions, tmp_path, capsys):
+    """`nbst render SOL.json --camera NAME`: a model camera's name draws; another is refused in one
+    line (exit 2) naming the cameras there are, and nothing is written; --clean is for scenes."""
+    png = tmp_path / "top.png"
+    assert main(["render", str(solutions["shapes"]), "-o", str(png), "--still", "0.1", "--camera", "top",
+                 "--clean", "-q"]) == 0
+    assert png.stat().st_size > 0
+    capsys.readouterr()
+    bad = tmp_path / "bad.mp4"
+    assert main(["render", str(solutions["shapes"]), "-o", str(bad), "--camera", "nope"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nope" in err[0] and "top" in err[0]
+    assert not bad.exists()
+    assert main(["render", "over5", "x.json", "-o", str(bad), "--clean"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_sniff(solutions, tmp_path):
+    assert sv.is_scene_solution(solutions["bank-shot"])
+    p = tmp_path / "x.json"
+    p.write_text('{"format": "nbst-fates"}')
+    assert not sv.is_scene_solution(p)
