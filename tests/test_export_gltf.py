@@ -20,7 +20,7 @@ import pytest
 pygltflib = pytest.importorskip("pygltflib")
 
 from nbst.cli.main import main  # noqa: E402
-from nbst.export.gltf import continuous_quaternions, write_glb  # noqa: E402
+from nbst.export.gltf import continuous_quaternions, gltf_document, write_glb  # noqa: E402
 from nbst.export.mjbodies import sampled_steps  # noqa: E402
 from nbst.export.worlds import file_kind, file_motion  # noqa: E402
 
@@ -225,6 +225,19 @@ def test_mujoco_worlds_key_the_replays_own_states(files):
     idx = sampled_steps(cm.times, 30)
     pos, quat = body_poses(cmodel, cm.qpos[idx])
     assert np.array_equal(motion.pos, pos) and np.array_equal(motion.times, cm.times[idx])
+    # glTF's (x, y, z, w), read as a rotation matrix the way a viewer does, is MuJoCo's xmat
+    from scipy.spatial.transform import Rotation
+
+    gl, blob = gltf_document(motion)
+    gl.set_binary_blob(blob)
+    d = mujoco.MjData(cmodel)
+    d.qpos[:] = cm.qpos[idx[-1]]
+    mujoco.mj_kinematics(cmodel, d)
+    for ch in gl.animations[0].channels:
+        if ch.target.path == "rotation":
+            xyzw = _read(gl, gl.animations[0].samplers[ch.sampler].output)[-1]
+            want = d.xmat[ch.target.node].reshape(3, 3)
+            assert np.abs(Rotation.from_quat(xyzw).as_matrix() - want).max() < 1e-6
 
 
 @pytest.mark.slow
