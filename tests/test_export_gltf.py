@@ -20,7 +20,7 @@ import pytest
 pygltflib = pytest.importorskip("pygltflib")
 
 from nbst.cli.main import main  # noqa: E402
-from nbst.export.gltf import continuous_quaternions, gltf_document, write_glb  # noqa: E402
+from nbst.export.gltf import BodyMotion, continuous_quaternions, gltf_document, write_glb  # noqa: E402
 from nbst.export.mjbodies import sampled_steps  # noqa: E402
 from nbst.export.worlds import file_kind, file_motion  # noqa: E402
 
@@ -264,7 +264,7 @@ def test_sampled_steps_are_the_nearest_states_with_both_ends():
 def test_every_geom_type_becomes_a_mesh_in_its_bodys_frame():
     import mujoco
 
-    from nbst.export.mjbodies import model_bodies
+    from nbst.export.mjbodies import PLANE_HALF, model_bodies
 
     xml = """<mujoco><asset><mesh name="tet" vertex="0 0 0  1 0 0  0 1 0  0 0 1"/>
       <material name="red" rgba="1 0 0 1"/></asset><worldbody>
@@ -283,15 +283,30 @@ def test_every_geom_type_becomes_a_mesh_in_its_bodys_frame():
     m = mujoco.MjModel.from_xml_string(xml)
     world, b = model_bodies(m)
     assert len(world.solids) == 2 and not world.moves and b.moves and len(b.solids) == 6
-    assert np.allclose(world.solids[0].mesh.bounds, [[-2, -3, 0], [2, 3, 0]])
-    assert np.allclose(world.solids[1].mesh.bounds[1, :2], 50.0)
+
+    def bounds(solid):
+        return np.array([solid.rows[:, :3].min(axis=0), solid.rows[:, :3].max(axis=0)])
+
+    assert np.allclose(bounds(world.solids[0]), [[-2, -3, 0], [2, 3, 0]])
+    assert np.allclose(bounds(world.solids[1])[1, :2], PLANE_HALF)
     sphere, capsule, cyl, ell, box, tet = b.solids
-    assert np.allclose(sphere.mesh.bounds, [[.4, -.1, -.1], [.6, .1, .1]], atol=2e-3)
-    assert capsule.rgba == (1.0, 0.0, 0.0, 1.0) and np.allclose(capsule.mesh.bounds[:, 2], [-.4, .4], atol=1e-6)
-    assert np.allclose(cyl.mesh.bounds[:, 1], [-.4, .4], atol=1e-6)     # turned about x: its axis along y
-    assert np.allclose(ell.mesh.bounds, [[-.1, -.2, -.3], [.1, .2, .3]], atol=1e-6)
-    assert np.allclose(box.mesh.bounds, [[-.1, -.2, -.3], [.1, .2, .3]])
-    assert len(tet.mesh.faces) == 4
+    assert np.allclose(bounds(sphere), [[.4, -.1, -.1], [.6, .1, .1]], atol=2e-3)
+    assert capsule.rgba == (1.0, 0.0, 0.0, 1.0) and np.allclose(bounds(capsule)[:, 2], [-.4, .4], atol=1e-6)
+    assert np.allclose(bounds(cyl)[:, 1], [-.4, .4], atol=1e-6)     # turned about x: its axis along y
+    assert np.allclose(bounds(ell), [[-.1, -.2, -.3], [.1, .2, .3]], atol=1e-6)
+    assert np.allclose(bounds(box), [[-.1, -.2, -.3], [.1, .2, .3]])
+    assert len(tet.rows) == 12
+    for s in b.solids:   # unit normals, turned with their geom
+        assert np.allclose(np.linalg.norm(s.rows[:, 3:], axis=1), 1.0, atol=1e-5)
+    top = cyl.rows[np.argmax(cyl.rows[:, 1])]
+    assert np.allclose(top[3:], [0, 1, 0], atol=1e-6)
+    # written and read back: every corner once per (position, normal), indexed
+    gl, blob = gltf_document(BodyMotion(bodies=[b], times=np.zeros(1), pos=np.zeros((1, 1, 3)),
+                                        quat=np.array([[[1.0, 0, 0, 0]]])))
+    gl.set_binary_blob(blob)
+    prim = gl.meshes[0].primitives[4]
+    v, idx = _read(gl, prim.attributes.POSITION), _read(gl, prim.indices)[:, 0].astype(int)
+    assert len(v) == 24 and np.allclose(v[idx], box.rows[:, :3], atol=1e-7)
 
 
 def test_bad_input_is_one_line_exit_2_and_nothing_written(files, tmp_path, capsys):

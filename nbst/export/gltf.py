@@ -1,7 +1,7 @@
 """The world-agnostic glTF 2.0 writer: bodies with their meshes, and per-body poses over time.
 
-A body is a name and its solids (a :class:`Solid`: a ``trimesh.Trimesh`` in the body's frame and an
-RGBA colour). :func:`write_glb` writes one node per body carrying one glTF mesh (a primitive per
+A body is a name and its solids (a :class:`Solid`: triangles in the body's frame, as the renderer's
+rows of position and normal, and an RGBA colour). :func:`write_glb` writes one node per body carrying one glTF mesh (a primitive per
 solid, each with a material whose ``baseColorFactor`` is the solid's RGBA; ``alphaMode`` BLEND
 below alpha 1), and one animation whose channels move each moving body: a ``translation`` and a
 ``rotation`` sampler per body, LINEAR interpolation, over one shared time accessor. Bodies that
@@ -34,14 +34,16 @@ __all__ = ["Solid", "Body", "BodyMotion", "continuous_quaternions", "gltf_docume
 
 @dataclass(frozen=True)
 class Solid:
-    """One solid of a body: a triangle mesh in the body's frame and its colour.
+    """One solid of a body: unshared triangles in the body's frame and its colour.
 
     Args:
-        mesh: a ``trimesh.Trimesh`` (vertices in the body's frame, metres or the world's units).
+        rows: (3 x ntriangle, 6) float array, each triangle corner's position (m, or the world's
+            units) and unit normal, as the renderer's geometry gives them
+            (:func:`nbst.render.scene.geoms.geom_rows`).
         rgba: (4,) colour, each channel in [0, 1].
     """
 
-    mesh: Any
+    rows: np.ndarray
     rgba: tuple[float, float, float, float]
 
 
@@ -165,12 +167,13 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
                        rotation=[float(q0[1]), float(q0[2]), float(q0[3]), float(q0[0])])
         prims = []
         for s in body.solids:
-            m = s.mesh.smooth_shaded if len(s.mesh.faces) else s.mesh
-            if not len(m.faces):
+            if len(s.rows) < 3:
                 continue
-            v = np.asarray(m.vertices, dtype=np.float32)
-            nrm = np.asarray(m.vertex_normals, dtype=np.float32)
-            idx = np.asarray(m.faces, dtype=np.uint32).reshape(-1)
+            # corners shared by triangles (same position and normal) stored once, and indexed
+            corners, inverse = np.unique(np.asarray(s.rows, np.float32), axis=0, return_inverse=True)
+            v, nrm = np.ascontiguousarray(corners[:, :3]), corners[:, 3:]
+            nrm = np.ascontiguousarray(nrm / np.linalg.norm(nrm, axis=1, keepdims=True))
+            idx = np.asarray(inverse, dtype=np.uint32).reshape(-1)
             prims.append(pg.Primitive(
                 attributes=pg.Attributes(POSITION=blob.add(v, pg.VEC3, target=pg.ARRAY_BUFFER, bounds=True),
                                          NORMAL=blob.add(nrm, pg.VEC3, target=pg.ARRAY_BUFFER)),

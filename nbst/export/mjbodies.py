@@ -1,12 +1,13 @@
 """MuJoCo models to glTF bodies, and recorded states to body poses.
 
-:func:`model_bodies` turns every body of a compiled ``mujoco.MjModel`` that has a visible geom into
-a :class:`~nbst.export.gltf.Body` whose solids are its geoms in the body's frame: plane (a quad: its
-half-sizes, or :data:`PLANE_HALF` m for an infinite one), sphere, capsule, ellipsoid, cylinder, box
-and mesh (the compiled vertices and faces), each coloured by its material's RGBA when it has one,
-else its own ``geom_rgba``. A geom is visible when its alpha is above 0 and its group is one
-MuJoCo's viewer shows by default (0, 1, 2). Heightfields and SDFs are not exported (none of nbst's
-worlds has one). The world body (id 0) is one static body. :func:`body_poses` runs
+:func:`model_bodies` turns every body of a compiled ``mujoco.MjModel`` into a
+:class:`~nbst.export.gltf.Body` whose solids are its visible geoms in the body's frame, with the
+renderer's geometry, visibility and colours (:mod:`nbst.render.scene.geoms`, the code ``nbst render``
+draws a scene with): plane (a quad: its half-sizes, or :data:`PLANE_HALF` m for an infinite one),
+sphere, capsule, ellipsoid, cylinder, box and mesh (the compiled vertices and faces), each coloured
+by its material's RGBA when it has one, else its own ``geom_rgba``; a geom is visible when its alpha
+is above 0 and its group is one MuJoCo's viewer shows by default (0, 1, 2). Heightfields are not
+exported (none of nbst's worlds has one). The world body (id 0) is one static body. :func:`body_poses` runs
 ``mj_kinematics`` on recorded ``qpos`` rows: every body's ``xpos`` and ``xquat``.
 """
 from __future__ import annotations
@@ -16,13 +17,12 @@ from typing import Any
 import numpy as np
 
 from nbst.export.gltf import Body, BodyMotion, Solid
+from nbst.render.scene.geoms import geom_rgba, geom_rows, visible_geoms
 
-__all__ = ["PLANE_HALF", "VISIBLE_GROUPS", "geom_mesh", "model_bodies", "body_poses", "sampled_steps", "qpos_motion"]
+__all__ = ["PLANE_HALF", "geom_body_rows", "model_bodies", "body_poses", "sampled_steps", "qpos_motion"]
 
 #: Half-size (m) of the quad drawn for an infinite plane (size 0 in MJCF).
 PLANE_HALF = 50.0
-#: The geom groups MuJoCo's viewer shows by default.
-VISIBLE_GROUPS = (0, 1, 2)
 
 
 def _quat_matrix(q: np.ndarray) -> np.ndarray:
@@ -32,56 +32,26 @@ def _quat_matrix(q: np.ndarray) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def geom_mesh(model: Any, g: int) -> Any:
-    """Geom ``g`` of ``model`` as a ``trimesh.Trimesh`` in its body's frame, or None (a type not exported).
+def geom_body_rows(model: Any, g: int) -> np.ndarray | None:
+    """Geom ``g`` of ``model`` as triangle rows (position, normal) in its body's frame: the
+    renderer's own geometry (:func:`nbst.render.scene.geoms.geom_rows`, in the geom's frame)
+    placed by ``geom_pos`` and ``geom_quat``.
 
     Args:
         model: a compiled ``mujoco.MjModel``.
         g: the geom's id.
 
     Returns:
-        the mesh, or None for a heightfield, SDF or other type.
+        (V, 6) float64 array, or None for a type not drawn (a heightfield).
     """
-    import mujoco
-    import trimesh
-
-    t, size = int(model.geom_type[g]), np.asarray(model.geom_size[g], float)
-    G = mujoco.mjtGeom
-    if t == G.mjGEOM_PLANE:
-        hx, hy = (float(size[0]) or PLANE_HALF), (float(size[1]) or PLANE_HALF)
-        v = np.array([[-hx, -hy, 0.0], [hx, -hy, 0.0], [hx, hy, 0.0], [-hx, hy, 0.0]])
-        m = trimesh.Trimesh(vertices=v, faces=[[0, 1, 2], [0, 2, 3]], process=False)
-    elif t == G.mjGEOM_SPHERE:
-        m = trimesh.creation.icosphere(subdivisions=3, radius=float(size[0]))
-    elif t == G.mjGEOM_ELLIPSOID:
-        m = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
-        m.apply_scale(size[:3])
-    elif t == G.mjGEOM_CAPSULE:
-        m = trimesh.creation.capsule(height=2.0 * float(size[1]), radius=float(size[0]), count=[32, 16])
-    elif t == G.mjGEOM_CYLINDER:
-        m = trimesh.creation.cylinder(radius=float(size[0]), height=2.0 * float(size[1]), sections=48)
-    elif t == G.mjGEOM_BOX:
-        m = trimesh.creation.box(extents=2.0 * size[:3])
-    elif t == G.mjGEOM_MESH:
-        k = int(model.geom_dataid[g])
-        va, vn = int(model.mesh_vertadr[k]), int(model.mesh_vertnum[k])
-        fa, fn = int(model.mesh_faceadr[k]), int(model.mesh_facenum[k])
-        m = trimesh.Trimesh(vertices=np.array(model.mesh_vert[va:va + vn], float),
-                            faces=np.array(model.mesh_face[fa:fa + fn]), process=False)
-    else:
+    rows = geom_rows(model, g, extent=PLANE_HALF)
+    if rows is None:
         return None
-    tf = np.eye(4)
-    tf[:3, :3] = _quat_matrix(np.asarray(model.geom_quat[g], float))
-    tf[:3, 3] = model.geom_pos[g]
-    m.apply_transform(tf)
-    return m
-
-
-def _rgba(model: Any, g: int) -> tuple[float, float, float, float]:
-    mat = int(model.geom_matid[g])
-    c = model.mat_rgba[mat] if mat >= 0 else model.geom_rgba[g]
-    r, gr, b, a = (float(x) for x in c)
-    return (r, gr, b, a)
+    R = _quat_matrix(np.asarray(model.geom_quat[g], float))
+    out = np.asarray(rows, float).copy()
+    out[:, :3] = out[:, :3] @ R.T + np.asarray(model.geom_pos[g], float)
+    out[:, 3:] = out[:, 3:] @ R.T
+    return out
 
 
 def model_bodies(model: Any) -> list[Body]:
@@ -95,12 +65,10 @@ def model_bodies(model: Any) -> list[Body]:
         geom has no solids.
     """
     bodies = [Body(name=model.body(b).name or f"body{b}", solids=[], moves=b > 0) for b in range(model.nbody)]
-    for g in range(model.ngeom):
-        if _rgba(model, g)[3] <= 0 or int(model.geom_group[g]) not in VISIBLE_GROUPS:
-            continue
-        m = geom_mesh(model, g)
-        if m is not None:
-            bodies[int(model.geom_bodyid[g])].solids.append(Solid(mesh=m, rgba=_rgba(model, g)))
+    for g in visible_geoms(model):
+        rows = geom_body_rows(model, g)
+        if rows is not None:
+            bodies[int(model.geom_bodyid[g])].solids.append(Solid(rows=rows, rgba=geom_rgba(model, g)))
     return bodies
 
 

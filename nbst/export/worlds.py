@@ -4,7 +4,8 @@ One function per kind of file, each replaying it with its own room's replay (no 
 
 * a 2D solution (``nbst solve``): the exact simulator (:func:`nbst.sim.simulate`, as ``nbst
   render`` draws it); each disk a puck (a cylinder of its radius, :data:`PUCK_HEIGHT_FRAC` of it
-  tall, amber cueable, blue noncueable) sliding on the box's floor (z up, the box's units);
+  tall, amber cueable, blue noncueable; the 3D view's shape, :func:`nbst.render.core.camera.mesh_arrays`)
+  sliding on the box's floor (a quad at z = 0; z up, the box's units);
 * a 5 m bowling throw (``nbst bowl solve``): :func:`nbst.render.bowling.deck.record`;
 * a foul-line bowling throw (``nbst bowl throw``/``replay``): :func:`nbst.render.bowling.throw.record_throw`,
   the frame as ``nbst bowl replay`` runs it (the ball's rotation is relative to its release, as in
@@ -29,6 +30,7 @@ from nbst import palette
 from nbst.errors import InputError
 from nbst.export.gltf import Body, BodyMotion, Solid
 from nbst.files import sniff_kind
+from nbst.render.core.camera import mesh_arrays
 
 __all__ = ["DEFAULT_FPS", "FPS_MAX", "PUCK_HEIGHT_FRAC", "FLOOR_RGBA", "KINDS", "file_kind", "disks_motion",
            "deck_motion", "lane_motion", "crash_motion", "scene_motion", "file_motion"]
@@ -103,14 +105,15 @@ def disks_motion(path: str | os.PathLike, *, problem: str | Path | None = None,
     times = np.append(times[times < prob.t_final * (1 - 1e-9)], prob.t_final)
     xy = np.asarray(tr.at(times), float)
     w, h = prob.box
-    floor = trimesh.creation.box(extents=[w, h, 0.02 * min(w, h)])
-    floor.apply_translation([w / 2, h / 2, -0.01 * min(w, h)])
-    bodies = [Body(name="box", solids=[Solid(mesh=floor, rgba=FLOOR_RGBA)], moves=False)]
+    corners = np.array([[0, 0, 0], [w, 0, 0], [w, h, 0], [0, 0, 0], [w, h, 0], [0, h, 0]], float)
+    floor = np.concatenate([corners, np.tile([0.0, 0.0, 1.0], (6, 1))], axis=1)
+    bodies = [Body(name="box", solids=[Solid(rows=floor, rgba=FLOOR_RGBA)], moves=False)]
     half = np.asarray(prob.radius, float) * PUCK_HEIGHT_FRAC / 2
     for i in range(prob.n):
         rgb = palette.CUEABLE if prob.cueable[i] else palette.NONCUEABLE
-        puck = trimesh.creation.cylinder(radius=float(prob.radius[i]), height=2 * float(half[i]), sections=48)
-        bodies.append(Body(name=f"disk{i}", solids=[Solid(mesh=puck, rgba=(*rgb, 1.0))]))
+        puck = mesh_arrays(trimesh.creation.cylinder(radius=float(prob.radius[i]), height=2 * float(half[i]),
+                                                     sections=48))
+        bodies.append(Body(name=f"disk{i}", solids=[Solid(rows=puck, rgba=(*rgb, 1.0))]))
     n = len(times)
     pos = np.zeros((n, prob.n + 1, 3))
     pos[:, 1:, :2] = xy
