@@ -14,6 +14,8 @@ from __future__ import annotations
 import json
 import os
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -24,6 +26,7 @@ from nbst.export.gltf import BodyMotion, continuous_quaternions, gltf_document, 
 from nbst.export.mjbodies import sampled_steps  # noqa: E402
 from nbst.export.worlds import file_kind, file_motion  # noqa: E402
 
+ROOT = Path(__file__).resolve().parents[1]
 #: A short crossing (2.5 s), as tests/test_render_crash.py records one.
 CRASH = {
     "kind": "nbst-crash-script", "name": "short",
@@ -323,6 +326,9 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(files, tmp_path, capsy
         ([str(bad), "--gltf", str(out)], "problem"),
         ([str(files["crash"]), "--problem", "over5", "--gltf", str(out)], "problem"),
         ([str(tmp_path / "none.json"), "--gltf", str(out)], "no such file"),
+        ([str(ROOT / "models/crash/scripts/t-bone.json"), "--gltf", str(out)], "solve it first"),
+        ([str(ROOT / "nbst/scene/examples/snake-eyes.json"), "--gltf", str(out)], "solve it first"),
+        ([str(ROOT / "models/bowling/deck/atlas.json"), "--gltf", str(out)], "one throw file"),
         ([str(files["disks"]), "--gltf", str(tmp_path / "x.gltf")], ".glb"),
         ([str(files["disks"]), "--gltf", str(out), "--fps", "0"], "fps"),
         ([str(files["disks"]), "--gltf", str(fifo)], "FIFO"),

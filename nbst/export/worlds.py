@@ -32,7 +32,7 @@ from nbst.export.gltf import Body, BodyMotion, Solid
 from nbst.files import sniff_kind
 from nbst.render.core.camera import mesh_arrays
 
-__all__ = ["DEFAULT_FPS", "FPS_MAX", "PUCK_HEIGHT_FRAC", "FLOOR_RGBA", "KINDS", "file_kind", "disks_motion",
+__all__ = ["DEFAULT_FPS", "FPS_MAX", "PUCK_HEIGHT_FRAC", "FLOOR_RGBA", "KINDS", "NOT_MOTIONS", "file_kind", "disks_motion",
            "deck_motion", "lane_motion", "crash_motion", "scene_motion", "file_motion"]
 
 #: Keyframes per second unless asked otherwise, and the most accepted.
@@ -45,6 +45,11 @@ FLOOR_RGBA = (0.16, 0.17, 0.20, 1.0)
 #: The files :func:`file_kind` knows, by the kind string each writes in its first lines.
 KINDS = (("scene", "nbst-scene-solution"), ("crash", "nbst-crash"), ("deck", "nbst-bowling-shot"),
          ("lane", "nbst-bowling-throw"))
+#: Files of nbst's that hold no motion yet, and what to do instead (refused in one line).
+NOT_MOTIONS = {"nbst-crash-script": "a crash script: solve it first (`nbst crash solve`) and export the crash file",
+               "nbst-fates": "a fates file: solve it first (`nbst scene solve`) and export the solution",
+               "nbst-bowling-atlas": "an atlas of 5 m throws: export one throw file",
+               "nbst-bowling-throw-atlas": "an atlas of foul-line throws: export one throw file"}
 _SNIFF_BYTES = 4096
 
 
@@ -57,8 +62,15 @@ def file_kind(path: str | os.PathLike) -> str:
 
     Returns:
         the kind's name.
+
+    Raises:
+        InputError: a file of nbst's that holds no motion (:data:`NOT_MOTIONS`).
     """
-    return sniff_kind(path, KINDS, max_bytes=_SNIFF_BYTES) or "disks"
+    kinds = KINDS + tuple((k, k) for k in NOT_MOTIONS)
+    kind = sniff_kind(path, kinds, max_bytes=_SNIFF_BYTES) or "disks"
+    if kind in NOT_MOTIONS:
+        raise InputError(f"{path}: format: {NOT_MOTIONS[kind]}")
+    return kind
 
 
 def _check_fps(fps: float) -> float:
