@@ -67,7 +67,8 @@ def register(sub) -> None:
                "  nbst render sol.json -o dice.mp4                       # a scene solution (nbst scene solve)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("problem", help="built-in name or path to a problem JSON file (or a crash file from `nbst crash "
-                                   "solve`, rendered in 3D alone, docs/render.md)")
+                                   "solve`, rendered in 3D alone, docs/render.md; or a scene solution from `nbst "
+                                   "scene solve`, alone, docs/scene.md)")
     p.add_argument("solution", nargs="?",
                    help="path to a solution JSON file (e.g. from `nbst solve`); omit it when PROBLEM is a bowling "
                         "5 m throw file from `nbst bowl solve` (rendered in 3D, docs/bowling.md)")

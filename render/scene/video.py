@@ -40,12 +40,15 @@ from nbst.render.scene.motion import SceneMotion, record
 from nbst.scene.fates import Fates
 from nbst.scene.solution import SOLUTION_FORMAT
 
-__all__ = ["AZIMUTH", "ELEVATION", "FILL", "FOV", "LIGHT", "MARKS", "READOUT_FRAC", "SKY", "IMPACT", "SHADOW_PX", "SceneRenderer",
+__all__ = ["AZIMUTH", "DISTANCE", "ELEVATION", "FILL", "FOV", "LIGHT", "MARKS", "READOUT_FRAC", "SKY", "IMPACT", "SHADOW_PX", "SceneRenderer",
            "is_scene_solution", "render_scene", "default_camera", "camera_names"]
 
 #: The framing camera looks at the bodies from this azimuth (degrees from +x, about +z; -90: from
 #: -y, the front) and elevation (degrees above the horizon), with this vertical field of view.
-AZIMUTH, ELEVATION, FOV = -75.0, 20.0, 40.0
+AZIMUTH, ELEVATION, FOV = -70.0, 35.0, 40.0
+#: ... from this many times the framed points' extent (a longer lens: the near side of a table does
+#: not dwarf the dice on the floor beside it) ...
+DISTANCE = 2.5
 #: ... as near as it can with every corner of the framed box within this share of the frame.
 FILL = 0.8
 #: Towards the light when the model has none (world frame).
@@ -116,7 +119,7 @@ def default_camera(points: np.ndarray, aspect: float, free: tuple[float, float, 
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The camera that frames ``points`` (N, 3) from :data:`AZIMUTH` and :data:`ELEVATION`.
 
-    It stands 1.3 times the points' extent from their box's centre and looks at it with a
+    It stands :data:`DISTANCE` times the points' extent from their box's centre and looks at it with a
     :data:`FOV` lens; then the picture is scaled and moved (an off-axis frustum) so that the
     points' projections fill :data:`FILL` of the ``free`` part of the frame (x0, y0, x1, y1 in
     normalised device coordinates, y down: the part the readout leaves).
@@ -128,7 +131,7 @@ def default_camera(points: np.ndarray, aspect: float, free: tuple[float, float, 
     c = (lo + hi) / 2
     az, el = math.radians(AZIMUTH), math.radians(ELEVATION)
     d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    dist = 1.3 * max(float(np.linalg.norm(hi - lo)), 0.05)
+    dist = DISTANCE * max(float(np.linalg.norm(hi - lo)), 0.05)
     eye = c + d * dist
     flip = np.diag([1.0, -1.0, 1.0, 1.0])
     vp = flip @ perspective(FOV, aspect, dist / 100, dist * 50) @ look_at(eye, c, np.array([0.0, 0.0, 1.0]))
@@ -185,7 +188,11 @@ class SceneRenderer(FrameRenderer):
         self.lo, self.hi = points.min(axis=0), points.max(axis=0)
         span = float(np.linalg.norm(self.hi - self.lo))
         self.span = span
-        self.checker = 10.0 ** round(math.log10(max(span, 1e-3) / 6))
+        # the planes' checker: 1, 2.5 or 5 x 10^k m, the nearest (in ratio) to a tenth of the framed extent
+        want = max(span, 1e-3) / 10
+        k = math.floor(math.log10(want))
+        self.checker = min((m * 10.0 ** e for e in (k, k + 1) for m in (1.0, 2.5, 5.0)),
+                           key=lambda c: abs(math.log(c / want)))
         # the geoms: one vertex array per distinct shape
         self.prog = ctx.program(vertex_shader=SCENE_VS, fragment_shader=SCENE_FS)
         self.dprog = ctx.program(vertex_shader=DEPTH_VS, fragment_shader=DEPTH_FS)
@@ -206,6 +213,8 @@ class SceneRenderer(FrameRenderer):
         self.marks: list[tuple[Any, Any, tuple[float, ...]]] = []   # (solid vao, outline vao, rgb)
         self.hoops: list[tuple[np.ndarray, str, tuple[float, ...]]] = []   # (centre, label, rgb)
         self.arrows: list[tuple[int, np.ndarray, Any, tuple[float, ...]]] = []  # (body, axis, vao, rgb)
+        one = len(fates.fates) == 1   # the labels name the body when there are several
+        self.one = one
         for i, f in enumerate(fates.fates):
             rgb = MARKS[i % len(MARKS)]
             for r in _regions(f):
@@ -214,9 +223,9 @@ class SceneRenderer(FrameRenderer):
             for k, r in enumerate(f.through):
                 top = r.mid()   # the label over the region's top
                 top[2] = top[2] + r.radius if r.center is not None else float(np.asarray(r.hi, float)[2])
-                self.hoops.append((top, f"{f.body} {k + 1}", rgb))
+                self.hoops.append((top, f"{k + 1}" if one else f"{f.body} {k + 1}", rgb))
             for t_at, r in f.at:
-                self.hoops.append((r.mid(), f"{f.body} t {t_at:g} s", rgb))
+                self.hoops.append((r.mid(), f"t {t_at:g} s" if one else f"{f.body} t {t_at:g} s", rgb))
             if f.up is not None:
                 b = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body))
                 gs = [g for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) == b]
@@ -400,7 +409,7 @@ class SceneRenderer(FrameRenderer):
         box = (0.0, 0.0, x0 + (max(len(s) for s in lines) + 0.6) * cw, y0 + (len(lines) + 0.3) * ch)
         placed = [box]
         labels = [(c, lab, rgb, False) for c, lab, rgb in self.hoops]
-        labels += [(np.asarray(im.pos), f"{im.body}-{im.other} {im.t:.2f} s", IMPACT, True)
+        labels += [(np.asarray(im.pos), f"{'' if self.one else im.body + '-'}{im.other} {im.t:.2f} s", IMPACT, True)
                    for im in self.motion.touches if im.t <= t_now]
         for centre, label, rgb, impact in labels:
             col, row, front = self.to_pixel(vpm, centre)
