@@ -96,12 +96,12 @@ def scene_report_html(val: SceneValidation) -> str:
              "<h2>The scene's own setting (the replay)</h2>", _table_html([val.scene_row], cols)]
     for g in GROUPS:
         parts += [f"<h2>{_TITLES[g]}</h2>", _table_html(val.group(g), cols),
-                  f"<p><img src='paths-{g}.png' alt='each fated body's path from above under each {g} setting'></p>"]
+                  f"<p><img src=\"paths-{g}.png\" alt=\"each fated body's path from above under each {g} setting\"></p>"]
     parts += ["<h2>Noise</h2>",
               f"<p>P(every fate met) = <b>{p.p:.3g}</b> (95 % Wilson interval {p.lo:.3g}&ndash;{p.hi:.3g}; {p.k} of "
               f"{p.n} noisy rollouts at the scene's setting; sigma per control [{sigma}]; draws of seed "
               f"{val.noise_seed}, those of <code>nbst scene solve --samples</code>).</p>",
-              "<p><img src='noise.png' alt='where each fated body ends in each noisy rollout'></p>",
+              "<p><img src=\"noise.png\" alt=\"where each fated body ends in each noisy rollout\"></p>",
               "<p class=small>The same table is in report.json.</p></body></html>"]
     return "\n".join(parts)
 

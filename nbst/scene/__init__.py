@@ -5,6 +5,8 @@ The scene is the user's MJCF; what must happen is a small JSON file, the fates f
 initial velocities of the scene's free bodies. One module each, top to bottom:
 
 * :mod:`.api` -- :func:`solve`, the one typed way in;
+* :mod:`.validate` -- ``validate_solution``: the fates under MuJoCo's other integrators,
+  solvers, cones, finer steps and noise (``nbst scene validate``);
 * :mod:`.solution` -- the solution file (``"nbst-scene-solution"``), :class:`SceneResult`,
   :func:`replay_solution` (bit for bit with a plain ``mj_step`` loop), ``export_scene`` (the
   scene with a keyframe holding the initial state);
@@ -30,13 +32,14 @@ import importlib
 
 __all__ = ["solve", "SceneResult", "SceneReplay", "replay_solution", "solution_dict", "read_solution", "export_scene",
            "load_fates", "Fates", "FatesError", "SceneSim", "signature_search", "example_names",
-           "DEFAULT_MAX_ROLLOUTS", "api", "solution", "search", "rollout", "judge", "scenefile", "fates", "builtin"]
+           "DEFAULT_MAX_ROLLOUTS", "validate_solution", "api", "validate", "solution", "search", "rollout", "judge", "scenefile", "fates", "builtin"]
 
 _LAZY = {"solve": "api", "SceneResult": "solution", "SceneReplay": "solution", "replay_solution": "solution",
          "solution_dict": "solution", "read_solution": "solution", "export_scene": "solution",
          "load_fates": "scenefile", "Fates": "fates",
          "FatesError": "fates", "SceneSim": "rollout", "signature_search": "search",
-         "example_names": "builtin", "DEFAULT_MAX_ROLLOUTS": "search"}
+         "example_names": "builtin", "DEFAULT_MAX_ROLLOUTS": "search",
+         "validate_solution": "validate"}
 
 
 def __getattr__(name: str) -> object:
