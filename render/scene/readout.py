@@ -13,10 +13,12 @@ from __future__ import annotations
 from nbst.scene.fates import AT_REST_SPEED, STILL_DISTANCE, Fate, Fates, Region
 from nbst.scene.judge import Judgement, signature_text
 
-__all__ = ["OK", "NO", "region_text", "asked", "readout", "widest", "marks", "body_rows"]
+__all__ = ["OK", "NO", "COMPACT_AFTER", "region_text", "asked", "readout", "widest", "marks", "body_rows"]
 
 OK, NO = "\u2713", "\u2717"
 _DEG = "\u00b0"
+#: Past this many bodies with fates, the readout gives one line per fate (a row of dominoes).
+COMPACT_AFTER = 3
 
 
 def _v(p) -> str:
@@ -56,26 +58,38 @@ def asked(f: Fate) -> list[tuple[str, str]]:
 
 def readout(title: str, t: float, fates: Fates, judgement: Judgement, *, final: bool) -> list[str]:
     """The readout's lines at time ``t``: the title and time, then per body its fates asked and,
-    when ``final``, what happened with a mark, and the signature."""
+    when ``final``, what happened with a mark, and the signature. Past :data:`COMPACT_AFTER`
+    bodies, one line per fate (the body's name first, what happened after what was asked)."""
     lines = [title, f"t = {t:5.2f} s"]
     verdicts = {b.body: {v.fate: v for v in b.fates} for b in judgement.bodies}
+    compact = len(fates.fates) > COMPACT_AFTER
     for f in fates.fates:
-        lines.append(f.body)
+        if not compact:
+            lines.append(f.body)
         for name, text in asked(f):
-            lines.append(f"  {name}: {text}")
             v = verdicts.get(f.body, {}).get(name)
-            if final and v is not None:
-                lines.append(f"    {OK if v.met else NO} {v.happened}")
+            said = f"{OK if v.met else NO} {v.happened}" if final and v is not None else ""
+            if compact:
+                lines.append(f"{f.body} {name}: {text}" + (f"  {said}" if said else ""))
+            else:
+                lines.append(f"  {name}: {text}")
+                if said:
+                    lines.append(f"    {said}")
     if final:
         sig = signature_text(judgement.signature)
         lines.append(f"signature {sig}: " + ("every fate met" if judgement.met else "not every fate met"))
     return lines
 
 
-def body_rows(lines: list[str], fates: Fates) -> list[int]:
-    """Per line, the index of the fated body it names (a block's first line), else -1."""
-    names = [f.body for f in fates.fates]
-    return [names.index(s) if s in names else -1 for s in lines]
+def body_rows(lines: list[str], fates: Fates) -> list[tuple[int, int]]:
+    """Per line, (the index of the fated body whose name it starts with, the name's length), drawn
+    in the body's mark colour; (-1, 0) for the others."""
+    out = []
+    for s in lines:
+        hit = next(((i, len(f.body)) for i, f in enumerate(fates.fates) if s == f.body or s.startswith(f.body + " ")),
+                   (-1, 0))
+        out.append(hit)
+    return out
 
 
 def widest(title: str, fates: Fates, judgement: Judgement, duration: float) -> tuple[int, int]:

@@ -8,7 +8,8 @@
   light; planes carry a faint checker so the floor reads.
 * **The fates**: each region (``rest_in``, ``at``, ``through``, the hoops numbered in order) as a
   translucent solid with its outline in its body's mark colour; an ``up`` axis as an arrow on the
-  body; each first touch (an impact) as a yellow ball from its time on, labelled with the pair.
+  body; each first touch after the start (an impact; each pair once) as a yellow ball from its
+  time on, labelled with the pair where the fates name what was touched (all, where none do).
 * **The readout** (:mod:`nbst.render.scene.readout`), top left: asked vs happened. ``clean``
   draws no text at all.
 * **Cameras**: a model camera by name, else one that frames the fated and controlled bodies' paths
@@ -36,7 +37,7 @@ from nbst.render.core.video import render_output
 from nbst.render.scene import geoms as sg
 from nbst.render.scene import readout as ro
 from nbst.render.scene.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
-from nbst.render.scene.motion import SceneMotion, record
+from nbst.render.scene.motion import SceneMotion, Touch, record
 from nbst.scene.fates import Fates
 from nbst.scene.solution import SOLUTION_FORMAT
 
@@ -213,6 +214,18 @@ class SceneRenderer(FrameRenderer):
         self.marks: list[tuple[Any, Any, tuple[float, ...]]] = []   # (solid vao, outline vao, rgb)
         self.hoops: list[tuple[np.ndarray, str, tuple[float, ...]]] = []   # (centre, label, rgb)
         self.arrows: list[tuple[int, np.ndarray, Any, tuple[float, ...]]] = []  # (body, axis, vao, rgb)
+        # the impacts: first touches after the start (a contact there at t = 0 is a body at rest),
+        # each pair once; labelled where the fates name what was touched (all of them where none do)
+        seen: set[frozenset[str]] = set()
+        self.impacts: list[Touch] = []
+        for im in motion.touches:
+            pair = frozenset((im.body, im.other))
+            if im.t > 0 and pair not in seen:
+                seen.add(pair)
+                self.impacts.append(im)
+        asked = {f.body: {*f.hits, *f.never_hits} for f in fates.fates}
+        self.named = [im for im in self.impacts if im.other in asked.get(im.body, ())
+                      or im.body in asked.get(im.other, ())] if any(asked.values()) else list(self.impacts)
         one = len(fates.fates) == 1   # the labels name the body when there are several
         self.one = one
         for i, f in enumerate(fates.fates):
@@ -363,7 +376,7 @@ class SceneRenderer(FrameRenderer):
             x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
             x /= np.linalg.norm(x)
             self._solid(vao, np.column_stack([x, np.cross(z, x), z]), bx[b], (*rgb, 1.0))
-        for im in self.motion.touches:
+        for im in self.impacts:
             if im.t <= t_now:
                 self._solid(self.impact_vao, np.eye(3), np.asarray(im.pos), (*IMPACT, 1.0))
         # the translucent: geoms, regions, then the outlines
@@ -410,7 +423,7 @@ class SceneRenderer(FrameRenderer):
         placed = [box]
         labels = [(c, lab, rgb, False) for c, lab, rgb in self.hoops]
         labels += [(np.asarray(im.pos), f"{'' if self.one else im.body + '-'}{im.other} {im.t:.2f} s", IMPACT, True)
-                   for im in self.motion.touches if im.t <= t_now]
+                   for im in self.impacts if im.t <= t_now and im in self.named]
         for centre, label, rgb, impact in labels:
             col, row, front = self.to_pixel(vpm, centre)
             if not (front and 0 <= col < size[0] and 0 <= row < size[1]):
@@ -434,10 +447,10 @@ class SceneRenderer(FrameRenderer):
         self.overlay_boxes.append(box)
         plain, oks, nos = ro.marks(lines)
         owner = ro.body_rows(lines, self.fates)
-        tx.draw(size, tx.layout([s if owner[j] < 0 else "" for j, s in enumerate(plain)], x0, y0), style.TEXT)
-        for j, s in enumerate(plain):
-            if owner[j] >= 0:
-                tx.draw(size, tx.layout([s], x0, y0 + j * ch), MARKS[owner[j] % len(MARKS)])
+        tx.draw(size, tx.layout([" " * n + s[n:] for s, (_, n) in zip(plain, owner)], x0, y0), style.TEXT)
+        for j, (i, n) in enumerate(owner):   # each body's name in its mark colour
+            if i >= 0:
+                tx.draw(size, tx.layout([plain[j][:n]], x0, y0 + j * ch), MARKS[i % len(MARKS)])
         tx.draw(size, tx.layout(oks, x0, y0), OK_RGB)
         tx.draw(size, tx.layout(nos, x0, y0), NO_RGB)
 
