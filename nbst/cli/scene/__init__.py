@@ -118,7 +118,7 @@ def register(sub) -> None:
                                   "(pyramidal, elliptic) and the timestep ladder (h, h/2, h/4), one option of the "
                                   "scene's <option> changed at a time, and judge every fate again (met or not, with "
                                   "its graded cost); and estimate P(every fate met) under the fates' noise from "
-                                  "--samples noisy rollouts, with its 95 %% Wilson interval. Prints a line per "
+                                  "--samples noisy rollouts, with its 95 % Wilson interval. Prints a line per "
                                   "setting; --out-dir DIR writes index.html (a table per setting group, each fated "
                                   "body's path from above under each setting over the fates' regions), its PNGs "
                                   "and report.json (the same table).",
