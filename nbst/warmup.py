@@ -164,10 +164,12 @@ def warm_searches() -> None:
     """nbst's search loop (plain and ``--robust``) and the paper's (``--variant A`` and its simplified
     variants), which share their population kernels; and validate's sensitivity report (the Jacobian;
     from a file, and from the library: the tests) and the many-body search's two-disk contacts, which
-    share the Jacobian and aiming kernels with nbst's loop (other signatures of the same kernels:
-    compiled in this group, never beside it)."""
+    share the Jacobian and aiming kernels with nbst's loop, as ``nbst generate``'s placing of disks
+    shares the aiming kernel (other signatures of the same kernels: compiled in this group, never
+    beside it)."""
     import numpy as np
 
+    from nbst.planted import planted
     from nbst.search.aim import pair_contact
     from nbst.sim.jacobian import final_jacobian
     from nbst.sim.sensitivity import analyze
@@ -183,16 +185,16 @@ def warm_searches() -> None:
     ka = many_disks_problem().kernel_arrays()
     pair_contact(ka.start[0], ka.start[1], ka.target[0], ka.target[1], 1.0, 1.0, 5.0, 5.0, ka.W, ka.H, ka.t_final, 8,
                  np.empty((2, 5)))
+    planted(20, noncue=2, seed=0)
 
 
 def warm_many_disks() -> None:
     """The cell-grid kernel (``CELLS_MIN_DISKS`` disks and more), the keyframes and replays for N
-    disks, the multiword signatures' batch evaluation; and ``nbst generate``'s kernels (placing
-    disks, assigning a formation's targets)."""
+    disks, the multiword signatures' batch evaluation; and ``nbst generate``'s assigning of a
+    formation's targets."""
     import numpy as np
 
     from nbst.formation import formation
-    from nbst.planted import planted
     from nbst.sim import evaluate, simulate
 
     many = many_disks_problem()
@@ -202,7 +204,6 @@ def warm_many_disks() -> None:
     tr.at([0.0, 1.0], replay=True)
     tr.velocity_at([0.5], replay=True)
     evaluate(many, np.stack([Vm, Vm]), jobs=1)
-    planted(20, noncue=2, seed=0)
     formation("nbst", 40, seed=0)
 
 
