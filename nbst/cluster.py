@@ -44,7 +44,7 @@ _HINT = "start one with `dask scheduler` (it prints its tcp:// address) and work
 
 
 def _fail(address: str, what: str) -> InputError:
-    return InputError(f"--cluster {address}: {what}")
+    return InputError(f"cluster {address}: {what}")
 
 
 def split_address(address: str) -> tuple[str, str, int]:

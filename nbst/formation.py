@@ -230,9 +230,9 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
     import time
 
     if start not in START_LAYOUTS:
-        raise FormationError(f"--start must be one of {', '.join(START_LAYOUTS)}, got {start!r}")
+        raise FormationError(f"start must be one of {', '.join(START_LAYOUTS)}, got {start!r}")
     if not 1 <= n <= MAX_FORMATION_DISKS:
-        raise FormationError(f"--disks must be in 1..{MAX_FORMATION_DISKS:,} for a formation, got {n:,}")
+        raise FormationError(f"the number of disks must be in 1..{MAX_FORMATION_DISKS:,} for a formation, got {n:,}")
     r = float(radius)
     s = spacing(r)
     rng = np.random.default_rng(seed)
@@ -247,13 +247,13 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
         kind, label = "text", src
         check_text(src)
         if not src.strip():
-            raise FormationError("--targets-from: the text is empty; give a text to write or an image file "
+            raise FormationError("the target text is empty; give a text to write or an image file "
                                  f"({', '.join(IMAGE_EXTENSIONS)})")
         if len(src) > MAX_TEXT_CHARS:
-            raise FormationError(f"--targets-from: a text of {len(src):,} characters; at most {MAX_TEXT_CHARS}")
+            raise FormationError(f"the target text has {len(src):,} characters; at most {MAX_TEXT_CHARS}")
         mask = text_mask(src)
         if not mask.any():
-            raise FormationError(f"--targets-from: the text {src!r} draws no dark pixels")
+            raise FormationError(f"the target text {src!r} draws no dark pixels")
     rows = np.flatnonzero(mask.any(axis=1))
     cols = np.flatnonzero(mask.any(axis=0))
     mask = mask[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1]  # the dark region's bounding box
@@ -270,21 +270,21 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
         W, H = map(float, box)
         if W - 2 * s <= 0 or H - 2 * s <= 0:
             raise FormationError(f"the {W:g} x {H:g} box leaves no room for disks of radius {r:g} "
-                                 f"(border {s:.4g} on each side); use a larger --box or a smaller --radius")
+                                 f"(border {s:.4g} on each side); use a larger box or a smaller radius")
         k = min((W - 2 * s) / pw, (H - 2 * s) / ph)
         if h_px * k < s:
             cap = hex_lattice(mask, s / k).shape[0]
             raise FormationError(f"the picture of {label!r} scaled into the {W:g} x {H:g} box holds at most {cap:,} "
-                                 f"disks of radius {r:g} at spacing {s:.4g} (asked for {n:,}); use fewer --disks, "
-                                 f"a smaller --radius, a larger --box, or no --box (sized to fit)")
+                                 f"disks of radius {r:g} at spacing {s:.4g} (asked for {n:,}); use fewer disks, "
+                                 f"a smaller radius, a larger box, or no box (sized to fit)")
         box_note = "given"
     if not (BOX_MIN <= W <= BOX_MAX and BOX_MIN <= H <= BOX_MAX):
         raise FormationError(f"the box would be {W:.4g} x {H:.4g}, outside nbst's [{BOX_MIN:g}, {BOX_MAX:g}]; "
-                             f"use a different --radius")
+                             f"use a different radius")
     if r < RADIUS_MIN_FRACTION * max(W, H):
         raise FormationError(f"the picture's dark part is {pw:,} x {ph:,} px: at the spacing of disks of radius "
                              f"{r:g} its box would be {W:.4g} x {H:.4g}, over {1 / RADIUS_MIN_FRACTION:,.0f} radii "
-                             f"long; use a picture of a less extreme shape, or fewer --disks")
+                             f"long; use a picture of a less extreme shape, or fewer disks")
     # thin the lattice to n points (seeded), then picture pixels -> box units, y up, centred
     if pts.shape[0] > n:
         pts = pts[np.sort(rng.choice(pts.shape[0], size=n, replace=False))]
@@ -294,7 +294,7 @@ def formation(src: str, n: int, *, radius: float = 15.0, start: str = "grid", se
     starts = grid_starts(n, (W, H), s) if start == "grid" else random_starts(n, (W, H), s, r, rng)
     if starts is None:
         raise FormationError(f"the {W:g} x {H:g} box cannot hold {n:,} starts of radius {r:g} spaced {s:.4g} apart "
-                             f"({start} layout); use fewer --disks, a smaller --radius or a larger --box")
+                             f"({start} layout); use fewer disks, a smaller radius or a larger box")
     t1 = time.perf_counter()
     perm, passes, swaps = assign(starts, targets, progress=progress)
     info.update(assign_s=time.perf_counter() - t1, passes=passes, swaps=swaps)

@@ -133,23 +133,23 @@ def check_text(src: str) -> None:
     ext = os.path.splitext(src)[1].lower()
     readable = ", ".join(e[1:].upper() for e in IMAGE_EXTENSIONS)
     if ext in OTHER_PICTURE_EXTENSIONS:
-        raise FormationError(f"--targets-from {src}: a {ext[1:].upper()} picture, which nbst does not read; "
+        raise FormationError(f"{src}: a {ext[1:].upper()} picture, which nbst does not read; "
                              f"convert it to PNG (it reads {readable})")
     try:  # a file's name (with an extension or a folder in it), not a word that happens to name a folder
         is_file = bool(ext or os.sep in src) and os.path.lexists(src)
     except (ValueError, OSError):  # a NUL byte, a name too long: not a file
         is_file = False
     if is_file:
-        raise FormationError(f"--targets-from {src}: an existing file, but not an image nbst reads ({readable}, "
+        raise FormationError(f"{src}: an existing file, but not an image nbst reads ({readable}, "
                              "by extension); convert it to PNG, or give the text to write")
     for k, ch in enumerate(src):
         if 0xD800 <= ord(ch) <= 0xDFFF:
             byte = f"the byte 0x{ord(ch) - 0xDC00:02x}" if 0xDC80 <= ord(ch) <= 0xDCFF else f"U+{ord(ch):04X}"
-            raise FormationError(f"--targets-from: the text is not valid UTF-8 ({byte} at character {k + 1}); "
+            raise FormationError(f"the target text is not valid UTF-8 ({byte} at character {k + 1}); "
                                  "give the text in UTF-8")
     why = bad_text(src, allow_newlines=True)  # the rule of every text field nbst reads
     if why:
-        raise FormationError(f"--targets-from: the text {why}; only printable characters, line breaks and tabs "
+        raise FormationError(f"the target text {why}; only printable characters, line breaks and tabs "
                              "are drawn")
 
 
@@ -218,12 +218,12 @@ def lattice_for(mask: np.ndarray, n: int) -> tuple[float, np.ndarray]:
         if h < MIN_LATTICE_PX:
             raise FormationError(f"the picture's dark part ({pw:,} x {ph:,} px, {int(area):,} dark pixels) cannot hold "
                                  f"{n:,} targets at least {MIN_LATTICE_PX:g} pixel apart: use a larger picture or "
-                                 f"fewer --disks")
+                                 f"fewer disks")
         if lattice_size(mask.shape, h) > MAX_LATTICE_POINTS:
             raise FormationError(f"the picture's dark part ({pw:,} x {ph:,} px) is too thin or too scattered for "
                                  f"{n:,} targets: their lattice would need a spacing of {h:.3g} px, "
                                  f"{lattice_size(mask.shape, h):,} candidate points (limit {MAX_LATTICE_POINTS:,}); "
-                                 f"crop it to its dark part, thicken it, or use fewer --disks")
+                                 f"crop it to its dark part, thicken it, or use fewer disks")
         return hex_lattice(mask, h)
 
     h0 = math.sqrt(2.0 * area / (math.sqrt(3.0) * n))

@@ -193,7 +193,7 @@ def test_bowl_cluster_at_an_http_server_is_one_line_in_seconds(http_server, tmp_
         rc, _, err = _main(argv, capsys)
         assert time.monotonic() - t0 < 10
         _one_line(rc, err, http_server, "HTTP server")
-        assert err.count("--cluster") == 1, err  # said once
+        assert err.count(f"cluster {http_server}") == 1, err  # said once
 
 
 # --------------------------------------------------------------------------- what the commands say

@@ -122,7 +122,7 @@ def test_bad_sources_exit_2_with_one_line(tmp_path, capsys, monkeypatch):
     _refused(tmp_path, capsys, ["--targets-from", str(tmp_path / "dir.png")], "dir.png", "directory")
     _refused(tmp_path, capsys, ["--targets-from", "   "], "text is empty")
     _refused(tmp_path, capsys, ["--targets-from", "nbst", "--disks", "500", "--box", "600", "300"],
-             "holds at most", "asked for 500", "--box")
+             "holds at most", "asked for 500", "larger box")
     _refused(tmp_path, capsys, ["--targets-from", "nbst", "--noncue", "2"], "--noncue applies to --planted only")
     import imageio.v3 as iio
 

@@ -61,7 +61,7 @@ def _refused(address: str, words: str) -> float:
         cluster.connect(address)
     took = time.monotonic() - t0
     msg = str(e.value)
-    assert "\n" not in msg and msg.startswith(f"--cluster {address}: ") and words in msg, msg
+    assert "\n" not in msg and msg.startswith(f"cluster {address}: ") and words in msg, msg
     return took
 
 
