@@ -316,7 +316,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     from nbst.parallel import default_jobs
 
-    ap = argparse.ArgumentParser(prog="python -m nbst.warmup", description=main.__doc__)
+    ap = argparse.ArgumentParser(prog="python -m nbst.warmup", description=main.__doc__, allow_abbrev=False)
     ap.add_argument("-q", "--quiet", action="store_true", help="say nothing")
     ap.add_argument("--jobs", type=int, default=default_jobs(), metavar="N",
                     help="processes at once (default: every core; 1: here, one group after the other)")
