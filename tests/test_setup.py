@@ -31,7 +31,7 @@ def test_ci_runs_the_readme_test_command_then_the_rest():
           if line.strip() and not line.startswith("#") and not line.startswith(("set ", "cd "))]
     assert ci[0] == cmds[1] and len(ci) == 2
     assert "pytest" in cmds[1] and "-n auto" in cmds[1] and '-m "not slow"' in cmds[1]
-    assert ci[1] == '.venv/bin/python -m pytest -q -n auto -m slow'
+    assert ci[1] == 'bash scripts/test-packages.sh && .venv/bin/python -m pytest -q -n auto -m slow'
 
 
 
