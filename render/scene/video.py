@@ -37,7 +37,7 @@ from nbst.render.core.video import render_output
 from nbst.render.scene import geoms as sg
 from nbst.render.scene import readout as ro
 from nbst.render.scene.framing import regions_of, default_camera, focus_points
-from nbst.render.scene.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
+from nbst.render.core.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
 from nbst.render.scene.motion import SceneMotion, Touch, record
 from nbst.scene.fates import Fates
 from nbst.scene.solution import SOLUTION_FORMAT
