@@ -96,8 +96,7 @@ def part_rate(scenes: list[str], n: int) -> None:
                     t0 = time.perf_counter()
                     sim.run(xs)
                     room = time.perf_counter() - t0
-                    how = ("one mj_step(nstep) call per rollout (C)" if not (sim.per_step or sim.pairs or sim.sequences)
-                           else "mj_step per step in Python (path/contacts read)")
+                    how = sim.engine + (" + path/contact sensors" if sim.per_step or sim.pairs else ", the end only")
                     # the same initial states as full physics states
                     d = mujoco.MjData(model)
                     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS

@@ -372,3 +372,50 @@ def test_solve_with_the_ladder_keeps_only_answers_met_at_h_2_and_h_4(toss, tmp_p
     p.write_text(json.dumps(solution_dict(res)))
     assert json.loads(p.read_text())["ladder"]["holds"] is True
     assert ladder_solution(p).holds
+
+
+@pytest.mark.parametrize("sequences", [False, True])
+def test_mujoco_rollout_with_sensors_is_the_python_loop(toss, sequences):
+    """The rollouts run on mujoco.rollout, the path and the touches read from sensors added to a copy
+    of the scene: the same final state bit for bit, the same verdicts, touch times and contact
+    sequences as the plain mj_step loop reading MjData.xpos and MjData.contact between the steps."""
+    f, model = load_fates(toss)
+    lo, hi = f.bounds()
+    xs = lo + (hi - lo) * np.random.default_rng(3).random((12, f.dim))
+    xs[0] = [4.0, 0, 3.0, 0, 0, 0, 0, 0, 0]  # into the wall: a touch to find
+    with SceneSim(f, model, sequences=sequences) as a, SceneSim(f, model, sequences=sequences, loop=True) as b:
+        assert a.engine == "mujoco.rollout" and b.engine == "mj_step loop"
+        ra, rb = a.run(xs), b.run(xs)
+    for x, y in zip(ra, rb):
+        assert x.qpos.tobytes() == y.qpos.tobytes() and x.qvel.tobytes() == y.qvel.tobytes()
+        assert x.judgement == y.judgement and x.sequence == y.sequence
+    assert ra[0].judgement.bodies[0].fates[1].happened == "touched wall"
+    if sequences:
+        assert "ball-wall" in ra[0].sequence and "ball-floor" in ra[1].sequence + ra[2].sequence
+
+
+def test_a_key_with_controls_and_mocap_rolls_out_as_the_loop(tmp_path):
+    """A key's ctrl and mocap pose, which mujoco.rollout would reset, are given to it as constant
+    controls: the arm the key drives turns, bit for bit as in the plain loop."""
+    (tmp_path / "arm.xml").write_text("""<mujoco>
+  <option timestep="0.005"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="2 2 0.1"/>
+    <body name="mark" mocap="true" pos="0 0 2"><geom type="sphere" size="0.02" contype="0" conaffinity="0"/></body>
+    <body name="arm" pos="0 0 0.5"><joint name="hinge" type="hinge" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.02"/></body>
+    <body name="ball" pos="0.3 0.3 0.1"><freejoint/><geom type="sphere" size="0.05"/></body>
+  </worldbody>
+  <actuator><motor joint="hinge" gear="1"/></actuator>
+  <keyframe><key name="go" qpos="0 0.3 0.3 0.1 1 0 0 0" ctrl="0.5" mpos="1 0 2" mquat="1 0 0 0"/></keyframe>
+</mujoco>""")
+    doc = {"format": "nbst-fates", "version": 1, "scene": "arm.xml", "keyframe": "go", "duration": 0.5,
+           "controls": {"ball": {"linvel": [[-1, 1], [-1, 1], [0, 1]]}},
+           "fates": {"ball": {"never_hits": ["arm"]}, "arm": {"still": True}}}
+    (tmp_path / "arm.json").write_text(json.dumps(doc))
+    f, model = load_fates(tmp_path / "arm.json")
+    with SceneSim(f, model) as a, SceneSim(f, model, loop=True) as b:
+        assert a.engine == "mujoco.rollout"
+        ra, rb = a.rollout(np.array([0.2, 0.1, 0.5])), b.rollout(np.array([0.2, 0.1, 0.5]))
+    assert ra.qpos.tobytes() == rb.qpos.tobytes() and ra.judgement == rb.judgement
+    assert abs(ra.qpos[0]) > 0.1  # the key's torque turned the arm
