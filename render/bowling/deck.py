@@ -1,8 +1,10 @@
 """5 m throws in 3D (``nbst render THROW.json``): the lane, the pins and the ball, headless.
 
 The motion is the throw's own replay (plain ``mj_step`` from the throw file's scene and
-initial state, the pose of every body recorded at each 1 ms step); the pin mesh is the
-same trimesh solid the scene is built from (:mod:`nbst.models.bowling.pin`). Two
+initial state, the pose of every body recorded at each 1 ms step); every solid drawn is one of
+the scene's MJCF geoms as the render core builds it (:mod:`nbst.render.core.geoms`): the pins'
+visual mesh (with the neck stripes), the ball, and the lane, gutters, walls, pit and floor in
+their MJCF colours. Two
 cameras: ``behind`` (behind the ball, following it down the lane until the pins) and
 ``overhead`` (above the pin deck); ``both`` draws them side by side. The video runs
 in slow motion (:data:`SLOW`) from just before the first ball-pin contact.
@@ -24,6 +26,7 @@ import numpy as np
 from nbst.errors import InputError
 from nbst.files import sniff_kind
 from nbst.render.core import style
+from nbst.render.core import geoms as cg
 from nbst.render.core.camera import look_at, perspective
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
@@ -32,8 +35,9 @@ from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
 
 __all__ = ["BACKGROUND", "BALL_RGB", "DISK_ONLY_FLAGS", "FPS_MAX", "IMPACT_WINDOW", "PIN_LABEL_BACK", "PIN_RED",
-           "PIN_WHITE", "SLOW", "SNIFF_BYTES", "STRIPES_IN", "BowlingRenderer", "Motion", "bowling_kind",
-           "is_throw_file", "load_motion", "motion_times", "record", "render_file", "render_motion", "slow_window"]
+           "PIN_WHITE", "SLOW", "SNIFF_BYTES", "STRIPES_IN", "BowlingRenderer", "Motion", "ball_solid", "bowling_kind",
+           "is_throw_file", "load_motion", "motion_times", "pin_colour", "pin_solid", "record", "render_file",
+           "render_motion", "slow_window", "static_solids"]
 
 #: Slow motion around impact: this many times slower from IMPACT_WINDOW[0] s before
 #: the first ball-pin contact to IMPACT_WINDOW[1] s after it.
@@ -59,6 +63,7 @@ class Motion:
     impact: float          # time of the first ball-pin contact (s), or nan
     down: list
     down_masks: np.ndarray | None = None   # (S,) pins down (10-bit mask) at each step, by the throw's rule
+    model: object = None                   # the compiled MjModel replayed: its geoms are what is drawn
 
 
 def record(throw: dict, model) -> Motion:
@@ -99,7 +104,7 @@ def record(throw: dict, model) -> Motion:
     masks = pinfall.mask_of(pinfall.pins_down(model, q))
     return Motion(times=np.arange(n + 1) * model.opt.timestep, ball=q[:, ba:ba + 7],
                   pins=q[:, adr[:, None] + np.arange(7)], impact=impact, down=pinfall.pins_of(int(masks[-1])),
-                  down_masks=masks)
+                  down_masks=masks, model=model)
 
 
 def slow_window(motion: Motion) -> tuple[float, float]:
@@ -117,27 +122,48 @@ def motion_times(motion: Motion, fps: float, *, hold: float = 1.0) -> np.ndarray
     return frame_times(float(motion.times[-1]), fps, windows=[(a, b)] if b > a else [], slow=SLOW, hold=hold)
 
 
-def _quat_mat(q) -> np.ndarray:
-    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
 def _pose(p7) -> np.ndarray:
     m = np.eye(4)
-    m[:3, :3] = _quat_mat(p7[3:7])
+    m[:3, :3] = cg.quat_mat(p7[3:7])
     m[:3, 3] = p7[:3]
     return m
 
 
-def _flat(mesh, color_fn) -> np.ndarray:
-    """(V, 9) float32 unshared triangles: position, smooth vertex normal, colour."""
-    tris = mesh.faces.reshape(-1)
-    pos = mesh.vertices[tris]
-    nrm = mesh.vertex_normals[tris]
-    col = np.array([color_fn(p) for p in pos])
-    return np.concatenate([pos, nrm, col], axis=1).astype("f4")
+def pin_colour(p) -> tuple:
+    """A pin's colour at the body-frame point ``p``: white maple, red between STRIPES_IN (inches up)."""
+    from nbst.models.bowling import scene
+
+    h = p[2] / scene.INCH
+    return PIN_RED if any(lo <= h <= hi for lo, hi in STRIPES_IN) else PIN_WHITE
+
+
+def _visible_of(model, body: str) -> list[int]:
+    b = model.body(body).id
+    return [g for g in cg.visible_geoms(model) if int(model.geom_bodyid[g]) == b]
+
+
+def pin_solid(model) -> np.ndarray:
+    """(V, 9) a pin in its body's frame: the first pin's visible geoms (its visual mesh), striped."""
+    parts = [r for g in _visible_of(model, "pin1") if (r := cg.body_rows(model, g)) is not None]
+    return np.concatenate([cg.coloured(r, pin_colour) for r in parts])
+
+
+def ball_solid(model, rgb=BALL_RGB, level: int = 3) -> np.ndarray:
+    """(V, 9) the ball geom in its body's frame (an icosphere of ``level`` subdivisions), one colour."""
+    g = model.geom("ball").id
+    rows = cg.body_rows(model, g) if int(model.geom_type[g]) != cg.SPHERE else cg.posed(
+        cg.sphere_rows(float(model.geom_size[g][0]), level), cg.quat_mat(model.geom_quat[g]), model.geom_pos[g])
+    return cg.coloured(rows, rgb)
+
+
+def static_solids(model) -> np.ndarray:
+    """(V, 9) the world body's visible geoms (lane, gutters, walls, pit, floor) in world
+    coordinates and their MJCF colours."""
+    parts = []
+    for g in cg.visible_geoms(model):
+        if int(model.geom_bodyid[g]) == 0 and (r := cg.body_rows(model, g)) is not None:
+            parts.append(cg.coloured(r, cg.geom_rgba(model, g)))
+    return np.concatenate(parts)
 
 
 class BowlingRenderer(FrameRenderer):
@@ -145,9 +171,6 @@ class BowlingRenderer(FrameRenderer):
 
     def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both", throw: dict | None = None):
         import moderngl
-        import trimesh
-
-        from nbst.models.bowling import pin, scene
 
         if camera not in ("behind", "overhead", "both"):
             raise InputError(f"camera must be behind, overhead or both, got {camera!r}")
@@ -172,39 +195,12 @@ class BowlingRenderer(FrameRenderer):
             buf = ctx.buffer(np.ascontiguousarray(arr).tobytes())
             return ctx.vertex_array(self.prog, [(buf, "3f 3f 3f", "in_pos", "in_normal", "in_color")]), buf
 
-        g = pin.geometry()
-        pm = trimesh.Trimesh(g.visual_vertices.astype(float), g.visual_faces, process=False)
-        inch = 0.0254
-
-        def pin_color(p):
-            h = p[2] / inch
-            return PIN_RED if any(lo <= h <= hi for lo, hi in STRIPES_IN) else PIN_WHITE
-
-        self.pin_vao = vao(_flat(pm, pin_color))
-        self.ball_vao = vao(_flat(trimesh.creation.icosphere(subdivisions=3, radius=scene.BALL_RADIUS),
-                                  lambda p: BALL_RGB))
-        statics = []
-        hw, gw = scene.LANE_WIDTH / 2, scene.GUTTER_WIDTH
-        boxes = [  # (x0, x1, y0, y1, z0, z1, rgb)
-            (scene.LANE_START_X, scene.OIL_END_X, -hw, hw, -0.05, 0.0, (0.80, 0.64, 0.42)),
-            (scene.OIL_END_X, scene.DECK_FRONT_X, -hw, hw, -0.05, 0.0, (0.86, 0.70, 0.48)),
-            (scene.DECK_FRONT_X, scene.PIT_EDGE_X, -hw, hw, -0.05, 0.0, (0.90, 0.78, 0.58)),
-            (scene.LANE_START_X, scene.PIT_EDGE_X, hw, hw + gw, -0.06, -scene.GUTTER_DEPTH, (0.40, 0.40, 0.45)),
-            (scene.LANE_START_X, scene.PIT_EDGE_X, -hw - gw, -hw, -0.06, -scene.GUTTER_DEPTH, (0.40, 0.40, 0.45)),
-            (scene.PIT_EDGE_X, scene.PIT_EDGE_X + scene.PIT_LENGTH, -hw - gw, hw + gw, -scene.PIT_DEPTH - 0.02,
-             -scene.PIT_DEPTH, (0.15, 0.15, 0.17)),
-            (scene.DECK_FRONT_X, scene.PIT_EDGE_X + scene.PIT_LENGTH, hw + gw, hw + gw + 0.05, -scene.PIT_DEPTH, 0.5,
-             (0.22, 0.24, 0.30)),
-            (scene.DECK_FRONT_X, scene.PIT_EDGE_X + scene.PIT_LENGTH, -hw - gw - 0.05, -hw - gw, -scene.PIT_DEPTH, 0.5,
-             (0.22, 0.24, 0.30)),
-        ]
-        for x0, x1, y0, y1, z0, z1, rgb in boxes:
-            b = trimesh.creation.box(extents=[x1 - x0, y1 - y0, z1 - z0])
-            b.apply_translation([(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2])
-            tris = b.faces.reshape(-1)
-            fn = np.repeat(b.face_normals, 3, axis=0)
-            statics.append(np.concatenate([b.vertices[tris], fn, np.tile(rgb, (len(tris), 1))], axis=1))
-        self.static_vao = vao(np.concatenate(statics).astype("f4"))
+        model = motion.model
+        if model is None:
+            raise InputError("the motion carries no model: record it with record(throw, model)")
+        self.pin_vao = vao(pin_solid(model))
+        self.ball_vao = vao(ball_solid(model))
+        self.static_vao = vao(static_solids(model))
 
     def _views(self, t):
         """[(viewport, view-projection, eye)] for the frame at time t."""

@@ -27,11 +27,12 @@ import numpy as np
 from nbst.errors import InputError
 from nbst.models.bowling import lane, pin, pinfall, scene
 from nbst.models.bowling.lane import names
-from nbst.render.bowling.deck import BACKGROUND, PIN_RED, PIN_WHITE, STRIPES_IN, _flat, _pose
+from nbst.render.bowling.deck import BACKGROUND, PIN_WHITE, _pose, pin_solid
 from nbst.render.bowling.throw import (BEHIND_AHEAD, BEHIND_BACK, BEHIND_FOV, BEHIND_HEIGHT, FOLLOW_STOP_FT, LEGEND,
                                        OVERHEAD_FROM_FT, OVERHEAD_SHARE, TRAIL_HALF_WIDTH, TRAIL_HALF_WIDTH_OVERHEAD,
                                        TRAIL_RGB, Throw, ball_texture, lane_marks, lane_solids, ortho_panel,
                                        still_time, throw_times)
+from nbst.render.core import geoms as cg
 from nbst.render.core import style
 from nbst.render.core.camera import look_at, perspective
 from nbst.render.core.gl import FrameRenderer, FrameTarget
@@ -113,8 +114,6 @@ class LaneRenderer(FrameRenderer):
                  probability: float | None = None, probability_note: str | None = None,
                  overhead_from_ft: float = OVERHEAD_FROM_FT, expected=None, no_request: bool = False):
         import moderngl
-        import trimesh
-
 
         if camera not in CAMERAS:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
@@ -154,16 +153,17 @@ class LaneRenderer(FrameRenderer):
             self._bufs.append((v, buf))
             return v
 
-        g = pin.geometry()
-        pm = trimesh.Trimesh(g.visual_vertices.astype(float), g.visual_faces, process=False)
+        # the pins and the ball: the frame model's own geoms (the core's triangles), the ball's
+        # texture laid on in the shader
+        model = self.motion.model
+        if model is None:
+            from nbst.models.bowling.lane import frame
 
-        def pin_color(p):
-            hh = p[2] / scene.INCH
-            return PIN_RED if any(lo <= hh <= hi for lo, hi in STRIPES_IN) else PIN_WHITE
-
-        self.pin_vao = vao(_flat(pm, pin_color))
-        sphere = trimesh.creation.icosphere(subdivisions=4, radius=scene.BALL_RADIUS)
-        self.ball_vao = vao(sphere.vertices[sphere.faces.reshape(-1)], self.ball_prog, "3f", ("in_pos",))
+            model = frame.frame_model(throw.ball, timestep=throw.timestep)
+        self.pin_vao = vao(pin_solid(model))
+        g = model.geom("ball").id
+        self.ball_vao = vao(cg.sphere_rows(float(model.geom_size[g][0]), 4)[:, :3], self.ball_prog, "3f",
+                            ("in_pos",))
         tex = ball_texture(throw)
         self.ball_tex = ctx.texture((tex.shape[1], tex.shape[0]), 3, np.ascontiguousarray(tex).tobytes(), alignment=1)
         self.ball_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)

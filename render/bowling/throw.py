@@ -190,7 +190,7 @@ def record_throw(delivery, oil: object = "house", ball=None, *, standing=None, t
     masks = pinfall.mask_of(pinfall.pins_down(m, q) & play)   # now down: tilted or off the deck
     masks[-1] = pinfall.mask_from_pins(fr.down)                 # the end: the frame's USBC outcome
     motion = Motion(times=np.arange(len(q)) * h, ball=bq, pins=q[:, padr[:, None] + np.arange(7)],
-                    impact=impact[0], down=list(fr.down), down_masks=masks)
+                    impact=impact[0], down=list(fr.down), down_masks=masks, model=m)
     return Throw(motion=motion, result=result, delivery=delivery, oil=oil, ball=ball, timestep=h, frame=fr,
                  in_play=tuple(fr.in_play))
 

@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 
+from nbst.render.core import geoms as cg
 from nbst.render.core.camera import mesh_arrays
 from nbst.render.core.solids import box as _box, flat_poly as _flat_poly, ribbon as _ribbon
 
@@ -196,17 +197,11 @@ def impact_marks(impacts) -> np.ndarray:
 
 # --------------------------------------------------------------------------- solids (V, 9)
 
-def _in_frame(rows: np.ndarray, R: np.ndarray, p: np.ndarray) -> np.ndarray:
-    out = rows.copy()
-    out[:, :3] = rows[:, :3] @ R.T + p
-    out[:, 3:6] = rows[:, 3:6] @ R.T
-    return out
-
-
 def static_solids(model, data) -> tuple[np.ndarray, np.ndarray, tuple]:
     """(ground (V, 9), the rest (V, 9), the ground's RGB) of the scene's static geoms in world
-    coordinates (``data`` after ``mj_kinematics``): the ground plane (drawn to GROUND_DRAWN, 2 mm
-    under the carriageway), and the carriageway, curbs and barriers, each in its own colour."""
+    coordinates (``data`` after ``mj_kinematics``), each the core's triangles of its MJCF geom
+    (:func:`nbst.render.core.geoms.geom_rows`) in its own colour: the ground plane (drawn to
+    GROUND_DRAWN, 2 mm under the carriageway), and the carriageway, curbs and barriers."""
     from nbst.models.crash import scene as scene_mod
 
     movers = {model.body(scene_mod.vehicle_prefix(i)).id for i in range(_vehicles(model))}
@@ -217,21 +212,21 @@ def static_solids(model, data) -> tuple[np.ndarray, np.ndarray, tuple]:
         b = int(model.geom_bodyid[g])
         while b and b not in movers:
             b = int(model.body_parentid[b])
-        if b in movers:
+        if b in movers or model.geom_type[g] not in (GEOM_PLANE, GEOM_BOX):
             continue
         rgb = tuple(float(c) for c in model.geom_rgba[g][:3])
         R, p = data.geom_xmat[g].reshape(3, 3), data.geom_xpos[g]
-        sx, sy, sz = (float(c) for c in model.geom_size[g])
+        rows = cg.geom_rows(model, g, extent=GROUND_DRAWN, plane_at_least=GROUND_DRAWN)
         if model.geom_type[g] == GEOM_PLANE:
-            sx, sy = max(sx, GROUND_DRAWN), max(sy, GROUND_DRAWN)
-            ground.append(_in_frame(_flat_poly([(-sx, -sy), (sx, -sy), (sx, sy), (-sx, sy)], rgb, z=-0.002), R, p))
+            ground.append(cg.coloured(cg.posed(rows, R, p - np.array([0.0, 0.0, 0.002])), rgb))
             ground_rgb = rgb
-        elif model.geom_type[g] == GEOM_BOX:
-            rest.append(_in_frame(_box(-sx, sx, -sy, sy, -sz, sz, rgb), R, p))
-    def rows(parts):
+        else:
+            rest.append(cg.coloured(cg.posed(rows, R, p), rgb))
+
+    def rows_of(parts):
         return np.concatenate(parts).astype("f4") if parts else np.zeros((0, 9), "f4")
 
-    return rows(ground), rows(rest), ground_rgb
+    return rows_of(ground), rows_of(rest), ground_rgb
 
 
 def _vehicles(model) -> int:
@@ -255,7 +250,7 @@ def geom_solid(model, g: int, arches=()) -> np.ndarray | None:
     if model.geom_type[g] == GEOM_BOX:
         if not name.endswith("_cabin"):
             return body_box(sx, sy, sz, rgb, arches).astype("f4")
-        rows = _box(-sx, sx, -sy, sy, -sz, sz, rgb)
+        rows = cg.coloured(cg.geom_rows(model, g), rgb)
         rows[np.abs(rows[:, 5]) < 0.5, 6:9] = GLASS
         screen = _flat_poly([(0.45 * sx, -0.9 * sy), (0.95 * sx, -0.9 * sy), (0.95 * sx, 0.9 * sy),
                              (0.45 * sx, 0.9 * sy)], GLASS, z=sz + 0.004)
@@ -282,7 +277,7 @@ def body_box(sx: float, sy: float, sz: float, rgb, arches=()) -> np.ndarray:
     stays the geom's own size everywhere else."""
     arches = sorted((float(x), float(h), float(min(top, sz))) for x, h, top in arches)
     if not arches:
-        return _box(-sx, sx, -sy, sy, -sz, sz, rgb)
+        return _box(-sx, sx, -sy, sy, -sz, sz, rgb)   # the core's box (a geom's, without a model)
     rows = [r for r in _box(-sx, sx, -sy, sy, -sz, sz, rgb).reshape(-1, 3, 9) if abs(r[0, 4]) < 0.5]
     cuts = sorted({-sx, sx, *(c for x, h, _ in arches for c in (max(-sx, x - h), min(sx, x + h)))})
     out = [np.concatenate(rows)]
@@ -316,4 +311,4 @@ def tyre_solid(radius: float, half_width: float) -> np.ndarray:
     col = np.where(cap[:, None], np.where(spoke[:, None], SPOKE, HUB), TYRE)
     rows = np.concatenate([pn, np.repeat(col, 3, axis=0)], axis=1)
     R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])     # z (axle) -> y
-    return _in_frame(rows, R, np.zeros(3))
+    return cg.posed(rows, R, np.zeros(3))

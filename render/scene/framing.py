@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from nbst.render.core.camera import look_at, perspective
-from nbst.render.scene import geoms as sg
+from nbst.render.core import geoms as sg
 from nbst.render.scene.motion import SceneMotion
 from nbst.scene.fates import Fates
 

@@ -1,7 +1,7 @@
 """A scene solution in 3D (``nbst render SOL.json``): any MJCF drawn with moderngl.
 
 * **The scene**: every geom MuJoCo's viewer shows by default (groups 0-2, alpha above 0) as its
-  type's solid (:mod:`nbst.render.scene.geoms`: plane, sphere, capsule, ellipsoid, cylinder, box,
+  type's solid (:mod:`nbst.render.core.geoms`: plane, sphere, capsule, ellipsoid, cylinder, box,
   mesh) in its material's or its own colour, posed each frame from the replay
   (:mod:`nbst.render.scene.motion`); lit by the model's first light (else :data:`LIGHT`) with the
   3D worlds' shading (``nbst.render.core.shaders.SHADE``) and shadows from a shadow map of that
@@ -34,7 +34,7 @@ from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shapes import Rect, Text, text_cell
 from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
-from nbst.render.scene import geoms as sg
+from nbst.render.core import geoms as sg
 from nbst.render.scene import readout as ro
 from nbst.render.scene.framing import regions_of, default_camera, focus_points
 from nbst.render.core.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
