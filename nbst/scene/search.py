@@ -1,35 +1,32 @@
-"""The paper's per-body signature search, carried to the free bodies of any scene.
+"""The paper's per-body signature search, carried to the free bodies of any scene, on the one
+rollout-search engine (``nbst.models.mjsearch.engine.Engine``: pycma's ask/tell).
 
 A trial is a controls vector, kept in the unit cube (coordinate k maps to ``lo[k] + u[k] (hi[k] -
 lo[k])``), cut into **blocks**, one per controlled body. Its **signature** holds one bit per body
-with fates: set when all of that body's fates are met (``nbst.scene.judge``). As in the paper
-(docs/scene.md, "The search"):
+with fates: set when all of that body's fates are met (``nbst.scene.judge``). This module knows the
+scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
 
-* **initialize**: random trials (each block by *directed* or *uniform randomize*, even odds) until
-  every bit is set in at least :data:`INIT_PER_BIT` members, or after :data:`INIT_MAX` rollouts (a
-  tenth of the budget at most);
-* **generate**: one of four operators, even odds: *creep* (one block perturbed), *directed
-  randomize* (one block aimed), *uniform randomize* (one block drawn anew), *crossover* (two
-  parents; the second among those whose signature OR'ed with the first's sets the most bits; each
-  block from the parent whose body meets its fates when exactly one does, else from either). A
-  parent is chosen "Senate-like": each order (bits set) present is as likely, each signature of
-  that order as likely, then the better of two members of that signature drawn at random;
-* **insert**: a child with the signature of one parent replaces it, unless that parent is the
-  best of its signature and the child is not better (elitism); otherwise it joins, the worst of its
-  signature leaving past :data:`PER_SIGNATURE`; past :data:`POPULATION` members the lowest-order
-  signatures subsumed by higher-order ones are culled (not the best's);
-* with a ladder (finer timesteps, h/2 and h/4), a trial that meets every fate is rolled out there
-  too and counts only if it meets them there as well (each miss adds :data:`LADDER_PENALTY` to
-  its cost, so a trial that holds is better);
-* the search stops when every bit is set (all fates met), or at the rollout budget. Asked for
-  several answers, it goes on until that many rollouts meet every fate, each with a contact
-  sequence of its own (Chenney & Forsyth 2000: the animator chooses).
+* **initialize** (the engine's exploring phase): random trials (each block by *directed* or
+  *uniform randomize*, even odds) until every bit is set in at least :data:`INIT_PER_BIT` members,
+  or after :data:`INIT_MAX` rollouts (a tenth of the budget at most);
+* **generate** (the engine's GA): *creep* (one block perturbed by a normal step of sigma 0.01,
+  0.04 or 0.15 of the range), *directed randomize* (this module's aim), *uniform randomize*,
+  *crossover* of whole per-body blocks; Senate-like parents; a changed block is an unmet body's
+  half the time;
+* **insert**: the paper's elitism, :data:`PER_SIGNATURE` members per signature, subsumed signatures
+  culled past :data:`POPULATION`;
+* the engine's **distance** of a trial is 3 per unmet bit plus, with a ladder (finer timesteps,
+  h/2 and h/4), 1 per rung where a trial that meets every fate does not (those rollouts counted);
+  its **cost** the judge's graded cost plus :data:`LADDER_PENALTY` per such rung: the best is the
+  lowest (distance, cost), and the search stops when it is 0 (every fate met, and kept on the
+  ladder), or at the rollout budget. Asked for several answers, it goes on until that many
+  rollouts meet every fate (and hold), each with a contact sequence of its own (Chenney & Forsyth
+  2000: the animator chooses).
 
 *Directed randomize* aims a body that has a place to be (``rest_in`` or ``at``): the velocity that
 would carry its origin ballistically (the model's gravity, no contacts) to a point of the region in a
-random flight time (``at``: its time); half the time it instead takes the block of the member whose
-body is nearest its fates and creeps it. *Creep* adds a normal step of sigma 0.01, 0.04 or 0.15 (of
-the range, one at random) to the block.
+random flight time (``at``: its time); half the time (and always for a body with no place) it
+instead takes the block of the member whose body is nearest its fates and creeps it (sigma 0.04).
 
 Children are made :data:`BATCH` at a time from one generator stream (``nbst.seeds``) and rolled out
 on ``jobs`` threads: the result depends on the seed alone, never on ``jobs``. Ctrl-C stops the
@@ -39,15 +36,17 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
+from nbst.models.mjsearch.engine import Engine
 from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
 from nbst.scene.rollout import SceneRollout, SceneSim
 
-__all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "LADDER_PENALTY", "SceneProgress",
-           "SceneSearchResult", "signature_search", "noisy_probability"]
+__all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "CREEP",
+           "LADDER_PENALTY", "SceneProgress", "SceneSearchResult", "signature_search", "noisy_probability",
+           "distance_of"]
 
 #: The rollout budget when none is given (the CLI's --max-rollouts default too).
 DEFAULT_MAX_ROLLOUTS = 3000
@@ -63,7 +62,8 @@ LADDER_PENALTY = 0.01
 INIT_PER_BIT = 3
 #: ... or after this many rollouts (and at most a tenth of the budget).
 INIT_MAX = 160
-_CREEP = (0.01, 0.04, 0.15)
+#: The creep's normal steps (unit cube), one drawn per child.
+CREEP = (0.01, 0.04, 0.15)
 
 
 @dataclass(frozen=True)
@@ -102,46 +102,32 @@ class SceneSearchResult:
     best_held: bool | None = None
 
 
-class _Member:
-    __slots__ = ("u", "r", "sig", "cost", "held")
-
-    def __init__(self, u: np.ndarray, r: SceneRollout):
-        self.u, self.r, self.sig, self.cost = u, r, r.signature, r.cost
-        #: with a ladder: every fate also met at each finer step (None: not looked at)
-        self.held: bool | None = None
+def distance_of(r: SceneRollout, ladder_misses: int = 0) -> int:
+    """The engine's distance of a rollout: 3 per unmet signature bit (every bit unmet when MuJoCo
+    warned), plus the ladder's misses of a rollout that meets every fate (0 to 2)."""
+    return 3 * sum(1 for b in r.signature if not b) + int(ladder_misses)
 
 
-def _better(a: _Member, b: _Member) -> bool:
-    """a is better than b: more bits set, then lower cost."""
-    return (sum(a.sig), -a.cost) > (sum(b.sig), -b.cost)
+class _Scene:
+    """What the engine asks of the scene: the unit cube, the aim, the rollouts and their verdicts."""
 
-
-class _Search:
-    def __init__(self, sim: SceneSim, rng: np.random.Generator, want: int = 1, ladder: tuple[SceneSim, ...] = ()):
+    def __init__(self, sim: SceneSim, want: int, ladder: tuple[SceneSim, ...]):
         f = sim.fates
-        self.sim, self.rng, self.fates = sim, rng, f
+        self.sim, self.fates, self.want, self.ladder = sim, f, want, ladder
         self.lo, self.hi = f.bounds()
         self.span = self.hi - self.lo
         self.blocks = f.blocks()
         fated = [fa.body for fa in f.fates]
         #: per block: the signature bit of its body (None: the body has no fates)
         self.bit = [fated.index(c.body) if c.body in fated else None for c in f.controls]
-        self.pop: list[_Member] = []
-        self.best: _Member | None = None
-        self.seen: set[tuple[bool, ...]] = set()
-        self.want = want
-        self.ladder = ladder
         self.answers: dict[tuple[str, ...], SceneRollout] = {}
-        self.rollouts = 0
-        # the origin of each controlled body at the start (for aiming), gravity
+        self.held: dict[int, bool] = {}  # id(rollout) -> kept on the ladder
+        self.seen: set[tuple[bool, ...]] = set()
         mid = (self.lo + self.hi) / 2
         q0, _ = sim.initial_state(mid)
-        self.origin = []
-        for qa, _da in sim.adr:  # (the middle of a pos range is added already)
-            self.origin.append(q0[qa:qa + 3].copy())
+        self.origin = [q0[qa:qa + 3].copy() for qa, _da in sim.adr]  # (the middle of a pos range is added)
         self.gravity = np.array(sim.model.opt.gravity, dtype=float)
 
-    # -- operators --------------------------------------------------------------------
     def x_of(self, u: np.ndarray) -> np.ndarray:
         return self.lo + np.clip(u, 0.0, 1.0) * self.span
 
@@ -150,154 +136,88 @@ class _Search:
             u = np.where(self.span > 0, (x - self.lo) / np.where(self.span > 0, self.span, 1.0), 0.5)
         return np.asarray(np.clip(u, 0.0, 1.0))
 
-    def uniform(self, u: np.ndarray, i: int) -> None:
-        sl = self.blocks[i]
-        u[sl] = self.rng.random(sl.stop - sl.start)
-
-    def creep(self, u: np.ndarray, i: int, sigma: float | None = None) -> None:
-        sl = self.blocks[i]
-        s = float(self.rng.choice(_CREEP)) if sigma is None else sigma
-        u[sl] = np.clip(u[sl] + s * self.rng.standard_normal(sl.stop - sl.start), 0.0, 1.0)
-
-    def directed(self, u: np.ndarray, i: int) -> None:
+    # -- the moves --------------------------------------------------------------------
+    def directed(self, eng: Engine, u: np.ndarray, i: int) -> None:
+        """Directed randomize of block ``i`` of ``u`` (in place; the module docstring)."""
+        rng = eng.rng
         c, b = self.fates.controls[i], self.bit[i]
         fate = None if b is None else self.fates.fates[b]
         aimable = fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
-        if self.pop and (not aimable or self.rng.random() < 0.5):
-            # the block of the member whose body comes nearest its fates, crept
+        sl = self.blocks[i]
+        pop = eng.population
+        if pop and (not aimable or rng.random() < 0.5):
             if b is not None:
-                donor = min(self.pop, key=lambda m: m.r.judgement.bodies[b].cost)
+                donor = min(pop, key=lambda m: m.payload.judgement.bodies[b].cost)
             else:
-                donor = min(self.pop, key=lambda m: m.cost)
-            sl = self.blocks[i]
+                donor = min(pop, key=lambda m: m.key)
             u[sl] = donor.u[sl]
-            self.creep(u, i, 0.04)
+            u[sl] = np.clip(u[sl] + 0.04 * rng.standard_normal(sl.stop - sl.start), 0.0, 1.0)
             return
-        self.uniform(u, i)
+        u[sl] = rng.random(sl.stop - sl.start)
         if not aimable:
             return
         assert fate is not None
-        if fate.at and (fate.rest_in is None or self.rng.random() < 0.5):
-            t, region = fate.at[int(self.rng.integers(len(fate.at)))]
+        if fate.at and (fate.rest_in is None or rng.random() < 0.5):
+            t, region = fate.at[int(rng.integers(len(fate.at)))]
             t = max(t, 1e-3)
         else:
             assert fate.rest_in is not None
             region = fate.rest_in
-            t = float(self.rng.uniform(0.1, max(0.2, min(1.0, 0.5 * self.fates.duration))))
+            t = float(rng.uniform(0.1, max(0.2, min(1.0, 0.5 * self.fates.duration))))
         target = region.mid()
         if region.center is not None:
-            target = target + region.radius * 0.5 * self.rng.uniform(-1, 1, 3)
+            target = target + region.radius * 0.5 * rng.uniform(-1, 1, 3)
         else:
-            target = target + 0.25 * (np.asarray(region.hi) - np.asarray(region.lo)) * self.rng.uniform(-1, 1, 3)
+            target = target + 0.25 * (np.asarray(region.hi) - np.asarray(region.lo)) * rng.uniform(-1, 1, 3)
         v = (target - self.origin[i] - 0.5 * self.gravity * t * t) / t
         k = [p for p, _ in c.parts()].index("linvel")
-        sl = self.blocks[i]
         a = sl.start + 3 * k
         x = self.x_of(u)
         x[a:a + 3] = v
         u[a:a + 3] = self.u_of(x)[a:a + 3]
 
-    def random_trial(self) -> np.ndarray:
-        u = self.rng.random(len(self.lo))
+    def init(self, eng: Engine) -> np.ndarray:
+        """A random trial: each block by directed or uniform randomize, even odds."""
+        u = eng.rng.random(len(self.lo))
         for i in range(len(self.blocks)):
-            if self.rng.random() < 0.5:
-                self.directed(u, i)
+            if eng.rng.random() < 0.5:
+                self.directed(eng, u, i)
         return u
 
-    # -- parents ----------------------------------------------------------------------
-    def senate(self, among: list[_Member]) -> _Member:
-        orders = sorted({sum(m.sig) for m in among})
-        o = orders[int(self.rng.integers(len(orders)))]
-        sigs = sorted({m.sig for m in among if sum(m.sig) == o})
-        s = sigs[int(self.rng.integers(len(sigs)))]
-        mem = [m for m in among if m.sig == s]
-        a, b = (mem[int(k)] for k in self.rng.integers(len(mem), size=2))
-        return a if a.cost <= b.cost else b  # a tournament of two inside the signature
+    def init_done(self, eng: Engine) -> bool:
+        return all(sum(1 for m in eng.population if m.signature >> b & 1) >= INIT_PER_BIT
+                   for b in range(len(self.fates.fates)))
 
-    def block_to_change(self, parent: _Member) -> int:
-        unmet = [i for i, b in enumerate(self.bit) if b is None or not parent.sig[b]]
-        if unmet and self.rng.random() < 0.5:
-            return unmet[int(self.rng.integers(len(unmet)))]
-        return int(self.rng.integers(len(self.blocks)))
+    # -- rollouts ---------------------------------------------------------------------
+    def evaluate(self, U: np.ndarray) -> dict[str, Any]:
+        outs = self.sim.run(np.array([self.x_of(u) for u in U]))
+        spent = len(outs)
+        dist, cost = [], []
+        for r in outs:
+            self.seen.add(r.signature)
+            met = r.judgement.met and not r.warnings
+            misses = 0
+            if met and self.ladder:  # the finer steps: a miss there costs, and keeps the search going
+                misses = sum(not (q.judgement.met and not q.warnings) for q in (s.rollout(r.x) for s in self.ladder))
+                spent += len(self.ladder)
+                self.held[id(r)] = misses == 0
+            if met and misses == 0 and r.sequence not in self.answers and len(self.answers) < self.want:
+                self.answers[r.sequence] = r
+            dist.append(distance_of(r, misses))
+            cost.append(r.cost + LADDER_PENALTY * misses)
+        sigs = [sum(1 << k for k, b in enumerate(r.signature) if b) for r in outs]
+        return {"signatures": sigs, "distances": dist, "costs": cost, "payloads": outs, "rollouts": spent}
 
-    def child(self) -> tuple[np.ndarray, tuple[_Member, ...]]:
-        op = int(self.rng.integers(4))
-        p1 = self.senate(self.pop)
-        if op == 3 and len(self.pop) > 1:
-            others = [m for m in self.pop if m is not p1]
-            best_or = max(sum(a or b for a, b in zip(p1.sig, m.sig)) for m in others)
-            p2 = self.senate([m for m in others if sum(a or b for a, b in zip(p1.sig, m.sig)) == best_or])
-            u = p1.u.copy()
-            for i, sl in enumerate(self.blocks):
-                b = self.bit[i]
-                ok1, ok2 = (p1.sig[b], p2.sig[b]) if b is not None else (False, False)
-                take2 = ok2 if ok1 != ok2 else bool(self.rng.random() < 0.5)
-                if take2:
-                    u[sl] = p2.u[sl]
-            return u, (p1, p2)
-        u = p1.u.copy()
-        i = self.block_to_change(p1)
-        (self.creep, self.directed, self.uniform, self.creep)[op](u, i)
-        return u, (p1,)
-
-    # -- population -------------------------------------------------------------------
-    def note(self, m: _Member) -> None:
-        self.seen.add(m.sig)
-        met = m.r.judgement.met and not m.r.warnings
-        if met and self.ladder:  # the finer steps: a miss there costs, and keeps the search going
-            fails = sum(not (r.judgement.met and not r.warnings) for r in (s.rollout(m.r.x) for s in self.ladder))
-            self.rollouts += len(self.ladder)
-            m.held, m.cost = fails == 0, m.cost + LADDER_PENALTY * fails
-        if met and m.held is not False and m.r.sequence not in self.answers and len(self.answers) < self.want:
-            self.answers[m.r.sequence] = m.r
-        if self.best is None or _better(m, self.best):
-            self.best = m
-
-    def add(self, m: _Member) -> None:
-        self.pop.append(m)
-        same = [x for x in self.pop if x.sig == m.sig]
-        if len(same) > PER_SIGNATURE:
-            worst = max((x for x in same if x is not self.best), key=lambda x: x.cost, default=None)
-            if worst is not None:
-                self.pop.remove(worst)
-        if len(self.pop) > POPULATION:
-            self.cull()
-
-    def cull(self) -> None:
-        assert self.best is not None
-        sigs = {x.sig for x in self.pop}
-        subsumed = [s for s in sigs if s != self.best.sig and all(
-            any(t[k] and sum(t) > sum(s) for t in sigs) for k in range(len(s)) if s[k])]
-        if subsumed:
-            low = min(sum(s) for s in subsumed)
-            gone = {s for s in subsumed if sum(s) == low}
-            self.pop = [x for x in self.pop if x.sig not in gone]
-        while len(self.pop) > POPULATION:
-            worst = max((x for x in self.pop if x is not self.best), key=lambda x: (-sum(x.sig), x.cost))
-            self.pop.remove(worst)
-
-    def insert(self, m: _Member, parents: tuple[_Member, ...]) -> None:
-        self.note(m)
-        same = [p for p in parents if p.sig == m.sig and p in self.pop]
-        if same:
-            p = same[int(self.rng.integers(len(same)))] if len(same) > 1 else same[0]
-            best_of_sig = min((x for x in self.pop if x.sig == p.sig), key=lambda x: x.cost)
-            if not (p is best_of_sig and m.cost >= p.cost):
-                self.pop[self.pop.index(p)] = m
-                return
-        self.add(m)
-
-    def done(self) -> bool:
+    def done(self, eng: Engine) -> bool:
         if self.want > 1:
             return len(self.answers) >= self.want
-        return (self.best is not None and self.best.r.judgement.met and not self.best.r.warnings
-                and self.best.held is not False)
+        return eng.best is not None and eng.best.distance == 0
 
 
 def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: int = DEFAULT_MAX_ROLLOUTS,
                      answers: int = 1, ladder: tuple[SceneSim, ...] = (),
                      callback: Callable[[SceneProgress], None] | None = None) -> SceneSearchResult:
-    """Search the controls with the paper's signature search (module docstring).
+    """Search the controls with the paper's signature search on the engine (module docstring).
 
     Args:
         sim: the scene's rollouts (its ``jobs`` threads roll each batch out).
@@ -308,58 +228,43 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
             sim must record sequences, ``SceneSim(sequences=True)``), or the budget is spent.
         ladder: sims of the same scene at finer timesteps (h/2, h/4): a trial that meets every fate
             is rolled out on each too (those rollouts count in the budget), and is an answer only if
-            it meets them there as well; a miss adds :data:`LADDER_PENALTY` to its cost per rung.
+            it meets them there as well; a miss adds 1 to its distance and :data:`LADDER_PENALTY`
+            to its cost per rung.
         callback: called with a :class:`SceneProgress` after each batch.
 
     Returns:
         the :class:`SceneSearchResult` (the best rollout, also when interrupted).
     """
-    S = _Search(sim, rng, want=answers, ladder=ladder)
+    S = _Scene(sim, answers, ladder)
+    fates = sim.fates
+    eng = Engine(fates.dim, seed=rng, max_rollouts=max_rollouts, blocks=[list(range(b.start, b.stop)) for b in S.blocks],
+                 bits=S.bit, batch=BATCH, explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init=S.init,
+                 init_done=S.init_done, ga_batches=1, ga_fine=1, moves={"directed": S.directed}, creep=CREEP,
+                 prefer_unmet=True, population=POPULATION, per_signature=PER_SIGNATURE, cma=False, done=S.done)
     t0 = time.perf_counter()
-    stopped = "budget"
 
     def tell() -> None:
-        if callback is not None and S.best is not None:
-            callback(SceneProgress(S.rollouts, S.best.cost, "".join("1" if b else "0" for b in S.best.sig),
-                                   len(S.pop), len(S.seen)))
+        b = eng.best
+        if callback is not None and b is not None:
+            callback(SceneProgress(eng.rollouts, b.cost, "".join("1" if k else "0" for k in b.payload.signature),
+                                   len(eng.population), len(S.seen)))
 
     try:
-        init_budget = max(2 * BATCH, min(max_rollouts // 10, INIT_MAX))
-        while S.rollouts < min(init_budget, max_rollouts) and not S.done():
-            n = min(BATCH, max_rollouts - S.rollouts)
-            us = [S.random_trial() for _ in range(n)]
-            outs = sim.run(np.array([S.x_of(u) for u in us]))
-            S.rollouts += n
-            for u, r in zip(us, outs):
-                m = _Member(u, r)
-                S.note(m)
-                S.add(m)
-            tell()
-            counts = [sum(1 for m in S.pop if m.sig[b]) for b in range(len(sim.fates.fates))]
-            if min(counts) >= INIT_PER_BIT:
-                break
-        while S.rollouts < max_rollouts and not S.done():
-            n = min(BATCH, max_rollouts - S.rollouts)
-            kids = [S.child() for _ in range(n)]
-            outs = sim.run(np.array([S.x_of(u) for u, _ in kids]))
-            S.rollouts += n
-            for (u, parents), r in zip(kids, outs):
-                S.insert(_Member(u, r), parents)
-                if S.done():
-                    break
+        while not eng.stop():
+            U = eng.ask()
+            eng.tell(U, **S.evaluate(U))
             tell()
     except KeyboardInterrupt:
-        stopped = "interrupted"
-    if S.done():
-        stopped = "met"
-    if S.best is None:  # interrupted before the first batch came back: roll out the middle of the ranges
-        mid = np.full(len(S.lo), 0.5)
-        S.best = _Member(mid, sim.rollout(S.x_of(mid)))
-    if stopped != "interrupted":
-        tell()
-    return SceneSearchResult(best=S.best.r, rollouts=S.rollouts, stopped=stopped,
-                             wall_time=time.perf_counter() - t0, signatures=len(S.seen),
-                             answers=tuple(S.answers.values()), best_held=S.best.held)
+        eng.interrupt()
+    reasons = eng.stop()
+    stopped = "met" if "solved" in reasons else "interrupted" if "interrupted" in reasons else "budget"
+    if eng.best is None:  # interrupted before the first batch came back: roll out the middle of the ranges
+        best = sim.rollout(S.x_of(np.full(fates.dim, 0.5)))
+    else:
+        best = eng.best.payload
+    return SceneSearchResult(best=best, rollouts=eng.rollouts, stopped=stopped, wall_time=time.perf_counter() - t0,
+                             signatures=len(S.seen), answers=tuple(S.answers.values()),
+                             best_held=S.held.get(id(best)))
 
 
 def noisy_probability(sim: SceneSim, x: np.ndarray, *, n: int, seed: int) -> Probability:
