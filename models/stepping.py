@@ -43,10 +43,26 @@ lets no step cross an impact:
    approaches, and each micro-step makes it separate. A micro-step longer than h (eps / u > h:
    u below eps / h) is capped at h with k = 2u / (eps h), which still reverses u.
 
-Requirements on the scene (``nbst mjcf`` scenes satisfy them): Euler integrator; no gravity or
-other forces, so that Euler free flight is exact and no contact is active between impacts;
-frictionless (condim 1) contacts with margin = gap = 0 and direct ``solref = (-k, 0)``
-(the micro-step sets k); no explicit ``<pair>``s (only geom contype/conaffinity is masked).
+Requirements on the scene (``nbst mjcf`` scenes satisfy them; :func:`check_model` refuses, in one
+line naming each, a model that breaks one, before any step, so that no call returns an answer
+it did not compute: a ball under gravity used to fall to z = -46 m and return normally):
+
+* Euler integrator; no gravity, fluid (density, viscosity), actuator, spring, damper, friction
+  loss or applied force (``data.qfrc_applied``, ``data.xfrc_applied``): Euler free flight is
+  then exact and no force acts between impacts;
+* no constraint but contacts: no equality, joint or tendon limit, and contacts and constraints
+  enabled; no flex (soft body); no contact override or sleeping (``opt.enableflags``);
+* each collidable geom (contype or conaffinity non-zero) frictionless (condim 1), margin =
+  gap = 0, elastic: a direct undamped ``solref = (-k, 0)`` (the micro-step sets k) and
+  ``solimp`` dmin = dmax = 0.9999, MuJoCo's most (a contact's impulse is then exact; measured on
+  two disks with five wall bounces, tests/test_stepping.py's first case: 2.6e-10 units from the
+  exact end, against 106 units and speeds 20 % low with the default solimp (0.9, 0.95), and
+  219 units and speeds 43 % high with dmin 0.9999, dmax 0.95); convex (no height field or SDF:
+  a graze is found by convexity);
+* bodies that translate: every joint a slide joint, or a free joint of a body whose centre of
+  mass is its frame's origin and whose collidable geoms are spheres centred there (their
+  rotation then never shows: a frictionless contact exerts no torque on them);
+* no explicit ``<pair>`` (only geom contype/conaffinity is masked).
 
 Usage (a scene written by ``nbst mjcf``)::
 
@@ -71,8 +87,8 @@ import numpy as np
 
 from nbst.errors import InputError, MujocoError
 
-__all__ = ["TOL_REL", "TIE_TIME", "MAX_SEARCH", "MICRO_ACCEL", "SHARED_K", "MAX_MICRO_PER_GEOM", "AlignedStats",
-           "step_aligned"]
+__all__ = ["TOL_REL", "TIE_TIME", "MAX_SEARCH", "MICRO_ACCEL", "SHARED_K", "MAX_MICRO_PER_GEOM", "ELASTIC_IMP",
+           "SceneNotSupported", "AlignedStats", "unsupported", "check_model", "step_aligned"]
 
 #: Default overlap tolerance, relative to ``model.stat.extent``: the touch is located so that the
 #: deepest new overlap is at most this (1e-15 x 0.8 m = 8e-16 m, a few ulps of a coordinate; the
@@ -98,6 +114,150 @@ SHARED_K = 1e-300
 #: Micro-steps in one instant, per collidable geom, before the run is declared a jam
 #: (disks pinned between walls bounce without end; nbst.constants.STALL_EVENTS_PER_DISK).
 MAX_MICRO_PER_GEOM = 1000
+#: ``solimp`` dmin and dmax a collidable geom needs: MuJoCo's largest impedance (mjMAXIMP), at
+#: which a micro-step's impulse reverses the normal velocity exactly (module docstring).
+ELASTIC_IMP = 0.9999
+#: Collidable geoms named in a refusal before "and N more".
+_NAMES_SHOWN = 3
+
+
+class SceneNotSupported(InputError):
+    """A model ``step_aligned`` cannot advance exactly (gravity, friction, another integrator,
+    contact settings it does not model): one line naming every unsupported setting."""
+
+
+def _names(model, obj, ids) -> str:
+    import mujoco
+    ids = [int(i) for i in ids]
+    out = []
+    for i in ids[:_NAMES_SHOWN]:
+        name = mujoco.mj_id2name(model, obj, i)
+        out.append(f"'{name}'" if name else f"#{i}")
+    more = f" and {len(ids) - _NAMES_SHOWN} more" if len(ids) > _NAMES_SHOWN else ""
+    return ", ".join(out) + more
+
+
+def _vec(x) -> str:
+    return "(" + ", ".join(f"{float(v):.6g}" for v in np.ravel(x)) + ")"
+
+
+def unsupported(model, data=None) -> list[str]:
+    """What in ``model`` (and ``data``'s applied forces) ``step_aligned`` does not model.
+
+    Args:
+        model: a ``mujoco.MjModel``.
+        data: its ``mujoco.MjData``, or None: then applied forces are not checked.
+
+    Returns:
+        One phrase per unsupported setting, naming it and the geoms, joints or fields concerned
+        (empty: the scene is one step_aligned advances exactly; module docstring, requirements).
+    """
+    import mujoco
+    o = model.opt
+    dis, ena = int(o.disableflags), int(o.enableflags)
+    D, E, G, J = mujoco.mjtDisableBit, mujoco.mjtEnableBit, mujoco.mjtObj.mjOBJ_GEOM, mujoco.mjtObj.mjOBJ_JOINT
+    off = lambda bit: bool(dis & int(bit))  # noqa: E731
+    out = []
+    if int(o.integrator) != int(mujoco.mjtIntegrator.mjINT_EULER):
+        out.append(f"integrator {mujoco.mjtIntegrator(int(o.integrator)).name[len('mjINT_'):]} (it needs Euler, "
+                   f"whose free flight is exact)")
+    if not off(D.mjDSBL_GRAVITY) and np.any(o.gravity != 0):
+        out.append(f"gravity {_vec(o.gravity)} m/s^2 (it needs none: bodies fly free between impacts)")
+    if o.density != 0 or o.viscosity != 0:
+        out.append(f"fluid forces (opt.density {o.density:g}, opt.viscosity {o.viscosity:g}; it needs none)")
+    if off(D.mjDSBL_CONTACT) or off(D.mjDSBL_CONSTRAINT):
+        out.append("contacts disabled (opt.disableflags: aligned stepping resolves impacts through them)")
+    for bit, what in ((E.mjENBL_OVERRIDE, "contact override (it would replace the micro-step's solref)"),
+                      (E.mjENBL_SLEEP, "sleeping bodies")):
+        if ena & int(bit):
+            out.append(f"{what} (opt.enableflags)")
+    if model.npair:
+        out.append(f"explicit contact pairs (<pair>, {model.npair}: only geom contype/conaffinity is masked)")
+    if model.nu and not off(D.mjDSBL_ACTUATION):
+        out.append(f"actuators ({model.nu}: it models no force between impacts)")
+    if model.neq and not off(D.mjDSBL_EQUALITY):
+        out.append(f"equality constraints ({model.neq})")
+    if getattr(model, "nflex", 0):
+        out.append(f"flexes ({model.nflex}: soft bodies)")
+    lim = np.flatnonzero(model.jnt_limited) if not off(D.mjDSBL_LIMIT) else np.zeros(0, dtype=int)
+    if len(lim):
+        out.append(f"joint limits on {_names(model, J, lim)}")
+    if model.ntendon and ((not off(D.mjDSBL_LIMIT) and np.any(model.tendon_limited))
+                          or (not off(D.mjDSBL_SPRING) and np.any(model.tendon_stiffness != 0))
+                          or (not off(D.mjDSBL_DAMPER) and np.any(model.tendon_damping != 0))
+                          or (not off(D.mjDSBL_FRICTIONLOSS) and np.any(model.tendon_frictionloss != 0))):
+        out.append("tendon limits, springs, dampers or friction loss")
+    dof_j = model.dof_jntid
+    for flag, vals, what in ((D.mjDSBL_SPRING, model.jnt_stiffness, "joint stiffness"),
+                             (D.mjDSBL_DAMPER, model.dof_damping, "joint damping"),
+                             (D.mjDSBL_FRICTIONLOSS, model.dof_frictionloss, "joint friction loss")):
+        bad = np.flatnonzero(vals != 0)
+        if len(bad) and not off(flag):
+            js = bad if vals is model.jnt_stiffness else np.unique(dof_j[bad])
+            out.append(f"{what} on {_names(model, J, js)}")
+    # bodies that translate: slide joints, or a free joint of spheres centred at the centre of mass
+    coll = np.flatnonzero((model.geom_contype | model.geom_conaffinity) != 0)
+    free_t, slide_t = int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_SLIDE)
+    rot = [j for j in range(model.njnt) if int(model.jnt_type[j]) not in (free_t, slide_t)]
+    if rot:
+        out.append(f"hinge or ball joints {_names(model, J, rot)} (it models bodies that translate)")
+    for j in range(model.njnt):
+        if int(model.jnt_type[j]) != free_t:
+            continue
+        b = int(model.jnt_bodyid[j])
+        sub = {b} | {k for k in range(model.nbody) if _ancestor(model, b, k)}
+        gs = [g for g in coll if int(model.geom_bodyid[g]) in sub]
+        ok = np.all(np.abs(model.body_ipos[b]) == 0) and all(
+            int(model.geom_bodyid[g]) == b and int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_SPHERE)
+            and np.all(model.geom_pos[g] == 0) for g in gs)
+        if not ok:
+            out.append(f"free joint {_names(model, J, [j])} of a body that may turn what collides (it needs its "
+                       f"centre of mass at its origin and only spheres centred there)")
+    g = coll
+    checks = (
+        (model.geom_condim[g] != 1, "friction: condim other than 1 on geoms"),
+        ((model.geom_margin[g] != 0) | (model.geom_gap[g] != 0), "contact margin or gap on geoms"),
+        ((model.geom_solref[g, 0] >= 0) | (model.geom_solref[g, 1] != 0),
+         "inelastic contacts: solref not direct and undamped (-k, 0) on geoms"),
+        ((model.geom_solimp[g, 0] < ELASTIC_IMP) | (model.geom_solimp[g, 1] < ELASTIC_IMP),
+         f"solimp dmin or dmax below {ELASTIC_IMP:g} (the impulse would not be elastic) on geoms"),
+        (np.isin(model.geom_type[g], [int(mujoco.mjtGeom.mjGEOM_HFIELD), int(mujoco.mjtGeom.mjGEOM_SDF)]),
+         "non-convex collision geoms (height field or SDF)"),
+    )
+    for mask, what in checks:
+        if np.any(mask):
+            out.append(f"{what} {_names(model, G, g[mask])}")
+    if data is not None:
+        for name in ("qfrc_applied", "xfrc_applied"):
+            if np.any(getattr(data, name) != 0):
+                out.append(f"applied forces (data.{name})")
+    return out
+
+
+def _ancestor(model, a: int, b: int) -> bool:
+    """Body ``a`` is a proper ancestor of body ``b``."""
+    while b > 0:
+        b = int(model.body_parentid[b])
+        if b == a:
+            return True
+    return False
+
+
+def check_model(model, data=None) -> None:
+    """Refuse a model ``step_aligned`` cannot advance exactly, naming every unsupported setting.
+
+    Args:
+        model: a ``mujoco.MjModel``.
+        data: its ``mujoco.MjData`` (its applied forces are checked), or None.
+
+    Raises:
+        SceneNotSupported: one line listing what the model has that aligned stepping does not
+            model (:func:`unsupported`).
+    """
+    bad = unsupported(model, data)
+    if bad:
+        raise SceneNotSupported("step_aligned: the model has what aligned stepping does not model (elastic, "
+                                "frictionless impacts between bodies in free flight): " + "; ".join(bad))
 
 
 @dataclass
@@ -268,10 +428,14 @@ def step_aligned(model, data, t_end: float, *, h: float | None = None, tol: floa
                 ``TOL_REL * model.stat.extent``
     on_event  : called as on_event(t_touch, geom1, geom2, approach_speed) after each impact
     on_step   : called as on_step(data) after every accepted step and micro-step
-    max_steps : RuntimeError past this many accepted steps + micro-steps (default: none)
+    max_steps : MujocoError past this many accepted steps + micro-steps (default: none)
     returns   : AlignedStats. The model's timestep, solref, margin, contype and conaffinity
                 are restored on return, also on error.
+    raises    : SceneNotSupported (before any step) for a model it does not model
+                (:func:`check_model`: gravity, friction, another integrator, contact settings);
+                InputError for a bad h or tol; MujocoError for a jam or past max_steps.
     """
+    check_model(model, data)
     h = float(model.opt.timestep if h is None else h)
     if not (math.isfinite(h) and h > 0):
         raise InputError(f"h must be a finite number > 0, got {h!r}")
