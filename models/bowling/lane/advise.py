@@ -12,7 +12,13 @@
   with the straight-line slope, each step one run of the ball alone).
 * **Spare advice** (:func:`advise_leave`): the spare tool's best line at the leave
   (:func:`.spares.best_spare` under the bowler's noise), said as stance and target, with the
-  conversion probability and its 95 % Wilson interval.
+  conversion probability and its 95 % Wilson interval and the pins it takes (mean, counts, 95 %
+  interval). Where no line converts (a 7-9, a big four) it says so and gives the line that takes
+  the most pins; a slide (the 4 driven into the 9) is among the lines tried.
+* **The stance at the edge**: boards are numbered 1-39 on the approach as on the lane; a ball
+  released within :data:`STANCE_SEP` boards of the far edge would need the slide foot off the
+  numbered boards, so the advice stands the bowler on board 39 and says how close to the foot
+  the ball is released (:func:`stance_text`).
 * **Strike advice after a frame** (:func:`move_after`): the hit named (:mod:`.names`), and the
   move the coaching rule gives: *move in the direction of the miss* -- a light hit (the ball
   right of the pocket, for a right-hander) moves feet and eyes right, towards the hand; a high
@@ -33,7 +39,8 @@ from nbst.models.bowling import lane
 from nbst.models.bowling.lane import names as _names, spares, noise as _noise
 
 __all__ = ["STANCE_SEP", "ARROW_BOARDS", "BOARDS_PER_STEP", "POCKET_MIDDLE", "stance_of", "arrow_text", "line_of",
-           "aim_target", "Move", "move_after", "LeaveAdvice", "advise_leave", "SAMPLE_NOTE"]
+           "aim_target", "Move", "move_after", "LeaveAdvice", "advise_leave", "SAMPLE_NOTE", "stance_text",
+           "pins_text"]
 
 #: Boards from the slide foot to the ball at release (assumed; see the module docstring).
 STANCE_SEP = 7.0
@@ -149,7 +156,9 @@ def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -
 @dataclass
 class LeaveAdvice:
     """Where to stand and look at a leave, the conversion probability (k of n, 95 % Wilson), the
-    ball, and the spare tool's account (:class:`.spares.SpareResult` as a dict)."""
+    pins the line takes (:func:`.spares.pins_estimate`), whether any line converted, the line that
+    takes the most pins (for the count), the ball, and the spare tool's account
+    (:class:`.spares.SpareResult` as a dict)."""
 
     leave: str
     names: list
@@ -161,15 +170,63 @@ class LeaveAdvice:
     label: str
     spare: dict
     text: str
+    converts: bool = True
+    pins: dict | None = None
+    most_pins: dict | None = None
+    count_text: str = ""
 
     def to_dict(self) -> dict:
         return asdict(self)
 
 
+def stance_text(foul_board: float) -> str:
+    """Where to stand for a ball released on ``foul_board``, said honestly at the lane's edge: the
+    slide foot :data:`STANCE_SEP` boards inside the release, or, where that is past board
+    :data:`.units.N_BOARDS` (off the approach's numbered boards), on the last board with the ball
+    released closer to the foot (the separation said)."""
+    stance = stance_of(foul_board)
+    if stance <= lane.N_BOARDS:
+        return f"stand on {stance:.1f}"
+    return (f"stand on {lane.N_BOARDS} (the last board; the ball released on {foul_board:.1f}, "
+            f"{lane.N_BOARDS - foul_board:.1f} boards from the slide foot)")
+
+
+def pins_text(p: dict) -> str:
+    """``1.0 pins a throw (11 of 12 took 1; 95% CI 0.8-1.1)``: a :func:`.spares.pins_estimate`."""
+    counts = ", ".join(f"{v} took {k}" for k, v in p["counts"].items())
+    return f"{p['mean']:.2f} of {p['of']} pins a throw ({counts}; 95% CI {p['lo']:.2f}-{p['hi']:.2f})"
+
+
+def _line_text(d: lane.Delivery, r, label: str) -> str:
+    return (f"{stance_text(r.board_at_foul_line)}, look at {arrow_text(float(r.board_at_arrows))}, {d.mph:.1f} mph "
+            f"{d.rpm:.0f} rpm ({label})")
+
+
 def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=None, screen: int = spares.SCREEN,
                  polish: int | None = None, on_done=None) -> LeaveAdvice:
     """The advice at ``leave`` ('-' joined pins): :func:`.spares.best_spare` under ``noise`` (a
-    bowler's), said as stance and target (the real path's crossing of the arrows)."""
+    bowler's), said as stance and target (the real path's crossing of the arrows), with the pins
+    it takes. Where no line converted a screening throw the advice says so and gives the line
+    that takes the most pins, with that figure; where the best converting line takes fewer pins
+    than another, that line is given too, for the count.
+
+    Args:
+        leave: the pins standing, '-' joined ("4-9").
+        n: throws of each fresh measure.
+        seed: the seed of the measures.
+        runner: the :class:`.frame.FrameRunner`.
+        noise: the release noise (None: :data:`.noise.DEFAULT`).
+        strike: the bowler's strike ball (the 3-6-9 line's; None: :data:`.spares.STRIKE`).
+        screen: noisy throws per candidate in the screening.
+        polish: noisy frames of the polish (None: the spare tool's default; 0: none).
+        on_done: called after each frame.
+
+    Returns:
+        a :class:`LeaveAdvice`.
+
+    Raises:
+        LaneError: a leave that is not distinct pins 1..10, or all ten.
+    """
     nz = noise if noise is not None else _noise.DEFAULT
     res = spares.best_spare(leave, n, seed, runner=runner, screen=screen, nz=nz, on_done=on_done, polish=polish,
                             strike=strike)
@@ -179,8 +236,21 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
     standing = spares.leave_pins(leave)
     nm = _names.leave_names(range(1, 11), standing)
     stance, target = stance_of(r.board_at_foul_line), float(r.board_at_arrows)
-    txt = (f"leave {leave}{' (' + ', '.join(nm) + ')' if nm else ''}: stand on {stance:.1f}, look at "
-           f"{arrow_text(target)}, {d.mph:.1f} mph {d.rpm:.0f} rpm ({res.best_label}): converts {100 * e['p']:.0f}% "
-           f"({e['k']}/{e['n']}; 95% CI {100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)")
+    head = f"leave {leave}{' (' + ', '.join(nm) + ')' if nm else ''}"
+    screened = sum(c[2] for c in res.candidates)
+    most = res.most_pins
+    count_text = ""
+    if res.converts:
+        txt = (f"{head}: {_line_text(d, r, res.best_label)}: converts {100 * e['p']:.0f}% ({e['k']}/{e['n']}; 95% CI "
+               f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)" + (f"; {pins_text(res.pins)}" if res.pins else ""))
+        if most is not None and res.pins is not None and most["label"] != res.best_label                 and most["pins"]["mean"] > res.pins["mean"]:
+            dm = lane.Delivery(**most["delivery"])
+            count_text = (f"for the count: {_line_text(dm, lane.throw(dm, runner.oil, runner.ball), most['label'])}: "
+                          f"{pins_text(most['pins'])}")
+    else:
+        txt = (f"{head}: no line converts: none of {len(res.candidates)} lines converted any of their {screened} "
+               f"screening throws (95% CI of a line's rate 0-{100 * _noise.wilson(0, screen)[1]:.0f}% each); the most "
+               f"pins: {_line_text(d, r, res.best_label)}: " + (pins_text(res.pins) if res.pins else ""))
     return LeaveAdvice(leave=leave, names=nm, stance_board=stance, target_board=target, target=arrow_text(target),
-                       delivery=res.best, estimate=e, label=res.best_label, spare=res.to_dict(), text=txt)
+                       delivery=res.best, estimate=e, label=res.best_label, spare=res.to_dict(), text=txt,
+                       converts=res.converts, pins=res.pins, most_pins=most, count_text=count_text)

@@ -24,6 +24,14 @@
   ``polish`` frames) unless it converted every screening throw, or no candidate converted
   any (nothing to climb); the polished throw, if it keeps its outcome on the ladder,
   replaces the pick. The pick is measured afresh on ``n``, before and after the polish.
+* **Splits and the count** (issue 48): on a leave of several pins the candidates also hold the
+  **slide** (:func:`slide_at`: the straight spare ball through the spot where, touching a front
+  pin, the line of centres points at a pin behind it, so the front pin is driven into the back
+  one: the 4 into the 9) and, for the count, the straight ball at **each pin alone**. Every
+  candidate is ranked by its conversions, then by the **pins it takes** (the mean over its
+  noisy throws, :func:`pins_estimate`). Where no candidate converts a single screening throw the
+  pick is the line that takes the most pins, and :class:`SpareResult` says so (``converts``
+  False); the line taking the most pins is also measured beside the pick (``most_pins``).
 
 The 3-6-9 system (talkbowling.co.uk, "Spare systems"): keep the strike line's target arrow
 and move the feet 3 boards (2 pin), 6 (4 pin) or 9 (7 pin) towards the hand side for the
@@ -42,12 +50,14 @@ import numpy as np
 
 from nbst.errors import SolveError
 from nbst.models.bowling import lane, scene
+from nbst.models.bowling import pin as pinmod
 from nbst.models.bowling.lane import frame, noise, robust
 
 __all__ = ["STRIKE", "STRIKE_FOUL", "STRIKE_ARROW", "SPARE_BALL", "POCKET_BOARDS", "POCKET_PEAK", "POCKET_CELL",
            "LEAVES", "leave_spec", "leave_pins", "TABLE_FOUL", "TABLE_ROTATION", "TABLE_ANGLE", "aim_table",
            "aim_entry", "PocketMap", "pocket_map", "system_369", "aim_point", "straight_at", "SpareResult",
-           "candidates", "SCREEN", "POLISH_PER_SCREEN", "best_spare", "pocket_figure"]
+           "candidates", "candidate_count", "SCREEN", "POLISH_PER_SCREEN", "best_spare", "pocket_figure", "CONTACT_REACH", "slide_at",
+           "pins_estimate"]
 
 #: The strike line: the typical (league-200) release, 17 mph, 350 rpm, 45 deg rotation, 12 deg tilt,
 #: from board 20 at the foul line, 2.82 deg out: the ball alone reaches board 17.5 at the head pin
@@ -292,33 +302,141 @@ class SpareResult:
     best: dict
     best_label: str
     estimate: dict
-    candidates: list  # (label, screened k/n)
+    candidates: list  # (label, screened k, n, mean pins taken in the screening)
     ladder: list  # the best throw without noise: (timestep, leave) at h = 1, 0.5, 0.25 ms, then ("+2 s", leave)
     screened: dict  # the screening's pick before the polish: label, delivery, fresh estimate (seed, n)
     polish: dict | None  # robust.maximise's account (None: not polished, see ``polish_note``)
     polish_note: str
+    converts: bool = True  # some candidate converted a screening throw (False: the pick is for the count)
+    pins: dict | None = None  # the pick's pins taken on the fresh measure (:func:`pins_estimate`)
+    most_pins: dict | None = None  # the line taking the most pins: label, delivery, pins (fresh measure)
 
     def to_dict(self) -> dict:
         return asdict(self)
 
 
-def candidates(name: str, *, oil: str = "house", ball=None, strike: lane.Delivery = STRIKE) -> list:
-    """(label, delivery) of every throw :func:`best_spare` tries at leave ``name``: the 3-6-9 line
-    (from ``strike``) first, then the straight spare balls (aim offsets up to 2 boards, 3 on a
-    multi-pin leave)."""
+#: Centre to centre (m) of the ball and a pin touching, at the ball centre's height: the ball's radius
+#: and the pin's, interpolated in the USBC profile (``pin.PROFILE_IN``: 4.71 in across at 4.25 in up).
+CONTACT_REACH = scene.BALL_RADIUS + 0.5 * pinmod.INCH * float(np.interp(
+    scene.BALL_RADIUS / pinmod.INCH, [h for h, _ in pinmod.PROFILE_IN], [dia for _, dia in pinmod.PROFILE_IN]))
+#: Slides are tried on leaves of at most this many pins (a front pin driven into one behind it).
+SLIDE_MAX_PINS = 4
+
+
+def slide_at(front: int, back: int) -> tuple[float, float]:
+    """(x, y) of the ball's centre (m) touching pin ``front`` so that the line of centres, the
+    direction the pin is driven, points at pin ``back``: the front pin's spot less
+    :data:`CONTACT_REACH` along the unit vector from the front pin to the back one.
+
+    Args:
+        front: the pin hit (1..10).
+        back: the pin it should be driven into (1..10, not ``front``).
+
+    Returns:
+        (x, y) in the scene's frame (m); a straight ball through it, heading down the lane,
+        touches ``front`` first there when the back pin is behind it.
+    """
+    spots = scene.pin_spots()
+    a, b = np.asarray(spots[front - 1], float), np.asarray(spots[back - 1], float)
+    u = (b - a) / np.linalg.norm(b - a)
+    c = a - CONTACT_REACH * u
+    return float(c[0]), float(c[1])
+
+
+def _slides(pins) -> list[tuple[int, int]]:
+    """(front, back) pairs of a leave's pins: the back pin a row or more behind the front one and off
+    its line (a pin straight behind is the aim point's, not a slide)."""
+    spots = scene.pin_spots()
+    out = []
+    for a in pins:
+        for b in pins:
+            dx, dy = spots[b - 1][0] - spots[a - 1][0], spots[b - 1][1] - spots[a - 1][1]
+            if dx > 0.1 and abs(dy) > 0.1:
+                out.append((a, b))
+    return out
+
+
+def _plan(name: str) -> list[tuple[str, float, float, float | None, float]]:
+    """(kind, x, y, foul or None: cross-lane, mph) of every straight ball :func:`candidates` throws at
+    leave ``name``, after the 3-6-9 line (no throw run: :func:`candidate_count` counts them)."""
     key, _ = leave_spec(name)
+    pins = leave_pins(name)
     x, y = aim_point(key)
-    wide = (0.0, -1.0, 1.0, -2.0, 2.0) + ((-3.0, 3.0) if len(leave_pins(name)) > 1 else ())
-    out = [("3-6-9", system_369(name, strike))]
+    wide = (0.0, -1.0, 1.0, -2.0, 2.0) + ((-3.0, 3.0) if len(pins) > 1 else ())
     down_board = float(lane.y_to_board(y))  # straight down the boards: drives a front pin into the one behind
+    edge = scene.LANE_WIDTH / 2 - 0.02
+    out: list[tuple[str, float, float, float | None, float]] = []
     for offs, foul, mph in ((wide, None, 17.0), (wide[:5], None, 21.0), ((0.0, -1.0, 1.0), 20.0, 17.0),
                             ((0.0, -1.0, 1.0), down_board, 17.0)):
         for off in offs:
             yy = y + off * lane.BOARD_WIDTH
-            if abs(yy) < scene.LANE_WIDTH / 2 - 0.02:
-                d = straight_at(x, yy, oil=oil, ball=ball, foul=foul, mph=mph)
-                out.append((f"straight {mph:g} mph from {d.board:.1f} at {lane.y_to_board(yy):.1f}", d))
+            if abs(yy) < edge:
+                out.append(("straight", x, yy, foul, mph))
+    if len(pins) > 1:
+        if len(pins) <= SLIDE_MAX_PINS:
+            for a, b in _slides(pins):
+                sx, sy = slide_at(a, b)
+                for foul2 in (None, float(lane.y_to_board(sy))):
+                    for off in (0.0, -0.5, 0.5):
+                        yy = sy + off * lane.BOARD_WIDTH
+                        if abs(yy) < edge:
+                            out.append((f"slide the {a} into the {b}", sx, yy, foul2, SPARE_BALL["mph"]))
+        for p in pins:
+            px, py = aim_point((p,))
+            out.append((f"the {p} alone", px, py, None, SPARE_BALL["mph"]))
     return out
+
+
+def candidate_count(name: str) -> int:
+    """How many throws :func:`candidates` tries at leave ``name`` (none run)."""
+    return 1 + len(_plan(name))
+
+
+def candidates(name: str, *, oil: str = "house", ball=None, strike: lane.Delivery = STRIKE) -> list:
+    """(label, delivery) of every throw :func:`best_spare` tries at leave ``name``: the 3-6-9 line
+    (from ``strike``) first, then the straight spare balls (aim offsets up to 2 boards, 3 on a
+    multi-pin leave); on a multi-pin leave also the slides (:func:`slide_at`, from across the lane
+    and straight down the boards, on the spot and 1/2 board either side; leaves of at most
+    :data:`SLIDE_MAX_PINS` pins) and the straight ball at each pin alone (for the count)."""
+    out = [("3-6-9", system_369(name, strike))]
+    for kind, x, y, foul, mph in _plan(name):
+        d = straight_at(x, y, oil=oil, ball=ball, foul=foul, mph=mph)
+        at = f"from {d.board:.1f} at {lane.y_to_board(y):.1f}"
+        out.append((f"straight {mph:g} mph {at}" if kind == "straight" else f"{kind}: straight {at}", d))
+    return out
+
+
+def pins_estimate(results, standing) -> dict:
+    """The pins a line takes over noisy frames: the mean (of the pins in ``standing`` down), a 95 %
+    interval, and how many frames took each count.
+
+    The interval is the normal one, mean +- 1.96 s / sqrt(n), clipped to [0, pins standing]; where
+    every frame took the same count k (s = 0) it is the range the Wilson interval of "takes k"
+    allows, the other frames taking none or all: [k lo, k + (m - k)(1 - lo)], lo the Wilson
+    lower bound of n in n.
+
+    Args:
+        results: the :class:`.frame.FrameResult` of the noisy frames (at least one).
+        standing: the pins standing before the throw.
+
+    Returns:
+        {"mean", "lo", "hi", "n", "of", "counts"}: ``of`` the pins standing, ``counts`` the frames
+        per pins taken ({"1": 11, "0": 1}).
+    """
+    m = len(standing)
+    took = np.array([len(r.down) for r in results], dtype=float)
+    n = len(took)
+    mean = float(took.mean())
+    sd = float(took.std(ddof=1)) if n > 1 else 0.0
+    if sd > 0:
+        lo, hi = mean - noise.Z95 * sd / math.sqrt(n), mean + noise.Z95 * sd / math.sqrt(n)
+    else:
+        w = noise.wilson(n, n)[0]
+        lo, hi = mean * w, mean + (m - mean) * (1 - w)
+    counts: dict = {}
+    for t in sorted(took, reverse=True):
+        counts[str(int(t))] = counts.get(str(int(t)), 0) + 1
+    return {"mean": mean, "lo": float(max(0.0, lo)), "hi": float(min(m, hi)), "n": n, "of": m, "counts": counts}
 
 
 #: Noisy throws per candidate in the screening when none is given (``bowl spares|advise --screen``'s default).
@@ -333,8 +451,12 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     """The candidate of :func:`candidates` that converts leave ``name`` best. Screening: ``screen``
     noisy throws each; the best three get ``2 * screen`` more and their noise-free throw is run
     at h = 1, 0.5 and 0.25 ms; the pick is the most conversions among those three whose ladder
-    converts at every step (any of the three if none does). Its probability is then measured
-    afresh on ``n`` throws (seed ``seed``; screening used other seeds), as is the 3-6-9 line's.
+    converts at every step (any of the three if none does), ties going to the most pins taken.
+    Its probability is then measured afresh on ``n`` throws (seed ``seed``; screening used other
+    seeds), as is the 3-6-9 line's, and so are the pins it takes (:func:`pins_estimate`). Where
+    no candidate converted a screening throw, the pick is the line taking the most pins
+    (``converts`` False). The line that took the most pins in the screening is measured on the
+    same ``n`` throws (``most_pins``; the pick's own where it is the pick).
 
     **Polish**: :func:`.robust.maximise` from the pick, ``polish`` noisy frames (default
     ``POLISH_PER_SCREEN * screen``; 0: none), fresh estimate on ``n`` throws of seed ``seed``
@@ -364,27 +486,39 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     if len(standing) == 10:
         raise lane.LaneError(f"leave: {name!r} is all ten pins: a first ball, not a spare")
     cands = candidates(name, oil=runner.oil, ball=runner.ball, strike=STRIKE if strike is None else strike)
-    k = {}
+    k, took = {}, {}
     for c, (label, d) in enumerate(cands):
-        est, _ = noise.probability(d, screen, seed + 1000 + c, runner=runner, standing=standing, noise=nz,
-                                   on_done=on_done)
+        est, rs = noise.probability(d, screen, seed + 1000 + c, runner=runner, standing=standing, noise=nz,
+                                    on_done=on_done)
         k[c] = [est.k, screen]
-    top = sorted(k, key=lambda c: (-k[c][0], c))[:3]
+        took[c] = [len(r.down) for r in rs]
+    top = sorted(k, key=lambda c: (-k[c][0], -float(np.mean(took[c])), c))[:3]
     ladders = {}
     for c in top:
-        est, _ = noise.probability(cands[c][1], 2 * screen, seed + 2000 + c, runner=runner, standing=standing,
-                                   noise=nz, on_done=on_done)
+        est, rs = noise.probability(cands[c][1], 2 * screen, seed + 2000 + c, runner=runner, standing=standing,
+                                    noise=nz, on_done=on_done)
         k[c] = [k[c][0] + est.k, 3 * screen]
+        took[c] += [len(r.down) for r in rs]
         ladders[c] = [[r.timestep, r.leave] for r in frame.ladder(cands[c][1], runner.oil, runner.ball,
                                                                   standing=standing)]
+    converts = any(k[c][0] for c in k)
     holds = [c for c in top if all(not lv for _, lv in ladders[c])]
-    best_i = max(holds or top, key=lambda c: (k[c][0], -c))
-    e369, _ = noise.probability(cands[0][1], n, seed, runner=runner, standing=standing, noise=nz, on_done=on_done)
+    best_i = max(holds or top, key=lambda c: (k[c][0], float(np.mean(took[c])), -c))
+    e369, r369 = noise.probability(cands[0][1], n, seed, runner=runner, standing=standing, noise=nz, on_done=on_done)
     if best_i == 0:
-        eb = e369
+        eb, rb = e369, r369
     else:
-        eb, _ = noise.probability(cands[best_i][1], n, seed, runner=runner, standing=standing, noise=nz,
+        eb, rb = noise.probability(cands[best_i][1], n, seed, runner=runner, standing=standing, noise=nz,
+                                   on_done=on_done)
+    pins = pins_estimate(rb, standing)
+    # the count: most pins in the screening (ties to a line at one pin alone, then the first)
+    most_i = max(k, key=lambda c: (float(np.mean(took[c])), " alone: " in cands[c][0], -c))
+    if most_i == best_i:
+        most = {"label": cands[best_i][0], "delivery": cands[best_i][1].to_dict(), "pins": pins}
+    else:
+        _, rm = noise.probability(cands[most_i][1], n, seed, runner=runner, standing=standing, noise=nz,
                                   on_done=on_done)
+        most = {"label": cands[most_i][0], "delivery": cands[most_i][1].to_dict(), "pins": pins_estimate(rm, standing)}
     best, label, lad0 = cands[best_i][1], cands[best_i][0], ladders[best_i]
     screened = {"label": label, "delivery": best.to_dict(), "estimate": eb.to_dict()}
     budget = POLISH_PER_SCREEN * screen if polish is None else int(polish)
@@ -410,10 +544,14 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
         else:
             note = "polished: no better release found on the polish's screen; the screening's pick stays"
     lad = lad0 + [["+2 s", frame.run_frame(best, runner.oil, runner.ball, standing=standing, extra_s=2.0).leave]]
+    if pol is not None and label.startswith("polished"):   # the polished pick's pins, on the same fresh throws
+        _, rp = noise.probability(best, n, seed, runner=runner, standing=standing, noise=nz, on_done=on_done)
+        pins = pins_estimate(rp, standing)
     return SpareResult(leave=name, system_369=cands[0][1].to_dict(), system_369_estimate=e369.to_dict(),
                        best=best.to_dict(), best_label=label, estimate=eb.to_dict(),
-                       candidates=[[cands[c][0], *k[c]] for c in range(len(cands))], ladder=lad,
-                       screened=screened, polish=pol, polish_note=note)
+                       candidates=[[cands[c][0], *k[c], float(np.mean(took[c]))] for c in range(len(cands))],
+                       ladder=lad, screened=screened, polish=pol, polish_note=note, converts=converts, pins=pins,
+                       most_pins=most)
 
 
 # --------------------------------------------------------------------------- the picture

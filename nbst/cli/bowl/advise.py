@@ -16,7 +16,7 @@ from nbst.cli.bowl.lane import _bar
 from nbst.parallel import default_jobs
 from nbst.outputs import atomic_path, prepare_output
 
-__all__ = ["register", "register_advise", "cmd_advise", "spare_frames", "cmd_spares", "leaves_of", "spare_doc",
+__all__ = ["register", "register_advise", "cmd_advise", "noise_line", "spare_frames", "cmd_spares", "leaves_of", "spare_doc",
            "spare_line", "cmd_pocket"]
 
 
@@ -134,19 +134,36 @@ def cmd_advise(args) -> int:
         bar.close()
         raise
     bar.close()
-    doc = {**adv.to_dict(), "bowler": args.bowler, "noise": nz.to_dict(), "seed": args.seed, "note": _note()}
+    doc = {**adv.to_dict(), "bowler": args.bowler, "noise": nz.to_dict(), "noise_of": noise_line(args.bowler, nz),
+           "seed": args.seed, "note": _note()}
     if args.json:
         print_json(doc)
         return 0
-    print(adv.text + (f"; bowler {args.bowler}" if args.bowler else ""))
+    print(adv.text)
+    if adv.count_text:
+        print(adv.count_text)
+    print(noise_line(args.bowler, nz))
     print(f"note: {_note()}")
     return 0
 
 
+def noise_line(bowler, nz) -> str:
+    """Which release noise a spare command threw with: the --bowler's spare noise, or (no --bowler)
+    the default release noise, its sigmas said."""
+    sig = (f"board {nz.board:g}, angle {nz.angle:g} deg, {nz.mph:g} mph, {nz.rpm:g} rpm, rotation {nz.rotation:g} deg, "
+           f"tilt {nz.tilt:g} deg")
+    if bowler:
+        return f"noise: bowler {bowler}'s spare-ball noise ({sig})"
+    return f"noise: the default release noise, no --bowler ({sig}; --bowler P throws with a profile's)"
+
+
 def spare_frames(leave: str, screen: int, samples: int, polish: int) -> int:
     """Frames :func:`.spares.best_spare` runs at ``leave`` at most (its candidates screened, three
-    screened more, the two measures, the polish and its measure)."""
-    return 2 * samples + (23 + 2 * ("-" in leave)) * screen + (polish + samples) * (polish > 0)
+    screened more, the measures: the 3-6-9 line, the pick, the line taking the most pins, the
+    polish and its measures)."""
+    from nbst.models.bowling.lane import spares
+
+    return 3 * samples + spares.candidate_count(leave) * screen + 3 * 2 * screen + 9 + (polish + 2 * samples) * (polish > 0)
 
 
 def _grid(text: str, flag: str, lo: float, hi: float) -> list:
@@ -195,6 +212,7 @@ def cmd_spares(args) -> int:
         print_json({"seed": args.seed, "samples": args.samples, "screen": args.screen, "polish": polish,
                     "bowler": args.bowler, "noise": nz.to_dict(), "note": _note(), "spares": out})
     else:
+        print(noise_line(args.bowler, nz))
         print(f"note: {_note()}")
     return 0
 
@@ -250,9 +268,12 @@ def _left(leave) -> str:
 def spare_line(r: dict) -> str:
     e, s, b = r["estimate"], r["system_369_estimate"], r["best"]
     nm = f" ({', '.join(r['names'])})" if r.get("names") else ""
-    return (f"{r['leave']:>8}{nm}  best: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
+    pins = r.get("pins")
+    took = f", {pins['mean']:.2f} of {pins['of']} pins a throw" if pins else ""
+    best = "best" if r.get("converts", True) else "no line converts; the most pins"
+    return (f"{r['leave']:>8}{nm}  {best}: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
             f"{b['mph']:.1f} mph, {b['rpm']:.0f} rpm, rotation {b['rotation']:.0f})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
-            f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)   3-6-9 line (board {r['system_369']['board']:.1f}): "
+            f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%{took})   3-6-9 line (board {r['system_369']['board']:.1f}): "
             f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
             + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(_left(x[1]) for x in r["ladder"]))
 
