@@ -12,7 +12,13 @@
   ribbon that grows with time.
 * **Impacts**: the vehicle-to-vehicle contacts of the judged outcome (first contact time and
   point, each vehicle's delta-V) and the first curb or barrier strike of each vehicle (the
-  outcome's time; the point where the step's contact with the curb or barrier was).
+  outcome's time; the point where the step's contact with the curb or barrier was). For a
+  vehicle pair, from the recorded motion (:func:`impact_vectors`): each vehicle's velocity
+  just before the contact, its velocity change over the contact (from the step before the
+  first touch to the step after the last touch of that episode: no gap over
+  :data:`CONTACT_GAP` s) and the principal direction of force (PDOF) as a clock direction in
+  its own frame (12 o'clock: the force comes from straight ahead; 3 o'clock: from its right),
+  the direction the velocity change points from (SAE J224's convention).
 * **Frame times** (:func:`nbst.render.core.times.frame_times` over :func:`slow_windows`): real
   time, slowed :data:`SLOW` x from :data:`SLOW_WINDOW` [0] s before each impact to [1] s after it (overlapping windows merge),
   then a hold; sim time is a piecewise-linear function of video time, so a window adds
@@ -27,8 +33,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["MARK_DT", "MARK_GAP", "POSE_DT", "SCRAPE_HALF", "SKID_HEIGHT", "SKID_SLIP", "SLOW", "SLOW_WINDOW",
-           "CrashMotion", "Impact", "MarkRun", "impact_times", "record", "slow_windows", "slowed"]
+__all__ = ["CONTACT_GAP", "MARK_DT", "MARK_GAP", "POSE_DT", "SCRAPE_HALF", "SKID_HEIGHT", "SKID_SLIP", "SLOW",
+           "SLOW_WINDOW", "CrashMotion", "Impact", "MarkRun", "clock_of", "impact_times", "impact_vectors", "record",
+           "slow_windows", "slowed"]
 
 #: Poses are recorded at least this often (s): at 60 fps in 4x slow motion a frame is 4.2 ms
 #: of crash, so a frame is never more than a step from the pose it shows at 2 ms steps.
@@ -50,6 +57,9 @@ MARK_GAP = 3.5
 #: SLOW_WINDOW[1] s after it (the contact lasts ~0.1 s; the spin-out that follows is the show).
 SLOW = 4.0
 SLOW_WINDOW = (0.25, 0.75)
+#: A pair's contact episode ends at a gap in its touching longer than this (s): the bodies
+#: chatter within a few ms while they crush, and part for good after.
+CONTACT_GAP = 0.02
 
 
 @dataclass(frozen=True)
@@ -62,6 +72,13 @@ class Impact:
     b: int | None
     what: str           # "vehicle", "curb" or "barrier"
     delta_v_kmh: dict = field(default_factory=dict)   # name -> km/h (vehicle pairs)
+    #: vehicle index -> its velocity (vx, vy) m/s, world frame, just before the contact
+    v_before: dict = field(default_factory=dict)
+    #: vehicle index -> its velocity change (dvx, dvy) m/s, world frame, over the contact episode
+    dv: dict = field(default_factory=dict)
+    #: vehicle index -> the PDOF, a clock direction 1..12 in its own frame (:func:`clock_of`)
+    pdof: dict = field(default_factory=dict)
+    t_end: float = math.nan   # the contact episode's last touch (s)
 
 
 @dataclass(frozen=True)
@@ -80,7 +97,8 @@ class MarkRun:
 class CrashMotion:
     """A replayed crash (SI units; times in s from the start).
 
-    times (S,), qpos (S, nq): recorded states; speed (S, n) m/s of each vehicle's CoM;
+    times (S,), qpos (S, nq): recorded states; speed (S, n) m/s of each vehicle's CoM, vel (S, n, 3)
+    its velocity (world frame);
     pos (S, n, 3) CoM; quat (S, n, 4) attitude (w, x, y, z); roll, yaw (S, n) unwrapped rad;
     marks, impacts; outcome: the replay's judged :class:`nbst.models.crash.outcome.Outcome`;
     outcome_dict: the same in the file's units; same_state: the replay ended in the file's final
@@ -89,6 +107,7 @@ class CrashMotion:
     times: np.ndarray
     qpos: np.ndarray
     speed: np.ndarray
+    vel: np.ndarray
     pos: np.ndarray
     quat: np.ndarray
     roll: np.ndarray
@@ -166,9 +185,12 @@ def record(d: dict, script, model) -> CrashMotion:
     slot = {k: j for j, k in enumerate(keep)}
     Q = np.empty((len(keep), model.nq))
     V = np.empty((len(keep), n))
+    W = np.empty((len(keep), n, 3))
     vi = L.qvel[:, None] + np.arange(3)
     Q[0] = d["qpos0"]
-    V[0] = np.linalg.norm(np.asarray(d["qvel0"], float)[vi], axis=-1)
+    W[0] = np.asarray(d["qvel0"], float)[vi]
+    V[0] = np.linalg.norm(W[0], axis=-1)
+    touching: dict = {}                      # (a, b) vehicle pair -> [times they touch]
     samples: dict = {}                       # (kind, vehicle, corner) -> [(t, x, y, sliding)]
     strikes: dict = {}                       # (vehicle, what) -> [(t, pos)]
     vel6 = np.zeros(6)
@@ -177,12 +199,17 @@ def record(d: dict, script, model) -> CrashMotion:
         j = slot.get(k)
         if j is not None:
             Q[j] = md.qpos
-            V[j] = np.linalg.norm(md.qvel[vi], axis=-1)
+            W[j] = md.qvel[vi]
+            V[j] = np.linalg.norm(W[j], axis=-1)
         # after mj_step, data's contacts, poses and body velocities are those of the state the
         # step started from: time (k - 1) dt
         t = (k - 1) * dt
         nc = md.ncon
         geom = md.contact.geom[:nc]
+        if nc:
+            ow = owner[geom]
+            for a, b in ow[(ow[:, 0] >= 0) & (ow[:, 1] >= 0) & (ow[:, 0] != ow[:, 1])].tolist():
+                touching.setdefault((min(a, b), max(a, b)), set()).add(t)
         if has_strikes and nc:
             hit = strike_of[geom]
             for c in np.nonzero((hit[:, 0] != "") | (hit[:, 1] != ""))[0]:
@@ -227,9 +254,10 @@ def record(d: dict, script, model) -> CrashMotion:
     roll = np.unwrap(np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)), axis=0)
     yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)), axis=0)
     marks = _runs(samples, half_width, mark_stride * dt)
-    return CrashMotion(times=np.array(keep, float) * dt, qpos=Q, speed=V, pos=pos, quat=quat, roll=roll, yaw=yaw,
-                       marks=marks,
-                       impacts=_impacts(outcome, od, script, strikes), outcome=outcome, outcome_dict=od,
+    times = np.array(keep, float) * dt
+    impacts = [impact_vectors(im, times, W, yaw, touching) for im in _impacts(outcome, od, script, strikes)]
+    return CrashMotion(times=times, qpos=Q, speed=V, vel=W, pos=pos, quat=quat, roll=roll, yaw=yaw,
+                       marks=marks, impacts=impacts, outcome=outcome, outcome_dict=od,
                        same_state=same_state, same_outcome=od == d["outcome"], duration=nstep * dt)
 
 
@@ -273,6 +301,42 @@ def _impacts(outcome, od: dict, script, strikes: dict) -> list[Impact]:
                 t0, p = strikes.get((i, what), (t, (math.nan,) * 3))
                 out.append(Impact(t=float(t), pos=p, a=i, b=None, what=what))
     return sorted(out, key=lambda m: (m.t, m.a))
+
+
+def clock_of(dv_body) -> int:
+    """The clock direction (1..12) a force comes from, given the velocity change ``dv_body``
+    (dx forward, dy left) it made in the vehicle's frame: 12 from straight ahead (a frontal
+    hit: the change points back), 3 from the right, 6 from behind, 9 from the left."""
+    fx, fy = -float(dv_body[0]), -float(dv_body[1])      # where the force comes from
+    h = round(-math.degrees(math.atan2(fy, fx)) / 30.0) % 12
+    return 12 if h == 0 else int(h)
+
+
+def impact_vectors(im: Impact, times: np.ndarray, vel: np.ndarray, yaw: np.ndarray, touching: dict) -> Impact:
+    """``im`` with, for a vehicle pair, each vehicle's velocity before the contact, its velocity
+    change over the contact episode that starts at ``im.t`` (the pair's touching ``times`` with no
+    gap over CONTACT_GAP) and its PDOF; other impacts unchanged. ``vel`` (S, n, 3) and ``yaw``
+    (S, n) are sampled at ``times`` (S,)."""
+    from dataclasses import replace
+
+    if im.what != "vehicle" or im.b is None:
+        return im
+    ts = sorted(t for t in touching.get((min(im.a, im.b), max(im.a, im.b)), ()) if t >= im.t - 1e-9)
+    t_end = im.t
+    for t in ts:
+        if t - t_end > CONTACT_GAP:
+            break
+        t_end = t
+    k0 = max(0, int(np.searchsorted(times, im.t, side="right")) - 1)       # at or before the first touch
+    k1 = min(len(times) - 1, int(np.searchsorted(times, t_end, side="right")))   # after the last
+    v_before, dv, pdof = {}, {}, {}
+    for i in (im.a, im.b):
+        d = vel[k1, i, :2] - vel[k0, i, :2]
+        c, s = math.cos(float(yaw[k0, i])), math.sin(float(yaw[k0, i]))
+        v_before[i] = (float(vel[k0, i, 0]), float(vel[k0, i, 1]))
+        dv[i] = (float(d[0]), float(d[1]))
+        pdof[i] = clock_of((c * d[0] + s * d[1], -s * d[0] + c * d[1]))
+    return replace(im, v_before=v_before, dv=dv, pdof=pdof, t_end=float(t_end))
 
 
 def impact_times(outcome: dict) -> list[float]:

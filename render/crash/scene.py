@@ -22,8 +22,8 @@ from nbst.render.core import geoms as cg
 from nbst.render.core.camera import mesh_arrays
 from nbst.render.core.solids import box as _box, flat_poly as _flat_poly, ribbon as _ribbon
 
-__all__ = ["ARROW_MIN", "GLASS", "GROUND_DRAWN", "IMPACT", "MARKING", "SCRAPE", "SKID", "STRIKE", "TYRE", "WELL",
-           "arrow_xy", "body_box", "disc_xy", "geom_solid", "impact_marks", "lane_marks", "motion_marks",
+__all__ = ["ARROW_MIN", "PDOF", "PDOF_LENGTH", "VELOCITY_SECONDS", "GLASS", "GROUND_DRAWN", "IMPACT", "MARKING", "SCRAPE", "SKID", "STRIKE", "TYRE", "WELL",
+           "arrow_xy", "body_box", "disc_xy", "geom_solid", "impact_arrows", "impact_marks", "lane_marks", "motion_marks",
            "polyline_distance", "ribbon_marks", "static_solids", "strip_triangles", "target_marks", "tyre_solid",
            "wedge_xy"]
 
@@ -46,6 +46,13 @@ LINE_HALF, TRAIL_HALF, TARGET_RIM, DASH, EDGE_IN = 0.07, 0.09, 0.12, (3.0, 6.0),
 IMPACT_RING, STRIKE_RING = (0.9, 1.25), (0.45, 0.65)
 #: A heading arrow is at least this long (m), else the rest region's radius.
 ARROW_MIN = 2.5
+#: At each vehicle pair's impact, from its time on: each vehicle's velocity arrow (from its CoM
+#: where it was at the impact, as long as the ground it covered in VELOCITY_SECONDS s, at least
+#: VELOCITY_MIN m, in its colour lightened by VELOCITY_LIGHT) and its PDOF arrow (PDOF_LENGTH m
+#: long, along the force, its head at the CoM), in PDOF's colour.
+VELOCITY_SECONDS, VELOCITY_MIN, VELOCITY_LIGHT, VELOCITY_HALF = 0.3, 1.5, 0.45, 0.14
+PDOF_LENGTH, PDOF_HALF = 3.5, 0.16
+PDOF = (1.0, 0.90, 0.10, 0.95)
 #: Tyres: sides of the cylinder drawn for an ellipsoid tyre, and the spokes (angles, rad, of the
 #: wheel's two light wedges: the spin reads from any side).
 TYRE_SIDES, SPOKES = 24, (0.0, math.pi)
@@ -180,6 +187,28 @@ def motion_marks(motion, colours) -> np.ndarray:
     for m in motion.marks:
         out.append(ribbon_marks(m.xy, m.half, Z_SKID, SKID if m.kind == "skid" else SCRAPE, m.times))
     return np.concatenate(out)
+
+
+def impact_arrows(impacts, pos_at, colours) -> np.ndarray:
+    """(V, 8) at each vehicle pair's impact, from its time on, each vehicle's velocity arrow and
+    PDOF arrow (see VELOCITY_SECONDS, PDOF_LENGTH) where it was then: ``pos_at(t, i)`` its (x, y)."""
+    out = []
+    for m in impacts:
+        if m.what != "vehicle" or not m.dv:
+            continue
+        for i, (vx, vy) in m.v_before.items():
+            x, y = (float(c) for c in pos_at(m.t, i)[:2])
+            speed = math.hypot(vx, vy)
+            if speed > 0.1:
+                light = tuple(c + VELOCITY_LIGHT * (1 - c) for c in colours[i][:3])
+                out.append(_marks(arrow_xy(x, y, math.atan2(vy, vx), max(VELOCITY_MIN, VELOCITY_SECONDS * speed),
+                                           VELOCITY_HALF), Z_IMPACT, (*light, 0.95), m.t))
+            dx, dy = m.dv[i]
+            if math.hypot(dx, dy) > 1e-6:
+                h = math.atan2(dy, dx)
+                out.append(_marks(arrow_xy(x - PDOF_LENGTH * math.cos(h), y - PDOF_LENGTH * math.sin(h), h,
+                                           PDOF_LENGTH, PDOF_HALF), Z_IMPACT, PDOF, m.t))
+    return np.concatenate(out) if out else np.zeros((0, 8), "f4")
 
 
 def impact_marks(impacts) -> np.ndarray:

@@ -9,14 +9,21 @@ scene's own geoms (their MJCF sizes, poses and colours), placed each frame by
   impact, with a scale bar; the wheels drawn through the bodies so that their steering shows)
   and ``behind``, a chase camera behind the followed vehicle, :data:`CHASE_SIDE` degrees off
   its axis so the wheels' faces show, turning with its heading smoothed over
-  :data:`CHASE_TAU` s (a spinning car does not whirl the camera); ``both``: the chase view,
-  and the overhead view above the readout.
+  :data:`CHASE_TAU` s (a spinning car does not whirl the camera), that keeps its partner (the
+  vehicle it first hits) in view too: it looks at a point between them and backs off (and up)
+  as far as both need (:func:`chase_framing`); ``both``: the overhead view on the left half
+  of the frame, full height, the chase view and the readout on the right.
+* **At each impact** of a vehicle pair, from its time on: each vehicle's velocity arrow (just
+  before the contact) and its PDOF arrow (the principal direction of force, from its velocity
+  change over the contact, :func:`nbst.render.crash.motion.impact_vectors`), labelled in the
+  overhead view with its clock direction.
 * **On the road**: lane markings, the script's rest regions and heading arrows, each
   vehicle's trail, skid marks and scrapes, and an impact ring at each first contact point
   from the moment of contact, labelled with the pair and the time (drawn over the vehicles in
   the overhead view, as a crash diagram marks its points of impact).
 * **Readout** (:mod:`nbst.render.crash.readout`) in a column on the right; slow motion around
-  each impact (:func:`nbst.render.core.times.frame_times`).
+  each impact (:func:`nbst.render.core.times.frame_times`). ``clean``: no text at all (no
+  readout, titles, names or labels, no scale bar), the views filling the frame.
 
 Compute apart from I/O: :class:`CrashRenderer` returns frames; :func:`render_crash` is the thin
 writer the CLI calls; :func:`crash_kind` sniffs a file's kind.
@@ -42,20 +49,31 @@ from nbst.render.crash import scene as cs
 from nbst.render.crash.motion import SLOW, record, slow_windows, slowed
 from nbst.render.scene2d import keep_apart
 
-__all__ = ["CAMERAS", "IMPACT_TEXT", "LIGHT", "MARK_FS", "MARK_VS", "PANEL", "SCALE_BARS", "SKY", "SNIFF_BYTES",
-           "CrashRenderer", "chase_yaw", "crash_kind", "load", "render_crash", "top_view"]
+__all__ = ["BOTH_OVERHEAD_SHARE", "CAMERAS", "CHASE_FLOOR", "CHASE_LADDER", "CHASE_MIN_SHARE", "CHASE_NDC", "IMPACT_TEXT", "LIGHT",
+           "MARK_FS", "MARK_VS", "PANEL", "SCALE_BARS", "SKY", "SNIFF_BYTES", "CrashRenderer", "chase_framing",
+           "chase_yaw", "crash_kind", "load", "partner_of", "render_crash", "top_view"]
 
 CAMERAS = ("overhead", "behind", "both")
 #: Share of the frame's width the readout column takes, and the most it takes where its text
 #: at MIN_READOUT_PX needs more (small frames).
 COLUMN_SHARE, COLUMN_MAX = 0.36, 0.62
-#: Height of the overhead panel above the readout (camera "both"), as a share of the frame's
-#: height; less where the readout needs the rows, none under INSET_MIN (a small frame).
-INSET_SHARE, INSET_MIN = 0.45, 0.2
+#: Camera "both": the overhead view takes this share of the frame's width, full height (so at least
+#: half the frame); the chase view at least CHASE_MIN_SHARE of the height of the column on its
+#: right, the readout the rest (its text smaller where it needs more rows; past the smallest
+#: text, the chase view gives it rows down to CHASE_FLOOR of the height).
+BOTH_OVERHEAD_SHARE, CHASE_MIN_SHARE, CHASE_FLOOR = 0.5, 0.45, 0.3
 #: Chase camera: this far behind the vehicle (m), this high, looking at a point this far ahead
 #: of it, from this many degrees off its axis (its left), field of view (deg); the heading it
 #: follows is smoothed with this time constant (s).
 CHASE_BACK, CHASE_HEIGHT, CHASE_AHEAD, CHASE_SIDE, CHASE_FOV, CHASE_TAU = 14.0, 5.5, 6.0, 15.0, 45.0, 0.6
+#: Keeping the partner in view: the camera's distances to try, as multiples of CHASE_BACK (its
+#: height grows with it), the look point's share of the way from the followed vehicle to its
+#: partner, and how far out (normalised device coordinates) a vehicle's box may project.
+CHASE_LADDER = (1.0, 1.25, 1.6, 2.0, 2.5, 3.2, 4.0, 5.0, 6.5, 8.0, 10.0, 13.0)
+CHASE_BLEND = (0.0, 0.5)
+CHASE_NDC = 0.9
+#: A vehicle's box for framing: this half length and half width (m) about its CoM, up to its height.
+CHASE_BOX = (2.6, 1.1)
 #: Overhead view: the impacts, rest poses and regions and the paths within this distance (m) of
 #: them, with this margin (m), at least this wide (m).
 OVERHEAD_LEAD, OVERHEAD_MARGIN, OVERHEAD_MIN = 12.0, 4.0, 24.0
@@ -121,14 +139,95 @@ def chase_yaw(times: np.ndarray, yaw: np.ndarray, tau: float = CHASE_TAU) -> np.
     return out
 
 
+def partner_of(motion, i: int) -> int | None:
+    """The vehicle ``i`` first hits (its first vehicle pair impact), else the nearest other vehicle
+    at the end, else None (it drives alone)."""
+    for im in motion.impacts:
+        if im.what == "vehicle" and im.b is not None and i in (im.a, im.b):
+            return im.b if im.a == i else im.a
+    n = motion.pos.shape[1]
+    if n < 2:
+        return None
+    d = [np.inf if j == i else float(np.hypot(*(motion.pos[-1, j, :2] - motion.pos[-1, i, :2]))) for j in range(n)]
+    return int(np.argmin(d))
+
+
+def _chase_matrix(p, q, yaw, scale, blend, aspect):
+    """(view-projection, eye) of the chase camera at ``scale`` x CHASE_BACK behind ``p`` (heading
+    ``yaw``), looking at the point ``blend`` of the way from ``p``'s look point to ``q``."""
+    back = yaw + math.pi - math.radians(CHASE_SIDE)
+    eye = p + np.array([scale * CHASE_BACK * math.cos(back), scale * CHASE_BACK * math.sin(back),
+                        scale * CHASE_HEIGHT])
+    look = p + np.array([CHASE_AHEAD * math.cos(yaw), CHASE_AHEAD * math.sin(yaw), 0.6])
+    tgt = look if q is None else (1 - blend) * look + blend * np.array([q[0], q[1], 0.6])
+    flip = np.diag([1.0, -1.0, 1.0, 1.0])  # image row 0 at the top: no flip on readback
+    far = 3000.0 * scale
+    return flip @ perspective(CHASE_FOV, aspect, 0.5, far) @ look_at(eye, tgt, np.array([0.0, 0.0, 1.0])), eye
+
+
+def _box_corners(pos, yaw, height) -> np.ndarray:
+    """(8, 3) the corners of a vehicle's framing box (CHASE_BOX) at ``pos`` heading ``yaw``."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    a, b = CHASE_BOX
+    out = []
+    for dx in (-a, a):
+        for dy in (-b, b):
+            for z in (0.0, height):
+                out.append([pos[0] + c * dx - s * dy, pos[1] + s * dx + c * dy, z])
+    return np.array(out)
+
+
+def _contains(vpm, pts) -> bool:
+    c = vpm @ np.c_[pts, np.ones(len(pts))].T
+    if np.any(c[3] <= 0.5):
+        return False
+    ndc = c[:2] / c[3]
+    return bool(np.all(np.abs(ndc) <= CHASE_NDC))
+
+
+def chase_framing(motion, follow: int, partner: int | None, cam_yaw: np.ndarray, heights, aspect: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(scale (S,), blend (S,)) of the chase camera at each sample: the nearest of CHASE_LADDER
+    (then the look point's CHASE_BLEND towards the partner) at which both vehicles' boxes project
+    inside CHASE_NDC of the view; the scale backs off at once and closes in smoothly
+    (CHASE_TAU), never closer than the sample needs."""
+    S = len(motion.times)
+    need_s, need_b = np.ones(S), np.zeros(S)
+    if partner is None:
+        return need_s, need_b
+    for k in range(S):
+        p = motion.pos[k, follow].copy()
+        p[2] = 0.0
+        q = motion.pos[k, partner]
+        pts = np.concatenate([_box_corners(p, float(motion.yaw[k, follow]), heights[follow]),
+                              _box_corners(q, float(motion.yaw[k, partner]), heights[partner])])
+        found = None
+        for sc in CHASE_LADDER:
+            for bl in CHASE_BLEND:
+                if _contains(_chase_matrix(p, q, float(cam_yaw[k]), sc, bl, aspect)[0], pts):
+                    found = (sc, bl)
+                    break
+            if found:
+                break
+        need_s[k], need_b[k] = found or (CHASE_LADDER[-1], CHASE_BLEND[-1])
+    # back off at once, close in over CHASE_TAU; the look point likewise, never short of the need
+    scale, blend = need_s.copy(), need_b.copy()
+    a = 1.0 - np.exp(-np.diff(motion.times) / CHASE_TAU)
+    for k in range(1, S):
+        scale[k] = max(need_s[k], scale[k - 1] + a[k - 1] * (need_s[k] - scale[k - 1]))
+        blend[k] = max(need_b[k], blend[k - 1] + a[k - 1] * (need_b[k] - blend[k - 1]))
+    return scale, blend
+
+
 class CrashRenderer(FrameRenderer):
     """Frames of a recorded crash: ``render(t)`` -> (H, W, 3) uint8.
 
     d, script, model: ``crashfile.load``'s; motion: ``nbst.render.crash.motion.record``'s; camera: overhead |
-    behind | both; follow: the chased vehicle's index (behind and both)."""
+    behind | both; follow: the chased vehicle's index (behind and both); clean: no text (the views
+    fill the frame)."""
 
     def __init__(self, ctx, d: dict, script, model, motion, *, size=style.DEFAULT_SIZE, camera: str = "overhead",
-                 follow: int = 0):
+                 follow: int = 0, clean: bool = False):
         import moderngl
         import mujoco
 
@@ -137,7 +236,7 @@ class CrashRenderer(FrameRenderer):
         if camera not in CAMERAS:
             raise InputError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         self.ctx, self.d, self.script, self.model, self.motion = ctx, d, script, model, motion
-        self.camera, self.follow = camera, int(follow)
+        self.camera, self.follow, self.clean = camera, int(follow), bool(clean)
         self.size = (int(size[0]), int(size[1]))
         self._mgl, self._mj = moderngl, mujoco
         self.data = mujoco.MjData(model)
@@ -153,23 +252,27 @@ class CrashRenderer(FrameRenderer):
         # (to COLUMN_MAX of the frame; past that the lines are cut at the frame's edge)
         chars, rows = ro.widest(motion, script, self.fates, self.labels, self.windows)
         px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
-        ih = int(round(INSET_SHARE * h)) if camera == "both" else 0
-        cw_ = int(round(COLUMN_SHARE * w))
-        while px > style.MIN_READOUT_PX and ((chars + 2) * text_cell(px)[0] > cw_ or
-                                             (rows + 1) * text_cell(px)[1] > h - ih):
-            px -= 1
-        cw_ = int(min(max(cw_, (chars + 2) * text_cell(px)[0]), round(COLUMN_MAX * w)))
-        if ih:   # the overhead panel gives the readout the rows it needs, and goes below INSET_MIN
-            ih = min(ih, h - (rows + 1) * text_cell(px)[1])
-            ih = ih if ih >= INSET_MIN * h else 0
-        self.column = (w - cw_, 0, cw_, h)
-        main = (0, 0, w - cw_, h)
-        if camera == "both" and ih:
-            self.panels = {"behind": main, "overhead": (w - cw_, 0, cw_, ih)}
-            self.text_box = (w - cw_, ih, cw_, h - ih)
+        if camera == "both":
+            # the overhead on the left (at least half the frame), the chase view over the readout on the right
+            ow = int(math.ceil(BOTH_OVERHEAD_SHARE * w))
+            rw = w - ow
+            room = 0 if self.clean else int((1 - CHASE_MIN_SHARE) * h)
+            while px > style.MIN_READOUT_PX and ((chars + 2) * text_cell(px)[0] > rw or
+                                                 (rows + 1) * text_cell(px)[1] > room):
+                px -= 1
+            # rows that do not fit at the smallest text take the chase view's height, down to CHASE_FLOOR
+            th = 0 if self.clean else min((rows + 1) * text_cell(px)[1], int((1 - CHASE_FLOOR) * h))
+            self.panels = {"overhead": (0, 0, ow, h), "behind": (ow, 0, rw, h - th)}
+            self.text_box = self.column = (ow, h - th, rw, th)
         else:
-            self.panels = {"behind" if camera == "both" else camera: main}
-            self.text_box = self.column
+            cw_ = 0 if self.clean else int(round(COLUMN_SHARE * w))
+            while not self.clean and px > style.MIN_READOUT_PX and ((chars + 2) * text_cell(px)[0] > cw_ or
+                                                                    (rows + 1) * text_cell(px)[1] > h):
+                px -= 1
+            if not self.clean:
+                cw_ = int(min(max(cw_, (chars + 2) * text_cell(px)[0]), round(COLUMN_MAX * w)))
+            self.column = self.text_box = (w - cw_, 0, cw_, h)
+            self.panels = {camera: (0, 0, w - cw_, h)}
         self.text = Text(ctx, px)
         self.small = Text(ctx, max(style.MIN_LABEL_PX, int(round(0.018 * min(self.size)))))
         self.target = FrameTarget(ctx, self.size, samples=style.MSAA_SAMPLES, depth=True)
@@ -188,7 +291,9 @@ class CrashRenderer(FrameRenderer):
         self.lines_vao = self._vao(np.concatenate([cs.lane_marks(script.road),
                                                    cs.target_marks(self.fates, self.colours)]), marks=True)
         self.trail_vao = self._vao(cs.motion_marks(motion, self.colours), marks=True)
-        self.impact_vao = self._vao(cs.impact_marks(motion.impacts), marks=True)
+        self.impact_vao = self._vao(np.concatenate([
+            cs.impact_arrows(motion.impacts, lambda t, i: motion.pos[motion.index(t), i], self.colours),
+            cs.impact_marks(motion.impacts)]), marks=True)
         # the vehicles' geoms, one buffer per shape (equal vehicles share theirs); the lower body
         # has an arch over each wheel, placed from the wheels' poses at the start
         self.geoms: list[tuple[int, bool, Any]] = []    # (geom id, is a tyre, vao)
@@ -209,8 +314,12 @@ class CrashRenderer(FrameRenderer):
                     self.geoms.append((g, "_tyre_" in nm, cache[key]))
             self.heights.append(script.vehicles[i].vtype.height)
         self.bounds = self._overhead_bounds()
+        self.partner = partner_of(motion, self.follow)
         if "behind" in self.panels:
             self.cam_yaw = chase_yaw(motion.times, motion.yaw[:, self.follow])
+            vp = self.panels["behind"]
+            self.chase_scale, self.chase_blend = chase_framing(motion, self.follow, self.partner, self.cam_yaw,
+                                                               self.heights, vp[2] / vp[3])
 
     def _vao(self, rows: np.ndarray, *, marks: bool = False):
         """A vertex array of solids (V, 9) or marks (V, 8); None for no rows."""
@@ -273,12 +382,9 @@ class CrashRenderer(FrameRenderer):
                 continue
             p = self.motion.pos[k, self.follow].copy()
             p[2] = 0.0
-            yaw = float(self.cam_yaw[k])
-            back = yaw + math.pi - math.radians(CHASE_SIDE)
-            eye = p + np.array([CHASE_BACK * math.cos(back), CHASE_BACK * math.sin(back), CHASE_HEIGHT])
-            tgt = p + np.array([CHASE_AHEAD * math.cos(yaw), CHASE_AHEAD * math.sin(yaw), 0.6])
-            flip = np.diag([1.0, -1.0, 1.0, 1.0])  # image row 0 at the top: no flip on readback
-            vpm = flip @ perspective(CHASE_FOV, vp[2] / vp[3], 0.5, 3000.0) @ look_at(eye, tgt, np.array([0.0, 0.0, 1.0]))
+            q = None if self.partner is None else self.motion.pos[k, self.partner]
+            vpm, eye = _chase_matrix(p, q, float(self.cam_yaw[k]), float(self.chase_scale[k]),
+                                     float(self.chase_blend[k]), vp[2] / vp[3])
             out.append((cam, vp, vpm, eye))
         return out
 
@@ -334,7 +440,8 @@ class CrashRenderer(FrameRenderer):
         ctx.disable(mgl.DEPTH_TEST)
         ctx.enable(mgl.BLEND)
         ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA  # the text shader's premultiplied alpha
-        self._overlay(t, k, views)
+        if not self.clean:
+            self._overlay(t, k, views)
         ctx.disable(mgl.BLEND)
 
     def _draw_vehicles(self, *, tyres_only: bool) -> None:
@@ -393,9 +500,36 @@ class CrashRenderer(FrameRenderer):
                          (col - w / 2, row + 2.2 * sch), (col - w / 2, row - 3.2 * sch)]
                 x, y = next(((x, y) for x, y in spots if keep_apart([(x, y, x + w, y + sch)], placed)[0]), spots[0])
                 placed.append(self._label(vp, label, x, y, IMPACT_TEXT))
+                if cam == "overhead":
+                    self._pdof_labels(vp, vpm, im, placed)
             if cam == "overhead":
                 self._scale_bar(vp, vpm)
         self._readout(t)
+
+    def _pdof_labels(self, vp, vpm, im, placed: list) -> None:
+        """Beside each PDOF arrow's tail (overhead): the vehicle's name and the clock direction."""
+        scw, sch = self.small.cell
+        col, row, _ = self.to_pixel(vp, vpm, im.pos)
+        r = cs.IMPACT_RING[1] * top_view(self.bounds, vp)[1] + 2
+        placed.append((col - r, row - r, col + r, row + r))   # the ring stays clear
+        for i, h in im.pdof.items():
+            dx, dy = im.dv[i]
+            n = math.hypot(dx, dy)
+            if n < 1e-6:
+                continue
+            x, y = self.motion.pos[self.motion.index(im.t), i, :2]
+            tail = (x - (cs.PDOF_LENGTH + 0.8) * dx / n, y - (cs.PDOF_LENGTH + 0.8) * dy / n, 0.0)
+            col, row, _ = self.to_pixel(vp, vpm, tail)
+            if not self._inside(vp, col, row):
+                continue
+            label = f"{self.names[i]} PDOF {h} o'clock"
+            w = scw * len(label)
+            spots = [(col - w / 2, row - 0.5 * sch), (col - w / 2, row - 1.6 * sch), (col - w / 2, row + 0.6 * sch),
+                     (col + 0.8 * scw, row - 0.5 * sch), (col - 0.8 * scw - w, row - 0.5 * sch)]
+            spot = next(((a, b) for a, b in spots if vp[0] <= a and a + w <= vp[0] + vp[2]
+                         and keep_apart([(a, b, a + w, b + sch)], placed)[0]), None)
+            if spot is not None:   # no room (a small frame): the arrow speaks alone
+                placed.append(self._label(vp, label, spot[0], spot[1], cs.PDOF[:3]))
 
     def _label(self, vp, text: str, x: float, y: float, colour) -> tuple:
         """Draw ``text`` in the small size with its top-left at (x, y) px, moved into the panel ``vp``
@@ -475,7 +609,7 @@ def load(path):
 
 
 def render_crash(d: dict, script, model, motion, output, *, still=None, camera: str = "overhead", follow: int = 0,
-                 size=None, fps=None, hold: float = 1.0, times=None, progress=None) -> int:
+                 size=None, fps=None, hold: float = 1.0, times=None, progress=None, clean: bool = False) -> int:
     """Render a recorded crash to ``output`` (.mp4/.gif at ``fps``, slowed around each impact, or a
     .png at time ``still``).
 
@@ -491,6 +625,7 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
         hold: seconds the last frame is held.
         times: the frames' times (default :func:`nbst.render.core.times.frame_times`: slowed at impacts).
         progress: None, or an object whose ``update(1)`` is called after each frame.
+        clean: no overlay text (no readout, titles, names or labels): the views fill the frame.
 
     Returns:
         The number of frames written (1 for a still).
@@ -502,7 +637,7 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
 
     size = tuple(size or style.DEFAULT_SIZE)
     return render_output(lambda ctx: CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera,
-                                                   follow=follow),
+                                                   follow=follow, clean=clean),
                          output, still=None if still is None else np.clip(still, 0.0, motion.duration),
                          times=lambda r, fps: (frame_times(motion.duration, fps, windows=r.windows, slow=SLOW, hold=hold)
                                                if times is None else times),

@@ -4,8 +4,9 @@ here on a crash file).
 A crash file from ``nbst crash solve`` is filmed from its own replay (docs/render.md, "A
 crash"): ``--camera overhead`` (the default) a true-scale view from above; ``--follow NAME`` a
 chase camera behind that vehicle beside the overhead view (``--camera behind``: the chase view
-alone); ``--still T`` a PNG of the frame at T seconds. The video runs in real time, 4x slower
-around each impact, then holds the last frame ``--hold`` seconds.
+alone); ``--still T`` a PNG of the frame at T seconds; ``--clean`` no overlay text (the views
+fill the frame). The video runs in real time, 4x slower around each impact, then holds the last
+frame ``--hold`` seconds.
 
 Exit codes: 0 written, 2 bad input (one line), 130 interrupted (no partial file is left).
 """
@@ -38,7 +39,7 @@ def check_flags(args) -> str | None:
     given = [flag for attr, default, flag in DISK_ONLY_FLAGS if getattr(args, attr, default) not in (default, None)]
     if given:
         return (f"{', '.join(given)} draw{'s' if len(given) == 1 else ''} disk problems only; a crash file takes "
-                f"-o, --still, --camera, --follow, --size, --fps, --hold, --max-frames and -q")
+                f"-o, --still, --camera, --follow, --clean, --size, --fps, --hold, --max-frames and -q")
     if getattr(args, "solution", None) is not None:
         return f"a crash file is rendered alone: drop {args.solution!r}"
     out = str(args.output)
@@ -57,7 +58,7 @@ def check_flags(args) -> str | None:
 
 
 def cmd_render_crash(args) -> int:
-    """``nbst render CRASH.json -o OUT [--still T] [--camera C] [--follow NAME] [--size WxH] [--fps F]
+    """``nbst render CRASH.json -o OUT [--still T] [--camera C] [--follow NAME] [--clean] [--size WxH] [--fps F]
     [--hold S] [--max-frames N] [-q]``: every flag is checked against the file before the replay."""
     from nbst.models.crash import crashfile
 
@@ -110,7 +111,7 @@ def cmd_render_crash(args) -> int:
             bar.note("")
         with sigterm_as_interrupt():   # kill: the partial video is removed as on Ctrl-C
             n = render_crash(d, script, model, motion, out, still=args.still, camera=camera, follow=follow,
-                             size=size, fps=fps, times=times, progress=bar)
+                             size=size, fps=fps, times=times, progress=bar, clean=bool(getattr(args, "clean", False)))
     except BaseException:
         if bar is not None:
             bar.close()
