@@ -100,6 +100,7 @@ def test_a_lone_10_is_flat_solid_or_ringing_by_angle_and_hit():
     (["bowl", "throw", "--stance", "25", "--target", "9th-arrow"], ("--target",)),
     (["bowl", "throw", "--stance", "25", "--target", "2nd-arrow", "--angle", "2"], ("--angle",)),
     (["bowl", "throw", "--stance", "5", "--target", "2nd-arrow"], ("--stance", "off the lane")),
+    (["bowl", "throw", "--stance", "41", "--target", "6th-arrow"], ("--stance", "39")),   # the approach's boards
     (["bowl", "frame", "--bowler", "amateur"], ("--bowler",)),
     (["bowl", "pocket", "-o", "p.png", "--bowler", "x"], ("--bowler",)),
     (["bowl", "solve", "--leave", "10", "-o", "t.json", "--bowler", "pro"], ("--bowler", "--foul-line")),
@@ -125,7 +126,7 @@ def test_the_parser_defaults_only_what_is_not_given():
     args = build_parser().parse_args(["bowl", "throw", "--stance", "27", "--target", "2nd-arrow", "--rpm", "350"])
     assert bowl_args.stance_target(args) == (27.0 - advise.STANCE_SEP, 10.0) == (20.0, 10.0)
     d = bowl_args.delivery_of(args)
-    assert (d.board, d.at, d.rpm, d.mph) == (20.0, "foul", 350.0, bowl_args.DELIVERY_DEFAULTS["mph"])
+    assert (d.board, d.at, d.rpm, d.mph) == (20.0, "foul", 350.0, bowl_args.delivery_defaults()["mph"])
     assert [bowl_args.target_board(t) for t in ("1st-arrow", "2nd arrow", "4th", "12.5")] == [5.0, 10.0, 20.0, 12.5]
 
 

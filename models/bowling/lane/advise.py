@@ -73,7 +73,8 @@ def arrow_text(board: float) -> str:
 def line_of(r) -> dict:
     """The line of a ball-alone throw (:class:`.lane.ThrowResult`): stance, release board, target
     at the arrows (the real path's crossing), breakpoint, entry board and angle, and their names."""
-    return {"stance_board": stance_of(r.board_at_foul_line), "separation_boards": STANCE_SEP,
+    stance = min(stance_of(r.board_at_foul_line), float(lane.N_BOARDS))   # on the numbered boards (stance_text)
+    return {"stance_board": stance, "separation_boards": stance - float(r.board_at_foul_line),
             "foul_board": float(r.board_at_foul_line), "target_board": float(r.board_at_arrows),
             "target": arrow_text(r.board_at_arrows), "breakpoint_ft": r.breakpoint_ft,
             "breakpoint_board": r.breakpoint_board, "entry_board": float(r.board_at_pins),
@@ -144,10 +145,10 @@ def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -
     way = ("left" if sign > 0 else "right") if d.hand == "right" else ("right" if sign > 0 else "left")
     phrase = _names.text(nm)
     if steps:
-        txt = (f"{phrase}: move {steps} {way} (feet {2 * steps} boards, eyes {steps}: stand on {ns:.0f}, look at "
-               f"{arrow_text(nt)})")
+        txt = (f"{phrase}: move {steps} {way} (feet {2 * steps} boards, eyes {steps}: "
+               f"{stance_text(ns - STANCE_SEP, 0)}, look at {arrow_text(nt)})")
     else:
-        txt = f"{phrase}: stay (stand on {stance:.0f}, look at {arrow_text(target)})"
+        txt = f"{phrase}: stay ({stance_text(stance - STANCE_SEP, 0)}, look at {arrow_text(target)})"
     return Move(names=nm, steps=steps, direction=way if steps else "stay", stance_board=stance, target_board=target,
                 new_stance_board=ns, new_target_board=nt, board_at_pins=None if b is None else float(b),
                 new_board_at_pins=new_b, delivery=nd.to_dict(), text=txt)
@@ -179,14 +180,14 @@ class LeaveAdvice:
         return asdict(self)
 
 
-def stance_text(foul_board: float) -> str:
+def stance_text(foul_board: float, digits: int = 1) -> str:
     """Where to stand for a ball released on ``foul_board``, said honestly at the lane's edge: the
     slide foot :data:`STANCE_SEP` boards inside the release, or, where that is past board
     :data:`.units.N_BOARDS` (off the approach's numbered boards), on the last board with the ball
     released closer to the foot (the separation said)."""
     stance = stance_of(foul_board)
     if stance <= lane.N_BOARDS:
-        return f"stand on {stance:.1f}"
+        return f"stand on {stance:.{digits}f}"
     return (f"stand on {lane.N_BOARDS} (the last board; the ball released on {foul_board:.1f}, "
             f"{lane.N_BOARDS - foul_board:.1f} boards from the slide foot)")
 

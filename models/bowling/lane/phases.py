@@ -52,7 +52,9 @@ class ThrowResult:
 
     ``skid_ft``: where the hook starts (sideways acceleration towards the pocket first reaches
     HOOK_SHARE of its peak); ``breakpoint_ft``/``breakpoint_board``: where the ball is farthest
-    out (its board stops falling; None when it never moves out); ``roll_ft``: where the contact
+    out (its board stops falling; None when it never moves out), or, where it got there before the
+    hook started (a slow, low-rev ball curling on the oil, then drifting back), the hook start:
+    where it turns, so the breakpoint never comes before the hook; ``roll_ft``: where the contact
     point's slip first drops below ROLL_SLIP (None if it never rolls before the pins);
     ``entry_angle_deg``: the ball's heading where its centre crosses the head pin's line,
     + towards the pocket side; ``board_at_pins``: its board there. ``flare_in``: track flare,
@@ -246,9 +248,12 @@ def throw(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: Oil
     a_perp = s * (v[:, 0] * a[:, 1] - v[:, 1] * a[:, 0]) / np.maximum(speed, 1e-9)
     peak = a_perp.max()
     skid_i: int | None = int(np.argmax(a_perp >= HOOK_SHARE * peak)) if peak > 0.05 else None
-    # breakpoint: the ball's farthest board out, if it went out at least BREAKPOINT_MIN boards
+    # breakpoint: the ball's farthest board out, if it went out at least BREAKPOINT_MIN boards; where it got
+    # there still skidding (before the hook starts) it drifted back on the oil and turns at the hook start
     far = int(np.argmin(board))
     bp_i = far if board[0] - board[far] >= BREAKPOINT_MIN and far < len(board) - 1 else None
+    if bp_i is not None and skid_i is not None and skid_i > bp_i:
+        bp_i = skid_i
     rolled = np.flatnonzero(slip_h < ROLL_SLIP)
     roll_i = int(rolled[0]) if len(rolled) else None
     # at the head pin's line: interpolate between the last two steps

@@ -44,7 +44,7 @@ from nbst.models.bowling.lane.noise import Noise
 from nbst.registry import Registry
 from nbst.models.bowling.lane import phases
 
-__all__ = ["Profile", "PROFILES", "NAMES", "DEFAULT_PROFILE", "PROFILES_DIR", "NOISE_SHAPE", "PRO_SCALE", "PRO_NOISE",
+__all__ = ["Profile", "PROFILES", "NAMES", "DEFAULT_PROFILE", "HOUSE_PROFILE", "house_release", "PROFILES_DIR", "NOISE_SHAPE", "PRO_SCALE", "PRO_NOISE",
            "PRO_SPARE_SCALE", "PRO_SPARE_NOISE", "load_profile", "profile", "scaled", "strike_ball"]
 
 
@@ -155,6 +155,19 @@ for _name in ("pro", "league200", "league150", "twohander"):
 NAMES = PROFILES.names()
 #: The profile ``bowl series`` bowls when none is named.
 DEFAULT_PROFILE = "pro"
+#: The typical house bowler: its strike ball is the release of a delivery whose flags are left out
+#: (``bowl throw`` and ``bowl frame`` without ``--bowler``); its noise is not used there (the
+#: default release noise is, :data:`.noise.DEFAULT`).
+HOUSE_PROFILE = "league200"
+
+
+def house_release() -> lane.Delivery:
+    """The default release: :data:`HOUSE_PROFILE`'s strike ball, right-handed, board at the foul line.
+
+    Returns:
+        the :class:`.lane.Delivery` (checked).
+    """
+    return PROFILES[HOUSE_PROFILE].delivery("right")
 
 #: The pro's strike-ball noise: the shape times PRO_SCALE, fitted so the pro's strike ball hits the pocket
 #: (boards 16.5-18.5 at the head pin, entering at 4-6 deg) as often as PBA's televised finalists did, 54 of

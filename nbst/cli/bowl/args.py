@@ -15,7 +15,7 @@ from nbst.errors import InputError
 from nbst.domain import plain
 
 __all__ = ["number", "size_of", "err", "pin_list", "pins_down", "leave", "pins_text", "asked_text", "runner_args",
-           "picture_flags", "oil_flag", "DELIVERY_DEFAULTS", "bowlers", "bowlers_text", "bowler_flag",
+           "picture_flags", "oil_flag", "DELIVERY_KEYS", "BOARD_AT", "delivery_defaults", "bowlers", "bowlers_text", "bowler_flag",
            "delivery_flags", "arrows", "target_board", "ball_flags", "given", "delivery_of", "stance_target",
            "ball_of", "mc_flags", "check_picture_args", "wants_picture", "bowler_of"]
 
@@ -122,6 +122,7 @@ def picture_flags(p, what: str) -> None:
     p.add_argument("--camera", choices=("both", "behind", "overhead", "deck"), default=None,
                    help="--video/--still's view: both (behind the bowler and overhead, side by side; default), "
                         "behind, overhead, or deck (the pin deck close up: the ball into the pins, the pins flying)")
+    p.add_argument("--clean", action="store_true", help="--video/--still without overlay text (the picture alone)")
 
 
 def oil_flag(t) -> None:
@@ -135,9 +136,20 @@ def oil_flag(t) -> None:
                         "board; docs/bowling.md)")
 
 
-#: The delivery flags' defaults (a --bowler's release replaces them; a flag given beside it overrides it).
-DELIVERY_DEFAULTS = {"hand": "right", "board": 10.0, "at": "arrows", "angle": 1.5, "mph": 17.0, "rpm": 300.0,
-                     "rotation": 45.0, "tilt": 15.0}
+#: The delivery flags (their defaults: :func:`delivery_defaults`).
+DELIVERY_KEYS = ("hand", "board", "at", "angle", "mph", "rpm", "rotation", "tilt")
+#: Where a --board given without --at is: at the arrows.
+BOARD_AT = "arrows"
+
+
+def delivery_defaults() -> dict:
+    """The delivery flags' defaults: the release of the library's house profile
+    (:data:`nbst.models.bowling.lane.profiles.HOUSE_PROFILE`, a typical house bowler's strike
+    ball), right-handed, its board at the foul line (a --bowler's release replaces them; a flag
+    given beside it overrides it)."""
+    from nbst.models.bowling.lane import profiles
+
+    return profiles.house_release().to_dict()
 
 
 def bowlers() -> tuple[str, ...]:
@@ -166,22 +178,25 @@ def bowler_flag(t, what: str = "throw") -> None:
 
 def delivery_flags(t, *, bowler: bool = True) -> None:
     """The delivery flags of ``bowl throw`` and ``bowl frame``: one vocabulary, one help text
-    (defaults :data:`DELIVERY_DEFAULTS`, filled by :func:`delivery_of`, so that a flag given
+    (defaults :func:`delivery_defaults`, filled by :func:`delivery_of`, so that a flag given
     beside --bowler is told from one left out)."""
     from nbst.models.bowling.lane.advise import STANCE_SEP
+    from nbst.models.bowling.lane.profiles import HOUSE_PROFILE
 
-    D = DELIVERY_DEFAULTS
+    D = delivery_defaults()
     t.add_argument("--hand", choices=("right", "left"), default=None, help="bowling hand (default right)")
     t.add_argument("--board", type=Bounded("board", 1, 39), default=None, metavar="B",
-                   help=f"board where the ball is at --at (default {D['board']:g}; 1..39, fractions allowed)")
+                   help=f"board where the ball is at --at (1..39, fractions allowed; default: the {HOUSE_PROFILE} "
+                        f"profile's line, a typical house bowler's, board {D['board']:g} at the foul line)")
     t.add_argument("--at", choices=("foul", "arrows"), default=None,
                    help="where --board is: at the foul line, or where the ball crosses the arrows, 15 ft out, "
                         "along its real path (the board at the foul line is found by running the ball alone; "
-                        "default arrows)")
+                        f"default {BOARD_AT} for a --board given)")
     t.add_argument("--angle", type=Bounded("angle", -10, 10, unit="deg"), default=None, metavar="DEG",
                    help=f"launch angle from straight down the lane, + out towards board 1 (default {D['angle']:g})")
-    t.add_argument("--stance", type=Bounded("stance", 1, 60), default=None, metavar="B",
-                   help="where the bowler stands: the board of the slide foot on the approach (walking straight); "
+    t.add_argument("--stance", type=Bounded("stance", 1, 39), default=None, metavar="B",
+                   help="where the bowler stands: the board of the slide foot on the approach (walking straight; "
+                        "1..39, the approach's boards numbered as the lane's); "
                         "the ball is released %g boards towards the hand (a medium frame's ball-to-foot "
                         "separation, docs/bowling.md); with --target instead of --board/--at/--angle" % STANCE_SEP)
     t.add_argument("--target", type=target_board, default=None, metavar="ARROW",
@@ -246,13 +261,13 @@ def ball_flags(t) -> None:
 
 def given(args) -> dict:
     """The delivery flags given on the command line (not left at None), by name."""
-    keys = (*DELIVERY_DEFAULTS, "stance", "target")
+    keys = (*DELIVERY_KEYS, "stance", "target")
     return {k: getattr(args, k) for k in keys if getattr(args, k, None) is not None}
 
 
 def delivery_of(args, base=None):
     """The delivery of the :func:`delivery_flags`, checked (LaneError naming the field): ``base``
-    (a --bowler's strike ball) or :data:`DELIVERY_DEFAULTS`, with every flag given put over it. A
+    (a --bowler's strike ball) or :func:`delivery_defaults`, with every flag given put over it. A
     --board given without --at is at the arrows (its default); --stance/--target give the board at
     the foul line and a target the caller aims through (:func:`stance_target`)."""
     from dataclasses import replace
@@ -261,10 +276,10 @@ def delivery_of(args, base=None):
 
     g = given(args)
     st = stance_target(args)
-    d = lane.Delivery(**DELIVERY_DEFAULTS) if base is None else base
-    over = {k: v for k, v in g.items() if k in DELIVERY_DEFAULTS}
+    d = lane.Delivery(**delivery_defaults()) if base is None else base
+    over = {k: v for k, v in g.items() if k in DELIVERY_KEYS}
     if "board" in over and "at" not in over:
-        over["at"] = DELIVERY_DEFAULTS["at"]
+        over["at"] = BOARD_AT
     if st is not None:
         over.update(board=st[0], at="foul")
     return replace(d, **over).check()
