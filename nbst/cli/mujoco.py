@@ -178,13 +178,14 @@ def _is_crash(path) -> bool:
 
 
 def _crash_mjcf(args) -> int:
-    """``nbst mjcf CRASH.json``: the crash's scene with keyframe ``start`` and its controls."""
-    from nbst.models.crash import crashfile
+    """``nbst mjcf CRASH.json``: the crash's scene with keyframe ``start`` and its recorded controls
+    (``nbst.models.crash.export``: a plain mj_step loop plays it, docs/crash.md)."""
+    from nbst.models.crash import crashfile, export
 
     if args.solution:
         raise crashfile.CrashFileError(f"{args.solution}: a crash file carries its own controls; give it alone")
     d, script, model = crashfile.load(args.problem)
-    xml = crashfile.export_xml(d, script, model)
+    xml = export.export_xml(d)
     if args.output == "-":
         sys.stdout.write(xml)
         return 0
@@ -192,8 +193,9 @@ def _crash_mjcf(args) -> int:
     prepare_output(args.output, inputs=(args.problem,))
     write_text_atomic(args.output, xml)
     if not args.quiet:
-        print(f"nbst mjcf: wrote {args.output} ({script.n} vehicles; keyframe `start`; controls in "
-              f"custom numeric `crash_controls`, {d['controls']['period_steps']} steps a row)", file=sys.stderr)
+        print(f"nbst mjcf: wrote {args.output} ({script.n} vehicles, {d['nstep']} steps; keyframe `start`; "
+              f"controls in custom numeric `crash_controls`, {d['controls']['period_steps']} steps a row; "
+              f"play: docs/crash.md, \"Play the export in MuJoCo\")", file=sys.stderr)
     return 0
 
 
