@@ -230,6 +230,8 @@ class Engine:
         explore_between: uniform points after each restart.
         rank: ``rank(cell) -> float``: how far a cell is from the goal (lower first), or None.
         done: ``done(engine) -> bool``: the search is over (default: the best's distance is 0).
+        tournament: a parent is the best (lowest ``key``) of this many members drawn from its
+            signature (default 1: one member at random; the scene's search uses 2).
 
     Returns:
         The engine, before its first ``ask``.
@@ -251,7 +253,7 @@ class Engine:
                  polish: Sequence[float] = POLISH, spent: int = SPENT, right_kept: int = RIGHT_KEPT,
                  hold_distance: int = 1, explore_between: int = 0,
                  rank: Callable[[Hashable], float] | None = None,
-                 done: Callable[[Engine], bool] | None = None):
+                 done: Callable[[Engine], bool] | None = None, tournament: int = 1):
         if isinstance(max_rollouts, bool) or not isinstance(max_rollouts, numbers.Integral) or max_rollouts < 1:
             raise InputError(f"max_rollouts must be a whole number of at least 1, got {max_rollouts!r}")
         if isinstance(dim, bool) or not isinstance(dim, numbers.Integral) or dim < 0:
@@ -283,6 +285,7 @@ class Engine:
         self.spent_max, self.right_kept, self.hold_distance = int(spent), int(right_kept), int(hold_distance)
         self.explore_between = int(explore_between)
         self.rank, self.done = rank, done
+        self.tournament = max(1, int(tournament))
         # state
         self.rollouts = 0
         self.restarts = 0
@@ -412,6 +415,9 @@ class Engine:
         sigs = sorted({m.signature for m in pool if _order(m.signature) == o})
         s = sigs[int(self.rng.integers(len(sigs)))]
         members = [m for m in pool if m.signature == s]
+        if self.tournament > 1:  # the best of a few drawn from the signature
+            return min((members[int(k)] for k in self.rng.integers(len(members), size=self.tournament)),
+                       key=lambda m: m.key)
         return members[int(self.rng.integers(len(members)))]
 
     def _met(self, m: Member, i: int) -> bool:
