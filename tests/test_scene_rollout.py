@@ -419,3 +419,36 @@ def test_a_key_with_controls_and_mocap_rolls_out_as_the_loop(tmp_path):
         ra, rb = a.rollout(np.array([0.2, 0.1, 0.5])), b.rollout(np.array([0.2, 0.1, 0.5]))
     assert ra.qpos.tobytes() == rb.qpos.tobytes() and ra.judgement == rb.judgement
     assert abs(ra.qpos[0]) > 0.1  # the key's torque turned the arm
+
+
+def test_solve_robust_writes_the_pick_with_its_fresh_probability_and_ladder(toss, tmp_path):
+    """--robust: after the search, the robust maximiser's pick; its probability measured afresh from
+    --samples copies (a Wilson interval around k/n), its ladder rows h, h/2, h/4; it replays."""
+    out = tmp_path / "r.json"
+    assert main(["scene", "solve", str(toss), "-o", str(out), "--seed", "7", "--max-rollouts", "600", "--jobs", "1",
+                 "--robust", "24", "--samples", "12", "-q"]) in (0, 1)
+    d = json.loads(out.read_text())
+    p, rb = d["probability"], d["robust"]
+    assert p["n"] == 12 and p["lo"] <= p["p"] <= p["hi"] and p["p"] == p["k"] / 12
+    assert rb["budget"] == 24 and rb["rollouts"] >= rb["screen"][1] and rb["screen"][0] >= rb["start_screen"][0]
+    assert [row["timestep"] for row in rb["ladder"]] == [0.01, 0.005, 0.0025]
+    assert main(["scene", "replay", str(out)]) == 0
+
+
+def test_jobs_and_cluster_are_one_or_the_other(toss, tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["scene", "solve", str(toss), "-o", str(tmp_path / "x.json"), "--jobs", "2", "--cluster",
+              "tcp://127.0.0.1:1"])
+    assert e.value.code == 2 and not (tmp_path / "x.json").exists()
+    assert "not allowed with argument" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_same_solution_as_threads(toss):
+    from dask.distributed import LocalCluster
+
+    a = solve(None, toss, seed=7, max_rollouts=300, jobs=1)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as lc:
+        b = solve(None, toss, seed=7, max_rollouts=300, cluster=lc.scheduler_address)
+    assert a.rollouts == b.rollouts and a.best.x.tobytes() == b.best.x.tobytes()
+    assert a.best.qpos.tobytes() == b.best.qpos.tobytes() and a.met == b.met

@@ -1,9 +1,11 @@
 """``nbst.scene.solve``: the one typed way in to the scene search (docs/scene.md).
 
 Loads and checks the fates (``nbst.scene.scenefile.load_fates``), rolls the scene out on ``jobs``
-threads (``nbst.scene.rollout.SceneSim``) and runs the paper's per-body signature search
-(``nbst.scene.search.signature_search``) from one seed (``nbst.seeds``); on request, the
-probability that the answer holds under the fates' noise (``nbst.scene.search.noisy_probability``).
+threads (``nbst.scene.rollout.SceneSim``) or a Dask cluster (``nbst.scene.cluster``) and runs the
+paper's per-body signature search (``nbst.scene.search.signature_search``) from one seed
+(``nbst.seeds``), by default until the answer also meets every fate at h/2 and h/4 (the ladder);
+on request, the robust maximiser (``nbst.scene.robust``) and the probability that the answer holds
+under the fates' noise (``nbst.scene.search.noisy_probability``).
 """
 from __future__ import annotations
 
@@ -11,10 +13,12 @@ import copy
 import dataclasses
 import os
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 from nbst.errors import SolveError
+from nbst.scene.cluster import ClusterSceneSim
 from nbst.scene.fates import Fates
+from nbst.scene.robust import DEFAULT_ROBUST_SAMPLES, SceneRobustProblem
 from nbst.scene.scenefile import check_against_model, compile_scene, load_fates
 from nbst.scene.rollout import SceneSim, quiet_mujoco_warnings
 from nbst.scene.search import DEFAULT_MAX_ROLLOUTS, SceneProgress, noisy_probability, signature_search
@@ -29,7 +33,7 @@ LADDER = (2, 4)
 
 def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, seed: int | None = None,
           max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int = 1, samples: int = 0, answers: int = 1,
-          ladder: bool = False,
+          ladder: bool = True, robust: int | None = None, cluster: str | Any | None = None,
           callback: Callable[[SceneProgress], None] | None = None) -> SceneResult:
     """Find initial velocities (and offsets) of a scene's free bodies that meet their fates.
 
@@ -47,7 +51,15 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
             (>= 1; see ``nbst.scene.search.signature_search``); the first is the best.
         ladder: accept only answers that also meet every fate at h/2 and h/4 (the same initial
             state rolled out at the finer steps; those rollouts count in the budget); ``met`` then
-            says that the best does.
+            says that the best does (default; False: met at h is enough).
+        robust: after a search that met every fate (not interrupted), move the answer to where
+            it holds most often under the fates' noise with the rollout room's robust maximiser,
+            this many noisy rollouts (>= 12; None: not); the pick is the latest that keeps every
+            fate at h, h/2 and h/4 (with ``ladder``), its probability measured afresh from
+            ``samples`` copies (default ``nbst.scene.robust.DEFAULT_ROBUST_SAMPLES``).
+        cluster: run the batches on the workers of this Dask scheduler (an address such as
+            ``tcp://host:8786``, or a ``dask.distributed.Client``) instead of ``jobs`` threads;
+            the same result for the same seed.
         callback: called with a :class:`~nbst.scene.search.SceneProgress` after each batch.
 
     Returns:
@@ -58,13 +70,16 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     Raises:
         FatesError: the fates file or its scene is refused (one line naming the file and field).
         InputError: the seed is not an integer in range.
-        SolveError: ``max_rollouts``, ``jobs`` or ``answers`` is not an integer >= 1, or ``samples``
-            one >= 0.
+        SolveError: ``max_rollouts``, ``jobs`` or ``answers`` is not an integer >= 1, ``samples``
+            one >= 0, or ``robust`` one >= 12.
+        InputError: the cluster cannot be reached (one line).
     """
     for name, v, least in (("max_rollouts", max_rollouts, 1), ("jobs", jobs, 1), ("samples", samples, 0),
                            ("answers", answers, 1)):
         if isinstance(v, bool) or not isinstance(v, int) or v < least:
             raise SolveError(f"{name} must be an integer >= {least}, got {v!r}")
+    if robust is not None and (isinstance(robust, bool) or not isinstance(robust, int) or robust < 12):
+        raise SolveError(f"robust must be None or an integer >= 12 (noisy rollouts), got {robust!r}")
     s = resolve_seed(seed)
     if isinstance(fates, Fates):
         f = fates if scene is None else dataclasses.replace(fates, scene=Path(scene))
@@ -82,23 +97,44 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
             mk.opt.timestep = model.opt.timestep / k
             check_against_model(f, mk)  # the step cap, at this rung
             finer.append(SceneSim(f, mk, sequences=answers > 1))
-    with quiet_mujoco_warnings(), SceneSim(f, model, jobs=jobs, sequences=answers > 1) as sim:
+    extra: dict | None = None
+    seqs = answers > 1
+    sim = (ClusterSceneSim(f, model, cluster, sequences=seqs) if cluster is not None
+           else SceneSim(f, model, jobs=jobs, sequences=seqs))
+    with quiet_mujoco_warnings(), sim:
         r = signature_search(sim, rng=check_random_state(s), max_rollouts=max_rollouts, answers=answers,
                              ladder=tuple(finer), callback=callback)
         stopped = r.stopped
-        if samples and stopped != "interrupted":
-            try:
-                p = noisy_probability(sim, r.best.x, n=samples, seed=s)
-                if answers > 1:
-                    ps = [p if a is r.best else noisy_probability(sim, a.x, n=samples, seed=s) for a in r.answers]
-            except KeyboardInterrupt:
-                stopped = "interrupted"
-                p, ps = None, []
+        best, held = r.best, r.best_held
+        try:
+            if robust is not None and stopped == "met":
+                from nbst.models.mjsearch.robust import Interrupted, maximise
+
+                P: Any = SceneRobustProblem(sim, tuple(finer))  # the maximiser's RobustProblem (credit a float)
+                try:
+                    mx = maximise(P, [best.x], budget=robust, seed=s, n=samples or DEFAULT_ROBUST_SAMPLES,
+                                  ladder=ladder)
+                except Interrupted:
+                    raise KeyboardInterrupt from None
+                if mx.best is not best.x:
+                    best = sim.rollout(P.value(mx.best))
+                    held = bool(mx.ladder_holds) if ladder else None
+                p = mx.fresh
+                extra = {"budget": robust, "rollouts": mx.frames, "screen": [mx.screen.k, mx.screen.n],
+                         "start_screen": [mx.start_screen.k, mx.start_screen.n], "screen_seed": mx.screen_seed,
+                         **({"ladder": mx.ladder} if mx.ladder else {})}
+            elif samples and stopped != "interrupted":
+                p = noisy_probability(sim, best.x, n=samples, seed=s)
+            if samples and answers > 1 and stopped != "interrupted":
+                ps = [p if a is r.best else noisy_probability(sim, a.x, n=samples, seed=s) for a in r.answers]
+        except KeyboardInterrupt:
+            stopped = "interrupted"
+            p, ps = None, []
         nstep, key = sim.nstep, sim.key
-    met = r.best.judgement.met and not r.best.warnings and (not ladder or r.best_held is True)
-    return SceneResult(fates=f, model=model, best=r.best, met=met,
+    met = best.judgement.met and not best.warnings and (not ladder or held is True)
+    return SceneResult(fates=f, model=model, best=best, met=met,
                        rollouts=r.rollouts, stopped=stopped, seed=s, max_rollouts=max_rollouts,
                        wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p,
                        answers=r.answers if answers > 1 else (), answer_probabilities=tuple(ps),
                        ladder=tuple(float(model.opt.timestep) / k for k in (1, *LADDER)) if ladder else (),
-                       ladder_held=r.best_held)
+                       ladder_held=held, robust=extra)

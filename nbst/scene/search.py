@@ -11,13 +11,16 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
   or after :data:`INIT_MAX` rollouts (a tenth of the budget at most);
 * **generate** (the engine's GA): *creep* (one block perturbed by a normal step of sigma 0.01,
   0.04 or 0.15 of the range), *directed randomize* (this module's aim), *uniform randomize*,
-  *crossover* of whole per-body blocks; Senate-like parents; a changed block is an unmet body's
+  *crossover* of whole per-body blocks; Senate-like parents (the better of two members drawn from
+  the signature chosen); a changed block is an unmet body's
   half the time;
 * **insert**: the paper's elitism, :data:`PER_SIGNATURE` members per signature, subsumed signatures
   culled past :data:`POPULATION`;
 * the engine's **distance** of a trial is 3 per unmet bit plus, with a ladder (finer timesteps,
   h/2 and h/4), 1 per rung where a trial that meets every fate does not (those rollouts counted);
-  its **cost** the judge's graded cost plus :data:`LADDER_PENALTY` per such rung: the best is the
+  its **cost** the judge's graded cost plus :data:`LADDER_PENALTY` per such rung and each rung's
+  own graded cost (at most :data:`LADDER_FAR`: how far the finer step is from meeting them, so that
+  the search is drawn to motions that hold): the best is the
   lowest (distance, cost), and the search stops when it is 0 (every fate met, and kept on the
   ladder), or at the rollout budget. Asked for several answers, it goes on until that many
   rollouts meet every fate (and hold), each with a contact sequence of its own (Chenney & Forsyth
@@ -45,7 +48,7 @@ from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
 from nbst.scene.rollout import SceneRollout, SceneSim
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "CREEP",
-           "LADDER_PENALTY", "SceneProgress", "SceneSearchResult", "signature_search", "noisy_probability",
+           "LADDER_PENALTY", "LADDER_FAR", "SceneProgress", "SceneSearchResult", "signature_search", "noisy_probability",
            "distance_of"]
 
 #: The rollout budget when none is given (the CLI's --max-rollouts default too).
@@ -58,6 +61,8 @@ POPULATION = 60
 PER_SIGNATURE = 10
 #: The cost added to a trial that meets every fate for each finer step (the ladder) where it does not.
 LADDER_PENALTY = 0.01
+#: A rung's graded cost counts at most this much in the cost of a trial that meets every fate at h.
+LADDER_FAR = 10.0
 #: The initialisation ends when every bit is set in this many members (the paper: 5) ...
 INIT_PER_BIT = 3
 #: ... or after this many rollouts (and at most a tenth of the budget).
@@ -139,7 +144,7 @@ class _Scene:
     # -- the moves --------------------------------------------------------------------
     def directed(self, eng: Engine, u: np.ndarray, i: int) -> None:
         """Directed randomize of block ``i`` of ``u`` (in place; the module docstring)."""
-        rng = eng.rng
+        rng: np.random.Generator = eng.rng  # type: ignore[has-type]
         c, b = self.fates.controls[i], self.bit[i]
         fate = None if b is None else self.fates.fates[b]
         aimable = fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
@@ -178,9 +183,10 @@ class _Scene:
 
     def init(self, eng: Engine) -> np.ndarray:
         """A random trial: each block by directed or uniform randomize, even odds."""
-        u = eng.rng.random(len(self.lo))
+        rng: np.random.Generator = eng.rng  # type: ignore[has-type]
+        u = rng.random(len(self.lo))
         for i in range(len(self.blocks)):
-            if eng.rng.random() < 0.5:
+            if rng.random() < 0.5:
                 self.directed(eng, u, i)
         return u
 
@@ -196,15 +202,17 @@ class _Scene:
         for r in outs:
             self.seen.add(r.signature)
             met = r.judgement.met and not r.warnings
-            misses = 0
+            misses, far = 0, 0.0
             if met and self.ladder:  # the finer steps: a miss there costs, and keeps the search going
-                misses = sum(not (q.judgement.met and not q.warnings) for q in (s.rollout(r.x) for s in self.ladder))
+                rungs = [s.rollout(r.x) for s in self.ladder]
+                misses = sum(not (q.judgement.met and not q.warnings) for q in rungs)
+                far = sum(min(q.cost, LADDER_FAR) for q in rungs)  # how far each rung is from meeting them
                 spent += len(self.ladder)
                 self.held[id(r)] = misses == 0
             if met and misses == 0 and r.sequence not in self.answers and len(self.answers) < self.want:
                 self.answers[r.sequence] = r
             dist.append(distance_of(r, misses))
-            cost.append(r.cost + LADDER_PENALTY * misses)
+            cost.append(r.cost + LADDER_PENALTY * misses + far)
         sigs = [sum(1 << k for k, b in enumerate(r.signature) if b) for r in outs]
         return {"signatures": sigs, "distances": dist, "costs": cost, "payloads": outs, "rollouts": spent}
 
@@ -240,13 +248,15 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
     eng = Engine(fates.dim, seed=rng, max_rollouts=max_rollouts, blocks=[list(range(b.start, b.stop)) for b in S.blocks],
                  bits=S.bit, batch=BATCH, explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init=S.init,
                  init_done=S.init_done, ga_batches=1, ga_fine=1, moves={"directed": S.directed}, creep=CREEP,
-                 prefer_unmet=True, population=POPULATION, per_signature=PER_SIGNATURE, cma=False, done=S.done)
+                 prefer_unmet=True, population=POPULATION, per_signature=PER_SIGNATURE, cma=False, done=S.done,
+                 tournament=2)
     t0 = time.perf_counter()
 
     def tell() -> None:
         b = eng.best
         if callback is not None and b is not None:
-            callback(SceneProgress(eng.rollouts, b.cost, "".join("1" if k else "0" for k in b.payload.signature),
+            callback(SceneProgress(int(eng.rollouts), b.cost,  # type: ignore[has-type]
+                                   "".join("1" if k else "0" for k in b.payload.signature),
                                    len(eng.population), len(S.seen)))
 
     try:
@@ -262,7 +272,8 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         best = sim.rollout(S.x_of(np.full(fates.dim, 0.5)))
     else:
         best = eng.best.payload
-    return SceneSearchResult(best=best, rollouts=eng.rollouts, stopped=stopped, wall_time=time.perf_counter() - t0,
+    return SceneSearchResult(best=best, rollouts=int(eng.rollouts),  # type: ignore[has-type]
+                              stopped=stopped, wall_time=time.perf_counter() - t0,
                              signatures=len(S.seen), answers=tuple(S.answers.values()),
                              best_held=S.held.get(id(best)))
 

@@ -75,6 +75,8 @@ class SceneResult:
         answer_probabilities: each answer's probability (with ``samples``).
         ladder: with ``ladder``: the timesteps asked, h first.
         ladder_held: whether the best meets every fate at each of them (None: not asked or not met).
+        robust: with ``robust``: the maximiser's budget, rollouts, screens (k of m before and
+            after), its screen's seed and the pick's ladder rows (None: not asked).
     """
 
     fates: Fates
@@ -94,6 +96,7 @@ class SceneResult:
     answer_probabilities: tuple[Probability, ...] = ()
     ladder: tuple[float, ...] = ()
     ladder_held: bool | None = None
+    robust: dict | None = None
 
     @property
     def judgement(self) -> Judgement:
@@ -156,6 +159,7 @@ def solution_dict(res: SceneResult) -> dict:
         "versions": {"nbst": __version__, "mujoco": mujoco.__version__},
         **({} if res.probability is None else {"probability": _probability(res.probability, f, res.seed)}),
         **({} if not res.ladder else {"ladder": {"timesteps": list(res.ladder), "holds": bool(res.ladder_held)}}),
+        **({} if res.robust is None else {"robust": res.robust}),
         **({} if not res.answers else {"answers": [
             _answer(a, f, res.answer_probabilities[k] if k < len(res.answer_probabilities) else None, res.seed)
             for k, a in enumerate(res.answers)]}),

@@ -17,7 +17,7 @@ from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_out_dir, add_quiet, add_seed
 from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_export, cmd_replay, cmd_solve, cmd_validate
 
-__all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES", "ANSWERS"]
+__all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES", "ANSWERS", "ROBUST"]
 
 #: --max-rollouts' domain.
 ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
@@ -25,6 +25,8 @@ ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
 ANSWERS = Bounded("answers", 1, 100, integer=True)
 #: --samples' domain.
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
+#: --robust's domain (noisy rollouts).
+ROBUST = Bounded("robust", 12, 1_000_000, integer=True)
 
 #: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
 #: them without building their arguments (nbst.cli.main builds only the command asked for).
@@ -36,6 +38,7 @@ _FATES_HELP = "a fates file (JSON, \"format\": \"nbst-fates\") or a built-in exa
 
 
 def register(sub) -> None:
+    from nbst.scene.robust import DEFAULT_ROBUST_BUDGET, DEFAULT_ROBUST_SAMPLES
     from nbst.scene.search import DEFAULT_MAX_ROLLOUTS
 
     p = sub.add_parser("scene", help=COMMANDS["scene"],
@@ -79,16 +82,28 @@ def register(sub) -> None:
     add_seed(v, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
     v.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
                    help=with_limits(f"rollout budget of the search (default {DEFAULT_MAX_ROLLOUTS})", ROLLOUTS))
-    v.add_argument("--jobs", type=JOBS, default=None, metavar="K",
+    g = v.add_mutually_exclusive_group()
+    g.add_argument("--jobs", type=JOBS, default=None, metavar="K",
                    help=with_limits("threads running the rollouts (default: all cores); any K gives the same "
                                     "solution", JOBS))
+    g.add_argument("--cluster", default=None, metavar="ADDRESS",
+                   help="run the rollouts on the workers of this Dask scheduler (tcp://host:8786) instead; the same "
+                        "solution as --jobs for the same seed (the scene's files at the same path on the workers)")
+    v.add_argument("--robust", type=ROBUST, nargs="?", const=DEFAULT_ROBUST_BUDGET, default=None, metavar="BUDGET",
+                   help=with_limits("after a search that meets every fate, maximise the probability that they are "
+                                    "met under the fates' noise (the rollout room's robust maximiser: common random "
+                                    f"numbers, successive halving; BUDGET noisy rollouts, default "
+                                    f"{DEFAULT_ROBUST_BUDGET}) and write the pick, the latest that keeps every fate "
+                                    "at h, h/2 and h/4, with its probability measured afresh", ROBUST))
     v.add_argument("--samples", type=SAMPLES, default=None, metavar="N",
                    help=with_limits("also estimate how often the solution written meets every fate under the "
                                     "fates' noise (\"noise\", or the defaults of docs/scene.md) from N noisy "
-                                    "rollouts, with its 95 %% Wilson interval (default: none)", SAMPLES))
-    v.add_argument("--ladder", action="store_true",
-                   help="accept only a motion that also meets every fate at h/2 and h/4 (the same initial state "
-                        "rolled out at the finer steps; those rollouts count in --max-rollouts)")
+                                    "rollouts, with its 95 %% Wilson interval (default: none; "
+                                    f"{DEFAULT_ROBUST_SAMPLES} with --robust)", SAMPLES))
+    v.add_argument("--no-ladder", action="store_true",
+                   help="accept a motion that meets every fate at the scene's step only (by default the search goes "
+                        "on until one also meets them at h/2 and h/4, the same initial state rolled out at the "
+                        "finer steps, those rollouts counted in --max-rollouts; the file records that ladder)")
     v.add_argument("--answers", type=ANSWERS, default=1, metavar="K",
                    help=with_limits("go on after every fate is met until K solutions meet them, each with a "
                                     "contact sequence of its own (which body touches what, in what order): the "

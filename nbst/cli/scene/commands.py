@@ -100,7 +100,8 @@ def cmd_solve(args) -> int:
 
     with sigterm_as_interrupt():
         res = solve(args.scene, fates, seed=seed, max_rollouts=args.max_rollouts, jobs=args.jobs or default_jobs(),
-                    samples=args.samples or 0, answers=args.answers, ladder=args.ladder, callback=progress)
+                    samples=args.samples or 0, answers=args.answers, ladder=not args.no_ladder, robust=args.robust,
+                    cluster=args.cluster, callback=progress)
     if bar:
         bar[0].close(n=res.rollouts)
     write_json_atomic(args.output, solution_dict(res))
@@ -111,8 +112,11 @@ def cmd_solve(args) -> int:
         warn = f"; MuJoCo warned: {', '.join(b.warnings)}" if b.warnings else ""
         if res.probability is not None:
             warn += f"; P {res.probability.text()} under the fates' noise"
-        if args.ladder:
+        if not args.no_ladder:
             warn += "; kept at h/2 and h/4" if res.ladder_held else "; not kept at h/2 and h/4"
+        if res.robust is not None:
+            warn += (f"; robust: {res.robust['start_screen'][0]} -> {res.robust['screen'][0]} of "
+                     f"{res.robust['screen'][1]} noisy copies in {count_text(res.robust['rollouts'])} rollouts")
         if args.answers > 1:
             warn += f"; {len(res.answers)} of {args.answers} answers with contact sequences of their own"
         print(f"scene {name}: {met}, signature {res.judgement.to_dict()['signature']} after "
