@@ -430,34 +430,4 @@ def test_reconstruct_recovers_the_planted_crossing_from_its_rest_and_impact_posi
     assert main(["crash", "replay", str(out)]) == 0
 
 
-def test_polishing_restarts_move_to_another_funnel_once_the_best_ones_is_spent():
-    """With the best trial's contacts right, restarts start from it (at steps SIGMA0, /3, /9);
-    once SPENT of them in a row left its cost as it was (and it does not meet the script at its
-    own step), the next starts from the cheapest trial with the contacts right at least one SIGMA0 step from every start so far (a near one
-    is passed over), at SIGMA0; with none left, from the best again. No rollout is run."""
-    from types import SimpleNamespace
-
-    from nbst.models.crash import search
-
-    s = script.load_script("chain3")
-    sp = space.space_of(s)
-    srch = search._Search(sp, None, np.random.default_rng(0), 100, None)
-
-    def trial(u, cost):
-        vs = [SimpleNamespace(fates={"hits": True}) for _ in range(s.n)]
-        return search.Trial(u=np.full(sp.dim, u), outcome=SimpleNamespace(order_ok=True, cost=cost, solved=False,
-                                                                          vehicles=vs))
-
-    best, near, far = trial(0.5, 1.0), trial(0.51, 1.5), trial(0.95, 3.0)
-    assert srch.contacts_right(best)
-    srch.best, srch.right = best, [far, near, best]
-    assert srch.restart_point(0) == (best, search.SIGMA0)
-    assert srch.restart_point(1) == (best, search.SIGMA0 / 3)
-    srch.spent = search.SPENT
-    spread = search.SIGMA0 * math.sqrt(sp.dim)
-    assert np.linalg.norm(near.u - best.u) < spread <= np.linalg.norm(far.u - best.u)
-    best.outcome.solved = True  # met at its own step, fragile on the ladder: polished where it is
-    assert srch.restart_point(2) == (best, search.SIGMA0 / 9)
-    best.outcome.solved = False
-    assert srch.restart_point(3) == (far, search.SIGMA0)
-    assert srch.restart_point(4)[0] is best  # every trial with the contacts right is near a start
+# the polishing restarts' funnel switch is the engine's: tests/test_mjsearch_engine.py

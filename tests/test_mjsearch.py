@@ -19,7 +19,8 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from nbst.models.mjsearch import archive, ladder, probability, restarts, robust  # noqa: E402
+from nbst.models.mjsearch import archive, ladder, probability, robust  # noqa: E402
+from nbst.models.mjsearch.engine import Engine  # noqa: E402
 from nbst.models.mjsearch.pool import WorkerPool  # noqa: E402
 from nbst.models.mjsearch.runner import Runner  # noqa: E402
 
@@ -244,20 +245,47 @@ def test_parent_weights_favour_rare_signatures_of_sparse_groups():
     assert wg[0] < w[0] and wg[1] == wg[2]
 
 
-def test_restart_search_finds_a_far_cell_from_a_seed():
-    """CMA-ES restarts from the nearest archived cell reach cell 16 (the far corner, distance in
-    cells) from a start in cell 1, with 200 rollouts at most (seed 2)."""
+@pytest.mark.slow
+def test_the_engine_restarts_from_a_known_cell_to_a_far_one():
+    """The engine without its GA (bowling's set-up: CMA-ES restarts from the nearest archived cell,
+    steps alternating sigma0 and a tenth of it) reaches cell 16 (the far corner, distance in
+    cells) from a start known in cell 1, with 200 rollouts at most (seed 2), twice the same."""
     target = 16
 
-    def evaluate(X):
-        s = _grid_signature(X)
+    def evaluate(U):
+        s = _grid_signature(U)
         d = np.abs((s - 1) // 4 - 3) + np.abs((s - 1) % 4 - 3)
-        return s, d, d + 0.01 * np.hypot(*(X - 0.99).T)
+        return s, d, d + 0.01 * np.hypot(*(U - 0.99).T)
 
-    f = restarts.search(evaluate, SQUARE, target, seed=2, max_rollouts=200, explore=4, archive={1: [0.05, 0.05]})
-    assert f.stopped == "found" and f.signature == target and f.distance == 0 and f.rollouts <= 200
-    again = restarts.search(evaluate, SQUARE, target, seed=2, max_rollouts=200, explore=4, archive={1: [0.05, 0.05]})
+    runs = []
+    for _ in range(2):
+        e = Engine(2, seed=2, max_rollouts=200, explore=4, ga_batches=0, popsize=8, sigma0=0.05,
+                   schedule=(("cell", 1.0), ("cell", 0.1)), explore_between=16)
+        e.know({1: [0.05, 0.05]}, prior=lambda m: (6, 6.0))
+        runs.append(e.run(evaluate))
+    f, again = runs
+    assert "solved" in f.stopped and f.signature == target and f.distance == 0 and f.rollouts <= 200
     assert np.array_equal(f.x, again.x) and f.rollouts == again.rollouts
+
+
+def test_no_second_cma_loop_remains():
+    """One CMA-ES loop for rollout searches: pycma is imported only by the engine, the 2D
+    solvers' baseline (nbst.solvers.baselines) and, for now, the crash's reconstruction."""
+    root = os.path.join(os.path.dirname(__file__), "..")
+    allowed = {os.path.normpath(p) for p in ("models/mjsearch/engine.py", "nbst/solvers/baselines.py",
+                                             "models/crash/reconstruct.py")}
+    found = set()
+    for top in ("nbst", "models"):
+        for d, dirs, files in os.walk(os.path.join(root, top), followlinks=False):
+            dirs[:] = [x for x in dirs if x != "__pycache__"]
+            for f in files:
+                if f.endswith(".py"):
+                    path = os.path.join(d, f)
+                    text = open(path, encoding="utf-8").read()
+                    if "import cma" in text or "from cma" in text:
+                        found.add(os.path.normpath(os.path.relpath(path, root)))
+    assert "models/mjsearch/engine.py" in found and found <= allowed, sorted(found - allowed)
+    assert not os.path.exists(os.path.join(root, "models", "mjsearch", "restarts.py"))
 
 
 # --------------------------------------------------------------------------- probability and robustness

@@ -1,4 +1,4 @@
-"""nbst.models.mjsearch: the one room for searches over MuJoCo rollouts (bowling, the crash).
+"""nbst.models.mjsearch: the one room for searches over MuJoCo rollouts (bowling, the crash, scenes).
 
 Nothing here knows a bowling pin or a car: the caller gives the model, the map from its
 parameter vector to an initial state (and controls), and the outcome reader. The room gives
@@ -14,9 +14,13 @@ the machinery every rollout search needs, one module each:
 * :mod:`.pool` -- :class:`WorkerPool`: processes for hand-stepped rollouts (checks between
   steps), results in order, workers that die with their parent.
 * :mod:`.archive` -- :class:`Archive` keyed by signature, the MAP-Elites emitter
-  (:func:`emit`, :func:`grow`) over a :class:`Space`.
-* :mod:`.restarts` -- :func:`restarts.search`: uniform exploration, then CMA-ES restarts from
-  the outcomes nearest the one wanted.
+  (:func:`emit`, :func:`grow`) over a :class:`Space`: the atlases' illumination (every
+  signature, no target), not a search for one.
+* :mod:`.engine` -- :class:`Engine`: **the one rollout-search engine**, in pycma's shape
+  (``ask``, ``tell``, ``stop()`` giving reasons, ``result``), keyed by the caller's signature:
+  exploration, the paper's GA crossing whole blocks of coordinates (one per body, per driver),
+  the archive keyed by cell, and the one CMA-ES restart phase (pycma). Bowling's deck, the
+  crash and scenes run on it; the problem's moves (a directed randomize) come in as callables.
 * :mod:`.probability` -- noise with common random numbers (:func:`normal_draws`,
   :func:`perturb`), a probability with its Wilson interval (:class:`Probability`).
 * :mod:`.robust` -- :func:`robust.maximise`: the vector whose outcome holds most often under
@@ -39,19 +43,19 @@ Example (a closed-loop batch, replayed open loop from its recorded controls)::
         assert np.array_equal(out.final, again.final)
 
 Importing this package imports neither mujoco nor cma; the modules that need them import them
-when they run. Users: :mod:`nbst.models.bowling` (both halves) and :mod:`nbst.models.crash`
-(batch, probability, robust, ladder, cluster). docs/architecture.md places the
+when they run. Users: :mod:`nbst.models.bowling` (both halves), :mod:`nbst.models.crash`
+(engine, batch, probability, robust, ladder, cluster) and ``nbst.scene``. docs/architecture.md places the
 room; tests/test_mjsearch.py checks it on a small model of its own.
 """
 from __future__ import annotations
 
 import importlib
 
-__all__ = ["Runner", "Rollouts", "BatchRunner", "WorkerPool", "Archive", "Space", "box_space", "emit", "grow", "Probability",
+__all__ = ["Engine", "EngineResult", "Runner", "Rollouts", "BatchRunner", "WorkerPool", "Archive", "Space", "box_space", "emit", "grow", "Probability",
            "wilson", "normal_draws", "perturb", "Ladder", "climb", "ClusterRunner",
-           "runner", "batch", "pool", "archive", "restarts", "probability", "robust", "ladder", "cluster"]
+           "engine", "runner", "batch", "pool", "archive", "probability", "robust", "ladder", "cluster"]
 
-_LAZY = {"Runner": "runner", "Rollouts": "runner", "BatchRunner": "batch", "WorkerPool": "pool", "Archive": "archive", "Space": "archive",
+_LAZY = {"Engine": "engine", "EngineResult": "engine", "Runner": "runner", "Rollouts": "runner", "BatchRunner": "batch", "WorkerPool": "pool", "Archive": "archive", "Space": "archive",
          "box_space": "archive", "emit": "archive", "grow": "archive", "Probability": "probability",
          "wilson": "probability", "normal_draws": "probability", "perturb": "probability", "Ladder": "ladder",
          "climb": "ladder", "ClusterRunner": "cluster"}

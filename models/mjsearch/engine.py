@@ -61,7 +61,7 @@ What the engine does with them, in a fixed cycle:
      the goal and not a start yet; once every cell has been one, the cycle begins again),
      step ``sigma0 * factor``. Nearest = lowest ``rank(cell)`` (default 0), then the elite's
      (distance, cost), then discovery order; a cell known only from :meth:`Engine.know` ranks
-     by its ``prior(cell)``.
+     by its ``prior(cell)``, a stand-in (distance, cost).
 
    Its points join the population too (with the start as their parent).
 4. ``explore_between`` uniform points, then the cycle begins again at 2.
@@ -82,7 +82,6 @@ Compute only: no files, no printing, no MuJoCo.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass, field
 from typing import Any, Callable, Hashable, Sequence
 
@@ -254,9 +253,9 @@ class Engine:
                  hold_distance: int = 1, explore_between: int = 0,
                  rank: Callable[[Hashable], float] | None = None,
                  done: Callable[[Engine], bool] | None = None, tournament: int = 1):
-        if isinstance(max_rollouts, bool) or not isinstance(max_rollouts, numbers.Integral) or max_rollouts < 1:
+        if isinstance(max_rollouts, bool) or not isinstance(max_rollouts, (int, np.integer)) or max_rollouts < 1:
             raise InputError(f"max_rollouts must be a whole number of at least 1, got {max_rollouts!r}")
-        if isinstance(dim, bool) or not isinstance(dim, numbers.Integral) or dim < 0:
+        if isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim < 0:
             raise InputError(f"dim must be a whole number of at least 0, got {dim!r}")
         self.dim, self.max_rollouts = int(dim), int(max_rollouts)
         self.rng = check_random_state(seed)
@@ -293,7 +292,7 @@ class Engine:
         self.best: Member | None = None
         self.archive: dict[Hashable, Member] = {}     # cell -> elite
         self.first: dict[Hashable, np.ndarray] = {}   # cell -> first unit point
-        self.known: dict[Hashable, tuple[np.ndarray, float]] = {}  # cell -> (unit point, prior): from know()
+        self.known: dict[Hashable, tuple[np.ndarray, tuple]] = {}  # cell -> (unit point, prior key): know()
         self.order: dict[Hashable, int] = {}          # cell -> discovery index
         self.history: list[tuple[int, int, float]] = []
         self.right: list[Member] = []                 # fine points (the cheapest right_kept)
@@ -309,7 +308,7 @@ class Engine:
         self._phase = "explore"
         self._ga_left = 0
         self._between_left = 0
-        self._es = None
+        self._es: Any = None
         self._es_state: dict = {}
         self._pending: tuple[np.ndarray, str, list] | None = None
 
@@ -319,21 +318,22 @@ class Engine:
         """Rollouts left in the budget."""
         return self.max_rollouts - self.rollouts
 
-    def know(self, cells: dict, prior: Callable[[Hashable], float] | None = None) -> None:
+    def know(self, cells: dict, prior: Callable[[Hashable], tuple[float, float]] | None = None) -> None:
         """Cells known before the search ({cell: (dim,) unit point}, e.g. an atlas's): restart
-        points ranked by ``prior(cell)`` (default +inf: after every cell told) until a point of
-        theirs is told. The exploring phase is skipped when it was 0 points.
+        points, ranked among the told cells as if their elite's (distance, cost) were
+        ``prior(cell)`` (default (inf, inf): after every told cell), until a point of theirs is told.
 
         Args:
             cells: cell -> (dim,) unit point, in discovery order.
-            prior: a known cell's stand-in cost.
+            prior: a known cell's stand-in (distance, cost).
 
         Returns:
             None.
         """
         for c, u in cells.items():
             if c not in self.known and c not in self.archive:
-                self.known[c] = (np.asarray(u, dtype=float).copy(), math.inf if prior is None else float(prior(c)))
+                key = (math.inf, math.inf) if prior is None else tuple(float(v) for v in prior(c))
+                self.known[c] = (np.asarray(u, dtype=float).copy(), key)
                 self.order.setdefault(c, len(self.order))
 
     def interrupt(self) -> None:
@@ -374,7 +374,7 @@ class Engine:
                     self._phase = "between"
                 continue
             if self._phase == "cma":
-                xs = np.clip(np.array(self._es.ask(), dtype=float), 0.0, 1.0)
+                xs = np.clip(np.asarray(self._es.ask(), dtype=np.float64), 0.0, 1.0)
                 self._es_state["asked"] = xs
                 return self._asked(xs[:self.left], "cma", [self._es_state["start"]] * min(len(xs), self.left))
             if self._phase == "between":
@@ -497,7 +497,7 @@ class Engine:
         def key(c):
             r = float(self.rank(c)) if self.rank is not None else 0.0
             e = self.archive.get(c)
-            k = e.key if e is not None else (math.inf, self.known[c][1])
+            k = e.key if e is not None else self.known[c][1]
             return (r, k, self.order[c])
         cells = [c for c in list(self.archive) + [c for c in self.known if c not in self.archive]
                  if c not in self._used]
@@ -626,13 +626,13 @@ class Engine:
             del self.right[self.right_kept:]
         if self.ga_batches > 0:
             for m, p in zip(made, parents):
-                if phase == "ga":
+                if phase == "ga" and p is not None:
                     self._insert(m, list(p))
                 elif phase == "cma" and p is not None:
                     self._insert(m, [p])
                 else:
                     self._insert(m, [])
-        if B:
+        if B and self.best is not None:
             self.history.append((self.rollouts, self.best.distance, self.best.cost))
         self._advance(phase, made)
         return made

@@ -1,24 +1,25 @@
 """Search the delivery space for a requested set of pins down.
 
-The paper's crossover needs several velocity vectors; a bowling delivery is one, so the
-signature (which pins fell) guides the search instead. The search is the rollout room's
-(:func:`nbst.models.mjsearch.restarts.search`) on the 5 m deliveries:
+The paper's crossover needs several velocity vectors; a bowling delivery is one (a single
+block), so the signature (which pins fell) guides the search instead. The search is the
+rollout room's engine (:class:`nbst.models.mjsearch.engine.Engine`) on the 5 m deliveries,
+without its GA:
 
 1. **explore**: ``explore`` deliveries drawn uniformly over :data:`.delivery.BOUNDS`
-   (from the seeded Generator); every delivery enters an **archive keyed by subset**
-   (MAP-Elites style: the first delivery that produced each subset is kept; the archive
-   is also what ``nbst bowl atlas`` collects).
-2. **restarts**: CMA-ES (pycma) in the unit cube of delivery space, started from the
-   **elite** (the lowest-cost delivery seen) of the subset **nearest** the request and not
-   used yet, step size :data:`SIGMA0`. Nearest = lowest elite cost (Hamming distance
-   between the 10-bit masks plus the soft distance below), then discovery order; when
-   every subset has been a start, the cycle begins again. A restart ends after
-   :data:`STALL_GENERATIONS` generations without a nearer subset, and the next starts
-   from the next-nearest archived delivery, after :data:`EXPLORE_BETWEEN` more uniform
-   deliveries; each restart's sigma alternates between
-   :data:`SIGMA0` and a tenth of it (outcomes are chaotic: a near miss is often one
-   millimetre away from a hit, or nowhere near).
-3. stop at the first delivery whose subset is exactly the request, or at the budget.
+   (from the seeded Generator; capped at a quarter of the budget); every delivery enters
+   the engine's **archive keyed by subset** (the first delivery that produced each subset
+   is kept, and the lowest-cost one, its elite).
+2. **restarts**: CMA-ES (pycma, population :data:`POPSIZE`) in the unit cube of delivery
+   space, started from the **elite** of the subset **nearest** the request and not used
+   yet. Nearest = lowest (Hamming distance, cost), then discovery order (a subset known
+   only from a given ``archive``, e.g. the atlas's, ranks as its distance and the cost of a
+   delivery with every pin half-way); when every subset has been a start, the cycle begins
+   again. A restart ends after :data:`STALL_GENERATIONS` generations without a lower cost,
+   and the next starts after :data:`EXPLORE_BETWEEN` more uniform deliveries; the steps
+   alternate between :data:`SIGMA0` and a tenth of it (outcomes are chaotic: a near miss is
+   often one millimetre away from a hit, or nowhere near).
+3. stop at the first delivery whose subset is exactly the request, or at the budget; Ctrl-C
+   stops too, and the best so far is returned (``stopped`` "interrupted").
 
 Cost of a delivery = Hamming(subset, request) (or, with ``distance="geometry"``,
 :func:`geometry_distance`) + :data:`SOFT_WEIGHT` x the soft distance
@@ -32,7 +33,8 @@ Generator, and nothing else touches numpy's global random state in between).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -42,22 +44,24 @@ from nbst.errors import InputError
 from nbst.models.bowling import deck, geometry, pinfall, subsets
 
 from nbst.models.mjsearch import archive as _archive
-from nbst.models.mjsearch import restarts
+from nbst.models.mjsearch.engine import Engine
 
-__all__ = ["EXPLORE_BETWEEN", "BATCH", "POPSIZE", "SIGMA0", "STALL_GENERATIONS", "DEFAULT_MAX_ROLLOUTS",
+__all__ = ["EXPLORE_FIRST", "EXPLORE_BETWEEN", "BATCH", "POPSIZE", "SIGMA0", "STALL_GENERATIONS", "DEFAULT_MAX_ROLLOUTS",
            "SOFT_WEIGHT", "SCALES", "SPACE", "DeckProgress", "DeckResult", "to_unit", "from_unit", "hamming",
            "NEIGHBOUR_EXTRA", "geometry_distance", "soft_distance", "scorer", "solve", "ROBUSTNESS_STEPS",
            "ROBUSTNESS_ROLLOUTS", "robustness", "LADDER_LATERAL_M", "LADDER_SPEED_M_S", "robustness_ladder"]
 
+#: Uniform deliveries before the first restart (capped at a quarter of the budget).
+EXPLORE_FIRST = 200
 #: Uniform deliveries after each restart (new subsets to restart from; a search never stops
 #: exploring, so a subset that only random throws find is still found).
-EXPLORE_BETWEEN = restarts.EXPLORE_BETWEEN
+EXPLORE_BETWEEN = 16
 #: Deliveries run per batch (fixed, so that results do not depend on --jobs).
 BATCH = _archive.BATCH
 #: CMA-ES: population, initial step (unit cube), generations without progress per restart.
-POPSIZE = restarts.POPSIZE
-SIGMA0 = restarts.SIGMA0
-STALL_GENERATIONS = restarts.STALL_GENERATIONS
+POPSIZE = 8
+SIGMA0 = 0.05
+STALL_GENERATIONS = 6
 #: The rollout budget of :func:`solve` when none is given (``nbst bowl solve --max-rollouts``'s default).
 DEFAULT_MAX_ROLLOUTS = 3000
 #: Weight of the soft distance (in Hamming units per pin): < 1/10, so it only breaks ties.
@@ -80,10 +84,23 @@ class DeckProgress:
 
 
 @dataclass
-class DeckResult(restarts.Found):
-    """Best delivery found for ``target`` (a 10-bit mask), and how the search went: the rollout
-    room's :class:`~nbst.models.mjsearch.restarts.Found` (``stopped``: "found" | "budget" |
-    "interrupted"; ``archive``: mask -> (4,) delivery), read in bowling's words."""
+class DeckResult:
+    """Best delivery found for ``target`` (a 10-bit mask), and how the search went (``stopped``:
+    "found" | "budget" | "interrupted"; ``archive``: mask -> (4,) delivery, the first that gave
+    it, given ones first), with bowling's words for the engine's (``delivery``, ``mask``,
+    ``hamming``)."""
+
+    target: int
+    x: np.ndarray
+    signature: int
+    distance: int
+    cost: float
+    rollouts: int
+    restarts: int
+    stopped: str                 # "found" | "budget" | "interrupted"
+    seed: int
+    wall_time: float
+    archive: dict = field(default_factory=dict)   # mask -> the first delivery that gave it
 
     @property
     def delivery(self) -> np.ndarray:
@@ -161,7 +178,7 @@ def scorer(runner: deck.DeliveryRunner, target: int, distance: str = "hamming"):
 
 
 def solve(target: int, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, jobs: int | None = None,
-          runner: deck.DeliveryRunner | None = None, callback=None, explore: int = restarts.EXPLORE_FIRST,
+          runner: deck.DeliveryRunner | None = None, callback=None, explore: int = EXPLORE_FIRST,
           archive: dict | None = None, explore_between: int = EXPLORE_BETWEEN,
           distance: str = "hamming") -> DeckResult:
     """Search for a delivery that knocks down exactly the pins of ``target`` (a 10-bit mask).
@@ -197,17 +214,38 @@ def solve(target: int, *, seed: int, max_rollouts: int = DEFAULT_MAX_ROLLOUTS, j
     target = int(target)
     own = runner is None
     L = deck.DeliveryRunner(jobs=jobs) if runner is None else runner
+    t0 = time.perf_counter()
     try:
         evaluate, dist = scorer(L, target, distance)
-        cb = None if callback is None else (lambda p: callback(DeckProgress(p.rollouts, p.best_distance,
-                                                                        p.best_signature, p.signatures)))
-        f = restarts.search(evaluate, SPACE, target, seed=seed, max_rollouts=max_rollouts, archive=archive,
-                            prior=lambda m: float(dist(m, target)) + SOFT_WEIGHT * 10, clip=deck.clamp,
-                            callback=cb, explore=explore, explore_between=explore_between, batch=BATCH)
+
+        def run(U):
+            return evaluate(deck.clamp(SPACE.from_unit(U)))
+
+        eng = Engine(SPACE.dim, seed=seed, max_rollouts=max_rollouts, batch=BATCH, explore=explore, ga_batches=0,
+                     popsize=POPSIZE, sigma0=SIGMA0, stall=STALL_GENERATIONS,
+                     schedule=(("cell", 1.0), ("cell", 0.1)), explore_between=explore_between)
+        known = {int(m): np.asarray(x, dtype=float) for m, x in (archive or {}).items()}
+        eng.know({m: to_unit(x) for m, x in known.items()},
+                 prior=lambda m: (int(hamming(m, target)), float(dist(m, target)) + SOFT_WEIGHT * 10))
+        if target in known:  # known already: one rollout confirms it and makes it the best
+            U = to_unit(known[target])[None, :]
+            eng.tell(U, *run(U))
+
+        def progress(e: Engine) -> None:
+            if callback is not None and e.best is not None:
+                callback(DeckProgress(e.rollouts, e.best.distance, e.best.signature, len(set(known) | set(e.first))))
+
+        r = eng.run(run, progress)
     finally:
         if own:
             L.close()
-    return DeckResult(**vars(f))
+    stopped = "interrupted" if "interrupted" in r.stopped else "found" if "solved" in r.stopped else "budget"
+    seen = dict(known)
+    for m, u in r.first.items():
+        seen.setdefault(int(m), deck.clamp(SPACE.from_unit(u)))
+    return DeckResult(target=target, x=deck.clamp(SPACE.from_unit(r.x)), signature=r.signature, distance=r.distance,
+                      cost=r.cost, rollouts=r.rollouts, restarts=r.restarts, stopped=stopped, seed=int(seed),
+                      wall_time=time.perf_counter() - t0, archive=seen)
 
 
 #: Bisection rounds of :func:`robustness` per axis, and the rollouts it spends: on each of 2 axes, 4 at

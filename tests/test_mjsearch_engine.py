@@ -1,0 +1,142 @@
+"""The one rollout-search engine (nbst.models.mjsearch.engine) on synthetic problems: no physics.
+
+The problem: three blocks of two coordinates; block i meets its fate when its point lies within
+0.03 of a hidden target (bit i of the signature); the distance is the number of blocks missed.
+Claims: it solves, its stop reasons, the same seed gives the same points, Ctrl-C keeps the best
+so far, crossover moves whole blocks (each from the parent that meets it), and the polishing
+restarts leave a spent funnel.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from nbst.errors import InputError
+from nbst.models.mjsearch.engine import Engine
+
+TARGET = np.array([0.2, 0.7, 0.9, 0.1, 0.5, 0.5])
+BLOCKS = [[0, 1], [2, 3], [4, 5]]
+
+
+def blocks_problem(U):
+    d = np.array([[np.linalg.norm(u[b] - TARGET[b]) for b in BLOCKS] for u in np.atleast_2d(U)])
+    met = d < 0.03
+    return (met * (1 << np.arange(3))).sum(axis=1), 3 - met.sum(axis=1), d.sum(axis=1)
+
+
+def test_the_engine_solves_a_block_problem_and_says_why_it_stopped():
+    """Seeds 1-3, 3,000 rollouts: every block within 0.03 of its target (a 1/350 chance per block
+    for a uniform point) well inside the budget."""
+    for seed in (1, 2, 3):
+        r = Engine(6, seed=seed, max_rollouts=3000, blocks=BLOCKS).run(blocks_problem)
+        assert r.stopped == {"solved": r.rollouts} and r.distance == 0 and r.signature == 0b111
+        assert r.rollouts < 1500 and np.all(np.abs(r.x - TARGET) < 0.03)
+        assert r.history[-1] == (r.rollouts, 0, r.cost) and r.best.index <= r.rollouts
+
+
+def test_the_same_seed_gives_the_same_points_and_another_seed_others():
+    a = Engine(6, seed=7, max_rollouts=400, blocks=BLOCKS).run(blocks_problem)
+    b = Engine(6, seed=7, max_rollouts=400, blocks=BLOCKS).run(blocks_problem)
+    c = Engine(6, seed=8, max_rollouts=400, blocks=BLOCKS).run(blocks_problem)
+    assert np.array_equal(a.x, b.x) and a.rollouts == b.rollouts and a.history == b.history
+    assert not np.array_equal(a.x, c.x)
+
+
+def test_the_budget_is_kept_to_the_rollout_and_stop_says_so():
+    """An impossible signature: the search spends exactly the budget (asks never pass what is
+    left; a told batch's extra rollouts, as a ladder check's, count) and stops with "budget"."""
+    def never(U):
+        s, d, c = blocks_problem(U)
+        return {"signatures": s * 0, "distances": d * 0 + 3, "costs": c, "rollouts": len(U) + 1}
+
+    e = Engine(6, seed=1, max_rollouts=101, blocks=BLOCKS, batch=10)
+    r = e.run(never)
+    assert r.stopped == {"budget": 101} and 101 <= r.rollouts <= 101 + 10
+    assert e.ask().shape == (0, 6) and r.distance == 3
+    e2 = Engine(6, seed=1, max_rollouts=25, blocks=BLOCKS, batch=10)
+    sizes = []
+    while not e2.stop():
+        U = e2.ask()
+        sizes.append(len(U))
+        e2.tell(U, *blocks_problem(U))
+    assert sum(sizes) == e2.rollouts == 25 and max(sizes) <= 16
+
+
+def test_ctrl_c_keeps_the_best_so_far_and_before_any_point_raises():
+    calls = []
+
+    def stop_second(U):
+        calls.append(len(U))
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return blocks_problem(U)
+
+    r = Engine(6, seed=1, max_rollouts=3000, blocks=BLOCKS).run(stop_second)
+    assert r.stopped.get("interrupted") is True and r.rollouts == calls[0] == 16
+    s, d, c = blocks_problem(r.x)
+    assert (r.distance, r.cost) == (d[0], pytest.approx(c[0]))
+
+    def stop_first(U):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        Engine(6, seed=1, max_rollouts=3000, blocks=BLOCKS).run(stop_first)
+
+
+def test_crossover_moves_whole_blocks_from_the_parent_that_meets_them():
+    """A population of two: A meets block 0 only, B block 1 only. Every child keeps at least one
+    whole block of a parent (the others change one block), the engineered child A0|B1 appears,
+    and B0|A1 (each block from the parent that misses it) never does."""
+    e = Engine(4, seed=3, max_rollouts=10_000, blocks=[[0, 1], [2, 3]], batch=2, explore=2, cma=False)
+    U = e.ask()
+    e.tell(U, [0b01, 0b10], [1, 1], [1.0, 1.0])
+    A, B = U
+    kinds = set()
+    for _ in range(200):
+        for u in e.ask():  # the GA's children (not told: the population stays A and B)
+            src = tuple("A" if np.array_equal(u[b], A[b]) else "B" if np.array_equal(u[b], B[b]) else "-"
+                        for b in ([0, 1], [2, 3]))
+            assert src.count("-") <= 1, u
+            kinds.add(src)
+    assert ("A", "B") in kinds and ("B", "A") not in kinds
+    assert {("A", "-"), ("-", "A"), ("B", "-"), ("-", "B")} <= kinds
+
+
+def test_polishing_restarts_leave_a_spent_funnel_for_a_far_fine_point():
+    """With the best point fine, restarts start from it at sigma0, /3, /9; once ``spent`` of them
+    in a row left its cost as it was (and the best is farther than ``hold_distance``), the next
+    starts from the cheapest fine point at least one sigma0 step (sigma0 sqrt(dim)) from every
+    start so far, at sigma0 (a near one is passed over); with none left, from the best again. A
+    best at ``hold_distance`` is polished where it is. No rollout is run."""
+    e = Engine(4, seed=0, max_rollouts=100, sigma0=0.1, spent=3)
+    X = np.array([[0.5] * 4, [0.51] * 4, [0.95] * 4])
+    e.tell(X, [1, 1, 1], [2, 2, 2], [1.0, 1.5, 3.0], fine=[True, True, True])
+    best, near, far = (e.archive[1], *[m for m in e.right[1:]])
+    assert e.best is best and np.array_equal(best.u, X[0])
+    assert e.restart_point()[1:] == (0.1, best)
+    assert e.restart_point()[1] == pytest.approx(0.1 / 3)
+    e._spent = 3
+    assert np.linalg.norm(near.u - best.u) < 0.1 * math.sqrt(4) <= np.linalg.norm(far.u - best.u)
+    best.distance = 1  # at hold_distance: polished where it is
+    u, sigma, m = e.restart_point()
+    assert m is best and sigma == pytest.approx(0.1 / 9)
+    best.distance = 2
+    assert e.restart_point()[1:] == (0.1, far)
+    assert e.restart_point()[2] is best  # every fine point is near a start now
+
+
+def test_nothing_to_search_is_one_point_and_bad_settings_are_refused():
+    e = Engine(0, seed=1, max_rollouts=10)
+    U = e.ask()
+    assert U.shape == (1, 0)
+    e.tell(U, [0], [1], [0.5])
+    assert e.stop() == {"nothing_to_search": True} and e.result.rollouts == 1
+    for kw in ({"max_rollouts": 0}, {"max_rollouts": 5, "blocks": [[0, 7]]}, {"max_rollouts": 5, "bits": [0, 1]},
+               {"max_rollouts": 5, "schedule": (("nowhere", 1.0),)}):
+        with pytest.raises(InputError):
+            Engine(3, seed=1, **kw)
+    e = Engine(3, seed=1, max_rollouts=5)
+    with pytest.raises(InputError):
+        e.tell(e.ask(), [0], [1], [1.0])
