@@ -20,10 +20,11 @@ from nbst.parallel import default_jobs
 from nbst.progress import progress_bar
 from nbst.seeds import resolve_seed
 
-__all__ = ["ROLLOUTS", "PARTICLES", "add_parser", "cmd_reconstruct", "summary_lines"]
+__all__ = ["ROLLOUTS", "PARTICLES", "CLOCK", "add_parser", "cmd_reconstruct", "summary_lines"]
 
 ROLLOUTS = Bounded("max-rollouts", 16, 10_000_000, integer=True)
 PARTICLES = Bounded("particles", 16, 100_000, integer=True)
+CLOCK = "o'clock"
 
 
 def add_parser(cr) -> None:
@@ -77,20 +78,21 @@ def summary_lines(out: dict) -> list[str]:
         if s is None:
             lines.append(f"  {v['name']}: no draw hit as the evidence says")
             continue
-        weak = [nm for nm, x in (("impact speed", s), ("delta-V", dv)) if x and x.get("identifiable") is False]
+        weak = [f"{nm} (its prior {x['prior_lo']:.0f}-{x['prior_hi']:.0f} km/h)" for nm, x in
+                (("impact speed", s), ("delta-V", dv)) if x and x.get("identifiable") is False and "prior_lo" in x]
         lines.append(f"  {v['name']}: impact speed {_iv(s, 'km/h')}, delta-V {_iv(dv, 'km/h')}, "
-                     f"PDOF {_iv(p, 'o clock', 1)}")
-        if weak:
-            lines.append(f"    not identifiable from this evidence: {', '.join(weak)} (the interval is at least "
-                         f"{100 * out['weak_threshold']:.0f} % of its prior's "
-                         f"{s.get('prior_lo', float('nan')):.0f}-{s.get('prior_hi', float('nan')):.0f} km/h)")
+                     f"PDOF {_iv(p, CLOCK, 1)}")
+        if weak and out["accepted"]:
+            lines.append(f"    not identifiable from this evidence (an interval at least {100 * out['weak_threshold']:.0f} % "
+                         f"of its prior's): {', '.join(weak)}")
     c = out.get("closing_speed_kmh")
     if c:
         lines.append(f"  closing speed {_iv(c, 'km/h')}")
     u = out["unknowns"]
     lines.append(f"  road friction {u['friction']['lo']:.2f}-{u['friction']['hi']:.2f}, contact stiffness x "
                  f"{u['stiffness']['lo']:.2f}-{u['stiffness']['hi']:.2f}, damping x "
-                 f"{u['damping']['lo']:.2f}-{u['damping']['hi']:.2f} (90 % of the accepted draws)")
+                 f"{u['damping']['lo']:.2f}-{u['damping']['hi']:.2f} (90 % of the "
+                 + ("accepted draws)" if out["accepted"] else "nearest draws)"))
     return lines
 
 
