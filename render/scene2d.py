@@ -350,10 +350,10 @@ class Renderer2D(FrameRenderer):
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
                  labels: bool | None = False, title: str | None = None, motion_name: str | None = None,
-                 ghost_name: str | None = None):
+                 ghost_name: str | None = None, clean: bool = False):
         import moderngl
 
-
+        self.clean = bool(clean)   # no text: no readout, legend or numbers (``nbst render --clean``)
         self._show(ctx, problem, motion, ghost, trails=trails, motion_name=motion_name, ghost_name=ghost_name,
                    title=title)
         self.target = FrameTarget(ctx, size)
@@ -494,6 +494,8 @@ class Renderer2D(FrameRenderer):
     def _draw_legend(self) -> None:
         """Legend under the readout, in the left margin, when the margin is wide enough; else
         below the box, or above it right of the readout (a wide box leaves no left margin)."""
+        if self.clean:
+            return
         L = self.layout
         x, y = self._readout_origin()
         pad = 0.5 * L.margin
@@ -563,7 +565,8 @@ class Renderer2D(FrameRenderer):
                                                                             self.rpx), style.GHOST_LABEL,
                                            style.TEXT_HALO)
         x, y = self._readout_origin()
-        self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), x, y), style.TEXT)
+        if not self.clean:
+            self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), x, y), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
         return trail_capsules(self.motion, t, self.trail_half, self.colors, to_view=self.layout.to_image,

@@ -112,10 +112,11 @@ class Renderer3D(FrameRenderer):
 
     def __init__(self, ctx, problem, motion, *, size=style.DEFAULT_SIZE, trails: bool = False, ghost=None,
                  labels: bool = False, title: str | None = None, motion_name: str | None = None,
-                 ghost_name: str | None = None):
+                 ghost_name: str | None = None, clean: bool = False):
         import moderngl
         import trimesh
 
+        self.clean = bool(clean)   # no text: no readout, legend or numbers (``nbst render --clean``)
         self._show(ctx, problem, motion, ghost, trails=trails, motion_name=motion_name, ghost_name=ghost_name,
                    title=title)
         self._mgl = moderngl
@@ -295,6 +296,8 @@ class Renderer3D(FrameRenderer):
 
     def _draw_legend(self) -> None:
         """Legend under the readout, left of the table, when there is room."""
+        if self.clean:
+            return
         p = self.problem
         W, H = p.box
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
@@ -371,7 +374,8 @@ class Renderer3D(FrameRenderer):
                     self.target_text, self.to_pixels(g, z=self.puck_h), self.labels.rpx), style.GHOST_LABEL,
                     style.TEXT_HALO)
         pad = style.MARGIN_FRAC * min(self.size) * 0.5
-        self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
+        if not self.clean:
+            self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
 
     def _trail_instances(self, t: float) -> np.ndarray:
         return trail_capsules(self.motion, t, self.trail_half, self.colors, min_step=np.sqrt(1e-9))  # world units

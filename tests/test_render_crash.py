@@ -308,3 +308,70 @@ def test_cli_refuses_bad_flags_and_links_in_one_line(crash_file, tmp_path, capsy
     (tmp_path / "p.json").write_text("{}")
     assert main(["render", str(tmp_path / "p.json"), "-o", str(tmp_path / "a.mp4"), "--follow", "A"]) == 2
     assert "crash files only" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (640, 360)])
+def test_the_overhead_view_takes_at_least_half_the_frame(gl, loaded, size):
+    """With the chase view beside it (camera both) and alone, the overhead panel covers at least
+    half the frame, and a car in it is drawn at least 60 px long at 720p (the issue's 460x325 panel
+    drew it ~40 px long)."""
+    for camera in ("both", "overhead"):
+        r = crash.CrashRenderer(gl, *loaded, size=size, camera=camera, follow=1)
+        try:
+            _, _, w, h = r.panels["overhead"]
+            assert w * h >= 0.5 * size[0] * size[1]
+            _, ppm = crash.top_view(r.bounds, r.panels["overhead"])
+            length = 2 * float(r.model.geom_size[r.model.geom("v0_lower").id][0])
+            if size == (1280, 720):
+                assert length * ppm >= 60
+        finally:
+            r.release()
+
+
+def _yellow(frame, vp) -> int:
+    x, y, w, h = vp
+    sub = frame[y:y + h, x:x + w].astype(int)
+    return int((np.abs(sub - np.array([255, 230, 26])).max(axis=2) < 45).sum())
+
+
+def test_velocity_and_pdof_arrows_appear_at_the_impact(gl, loaded):
+    """Overhead, clean (no labels): the PDOF arrows' yellow is absent before the impact and drawn from
+    its time on; each vehicle's PDOF is a clock hour whose direction is its velocity change's
+    reverse in its own frame (A, hitting B with its front, from ahead: 11, 12 or 1 o'clock), and the
+    two changes are opposed (momentum: m_A dv_A ~ -m_B dv_B within 30 %, tyre forces aside)."""
+    d, s, model, m = loaded
+    (im,) = [x for x in m.impacts if x.what == "vehicle"]
+    assert set(im.pdof) == {0, 1} and im.t <= im.t_end < im.t + 0.3
+    assert im.pdof[0] in (11, 12, 1)
+    mass = [float(model.body_subtreemass[model.body(f"v{i}").id]) for i in range(2)]
+    pa, pb = (mass[i] * np.array(im.dv[i]) for i in range(2))
+    assert np.linalg.norm(pa + pb) < 0.3 * np.linalg.norm(pa)
+    r = crash.CrashRenderer(gl, *loaded, size=SIZE, camera="overhead", clean=True)
+    try:
+        vp = r.panels["overhead"]
+        assert _yellow(r.render(im.t - 0.05), vp) == 0
+        for t in (im.t + 0.01, m.duration):
+            assert _yellow(r.render(t), vp) > 30
+    finally:
+        r.release()
+    assert crash_motion.clock_of((-1.0, 0.0)) == 12 and crash_motion.clock_of((0.0, 1.0)) == 3
+    assert crash_motion.clock_of((1.0, 0.0)) == 6 and crash_motion.clock_of((0.0, -1.0)) == 9
+
+
+def test_the_chase_camera_keeps_both_vehicles_in_view(gl, loaded):
+    """At every frame time, each vehicle's CoM projects inside the chase panel, in front of the
+    camera, for either vehicle followed."""
+    d, s, model, m = loaded
+    times = frame_times(m.duration, 30.0, hold=0.0)
+    for follow in (0, 1):
+        r = crash.CrashRenderer(gl, *loaded, size=SIZE, camera="both", follow=follow)
+        try:
+            assert r.partner == 1 - follow
+            for t in times:
+                (cam, vp, vpm, _), = [v for v in r.views(t) if v[0] == "behind"]
+                k = m.index(t)
+                for i in (0, 1):
+                    col, row, front = r.to_pixel(vp, vpm, m.pos[k, i])
+                    assert front and r._inside(vp, col, row), (follow, t, i)
+        finally:
+            r.release()

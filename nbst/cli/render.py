@@ -79,7 +79,8 @@ def register(sub) -> None:
                         "solutions: the name of one of the scene's own cameras (default: one that frames the "
                         "bodies)")
     p.add_argument("--clean", action="store_true",
-                   help="scene solutions only: no overlay text (no readout, no labels), the picture alone")
+                   help="no overlay text (no readout, legend, titles, names or labels): the picture alone, for "
+                        "compositing; every kind of input")
     p.add_argument("--follow", default=None, metavar="NAME",
                    help="crash files only: a chase camera behind vehicle NAME, beside the overhead view")
     p.add_argument("--fps", type=FPS, default=None,
@@ -200,8 +201,6 @@ def cmd_render(args) -> int:
         from nbst.cli.render_scene import cmd_render_scene
 
         return cmd_render_scene(args)
-    if getattr(args, "clean", False):
-        return _err("render", "--clean applies to scene solutions only (from `nbst scene solve`)")
     if args.camera is not None and args.camera not in CAMERAS:
         return _err("render", f"--camera {args.camera}: use {', '.join(CAMERAS)} (a camera by name: scene "
                               f"solutions only)")
@@ -306,7 +305,8 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
         try:
             renderer = make_renderer(ctx, problem, motion, view=args.view, size=size, trails=args.trails,
                                      ghost=ghost, labels=args.labels,
-                                     motion_name="MuJoCo" if args.source == "mujoco" else None)
+                                     motion_name="MuJoCo" if args.source == "mujoco" else None,
+                                     clean=bool(getattr(args, "clean", False)))
             if kind == "png":
                 write_png(out, renderer.render(float(args.still)))
                 if not args.quiet:
@@ -332,24 +332,27 @@ def _render(args, problem, tr, out, kind, size, fps) -> int:
 def _labels_note(args, renderer) -> str:
     """Why the disks carry no numbers, when the size rule (not the user) left them off."""
     rpx = getattr(renderer, "rpx", None)
-    if args.labels is not None or getattr(renderer, "labels", None) is not None or rpx is None:
+    if getattr(args, "clean", False) or args.labels is not None or getattr(renderer, "labels", None) is not None or rpx is None:
         return ""
     return (f"; no disk numbers: disks {2 * float(min(rpx)):.0f} px across, under the {style.LABELS_MIN_DISK_PX:g} "
             f"px they need (--labels writes them anyway)")
 
 
 def make_renderer(ctx, problem, motion, *, view="2d", size=style.DEFAULT_SIZE, trails=False, ghost=None,
-                  labels=False, motion_name=None):
+                  labels=False, motion_name=None, clean=False):
     """A 2D or 3D renderer with ``render(t, out=None) -> (H, W, 3) uint8`` and ``size``.
     labels: True, False, or None (only where legible: :func:`nbst.render.scene2d.labels_legible`).
-    motion_name: what the disks show when it is not the exact motion ("MuJoCo" for --source mujoco)."""
+    motion_name: what the disks show when it is not the exact motion ("MuJoCo" for --source mujoco).
+    clean: no text at all (no readout, legend or numbers: ``labels`` is then off)."""
+    if clean:
+        labels = False
     if view == "3d":
         if labels is None:
             labels = auto_labels(problem, size)
         return Renderer3D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels,
-                          motion_name=motion_name)
+                          motion_name=motion_name, clean=clean)
     return Renderer2D(ctx, problem, motion, size=size, trails=trails, ghost=ghost, labels=labels,
-                      motion_name=motion_name)
+                      motion_name=motion_name, clean=clean)
 
 
 def mujoco_positions(problem, velocities, times):
@@ -421,7 +424,7 @@ def _check_throw_flags(args, duration: float | None = None) -> str | None:
              if getattr(args, attr, default) not in (default, None, False)]
     if given:
         return (f"{', '.join(given)} draw{'s' if len(given) == 1 else ''} disk problems only; a 5 m throw file "
-                f"takes -o, --still, --camera, --size, --fps, --hold, --max-frames and -q")
+                f"takes -o, --still, --camera, --clean, --size, --fps, --hold, --max-frames and -q")
     fps = getattr(args, "fps", None)
     if fps is not None and not (0 < fps <= FPS_MAX):
         return f"--fps {fps:g}: must be in (0, {FPS_MAX:g}] frames per second"
@@ -440,7 +443,7 @@ def _check_throw_flags(args, duration: float | None = None) -> str | None:
 
 
 def cmd_render_throw(args) -> int:
-    """``nbst render THROW.json -o OUT [--still T] [--camera C] [--size WxH] [--fps F] [--hold S] [-q]``
+    """``nbst render THROW.json -o OUT [--still T] [--camera C] [--clean] [--size WxH] [--fps F] [--hold S] [-q]``
     (``cmd_render`` dispatches here when its first argument is a 5 m throw file; the recording and
     the frames are :mod:`nbst.render.bowling.deck`'s)."""
 
@@ -486,7 +489,7 @@ def cmd_render_throw(args) -> int:
         bar = progress_bar(total=len(times), unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
     try:
         n = render_motion(throw, motion, out, still=still, camera=getattr(args, "camera", None) or "both",
-                          size=size, times=times, fps=fps, progress=bar)
+                          size=size, times=times, fps=fps, progress=bar, clean=bool(getattr(args, "clean", False)))
     except RenderError as e:
         return err(str(e))
     finally:

@@ -167,9 +167,11 @@ def static_solids(model) -> np.ndarray:
 
 
 class BowlingRenderer(FrameRenderer):
-    """Frames of a recorded 5 m throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both."""
+    """Frames of a recorded 5 m throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both;
+    ``clean``: no text (no readout, titles or pin numbers)."""
 
-    def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both", throw: dict | None = None):
+    def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both", throw: dict | None = None,
+                 clean: bool = False):
         import moderngl
 
         if camera not in ("behind", "overhead", "both"):
@@ -177,6 +179,7 @@ class BowlingRenderer(FrameRenderer):
         self.ctx, self.motion, self.camera = ctx, motion, camera
         self.size = tuple(size)
         self.throw = throw or {}
+        self.clean = bool(clean)
         n_cams = 2 if camera == "both" else 1
         panel_w = self.size[0] // n_cams
         px = max(style.MIN_READOUT_PX, int(round(style.TEXT_FRAC * min(self.size))))
@@ -302,7 +305,8 @@ class BowlingRenderer(FrameRenderer):
         ctx.disable(self._mgl.DEPTH_TEST)
         ctx.enable(self._mgl.BLEND)
         ctx.blend_func = self._mgl.ONE, self._mgl.ONE_MINUS_SRC_ALPHA  # the text shader's premultiplied alpha
-        self._overlay(t, views)
+        if not self.clean:
+            self._overlay(t, views)
         ctx.disable(self._mgl.BLEND)
 
     def release(self) -> None:
@@ -337,7 +341,7 @@ def load_motion(path):
 
 
 def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: str = "both", size=None,
-                  times=None, fps=None, progress=None) -> int:
+                  times=None, fps=None, progress=None, clean: bool = False) -> int:
     """Render a recorded 5 m throw to ``output`` (.mp4/.gif video of ``times`` at ``fps``, or .png at
     time ``still``).
 
@@ -351,6 +355,7 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
         times: the frames' times (default :func:`motion_times` at ``fps``).
         fps: frames per second (default 60).
         progress: None, or an object whose ``update(1)`` is called after each frame.
+        clean: no overlay text (no readout, titles or pin numbers).
 
     Returns:
         The number of frames written (1 for a still).
@@ -361,18 +366,20 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
     """
 
     size = tuple(size or style.DEFAULT_SIZE)
-    return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw), output,
+    return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw, clean=clean),
+                         output,
                          still=None if still is None else np.clip(still, 0.0, motion.times[-1]),
                          times=lambda r, fps: motion_times(motion, fps) if times is None else times,
                          fps=fps, progress=progress)
 
 
-def render_file(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None) -> int:
+def render_file(path, output, *, still=None, camera: str = "both", size=None, fps=None, progress=None,
+                clean: bool = False) -> int:
     """Render the 5 m throw file ``path`` to ``output`` (.mp4/.gif video, or .png at time ``still``).
 
     Args:
         path: the throw file (``nbst bowl solve``).
-        output, still, camera, size, fps, progress: as :func:`render_motion`.
+        output, still, camera, size, fps, progress, clean: as :func:`render_motion`.
 
     Returns:
         The number of frames written (1 for a still).
@@ -382,7 +389,8 @@ def render_file(path, output, *, still=None, camera: str = "both", size=None, fp
         RenderError: no GL context, or the video cannot be written.
     """
     throw, motion = load_motion(path)
-    return render_motion(throw, motion, output, still=still, camera=camera, size=size, fps=fps, progress=progress)
+    return render_motion(throw, motion, output, still=still, camera=camera, size=size, fps=fps, progress=progress,
+                         clean=clean)
 
 
 #: Bytes of a .json file read to tell a bowling file from a problem: nbst writes ``kind`` in

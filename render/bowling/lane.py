@@ -108,11 +108,13 @@ class LaneRenderer(FrameRenderer):
     ``asked`` (pins the throw was meant to knock down), ``probability`` (of the outcome, 0..1) and
     ``probability_note`` (e.g. its sample size and interval) add readout lines when given;
     ``expected`` (the pins down a throw file records) adds a line only when the recorded frame
-    ends differently; ``no_request`` says on the ``asked`` line that a file asked for nothing."""
+    ends differently; ``no_request`` says on the ``asked`` line that a file asked for nothing; ``clean``
+    draws no text (no readout, titles, pin numbers, ticks or key)."""
 
     def __init__(self, ctx, throw: Throw, *, size=style.DEFAULT_SIZE, camera: str = "both", asked=None,
                  probability: float | None = None, probability_note: str | None = None,
-                 overhead_from_ft: float = OVERHEAD_FROM_FT, expected=None, no_request: bool = False):
+                 overhead_from_ft: float = OVERHEAD_FROM_FT, expected=None, no_request: bool = False,
+                 clean: bool = False):
         import moderngl
 
         if camera not in CAMERAS:
@@ -122,6 +124,7 @@ class LaneRenderer(FrameRenderer):
         self.asked = None if asked is None else sorted(int(p) for p in asked)
         self.expected = None if expected is None else sorted(int(p) for p in expected)
         self.no_request = bool(no_request)
+        self.clean = bool(clean)
         self.in_play = tuple(throw.in_play)
         self.probability, self.probability_note = probability, probability_note
         self.hand = throw.delivery.hand
@@ -451,7 +454,8 @@ class LaneRenderer(FrameRenderer):
         ctx.disable(mgl.DEPTH_TEST)
         ctx.enable(mgl.BLEND)
         ctx.blend_func = mgl.ONE, mgl.ONE_MINUS_SRC_ALPHA  # the text shader's premultiplied alpha
-        self._overlay(t, views)
+        if not self.clean:
+            self._overlay(t, views)
         ctx.disable(mgl.BLEND)
 
     def release(self) -> None:
@@ -468,7 +472,7 @@ class LaneRenderer(FrameRenderer):
 
 def render_throw(throw: Throw, output, *, still: float | None = None, camera: str = "both", size=None,
                  fps=None, hold: float = 1.0, asked=None, probability=None, probability_note=None,
-                 expected=None, no_request: bool = False, progress=None) -> int:
+                 expected=None, no_request: bool = False, progress=None, clean: bool = False) -> int:
     """Render a recorded throw to ``output``: a .png at time ``still``, else a .mp4/.gif video.
 
     Args:
@@ -487,6 +491,7 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
             differently), or None.
         no_request: say on the ``asked`` line that the file asked for nothing.
         progress: None, or an object whose ``update(1)`` is called after each frame.
+        clean: no overlay text (no readout, titles, pin numbers, ticks or key).
 
     Returns:
         The number of frames written (1 for a still).
@@ -501,6 +506,6 @@ def render_throw(throw: Throw, output, *, still: float | None = None, camera: st
         still = still_time(throw) if still < 0 else np.clip(still, 0.0, throw.motion.times[-1])
     return render_output(lambda ctx: LaneRenderer(ctx, throw, size=size, camera=camera, asked=asked,
                                                   probability=probability, probability_note=probability_note,
-                                                  expected=expected, no_request=no_request),
+                                                  expected=expected, no_request=no_request, clean=clean),
                          output, still=still, times=lambda r, fps: throw_times(throw, fps, hold=hold),
                          fps=fps, progress=progress)

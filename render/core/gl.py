@@ -52,6 +52,8 @@ class FrameRenderer:
 
     target: FrameTarget
     size: tuple[int, int]
+    #: Draw no text (no readout, legend, titles, names or labels): ``nbst render --clean``.
+    clean: bool = False
 
     def draw(self, t: float) -> None:
         """Draw the frame at time ``t`` into ``self.target`` (each view its own)."""

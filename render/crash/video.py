@@ -269,8 +269,9 @@ class CrashRenderer(FrameRenderer):
             while not self.clean and px > style.MIN_READOUT_PX and ((chars + 2) * text_cell(px)[0] > cw_ or
                                                                     (rows + 1) * text_cell(px)[1] > h):
                 px -= 1
-            if not self.clean:
-                cw_ = int(min(max(cw_, (chars + 2) * text_cell(px)[0]), round(COLUMN_MAX * w)))
+            if not self.clean:   # the overhead view keeps at least BOTH_OVERHEAD_SHARE of the width
+                most = COLUMN_MAX if camera == "behind" else 1 - BOTH_OVERHEAD_SHARE
+                cw_ = int(min(max(cw_, (chars + 2) * text_cell(px)[0]), math.floor(most * w)))
             self.column = self.text_box = (w - cw_, 0, cw_, h)
             self.panels = {camera: (0, 0, w - cw_, h)}
         self.text = Text(ctx, px)

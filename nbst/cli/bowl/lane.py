@@ -366,7 +366,8 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
     try:
         if getattr(args, "still", None):
             prepare_output(args.still, option="--still")
-            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size, camera=camera, **readout)
+            render_throw(th, args.still, still=-1.0 if st is None else float(st), size=size, camera=camera,
+                         clean=bool(getattr(args, "clean", False)), **readout)
             print(f"{prog}: wrote {args.still}", file=sys.stderr)
         if getattr(args, "video", None):
             prepare_output(args.video, option="--video")
@@ -374,7 +375,8 @@ def write_pictures(args, th, *, prog: str = "nbst bowl throw", **readout) -> str
 
             bar = progress_bar(total=len(throw_times(th, fps)), unit="frame", file=sys.stderr, desc="render")
             try:
-                n = render_throw(th, args.video, size=size, fps=fps, progress=bar, camera=camera, **readout)
+                n = render_throw(th, args.video, size=size, fps=fps, progress=bar, camera=camera,
+                                 clean=bool(getattr(args, "clean", False)), **readout)
             finally:
                 bar.close()
             print(f"{prog}: wrote {args.video} ({n} frames)", file=sys.stderr)
