@@ -34,6 +34,11 @@ Parts (default: all, in this order; each prints its figures and its target, met 
   against the truth (target within 1 m/s or 5 % in >= 8 of 10);
 * ``probability``: P(fates) of the solved t-bone from 100 noisy rollouts on ``--jobs`` threads,
   wall time (target <= 60 s on 2 cores);
+* ``robust``: ``--robust-scripts`` (default t-bone, stunt, rollover) solved at ``--robust-seeds``
+  (default 1, 2, 3; 3,000 rollouts), then P(fates) of the solution and of ``nbst crash solve
+  --robust``'s pick (``--robust-budget`` noisy rollouts, default the CLI's) on the same
+  ``--robust-samples`` noisy re-drives (default 100, noise seed = the seed; ``--noise``): both
+  with their Wilson intervals (target: the pick's P >= 2x the solution's, or >= 50 %, at every seed);
 * ``sensitivity``: the solved chain3 (seed 1) rerun with each assumed parameter changed (body
   friction, road friction, yaw and roll inertia, the body contact's damping): its signature and
   how far each vehicle's rest position moves.
@@ -48,7 +53,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-PARTS = ("physics", "speed", "chain", "planted", "hidden", "funnels", "builtins", "recon", "probability", "sensitivity")
+PARTS = ("physics", "speed", "chain", "planted", "hidden", "funnels", "builtins", "recon", "probability", "robust",
+         "sensitivity")
 ARGS = None
 
 
@@ -292,6 +298,42 @@ def probability() -> None:
           f"outcomes {est.outcomes}")
 
 
+def robust_part() -> None:
+    from nbst.models.crash import robust, run, script, space
+
+    noise = ARGS.noise
+    n = ARGS.robust_samples
+    print(f"  P(fates) under {noise} noise, {n} re-drives (noise seed = search seed): the solution, then the "
+          f"robust pick ({ARGS.robust_budget} noisy rollouts)")
+    met = total = 0
+    for name in ARGS.robust_scripts.split(","):
+        sc = script.load_script(name)
+        for seed in ARGS.robust_seeds:
+            r, wall, _ = _solve(sc, seed, 3000)
+            if not r.best.accepted:
+                print(f"  {name}, seed {seed}: not solved on the ladder in {r.rollouts} rollouts: no probability",
+                      flush=True)
+                continue
+            S = space.space_of(sc)
+            R = run.CrashRunner(sc, jobs=ARGS.jobs)
+            intents = S.intents(r.best.u[None])[0]
+            plain = robust.probability(R, intents, n, seed, noise=noise)
+            t0 = time.perf_counter()
+            mx = robust.robust_pick(S, R, intents, budget=ARGS.robust_budget, seed=seed, n=n, noise=noise)
+            rw = time.perf_counter() - t0
+            R.close()
+            pick = mx.fresh
+            ok = pick.p >= 0.5 or (pick.k > 0 and pick.p >= 2 * plain.p)
+            met += ok
+            total += 1
+            print(f"  {name}, seed {seed}: solution {plain.text()}; robust pick {pick.text()} "
+                  f"(centring {mx.centre['start']}->{mx.centre['centred']} of {mx.centre['copies']}, ladder "
+                  f"{'holds' if mx.ladder_holds else 'LOST' if mx.ladder_holds is False else 'not asked'}, "
+                  f"{mx.frames} rollouts, {rw:.0f} s wall): {'met' if ok else 'NOT met'}", flush=True)
+    print(f"robust stunts: {met} of {total} (script, seed) pairs with the pick's P >= 2x the solution's or >= 50 % "
+          f"(target: all)")
+
+
 def sensitivity() -> None:
     import math
 
@@ -359,10 +401,22 @@ def main(argv=None) -> int:
                     help="search seeds of the planted part (default 1); with several, every script is searched "
                          "once per seed and the share solved is given with its Wilson 95 %% interval")
     ap.add_argument("--recon-budget", type=int, default=800, help="rollouts per reconstruction (default 800)")
+    from nbst.models.crash.robust import DEFAULT_NOISE, DEFAULT_ROBUST_BUDGET, DEFAULT_SAMPLES, NOISE_KINDS
+
+    ap.add_argument("--robust-scripts", default="t-bone,stunt,rollover", metavar="A,B",
+                    help="robust part: the built-in scripts (default t-bone,stunt,rollover)")
+    ap.add_argument("--robust-seeds", type=_seeds, default=[1, 2, 3], metavar="S,...",
+                    help="robust part: the search seeds (default 1,2,3)")
+    ap.add_argument("--robust-budget", type=int, default=DEFAULT_ROBUST_BUDGET,
+                    help=f"robust part: noisy rollouts of the robust pick (default {DEFAULT_ROBUST_BUDGET})")
+    ap.add_argument("--robust-samples", type=int, default=DEFAULT_SAMPLES,
+                    help=f"robust part: re-drives of each probability (default {DEFAULT_SAMPLES})")
+    ap.add_argument("--noise", choices=tuple(NOISE_KINDS), default=DEFAULT_NOISE,
+                    help=f"robust part: the driver noise (default {DEFAULT_NOISE})")
     args = ARGS = ap.parse_args(argv)
     for part in args.part or PARTS:
         t0 = time.perf_counter()
-        globals()[part]()
+        globals()["robust_part" if part == "robust" else part]()
         print(f"[{part}: {time.perf_counter() - t0:.1f} s wall]", flush=True)
     return 0
 

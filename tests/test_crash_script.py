@@ -257,3 +257,30 @@ def test_solve_refuses_a_bad_seed_or_budget_before_any_rollout(kw, words):
 
     with pytest.raises(InputError, match=words):
         crash.solve(S.load_script("t-bone"), **kw)
+
+
+def test_the_cli_check_shows_every_fate_the_script_asks(capsys):
+    """`nbst crash check` names each fate a vehicle is asked, exactly the fates the judge checks
+    (outcome.judge's keys): nothing asked is left out (t-bone's impact speed and delta-V were)."""
+    import numpy as np
+
+    from nbst.cli.crash.commands import fate_phrases
+    from nbst.cli.main import main
+    from nbst.models.crash import outcome
+
+    d = base()
+    d["vehicles"][0]["fate"] = {
+        "hits": ["B"], "impact_speed": [45, 60], "delta_v": [10, 30], "rest": {"x": 5, "y": 5, "radius": 2},
+        "impact_at": {"x": 0, "y": -1.75, "radius": 1}, "heading": {"deg": 30, "tol": 20}, "quarter_turns": 0,
+        "attitude": "upright", "spin": {"deg": 90, "tol": 30}, "strikes": {"curb": True, "barrier": False}}
+    s = S.script_from_dict(d, source="x.json")
+    nan = math.nan
+    vo = [outcome.VehicleOutcome(name=n, hits=[], impact_speed=nan, impact_heading=nan, impact_pos=(nan, nan),
+                                 delta_v=nan, rest=(0.0, 0.0, 0.0), quarter_turns=0, roll=0.0, attitude="upright",
+                                 spin=0.0, curb=nan, barrier=nan, moving=False) for n in ("A", "B")]
+    o = outcome.judge(outcome.Outcome(vehicles=vo, contacts=[]), s, np.zeros(1))
+    for i in range(2):
+        assert set(fate_phrases(s, i)) == set(o.vehicles[i].fates)
+    assert main(["crash", "check", "t-bone"]) == 0
+    out = capsys.readouterr().out
+    assert "impact speed 45-60 km/h" in out and "delta-V 15-35 km/h" in out and "at rest facing 140" in out

@@ -20,7 +20,13 @@ needs, nothing to look up elsewhere:
   impulse and each vehicle's delta-V) and per vehicle what happened
   (:meth:`.outcome.VehicleOutcome.to_dict`);
 * ``final_qpos``: the state after ``nstep`` steps, which a replay must reproduce bit for bit;
-* ``seed``, ``search``, and when measured ``probability`` and ``ladder``.
+* ``probability``: P(fates) under driver noise, measured by every ``nbst crash solve`` (null
+  when skipped, ``--samples 0``; absent in files written before it was measured by default):
+  ``k`` of ``n`` noisy re-drives met the script, ``p``, the 95 % Wilson interval ``lo``-``hi``,
+  the noise's ``seed``, ``noise_kind`` (retake or population; absent: retake), the standard
+  deviations ``noise`` (SI; ``noise_relative`` names the columns given as a share of the
+  intent) and the ``outcomes`` seen (label: count);
+* ``seed``, ``search``, and when measured ``ladder`` (and ``robust``).
 
 Replay (:func:`replay`): a fresh ``MjData``, ``qpos0``/``qvel0`` set, then for each row
 ``data.ctrl[:] = row; mj_step`` for its steps (docs/crash.md has the recipe as plain MuJoCo);
@@ -227,6 +233,7 @@ def load(path):
                                     f"periods of {ps} steps needs {-(-nstep // ps)}")
     for k, row in enumerate(c["rows"]):
         _vector({"r": row}, "r", f"{src}: controls.rows[{k}]", CTRL_MAX, model.nu)
+    _probability(d.get("probability"), src)
     it = d["intents"]
     if not isinstance(it, dict) or it.get("columns") != list(drv.INTENT) or not isinstance(it.get("rows"), list) \
             or len(it["rows"]) != script.n:
@@ -240,6 +247,28 @@ def load(path):
         if a is None or a not in (0, 1, 2):
             _fail(src, f"intents.rows[{k}]", "its after-impact code must be 0, 1 or 2")
     return d, script, model
+
+
+def _probability(p, src) -> None:
+    """A crash file's ``probability``: absent or null (not measured), else its fields checked."""
+    if p is None:
+        return
+    if not isinstance(p, dict):
+        _fail(src, "probability", "must be an object (k, n, p, lo, hi, ...) or null")
+    for k in ("k", "n"):
+        if isinstance(p.get(k), bool) or not isinstance(p.get(k), int):
+            _fail(src, f"probability.{k}", "must be a whole number")
+    if not 0 <= p["k"] <= p["n"] or p["n"] < 1:
+        _fail(src, "probability", f"k = {p['k']} of n = {p['n']}: need 0 <= k <= n and n >= 1")
+    for k in ("p", "lo", "hi"):
+        x = p.get(k)
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not 0.0 <= x <= 1.0:
+            _fail(src, f"probability.{k}", "must be a number in [0, 1]")
+    if not p["lo"] <= p["p"] <= p["hi"]:
+        _fail(src, "probability", "p must lie in its interval [lo, hi]")
+    kind = p.get("noise_kind", drv.NOISE_KIND_NAMES[0])
+    if kind not in drv.NOISE_KIND_NAMES:
+        _fail(src, "probability.noise_kind", f"must be one of {', '.join(drv.NOISE_KIND_NAMES)}")
 
 
 def intents_array(d: dict, script: Script) -> np.ndarray:

@@ -42,7 +42,7 @@ import numpy as np
 
 from nbst.models.crash import vehicle as veh
 
-__all__ = ["PERIOD", "INTENT", "IX", "AFTER_BRAKE", "AFTER_COAST", "AFTER_HOLD", "LOOKAHEAD_MIN", "REACHED",
+__all__ = ["PERIOD", "INTENT", "IX", "NOISE_KIND_NAMES", "AFTER_BRAKE", "AFTER_COAST", "AFTER_HOLD", "LOOKAHEAD_MIN", "REACHED",
            "STEER_RATE", "KV", "ACCEL", "DECEL", "VMAX", "IDM_A", "IDM_B", "IDM_S0", "IDM_DELTA", "IDM_PANIC",
            "DriverState", "Fleet", "yaw_of", "ackermann", "controls"]
 
@@ -51,6 +51,8 @@ PERIOD = 0.02
 INTENT = ("speed", "aim_x", "aim_y", "arrive", "brake_at", "slide_at", "slide_steer", "slide_power", "headway",
           "reaction", "after", "after_steer")
 IX = {k: i for i, k in enumerate(INTENT)}
+#: The kinds of driver noise (their spreads: :data:`.robust.NOISE_KINDS`), the default first.
+NOISE_KIND_NAMES = ("retake", "population")
 AFTER_BRAKE, AFTER_COAST, AFTER_HOLD = 0, 1, 2
 #: Pure pursuit: shortest look-ahead (m), a target counts as reached within REACHED m.
 LOOKAHEAD_MIN, REACHED = 6.0, 3.0

@@ -28,10 +28,11 @@ import numpy as np
 
 from nbst.models.crash import driver as drv
 from nbst.models.crash import scene as scene_mod
+from nbst.models.crash import vehicle as veh
 from nbst.models.crash.script import Script
 
 __all__ = ["KMH", "COS45", "REST_SPEED", "W_CONTACT", "W_NEAR", "W_METRE", "W_HEADING", "W_TURN",
-           "W_ATTITUDE", "W_STRIKE", "W_KMH", "W_SPIN", "W_CENTRE", "Recorder", "VehicleOutcome", "Outcome",
+           "W_ATTITUDE", "W_STRIKE", "W_KMH", "W_SPIN", "W_CENTRE", "W_MOVING", "Recorder", "VehicleOutcome", "Outcome",
            "outcomes", "judge"]
 
 KMH = 3.6
@@ -48,6 +49,10 @@ W_CONTACT, W_NEAR, W_METRE, W_HEADING, W_TURN, W_ATTITUDE, W_STRIKE, W_KMH, W_SP
 #: can lose, so every measured fate also costs W_CENTRE x (how far from the middle of its band,
 #: in band halves): the search prefers the middle of the rest region, heading, spin and bands.
 W_CENTRE = 0.02
+#: A vehicle asked to come to rest (a rest region, a heading at rest) that still moves at the end
+#: costs this much, plus the slide it has left (:func:`_still_moving`): its rest and heading fates
+#: do not hold (the pose at the script's end is not a rest position).
+W_MOVING = 0.5
 
 
 class Recorder:
@@ -177,6 +182,7 @@ class VehicleOutcome:
     barrier: float
     moving: bool          # still above REST_SPEED at the end
     fates: dict = field(default_factory=dict)  # fate -> held (bool)
+    end_speed: float = math.nan  # m/s of its centre of mass at the end (not written: ``moving`` is)
 
     def to_dict(self, names) -> dict:
         r = lambda x, k=3: None if x is None or (isinstance(x, float) and math.isnan(x)) else round(float(x), k)  # noqa: E731
@@ -241,7 +247,8 @@ def outcomes(rec: Recorder, names: list[str], mass: np.ndarray) -> list[Outcome]
                 impact_pos=(float(rec.impact_pos[s, i, 0]), float(rec.impact_pos[s, i, 1])), delta_v=dv,
                 rest=(float(rec.final["pos"][s, i, 0]), float(rec.final["pos"][s, i, 1]), float(rec.final["yaw"][s, i])),
                 quarter_turns=turns, roll=roll, attitude=att, spin=float(rec.yaw[s, i]), curb=float(rec.curb[s, i]),
-                barrier=float(rec.barrier[s, i]), moving=bool(rec.final["speed"][s, i] > REST_SPEED)))
+                barrier=float(rec.barrier[s, i]), moving=bool(rec.final["speed"][s, i] > REST_SPEED),
+                end_speed=float(rec.final["speed"][s, i])))
         out.append(Outcome(vehicles=vs, contacts=contacts))
     return out
 
@@ -264,6 +271,14 @@ def _band(x: float, lo: float, hi: float) -> float:
     if math.isnan(x):
         return math.inf
     return max(0.0, lo - x, x - hi)
+
+
+def _still_moving(vo: VehicleOutcome, mu: float) -> float:
+    """The cost of a vehicle asked to rest (a rest region or a heading at rest) that still moves at
+    the end: :data:`W_MOVING`, plus W_METRE per metre it would still slide on locked wheels,
+    v^2 / (2 mu g) (a guide towards stopping in time; the fates are unmet all the same)."""
+    v = vo.end_speed if math.isfinite(vo.end_speed) else REST_SPEED
+    return W_MOVING + W_METRE * v * v / (2.0 * mu * veh.G)
 
 
 def judge(o: Outcome, script: Script, min_dist: np.ndarray | None = None) -> Outcome:
@@ -291,7 +306,7 @@ def judge(o: Outcome, script: Script, min_dist: np.ndarray | None = None) -> Out
                     c += W_CENTRE * min(abs(val - (band.lo + band.hi) / 2) / ((band.hi - band.lo) / 2), 2.0)
         if f.rest is not None:
             d = math.hypot(vo.rest[0] - f.rest[0], vo.rest[1] - f.rest[1])
-            ok["rest"] = d <= f.rest[2]
+            ok["rest"] = d <= f.rest[2] and not vo.moving  # a vehicle still moving has no rest position
             c += W_METRE * max(0.0, d - f.rest[2]) + W_CENTRE * min(d / f.rest[2], 2.0)
         if f.impact_at is not None:
             d = math.hypot(vo.impact_pos[0] - f.impact_at[0], vo.impact_pos[1] - f.impact_at[1])
@@ -301,8 +316,10 @@ def judge(o: Outcome, script: Script, min_dist: np.ndarray | None = None) -> Out
                 if math.isfinite(d) else W_CONTACT / 2
         if f.heading is not None:
             err = abs(float(_wrap(vo.rest[2] - f.heading[0])))
-            ok["heading"] = err <= f.heading[1]
+            ok["heading"] = err <= f.heading[1] and not vo.moving  # the heading at rest
             c += W_HEADING * max(0.0, err - f.heading[1]) + W_CENTRE * min(err / f.heading[1], 2.0)
+        if vo.moving and (f.rest is not None or f.heading is not None):
+            c += _still_moving(vo, script.road.friction)
         if f.quarter_turns is not None:
             lo, hi = f.quarter_turns
             ok["quarter_turns"] = lo <= vo.quarter_turns <= hi

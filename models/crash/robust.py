@@ -1,13 +1,17 @@
 """A crash that holds up: driver noise, the probability of the fates, the timestep ladder, and
 the robust maximiser, on the rollout room's machinery (:mod:`nbst.models.mjsearch`).
 
-**Driver noise** (:data:`NOISE`, standard deviations, SI; assumed figures, docs/crash.md names
-their sensitivity): a driver never repeats an intent exactly. Every intent a script sets is
-drawn from a normal distribution about its value (independent draws), clipped to what a car
-can do (:data:`CLIP`); the after-impact choice is kept. **Common random numbers**: copy i of
-any intent set uses row i of the same standard-normal draws of the seed
-(:func:`nbst.models.mjsearch.probability.normal_draws`), so two intent sets are compared on
-paired copies.
+**Driver noise**, two kinds (:data:`NOISE_KINDS`, standard deviations, SI): a driver never
+repeats an intent exactly. **Retake** noise (:data:`NOISE`, the default; assumed figures) is what
+a stunt crew repeats from take to take: the same drivers, rehearsed. **Population** noise
+(:data:`POPULATION`; published spreads, docs/crash.md cites them) is what real drivers vary:
+perception-reaction times, chosen speeds, lane position; a crash its fates hold under it is one
+ordinary drivers would repeat. Every intent a script sets is drawn from a normal distribution
+about its value (independent draws; :data:`RELATIVE` columns scale with the intent: a share of
+the speed), clipped to what a car can do (:data:`CLIP`); the after-impact choice is kept.
+**Common random numbers**: copy i of any intent set uses row i of the same standard-normal
+draws of the seed (:func:`nbst.models.mjsearch.probability.normal_draws`), so two intent sets
+are compared on paired copies (and the two kinds on the same draws).
 
 :func:`probability`: the share of ``n`` noisy copies that meet the script, with its 95 %
 Wilson interval, and how often each outcome came up. :func:`ladder`: the same intents run at
@@ -25,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.errors import InputError
 from nbst.models.crash import driver as drv
 from nbst.models.crash.run import TIMESTEP_LADDER, CrashRunner
 from nbst.models.crash.script import AFTER_IMPACT, Range
@@ -32,39 +37,89 @@ from nbst.models.crash.space import CrashSpace
 from nbst.models.mjsearch.ladder import climb
 from nbst.models.mjsearch.probability import Probability, counts, normal_draws, perturb
 
-__all__ = ["DEFAULT_SAMPLES", "DEFAULT_ROBUST_BUDGET", "NOISE", "CLIP", "sigma_row", "noisy", "label",
-           "CrashEstimate", "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem"]
+__all__ = ["DEFAULT_SAMPLES", "SOLVE_SAMPLES", "DEFAULT_ROBUST_BUDGET", "NOISE", "POPULATION", "RELATIVE",
+           "NOISE_KINDS", "DEFAULT_NOISE", "CLIP", "check_noise", "sigma_row", "noisy", "label", "CrashEstimate",
+           "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem", "CENTRE_COPIES",
+           "CENTRE_SHARE", "RobustPick", "robust_pick"]
 
 #: Noisy copies a probability is estimated from when none is given (``nbst crash probability
 #: --samples``; ``nbst crash solve --robust``'s fresh estimate).
 DEFAULT_SAMPLES = 100
+#: Noisy copies of the probability every ``nbst crash solve`` writes (its ``--samples`` default;
+#: 0 skips it): cheap beside the search (32 rollouts; a few seconds), and enough to tell a crash
+#: its drivers repeat most of the time from a lottery (0 of 32: the 95 % Wilson interval 0-11 %).
+SOLVE_SAMPLES = 32
 #: The robust maximiser's budget of noisy rollouts when none is given (``nbst crash solve --robust``).
 DEFAULT_ROBUST_BUDGET = 600
-#: Driver noise: standard deviation of each intent (SI).
+#: Retake noise (a stunt crew's take to take; assumed): standard deviation of each intent (SI).
 NOISE = {"speed": 0.5, "aim_x": 0.2, "aim_y": 0.2, "arrive": 0.1, "brake_at": 0.1, "slide_at": 0.1,
          "slide_steer": math.radians(1.0), "slide_power": 0.05, "headway": 0.05, "reaction": 0.1,
          "after_steer": math.radians(1.0)}
+#: Population noise (what ordinary drivers vary; docs/crash.md cites each): the perception-reaction
+#: time of a brake, a slide or a follower, 0.44 s (Johansson and Rumar 1971: median 0.9 s, a
+#: quarter above 1.2 s, as a log-normal); the chosen speed and so the arrival time, 13.5 % of the
+#: intent (FHWA-SA-10-001 ch. 5: speeds normally distributed, SD 7 mph about a 52 mph mean); the
+#: lane position, 0.2 m (the weaving, SDLP, of sober drivers: Verster and Roth 2011); the time gap
+#: behind a leader, 0.3 s (1-2 s in rush-hour traffic: Ayres et al. 2001); the stunt manoeuvres
+#: (slide steer and power, the wheel after impact), which no survey measures, as in retakes.
+POPULATION = {"speed": 0.135, "aim_x": 0.2, "aim_y": 0.2, "arrive": 0.135, "brake_at": 0.44, "slide_at": 0.44,
+              "slide_steer": math.radians(1.0), "slide_power": 0.05, "headway": 0.3, "reaction": 0.44,
+              "after_steer": math.radians(1.0)}
+#: The kinds of driver noise by name, and the columns each gives as a share of the intent's value.
+NOISE_KINDS = dict(zip(drv.NOISE_KIND_NAMES, (NOISE, POPULATION)))
+RELATIVE = {"retake": (), "population": ("speed", "arrive")}
+#: The noise a probability is measured under when none is named.
+DEFAULT_NOISE = drv.NOISE_KIND_NAMES[0]
 #: What a noisy intent is clipped to (a car's and a driver's limits, not the script's ranges).
 CLIP = {"speed": (0.0, 70.0), "arrive": (0.0, 60.0), "brake_at": (0.0, 60.0), "slide_at": (0.0, 60.0),
         "slide_steer": (-math.radians(35), math.radians(35)), "slide_power": (0.0, 1.0), "headway": (0.05, 10.0),
         "reaction": (0.0, 5.0), "after_steer": (-math.radians(35), math.radians(35))}
 
 
-def sigma_row() -> np.ndarray:
-    """(len(INTENT),) the noise of each intent column (0 where none)."""
-    return np.array([NOISE.get(k, 0.0) for k in drv.INTENT])
+def check_noise(noise: str) -> str:
+    """The noise kind ``noise`` checked.
+
+    Args:
+        noise: a name of :data:`NOISE_KINDS`.
+
+    Returns:
+        The name.
+
+    Raises:
+        InputError: an unknown kind.
+    """
+    if noise not in NOISE_KINDS:
+        raise InputError(f"noise: {noise!r} is not a kind of driver noise; known: {', '.join(NOISE_KINDS)}")
+    return noise
 
 
-def noisy(intents: np.ndarray, m: int, seed: int) -> np.ndarray:
-    """(m, n, len(INTENT)) noisy copies of ``intents`` (n, len(INTENT)); copy i is the same draw
-    for every intent set (common random numbers). Off behaviours (NaN) stay off."""
+def sigma_row(noise: str = DEFAULT_NOISE) -> np.ndarray:
+    """(len(INTENT),) the noise of each intent column (0 where none; a share of the intent for
+    the kind's :data:`RELATIVE` columns)."""
+    kind = NOISE_KINDS[check_noise(noise)]
+    return np.array([kind.get(k, 0.0) for k in drv.INTENT])
+
+
+def _sigmas(intents: np.ndarray, noise: str) -> np.ndarray:
+    """(n, len(INTENT)) each intent's standard deviation under ``noise`` (SI)."""
+    sig = np.broadcast_to(sigma_row(noise), intents.shape).copy()
+    for k in RELATIVE[noise]:
+        j = drv.IX[k]
+        sig[:, j] = sig[:, j] * np.abs(np.nan_to_num(intents[:, j]))
+    return sig
+
+
+def noisy(intents: np.ndarray, m: int, seed: int, noise: str = DEFAULT_NOISE) -> np.ndarray:
+    """(m, n, len(INTENT)) noisy copies of ``intents`` (n, len(INTENT)) under the kind ``noise``
+    (:data:`NOISE_KINDS`); copy i is the same draw for every intent set and every kind (common
+    random numbers). Off behaviours (NaN) stay off."""
     n, P = intents.shape
     lo = np.full((n, P), -np.inf)
     hi = np.full((n, P), np.inf)
     for k, (a, b) in CLIP.items():
         lo[:, drv.IX[k]], hi[:, drv.IX[k]] = a, b
     draws = normal_draws(seed, m, n * P).reshape(m, n, P)
-    return perturb(intents[None], np.broadcast_to(sigma_row(), (n, P))[None], draws, lo[None], hi[None])
+    return perturb(intents[None], _sigmas(intents, noise)[None], draws, lo[None], hi[None])
 
 
 def label(o) -> str:
@@ -81,6 +136,7 @@ class CrashEstimate:
     prob: Probability
     seed: int
     outcomes: dict
+    noise: str = DEFAULT_NOISE
 
     def __getattr__(self, name):  # k, n, p, lo, hi, text() of the probability
         if name == "prob":
@@ -89,25 +145,44 @@ class CrashEstimate:
 
     def to_dict(self) -> dict:
         pr = self.prob
+        kind = NOISE_KINDS[self.noise]
         return {"k": pr.k, "n": pr.n, "p": pr.p, "lo": pr.lo, "hi": pr.hi, "seed": self.seed,
-                "noise": {k: NOISE[k] for k in NOISE}, "outcomes": dict(self.outcomes)}
+                "noise_kind": self.noise, "noise": {k: kind[k] for k in kind},
+                "noise_relative": list(RELATIVE[self.noise]), "outcomes": dict(self.outcomes)}
 
 
-def estimate_of(outcomes, seed: int) -> CrashEstimate:
+def estimate_of(outcomes, seed: int, noise: str = DEFAULT_NOISE) -> CrashEstimate:
     k = sum(1 for o in outcomes if o.solved)
     return CrashEstimate(prob=Probability.of(k, len(outcomes)), seed=int(seed),
-                         outcomes=counts(label(o) for o in outcomes))
+                         outcomes=counts(label(o) for o in outcomes), noise=check_noise(noise))
 
 
-def probability(runner: CrashRunner, intents: np.ndarray, n: int, seed: int, *, on_batch=None) -> CrashEstimate:
-    """The probability that ``intents`` meet the script under driver noise (``n`` copies of ``seed``)."""
-    copies = noisy(np.asarray(intents, dtype=float), n, seed)
+def probability(runner: CrashRunner, intents: np.ndarray, n: int, seed: int, *, noise: str = DEFAULT_NOISE,
+                on_batch=None) -> CrashEstimate:
+    """The probability that ``intents`` meet the script under driver noise.
+
+    Args:
+        runner: the crash's runner.
+        intents: (vehicles, len(INTENT)) the drivers' intents.
+        n: noisy copies.
+        seed: the noise's seed (common random numbers).
+        noise: the kind of driver noise (:data:`NOISE_KINDS`).
+        on_batch: called with the copies run so far after each batch.
+
+    Returns:
+        A :class:`CrashEstimate`.
+
+    Raises:
+        InputError: an unknown noise kind.
+    """
+    check_noise(noise)
+    copies = noisy(np.asarray(intents, dtype=float), n, seed, noise)
     outs = []
     for k in range(0, n, runner.size):
         outs += runner.run(copies[k:k + runner.size]).outcomes
         if on_batch:
             on_batch(len(outs))
-    return estimate_of(outs, seed)
+    return estimate_of(outs, seed, noise)
 
 
 def ladder(script, xml: str, intents: np.ndarray, timesteps=TIMESTEP_LADDER):
@@ -132,13 +207,16 @@ def ladder_rows(lad) -> list:
 
 class RobustCrashProblem:
     """The crash as :func:`nbst.models.mjsearch.robust.maximise` sees it: a candidate is an intent
-    set (n, len(INTENT)); a point is the search space's coordinates, each in its noise sigma."""
+    set (n, len(INTENT)); a point is the search space's coordinates, each in its noise sigma
+    (under ``noise``; a relative column's sigma taken at ``ref``, the start's intents)."""
 
-    def __init__(self, space: CrashSpace, runner: CrashRunner, xml: str):
-        self.S, self.R, self.xml = space, runner, xml
-        sig = sigma_row()
-        self.scale = np.array([sig[f] if isinstance(r, Range) and sig[f] > 0 else 1.0 for _, f, r in space.coords])
-        self.moved = np.array([1.0 if isinstance(r, Range) and sig[f] > 0 else 0.0 for _, f, r in space.coords])
+    def __init__(self, space: CrashSpace, runner: CrashRunner, xml: str, noise: str = DEFAULT_NOISE, ref=None):
+        self.S, self.R, self.xml, self.noise = space, runner, xml, check_noise(noise)
+        sig = _sigmas(np.asarray(space.base if ref is None else ref, dtype=float), noise)
+        self.sig = np.array([sig[i, f] if isinstance(r, Range) else 0.0 for i, f, r in space.coords])
+        ok = np.isfinite(self.sig) & (self.sig > 0)
+        self.scale = np.where(ok, self.sig, 1.0)
+        self.moved = np.array([1.0 if isinstance(r, Range) and good else 0.0 for (_, _, r), good in zip(space.coords, ok)])
         self.lo = np.array([r.lo if isinstance(r, Range) else 0.0 for _, _, r in space.coords])
         self.hi = np.array([r.hi if isinstance(r, Range) else 0.0 for _, _, r in space.coords])
 
@@ -166,7 +244,7 @@ class RobustCrashProblem:
         return self._values(cand) / self.scale
 
     def noisy(self, cand, m: int, seed: int) -> list:
-        return list(noisy(cand, m, seed))
+        return list(noisy(cand, m, seed, self.noise))
 
     def run(self, copies: list) -> list:
         out = []
@@ -175,14 +253,116 @@ class RobustCrashProblem:
         return out
 
     def judge(self, o):
-        return bool(o.solved), bin(o.signature).count("1"), label(o)
+        # partial credit: the fates held (bits), then how near the rest came (a finer tie-break
+        # between candidates that meet the script equally often on the screen)
+        return bool(o.solved), bin(o.signature).count("1") - min(o.cost, 100.0) / 1000.0, label(o)
 
     def ladder(self, cand):
         lad = ladder(self.R.script, self.xml, cand)
         return ladder_rows(lad), bool(lad.results[0].solved and lad.holds), len(lad.timesteps)
 
     def fresh(self, cand, n: int, seed: int) -> CrashEstimate:
-        return probability(self.R, cand, n, seed)
+        return probability(self.R, cand, n, seed, noise=self.noise)
+
+
+#: The centring stage of :func:`robust_pick`: noisy copies per screen, and the share of the
+#: budget it may spend (the room's maximiser gets the rest).
+CENTRE_COPIES, CENTRE_SHARE = 48, 0.5
+
+
+def _centre(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int):
+    """Move ``start`` to the centroid of its noisy copies that meet the script (fewer than a
+    quarter meeting it: of the quarter nearest to it), while that raises how many of the same
+    copies (common random numbers; then the partial credit) meet it: (the candidate, [k, m] before,
+    [k, m] after, rollouts run). Every copy that meets the script is itself an intent set that
+    does; their centroid is the cross-entropy method's new mean (Rubinstein and Kroese, *The
+    Cross-Entropy Method*, 2004), the point the noise carries most often into the met region."""
+    m = CENTRE_COPIES
+    cs = int(np.random.SeedSequence([int(seed), 47]).generate_state(1, np.uint64)[0] >> 1)
+    frames = 0
+
+    def screen(cand):
+        nonlocal frames
+        copies = P.noisy(cand, m, cs)
+        got = [P.judge(o) for o in P.run(copies)]
+        frames += m
+        y = np.array([g[0] for g in got])
+        # the elite: the copies that met the script, or, fewer than a quarter meeting it, the
+        # quarter nearest to it (met first, then partial credit: the cross-entropy method's elite)
+        order = sorted(range(m), key=lambda i: (got[i][0], got[i][1]), reverse=True)
+        elite = np.zeros(m, bool)
+        elite[order[:max(int(y.sum()), m // 4)]] = True
+        return y, elite, sum(g[1] for g in got), np.array([P.point(c) for c in copies])
+
+    if budget < 2 * m:  # not even a screen and one step: leave it to the maximiser
+        return start, [0, 0], [0, 0], 0
+    cand = start
+    y, elite, credit, Z = screen(cand)
+    k0 = k = int(y.sum())
+    x = P.point(cand)
+    step = 1.0
+    while k < m and frames + m <= budget and step >= 0.25:
+        d = (Z[elite].mean(axis=0) - x) * P.moved
+        x_new = P.project(x + step * d)
+        c_new = P.make(x_new)
+        y2, elite2, credit2, Z2 = screen(c_new)
+        if (int(y2.sum()), credit2) > (k, credit):
+            cand, x, y, elite, credit, Z, k = c_new, P.point(c_new), y2, elite2, credit2, Z2, int(y2.sum())
+        else:
+            step /= 2
+    return cand, [k0, m], [k, m], frames
+
+
+def robust_pick(space: CrashSpace, runner: CrashRunner, intents: np.ndarray, *, budget: int, seed: int, n: int,
+                noise: str = DEFAULT_NOISE, ladder: bool = True):
+    """The intents near ``intents`` that meet the script most often under driver noise: the
+    centring stage (:func:`_centre`, at most :data:`CENTRE_SHARE` of ``budget``), then the
+    room's robust maximiser from both the centred and the given intents (the rest of the budget;
+    its pick keeps its outcome on the ladder and is measured afresh on ``n`` copies of ``seed``).
+
+    Args:
+        space: the script's search space.
+        runner: its runner.
+        intents: (vehicles, len(INTENT)) a crash that meets the script.
+        budget: noisy rollouts for the two stages (the ladder and the fresh estimate on top).
+        seed: the seed (screens, steps, the fresh estimate).
+        n: noisy copies of the fresh estimate.
+        noise: the kind of driver noise (:data:`NOISE_KINDS`).
+        ladder: keep only a pick that keeps its outcome at 1 and 0.5 ms.
+
+    Returns:
+        A :class:`RobustPick`: the room's ``Maximum`` (``best``: the pick; ``fresh``: its
+        :class:`CrashEstimate`; ``frames`` counting both stages) and ``centre``.
+
+    Raises:
+        InputError: an unknown noise kind.
+        SolveError: a budget or ``n`` the maximiser refuses.
+    """
+    from nbst.models.mjsearch import robust as room
+
+    P = RobustCrashProblem(space, runner, runner.xml, noise=noise, ref=intents)
+    intents = np.asarray(intents, dtype=float)
+    centred, before, after, used = _centre(P, intents, int(budget * CENTRE_SHARE), seed)
+    starts = [centred, intents] if after[0] > before[0] else [intents]
+    mx = room.maximise(P, starts, budget=max(1, int(budget) - used), seed=seed, n=n, ladder=ladder)
+    mx.frames += used
+    return RobustPick(mx=mx, centre={"copies": before[1], "start": before[0], "centred": after[0],
+                                     "rollouts": used})
+
+
+@dataclass
+class RobustPick:
+    """What :func:`robust_pick` found: the room's ``Maximum`` (its fields read through: best,
+    fresh, frames, ladder, ...) and the centring stage's ``centre`` ({copies, start, centred,
+    rollouts}: how many of the centring screen's copies the start and the centred intents met)."""
+
+    mx: object
+    centre: dict
+
+    def __getattr__(self, name):
+        if name in ("mx", "centre"):
+            raise AttributeError(name)
+        return getattr(self.mx, name)
 
 
 def _after_name(code: float) -> str:

@@ -26,6 +26,7 @@ __all__ = ["COMMANDS", "register"]
 ROLLOUTS = Bounded("max-rollouts", 1, 10_000_000, integer=True)
 ROBUST = Bounded("robust", 12, 1_000_000, integer=True)
 SAMPLES = Bounded("samples", 1, 100_000, integer=True)
+SOLVE_SAMPLES_FLAG = Bounded("samples", 0, 100_000, integer=True)
 
 
 #: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
@@ -38,7 +39,7 @@ COMMANDS = {
 def register(sub) -> None:
     # the defaults are the library's; read here, when `nbst crash` is built, so that `nbst --help`
     # loads no crash module (their registries, the vehicle files) at all
-    from nbst.models.crash.robust import DEFAULT_ROBUST_BUDGET, DEFAULT_SAMPLES
+    from nbst.models.crash.robust import DEFAULT_NOISE, DEFAULT_ROBUST_BUDGET, DEFAULT_SAMPLES, NOISE_KINDS, SOLVE_SAMPLES
     from nbst.models.crash.search import DEFAULT_MAX_ROLLOUTS
 
     p = sub.add_parser("crash", help=COMMANDS["crash"],
@@ -84,10 +85,12 @@ def register(sub) -> None:
                                     f"successive halving; BUDGET noisy rollouts, default {DEFAULT_ROBUST_BUDGET}) and "
                                     "write the pick, "
                                     "the latest that keeps its outcome at 2, 1 and 0.5 ms", ROBUST))
-    v.add_argument("--samples", type=SAMPLES, default=None, metavar="N",
-                   help=with_limits("also estimate the probability that the crash written meets the script under "
-                                    "driver noise from N noisy rollouts, with its 95 %% Wilson interval (default: "
-                                    f"none; {DEFAULT_SAMPLES} with --robust)", SAMPLES))
+    v.add_argument("--samples", type=SOLVE_SAMPLES_FLAG, default=None, metavar="N",
+                   help=with_limits("estimate the probability that the crash written meets the script under "
+                                    "driver noise from N noisy re-drives, with its 95 %% Wilson interval, into the "
+                                    f"file and the summary (default {SOLVE_SAMPLES}, {DEFAULT_SAMPLES} with --robust; "
+                                    "0: none)", SOLVE_SAMPLES_FLAG))
+    _noise_flag(v, DEFAULT_NOISE, NOISE_KINDS)
     v.add_argument("--no-ladder", action="store_true",
                    help="accept a crash that meets the script at the script's step only (by default the search "
                         "goes on until one also meets it at 1 and 0.5 ms, and the file records that ladder)")
@@ -98,14 +101,16 @@ def register(sub) -> None:
 
     b = cr.add_parser("probability", help="the probability that a crash file's intents meet its script under "
                                           "driver noise",
-                      description="Run N noisy copies of CRASH.json's driver intents (speed +-0.5 m/s, aim "
-                                  "+-0.2 m, times +-0.1 s, steering +-1 deg: docs/crash.md) and print the share "
+                      description="Run N noisy copies of CRASH.json's driver intents (--noise retake: speed "
+                                  "+-0.5 m/s, aim +-0.2 m, times +-0.1 s, steering +-1 deg; population: published "
+                                  "spreads of real drivers; docs/crash.md) and print the share "
                                   "that meets the script with its 95 %% Wilson interval, and the outcomes seen. "
                                   "The same --seed gives the same copies (common random numbers).")
     b.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
     b.add_argument("--samples", type=SAMPLES, default=DEFAULT_SAMPLES, metavar="N",
                    help=with_limits(f"noisy rollouts (default {DEFAULT_SAMPLES})", SAMPLES))
     b.add_argument("--seed", type=SEED, default=1, help=f"noise seed [{SEED.limits}] (default 1)")
+    _noise_flag(b, DEFAULT_NOISE, NOISE_KINDS)
     b.add_argument("-o", "--output", default=None, metavar="OUT.json",
                    help="also write the crash file with this estimate in its `probability`")
     _runner_flags(b)
@@ -122,6 +127,13 @@ def register(sub) -> None:
     r.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
     r.add_argument("--json", action="store_true", help="print one JSON object: identical, outcome")
     r.set_defaults(func=cmd_replay)
+
+
+def _noise_flag(p, default: str, kinds) -> None:
+    p.add_argument("--noise", choices=tuple(kinds), default=default,
+                   help=f"the driver noise (default {default}): retake, what a stunt crew repeats take to take; "
+                        "population, what ordinary drivers vary (published reaction times, speeds, lane positions: "
+                        "docs/crash.md)")
 
 
 def _runner_flags(p) -> None:

@@ -14,12 +14,13 @@ from typing import Any
 import numpy as np
 
 from nbst.cli.args import print_json
+from nbst.errors import InputError
 from nbst.outputs import prepare_output, sigterm_as_interrupt, write_text_atomic
 from nbst.parallel import default_jobs
 from nbst.progress import command_start, count_text, progress_bar, seconds_text
 from nbst.seeds import resolve_seed
 
-__all__ = ["cmd_scripts", "cmd_check", "cmd_solve", "cmd_probability", "cmd_replay",
+__all__ = ["fate_phrases", "cmd_scripts", "cmd_check", "cmd_solve", "cmd_probability", "cmd_replay",
            "write_crash"]
 
 
@@ -55,30 +56,46 @@ def cmd_scripts(args) -> int:
     return 0
 
 
+def fate_phrases(script, i: int) -> dict:
+    """{fate key (outcome.judge's): what vehicle ``i``'s script asks, in words}, every fate asked."""
+    f, names = script.vehicles[i].fate, script.names()
+    asks: dict = {}
+    if f.hits is not None:
+        asks["hits"] = "hits " + (", then ".join(names[j] for j in f.hits) or "nobody")
+    if f.impact_speed is not None:
+        asks["impact_speed"] = f"impact speed {f.impact_speed.lo * 3.6:g}-{f.impact_speed.hi * 3.6:g} km/h"
+    if f.delta_v is not None:
+        asks["delta_v"] = f"delta-V {f.delta_v.lo * 3.6:g}-{f.delta_v.hi * 3.6:g} km/h in its first impact"
+    if f.impact_at is not None:
+        asks["impact_at"] = f"at the impact within {f.impact_at[2]:g} m of ({f.impact_at[0]:g}, {f.impact_at[1]:g})"
+    if f.rest is not None:
+        asks["rest"] = f"comes to rest within {f.rest[2]:g} m of ({f.rest[0]:g}, {f.rest[1]:g})"
+    if f.heading is not None:
+        asks["heading"] = f"at rest facing {math.degrees(f.heading[0]):g} +- {math.degrees(f.heading[1]):g} deg"
+    if f.quarter_turns is not None:
+        lo, hi = f.quarter_turns
+        asks["quarter_turns"] = f"{lo}{'' if lo == hi else f'-{hi}'} quarter turn{'' if hi == 1 else 's'} of roll"
+    if f.attitude is not None:
+        asks["attitude"] = f"ends {f.attitude}"
+    if f.spin is not None:
+        asks["spin"] = f"spins {math.degrees(f.spin[0]):g} +- {math.degrees(f.spin[1]):g} deg"
+    for key in ("curb", "barrier"):
+        want = getattr(f, key)
+        if want is not None:
+            asks[key] = f"{'strikes' if want else 'does not strike'} a {key}"
+    return asks
+
+
 def cmd_check(args) -> int:
     s = _load(args.script)
     print(f"{s.name}: {s.road.layout} road, {s.road.width:g} m wide, friction {s.road.friction:g}"
           + (f", curbs {s.road.curb:g} m" if s.road.curb else "") + f"; {s.duration:g} s at {s.timestep * 1e3:g} ms")
     names = s.names()
-    for v in s.vehicles:
-        f = v.fate
-        asks = []
-        if f.hits is not None:
-            asks.append("hits " + (", ".join(names[j] for j in f.hits) or "nobody"))
-        if f.rest is not None:
-            asks.append(f"rests within {f.rest[2]:g} m of ({f.rest[0]:g}, {f.rest[1]:g})")
-        if f.impact_at is not None:
-            asks.append(f"at the impact within {f.impact_at[2]:g} m of ({f.impact_at[0]:g}, {f.impact_at[1]:g})")
-        if f.heading is not None:
-            asks.append(f"facing {math.degrees(f.heading[0]):g} +- {math.degrees(f.heading[1]):g} deg")
-        if f.quarter_turns is not None:
-            asks.append(f"{f.quarter_turns[0]}-{f.quarter_turns[1]} quarter turns")
-        if f.attitude is not None:
-            asks.append(f"ends {f.attitude}")
-        if f.spin is not None:
-            asks.append(f"spins {math.degrees(f.spin[0]):g} deg")
+    for i, v in enumerate(s.vehicles):
+        asks = list(fate_phrases(s, i).values())
+        speed = f"{v.speed.lo * 3.6:g}" + ("" if v.speed.hi == v.speed.lo else f"-{v.speed.hi * 3.6:g}")
         print(f"  {v.name}: {v.vtype.label} at ({v.x:g}, {v.y:g}) facing {math.degrees(v.heading):g} deg, "
-              f"{v.speed.lo * 3.6:g}-{v.speed.hi * 3.6:g} km/h; " + ("; ".join(asks) or "no fate asked"))
+              f"{speed} km/h; " + ("; ".join(asks) or "no fate asked"))
     if s.order is not None:
         print("  order: " + ", then ".join(f"{names[a]}-{names[b]}" for a, b in s.order))
     return 0
@@ -97,6 +114,9 @@ def cmd_solve(args) -> int:
     from nbst.models.crash import crashfile, search
 
     script = _load(args.script)
+    if args.robust is not None and args.samples == 0:
+        raise InputError("--samples 0 with --robust: the robust pick's probability is measured afresh, from at least "
+                         "1 noisy re-drive")
     prepare_output(args.output)
     seed = _seed(args)
     runner = _runner(args, script)
@@ -143,9 +163,8 @@ def cmd_solve(args) -> int:
         more = ""
         if "ladder" in d:
             more += "; ladder " + ("holds at 2, 1 and 0.5 ms" if d["ladder"]["holds"] else "does not hold")
-        if "probability" in d:
-            p = d["probability"]
-            more += f"; P {100 * p['p']:.0f} % ({p['k']}/{p['n']}, 95 % CI {100 * p['lo']:.0f}-{100 * p['hi']:.0f} %)"
+        if d.get("probability"):
+            more += "; " + _p_text(d["probability"])
         moving = [v.name for v in b.outcome.vehicles if v.moving]
         if moving:
             more += (f"; {', '.join(moving)} still moving at the end ({script.duration:g} s): the pose then, not a "
@@ -158,25 +177,32 @@ def cmd_solve(args) -> int:
     return 0 if b.outcome.solved else 1
 
 
+def _p_text(p: dict) -> str:
+    """A crash file's probability in one phrase: P, k/n, the interval, the noise."""
+    return (f"P(fates) {100 * p['p']:.0f} % ({p['k']}/{p['n']} noisy re-drives, 95 % CI {100 * p['lo']:.0f}-"
+            f"{100 * p['hi']:.0f} %, {p.get('noise_kind', 'retake')} noise)")
+
+
 def _after_search(args, script, runner, S, best, intents, seed):
-    """The robust maximiser (--robust), the ladder and the probability (--samples) of the crash
-    found: (the trial to write, its intents, the file's extra fields)."""
+    """The robust maximiser (--robust), the ladder and the probability (--samples; by default
+    :data:`.robust.SOLVE_SAMPLES` re-drives, 0: none) of the crash found: (the trial to write,
+    its intents, the file's extra fields; ``probability`` None when not measured)."""
     from nbst.models.crash import robust
     from nbst.models.crash.search import Trial
 
-    extra: dict = {}
+    extra: dict = {"probability": None}
+    noise = robust.check_noise(args.noise)
     if args.robust is not None and best.outcome.solved:
-        from nbst.models.mjsearch import robust as room
-
-        n = args.samples or robust.DEFAULT_SAMPLES
-        P = robust.RobustCrashProblem(S, runner, runner.xml)
-        mx = room.maximise(P, [intents], budget=args.robust, seed=seed, n=n, ladder=not args.no_ladder)
+        n = args.samples if args.samples is not None else robust.DEFAULT_SAMPLES
+        mx = robust.robust_pick(S, runner, intents, budget=args.robust, seed=seed, n=n, noise=noise,
+                                ladder=not args.no_ladder)
         intents = mx.best
         r = runner.run(intents[None])
         best = Trial(u=S.unit_of(intents), outcome=r.outcomes[0], controls=r.controls[0], qpos0=r.qpos0[0],
                      qvel0=r.qvel0[0], final_qpos=r.final_qpos[0])
         extra["robust"] = {"budget": args.robust, "rollouts": mx.frames, "screen": [mx.screen.k, mx.screen.n],
-                           "start_screen": [mx.start_screen.k, mx.start_screen.n], "screen_seed": mx.screen_seed}
+                           "start_screen": [mx.start_screen.k, mx.start_screen.n], "screen_seed": mx.screen_seed,
+                           "centre": mx.centre}
         extra["probability"] = mx.fresh.to_dict()
         if mx.ladder:
             extra["ladder"] = {"rows": mx.ladder, "holds": bool(mx.ladder_holds)}
@@ -184,8 +210,9 @@ def _after_search(args, script, runner, S, best, intents, seed):
     if not args.no_ladder:
         lad = robust.ladder(script, runner.xml, intents)
         extra["ladder"] = {"rows": robust.ladder_rows(lad), "holds": bool(lad.holds)}
-    if args.samples:
-        extra["probability"] = robust.probability(runner, np.asarray(intents), args.samples, seed).to_dict()
+    n = robust.SOLVE_SAMPLES if args.samples is None else args.samples
+    if n:
+        extra["probability"] = robust.probability(runner, np.asarray(intents), n, seed, noise=noise).to_dict()
     return best, intents, extra
 
 
@@ -199,7 +226,7 @@ def cmd_probability(args) -> int:
     runner = _runner(args, script, xml=d["scene_xml"])
     bar = None if args.quiet else progress_bar(total=args.samples, unit="rollout", file=sys.stderr,
                                                desc=f"probability {script.name}")
-    est = robust.probability(runner, intents, args.samples, args.seed,
+    est = robust.probability(runner, intents, args.samples, args.seed, noise=args.noise,
                              on_batch=None if bar is None else (lambda k: bar.update(k - bar.n)))
     if bar is not None:
         bar.close()
@@ -210,7 +237,7 @@ def cmd_probability(args) -> int:
     if args.json:
         print_json(est.to_dict())
     else:
-        print(f"{args.crash}: P(script met) = {est.text()} under driver noise, seed {args.seed}")
+        print(f"{args.crash}: P(script met) = {est.text()} under {args.noise} noise (docs/crash.md), seed {args.seed}")
         for lab, k in est.outcomes.items():
             print(f"  {lab:12s} {k}")
     return 0
