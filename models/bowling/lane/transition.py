@@ -18,9 +18,10 @@
   bowler's spare system, :func:`.spares.straight_at`), under the same noise.
 * **Moves** (``move``): ``"none"`` keeps the line; ``"auto"`` reads where the last
   :data:`MOVE_AFTER` strike balls crossed the head pin's line and, when their mean is more than
-  :data:`MOVE_MISS` boards high (left of the pocket for a right-hander) or light, makes the
-  coach's "2 and 1" move: feet 2 boards and target 1 board in the same direction (in when high,
-  out when light). One such move shifts the pro's ball at the pins by about 2 boards (1.6-2.7,
+  :data:`MOVE_MISS` boards and its standard error high (left of the pocket for a right-hander)
+  or light, makes the coach's "2 and 1" move: feet 2 boards and target 1 board in the same
+  direction (in when high, out when light), one step per :data:`MOVE_BOARDS` boards of miss in
+  half steps (:func:`move_for`). One such move shifts the pro's ball at the pins by about 2 boards (1.6-2.7,
   measured on the house shot fresh and after 10-30 identical balls, 2026-12-03; docs/bowling.md).
 * **Readings**: each ball's board and entry angle at the pins (the frame's), its breakpoint
   (the ball alone, :func:`.phases.throw`, on a copy of the lane as it was: the same ball path),
@@ -45,7 +46,7 @@ from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
 from nbst.models.bowling.lane.noise import Noise
 from nbst.models.bowling.lane.oil import DX_FT, NX, OilField, OilLaw, pattern
 
-__all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS",
+__all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
            "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
            "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws"]
 
@@ -57,8 +58,10 @@ POCKET = (16.5, 18.5)
 TARGET_BOARD = 17.5
 #: "2 and 1": feet and target boards of one move.
 MOVE_FEET, MOVE_TARGET = 2.0, 1.0
-#: A move follows the mean of the last MOVE_AFTER strike balls missing by more than MOVE_MISS boards.
-MOVE_AFTER, MOVE_MISS = 5, 1.0
+#: A move follows the mean of the last MOVE_AFTER strike balls missing by more than MOVE_MISS boards and
+#: more than its standard error; one "2 and 1" step per MOVE_BOARDS boards of miss, in half steps (issue 48).
+MOVE_AFTER, MOVE_MISS = 4, 0.5
+MOVE_BOARDS = 2.0
 MAX_GAMES, MAX_LINEUP = 30, 8
 #: Paths are kept every PATH_FT ft; oil maps rounded to MAP_DECIMALS (um).
 PATH_FT = 0.5
@@ -121,15 +124,21 @@ def moved(strike: lane.Delivery, feet: float, target: float) -> lane.Delivery:
     return replace(strike, board=float(fb), at="foul", angle=float(angle))
 
 
-def move_for(boards) -> int:
+def move_for(boards) -> float:
     """The bowler's move after strike balls that crossed the head pin's line on ``boards`` (the
-    latest last; None for a ball that never got there): +1 "2 and 1" in (the last MOVE_AFTER hit
-    high on average), -1 out (light), 0 stay."""
+    latest last; None for a ball that never got there), in "2 and 1" steps: + in (the last
+    MOVE_AFTER hit high on average), - out (light), 0 stay. A move needs the mean miss to exceed
+    MOVE_MISS and its standard error (a miss the bowler's own spread explains is not read as the
+    lane's; issue 48: noise-driven moves cost a league bowler a game); its size is one step per
+    MOVE_BOARDS boards of miss, rounded to a half step (feet 1 board, target 1/2), at least a half."""
     last = [b for b in list(boards)[-MOVE_AFTER:] if b is not None]
     if len(last) < MOVE_AFTER:
         return 0
     miss = float(np.mean(last)) - TARGET_BOARD
-    return 1 if miss > MOVE_MISS else -1 if miss < -MOVE_MISS else 0
+    se = float(np.std(last, ddof=1)) / math.sqrt(len(last))
+    if abs(miss) <= max(MOVE_MISS, se):
+        return 0
+    return float(math.copysign(max(0.5, round(2 * abs(miss) / MOVE_BOARDS) / 2), miss))
 
 
 def spare_line(pins, hand: str, oil, ball: lane.Ball | None = None) -> lane.Delivery:
