@@ -4,6 +4,12 @@
 what they must hit); :func:`default_camera` looks at it from :data:`AZIMUTH` and :data:`ELEVATION`
 and fits it into the part of the frame the readout leaves (an off-axis frustum).
 
+The camera tracks (:func:`tracking_boxes`): at each frame it frames the regions and what the
+bodies must hit, and the bodies where they are within :data:`TRACK_WINDOW` s of that frame,
+the box smoothed over :data:`TRACK_TAU` s both ways; so the bodies stay large (two dice at rest
+in their square fill the view, not a speck beside the table they fell from) and the view
+glides, never jumps.
+
 Compute only (numpy; MuJoCo's names).
 """
 from __future__ import annotations
@@ -18,7 +24,8 @@ from nbst.render.core import geoms as sg
 from nbst.render.scene.motion import SceneMotion
 from nbst.scene.fates import Fates
 
-__all__ = ["AZIMUTH", "DISTANCE", "ELEVATION", "FILL", "FOV", "focus_points", "default_camera", "regions_of"]
+__all__ = ["AZIMUTH", "DISTANCE", "ELEVATION", "FILL", "FOV", "TRACK_TAU", "TRACK_WINDOW", "box_corners",
+           "focus_points", "default_camera", "regions_of", "tracking_boxes"]
 
 #: The framing camera looks at the bodies from this azimuth (degrees from +x, about +z; -90: from
 #: -y, the front) and elevation (degrees above the horizon), with this vertical field of view.
@@ -29,16 +36,67 @@ DISTANCE = 2.5
 #: ... as near as it can with every corner of the framed box within this share of the frame.
 FILL = 0.8
 
+#: The tracking camera frames the bodies within this many seconds of the frame, its box smoothed
+#: with this time constant (s), forwards and backwards.
+TRACK_WINDOW, TRACK_TAU = 0.35, 0.25
+
 _CUBE = np.array([[(-1.0, 1.0)[(k >> i) & 1] for i in range(3)] for k in range(8)])
 
 
-def focus_points(motion: SceneMotion, fates: Fates, model: Any) -> np.ndarray:
-    """(N, 3) the points the default camera frames: the controlled and fated bodies' paths (the
-    corners of their geoms' bounding cubes at every frame), their regions' corners, and what their
-    ``hits`` and ``never_hits`` name (planes aside), where it starts."""
+def _fixed_and_bodies(motion: SceneMotion, fates: Fates, model: Any) -> tuple[np.ndarray, list[tuple[int, float]]]:
+    """(the fixed points: regions' corners and what the bodies must touch or miss, (N, 3); the
+    framed bodies as (body id, the radius of a cube about its origin holding its geoms))."""
+    pts = focus_points(motion, fates, model, bodies=False)
     import mujoco
 
     bodies = {int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n))
+              for n in [c.body for c in fates.controls] + [f.body for f in fates.fates]}
+    out = []
+    for b in sorted(bodies):
+        gs = [g for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) == b]
+        out.append((b, max((float(model.geom_rbound[g]) + float(np.linalg.norm(model.geom_pos[g])) for g in gs),
+                           default=0.05)))
+    return pts, out
+
+
+def tracking_boxes(motion: SceneMotion, fates: Fates, model: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(lo (F, 3), hi (F, 3)): the box the tracking camera frames at each recorded frame: the fixed
+    points (regions, what must be touched) and the bodies within TRACK_WINDOW s, smoothed over
+    TRACK_TAU s forwards and backwards (never a jump)."""
+    fixed, bodies = _fixed_and_bodies(motion, fates, model)
+    t = np.asarray(motion.times, float)
+    F = len(t)
+    lo = np.empty((F, 3))
+    hi = np.empty((F, 3))
+    for k in range(F):
+        sel = np.abs(t - t[k]) <= TRACK_WINDOW + 1e-12
+        parts = [fixed] if len(fixed) else []
+        for b, r in bodies:
+            p = motion.body_xpos[sel, b]
+            parts.append(np.concatenate([p.min(axis=0) - r, p.max(axis=0) + r])[None].reshape(2, 3))
+        allp = np.concatenate(parts)
+        lo[k], hi[k] = allp.min(axis=0), allp.max(axis=0)
+    a = 1.0 - np.exp(-np.diff(t) / TRACK_TAU) if F > 1 else np.zeros(0)
+    for arr in (lo, hi):
+        for k in range(1, F):                      # forwards
+            arr[k] = arr[k - 1] + a[k - 1] * (arr[k] - arr[k - 1])
+        for k in range(F - 2, -1, -1):             # and backwards: no lag
+            arr[k] = arr[k + 1] + a[k] * (arr[k] - arr[k + 1])
+    return lo, hi
+
+
+def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(8, 3) the corners of the box lo..hi."""
+    return (lo + hi) / 2 + (hi - lo) / 2 * _CUBE
+
+
+def focus_points(motion: SceneMotion, fates: Fates, model: Any, *, bodies: bool = True) -> np.ndarray:
+    """(N, 3) the points the default camera frames: the controlled and fated bodies' paths (the
+    corners of their geoms' bounding cubes at every frame), their regions' corners, and what their
+    ``hits`` and ``never_hits`` name (planes aside), where it starts; ``bodies`` False: the paths left out."""
+    import mujoco
+
+    moving = {int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n))
               for n in [c.body for c in fates.controls] + [f.body for f in fates.fates]}
     pts = []
     for f in fates.fates:   # what they must touch or miss (a backboard, a bell), but no plane
@@ -49,7 +107,7 @@ def focus_points(motion: SceneMotion, fates: Fates, model: Any) -> np.ndarray:
             for g in gs:
                 if g >= 0 and int(model.geom_type[g]) != sg.PLANE:
                     pts.append(motion.geom_xpos[0, g] + float(model.geom_rbound[g]) * _CUBE)
-    for b in bodies:
+    for b in (moving if bodies else ()):
         gs = [g for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) == b]
         r = max((float(model.geom_rbound[g]) + float(np.linalg.norm(model.geom_pos[g])) for g in gs), default=0.05)
         pts.append((motion.body_xpos[:, b, None, :] + r * _CUBE).reshape(-1, 3))
@@ -60,7 +118,7 @@ def focus_points(motion: SceneMotion, fates: Fates, model: Any) -> np.ndarray:
             else:
                 lo, hi = np.asarray(reg.lo, float), np.asarray(reg.hi, float)
                 pts.append((lo + hi) / 2 + (hi - lo) / 2 * _CUBE)
-    return np.concatenate(pts)
+    return np.concatenate(pts) if pts else np.zeros((0, 3))
 
 
 def regions_of(f: Any) -> list[Any]:

@@ -12,8 +12,9 @@
   time on, labelled with the pair where the fates name what was touched (all, where none do).
 * **The readout** (:mod:`nbst.render.scene.readout`), top left: asked vs happened. ``clean``
   draws no text at all.
-* **Cameras**: a model camera by name, else one that frames the fated and controlled bodies' paths
-  and their regions, from the front and above (:mod:`nbst.render.scene.framing`).
+* **Cameras**: a model camera by name, else one that frames the fated and controlled bodies and
+  their regions from the front and above, tracking the bodies as they move (a box over where they
+  are within a fraction of a second, smoothed: :mod:`nbst.render.scene.framing`).
 
 Compute apart from I/O: :class:`SceneRenderer` returns frames; :func:`render_scene` is the thin
 writer the CLI calls; :func:`is_scene_solution` sniffs a file.
@@ -36,7 +37,7 @@ from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
 from nbst.render.core import geoms as sg
 from nbst.render.scene import readout as ro
-from nbst.render.scene.framing import regions_of, default_camera, focus_points
+from nbst.render.scene.framing import box_corners, default_camera, focus_points, regions_of, tracking_boxes
 from nbst.render.core.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
 from nbst.render.scene.motion import SceneMotion, Touch, record
 from nbst.scene.fates import Fates
@@ -204,8 +205,11 @@ class SceneRenderer(FrameRenderer):
             eye, look, vpm = default_camera(points, w / h, free)
             if best is None or abs(vpm[0, 0]) > abs(best[2][0, 0]):
                 best = (eye, look, vpm)
+                self.free = free
         assert best is not None
         self.eye, self.look, self.vpm = best
+        # the framing camera tracks the bodies (nbst.render.scene.framing.tracking_boxes)
+        self.track = tracking_boxes(motion, fates, model) if self.cam < 0 else None
         self.text = self.small = None
         self.rect = None
         if not self.clean:
@@ -245,6 +249,10 @@ class SceneRenderer(FrameRenderer):
             fov = float(self.model.cam_fovy[self.cam])
             near = max(float(self.model.vis.map.znear) * float(self.model.stat.extent), 1e-3)
             return flip @ perspective(fov, w / h, near, 1e3 * near + 100.0 * self.span) @ v, p
+        if self.track is not None:
+            k = self.motion.index(t)
+            eye, _, vpm = default_camera(box_corners(self.track[0][k], self.track[1][k]), w / h, self.free)
+            return vpm, eye
         return self.vpm, self.eye
 
     def to_pixel(self, vpm: np.ndarray, p: np.ndarray) -> tuple[float, float, bool]:
