@@ -13,18 +13,19 @@ Parts:
   room's rollout path (``nbst.scene.rollout.SceneSim.run``: the initial state from the controls,
   the steps, the judge) against ``mujoco.rollout.rollout`` alone from the same initial states, on
   the same model, steps and threads (1 and 2), in the same run: rollouts per second and their
-  ratio. The room does not run on ``mujoco.rollout``: a scene whose fates need the end only (no
-  ``at``, ``through``, ``still``, ``hits``, ``never_hits``) steps with one ``mj_step(m, d, nstep)``
-  call per rollout (C, the GIL released: threads run side by side); one whose fates need the path
-  or the contacts steps with ``mj_step`` once per step in Python, reading positions and contacts
-  between the steps (the GIL held between steps). The ratio measures that honestly.
-* **builtins**: each built-in solved (``nbst.scene.solve``) at each seed: rollouts to meet, their
-  median (a seed not met within the budget counts as the budget in the median, and is said), and
-  whether the answer still meets every fate at h/2 and h/4 (the same initial state; the ladder of
-  ``nbst scene replay --ladder``).
-* **versus**: the same scenes, the same cost (the judge's graded cost, every fate met at cost 0;
-  a rollout on which MuJoCo warned costs :data:`WARNED_COST`), the same budget of rollouts and the
-  same batches of threads, for:
+  ratio. The room runs on ``mujoco.rollout`` too (``SceneSim.engine``): the path and the first
+  touches are read from sensors added to a copy of the scene, written at every step; the ratio
+  is what the room adds (the initial state, the sensors, the judge).
+* **builtins**: each built-in solved (``nbst.scene.solve``, its default: the ladder asked) at each
+  seed: rollouts to meet, their median (a seed not met within the budget counts as the budget in
+  the median, and is said), and whether the answer meets every fate at h/2 and h/4 (checked again
+  here: the same initial state rolled out anew, the ladder of ``nbst scene replay --ladder``):
+  "ladder held k/5".
+* **versus**: the same scenes, the same cost and test as ``nbst.scene.solve`` by default (the
+  judge's graded cost, every fate met at cost 0; a rollout on which MuJoCo warned costs
+  :data:`WARNED_COST`; a rollout that meets every fate is rolled out at h/2 and h/4 too, counted,
+  its rungs' misses and graded costs added; solved when every fate is met at all three: the
+  ladder), the same budget of rollouts and the same batches of threads, for:
 
   - **nbst**: the room's signature search (``nbst.scene.solve``);
   - **pycma**: ``cma.CMAEvolutionStrategy`` alone over the controls scaled to [0, 1]^D (bounds
@@ -40,7 +41,7 @@ Parts:
     the :data:`CEM_ELITE` best refit the mean and the per-coordinate sigma (not below
     :data:`CEM_SIGMA_MIN`).
 
-  Each stops at the first rollout that meets every fate. Printed per scene: solved (of the
+  Each stops at the first rollout that meets every fate at h, h/2 and h/4. Printed per scene: solved (of the
   seeds) and the median rollouts to meet (unsolved counted as the budget).
 """
 from __future__ import annotations
@@ -160,7 +161,8 @@ def part_builtins(scenes: list[str], seeds: list[int], budget: int, jobs: int) -
             else:
                 rows.append(f"s{s}: not met")
         met = sum(1 for r in rows if "not met" not in r)
-        print(f"{name:12s} met {met}/{len(seeds)}, median {_median(counts):g} rollouts; "
+        held = sum(1 for r in rows if "h/2 ok, h/4 ok" in r)
+        print(f"{name:12s} met {met}/{len(seeds)}, median {_median(counts):g} rollouts, ladder held {held}/{len(seeds)}; "
               f"{'; '.join(rows)}  [{time.perf_counter() - t0:.0f} s]")
 
 
@@ -171,15 +173,22 @@ class _Budget(Exception):
 
 
 class Objective:
-    """The room's graded cost over controls scaled to [0, 1]^D, counting rollouts; stops at the first met."""
+    """The room's cost over controls scaled to [0, 1]^D, counting rollouts; stops at the first solved.
 
-    def __init__(self, sim: SceneSim, budget: int):
-        self.sim, self.budget = sim, budget
+    The same cost and the same test as ``nbst.scene.solve`` (its default ladder): the judge's graded
+    cost; a rollout that meets every fate at h is rolled out at h/2 and h/4 too (counted), and adds
+    ``LADDER_PENALTY`` per rung it misses there plus each rung's graded cost (at most
+    ``LADDER_FAR``); it solves when it meets every fate at all three."""
+
+    def __init__(self, sim: SceneSim, budget: int, ladder: tuple = ()):
+        self.sim, self.budget, self.ladder = sim, budget, ladder
         self.lo, self.hi = sim.fates.bounds()
         self.used = 0
         self.met_at: int | None = None
 
     def __call__(self, us: np.ndarray) -> np.ndarray:
+        from nbst.scene.search import LADDER_FAR, LADDER_PENALTY
+
         us = np.clip(np.asarray(us, dtype=float).reshape(-1, self.sim.fates.dim), 0.0, 1.0)
         us = us[:self.budget - self.used]
         if not len(us):
@@ -188,11 +197,17 @@ class Objective:
         costs = []
         for r in outs:
             self.used += 1
-            if r.judgement.met and not r.warnings and self.met_at is None:
-                self.met_at = self.used
-            costs.append(WARNED_COST if r.warnings else r.judgement.cost)
+            c = WARNED_COST if r.warnings else r.judgement.cost
+            if r.judgement.met and not r.warnings:
+                rungs = [s.rollout(r.x) for s in self.ladder]
+                self.used += len(rungs)
+                misses = sum(not (q.judgement.met and not q.warnings) for q in rungs)
+                c += LADDER_PENALTY * misses + sum(min(q.cost, LADDER_FAR) for q in rungs)
+                if misses == 0 and self.met_at is None:
+                    self.met_at = self.used
+            costs.append(c)
         if self.met_at is not None or self.used >= self.budget:
-            raise _Budget  # met, or the budget spent (a truncated batch is not told)
+            raise _Budget  # solved, or the budget spent (a truncated batch is not told)
         return np.array(costs)
 
 
@@ -243,12 +258,17 @@ def part_versus(scenes: list[str], seeds: list[int], budget: int, jobs: int) -> 
         counts: dict[str, list[int]] = {"nbst": []}
         for s in seeds:
             res = _solve(name, s, budget, jobs)
-            counts["nbst"].append(res.rollouts if res.met else -1)
+            counts["nbst"].append(res.rollouts if res.met else -1)  # met: every fate at h, h/2 and h/4
+        rungs = []
+        for k in (2, 4):
+            mk = copy.copy(model)
+            mk.opt.timestep = model.opt.timestep / k
+            rungs.append(SceneSim(fates, mk))
         with quiet_mujoco_warnings(), SceneSim(fates, model, jobs=jobs) as sim:
             for meth, fn in GENERIC.items():
                 counts[meth] = []
                 for s in seeds:
-                    f = Objective(sim, budget)
+                    f = Objective(sim, budget, tuple(rungs))
                     try:
                         fn(f, np.random.default_rng(s))
                     except _Budget:
