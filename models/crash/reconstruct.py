@@ -374,6 +374,7 @@ class Reconstruction:
             "median": round(float(np.median(cs)) * kmh, 2),
             "hi": round(float(np.quantile(cs, 1 - (1 - LEVEL) / 2)) * kmh, 2)}
         return {"method": self.method, "level": LEVEL, "particles": self.particles, "accepted": int(acc.sum()),
+                "intervals_over": "accepted draws" if acc.any() else "the prior (no draw met the evidence)",
                 "fits": int(acc.sum()), "epsilon": round(float(self.epsilon), 4), "rollouts": self.rollouts,
                 "generations": self.generations, "seed": self.seed, "evidence": self.labels,
                 "vehicles": vs, "closing_speed_kmh": closing, "unknowns": phys,
@@ -408,14 +409,20 @@ def _interval(x: np.ndarray, prior: np.ndarray, circular: float | None = None) -
 
 
 def intervals_of(rec: Reconstruction) -> list:
-    """Per vehicle {impact_speed, delta_v (m/s), pdof (h)} intervals over the accepted draws
-    (over the whole population when none is accepted)."""
-    acc = rec.accepted if rec.accepted.any() else np.ones(len(rec.distance), bool)
+    """Per vehicle {impact_speed, delta_v (m/s), pdof (h)} intervals over the accepted draws. When
+    no draw met the evidence, the prior's (the first generation's draws that hit as the evidence
+    says), flagged not identifiable: a population that never reached the evidence has collapsed
+    on its nearest draws, and their spread is no interval (docs/results/crash.md)."""
     out = []
     for i in range(len(rec.names)):
-        Q, P = rec.quantities[acc], rec.prior_quantities
+        Q = rec.quantities[rec.accepted] if rec.found else rec.prior_quantities
+        P = rec.prior_quantities
         iv = {"impact_speed": _interval(Q[:, 3 * i], P[:, 3 * i]), "delta_v": _interval(Q[:, 3 * i + 1], P[:, 3 * i + 1]),
               "pdof": _interval(Q[:, 3 * i + 2], P[:, 3 * i + 2], circular=12.0)}
+        if not rec.found:
+            for x in iv.values():
+                if x:
+                    x["identifiable"] = False
         out.append(iv if iv["impact_speed"] else {})
     return out
 

@@ -5,7 +5,7 @@ Registered by :mod:`nbst.cli.crash` (:func:`add_parser`); light at import: the c
 mujoco are imported inside :func:`cmd_reconstruct`.
 
 Exit codes: 0 draws that meet the evidence were found (the intervals are theirs); 1 none within
-the budget (the intervals are those of the nearest draws, said so, and the nearest crash is
+the budget (the intervals are the prior's, said so, and the nearest crash is
 written); 2 bad input; 130 interrupted (what ran is written).
 """
 from __future__ import annotations
@@ -46,7 +46,7 @@ def add_parser(cr) -> None:
                                   "draw nearest the evidence as a crash file (replay and render it as any) with "
                                   "the intervals in its `reconstruction`.",
                       epilog="Exit 0: draws that meet the evidence found; 1: none within the budget (the "
-                             "intervals are those of the nearest draws); 2: bad input; 130: interrupted.")
+                             "intervals are the prior's); 2: bad input; 130: interrupted.")
     c.add_argument("case", metavar="CASE", help="a case file (nbst-crash-case or nbst-crash-script JSON) or a "
                                                 "built-in name")
     c.add_argument("-o", "--output", required=True, metavar="REC.json", help="where to write the reconstruction")
@@ -92,7 +92,7 @@ def summary_lines(out: dict) -> list[str]:
     lines.append(f"  road friction {u['friction']['lo']:.2f}-{u['friction']['hi']:.2f}, contact stiffness x "
                  f"{u['stiffness']['lo']:.2f}-{u['stiffness']['hi']:.2f}, damping x "
                  f"{u['damping']['lo']:.2f}-{u['damping']['hi']:.2f} (90 % of the "
-                 + ("accepted draws)" if out["accepted"] else "nearest draws)"))
+                 + ("accepted draws)" if out["accepted"] else "last population)"))
     return lines
 
 
@@ -140,7 +140,7 @@ def cmd_reconstruct(args) -> int:
                           "the population converge)")
         else:
             state = (f"no draw meets the evidence within the budget (tolerance reached {rec.epsilon:.2f}, 1: within "
-                     "it): the intervals are those of the nearest draws")
+                     "it): the intervals are the prior's, what the ranges alone allow")
         print(f"reconstruct {case.script.name}: {state}; {out['rollouts']} rollouts, {out['generations']} "
               f"generations, seed {seed}; 90 % intervals; wrote {args.output}")
         for line in summary_lines(out):
