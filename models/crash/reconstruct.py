@@ -60,7 +60,7 @@ from nbst.models.crash.space import space_of
 from nbst.models.crash.vehicle import BIT_BODY, G
 from nbst.seeds import check_seed
 
-__all__ = ["PARTICLES", "MAX_ROLLOUTS", "LEVEL", "WEAK", "MAX_MOVES", "FINAL_MOVES", "ALPHA", "MIN_ACCEPTED",
+__all__ = ["PARTICLES", "MAX_ROLLOUTS", "LEVEL", "WEAK", "MAX_MOVES", "FINAL_MOVES", "ALPHA", "STALL", "MIN_ACCEPTED",
            "METHOD", "Progress", "AbcRunner", "Reconstruction", "reconstruct", "ranges_of", "slide_speed",
            "momentum_speeds", "pdof_clock", "phys_coords", "scene_xml_of"]
 
@@ -76,6 +76,8 @@ WEAK = 0.5
 MAX_MOVES, FINAL_MOVES = 2, 2
 #: The share of the population replaced each generation (the tolerance falls to its quantile).
 ALPHA = 0.5
+#: Generations without a lower tolerance after which the population has stalled and the run ends.
+STALL = 8
 #: Fewer accepted draws than this: the intervals are rough (said in the report).
 MIN_ACCEPTED = 32
 
@@ -494,10 +496,10 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, particles:
         if callback:
             callback(Progress(used, eps, int((D <= 1).sum())))
         moves = MAX_MOVES
-        idle = 0
-        while used + BATCH <= max_rollouts and idle < 3:
+        idle = stalled = 0
+        while used + BATCH <= max_rollouts and idle < 3 and stalled < STALL:
             gens += 1
-            before = used
+            before, eps_before = used, eps
             final = bool((D <= 1.0).all())
             if final:  # every draw within the evidence: FINAL_MOVES steps for all, so that the copies spread
                 eps, alive, move, steps = 1.0, np.ones(N, bool), np.arange(N), FINAL_MOVES
@@ -545,6 +547,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, particles:
             if final:
                 break
             idle = idle + 1 if used == before else 0  # three generations of proposals all outside the box: stop
+            stalled = stalled + 1 if eps >= eps_before and eps > 1.0 else 0  # at 1 the population still fills
     except KeyboardInterrupt:
         interrupted = True
         if D is None:
