@@ -5,7 +5,8 @@ README's example (a built-in script solved, then rendered) end to end.
     python benchmarks/bench_render_crash.py --crash tbone.json   # a crash file you have
     python benchmarks/bench_render_crash.py --readme             # also: the README's two commands, timed
 
-Prints, for the overhead camera and for ``--follow`` (chase + overhead): ms per frame of the
+Prints, for the overhead camera and for ``--follow`` (chase + overhead): the renderer's set-up
+(buffers, and the chase camera's framing over every pose), ms per frame of the
 render alone (draw + MSAA resolve + RGBA readback, as the MP4 path reads it, over frames spread
 across the crash), its ratio to an empty frame's (clear + resolve + readback, the floor, measured
 in the same run), and the whole video end to end (render + H.264 encoding, as ``nbst render``:
@@ -77,7 +78,9 @@ def main(argv=None) -> int:
     floor_target.release()
     print(f"empty frame (clear + resolve + RGBA readback): {floor:.1f} ms")
     for camera, follow in (("overhead", None), ("both", 0)):
+        t = time.perf_counter()
         r = crash.CrashRenderer(ctx, d, script, model, motion, size=(w, h), camera=camera, follow=follow or 0)
+        setup = time.perf_counter() - t
         buf = r.target.new_frame(4)
         r.render_rgba(times[0], out=buf)
         t = time.perf_counter()
@@ -93,7 +96,8 @@ def main(argv=None) -> int:
                                fps=style.DEFAULT_FPS, times=ft)
         e2e = time.perf_counter() - t
         name = "overhead" if follow is None else f"--follow {script.names()[0]} (chase + overhead)"
-        print(f"{name:36s} render {ms:6.1f} ms/frame ({ms / floor:4.1f}x the empty frame); end to end {n} frames "
+        print(f"{name:36s} set-up {setup:.2f} s; render {ms:6.1f} ms/frame ({ms / floor:4.1f}x the empty frame); "
+              f"end to end {n} frames "
               f"({n / style.DEFAULT_FPS:.1f} s of video) in {e2e:.1f} s = {n / e2e:.1f} fps; "
               f"{out.stat().st_size / 1e6:.2f} MB", flush=True)
     ctx.release()

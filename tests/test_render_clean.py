@@ -7,12 +7,11 @@ frame has text-coloured ink and the clean frame has none, and the clean frame dr
 """
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
 from nbst.render.core import shapes, style
+from tests.test_render_crash import crash_file, loaded  # noqa: F401  (the crash file and its replay, as there)
 
 SIZE = (640, 360)
 TEXT = np.array(style.rgb8(style.TEXT))
@@ -121,32 +120,14 @@ def test_a_clean_lane_frame_has_no_text(gl, glyphs):
     _check(lambda clean: bl.LaneRenderer(gl, th, size=SIZE, camera="both", clean=clean), 1.0, glyphs)
 
 
-@pytest.fixture(scope="module")
-def crash_loaded(tmp_path_factory):
-    from nbst.models.crash import crashfile, run, script, space
-    from nbst.render.crash import video as crash
-    from tests.test_render_crash import SHORT
-
-    s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
-    sp = space.space_of(s)
-    U = np.random.default_rng(3).random((1, sp.dim))
-    R = run.CrashRunner(s, jobs=1, batch=1)
-    res = R.run(sp.intents(U))
-    d = crashfile.crash_dict(s, R.xml, R.model, sp.intents(U)[0], res.qpos0[0], res.qvel0[0], res.controls[0],
-                             res.final_qpos[0], res.outcomes[0], seed=3, period_steps=R.period)
-    f = tmp_path_factory.mktemp("crash") / "short.json"
-    f.write_text(json.dumps(d, indent=1, allow_nan=False))
-    return crash.load(f)
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("camera", ["both", "overhead"])
-def test_a_clean_crash_frame_has_no_text_and_the_views_fill_it(gl, glyphs, crash_loaded, camera):
+def test_a_clean_crash_frame_has_no_text_and_the_views_fill_it(gl, glyphs, loaded, camera):
     from nbst.render.crash import video as crash
 
-    _check(lambda clean: crash.CrashRenderer(gl, *crash_loaded, size=SIZE, camera=camera, follow=1, clean=clean),
-           crash_loaded[3].duration, glyphs)
-    r = crash.CrashRenderer(gl, *crash_loaded, size=SIZE, camera=camera, follow=1, clean=True)
+    _check(lambda clean: crash.CrashRenderer(gl, *loaded, size=SIZE, camera=camera, follow=1, clean=clean),
+           loaded[3].duration, glyphs)
+    r = crash.CrashRenderer(gl, *loaded, size=SIZE, camera=camera, follow=1, clean=True)
     try:   # no readout column: the views cover the frame
         assert sum(vp[2] * vp[3] for vp in r.panels.values()) == SIZE[0] * SIZE[1]
     finally:
