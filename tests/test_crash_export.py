@@ -62,6 +62,7 @@ def _nbst_replay(f: Path) -> np.ndarray:
     return crashfile.replay(d, s, model)[0]
 
 
+@pytest.mark.slow  # 2-5 s (3,000 steps three times); the next test runs the same loop in the fast tier
 def test_the_docs_loop_plays_a_built_in_crash_as_nbst_replays_it(tmp_path, monkeypatch):
     f = _crash_file(tmp_path, script.load_script("t-bone"), seed=1)
     ns = _play_the_doc_loop(tmp_path, monkeypatch)  # it asserts final_qpos itself
