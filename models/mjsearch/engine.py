@@ -40,7 +40,8 @@ What the engine does with them, in a fixed cycle:
    with the first's sets the most bits, and the child takes each **whole block** from the
    parent that meets that block's bit when exactly one does, else from either at random (the
    paper's "genetically engineered" child). Parents are chosen Senate-like: every order
-   (bits set) alike, every signature of that order alike, then a member. A changed block is
+   (bits set) alike, every signature of that order alike, then a member (the best of
+   ``tournament`` drawn from it; default 1: any member). A changed block is
    one whose bit the parent misses, half the time, when ``prefer_unmet``.
    **Insert**: a child with the signature of a parent replaces it, unless that parent is the
    best of its signature and the child is no better; else it joins, the worst of its signature
