@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from nbst.models.bowling import scene
+from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import advise, frame, noise, spares
 
 
@@ -68,16 +68,16 @@ def _fake(monkeypatch, outcomes: dict):
     """best_spare over three stand-in lines whose noisy frames take the pins ``outcomes[board]``
     (one list of pins down per throw, cycled); no physics."""
     lines = [("3-6-9", 1.0), ("the 7 alone", 2.0), ("slide", 3.0)]
-    monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, spares.STRIKE.__class__(board=b, at="foul"))
+    monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, lane.Delivery(board=b, at="foul"))
                                                                    for lbl, b in lines])
 
     def probability(d, n, seed, *, runner, standing, noise=None, on_done=None, want=None):
         seq = outcomes[d.board]
         rs = [SimpleNamespace(down=seq[i % len(seq)], leave=[p for p in standing if p not in seq[i % len(seq)]],
                               converted=set(seq[i % len(seq)]) == set(standing), timestep=0.001) for i in range(n)]
-        return noise_mod.estimate(rs, seed, noise or noise_mod.DEFAULT), rs
+        return estimate(rs, seed, noise or default), rs
 
-    noise_mod = noise
+    estimate, default = noise.estimate, noise.DEFAULT
     monkeypatch.setattr(noise, "probability", probability)
     monkeypatch.setattr(frame, "ladder", lambda d, oil, ball, standing: probability(d, 3, 0, runner=None,
                                                                                     standing=standing)[1])
