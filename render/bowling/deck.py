@@ -160,7 +160,8 @@ def static_solids(model) -> np.ndarray:
     """(V, 9) the world body's visible geoms (lane, gutters, walls, pit, floor) in world
     coordinates and their MJCF colours."""
     parts = []
-    for g in cg.visible_geoms(model):
+    # planes last: the lane hides most of the floor, and depth-tested fragments behind it are not shaded
+    for g in sorted(cg.visible_geoms(model), key=lambda g: int(model.geom_type[g]) == cg.PLANE):
         if int(model.geom_bodyid[g]) == 0 and (r := cg.body_rows(model, g)) is not None:
             parts.append(cg.coloured(r, cg.geom_rgba(model, g)))
     return np.concatenate(parts)
