@@ -358,6 +358,7 @@ def test_velocity_and_pdof_arrows_appear_at_the_impact(gl, loaded):
     assert crash_motion.clock_of((1.0, 0.0)) == 6 and crash_motion.clock_of((0.0, -1.0)) == 9
 
 
+@pytest.mark.slow
 def test_the_chase_camera_keeps_both_vehicles_in_view(gl, loaded):
     """At every frame time, each vehicle's CoM projects inside the chase panel, in front of the
     camera, for either vehicle followed."""

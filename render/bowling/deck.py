@@ -153,6 +153,8 @@ def ball_solid(model, rgb=BALL_RGB, level: int = 3) -> np.ndarray:
     g = model.geom("ball").id
     rows = cg.body_rows(model, g) if int(model.geom_type[g]) != cg.SPHERE else cg.posed(
         cg.sphere_rows(float(model.geom_size[g][0]), level), cg.quat_mat(model.geom_quat[g]), model.geom_pos[g])
+    if rows is None:
+        raise InputError("the scene's ball geom is of a type not drawn (a height field)")
     return cg.coloured(rows, rgb)
 
 

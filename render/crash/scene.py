@@ -246,6 +246,7 @@ def static_solids(model, data) -> tuple[np.ndarray, np.ndarray, tuple]:
         rgb = tuple(float(c) for c in model.geom_rgba[g][:3])
         R, p = data.geom_xmat[g].reshape(3, 3), data.geom_xpos[g]
         rows = cg.geom_rows(model, g, extent=GROUND_DRAWN, plane_at_least=GROUND_DRAWN)
+        assert rows is not None   # a plane or a box: always drawn
         if model.geom_type[g] == GEOM_PLANE:
             ground.append(cg.coloured(cg.posed(rows, R, p - np.array([0.0, 0.0, 0.002])), rgb))
             ground_rgb = rgb
@@ -279,7 +280,9 @@ def geom_solid(model, g: int, arches=()) -> np.ndarray | None:
     if model.geom_type[g] == GEOM_BOX:
         if not name.endswith("_cabin"):
             return body_box(sx, sy, sz, rgb, arches).astype("f4")
-        rows = cg.coloured(cg.geom_rows(model, g), rgb)
+        box = cg.geom_rows(model, g)
+        assert box is not None   # a box: always drawn
+        rows = cg.coloured(box, rgb)
         rows[np.abs(rows[:, 5]) < 0.5, 6:9] = GLASS
         screen = _flat_poly([(0.45 * sx, -0.9 * sy), (0.95 * sx, -0.9 * sy), (0.95 * sx, 0.9 * sy),
                              (0.45 * sx, 0.9 * sy)], GLASS, z=sz + 0.004)
