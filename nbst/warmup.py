@@ -16,8 +16,9 @@ load the cached code in about a second.
 Two processes must not write the same kernel's cache at once (numba's index of a kernel's
 compiled signatures is one file, read, extended and written back): each group compiles
 kernels that no other group compiles, the shared event kernel being compiled before them all
-(tests/test_setup.py holds the list; ``python -m nbst.warmup`` run twice compiles nothing the
-second time).
+(tests/test_setup.py holds the list: it finds what each group would add to a cold cache by
+numba's type inference on a warm one, the signatures run and their callees', without the cold
+compile; ``python -m nbst.warmup`` run twice compiles nothing the second time).
 """
 from __future__ import annotations
 
