@@ -60,7 +60,7 @@ from nbst.models.crash.space import space_of
 from nbst.models.crash.vehicle import BIT_BODY, G
 from nbst.seeds import check_seed
 
-__all__ = ["PARTICLES", "MAX_ROLLOUTS", "LEVEL", "WEAK", "MAX_MOVES", "FINAL_MOVES", "ALPHA", "STALL", "MIN_ACCEPTED",
+__all__ = ["PARTICLES", "MAX_ROLLOUTS", "LEVEL", "WEAK", "MAX_MOVES", "FINAL_MOVES", "ALPHA", "MIN_ACCEPTED",
            "METHOD", "Progress", "AbcRunner", "Reconstruction", "reconstruct", "ranges_of", "slide_speed",
            "momentum_speeds", "pdof_clock", "phys_coords", "scene_xml_of"]
 
@@ -76,8 +76,6 @@ WEAK = 0.5
 MAX_MOVES, FINAL_MOVES = 2, 2
 #: The share of the population replaced each generation (the tolerance falls to its quantile).
 ALPHA = 0.5
-#: Generations without a lower tolerance after which the population has stalled and the run ends.
-STALL = 8
 #: Fewer accepted draws than this: the intervals are rough (said in the report).
 MIN_ACCEPTED = 32
 
@@ -376,7 +374,6 @@ class Reconstruction:
             "median": round(float(np.median(cs)) * kmh, 2),
             "hi": round(float(np.quantile(cs, 1 - (1 - LEVEL) / 2)) * kmh, 2)}
         return {"method": self.method, "level": LEVEL, "particles": self.particles, "accepted": int(acc.sum()),
-                "intervals_over": "accepted draws" if acc.any() else "the prior (no draw met the evidence)",
                 "fits": int(acc.sum()), "epsilon": round(float(self.epsilon), 4), "rollouts": self.rollouts,
                 "generations": self.generations, "seed": self.seed, "evidence": self.labels,
                 "vehicles": vs, "closing_speed_kmh": closing, "unknowns": phys,
@@ -411,20 +408,14 @@ def _interval(x: np.ndarray, prior: np.ndarray, circular: float | None = None) -
 
 
 def intervals_of(rec: Reconstruction) -> list:
-    """Per vehicle {impact_speed, delta_v (m/s), pdof (h)} intervals over the accepted draws. When
-    no draw met the evidence, the prior's (the first generation's draws that hit as the evidence
-    says), flagged not identifiable: a population that never reached the evidence has collapsed
-    on its nearest draws, and their spread is no interval (docs/results/crash.md)."""
+    """Per vehicle {impact_speed, delta_v (m/s), pdof (h)} intervals over the accepted draws
+    (over the whole population when none is accepted)."""
+    acc = rec.accepted if rec.accepted.any() else np.ones(len(rec.distance), bool)
     out = []
     for i in range(len(rec.names)):
-        Q = rec.quantities[rec.accepted] if rec.found else rec.prior_quantities
-        P = rec.prior_quantities
+        Q, P = rec.quantities[acc], rec.prior_quantities
         iv = {"impact_speed": _interval(Q[:, 3 * i], P[:, 3 * i]), "delta_v": _interval(Q[:, 3 * i + 1], P[:, 3 * i + 1]),
               "pdof": _interval(Q[:, 3 * i + 2], P[:, 3 * i + 2], circular=12.0)}
-        if not rec.found:
-            for x in iv.values():
-                if x:
-                    x["identifiable"] = False
         out.append(iv if iv["impact_speed"] else {})
     return out
 
@@ -496,10 +487,10 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, particles:
         if callback:
             callback(Progress(used, eps, int((D <= 1).sum())))
         moves = MAX_MOVES
-        idle = stalled = 0
-        while used + BATCH <= max_rollouts and idle < 3 and stalled < STALL:
+        idle = 0
+        while used + BATCH <= max_rollouts and idle < 3:
             gens += 1
-            before, eps_before = used, eps
+            before = used
             final = bool((D <= 1.0).all())
             if final:  # every draw within the evidence: FINAL_MOVES steps for all, so that the copies spread
                 eps, alive, move, steps = 1.0, np.ones(N, bool), np.arange(N), FINAL_MOVES
@@ -547,7 +538,6 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, particles:
             if final:
                 break
             idle = idle + 1 if used == before else 0  # three generations of proposals all outside the box: stop
-            stalled = stalled + 1 if eps >= eps_before and eps > 1.0 else 0  # at 1 the population still fills
     except KeyboardInterrupt:
         interrupted = True
         if D is None:

@@ -5,7 +5,7 @@ Registered by :mod:`nbst.cli.crash` (:func:`add_parser`); light at import: the c
 mujoco are imported inside :func:`cmd_reconstruct`.
 
 Exit codes: 0 draws that meet the evidence were found (the intervals are theirs); 1 none within
-the budget (the intervals are the prior's, said so, and the nearest crash is
+the budget (the intervals are those of the nearest draws, said so, and the nearest crash is
 written); 2 bad input; 130 interrupted (what ran is written).
 """
 from __future__ import annotations
@@ -20,11 +20,10 @@ from nbst.parallel import default_jobs
 from nbst.progress import progress_bar
 from nbst.seeds import resolve_seed
 
-__all__ = ["ROLLOUTS", "PARTICLES", "CLOCK", "add_parser", "cmd_reconstruct", "summary_lines"]
+__all__ = ["ROLLOUTS", "PARTICLES", "add_parser", "cmd_reconstruct", "summary_lines"]
 
 ROLLOUTS = Bounded("max-rollouts", 16, 10_000_000, integer=True)
 PARTICLES = Bounded("particles", 16, 100_000, integer=True)
-CLOCK = "o'clock"
 
 
 def add_parser(cr) -> None:
@@ -46,7 +45,7 @@ def add_parser(cr) -> None:
                                   "draw nearest the evidence as a crash file (replay and render it as any) with "
                                   "the intervals in its `reconstruction`.",
                       epilog="Exit 0: draws that meet the evidence found; 1: none within the budget (the "
-                             "intervals are the prior's); 2: bad input; 130: interrupted.")
+                             "intervals are those of the nearest draws); 2: bad input; 130: interrupted.")
     c.add_argument("case", metavar="CASE", help="a case file (nbst-crash-case or nbst-crash-script JSON) or a "
                                                 "built-in name")
     c.add_argument("-o", "--output", required=True, metavar="REC.json", help="where to write the reconstruction")
@@ -78,21 +77,20 @@ def summary_lines(out: dict) -> list[str]:
         if s is None:
             lines.append(f"  {v['name']}: no draw hit as the evidence says")
             continue
-        weak = [f"{nm} (its prior {x['prior_lo']:.0f}-{x['prior_hi']:.0f} km/h)" for nm, x in
-                (("impact speed", s), ("delta-V", dv)) if x and x.get("identifiable") is False and "prior_lo" in x]
+        weak = [nm for nm, x in (("impact speed", s), ("delta-V", dv)) if x and x.get("identifiable") is False]
         lines.append(f"  {v['name']}: impact speed {_iv(s, 'km/h')}, delta-V {_iv(dv, 'km/h')}, "
-                     f"PDOF {_iv(p, CLOCK, 1)}")
-        if weak and out["accepted"]:
-            lines.append(f"    not identifiable from this evidence (an interval at least {100 * out['weak_threshold']:.0f} % "
-                         f"of its prior's): {', '.join(weak)}")
+                     f"PDOF {_iv(p, 'o clock', 1)}")
+        if weak:
+            lines.append(f"    not identifiable from this evidence: {', '.join(weak)} (the interval is at least "
+                         f"{100 * out['weak_threshold']:.0f} % of its prior's "
+                         f"{s.get('prior_lo', float('nan')):.0f}-{s.get('prior_hi', float('nan')):.0f} km/h)")
     c = out.get("closing_speed_kmh")
     if c:
         lines.append(f"  closing speed {_iv(c, 'km/h')}")
     u = out["unknowns"]
     lines.append(f"  road friction {u['friction']['lo']:.2f}-{u['friction']['hi']:.2f}, contact stiffness x "
                  f"{u['stiffness']['lo']:.2f}-{u['stiffness']['hi']:.2f}, damping x "
-                 f"{u['damping']['lo']:.2f}-{u['damping']['hi']:.2f} (90 % of the "
-                 + ("accepted draws)" if out["accepted"] else "last population)"))
+                 f"{u['damping']['lo']:.2f}-{u['damping']['hi']:.2f} (90 % of the accepted draws)")
     return lines
 
 
@@ -140,7 +138,7 @@ def cmd_reconstruct(args) -> int:
                           "the population converge)")
         else:
             state = (f"no draw meets the evidence within the budget (tolerance reached {rec.epsilon:.2f}, 1: within "
-                     "it): the intervals are the prior's, what the ranges alone allow")
+                     "it): the intervals are those of the nearest draws")
         print(f"reconstruct {case.script.name}: {state}; {out['rollouts']} rollouts, {out['generations']} "
               f"generations, seed {seed}; 90 % intervals; wrote {args.output}")
         for line in summary_lines(out):
