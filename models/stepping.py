@@ -75,6 +75,9 @@ Usage (a scene written by ``nbst mjcf``)::
     print(data.qpos, stats)
 
 Compute only: mujoco is imported on first call; the model's fields are restored on return.
+
+Length: aligned stepping and the guard that lists every setting it cannot model sit together, so
+the guard changes whenever the stepping's assumptions do.
 """
 from __future__ import annotations
 

@@ -79,6 +79,10 @@ engine's state alone (never on threads): the same seed and the same answers give
 points.
 
 Compute only: no files, no printing, no MuJoCo.
+
+Length: the one rollout-search engine (exploration, the block GA, the archive and the CMA-ES
+restart phase) in one ask/tell object, by design: the rule is that no second loop exists
+anywhere.
 """
 from __future__ import annotations
 

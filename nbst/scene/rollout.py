@@ -40,6 +40,10 @@ rolled out again by the loop, so that its final state too is the loop's.
 depend on ``jobs``.
 
 mujoco is imported when a :class:`SceneSim` is made.
+
+Length: two rollout paths that must agree bit for bit (mujoco.rollout with sensors on a copy of
+the scene, and the plain mj_step loop it falls back to) and the check between them live
+together, so that one reading shows both.
 """
 from __future__ import annotations
 

@@ -17,6 +17,8 @@ this module draws them.
 Compute apart from I/O: :class:`LaneRenderer` returns frames; :func:`render_throw` is the thin
 writer the CLI calls (``nbst.cli.bowl.lane`` checks the flags and prints what was written).
 
+Length: the full-lane video's cameras, oil shading and overlay share one frame loop; a few lines
+over the house's 500.
 """
 from __future__ import annotations
 

@@ -27,6 +27,9 @@ scene's own geoms (their MJCF sizes, poses and colours), placed each frame by
 
 Compute apart from I/O: :class:`CrashRenderer` returns frames; :func:`render_crash` is the thin
 writer the CLI calls; :func:`crash_kind` sniffs a file's kind.
+
+Length: the crash video's two views (overhead and chase, with the chase's framing), the impact
+arrows and the frame loop share the recorded motion and one GL context.
 """
 from __future__ import annotations
 

@@ -40,6 +40,9 @@ the other way for the 3 pin, 6 for the 6 pin, 9 for the 10 pin): an assumption. 
 moved at the foul line, the release board standing in for the feet.
 
 Compute only: no files, no printing.
+
+Length: the spare lines (straight, slide, each pin alone) and their ranking by conversions and
+pins are one decision; split, the ranking would read lines it cannot see.
 """
 from __future__ import annotations
 
