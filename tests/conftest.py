@@ -174,6 +174,25 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if item.nodeid in SLOW or item.nodeid.split("[")[0] in SLOW:
             item.add_marker(pytest.mark.slow)
+    items.sort(key=lambda it: -LONGEST.get(it.nodeid, 0.0))  # stable: the rest keep their order
+
+
+#: The slow tier's longest tests (seconds, ``pytest -m slow --durations``, 2 cores, 2026-12-06):
+#: they are handed out first, so that the last minutes of ``-n auto`` are not one long test on
+#: one core while the other idles (longest first; the order of the rest is pytest's).
+LONGEST = {
+    "tests/test_crash_run.py::test_the_benchmarks_planted_scripts_ask_two_contacts_and_their_hidden_intents_meet_them": 153,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[bowling.md]": 90,
+    "tests/test_crash_run.py::test_a_planted_script_with_min_p_has_a_hidden_answer_its_noisy_drivers_meet_that_often": 89,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[README.md]": 86,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[render.md]": 78,
+    "tests/test_setup.py::test_the_groups_compile_no_kernel_in_common": 59,
+    "tests/test_crash_run.py::test_reconstruct_recovers_the_planted_crossing_from_its_rest_and_impact_positions": 38,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[results/disks.md]": 26,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[crash.md]": 23,
+    "tests/test_crash_run.py::test_solve_meets_the_short_script_and_the_cli_replays_it": 22,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[mujoco.md]": 20,
+}
 
 
 _over_budget: list = []

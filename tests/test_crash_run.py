@@ -377,6 +377,7 @@ def test_reconstruct_finds_fits_of_loose_evidence_and_writes_a_crash_file(tmp_pa
     from nbst.cli.main import main
 
     d = json.loads(json.dumps(SHORT))
+    d["duration"] = 6.0  # long enough to come to rest: a vehicle still moving at the end has no rest position
     for v in d["vehicles"]:  # evidence so loose that many intents fit: the spread stage has work
         v["fate"]["rest"] = {"x": 5, "y": 5, "radius": 40}
     f = tmp_path / "case.json"
