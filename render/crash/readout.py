@@ -14,7 +14,8 @@ on the left and, where the script asks something of it, a mark and what was aske
 
 The marks (✓ the fate holds, ✗ it does not) and the signature line (one character per
 vehicle, 1 = every fate of that vehicle holds, the search's signature) appear on the last
-frame: the fates are judged at rest. They are the replay's own judgement
+frame: the fates are judged at the end (a vehicle still moving then has no rest: its rest and heading
+fates are unmet, and its last line reads ``end (x, y)``). They are the replay's own judgement
 (:func:`nbst.models.crash.outcome.judge`), which a faithful replay shares with the file.
 
 Compute only: :func:`readout` returns text lines.
@@ -175,7 +176,7 @@ def readout(t: float, motion, script, fates: list[dict], labels: list[str], wind
             s += f" \u00b7 order {OK if o.order_ok else NO}"
         lines.append(s + f" \u00b7 {'met' if o.solved else 'not met'}")
     else:
-        lines.append("signature: judged at rest")
+        lines.append("signature: judged at the end")
     if not motion.identical:
         lines.append(f"{NO} replay {'state' if not motion.same_state else 'outcome'} differs from the file")
     lines.append(f"{'what happened':<{RESULT_CHARS}}   asked")
