@@ -55,7 +55,7 @@ from nbst.problem import ProblemError, read_json
 
 __all__ = ["KIND", "SCHEMA_VERSION", "QPOS_MAX", "QVEL_MAX", "CTRL_MAX", "MAX_XML_CHARS", "CrashFileError",
            "intents_dict", "fate_dict", "outcome_dict", "crash_dict", "load", "intents_array",
-           "controls_array", "replay", "export_xml"]
+           "controls_array", "replay"]
 
 KIND = "nbst-crash"
 SCHEMA_VERSION = 1
@@ -313,25 +313,3 @@ def replay(d: dict, script: Script, model, *, on_step=None):
     o = out_mod.outcomes(rec, script.names(), L.mass)[0]
     out_mod.judge(o, script, rec.min_dist[0])
     return md.qpos.copy(), o
-
-
-def _num(x: float) -> str:
-    t = repr(float(x))
-    return t[:-2] if t.endswith(".0") else t
-
-
-def export_xml(d: dict, script: Script, model) -> str:
-    """The crash file's scene for MuJoCo users (``nbst mjcf CRASH.json``): its XML with keyframe
-    ``start`` (the initial state, the first row of controls) and the realised controls as custom
-    numerics ``crash_controls`` (periods x nu, row-major) and ``crash_period_steps``, every
-    number exact. ``model.numeric("crash_controls").data.reshape(-1, model.nu)`` reads them back."""
-    xml = d["scene_xml"].rstrip()
-    if not xml.endswith("</mujoco>"):
-        raise CrashFileError("scene_xml: does not end with </mujoco>")
-    rows = controls_array(d)
-    custom = (f'  <custom>\n    <numeric name="crash_period_steps" data="{int(d["controls"]["period_steps"])}"/>\n'
-              f'    <numeric name="crash_controls" data="{" ".join(_num(x) for x in rows.ravel())}"/>\n  </custom>\n')
-    key = (f'  <keyframe>\n    <key name="start" time="0" qpos="{" ".join(_num(x) for x in d["qpos0"])}" '
-           f'qvel="{" ".join(_num(x) for x in d["qvel0"])}" ctrl="{" ".join(_num(x) for x in rows[0])}"/>\n'
-           f'  </keyframe>\n')
-    return xml[: -len("</mujoco>")] + custom + key + "</mujoco>\n"

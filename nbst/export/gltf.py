@@ -39,7 +39,7 @@ class Solid:
     Args:
         rows: (3 x ntriangle, 6) float array, each triangle corner's position (m, or the world's
             units) and unit normal, as the renderer's geometry gives them
-            (:func:`nbst.render.scene.geoms.geom_rows`).
+            (:func:`nbst.render.core.geoms.geom_rows`).
         rgba: (4,) colour, each channel in [0, 1].
     """
 

@@ -2,7 +2,7 @@
 
 :func:`model_bodies` turns every body of a compiled ``mujoco.MjModel`` into a
 :class:`~nbst.export.gltf.Body` whose solids are its visible geoms in the body's frame, with the
-renderer's geometry, visibility and colours (:mod:`nbst.render.scene.geoms`, the code ``nbst render``
+renderer's geometry, visibility and colours (:mod:`nbst.render.core.geoms`, the code ``nbst render``
 draws a scene with): plane (a quad: its half-sizes, or :data:`PLANE_HALF` m for an infinite one),
 sphere, capsule, ellipsoid, cylinder, box and mesh (the compiled vertices and faces), each coloured
 by its material's RGBA when it has one, else its own ``geom_rgba``; a geom is visible when its alpha
@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from nbst.export.gltf import Body, BodyMotion, Solid
-from nbst.render.scene.geoms import geom_rgba, geom_rows, visible_geoms
+from nbst.render.core.geoms import geom_rgba, geom_rows, visible_geoms
 
 __all__ = ["PLANE_HALF", "geom_body_rows", "model_bodies", "body_poses", "sampled_steps", "qpos_motion"]
 
@@ -34,7 +34,7 @@ def _quat_matrix(q: np.ndarray) -> np.ndarray:
 
 def geom_body_rows(model: Any, g: int) -> np.ndarray | None:
     """Geom ``g`` of ``model`` as triangle rows (position, normal) in its body's frame: the
-    renderer's own geometry (:func:`nbst.render.scene.geoms.geom_rows`, in the geom's frame)
+    renderer's own geometry (:func:`nbst.render.core.geoms.geom_rows`, in the geom's frame)
     placed by ``geom_pos`` and ``geom_quat``.
 
     Args:
