@@ -12,10 +12,8 @@ from nbst.models.bowling.lane import profiles  # noqa: E402
 
 
 def _style(name: str) -> profiles.Profile:
-    """A profile by name: registered, or read from its file in ``bowlers/`` (a style not yet registered)."""
-    if name in profiles.NAMES:
-        return profiles.profile(name)
-    return profiles.load_profile(profiles.PROFILES_DIR / f"{name}.json")
+    """A registered profile by name (the cranker is one since issue 48)."""
+    return profiles.profile(name)
 
 
 @pytest.mark.slow

@@ -125,6 +125,18 @@ def test_a_profile_carries_its_board_and_scale_and_is_one_registry_entry_and_one
         profiles.load_profile(f)
 
 
+def test_the_cranker_is_a_registered_profile_read_from_its_file():
+    """Issue 48's one-handed cranker is a profile like the others: registered, its file's numbers,
+    the pro's noise sizes, and the CLI's ``--bowler`` knows it."""
+    from nbst.cli.bowl import args as bowl_args
+
+    assert "cranker" in profiles.NAMES and "cranker" in bowl_args.bowlers()
+    p = profiles.profile("cranker")
+    assert p == profiles.load_profile(profiles.PROFILES_DIR / "cranker.json")
+    assert (p.noise_scale, p.spare_noise_scale) == (profiles.PRO_SCALE, profiles.PRO_SPARE_SCALE)
+    assert p.strike.rotation > profiles.profile("pro").strike.rotation   # more side roll: a higher entry angle
+
+
 def test_the_balls_are_a_registry_and_the_cli_reads_its_defaults():
     from nbst.cli.main import build_parser
     from nbst.cli.bowl import args as bowl_args

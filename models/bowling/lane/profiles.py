@@ -1,6 +1,6 @@
 """Bowler profiles (issue 34): a typical strike ball and a correlated release noise per kind of bowler.
 
-:data:`PROFILES` (a :class:`nbst.registry.Registry`) holds four (:class:`Profile`), each read from its data
+:data:`PROFILES` (a :class:`nbst.registry.Registry`) holds five (:class:`Profile`), each read from its data
 file ``bowlers/<name>.json``, right-handed (``--hand left`` mirrors them: a
 left-hander's lane is a right-hander's mirrored):
 
@@ -11,8 +11,9 @@ pro          18.6     436   50       12    PBA League 2020, men's means (Pete Do
                                            Times Union, 2020-09-29); rotation and tilt assumed
 league200    17.0     350   45       12    assumed (between the pro and issue 22's 17/300)
 league150    15.5     250   30       15    assumed (a stroker)
-twohander    18.0     520   40       5     PBA League 2020: 4 of the top 5 rev rates were
-                                           two-handers, the top 570 rpm; tilt assumed
+twohander    18.0     520   60       5     PBA League 2020: 4 of the top 5 rev rates were
+                                           two-handers, the top 570 rpm; rotation and tilt assumed
+cranker      18.0     450   60       10    assumed (a one-handed high-rev player, issue 48)
 =========== ======== ===== ======== ===== ====================================================
 
 Each strike ball's line is its foul-line board (:attr:`Profile.foul_board`, chosen so the ball breaks
@@ -28,7 +29,7 @@ both), axis rotation and revs -0.3 (turning the hand more trades revs for side r
 fitted for the pro (issue 34's carry fit): the strike ball's to PBA's pocket-hit rate
 (:data:`PRO_SCALE`), the spare ball's to PBA's televised spares (:data:`PRO_SPARE_SCALE`). The
 league bowlers' sigmas are the shape's times their :attr:`Profile.noise_scale` (1.8 and 3, assumed), for strike
-and spare balls alike; the two-hander's are the pro's.
+and spare balls alike; the two-hander's and the cranker's are the pro's.
 
 Compute only.
 """
@@ -147,7 +148,7 @@ def load_profile(path) -> Profile:
 #: is one line here and one file in ``bowlers/``. The launch angles in the files are
 #: ``phases.aim_angle`` to board 17.5 on the fresh house shot with the default ball.
 PROFILES: Registry[Profile] = Registry("bowler profile")
-for _name in ("pro", "league200", "league150", "twohander"):
+for _name in ("pro", "league200", "league150", "twohander", "cranker"):
     _prof = load_profile(PROFILES_DIR / f"{_name}.json")
     if _prof.name != _name:
         raise lane.LaneError(f"{_name}.json: name: {_prof.name!r} must be the file's name {_name!r}")
