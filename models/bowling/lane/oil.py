@@ -1,16 +1,20 @@
 """Oil as data: pattern files, the film they lay on the lane, and the law from film to friction.
 
-* **Pattern file** (``nbst-oil-pattern``, one pattern per JSON file, :func:`load_pattern`), in a
-  pattern sheet's terms: the machine's **forward** pass and, optionally, its **reverse** pass,
-  each with its oil distance (``length_ft`` from the foul line), its volume (``volume_ml``, as a
-  sheet's forward and reverse totals) and its lateral shape: ``units`` per board (39 numbers,
-  board 1 the right-hander's right edge, as a sheet's oil-per-board graph) or ``loads``
-  (``[[from_left, to_right, n], ...]``: ``n`` loads from board ``from_left`` counted from the
-  left edge to board ``to_right`` counted from the right edge, as a sheet's load table:
-  ``[2, 2, 3]`` is "2L-2R, 3 loads"). Units are relative: the pass's volume is spread over its
-  boards in their proportion (the absolute size of a "unit" is not published where we could
-  read it, so a volume is required). An optional ``taper_ft``/``taper_to`` thins the last
-  ``taper_ft`` ft of a pass linearly to ``taper_to`` of its load (the brushes' buff-out).
+* **Pattern file** (``nbst-oil-pattern``, one pattern per JSON file, :func:`load_pattern`).
+  **Version 2 is a lane machine's pattern sheet** (Kegel's layout): ``rows``, in the order the
+  machine runs them, each ``{"pass": "forward"|"reverse", "boards": "2L-2R", "loads": n,
+  "ul": microlitres per board per load, "speed": in/s, "start_ft": a, "end_ft": b}`` (``n`` loads
+  of ``ul`` on every board from ``2L`` (board 2 counted from the left edge) to ``2R`` (board 2
+  from the right), laid evenly from ``a`` to ``b`` ft past the foul line), or a **buff** row
+  ``{"pass": ..., "buff": true, "start_ft": a, "end_ft": b}``: the brush alone over ``a``-``b``,
+  in the pass's direction (:func:`buffed`). The volume (``loads x boards x ul``, less what the
+  brush lifts off), the length and the ratio are **computed** from the rows, never entered:
+  :meth:`Pattern.sheet` prints them. ``source`` names where the numbers come from and
+  ``published`` holds what the source states (length, volumes, ratios) for comparison.
+  **Version 1** (still read; the house shots ship in it) gives each pass's length and volume
+  and its lateral shape: ``units`` per board (39 relative numbers) or ``loads``
+  (``[[from_left, to_right, n], ...]``), the pass's volume spread over its boards in their
+  proportion, with an optional linear ``taper_ft``/``taper_to`` buff-out.
   Every problem is one :class:`~.units.LaneError` line naming the file and the field.
 * **Film** (:meth:`Pattern.grid`): oil thickness in micrometres (um = ml/m^2) on cells of one
   board x :data:`DX_FT` from the foul line to the pin deck, the passes added. A right-hander
@@ -43,21 +47,32 @@ from nbst.models.bowling.lane.units import BOARD_WIDTH, FT, N_BOARDS, LaneError,
 from nbst.registry import Registry
 
 __all__ = ["MU_OIL", "MU_DRY", "FORMAT", "PATTERNS_DIR", "PATTERNS", "DEFAULT_OIL", "DX_FT", "NX", "CELL_AREA",
-           "Pass", "Pattern", "OilLaw", "LAW", "OilField", "load_pattern", "pattern_from_dict", "pattern", "oil_name"]
+           "BUFF_CARRY_FT", "RATIO_FT", "Pass", "Row", "Pattern", "OilLaw", "LAW", "OilField", "buffed", "load_pattern",
+           "pattern_from_dict", "pattern", "oil_name", "board_of"]
 
 #: Friction of a full oil film (Frohlich's figure, as scene.MU_OIL) and of the dry lane for
 #: the default ball (scene.MU_DRY); the ball's coverstock friction replaces the latter.
 MU_OIL = scene.MU_OIL
 MU_DRY = scene.MU_DRY
 FORMAT = "nbst-oil-pattern"
-VERSION = 1
+VERSION = 2
+#: Versions read: 1 (passes with a volume and a lateral shape), 2 (a pattern sheet's rows).
+VERSIONS = (1, 2)
 PATTERNS_DIR = Path(__file__).with_name("patterns")
 #: The film grid: cells of one board by DX_FT ft, from the foul line to the pin deck's front.
 DX_FT = 0.25
 NX = int(math.floor(float(x_to_ft(scene.DECK_FRONT_X)) / DX_FT))
 CELL_AREA = BOARD_WIDTH * DX_FT * FT  # m^2
 #: The shipped patterns, in the order they are listed.
-SHIPPED = ("house", "house-short", "house-long", "sport-short", "sport", "sport-long", "short", "flat", "uniform")
+SHIPPED = ("house", "house-short", "house-long", "sport-short", "sport", "sport-long", "short", "flat", "uniform",
+           "pba-house", "kegel-boardwalk", "pba-chameleon", "pba-cheetah")
+#: The brush's carry length (ft): over it the brush evens out with the film it passes (:func:`buffed`;
+#: assumed: no published figure found).
+BUFF_CARRY_FT = 2.0
+#: Where :meth:`Pattern.ratio` reads a pattern without a published ratio distance (ft).
+RATIO_FT = 10.0
+#: A lane machine's travel speeds a sheet may give (in/s).
+SPEED_RANGE = (1.0, 60.0)
 #: The pattern a throw is bowled on when none is named (``--oil``'s default).
 DEFAULT_OIL = "house"
 
@@ -89,22 +104,116 @@ class Pass:
         return d
 
 
-@dataclass(frozen=True)
-class Pattern:
-    """An oil pattern: its passes (forward first). See the module docstring."""
+def board_of(text, where: str) -> int:
+    """A sheet's board (``"2L"``: board 2 from the left edge; ``"2R"``: from the right; a bare number:
+    the lane's board counted from the right edge, as a right-hander's) as the lane's board 1..39."""
+    t = str(text).strip().upper() if isinstance(text, (str, int)) and not isinstance(text, bool) else ""
+    side = t[-1:] if t[-1:] in ("L", "R") else "R"
+    num = t[:-1] if t[-1:] in ("L", "R") else t
+    if not num.isdigit() or not 1 <= int(num) <= N_BOARDS:
+        raise LaneError(f"{where}: must be a board 1L..39L or 1R..39R (e.g. 2L-2R), got {text!r}")
+    n = int(num)
+    return N_BOARDS + 1 - n if side == "L" else n
 
-    name: str
-    description: str
-    passes: tuple
+
+@dataclass(frozen=True)
+class Row:
+    """One row of a pattern sheet: ``loads`` loads of ``ul`` microlitres on every board ``lo``..``hi``
+    (the lane's boards, 1 = the right-hander's right edge) laid evenly over ``start_ft``-``end_ft``,
+    in the ``direction`` pass at ``speed`` in/s; or, ``buff``, the brush alone over that range."""
+
+    direction: str
+    start_ft: float
+    end_ft: float
+    boards: str = ""
+    lo: int = 0
+    hi: int = 0
+    loads: float = 0.0
+    ul: float = 0.0
+    speed: float = 0.0
+    buff: bool = False
 
     @property
-    def length_ft(self) -> float:
-        """Where the pattern ends (the longest pass)."""
-        return max(p.length_ft for p in self.passes)
+    def n_boards(self) -> int:
+        return 0 if self.buff else self.hi - self.lo + 1
 
     @property
     def volume_ml(self) -> float:
-        return float(sum(p.volume_ml for p in self.passes))
+        """The oil the row lays (ml): loads x boards x microlitres."""
+        return 0.0 if self.buff else self.loads * self.n_boards * self.ul / 1000.0
+
+    def span(self) -> tuple[float, float]:
+        return min(self.start_ft, self.end_ft), max(self.start_ft, self.end_ft)
+
+    def to_dict(self) -> dict:
+        d: dict = {"pass": self.direction}
+        if self.buff:
+            d["buff"] = True
+        else:
+            d.update({"boards": self.boards, "loads": self.loads, "ul": self.ul, "speed": self.speed})
+        d.update({"start_ft": self.start_ft, "end_ft": self.end_ft})
+        return d
+
+
+def buffed(h: np.ndarray, a_ft: float, b_ft: float, direction: str, carry_ft: float = BUFF_CARRY_FT) -> float:
+    """The brush alone over ``a_ft``-``b_ft`` of the film ``h`` (N_BOARDS, NX; um; changed in place),
+    travelling down the lane (``forward``) or back to the foul line (``reverse``): it drops clean and,
+    on each cell it crosses, it and the cell share their oil in proportion to their areas (the
+    brush as ``carry_ft`` of board, the cell as the part of it in the range), so it lifts oil where
+    the lane is wetter than it and lays it where drier, over about ``carry_ft``. At the range's
+    end it lifts with what it holds: that oil leaves the lane. Returns the ml it took away."""
+    lo, hi = min(a_ft, b_ft), max(a_ft, b_ft)
+    j0, j1 = int(math.floor(lo / DX_FT)), min(int(math.ceil(hi / DX_FT)), NX)
+    cols = range(j0, j1) if direction == "forward" else range(j1 - 1, j0 - 1, -1)
+    brush = np.zeros(N_BOARDS)  # ml per board
+    a_b = carry_ft * FT * BOARD_WIDTH
+    for j in cols:
+        frac = (min(hi, (j + 1) * DX_FT) - max(lo, j * DX_FT)) / DX_FT
+        if frac <= 0:
+            continue
+        a_c = CELL_AREA * frac
+        total = h[:, j] * a_c + brush
+        h[:, j] += (total * a_c / (a_c + a_b) - h[:, j] * a_c) / CELL_AREA
+        brush = total * a_b / (a_c + a_b)
+    return float(brush.sum())
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """An oil pattern: a sheet's ``rows`` (version 2), or ``passes`` (version 1, forward first).
+    See the module docstring."""
+
+    name: str
+    description: str
+    passes: tuple = ()
+    rows: tuple = ()
+    source: str = ""
+    published: tuple = ()  # (key, value) pairs, as the file's "published" object
+    ratio_ft: float = RATIO_FT
+
+    @property
+    def length_ft(self) -> float:
+        """Where the pattern ends: the longest pass, or the far end of the last cell the rows leave oil on."""
+        if not self.rows:
+            return max(p.length_ft for p in self.passes)
+        g = _grid(self)
+        wet = np.nonzero(g.max(axis=0) > 0)[0]
+        far = max(r.span()[1] for r in self.rows)
+        return float(min((wet[-1] + 1) * DX_FT, far)) if len(wet) else 0.0
+
+    @property
+    def volume_ml(self) -> float:
+        """The oil on the lane (ml): the passes' volumes, or the rows' less what the brush lifted."""
+        if not self.rows:
+            return float(sum(p.volume_ml for p in self.passes))
+        return float(_grid(self).sum() * CELL_AREA)
+
+    def applied_ml(self, direction: str | None = None) -> float:
+        """The oil the rows (of the ``direction`` pass, or all) lay, before any buffing (ml)."""
+        if not self.rows:
+            return float(sum(p.volume_ml for k, p in enumerate(self.passes)
+                             if direction is None or direction == ("forward", "reverse")[k]))
+        return float(sum(r.volume_ml for r in self.rows if direction is None or r.direction == direction))
 
     def grid(self) -> np.ndarray:
         """(N_BOARDS, NX) oil film, um, cell centres (a new array each call)."""
@@ -123,16 +232,60 @@ class Pattern:
         g = _grid(self)
         return bool(np.allclose(g, g[::-1], rtol=1e-12, atol=1e-15))
 
-    def ratio(self, ft: float = 10.0) -> float:
-        """Inside over outside at ``ft``: the mean film of boards 18-22 over that of boards 3 and 37
-        (our reading of USBC's "oil in the middle compared to the outside")."""
+    def ratio(self, ft: float | None = None) -> float:
+        """Inside over outside at ``ft`` (default :attr:`ratio_ft`): the mean film of boards 18-22 over
+        that of boards 3 and 37 (our reading of USBC's "oil in the middle compared to the outside")."""
+        ft = self.ratio_ft if ft is None else ft
         g = _grid(self)[:, min(int(ft / DX_FT), NX - 1)]
         out = (g[2] + g[36]) / 2
         return float(g[17:22].mean() / out) if out > 0 else math.inf
 
+    def summary(self) -> str:
+        """One line: length, volume and ratio, as computed."""
+        r = self.ratio()
+        return (f"{self.length_ft:g} ft, {self.volume_ml:.2f} ml, "
+                f"{'flat' if not math.isfinite(r) else f'{r:.2f}:1'} at {self.ratio_ft:g} ft")
+
+    def sheet(self) -> str:
+        """The pattern as a sheet: its rows with the oil each lays, the totals, the length and the ratios,
+        all computed; then what the source published."""
+        lines = [f"{self.name}: {self.description}"]
+        if self.source:
+            lines.append(f"source: {self.source}")
+        if self.rows:
+            lines.append(f"{'#':>3} {'pass':8} {'boards':8} {'loads':>5} {'ul':>5} {'speed':>5} {'start':>6} {'end':>6} {'ml':>6}")
+            for k, r in enumerate(self.rows, 1):
+                if r.buff:
+                    lines.append(f"{k:>3} {r.direction:8} {'buff':8} {'':>5} {'':>5} {'':>5} {r.start_ft:>6g} {r.end_ft:>6g}")
+                else:
+                    lines.append(f"{k:>3} {r.direction:8} {r.boards:8} {r.loads:>5g} {r.ul:>5g} {r.speed:>5g} "
+                                 f"{r.start_ft:>6g} {r.end_ft:>6g} {r.volume_ml:>6.2f}")
+        fw, rv = self.applied_ml("forward"), self.applied_ml("reverse")
+        lines.append(f"volume: forward {fw:.2f} ml, reverse {rv:.2f} ml, laid {fw + rv:.2f} ml; on the lane "
+                     f"{self.volume_ml:.2f} ml (the brush lifted {fw + rv - self.volume_ml:.2f} ml)")
+        at = {self.ratio_ft, 10.0, 22.0}
+        for k, v in self.published:
+            if k == "ratio" and isinstance(v, tuple):
+                at |= {float(x[0]) for x in v if isinstance(x, tuple) and x and isinstance(x[0], (int, float))}
+        rs = ", ".join(f"{self.ratio(ft):.2f}:1 at {ft:g} ft" for ft in sorted(at) if ft < self.length_ft)
+        lines.append(f"length: {self.length_ft:g} ft; ratio (boards 18-22 over 3 and 37): {rs}")
+        if self.published:
+            lines.append("published: " + ", ".join(f"{k} {v}" for k, v in self.published))
+        return "\n".join(lines)
+
     def to_dict(self) -> dict:
         """The pattern as a pattern file's content (:func:`pattern_from_dict` reads it back)."""
-        d = {"format": FORMAT, "version": VERSION, "name": self.name, "description": self.description,
+        if self.rows:
+            d = {"format": FORMAT, "version": 2, "name": self.name, "description": self.description}
+            if self.source:
+                d["source"] = self.source
+            if self.published:
+                d["published"] = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.published}
+            if self.ratio_ft != RATIO_FT:
+                d["ratio_ft"] = self.ratio_ft
+            d["rows"] = [r.to_dict() for r in self.rows]
+            return d
+        d = {"format": FORMAT, "version": 1, "name": self.name, "description": self.description,
              "forward": self.passes[0].to_dict()}
         if len(self.passes) > 1:
             d["reverse"] = self.passes[1].to_dict()
@@ -141,8 +294,19 @@ class Pattern:
 
 @lru_cache(maxsize=64)
 def _grid(p: Pattern) -> np.ndarray:
-    xs = (np.arange(NX) + 0.5) * DX_FT
     g = np.zeros((N_BOARDS, NX))
+    if p.rows:
+        edges = np.arange(NX + 1) * DX_FT
+        for r in p.rows:
+            a, b = r.span()
+            if r.buff:
+                buffed(g, a, b, r.direction)
+                continue
+            w = np.clip(np.minimum(edges[1:], b) - np.maximum(edges[:-1], a), 0.0, None) / (b - a)
+            g[r.lo - 1:r.hi, :] += (r.loads * r.ul * 1e-3 / CELL_AREA) * w[None, :]  # ml per board -> um
+        g.setflags(write=False)
+        return g
+    xs = (np.arange(NX) + 0.5) * DX_FT
     for ps in p.passes:
         lat = np.asarray(ps.units, dtype=float)
         cells = np.outer(lat, ps.shape_x(xs))
@@ -266,11 +430,72 @@ def _pass(d, where: str) -> Pass:
     return Pass(length, vol, _units(d, where), taper, to)
 
 
+def _row(d, where: str) -> Row:
+    if not isinstance(d, dict):
+        raise LaneError(f"{where}: must be an object (pass, boards, loads, ul, speed, start_ft, end_ft; or buff)")
+    deck_ft = NX * DX_FT
+    known = {"pass", "buff", "boards", "loads", "ul", "speed", "start_ft", "end_ft"}
+    extra = sorted(set(d) - known)
+    if extra:
+        raise LaneError(f"{where}.{extra[0]}: not a row field (fields: {', '.join(sorted(known))})")
+    direction = d.get("pass")
+    if direction not in ("forward", "reverse"):
+        raise LaneError(f"{where}.pass: must be 'forward' or 'reverse', got {direction!r}")
+    a = _num(d.get("start_ft"), f"{where}.start_ft", 0.0, deck_ft)
+    b = _num(d.get("end_ft"), f"{where}.end_ft", 0.0, deck_ft)
+    if a == b:
+        raise LaneError(f"{where}.end_ft: must differ from start_ft ({a:g} ft): a row covers a distance")
+    buff = d.get("buff", False)
+    if not isinstance(buff, bool):
+        raise LaneError(f"{where}.buff: must be true or false, got {buff!r}")
+    if buff:
+        for k in ("boards", "loads", "ul", "speed"):
+            if k in d:
+                raise LaneError(f"{where}.{k}: a buff row is the brush alone (pass, start_ft, end_ft), no {k}")
+        return Row(direction, a, b, buff=True)
+    text = d.get("boards")
+    if not isinstance(text, str) or text.count("-") != 1:
+        raise LaneError(f"{where}.boards: must be 'FROM-TO' as a sheet writes it (e.g. '2L-2R', '10L-10R'), got {text!r}")
+    x, y = (board_of(t, f"{where}.boards") for t in text.split("-"))
+    loads = _num(d.get("loads"), f"{where}.loads", 0.0, 100.0, open_lo=True)
+    ul = _num(d.get("ul"), f"{where}.ul", 0.0, 500.0, open_lo=True)
+    speed = _num(d.get("speed"), f"{where}.speed", *SPEED_RANGE)
+    return Row(direction, a, b, text.strip().upper(), min(x, y), max(x, y), loads, ul, speed)
+
+
+def _frozen(v):
+    return tuple(_frozen(x) for x in v) if isinstance(v, list) else v
+
+
+def _rows_pattern(doc: dict, src: str, name: str, desc: str) -> Pattern:
+    rows = doc.get("rows")
+    if not isinstance(rows, list) or not rows or len(rows) > 200:
+        raise LaneError(f"{src}: rows: must be a list of 1 to 200 rows (a pattern sheet's load rows)")
+    out = tuple(_row(r, f"{src}: rows[{k}]") for k, r in enumerate(rows))
+    if not any(not r.buff for r in out):
+        raise LaneError(f"{src}: rows: no row lays oil (only buff rows)")
+    for k in ("forward", "reverse"):
+        if k in doc:
+            raise LaneError(f"{src}: {k}: version 2 gives rows (each with its pass), not {k}")
+    source = doc.get("source", "")
+    if not isinstance(source, str) or len(source) > 600:
+        raise LaneError(f"{src}: source: must be a text of at most 600 characters")
+    pub = doc.get("published", {})
+    if not isinstance(pub, dict):
+        raise LaneError(f"{src}: published: must be an object (what the source states)")
+    ratio_ft = _num(doc.get("ratio_ft", RATIO_FT), f"{src}: ratio_ft", 0.0, NX * DX_FT, open_lo=True)
+    pat = Pattern(name, desc, rows=out, source=source, published=tuple((k, _frozen(v)) for k, v in pub.items()),
+                  ratio_ft=ratio_ft)
+    if pat.volume_ml <= 0:
+        raise LaneError(f"{src}: rows: the brush leaves no oil on the lane")
+    return pat
+
+
 def pattern_from_dict(doc, src: str = "<pattern>") -> Pattern:
     """A pattern file's decoded content as a :class:`Pattern`.
 
     Args:
-        doc: the decoded JSON object.
+        doc: the decoded JSON object (version 2: a sheet's rows; version 1: passes).
         src: how messages name its source (a file's path).
 
     Returns:
@@ -283,14 +508,18 @@ def pattern_from_dict(doc, src: str = "<pattern>") -> Pattern:
         raise LaneError(f"{src}: a pattern file must be a JSON object")
     if doc.get("format") != FORMAT:
         raise LaneError(f"{src}: format: must be {FORMAT!r}, got {doc.get('format')!r}")
-    if doc.get("version") != VERSION:
-        raise LaneError(f"{src}: version: must be {VERSION}, got {doc.get('version')!r}")
+    if doc.get("version") not in VERSIONS or isinstance(doc.get("version"), bool):
+        raise LaneError(f"{src}: version: must be one of {', '.join(map(str, VERSIONS))}, got {doc.get('version')!r}")
     name = doc.get("name")
     if not isinstance(name, str) or not name.strip() or len(name) > 80 or not name.isprintable():
         raise LaneError(f"{src}: name: must be a short printable text, got {name!r}")
     desc = doc.get("description", "")
     if not isinstance(desc, str) or len(desc) > 400:
         raise LaneError(f"{src}: description: must be a text of at most 400 characters")
+    if doc["version"] == 2:
+        return _rows_pattern(doc, src, name.strip(), desc)
+    if "rows" in doc:
+        raise LaneError(f"{src}: rows: a sheet's rows need version 2 (version 1 gives forward/reverse passes)")
     passes = [_pass(doc.get("forward"), f"{src}: forward")]
     if doc.get("reverse") is not None:
         passes.append(_pass(doc["reverse"], f"{src}: reverse"))
@@ -394,4 +623,4 @@ for _name in SHIPPED:
     _pat = load_pattern(PATTERNS_DIR / f"{_name}.json")
     if _pat.name != _name:
         raise LaneError(f"{_name}.json: name: {_pat.name!r} must be the file's name {_name!r}")
-    PATTERNS.register(_name, _pat, help=f"{_pat.length_ft:g} ft, {_pat.volume_ml:g} ml, {_pat.ratio():.0f}:1")
+    PATTERNS.register(_name, _pat, help=f"{_pat.length_ft:g} ft, {_pat.volume_ml:.3g} ml, {_pat.ratio():.2g}:1")
