@@ -18,6 +18,7 @@ import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.crash.commands import cmd_check, cmd_probability, cmd_reconstruct, cmd_replay, cmd_scripts, cmd_solve
+from nbst.cli.crash.report import register_report
 from nbst.cli.flags import add_quiet, add_seed
 
 __all__ = ["COMMANDS", "register"]
@@ -149,6 +150,7 @@ def register(sub) -> None:
     r.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
     r.add_argument("--json", action="store_true", help="print one JSON object: identical, outcome")
     r.set_defaults(func=cmd_replay)
+    register_report(cr)
 
 
 def _noise_flag(p, default: str, kinds) -> None:

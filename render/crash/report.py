@@ -1,0 +1,567 @@
+"""A reconstructionist's report of a crash file (``nbst crash report CRASH.json -o report.html``).
+
+One self-contained HTML page (figures inline as base64 PNG), in a reconstructionist's units
+(km/h, metres, degrees, seconds, clock directions):
+
+* **per vehicle**: the speed at its first impact, its Delta-v (the magnitude of its velocity
+  change over that impact's contact episode, and the contact impulse's share |J| / m), the PDOF
+  (the direction the force comes from, as a clock direction and in degrees clockwise from
+  straight ahead), EES and residual crush when the file records crush (else "not recorded"), and
+  the 90 % intervals of a reconstruction when the file carries one (else the point value, said
+  to have no interval); every number from :func:`nbst.models.crash.impact.crash_impacts`;
+* **every impact** (each contact episode of a vehicle pair): its time and length, each vehicle's
+  speed before and after, Delta-v in its own frame, PDOF, and how far the two m Delta-v balance;
+* **the speed-time diagram** (km/h against s per vehicle, the impacts marked) and **the sequence
+  diagram** (a lane per vehicle: driving, perception-reaction, braking, impact, post-impact, rest;
+  an arrow from the striking to the struck vehicle at each impact);
+* **the scene diagram**: overhead, to scale in metres: the road, curbs and barriers, each
+  vehicle's path, its outline at the start, at its first impact and at rest, the impact points,
+  the skid marks and scrapes the replay left (:mod:`.motion`), and the evidence's regions (rest
+  regions, impact positions, headings at rest);
+* **evidence against fit**: every fate of the script (a reconstruction's evidence): asked, got,
+  tolerance, met (the replay's own judgement, :func:`nbst.models.crash.outcome.judge`).
+
+The perception-reaction phase is not in the file: it is drawn as :data:`PERCEPTION_S` s before
+a driver's reaction stop (``brake_at``), an assumed median, and labelled as such.
+
+Compute only: :func:`crash_report` returns the figures' data and :func:`report_html` the page;
+the CLI writes it.
+
+Length: one page of three figures and three tables, each a short function over the same
+:class:`CrashReport`; apart, they would only pass it around.
+"""
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nbst.models.crash import impact as impact_mod
+from nbst.models.crash import outcome as out_mod
+
+from nbst.render.crash import motion as motion_mod
+
+__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "CrashReport", "crash_report",
+           "evidence_rows", "phases", "report_html", "striker"]
+
+#: Figure resolution (dots per inch); figures are ~8 in wide.
+DPI = 100
+#: The perception-reaction time drawn before a reaction stop (s): the median brake reaction time
+#: to an unexpected signal, 0.9 s (Johansson and Rumar, *Drivers' brake reaction times*, Human
+#: Factors 13, 1971). Assumed: the crash file holds when the driver braked, not when the hazard
+#: appeared.
+PERCEPTION_S = 0.9
+#: The impact table lists at most this many contact episodes (the rest are counted).
+MAX_IMPACT_ROWS = 40
+#: Contact episodes in which neither vehicle's Delta-v reaches this (km/h) are grazes: counted,
+#: not listed, not drawn.
+MINOR_DV_KMH = 1.0
+#: The sequence diagram's phases, in drawing order, with their colours.
+PHASES = (("driving", "#d9d9d9"), ("perception-reaction (assumed)", "#fde68a"), ("braking", "#f59e0b"),
+          ("impact", "#dc2626"), ("post-impact", "#60a5fa"), ("rest", "#16a34a"))
+
+_CSS = """body{font-family:system-ui,sans-serif;max-width:72em;margin:1.5em auto;padding:0 1em;color:#222}
+h1{font-size:1.4em}h2{font-size:1.1em;margin-top:1.5em}table{border-collapse:collapse;font-size:.85em}
+td,th{border:1px solid #ccc;padding:.2em .5em;text-align:right}th{background:#f3f3f3}td.l,th.l{text-align:left}
+.ok{color:#176317}.bad{color:#b00}img{max-width:100%}.small{font-size:.85em;color:#555}"""
+
+
+@dataclass(frozen=True)
+class CrashReport:
+    """What the page shows: the file, its replayed impacts and motion."""
+
+    d: dict
+    script: object
+    model: object
+    impacts: impact_mod.CrashImpacts
+    motion: motion_mod.CrashMotion
+    source: str
+
+    @property
+    def names(self) -> list:
+        return self.script.names()
+
+    def major(self) -> list:
+        """The impacts at least one of whose vehicles changes speed by :data:`MINOR_DV_KMH` or more."""
+        return [p for p in self.impacts.impacts if max(v.dv for v in p.vehicles) * impact_mod.KMH >= MINOR_DV_KMH]
+
+    def first(self, i: int):
+        """Vehicle ``i``'s first major impact: (PairImpact, VehicleImpact) or None."""
+        for p in self.major():
+            if i in (p.a, p.b):
+                return p, p.of(i)
+        return None
+
+
+def crash_report(d: dict, script, model, *, source: str = "") -> CrashReport:
+    """Replay a checked crash file (``crashfile.load``'s values) for the report.
+
+    Args:
+        d, script, model: the crash file, its Script and MjModel.
+        source: the file's name, for the page.
+
+    Returns:
+        The :class:`CrashReport`.
+    """
+    return CrashReport(d=d, script=script, model=model, impacts=impact_mod.crash_impacts(d, script, model),
+                       motion=motion_mod.record(d, script, model), source=source)
+
+
+# --------------------------------------------------------------------------- helpers
+
+def _colour(rep: CrashReport, i: int):
+    c = rep.d["vehicles"][i].get("colour") or [0.3, 0.3, 0.3, 1.0]
+    return tuple(float(x) for x in c[:3])
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=DPI)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _figure(size):
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=size, layout="constrained")
+
+
+def _f(x, fmt=".1f") -> str:
+    return "&ndash;" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, fmt)
+
+
+def _deg(x: float) -> int:
+    return int(round(x)) % 360
+
+
+def striker(p: impact_mod.PairImpact) -> int | None:
+    """The striking vehicle of an impact: the one whose force comes more nearly from straight ahead
+    (its front took the blow), when the other's comes more from a side or the back; None when both
+    are struck in the front within 45 deg (head-on) or neither is."""
+    off = [min(v.pdof_deg, 360 - v.pdof_deg) if math.isfinite(v.pdof_deg) else 180.0 for v in p.vehicles]
+    if off[0] <= 45 and off[1] <= 45:
+        return None
+    k = int(np.argmin(off))
+    return p.vehicles[k].vehicle if off[k] <= 60 else None
+
+
+def phases(rep: CrashReport, i: int) -> list[tuple[str, float, float]]:
+    """Vehicle ``i``'s phases [(name, start s, end s)] in time order (names of :data:`PHASES`)."""
+    T = float(rep.motion.duration)
+    imp = [p for p in rep.major() if i in (p.a, p.b)]
+    t_hit = imp[0].t if imp else math.inf
+    t_last = imp[-1].t_end if imp else math.nan
+    sp = rep.impacts.speed[:, i]
+    moving = np.nonzero(sp > out_mod.REST_SPEED)[0]
+    times = rep.impacts.times
+    t_rest = float(times[moving[-1] + 1]) if moving.size and moving[-1] + 1 < len(times) else (
+        T if moving.size else 0.0)
+    if moving.size and moving[-1] + 1 >= len(times):
+        t_rest = math.inf                                     # still moving at the end
+    row = rep.d["intents"]["rows"][i]
+    cols = rep.d["intents"]["columns"]
+    brake = row[cols.index("brake_at")] if "brake_at" in cols else None
+    out: list = []
+    pre_end = min(t_hit, t_rest, T)
+    start_perc = pre_end
+    if brake is not None and brake < pre_end:
+        start_perc = max(0.0, brake - PERCEPTION_S)
+    if start_perc > 0:
+        out.append(("driving", 0.0, start_perc))
+    if brake is not None and brake < pre_end:
+        out.append((PHASES[1][0], start_perc, float(brake)))
+        out.append(("braking", float(brake), pre_end))
+    if imp:
+        for k, p in enumerate(imp):
+            out.append(("impact", p.t, max(p.t_end, p.t + 0.01)))
+            nxt = imp[k + 1].t if k + 1 < len(imp) else min(t_rest, T)
+            if nxt > p.t_end:
+                out.append(("post-impact", p.t_end, nxt))
+    if t_rest < T:
+        out.append(("rest", t_rest, T))
+    return out
+
+
+# --------------------------------------------------------------------------- the figures
+
+def figure_speed(rep: CrashReport) -> str:
+    """The speed-time diagram (base64 PNG)."""
+    fig = _figure((8.0, 3.6))
+    ax = fig.add_subplot(1, 1, 1)
+    t = rep.impacts.times
+    for i, nm in enumerate(rep.names):
+        ax.plot(t, rep.impacts.speed[:, i] * impact_mod.KMH, color=_colour(rep, i), lw=1.6, label=nm)
+    top = float(rep.impacts.speed.max()) * impact_mod.KMH
+    for p in rep.major():
+        ax.axvline(p.t, color="0.4", lw=0.8, ls="--")
+        ax.text(p.t, top * 1.04, f"{rep.names[p.a]}-{rep.names[p.b]} {p.t:.2f} s", fontsize=7, ha="center",
+                va="bottom", color="0.25")
+        for v in p.vehicles:
+            ax.plot([p.t, p.t_end], [v.speed_before * impact_mod.KMH, v.speed_after * impact_mod.KMH], "o",
+                    ms=3.5, color=_colour(rep, v.vehicle), mec="k", mew=0.5)
+    ax.set_xlim(0, rep.motion.duration)
+    ax.set_ylim(0, max(top * 1.15, 1.0))
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("speed of the centre of mass (km/h)")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", fontsize=8, title="vehicle", title_fontsize=8)
+    return _png(fig)
+
+
+def figure_sequence(rep: CrashReport) -> str:
+    """The sequence diagram (base64 PNG)."""
+    from matplotlib.patches import Patch
+
+    n = rep.script.n
+    fig = _figure((8.0, 1.0 + 0.55 * n))
+    ax = fig.add_subplot(1, 1, 1)
+    colours = dict(PHASES)
+    lane = {i: n - 1 - i for i in range(n)}
+    for i in range(n):
+        for name, a, b in phases(rep, i):
+            ax.broken_barh([(a, max(b - a, 1e-3))], (lane[i] - 0.3, 0.6), facecolors=colours[name],
+                           edgecolors="0.3", lw=0.4)
+    for p in rep.major():
+        s = striker(p)
+        src, dst = (p.a, p.b) if s is None or s == p.a else (p.b, p.a)
+        y0, y1 = lane[src], lane[dst]
+        style = "<|-|>" if s is None else "-|>"
+        ax.annotate("", xy=(p.t, y1 + (0.3 if y1 < y0 else -0.3)), xytext=(p.t, y0 + (-0.3 if y1 < y0 else 0.3)),
+                    arrowprops={"arrowstyle": style, "color": "k", "lw": 1.0})
+        what = "head-on" if s is None else f"{rep.names[src]} hits {rep.names[dst]}"
+        ax.text(p.t + 0.03 * rep.motion.duration / 6, (y0 + y1) / 2, f"{what}\n{p.t:.2f} s", fontsize=7,
+                va="center")
+    ax.set_yticks([lane[i] for i in range(n)], [f"{nm}" for nm in rep.names])
+    ax.set_xlim(0, rep.motion.duration)
+    ax.set_ylim(-0.6, n - 0.4)
+    ax.set_xlabel("time (s)")
+    ax.legend(handles=[Patch(facecolor=c, edgecolor="0.3", label=nm) for nm, c in PHASES], fontsize=7,
+              loc="upper center", bbox_to_anchor=(0.5, -0.35 if n < 3 else -0.25), ncol=3, frameon=False)
+    return _png(fig)
+
+
+def _outline(model, data, qpos, i: int) -> np.ndarray:
+    """(4, 2) corners of vehicle ``i``'s lower body seen from above at state ``qpos``."""
+    import mujoco
+
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    g = model.geom(f"v{i}_lower").id
+    c, R, s = data.geom_xpos[g], data.geom_xmat[g].reshape(3, 3), model.geom_size[g]
+    pts = [c + R @ np.array([sx * s[0], sy * s[1], 0.0]) for sx, sy in ((1, 1), (1, -1), (-1, -1), (-1, 1))]
+    return np.array(pts)[:, :2]
+
+
+def figure_scene(rep: CrashReport) -> str:
+    """The scene diagram: overhead, to scale in metres (base64 PNG)."""
+    import mujoco
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Polygon, Wedge
+
+    model, m = rep.model, rep.motion
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    # the region that matters: paths, impacts, rest regions, with a margin; inside the map
+    pts = [m.pos[:, i, :2] for i in range(rep.script.n)]
+    for f in (v["fate"] for v in rep.d["vehicles"]):
+        for k in ("rest", "impact_at"):
+            if k in f:
+                r = f[k]["radius"]
+                pts.append(np.array([[f[k]["x"] - r, f[k]["y"] - r], [f[k]["x"] + r, f[k]["y"] + r]]))
+    P = np.vstack(pts)
+    lo, hi = P.min(axis=0) - 6.0, P.max(axis=0) + 6.0
+    span = hi - lo
+    w = 8.0
+    fig = _figure((w, min(max(w * span[1] / span[0], 3.0), 11.0) + 1.3))
+    ax = fig.add_subplot(1, 1, 1)
+    ax.set_facecolor((0.86, 0.89, 0.83))
+    for g in range(model.ngeom):
+        name = model.geom(g).name
+        if model.geom_bodyid[g] >= 0 and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX and \
+                name.startswith(("road", "curb", "barrier")):
+            c, R, s = data.geom_xpos[g], data.geom_xmat[g].reshape(3, 3), model.geom_size[g]
+            poly = [(c + R @ np.array([sx * s[0], sy * s[1], 0.0]))[:2] for sx, sy in ((1, 1), (1, -1), (-1, -1), (-1, 1))]
+            col = {"road": "0.55", "curb": "0.8", "barrier": "#d08a2a"}[name.rstrip("0123456789")]
+            ax.add_patch(Polygon(poly, closed=True, facecolor=col, edgecolor="none", zorder=1))
+    for line in rep.script.road.centreline():
+        ax.plot(line[:, 0], line[:, 1], color="w", lw=0.8, ls=(0, (6, 6)), zorder=2)
+    for mk in m.marks:
+        ax.plot(mk.xy[:, 0], mk.xy[:, 1], color="k" if mk.kind == "skid" else "#7a4a1e", lw=1.2, alpha=0.8,
+                solid_capstyle="butt", zorder=3)
+    qpos = m.qpos
+    for i in range(rep.script.n):
+        col = _colour(rep, i)
+        ax.plot(m.pos[:, i, 0], m.pos[:, i, 1], color=col, lw=1.2, zorder=4)
+        ax.add_patch(Polygon(_outline(model, data, qpos[0], i), closed=True, fill=False, edgecolor=col, lw=1.0,
+                             ls=":", zorder=5))
+        first = rep.first(i)
+        if first is not None:
+            k = max(0, int(np.searchsorted(m.times, first[0].t)) - 1)
+            ax.add_patch(Polygon(_outline(model, data, qpos[k], i), closed=True, fill=False, edgecolor=col, lw=1.4,
+                                 zorder=6))
+        ax.add_patch(Polygon(_outline(model, data, qpos[-1], i), closed=True, facecolor=col + (0.55,), edgecolor=col,
+                             lw=1.4, zorder=6))
+        x, y = m.pos[-1, i, :2]
+        ax.text(x, y, rep.names[i], fontsize=8, ha="center", va="center", weight="bold", zorder=9)
+        x0, y0 = m.pos[0, i, :2]
+        ax.text(x0, y0, rep.names[i], fontsize=7, ha="center", va="center", color=col, zorder=9)
+        f = rep.d["vehicles"][i]["fate"]
+        if "rest" in f:
+            r = f["rest"]
+            ax.add_patch(Circle((r["x"], r["y"]), r["radius"], fill=False, edgecolor=col, lw=1.2, ls="--", zorder=7))
+            if "heading" in f:
+                h, tol = f["heading"]["deg"], f["heading"]["tol"]
+                ax.add_patch(Wedge((r["x"], r["y"]), r["radius"], h - tol, h + tol, facecolor=col + (0.15,),
+                                   edgecolor=col, lw=0.6, zorder=7))
+        if "impact_at" in f:
+            r = f["impact_at"]
+            ax.add_patch(Circle((r["x"], r["y"]), r["radius"], fill=False, edgecolor=col, lw=1.0, ls=":", zorder=7))
+    for p in rep.major():
+        ax.plot(p.pos[0], p.pos[1], marker="*", ms=12, color="#dc2626", mec="k", mew=0.6, zorder=8)
+        ax.text(p.pos[0] + 0.6, p.pos[1] + 0.6, f"{p.t:.2f} s", fontsize=7, zorder=9)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal")
+    ax.set_xlabel("x, east (m)")
+    ax.set_ylabel("y, north (m)")
+    ax.grid(alpha=0.25, zorder=0)
+    handles = [Line2D([], [], color="0.3", lw=1.2, label="path of the centre of mass"),
+               Line2D([], [], color="0.3", lw=1.0, ls=":", label="start"),
+               Line2D([], [], color="0.3", lw=1.4, label="at its first impact"),
+               Polygon([[0, 0]], facecolor="0.6", edgecolor="0.3", label="at rest (end)"),
+               Line2D([], [], marker="*", color="#dc2626", mec="k", ls="none", ms=10, label="impact point"),
+               Line2D([], [], color="k", lw=1.2, label="skid mark"),
+               Line2D([], [], color="0.3", lw=1.2, ls="--", label="rest region asked (wedge: heading)"),
+               Line2D([], [], color="0.3", lw=1.0, ls=":", label="impact position asked")]
+    if any(mk.kind == "scrape" for mk in m.marks):
+        handles.append(Line2D([], [], color="#7a4a1e", lw=1.2, label="scrape"))
+    ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=3, frameon=False)
+    return _png(fig)
+
+
+# --------------------------------------------------------------------------- the tables
+
+def _interval(rec: dict | None, i: int, key: str, fmt=".1f") -> str:
+    """A reconstruction's interval of vehicle ``i``'s ``key``, in words."""
+    if not rec:
+        return "no interval (one crash: the point value)"
+    vs = rec.get("vehicles") or []
+    q = vs[i].get(key) if i < len(vs) and isinstance(vs[i], dict) else None
+    if not isinstance(q, dict) or q.get("lo") is None or q.get("hi") is None:
+        return "no interval in the reconstruction"
+    level = rec.get("level", 0.9)
+    txt = f"{format(q['lo'], fmt)}&ndash;{format(q['hi'], fmt)} ({100 * level:.0f} %)"
+    if q.get("identifiable") is False:
+        txt += " <b class=bad>not identifiable</b>"
+    return txt
+
+
+def _ees(v: dict) -> str:
+    cr = v.get("crush")
+    if not isinstance(cr, dict) or cr.get("ees_kmh") is None:
+        return "not recorded"
+    zones = cr.get("zones") or {}
+    res = ", ".join(f"{z} {100 * float(q.get('residual_m', 0.0)):.0f} cm" for z, q in zones.items()
+                    if float(q.get("residual_m", 0.0)) > 0.0)
+    return f"{float(cr['ees_kmh']):.1f}" + (f" <span class=small>(residual crush: {res})</span>" if res else "")
+
+
+def _vehicle_table(rep: CrashReport) -> str:
+    rec = rep.d.get("reconstruction")
+    K = impact_mod.KMH
+    rows = []
+    for i, nm in enumerate(rep.names):
+        v = rep.d["vehicles"][i]
+        first = rep.first(i)
+        if first is None:
+            cells = "<td>no impact</td><td>&ndash;</td><td>&ndash;</td><td>&ndash;</td>"
+        else:
+            p, vi = first
+            cells = (f"<td data-q='{nm}.impact_speed'>{vi.speed_before * K:.1f}</td>"
+                     f"<td data-q='{nm}.delta_v'>{vi.dv * K:.1f}</td>"
+                     f"<td data-q='{nm}.delta_v_impulse'>{vi.dv_impulse * K:.1f}</td>"
+                     f"<td data-q='{nm}.pdof'>{vi.pdof_clock} o'clock ({_deg(vi.pdof_deg)}&deg;)</td>")
+        iv = (f"impact speed: {_interval(rec, i, 'impact_speed_kmh')}<br>Delta-v: {_interval(rec, i, 'delta_v_kmh')}"
+              f"<br>PDOF: {_interval(rec, i, 'pdof_clock', '.1f')}" if rec else _interval(rec, i, ""))
+        rows.append(f"<tr><td class=l><b>{html.escape(nm)}</b></td><td class=l>{html.escape(str(v.get('type', '')))}"
+                    f"</td><td>{rep.impacts.mass[i]:,.0f}</td>{cells}<td data-q='{nm}.ees'>{_ees(v)}</td>"
+                    f"<td class=l>{iv}</td></tr>")
+    return ("<table><tr><th class=l>vehicle</th><th class=l>type</th><th>mass (kg)</th><th>impact speed (km/h)</th>"
+            "<th>&Delta;v (km/h)</th><th>&Delta;v of the contact force, |J|/m (km/h)</th><th>PDOF</th>"
+            "<th>EES (km/h)</th><th class=l>intervals</th></tr>" + "".join(rows) + "</table>")
+
+
+def _impact_table(rep: CrashReport) -> str:
+    K = impact_mod.KMH
+    major = rep.major()
+    rows = []
+    for p in major[:MAX_IMPACT_ROWS]:
+        s = striker(p)
+        for k, v in enumerate(p.vehicles):
+            nm = rep.names[v.vehicle]
+            head = (f"<td rowspan=2>{p.t:.3f}</td><td rowspan=2>{1e3 * (p.t_end - p.t):.0f}</td><td rowspan=2 "
+                    f"class=l>{html.escape(rep.names[p.a])}&ndash;{html.escape(rep.names[p.b])}"
+                    f"{'' if s is None else ' (' + html.escape(rep.names[s]) + ' strikes)'}</td>" if k == 0 else "")
+            tail = f"<td rowspan=2>{100 * p.momentum_error:.1f}</td>" if k == 0 else ""
+            rows.append(f"<tr>{head}<td class=l>{html.escape(nm)}</td><td>{v.speed_before * K:.1f}</td>"
+                        f"<td>{v.speed_after * K:.1f}</td><td>{v.dv_body[0] * K:+.1f}, {v.dv_body[1] * K:+.1f}</td>"
+                        f"<td>{v.dv * K:.1f}</td><td>{v.dv_impulse * K:.1f}</td>"
+                        f"<td>{v.pdof_clock} ({_deg(v.pdof_deg)}&deg;)</td>{tail}</tr>")
+    minor = len(rep.impacts.impacts) - len(major)
+    more = len(major) - min(len(major), MAX_IMPACT_ROWS)
+    note = []
+    if more:
+        note.append(f"{more} further impacts not listed")
+    if minor:
+        note.append(f"{minor} grazes (no vehicle's &Delta;v reaches {MINOR_DV_KMH:g} km/h) not listed")
+    return ("<table><tr><th>t (s)</th><th>lasts (ms)</th><th class=l>pair</th><th class=l>vehicle</th>"
+            "<th>speed before (km/h)</th><th>after (km/h)</th><th>&Delta;v forward, left (km/h)</th>"
+            "<th>|&Delta;v| (km/h)</th><th>|J|/m (km/h)</th><th>PDOF (clock, deg)</th>"
+            "<th>m&Delta;v imbalance (%)</th></tr>" + "".join(rows) + "</table>"
+            + (f"<p class=small>{'; '.join(note)}.</p>" if note else "")) if major else \
+        "<p>No vehicle touched another.</p>"
+
+
+def evidence_rows(rep: CrashReport) -> list[tuple[str, str, str, str, str, bool]]:
+    """Every fate of the script against the replay: [(vehicle, fate, asked, got, tolerance, met)],
+    the global order last (vehicle "all")."""
+    o = rep.motion.outcome
+    names = rep.names
+    K = impact_mod.KMH
+    out = []
+    for i, (vs, vo) in enumerate(zip(rep.script.vehicles, o.vehicles)):
+        f, met, nm = vs.fate, vo.fates, names[i]
+        end = "still moving at the end: " if vo.moving else ""
+        if f.hits is not None:
+            out.append((nm, "hits", ", then ".join(names[j] for j in f.hits) or "nobody",
+                        ", then ".join(names[j] for j, _ in vo.hits) or "nobody", "the same, in order", met["hits"]))
+        for key, label, val in (("impact_speed", "impact speed", vo.impact_speed), ("delta_v", "delta-V", vo.delta_v)):
+            b = getattr(f, key)
+            if b is not None:
+                mid, half = (b.lo + b.hi) / 2 * K, (b.hi - b.lo) / 2 * K
+                out.append((nm, label, f"{mid:.1f} km/h", f"{val * K:.1f} km/h" if math.isfinite(val) else "no impact",
+                            f"&plusmn; {half:.1f} km/h", met[key]))
+        if f.impact_at is not None:
+            x, y, r = f.impact_at
+            dd = math.hypot(vo.impact_pos[0] - x, vo.impact_pos[1] - y)
+            out.append((nm, "position at impact", f"({x:.2f}, {y:.2f}) m",
+                        f"({vo.impact_pos[0]:.2f}, {vo.impact_pos[1]:.2f}) m, {dd:.2f} m off" if math.isfinite(dd)
+                        else "no impact", f"{r:g} m", met["impact_at"]))
+        if f.rest is not None:
+            x, y, r = f.rest
+            dd = math.hypot(vo.rest[0] - x, vo.rest[1] - y)
+            out.append((nm, "rest position", f"({x:.2f}, {y:.2f}) m",
+                        f"{end}({vo.rest[0]:.2f}, {vo.rest[1]:.2f}) m, {dd:.2f} m off", f"{r:g} m", met["rest"]))
+        if f.heading is not None:
+            err = abs((math.degrees(vo.rest[2] - f.heading[0]) + 180) % 360 - 180)
+            out.append((nm, "heading at rest", f"{math.degrees(f.heading[0]):.0f}&deg;",
+                        f"{end}{math.degrees(vo.rest[2]):.0f}&deg;, {err:.0f}&deg; off",
+                        f"&plusmn; {math.degrees(f.heading[1]):.0f}&deg;", met["heading"]))
+        if f.quarter_turns is not None:
+            lo, hi = f.quarter_turns
+            out.append((nm, "quarter turns of roll", f"{lo}" if lo == hi else f"{lo}-{hi}", f"{vo.quarter_turns}",
+                        "whole turns", met["quarter_turns"]))
+        if f.attitude is not None:
+            out.append((nm, "attitude at the end", f.attitude, vo.attitude, "the same", met["attitude"]))
+        if f.spin is not None:
+            out.append((nm, "spin", f"{math.degrees(f.spin[0]):.0f}&deg;", f"{abs(math.degrees(vo.spin)):.0f}&deg;",
+                        f"&plusmn; {math.degrees(f.spin[1]):.0f}&deg;", met["spin"]))
+        for key in ("curb", "barrier"):
+            want = getattr(f, key)
+            if want is not None:
+                t = getattr(vo, key)
+                out.append((nm, f"{key} strike", "yes" if want else "no",
+                            f"yes, {t:.2f} s" if math.isfinite(t) else "no", "&ndash;", met[key]))
+    if rep.script.order is not None:
+        want = ", ".join(f"{names[a]}-{names[b]}" for a, b in rep.script.order)
+        got = ", ".join(f"{names[a]}-{names[b]}" for a, b in o.sequence) or "none"
+        out.append(("all", "order of first contacts", want, got, "the same", bool(o.order_ok)))
+    return out
+
+
+def _evidence_table(rep: CrashReport) -> str:
+    rows = evidence_rows(rep)
+    if not rows:
+        return "<p>The script asks nothing of the vehicles.</p>"
+    body = "".join(
+        f"<tr><td class=l>{html.escape(v)}</td><td class=l>{k}</td><td class=l>{a}</td><td class=l>{g}</td>"
+        f"<td class=l>{t}</td><td class={'ok' if ok else 'bad'}>{'met' if ok else 'NOT met'}</td></tr>"
+        for v, k, a, g, t, ok in rows)
+    n_ok = sum(r[5] for r in rows)
+    return (f"<p>{n_ok} of {len(rows)} met.</p><table><tr><th class=l>vehicle</th><th class=l>fate / evidence</th>"
+            "<th class=l>asked</th><th class=l>got</th><th class=l>tolerance</th><th>met</th></tr>" + body + "</table>")
+
+
+def _reconstruction_html(rec: dict | None) -> str:
+    if not rec:
+        return ""
+    bits = []
+    if rec.get("method"):
+        bits.append(f"Method: {html.escape(str(rec['method']))}.")
+    if rec.get("accepted") is not None and rec.get("draws") is not None:
+        bits.append(f"{rec['accepted']} of {rec['draws']} draws met every piece of evidence.")
+    for s in rec.get("verdicts") or []:
+        bits.append(html.escape(str(s)))
+    cs = rec.get("closing_speed_kmh")
+    if isinstance(cs, dict) and cs.get("lo") is not None:
+        bits.append(f"Closing speed {cs['lo']:.1f}&ndash;{cs['hi']:.1f} km/h"
+                    + (" (not identifiable)." if cs.get("identifiable") is False else "."))
+    return "<h2>The reconstruction</h2><p>" + " ".join(bits) + "</p>" if bits else ""
+
+
+def report_html(rep: CrashReport) -> str:
+    """The whole page of :func:`crash_report`'s result.
+
+    Args:
+        rep: the report's data.
+
+    Returns:
+        The HTML text (figures inline).
+    """
+    d, s = rep.d, rep.script
+    esc = html.escape
+    o = rep.motion.outcome
+    same = ("The replay reproduces the file bit for bit." if rep.motion.identical and rep.impacts.identical
+            else f"<b class=bad>Warning</b>: {esc(rep.motion.differs() or 'the replay differs from the file')}; "
+                 "the page shows the replay.")
+    p = d.get("probability")
+    prob = (f" Under {esc(str(p.get('noise_kind', 'retake')))} driver noise, {p['k']} of {p['n']} re-drives met the "
+            f"script (P = {100 * p['p']:.0f} %, 95 % Wilson interval {100 * p['lo']:.0f}&ndash;{100 * p['hi']:.0f} %)."
+            if isinstance(p, dict) else "")
+    rec = d.get("reconstruction")
+    road = s.road
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>nbst crash report: {esc(s.name)}</title>
+<style>{_CSS}</style></head><body>
+<h1>Crash report: {esc(s.name)}</h1>
+<p class=small>{esc(rep.source)}{' &middot; ' + esc(s.description.splitlines()[0]) if s.description else ''}</p>
+<p>{s.n} vehicles on a {esc(road.layout)} road, {road.width:g} m wide, friction {road.friction:g};
+{s.duration:g} s at {1e3 * float(d['timestep']):g} ms steps (MuJoCo {esc(str(d.get('mujoco', '')))}).
+{'The script is met' if o.solved else 'The script is not met'} (signature {o.signature_text(s.n)}).{prob} {same}</p>
+<h2>Per vehicle, at its first impact</h2>
+{_vehicle_table(rep)}
+<p class=small>Impact speed: the centre of mass's speed just before the first touch. &Delta;v: the magnitude of
+its velocity change from just before the first touch to just after the last of the contact episode (touches
+less than {1e3 * impact_mod.CONTACT_GAP:g} ms apart); it holds the tyres' forces over the episode too, which
+|J|/m, the contact impulse over the mass, leaves out. PDOF: where the force comes from in the vehicle's frame
+(12 o'clock: straight ahead, 3: the right; degrees clockwise from straight ahead; SAE J224). EES: the
+energy-equivalent speed of the residual crush, recorded only for crushing vehicle types.</p>
+{_reconstruction_html(rec)}
+<h2>Impacts</h2>
+{_impact_table(rep)}
+<h2>Speed against time</h2>
+<img alt="speed-time diagram" src="data:image/png;base64,{figure_speed(rep)}">
+<h2>Sequence</h2>
+<img alt="sequence diagram" src="data:image/png;base64,{figure_sequence(rep)}">
+<p class=small>Perception-reaction is drawn {PERCEPTION_S:g} s before a reaction stop (an assumed median: Johansson
+and Rumar 1971); the crash file records when the driver braked, not when the hazard appeared.</p>
+<h2>Scene</h2>
+<img alt="scene diagram" src="data:image/png;base64,{figure_scene(rep)}">
+<h2>Evidence against fit</h2>
+{_evidence_table(rep)}
+</body></html>
+"""
