@@ -23,8 +23,14 @@ index 1), pitch 0.9 x yaw, roll ``m (0.39 track)^2``.
 
 * body ``{p}`` on a free joint ``{p}_free``: the sprung mass with explicit inertia; two
   collision boxes, ``{p}_lower`` (bumper to belt line, full length and width) and ``{p}_cabin``
-  (belt line to roof), which carry the car-to-car contacts (they do not crush: penetration
-  stands in for crush; docs/crash.md);
+  (belt line to roof), which carry the car-to-car contacts (a rigid type does not crush:
+  penetration stands in for crush; docs/crash.md);
+* a crushing type (``crush`` true: ``sedan-crush``, ``suv-crush``, ``van-crush``) has four crush
+  zones (front, rear, left, right: :func:`crush_zones`): the lower box keeps its core and each
+  zone is a slab on a chain of slide joints ``{p}_crush_{zone}_{k}`` with dry friction, CRASH3's
+  force per unit width A + B C as a staircase of yield forces (:class:`CrushZone`); the joints
+  hold what they crushed (plastic), so their sum is the residual crush (:func:`crush_residual`)
+  and CRASH3's energy of it the EES (:func:`crush_ees`);
 * four corners ``fl fr rl rr``: a knuckle body on a sprung slide joint ``{p}_susp_{c}``
   (stiffness for a 1.5 Hz ride, damping ratio 0.3, travel limited by bump stops), the front
   ones with a steer hinge ``{p}_steer_{c}`` (Ackermann angles set by the driver), and a wheel
@@ -57,7 +63,9 @@ from nbst.registry import Registry
 __all__ = ["G", "CORNERS", "CONTROLS", "BIT_STATIC", "BIT_TYRE", "BIT_BODY", "VEHICLE_KIND", "BodyContact",
            "BODY_CONTACT", "TYRE_FRICTION", "BRAKE_KV", "TYRE_SOLREF", "VehicleType",
            "vehicle_type_from_dict", "VEHICLE_TYPES", "control_names", "corner_positions", "heading_quat",
-           "add_vehicle"]
+           "add_vehicle", "CRUSH_ZONES", "CRUSH_STEPS", "CRUSH_LINK_MASS", "CRUSH_SLAB_MASS", "CRUSH_SOLREF",
+           "CRUSH_SOLIMP", "CRUSH_JOINT_SOLREF", "CRUSH_JOINT_SOLIMP", "CrushZone", "crush_zones",
+           "crush_joint_names", "crush_residual", "crush_energy", "crush_ees", "crush_record"]
 
 G = 9.81
 #: Corner names, in the order of every per-corner array.
@@ -128,6 +136,18 @@ class VehicleType:
     power: float = 150e3          # W at the rear wheels (a spinning wheel's torque is at most power / omega)
     brake_torque: float = 6000.0  # N m per wheel (beyond what a tyre can pass on at mu 1.2: the wheel locks)
     source: str = ""
+    # crush (opt-in; off: the rigid boxes of before, nothing else in the model changes): CRASH3's
+    # force per unit width F/w = A + B C per zone (A N/m, B N/m^2) and each zone's depth (m)
+    crush: bool = False
+    crush_front_a: float = 0.0
+    crush_front_b: float = 0.0
+    crush_front_depth: float = 0.0
+    crush_rear_a: float = 0.0
+    crush_rear_b: float = 0.0
+    crush_rear_depth: float = 0.0
+    crush_side_a: float = 0.0
+    crush_side_b: float = 0.0
+    crush_side_depth: float = 0.0
 
     @property
     def cg_height(self) -> float:
@@ -152,10 +172,13 @@ class VehicleType:
 
     def to_dict(self) -> dict:
         ix, iy, iz = self.inertia
-        return {"type": self.name, "label": self.label, "mass_kg": self.mass, "length_m": self.length,
-                "width_m": self.width, "height_m": self.height, "wheelbase_m": self.wheelbase,
-                "track_m": self.track, "ssf": self.ssf, "cg_height_m": _six(self.cg_height),
-                "inertia_kg_m2": [_six(ix), _six(iy), _six(iz)], "wheel_radius_m": self.wheel_radius}
+        d = {"type": self.name, "label": self.label, "mass_kg": self.mass, "length_m": self.length,
+             "width_m": self.width, "height_m": self.height, "wheelbase_m": self.wheelbase,
+             "track_m": self.track, "ssf": self.ssf, "cg_height_m": _six(self.cg_height),
+             "inertia_kg_m2": [_six(ix), _six(iy), _six(iz)], "wheel_radius_m": self.wheel_radius}
+        if self.crush:
+            d["crushes"] = True
+        return d
 
 
 def vehicle_type_from_dict(d: object, *, source: str = "<vehicle type>") -> VehicleType:
@@ -182,14 +205,27 @@ def vehicle_type_from_dict(d: object, *, source: str = "<vehicle type>") -> Vehi
         if f is None:
             raise InputError(f"{source}: {k}: unknown field; the fields are {', '.join(fields)}")
         text = f.type == "str"
+        if f.type == "bool":
+            if not isinstance(v, bool):
+                raise InputError(f"{source}: {k}: must be true or false, got {v!r}")
+            continue
         if (not isinstance(v, str)) if text else (isinstance(v, bool) or not isinstance(v, (int, float))
                                                  or not math.isfinite(v)):
             raise InputError(f"{source}: {k}: must be {'a string' if text else 'a finite number'}, got {v!r}")
     missing = [k for k, f in fields.items() if f.default is dataclasses.MISSING and k not in values]
     if missing:
         raise InputError(f"{source}: {missing[0]}: missing")
-    kwargs: dict[str, Any] = {k: v if isinstance(v, str) else float(v) for k, v in values.items()}
-    return VehicleType(**kwargs)
+    kwargs: dict[str, Any] = {k: v if isinstance(v, (str, bool)) else float(v) for k, v in values.items()}
+    vt = VehicleType(**kwargs)
+    if vt.crush:
+        for z in ("front", "rear", "side"):
+            for part in ("a", "b", "depth"):
+                if not getattr(vt, f"crush_{z}_{part}") > 0:
+                    raise InputError(f"{source}: crush_{z}_{part}: must be > 0 when crush is true")
+        if vt.crush_front_depth + vt.crush_rear_depth >= 0.8 * vt.length or 2 * vt.crush_side_depth >= 0.8 * vt.width:
+            raise InputError(f"{source}: crush_*_depth: the crush zones must leave a core (front + rear < 80 % of "
+                             "the length, twice the side < 80 % of the width)")
+    return vt
 
 
 def _builtin(file: str) -> VehicleType:
@@ -203,6 +239,9 @@ VEHICLE_TYPES: Registry[VehicleType] = Registry("vehicle type")
 VEHICLE_TYPES.register("sedan", _builtin("sedan.json"), help="a mid-size sedan (2018 Toyota Camry class), 1,450 kg")
 VEHICLE_TYPES.register("suv", _builtin("suv.json"), help="a mid-size SUV, 2,000 kg")
 VEHICLE_TYPES.register("van", _builtin("van.json"), help="a full-size van (light truck), 2,500 kg")
+VEHICLE_TYPES.register("sedan-crush", _builtin("sedan-crush.json"), help="the sedan with crush zones (CRASH3 A, B per zone)")
+VEHICLE_TYPES.register("suv-crush", _builtin("suv-crush.json"), help="the SUV with crush zones (CRASH3 A, B per zone)")
+VEHICLE_TYPES.register("van-crush", _builtin("van-crush.json"), help="the van with crush zones (CRASH3 A, B per zone)")
 
 
 def _six(x: float) -> float:
@@ -228,16 +267,189 @@ def _sprung(vt: VehicleType) -> tuple[float, np.ndarray, np.ndarray]:
     vehicle (body plus four corners of ``corner_mass`` at the wheel centres) has ``vt``'s mass,
     CoM at the body origin and inertia."""
     mc = vt.corner_mass
-    ms = vt.mass - 4 * mc
     wheels = corner_positions(vt)
-    com = -mc * wheels.sum(axis=0) / ms  # so that the total CoM is the origin
+    points = [(mc, p) for p in wheels] + _crush_masses(vt)  # corners, and the crush bodies of a crushing type
+    ms = vt.mass - sum(m for m, _ in points)
+    com = -sum(m * p for m, p in points) / ms  # so that the total CoM is the origin
     ix, iy, iz = vt.inertia
     corner = np.zeros(3)
-    for p in wheels:  # point masses at the wheel centres (their own inertia is small)
-        corner += mc * np.array([p[1] ** 2 + p[2] ** 2, p[0] ** 2 + p[2] ** 2, p[0] ** 2 + p[1] ** 2])
+    for m, p in points:  # point masses (their own inertia is small)
+        corner += m * np.array([p[1] ** 2 + p[2] ** 2, p[0] ** 2 + p[2] ** 2, p[0] ** 2 + p[1] ** 2])
     body = ms * np.array([com[1] ** 2 + com[2] ** 2, com[0] ** 2 + com[2] ** 2, com[0] ** 2 + com[1] ** 2])
     inertia = np.array([ix, iy, iz]) - corner - body
     return ms, com, inertia
+
+
+# --------------------------------------------------------------------------- crush (opt-in)
+
+#: Crush zones, in the order of every per-zone list.
+CRUSH_ZONES = ("front", "rear", "left", "right")
+#: Plastic elements per zone: the force-crush line A + B C is a staircase of this many steps
+#: (each step's force at its mid-depth, so each step's energy is the line's exactly).
+CRUSH_STEPS = {"front": 6, "rear": 6, "left": 4, "right": 4}
+#: Mass (kg) of each inner link of a zone's chain and of the zone's outer slab (taken out of the
+#: sprung mass: the vehicle's mass, CoM and inertia stay those of its type).
+CRUSH_LINK_MASS = 5.0
+CRUSH_SLAB_MASS = {"front": 30.0, "rear": 25.0, "left": 15.0, "right": 15.0}
+#: The slabs' contact (time constant s, damping ratio) and solimp: hard (impedance 0.99) so
+#: that the slab, not the penetration, takes the crush; its elastic give (a few cm) is the
+#: structure's spring-back (restitution ~0.06-0.09 at 16-56 km/h); critically damped, so that
+#: a slab does not bounce off what it hits (0.5 did: the contact broke for a step at 12 ms).
+CRUSH_SOLREF = (0.02, 1.0)
+CRUSH_SOLIMP = (0.99, 0.99, 0.001, 0.5, 2.0)
+#: The plastic joints' dry friction and travel limits: as hard as MuJoCo's constraints go
+#: (impedance 0.9999), so that a joint loaded below its yield force creeps by at most ~1 cm
+#: through a crash (a softer one slides like a damper: every step yields at once).
+CRUSH_JOINT_SOLREF = (0.004, 1.0)
+CRUSH_JOINT_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+
+
+@dataclass(frozen=True)
+class CrushZone:
+    """One crush zone of a vehicle (body frame): its slab's centre and half sizes, the inward
+    unit ``axis`` along which it crushes, the crush width ``width`` (m), CRASH3's ``a`` (N/m)
+    and ``b`` (N/m^2), the ``depth`` (m) it can crush and its ``steps``."""
+
+    name: str
+    axis: tuple
+    centre: tuple
+    half: tuple
+    width: float
+    a: float
+    b: float
+    depth: float
+    steps: int
+
+    def step_forces(self) -> np.ndarray:
+        """Each plastic element's yield force (N): w (A + B c) at the mid-depth c of its step."""
+        d = self.depth / self.steps
+        return self.width * (self.a + self.b * (np.arange(self.steps) + 0.5) * d)
+
+    def energy(self, c: float) -> float:
+        """CRASH3's crush energy (J) of a residual crush ``c`` (m) across the zone's width:
+        w (A c + B c^2 / 2 + A^2 / (2 B)) for c > 0 (the last term: the energy taken without
+        residual crush, below the no-damage speed), 0 for no crush."""
+        if c <= 0.0:
+            return 0.0
+        return self.width * (self.a * c + self.b * c * c / 2 + self.a ** 2 / (2 * self.b))
+
+
+def crush_zones(vt: VehicleType) -> list[CrushZone]:
+    """The four :class:`CrushZone` of a crushing type (front and rear full width, the sides
+    between them), [] for a rigid one."""
+    if not vt.crush:
+        return []
+    front = vt.a + vt.front_overhang
+    rear = front - vt.length
+    zc = (vt.clearance + vt.belt) / 2 - vt.cg_height
+    hz = (vt.belt - vt.clearance) / 2
+    fd, rd, sd = vt.crush_front_depth, vt.crush_rear_depth, vt.crush_side_depth
+    w = vt.width
+    ls = vt.length - fd - rd
+    xs = (rear + rd + front - fd) / 2
+    return [
+        CrushZone("front", (-1.0, 0.0, 0.0), (front - fd / 2, 0.0, zc), (fd / 2, w / 2, hz), w,
+                  vt.crush_front_a, vt.crush_front_b, fd, CRUSH_STEPS["front"]),
+        CrushZone("rear", (1.0, 0.0, 0.0), (rear + rd / 2, 0.0, zc), (rd / 2, w / 2, hz), w,
+                  vt.crush_rear_a, vt.crush_rear_b, rd, CRUSH_STEPS["rear"]),
+        CrushZone("left", (0.0, -1.0, 0.0), (xs, w / 2 - sd / 2, zc), (ls / 2, sd / 2, hz), ls,
+                  vt.crush_side_a, vt.crush_side_b, sd, CRUSH_STEPS["left"]),
+        CrushZone("right", (0.0, 1.0, 0.0), (xs, -(w / 2 - sd / 2), zc), (ls / 2, sd / 2, hz), ls,
+                  vt.crush_side_a, vt.crush_side_b, sd, CRUSH_STEPS["right"]),
+    ]
+
+
+def _crush_masses(vt: VehicleType) -> list[tuple[float, np.ndarray]]:
+    """(mass, position) of every crush body (links and slab) of ``vt``, body frame."""
+    out = []
+    for z in crush_zones(vt):
+        out.append(((z.steps - 1) * CRUSH_LINK_MASS + CRUSH_SLAB_MASS[z.name], np.array(z.centre)))
+    return out
+
+
+def crush_joint_names(prefix: str, zone: CrushZone) -> list[str]:
+    """The plastic joints of ``zone`` of vehicle ``prefix``, outermost last."""
+    return [f"{prefix}_crush_{zone.name}_{k}" for k in range(zone.steps)]
+
+
+def _add_crush(spec, body, vt: VehicleType, prefix: str, rgba) -> None:
+    """The crush zones of ``vt`` on ``body``: per zone a chain of ``steps`` bodies on slide
+    joints along the zone's inward axis, each joint with dry friction (``frictionloss``) equal
+    to its step's force and a travel of one step, the outermost carrying the zone's slab; the
+    vehicle's own crush bodies and its body do not collide with one another."""
+    import mujoco
+
+    GT = mujoco.mjtGeom
+    slabs = []
+    for z in crush_zones(vt):
+        forces = z.step_forces()
+        step = z.depth / z.steps
+        parent = body
+        for k, name in enumerate(crush_joint_names(prefix, z)):  # the plastic steps, links of CRUSH_LINK_MASS
+            last = k == z.steps - 1
+            link = parent.add_body(name=f"{prefix}_crush_{z.name}" if last else f"{name}_link",
+                                   pos=[_six(c) for c in z.centre] if k == 0 else [0.0, 0.0, 0.0])
+            j = link.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(z.axis))
+            j.frictionloss = _six(forces[k])
+            j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            j.range = [0.0, _six(step)]
+            j.solref_friction = list(CRUSH_JOINT_SOLREF)
+            j.solimp_friction = list(CRUSH_JOINT_SOLIMP)
+            j.solref_limit = list(CRUSH_JOINT_SOLREF)
+            j.solimp_limit = list(CRUSH_JOINT_SOLIMP)
+            if not last:  # a link's mass on a small sphere that touches nothing (see the hubs)
+                g = link.add_geom(name=f"{name}_mass", type=GT.mjGEOM_SPHERE, size=[0.02, 0, 0],
+                                  mass=_six(CRUSH_LINK_MASS), rgba=[0.3, 0.3, 0.3, 1.0], group=3)
+                g.contype = g.conaffinity = 0
+            parent = link
+        slab = parent  # the last link carries the slab
+        g = slab.add_geom(name=f"{prefix}_crush_{z.name}", type=GT.mjGEOM_BOX, size=[_six(h) for h in z.half],
+                          mass=_six(CRUSH_SLAB_MASS[z.name]), rgba=list(rgba))
+        g.contype = BIT_BODY
+        g.conaffinity = BIT_STATIC | BIT_BODY
+        g.condim = 3
+        g.priority = 3
+        g.friction = [BODY_CONTACT.friction, 0.0, 0.0]
+        g.solref = list(CRUSH_SOLREF)
+        g.solimp = list(CRUSH_SOLIMP)
+        slabs.append(slab.name)
+    for i, a in enumerate(slabs):
+        spec.add_exclude(bodyname1=prefix, bodyname2=a)
+        for b in slabs[i + 1:]:
+            spec.add_exclude(bodyname1=a, bodyname2=b)
+
+
+def crush_residual(model, prefix: str, vt: VehicleType, qpos) -> dict:
+    """{zone: crush (m)} of vehicle ``prefix`` (type ``vt``) in state ``qpos``: the sum of the
+    zone's plastic joints (what stays once the contact lets go: the residual crush); {} for a
+    rigid type."""
+    out = {}
+    for z in crush_zones(vt):
+        out[z.name] = float(sum(qpos[model.joint(n).qposadr[0]] for n in crush_joint_names(prefix, z)))
+    return out
+
+
+def crush_energy(vt: VehicleType, residual: dict) -> dict:
+    """{zone: CRASH3 crush energy (J)} of ``residual`` ({zone: m})."""
+    return {z.name: z.energy(max(0.0, residual.get(z.name, 0.0))) for z in crush_zones(vt)}
+
+
+def crush_ees(vt: VehicleType, residual: dict) -> float:
+    """Energy-equivalent speed (m/s): sqrt(2 E / m), E the crush energy of all zones."""
+    return math.sqrt(2.0 * sum(crush_energy(vt, residual).values()) / vt.mass)
+
+
+def crush_record(model, prefix: str, vt: VehicleType, qpos) -> dict | None:
+    """The crash file's ``crush`` entry of a vehicle (docs/formats: per zone the residual crush,
+    width, A, B and energy; the total energy and the EES), None for a rigid type."""
+    if not vt.crush:
+        return None
+    res = crush_residual(model, prefix, vt, qpos)
+    en = crush_energy(vt, res)
+    zones = {z.name: {"residual_m": round(res[z.name], 4), "width_m": _six(z.width), "A_N_per_m": z.a,
+                      "B_N_per_m2": z.b, "energy_J": round(en[z.name], 1)} for z in crush_zones(vt)}
+    return {"zones": zones, "energy_J": round(sum(en.values()), 1),
+            "ees_kmh": round(crush_ees(vt, res) * 3.6, 2)}
 
 
 def heading_quat(heading: float) -> list[float]:
@@ -264,17 +476,23 @@ def add_vehicle(spec, vt: VehicleType, prefix: str, *, pos=(0.0, 0.0), heading: 
     front = vt.a + vt.front_overhang
     rear = front - vt.length
     lower_h = vt.belt - vt.clearance
+    mid = (front + rear) / 2  # the lower box's centre before any crush zone takes its ends
+    if vt.crush:  # the core between the crush zones (they take the rest of the lower box)
+        front, rear = front - vt.crush_front_depth, rear + vt.crush_rear_depth
+    half_w = vt.width / 2 - (vt.crush_side_depth if vt.crush else 0.0)
     lower = body.add_geom(name=f"{prefix}_lower", type=GT.mjGEOM_BOX,
-                          size=[_six(vt.length / 2), _six(vt.width / 2), _six(lower_h / 2)],
+                          size=[_six((front - rear) / 2), _six(half_w), _six(lower_h / 2)],
                           pos=[_six((front + rear) / 2), 0.0, _six(vt.clearance + lower_h / 2 - h)], rgba=list(rgba))
     cab_h = vt.height - vt.belt
     cabin = body.add_geom(name=f"{prefix}_cabin", type=GT.mjGEOM_BOX,
                           size=[_six(vt.cabin_length / 2), _six(0.44 * vt.width), _six(cab_h / 2)],
-                          pos=[_six((front + rear) / 2 - vt.cabin_offset), 0.0, _six(vt.belt + cab_h / 2 - h)],
+                          pos=[_six(mid - vt.cabin_offset), 0.0, _six(vt.belt + cab_h / 2 - h)],
                           rgba=[0.75 * c for c in rgba[:3]] + [rgba[3]])
     for g in (lower, cabin):
         _body_contact(g)
         g.mass = 0.0
+    if vt.crush:
+        _add_crush(spec, body, vt, prefix, rgba)
     k = _six(_corner_load(vt, 0) / G * (2 * math.pi * vt.ride_hz) ** 2)
     kr = _six(_corner_load(vt, 2) / G * (2 * math.pi * vt.ride_hz) ** 2)
     for i, (c, p) in enumerate(zip(CORNERS, corner_positions(vt))):

@@ -1,0 +1,117 @@
+"""Crush zones (opt-in vehicle types ``*-crush``) against the physics they stand for.
+
+Each test asserts a physical fact with its tolerance; the experiment is
+nbst.models.crash.scene.barrier_pulse (the NHTSA NCAP frontal test: full width into a rigid
+wall at 56 km/h) and the crush read-outs of nbst.models.crash.vehicle (docs/crash.md "Crush")."""
+import math
+
+import numpy as np
+import pytest
+
+from nbst.models.crash import road, scene, vehicle
+
+G = vehicle.G
+
+
+@pytest.fixture(scope="module")
+def pulse():
+    return scene.barrier_pulse("sedan-crush", 56.0, timestep=0.002)
+
+
+def test_the_built_in_types_stay_rigid_and_their_twins_crush():
+    # crush is opt-in: the built-in types have no crush joints; each has a crushing twin of the
+    # same mass whose four zones are CRASH3 lines with positive A and B
+    for name in ("sedan", "suv", "van"):
+        assert not vehicle.VEHICLE_TYPES[name].crush and vehicle.crush_zones(vehicle.VEHICLE_TYPES[name]) == []
+        twin = vehicle.VEHICLE_TYPES[f"{name}-crush"]
+        assert twin.crush and twin.mass == vehicle.VEHICLE_TYPES[name].mass
+        zones = vehicle.crush_zones(twin)
+        assert [z.name for z in zones] == list(vehicle.CRUSH_ZONES)
+        for z in zones:
+            f = z.step_forces()
+            assert (np.diff(f) > 0).all() and f[0] > z.width * z.a  # a rising staircase above w A
+            # the staircase's work over the full depth is the CRASH3 line's, w (A D + B D^2 / 2)
+            assert f.sum() * z.depth / z.steps == pytest.approx(z.width * (z.a * z.depth + z.b * z.depth ** 2 / 2),
+                                                                rel=1e-12)
+
+
+def test_a_crushing_vehicle_keeps_its_mass():
+    vt = vehicle.VEHICLE_TYPES["sedan-crush"]
+    m = scene.build_spec(road.Road(layout="straight"), [scene.SceneVehicle("v0", vt, 0.0, 0.0, 0.0)],
+                         timestep=0.002).compile()
+    assert scene.layout(m, 1).mass[0] == pytest.approx(vt.mass, rel=1e-9)  # crush bodies are taken out of the sprung mass
+
+
+def test_the_barrier_pulse_sits_in_the_published_ranges(pulse):
+    # NCAP 56 km/h rigid barrier (docs/crash.md "Crush" has the sources): the car stops in
+    # 60-90 ms over 0.5-0.8 m of dynamic crush at a mean 18-30 g; the first contact step no
+    # longer carries the rigid box's 100+ g spike (a slab of 30 kg meets the wall, not 1.45 t)
+    assert 0.060 <= pulse.t_zero <= 0.090, pulse
+    assert 0.5 <= pulse.dynamic_crush <= 0.8, pulse
+    assert 18.0 <= pulse.mean_g <= 30.0, pulse
+    assert pulse.first_step_g < 20.0, pulse
+    assert pulse.peak_g < 60.0, pulse  # CFC 60 peak: a staircase, no spike
+
+
+def test_residual_crush_is_real_and_below_the_dynamic_crush(pulse):
+    # the plastic joints hold what they crushed: residual > 0, and at most the dynamic crush
+    # (the contact's elastic give springs back)
+    assert 0.3 < pulse.residual < pulse.dynamic_crush, pulse
+
+
+def test_energy_absorbed_is_the_crush_energy(pulse):
+    # the kinetic energy the impact took equals CRASH3's energy of the residual crush,
+    # w (A C + B C^2 / 2 + A^2 / 2B), within 10 % (the staircase, the A^2/2B term the model
+    # does not take without crush, and the contact's damping)
+    assert pulse.crush_energy == pytest.approx(pulse.energy_lost, rel=0.10), pulse
+    # so the EES from the residual crush is the impact speed within 5 % (a rigid wall: EES = speed)
+    vt = vehicle.VEHICLE_TYPES["sedan-crush"]
+    ees = vehicle.crush_ees(vt, {"front": pulse.residual})
+    assert ees * 3.6 == pytest.approx(56.0, rel=0.05), (ees * 3.6, pulse)
+
+
+def test_restitution_stays_in_the_published_band(pulse):
+    # the docs' band (SAE 931842; Monson and Germane SAE 1999-01-0097): at least 0.05, at most
+    # 0.2 from 40 km/h up
+    assert 0.05 <= pulse.restitution <= 0.2, pulse
+
+
+@pytest.mark.slow
+def test_the_pulse_holds_across_timesteps(pulse):
+    # h, h/2, h/4: time to zero velocity within 8 %, crush within 5 %, mean deceleration within 8 %
+    for h in (0.001, 0.0005):
+        r = scene.barrier_pulse("sedan-crush", 56.0, timestep=h)
+        assert r.t_zero == pytest.approx(pulse.t_zero, rel=0.08), (h, r)
+        assert r.dynamic_crush == pytest.approx(pulse.dynamic_crush, rel=0.05), (h, r)
+        assert r.residual == pytest.approx(pulse.residual, rel=0.05), (h, r)
+        assert r.mean_g == pytest.approx(pulse.mean_g, rel=0.08), (h, r)
+
+
+def test_momentum_is_conserved_through_a_crushing_impact():
+    # a crushing sedan into the back of a standing one: crush bodies are internal, so the two
+    # vehicles' momentum along the impact is conserved within 5 % (wheels free, as for the rigid ones)
+    from nbst.models.crash import checks
+
+    r = checks.impact("sedan-crush", 40.0)
+    assert r.momentum_after == pytest.approx(r.momentum_before, rel=0.05)
+    assert 0.0 < r.restitution < 0.4, r
+
+
+def test_the_crash_file_records_residual_crush_and_ees():
+    import mujoco
+
+    vt = vehicle.VEHICLE_TYPES["sedan-crush"]
+    m = scene.build_spec(road.Road(layout="straight"), [scene.SceneVehicle("v0", vt, 0.0, 0.0, 0.0)],
+                         timestep=0.002).compile()
+    d = mujoco.MjData(m)
+    q = np.array(d.qpos)
+    q[m.joint("v0_crush_front_0").qposadr[0]] = 0.1
+    q[m.joint("v0_crush_front_1").qposadr[0]] = 0.05
+    rec = vehicle.crush_record(m, "v0", vt, q)
+    assert rec["zones"]["front"]["residual_m"] == pytest.approx(0.15)
+    assert rec["zones"]["rear"]["residual_m"] == 0.0 and rec["zones"]["rear"]["energy_J"] == 0.0
+    z = vehicle.crush_zones(vt)[0]
+    e = z.width * (z.a * 0.15 + z.b * 0.15 ** 2 / 2 + z.a ** 2 / (2 * z.b))
+    assert rec["energy_J"] == pytest.approx(e, abs=0.1)
+    assert rec["ees_kmh"] == pytest.approx(math.sqrt(2 * e / vt.mass) * 3.6, abs=0.01)
+    assert vehicle.crush_record(m, "v0", vehicle.VEHICLE_TYPES["sedan"], q) is None
