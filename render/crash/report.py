@@ -45,7 +45,7 @@ from nbst.models.crash import outcome as out_mod
 
 from nbst.render.crash import motion as motion_mod
 
-__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "CrashReport", "crash_report",
+__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "SCENE_ASPECT", "CrashReport", "crash_report",
            "evidence_rows", "phases", "report_html", "striker"]
 
 #: Figure resolution (dots per inch); figures are ~8 in wide.
@@ -60,6 +60,8 @@ MAX_IMPACT_ROWS = 40
 #: Contact episodes in which neither vehicle's Delta-v reaches this (km/h) are grazes: counted,
 #: not listed, not drawn.
 MINOR_DV_KMH = 1.0
+#: The scene diagram's height over its width stays in this range (the shorter side grows).
+SCENE_ASPECT = (0.4, 1.3)
 #: The sequence diagram's phases, in drawing order, with their colours.
 PHASES = (("driving", "#d9d9d9"), ("perception-reaction (assumed)", "#fde68a"), ("braking", "#f59e0b"),
           ("impact", "#dc2626"), ("post-impact", "#60a5fa"), ("rest", "#16a34a"))
@@ -274,9 +276,14 @@ def figure_scene(rep: CrashReport) -> str:
                 pts.append(np.array([[f[k]["x"] - r, f[k]["y"] - r], [f[k]["x"] + r, f[k]["y"] + r]]))
     P = np.vstack(pts)
     lo, hi = P.min(axis=0) - 6.0, P.max(axis=0) + 6.0
+    # neither side under SCENE_ASPECT[0] nor over [1] times the other: the road stays in view
+    span = hi - lo
+    want = np.clip(span[1] / span[0], *SCENE_ASPECT)
+    grow = np.array([max(0.0, span[1] / want - span[0]), max(0.0, span[0] * want - span[1])])
+    lo, hi = lo - grow / 2, hi + grow / 2
     span = hi - lo
     w = 8.0
-    fig = _figure((w, min(max(w * span[1] / span[0], 3.0), 11.0) + 1.3))
+    fig = _figure((w, (w - 0.9) * span[1] / span[0] + 1.6))
     ax = fig.add_subplot(1, 1, 1)
     ax.set_facecolor((0.86, 0.89, 0.83))
     for g in range(model.ngeom):
@@ -339,7 +346,7 @@ def figure_scene(rep: CrashReport) -> str:
                Line2D([], [], color="0.3", lw=1.0, ls=":", label="impact position asked")]
     if any(mk.kind == "scrape" for mk in m.marks):
         handles.append(Line2D([], [], color="#7a4a1e", lw=1.2, label="scrape"))
-    ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=3, frameon=False)
+    fig.legend(handles=handles, fontsize=7, loc="outside lower center", ncol=3, frameon=False)
     return _png(fig)
 
 
