@@ -8,7 +8,10 @@
   the right-hander's edge: a left-hander's path is drawn where it ran.
 * :func:`transition_figure`: a series' drift: board at the pins, breakpoint board, entry angle and
   the pocket-hit rate (per game, with its 95 % interval) against the ball's number on the lane, one
-  colour per run (moves none / auto), and the oil maps before and after each run.
+  colour per run (moves none / auto); the lane before and after each run (a power scale, so that
+  carry-down's thin film past the pattern shows), the share of its oil each board lost at 10, 20
+  and 30 ft after each game (the track widening), and the oil laid past the pattern's end after
+  each game (carry-down).
 
 Both return a ``matplotlib.figure.Figure`` (Agg; nothing global); :func:`save` writes one through
 the atomic writer. matplotlib is imported inside the functions (``import nbst.render`` stays light).
@@ -21,7 +24,7 @@ from nbst.models.bowling.lane.oil import CELL_AREA
 from nbst.models.bowling.lane.units import ARROW_BOARDS, ARROWS_FT
 from nbst.outputs import atomic_path
 
-__all__ = ["PATH_FIGSIZE", "path_figure", "transition_figure", "save", "lane_board"]
+__all__ = ["PATH_FIGSIZE", "TRACK_GAMMA", "TRACK_FT", "path_figure", "transition_figure", "save", "lane_board"]
 
 PATH_FIGSIZE = (12.0, 4.6)
 #: Run colours by move policy.
@@ -35,11 +38,78 @@ def lane_board(board, hand: str):
     return b if hand == "right" else 40.0 - b
 
 
-def _oil(ax, film, dx_ft: float, vmax: float | None = None):
+def _oil(ax, film, dx_ft: float, vmax: float | None = None, gamma: float = 1.0):
     f = np.asarray(film, dtype=float)
     ext = (0.0, f.shape[1] * dx_ft, 0.5, f.shape[0] + 0.5)
-    return ax.imshow(f, origin="lower", extent=ext, aspect="auto", cmap="Greys", vmin=0.0,
-                     vmax=vmax if vmax is not None else max(float(f.max()), 1e-9), interpolation="nearest")
+    top = vmax if vmax is not None else max(float(f.max()), 1e-9)
+    if gamma != 1.0:
+        from matplotlib.colors import PowerNorm
+
+        return ax.imshow(f, origin="lower", extent=ext, aspect="auto", cmap="Greys",
+                         norm=PowerNorm(gamma, vmin=0.0, vmax=top), interpolation="nearest")
+    return ax.imshow(f, origin="lower", extent=ext, aspect="auto", cmap="Greys", vmin=0.0, vmax=top,
+                     interpolation="nearest")
+
+
+#: The lane pictures of a series draw film^TRACK_GAMMA (a power scale), so that carry-down's tenths of
+#: a micrometre past the pattern show beside the pattern's micrometres.
+TRACK_GAMMA = 0.35
+#: Where the track's width is read across the lane (ft past the foul line).
+TRACK_FT = (10.0, 20.0, 30.0)
+
+
+def _track_by_game(ax, before, games, dx: float, move: str) -> None:
+    """The share of its oil each board lost, at :data:`TRACK_FT`, after each game: the track widening."""
+    from matplotlib import colormaps
+
+    cmap = colormaps["viridis"]
+    boards = np.arange(1, before.shape[0] + 1)
+    styles = ("-", "--", ":")
+    for g in games:
+        m = np.asarray(g["map"], dtype=float)
+        c = cmap((g["game"] - 1) / max(len(games) - 1, 1))
+        for ft, ls in zip(TRACK_FT, styles):
+            j = min(int(ft / dx), before.shape[1] - 1)
+            ok = before[:, j] > 0
+            share = np.where(ok, (before[:, j] - m[:, j]) / np.where(ok, before[:, j], 1.0), np.nan)
+            ax.plot(boards, 100 * share, ls, color=c, lw=1.3,
+                    label=f"game {g['game']}" if ft == TRACK_FT[0] else None)
+    for ft, ls in zip(TRACK_FT, styles):
+        ax.plot([], [], ls, color="0.3", label=f"at {ft:g} ft")
+    ax.set_xlim(0.5, before.shape[0] + 0.5)
+    ax.set_xticks([1, 5, 10, 15, 20, 25, 30, 35, 39])
+    ax.set_xlabel("board (lane's, from the right edge)")
+    ax.set_ylabel("oil lost (% of the fresh film)")
+    ax.set_title(f"the track after each game (move {move}): the share of its oil each board lost", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="upper right")
+
+
+def _carry_by_game(ax, before, games, dx: float, length, move: str) -> None:
+    """Carry-down: the oil laid past the pattern's end (summed across the lane) against distance, after each game."""
+    from matplotlib import colormaps
+
+    cmap = colormaps["viridis"]
+    n = before.shape[1]
+    ft = (np.arange(n) + 0.5) * dx
+    j0 = 0 if length is None else max(int(length / dx) - int(4 / dx), 0)
+    for g in games:
+        m = np.asarray(g["map"], dtype=float)
+        laid = np.clip(m - before, 0.0, None).sum(axis=0) * CELL_AREA * 1e3 / dx  # ul per ft of lane
+        c = cmap((g["game"] - 1) / max(len(games) - 1, 1))
+        ax.plot(ft[j0:], laid[j0:], color=c, lw=1.5,
+                label=f"game {g['game']}: {1e3 * g['past_end_ml']:.0f} ul past the end")
+    if length is not None:
+        ax.axvline(length, color="#8e6c2f", lw=0.8, ls="--")
+    ax.set_xlim(ft[j0], 60.5)
+    ax.set_xlabel("distance from the foul line (ft)")
+    ax.set_ylabel("oil laid down (ul per ft)")
+    ax.set_title(f"carry-down (move {move}): oil the balls laid where the lane was drier than their covers", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper right")
+
+
+
 
 
 def _lane_marks(ax, length_ft: float | None) -> None:
@@ -113,12 +183,14 @@ def _per_game(balls, key):
 def transition_figure(doc: dict, *, title: str = ""):
     """The drift of a series file's content ``doc`` (:func:`.transition.series_dict`): left, the strike
     balls' board at the pins, breakpoint board, entry angle and the pocket-hit rate per game against
-    the ball's number on the lane, one colour per run; right, the oil before and after each run."""
+    the ball's number on the lane, one colour per run; right, the oil before and after each run and,
+    when the run kept the lane after each game (``oil.games``), the track and the carry-down by game."""
     from matplotlib.figure import Figure
 
     runs = doc["runs"]
-    fig = Figure(figsize=(14.0, 11.0), dpi=100, layout="constrained")
-    gs = fig.add_gridspec(4, 2, width_ratios=(1.15, 1.0))
+    rows = 1 + min(len(runs), 2) + (2 if runs[0]["oil"].get("games") else 0)
+    fig = Figure(figsize=(14.0, 2.75 * max(rows, 4)), dpi=100, layout="constrained")
+    gs = fig.add_gridspec(max(rows, 4), 2, width_ratios=(1.15, 1.0))
     left = [fig.add_subplot(gs[i, 0]) for i in range(4)]
     lo, hi = doc.get("pocket_boards", (16.5, 18.5))
     for run in runs:
@@ -165,26 +237,24 @@ def transition_figure(doc: dict, *, title: str = ""):
     for ax in left:
         ax.grid(alpha=0.3)
     left[0].legend(fontsize=7, loc="best")
-    vmax = max(float(np.max(runs[0]["oil"]["before"])), 1e-9)
-    dx = runs[0]["oil"].get("dx_ft", 0.25)
-    maps = [("before: the fresh pattern", runs[0]["oil"]["before"])]
-    maps += [(f"after {r['games']} games, move {r['move']}", r["oil"]["after"]) for r in runs[:2]]
     before = np.asarray(runs[0]["oil"]["before"], dtype=float)
-    after = np.asarray(runs[0]["oil"]["after"], dtype=float)
-    for i, (name, m) in enumerate(maps):
+    dx = runs[0]["oil"].get("dx_ft", 0.25)
+    length = runs[0]["oil"].get("length_ft")
+    vmax = max(float(before.max()), 1e-9)
+    maps = [("before: the fresh pattern", before, None)]
+    maps += [(f"after {r['games']} games, move {r['move']}", np.asarray(r["oil"]["after"], dtype=float), r) for r in runs[:2]]
+    for i, (name, m, _) in enumerate(maps):
         ax = fig.add_subplot(gs[i, 1])
-        im = _oil(ax, m, dx, vmax)
-        _lane_marks(ax, runs[0]["oil"].get("length_ft"))
-        ax.set_title(f"oil {name} (um; {np.asarray(m).sum() * CELL_AREA:.2f} ml on the lane)", fontsize=9)
-        fig.colorbar(im, ax=ax, pad=0.01, fraction=0.04)
-    ax = fig.add_subplot(gs[len(maps), 1])
-    diff = after - before
-    lim = max(float(np.abs(diff).max()), 1e-9)
-    im = ax.imshow(diff, origin="lower", extent=(0.0, diff.shape[1] * dx, 0.5, diff.shape[0] + 0.5), aspect="auto",
-                   cmap="RdBu", vmin=-lim, vmax=lim, interpolation="nearest")
-    _lane_marks(ax, runs[0]["oil"].get("length_ft"))
-    ax.set_title(f"oil change, move {runs[0]['move']} (um; red: taken, blue: laid down)", fontsize=9)
-    fig.colorbar(im, ax=ax, pad=0.01, fraction=0.04)
+        im = _oil(ax, m, dx, vmax, gamma=TRACK_GAMMA)
+        _lane_marks(ax, length)
+        past = "" if length is None else f", {m[:, int(np.ceil(length / dx)):].sum() * CELL_AREA * 1e3:.0f} ul past its end"
+        ax.set_title(f"oil {name}: {m.sum() * CELL_AREA:.2f} ml on the lane{past}", fontsize=9)
+        fig.colorbar(im, ax=ax, pad=0.01, fraction=0.04).set_label(f"um (grey ~ film^{TRACK_GAMMA:g})", fontsize=7)
+    run = runs[0]
+    games = run["oil"].get("games") or []
+    if games:
+        _track_by_game(fig.add_subplot(gs[len(maps), 1]), before, games, dx, run["move"])
+        _carry_by_game(fig.add_subplot(gs[len(maps) + 1, 1]), before, games, dx, length, run["move"])
     fig.suptitle(title or f"{doc.get('bowler', '')}: {doc.get('games', '?')} games by {doc.get('lineup', 1)} "
                           f"bowler(s) on one lane of {doc.get('oil', '')} oil, seed {doc.get('seed')}", fontsize=10)
     return fig

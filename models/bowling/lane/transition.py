@@ -44,11 +44,12 @@ import numpy as np
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
 from nbst.models.bowling.lane.noise import Noise
-from nbst.models.bowling.lane.oil import DX_FT, NX, OilField, OilLaw, pattern
+from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
            "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
-           "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws"]
+           "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws",
+           "lay_band", "track_width", "depleted_share"]
 
 FORMAT = "nbst-bowling-series"
 VERSION = 1
@@ -176,6 +177,62 @@ def film_along(field: OilField, ft: np.ndarray, board: np.ndarray, hand: str, at
     return float(field.h[i, min(int(at_ft / DX_FT), NX - 1)])
 
 
+def lay_band(h: np.ndarray, before: np.ndarray, ft, y, band_in: float) -> float:
+    """Lay one ball's oil change across the boards its contact band covers (``h`` changed in place).
+
+    The contact kernel (:mod:`.friction`) trades oil with the one cell under the ball's centre; the
+    band is ``band_in`` wide (:attr:`.oil.OilLaw.band_in`, 1 in: about a board), so a ball between two
+    boards takes (and lays) oil on both. Per 0.25 ft column the ball's net change (``h - before``) is
+    spread over the boards in proportion to their overlap with the band centred on the ball's lane
+    ``y`` (m) at that distance (``ft``, ``y``: its path). Each column keeps its total: oil is conserved
+    to rounding. A board that would go below zero gives what it has and the rest of the band the
+    remainder; a column where even that fails keeps the kernel's change. Returns the oil (ml) moved
+    between boards."""
+    d = h - before
+    cols = np.nonzero(np.abs(d).max(axis=0) > 0)[0]
+    if len(cols) == 0 or len(ft) < 2:
+        return 0.0
+    half = band_in * scene.INCH / 2 / lane.BOARD_WIDTH
+    edges = np.arange(lane.N_BOARDS + 1, dtype=float)
+    c = (np.interp((cols + 0.5) * DX_FT, ft, y) + scene.LANE_WIDTH / 2) / lane.BOARD_WIDTH
+    moved = 0.0
+    for j, cj in zip(cols, c):
+        w = np.clip(np.minimum(edges[1:], cj + half) - np.maximum(edges[:-1], cj - half), 0.0, None)
+        if w.sum() <= 0:
+            continue
+        w /= w.sum()
+        tot = float(d[:, j].sum())
+        new = before[:, j] + tot * w
+        if new.min() < 0.0:  # a board gives what it has; the band's others the rest, in proportion to their oil
+            short = -float(new[new < 0].sum())
+            new = np.maximum(new, 0.0)
+            rest = (w > 0) & (new > 0)
+            if not rest.any() or new[rest].sum() < short:
+                continue
+            new[rest] -= short * new[rest] / new[rest].sum()
+        moved += float(np.abs(new - h[:, j]).sum()) / 2 * CELL_AREA
+        h[:, j] = new
+    return moved
+
+
+def track_width(before: np.ndarray, after: np.ndarray, at_ft: float, share: float = 0.5) -> int:
+    """The boards (39, the lane's) at ``at_ft`` that lost at least ``share`` of the most any board lost
+    there: the width of the track a series dug, in boards."""
+    j = min(int(at_ft / DX_FT), NX - 1)
+    lost = np.asarray(before)[:, j] - np.asarray(after)[:, j]
+    top = float(lost.max())
+    return int((lost >= share * top).sum()) if top > 0 else 0
+
+
+def depleted_share(before: np.ndarray, after: np.ndarray, at_ft: float) -> float:
+    """The largest share of its oil any board lost at ``at_ft`` (0..1): how dry the track's driest board is."""
+    j = min(int(at_ft / DX_FT), NX - 1)
+    b = np.asarray(before)[:, j]
+    a = np.asarray(after)[:, j]
+    ok = b > 0
+    return float(((b[ok] - a[ok]) / b[ok]).max()) if ok.any() else 0.0
+
+
 def _path(r: phases.ThrowResult) -> dict:
     ft = np.arange(0.0, r.path["ft"][-1], PATH_FT)
     return {"ft": [float(v) for v in ft], "board": [round(float(v), 3) for v in np.interp(ft, r.path["ft"], r.path["board"])]}
@@ -208,6 +265,7 @@ class Run:
         self.lines = {b.index: [0.0, 0.0] for b in bowlers}  # feet, target
         self.readings: dict = {b.index: [] for b in bowlers}
         self.moves: list[dict] = []
+        self.games_oil: list[dict] = []  # the lane after each game: its oil, past the pattern's end, and its map
         self._spares: dict = {}
         self._draws = {}
         for b in bowlers:
@@ -239,7 +297,10 @@ class Run:
             t = phases.throw(d, self.pattern, self.ball, law=self.law, field=self.field.copy())
         except lane.LaneError:
             t = None
+        h0 = self.field.h.copy()
         r = frame.run_frame(d, self.pattern, self.ball, standing=standing, law=self.law, field=self.field)
+        if t is not None:
+            lay_band(self.field.h, h0, t.path["ft"], t.path["y"], self.law.band_in)
         board = r.board_at_pins
         rec = {"n": len(self.balls) + 1, "game": game + 1, "frame": frame_no, "roll": roll, "bowler": b.index,
                "hand": b.hand, "standing": list(standing), "line": list(self.lines[b.index]) if full else None,
@@ -295,6 +356,9 @@ class Run:
                     self._frame(b, g, k, on_ball)
                     if on_frame is not None:
                         on_frame()
+            f = OilField(self._done)
+            self.games_oil.append({"game": g + 1, "lane_ml": f.total_ml(), "past_end_ml": f.ml_past(self.pattern.length_ft),
+                                   "map": _map(f)})
 
     def to_dict(self) -> dict:
         """The run: its settings, every ball, the moves, the oil before and after, the scores and the summary."""
@@ -304,7 +368,7 @@ class Run:
                           "spare_noise": (b.spare_noise or b.noise).to_dict()} for b in self.bowlers],
              "balls": self.balls, "moves": self.moves, "scores": scores,
              "oil": {"pattern": self.pattern.name, "length_ft": self.pattern.length_ft, "dx_ft": DX_FT,
-                     "before": self.before, "after": _map(OilField(self._done))}}
+                     "before": self.before, "after": _map(OilField(self._done)), "games": self.games_oil}}
         d["summary"] = summary(d)
         return d
 
@@ -378,6 +442,7 @@ def identical_throws(delivery: lane.Delivery, n: int, oil="house", ball: lane.Ba
     for _ in range(n):
         before = field.copy()
         r = phases.throw(delivery, pat, ball, law=law, field=field)
+        lay_band(field.h, before.h, r.path["ft"], r.path["y"], law.band_in)
         out.append({"film_um": film_along(before, r.path["ft"], r.path["board"], delivery.hand, at_ft),
                     "board_at_pins": r.board_at_pins, "entry_angle_deg": r.entry_angle_deg,
                     "past_ml": field.ml_past(pat.length_ft), "lane_ml": field.total_ml(), "oil": r.path["oil"]})
