@@ -373,7 +373,7 @@ def _ees(v: dict) -> str:
         return "not recorded"
     zones = cr.get("zones") or {}
     res = ", ".join(f"{z} {100 * float(q.get('residual_m', 0.0)):.0f} cm" for z, q in zones.items()
-                    if float(q.get("residual_m", 0.0)) > 0.0)
+                    if float(q.get("residual_m", 0.0)) >= 0.005)
     return f"{float(cr['ees_kmh']):.1f}" + (f" <span class=small>(residual crush: {res})</span>" if res else "")
 
 
