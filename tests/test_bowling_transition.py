@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nbst.models.bowling import lane
+from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, profiles, transition as T
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -78,6 +78,51 @@ def test_a_left_handers_lane_is_the_right_handers_mirrored():
     assert abs(b.board_at_pins - a.board_at_pins) <= 0.05
     # the right-hander's breakpoint boards (1-12 from the right edge) stay fresh for a left-hander: fresh oil each
     assert np.abs(dl[:12]).sum() <= 1e-3 * np.abs(dl).sum() and np.abs(dr[:12]).sum() > 0.1 * np.abs(dr).sum()
+
+
+def test_the_band_lays_a_balls_change_across_the_boards_it_covers_and_keeps_every_column():
+    """A ball whose centre runs on the line between boards 10 and 11 takes its oil from both, half each."""
+    before = lane.OilField.fresh(lane.pattern("flat")).h
+    h = before.copy()
+    ft = np.array([0.0, 60.0])
+    y = np.full(2, -scene.LANE_WIDTH / 2 + 10 * lane.BOARD_WIDTH)  # the edge between boards 10 and 11
+    j = 40
+    h[10, j] -= 0.5  # the kernel took 0.5 um from the centre cell only
+    moved = T.lay_band(h, before, ft, y, 1.0)
+    assert h[9, j] == pytest.approx(before[9, j] - 0.25, abs=1e-12) and h[10, j] == pytest.approx(before[10, j] - 0.25, abs=1e-12)
+    assert h[:, j].sum() == pytest.approx(before[:, j].sum() - 0.5, abs=1e-12) and moved > 0
+    assert np.array_equal(np.delete(h, j, axis=1), np.delete(before, j, axis=1))  # other columns untouched
+
+
+@pytest.fixture(scope="module")
+def wear3():
+    return T.strike_wear("pro", 3, seed=1)  # 36 strike balls of the pro, the ball alone (~5 s)
+
+
+@pytest.mark.slow
+def test_the_pros_track_widens_over_three_games_and_is_no_one_board_stripe(wear3):
+    """Issue 48: by game 3 the pro's track had burned to a one-board dry stripe. The track (neighbouring
+    boards that lost >= 10 % of their film) at 10, 20 and 30 ft: at least 2 boards everywhere, and wider
+    after game 3 than after game 1 (2026-12-06, seeds 1-4: [2, 2, 2-3] boards after game 1, [2, 3, 4-5] after 3)."""
+    b = wear3["before"]
+    widths = [[T.track_width(b, g["map"], ft) for ft in (10.0, 20.0, 30.0)] for g in wear3["games"]]
+    assert min(widths[-1]) >= 2 and sum(widths[-1]) >= 7, widths
+    assert sum(widths[-1]) > sum(widths[0]), widths
+
+
+@pytest.mark.slow
+def test_carry_down_lays_oil_past_the_pattern_and_grows_with_games(wear3):
+    past = [g["past_end_ml"] for g in wear3["games"]]
+    assert past[0] > 0.005 and all(b > a for a, b in zip(past, past[1:])), past  # 2026-12-06: 15, 22, 38 ul
+
+
+@pytest.mark.slow
+def test_three_games_account_for_every_drop_of_oil(wear3):
+    """initial = removed (by the covers: absorbed or wiped off) + carried (past the pattern's end) + remaining,
+    to 1e-9 ml (the arithmetic's rounding; 22 ml in all)."""
+    w = wear3
+    assert w["initial"] == pytest.approx(22.0, abs=1e-9) and w["removed"] > 0 and w["carried"] > 0
+    assert abs(w["initial"] - (w["removed"] + w["carried"] + w["remaining"])) <= 1e-9
 
 
 def test_two_and_one_moves_feet_two_boards_and_the_target_one():

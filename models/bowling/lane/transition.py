@@ -49,7 +49,7 @@ from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw,
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
            "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
            "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws",
-           "lay_band", "track_width", "depleted_share"]
+           "lay_band", "track_width", "depleted_share", "strike_wear"]
 
 FORMAT = "nbst-bowling-series"
 VERSION = 1
@@ -215,13 +215,26 @@ def lay_band(h: np.ndarray, before: np.ndarray, ft, y, band_in: float) -> float:
     return moved
 
 
-def track_width(before: np.ndarray, after: np.ndarray, at_ft: float, share: float = 0.5) -> int:
-    """The boards (39, the lane's) at ``at_ft`` that lost at least ``share`` of the most any board lost
-    there: the width of the track a series dug, in boards."""
+#: A board is in the track when it lost at least this share of its fresh film (:func:`track_width`).
+TRACK_LOSS = 0.10
+
+
+def track_width(before: np.ndarray, after: np.ndarray, at_ft: float, share: float = TRACK_LOSS) -> int:
+    """The width (boards) of the track at ``at_ft``: the run of neighbouring boards around the board
+    that lost the largest share of its film, each of which lost at least ``share`` of its fresh film."""
     j = min(int(at_ft / DX_FT), NX - 1)
-    lost = np.asarray(before)[:, j] - np.asarray(after)[:, j]
-    top = float(lost.max())
-    return int((lost >= share * top).sum()) if top > 0 else 0
+    b = np.asarray(before)[:, j]
+    a = np.asarray(after)[:, j]
+    lost = np.where(b > 0, (b - a) / np.where(b > 0, b, 1.0), 0.0)
+    k = int(np.argmax(lost))
+    if lost[k] < share:
+        return 0
+    lo = hi = k
+    while lo > 0 and lost[lo - 1] >= share:
+        lo -= 1
+    while hi < len(lost) - 1 and lost[hi + 1] >= share:
+        hi += 1
+    return hi - lo + 1
 
 
 def depleted_share(before: np.ndarray, after: np.ndarray, at_ft: float) -> float:
@@ -429,6 +442,42 @@ def check_series(doc, src: str = "<series>") -> dict:
         if any(np.shape(x) != (lane.N_BOARDS, NX) for x in m):
             raise TransitionError(f"{src}: runs[{k}].oil: before and after must be {lane.N_BOARDS} x {NX} films")
     return doc
+
+
+def strike_wear(profile: str, games: int = 3, seed: int = 1, oil="house", *, per_game: int = 12,
+                law: OilLaw = lane.LAW) -> dict:
+    """``games`` x ``per_game`` strike balls of ``profile`` (its line and noise, right-handed), the ball
+    alone, on one lane of ``oil`` that they wear: the lane after each game (map, ml on it, ml past the
+    pattern's end) and the oil's account (``initial`` = ``removed`` (taken by the covers: absorbed or
+    wiped off before the next ball) + ``carried`` (on the lane past the pattern's end) + ``remaining``
+    (on the lane up to it)). Quick (the ball alone, ~0.03 s a ball): the tests' and figures' transition."""
+    b = lineup(profile, 1, 0.0, oil=oil)[0]
+    pat = pattern(oil)
+    field = OilField.fresh(pat)
+    rng = np.random.default_rng([int(seed), 0])
+    rows = b.noise.mix(rng.standard_normal((games * per_game, len(noise.KEYS))))
+    lo = [noise.CLIP[k][0] for k in noise.KEYS]
+    hi = [noise.CLIP[k][1] for k in noise.KEYS]
+    out: dict[str, Any] = {"before": pat.grid(), "games": [], "initial": field.total_ml(), "removed": 0.0, "balls": 0}
+    for g in range(games):
+        for k in range(per_game):
+            x = noise.perturb([getattr(b.strike, q) for q in noise.KEYS], [getattr(b.noise, q) for q in noise.KEYS],
+                              rows[g * per_game + k][None], lo, hi)[0]
+            d = replace(b.strike, **{q: float(v) for q, v in zip(noise.KEYS, x)})
+            h0 = field.h.copy()
+            try:
+                r = phases.throw(d, pat, law=law, field=field)
+            except lane.LaneError:  # a gutter ball: what it took is still taken
+                out["removed"] += float(h0.sum() - field.h.sum()) * CELL_AREA
+                continue
+            lay_band(field.h, h0, r.path["ft"], r.path["y"], law.band_in)
+            out["removed"] += r.path["oil"]["taken"]
+            out["balls"] += 1
+        out["games"].append({"game": g + 1, "map": field.h.copy(), "lane_ml": field.total_ml(),
+                             "past_end_ml": field.ml_past(pat.length_ft)})
+    out["carried"] = field.ml_past(pat.length_ft)
+    out["remaining"] = field.total_ml() - out["carried"]
+    return out
 
 
 def identical_throws(delivery: lane.Delivery, n: int, oil="house", ball: lane.Ball | None = None, *,
