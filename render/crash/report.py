@@ -37,11 +37,13 @@ import html
 import io
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from nbst.models.crash import impact as impact_mod
 from nbst.models.crash import outcome as out_mod
+from nbst.models.crash.script import Script
 
 from nbst.render.crash import motion as motion_mod
 
@@ -77,8 +79,8 @@ class CrashReport:
     """What the page shows: the file, its replayed impacts and motion."""
 
     d: dict
-    script: object
-    model: object
+    script: Script
+    model: Any
     impacts: impact_mod.CrashImpacts
     motion: motion_mod.CrashMotion
     source: str
@@ -307,8 +309,8 @@ def figure_scene(rep: CrashReport) -> str:
                              ls=":", zorder=5))
         first = rep.first(i)
         if first is not None:
-            k = max(0, int(np.searchsorted(m.times, first[0].t)) - 1)
-            ax.add_patch(Polygon(_outline(model, data, qpos[k], i), closed=True, fill=False, edgecolor=col, lw=1.4,
+            kf = max(0, int(np.searchsorted(m.times, first[0].t)) - 1)
+            ax.add_patch(Polygon(_outline(model, data, qpos[kf], i), closed=True, fill=False, edgecolor=col, lw=1.4,
                                  zorder=6))
         ax.add_patch(Polygon(_outline(model, data, qpos[-1], i), closed=True, facecolor=col + (0.55,), edgecolor=col,
                              lw=1.4, zorder=6))
@@ -436,7 +438,7 @@ def _impact_table(rep: CrashReport) -> str:
 def evidence_rows(rep: CrashReport) -> list[tuple[str, str, str, str, str, bool]]:
     """Every fate of the script against the replay: [(vehicle, fate, asked, got, tolerance, met)],
     the global order last (vehicle "all")."""
-    o = rep.motion.outcome
+    o: Any = rep.motion.outcome
     names = rep.names
     K = impact_mod.KMH
     out = []
@@ -531,7 +533,7 @@ def report_html(rep: CrashReport) -> str:
     """
     d, s = rep.d, rep.script
     esc = html.escape
-    o = rep.motion.outcome
+    o: Any = rep.motion.outcome
     same = ("The replay reproduces the file bit for bit." if rep.motion.identical and rep.impacts.identical
             else f"<b class=bad>Warning</b>: {esc(rep.motion.differs() or 'the replay differs from the file')}; "
                  "the page shows the replay.")
