@@ -47,7 +47,7 @@ from nbst.models.crash.script import Script
 
 from nbst.render.crash import motion as motion_mod
 
-__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "SCENE_ASPECT", "CrashReport", "crash_report",
+__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "SCENE_ASPECT", "ZOOM", "CrashReport", "crash_report",
            "evidence_rows", "phases", "report_html", "striker"]
 
 #: Figure resolution (dots per inch); figures are ~8 in wide.
@@ -62,6 +62,9 @@ MAX_IMPACT_ROWS = 40
 #: Contact episodes in which neither vehicle's Delta-v reaches this (km/h) are grazes: counted,
 #: not listed, not drawn.
 MINOR_DV_KMH = 1.0
+#: The scene diagram adds a panel around the impacts and rest positions when the whole crash
+#: spans more than this many times that region.
+ZOOM = 2.0
 #: The scene diagram's height over its width stays in this range (the shorter side grows).
 SCENE_ASPECT = (0.4, 1.3)
 #: The sequence diagram's phases, in drawing order, with their colours.
@@ -260,33 +263,79 @@ def _outline(model, data, qpos, i: int) -> np.ndarray:
     return np.array(pts)[:, :2]
 
 
-def figure_scene(rep: CrashReport) -> str:
-    """The scene diagram: overhead, to scale in metres (base64 PNG)."""
-    import mujoco
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Circle, Polygon, Wedge
+def _extent(pts: list, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) of the points with a margin, the shorter side grown so that height / width stays
+    within :data:`SCENE_ASPECT`."""
+    P = np.vstack(pts)
+    lo, hi = P.min(axis=0) - margin, P.max(axis=0) + margin
+    span = hi - lo
+    want = np.clip(span[1] / span[0], *SCENE_ASPECT)
+    grow = np.array([max(0.0, span[1] / want - span[0]), max(0.0, span[0] * want - span[1])])
+    return lo - grow / 2, hi + grow / 2
 
-    model, m = rep.model, rep.motion
-    data = mujoco.MjData(model)
-    mujoco.mj_kinematics(model, data)
-    # the region that matters: paths, impacts, rest regions, with a margin; inside the map
-    pts = [m.pos[:, i, :2] for i in range(rep.script.n)]
+
+def _regions(rep: CrashReport) -> list:
+    """Corner pairs of every rest region and impact position the script asks for."""
+    out = []
     for f in (v["fate"] for v in rep.d["vehicles"]):
         for k in ("rest", "impact_at"):
             if k in f:
                 r = f[k]["radius"]
-                pts.append(np.array([[f[k]["x"] - r, f[k]["y"] - r], [f[k]["x"] + r, f[k]["y"] + r]]))
-    P = np.vstack(pts)
-    lo, hi = P.min(axis=0) - 6.0, P.max(axis=0) + 6.0
-    # neither side under SCENE_ASPECT[0] nor over [1] times the other: the road stays in view
-    span = hi - lo
-    want = np.clip(span[1] / span[0], *SCENE_ASPECT)
-    grow = np.array([max(0.0, span[1] / want - span[0]), max(0.0, span[0] * want - span[1])])
-    lo, hi = lo - grow / 2, hi + grow / 2
-    span = hi - lo
-    w = 8.0
-    fig = _figure((w, (w - 0.9) * span[1] / span[0] + 1.6))
-    ax = fig.add_subplot(1, 1, 1)
+                out.append(np.array([[f[k]["x"] - r, f[k]["y"] - r], [f[k]["x"] + r, f[k]["y"] + r]]))
+    return out
+
+
+def figure_scene(rep: CrashReport) -> str:
+    """The scene diagram: overhead, to scale in metres (base64 PNG): the whole crash, and where the
+    paths reach far beyond the impacts and the rest positions, those first, zoomed (:data:`ZOOM`)."""
+    import mujoco
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Polygon
+
+    m = rep.motion
+    n = rep.script.n
+    whole = _extent([m.pos[:, i, :2] for i in range(n)] + _regions(rep), 6.0)
+    near = [m.pos[-1:, i, :2] for i in range(n)] + [np.array([p.pos[:2]]) for p in rep.major()] + _regions(rep)
+    for i in range(n):
+        first = rep.first(i)
+        if first is not None:
+            near.append(m.pos[max(0, int(np.searchsorted(m.times, first[0].t)) - 1):][:1, i, :2])
+    zoom = _extent(near, 6.0)
+    views = [zoom, whole] if (whole[1] - whole[0]).max() > ZOOM * (zoom[1] - zoom[0]).max() else [whole]
+    k = len(views)
+    panel = 8.0 if k == 1 else 5.2                      # inches of each panel's width
+    widths = [panel * (hi[0] - lo[0]) / (hi[1] - lo[1]) / max((h[0] - q[0]) / (h[1] - q[1]) for q, h in views)
+              for lo, hi in views]
+    fig = _figure((panel * k + 0.8, panel / max((h[0] - q[0]) / (h[1] - q[1]) for q, h in views) + 1.4))
+    axes = fig.subplots(1, k, gridspec_kw={"width_ratios": widths}, squeeze=False)[0]
+    data = mujoco.MjData(rep.model)
+    for ax, (lo, hi), title in zip(axes, views, ("around the impacts and the rest positions", "the whole crash")):
+        _draw_scene(ax, rep, data)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        if len(views) > 1:
+            ax.set_title(title, fontsize=9)
+    handles = [Line2D([], [], color="0.3", lw=1.2, label="path of the centre of mass"),
+               Line2D([], [], color="0.3", lw=1.0, ls=":", label="start"),
+               Line2D([], [], color="0.3", lw=1.4, label="at its first impact"),
+               Polygon([[0, 0]], facecolor="0.6", edgecolor="0.3", label="at rest (end)"),
+               Line2D([], [], marker="*", color="#dc2626", mec="k", ls="none", ms=10, label="impact point"),
+               Line2D([], [], color="k", lw=1.2, label="skid mark"),
+               Line2D([], [], color="0.3", lw=1.2, ls="--", label="rest region asked (wedge: heading)"),
+               Line2D([], [], color="0.3", lw=1.0, ls=":", label="impact position asked")]
+    if any(mk.kind == "scrape" for mk in m.marks):
+        handles.append(Line2D([], [], color="#7a4a1e", lw=1.2, label="scrape"))
+    fig.legend(handles=handles, fontsize=7, loc="outside lower center", ncol=3, frameon=False)
+    return _png(fig)
+
+
+def _draw_scene(ax, rep: CrashReport, data) -> None:
+    """Draw the road, the marks, the vehicles and the evidence's regions on ``ax`` (metres)."""
+    import mujoco
+    from matplotlib.patches import Circle, Polygon, Wedge
+
+    model, m = rep.model, rep.motion
+    mujoco.mj_kinematics(model, data)
     ax.set_facecolor((0.86, 0.89, 0.83))
     for g in range(model.ngeom):
         name = model.geom(g).name
@@ -332,24 +381,10 @@ def figure_scene(rep: CrashReport) -> str:
     for p in rep.major():
         ax.plot(p.pos[0], p.pos[1], marker="*", ms=12, color="#dc2626", mec="k", mew=0.6, zorder=8)
         ax.text(p.pos[0] + 0.6, p.pos[1] + 0.6, f"{p.t:.2f} s", fontsize=7, zorder=9)
-    ax.set_xlim(lo[0], hi[0])
-    ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
     ax.set_xlabel("x, east (m)")
     ax.set_ylabel("y, north (m)")
     ax.grid(alpha=0.25, zorder=0)
-    handles = [Line2D([], [], color="0.3", lw=1.2, label="path of the centre of mass"),
-               Line2D([], [], color="0.3", lw=1.0, ls=":", label="start"),
-               Line2D([], [], color="0.3", lw=1.4, label="at its first impact"),
-               Polygon([[0, 0]], facecolor="0.6", edgecolor="0.3", label="at rest (end)"),
-               Line2D([], [], marker="*", color="#dc2626", mec="k", ls="none", ms=10, label="impact point"),
-               Line2D([], [], color="k", lw=1.2, label="skid mark"),
-               Line2D([], [], color="0.3", lw=1.2, ls="--", label="rest region asked (wedge: heading)"),
-               Line2D([], [], color="0.3", lw=1.0, ls=":", label="impact position asked")]
-    if any(mk.kind == "scrape" for mk in m.marks):
-        handles.append(Line2D([], [], color="#7a4a1e", lw=1.2, label="scrape"))
-    fig.legend(handles=handles, fontsize=7, loc="outside lower center", ncol=3, frameon=False)
-    return _png(fig)
 
 
 # --------------------------------------------------------------------------- the tables
