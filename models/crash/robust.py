@@ -31,7 +31,7 @@ import numpy as np
 
 from nbst.errors import InputError
 from nbst.models.crash import driver as drv
-from nbst.models.crash.run import TIMESTEP_LADDER, CrashRunner
+from nbst.models.crash.run import BATCH, TIMESTEP_LADDER, CrashRunner
 from nbst.models.crash.script import AFTER_IMPACT, Range
 from nbst.models.crash.space import CrashSpace
 from nbst.models.mjsearch.ladder import climb
@@ -40,7 +40,8 @@ from nbst.models.mjsearch.probability import Probability, counts, normal_draws, 
 __all__ = ["DEFAULT_SAMPLES", "SOLVE_SAMPLES", "DEFAULT_ROBUST_BUDGET", "NOISE", "POPULATION", "RELATIVE",
            "NOISE_KINDS", "DEFAULT_NOISE", "CLIP", "check_noise", "sigma_row", "noisy", "label", "CrashEstimate",
            "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem", "CENTRE_COPIES",
-           "CENTRE_SHARE", "RobustPick", "robust_pick"]
+           "CENTRE_SHARE", "POOL_SHARE", "POOL_SEARCHES", "POOL_ROLLOUTS", "RACE_SHARE",
+           "RACE_COPIES", "RobustPick", "robust_pick"]
 
 #: Noisy copies a probability is estimated from when none is given (``nbst crash probability
 #: --samples``; ``nbst crash solve --robust``'s fresh estimate).
@@ -50,7 +51,7 @@ DEFAULT_SAMPLES = 100
 #: its drivers repeat most of the time from a lottery (0 of 32: the 95 % Wilson interval 0-11 %).
 SOLVE_SAMPLES = 32
 #: The robust maximiser's budget of noisy rollouts when none is given (``nbst crash solve --robust``).
-DEFAULT_ROBUST_BUDGET = 600
+DEFAULT_ROBUST_BUDGET = 1200
 #: Retake noise (a stunt crew's take to take; assumed): standard deviation of each intent (SI).
 NOISE = {"speed": 0.5, "aim_x": 0.2, "aim_y": 0.2, "arrive": 0.1, "brake_at": 0.1, "slide_at": 0.1,
          "slide_steer": math.radians(1.0), "slide_power": 0.05, "headway": 0.05, "reaction": 0.1,
@@ -265,9 +266,86 @@ class RobustCrashProblem:
         return probability(self.R, cand, n, seed, noise=self.noise)
 
 
-#: The centring stage of :func:`robust_pick`: noisy copies per screen, and the share of the
-#: budget it may spend (the room's maximiser gets the rest).
+#: The robust pick's stages (:func:`robust_pick`), in noisy rollouts of its budget: **gathering**
+#: other crashes that meet the script, from short searches of the crash (:func:`.search.solve`)
+#: from seeds derived from the pick's (at most POOL_SEARCHES, each at most POOL_ROLLOUTS, all
+#: within POOL_SHARE of the budget); **racing** them (successive halving from RACE_COPIES common
+#: copies each, within RACE_SHARE); **centring** the winner (CENTRE_COPIES copies per screen,
+#: within CENTRE_SHARE of what is left); the room's **maximiser** (the rest).
+POOL_SHARE, POOL_SEARCHES, POOL_ROLLOUTS = 0.4, 6, 400
+RACE_SHARE, RACE_COPIES = 0.3, 12
 CENTRE_COPIES, CENTRE_SHARE = 48, 0.5
+
+
+def _derived(seed: int, *salt: int) -> int:
+    """A seed in [0, 2^63) derived from ``seed`` and ``salt`` (one stream per stage)."""
+    return int(np.random.SeedSequence([int(seed), *salt]).generate_state(1, np.uint64)[0] >> 1)
+
+
+def _gather(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int, ladder: bool):
+    """Other crashes that meet the script: short crash searches (:func:`.search.solve`) from seeds
+    derived from ``seed``, each stopping at its first crash that meets the script (and keeps
+    meeting it at 1 and 0.5 ms when ``ladder``), all within ``budget`` rollouts. Every accepted
+    trial a search ran is kept (a search's last batch may hold several). Returns (members: the
+    start first, then the new ones in the order found, each (intents, from): 'start' or the
+    search's seed; rollouts run; searches run)."""
+    from nbst.models.crash import search
+
+    members = [(np.asarray(start, dtype=float), "start")]
+    used = runs = 0
+    for k in range(POOL_SEARCHES):
+        cap = min(POOL_ROLLOUTS, budget - used)
+        if cap < BATCH * 4:  # too few for a search to find anything
+            break
+        s = _derived(seed, 47, k)
+        found: list = []
+        res = search.solve(P.R.script, seed=s, max_rollouts=cap, runner=P.R, ladder=ladder,
+                           keep=lambda t: found.append(t) if t.accepted else None)
+        used += res.rollouts
+        runs += 1
+        for t in found:
+            cand = P.S.intents(t.u[None])[0]
+            if not any(np.allclose(np.nan_to_num(cand), np.nan_to_num(c), atol=1e-9) for c, _ in members):
+                members.append((cand, s))
+    return members, used, runs
+
+
+def _race(P: RobustCrashProblem, members: list, budget: int, seed: int):
+    """Successive halving on common copies: every member is run on the first RACE_COPIES noisy
+    copies of one race seed (copy i the same draw for all), the better half (copies that meet the
+    script, then partial credit) goes on to twice as many copies, and so on while the budget
+    allows. Returns (the members' indices ranked, best first: the survivors of the last rung by
+    their score on its copies, then the others by the rung each reached and their score there;
+    rows [index, met, copies run] in member order; rollouts run)."""
+    if len(members) == 1:
+        return [0], [[0, 0, 0]], 0
+    cs = _derived(seed, 48)
+    got: list[list] = [[] for _ in members]
+    alive = list(range(len(members)))
+    reached = {i: 0 for i in alive}
+    m, used = RACE_COPIES, 0
+    while alive:
+        need = sum(max(0, m - len(got[i])) for i in alive)
+        if used + need > budget:
+            break
+        todo = [(i, c) for i in alive for c in P.noisy(members[i], m, cs)[len(got[i]):]]
+        for (i, _), o in zip(todo, P.run([c for _, c in todo])):
+            got[i].append(P.judge(o))
+        used += need
+        for i in alive:
+            reached[i] = m
+        if len(alive) == 1:
+            break
+        score = {i: (sum(g[0] for g in got[i][:m]), sum(g[1] for g in got[i][:m])) for i in alive}
+        alive = sorted(alive, key=lambda i: (score[i], -i), reverse=True)[:(len(alive) + 1) // 2]
+        m *= 2
+
+    def key(i):
+        r = reached[i]
+        return (r, sum(g[0] for g in got[i][:r]), sum(g[1] for g in got[i][:r]), -i)
+
+    order = sorted(range(len(members)), key=key, reverse=True)
+    return order, [[i, int(sum(g[0] for g in got[i])), len(got[i])] for i in range(len(members))], used
 
 
 def _centre(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int):
@@ -278,7 +356,7 @@ def _centre(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int):
     does; their centroid is the cross-entropy method's new mean (Rubinstein and Kroese, *The
     Cross-Entropy Method*, 2004), the point the noise carries most often into the met region."""
     m = CENTRE_COPIES
-    cs = int(np.random.SeedSequence([int(seed), 47]).generate_state(1, np.uint64)[0] >> 1)
+    cs = _derived(seed, 47)
     frames = 0
 
     def screen(cand):
@@ -315,24 +393,29 @@ def _centre(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int):
 
 def robust_pick(space: CrashSpace, runner: CrashRunner, intents: np.ndarray, *, budget: int, seed: int, n: int,
                 noise: str = DEFAULT_NOISE, ladder: bool = True):
-    """The intents near ``intents`` that meet the script most often under driver noise: the
-    centring stage (:func:`_centre`, at most :data:`CENTRE_SHARE` of ``budget``), then the
-    room's robust maximiser from both the centred and the given intents (the rest of the budget;
-    its pick keeps its outcome on the ladder and is measured afresh on ``n`` copies of ``seed``).
+    """The crash that meets the script most often under driver noise, among ``intents`` and other
+    crashes that meet it, and near the best of them. Four stages on one ``budget`` of noisy
+    rollouts (:data:`POOL_SHARE` and the rest): other crashes gathered by short searches
+    (:func:`_gather`: not only the neighbourhood of ``intents``), raced on common copies
+    (:func:`_race`), the winner centred (:func:`_centre`), then the room's robust maximiser from
+    the centred winner and the winner (the rest). The pick keeps its outcome on the ladder (the
+    maximiser's, else the best-raced member that does) and its probability is measured afresh on
+    ``n`` copies of ``seed`` (copies no stage ran).
 
     Args:
         space: the script's search space.
         runner: its runner.
         intents: (vehicles, len(INTENT)) a crash that meets the script.
-        budget: noisy rollouts for the two stages (the ladder and the fresh estimate on top).
-        seed: the seed (screens, steps, the fresh estimate).
+        budget: noisy rollouts (and the gathering searches' rollouts) of the four stages; the
+            ladder checks and the fresh estimate come on top.
+        seed: the seed (searches, race, screens, steps, the fresh estimate).
         n: noisy copies of the fresh estimate.
         noise: the kind of driver noise (:data:`NOISE_KINDS`).
-        ladder: keep only a pick that keeps its outcome at 1 and 0.5 ms.
+        ladder: keep only crashes that keep their outcome at 1 and 0.5 ms.
 
     Returns:
         A :class:`RobustPick`: the room's ``Maximum`` (``best``: the pick; ``fresh``: its
-        :class:`CrashEstimate`; ``frames`` counting both stages) and ``centre``.
+        :class:`CrashEstimate`; ``frames`` counting every stage), ``centre`` and ``race``.
 
     Raises:
         InputError: an unknown noise kind.
@@ -340,27 +423,49 @@ def robust_pick(space: CrashSpace, runner: CrashRunner, intents: np.ndarray, *, 
     """
     from nbst.models.mjsearch import robust as room
 
+    budget = int(budget)
     P = RobustCrashProblem(space, runner, runner.xml, noise=noise, ref=intents)
     intents = np.asarray(intents, dtype=float)
-    centred, before, after, used = _centre(P, intents, int(budget * CENTRE_SHARE), seed)
-    starts = [centred, intents] if after[0] > before[0] else [intents]
-    mx = room.maximise(P, starts, budget=max(1, int(budget) - used), seed=seed, n=n, ladder=ladder)
-    mx.frames += used
+    members, used_pool, runs = _gather(P, intents, int(budget * POOL_SHARE), seed, ladder)
+    order, rows, used_race = _race(P, [c for c, _ in members], int(budget * RACE_SHARE), seed)
+    win = members[order[0]][0]
+    left = budget - used_pool - used_race
+    centred, before, after, used_c = _centre(P, win, int(left * CENTRE_SHARE), seed)
+    starts = [centred, win] if after[0] > before[0] else [win]
+    mx = room.maximise(P, starts, budget=max(1, left - used_c), seed=seed, n=n, ladder=ladder)
+    mx.frames += used_pool + used_race + used_c
+    fell_back = False
+    if ladder and mx.ladder_holds is False:
+        # the maximiser's steps left the ladder: the best-raced member that keeps it instead
+        for i in order:
+            rows_l, ok, ran = P.ladder(members[i][0])
+            mx.frames += ran
+            if ok:
+                mx.best, mx.ladder, mx.ladder_holds, fell_back = members[i][0], rows_l, True, True
+                mx.fresh = P.fresh(members[i][0], n, seed)
+                break
+    race = {"members": len(members), "searches": runs, "search_rollouts": used_pool, "rollouts": used_race,
+            "table": [[r[0], str(members[r[0]][1]), r[1], r[2]] for r in rows], "winner": int(order[0]),
+            "fell_back": fell_back}
     return RobustPick(mx=mx, centre={"copies": before[1], "start": before[0], "centred": after[0],
-                                     "rollouts": used})
+                                     "rollouts": used_c}, race=race)
 
 
 @dataclass
 class RobustPick:
     """What :func:`robust_pick` found: the room's ``Maximum`` (its fields read through: best,
-    fresh, frames, ladder, ...) and the centring stage's ``centre`` ({copies, start, centred,
-    rollouts}: how many of the centring screen's copies the start and the centred intents met)."""
+    fresh, frames, ladder, ...), the centring stage's ``centre`` ({copies, start, centred,
+    rollouts}: how many of the centring screen's copies the winner and the centred intents met)
+    and the gathering and race's ``race`` ({members, searches, search_rollouts, rollouts, table:
+    [[member, from (``start`` or the search's seed), met, copies run]], winner, fell_back: the
+    pick is the race's best member that keeps the ladder, the maximiser's having lost it})."""
 
     mx: object
     centre: dict
+    race: dict | None = None
 
     def __getattr__(self, name):
-        if name in ("mx", "centre"):
+        if name in ("mx", "centre", "race"):
             raise AttributeError(name)
         return getattr(self.mx, name)
 

@@ -1,0 +1,79 @@
+"""The robust pick's stages (models/crash/robust.py): the race among crashes that meet the script,
+on common copies, and the gathering of such crashes by short searches."""
+import json
+
+import numpy as np
+import pytest
+
+from nbst.models.crash import robust, run, script, space
+from nbst.models.mjsearch.probability import normal_draws
+
+
+class _Windows:
+    """Members are numbers; a noisy copy is the number plus a standard normal draw (copy i the same
+    draw for every member: common random numbers); it meets the 'script' inside [-1, 1]."""
+
+    def __init__(self):
+        self.ran = 0
+
+    def noisy(self, x, m, seed):
+        return list(float(x) + normal_draws(seed, m, 1)[:, 0])
+
+    def run(self, copies):
+        self.ran += len(copies)
+        return list(copies)
+
+    def judge(self, r):
+        return abs(r) <= 1.0, -abs(r), "in" if abs(r) <= 1.0 else "out"
+
+
+def test_the_race_ranks_the_member_met_most_often_first_within_its_budget():
+    """Members at 3, 2.5, 0.2 (P = 0.58 of meeting [-1, 1] under unit noise), 1.5 and 2: the one at
+    0.2 wins on paired copies; the race runs no more than its budget."""
+    P = _Windows()
+    members = [3.0, 2.5, 0.2, 1.5, 2.0]
+    order, rows, used = robust._race(P, members, budget=200, seed=3)
+    assert order[0] == 2 and used == P.ran <= 200
+    assert [r[0] for r in rows] == list(range(5)) and rows[2][2] >= rows[0][2]  # the winner ran the most copies
+    assert rows[2][1] > rows[0][1]  # the winner met more of its copies than the member at 3 did
+    assert robust._race(P, members, budget=200, seed=3) == (order, rows, used)  # the same seed, the same race
+
+
+def test_a_race_of_one_runs_nothing():
+    P = _Windows()
+    assert robust._race(P, [0.0], budget=100, seed=1) == ([0], [[0, 0, 0]], 0) and P.ran == 0
+
+
+#: A short two-car crossing (tests/test_crash_run.py's): A eastbound meets B northbound.
+SHORT = {
+    "kind": "nbst-crash-script", "name": "short",
+    "road": {"layout": "intersection", "width": 7, "length": 80},
+    "duration": 2.5,
+    "vehicles": [
+        {"name": "A", "type": "sedan", "start": {"x": -22, "y": -1.75, "heading": 0}, "speed": [45, 55],
+         "driver": {"aim": {"x": [0, 4], "y": -1.75}, "arrive": [1.5, 1.8], "after_impact": ["brake", "coast"]},
+         "fate": {"hits": ["B"]}},
+        {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -22, "heading": 90}, "speed": [45, 55],
+         "driver": {"aim": {"x": 1.75, "y": [-2, 2]}, "arrive": [1.5, 1.8]}, "fate": {"hits": ["A"]}},
+    ],
+}
+
+
+@pytest.mark.slow
+def test_gathering_finds_other_crashes_that_meet_the_script_at_every_timestep():
+    """A short search from a derived seed brings crashes other than the start, each meeting the
+    script at 2, 1 and 0.5 ms, within the rollouts it was given."""
+    s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
+    S = space.space_of(s)
+    R = run.CrashRunner(s, jobs=1)
+    try:
+        start = S.intents(np.full((1, S.dim), 0.5))[0]
+        P = robust.RobustCrashProblem(S, R, R.xml, ref=start)
+        members, used, runs = robust._gather(P, start, 4 * run.BATCH, seed=2, ladder=True)
+        assert runs == 1 and 0 < used <= 4 * run.BATCH and len(members) >= 2 and members[0][1] == "start"
+        for cand, origin in members[1:]:
+            assert origin != "start" and not np.allclose(np.nan_to_num(cand), np.nan_to_num(start))
+            rows, holds, _ = P.ladder(cand)
+            assert holds and rows[0][2]  # met at 2 ms and kept at 1 and 0.5 ms
+    finally:
+        R.close()
