@@ -59,7 +59,12 @@ def _crash_file(raw: dict, path) -> str:
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("crash-report")
-    return {"t-bone": _crash_file(TBONE, tmp / "tbone.json"), "head-on": _crash_file(HEADON, tmp / "headon.json")}
+    crush = json.loads(json.dumps(TBONE))
+    crush["name"] = "t-bone-crush"
+    for v in crush["vehicles"]:
+        v["type"] += "-crush"
+    return {"t-bone": _crash_file(TBONE, tmp / "tbone.json"), "head-on": _crash_file(HEADON, tmp / "headon.json"),
+            "t-bone-crush": _crash_file(crush, tmp / "tbone-crush.json")}
 
 
 @pytest.fixture(scope="module")
@@ -108,13 +113,13 @@ def test_a_head_on_strikes_both_from_straight_ahead(impacts):
         assert _off(v.pdof_deg, 0.0) <= 15 and v.pdof_clock == 12, v
 
 
-@pytest.mark.parametrize("case", ["t-bone", "head-on"])
+@pytest.mark.parametrize("case", ["t-bone", "head-on", "t-bone-crush"])
 def test_the_two_vehicles_momentum_changes_balance_within_the_roads_reach(impacts, case):
     """m_a dv_a + m_b dv_b: the contact forces cancel between the two, so what is left is the
     road's over the episode, at most mu g tau (m_a + m_b) (the friction cone; tau the window from
     the state before the first touch to after the last). Measured 0.62 (head-on) and 0.88 (this
-    t-bone) of that bound, 9-17 % of the mean m |dv|. And the contact impulse's share, |J| / m,
-    is the outcome's delta-V."""
+    t-bone) of that bound, 9-17 % of the mean m |dv|; with crushing fronts and sides too. And the
+    contact impulse's share, |J| / m, is the outcome's delta-V."""
     d, s, m, ci = impacts[case]
     p = max(ci.impacts, key=lambda q: max(v.dv for v in q.vehicles))
     tau = p.t_end - p.t + float(m.opt.timestep)
@@ -156,23 +161,26 @@ def test_the_page_states_the_librarys_numbers_and_says_what_is_not_recorded(file
 
 @pytest.mark.slow
 def test_the_page_shows_a_reconstructions_intervals_and_recorded_crush(impacts):
-    """The file's fields as their writers document them (reconstruction: 90 % intervals and an
-    identifiability flag; crush: residual crush per zone and EES) appear on the page."""
+    """A crushing pair's EES and residual crush, as the crash file records them, and a
+    reconstruction's intervals (the fields as their writer documents them: 90 % intervals with an
+    identifiability flag) appear on the page."""
     from nbst.render.crash.report import crash_report, report_html
 
-    d, s, m, ci = impacts["t-bone"]
+    d, s, m, ci = impacts["t-bone-crush"]
     d = json.loads(json.dumps(d))
     iv = {"lo": 48.0, "median": 50.0, "hi": 53.5, "estimate": 50.1, "identifiable": True}
     d["reconstruction"] = {"level": 0.9, "method": "Optimisation Monte Carlo", "draws": 40, "accepted": 12,
                            "vehicles": [{"name": "A", "impact_speed_kmh": iv, "delta_v_kmh": None, "pdof_clock": None},
                                         {"name": "B", "impact_speed_kmh": dict(iv, identifiable=False),
                                          "delta_v_kmh": None, "pdof_clock": None}]}
-    d["vehicles"][0]["crush"] = {"zones": {"front": {"residual_m": 0.31, "width_m": 1.6, "A_N_per_m": 5e4,
-                                                     "B_N_per_m2": 5e5, "energy_J": 9e4}},
-                                 "energy_J": 9e4, "ees_kmh": 40.2}
     page = report_html(crash_report(d, s, m))
     cells = _cells(page)
-    assert cells["A.ees"].startswith("40.2") and "front 31 cm" in cells["A.ees"] and cells["B.ees"] == "not recorded"
+    for v in d["vehicles"]:
+        crush = v["crush"]
+        assert cells[f"{v['name']}.ees"].startswith(f"{crush['ees_kmh']:.1f}")
+        for zone, z in crush["zones"].items():
+            assert (f"{zone} {100 * z['residual_m']:.0f} cm" in cells[f"{v['name']}.ees"]) == (z["residual_m"] >= 0.005)
+    assert any(z["residual_m"] >= 0.05 for v in d["vehicles"] for z in v["crush"]["zones"].values())
     assert page.count("48.0&ndash;53.5 (90 %)") == 2 and page.count("not identifiable") == 1
     assert "12 of 40 draws met every piece of evidence" in page
 
