@@ -4,6 +4,7 @@
                                                      [--lefty-share 0] [--jobs 1]
     nice -n 10 python benchmarks/bench_transition.py --part sensitivity [--throws 20]
     nice -n 10 python benchmarks/bench_transition.py --part depletion [--seeds 1-4] [--lineup 4]
+    nice -n 10 python benchmarks/bench_transition.py --part wear [--seeds 1-4] [--games 3] [--oil house]
 
 For each seed: the series of ``nbst bowl series --move both`` (models/bowling/lane/transition.py):
 ``--games`` games by ``--lineup`` bowlers of the profile on one fresh house shot that every ball wears,
@@ -32,6 +33,12 @@ every ball, strike and spare), no moves, at exchange 0.15, 0.3 (as shipped) and 
 board that lost the largest share of its oil, and the share lost by the 3, 5 and 7 boards centred on
 it (the area of play: its width is our choice, and the table gives all three); the mean over those
 distances, per seed, and the share of the whole pattern taken.
+
+``--part wear`` (issue 48: the track and the carry-down): for each profile, ``--games`` x 12 strike balls
+under the profile's noise, the ball alone (:func:`.transition.strike_wear`), on one lane of ``--oil``, per
+seed: after each game, the track's width at 10, 20 and 30 ft (the run of boards around the driest that lost
+at least 10 % of their film), the driest board's loss there, the oil past the pattern's end, and the
+oil's account (initial minus removed, carried and remaining).
 """
 from __future__ import annotations
 
@@ -63,6 +70,7 @@ def one(seed: int, args) -> dict:
     doc["seconds"] = time.time() - t0
     for r in doc["runs"]:  # the maps are large: keep the oil's totals only
         before, after = np.asarray(r["oil"].pop("before")), np.asarray(r["oil"].pop("after"))
+        r["oil"].pop("games", None)
         j = int(np.ceil(r["oil"]["length_ft"] / r["oil"]["dx_ft"]))
         r["oil"].update(before_ml=before.sum() * CELL_AREA, after_ml=after.sum() * CELL_AREA,
                         past_before_ml=before[:, j:].sum() * CELL_AREA, past_after_ml=after[:, j:].sum() * CELL_AREA)
@@ -126,9 +134,27 @@ def depletion(seeds: list[int], n: int, bowler: str = "pro") -> None:
                   f"{100 * whole:.1f} % | {time.time() - t0:.0f} |", flush=True)
 
 
+def wear(seeds: list[int], games: int, oil: str) -> None:
+    print(f"## the track and the carry-down: {games} x 12 strike balls a profile, the ball alone, one lane of {oil}, "
+          f"seeds {seeds[0]}-{seeds[-1]}\n")
+    print("| profile | seed | track width at 10 / 20 / 30 ft by game (boards) | driest board's loss at 10 / 20 / 30 ft "
+          "after the last | past the end by game (ul) | account (ml) | s |\n|---|---|---|---|---|---|---|")
+    for prof in ("pro", "league200", "league150", "twohander"):
+        for seed in seeds:
+            t0 = time.time()
+            w = T.strike_wear(prof, games, seed, oil)
+            b = w["before"]
+            widths = "; ".join("/".join(str(T.track_width(b, g["map"], ft)) for ft in (10, 20, 30)) for g in w["games"])
+            dry = " / ".join(f"{100 * T.depleted_share(b, w['games'][-1]['map'], ft):.0f} %" for ft in (10, 20, 30))
+            past = ", ".join(f"{1e3 * g['past_end_ml']:.0f}" for g in w["games"])
+            acct = w["initial"] - (w["removed"] + w["carried"] + w["remaining"])
+            print(f"| {prof} | {seed} | {widths} | {dry} | {past} | {acct:.1e} | {time.time() - t0:.0f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
-    ap.add_argument("--part", choices=("drift", "sensitivity", "depletion"), default="drift")
+    ap.add_argument("--part", choices=("drift", "sensitivity", "depletion", "wear"), default="drift")
+    ap.add_argument("--oil", default="house", help="--part wear: the pattern (default house)")
     ap.add_argument("--throws", type=int, default=20, help="--part sensitivity: identical throws (default 20)")
     ap.add_argument("--bowler", default="pro")
     ap.add_argument("--games", type=int, default=3)
@@ -140,6 +166,9 @@ def main() -> None:
     args = ap.parse_args()
     if args.part == "sensitivity":
         sensitivity(args.throws)
+        return
+    if args.part == "wear":
+        wear(_seeds(args.seeds or "1-4"), args.games, args.oil)
         return
     if args.part == "depletion":
         depletion(_seeds(args.seeds or "1-4"), args.lineup or 4, args.bowler)
