@@ -74,6 +74,7 @@ def test_the_published_patterns_give_their_published_numbers(name):
     pat = lane.PATTERNS[name]
     pub = dict(pat.published)
     assert pat.source and pat.rows and pat.symmetric()
+    assert oil.pattern_from_dict(json.loads(json.dumps(pat.to_dict()))) == pat  # as a throw file embeds it
     length = pub["length_ft"]
     lo, hi = (length, length) if not isinstance(length, tuple) else length
     assert lo <= pat.length_ft <= hi

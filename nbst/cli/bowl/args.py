@@ -132,8 +132,7 @@ def oil_flag(t) -> None:
 
     t.add_argument("--oil", default=DEFAULT_OIL, type=argtype("--oil"), metavar="PATTERN",
                    help=f"oil pattern (default {DEFAULT_OIL}): {PATTERNS.help_text()}; or a pattern file "
-                        "(nbst-oil-pattern JSON: forward/reverse passes with length, volume and units or loads per "
-                        "board; docs/bowling.md)")
+                        "(nbst-oil-pattern JSON: a lane machine's sheet of load and buff rows; docs/formats.md)")
 
 
 #: The delivery flags (their defaults: :func:`delivery_defaults`).
