@@ -54,16 +54,17 @@ def test_the_barrier_pulse_sits_in_the_published_ranges(pulse):
 
 
 def test_residual_crush_is_real_and_below_the_dynamic_crush(pulse):
-    # the plastic joints hold what they crushed: residual > 0, and at most the dynamic crush
-    # (the contact's elastic give springs back)
+    # the plastic joints hold what they crushed: residual > 0; the elastic element springs back,
+    # so the residual is below the dynamic crush, by 2-25 % (real fronts spring back ~10-20 %)
     assert 0.3 < pulse.residual < pulse.dynamic_crush, pulse
+    assert 0.75 <= pulse.residual / pulse.dynamic_crush <= 0.98, pulse
 
 
 def test_energy_absorbed_is_the_crush_energy(pulse):
     # the kinetic energy the impact took equals CRASH3's energy of the residual crush,
-    # w (A C + B C^2 / 2 + A^2 / 2B), within 10 % (the staircase, the A^2/2B term the model
-    # does not take without crush, and the contact's damping)
-    assert pulse.crush_energy == pytest.approx(pulse.energy_lost, rel=0.10), pulse
+    # w (A C + B C^2 / 2 + A^2 / 2B), within 8 % (the staircase, the elastic element's damping,
+    # the contact's)
+    assert pulse.crush_energy == pytest.approx(pulse.energy_lost, rel=0.08), pulse
     # so the EES from the residual crush is the impact speed within 5 % (a rigid wall: EES = speed)
     vt = vehicle.VEHICLE_TYPES["sedan-crush"]
     ees = vehicle.crush_ees(vt, {"front": pulse.residual})
@@ -71,12 +72,14 @@ def test_energy_absorbed_is_the_crush_energy(pulse):
 
 
 def test_restitution_stays_in_the_published_band(pulse):
-    # the docs' band (SAE 931842; Monson and Germane SAE 1999-01-0097): at least 0.05, at most
-    # 0.2 from 40 km/h up
-    assert 0.05 <= pulse.restitution <= 0.2, pulse
+    # SAE 931842 (Howard, Bomar and Bare): about 0.1 at medium and high speed, 0.2-0.4 at low
+    # speed; falling as the speed rises (Monson and Germane, SAE 1999-01-0097). The barrier at
+    # 56 km/h: 0.1-0.2; at 16 km/h: higher, at most 0.4
+    assert 0.1 <= pulse.restitution <= 0.2, pulse
+    low = scene.barrier_pulse("sedan-crush", 16.0, timestep=0.002)
+    assert pulse.restitution < low.restitution <= 0.4, low
 
 
-@pytest.mark.slow
 def test_the_pulse_holds_across_timesteps(pulse):
     # h, h/2, h/4: time to zero velocity within 8 %, crush within 5 %, mean deceleration within 8 %
     for h in (0.001, 0.0005):

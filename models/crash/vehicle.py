@@ -297,6 +297,14 @@ CRUSH_SLAB_MASS = {"front": 30.0, "rear": 25.0, "left": 15.0, "right": 15.0}
 #: a slab does not bounce off what it hits (0.5 did: the contact broke for a step at 12 ms).
 CRUSH_SOLREF = (0.02, 1.0)
 CRUSH_SOLIMP = (0.99, 0.99, 0.001, 0.5, 2.0)
+#: The elastic element between the body and each zone's plastic steps (the structure's
+#: spring-back): a joint spring deflecting ``CRUSH_ELASTIC_DEFLECTION`` m at the zone's first
+#: yield force, damped at ``CRUSH_ELASTIC_ZETA`` of critical for the vehicle's mass, on a link of
+#: ``CRUSH_ELASTIC_MASS`` kg (heavy enough that the explicit spring is stable at 2 ms steps).
+#: 0 deflection: no elastic element.
+CRUSH_ELASTIC_DEFLECTION = 0.02
+CRUSH_ELASTIC_ZETA = 2.0
+CRUSH_ELASTIC_MASS = {"front": 40.0, "rear": 40.0, "left": 20.0, "right": 20.0}
 #: The plastic joints' dry friction and travel limits: as hard as MuJoCo's constraints go
 #: (impedance 0.9999), so that a joint loaded below its yield force creeps by at most ~1 cm
 #: through a crash (a softer one slides like a damper: every step yields at once).
@@ -363,7 +371,8 @@ def _crush_masses(vt: VehicleType) -> list[tuple[float, np.ndarray]]:
     """(mass, position) of every crush body (links and slab) of ``vt``, body frame."""
     out = []
     for z in crush_zones(vt):
-        out.append(((z.steps - 1) * CRUSH_LINK_MASS + CRUSH_SLAB_MASS[z.name], np.array(z.centre)))
+        el = CRUSH_ELASTIC_MASS[z.name] if CRUSH_ELASTIC_DEFLECTION > 0 else 0.0
+        out.append(((z.steps - 1) * CRUSH_LINK_MASS + CRUSH_SLAB_MASS[z.name] + el, np.array(z.centre)))
     return out
 
 
@@ -385,10 +394,24 @@ def _add_crush(spec, body, vt: VehicleType, prefix: str, rgba) -> None:
         forces = z.step_forces()
         step = z.depth / z.steps
         parent = body
+        if CRUSH_ELASTIC_DEFLECTION > 0:
+            parent = body.add_body(name=f"{prefix}_crush_{z.name}_elastic_link", pos=[_six(c) for c in z.centre])
+            k_el = forces[0] / CRUSH_ELASTIC_DEFLECTION
+            j = parent.add_joint(name=f"{prefix}_crush_{z.name}_elastic", type=mujoco.mjtJoint.mjJNT_SLIDE,
+                                 axis=list(z.axis))
+            j.stiffness = [_six(k_el), 0.0, 0.0]
+            j.damping = [_six(2 * CRUSH_ELASTIC_ZETA * math.sqrt(k_el * vt.mass)), 0.0, 0.0]
+            j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            j.range = [-0.01, _six(1.5 * forces[-1] / k_el)]
+            j.solref_limit = list(CRUSH_JOINT_SOLREF)
+            j.solimp_limit = list(CRUSH_JOINT_SOLIMP)
+            g = parent.add_geom(name=f"{prefix}_crush_{z.name}_elastic_mass", type=GT.mjGEOM_SPHERE, size=[0.02, 0, 0],
+                                mass=_six(CRUSH_ELASTIC_MASS[z.name]), rgba=[0.3, 0.3, 0.3, 1.0], group=3)
+            g.contype = g.conaffinity = 0
         for k, name in enumerate(crush_joint_names(prefix, z)):  # the plastic steps, links of CRUSH_LINK_MASS
             last = k == z.steps - 1
             link = parent.add_body(name=f"{prefix}_crush_{z.name}" if last else f"{name}_link",
-                                   pos=[_six(c) for c in z.centre] if k == 0 else [0.0, 0.0, 0.0])
+                                   pos=[_six(c) for c in z.centre] if k == 0 and parent is body else [0.0, 0.0, 0.0])
             j = link.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(z.axis))
             j.frictionloss = _six(forces[k])
             j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
