@@ -31,13 +31,13 @@ TBONE = {
          "driver": {"aim": {"x": 1.75, "y": 10}}, "fate": {"hits": ["A"], "heading": {"deg": 60, "tol": 30}}},
     ],
 }
-#: A full-overlap head-on on a straight road: a sedan and an SUV at 40 km/h each.
+#: A full-overlap head-on on a straight road: a sedan and an SUV at 40 km/h each, the sedan braking from 1.2 s.
 HEADON = {
     "kind": "nbst-crash-script", "name": "head-on", "road": {"layout": "straight", "width": 7, "length": 80},
     "duration": 2.5,
     "vehicles": [
         {"name": "A", "type": "sedan", "start": {"x": -20, "y": 0, "heading": 0}, "speed": 40,
-         "fate": {"hits": ["B"]}},
+         "driver": {"brake_at": 1.2}, "fate": {"hits": ["B"]}},
         {"name": "B", "type": "suv", "start": {"x": 20, "y": 0, "heading": 180}, "speed": 40,
          "fate": {"hits": ["A"]}},
     ],
@@ -117,9 +117,9 @@ def test_a_head_on_strikes_both_from_straight_ahead(impacts):
 def test_the_two_vehicles_momentum_changes_balance_within_the_roads_reach(impacts, case):
     """m_a dv_a + m_b dv_b: the contact forces cancel between the two, so what is left is the
     road's over the episode, at most mu g tau (m_a + m_b) (the friction cone; tau the window from
-    the state before the first touch to after the last). Measured 0.62 (head-on) and 0.88 (this
-    t-bone) of that bound, 9-17 % of the mean m |dv|; with crushing fronts and sides too. And the
-    contact impulse's share, |J| / m, is the outcome's delta-V."""
+    the state before the first touch to after the last). Measured 0.88 (t-bone), 0.91 (head-on)
+    and 0.91 (t-bone with crush) of that bound, 15-17 % of the mean m |dv|. And the contact
+    impulse's share, |J| / m, is the outcome's delta-V."""
     d, s, m, ci = impacts[case]
     p = max(ci.impacts, key=lambda q: max(v.dv for v in q.vehicles))
     tau = p.t_end - p.t + float(m.opt.timestep)
@@ -129,6 +129,24 @@ def test_the_two_vehicles_momentum_changes_balance_within_the_roads_reach(impact
     assert p.momentum_error < 0.25
     for i in (p.a, p.b):
         assert p.of(i).dv_impulse * impact.KMH == pytest.approx(d["outcome"]["vehicles"][i]["delta_v_kmh"], abs=0.1)
+
+
+def test_the_sequence_runs_from_driving_through_the_impact_to_rest(impacts):
+    """The braking sedan's phases tile the crash: driving, the assumed perception-reaction time
+    before its reaction stop, braking up to the impact, the impact, then post-impact (and rest
+    once it stays below the rest speed); the SUV drives into it without braking."""
+    from nbst.render.crash.report import PERCEPTION_S, crash_report, phases
+
+    d, s, m, ci = impacts["head-on"]
+    rep = crash_report(d, s, m)
+    (p,) = rep.major()
+    a, b = phases(rep, 0), phases(rep, 1)
+    assert [x[0] for x in a[:5]] == ["driving", "perception-reaction (assumed)", "braking", "impact", "post-impact"]
+    assert a[1][1] == pytest.approx(1.2 - PERCEPTION_S) and a[2][1] == pytest.approx(1.2) and a[3][1] == p.t
+    assert [x[0] for x in b[:3]] == ["driving", "impact", "post-impact"]
+    for ph in (a, b):
+        assert ph[0][1] == 0.0 and ph[-1][2] == pytest.approx(s.duration)
+        assert all(x[2] == pytest.approx(y[1]) for x, y in zip(ph, ph[1:]))      # no gap, no overlap
 
 
 def _cells(page: str) -> dict:

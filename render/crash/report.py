@@ -47,8 +47,8 @@ from nbst.models.crash.script import Script
 
 from nbst.render.crash import motion as motion_mod
 
-__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "SCENE_ASPECT", "ZOOM", "CrashReport", "crash_report",
-           "evidence_rows", "phases", "report_html", "striker"]
+__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "SCENE_ASPECT", "STRIKE_S", "ZOOM", "CrashReport", "crash_report",
+           "evidence_rows", "phases", "report_html", "striker", "strikes"]
 
 #: Figure resolution (dots per inch); figures are ~8 in wide.
 DPI = 100
@@ -95,6 +95,25 @@ class CrashReport:
     def major(self) -> list:
         """The impacts at least one of whose vehicles changes speed by :data:`MINOR_DV_KMH` or more."""
         return [p for p in self.impacts.impacts if max(v.dv for v in p.vehicles) * impact_mod.KMH >= MINOR_DV_KMH]
+
+    def opening(self) -> list:
+        """The first major impact of each vehicle pair (the ones labelled in the figures)."""
+        seen: set = set()
+        out = []
+        for p in self.major():
+            if (p.a, p.b) not in seen:
+                seen.add((p.a, p.b))
+                out.append(p)
+        return out
+
+    def reach(self, p: impact_mod.PairImpact) -> float:
+        """The most the road can unbalance the pair's m dv over the impact, mu g tau (m_a + m_b)
+        (the friction cone; tau from the state before the first touch to after the last), as a
+        share of the mean m |dv|: the imbalance stays under it."""
+        tau = p.t_end - p.t + float(self.model.opt.timestep)
+        ma, mb = self.impacts.mass[p.a], self.impacts.mass[p.b]
+        mean = 0.5 * (ma * p.of(p.a).dv + mb * p.of(p.b).dv)
+        return float(self.script.road.friction * 9.81 * tau * (ma + mb) / mean) if mean > 0 else math.inf
 
     def first(self, i: int):
         """Vehicle ``i``'s first major impact: (PairImpact, VehicleImpact) or None."""
@@ -156,40 +175,54 @@ def striker(p: impact_mod.PairImpact) -> int | None:
     return p.vehicles[k].vehicle if off[k] <= 60 else None
 
 
+def strikes(rep: CrashReport, i: int | None = None) -> list:
+    """The curb and barrier strikes (:class:`nbst.render.crash.motion.Impact`, ``b`` None) of
+    vehicle ``i`` (every vehicle's: None), in time order."""
+    return [im for im in rep.motion.impacts if im.what != "vehicle" and (i is None or im.a == i)]
+
+
+#: A curb or barrier strike is drawn this long (s) in the sequence diagram (its contact is not timed).
+STRIKE_S = 0.05
+
+
 def phases(rep: CrashReport, i: int) -> list[tuple[str, float, float]]:
-    """Vehicle ``i``'s phases [(name, start s, end s)] in time order (names of :data:`PHASES`)."""
+    """Vehicle ``i``'s phases [(name, start s, end s)] in time order (names of :data:`PHASES`): its
+    vehicle impacts and its curb and barrier strikes are impacts, the first of them ends the driver's
+    part (perception-reaction and braking only before it), rest is the stretch below the outcome's
+    rest speed that lasts to the end."""
     T = float(rep.motion.duration)
-    imp = [p for p in rep.major() if i in (p.a, p.b)]
-    t_hit = imp[0].t if imp else math.inf
-    t_last = imp[-1].t_end if imp else math.nan
+    events = sorted([(p.t, max(p.t_end, p.t + 0.01)) for p in rep.major() if i in (p.a, p.b)]
+                    + [(im.t, im.t + STRIKE_S) for im in strikes(rep, i)])
+    t_hit = events[0][0] if events else math.inf
     sp = rep.impacts.speed[:, i]
     moving = np.nonzero(sp > out_mod.REST_SPEED)[0]
     times = rep.impacts.times
-    t_rest = float(times[moving[-1] + 1]) if moving.size and moving[-1] + 1 < len(times) else (
-        T if moving.size else 0.0)
-    if moving.size and moving[-1] + 1 >= len(times):
+    if not moving.size:
+        t_rest = 0.0
+    elif moving[-1] + 1 < len(times):
+        t_rest = float(times[moving[-1] + 1])
+    else:
         t_rest = math.inf                                     # still moving at the end
     row = rep.d["intents"]["rows"][i]
     cols = rep.d["intents"]["columns"]
-    brake = row[cols.index("brake_at")] if "brake_at" in cols else None
+    got = row[cols.index("brake_at")] if "brake_at" in cols else None
+    brake = math.inf if got is None else float(got)
     out: list = []
     pre_end = min(t_hit, t_rest, T)
-    start_perc = pre_end
-    if brake is not None and brake < pre_end:
-        start_perc = max(0.0, brake - PERCEPTION_S)
+    braking = brake < pre_end
+    start_perc = max(0.0, brake - PERCEPTION_S) if braking else pre_end
     if start_perc > 0:
         out.append(("driving", 0.0, start_perc))
-    if brake is not None and brake < pre_end:
-        out.append((PHASES[1][0], start_perc, float(brake)))
-        out.append(("braking", float(brake), pre_end))
-    if imp:
-        for k, p in enumerate(imp):
-            out.append(("impact", p.t, max(p.t_end, p.t + 0.01)))
-            nxt = imp[k + 1].t if k + 1 < len(imp) else min(t_rest, T)
-            if nxt > p.t_end:
-                out.append(("post-impact", p.t_end, nxt))
+    if braking:
+        out.append((PHASES[1][0], start_perc, brake))
+        out.append(("braking", brake, pre_end))
+    for k, (t0, t1) in enumerate(events):
+        out.append(("impact", t0, t1))
+        nxt = events[k + 1][0] if k + 1 < len(events) else min(max(t_rest, t1), T)
+        if nxt > t1:
+            out.append(("post-impact", t1, nxt))
     if t_rest < T:
-        out.append(("rest", t_rest, T))
+        out.append(("rest", max(t_rest, events[-1][1] if events else 0.0), T))
     return out
 
 
@@ -203,15 +236,23 @@ def figure_speed(rep: CrashReport) -> str:
     for i, nm in enumerate(rep.names):
         ax.plot(t, rep.impacts.speed[:, i] * impact_mod.KMH, color=_colour(rep, i), lw=1.6, label=nm)
     top = float(rep.impacts.speed.max()) * impact_mod.KMH
+    opening = rep.opening()
     for p in rep.major():
-        ax.axvline(p.t, color="0.4", lw=0.8, ls="--")
-        ax.text(p.t, top * 1.04, f"{rep.names[p.a]}-{rep.names[p.b]} {p.t:.2f} s", fontsize=7, ha="center",
-                va="bottom", color="0.25")
+        ax.axvline(p.t, color="0.4", lw=0.8, ls="--" if p in opening else ":")
+        if p in opening:
+            ax.text(p.t, top * 1.13, f" {rep.names[p.a]}-{rep.names[p.b]} {p.t:.2f} s", fontsize=7, ha="right",
+                    va="top", color="0.25", rotation=90)
         for v in p.vehicles:
             ax.plot([p.t, p.t_end], [v.speed_before * impact_mod.KMH, v.speed_after * impact_mod.KMH], "o",
                     ms=3.5, color=_colour(rep, v.vehicle), mec="k", mew=0.5)
+    for im in strikes(rep):
+        ax.axvline(im.t, color=_colour(rep, im.a), lw=0.9, ls="-.")
+        ax.text(im.t, top * 1.13, f" {rep.names[im.a]} {im.what} {im.t:.2f} s", fontsize=7, ha="right", va="top",
+                color="0.25", rotation=90)
     ax.set_xlim(0, rep.motion.duration)
     ax.set_ylim(0, max(top * 1.15, 1.0))
+    ax.set_title("vehicle impacts dashed (the first of each pair labelled; dots: the speeds before and after), "
+                 "curb and barrier strikes dash-dotted", fontsize=8)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("speed of the centre of mass (km/h)")
     ax.grid(alpha=0.3)
@@ -227,6 +268,7 @@ def figure_sequence(rep: CrashReport) -> str:
     fig = _figure((8.0, 1.0 + 0.55 * n))
     ax = fig.add_subplot(1, 1, 1)
     colours = dict(PHASES)
+    opening = rep.opening()
     lane = {i: n - 1 - i for i in range(n)}
     for i in range(n):
         for name, a, b in phases(rep, i):
@@ -238,10 +280,11 @@ def figure_sequence(rep: CrashReport) -> str:
         y0, y1 = lane[src], lane[dst]
         style = "<|-|>" if s is None else "-|>"
         ax.annotate("", xy=(p.t, y1 + (0.3 if y1 < y0 else -0.3)), xytext=(p.t, y0 + (-0.3 if y1 < y0 else 0.3)),
-                    arrowprops={"arrowstyle": style, "color": "k", "lw": 1.0})
-        what = "head-on" if s is None else f"{rep.names[src]} hits {rep.names[dst]}"
-        ax.text(p.t + 0.03 * rep.motion.duration / 6, (y0 + y1) / 2, f"{what}\n{p.t:.2f} s", fontsize=7,
-                va="center")
+                    arrowprops={"arrowstyle": style, "color": "k", "lw": 1.4, "mutation_scale": 12})
+        if p in opening:
+            what = "head-on" if s is None else f"{rep.names[src]} hits {rep.names[dst]}"
+            ax.text(p.t + 0.005 * rep.motion.duration, (y0 + y1) / 2, f"{what} {p.t:.2f} s", fontsize=7,
+                    va="center", bbox={"facecolor": "w", "edgecolor": "none", "alpha": 0.8, "pad": 1})
     ax.set_yticks([lane[i] for i in range(n)], [f"{nm}" for nm in rep.names])
     ax.set_xlim(0, rep.motion.duration)
     ax.set_ylim(-0.6, n - 0.4)
@@ -295,7 +338,8 @@ def figure_scene(rep: CrashReport) -> str:
     m = rep.motion
     n = rep.script.n
     whole = _extent([m.pos[:, i, :2] for i in range(n)] + _regions(rep), 6.0)
-    near = [m.pos[-1:, i, :2] for i in range(n)] + [np.array([p.pos[:2]]) for p in rep.major()] + _regions(rep)
+    near = [m.pos[-1:, i, :2] for i in range(n)] + [np.array([p.pos[:2]]) for p in rep.major()] + _regions(rep) \
+        + [np.array([im.pos[:2]]) for im in strikes(rep) if all(math.isfinite(x) for x in im.pos[:2])]
     for i in range(n):
         first = rep.first(i)
         if first is not None:
@@ -303,11 +347,13 @@ def figure_scene(rep: CrashReport) -> str:
     zoom = _extent(near, 6.0)
     views = [zoom, whole] if (whole[1] - whole[0]).max() > ZOOM * (zoom[1] - zoom[0]).max() else [whole]
     k = len(views)
-    panel = 8.0 if k == 1 else 5.2                      # inches of each panel's width
-    widths = [panel * (hi[0] - lo[0]) / (hi[1] - lo[1]) / max((h[0] - q[0]) / (h[1] - q[1]) for q, h in views)
-              for lo, hi in views]
-    fig = _figure((panel * k + 0.8, panel / max((h[0] - q[0]) / (h[1] - q[1]) for q, h in views) + 1.4))
-    axes = fig.subplots(1, k, gridspec_kw={"width_ratios": widths}, squeeze=False)[0]
+    aspect = [(hi[1] - lo[1]) / (hi[0] - lo[0]) for lo, hi in views]     # height per width
+    if k == 1 or min(aspect) < 0.8:                     # wide views: one above the other, 8 in wide
+        fig = _figure((8.8, sum(7.2 * a for a in aspect) + 0.7 * k + 1.0))
+        axes = fig.subplots(k, 1, gridspec_kw={"height_ratios": aspect}, squeeze=False)[:, 0]
+    else:                                               # tall ones side by side, 5 in high
+        fig = _figure((sum(5.0 / a for a in aspect) + 1.6, 6.4))
+        axes = fig.subplots(1, k, gridspec_kw={"width_ratios": [1 / a for a in aspect]}, squeeze=False)[0]
     data = mujoco.MjData(rep.model)
     for ax, (lo, hi), title in zip(axes, views, ("around the impacts and the rest positions", "the whole crash")):
         _draw_scene(ax, rep, data)
@@ -318,8 +364,9 @@ def figure_scene(rep: CrashReport) -> str:
     handles = [Line2D([], [], color="0.3", lw=1.2, label="path of the centre of mass"),
                Line2D([], [], color="0.3", lw=1.0, ls=":", label="start"),
                Line2D([], [], color="0.3", lw=1.4, label="at its first impact"),
-               Polygon([[0, 0]], facecolor="0.6", edgecolor="0.3", label="at rest (end)"),
+               Polygon([[0, 0]], facecolor="0.6", edgecolor="0.3", label="at the end (at rest, or still moving)"),
                Line2D([], [], marker="*", color="#dc2626", mec="k", ls="none", ms=10, label="impact point"),
+               Line2D([], [], marker="D", color="w", mec="0.3", mew=1.4, ls="none", ms=6, label="curb or barrier strike"),
                Line2D([], [], color="k", lw=1.2, label="skid mark"),
                Line2D([], [], color="0.3", lw=1.2, ls="--", label="rest region asked (wedge: heading)"),
                Line2D([], [], color="0.3", lw=1.0, ls=":", label="impact position asked")]
@@ -364,9 +411,9 @@ def _draw_scene(ax, rep: CrashReport, data) -> None:
         ax.add_patch(Polygon(_outline(model, data, qpos[-1], i), closed=True, facecolor=col + (0.55,), edgecolor=col,
                              lw=1.4, zorder=6))
         x, y = m.pos[-1, i, :2]
-        ax.text(x, y, rep.names[i], fontsize=8, ha="center", va="center", weight="bold", zorder=9)
+        ax.text(x, y, rep.names[i], fontsize=8, ha="center", va="center", weight="bold", zorder=9, clip_on=True)
         x0, y0 = m.pos[0, i, :2]
-        ax.text(x0, y0, rep.names[i], fontsize=7, ha="center", va="center", color=col, zorder=9)
+        ax.text(x0, y0, rep.names[i], fontsize=7, ha="center", va="center", color=col, zorder=9, clip_on=True)
         f = rep.d["vehicles"][i]["fate"]
         if "rest" in f:
             r = f["rest"]
@@ -378,9 +425,18 @@ def _draw_scene(ax, rep: CrashReport, data) -> None:
         if "impact_at" in f:
             r = f["impact_at"]
             ax.add_patch(Circle((r["x"], r["y"]), r["radius"], fill=False, edgecolor=col, lw=1.0, ls=":", zorder=7))
+    for im in strikes(rep):
+        if all(math.isfinite(x) for x in im.pos[:2]):
+            ax.plot(im.pos[0], im.pos[1], marker="D", ms=6, color="w", mec=_colour(rep, im.a), mew=1.4, zorder=8)
+            ax.text(im.pos[0] + 0.5, im.pos[1] - 0.5, f"{im.what} {im.t:.2f} s", fontsize=7, va="top", zorder=9,
+                    clip_on=True)
+    opening = rep.opening()
     for p in rep.major():
-        ax.plot(p.pos[0], p.pos[1], marker="*", ms=12, color="#dc2626", mec="k", mew=0.6, zorder=8)
-        ax.text(p.pos[0] + 0.6, p.pos[1] + 0.6, f"{p.t:.2f} s", fontsize=7, zorder=9)
+        ax.plot(p.pos[0], p.pos[1], marker="*", ms=12 if p in opening else 7, color="#dc2626", mec="k", mew=0.6,
+                zorder=8)
+        if p in opening:
+            ax.text(p.pos[0] + 0.6, p.pos[1] + 0.6, f"{rep.names[p.a]}-{rep.names[p.b]} {p.t:.2f} s", fontsize=7,
+                    zorder=9, clip_on=True)
     ax.set_aspect("equal")
     ax.set_xlabel("x, east (m)")
     ax.set_ylabel("y, north (m)")
@@ -450,7 +506,8 @@ def _impact_table(rep: CrashReport) -> str:
             head = (f"<td rowspan=2>{p.t:.3f}</td><td rowspan=2>{1e3 * (p.t_end - p.t):.0f}</td><td rowspan=2 "
                     f"class=l>{html.escape(rep.names[p.a])}&ndash;{html.escape(rep.names[p.b])}"
                     f"{'' if s is None else ' (' + html.escape(rep.names[s]) + ' strikes)'}</td>" if k == 0 else "")
-            tail = f"<td rowspan=2>{100 * p.momentum_error:.1f}</td>" if k == 0 else ""
+            tail = (f"<td rowspan=2>{100 * p.momentum_error:.0f} (reach {100 * rep.reach(p):.0f})</td>"
+                    if k == 0 else "")
             rows.append(f"<tr>{head}<td class=l>{html.escape(nm)}</td><td>{v.speed_before * K:.1f}</td>"
                         f"<td>{v.speed_after * K:.1f}</td><td>{v.dv_body[0] * K:+.1f}, {v.dv_body[1] * K:+.1f}</td>"
                         f"<td>{v.dv * K:.1f}</td><td>{v.dv_impulse * K:.1f}</td>"
@@ -460,12 +517,14 @@ def _impact_table(rep: CrashReport) -> str:
     note = []
     if more:
         note.append(f"{more} further impacts not listed")
+    note.append("the two vehicles' m&Delta;v differ by what the road gave over the impact, at most &mu; g &tau; "
+                "(m<sub>a</sub> + m<sub>b</sub>) over its length &tau;: its reach")
     if minor:
         note.append(f"{minor} grazes (no vehicle's &Delta;v reaches {MINOR_DV_KMH:g} km/h) not listed")
     return ("<table><tr><th>t (s)</th><th>lasts (ms)</th><th class=l>pair</th><th class=l>vehicle</th>"
             "<th>speed before (km/h)</th><th>after (km/h)</th><th>&Delta;v forward, left (km/h)</th>"
             "<th>|&Delta;v| (km/h)</th><th>|J|/m (km/h)</th><th>PDOF (clock, deg)</th>"
-            "<th>m&Delta;v imbalance (%)</th></tr>" + "".join(rows) + "</table>"
+            "<th>m&Delta;v imbalance (the road's reach), % of the mean m|&Delta;v|</th></tr>" + "".join(rows) + "</table>"
             + (f"<p class=small>{'; '.join(note)}.</p>" if note else "")) if major else \
         "<p>No vehicle touched another.</p>"
 
