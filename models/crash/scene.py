@@ -78,6 +78,9 @@ def build_spec(road: road_mod.Road, vehicles, *, timestep: float, name: str = "c
     statics = road_mod.add_road(spec, road)
     for i, v in enumerate(vehicles):
         veh.add_vehicle(spec, v.vtype, v.prefix, pos=(v.x, v.y), heading=v.heading, rgba=COLOURS[i % len(COLOURS)])
+        if v.vtype.crush and statics["barriers"]:  # a crushing front meets a wall with its crush zone, as it
+            for c in veh.CORNERS:                   # meets another vehicle: its wheels pass (they touch no vehicle)
+                spec.add_exclude(bodyname1=f"{v.prefix}_wheel_{c}", bodyname2="barriers")
     n = len(vehicles)
     for i in range(n):
         for j in range(i + 1, n):
