@@ -455,6 +455,8 @@ def _interval(rec: dict | None, i: int, key: str, fmt=".1f") -> str:
         return "no interval in the reconstruction"
     level = rec.get("level", 0.9)
     txt = f"{format(q['lo'], fmt)}&ndash;{format(q['hi'], fmt)} ({100 * level:.0f} %)"
+    if q.get("median") is not None:
+        txt += f", median {format(q['median'], fmt)}"
     if q.get("identifiable") is False:
         txt += " <b class=bad>not identifiable</b>"
     return txt
@@ -609,6 +611,16 @@ def _reconstruction_html(rec: dict | None) -> str:
         bits.append(f"{rec['accepted']} of {rec['draws']} draws met every piece of evidence.")
     for s in rec.get("verdicts") or []:
         bits.append(html.escape(str(s)))
+    unk = rec.get("unknowns")
+    if isinstance(unk, dict) and unk:
+        bits.append("Over the accepted draws: " + ", ".join(
+            f"{html.escape(str(k))} {v['lo']:g}&ndash;{v['hi']:g}" for k, v in unk.items()
+            if isinstance(v, dict) and v.get("lo") is not None and v.get("hi") is not None) + ".")
+    ev = [str(x) for x in rec.get("evidence") or []]
+    if ev:
+        bits.append(f"Evidence: {html.escape(', '.join(ev))} (the pieces beyond the script's fates, such as skid "
+                    "marks, an event data recorder's speed or residual crush, are judged in the reconstruction's "
+                    "draws; the table below holds the fates).")
     cs = rec.get("closing_speed_kmh")
     if isinstance(cs, dict) and cs.get("lo") is not None:
         bits.append(f"Closing speed {cs['lo']:.1f}&ndash;{cs['hi']:.1f} km/h"
