@@ -54,6 +54,7 @@ WRITERS = [
     ("render-crash-mp4", ["render", "{crash}", "-o", "{out}", "--size", "64x64", "--fps", "4"], "crash.mp4"),
     ("render-crash-gif", ["render", "{crash}", "-o", "{out}", "--size", "64x64", "--fps", "4"], "crash.gif"),
     ("render-crash-still", ["render", "{crash}", "--still", "0", "-o", "{out}"], "crash.png"),
+    ("crash-report", ["crash", "report", "{crash}", "-o", "{out}"], "report.html"),
 ]
 #: What may be at the output path, and the word the refusal must use for it.
 KINDS = {"link-to-file": "symbolic link", "dangling-link": "symbolic link", "fifo": "FIFO", "folder": "folder"}
