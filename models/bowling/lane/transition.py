@@ -463,7 +463,8 @@ def strike_wear(profile: str, games: int = 3, seed: int = 1, oil="house", *, per
         for k in range(per_game):
             x = noise.perturb([getattr(b.strike, q) for q in noise.KEYS], [getattr(b.noise, q) for q in noise.KEYS],
                               rows[g * per_game + k][None], lo, hi)[0]
-            d = replace(b.strike, **{q: float(v) for q, v in zip(noise.KEYS, x)})
+            fields: dict[str, Any] = {q: float(v) for q, v in zip(noise.KEYS, x)}
+            d = replace(b.strike, **fields)
             h0 = field.h.copy()
             try:
                 r = phases.throw(d, pat, law=law, field=field)
