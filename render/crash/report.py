@@ -44,6 +44,7 @@ import numpy as np
 from nbst.models.crash import impact as impact_mod
 from nbst.models.crash import outcome as out_mod
 from nbst.models.crash.script import Script
+from nbst.models.crash.vehicle import G
 
 from nbst.render.crash import motion as motion_mod
 
@@ -113,7 +114,7 @@ class CrashReport:
         tau = p.t_end - p.t + float(self.model.opt.timestep)
         ma, mb = self.impacts.mass[p.a], self.impacts.mass[p.b]
         mean = 0.5 * (ma * p.of(p.a).dv + mb * p.of(p.b).dv)
-        return float(self.script.road.friction * 9.81 * tau * (ma + mb) / mean) if mean > 0 else math.inf
+        return float(self.script.road.friction * G * tau * (ma + mb) / mean) if mean > 0 else math.inf
 
     def first(self, i: int):
         """Vehicle ``i``'s first major impact: (PairImpact, VehicleImpact) or None."""
@@ -154,10 +155,6 @@ def _figure(size):
     from matplotlib.figure import Figure
 
     return Figure(figsize=size, layout="constrained")
-
-
-def _f(x, fmt=".1f") -> str:
-    return "&ndash;" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, fmt)
 
 
 def _deg(x: float) -> int:
