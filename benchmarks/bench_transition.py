@@ -139,7 +139,9 @@ def wear(seeds: list[int], games: int, oil: str) -> None:
           f"seeds {seeds[0]}-{seeds[-1]}\n")
     print("| profile | seed | track width at 10 / 20 / 30 ft by game (boards) | driest board's loss at 10 / 20 / 30 ft "
           "after the last | past the end by game (ul) | account (ml) | s |\n|---|---|---|---|---|---|---|")
-    for prof in ("pro", "league200", "league150", "twohander"):
+    from nbst.models.bowling.lane import profiles
+
+    for prof in profiles.PROFILES.names():
         for seed in seeds:
             t0 = time.time()
             w = T.strike_wear(prof, games, seed, oil)

@@ -67,6 +67,8 @@ MAX_GAMES, MAX_LINEUP = 30, 8
 #: Paths are kept every PATH_FT ft; oil maps rounded to MAP_DECIMALS (um).
 PATH_FT = 0.5
 MAP_DECIMALS = 6
+#: The lane kept after each game (``oil.games``) is rounded to GAME_MAP_DECIMALS (um): a 30-game file stays small.
+GAME_MAP_DECIMALS = 4
 #: Draws per bowler and game: at most 21 balls (9 frames x 2 + 3 in the tenth).
 _ROWS_PER_GAME = 21
 
@@ -251,8 +253,8 @@ def _path(r: phases.ThrowResult) -> dict:
     return {"ft": [float(v) for v in ft], "board": [round(float(v), 3) for v in np.interp(ft, r.path["ft"], r.path["board"])]}
 
 
-def _map(field: OilField) -> list:
-    return [[round(float(v), MAP_DECIMALS) for v in row] for row in field.h]
+def _map(field: OilField, decimals: int = MAP_DECIMALS) -> list:
+    return [[round(float(v), decimals) for v in row] for row in field.h]
 
 
 class Run:
@@ -371,7 +373,7 @@ class Run:
                         on_frame()
             f = OilField(self._done)
             self.games_oil.append({"game": g + 1, "lane_ml": f.total_ml(), "past_end_ml": f.ml_past(self.pattern.length_ft),
-                                   "map": _map(f)})
+                                   "map": _map(f, GAME_MAP_DECIMALS)})
 
     def to_dict(self) -> dict:
         """The run: its settings, every ball, the moves, the oil before and after, the scores and the summary."""
