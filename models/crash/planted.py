@@ -8,6 +8,11 @@ search's acceptance asks: :func:`holds_on_ladder`; and, ``min_p`` given, one tha
 drivers, re-driven with the driver noise, meet that often: :func:`hidden_probability`). A **planted case** does the same for reconstruction, and keeps
 the hidden truth (each vehicle's impact speed and heading) for the comparison.
 
+A **planted reconstruction** (:func:`planted_reconstruction`, the templates of
+:data:`RECON_TEMPLATES`: a 90 degree crossing, a 30 degree oblique, an offset head-on, a
+same-lane rear-end) also hides the road friction, the loads and the contact's stiffness and
+damping, drawn in the ranges the case states: the reconstruction's coverage benchmark.
+
 Templates (:data:`TEMPLATES`): ``crossing2`` (a sedan and an SUV meeting at an intersection,
 after-impact braking known: the reconstruction's planted crashes), ``intersection3`` (three
 vehicles at an intersection: the search's planted scripts).
@@ -30,7 +35,8 @@ from nbst.models.crash.search import LADDER_CHECK_TIMESTEPS
 from nbst.models.crash.space import space_of
 
 __all__ = ["TEMPLATES", "holds_on_ladder", "COPIES", "COPIES_SEED", "hidden_probability", "planted_script",
-           "FUNNEL_STEPS", "funnel", "planted_case"]
+           "FUNNEL_STEPS", "funnel", "planted_case", "RECON_TEMPLATES",
+           "PLANT_REST", "PLANT_HEADING", "PLANT_IMPACT", "planted_reconstruction"]
 
 _ROAD = {"layout": "intersection", "width": 7, "length": 120, "curb": 0.15}
 TEMPLATES = {
@@ -191,3 +197,100 @@ def planted_case(seed: int, *, template: str = "crossing2", radius: float = 1.0,
             v["fate"]["impact_at"] = {"x": round(vo.impact_pos[0], 3), "y": round(vo.impact_pos[1], 3),
                                       "radius": impact_radius}
     return d, [{"impact_speed": v.impact_speed, "impact_heading": v.impact_heading} for v in o.vehicles]
+
+
+# --------------------------------------------------------------------------- reconstruction cases, unknowns hidden
+
+_STRAIGHT = {"layout": "straight", "width": 7, "length": 200}
+#: Two-car templates of the coverage benchmark (benchmarks/bench_crash_coverage.py) and the tests:
+#: a 90 degree crossing, a 30 degree oblique on a wide plaza, an offset head-on and a same-lane rear-end.
+RECON_TEMPLATES = {
+    "crossing": {
+        "kind": "nbst-crash-script", "road": {"layout": "intersection", "width": 7, "length": 120, "curb": 0.15},
+        "duration": 5.5,
+        "vehicles": [
+            {"name": "A", "type": "sedan", "start": {"x": -45, "y": -1.75, "heading": 0}, "speed": [30, 80],
+             "driver": {"aim": {"x": [-3, 6], "y": [-3, 0]}, "arrive": [2.2, 4.0], "after_impact": "brake"}},
+            {"name": "B", "type": "suv", "start": {"x": 1.75, "y": -45, "heading": 90}, "speed": [30, 80],
+             "driver": {"aim": {"x": [0, 3], "y": [-3, 6]}, "arrive": [2.2, 4.0], "after_impact": "brake"}}]},
+    "oblique": {
+        "kind": "nbst-crash-script", "road": {"layout": "straight", "width": 30, "length": 160}, "duration": 5.5,
+        "vehicles": [
+            {"name": "A", "type": "sedan", "start": {"x": -40, "y": 0, "heading": 0}, "speed": [40, 80],
+             "driver": {"aim": {"x": [-2, 3], "y": [-1.5, 1.5]}, "arrive": [2.2, 3.2], "after_impact": "brake"}},
+            {"name": "B", "type": "suv", "start": {"x": -22, "y": -12, "heading": 30}, "speed": [30, 60],
+             "driver": {"aim": {"x": [-2, 3], "y": [-2, 2]}, "arrive": [2.2, 3.2], "after_impact": "brake"}}]},
+    "head-on": {
+        "kind": "nbst-crash-script", "road": _STRAIGHT, "duration": 4.5,
+        "vehicles": [
+            {"name": "A", "type": "sedan", "start": {"x": -30, "y": -1.75, "heading": 0}, "speed": [30, 70],
+             "driver": {"aim": {"x": [10, 30], "y": [0.0, 2.5]}, "after_impact": "brake"}},
+            {"name": "B", "type": "suv", "start": {"x": 30, "y": 1.75, "heading": 180}, "speed": [30, 70],
+             "driver": {"after_impact": "brake"}}]},
+    "rear-end": {
+        "kind": "nbst-crash-script", "road": _STRAIGHT, "duration": 5.0,
+        "vehicles": [
+            {"name": "A", "type": "sedan", "start": {"x": 0, "y": -1.75, "heading": 0}, "speed": [30, 50],
+             "driver": {"after_impact": "brake"}},
+            {"name": "B", "type": "suv", "start": {"x": -12, "y": -1.75, "heading": 0}, "speed": [70, 90],
+             "driver": {"after_impact": "brake"}}]},
+}
+#: The evidence's tolerances of a planted case: rest (m), heading at rest (deg), impact position (m).
+PLANT_REST, PLANT_HEADING, PLANT_IMPACT = 1.5, 15.0, 1.0
+
+
+
+
+def planted_reconstruction(template: str, seed: int, *, impact_at: bool = True,
+                           friction: tuple = (0.7, 0.9)) -> tuple[dict, dict]:
+    """(case dict, truth): a reconstruction case (``nbst-crash-case``) of one of
+    :data:`RECON_TEMPLATES`: hidden intents, road friction (uniform in ``friction``, which the
+    case states as its range but not the value), loads and contact factors (uniform in
+    :mod:`.evidence`'s default ranges), simulated until a crash with one contact whose vehicles
+    both come to rest; what happened written as the evidence (whom each hit, rest within
+    :data:`PLANT_REST`, heading within :data:`PLANT_HEADING`, with ``impact_at`` the impact
+    positions within :data:`PLANT_IMPACT`). The truth: per vehicle impact speed, delta-V (m/s)
+    and PDOF (o'clock), the closing speed, the friction and the loads.
+
+    Raises:
+        SolveError: no such crash in 64 batches of draws."""
+    from nbst.models.crash import evidence as ev_mod
+    from nbst.models.crash import reconstruct as rc
+
+    d: dict[str, Any] = copy.deepcopy(RECON_TEMPLATES[template])
+    d["name"] = f"planted-{template}-{seed}"
+    d["kind"] = ev_mod.CASE_KIND
+    d["unknowns"] = {"friction": list(friction)}
+    case = ev_mod.case_from_dict(d, source="<planted>")
+    S = space_of(case.script)
+    pc = rc.phys_coords(case)
+    rng = np.random.default_rng([int(seed), 470])
+    R = rc.PhysRunner(case)
+    try:
+        for _ in range(64):
+            Z = rng.random((16, S.dim + len(pc)))
+            phys = rc._phys_values(case, Z[:, S.dim:])
+            rolls, track = R.run_phys(S.intents(Z[:, :S.dim]), phys)
+            for k, o in enumerate(rolls.outcomes):
+                if len(o.contacts) != 1 or any(v.moving or not v.hits for v in o.vehicles):
+                    continue
+                mass = R.L.mass + phys["load"][k]
+                q = rc._quantities(case, o, track, k, mass)
+                names = case.script.names()
+                vehicles: list = d["vehicles"]
+                for v, vo in zip(vehicles, o.vehicles):
+                    v["fate"] = {"hits": [names[j] for j, _ in vo.hits],
+                                 "rest": {"x": round(vo.rest[0], 3), "y": round(vo.rest[1], 3), "radius": PLANT_REST},
+                                 "heading": {"deg": round(math.degrees(vo.rest[2]), 2), "tol": PLANT_HEADING}}
+                    if impact_at:
+                        v["fate"]["impact_at"] = {"x": round(vo.impact_pos[0], 3), "y": round(vo.impact_pos[1], 3),
+                                                  "radius": PLANT_IMPACT}
+                truth = {"vehicles": [{"impact_speed": float(q[3 * i]), "delta_v": float(q[3 * i + 1]),
+                                       "pdof": float(q[3 * i + 2])} for i in range(case.n)],
+                         "closing_speed": float(q[-1]), "friction": float(phys["friction"][k]),
+                         "load": [float(x) for x in phys["load"][k]]}
+                return d, truth
+    finally:
+        R.close()
+    raise SolveError(f"planted reconstruction ({template!r}, seed {seed}): no single-contact crash with both "
+                     "vehicles at rest in 64 batches")

@@ -1,250 +1,326 @@
-"""Reconstruction: from the rest positions of the vehicles back to their speeds before the crash.
+"""Reconstruction with honest uncertainty: Optimisation Monte Carlo over batched rollouts.
 
-A reconstruction case is a crash script (:mod:`.script`) whose fates are the **evidence**: each
-vehicle's rest position (``rest``, its radius the tolerance) and heading at rest (``heading``,
-its tolerance), whom it hit (``hits``), optionally where it was at the first contact
-(``impact_at``: its centre of mass, as a reconstructionist places the vehicles at impact from
-the crush and the marks on the road); a vehicle's ``impact_speed`` is left out: that is what
-is sought. Its drivers' ranges bound the unknowns: the speeds, the approach (aim point,
-arrival time), what each driver did after the impact.
+A case (:mod:`.evidence`: a crash script whose fates are the evidence, the unknowns besides the
+drivers, more evidence kinds with their tolerances) is reconstructed by **Optimisation Monte
+Carlo** (OMC: Meeds and Welling, *Optimization Monte Carlo: efficient and embarrassingly
+parallel likelihood-free inference*, NeurIPS 2015). A likelihood-free posterior is sampled by
+drawing the simulator's nuisance randomness and *optimising* the parameters of interest to the
+observation for each draw, instead of waiting for a random draw to land on the evidence (the
+rejection and ABC-SMC samplers a crash with 8 driver coordinates starves: 0 draws met the
+built-in crossing-case in 2,400 rollouts, docs/results/crash.md). Here:
 
-:func:`reconstruct` runs in two stages on one rollout budget:
+* the **parameters** are the drivers' intents within the script's ranges (speeds, aim,
+  arrival, ...), the unit cube of :func:`.space.space_of`;
+* each **draw** k takes the nuisance unknowns from their stated ranges, uniformly: the road's
+  friction, each vehicle's load (kg over its type's mass), factors on the body contact's
+  stiffness and damping ratio (the restitution); and an **error of the evidence** within its
+  tolerances (:func:`.evidence.jitter`, :data:`JITTER` of each tolerance: the model that each
+  piece of evidence is known to within its tolerance);
+* the draw's intents are **fitted** to its moved evidence on the one rollout engine
+  (:class:`nbst.models.mjsearch.engine.Engine`: a short exploring batch from a warm start, then
+  CMA-ES, :data:`DRAW_ROLLOUTS` rollouts at most, every rollout with the draw's friction,
+  masses and contact);
+* the draw is **accepted** when its fit meets the *stated* evidence, every piece within its
+  tolerance; the accepted draws are the sample. Meeds and Welling weight each optimum by its
+  prior over the Jacobian's volume; the weights here are equal (the Jacobian would cost one
+  rollout per coordinate a draw, and the prior is uniform): an approximation, said so.
 
-1. **fit**. Two vehicles that hit each other, with rest and impact positions as evidence
-   (:func:`applies`), get the **momentum fit** (:func:`momentum_fit`), the reconstructionist's
-   own method carried to rollouts: the momentum seed (each vehicle leaves its impact position
-   sliding to rest on locked wheels, v = sqrt(2 mu g d); linear momentum through the impact
-   gives the speeds before it), rounds that fit the intents to the impact positions and the
-   target speeds and correct the speeds by the momentum balance of the evidence's slides
-   against the simulated ones, then CMA-ES on the evidence's least squares. Any other case
-   gets the crash search (:func:`.search.solve`: the signature search, the archive keyed by
-   contact sequence, CMA-ES restarts) until a set of intents meets the evidence;
-2. **spread**: every fit found so far is a parent; children are its intents moved by Gaussian
-   steps in the unit cube at three scales (1 %, 3 %, 10 % of each range), drawn per child, and
-   every child that meets the evidence is kept as another fit (an evidence-constrained random
-   walk, not a posterior: each fit counts once).
+The fits start near a **pilot** fit at the middle of the nuisance ranges: for two vehicles
+with impact and rest positions, the classic reconstructionist's **momentum Monte Carlo**
+(linear momentum through the impact, each vehicle sliding to rest at sqrt(2 mu g d), the
+inputs drawn over their ranges: Brach and Brach, *Vehicle Accident Analysis and Reconstruction
+Methods*, SAE International, the chapter on uncertainty and sensitivity (its Monte Carlo
+method); W. Bartlett and A. Fonda, *Evaluating Uncertainty in Accident Reconstruction with
+Finite Differences*, SAE 2003-01-0489; the Monte Carlo reconstruction of SAE 2001-01-3347)
+screens the speeds and gives the pilot its target speeds; then an engine fit of the whole
+evidence; each draw's warm start is the pilot's fit with the speeds scaled by the momentum
+balance at the draw's friction and masses.
 
-The answer is every fit within the tolerances, summarised per vehicle as ranges (lowest,
-median, highest) of the impact speed (its speed just before its first vehicle contact), its
-direction of travel then, and its delta-V; the **estimate** is the fit of least squares
-against the evidence (:func:`residuals`, in units of the tolerances: the middle of the
-evidence, where the hidden crash lies). docs/results/crash.md compares the method, point by point,
-with PC-Crash's optimiser (Moser and Steffan, SAE 980373).
+Each vehicle's impact speed (just before its first vehicle contact), delta-V (that contact's
+impulse over the drawn mass) and PDOF (principal direction of force, a clock: 12 from straight
+ahead, 3 from the right) are summarised over the accepted draws as a 90 % interval
+(:data:`LEVEL`: 5th to 95th percentile). A quantity whose interval spans at least :data:`WEAK`
+of its prior interval (the same quantity over the pilot's exploring rollouts that hit as the
+evidence says, or the driver's speed range), or that fewer than :data:`MIN_ACCEPTED` draws
+pin, is **not identifiable** from this evidence: its interval is reported at least as wide as
+the prior's, never narrow.
+
+The rollouts run on :class:`PhysRunner`: the case's :class:`~.run.CrashRunner` whose batch
+gives each simulation its own friction, masses and contact (``mujoco.batch.Batch.expand``) and
+records every vehicle's track per driver period (the EDR speed, the skid's start and length).
+The crash written for a reconstruction is its accepted draw of least squared distance, run
+again on a scene whose XML holds that draw's unknowns, so that it replays bit for bit.
 
 Compute only.
+
+Length: one method in one place: the runner with per-simulation physics, the momentum screen,
+the pilot and the draws on the engine, the intervals and their identifiability verdicts.
 """
 from __future__ import annotations
 
 import math
+import os
+import sys
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
+from nbst.errors import InputError
+from nbst.models.crash import driver as drv
+from nbst.models.crash import evidence as ev_mod
+from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import search as search_mod
-from nbst.models.crash.outcome import _wrap as out_wrap
-from nbst.models.crash.run import BATCH, CrashRunner
-from nbst.models.crash.script import Script
+from nbst.models.crash.run import BATCH, CrashRollouts, CrashRunner, scene_vehicles
+from nbst.models.crash.script import Range
 from nbst.models.crash.space import space_of
-from nbst.models.crash.vehicle import G
+from nbst.models.crash.vehicle import BIT_BODY, G
 from nbst.seeds import check_seed
 
-__all__ = ["FIT_SHARE", "FIT_SHARE_MOMENTUM", "SCALES", "MAX_FITS", "Reconstruction", "METHOD_SEARCH",
-           "METHOD_MOMENTUM", "ranges_of", "reconstruct", "ROUNDS", "SPEED_TOL", "LM_ROUND", "FD_STEP",
-           "MAX_STEP", "SIGMA_FINAL", "GAIN", "START", "MISS", "applies", "slide_speed", "momentum_speeds",
-           "residuals", "momentum_fit"]
+__all__ = ["MAX_ROLLOUTS", "DRAWS", "DRAW_ROLLOUTS", "DRAW_PARALLEL", "DRAW_UNIFORM", "PILOT_SHARE", "PILOT_APPROACH", "EXPLORE",
+           "POPSIZE", "STALL", "SIGMA_PILOT", "SIGMA_FIT", "SIGMA_DRAW", "PILOT_DONE", "DRAW_DONE", "JITTER", "LEVEL",
+           "WEAK", "MIN_ACCEPTED", "SCREEN_SAMPLES", "SCREEN_SPEED_TOL", "PARALLEL_DEG", "ROUNDS", "GAIN", "METHOD", "Progress",
+           "PhysRunner", "Reconstruction", "reconstruct", "best_trial", "slide_speed", "momentum_speeds",
+           "momentum_applies", "momentum_screen", "pdof_clock", "phys_coords", "scene_xml_of"]
 
-#: Share of the budget the fit stage may use before the spread starts (it starts earlier when a fit is found).
-FIT_SHARE = 0.7
-#: The same for the momentum fit (:func:`momentum_fit`: its least-squares fit is the estimate; the
-#: spread only measures the range).
-FIT_SHARE_MOMENTUM = 0.85
-#: Spread: step scales in the unit cube, and the fits kept at most as parents (the first found first).
-SCALES = (0.01, 0.03, 0.1)
-MAX_FITS = 2000
+#: The default rollout budget of one reconstruction (the CLI's --max-rollouts).
+MAX_ROLLOUTS = 2000
+#: OMC draws (the CLI's --draws), the most rollouts one draw's fit takes, and the draws fitted
+#: together (their rollouts share batches).
+DRAWS, DRAW_ROLLOUTS, DRAW_PARALLEL = 16, 64, 2
+#: Of a draw's first batch (the warm start and steps about it), this many points are uniform in
+#: the cube: where the evidence leaves a ridge of equal fits, a draw may start anywhere along it.
+DRAW_UNIFORM = 3
+#: The pilot's share of the budget, and the share of the pilot that fits the approach (impact
+#: positions at the momentum screen's speeds) before the whole evidence.
+PILOT_SHARE, PILOT_APPROACH = 0.45, 0.45
+#: The pilot's exploring rollouts (uniform in the cube) and the CMA-ES population and stall.
+EXPLORE, POPSIZE, STALL = 32, 8, 4
+#: CMA-ES steps (unit cube): the pilot from a random best, the pilot from the approach fit, a draw.
+SIGMA_PILOT, SIGMA_FIT, SIGMA_DRAW = 0.12, 0.04, 0.03
+#: A fit stops once every target is within this many tolerances: the pilot, a draw.
+PILOT_DONE, DRAW_DONE = 0.3, 0.35
+#: A draw moves each piece of evidence by an error uniform within this share of its tolerance.
+JITTER = 0.7
+#: The intervals' level; an interval spanning WEAK of its prior's is not identifiable; fewer
+#: accepted draws than MIN_ACCEPTED pin nothing (every interval widened to the prior's).
+LEVEL, WEAK, MIN_ACCEPTED = 0.90, 0.3, 8
+#: The momentum screen's draws, its speeds' tolerance (m/s) as a pilot target, and the angle
+#: (deg) between approaches under which the momentum balance cannot split the speeds.
+SCREEN_SAMPLES, SCREEN_SPEED_TOL, PARALLEL_DEG = 2000, 1.5, 15.0
+#: The pilot's approach rounds (each: fit the approach, then correct the target speeds by the
+#: momentum balance of the evidence's slides against the simulated ones, by GAIN of it: the
+#: simulated slide is not the locked-wheel ideal, and the difference cancels).
+ROUNDS, GAIN = 3, 0.7
 
-
-@dataclass
-class Reconstruction:
-    """The fits of a case and what they say."""
-
-    fits: list                  # Trials that meet the evidence, in the order found
-    best: search_mod.Trial      # the trial of lowest cost (a fit when there is one)
-    rollouts: int
-    fit_rollouts: int           # rollouts of the fit stage
-    seed: int
-    ranges: list = field(default_factory=list)  # per vehicle: {quantity: (lo, median, hi)}
-    interrupted: bool = False   # Ctrl-C: what ran is here
-    estimate: list = field(default_factory=list)  # per vehicle: {quantity: the least-squares fit's value}
-    method: str = ""
-
-    @property
-    def found(self) -> bool:
-        return bool(self.fits)
-
-    def to_dict(self, names) -> dict:
-        kmh = 3.6
-
-        def rng(t, est, scale=1.0, k=2):
-            return None if t is None else {"min": round(t[0] * scale, k), "estimate": round(est * scale, k),
-                                           "median": round(t[1] * scale, k), "max": round(t[2] * scale, k)}
-
-        return {"fits": len(self.fits), "rollouts": self.rollouts, "fit_rollouts": self.fit_rollouts, "seed": self.seed,
-                "vehicles": [{"name": nm, "impact_speed_kmh": rng(r.get("impact_speed"), e.get("impact_speed"), kmh),
-                              "impact_speed_m_s": rng(r.get("impact_speed"), e.get("impact_speed")),
-                              "impact_heading_deg": rng(r.get("impact_heading"), e.get("impact_heading"),
-                                                        180 / math.pi, 1),
-                              "delta_v_kmh": rng(r.get("delta_v"), e.get("delta_v"), kmh)}
-                             for nm, r, e in zip(names, self.ranges, self.estimate or [{}] * len(names))],
-                "method": self.method}
+METHOD = ("Optimisation Monte Carlo (Meeds and Welling, NeurIPS 2015): each draw takes the road friction, the loads "
+          "and the contact's stiffness and damping from their ranges and an error of the evidence within its "
+          "tolerances, fits the drivers' intents to it on the rollout engine, and is accepted when the fit meets "
+          "every piece of the stated evidence within its tolerance; equal weights; 90 % intervals over the accepted "
+          "draws; the pilot fit starts from the momentum Monte Carlo screen (Brach and Brach)")
 
 
-METHOD_SEARCH = ("fit: the crash search; spread: Gaussian children of the fits at 1, 3 and 10 % of each range, every "
-                 "child within the evidence kept; ranges over every fit; the estimate the fit of least squares")
-METHOD_MOMENTUM = ("fit: the momentum seed from the impact and rest positions (slides on locked wheels), rounds of "
-                   "momentum corrections of the speeds, then CMA-ES on the evidence's least squares; spread: Gaussian "
-                   "children of the fits; ranges over every fit; the estimate the fit of least squares")
+# --------------------------------------------------------------------------- the runner
 
-
-def _summary(values: list) -> tuple | None:
-    v = np.array([x for x in values if np.isfinite(x)])
-    return None if not len(v) else (float(v.min()), float(np.median(v)), float(v.max()))
-
-
-def ranges_of(fits: list, n: int) -> list:
-    """Per vehicle, (lowest, median, highest) of impact speed, heading (unwrapped about the
-    first fit's) and delta-V over ``fits``."""
+def phys_coords(case: ev_mod.Case) -> list:
+    """The physical unknowns that vary, as [(name, vehicle index or None, lo, hi)]."""
+    u = case.unknowns
     out = []
-    for i in range(n):
-        vs = [t.outcome.vehicles[i] for t in fits]
-        h0 = vs[0].impact_heading if vs else 0.0
-        heads = [h0 + (v.impact_heading - h0 + math.pi) % (2 * math.pi) - math.pi for v in vs]
-        out.append({"impact_speed": _summary([v.impact_speed for v in vs]), "impact_heading": _summary(heads),
-                    "delta_v": _summary([v.delta_v for v in vs])})
+    if u.friction[1] > u.friction[0]:
+        out.append(("friction", None, *u.friction))
+    if u.load[1] > u.load[0]:
+        out += [("load", i, *u.load) for i in range(case.n)]
+    for nm in ("stiffness", "damping"):
+        r = getattr(u, nm)
+        if r[1] > r[0]:
+            out.append((nm, None, *r))
     return out
 
 
-def reconstruct(case: Script, *, seed: int, max_rollouts: int = search_mod.DEFAULT_MAX_ROLLOUTS,
-                runner: CrashRunner | None = None, jobs: int = 1,
-                callback: Callable[[search_mod.CrashProgress], object] | None = None) -> Reconstruction:
-    """Every fit of ``case`` (a Script whose fates are the evidence) within ``max_rollouts``.
-
-    Args:
-        case: the crash script whose fates are the evidence (rest positions, headings, ...).
-        seed: an integer in [0, 2^63-1]; the same seed gives the same fits whatever ``jobs``.
-        max_rollouts: the budget, in rollouts: the crash search for fits first, then Gaussian
-            children of the fits that spread them.
-        runner: a ``nbst.models.crash.run.CrashRunner`` for this case to reuse, or None: one is made
-            with ``jobs`` threads and closed at the end.
-        jobs: threads of the runner made here.
-        callback: None, or called with a :class:`~nbst.models.crash.search.CrashProgress` after
-            each batch.
-
-    Returns:
-        A :class:`Reconstruction`: the fits in the order found (search trials: ``u`` (dim,)
-        unit-cube point, ``outcome``, ``controls`` (periods, nu), ...), the best trial, the
-        rollouts, and per vehicle the range (min, median, max) of impact speed (m/s), heading
-        (rad) and delta-V (m/s) over the fits (``to_dict`` gives them in km/h and degrees);
-        ``interrupted`` after Ctrl-C.
-
-    Raises:
-        InputError: ``seed`` is not an integer in [0, 2^63-1].
-        MujocoError: a rollout diverged (a non-finite state).
-    """
-    own = runner is None
-    R = runner if runner is not None else CrashRunner(case, jobs=jobs)
-    S = space_of(case)
-    fits: list = []
-
-    def keep(t):
-        if t.outcome.solved and len(fits) < MAX_FITS:
-            fits.append(t)
-
-    momentum = applies(case)
-    share = FIT_SHARE_MOMENTUM if momentum else FIT_SHARE
-    fit_budget = min(int(max_rollouts), max(BATCH, int(share * max_rollouts)))
-    seed = check_seed(seed, what="seed")
-    rng = np.random.default_rng([seed, 32])
-    interrupted = False
-    if momentum:
-        seen: list = []
-
-        def keep_all(t):
-            seen.append(t)
-            keep(t)
-        def told(p):  # the fits found so far, as the search reports its archive
-            callback(search_mod.CrashProgress(p.rollouts, p.best_cost, p.best_signature, bool(fits), len(fits)))
-        try:
-            used = momentum_fit(case, R, S, fit_budget, rng, keep_all, told if callback else None)
-        except KeyboardInterrupt:
-            interrupted, used = True, len(seen)
-        if not seen:
-            raise KeyboardInterrupt
-        best = min(seen, key=lambda t: t.cost)
-        fit_used = used
-    else:
-        res = search_mod.solve(case, seed=seed, max_rollouts=fit_budget, runner=R, callback=callback, keep=keep,
-                               ladder=False)  # a fit is a fit at the case's step; the spread measures the rest
-        used = fit_used = res.rollouts
-        best = res.best
-        interrupted = res.stopped == "interrupted"
-    try:
-        while fits and used < max_rollouts and S.dim and not interrupted:
-            k = min(BATCH, max_rollouts - used)
-            parents = rng.integers(0, len(fits), size=k)
-            scale = np.asarray(SCALES)[rng.integers(0, len(SCALES), size=k)]
-            U = np.clip(np.array([fits[p].u for p in parents]) + scale[:, None] * rng.standard_normal((k, S.dim)),
-                        0.0, 1.0)
-            r = R.run(S.intents(U))
-            for u, i in zip(U, range(k)):
-                t = search_mod.Trial(u=u, outcome=r.outcomes[i], controls=r.controls[i], qpos0=r.qpos0[i],
-                                     qvel0=r.qvel0[i], final_qpos=r.final_qpos[i])
-                keep(t)
-                if t.cost < best.cost:
-                    best = t
-            used += k
-            if callback:
-                callback(search_mod.CrashProgress(used, best.cost, best.outcome.signature_text(case.n), True,
-                                                  len(fits)))
-    except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        if own:
-            R.close()
-    if fits:  # the estimate: the fit of least squares against the evidence, in units of its tolerances
-        best = min(fits, key=lambda f: float(np.sum(residuals(f.outcome, case) ** 2)))
-    return Reconstruction(fits=fits, best=best, rollouts=used, fit_rollouts=fit_used, seed=int(seed),
-                          ranges=ranges_of(fits, case.n) if fits else [{} for _ in range(case.n)],
-                          estimate=[{"impact_speed": v.impact_speed, "impact_heading": v.impact_heading,
-                                     "delta_v": v.delta_v} for v in best.outcome.vehicles] if fits else [],
-                          method=METHOD_MOMENTUM if momentum else METHOD_SEARCH,
-                          interrupted=interrupted)
+def _phys_values(case: ev_mod.Case, P: np.ndarray) -> dict:
+    """Unit physical coordinates (s, p) -> {friction (s,), load (s, n), stiffness (s,), damping (s,)}."""
+    u, s = case.unknowns, len(P)
+    out = {"friction": np.full(s, u.friction[0]), "load": np.full((s, case.n), u.load[0]),
+           "stiffness": np.full(s, u.stiffness[0]), "damping": np.full(s, u.damping[0])}
+    for k, (nm, i, lo, hi) in enumerate(phys_coords(case)):
+        x = lo + (hi - lo) * P[:, k]
+        if i is None:
+            out[nm] = x
+        else:
+            out[nm][:, i] = x
+    return out
 
 
-# --------------------------------------------------------------------------- the reconstructionist's fit
-
-#: Momentum rounds (simulate, compare the slides, correct the speeds), the residuals' tolerance
-#: on a speed (m/s) in those rounds, Levenberg-Marquardt iterations per round, its
-#: finite-difference step (unit cube) and the largest step it takes at once; the final CMA-ES's
-#: initial step (unit cube).
-ROUNDS, SPEED_TOL, LM_ROUND, FD_STEP, MAX_STEP, SIGMA_FINAL = 6, 0.5, 3, 0.02, 0.3, 0.03
-#: The share of the momentum correction taken per round (the whole correction overshot in the
-#: planted crashes: the speeds swung about the answer from round to round).
-GAIN = 0.5
-#: Random rollouts the fit starts from (the one nearest the momentum seed's impact is the start).
-START = 32
-#: A residual entry for a contact that did not happen (a flat, large miss).
-MISS = 10.0
+def _targets(model, n: int) -> dict:
+    """Where the physical unknowns live in the model: the road's friction geoms, each vehicle's
+    sprung body, the vehicles' body-contact geoms."""
+    names = [model.geom(g).name for g in range(model.ngeom)]
+    road = [g for g, nm in enumerate(names) if nm == "ground" or nm.startswith(("curb", "barrier"))]
+    bodies = [model.body(scene_mod.vehicle_prefix(i)).id for i in range(n)]
+    contact = [g for g in range(model.ngeom) if model.geom_contype[g] & BIT_BODY and model.geom_bodyid[g] in bodies
+               and model.geom_solref[g, 0] > 0]
+    return {"road": np.array(road, int), "bodies": np.array(bodies, int), "contact": np.array(contact, int)}
 
 
-def applies(case) -> bool:
-    """Whether the momentum fit applies: two vehicles that hit each other and brake after it
-    (the slides on locked wheels), each with a rest position and an impact position as evidence."""
-    if case.n != 2:
-        return False
-    return all(v.fate.hits == (1 - i,) and v.fate.rest is not None and v.fate.impact_at is not None
-               and v.driver.after_impact == ("brake",) for i, v in enumerate(case.vehicles))
+class _Track:
+    """The batch runner with every vehicle's planar position and speed recorded per period."""
 
+    def __init__(self, stepper, L):
+        self.stepper, self.L = stepper, L
+        self.batch = stepper.batch
+        self.pos = self.speed = np.zeros(0)
+
+    def run(self, qpos0, qvel0, nstep, *, period, controller, observer=None):
+        s, n = len(qpos0), self.L.n
+        periods = -(-int(nstep) // int(period))
+        self.pos = np.full((s, periods, n, 2), np.nan)
+        self.speed = np.full((s, periods, n), np.nan)
+        pxy = self.L.qpos[:, None] + np.arange(2)
+        vxy = self.L.qvel[:, None] + np.arange(2)
+
+        def ctl(v):
+            k = v.step // period
+            self.pos[:, k] = v.qpos[:, pxy]
+            self.speed[:, k] = np.hypot(v.qvel[:, vxy][..., 0], v.qvel[:, vxy][..., 1])
+            return controller(v)
+
+        return self.stepper.run(qpos0, qvel0, nstep, period=period, controller=ctl, observer=observer)
+
+    def close(self) -> None:
+        self.stepper.close()
+
+
+class PhysRunner(CrashRunner):
+    """A :class:`CrashRunner` of a case whose simulations each take their own physical unknowns
+    (``run(intents, phys)``) and whose rollouts keep each vehicle's track (see the module docstring)."""
+
+    def __init__(self, case: ev_mod.Case, *, jobs: int = 1, batch: int = BATCH):
+        super().__init__(case.script, jobs=jobs, batch=batch)
+        self.case = case
+        self.stepper = _Track(self.stepper, self.L)  # type: ignore[assignment]
+        self.at = _targets(self.model, case.n)
+        m = self.model
+        self.mass0 = m.body_mass[self.at["bodies"]].copy()
+        self.inertia0 = m.body_inertia[self.at["bodies"]].copy()
+        self.solref0 = m.geom_solref[self.at["contact"]].copy()
+        self._phys: dict = {}
+
+    def run_phys(self, intents: np.ndarray, phys: dict) -> tuple[CrashRollouts, dict]:
+        """Rollouts of ``intents`` (s, n, len(INTENT)) with the physical unknowns ``phys``
+        (:func:`_phys_values`' arrays of length s): (the rollouts, the tracks: ``pos`` (s,
+        periods, n, 2), ``speed`` (s, periods, n), ``locked`` (s, periods, n))."""
+        intents = np.asarray(intents, float).reshape(-1, self.script.n, len(drv.INTENT))
+        parts, tracks = [], []
+        for k in range(0, len(intents), self.size):
+            self._set({key: v[k:k + self.size] for key, v in phys.items()})
+            r = self._batch(intents[k:k + self.size])
+            parts.append(r)
+            brakes = r.controls[:, :, self.L.ctrl[:, 4:8]]  # (s, periods, n, 4)
+            st: Any = self.stepper
+            tracks.append({"pos": st.pos, "speed": st.speed,
+                           "locked": (brakes >= 0.999).all(axis=-1)})
+        rolls = CrashRollouts(outcomes=[o for p in parts for o in p.outcomes],
+                              min_dist=np.concatenate([p.min_dist for p in parts]),
+                              qpos0=np.concatenate([p.qpos0 for p in parts]),
+                              qvel0=np.concatenate([p.qvel0 for p in parts]),
+                              controls=np.concatenate([p.controls for p in parts]),
+                              final_qpos=np.concatenate([p.final_qpos for p in parts]))
+        track: dict[str, Any] = {key: np.concatenate([t[key] for t in tracks]) for key in tracks[0]}
+        track["period"] = drv.PERIOD
+        return rolls, track
+
+    def _set(self, phys: dict) -> None:
+        B, at = self.stepper.batch, self.at
+        s = len(phys["friction"])
+        fr = B.expand("geom_friction")
+        fr[:s, at["road"], 0] = phys["friction"][:, None]
+        mass = self.mass0[None] + phys["load"]  # (s, n)
+        bm = B.expand("body_mass")
+        bm[:s, at["bodies"]] = mass
+        bi = B.expand("body_inertia")
+        bi[:s, at["bodies"]] = self.inertia0[None] * (mass / self.mass0[None])[..., None]
+        if len(at["contact"]):
+            sr = B.expand("geom_solref")
+            sr[:s, at["contact"], 0] = self.solref0[None, :, 0] / np.sqrt(phys["stiffness"])[:, None]
+            sr[:s, at["contact"], 1] = self.solref0[None, :, 1] * phys["damping"][:, None]
+        B.set_const()
+
+
+def scene_xml_of(case: ev_mod.Case, phys: dict, k: int) -> str:
+    """The case's scene as MJCF text with draw ``k``'s physical unknowns written in (the crash
+    written for a reconstruction runs and replays on it)."""
+    s = case.script
+    spec = scene_mod.build_spec(s.road, scene_vehicles(s), timestep=s.timestep, name=s.name)
+    model = spec.compile()
+    at = _targets(model, case.n)
+    for g in at["road"]:
+        geom = spec.geom(model.geom(int(g)).name)
+        geom.friction[0] = float(phys["friction"][k])
+    for i, b in enumerate(at["bodies"]):
+        body = spec.body(model.body(int(b)).name)
+        f = (model.body_mass[b] + float(phys["load"][k, i])) / model.body_mass[b]
+        body.mass = float(model.body_mass[b]) * f
+        body.inertia = [float(x) * f for x in model.body_inertia[b]]
+    for g in at["contact"]:
+        geom = spec.geom(model.geom(int(g)).name)
+        geom.solref = [float(model.geom_solref[g, 0]) / math.sqrt(float(phys["stiffness"][k])),
+                       float(model.geom_solref[g, 1]) * float(phys["damping"][k])]
+    return scene_mod.scene_xml(spec)
+
+
+# --------------------------------------------------------------------------- what a rollout says
+
+def pdof_clock(force_xy, yaw: float) -> float:
+    """The principal direction of force on a vehicle as a clock direction in hours (0 < h <= 12):
+    where the force comes from, in the vehicle's frame (12: from straight ahead, 3: from the
+    right, 6: from behind, 9: from the left), of a world-frame force or impulse ``force_xy`` on
+    the vehicle facing ``yaw`` rad."""
+    fx, fy = float(force_xy[0]), float(force_xy[1])
+    c, s = math.cos(yaw), math.sin(yaw)
+    lx, ly = c * fx + s * fy, -s * fx + c * fy  # in the vehicle frame (x ahead, y left)
+    ang = math.degrees(math.atan2(-ly, -lx))    # where it comes from, counter-clockwise from ahead
+    h = (12.0 - ang / 30.0) % 12.0
+    return 12.0 if h < 1e-9 or h > 12.0 - 1e-9 else h
+
+
+def _quantities(case: ev_mod.Case, o, track: dict, s: int, mass: np.ndarray) -> np.ndarray:
+    """Per vehicle (impact speed m/s, delta-V m/s, PDOF h), then the first contact's closing speed (m/s)."""
+    n = case.n
+    q = np.full(3 * n + 1, np.nan)
+    for i, vo in enumerate(o.vehicles):
+        if not vo.hits or not math.isfinite(vo.impact_speed):
+            continue
+        first = next(c for c in o.contacts if i in c[:2])
+        a, b, t = first[0], first[1], first[2]
+        J = np.asarray(first[5][:2], float) * (1.0 if i == a else -1.0)  # the sensor's force is on subtree a
+        q[3 * i] = vo.impact_speed
+        q[3 * i + 1] = float(np.linalg.norm(first[5])) / mass[i]
+        k = max(0, min(int(t / drv.PERIOD), track["pos"].shape[1] - 1))
+        yaw = _yaw_before(track, s, i, k, vo)
+        q[3 * i + 2] = pdof_clock(-J, yaw)
+    if o.contacts:
+        a, b = o.contacts[0][:2]
+        va, vb = o.vehicles[a], o.vehicles[b]
+        if math.isfinite(va.impact_speed) and math.isfinite(vb.impact_speed):
+            ua = va.impact_speed * np.array([math.cos(va.impact_heading), math.sin(va.impact_heading)])
+            ub = vb.impact_speed * np.array([math.cos(vb.impact_heading), math.sin(vb.impact_heading)])
+            q[3 * n] = float(np.linalg.norm(ua - ub))
+    return q
+
+
+def _yaw_before(track: dict, s: int, i: int, k: int, vo) -> float:
+    """The vehicle's heading just before the impact: its direction of travel when moving (> 1 m/s),
+    else the direction of its last metre of track."""
+    if vo.impact_speed > 1.0:
+        return vo.impact_heading
+    p = track["pos"][s, : k + 1, i]
+    d = p[-1] - p[0]
+    return math.atan2(d[1], d[0]) if float(np.hypot(*d)) > 0.05 else vo.impact_heading
+
+
+
+
+# --------------------------------------------------------------------------- the momentum screen
 
 def slide_speed(distance: float, mu: float) -> float:
     """The speed (m/s) that a slide on locked wheels over ``distance`` (m) at friction ``mu``
@@ -257,7 +333,7 @@ def momentum_speeds(mass, impact, approach, rest, mu: float) -> np.ndarray:
     the impact: each leaves its impact position ``impact[i]`` (x, y) towards its rest position
     ``rest[i]`` at :func:`slide_speed` of that distance, and came in along the unit ``approach[i]``;
     m_A v_A e_A + m_B v_B e_B = m_A u_A + m_B u_B, solved for (v_A, v_B) (least squares when the
-    approaches are parallel)."""
+    approaches are parallel: then only the total momentum is known, not its split)."""
     mass = np.asarray(mass, float)
     post = np.zeros(2)
     for i in range(2):
@@ -269,163 +345,573 @@ def momentum_speeds(mass, impact, approach, rest, mu: float) -> np.ndarray:
     return np.linalg.lstsq(A, post, rcond=None)[0]
 
 
-def _unit(a: float) -> np.ndarray:
-    return np.array([math.cos(a), math.sin(a)])
+def momentum_applies(case: ev_mod.Case) -> bool:
+    """Whether the momentum screen applies: two vehicles that hit each other, each with a rest
+    position and an impact position as evidence."""
+    s = case.script
+    return s.n == 2 and all(v.fate.hits == (1 - i,) and v.fate.rest is not None and v.fate.impact_at is not None
+                            for i, v in enumerate(s.vehicles))
 
 
-def residuals(o, case, target=None) -> np.ndarray:
-    """The evidence's misses in units of its tolerances: per vehicle the impact position (x, y),
-    then (``target`` None) the rest position (x, y) and heading, or (``target``: speeds m/s) the
-    impact speed against the target in :data:`SPEED_TOL`. A vehicle whose hits are wrong gets
-    :data:`MISS` in each entry."""
-    r = []
-    for i, (vs, vo) in enumerate(zip(case.vehicles, o.vehicles)):
-        f = vs.fate
-        ok = [j for j, _ in vo.hits] == list(f.hits or ()) and (not f.hits or math.isfinite(vo.impact_speed))
-        k = 2 * (f.impact_at is not None) + (1 if target is not None else
-                                             2 * (f.rest is not None) + (f.heading is not None))
-        if not ok:
-            r += [MISS] * k
-            continue
-        if f.impact_at is not None:
-            r += [(vo.impact_pos[0] - f.impact_at[0]) / f.impact_at[2], (vo.impact_pos[1] - f.impact_at[1]) / f.impact_at[2]]
-        if target is not None:
-            r.append((vo.impact_speed - target[i]) / SPEED_TOL)
-            continue
-        if f.rest is not None:
-            r += [(vo.rest[0] - f.rest[0]) / f.rest[2], (vo.rest[1] - f.rest[1]) / f.rest[2]]
-        if f.heading is not None:
-            r.append(float(out_wrap(vo.rest[2] - f.heading[0])) / f.heading[1])
-    return np.array(r)
+def _approaches(case: ev_mod.Case) -> list:
+    out = []
+    for v in case.script.vehicles:
+        d = np.array(v.fate.impact_at[:2]) - [v.x, v.y]
+        out.append(d / max(float(np.hypot(*d)), 1e-9))
+    return out
 
 
-class _Fitter:
-    """Runs the fit's rollouts on the budget, every one handed to ``keep``."""
+def momentum_screen(case: ev_mod.Case, rng: np.random.Generator, n: int = SCREEN_SAMPLES) -> dict | None:
+    """The classic reconstructionist's Monte Carlo (Brach and Brach's uncertainty chapter) over
+    the case's ranges: ``n`` draws of friction and loads (uniform in their ranges) and of the
+    impact and rest positions (uniform within their tolerances), each through
+    :func:`momentum_speeds` along the approach from the start to the impact position.
 
-    def __init__(self, case, R, S, budget: int, keep, callback):
-        self.case, self.R, self.S, self.budget, self.keep, self.callback = case, R, S, int(budget), keep, callback
+    Args:
+        case: an :class:`.evidence.Case` for which :func:`momentum_applies`.
+        rng: the random numbers.
+        n: draws.
+
+    Returns:
+        None when the screen does not apply; else {"speeds": (n, 2) m/s, "degenerate": bool
+        (the approaches within :data:`PARALLEL_DEG` of parallel: the momentum balance gives the
+        total, not the split), "angle_deg": the angle between the approaches}.
+    """
+    if not momentum_applies(case):
+        return None
+    vs = case.script.vehicles
+    app = _approaches(case)
+    ang = math.degrees(math.acos(max(-1.0, min(1.0, float(np.dot(app[0], app[1]))))))
+    base = np.array([v.vtype.mass for v in vs])
+    u = case.unknowns
+    out = np.zeros((n, 2))
+
+    def disc(p):
+        r, a = p[2] * math.sqrt(float(rng.random())), 2 * math.pi * float(rng.random())
+        return (p[0] + r * math.cos(a), p[1] + r * math.sin(a))
+
+    for k in range(n):
+        mu = float(rng.uniform(*u.friction))
+        mass = base + rng.uniform(u.load[0], u.load[1], size=2)
+        imp = [disc(v.fate.impact_at) for v in vs]
+        rest = [disc(v.fate.rest) for v in vs]
+        out[k] = momentum_speeds(mass, imp, app, rest, mu)
+    return {"speeds": out, "degenerate": bool(min(ang, 180.0 - ang) < PARALLEL_DEG), "angle_deg": ang}
+
+
+# --------------------------------------------------------------------------- one batch, judged
+
+@dataclass
+class _Told:
+    """What the reconstruction keeps of one rollout."""
+
+    u: np.ndarray
+    phys: dict          # this rollout's unknowns (scalars; load (n,))
+    dist: np.ndarray    # distances to the stated evidence (tolerance units)
+    q: np.ndarray       # (3 n + 1,) impact speed, delta-V, PDOF per vehicle; closing speed
+    o: object = field(default=None, repr=False)  # its Outcome
+
+
+class _Problem:
+    """The case, its runner and the rollouts told so far."""
+
+    def __init__(self, case: ev_mod.Case, R: PhysRunner, budget: int, callback):
+        self.case, self.R, self.budget, self.callback = case, R, int(budget), callback
+        self.S = space_of(case.script)
+        self.ps = ev_mod.pieces(case)
+        self.hit_rows = [k for k, p in enumerate(self.ps) if p.kind == "hits"]
         self.used = 0
-        self.best: search_mod.Trial | None = None
+        self.accepted = 0
+        self.best: float = math.inf
 
-    def run(self, U: np.ndarray) -> list:
-        U = np.clip(np.atleast_2d(U), 0.0, 1.0)[: max(0, self.budget - self.used)]
-        if not len(U):
-            return []
-        r = self.R.run(self.S.intents(U))
-        out = []
-        for i, u in enumerate(U):
-            t = search_mod.Trial(u=u.copy(), outcome=r.outcomes[i], controls=r.controls[i], qpos0=r.qpos0[i],
-                                 qvel0=r.qvel0[i], final_qpos=r.final_qpos[i])
-            self.keep(t)
-            if self.best is None or t.cost < self.best.cost:
-                self.best = t
-            out.append(t)
+    def run(self, U: np.ndarray, phys: dict, targets: list) -> list:
+        """Roll out unit points U (s, dim) with per-row unknowns ``phys`` and per-row evidence
+        ``targets`` (lists of pieces); per row (told, distances to its targets)."""
+        U = np.clip(np.atleast_2d(U), 0.0, 1.0)
+        rolls, track = self.R.run_phys(self.S.intents(U), phys)
         self.used += len(U)
-        best = self.best
-        if self.callback and best is not None:  # not None: U had a row
-            self.callback(search_mod.CrashProgress(self.used, best.cost, best.outcome.signature_text(self.case.n),
-                                                   best.outcome.solved, 0))
+        mass = self.R.L.mass[None] + phys["load"]
+        out = []
+        for k, o in enumerate(rolls.outcomes):
+            md = rolls.min_dist[k]
+            d0 = ev_mod.distances(self.case, self.ps, o, track, k, md)
+            dt = d0 if targets[k] is self.ps else ev_mod.distances(self.case, targets[k], o, track, k, md)
+            q = _quantities(self.case, o, track, k, mass[k])
+            out.append((_Told(u=U[k].copy(), phys={key: np.array(v[k]) for key, v in phys.items()}, dist=d0, q=q, o=o), dt))
+            self.best = min(self.best, float(np.max(d0)) if len(d0) else 0.0)
+        if self.callback:
+            self.callback(Progress(self.used, self.best, self.accepted))
         return out
 
-    def cma(self, t, fn, rng, sigma: float = SIGMA_FINAL):
-        """CMA-ES from trial ``t`` on the sum of squares of ``fn(outcome)`` until the budget
-        (restarted at a third of the step from the best when it stalls); the trial of least squares."""
-        import cma
+    def score(self, d: np.ndarray, done_at: float) -> tuple[int, int, float]:
+        """(signature, distance, cost) for the engine: signature 1 when every contact is as the
+        evidence says; distance 0 within ``done_at`` of every target, 1 with the contacts
+        right, 2 without; cost the sum of squared distances."""
+        hits_ok = bool(all(float(d[k]) == 0.0 for k in self.hit_rows))
+        m = float(np.max(d)) if len(d) else 0.0
+        return int(hits_ok), (0 if m <= done_at else (1 if hits_ok else 2)), float(np.sum(d ** 2))
 
-        best, rb = t, fn(t.outcome)
+
+def _phys_mid(case: ev_mod.Case, s: int) -> dict:
+    return _phys_values(case, np.full((s, len(phys_coords(case))), 0.5))
+
+
+def _stack(ph: list) -> dict:
+    return {key: np.stack([p[key] for p in ph]) for key in ph[0]}
+
+
+def _fit(P: _Problem, engines: list, max_rollouts: int) -> None:
+    """Run ``engines`` (each a dict: ``eng``, ``phys`` (one row's unknowns), ``targets``,
+    ``done_at``, ``told`` list) together, their asks in shared batches, until each stops or the
+    reconstruction's budget ends."""
+    active = list(engines)
+    while active and P.used < max_rollouts:
+        rows: list[np.ndarray] = []
+        owners: list[dict] = []
+        for e in active:
+            U = e["eng"].ask()
+            U = U[:max(0, max_rollouts - P.used - sum(len(r) for r in rows))]
+            rows.append(U)
+            owners.append(e)
+        if not sum(len(r) for r in rows):
+            break
+        U_all = np.concatenate([r for r in rows if len(r)])
+        phys = _stack([e["phys"] for e, r in zip(owners, rows) for _ in range(len(r))])
+        targets = [e["targets"] for e, r in zip(owners, rows) for _ in range(len(r))]
+        told = P.run(U_all, phys, targets)
         k = 0
-        while self.used + BATCH <= self.budget:
-            es = cma.CMAEvolutionStrategy(best.u.tolist(), sigma / 3 ** (k % 3),
-                                          {"bounds": [0.0, 1.0], "popsize": BATCH, "verbose": -9,
-                                           "seed": int(rng.integers(1, 2**31 - 1))})
-            stalled, here = 0, float(rb @ rb)
-            while self.used + BATCH <= self.budget and stalled < 6:
-                xs = es.ask()
-                ts = self.run(np.array(xs))
-                rs = [fn(x.outcome) for x in ts]
-                cs = [float(x @ x) for x in rs]
-                es.tell(xs, cs)
-                j = int(np.argmin(cs))
-                if cs[j] < float(rb @ rb):
-                    best, rb = ts[j], rs[j]
-                if cs[j] < here - 1e-9:
-                    here, stalled = cs[j], 0
-                else:
-                    stalled += 1
-            k += 1
-        return best, rb
-
-    def lm(self, t, fn, iters: int):
-        """Levenberg-Marquardt from trial ``t`` on the residuals ``fn(outcome)``: each iteration a
-        forward-difference Jacobian (one rollout per coordinate) and a batch of damped steps;
-        returns the trial of least squares."""
-        d = self.S.dim
-        r0 = fn(t.outcome)
-        for _ in range(iters):
-            if self.used + d + 1 > self.budget:
-                break
-            h = np.where(t.u + FD_STEP <= 1.0, FD_STEP, -FD_STEP)
-            fd = self.run(t.u[None] + np.diag(h))
-            if len(fd) < d:
-                break
-            J = np.column_stack([(fn(f.outcome) - r0) / h[k] for k, f in enumerate(fd)])
-            JTJ, g = J.T @ J, J.T @ r0
-            scale = max(float(np.trace(JTJ)) / d, 1e-9)
-            steps = []
-            for lam in (1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3, 1.0, 3.0):
-                s = -np.linalg.solve(JTJ + lam * scale * np.eye(d), g)
-                n = float(np.linalg.norm(s))
-                steps.append(s * min(1.0, MAX_STEP / n) if n > 0 else s)
-            cand = self.run(t.u[None] + np.array(steps))
-            if not cand:
-                break
-            rs = [fn(c.outcome) for c in cand]
-            k = int(np.argmin([float(x @ x) for x in rs]))
-            if float(rs[k] @ rs[k]) < float(r0 @ r0):
-                t, r0 = cand[k], rs[k]
-            if float(r0 @ r0) < 1e-3:
-                break
-        return t, r0
+        for e, r in zip(owners, rows):
+            if not len(r):
+                continue
+            part = told[k:k + len(r)]
+            k += len(r)
+            sc = [P.score(dt, e["done_at"]) for _, dt in part]
+            e["eng"].tell(r, [s[0] for s in sc], [s[1] for s in sc], [s[2] for s in sc],
+                          payloads=[t for t, _ in part])
+            e["told"] += [(t, s[2]) for (t, _), s in zip(part, sc)]
+        active = [e for e in active if not e["eng"].stop()]
 
 
-def momentum_fit(case, R, S, budget: int, rng, keep, callback=None) -> int:
-    """The reconstructionist's fit of a case that :func:`applies`: (1) the momentum seed: the
-    speeds that conserve momentum from the evidence's impact positions (approaching from the
-    start) to its rest positions along slides on locked wheels; (2) rounds of: least squares of
-    the intents to the impact positions and the target speeds (the approach is smooth in the
-    intents), then a simulation, and the target speeds corrected by the momentum balance of the
-    evidence's slides against the simulated ones (from the simulated impact: the model's errors
-    cancel); (3) least squares of the intents to the whole evidence (impact and rest positions,
-    headings). Every rollout goes to ``keep``. Returns the rollouts used."""
-    F = _Fitter(case, R, S, budget, keep, callback)
-    mass = [v.vtype.mass for v in case.vehicles]
-    mu = case.road.friction
-    ev_imp = [v.fate.impact_at for v in case.vehicles]
-    ev_rest = [v.fate.rest for v in case.vehicles]
-    approach = []
-    for v, p in zip(case.vehicles, ev_imp):
-        d = np.array(p[:2]) - [v.x, v.y]
-        approach.append(d / max(float(np.hypot(*d)), 1e-9))
-    target = momentum_speeds(mass, ev_imp, approach, ev_rest, mu)
-    hi = max(v.speed.hi for v in case.vehicles)
-    target = np.clip(target, 0.5, hi * 1.5)
-    starts = F.run(rng.random((START, S.dim)))
-    if not starts:
-        return F.used
-    t = min(starts, key=lambda x: float(np.sum(residuals(x.outcome, case, target) ** 2)))
-    for _ in range(ROUNDS):
-        t, _ = F.lm(t, lambda o: residuals(o, case, target), LM_ROUND)
-        vo = t.outcome.vehicles
-        if not all(math.isfinite(v.impact_speed) for v in vo):
-            break
-        full = residuals(t.outcome, case)
-        if float(np.max(np.abs(full))) <= 0.5:
-            break
-        imp = [v.impact_pos for v in vo]
-        app = [_unit(v.impact_heading) for v in vo]
-        sim = np.array([v.impact_speed for v in vo])
-        corr = momentum_speeds(mass, imp, app, ev_rest, mu) - momentum_speeds(mass, imp, app,
-                                                                               [v.rest for v in vo], mu)
-        target = np.clip(sim + GAIN * corr, 0.5, hi * 1.5)
-    F.cma(t, lambda o: residuals(o, case), rng)
-    return F.used
+def _engine(dim: int, rng, budget: int, start, *, sigma: float, explore: int, spread: float,
+            uniform: int = 0):
+    """An engine for one fit: ``explore`` points first (the start, then Gaussian steps of
+    ``spread`` about it, the last ``uniform`` of them uniform in the cube), then CMA-ES from the
+    best at ``sigma``."""
+    from nbst.models.mjsearch.engine import Engine
+
+    count = [0]
+
+    def init(e):
+        j = count[0]
+        count[0] += 1
+        if start is None or j >= explore - uniform:
+            return e.rng.random(dim)
+        if j == 0:
+            return np.asarray(start, float)
+        return np.asarray(start, float) + spread * e.rng.standard_normal(dim)
+
+    return Engine(dim, seed=rng, max_rollouts=max(1, int(budget)), batch=min(BATCH, explore), explore=explore,
+                  init=init, ga_batches=0, cma=True, popsize=POPSIZE, sigma0=sigma, stall=STALL,
+                  schedule=(("best", 1.0), ("best", 1.0 / 3.0)))
+
+
+# --------------------------------------------------------------------------- the reconstruction
+
+@dataclass
+class Progress:
+    """After each batch: rollouts so far, the least largest distance to the stated evidence
+    (1: every piece within its tolerance), the draws accepted so far."""
+
+    rollouts: int
+    best: float
+    accepted: int
+
+
+@dataclass
+class Reconstruction:
+    """What a reconstruction found (the module docstring)."""
+
+    names: list
+    labels: list                 # the evidence's pieces
+    draws: list                  # per OMC draw: its _Told (the fit) or None, in draw order
+    accepted: list               # the accepted draws' _Told
+    prior_q: np.ndarray          # quantities of the pilot's exploring rollouts that hit as the evidence says
+    speed_prior: list            # per vehicle (lo, hi) m/s: the driver's speed range
+    screen: dict | None          # the momentum screen (momentum_screen), or None
+    rollouts: int
+    pilot_rollouts: int
+    seed: int
+    intervals: list = field(default_factory=list)  # per vehicle {quantity: {...}}
+    closing: dict = field(default_factory=dict)
+    verdicts: list = field(default_factory=list)
+    not_identifiable: list = field(default_factory=list)
+    best: _Told | None = None    # the accepted draw of least squares (else the pilot's best)
+    interrupted: bool = False
+    method: str = METHOD
+
+    @property
+    def found(self) -> bool:
+        return bool(self.accepted)
+
+    @property
+    def fits(self) -> list:
+        """The accepted draws (the name the former fit used)."""
+        return self.accepted
+
+    @property
+    def estimate(self) -> list:
+        """Per vehicle {"impact_speed", "delta_v"} (m/s) of the accepted draw of least squares."""
+        if self.best is None:
+            return [{} for _ in self.names]
+        return [{"impact_speed": float(self.best.q[3 * i]), "delta_v": float(self.best.q[3 * i + 1])}
+                for i in range(len(self.names))]
+
+    @property
+    def ranges(self) -> list:
+        """Per vehicle {"impact_speed": (lo, median, hi)} (m/s): the 90 % interval and median."""
+        out = []
+        for x in self.intervals:
+            s = x.get("impact_speed")
+            out.append({"impact_speed": (s["lo"], s.get("median", math.nan), s["hi"])} if s else {})
+        return out
+
+    def to_dict(self) -> dict:
+        """The reconstruction as the crash file's ``reconstruction`` (km/h, o'clock; the field
+        names of docs/formats.md)."""
+        kmh = 3.6
+        n = len(self.names)
+        b = self.best.q if self.best is not None else np.full(3 * n + 1, np.nan)
+
+        def iv(x, scale, est, k=2):
+            if not x:
+                return None
+            out = {key: round(float(x[key]) * scale, k) for key in ("lo", "median", "hi", "prior_lo", "prior_hi")
+                   if key in x}
+            out["estimate"] = None if not np.isfinite(est) else round(float(est) * scale, k)
+            if "identifiable" in x:
+                out["identifiable"] = bool(x["identifiable"])
+            return out
+
+        vs = []
+        for i, (nm, x) in enumerate(zip(self.names, self.intervals)):
+            vs.append({"name": nm, "impact_speed_kmh": iv(x.get("impact_speed"), kmh, b[3 * i]),
+                       "delta_v_kmh": iv(x.get("delta_v"), kmh, b[3 * i + 1]),
+                       "pdof_clock": iv(x.get("pdof"), 1.0, b[3 * i + 2], 1),
+                       "impact_speed_m_s": iv(x.get("impact_speed"), 1.0, b[3 * i], 3)})
+        unk = {}
+        acc = self.accepted
+        for key, name in (("friction", "friction"), ("load", "load_kg"), ("stiffness", "stiffness"),
+                          ("damping", "damping")):
+            if not acc:
+                continue
+            v = np.array([np.mean(t.phys[key]) for t in acc])
+            unk[name] = {"lo": round(float(np.quantile(v, (1 - LEVEL) / 2)), 3), "median": round(float(np.median(v)), 3),
+                         "hi": round(float(np.quantile(v, 1 - (1 - LEVEL) / 2)), 3)}
+        scr = None
+        if self.screen is not None:
+            sp = self.screen["speeds"] * kmh
+            scr = {"degenerate": self.screen["degenerate"], "angle_deg": round(self.screen["angle_deg"], 1),
+                   "vehicles": [{"name": nm, "impact_speed_kmh": {
+                       "lo": round(float(np.quantile(sp[:, i], (1 - LEVEL) / 2)), 2),
+                       "median": round(float(np.median(sp[:, i])), 2),
+                       "hi": round(float(np.quantile(sp[:, i], 1 - (1 - LEVEL) / 2)), 2)}}
+                       for i, nm in enumerate(self.names)]}
+        return {"method": self.method, "level": LEVEL, "draws": len(self.draws), "accepted": len(acc),
+                "fits": len(acc), "rollouts": self.rollouts, "pilot_rollouts": self.pilot_rollouts,
+                "seed": self.seed, "interrupted": self.interrupted, "evidence": self.labels, "vehicles": vs,
+                "closing_speed_kmh": iv(self.closing, kmh, b[3 * n]) if self.closing else None,
+                "not_identifiable": list(self.not_identifiable), "verdicts": list(self.verdicts),
+                "unknowns": unk, "momentum_screen": scr, "weak_threshold": WEAK, "min_accepted": MIN_ACCEPTED}
+
+
+def _interval(x: np.ndarray, circular: float | None = None) -> dict:
+    """{lo, median, hi}: the central LEVEL of samples ``x`` (a circular quantity of period
+    ``circular`` unwrapped about its circular mean)."""
+    x = x[np.isfinite(x)]
+    if not len(x):
+        return {}
+    if circular is not None:
+        ang = x / circular * 2 * math.pi
+        c = math.atan2(float(np.mean(np.sin(ang))), float(np.mean(np.cos(ang)))) / (2 * math.pi) * circular
+        x = c + (x - c + circular / 2) % circular - circular / 2
+    a = (1 - LEVEL) / 2
+    out = {"lo": float(np.quantile(x, a)), "median": float(np.median(x)), "hi": float(np.quantile(x, 1 - a))}
+    if circular is not None:
+        for k in out:
+            h = out[k] % circular
+            out[k] = circular if h < 1e-6 or h > circular - 1e-6 else h
+    return out
+
+
+def _judge(rec: Reconstruction) -> None:
+    """The intervals over the accepted draws, each set against its prior: not identifiable
+    (reported at least as wide as the prior) when it spans :data:`WEAK` of the prior's width
+    or fewer than :data:`MIN_ACCEPTED` draws pin it."""
+    n = len(rec.names)
+    Q = np.array([t.q for t in rec.accepted]) if rec.accepted else np.zeros((0, 3 * n + 1))
+    P = rec.prior_q
+    few = len(Q) < MIN_ACCEPTED
+    if not rec.accepted:
+        rec.verdicts.append("no draw met every piece of evidence within its tolerance in the budget: every interval "
+                            "is the prior's (not identifiable here); a larger budget, or looser tolerances")
+    elif few:
+        rec.verdicts.append(f"only {len(Q)} draws met the evidence (fewer than {MIN_ACCEPTED}): every interval is "
+                            "widened to its prior's")
+    rec.intervals = []
+    for i, nm in enumerate(rec.names):
+        row: dict = {}
+        for key, col, circ in (("impact_speed", 3 * i, None), ("delta_v", 3 * i + 1, None), ("pdof", 3 * i + 2, 12.0)):
+            x = _interval(Q[:, col], circ) if len(Q) else {}
+            pr = _interval(P[:, col], circ) if len(P) >= 8 else {}
+            if key == "impact_speed":
+                lo, hi = rec.speed_prior[i]
+                pr = {"lo": min(pr.get("lo", lo), lo), "hi": max(pr.get("hi", hi), hi)}
+            if not x and not pr:
+                continue
+            has = "lo" in x
+            if key == "pdof" or not pr:
+                if has:
+                    x["identifiable"] = not few
+                    row[key] = x
+                continue
+            x["prior_lo"], x["prior_hi"] = pr["lo"], pr["hi"]
+            wide = has and (x["hi"] - x["lo"]) >= WEAK * max(pr["hi"] - pr["lo"], 1e-9)
+            ok = has and not few and not wide
+            if not ok:
+                if not has:
+                    x["median"] = math.nan
+                x["lo"], x["hi"] = min(x.get("lo", pr["lo"]), pr["lo"]), max(x.get("hi", pr["hi"]), pr["hi"])
+                rec.not_identifiable.append(f"{nm}.{key}")
+            x["identifiable"] = ok
+            row[key] = x
+        rec.intervals.append(row)
+    cs = Q[:, -1] if len(Q) else np.zeros(0)
+    rec.closing = _interval(cs) if len(cs) else {}
+    if rec.closing:
+        pc = P[:, -1][np.isfinite(P[:, -1])] if len(P) else np.zeros(0)
+        if len(pc) >= 8:
+            plo, phi = float(np.quantile(pc, 0.05)), float(np.quantile(pc, 0.95))
+            wide = rec.closing["hi"] - rec.closing["lo"] >= WEAK * max(phi - plo, 1e-9)
+            rec.closing["identifiable"] = not (wide or few)
+            if wide or few:
+                rec.closing["lo"], rec.closing["hi"] = min(rec.closing["lo"], plo), max(rec.closing["hi"], phi)
+                rec.not_identifiable.append("closing_speed")
+    if n == 2 and not few and any(x.endswith(".impact_speed") for x in rec.not_identifiable):
+        _propagate(rec, Q)
+    weak = [x for x in rec.not_identifiable if x.endswith("impact_speed") or x == "closing_speed"]
+    if weak and rec.accepted and not few:
+        why = (f"the accepted fits spread over at least {100 * WEAK:.0f} % of the prior's range: the evidence given "
+               "does not pin it; reported at least as wide as the prior")
+        if rec.screen is not None and rec.screen["degenerate"]:
+            why += (f" (the approaches are {rec.screen['angle_deg']:.0f} deg apart: momentum through the impact gives "
+                    "the total, not the split)")
+        rec.verdicts.append(f"not identifiable: {', '.join(weak)}: {why}")
+
+
+def _propagate(rec: Reconstruction, Q: np.ndarray) -> None:
+    """Two vehicles, a speed not identifiable: the closing speed and each delta-V are functions of
+    the speeds (delta-V_i = r_i times the closing speed, r_i set by the masses and the
+    restitution), so they are not identifiable either: the closing speed's interval becomes the
+    range of |v_A e_A - v_B e_B| over the speeds' (widened) intervals along the accepted draws'
+    median directions of travel, and each delta-V's the range of r_i (over the accepted draws)
+    times it, each joined with the accepted draws' own interval."""
+    heads = []
+    for i in range(2):
+        h = np.array([t.o.vehicles[i].impact_heading for t in rec.accepted if t.o is not None])
+        h = h[np.isfinite(h)]
+        heads.append(math.atan2(float(np.mean(np.sin(h))), float(np.mean(np.cos(h)))) if len(h) else 0.0)
+    e = [np.array([math.cos(h), math.sin(h)]) for h in heads]
+    sa, sb = rec.intervals[0].get("impact_speed"), rec.intervals[1].get("impact_speed")
+    if not sa or not sb:
+        return
+    grid = [abs(float(np.linalg.norm(va * e[0] - vb * e[1])))
+            for va in np.linspace(sa["lo"], sa["hi"], 17) for vb in np.linspace(sb["lo"], sb["hi"], 17)]
+    c_lo, c_hi = min(grid), max(grid)
+    cl = rec.closing or {}
+    rec.closing = {"lo": min(cl.get("lo", c_lo), c_lo), "median": cl.get("median", math.nan),
+                   "hi": max(cl.get("hi", c_hi), c_hi), "identifiable": False}
+    if "closing_speed" not in rec.not_identifiable:
+        rec.not_identifiable.append("closing_speed")
+    for i, nm in enumerate(rec.names):
+        dv = rec.intervals[i].get("delta_v")
+        ok = np.isfinite(Q[:, 3 * i + 1]) & np.isfinite(Q[:, -1]) & (Q[:, -1] > 0.1)
+        if not dv or not ok.any():
+            continue
+        r = Q[ok, 3 * i + 1] / Q[ok, -1]
+        dv["lo"] = min(dv["lo"], float(r.min()) * rec.closing["lo"])
+        dv["hi"] = max(dv["hi"], float(r.max()) * rec.closing["hi"])
+        dv["identifiable"] = False
+        if f"{nm}.delta_v" not in rec.not_identifiable:
+            rec.not_identifiable.append(f"{nm}.delta_v")
+
+
+def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int = DRAWS,
+                runner: PhysRunner | None = None, jobs: int = 1,
+                callback: Callable[[Progress], object] | None = None) -> Reconstruction:
+    """Reconstruct ``case`` by Optimisation Monte Carlo (the module docstring).
+
+    Args:
+        case: an :class:`.evidence.Case`, or a crash script whose fates are the evidence (its
+            unknowns take the defaults of :mod:`.evidence`).
+        seed: an integer in [0, 2^63-1]; the same seed gives the same draws whatever ``jobs``.
+        max_rollouts: the rollout budget: the pilot takes up to :data:`PILOT_SHARE` of it, the
+            draws the rest (each up to :data:`DRAW_ROLLOUTS`).
+        draws: OMC draws (each nuisance and evidence-error draw fitted once).
+        runner: a :class:`PhysRunner` of this case to reuse, or None: one is made with ``jobs``
+            threads and closed at the end.
+        jobs: threads of the runner made here.
+        callback: None, or called with a :class:`Progress` after each batch.
+
+    Returns:
+        A :class:`Reconstruction`: the accepted draws, per vehicle the 90 % intervals of impact
+        speed, delta-V (m/s) and PDOF (o'clock) with their identifiability, the verdicts, the
+        momentum screen, the draw of least squares (``best``); ``interrupted`` after Ctrl-C.
+
+    Raises:
+        InputError: ``seed`` is not an integer in [0, 2^63-1], ``max_rollouts`` or ``draws``
+            under 1.
+        MujocoError: a rollout diverged (a non-finite state).
+    """
+    if not isinstance(case, ev_mod.Case):
+        case = ev_mod.case_from_dict(case.raw, source=case.source)
+    seed = check_seed(seed, what="seed")
+    if isinstance(max_rollouts, bool) or int(max_rollouts) < 1:
+        raise InputError(f"max_rollouts {max_rollouts}: at least 1")
+    if int(draws) < 1:
+        raise InputError(f"draws {draws}: at least 1")
+    max_rollouts = int(max_rollouts)
+    own = runner is None
+    R = runner if runner is not None else PhysRunner(case, jobs=jobs)
+    P = _Problem(case, R, max_rollouts, callback)
+    S = P.S
+    rng = np.random.default_rng([seed, 47])
+    screen = momentum_screen(case, np.random.default_rng([seed, 48]))
+    speed_prior = [(v.speed.lo, v.speed.hi) for v in case.script.vehicles]
+    mid = {key: v[0] for key, v in _phys_mid(case, 1).items()}
+    pilot_budget = max(min(2 * BATCH, max_rollouts), int(PILOT_SHARE * max_rollouts))
+    interrupted = False
+    pilot_told: list = []
+    explore_q: list = []
+    out_draws: list = []
+    accepted: list = []
+    try:
+        start = None
+        if screen is not None and S.dim:  # stage A: the approach to the impact positions at momentum speeds
+            vs = case.script.vehicles
+            mass = np.array([v.vtype.mass for v in vs]) + mid["load"]
+            mu = float(mid["friction"])
+            ev_rest = [v.fate.rest for v in vs]
+            target = np.median(screen["speeds"], axis=0)
+            for rnd in range(ROUNDS):
+                speeds = [ev_mod.Piece(f"{nm}.impact_speed", i, "impact_speed", (float(target[i]),), SCREEN_SPEED_TOL,
+                                       False) for i, nm in enumerate(case.script.names())]
+                tA = [p for p in P.ps if p.kind in ("hits", "impact_at")] + speeds
+                share = PILOT_APPROACH * pilot_budget * (0.5 if rnd == 0 else 0.5 / (ROUNDS - 1))
+                eA = {"eng": _engine(S.dim, rng, int(share), start, sigma=SIGMA_PILOT if start is None else SIGMA_FIT,
+                                     explore=EXPLORE if start is None else BATCH // 2, spread=SIGMA_FIT,
+                                     uniform=EXPLORE if start is None else 0),
+                      "phys": mid, "targets": tA, "done_at": DRAW_DONE, "told": []}
+                _fit(P, [eA], P.used + int(share))
+                pilot_told += eA["told"]
+                if not eA["told"]:
+                    break
+                t = eA["eng"].result.payload
+                start = t.u
+                vo = t.o.vehicles
+                if not all(math.isfinite(v.impact_speed) for v in vo):
+                    continue
+                imp = [v.impact_pos for v in vo]
+                app = [np.array([math.cos(v.impact_heading), math.sin(v.impact_heading)]) for v in vo]
+                sim = np.array([v.impact_speed for v in vo])
+                corr = (momentum_speeds(mass, imp, app, ev_rest, mu)
+                        - momentum_speeds(mass, imp, app, [v.rest for v in vo], mu))
+                target = np.clip(sim + GAIN * corr, 0.5, max(v.speed.hi for v in vs) * 1.5)
+        eB = {"eng": _engine(S.dim, rng, pilot_budget - P.used, start, sigma=SIGMA_PILOT if start is None else SIGMA_FIT,
+                             explore=EXPLORE if start is None else BATCH, spread=SIGMA_FIT,
+                             uniform=EXPLORE if start is None else 0),
+              "phys": mid, "targets": P.ps, "done_at": PILOT_DONE, "told": []}
+        _fit(P, [eB], pilot_budget)
+        pilot_told += eB["told"]
+        if os.environ.get("NBST_RECON_DEBUG"):
+            print("pilot", P.used, min(float(np.max(t.dist)) for t, _ in pilot_told), file=sys.stderr)
+        explore_q = [t.q for t, _ in pilot_told[:EXPLORE] if all(t.dist[k] == 0.0 for k in P.hit_rows)]
+        met = [t for t, _ in pilot_told if len(t.dist) and float(np.max(t.dist)) <= 1.0]
+        pilot_best = min((t for t, _ in pilot_told), key=lambda t: float(np.sum(t.dist ** 2)))
+        pilot_used = P.used
+        # the OMC draws, DRAW_PARALLEL at a time in shared batches
+        per = max(BATCH // 2, min(DRAW_ROLLOUTS, (max_rollouts - P.used) // max(1, int(draws))))
+        pcs = phys_coords(case)
+        specs = []
+        for _ in range(int(draws)):
+            ph = _phys_values(case, rng.random((1, len(pcs))))
+            specs.append(({key: v[0] for key, v in ph.items()}, ev_mod.jitter(P.ps, rng, JITTER)))
+        k = 0
+        while k < len(specs) and P.used < max_rollouts:
+            group = []
+            for ph1, tg in specs[k:k + DRAW_PARALLEL]:
+                pool = met + accepted  # warm starts: the fits that met the stated evidence so far
+                base = pool[int(rng.integers(len(pool)))] if pool else pilot_best
+                group.append({"eng": _engine(S.dim, rng, per, _warm(case, S, base, mid, ph1, screen), sigma=SIGMA_DRAW,
+                                             explore=BATCH // 2, spread=SIGMA_DRAW, uniform=DRAW_UNIFORM),
+                              "phys": ph1, "targets": tg, "done_at": DRAW_DONE, "told": []})
+            _fit(P, group, max_rollouts)
+            for e in group:
+                ok = [(t, c) for t, c in e["told"] if float(np.max(t.dist)) <= 1.0]
+                t = min(ok, key=lambda x: x[1])[0] if ok else None
+                out_draws.append(t)
+                if t is not None:
+                    accepted.append(t)
+            P.accepted = len(accepted)
+            k += DRAW_PARALLEL
+    except KeyboardInterrupt:
+        interrupted = True
+        if not pilot_told:
+            raise
+        pilot_used = locals().get("pilot_used", P.used)
+        pilot_best = locals().get("pilot_best", min((t for t, _ in pilot_told), key=lambda t: float(np.sum(t.dist ** 2))))
+    finally:
+        if own:
+            R.close()
+    rec = Reconstruction(names=case.script.names(), labels=ev_mod.labels(case), draws=out_draws, accepted=accepted,
+                         prior_q=np.array(explore_q) if explore_q else np.zeros((0, 3 * case.n + 1)),
+                         speed_prior=speed_prior, screen=screen, rollouts=P.used, pilot_rollouts=pilot_used,
+                         seed=int(seed), interrupted=interrupted)
+    rec.best = min(accepted, key=lambda t: float(np.sum(t.dist ** 2))) if accepted else pilot_best
+    _judge(rec)
+    return rec
+
+
+def _warm(case, S, base: _Told, mid: dict, ph: dict, screen) -> np.ndarray:
+    """A draw's warm start: ``base``'s intents with each vehicle's speed scaled by the momentum
+    balance at the draw's friction and masses against the pilot's (sqrt of the friction ratio
+    without the screen: a slide's speed goes as sqrt(mu))."""
+    u = base.u.copy()
+    ratio = np.full(case.n, math.sqrt(float(ph["friction"]) / float(mid["friction"])))
+    if screen is not None and not screen["degenerate"]:
+        vs = case.script.vehicles
+        m0 = np.array([v.vtype.mass for v in vs])
+        imp, rest, app = [v.fate.impact_at for v in vs], [v.fate.rest for v in vs], _approaches(case)
+        a = momentum_speeds(m0 + mid["load"], imp, app, rest, float(mid["friction"]))
+        b = momentum_speeds(m0 + ph["load"], imp, app, rest, float(ph["friction"]))
+        ratio = np.where(np.abs(a) > 0.5, b / np.where(np.abs(a) > 0.5, a, 1.0), ratio)
+    for k, (i, f, r) in enumerate(S.coords):
+        if f == drv.IX["speed"] and isinstance(r, Range) and r.hi > r.lo:
+            v = (r.lo + (r.hi - r.lo) * u[k]) * float(np.clip(ratio[i], 0.7, 1.4))
+            u[k] = (v - r.lo) / (r.hi - r.lo)
+    return np.clip(u, 0.0, 1.0)
+
+
+def best_trial(case: ev_mod.Case, rec: Reconstruction) -> tuple[search_mod.Trial, str]:
+    """The draw of least squares rolled out again on a scene that holds its unknowns: (its
+    trial, the scene's MJCF text): the crash a reconstruction writes."""
+    S = space_of(case.script)
+    t = rec.best
+    assert t is not None
+    xml = scene_xml_of(case, {k: np.atleast_1d(v)[None] if np.ndim(v) else np.array([v]) for k, v in t.phys.items()}, 0)
+    R = CrashRunner(case.script, xml=xml, batch=1)
+    try:
+        r = R.run(S.intents(t.u[None]))
+    finally:
+        R.close()
+    return search_mod.Trial(u=t.u.copy(), outcome=r.outcomes[0], controls=r.controls[0], qpos0=r.qpos0[0],
+                            qvel0=r.qvel0[0], final_qpos=r.final_qpos[0]), xml

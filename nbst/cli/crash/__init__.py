@@ -3,7 +3,8 @@ command-line room.
 
 * this package registers the subcommands (light: the arguments only; their defaults are the
   library's, ``nbst.models.crash.search.DEFAULT_MAX_ROLLOUTS`` and the like);
-* :mod:`.commands` runs them; :mod:`.render` is ``nbst render CRASH.json`` (``nbst render``
+* :mod:`.commands` runs them (:mod:`.reconstruct` registers and runs ``reconstruct``);
+  :mod:`.render` is ``nbst render CRASH.json`` (``nbst render``
   dispatches there on a crash file).
 
 Registration is light: mujoco and cma are imported inside the commands.
@@ -17,7 +18,8 @@ from __future__ import annotations
 import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
-from nbst.cli.crash.commands import cmd_check, cmd_probability, cmd_reconstruct, cmd_replay, cmd_scripts, cmd_solve
+from nbst.cli.crash import reconstruct as reconstruct_cli
+from nbst.cli.crash.commands import cmd_check, cmd_probability, cmd_replay, cmd_scripts, cmd_solve
 from nbst.cli.crash.report import register_report
 from nbst.cli.flags import add_quiet, add_seed
 
@@ -97,30 +99,7 @@ def register(sub) -> None:
     add_quiet(v, "no progress bar and no summary line")
     v.set_defaults(func=cmd_solve)
 
-    c = cr.add_parser("reconstruct", help="from the vehicles' rest positions back to their speeds before the crash",
-                      description="Read CASE (a crash script whose fates are the evidence: each vehicle's rest "
-                                  "position and heading with their tolerances, whom it hit, optionally where it "
-                                  "was at the impact (impact_at); its drivers' ranges bound the unknowns) and find "
-                                  "every set of pre-impact intents whose crash meets the evidence: first a fit (two "
-                                  "vehicles with impact positions: the momentum seed from the slides to rest, "
-                                  "momentum corrections, then CMA-ES; else the crash search), then the spread "
-                                  "around the fits. Prints each vehicle's impact speed and heading: the estimate "
-                                  "(the fit of least squares against the evidence) and the range over every fit; "
-                                  "writes the estimate as a crash file with the ranges in its `reconstruction` "
-                                  "(replay and render it as any crash file). docs/crash.md compares the method "
-                                  "with PC-Crash's optimiser.",
-                      epilog="Exit 0: fits found; 1: no fit within --max-rollouts (the nearest crash is written); "
-                             "2: bad input; 130: interrupted.")
-    c.add_argument("case", metavar="CASE", help="a crash script of evidence (JSON file or built-in name)")
-    c.add_argument("-o", "--output", required=True, metavar="REC.json", help="where to write the reconstruction")
-    add_seed(c, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
-    c.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
-                   help=with_limits(f"rollout budget, fit and spread together (default {DEFAULT_MAX_ROLLOUTS})",
-                                    ROLLOUTS))
-    _runner_flags(c)
-    c.add_argument("--json", action="store_true", help="print the reconstruction as one JSON object")
-    add_quiet(c, "no progress bar and no summary")
-    c.set_defaults(func=cmd_reconstruct)
+    reconstruct_cli.add_parser(cr)
 
     b = cr.add_parser("probability", help="the probability that a crash file's intents meet its script under "
                                           "driver noise",

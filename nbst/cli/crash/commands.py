@@ -20,7 +20,7 @@ from nbst.parallel import default_jobs
 from nbst.progress import command_start, count_text, progress_bar, seconds_text
 from nbst.seeds import resolve_seed
 
-__all__ = ["fate_phrases", "cmd_scripts", "cmd_check", "cmd_solve", "cmd_reconstruct", "cmd_probability", "cmd_replay",
+__all__ = ["fate_phrases", "cmd_scripts", "cmd_check", "cmd_solve", "cmd_probability", "cmd_replay",
            "write_crash"]
 
 
@@ -214,56 +214,6 @@ def _after_search(args, script, runner, S, best, intents, seed):
     if n:
         extra["probability"] = robust.probability(runner, np.asarray(intents), n, seed, noise=noise).to_dict()
     return best, intents, extra
-
-
-def cmd_reconstruct(args) -> int:
-    from nbst.models.crash import crashfile, reconstruct
-    from nbst.models.crash.space import space_of
-
-    case = _load(args.case)
-    prepare_output(args.output)
-    seed = _seed(args)
-    runner = _runner(args, case)
-    bar = None if args.quiet else progress_bar(total=args.max_rollouts, unit="rollout", file=sys.stderr,
-                                               desc=f"reconstruct {case.name}")
-
-    def progress(p):
-        if bar is not None:
-            bar.update(p.rollouts - bar.n)
-            bar.set_postfix_str(f"best cost {p.best_cost:.3g}" + (f", {p.sequences} fits" if p.solved else ""),
-                                refresh=False)
-
-    try:
-        with sigterm_as_interrupt():
-            rec = reconstruct.reconstruct(case, seed=seed, max_rollouts=args.max_rollouts, runner=runner,
-                                          callback=progress)
-    finally:
-        if bar is not None:
-            bar.close()
-    b = rec.best
-    assert b.controls is not None  # every trial a search returns was rolled out
-    S = space_of(case)
-    d = crashfile.crash_dict(case, runner.xml, runner.model, S.intents(b.u[None])[0], b.qpos0, b.qvel0, b.controls,
-                             b.final_qpos, b.outcome, seed=seed, period_steps=runner.period)
-    d["reconstruction"] = rec.to_dict(case.names())
-    write_crash(args.output, d)
-    runner.close()
-    out = d["reconstruction"]
-    if args.json:
-        print_json(out)
-    elif not args.quiet:
-        print(f"reconstruct {case.name}: {out['fits']} fits within the evidence in {out['rollouts']} rollouts "
-              f"(first stage {out['fit_rollouts']}); wrote {args.output}")
-        for v in out["vehicles"]:
-            s, h = v["impact_speed_kmh"], v["impact_heading_deg"]
-            if s is None:
-                print(f"  {v['name']}: no fit")
-                continue
-            print(f"  {v['name']}: impact speed {s['estimate']:.1f} km/h (fits {s['min']:.1f}-{s['max']:.1f}), "
-                  f"heading {h['estimate']:.0f} deg ({h['min']:.0f} to {h['max']:.0f})")
-    if rec.interrupted:
-        return 130
-    return 0 if rec.found else 1
 
 
 def cmd_probability(args) -> int:
