@@ -89,6 +89,12 @@ class PairImpact:
     vehicles: tuple      # (VehicleImpact of a, VehicleImpact of b)
     momentum_error: float  # |m_a dv_a + m_b dv_b| / the mean of m_a |dv_a| and m_b |dv_b|
 
+    @property
+    def closing_speed(self) -> float:
+        """|v_a - v_b| just before the first touch (m/s)."""
+        va, vb = self.vehicles[0].v_before, self.vehicles[1].v_before
+        return math.hypot(va[0] - vb[0], va[1] - vb[1])
+
     def of(self, i: int) -> VehicleImpact:
         """The :class:`VehicleImpact` of vehicle ``i`` (one of the pair)."""
         return self.vehicles[0] if i == self.a else self.vehicles[1]

@@ -504,7 +504,8 @@ def _impact_table(rep: CrashReport) -> str:
             nm = rep.names[v.vehicle]
             head = (f"<td rowspan=2>{p.t:.3f}</td><td rowspan=2>{1e3 * (p.t_end - p.t):.0f}</td><td rowspan=2 "
                     f"class=l>{html.escape(rep.names[p.a])}&ndash;{html.escape(rep.names[p.b])}"
-                    f"{'' if s is None else ' (' + html.escape(rep.names[s]) + ' strikes)'}</td>" if k == 0 else "")
+                    f"{'' if s is None else ' (' + html.escape(rep.names[s]) + ' strikes)'}</td>"
+                    f"<td rowspan=2>{p.closing_speed * K:.1f}</td>" if k == 0 else "")
             tail = (f"<td rowspan=2>{100 * p.momentum_error:.0f} (reach {100 * rep.reach(p):.0f})</td>"
                     if k == 0 else "")
             rows.append(f"<tr>{head}<td class=l>{html.escape(nm)}</td><td>{v.speed_before * K:.1f}</td>"
@@ -520,11 +521,12 @@ def _impact_table(rep: CrashReport) -> str:
                 "(m<sub>a</sub> + m<sub>b</sub>) over its length &tau;: its reach")
     if minor:
         note.append(f"{minor} grazes (no vehicle's &Delta;v reaches {MINOR_DV_KMH:g} km/h) not listed")
-    return ("<table><tr><th>t (s)</th><th>lasts (ms)</th><th class=l>pair</th><th class=l>vehicle</th>"
+    return ("<table><tr><th>t (s)</th><th>lasts (ms)</th><th class=l>pair</th><th>closing speed (km/h)</th>"
+            "<th class=l>vehicle</th>"
             "<th>speed before (km/h)</th><th>after (km/h)</th><th>&Delta;v forward, left (km/h)</th>"
             "<th>|&Delta;v| (km/h)</th><th>|J|/m (km/h)</th><th>PDOF (clock, deg)</th>"
             "<th>m&Delta;v imbalance (the road's reach), % of the mean m|&Delta;v|</th></tr>" + "".join(rows) + "</table>"
-            + (f"<p class=small>{'; '.join(note)}.</p>" if note else "")) if major else \
+            + f"<p class=small>{'; '.join(note)[:1].upper()}{'; '.join(note)[1:]}.</p>") if major else \
         "<p>No vehicle touched another.</p>"
 
 
