@@ -48,7 +48,7 @@ from nbst.models.crash.vehicle import G
 
 from nbst.render.crash import motion as motion_mod
 
-__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "PHASES", "SCENE_ASPECT", "STRIKE_S", "ZOOM", "CrashReport", "crash_report",
+__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "BRAKE_ON", "MIN_PHASE_S", "PERCEIVED_S", "PHASES", "SCENE_ASPECT", "STRIKE_S", "ZOOM", "CrashReport", "crash_report",
            "evidence_rows", "phases", "report_html", "striker", "strikes"]
 
 #: Figure resolution (dots per inch); figures are ~8 in wide.
@@ -178,15 +178,73 @@ def strikes(rep: CrashReport, i: int | None = None) -> list:
     return [im for im in rep.motion.impacts if im.what != "vehicle" and (i is None or im.a == i)]
 
 
+#: A brake command at or above this (0..1) is braking in the sequence diagram (the drivers' pacing
+#: brakes lightly; a reaction stop, a panicking follower or a locked wheel brakes at 1).
+BRAKE_ON = 0.5
+#: Phases shorter than this (s) before the first impact are not drawn (a follower's brake pulses).
+MIN_PHASE_S = 0.1
+#: Without a reaction stop, the perception-reaction time is drawn before the first braking that
+#: lasts this long (s) or runs into the impact.
+PERCEIVED_S = 0.5
 #: A curb or barrier strike is drawn this long (s) in the sequence diagram (its contact is not timed).
 STRIKE_S = 0.05
+
+
+def _brake(rep: CrashReport, i: int) -> np.ndarray:
+    """Vehicle ``i``'s strongest brake command (0..1) at each recorded time (the file's controls)."""
+    c = rep.d["controls"]
+    idx = [k for k, a in enumerate(c["actuators"]) if a.startswith(f"v{i}_brake")]
+    rows = np.asarray(c["rows"], float)
+    if not idx or not len(rows):
+        return np.zeros(len(rep.impacts.times))
+    per = rows[:, idx].max(axis=1)
+    dt = float(rep.model.opt.timestep)
+    k = np.minimum((np.round(rep.impacts.times / dt).astype(int) - 1).clip(0) // int(c["period_steps"]), len(per) - 1)
+    return per[k]
+
+
+def _before(rep: CrashReport, i: int, end: float) -> list:
+    """Vehicle ``i``'s phases from the start to ``end`` (its first impact, else its rest or the end):
+    driving, braking (the brakes at :data:`BRAKE_ON` or more), at rest (below the outcome's rest
+    speed), each held :data:`MIN_PHASE_S` at least, and the assumed perception-reaction time before
+    the braking of the driver's reaction stop, or else its first braking of :data:`PERCEIVED_S` or
+    more, or one that runs into the impact."""
+    times = rep.impacts.times
+    n = int(np.searchsorted(times, end))
+    if n == 0:
+        return []
+    sp, br = rep.impacts.speed[:n, i], _brake(rep, i)[:n]
+    lab = np.where(sp <= out_mod.REST_SPEED, 2, np.where(br >= BRAKE_ON, 1, 0))
+    starts = np.concatenate([[0], np.nonzero(np.diff(lab))[0] + 1])
+    runs = [[int(lab[k]), float(times[k]), float(times[starts[j + 1]]) if j + 1 < len(starts) else end]
+            for j, k in enumerate(starts)]
+    merged: list = []
+    for r in runs:       # a run too short to draw belongs to the one before it (a follower's brake pulses)
+        if merged and (r[2] - r[1] < MIN_PHASE_S or merged[-1][0] == r[0]):
+            merged[-1][2] = r[2]
+        else:
+            merged.append(r)
+    names = ("driving", "braking", "rest")
+    out = [(names[r[0]], r[1], r[2]) for r in merged]
+    cols = rep.d["intents"]["columns"]
+    got = rep.d["intents"]["rows"][i][cols.index("brake_at")] if "brake_at" in cols else None
+    stop = math.inf if got is None else float(got)          # the driver's reaction stop, if any
+    for j, (name, t0, t1) in enumerate(out):
+        # the reaction stop, else the first braking that lasts or runs into the impact: perceived before it
+        if name == "braking" and (t0 - 0.05 <= stop < t1 if math.isfinite(stop) and stop < end
+                                  else t1 - t0 >= PERCEIVED_S or t1 >= end):
+            p0 = max(0.0, t0 - PERCEPTION_S)
+            keep = [(nm, a, min(b, p0)) for nm, a, b in out[:j] if a < p0]
+            return keep + [(PHASES[1][0], p0, t0)] + out[j:]
+    return out
 
 
 def phases(rep: CrashReport, i: int) -> list[tuple[str, float, float]]:
     """Vehicle ``i``'s phases [(name, start s, end s)] in time order (names of :data:`PHASES`): its
     vehicle impacts and its curb and barrier strikes are impacts, the first of them ends the driver's
-    part (perception-reaction and braking only before it), rest is the stretch below the outcome's
-    rest speed that lasts to the end."""
+    part (before it: driving, braking and at rest from the realised controls and speed, and the
+    assumed perception-reaction time before the first braking), rest is the stretch below the
+    outcome's rest speed that lasts to the end."""
     T = float(rep.motion.duration)
     events = sorted([(p.t, max(p.t_end, p.t + 0.01)) for p in rep.major() if i in (p.a, p.b)]
                     + [(im.t, im.t + STRIKE_S) for im in strikes(rep, i)])
@@ -200,19 +258,8 @@ def phases(rep: CrashReport, i: int) -> list[tuple[str, float, float]]:
         t_rest = float(times[moving[-1] + 1])
     else:
         t_rest = math.inf                                     # still moving at the end
-    row = rep.d["intents"]["rows"][i]
-    cols = rep.d["intents"]["columns"]
-    got = row[cols.index("brake_at")] if "brake_at" in cols else None
-    brake = math.inf if got is None else float(got)
-    out: list = []
     pre_end = min(t_hit, t_rest, T)
-    braking = brake < pre_end
-    start_perc = max(0.0, brake - PERCEPTION_S) if braking else pre_end
-    if start_perc > 0:
-        out.append(("driving", 0.0, start_perc))
-    if braking:
-        out.append((PHASES[1][0], start_perc, brake))
-        out.append(("braking", brake, pre_end))
+    out = _before(rep, i, pre_end)
     for k, (t0, t1) in enumerate(events):
         out.append(("impact", t0, t1))
         nxt = events[k + 1][0] if k + 1 < len(events) else min(max(t_rest, t1), T)
