@@ -22,7 +22,8 @@ One self-contained HTML page (figures inline as base64 PNG), in a reconstruction
   tolerance, met (the replay's own judgement, :func:`nbst.models.crash.outcome.judge`).
 
 The perception-reaction phase is not in the file: it is drawn as :data:`PERCEPTION_S` s before
-a driver's reaction stop (``brake_at``), an assumed median, and labelled as such.
+a driver's reaction stop (``brake_at``) or else its first lasting braking, an assumed median, and
+labelled as such.
 
 Compute only: :func:`crash_report` returns the figures' data and :func:`report_html` the page;
 the CLI writes it.
@@ -718,8 +719,10 @@ energy-equivalent speed of the residual crush, recorded only for crushing vehicl
 <img alt="speed-time diagram" src="data:image/png;base64,{figure_speed(rep)}">
 <h2>Sequence</h2>
 <img alt="sequence diagram" src="data:image/png;base64,{figure_sequence(rep)}">
-<p class=small>Perception-reaction is drawn {PERCEPTION_S:g} s before a reaction stop (an assumed median: Johansson
-and Rumar 1971); the crash file records when the driver braked, not when the hazard appeared.</p>
+<p class=small>Braking and standing still are read from the realised brake commands and speeds. Perception-reaction
+is drawn {PERCEPTION_S:g} s before the driver's reaction stop, or else its first lasting braking (an assumed
+median: Johansson and Rumar 1971); the crash file records when the driver braked, not when the hazard
+appeared.</p>
 <h2>Scene</h2>
 <img alt="scene diagram" src="data:image/png;base64,{figure_scene(rep)}">
 <h2>Evidence against fit</h2>
