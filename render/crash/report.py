@@ -108,6 +108,11 @@ class CrashReport:
                 out.append(p)
         return out
 
+    @property
+    def friction(self) -> float:
+        """The road's friction in the scene the file ran (a reconstruction draws its own)."""
+        return float(self.model.geom("ground").friction[0])
+
     def reach(self, p: impact_mod.PairImpact) -> float:
         """The most the road can unbalance the pair's m dv over the impact, mu g tau (m_a + m_b)
         (the friction cone; tau from the state before the first touch to after the last), as a
@@ -115,7 +120,7 @@ class CrashReport:
         tau = p.t_end - p.t + float(self.model.opt.timestep)
         ma, mb = self.impacts.mass[p.a], self.impacts.mass[p.b]
         mean = 0.5 * (ma * p.of(p.a).dv + mb * p.of(p.b).dv)
-        return float(self.script.road.friction * G * tau * (ma + mb) / mean) if mean > 0 else math.inf
+        return float(self.friction * G * tau * (ma + mb) / mean) if mean > 0 else math.inf
 
     def first(self, i: int):
         """Vehicle ``i``'s first major impact: (PairImpact, VehicleImpact) or None."""
@@ -651,28 +656,29 @@ def _evidence_table(rep: CrashReport) -> str:
 def _reconstruction_html(rec: dict | None) -> str:
     if not rec:
         return ""
+    esc = html.escape
     bits = []
     if rec.get("method"):
-        bits.append(f"Method: {html.escape(str(rec['method']))}.")
+        bits.append(f"Method: {esc(str(rec['method']).rstrip('.'))}.")
     if rec.get("accepted") is not None and rec.get("draws") is not None:
         bits.append(f"{rec['accepted']} of {rec['draws']} draws met every piece of evidence.")
-    for s in rec.get("verdicts") or []:
-        bits.append(html.escape(str(s)))
-    unk = rec.get("unknowns")
-    if isinstance(unk, dict) and unk:
-        bits.append("Over the accepted draws: " + ", ".join(
-            f"{html.escape(str(k))} {v['lo']:g}&ndash;{v['hi']:g}" for k, v in unk.items()
-            if isinstance(v, dict) and v.get("lo") is not None and v.get("hi") is not None) + ".")
-    ev = [str(x) for x in rec.get("evidence") or []]
-    if ev:
-        bits.append(f"Evidence: {html.escape(', '.join(ev))} (the pieces beyond the script's fates, such as skid "
-                    "marks, an event data recorder's speed or residual crush, are judged in the reconstruction's "
-                    "draws; the table below holds the fates).")
     cs = rec.get("closing_speed_kmh")
     if isinstance(cs, dict) and cs.get("lo") is not None:
         bits.append(f"Closing speed {cs['lo']:.1f}&ndash;{cs['hi']:.1f} km/h"
                     + (" (not identifiable)." if cs.get("identifiable") is False else "."))
-    return "<h2>The reconstruction</h2><p>" + " ".join(bits) + "</p>" if bits else ""
+    unk = rec.get("unknowns")
+    if isinstance(unk, dict) and unk:
+        bits.append("Over the accepted draws: " + ", ".join(
+            f"{esc(str(k).replace('_', ' '))} {v['lo']:.3g}&ndash;{v['hi']:.3g}" for k, v in unk.items()
+            if isinstance(v, dict) and v.get("lo") is not None and v.get("hi") is not None) + ".")
+    ev = [str(x) for x in rec.get("evidence") or []]
+    if ev:
+        bits.append(f"Evidence: {esc(', '.join(ev))} (the pieces beyond the script's fates, such as skid marks, an "
+                    "event data recorder's speed or residual crush, are judged in the reconstruction's draws; the "
+                    "table of evidence below holds the fates).")
+    verdicts = "".join(f"<li>{esc(str(v))}</li>" for v in rec.get("verdicts") or [])
+    return ("<h2>The reconstruction</h2>" + "".join(f"<p>{b}</p>" for b in bits)
+            + (f"<p>Verdicts:</p><ul>{verdicts}</ul>" if verdicts else ""))
 
 
 def report_html(rep: CrashReport) -> str:
@@ -701,7 +707,7 @@ def report_html(rep: CrashReport) -> str:
 <style>{_CSS}</style></head><body>
 <h1>Crash report: {esc(s.name)}</h1>
 <p class=small>{esc(rep.source)}{' &middot; ' + esc(s.description.splitlines()[0]) if s.description else ''}</p>
-<p>{s.n} vehicles on a {esc(road.layout)} road, {road.width:g} m wide, friction {road.friction:g};
+<p>{s.n} vehicles on a {esc(road.layout)} road, {road.width:g} m wide, friction {rep.friction:.3g};
 {s.duration:g} s at {1e3 * float(d['timestep']):g} ms steps (MuJoCo {esc(str(d.get('mujoco', '')))}).
 {'The script is met' if o.solved else 'The script is not met'} (signature {o.signature_text(s.n)}).{prob} {same}</p>
 <h2>Per vehicle, at its first impact</h2>
