@@ -292,20 +292,23 @@ def barrier_pulse(type_name: str, speed_kmh: float = 56.0, *, timestep: float = 
     d.qpos[:], d.qvel[:] = initial_state(m, [v], [v0])
     L = layout(m, 1)
     s, ix, iq = int(L.barrier_adr[0]), int(L.qvel[0]), int(L.qpos[0])
-    vel, xs, touching = [], [], []
+    vl: list[float] = []
+    xl: list[float] = []
+    tl: list[bool] = []
     window, k0 = int(round(0.25 / timestep)), None  # 0.25 s after the first contact: parted by then
     for k in range(int(round(2.0 / timestep))):
         mujoco.mj_step(m, d)
-        vel.append(d.qvel[ix])
-        xs.append(d.qpos[iq])
-        touching.append(d.sensordata[s] > 0)
-        if k0 is None and touching[-1]:
+        vl.append(float(d.qvel[ix]))
+        xl.append(float(d.qpos[iq]))
+        tl.append(bool(d.sensordata[s] > 0))
+        if k0 is None and tl[-1]:
             k0 = k
         if k0 is not None and k - k0 >= window:
             break
-    if k0 is None or touching[-1]:
-        raise SolveError(f"barrier pulse at {speed_kmh:g} km/h: the vehicle did not touch and leave the wall within 2 s")
-    vel, xs, touching = np.array(vel), np.array(xs), np.array(touching)
+    if k0 is None or tl[-1]:
+        raise SolveError(f"barrier pulse at {speed_kmh:g} km/h: the vehicle did not touch and leave the wall "
+                         "within 2 s")
+    vel, xs, touching = np.array(vl), np.array(xl), np.array(tl)
     k1 = int(np.flatnonzero(touching)[-1]) + 1  # the first step after the last contact
     before = v0 if k0 == 0 else vel[k0 - 1]
     x0 = xs[k0 - 1] if k0 > 0 else xs[0] - before * timestep

@@ -64,7 +64,7 @@ __all__ = ["G", "CORNERS", "CONTROLS", "BIT_STATIC", "BIT_TYRE", "BIT_BODY", "VE
            "BODY_CONTACT", "TYRE_FRICTION", "BRAKE_KV", "TYRE_SOLREF", "VehicleType",
            "vehicle_type_from_dict", "VEHICLE_TYPES", "control_names", "corner_positions", "heading_quat",
            "add_vehicle", "CRUSH_ZONES", "CRUSH_STEPS", "CRUSH_LINK_MASS", "CRUSH_SLAB_MASS", "CRUSH_SOLREF",
-           "CRUSH_SOLIMP", "CRUSH_JOINT_SOLREF", "CRUSH_JOINT_SOLIMP", "CrushZone", "crush_zones",
+           "CRUSH_SOLIMP", "CRUSH_MIN_RESIDUAL", "CRUSH_JOINT_SOLREF", "CRUSH_JOINT_SOLIMP", "CrushZone", "crush_zones",
            "crush_joint_names", "crush_residual", "crush_energy", "crush_ees", "crush_record"]
 
 G = 9.81
@@ -239,9 +239,10 @@ VEHICLE_TYPES: Registry[VehicleType] = Registry("vehicle type")
 VEHICLE_TYPES.register("sedan", _builtin("sedan.json"), help="a mid-size sedan (2018 Toyota Camry class), 1,450 kg")
 VEHICLE_TYPES.register("suv", _builtin("suv.json"), help="a mid-size SUV, 2,000 kg")
 VEHICLE_TYPES.register("van", _builtin("van.json"), help="a full-size van (light truck), 2,500 kg")
-VEHICLE_TYPES.register("sedan-crush", _builtin("sedan-crush.json"), help="the sedan with crush zones (CRASH3 A, B per zone)")
-VEHICLE_TYPES.register("suv-crush", _builtin("suv-crush.json"), help="the SUV with crush zones (CRASH3 A, B per zone)")
-VEHICLE_TYPES.register("van-crush", _builtin("van-crush.json"), help="the van with crush zones (CRASH3 A, B per zone)")
+# the crushing twins (opt-in: a script names them; docs/crash.md "Crush")
+VEHICLE_TYPES.register("sedan-crush", _builtin("sedan-crush.json"), help="the sedan with crush zones (CRASH3 A, B)")
+VEHICLE_TYPES.register("suv-crush", _builtin("suv-crush.json"), help="the SUV with crush zones (CRASH3 A, B)")
+VEHICLE_TYPES.register("van-crush", _builtin("van-crush.json"), help="the van with crush zones (CRASH3 A, B)")
 
 
 def _six(x: float) -> float:
@@ -305,6 +306,10 @@ CRUSH_SOLIMP = (0.99, 0.99, 0.001, 0.5, 2.0)
 CRUSH_ELASTIC_DEFLECTION = 0.02
 CRUSH_ELASTIC_ZETA = 2.0
 CRUSH_ELASTIC_MASS = {"front": 40.0, "rear": 40.0, "left": 20.0, "right": 20.0}
+#: Residual crush below this (m) is no damage: a loaded zone's joints creep by a millimetre or
+#: two (braking, a blow on another zone), which CRASH3's energy must not read as crush (its
+#: A^2 / 2B term alone is 4 kJ for the sedan's rear).
+CRUSH_MIN_RESIDUAL = 0.005
 #: The plastic joints' dry friction and travel limits: as hard as MuJoCo's constraints go
 #: (impedance 0.9999), so that a joint loaded below its yield force creeps by at most ~1 cm
 #: through a crash (a softer one slides like a damper: every step yields at once).
@@ -335,9 +340,9 @@ class CrushZone:
 
     def energy(self, c: float) -> float:
         """CRASH3's crush energy (J) of a residual crush ``c`` (m) across the zone's width:
-        w (A c + B c^2 / 2 + A^2 / (2 B)) for c > 0 (the last term: the energy taken without
-        residual crush, below the no-damage speed), 0 for no crush."""
-        if c <= 0.0:
+        w (A c + B c^2 / 2 + A^2 / (2 B)) for c >= :data:`CRUSH_MIN_RESIDUAL` (the last term:
+        the energy taken without residual crush, below the no-damage speed), 0 below it."""
+        if c < CRUSH_MIN_RESIDUAL:
             return 0.0
         return self.width * (self.a * c + self.b * c * c / 2 + self.a ** 2 / (2 * self.b))
 
