@@ -133,8 +133,9 @@ def test_the_two_vehicles_momentum_changes_balance_within_the_roads_reach(impact
 
 def test_the_sequence_runs_from_driving_through_the_impact_to_rest(impacts):
     """The braking sedan's phases tile the crash: driving, the assumed perception-reaction time
-    before its reaction stop, braking (its realised brake commands) up to the impact, the impact, then post-impact (and rest
-    once it stays below the rest speed); the SUV drives into it without braking."""
+    before its reaction stop, braking (its realised brake commands) up to the impact, the impact,
+    then post-impact (and rest once it stays below the rest speed); the SUV drives into it without
+    braking."""
     from nbst.render.crash.report import PERCEPTION_S, crash_report, phases
 
     d, s, m, ci = impacts["head-on"]

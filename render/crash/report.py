@@ -49,8 +49,9 @@ from nbst.models.crash.vehicle import G
 
 from nbst.render.crash import motion as motion_mod
 
-__all__ = ["DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "PERCEPTION_S", "BRAKE_ON", "MIN_PHASE_S", "PERCEIVED_S", "PHASES", "SCENE_ASPECT", "STRIKE_S", "ZOOM", "CrashReport", "crash_report",
-           "evidence_rows", "phases", "report_html", "striker", "strikes"]
+__all__ = ["BRAKE_ON", "DPI", "MAX_IMPACT_ROWS", "MINOR_DV_KMH", "MIN_PHASE_S", "PERCEIVED_S", "PERCEPTION_S", "PHASES",
+           "SCENE_ASPECT", "STRIKE_S", "ZOOM", "CrashReport", "crash_report", "evidence_rows", "phases", "report_html",
+           "striker", "strikes"]
 
 #: Figure resolution (dots per inch); figures are ~8 in wide.
 DPI = 100
@@ -416,7 +417,8 @@ def figure_scene(rep: CrashReport) -> str:
                Line2D([], [], color="0.3", lw=1.4, label="at its first impact"),
                Polygon([[0, 0]], facecolor="0.6", edgecolor="0.3", label="at the end (at rest, or still moving)"),
                Line2D([], [], marker="*", color="#dc2626", mec="k", ls="none", ms=10, label="impact point"),
-               Line2D([], [], marker="D", color="w", mec="0.3", mew=1.4, ls="none", ms=6, label="curb or barrier strike"),
+               Line2D([], [], marker="D", color="w", mec="0.3", mew=1.4, ls="none", ms=6,
+                      label="curb or barrier strike"),
                Line2D([], [], color="k", lw=1.2, label="skid mark"),
                Line2D([], [], color="0.3", lw=1.2, ls="--", label="rest region asked (wedge: heading)"),
                Line2D([], [], color="0.3", lw=1.0, ls=":", label="impact position asked")]
@@ -439,7 +441,8 @@ def _draw_scene(ax, rep: CrashReport, data) -> None:
         if model.geom_bodyid[g] >= 0 and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX and \
                 name.startswith(("road", "curb", "barrier")):
             c, R, s = data.geom_xpos[g], data.geom_xmat[g].reshape(3, 3), model.geom_size[g]
-            poly = [(c + R @ np.array([sx * s[0], sy * s[1], 0.0]))[:2] for sx, sy in ((1, 1), (1, -1), (-1, -1), (-1, 1))]
+            poly = [(c + R @ np.array([sx * s[0], sy * s[1], 0.0]))[:2]
+                    for sx, sy in ((1, 1), (1, -1), (-1, -1), (-1, 1))]
             col = {"road": "0.55", "curb": "0.8", "barrier": "#d08a2a"}[name.rstrip("0123456789")]
             ax.add_patch(Polygon(poly, closed=True, facecolor=col, edgecolor="none", zorder=1))
     for line in rep.script.road.centreline():
@@ -578,7 +581,8 @@ def _impact_table(rep: CrashReport) -> str:
             "<th class=l>vehicle</th>"
             "<th>speed before (km/h)</th><th>after (km/h)</th><th>&Delta;v forward, left (km/h)</th>"
             "<th>|&Delta;v| (km/h)</th><th>|J|/m (km/h)</th><th>PDOF (clock, deg)</th>"
-            "<th>m&Delta;v imbalance (the road's reach), % of the mean m|&Delta;v|</th></tr>" + "".join(rows) + "</table>"
+            "<th>m&Delta;v imbalance (the road's reach), % of the mean m|&Delta;v|</th></tr>"
+            + "".join(rows) + "</table>"
             + f"<p class=small>{'; '.join(note)[:1].upper()}{'; '.join(note)[1:]}.</p>") if major else \
         "<p>No vehicle touched another.</p>"
 
