@@ -346,6 +346,13 @@ def test_velocity_and_pdof_arrows_appear_at_the_impact(gl, loaded):
     mass = [float(model.body_subtreemass[model.body(f"v{i}").id]) for i in range(2)]
     pa, pb = (mass[i] * np.array(im.dv[i]) for i in range(2))
     assert np.linalg.norm(pa + pb) < 0.3 * np.linalg.norm(pa)
+    # the arrows' delta-V is the report's (models/crash/impact.py), from the step before the first
+    # touch: each vehicle's |dv| within 10 % of its contact impulse / mass (the tyres' share aside)
+    from nbst.models.crash import impact as impact_mod
+    (p,) = impact_mod.crash_impacts(d, s, model).impacts
+    for v in p.vehicles:
+        assert im.dv[v.vehicle] == v.dv_world and im.pdof[v.vehicle] == v.pdof_clock
+        assert abs(v.dv - v.dv_impulse) < 0.1 * v.dv_impulse
     r = crash.CrashRenderer(gl, *loaded, size=SIZE, camera="overhead", clean=True)
     try:
         vp = r.panels["overhead"]

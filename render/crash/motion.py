@@ -13,12 +13,14 @@
 * **Impacts**: the vehicle-to-vehicle contacts of the judged outcome (first contact time and
   point, each vehicle's delta-V) and the first curb or barrier strike of each vehicle (the
   outcome's time; the point where the step's contact with the curb or barrier was). For a
-  vehicle pair, from the recorded motion (:func:`impact_vectors`): each vehicle's velocity
-  just before the contact, its velocity change over the contact (from the step before the
-  first touch to the step after the last touch of that episode: no gap over
-  :data:`CONTACT_GAP` s) and the principal direction of force (PDOF) as a clock direction in
-  its own frame (12 o'clock: the force comes from straight ahead; 3 o'clock: from its right),
-  the direction the velocity change points from (SAE J224's convention).
+  vehicle pair, the crash room's reading (:func:`nbst.models.crash.impact.crash_impacts`, the
+  numbers of ``nbst crash report``; :func:`impact_vectors`): each vehicle's velocity just before
+  the first touch, its velocity change over the contact episode (from the step before the first
+  touch to the step after the last touch: no gap over :data:`CONTACT_GAP` s; the scene's pair
+  sensors, so a crushing vehicle's crush bodies count) and the principal direction of force
+  (PDOF) as a clock direction in its own frame (12 o'clock: the force comes from straight
+  ahead; 3 o'clock: from its right), the direction the velocity change points from (SAE J224's
+  convention).
 * **Frame times** (:func:`nbst.render.core.times.frame_times` over :func:`slow_windows`): real
   time, slowed :data:`SLOW` x from :data:`SLOW_WINDOW` [0] s before each impact to [1] s after it (overlapping windows merge),
   then a hold; sim time is a piecewise-linear function of video time, so a window adds
@@ -32,6 +34,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from nbst.models.crash.impact import CONTACT_GAP, CrashImpacts, pdof_of
 
 __all__ = ["CONTACT_GAP", "MARK_DT", "MARK_GAP", "POSE_DT", "SCRAPE_HALF", "SKID_HEIGHT", "SKID_SLIP", "SLOW",
            "SLOW_WINDOW", "CrashMotion", "Impact", "MarkRun", "clock_of", "impact_times", "impact_vectors", "record",
@@ -57,9 +61,6 @@ MARK_GAP = 3.5
 #: SLOW_WINDOW[1] s after it (the contact lasts ~0.1 s; the spin-out that follows is the show).
 SLOW = 4.0
 SLOW_WINDOW = (0.25, 0.75)
-#: A pair's contact episode ends at a gap in its touching longer than this (s): the bodies
-#: chatter within a few ms while they crush, and part for good after.
-CONTACT_GAP = 0.02
 
 
 @dataclass(frozen=True)
@@ -151,6 +152,7 @@ def record(d: dict, script, model) -> CrashMotion:
     import mujoco
 
     from nbst.models.crash import crashfile
+    from nbst.models.crash import impact as impact_mod
     from nbst.models.crash import scene as scene_mod
     from nbst.models.crash import vehicle as veh
 
@@ -190,7 +192,6 @@ def record(d: dict, script, model) -> CrashMotion:
     Q[0] = d["qpos0"]
     W[0] = np.asarray(d["qvel0"], float)[vi]
     V[0] = np.linalg.norm(W[0], axis=-1)
-    touching: dict = {}                      # (a, b) vehicle pair -> [times they touch]
     samples: dict = {}                       # (kind, vehicle, corner) -> [(t, x, y, sliding)]
     strikes: dict = {}                       # (vehicle, what) -> [(t, pos)]
     vel6 = np.zeros(6)
@@ -206,10 +207,6 @@ def record(d: dict, script, model) -> CrashMotion:
         t = (k - 1) * dt
         nc = md.ncon
         geom = md.contact.geom[:nc]
-        if nc:
-            ow = owner[geom]
-            for a, b in ow[(ow[:, 0] >= 0) & (ow[:, 1] >= 0) & (ow[:, 0] != ow[:, 1])].tolist():
-                touching.setdefault((min(a, b), max(a, b)), set()).add(t)
         if has_strikes and nc:
             hit = strike_of[geom]
             for c in np.nonzero((hit[:, 0] != "") | (hit[:, 1] != ""))[0]:
@@ -255,7 +252,8 @@ def record(d: dict, script, model) -> CrashMotion:
     yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)), axis=0)
     marks = _runs(samples, half_width, mark_stride * dt)
     times = np.array(keep, float) * dt
-    impacts = [impact_vectors(im, times, W, yaw, touching) for im in _impacts(outcome, od, script, strikes)]
+    found = impact_mod.crash_impacts(d, script, model)
+    impacts = [impact_vectors(im, found) for im in _impacts(outcome, od, script, strikes)]
     return CrashMotion(times=times, qpos=Q, speed=V, vel=W, pos=pos, quat=quat, roll=roll, yaw=yaw,
                        marks=marks, impacts=impacts, outcome=outcome, outcome_dict=od,
                        same_state=same_state, same_outcome=od == d["outcome"], duration=nstep * dt)
@@ -306,37 +304,29 @@ def _impacts(outcome, od: dict, script, strikes: dict) -> list[Impact]:
 def clock_of(dv_body) -> int:
     """The clock direction (1..12) a force comes from, given the velocity change ``dv_body``
     (dx forward, dy left) it made in the vehicle's frame: 12 from straight ahead (a frontal
-    hit: the change points back), 3 from the right, 6 from behind, 9 from the left."""
-    fx, fy = -float(dv_body[0]), -float(dv_body[1])      # where the force comes from
-    h = round(-math.degrees(math.atan2(fy, fx)) / 30.0) % 12
-    return 12 if h == 0 else int(h)
+    hit: the change points back), 3 from the right, 6 from behind, 9 from the left
+    (:func:`nbst.models.crash.impact.pdof_of`'s clock; 12 for no change)."""
+    return pdof_of(dv_body)[1] or 12
 
 
-def impact_vectors(im: Impact, times: np.ndarray, vel: np.ndarray, yaw: np.ndarray, touching: dict) -> Impact:
+def impact_vectors(im: Impact, found: CrashImpacts) -> Impact:
     """``im`` with, for a vehicle pair, each vehicle's velocity before the contact, its velocity
-    change over the contact episode that starts at ``im.t`` (the pair's touching ``times`` with no
-    gap over CONTACT_GAP) and its PDOF; other impacts unchanged. ``vel`` (S, n, 3) and ``yaw``
-    (S, n) are sampled at ``times`` (S,)."""
+    change over the contact episode and its PDOF, from the crash room's reading of the same
+    replay (``found``: :func:`nbst.models.crash.impact.crash_impacts`): the pair's episode that
+    starts nearest ``im.t``; other impacts, and a pair whose sensors read no episode, unchanged."""
     from dataclasses import replace
 
     if im.what != "vehicle" or im.b is None:
         return im
-    ts = sorted(t for t in touching.get((min(im.a, im.b), max(im.a, im.b)), ()) if t >= im.t - 1e-9)
-    t_end = im.t
-    for t in ts:
-        if t - t_end > CONTACT_GAP:
-            break
-        t_end = t
-    k0 = max(0, int(np.searchsorted(times, im.t, side="right")) - 1)       # at or before the first touch
-    k1 = min(len(times) - 1, int(np.searchsorted(times, t_end, side="right")))   # after the last
-    v_before, dv, pdof = {}, {}, {}
-    for i in (im.a, im.b):
-        d = vel[k1, i, :2] - vel[k0, i, :2]
-        c, s = math.cos(float(yaw[k0, i])), math.sin(float(yaw[k0, i]))
-        v_before[i] = (float(vel[k0, i, 0]), float(vel[k0, i, 1]))
-        dv[i] = (float(d[0]), float(d[1]))
-        pdof[i] = clock_of((c * d[0] + s * d[1], -s * d[0] + c * d[1]))
-    return replace(im, v_before=v_before, dv=dv, pdof=pdof, t_end=float(t_end))
+    a, b = min(im.a, im.b), max(im.a, im.b)
+    mine = [p for p in found.impacts if (p.a, p.b) == (a, b)]
+    if not mine:
+        return im
+    p = min(mine, key=lambda p: abs(p.t - im.t))
+    v_before = {v.vehicle: v.v_before for v in p.vehicles}
+    dv = {v.vehicle: v.dv_world for v in p.vehicles}
+    pdof = {v.vehicle: v.pdof_clock or 12 for v in p.vehicles}
+    return replace(im, v_before=v_before, dv=dv, pdof=pdof, t_end=float(p.t_end))
 
 
 def impact_times(outcome: dict) -> list[float]:
