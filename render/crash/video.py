@@ -306,7 +306,7 @@ class CrashRenderer(FrameRenderer):
         for i in range(n):
             body = model.body(f"v{i}").id
             for g in np.nonzero(model.geom_bodyid == body)[0].tolist() + [
-                    model.geom(f"v{i}_tyre_{c}").id for c in ("fl", "fr", "rl", "rr")]:
+                    model.geom(f"v{i}_tyre_{c}").id for c in ("fl", "fr", "rl", "rr")] + _crush_slabs(model, i):
                 nm = model.geom(g).name
                 arches = self._arches(i, g) if nm.endswith("_lower") else ()
                 key = (int(model.geom_type[g]), tuple(np.round(model.geom_size[g], 6)), tuple(model.geom_rgba[g]),
@@ -646,3 +646,15 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
                          times=lambda r, fps: (frame_times(motion.duration, fps, windows=r.windows, slow=SLOW, hold=hold)
                                                if times is None else times),
                          fps=fps, progress=progress)
+
+
+def _crush_slabs(model, i: int) -> list[int]:
+    """The geoms of vehicle ``i``'s crush zones' slabs (a crushing type: docs/crash.md "Crush"),
+    which ride their plastic joints: [] for a rigid type."""
+    out = []
+    for z in ("front", "rear", "left", "right"):
+        try:
+            out.append(int(model.geom(f"v{i}_crush_{z}").id))
+        except KeyError:
+            pass
+    return out
