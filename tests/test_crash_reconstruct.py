@@ -105,15 +105,18 @@ def test_pdof_reads_as_a_clock():
 @pytest.mark.slow
 def test_a_noise_free_planted_head_on_has_intervals_that_hold_the_truth_and_conserve_momentum():
     """A planted head-on (friction, loads and contact hidden in their ranges): the 90 % interval
-    of each vehicle's impact speed holds the true one, and the accepted fit of least squares,
-    rolled out again, keeps the pair's linear momentum through the impact within 5 % (tyre
-    forces act over the contact's few periods)."""
+    of each vehicle's impact speed holds the true one (here the accepted draws sit at 45-50 and
+    36-41 km/h for a true 37.8 and 31.0: faster together is a ridge of equal fits, which the
+    profile probes find, so both are reported not identifiable), and the accepted fit of least squares,
+    rolled out again, keeps the pair's linear momentum through the impact within 3 % of the
+    momentum the two bring in (tyre forces act over the contact's few periods)."""
     d, truth = planted.planted_reconstruction("head-on", 1)
     case = _case(d)
     rec = rc.reconstruct(case, seed=1, max_rollouts=HEAD_ON_BUDGET, draws=10, jobs=1)
     assert len(rec.accepted) >= rc.MIN_ACCEPTED
     for iv, t in zip(rec.intervals, truth["vehicles"]):
         assert iv["impact_speed"]["lo"] <= t["impact_speed"] <= iv["impact_speed"]["hi"], (iv, t)
+    assert {"A.impact_speed", "B.impact_speed"} <= set(rec.not_identifiable)
     t = rec.best
     R = rc.PhysRunner(case)
     try:
@@ -125,13 +128,15 @@ def test_a_noise_free_planted_head_on_has_intervals_that_hold_the_truth_and_cons
     c = rolls.outcomes[0].contacts[0]
     k0, k1 = int(c[2] / track["period"]) - 1, int(c[3] / track["period"]) + 2
     pos = track["pos"][0]
-    before = sum(mass[i] * (pos[k0, i] - pos[k0 - 1, i]) for i in range(2)) / track["period"]
+    p_in = [mass[i] * (pos[k0, i] - pos[k0 - 1, i]) / track["period"] for i in range(2)]
+    before = sum(p_in)
     after = sum(mass[i] * (pos[k1 + 1, i] - pos[k1, i]) for i in range(2)) / track["period"]
-    assert np.linalg.norm(after - before) <= 0.05 * max(np.linalg.norm(before), sum(mass) * 1.0)
+    brought = sum(float(np.linalg.norm(p)) for p in p_in)  # what each vehicle brings in: a head-on's nearly cancels
+    assert np.linalg.norm(after - before) <= 0.03 * brought, (before, after, brought)
 
 
 #: The head-on test's budget (rollouts).
-HEAD_ON_BUDGET = 600
+HEAD_ON_BUDGET = 700
 
 
 @pytest.mark.slow

@@ -79,7 +79,7 @@ from nbst.seeds import check_seed
 
 __all__ = ["MAX_ROLLOUTS", "DRAWS", "DRAW_ROLLOUTS", "DRAW_PARALLEL", "DRAW_UNIFORM", "PILOT_SHARE", "PILOT_APPROACH", "EXPLORE",
            "POPSIZE", "STALL", "SIGMA_PILOT", "SIGMA_FIT", "SIGMA_DRAW", "PILOT_DONE", "DRAW_DONE", "JITTER", "LEVEL",
-           "WEAK", "MIN_ACCEPTED", "SCREEN_SAMPLES", "SCREEN_SPEED_TOL", "PARALLEL_DEG", "ROUNDS", "GAIN", "METHOD", "Progress",
+           "WEAK", "MIN_ACCEPTED", "SCREEN_SAMPLES", "SCREEN_SPEED_TOL", "PARALLEL_DEG", "ROUNDS", "GAIN", "PROFILE_ROLLOUTS", "PROFILE_SHARE", "METHOD", "Progress",
            "PhysRunner", "Reconstruction", "reconstruct", "best_trial", "slide_speed", "momentum_speeds",
            "momentum_applies", "momentum_screen", "pdof_clock", "phys_coords", "scene_xml_of"]
 
@@ -102,6 +102,11 @@ SIGMA_PILOT, SIGMA_FIT, SIGMA_DRAW = 0.12, 0.04, 0.03
 PILOT_DONE, DRAW_DONE = 0.3, 0.35
 #: A draw moves each piece of evidence by an error uniform within this share of its tolerance.
 JITTER = 0.7
+#: The profile probes (identifiability): per vehicle, its speed held halfway between the
+#: accepted draws' and the prior's ends, each a fit of at most PROFILE_ROLLOUTS rollouts; a probe
+#: that meets the evidence makes the speed not identifiable (the profile likelihood's test:
+#: Raue et al., Bioinformatics 25, 2009). PROFILE_SHARE of the budget is kept for them.
+PROFILE_ROLLOUTS, PROFILE_SHARE = 40, 0.15
 #: The intervals' level; an interval spanning WEAK of its prior's is not identifiable; fewer
 #: accepted draws than MIN_ACCEPTED pin nothing (every interval widened to the prior's).
 LEVEL, WEAK, MIN_ACCEPTED = 0.90, 0.3, 8
@@ -475,7 +480,12 @@ def _fit(P: _Problem, engines: list, max_rollouts: int) -> None:
             owners.append(e)
         if not sum(len(r) for r in rows):
             break
-        U_all = np.concatenate([r for r in rows if len(r)])
+        U_all = np.concatenate([r for r in rows if len(r)]).copy()
+        at = 0
+        for e, r in zip(owners, rows):
+            for kf, val in e.get("fix", {}).items():  # a profile: this coordinate held
+                U_all[at:at + len(r), kf] = val
+            at += len(r)
         phys = _stack([e["phys"] for e, r in zip(owners, rows) for _ in range(len(r))])
         targets = [e["targets"] for e, r in zip(owners, rows) for _ in range(len(r))]
         told = P.run(U_all, phys, targets)
@@ -545,6 +555,7 @@ class Reconstruction:
     closing: dict = field(default_factory=dict)
     verdicts: list = field(default_factory=list)
     not_identifiable: list = field(default_factory=list)
+    profile: dict = field(default_factory=dict)  # vehicle index -> impact speeds (m/s) of probe fits that met the evidence
     best: _Told | None = None    # the accepted draw of least squares (else the pilot's best)
     interrupted: bool = False
     method: str = METHOD
@@ -676,6 +687,11 @@ def _judge(rec: Reconstruction) -> None:
                 continue
             x["prior_lo"], x["prior_hi"] = pr["lo"], pr["hi"]
             wide = has and (x["hi"] - x["lo"]) >= WEAK * max(pr["hi"] - pr["lo"], 1e-9)
+            if key == "impact_speed" and rec.profile.get(i):
+                wide = True
+                v = rec.profile[i]
+                rec.verdicts.append(f"profile: fits with {nm}'s speed held at {3.6 * min(v):.0f}-{3.6 * max(v):.0f} "
+                                    "km/h meet the evidence too")
             ok = has and not few and not wide
             if not ok:
                 if not has:
@@ -700,8 +716,9 @@ def _judge(rec: Reconstruction) -> None:
         _propagate(rec, Q)
     weak = [x for x in rec.not_identifiable if x.endswith("impact_speed") or x == "closing_speed"]
     if weak and rec.accepted and not few:
-        why = (f"the accepted fits spread over at least {100 * WEAK:.0f} % of the prior's range: the evidence given "
-               "does not pin it; reported at least as wide as the prior")
+        why = (f"the accepted fits spread over at least {100 * WEAK:.0f} % of the prior's range, or a profile fit "
+               "away from them meets the evidence too: the evidence given does not pin it; reported at least as wide "
+               "as the prior")
         if rec.screen is not None and rec.screen["degenerate"]:
             why += (f" (the approaches are {rec.screen['angle_deg']:.0f} deg apart: momentum through the impact gives "
                     "the total, not the split)")
@@ -794,14 +811,16 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
     explore_q: list = []
     out_draws: list = []
     accepted: list = []
+    profile: dict = {}
     try:
         start = None
-        if screen is not None and S.dim:  # stage A: the approach to the impact positions at momentum speeds
+        if screen is not None and not screen["degenerate"] and S.dim:  # stage A: the approach at momentum speeds
             vs = case.script.vehicles
             mass = np.array([v.vtype.mass for v in vs]) + mid["load"]
             mu = float(mid["friction"])
             ev_rest = [v.fate.rest for v in vs]
-            target = np.median(screen["speeds"], axis=0)
+            hi_speed = max(v.speed.hi for v in vs) * 1.5
+            target = np.clip(np.median(screen["speeds"], axis=0), 0.5, hi_speed)
             for rnd in range(ROUNDS):
                 speeds = [ev_mod.Piece(f"{nm}.impact_speed", i, "impact_speed", (float(target[i]),), SCREEN_SPEED_TOL,
                                        False) for i, nm in enumerate(case.script.names())]
@@ -825,7 +844,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
                 sim = np.array([v.impact_speed for v in vo])
                 corr = (momentum_speeds(mass, imp, app, ev_rest, mu)
                         - momentum_speeds(mass, imp, app, [v.rest for v in vo], mu))
-                target = np.clip(sim + GAIN * corr, 0.5, max(v.speed.hi for v in vs) * 1.5)
+                target = np.clip(sim + GAIN * corr, 0.5, hi_speed)
         eB = {"eng": _engine(S.dim, rng, pilot_budget - P.used, start, sigma=SIGMA_PILOT if start is None else SIGMA_FIT,
                              explore=EXPLORE if start is None else BATCH, spread=SIGMA_FIT,
                              uniform=EXPLORE if start is None else 0),
@@ -839,14 +858,15 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
         pilot_best = min((t for t, _ in pilot_told), key=lambda t: float(np.sum(t.dist ** 2)))
         pilot_used = P.used
         # the OMC draws, DRAW_PARALLEL at a time in shared batches
-        per = max(BATCH // 2, min(DRAW_ROLLOUTS, (max_rollouts - P.used) // max(1, int(draws))))
+        draw_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
+        per = max(BATCH // 2, min(DRAW_ROLLOUTS, (draw_end - P.used) // max(1, int(draws))))
         pcs = phys_coords(case)
         specs = []
         for _ in range(int(draws)):
             ph = _phys_values(case, rng.random((1, len(pcs))))
             specs.append(({key: v[0] for key, v in ph.items()}, ev_mod.jitter(P.ps, rng, JITTER)))
         k = 0
-        while k < len(specs) and P.used < max_rollouts:
+        while k < len(specs) and P.used < draw_end:
             group = []
             for ph1, tg in specs[k:k + DRAW_PARALLEL]:
                 pool = met + accepted  # warm starts: the fits that met the stated evidence so far
@@ -854,7 +874,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
                 group.append({"eng": _engine(S.dim, rng, per, _warm(case, S, base, mid, ph1, screen), sigma=SIGMA_DRAW,
                                              explore=BATCH // 2, spread=SIGMA_DRAW, uniform=DRAW_UNIFORM),
                               "phys": ph1, "targets": tg, "done_at": DRAW_DONE, "told": []})
-            _fit(P, group, max_rollouts)
+            _fit(P, group, draw_end)
             for e in group:
                 ok = [(t, c) for t, c in e["told"] if float(np.max(t.dist)) <= 1.0]
                 t = min(ok, key=lambda x: x[1])[0] if ok else None
@@ -863,6 +883,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
                     accepted.append(t)
             P.accepted = len(accepted)
             k += DRAW_PARALLEL
+        profile = _profile(P, S, accepted, rng, max_rollouts)
     except KeyboardInterrupt:
         interrupted = True
         if not pilot_told:
@@ -875,10 +896,50 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
     rec = Reconstruction(names=case.script.names(), labels=ev_mod.labels(case), draws=out_draws, accepted=accepted,
                          prior_q=np.array(explore_q) if explore_q else np.zeros((0, 3 * case.n + 1)),
                          speed_prior=speed_prior, screen=screen, rollouts=P.used, pilot_rollouts=pilot_used,
-                         seed=int(seed), interrupted=interrupted)
+                         seed=int(seed), interrupted=interrupted, profile=profile)
     rec.best = min(accepted, key=lambda t: float(np.sum(t.dist ** 2))) if accepted else pilot_best
     _judge(rec)
     return rec
+
+
+def _profile(P: _Problem, S, accepted: list, rng, max_rollouts: int) -> dict:
+    """The profile probes (:data:`PROFILE_ROLLOUTS`): for each vehicle's speed coordinate, fits
+    with the speed held halfway between the accepted draws' lowest (highest) and the range's end,
+    from the accepted draw of least squares at its unknowns, the other vehicles' speeds scaled
+    in proportion at the start; {vehicle: [impact speeds (m/s) of
+    probe rollouts that met the stated evidence]} (empty: the speed held wherever probed)."""
+    if len(accepted) < 2:
+        return {}
+    best = min(accepted, key=lambda t: float(np.sum(t.dist ** 2)))
+    probes = []
+    for k, (i, f, r) in enumerate(S.coords):
+        if f != drv.IX["speed"] or not isinstance(r, Range) or r.hi <= r.lo:
+            continue
+        us = np.array([t.u[k] for t in accepted])
+        for val, room in ((us.min() / 2, us.min() > 0.1), ((us.max() + 1) / 2, us.max() < 0.9)):
+            if room:
+                probes.append((i, k, float(val)))
+    found: dict = {}
+    for j in range(0, len(probes), DRAW_PARALLEL):
+        group = []
+        for i, k, val in probes[j:j + DRAW_PARALLEL]:
+            u0 = best.u.copy()
+            r = S.coords[k][2]
+            scale = (r.lo + (r.hi - r.lo) * val) / max(r.lo + (r.hi - r.lo) * u0[k], 1e-6)
+            for k2, (i2, f2, r2) in enumerate(S.coords):  # the other speeds in proportion: the ridge of equal fits
+                if k2 != k and f2 == drv.IX["speed"] and isinstance(r2, Range) and r2.hi > r2.lo:
+                    u0[k2] = np.clip(((r2.lo + (r2.hi - r2.lo) * u0[k2]) * scale - r2.lo) / (r2.hi - r2.lo), 0.0, 1.0)
+            u0[k] = val
+            group.append({"eng": _engine(S.dim, rng, PROFILE_ROLLOUTS, u0, sigma=SIGMA_FIT, explore=BATCH // 2,
+                                         spread=SIGMA_FIT, uniform=DRAW_UNIFORM),
+                          "phys": best.phys, "targets": P.ps, "done_at": 1.0, "told": [], "fix": {k: val},
+                          "vehicle": i})
+        _fit(P, group, max_rollouts)
+        for e in group:
+            met = [float(t.q[3 * e["vehicle"]]) for t, _ in e["told"] if float(np.max(t.dist)) <= 1.0]
+            if met:
+                found.setdefault(e["vehicle"], []).extend(met)
+    return found
 
 
 def _warm(case, S, base: _Told, mid: dict, ph: dict, screen) -> np.ndarray:
