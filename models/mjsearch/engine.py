@@ -236,6 +236,9 @@ class Engine:
         done: ``done(engine) -> bool``: the search is over (default: the best's distance is 0).
         tournament: a parent is the best (lowest ``key``) of this many members drawn from its
             signature (default 1: one member at random; the scene's search uses 2).
+        cma_by_key: CMA-ES ranks a generation by (distance, cost), the engine's order, instead of
+            by cost alone, and a restart stalls on that order (default False: by cost; the scene's
+            search of one block uses True).
 
     Returns:
         The engine, before its first ``ask``.
@@ -257,7 +260,7 @@ class Engine:
                  polish: Sequence[float] = POLISH, spent: int = SPENT, right_kept: int = RIGHT_KEPT,
                  hold_distance: int = 1, explore_between: int = 0,
                  rank: Callable[[Hashable], float] | None = None,
-                 done: Callable[[Engine], bool] | None = None, tournament: int = 1):
+                 done: Callable[[Engine], bool] | None = None, tournament: int = 1, cma_by_key: bool = False):
         if isinstance(max_rollouts, bool) or not isinstance(max_rollouts, (int, np.integer)) or max_rollouts < 1:
             raise InputError(f"max_rollouts must be a whole number of at least 1, got {max_rollouts!r}")
         if isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim < 0:
@@ -290,6 +293,7 @@ class Engine:
         self.explore_between = int(explore_between)
         self.rank, self.done = rank, done
         self.tournament = max(1, int(tournament))
+        self.cma_by_key = bool(cma_by_key)
         # state
         self.rollouts = 0
         self.restarts = 0
@@ -658,12 +662,25 @@ class Engine:
             if asked is None or B < len(asked):  # cut by the budget: not told to pycma
                 self._end_restart()
                 return
-            costs = [m.cost for m in made]
-            self._es.tell(asked.tolist(), costs)
-            if min(costs) < st["best_here"] - 1e-9:
-                st["best_here"], st["stalled"] = min(costs), 0
+            if self.cma_by_key:  # pycma ranks its generation: tell it the ranks of (distance, cost)
+                order = sorted(range(B), key=lambda k: made[k].key)
+                ranks = [0.0] * B
+                for r, k in enumerate(order):
+                    ranks[k] = float(r)
+                self._es.tell(asked.tolist(), ranks)
+                low = made[order[0]].key
+                bh = st["best_here"]
+                if bh == math.inf or low[0] < bh[0] or (low[0] == bh[0] and low[1] < bh[1] - 1e-9):
+                    st["best_here"], st["stalled"] = low, 0
+                else:
+                    st["stalled"] += 1
             else:
-                st["stalled"] += 1
+                costs = [m.cost for m in made]
+                self._es.tell(asked.tolist(), costs)
+                if min(costs) < st["best_here"] - 1e-9:
+                    st["best_here"], st["stalled"] = min(costs), 0
+                else:
+                    st["stalled"] += 1
             if st["stalled"] >= self.stall:
                 self._end_restart()
 
