@@ -160,3 +160,28 @@ def test_the_rear_end_from_rest_positions_alone_is_flagged_not_identifiable(tmp_
         s = v["impact_speed_kmh"]
         assert s["lo"] <= t["impact_speed"] * 3.6 <= s["hi"]
     assert main(["crash", "replay", str(out)]) == 0
+
+
+@pytest.mark.slow
+def test_residual_crush_is_evidence_for_a_crushing_type():
+    """A sedan-crush struck at 40 km/h closing by an suv-crush keeps a residual crush of a few
+    centimetres to decimetres (the crush model's CRASH3 zones), and the crush evidence's distance
+    is its miss from the stated depth in units of the tolerance."""
+    d = json.loads(json.dumps(planted.RECON_TEMPLATES["rear-end"]))
+    d["kind"], d["name"] = ev.CASE_KIND, "crush"
+    d["vehicles"][0]["type"], d["vehicles"][1]["type"] = "sedan-crush", "suv-crush"
+    for v in d["vehicles"]:
+        v["fate"] = {"hits": ["B" if v["name"] == "A" else "A"], "rest": {"x": 60, "y": -1.75, "radius": 50}}
+    d["evidence"] = {"A": {"crush": {"depth": 0.2, "tol": 0.05}}, "B": {"crush": {"depth": 0.2, "tol": 0.05}}}
+    case = _case(d)
+    R = rc.PhysRunner(case)
+    try:
+        P = rc._Problem(case, R, 16, None)
+        (t, _), = P.run(np.array([[0.5, 0.5]]), rc._phys_mid(case, 1), [P.ps])  # 40 and 80 km/h
+    finally:
+        R.close()
+    labels = ev.labels(case)
+    for i, nm in enumerate("AB"):
+        got = t.o.vehicles[i].residual_crush
+        assert 0.02 < got < 0.6, got
+        assert t.dist[labels.index(f"{nm}.crush")] == pytest.approx(abs(got - 0.2) / 0.05)

@@ -14,8 +14,8 @@ two more top-level keys:
 * ``evidence``: per vehicle name, the evidence kinds the script's fates do not carry, each with
   its tolerance: ``skid`` (a pre-impact skid: where the marks start and their length up to the
   impact), ``edr`` (an event data recorder's speed some seconds before the impact) and ``crush``
-  (residual crush depth, for a vehicle whose type records it: none does yet, so a case that
-  gives crush is refused with a message that says so).
+  (residual crush depth, the deepest of the vehicle's zones, for a vehicle whose type crushes:
+  the ``-crush`` twins, ``sedan-crush`` and the like; a rigid type's is refused).
 
 :func:`pieces` lists the evidence as pieces, each a target value and its tolerance;
 :func:`jitter` moves each target by an error drawn within its tolerance (the model of the
@@ -209,8 +209,8 @@ def case_from_dict(d: Any, *, source: str = "<dict>") -> Case:
         if "crush" in e:
             k = c.obj(e["crush"], f"{p}.crush", ("depth", "tol"), required=("depth",))
             if not records_crush(v.vtype):
-                c.fail(f"{p}.crush", f"vehicle type {v.vtype.name!r} records no residual crush (crush is off for "
-                                     "it): residual crush is evidence only for a type that records it")
+                c.fail(f"{p}.crush", f"vehicle type {v.vtype.name!r} records no residual crush (a rigid type): "
+                                     "residual crush is evidence only for a type that crushes, e.g. 'sedan-crush'")
             crush[i] = Crush(c.number(k["depth"], f"{p}.crush.depth", *_LIMITS["depth"], "m"),
                              c.number(k.get("tol", CRUSH_TOL), f"{p}.crush.tol", *_LIMITS["crush_tol"], "m"))
     return Case(script=s, unknowns=Unknowns(friction=fr, load=load, stiffness=st, damping=dm),

@@ -71,6 +71,7 @@ from nbst.models.crash import driver as drv
 from nbst.models.crash import evidence as ev_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import search as search_mod
+from nbst.models.crash import vehicle as vehicle_mod
 from nbst.models.crash.run import BATCH, CrashRollouts, CrashRunner, scene_vehicles
 from nbst.models.crash.script import Range
 from nbst.models.crash.space import space_of
@@ -425,6 +426,7 @@ class _Problem:
         self.S = space_of(case.script)
         self.ps = ev_mod.pieces(case)
         self.hit_rows = [k for k, p in enumerate(self.ps) if p.kind == "hits"]
+        self.crush = sorted({int(p.vehicle) for p in self.ps if p.kind == "crush" and p.vehicle is not None})
         self.used = 0
         self.accepted = 0
         self.best: float = math.inf
@@ -437,6 +439,12 @@ class _Problem:
         self.used += len(U)
         mass = self.R.L.mass[None] + phys["load"]
         out = []
+        if self.crush:
+            for k, o in enumerate(rolls.outcomes):
+                for i in self.crush:
+                    res = vehicle_mod.crush_residual(self.R.model, scene_mod.vehicle_prefix(i),
+                                                     self.case.script.vehicles[i].vtype, rolls.final_qpos[k])
+                    o.vehicles[i].residual_crush = max(res.values()) if res else math.nan  # type: ignore[attr-defined]
         for k, o in enumerate(rolls.outcomes):
             md = rolls.min_dist[k]
             d0 = ev_mod.distances(self.case, self.ps, o, track, k, md)
@@ -596,8 +604,8 @@ class Reconstruction:
         def iv(x, scale, est, k=2):
             if not x:
                 return None
-            out = {key: round(float(x[key]) * scale, k) for key in ("lo", "median", "hi", "prior_lo", "prior_hi")
-                   if key in x}
+            out = {key: (round(float(x[key]) * scale, k) if np.isfinite(x[key]) else None)
+                   for key in ("lo", "median", "hi", "prior_lo", "prior_hi") if key in x}
             out["estimate"] = None if not np.isfinite(est) else round(float(est) * scale, k)
             if "identifiable" in x:
                 out["identifiable"] = bool(x["identifiable"])

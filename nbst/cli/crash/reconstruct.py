@@ -40,7 +40,7 @@ def add_parser(cr) -> None:
     from nbst.models.crash.reconstruct import DRAWS as N, MAX_ROLLOUTS
 
     c = cr.add_parser("reconstruct", help="from the evidence back to each vehicle's impact speed, delta-V and PDOF, "
-                                          "as 90 % intervals",
+                                          "as 90 %% intervals",
                       description="Read CASE (a crash script whose fates are the evidence: whom each vehicle hit, "
                                   "its rest position and heading, its centre of mass at the impact; or an "
                                   "nbst-crash-case, which adds the unknowns' ranges and skid marks, event data "
