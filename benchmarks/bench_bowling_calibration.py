@@ -1,7 +1,8 @@
 """Bowling calibrated on seeds it was not fitted on (issue 48): carry, spares, the leave mix, entry angles.
 
-    python benchmarks/bench_bowling_calibration.py [--part carry|spares|leaves|angles|all]
+    python benchmarks/bench_bowling_calibration.py [--part carry|spares|leaves|angles|games|all]
                                                    [--seeds heldout|fit|S1,S2,..] [--n 260] [--spares 100]
+                                                   [--blocks 10] [--moves auto,none] [--profiles P1,P2,..]
                                                    [--setting KEY=V,..] [--jobs 1] [--cache DIR]
 
 Every figure is printed with its 95 % Wilson interval and the seeds it was measured on, and says
@@ -30,7 +31,17 @@ whether those seeds were used to fit anything (**fit**) or never (**held out**):
   10 pin 710, 7 pin 333, 9 pin 88, 7-10 53, 3-10 35, big four 30 of 2,781 spare attempts).
 - ``angles``: the ball alone on a fresh house shot (no pins, no noise): each profile's strike ball
   (entry angle, breakpoint), and the league-200 release with balls of RG 2.46-2.80 and differential
-  0-0.060 in, thrown on the same line (the same stance and launch angle) and re-aimed to board 17.5.
+  0-0.060 in, thrown on the same line (the same stance and launch angle), re-aimed to board 17.5 from
+  the same board, and re-aimed to board 17.5 through the 0.040 in ball's breakpoint board (the feet
+  moved: "the same breakpoint and pocket").
+- ``games``: the profiles' games (issue 48's averages: league150 140-160, league200 190-210, pro
+  215-240): ``--blocks`` blocks of 3 games per profile, each on a fresh house shot that every ball of
+  the block wears (``transition.Run``: strike and spare balls, the profile's noises), block b's
+  releases from seed ``GAME_HELDOUT_SEEDS[b]`` (``--seeds fit``: :data:`GAME_FIT_SEEDS`), with the
+  automatic "2 and 1" mover and standing still on the same releases (``--moves``). Prints each
+  profile's average with a 95 % interval over the block averages (t), its strikes, pocket hits and
+  spares (Wilson), the mover's paired gain per block, and the leave mix of all the profiles' first
+  balls together (a population of bowlers, not one) against ESPN's ranking.
 
 The pin deck is replayed from each throw's deck start (``frame.deck_start``; the lane phase once per
 throw, as ``bench_carry_fit.py``), so ``--setting`` (the keys of ``bench_carry_fit.DEFAULTS``: ``pp_mu``,
@@ -59,6 +70,14 @@ HELDOUT_SEEDS = (31, 32, 33, 34, 35)
 #: Seeds of the spare throws: fit, held out.
 FIT_SPARE_SEEDS = (21, 22, 23)
 HELDOUT_SPARE_SEEDS = (41, 42, 43, 44, 45)
+#: Seeds of the profiles' 3-game blocks: those the profiles' lines and noises were fitted on (issue 48:
+#: 101-105 chose the mover, 101-103 the league lines and noises), and those held out (never used to fit).
+GAME_FIT_SEEDS = (101, 102, 103)
+GAME_HELDOUT_SEEDS = tuple(range(301, 311))
+#: The profiles whose averages issue 48 asks for, and their bands.
+GAME_TARGETS = {"league150": (140, 160), "league200": (190, 210), "pro": (215, 240)}
+#: Two-sided 95 % t quantiles by degrees of freedom (1..12).
+T95 = (12.71, 4.30, 3.18, 2.78, 2.57, 2.45, 2.36, 2.31, 2.26, 2.23, 2.20, 2.18)
 POCKET = (16.5, 18.5)
 ENTRY_34 = (4.0, 6.0)
 SPARE_LEAVES = {"3-10": (3, 10), "10": (10,), "7": (7,)}
@@ -249,19 +268,126 @@ def part_angles() -> None:
         t = lane.throw(d, "house")
         print(f"| `{name}` {d.mph:g} mph, {d.rpm:g} rpm, rotation {d.rotation:g}, tilt {d.tilt:g} | board {d.board:g}, "
               f"{d.angle:.2f} deg | {t.breakpoint_ft:.1f} ft, board {t.breakpoint_board:.1f} | **{t.entry_angle_deg:.2f} deg** |")
-    base = profiles.profile("league200").strike
-    print("\nThe league-200 release (17 mph, 350 rpm, 45 deg, tilt 12) with other balls: on its own line "
-          "(board 20 at the foul line, 2.82 deg), and re-aimed to board 17.5 from the same board\n")
-    print("| ball | same line: board at the pins, entry | re-aimed: launch angle, breakpoint, entry |")
-    print("|---|---|---|")
-    for kw in ({"rg": 2.46}, {"rg": 2.50}, {"rg": 2.60}, {"rg": 2.80}, {"diff": 0.0}, {"diff": 0.02}, {"diff": 0.04},
-               {"diff": 0.05}, {"diff": 0.06}):
-        b = Ball(**kw)
-        t = lane.throw(base, "house", b)
-        dd, ta = phases.aim_angle(base, 17.5, "house", b)
-        print(f"| RG {b.rg:.2f}, diff {b.diff:.3f} | board {t.board_at_pins:.2f}, {t.entry_angle_deg:.2f} deg | "
-              f"{dd.angle:.2f} deg, {ta.breakpoint_ft or float('nan'):.1f} ft board {ta.breakpoint_board or float('nan'):.1f}, "
-              f"{ta.entry_angle_deg:.2f} deg |")
+    for name in ("league200", "cranker"):
+        base = profiles.profile(name).strike
+        bp0 = lane.throw(base, "house", Ball(diff=0.04)).breakpoint_board
+        print(f"\nThe {name} release ({base.mph:g} mph, {base.rpm:g} rpm, rotation {base.rotation:g}, tilt "
+              f"{base.tilt:g}) with other balls: on its own line (board {base.board:g} at the foul line, "
+              f"{base.angle:.2f} deg), re-aimed to board 17.5 from the same board, and re-aimed to board 17.5 "
+              f"through the 0.040 in ball's breakpoint board ({bp0:.1f}; the feet moved)\n")
+        print("| ball | same line: board at the pins, entry | re-aimed: launch angle, breakpoint, entry | same "
+              "breakpoint board: from, breakpoint, entry |")
+        print("|---|---|---|---|")
+        for kw in ({"rg": 2.46}, {"rg": 2.50}, {"rg": 2.60}, {"rg": 2.80}, {"diff": 0.0}, {"diff": 0.02},
+                   {"diff": 0.04}, {"diff": 0.05}, {"diff": 0.06}):
+            b = Ball(**kw)
+            t = lane.throw(base, "house", b)
+            try:
+                dd, ta = phases.aim_angle(base, 17.5, "house", b)
+                re = (f"{dd.angle:.2f} deg, {ta.breakpoint_ft or float('nan'):.1f} ft board "
+                      f"{ta.breakpoint_board or float('nan'):.1f}, {ta.entry_angle_deg:.2f} deg")
+            except lane.LaneError:
+                re = "no launch angle reaches 17.5"
+            print(f"| RG {b.rg:.2f}, diff {b.diff:.3f} | board {t.board_at_pins:.2f}, {t.entry_angle_deg:.2f} deg | "
+                  f"{re} | {_same_breakpoint(base, b, bp0) if 'diff' in kw else '-'} |", flush=True)
+
+
+def _same_breakpoint(base: lane.Delivery, ball: Ball, bp_board: float) -> str:
+    """``base`` re-aimed at board 17.5 from the foul-line board whose breakpoint is on ``bp_board`` (secant
+    on the board, each step ``phases.aim_angle``): 'from board, breakpoint, entry'."""
+    from dataclasses import replace
+
+    def at(fb):
+        d, t = phases.aim_angle(replace(base, board=float(fb)), 17.5, "house", ball)
+        return d, t, t.breakpoint_board - bp_board
+
+    try:
+        a, b = base.board - 2.0, base.board + 2.0
+        _, _, fa = at(a)
+        d, t, fb_ = at(b)
+        for _ in range(8):
+            if abs(fb_) < 0.05 or fb_ == fa:
+                break
+            a, fa, b = b, fb_, b - fb_ * (b - a) / (fb_ - fa)
+            d, t, fb_ = at(b)
+    except lane.LaneError:
+        return "not reached"
+    if abs(fb_) >= 0.1:
+        return "not reached"
+    return f"board {d.board:.1f}, {d.angle:.2f} deg; {t.breakpoint_ft:.1f} ft board {t.breakpoint_board:.1f}, **{t.entry_angle_deg:.2f} deg**"
+
+
+def _game_tag(name: str) -> str:
+    """A profile's strike ball and noises, so that a changed profile's games are bowled afresh."""
+    p = profiles.profile(name)
+    s = p.strike
+    return (f"{name}-b{s.board:g}a{s.angle:g}m{s.mph:g}r{s.rpm:g}o{s.rotation:g}t{s.tilt:g}"
+            f"x{p.noise_scale:g}s{p.spare_noise_scale}")
+
+
+def game_block(name: str, seed: int, move: str, cache: Path) -> dict:
+    """One 3-game block of profile ``name`` on a fresh house shot (transition), releases from ``seed``,
+    moving as ``move``: the games, and per first ball [game, board at the head pin's line, entry
+    angle, leave], per spare ball [standing, leave] (cached)."""
+    from nbst.models.bowling.lane import transition as T
+
+    path, done = _store(cache, "games.json")
+    k = f"{_game_tag(name)}|{move}|seed{seed}"
+    if k not in done:
+        t0 = time.time()
+        r = T.Run(T.lineup(name), 3, seed, move, "house")
+        r.play()
+        d = r.to_dict()
+        rec = {"games": [g[-1] for g in d["scores"]["0"]], "moves": len(d["moves"]),
+               "first": [[b["game"], b["board_at_pins"], b["entry_angle_deg"], list(b["leave"])]
+                         for b in d["balls"] if len(b["standing"]) == 10],
+               "spare": [[list(b["standing"]), list(b["leave"])] for b in d["balls"] if len(b["standing"]) < 10]}
+        done = _store(cache, "games.json")[1]
+        done[k] = rec
+        _save(path, done)
+        print(f"    ({k}: games {rec['games']}, {time.time() - t0:.0f} s)", flush=True)
+    return done[k]
+
+
+def part_games(seeds, names, moves, cache) -> None:
+    print(f"\n## games: {len(seeds)} blocks of 3 games per profile on a fresh house shot (transition, moves "
+          f"{', '.join(moves)}), {_which(seeds, GAME_FIT_SEEDS)}\n")
+    for s in seeds:  # seed by seed: an interrupted run has every profile's first blocks (cached)
+        for n in names:
+            for m in moves:
+                game_block(n, s, m, cache)
+    out = {(n, m): [game_block(n, s, m, cache) for s in seeds] for n in names for m in moves}
+    print("| profile | mover | games | average (95 % CI) | target | strikes | pocket hits (16.5-18.5) | carry of "
+          "pocket hits | spares | moves |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for n in names:
+        for m in moves:
+            rs = out[(n, m)]
+            g = np.array([x for r in rs for x in r["games"]], float)
+            b = np.array([np.mean(r["games"]) for r in rs])
+            half = T95[min(len(b) - 1, len(T95)) - 1] * b.std(ddof=1) / np.sqrt(len(b)) if len(b) > 1 else float("nan")
+            first = [x for r in rs for x in r["first"]]
+            pk = [x for x in first if x[1] is not None and POCKET[0] <= x[1] <= POCKET[1]]
+            spare = [x for r in rs for x in r["spare"]]
+            lo_t, hi_t = GAME_TARGETS.get(n, (float("nan"), float("nan")))
+            met = "met" if lo_t <= g.mean() <= hi_t else "not met"
+            print(f"| {n} | {m} | {len(g)} | **{g.mean():.1f}** ({g.mean() - half:.1f}-{g.mean() + half:.1f}) | "
+                  f"{lo_t:g}-{hi_t:g} ({met}) | {ci(sum(1 for x in first if not x[3]), len(first))} | "
+                  f"{ci(len(pk), len(first))} | {ci(sum(1 for x in pk if not x[3]), len(pk))} | "
+                  f"{ci(sum(1 for x in spare if not x[1]), len(spare))} | {sum(r['moves'] for r in rs)} |")
+    if {"auto", "none"} <= set(moves):
+        print("\n| profile | the mover's gain per 3-game block, paired (95 % CI) | blocks gaining / even / losing |")
+        print("|---|---|---|")
+        for n in names:
+            dd = np.array([sum(a["games"]) - sum(z["games"]) for a, z in zip(out[(n, "auto")], out[(n, "none")])], float)
+            half = T95[min(len(dd) - 1, len(T95)) - 1] * dd.std(ddof=1) / np.sqrt(len(dd)) if len(dd) > 1 else float("nan")
+            print(f"| {n} | {dd.mean():+.1f} pins ({dd.mean() - half:+.1f} to {dd.mean() + half:+.1f}) | "
+                  f"{int((dd > 0).sum())} / {int((dd == 0).sum())} / {int((dd < 0).sum())} |")
+    m0 = "auto" if "auto" in moves else moves[0]
+    recs = [[x[1], x[2], x[3], False] for n in names for r in out[(n, m0)] for x in r["first"]]
+    print(f"\nThe leave mix of all {len(recs)} first balls of {', '.join(names)} (mover {m0}): a population "
+          f"of bowlers.")
+    part_leaves({"records": recs, "n": len(recs)})
 
 
 def _seeds(text: str, fit, held) -> tuple:
@@ -270,10 +396,14 @@ def _seeds(text: str, fit, held) -> tuple:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
-    ap.add_argument("--part", choices=("carry", "spares", "leaves", "angles", "all"), default="all")
+    ap.add_argument("--part", choices=("carry", "spares", "leaves", "angles", "games", "all"), default="all")
     ap.add_argument("--seeds", default="heldout", help="'heldout' (default), 'fit' or a list of seeds")
     ap.add_argument("--n", type=int, default=260, help="pro first balls per seed (default 260)")
     ap.add_argument("--spares", type=int, default=100, help="throws per spare and seed (default 100)")
+    ap.add_argument("--blocks", type=int, default=None, help="games: the first B seeds' 3-game blocks (default all)")
+    ap.add_argument("--moves", default="auto,none", help="games: the movers, comma-separated (default auto,none)")
+    ap.add_argument("--profiles", default=",".join(GAME_TARGETS), help="games: the profiles (default: "
+                    "league150, league200, pro)")
     ap.add_argument("--setting", default="", help="the pins moved from the scene's, 'key=value,...'")
     ap.add_argument("--collision-segments", type=int, default=None, metavar="N",
                     help="probe: the pins' collision rings as N-gons (8..128; the scene's by default)")
@@ -294,6 +424,9 @@ def main() -> None:
         part_spares(_seeds(args.seeds, FIT_SPARE_SEEDS, HELDOUT_SPARE_SEEDS), args.spares, prm, args.cache)
     if args.part in ("angles", "all"):
         part_angles()
+    if args.part in ("games", "all"):
+        gs = _seeds(args.seeds, GAME_FIT_SEEDS, GAME_HELDOUT_SEEDS)[:args.blocks]
+        part_games(gs, args.profiles.split(","), args.moves.split(","), args.cache)
 
 
 if __name__ == "__main__":

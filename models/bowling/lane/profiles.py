@@ -9,8 +9,8 @@ profile      mph      rpm   rotation tilt  source
 =========== ======== ===== ======== ===== ====================================================
 pro          18.6     436   50       12    PBA League 2020, men's means (Pete Dougherty, Albany
                                            Times Union, 2020-09-29); rotation and tilt assumed
-league200    17.0     350   45       12    assumed (between the pro and issue 22's 17/300)
-league150    15.5     250   30       15    assumed (a stroker)
+league200    17.0     350   55       12    assumed (between the pro and issue 22's 17/300)
+league150    15.5     250   45       15    assumed (a stroker)
 twohander    18.0     520   60       5     PBA League 2020: 4 of the top 5 rev rates were
                                            two-handers, the top 570 rpm; rotation and tilt assumed
 cranker      18.0     450   60       10    assumed (a one-handed high-rev player, issue 48)
@@ -28,8 +28,12 @@ assumed (:data:`NOISE_SHAPE`): issue 22's sigmas (board 1/2, launch angle 0.15 d
 both), axis rotation and revs -0.3 (turning the hand more trades revs for side roll). Its size is
 fitted for the pro (issue 34's carry fit): the strike ball's to PBA's pocket-hit rate
 (:data:`PRO_SCALE`), the spare ball's to PBA's televised spares (:data:`PRO_SPARE_SCALE`). The
-league bowlers' sigmas are the shape's times their :attr:`Profile.noise_scale` (1.8 and 3, assumed), for strike
-and spare balls alike; the two-hander's and the cranker's are the pro's.
+league bowlers' sigmas are the shape's times their :attr:`Profile.noise_scale`, for strike and spare
+balls alike, fitted (issue 48) to the averages their names say over 3-game blocks with transition
+and the mover (seeds 101-103; held out: benchmarks/bench_bowling_calibration.py ``--part games``):
+``league200`` x 0.5, ``league150`` x 1.65; their axis rotations (55 and 45 deg, from 45 and 30) were
+raised first, so that their strike balls enter at 4.6 and 3.1 deg and carry. The two-hander's and
+the cranker's noises are the pro's.
 
 Compute only.
 """
