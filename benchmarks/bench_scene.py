@@ -41,8 +41,9 @@ Parts:
     the :data:`CEM_ELITE` best refit the mean and the per-coordinate sigma (not below
     :data:`CEM_SIGMA_MIN`).
 
-  Each stops at the first rollout that meets every fate at h, h/2 and h/4. Printed per scene: solved (of the
-  seeds) and the median rollouts to meet (unsolved counted as the budget).
+  Each stops after the batch in which a rollout first meets every fate at h, h/2 and h/4, all of
+  that batch's rollouts and ladder checks counted (as nbst's engine counts). Printed per scene:
+  solved (of the seeds) and the median rollouts to meet (unsolved counted as the budget).
 """
 from __future__ import annotations
 
@@ -176,9 +177,11 @@ class Objective:
     """The room's cost over controls scaled to [0, 1]^D, counting rollouts; stops at the first solved.
 
     The same cost and the same test as ``nbst.scene.solve`` (its default ladder): the judge's graded
-    cost; a rollout that meets every fate at h is rolled out at h/2 and h/4 too (counted), and adds
-    ``LADDER_PENALTY`` per rung it misses there plus each rung's graded cost (at most
-    ``LADDER_FAR``); it solves when it meets every fate at all three."""
+    cost; a rollout that meets every fate at h is rolled out at h/2, and at h/4 if it held there
+    (``nbst.scene.search.ladder_check``, counted), and adds ``LADDER_PENALTY`` per rung missed plus
+    each rung's graded cost (at most ``LADDER_FAR``, and that for a rung not rolled out); it solves
+    when it meets every fate at all three. Counted as nbst's engine counts: every rollout of the
+    batch in which the first such rollout came, its ladder checks included."""
 
     def __init__(self, sim: SceneSim, budget: int, ladder: tuple = ()):
         self.sim, self.budget, self.ladder = sim, budget, ladder
@@ -187,25 +190,27 @@ class Objective:
         self.met_at: int | None = None
 
     def __call__(self, us: np.ndarray) -> np.ndarray:
-        from nbst.scene.search import LADDER_FAR, LADDER_PENALTY
+        from nbst.scene.search import LADDER_PENALTY, ladder_check
 
         us = np.clip(np.asarray(us, dtype=float).reshape(-1, self.sim.fates.dim), 0.0, 1.0)
         us = us[:self.budget - self.used]
         if not len(us):
             raise _Budget
         outs = self.sim.run(self.lo + (self.hi - self.lo) * us)
-        costs = []
+        costs, held = [], False
         for r in outs:
             self.used += 1
             c = WARNED_COST if r.warnings else r.judgement.cost
-            if r.judgement.met and not r.warnings:
-                rungs = [s.rollout(r.x) for s in self.ladder]
-                self.used += len(rungs)
-                misses = sum(not (q.judgement.met and not q.warnings) for q in rungs)
-                c += LADDER_PENALTY * misses + sum(min(q.cost, LADDER_FAR) for q in rungs)
-                if misses == 0 and self.met_at is None:
-                    self.met_at = self.used
+            if r.judgement.met and not r.warnings and self.ladder:
+                misses, far, n = ladder_check(r.x, self.ladder)
+                self.used += n
+                c += LADDER_PENALTY * misses + far
+                held = held or misses == 0
+            elif r.judgement.met and not r.warnings:
+                held = True
             costs.append(c)
+        if held:  # the whole batch counts, its ladder checks too: as nbst's engine counts
+            self.met_at = self.used
         if self.met_at is not None or self.used >= self.budget:
             raise _Budget  # solved, or the budget spent (a truncated batch is not told)
         return np.array(costs)
@@ -248,17 +253,21 @@ def run_cem(f: Objective, rng: np.random.Generator) -> None:
 GENERIC: dict[str, Callable[[Objective, np.random.Generator], None]] = {"pycma": run_cma, "PS": run_ps, "CEM": run_cem}
 
 
-def part_versus(scenes: list[str], seeds: list[int], budget: int, jobs: int) -> None:
+def part_versus(scenes: list[str], seeds: list[int], budget: int, jobs: int,
+                methods: tuple[str, ...] = ("nbst", *GENERIC)) -> None:
     print(f"## versus: the same scenes, cost and budget ({budget} rollouts), seeds {seeds}; solved and median rollouts "
           f"to meet (unsolved counted as the budget)")
     for name in scenes:
         fates, model = load_fates(name)
         line = []
         t0 = time.perf_counter()
-        counts: dict[str, list[int]] = {"nbst": []}
-        for s in seeds:
-            res = _solve(name, s, budget, jobs)
-            counts["nbst"].append(res.rollouts if res.met else -1)  # met: every fate at h, h/2 and h/4
+        counts: dict[str, list[int]] = {}
+        if "nbst" in methods:
+            counts["nbst"] = []
+            for s in seeds:
+                res = _solve(name, s, budget, jobs)
+                counts["nbst"].append(res.rollouts if res.met else -1)  # met: every fate at h, h/2 and h/4
+                print(f"  {name} nbst seed {s}: {counts['nbst'][-1]}", flush=True)
         rungs = []
         for k in (2, 4):
             mk = copy.copy(model)
@@ -266,6 +275,8 @@ def part_versus(scenes: list[str], seeds: list[int], budget: int, jobs: int) -> 
             rungs.append(SceneSim(fates, mk))
         with quiet_mujoco_warnings(), SceneSim(fates, model, jobs=jobs) as sim:
             for meth, fn in GENERIC.items():
+                if meth not in methods:
+                    continue
                 counts[meth] = []
                 for s in seeds:
                     f = Objective(sim, budget, tuple(rungs))
@@ -274,6 +285,7 @@ def part_versus(scenes: list[str], seeds: list[int], budget: int, jobs: int) -> 
                     except _Budget:
                         pass
                     counts[meth].append(f.met_at if f.met_at is not None else -1)
+                    print(f"  {name} {meth} seed {s}: {counts[meth][-1]}", flush=True)
         for meth, c in counts.items():
             solved = sum(1 for a in c if a > 0)
             med = _median([a if a > 0 else budget for a in c])
@@ -291,6 +303,8 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2, help="threads for the searches (default 2)")
     ap.add_argument("--rate-rollouts", type=int, default=None, help="rollouts timed per rate row (default 400)")
     ap.add_argument("--quick", action="store_true", help="seeds 1-3, budget 1000, 200 rollouts timed")
+    ap.add_argument("--methods", default=None,
+                    help=f"comma-separated, of versus: nbst,{','.join(GENERIC)} (default: every one)")
     a = ap.parse_args()
     scenes = a.scenes.split(",") if a.scenes else example_names()
     seeds = seeds_of(a.seeds or ("1-3" if a.quick else "1-5"))
@@ -302,7 +316,7 @@ def main() -> None:
     if a.part in ("builtins", "all"):
         part_builtins(scenes, seeds, budget, a.jobs)
     if a.part in ("versus", "all"):
-        part_versus(scenes, seeds, budget, a.jobs)
+        part_versus(scenes, seeds, budget, a.jobs, tuple(a.methods.split(",")) if a.methods else ("nbst", *GENERIC))
 
 
 if __name__ == "__main__":

@@ -16,13 +16,18 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
   half the time;
 * **insert**: the paper's elitism, :data:`PER_SIGNATURE` members per signature, subsumed signatures
   culled past :data:`POPULATION`;
+* **one controlled body** (one block: crossover has nothing to swap, and the GA's uniform
+  randomize of the only block is a fresh random trial): no GA; :data:`ONE_BODY_EXPLORE` exploring
+  trials, then the engine's CMA-ES restarts (population :data:`ONE_BODY_POPSIZE`) from the best
+  trial, each generation ranked by (distance, cost) (the engine's ``cma_by_key``);
 * the engine's **distance** of a trial is 3 per unmet bit plus, with a ladder (finer timesteps,
-  h/2 and h/4), 1 per rung where a trial that meets every fate does not (those rollouts counted);
-  its **cost** the judge's graded cost plus :data:`LADDER_PENALTY` per such rung and each rung's
-  own graded cost (at most :data:`LADDER_FAR`: how far the finer step is from meeting them, so that
-  the search is drawn to motions that hold): the best is the
-  lowest (distance, cost), and the search stops when it is 0 (every fate met, and kept on the
-  ladder), or at the rollout budget. Asked for several answers, it goes on until that many
+  h/2 and h/4), 1 when a trial that meets every fate misses them there (:func:`ladder_check`: h/2,
+  then h/4 only if it held at h/2; those rollouts counted); its **cost** the judge's graded cost
+  plus :data:`LADDER_PENALTY` per rung missed and each rung's own graded cost (at most
+  :data:`LADDER_FAR`, and that for a rung not rolled out: how far the finer step is from meeting
+  them, so that the search is drawn to motions that hold): the best is the lowest (distance,
+  cost), and the search stops when it is 0 (every fate met, and kept on the ladder), or at the
+  rollout budget. Asked for several answers, it goes on until that many
   rollouts meet every fate (and hold), each with a contact sequence of its own (Chenney & Forsyth
   2000: the animator chooses).
 
@@ -48,8 +53,9 @@ from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
 from nbst.scene.rollout import SceneRollout, SceneSim
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "CREEP",
-           "LADDER_PENALTY", "LADDER_FAR", "SceneProgress", "SceneSearchResult", "signature_search", "noisy_probability",
-           "distance_of"]
+           "LADDER_PENALTY", "LADDER_FAR", "ONE_BODY_EXPLORE", "ONE_BODY_POPSIZE", "SceneProgress",
+           "SceneSearchResult", "signature_search", "noisy_probability",
+           "distance_of", "ladder_check"]
 
 #: The rollout budget when none is given (the CLI's --max-rollouts default too).
 DEFAULT_MAX_ROLLOUTS = 3000
@@ -69,6 +75,9 @@ INIT_PER_BIT = 3
 INIT_MAX = 160
 #: The creep's normal steps (unit cube), one drawn per child.
 CREEP = (0.01, 0.04, 0.15)
+#: One controlled body (one block: crossover has nothing to swap): exploring trials before the
+#: engine's CMA-ES restarts, and their population.
+ONE_BODY_EXPLORE, ONE_BODY_POPSIZE = 16, 12
 
 
 @dataclass(frozen=True)
@@ -109,8 +118,32 @@ class SceneSearchResult:
 
 def distance_of(r: SceneRollout, ladder_misses: int = 0) -> int:
     """The engine's distance of a rollout: 3 per unmet signature bit (every bit unmet when MuJoCo
-    warned), plus the ladder's misses of a rollout that meets every fate (0 to 2)."""
-    return 3 * sum(1 for b in r.signature if not b) + int(ladder_misses)
+    warned), plus 1 when a rollout that meets every fate misses them on the ladder (its misses
+    and how far each rung is from meeting them go in the cost)."""
+    return 3 * sum(1 for b in r.signature if not b) + (1 if ladder_misses else 0)
+
+
+def ladder_check(x: np.ndarray, ladder: tuple[SceneSim, ...]) -> tuple[int, float, int]:
+    """The ladder of a trial that meets every fate at h: its controls rolled out at each finer step
+    in turn (h/2, then h/4 only if every fate held at h/2: a rung after a miss is not rolled out).
+
+    Args:
+        x: (D,) the controls vector.
+        ladder: the sims at the finer steps, coarsest first.
+
+    Returns:
+        (misses, far, rollouts): the rungs missed (one not rolled out counts as missed), how far
+        they are from meeting every fate (each rung's graded cost, at most :data:`LADDER_FAR`;
+        ``LADDER_FAR`` for a rung not rolled out), and the rollouts spent.
+    """
+    far = 0.0
+    for k, s in enumerate(ladder):
+        q = s.rollout(x)
+        far += min(q.cost, LADDER_FAR)
+        if not (q.judgement.met and not q.warnings):
+            rest = len(ladder) - k - 1
+            return 1 + rest, far + LADDER_FAR * rest, k + 1
+    return 0, far, len(ladder)
 
 
 class _Scene:
@@ -204,10 +237,8 @@ class _Scene:
             met = r.judgement.met and not r.warnings
             misses, far = 0, 0.0
             if met and self.ladder:  # the finer steps: a miss there costs, and keeps the search going
-                rungs = [s.rollout(r.x) for s in self.ladder]
-                misses = sum(not (q.judgement.met and not q.warnings) for q in rungs)
-                far = sum(min(q.cost, LADDER_FAR) for q in rungs)  # how far each rung is from meeting them
-                spent += len(self.ladder)
+                misses, far, n = ladder_check(r.x, self.ladder)
+                spent += n
                 self.held[id(r)] = misses == 0
             if met and misses == 0 and r.sequence not in self.answers and len(self.answers) < self.want:
                 self.answers[r.sequence] = r
@@ -235,9 +266,9 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
             contact sequence of its own (the animator's choice, after Chenney & Forsyth 2000; the
             sim must record sequences, ``SceneSim(sequences=True)``), or the budget is spent.
         ladder: sims of the same scene at finer timesteps (h/2, h/4): a trial that meets every fate
-            is rolled out on each too (those rollouts count in the budget), and is an answer only if
-            it meets them there as well; a miss adds 1 to its distance and :data:`LADDER_PENALTY`
-            to its cost per rung.
+            is rolled out on each in turn while it holds (:func:`ladder_check`; those rollouts count
+            in the budget), and is an answer only if it meets them there as well; a miss adds 1 to
+            its distance and :data:`LADDER_PENALTY` per rung to its cost.
         callback: called with a :class:`SceneProgress` after each batch.
 
     Returns:
@@ -245,11 +276,15 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
     """
     S = _Scene(sim, answers, ladder)
     fates = sim.fates
-    eng = Engine(fates.dim, seed=rng, max_rollouts=max_rollouts, blocks=[list(range(b.start, b.stop)) for b in S.blocks],
-                 bits=S.bit, batch=BATCH, explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init=S.init,
-                 init_done=S.init_done, ga_batches=1, ga_fine=1, moves={"directed": S.directed}, creep=CREEP,
-                 prefer_unmet=True, population=POPULATION, per_signature=PER_SIGNATURE, cma=False, done=S.done,
-                 tournament=2)
+    blocks = [list(range(b.start, b.stop)) for b in S.blocks]
+    if len(blocks) > 1:  # the paper's GA: crossover of whole per-body blocks
+        how: dict[str, Any] = dict(explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init_done=S.init_done,
+                                   ga_batches=1, ga_fine=1, cma=False)
+    else:  # one controlled body: nothing to cross over; CMA-ES restarts after one exploring batch or two
+        how = dict(explore=ONE_BODY_EXPLORE, ga_batches=0, cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True)
+    eng = Engine(fates.dim, seed=rng, max_rollouts=max_rollouts, blocks=blocks, bits=S.bit, batch=BATCH, init=S.init,
+                 moves={"directed": S.directed}, creep=CREEP, prefer_unmet=True, population=POPULATION,
+                 per_signature=PER_SIGNATURE, done=S.done, tournament=2, **how)
     t0 = time.perf_counter()
 
     def tell() -> None:
