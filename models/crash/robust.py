@@ -291,7 +291,7 @@ def _gather(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int, la
     search's seed; rollouts run; searches run)."""
     from nbst.models.crash import search
 
-    members = [(np.asarray(start, dtype=float), "start")]
+    members: list[tuple[np.ndarray, object]] = [(np.asarray(start, dtype=float), "start")]
     used = runs = 0
     for k in range(POOL_SEARCHES):
         cap = min(POOL_ROLLOUTS, budget - used)
