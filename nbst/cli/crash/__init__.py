@@ -82,11 +82,11 @@ def register(sub) -> None:
                    help=with_limits(f"rollout budget of the search (default {DEFAULT_MAX_ROLLOUTS})", ROLLOUTS))
     _runner_flags(v)
     v.add_argument("--robust", type=ROBUST, nargs="?", const=DEFAULT_ROBUST_BUDGET, default=None, metavar="BUDGET",
-                   help=with_limits("after the search, maximise the probability that the script is met under "
-                                    "driver noise (the rollout room's robust maximiser: common random numbers, "
-                                    f"successive halving; BUDGET noisy rollouts, default {DEFAULT_ROBUST_BUDGET}) and "
-                                    "write the pick, "
-                                    "the latest that keeps its outcome at 2, 1 and 0.5 ms", ROBUST))
+                   help=with_limits("after the search, look for the crash that meets the script most often under "
+                                    "driver noise: short searches gather other crashes that meet it, they race on "
+                                    "common noisy re-drives, the winner is centred and climbed by the rollout room's "
+                                    f"robust maximiser (BUDGET noisy rollouts, default {DEFAULT_ROBUST_BUDGET}); the "
+                                    "pick written keeps its outcome at 2, 1 and 0.5 ms", ROBUST))
     v.add_argument("--samples", type=SOLVE_SAMPLES_FLAG, default=None, metavar="N",
                    help=with_limits("estimate the probability that the crash written meets the script under "
                                     "driver noise from N noisy re-drives, with its 95 %% Wilson interval, into the "
