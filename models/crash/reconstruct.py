@@ -488,15 +488,24 @@ def _fit(P: _Problem, engines: list, max_rollouts: int) -> None:
             owners.append(e)
         if not sum(len(r) for r in rows):
             break
-        U_all = np.concatenate([r for r in rows if len(r)]).copy()
+        width = max(r.shape[1] for r in rows)
+        U_all = np.concatenate([np.pad(r, ((0, 0), (0, width - r.shape[1])), constant_values=0.5)
+                                for r in rows if len(r)])
         at = 0
         for e, r in zip(owners, rows):
             for kf, val in e.get("fix", {}).items():  # a profile: this coordinate held
                 U_all[at:at + len(r), kf] = val
             at += len(r)
-        phys = _stack([e["phys"] for e, r in zip(owners, rows) for _ in range(len(r))])
+        rows_phys = []
+        for e, r in zip(owners, rows):
+            if e.get("joint") is not None:  # the pilot's joint fit: the unknowns are coordinates too
+                ph = _phys_values(P.case, r[:, P.S.dim:]) if len(r) else {}
+                rows_phys += [{key: v[j] for key, v in ph.items()} for j in range(len(r))]
+            else:
+                rows_phys += [e["phys"]] * len(r)
+        phys = _stack(rows_phys)
         targets = [e["targets"] for e, r in zip(owners, rows) for _ in range(len(r))]
-        told = P.run(U_all, phys, targets)
+        told = P.run(U_all[:, :P.S.dim], phys, targets)
         k = 0
         for e, r in zip(owners, rows):
             if not len(r):
@@ -853,10 +862,13 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
                 corr = (momentum_speeds(mass, imp, app, ev_rest, mu)
                         - momentum_speeds(mass, imp, app, [v.rest for v in vo], mu))
                 target = np.clip(sim + GAIN * corr, 0.5, hi_speed)
-        eB = {"eng": _engine(S.dim, rng, pilot_budget - P.used, start, sigma=SIGMA_PILOT if start is None else SIGMA_FIT,
+        npc = len(phys_coords(case))  # the whole evidence: intents and unknowns fitted together
+        startB = None if start is None else np.concatenate([start, np.full(npc, 0.5)])
+        eB = {"eng": _engine(S.dim + npc, rng, pilot_budget - P.used, startB,
+                             sigma=SIGMA_PILOT if start is None else SIGMA_FIT,
                              explore=EXPLORE if start is None else BATCH, spread=SIGMA_FIT,
                              uniform=EXPLORE if start is None else 0),
-              "phys": mid, "targets": P.ps, "done_at": PILOT_DONE, "told": []}
+              "phys": mid, "targets": P.ps, "done_at": PILOT_DONE, "told": [], "joint": npc}
         _fit(P, [eB], pilot_budget)
         pilot_told += eB["told"]
         if os.environ.get("NBST_RECON_DEBUG"):
@@ -879,7 +891,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
             for ph1, tg in specs[k:k + DRAW_PARALLEL]:
                 pool = met + accepted  # warm starts: the fits that met the stated evidence so far
                 base = pool[int(rng.integers(len(pool)))] if pool else pilot_best
-                group.append({"eng": _engine(S.dim, rng, per, _warm(case, S, base, mid, ph1, screen), sigma=SIGMA_DRAW,
+                group.append({"eng": _engine(S.dim, rng, per, _warm(case, S, base, base.phys, ph1, screen), sigma=SIGMA_DRAW,
                                              explore=BATCH // 2, spread=SIGMA_DRAW, uniform=DRAW_UNIFORM),
                               "phys": ph1, "targets": tg, "done_at": DRAW_DONE, "told": []})
             _fit(P, group, draw_end)
