@@ -25,7 +25,7 @@ built-in crossing-case in 2,400 rollouts, docs/results/crash.md). Here:
   prior over the Jacobian's volume; the weights here are equal (the Jacobian would cost one
   rollout per coordinate a draw, and the prior is uniform): an approximation, said so.
 
-The fits start near a **pilot** fit at the middle of the nuisance ranges: for two vehicles
+The fits start near a **pilot** fit (the intents and the unknowns together): for two vehicles
 with impact and rest positions, the classic reconstructionist's **momentum Monte Carlo**
 (linear momentum through the impact, each vehicle sliding to rest at sqrt(2 mu g d), the
 inputs drawn over their ranges: Brach and Brach, *Vehicle Accident Analysis and Reconstruction
@@ -33,16 +33,19 @@ Methods*, SAE International, the chapter on uncertainty and sensitivity (its Mon
 method); W. Bartlett and A. Fonda, *Evaluating Uncertainty in Accident Reconstruction with
 Finite Differences*, SAE 2003-01-0489; the Monte Carlo reconstruction of SAE 2001-01-3347)
 screens the speeds and gives the pilot its target speeds; then an engine fit of the whole
-evidence; each draw's warm start is the pilot's fit with the speeds scaled by the momentum
-balance at the draw's friction and masses.
+evidence, the unknowns coordinates too; each draw's warm start is a fit found so far with the
+speeds scaled by the momentum balance at the draw's friction and masses. Then the **profile
+probes** (:func:`_profile`: a speed held away from the accepted draws, the rest fitted; the
+profile likelihood's test, Raue et al., Bioinformatics 25, 2009) look for a ridge of equal fits
+the draws did not spread along.
 
 Each vehicle's impact speed (just before its first vehicle contact), delta-V (that contact's
 impulse over the drawn mass) and PDOF (principal direction of force, a clock: 12 from straight
 ahead, 3 from the right) are summarised over the accepted draws as a 90 % interval
 (:data:`LEVEL`: 5th to 95th percentile). A quantity whose interval spans at least :data:`WEAK`
 of its prior interval (the same quantity over the pilot's exploring rollouts that hit as the
-evidence says, or the driver's speed range), or that fewer than :data:`MIN_ACCEPTED` draws
-pin, is **not identifiable** from this evidence: its interval is reported at least as wide as
+evidence says, or the driver's speed range), a speed a profile probe moves, or one that fewer
+than :data:`MIN_ACCEPTED` draws pin, is **not identifiable** from this evidence: its interval is reported at least as wide as
 the prior's, never narrow.
 
 The rollouts run on :class:`PhysRunner`: the case's :class:`~.run.CrashRunner` whose batch
