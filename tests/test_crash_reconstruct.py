@@ -185,3 +185,30 @@ def test_residual_crush_is_evidence_for_a_crushing_type():
         got = t.o.vehicles[i].residual_crush
         assert 0.02 < got < 0.6, got
         assert t.dist[labels.index(f"{nm}.crush")] == pytest.approx(abs(got - 0.2) / 0.05)
+
+
+def test_skid_and_edr_evidence_read_the_track_as_a_reconstructionist_would():
+    """A car at 20 m/s locks every wheel at 1.0 s and slides at 8 m/s^2 into the impact at 1.5 s:
+    its skid starts where it locked (x = 20 m) and runs 20 x 0.5 - 4 x 0.25 = 9 m to the impact
+    (the kinematics of constant deceleration); an EDR 1 s before the impact reads 20 m/s."""
+    from types import SimpleNamespace
+
+    period, periods = 0.02, 100
+    t = np.arange(periods) * period
+    tb, a, v0 = 1.0, 8.0, 20.0
+    x = np.where(t < tb, v0 * t, v0 * tb + v0 * (t - tb) - a / 2 * (t - tb) ** 2)
+    speed = np.where(t < tb, v0, v0 - a * (t - tb))
+    track = {"pos": np.stack([x, np.zeros(periods)], axis=-1)[None, :, None, :], "speed": speed[None, :, None],
+             "locked": (t >= tb)[None, :, None], "period": period}
+    hit = 1.5
+    xi = v0 * tb + v0 * (hit - tb) - a / 2 * (hit - tb) ** 2
+    vo = SimpleNamespace(hits=[(1, hit)], impact_speed=v0 - a * (hit - tb), impact_pos=(xi, 0.0))
+    o = SimpleNamespace(vehicles=[vo], order_ok=True)
+    case = SimpleNamespace(script=SimpleNamespace(n=1))
+    ps = [ev.Piece("A.skid.start", 0, "skid_start", (20.0, 0.0), 0.5),
+          ev.Piece("A.skid.length", 0, "skid_length", (9.0,), 0.2),
+          ev.Piece("A.edr", 0, "edr", (20.0, 1.0), 0.5)]
+    d = ev.distances(case, ps, o, track, 0)
+    assert d[0] < 0.05 / 0.5 and d[1] < 0.05 / 0.2 and d[2] < 0.01 / 0.5, d
+    off = [ev.Piece("A.skid.length", 0, "skid_length", (10.0,), 0.2)]
+    assert ev.distances(case, off, o, track, 0)[0] == pytest.approx(1.0 / 0.2, abs=0.3)
