@@ -167,8 +167,8 @@ def cmd_reconstruct(args) -> int:
     elif not args.quiet:
         state = (f"{out['accepted']} of {out['draws']} draws meet the evidence" if rec.found else
                  "no draw meets the evidence within the budget: the intervals are the prior's")
-        print(f"reconstruct {case.script.name}: {state} in {out['rollouts']} rollouts (pilot {out['pilot_rollouts']}), "
-              f"seed {seed}; 90 % intervals; wrote {args.output}")
+        print(f"reconstruct {case.script.name} in {out['rollouts']} rollouts (pilot {out['pilot_rollouts']}), seed "
+              f"{seed}: {state}; 90 % intervals; wrote {args.output}")
         for line in summary_lines(out):
             print(line)
     if rec.interrupted:
