@@ -6,6 +6,7 @@ generic optimisers. Prints figures; asserts nothing (not a test).
     python benchmarks/bench_scene.py --part rate --scenes snake-eyes,bank-shot
     python benchmarks/bench_scene.py --part builtins --seeds 1-5 --budget 2000
     python benchmarks/bench_scene.py --part versus --seeds 1-3 --budget 1000 --jobs 2
+    python benchmarks/bench_scene.py --part versus --scenes bank-shot --seeds 1-20 --methods nbst,pycma
 
 Parts:
 
