@@ -27,7 +27,7 @@ LADDER = (0.002, 0.001, 0.0005)
 
 
 def main(argv=None) -> int:
-    from nbst.models.crash import scene, vehicle
+    from nbst.models.crash import crush, scene, vehicle
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--types", default="sedan-crush,suv-crush,van-crush,sedan")
@@ -44,7 +44,7 @@ def main(argv=None) -> int:
                 c0 = time.process_time()
                 r = scene.barrier_pulse(t, v, timestep=h)
                 cpu = time.process_time() - c0
-                ees = vehicle.crush_ees(vt, {"front": r.residual}) * 3.6 if vt.crush else float("nan")
+                ees = crush.crush_ees(vt, {"front": r.residual}) * 3.6 if vt.crush else float("nan")
                 rows.append(r)
                 print(f"{t:12} {v:5.0f} {h * 1e3:5.2f} {r.t_zero * 1e3:6.1f} {r.dynamic_crush:6.3f} {r.residual:6.3f} "
                       f"{r.mean_g:6.1f} {r.peak_g:7.1f} {r.first_step_g:6.1f} {r.restitution:6.3f} "

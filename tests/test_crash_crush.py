@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from nbst.models.crash import road, scene, vehicle
+from nbst.models.crash import crush, road, scene, vehicle
 
 G = vehicle.G
 
@@ -22,11 +22,11 @@ def test_the_built_in_types_stay_rigid_and_their_twins_crush():
     # crush is opt-in: the built-in types have no crush joints; each has a crushing twin of the
     # same mass whose four zones are CRASH3 lines with positive A and B
     for name in ("sedan", "suv", "van"):
-        assert not vehicle.VEHICLE_TYPES[name].crush and vehicle.crush_zones(vehicle.VEHICLE_TYPES[name]) == []
+        assert not vehicle.VEHICLE_TYPES[name].crush and crush.crush_zones(vehicle.VEHICLE_TYPES[name]) == []
         twin = vehicle.VEHICLE_TYPES[f"{name}-crush"]
         assert twin.crush and twin.mass == vehicle.VEHICLE_TYPES[name].mass
-        zones = vehicle.crush_zones(twin)
-        assert [z.name for z in zones] == list(vehicle.CRUSH_ZONES)
+        zones = crush.crush_zones(twin)
+        assert [z.name for z in zones] == list(crush.CRUSH_ZONES)
         for z in zones:
             f = z.step_forces()
             assert (np.diff(f) > 0).all() and f[0] > z.width * z.a  # a rising staircase above w A
@@ -67,7 +67,7 @@ def test_energy_absorbed_is_the_crush_energy(pulse):
     assert pulse.crush_energy == pytest.approx(pulse.energy_lost, rel=0.08), pulse
     # so the EES from the residual crush is the impact speed within 5 % (a rigid wall: EES = speed)
     vt = vehicle.VEHICLE_TYPES["sedan-crush"]
-    ees = vehicle.crush_ees(vt, {"front": pulse.residual})
+    ees = crush.crush_ees(vt, {"front": pulse.residual})
     assert ees * 3.6 == pytest.approx(56.0, rel=0.05), (ees * 3.6, pulse)
 
 
@@ -110,17 +110,17 @@ def test_the_crash_file_records_residual_crush_and_ees():
     q = np.array(d.qpos)
     q[m.joint("v0_crush_front_0").qposadr[0]] = 0.1
     q[m.joint("v0_crush_front_1").qposadr[0]] = 0.05
-    rec = vehicle.crush_record(m, "v0", vt, q)
+    rec = crush.crush_record(m, "v0", vt, q)
     assert rec["zones"]["front"]["residual_m"] == pytest.approx(0.15)
     assert rec["zones"]["rear"]["residual_m"] == 0.0 and rec["zones"]["rear"]["energy_J"] == 0.0
-    z = vehicle.crush_zones(vt)[0]
+    z = crush.crush_zones(vt)[0]
     e = z.width * (z.a * 0.15 + z.b * 0.15 ** 2 / 2 + z.a ** 2 / (2 * z.b))
     assert rec["energy_J"] == pytest.approx(e, abs=0.1)
     assert rec["ees_kmh"] == pytest.approx(math.sqrt(2 * e / vt.mass) * 3.6, abs=0.01)
-    assert vehicle.crush_record(m, "v0", vehicle.VEHICLE_TYPES["sedan"], q) is None
+    assert crush.crush_record(m, "v0", vehicle.VEHICLE_TYPES["sedan"], q) is None
     # a millimetre of creep is no damage: no energy (CRASH3's A^2/2B alone would be kJ)
     q[m.joint("v0_crush_rear_0").qposadr[0]] = 0.001
-    assert vehicle.crush_record(m, "v0", vt, q)["zones"]["rear"]["energy_J"] == 0.0
+    assert crush.crush_record(m, "v0", vt, q)["zones"]["rear"]["energy_J"] == 0.0
 
 
 def test_a_crushing_crash_file_replays_bit_for_bit_and_records_its_crush(tmp_path):
@@ -152,7 +152,7 @@ def test_a_crushing_crash_file_replays_bit_for_bit_and_records_its_crush(tmp_pat
     assert np.array_equal(q, np.array(dd["final_qpos"]))
     assert res.outcomes[0].contacts, "the crossing's vehicles met"
     for v in dd["vehicles"]:
-        assert v["crushes"] and set(v["crush"]["zones"]) == set(vehicle.CRUSH_ZONES)
+        assert v["crushes"] and set(v["crush"]["zones"]) == set(crush.CRUSH_ZONES)
         assert v["crush"]["ees_kmh"] > 0.0
     # who was hit where: A's front and B's left side crushed
     assert dd["vehicles"][0]["crush"]["zones"]["front"]["residual_m"] > 0.02

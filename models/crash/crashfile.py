@@ -9,7 +9,7 @@ needs, nothing to look up elsewhere:
 * ``vehicles``: per vehicle its name, type and figures, its body, free joint, actuators (in
   control order), wheel bodies and tyre geoms, colour, the driver's intent (user units) and
   the fate asked (user units: rest region, heading and its tolerance, hits, ...), and for a
-  crushing type ``crush``: the residual crush per zone and the EES (:func:`.vehicle.crush_record`);
+  crushing type ``crush``: the residual crush per zone and the EES (:func:`.crush.crush_record`);
 * ``intents``: the drivers' intents, exact (SI; ``columns`` the intent names, one row per
   vehicle, null = off): what ``nbst crash probability`` perturbs;
 * ``qpos0``, ``qvel0``: the initial state (JSON floats by ``repr``: exact);
@@ -47,6 +47,7 @@ import re
 import numpy as np
 
 from nbst.errors import InputError
+from nbst.models.crash import crush as crush_mod
 from nbst.models.crash import driver as drv
 from nbst.models.crash import outcome as out_mod
 from nbst.models.crash import scene as scene_mod
@@ -153,8 +154,8 @@ def crash_dict(script: Script, xml: str, model, intents: np.ndarray, qpos0, qvel
             "colour": list(scene_mod.COLOURS[i % len(scene_mod.COLOURS)]),
             "start": {"x": v.x, "y": v.y, "heading_deg": math.degrees(v.heading)},
             "intent": intents_dict(script, intents)[i], "fate": fate_dict(script, i)})
-        if v.vtype.crush:  # residual crush per zone and the EES (vehicle.crush_record)
-            vehicles[-1]["crush"] = veh.crush_record(model, p, v.vtype, final_qpos)
+        if v.vtype.crush:  # residual crush per zone and the EES (crush.crush_record)
+            vehicles[-1]["crush"] = crush_mod.crush_record(model, p, v.vtype, final_qpos)
     d = {
         "schema_version": SCHEMA_VERSION, "kind": KIND, "name": script.name, "script": script.raw,
         "scene_xml": xml, "timestep": float(model.opt.timestep), "duration": script.duration,

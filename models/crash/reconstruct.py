@@ -74,7 +74,7 @@ from nbst.models.crash import driver as drv
 from nbst.models.crash import evidence as ev_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import search as search_mod
-from nbst.models.crash import vehicle as vehicle_mod
+from nbst.models.crash import crush as crush_mod
 from nbst.models.crash.run import BATCH, CrashRollouts, CrashRunner, scene_vehicles
 from nbst.models.crash.script import Range
 from nbst.models.crash.space import space_of
@@ -445,7 +445,7 @@ class _Problem:
         if self.crush:
             for k, o in enumerate(rolls.outcomes):
                 for i in self.crush:
-                    res = vehicle_mod.crush_residual(self.R.model, scene_mod.vehicle_prefix(i),
+                    res = crush_mod.crush_residual(self.R.model, scene_mod.vehicle_prefix(i),
                                                      self.case.script.vehicles[i].vtype, rolls.final_qpos[k])
                     o.vehicles[i].residual_crush = max(res.values()) if res else math.nan  # type: ignore[attr-defined]
         for k, o in enumerate(rolls.outcomes):

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nbst.models.crash import crush as crush_mod
 from nbst.models.crash import road as road_mod
 from nbst.models.crash import vehicle as veh
 from nbst.models.scene import full_precision
@@ -320,11 +321,11 @@ def barrier_pulse(type_name: str, speed_kmh: float = 56.0, *, timestep: float = 
     acc = np.concatenate([np.zeros(pad), acc, np.zeros(pad)])
     peak = float(cfc_filter(acc, timestep).max() / veh.G)
     after = vel[k1]
-    residual = veh.crush_residual(m, "v0", vt, d.qpos).get("front", 0.0)
+    residual = crush_mod.crush_residual(m, "v0", vt, d.qpos).get("front", 0.0)
     mass = float(L.mass[0])
     return BarrierPulse(speed_kmh=speed_kmh, t_zero=float(t_zero), dynamic_crush=float(xs[kz] - x0),
                         mean_g=float(before / t_zero / veh.G), peak_g=peak, restitution=float(-after / before),
                         duration=float((k1 - k0) * timestep), residual=float(residual),
                         energy_lost=0.5 * mass * (before ** 2 - after ** 2),
-                        crush_energy=float(sum(veh.crush_energy(vt, {"front": residual}).values())),
+                        crush_energy=float(sum(crush_mod.crush_energy(vt, {"front": residual}).values())),
                         first_step_g=float(acc[pad] / veh.G))

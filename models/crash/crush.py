@@ -1,0 +1,235 @@
+"""Crush zones: CRASH3's force per unit width A + B C on MuJoCo, residual crush and EES.
+
+A crushing vehicle type (``crush`` true in its data file: ``sedan-crush``, ``suv-crush``,
+``van-crush``; docs/crash.md "Crush") has four zones, front, rear, left and right
+(:func:`crush_zones`). The lower box keeps a core and each zone is a slab on a chain of slide
+joints ``{prefix}_crush_{zone}_{k}`` (:func:`add_crush`):
+
+* **plastic**: each joint's dry friction (``frictionloss``) is one step of CRASH3's line
+  F / w = A + B C (Campbell's linear model as NHTSA's CRASH3 uses it), its travel one step's
+  depth; a joint keeps what it crushed, so the sum of a zone's joints is its residual crush
+  (:func:`crush_residual`);
+* **elastic**: a damped joint spring between the body and the steps gives the structure's
+  spring-back (:data:`CRUSH_ELASTIC_DEFLECTION` at the first yield force);
+* **energy**: CRASH3's crush energy of a residual crush, w (A C + B C^2 / 2 + A^2 / (2 B)) per
+  zone (:meth:`CrushZone.energy`), and the energy-equivalent speed EES = sqrt(2 E / m)
+  (:func:`crush_ees`); the crash file's ``crush`` entry (:func:`crush_record`).
+
+A vehicle type here is read by its attributes (``crush``, ``crush_front_a`` ...: the fields of
+:class:`nbst.models.crash.vehicle.VehicleType`); the vehicle module builds the bodies and calls
+:func:`add_crush` with its contact bits. Plain MJCF: no controller, so a crash with crush replays
+and exports bit for bit.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["CRUSH_ZONES", "CRUSH_STEPS", "CRUSH_LINK_MASS", "CRUSH_SLAB_MASS", "CRUSH_SOLREF", "CRUSH_SOLIMP",
+           "CRUSH_ELASTIC_DEFLECTION", "CRUSH_ELASTIC_ZETA", "CRUSH_ELASTIC_MASS", "CRUSH_MIN_RESIDUAL",
+           "CRUSH_JOINT_SOLREF", "CRUSH_JOINT_SOLIMP", "CrushZone", "crush_zones", "crush_masses", "crush_joint_names",
+           "add_crush", "crush_residual", "crush_energy", "crush_ees", "crush_record"]
+
+
+def _six(x: float) -> float:
+    """x to 6 significant digits: numbers MuJoCo's XML writer keeps exactly."""
+    return float(f"{float(x):.6g}")
+
+
+#: Crush zones, in the order of every per-zone list.
+CRUSH_ZONES = ("front", "rear", "left", "right")
+#: Plastic elements per zone: the force-crush line A + B C is a staircase of this many steps
+#: (each step's force at its mid-depth, so each step's energy is the line's exactly).
+CRUSH_STEPS = {"front": 6, "rear": 6, "left": 4, "right": 4}
+#: Mass (kg) of each inner link of a zone's chain and of the zone's outer slab (taken out of the
+#: sprung mass: the vehicle's mass, CoM and inertia stay those of its type).
+CRUSH_LINK_MASS = 5.0
+CRUSH_SLAB_MASS = {"front": 30.0, "rear": 25.0, "left": 15.0, "right": 15.0}
+#: The slabs' contact (time constant s, damping ratio) and solimp: hard (impedance 0.99) so
+#: that the slab, not the penetration, takes the crush; its elastic give (a few cm) is the
+#: structure's spring-back (restitution ~0.06-0.09 at 16-56 km/h); critically damped, so that
+#: a slab does not bounce off what it hits (0.5 did: the contact broke for a step at 12 ms).
+CRUSH_SOLREF = (0.02, 1.0)
+CRUSH_SOLIMP = (0.99, 0.99, 0.001, 0.5, 2.0)
+#: The elastic element between the body and each zone's plastic steps (the structure's
+#: spring-back): a joint spring deflecting ``CRUSH_ELASTIC_DEFLECTION`` m at the zone's first
+#: yield force, damped at ``CRUSH_ELASTIC_ZETA`` of critical for the vehicle's mass, on a link of
+#: ``CRUSH_ELASTIC_MASS`` kg (heavy enough that the explicit spring is stable at 2 ms steps).
+#: 0 deflection: no elastic element.
+CRUSH_ELASTIC_DEFLECTION = 0.02
+CRUSH_ELASTIC_ZETA = 2.0
+CRUSH_ELASTIC_MASS = {"front": 40.0, "rear": 40.0, "left": 20.0, "right": 20.0}
+#: Residual crush below this (m) is no damage: a loaded zone's joints creep by a millimetre or
+#: two (braking, a blow on another zone), which CRASH3's energy must not read as crush (its
+#: A^2 / 2B term alone is 4 kJ for the sedan's rear).
+CRUSH_MIN_RESIDUAL = 0.005
+#: The plastic joints' dry friction and travel limits: as hard as MuJoCo's constraints go
+#: (impedance 0.9999), so that a joint loaded below its yield force creeps by at most ~1 cm
+#: through a crash (a softer one slides like a damper: every step yields at once).
+CRUSH_JOINT_SOLREF = (0.004, 1.0)
+CRUSH_JOINT_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+
+
+@dataclass(frozen=True)
+class CrushZone:
+    """One crush zone of a vehicle (body frame): its slab's centre and half sizes, the inward
+    unit ``axis`` along which it crushes, the crush width ``width`` (m), CRASH3's ``a`` (N/m)
+    and ``b`` (N/m^2), the ``depth`` (m) it can crush and its ``steps``."""
+
+    name: str
+    axis: tuple
+    centre: tuple
+    half: tuple
+    width: float
+    a: float
+    b: float
+    depth: float
+    steps: int
+
+    def step_forces(self) -> np.ndarray:
+        """Each plastic element's yield force (N): w (A + B c) at the mid-depth c of its step."""
+        d = self.depth / self.steps
+        return self.width * (self.a + self.b * (np.arange(self.steps) + 0.5) * d)
+
+    def energy(self, c: float) -> float:
+        """CRASH3's crush energy (J) of a residual crush ``c`` (m) across the zone's width:
+        w (A c + B c^2 / 2 + A^2 / (2 B)) for c >= :data:`CRUSH_MIN_RESIDUAL` (the last term:
+        the energy taken without residual crush, below the no-damage speed), 0 below it."""
+        if c < CRUSH_MIN_RESIDUAL:
+            return 0.0
+        return self.width * (self.a * c + self.b * c * c / 2 + self.a ** 2 / (2 * self.b))
+
+
+def crush_zones(vt) -> list[CrushZone]:
+    """The four :class:`CrushZone` of a crushing type (front and rear full width, the sides
+    between them), [] for a rigid one."""
+    if not vt.crush:
+        return []
+    front = vt.a + vt.front_overhang
+    rear = front - vt.length
+    zc = (vt.clearance + vt.belt) / 2 - vt.cg_height
+    hz = (vt.belt - vt.clearance) / 2
+    fd, rd, sd = vt.crush_front_depth, vt.crush_rear_depth, vt.crush_side_depth
+    w = vt.width
+    ls = vt.length - fd - rd
+    xs = (rear + rd + front - fd) / 2
+    return [
+        CrushZone("front", (-1.0, 0.0, 0.0), (front - fd / 2, 0.0, zc), (fd / 2, w / 2, hz), w,
+                  vt.crush_front_a, vt.crush_front_b, fd, CRUSH_STEPS["front"]),
+        CrushZone("rear", (1.0, 0.0, 0.0), (rear + rd / 2, 0.0, zc), (rd / 2, w / 2, hz), w,
+                  vt.crush_rear_a, vt.crush_rear_b, rd, CRUSH_STEPS["rear"]),
+        CrushZone("left", (0.0, -1.0, 0.0), (xs, w / 2 - sd / 2, zc), (ls / 2, sd / 2, hz), ls,
+                  vt.crush_side_a, vt.crush_side_b, sd, CRUSH_STEPS["left"]),
+        CrushZone("right", (0.0, 1.0, 0.0), (xs, -(w / 2 - sd / 2), zc), (ls / 2, sd / 2, hz), ls,
+                  vt.crush_side_a, vt.crush_side_b, sd, CRUSH_STEPS["right"]),
+    ]
+
+
+def crush_masses(vt) -> list[tuple[float, np.ndarray]]:
+    """(mass, position) of every crush body (links and slab) of ``vt``, body frame."""
+    out = []
+    for z in crush_zones(vt):
+        el = CRUSH_ELASTIC_MASS[z.name] if CRUSH_ELASTIC_DEFLECTION > 0 else 0.0
+        out.append(((z.steps - 1) * CRUSH_LINK_MASS + CRUSH_SLAB_MASS[z.name] + el, np.array(z.centre)))
+    return out
+
+
+def crush_joint_names(prefix: str, zone: CrushZone) -> list[str]:
+    """The plastic joints of ``zone`` of vehicle ``prefix``, outermost last."""
+    return [f"{prefix}_crush_{zone.name}_{k}" for k in range(zone.steps)]
+
+
+def add_crush(spec, body, vt, prefix: str, rgba, *, contype: int, conaffinity: int, friction: float) -> None:
+    """The crush zones of ``vt`` on ``body``: per zone a chain of ``steps`` bodies on slide
+    joints along the zone's inward axis, each joint with dry friction (``frictionloss``) equal
+    to its step's force and a travel of one step, the outermost carrying the zone's slab; the
+    vehicle's own crush bodies and its body do not collide with one another."""
+    import mujoco
+
+    GT = mujoco.mjtGeom
+    slabs = []
+    for z in crush_zones(vt):
+        forces = z.step_forces()
+        step = z.depth / z.steps
+        parent = body
+        if CRUSH_ELASTIC_DEFLECTION > 0:
+            parent = body.add_body(name=f"{prefix}_crush_{z.name}_elastic_link", pos=[_six(c) for c in z.centre])
+            k_el = forces[0] / CRUSH_ELASTIC_DEFLECTION
+            j = parent.add_joint(name=f"{prefix}_crush_{z.name}_elastic", type=mujoco.mjtJoint.mjJNT_SLIDE,
+                                 axis=list(z.axis))
+            j.stiffness = [_six(k_el), 0.0, 0.0]
+            j.damping = [_six(2 * CRUSH_ELASTIC_ZETA * math.sqrt(k_el * vt.mass)), 0.0, 0.0]
+            j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            j.range = [-0.01, _six(1.5 * forces[-1] / k_el)]
+            j.solref_limit = list(CRUSH_JOINT_SOLREF)
+            j.solimp_limit = list(CRUSH_JOINT_SOLIMP)
+            g = parent.add_geom(name=f"{prefix}_crush_{z.name}_elastic_mass", type=GT.mjGEOM_SPHERE, size=[0.02, 0, 0],
+                                mass=_six(CRUSH_ELASTIC_MASS[z.name]), rgba=[0.3, 0.3, 0.3, 1.0], group=3)
+            g.contype = g.conaffinity = 0
+        for k, name in enumerate(crush_joint_names(prefix, z)):  # the plastic steps, links of CRUSH_LINK_MASS
+            last = k == z.steps - 1
+            link = parent.add_body(name=f"{prefix}_crush_{z.name}" if last else f"{name}_link",
+                                   pos=[_six(c) for c in z.centre] if k == 0 and parent is body else [0.0, 0.0, 0.0])
+            j = link.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(z.axis))
+            j.frictionloss = _six(forces[k])
+            j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            j.range = [0.0, _six(step)]
+            j.solref_friction = list(CRUSH_JOINT_SOLREF)
+            j.solimp_friction = list(CRUSH_JOINT_SOLIMP)
+            j.solref_limit = list(CRUSH_JOINT_SOLREF)
+            j.solimp_limit = list(CRUSH_JOINT_SOLIMP)
+            if not last:  # a link's mass on a small sphere that touches nothing (see the hubs)
+                g = link.add_geom(name=f"{name}_mass", type=GT.mjGEOM_SPHERE, size=[0.02, 0, 0],
+                                  mass=_six(CRUSH_LINK_MASS), rgba=[0.3, 0.3, 0.3, 1.0], group=3)
+                g.contype = g.conaffinity = 0
+            parent = link
+        slab = parent  # the last link carries the slab
+        g = slab.add_geom(name=f"{prefix}_crush_{z.name}", type=GT.mjGEOM_BOX, size=[_six(h) for h in z.half],
+                          mass=_six(CRUSH_SLAB_MASS[z.name]), rgba=list(rgba))
+        g.contype = contype
+        g.conaffinity = conaffinity
+        g.condim = 3
+        g.priority = 3
+        g.friction = [friction, 0.0, 0.0]
+        g.solref = list(CRUSH_SOLREF)
+        g.solimp = list(CRUSH_SOLIMP)
+        slabs.append(slab.name)
+    for i, a in enumerate(slabs):
+        spec.add_exclude(bodyname1=prefix, bodyname2=a)
+        for b in slabs[i + 1:]:
+            spec.add_exclude(bodyname1=a, bodyname2=b)
+
+
+def crush_residual(model, prefix: str, vt, qpos) -> dict:
+    """{zone: crush (m)} of vehicle ``prefix`` (type ``vt``) in state ``qpos``: the sum of the
+    zone's plastic joints (what stays once the contact lets go: the residual crush); {} for a
+    rigid type."""
+    out = {}
+    for z in crush_zones(vt):
+        out[z.name] = float(sum(qpos[model.joint(n).qposadr[0]] for n in crush_joint_names(prefix, z)))
+    return out
+
+
+def crush_energy(vt, residual: dict) -> dict:
+    """{zone: CRASH3 crush energy (J)} of ``residual`` ({zone: m})."""
+    return {z.name: z.energy(max(0.0, residual.get(z.name, 0.0))) for z in crush_zones(vt)}
+
+
+def crush_ees(vt, residual: dict) -> float:
+    """Energy-equivalent speed (m/s): sqrt(2 E / m), E the crush energy of all zones."""
+    return math.sqrt(2.0 * sum(crush_energy(vt, residual).values()) / vt.mass)
+
+
+def crush_record(model, prefix: str, vt, qpos) -> dict | None:
+    """The crash file's ``crush`` entry of a vehicle (docs/formats: per zone the residual crush,
+    width, A, B and energy; the total energy and the EES), None for a rigid type."""
+    if not vt.crush:
+        return None
+    res = crush_residual(model, prefix, vt, qpos)
+    en = crush_energy(vt, res)
+    zones = {z.name: {"residual_m": round(res[z.name], 4), "width_m": _six(z.width), "A_N_per_m": z.a,
+                      "B_N_per_m2": z.b, "energy_J": round(en[z.name], 1)} for z in crush_zones(vt)}
+    return {"zones": zones, "energy_J": round(sum(en.values()), 1),
+            "ees_kmh": round(crush_ees(vt, res) * 3.6, 2)}
