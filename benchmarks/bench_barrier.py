@@ -29,7 +29,7 @@ LADDER = (0.002, 0.001, 0.0005)
 def main(argv=None) -> int:
     from nbst.models.crash import crush, scene, vehicle
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     ap.add_argument("--types", default="sedan-crush,suv-crush,van-crush,sedan")
     ap.add_argument("--speeds", default="56,16")
     a = ap.parse_args(argv)

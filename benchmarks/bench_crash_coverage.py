@@ -35,7 +35,7 @@ def main() -> int:
     from nbst.models.crash import reconstruct as rc
     from nbst.models.mjsearch.probability import wilson
 
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], allow_abbrev=False)
     ap.add_argument("--cases", type=int, default=20)
     ap.add_argument("--from", dest="start", type=int, default=0, help="first case index")
     ap.add_argument("--budget", type=int, default=rc.MAX_ROLLOUTS)
