@@ -177,21 +177,22 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=lambda it: -LONGEST.get(it.nodeid, 0.0))  # stable: the rest keep their order
 
 
-#: The slow tier's longest tests (seconds, ``pytest -m slow --durations``, 2 cores, 2026-12-06):
+#: The slow tier's longest tests (seconds, ``pytest -m slow --durations``, 2 cores, 2026-12-06, 22:35 UTC):
 #: they are handed out first, so that the last minutes of ``-n auto`` are not one long test on
 #: one core while the other idles (longest first; the order of the rest is pytest's).
 LONGEST = {
-    "tests/test_crash_run.py::test_the_benchmarks_planted_scripts_ask_two_contacts_and_their_hidden_intents_meet_them": 153,
-    "tests/test_docs.py::test_every_command_in_the_doc_runs[bowling.md]": 90,
-    "tests/test_crash_run.py::test_a_planted_script_with_min_p_has_a_hidden_answer_its_noisy_drivers_meet_that_often": 89,
-    "tests/test_docs.py::test_every_command_in_the_doc_runs[README.md]": 86,
-    "tests/test_docs.py::test_every_command_in_the_doc_runs[render.md]": 78,
-    "tests/test_setup.py::test_the_groups_compile_no_kernel_in_common": 59,
-    "tests/test_crash_run.py::test_reconstruct_recovers_the_planted_crossing_from_its_rest_and_impact_positions": 38,
-    "tests/test_docs.py::test_every_command_in_the_doc_runs[results/disks.md]": 26,
-    "tests/test_docs.py::test_every_command_in_the_doc_runs[crash.md]": 23,
-    "tests/test_crash_run.py::test_solve_meets_the_short_script_and_the_cli_replays_it": 22,
-    "tests/test_docs.py::test_every_command_in_the_doc_runs[mujoco.md]": 20,
+    "tests/test_crash_run.py::test_the_benchmarks_planted_scripts_ask_two_contacts_and_their_hidden_intents_meet_them": 121,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[bowling.md]": 96,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[README.md]": 90,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[render.md]": 86,
+    "tests/test_crash_run.py::test_a_planted_script_with_min_p_has_a_hidden_answer_its_noisy_drivers_meet_that_often": 66,
+    "tests/test_crash_reconstruct.py::test_a_noise_free_planted_head_on_has_intervals_that_hold_the_truth_and_conserve_momentum": 41,
+    "tests/test_setup.py::test_the_groups_compile_no_kernel_in_common": 38,
+    "tests/test_crash_reconstruct.py::test_the_rear_end_from_rest_positions_alone_is_flagged_not_identifiable": 25,
+    "tests/test_scene_examples.py::test_the_example_is_solved_at_seed_1_and_replays[billiards]": 23,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[results/disks.md]": 17,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[results/bowling.md]": 17,
+    "tests/test_docs.py::test_every_command_in_the_doc_runs[crash.md]": 16,
 }
 
 
