@@ -98,7 +98,7 @@ def summary_lines(out: dict) -> list[str]:
             continue
         flag = lambda x: "" if not x or x.get("identifiable", True) else " NOT IDENTIFIABLE"  # noqa: E731
         lines.append(f"  {v['name']}: impact speed {_iv(s, 'km/h')}{flag(s)}, delta-V {_iv(dv, 'km/h')}{flag(dv)}, "
-                     f"PDOF {_iv(p, 'o clock', 1)}")
+                     "PDOF " + _iv(p, "o'clock", 1))
     c = out.get("closing_speed_kmh")
     if c:
         lines.append(f"  closing speed {_iv(c, 'km/h')}{'' if c.get('identifiable', True) else ' NOT IDENTIFIABLE'}")
