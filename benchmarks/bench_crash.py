@@ -1,7 +1,7 @@
 """The crash model's figures and the issue's targets (docs/crash.md).
 
     python benchmarks/bench_crash.py [--part P ...] [--jobs K] [--seeds 5] [--planted 10] [--planted-from 0]
-        [--planted-seeds 1] [--planted-unchecked] [--planted-min-p P] [--recon-budget 800]
+        [--planted-seeds 1] [--planted-unchecked] [--planted-min-p P]
 
 Parts (default: all, in this order; each prints its figures and its target, met or not):
 
@@ -28,10 +28,7 @@ Parts (default: all, in this order; each prints its figures and its target, met 
   meet the script at 2 ms: the width of its met funnel, which tells how hard it is for a search;
 * ``builtins``: every built-in script solved (3,000 rollouts, seed 1) and its signature at 1
   and 0.5 ms (the ladder; the rollover among them);
-* ``recon``: ``--planted`` planted 2-car crashes reconstructed from their rest poses (1 m,
-  10 deg) and impact positions (0.5 m), ``--recon-budget`` rollouts each (default 800): the
-  estimate's (the least-squares fit's) impact speed
-  against the truth (target within 1 m/s or 5 % in >= 8 of 10);
+* (the reconstruction's coverage and time: ``benchmarks/bench_crash_coverage.py``)
 * ``probability``: P(fates) of the solved t-bone from 100 noisy rollouts on ``--jobs`` threads,
   wall time (target <= 60 s on 2 cores);
 * ``robust``: ``--robust-scripts`` (default t-bone, stunt, rollover) solved at ``--robust-seeds``
@@ -54,7 +51,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-PARTS = ("physics", "speed", "chain", "planted", "hidden", "funnels", "builtins", "recon", "probability", "robust",
+PARTS = ("physics", "speed", "chain", "planted", "hidden", "funnels", "builtins", "probability", "robust",
          "sensitivity")
 ARGS = None
 
@@ -256,32 +253,6 @@ def builtins() -> None:
         print(line, flush=True)
 
 
-def recon() -> None:
-    from nbst.models.crash import planted as pl, reconstruct, script
-
-    good = 0
-    for k in range(ARGS.planted):
-        d, truth = pl.planted_case(200 + k)
-        case = script.script_from_dict(d)
-        t0, c0 = time.perf_counter(), time.process_time()
-        r = reconstruct.reconstruct(case, seed=1, max_rollouts=ARGS.recon_budget, jobs=ARGS.jobs)
-        errs = []
-        for i, tr in enumerate(truth):
-            errs.append(r.estimate[i]["impact_speed"] - tr["impact_speed"] if r.found else None)
-        ok = all(e is not None and (abs(e) <= 1.0 or abs(e) <= 0.05 * tr["impact_speed"]) for e, tr in zip(errs, truth))
-        good += ok
-        desc = ", ".join(f"{nm} truth {tr['impact_speed']:.2f} m/s " + (
-            f"est {tr['impact_speed'] + e:.2f} (median {r.ranges[i]['impact_speed'][1]:.2f}) "
-            f"[{r.ranges[i]['impact_speed'][0]:.2f}, "
-            f"{r.ranges[i]['impact_speed'][2]:.2f}]" if e is not None else "no fit")
-            for i, (nm, tr, e) in enumerate(zip(case.names(), truth, errs)))
-        print(f"  case {200 + k}: {len(r.fits)} fits, {r.rollouts} rollouts, {time.perf_counter() - t0:.0f} s wall, "
-              f"{time.process_time() - c0:.0f} s CPU: {desc}: "
-              f"{'within' if ok else 'OUTSIDE'}", flush=True)
-    print(f"reconstruction: {good} of {ARGS.planted} planted 2-car crashes within 1 m/s or 5 % with "
-          f"{ARGS.recon_budget:,} rollouts each (target >= 8 of 10)")
-
-
 def probability() -> None:
     from nbst.models.crash import robust, run, script, space
 
@@ -407,7 +378,6 @@ def main(argv=None) -> int:
     ap.add_argument("--planted-seeds", type=_seeds, default=[1], metavar="S,...",
                     help="search seeds of the planted part (default 1); with several, every script is searched "
                          "once per seed and the share solved is given with its Wilson 95 %% interval")
-    ap.add_argument("--recon-budget", type=int, default=800, help="rollouts per reconstruction (default 800)")
     from nbst.models.crash.robust import DEFAULT_NOISE, DEFAULT_ROBUST_BUDGET, DEFAULT_SAMPLES, NOISE_KINDS
 
     ap.add_argument("--robust-scripts", default="t-bone,stunt,rollover", metavar="A,B",

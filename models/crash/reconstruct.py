@@ -584,28 +584,6 @@ class Reconstruction:
     def found(self) -> bool:
         return bool(self.accepted)
 
-    @property
-    def fits(self) -> list:
-        """The accepted draws (the name the former fit used)."""
-        return self.accepted
-
-    @property
-    def estimate(self) -> list:
-        """Per vehicle {"impact_speed", "delta_v"} (m/s) of the accepted draw of least squares."""
-        if self.best is None:
-            return [{} for _ in self.names]
-        return [{"impact_speed": float(self.best.q[3 * i]), "delta_v": float(self.best.q[3 * i + 1])}
-                for i in range(len(self.names))]
-
-    @property
-    def ranges(self) -> list:
-        """Per vehicle {"impact_speed": (lo, median, hi)} (m/s): the 90 % interval and median."""
-        out = []
-        for x in self.intervals:
-            s = x.get("impact_speed")
-            out.append({"impact_speed": (s["lo"], s.get("median", math.nan), s["hi"])} if s else {})
-        return out
-
     def to_dict(self) -> dict:
         """The reconstruction as the crash file's ``reconstruction`` (km/h, o'clock; the field
         names of docs/formats.md)."""
