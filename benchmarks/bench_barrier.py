@@ -27,7 +27,7 @@ LADDER = (0.002, 0.001, 0.0005)
 
 
 def main(argv=None) -> int:
-    from nbst.models.crash import crush, scene, vehicle
+    from nbst.models.crash import checks, crush, vehicle
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     ap.add_argument("--types", default="sedan-crush,suv-crush,van-crush,sedan")
@@ -42,7 +42,7 @@ def main(argv=None) -> int:
             rows = []
             for h in LADDER:
                 c0 = time.process_time()
-                r = scene.barrier_pulse(t, v, timestep=h)
+                r = checks.barrier_pulse(t, v, timestep=h)
                 cpu = time.process_time() - c0
                 ees = crush.crush_ees(vt, {"front": r.residual}) * 3.6 if vt.crush else float("nan")
                 rows.append(r)

@@ -1,21 +1,21 @@
 """Crush zones (opt-in vehicle types ``*-crush``) against the physics they stand for.
 
 Each test asserts a physical fact with its tolerance; the experiment is
-nbst.models.crash.scene.barrier_pulse (the NHTSA NCAP frontal test: full width into a rigid
+nbst.models.crash.checks.barrier_pulse (the NHTSA NCAP frontal test: full width into a rigid
 wall at 56 km/h) and the crush read-outs of nbst.models.crash.vehicle (docs/crash.md "Crush")."""
 import math
 
 import numpy as np
 import pytest
 
-from nbst.models.crash import crush, road, scene, vehicle
+from nbst.models.crash import checks, crush, road, scene, vehicle
 
 G = vehicle.G
 
 
 @pytest.fixture(scope="module")
 def pulse():
-    return scene.barrier_pulse("sedan-crush", 56.0, timestep=0.002)
+    return checks.barrier_pulse("sedan-crush", 56.0, timestep=0.002)
 
 
 def test_the_built_in_types_stay_rigid_and_their_twins_crush():
@@ -76,14 +76,14 @@ def test_restitution_stays_in_the_published_band(pulse):
     # speed; falling as the speed rises (Monson and Germane, SAE 1999-01-0097). The barrier at
     # 56 km/h: 0.1-0.2; at 16 km/h: higher, at most 0.4
     assert 0.1 <= pulse.restitution <= 0.2, pulse
-    low = scene.barrier_pulse("sedan-crush", 16.0, timestep=0.002)
+    low = checks.barrier_pulse("sedan-crush", 16.0, timestep=0.002)
     assert pulse.restitution < low.restitution <= 0.4, low
 
 
 def test_the_pulse_holds_across_timesteps(pulse):
     # h, h/2, h/4: time to zero velocity within 8 %, crush within 5 %, mean deceleration within 8 %
     for h in (0.001, 0.0005):
-        r = scene.barrier_pulse("sedan-crush", 56.0, timestep=h)
+        r = checks.barrier_pulse("sedan-crush", 56.0, timestep=h)
         assert r.t_zero == pytest.approx(pulse.t_zero, rel=0.08), (h, r)
         assert r.dynamic_crush == pytest.approx(pulse.dynamic_crush, rel=0.05), (h, r)
         assert r.residual == pytest.approx(pulse.residual, rel=0.05), (h, r)
@@ -93,7 +93,6 @@ def test_the_pulse_holds_across_timesteps(pulse):
 def test_momentum_is_conserved_through_a_crushing_impact():
     # a crushing sedan into the back of a standing one: crush bodies are internal, so the two
     # vehicles' momentum along the impact is conserved within 5 % (wheels free, as for the rigid ones)
-    from nbst.models.crash import checks
 
     r = checks.impact("sedan-crush", 40.0)
     assert r.momentum_after == pytest.approx(r.momentum_before, rel=0.05)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nbst.errors import SolveError
+from nbst.models.crash import crush as crush_mod
 from nbst.models.crash import road as road_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import vehicle as veh
@@ -29,7 +30,7 @@ from nbst.models.crash import vehicle as veh
 __all__ = ["TIMESTEP", "RESTITUTION_SPEEDS", "RESTITUTION_MAX", "RESTITUTION_MIN", "RESTITUTION_HIGH_SPEED",
            "NCAP_DURATION_S", "NCAP_MEAN_G", "restitution_band", "braking_distance", "Tilt",
            "TILT_RESOLUTION", "TILT_RATE", "TILT_HOLD", "tilt_angle", "Impact", "impact", "Barrier",
-           "barrier", "restitution_curve"]
+           "barrier", "restitution_curve", "CFC_PULSE", "cfc_filter", "BarrierPulse", "barrier_pulse"]
 
 G = veh.G
 #: Step of the checks (s): the crash search's own step.
@@ -236,21 +237,27 @@ class Barrier:
     penetration: float
 
 
-def barrier(type_name: str, speed_kmh: float = 56.0, *, timestep: float = TIMESTEP) -> Barrier:
-    """A vehicle of ``type_name`` at ``speed_kmh`` square into a rigid wall (a barrier 2 m tall)."""
+def _at_the_wall(vt, speed: float, gap: float, timestep: float):
+    """(model, data, layout) of one vehicle of type ``vt`` driving square at ``speed`` m/s into a
+    rigid wall (a barrier 2 m tall, full width) that its front is ``gap`` m from."""
     import mujoco
 
-    vt = veh.VEHICLE_TYPES[type_name]
-    front = vt.a + vt.front_overhang
     wall_x = 5.0
     road = road_mod.Road(layout="straight", width=12.0, length=200.0,
                          barriers=(road_mod.Barrier((wall_x + road_mod.BARRIER_THICKNESS / 2, -4.0),
                                                     (wall_x + road_mod.BARRIER_THICKNESS / 2, 4.0), 2.0),))
-    v = scene_mod.SceneVehicle("v0", vt, wall_x - front - 0.3, 0.0, 0.0)
+    v = scene_mod.SceneVehicle("v0", vt, wall_x - (vt.a + vt.front_overhang) - gap, 0.0, 0.0)
     _, m = _model(road, [v], timestep)
     d = mujoco.MjData(m)
-    d.qpos[:], d.qvel[:] = scene_mod.initial_state(m, [v], [speed_kmh / 3.6])
-    L = scene_mod.layout(m, 1)
+    d.qpos[:], d.qvel[:] = scene_mod.initial_state(m, [v], [speed])
+    return m, d, scene_mod.layout(m, 1)
+
+
+def barrier(type_name: str, speed_kmh: float = 56.0, *, timestep: float = TIMESTEP) -> Barrier:
+    """A vehicle of ``type_name`` at ``speed_kmh`` square into a rigid wall (a barrier 2 m tall)."""
+    import mujoco
+
+    m, d, L = _at_the_wall(veh.VEHICLE_TYPES[type_name], speed_kmh / 3.6, 0.3, timestep)
     s = int(L.barrier_adr[0])
     bar = m.geom("barrier0").id
     before, pen = None, 0.0
@@ -273,3 +280,113 @@ def restitution_curve(type_name: str = "sedan", speeds_kmh=(15, 20, 30, 40, 50, 
                       timestep: float = TIMESTEP) -> np.ndarray:
     """(k, 2): closing speed (km/h) and restitution of :func:`impact` at each speed."""
     return np.array([[v, impact(type_name, v, timestep=timestep).restitution] for v in speeds_kmh])
+
+
+#: SAE J211's channel frequency class for vehicle-structure accelerations (integration to
+#: velocity and displacement, and the crash pulse): CFC 60.
+CFC_PULSE = 60.0
+
+
+def cfc_filter(x: np.ndarray, dt: float, cfc: float = CFC_PULSE) -> np.ndarray:
+    """``x`` (samples ``dt`` s apart) through SAE J211-1's phaseless digital filter of class
+    ``cfc``: a 2-pole Butterworth run forward, then backward (4 poles, no phase shift)."""
+    wd = 2.0 * math.pi * cfc * 2.0775
+    wa = math.sin(wd * dt / 2) / math.cos(wd * dt / 2)
+    den = 1.0 + math.sqrt(2.0) * wa + wa * wa
+    a0 = wa * wa / den
+    a1, a2 = 2 * a0, a0
+    b1 = -2.0 * (wa * wa - 1.0) / den
+    b2 = (-1.0 + math.sqrt(2.0) * wa - wa * wa) / den
+
+    def once(u):
+        y = np.empty_like(u)
+        y[:2] = u[:2]
+        for n in range(2, len(u)):
+            y[n] = a0 * u[n] + a1 * u[n - 1] + a2 * u[n - 2] + b1 * y[n - 1] + b2 * y[n - 2]
+        return y
+    x = np.asarray(x, dtype=float)
+    return once(once(x)[::-1])[::-1]
+
+
+@dataclass(frozen=True)
+class BarrierPulse:
+    """A vehicle square into a rigid wall, read as a crash test reads it (the sprung body's own
+    motion: the occupant compartment): ``speed_kmh``; ``t_zero`` (s), from first contact to zero
+    velocity; ``dynamic_crush`` (m), the body's travel over that time; ``mean_g`` = speed /
+    t_zero / g; ``peak_g`` the peak of the CFC 60 filtered deceleration; ``restitution`` =
+    rebound speed / speed at separation; ``duration`` (s) the contact time; ``residual`` (m)
+    the front zone's crush once the contact let go (0 for a rigid type); ``energy_lost`` (J)
+    the kinetic energy the impact took (before - after); ``crush_energy`` (J) CRASH3's energy
+    of the residual crush (0 for a rigid type); ``first_step_g`` the deceleration over the
+    first contact step."""
+
+    speed_kmh: float
+    t_zero: float
+    dynamic_crush: float
+    mean_g: float
+    peak_g: float
+    restitution: float
+    duration: float
+    residual: float
+    energy_lost: float
+    crush_energy: float
+    first_step_g: float
+
+
+def barrier_pulse(type_name: str, speed_kmh: float = 56.0, *, timestep: float = 0.002) -> BarrierPulse:
+    """The NHTSA NCAP frontal test (full width into a rigid barrier; 56 km/h) for a vehicle of
+    ``type_name`` at step ``timestep`` s: a plain ``mj_step`` loop, wheels free.
+
+    Args:
+        type_name: a registered vehicle type (``sedan-crush`` etc. crush; the others are rigid).
+        speed_kmh: the impact speed.
+        timestep: the step (s).
+
+    Returns:
+        the :class:`BarrierPulse`.
+
+    Raises:
+        SolveError: the vehicle never reached the wall or never left it within 2 s.
+    """
+    import mujoco
+
+    vt = veh.VEHICLE_TYPES[type_name]
+    v0 = speed_kmh / 3.6
+    m, d, L = _at_the_wall(vt, v0, 0.05, timestep)
+    s, ix, iq = int(L.barrier_adr[0]), int(L.qvel[0]), int(L.qpos[0])
+    vl: list[float] = []
+    xl: list[float] = []
+    tl: list[bool] = []
+    window, k0 = int(round(0.25 / timestep)), None  # 0.25 s after the first contact: parted by then
+    for k in range(int(round(2.0 / timestep))):
+        mujoco.mj_step(m, d)
+        vl.append(float(d.qvel[ix]))
+        xl.append(float(d.qpos[iq]))
+        tl.append(bool(d.sensordata[s] > 0))
+        if k0 is None and tl[-1]:
+            k0 = k
+        if k0 is not None and k - k0 >= window:
+            break
+    if k0 is None or tl[-1]:
+        raise SolveError(f"barrier pulse at {speed_kmh:g} km/h: the vehicle did not touch and leave the wall "
+                         "within 2 s")
+    vel, xs, touching = np.array(vl), np.array(xl), np.array(tl)
+    k1 = int(np.flatnonzero(touching)[-1]) + 1  # the first step after the last contact
+    before = v0 if k0 == 0 else vel[k0 - 1]
+    x0 = xs[k0 - 1] if k0 > 0 else xs[0] - before * timestep
+    kz = k0 + int(np.argmax(vel[k0:] <= 0.0))
+    # zero crossing, interpolated inside the step
+    t_zero = (kz - k0 + 1 - vel[kz] / (vel[kz] - vel[kz - 1])) * timestep if kz > k0 else timestep
+    acc = -np.diff(np.concatenate([[before], vel[k0:]])) / timestep
+    pad = int(round(0.02 / timestep))  # a quiet lead-in and tail: the filter's edges
+    acc = np.concatenate([np.zeros(pad), acc, np.zeros(pad)])
+    peak = float(cfc_filter(acc, timestep).max() / veh.G)
+    after = vel[k1]
+    residual = crush_mod.crush_residual(m, "v0", vt, d.qpos).get("front", 0.0)
+    mass = float(L.mass[0])
+    return BarrierPulse(speed_kmh=speed_kmh, t_zero=float(t_zero), dynamic_crush=float(xs[kz] - x0),
+                        mean_g=float(before / t_zero / veh.G), peak_g=peak, restitution=float(-after / before),
+                        duration=float((k1 - k0) * timestep), residual=float(residual),
+                        energy_lost=0.5 * mass * (before ** 2 - after ** 2),
+                        crush_energy=float(sum(crush_mod.crush_energy(vt, {"front": residual}).values())),
+                        first_step_g=float(acc[pad] / veh.G))

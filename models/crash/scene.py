@@ -30,14 +30,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nbst.models.crash import crush as crush_mod
 from nbst.models.crash import road as road_mod
 from nbst.models.crash import vehicle as veh
 from nbst.models.scene import full_precision
 
 __all__ = ["COLOURS", "PAIR_SIZE", "STRIKE_SIZE", "SETTLE_TIME", "SceneVehicle", "vehicle_prefix",
-           "build_spec", "scene_xml", "model_from_xml", "settled", "initial_state", "Layout", "layout",
-           "CFC_PULSE", "cfc_filter", "BarrierPulse", "barrier_pulse"]
+           "build_spec", "scene_xml", "model_from_xml", "settled", "initial_state", "Layout", "layout"]
 
 #: Vehicle colours (RGBA), in script order; the renderer reads them from the geoms.
 COLOURS = ((0.80, 0.12, 0.12, 1.0), (0.15, 0.35, 0.80, 1.0), (0.95, 0.75, 0.10, 1.0), (0.15, 0.60, 0.25, 1.0),
@@ -209,123 +207,3 @@ def layout(model, n: int) -> Layout:
 
 
 # --------------------------------------------------------------------------- the barrier pulse
-
-#: SAE J211's channel frequency class for vehicle-structure accelerations (integration to
-#: velocity and displacement, and the crash pulse): CFC 60.
-CFC_PULSE = 60.0
-
-
-def cfc_filter(x: np.ndarray, dt: float, cfc: float = CFC_PULSE) -> np.ndarray:
-    """``x`` (samples ``dt`` s apart) through SAE J211-1's phaseless digital filter of class
-    ``cfc``: a 2-pole Butterworth run forward, then backward (4 poles, no phase shift)."""
-    wd = 2.0 * math.pi * cfc * 2.0775
-    wa = math.sin(wd * dt / 2) / math.cos(wd * dt / 2)
-    den = 1.0 + math.sqrt(2.0) * wa + wa * wa
-    a0 = wa * wa / den
-    a1, a2 = 2 * a0, a0
-    b1 = -2.0 * (wa * wa - 1.0) / den
-    b2 = (-1.0 + math.sqrt(2.0) * wa - wa * wa) / den
-
-    def once(u):
-        y = np.empty_like(u)
-        y[:2] = u[:2]
-        for n in range(2, len(u)):
-            y[n] = a0 * u[n] + a1 * u[n - 1] + a2 * u[n - 2] + b1 * y[n - 1] + b2 * y[n - 2]
-        return y
-    x = np.asarray(x, dtype=float)
-    return once(once(x)[::-1])[::-1]
-
-
-@dataclass(frozen=True)
-class BarrierPulse:
-    """A vehicle square into a rigid wall, read as a crash test reads it (the sprung body's own
-    motion: the occupant compartment): ``speed_kmh``; ``t_zero`` (s), from first contact to zero
-    velocity; ``dynamic_crush`` (m), the body's travel over that time; ``mean_g`` = speed /
-    t_zero / g; ``peak_g`` the peak of the CFC 60 filtered deceleration; ``restitution`` =
-    rebound speed / speed at separation; ``duration`` (s) the contact time; ``residual`` (m)
-    the front zone's crush once the contact let go (0 for a rigid type); ``energy_lost`` (J)
-    the kinetic energy the impact took (before - after); ``crush_energy`` (J) CRASH3's energy
-    of the residual crush (0 for a rigid type); ``first_step_g`` the deceleration over the
-    first contact step."""
-
-    speed_kmh: float
-    t_zero: float
-    dynamic_crush: float
-    mean_g: float
-    peak_g: float
-    restitution: float
-    duration: float
-    residual: float
-    energy_lost: float
-    crush_energy: float
-    first_step_g: float
-
-
-def barrier_pulse(type_name: str, speed_kmh: float = 56.0, *, timestep: float = 0.002) -> BarrierPulse:
-    """The NHTSA NCAP frontal test (full width into a rigid barrier; 56 km/h) for a vehicle of
-    ``type_name`` at step ``timestep`` s: a plain ``mj_step`` loop, wheels free.
-
-    Args:
-        type_name: a registered vehicle type (``sedan-crush`` etc. crush; the others are rigid).
-        speed_kmh: the impact speed.
-        timestep: the step (s).
-
-    Returns:
-        the :class:`BarrierPulse`.
-
-    Raises:
-        SolveError: the vehicle never reached the wall or never left it within 2 s.
-    """
-    import mujoco
-
-    from nbst.errors import SolveError
-
-    vt = veh.VEHICLE_TYPES[type_name]
-    front = vt.a + vt.front_overhang
-    wall_x = 5.0
-    road = road_mod.Road(layout="straight", width=12.0, length=200.0,
-                         barriers=(road_mod.Barrier((wall_x + road_mod.BARRIER_THICKNESS / 2, -4.0),
-                                                    (wall_x + road_mod.BARRIER_THICKNESS / 2, 4.0), 2.0),))
-    v = SceneVehicle("v0", vt, wall_x - front - 0.05, 0.0, 0.0)
-    m = build_spec(road, [v], timestep=timestep).compile()
-    d = mujoco.MjData(m)
-    v0 = speed_kmh / 3.6
-    d.qpos[:], d.qvel[:] = initial_state(m, [v], [v0])
-    L = layout(m, 1)
-    s, ix, iq = int(L.barrier_adr[0]), int(L.qvel[0]), int(L.qpos[0])
-    vl: list[float] = []
-    xl: list[float] = []
-    tl: list[bool] = []
-    window, k0 = int(round(0.25 / timestep)), None  # 0.25 s after the first contact: parted by then
-    for k in range(int(round(2.0 / timestep))):
-        mujoco.mj_step(m, d)
-        vl.append(float(d.qvel[ix]))
-        xl.append(float(d.qpos[iq]))
-        tl.append(bool(d.sensordata[s] > 0))
-        if k0 is None and tl[-1]:
-            k0 = k
-        if k0 is not None and k - k0 >= window:
-            break
-    if k0 is None or tl[-1]:
-        raise SolveError(f"barrier pulse at {speed_kmh:g} km/h: the vehicle did not touch and leave the wall "
-                         "within 2 s")
-    vel, xs, touching = np.array(vl), np.array(xl), np.array(tl)
-    k1 = int(np.flatnonzero(touching)[-1]) + 1  # the first step after the last contact
-    before = v0 if k0 == 0 else vel[k0 - 1]
-    x0 = xs[k0 - 1] if k0 > 0 else xs[0] - before * timestep
-    kz = k0 + int(np.argmax(vel[k0:] <= 0.0))
-    # zero crossing, interpolated inside the step
-    t_zero = (kz - k0 + 1 - vel[kz] / (vel[kz] - vel[kz - 1])) * timestep if kz > k0 else timestep
-    acc = -np.diff(np.concatenate([[before], vel[k0:]])) / timestep
-    pad = int(round(0.02 / timestep))  # a quiet lead-in and tail: the filter's edges
-    acc = np.concatenate([np.zeros(pad), acc, np.zeros(pad)])
-    peak = float(cfc_filter(acc, timestep).max() / veh.G)
-    after = vel[k1]
-    residual = crush_mod.crush_residual(m, "v0", vt, d.qpos).get("front", 0.0)
-    mass = float(L.mass[0])
-    return BarrierPulse(speed_kmh=speed_kmh, t_zero=float(t_zero), dynamic_crush=float(xs[kz] - x0),
-                        mean_g=float(before / t_zero / veh.G), peak_g=peak, restitution=float(-after / before),
-                        duration=float((k1 - k0) * timestep), residual=float(residual),
-                        energy_lost=0.5 * mass * (before ** 2 - after ** 2),
-                        crush_energy=float(sum(crush_mod.crush_energy(vt, {"front": residual}).values())),
-                        first_step_g=float(acc[pad] / veh.G))
