@@ -40,7 +40,7 @@ from nbst.models.crash import crashfile
 from nbst.models.crash import scene as scene_mod
 
 __all__ = ["CONTACT_GAP", "KMH", "VehicleImpact", "PairImpact", "CrashImpacts", "pdof_of", "episodes", "pair_impact",
-           "crash_impacts"]
+           "crash_impacts", "impact_recorder"]
 
 #: A pair's contact episode ends at a gap in its touching longer than this (s).
 CONTACT_GAP = 0.02
@@ -213,6 +213,24 @@ def crash_impacts(d: dict, script, model) -> CrashImpacts:
     Raises:
         nothing of its own (the file was checked by ``crashfile.load``).
     """
+    on_step, finish = impact_recorder(d, script, model)
+    q_end, _ = crashfile.replay(d, script, model, on_step=on_step)
+    return finish(q_end)
+
+
+def impact_recorder(d: dict, script, model):
+    """What :func:`crash_impacts` reads, for a caller that replays the crash file itself with
+    more to record (the video's motion): ``(on_step, finish)``, ``on_step(k, data)`` for
+    ``crashfile.replay``'s hook and ``finish(q_end)`` -> :class:`CrashImpacts` after it.
+
+    Args:
+        d: the crash dict.
+        script: its Script.
+        model: its MjModel.
+
+    Returns:
+        (on_step, finish).
+    """
     n = script.n
     L = scene_mod.layout(model, n)
     dt = float(model.opt.timestep)
@@ -242,18 +260,20 @@ def crash_impacts(d: dict, script, model) -> CrashImpacts:
             force[k] = s[Fa]
             cpos[k] = s[Pa]
 
-    q_end, _ = crashfile.replay(d, script, model, on_step=on_step)
-    times = np.arange(nstep + 1) * dt
-    w, x, y, z = np.moveaxis(quat, -1, 0)
-    yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)), axis=0)
-    gap = max(0, int(round(CONTACT_GAP / dt)))
-    out = []
-    for p, (a, b) in enumerate(L.pairs):
-        for k0, k1 in episodes(found[:, p], gap):
-            # the pair sensor's net force acts on its second subtree (b): a takes -J
-            J = -(force[k0:k1 + 1, p] * found[k0:k1 + 1, p, None]).sum(axis=0) * dt
-            out.append(pair_impact(a, b, k0, k1, times, vel, yaw, L.mass, J, cpos[k0, p]))
-    out.sort(key=lambda m: (m.t, m.a, m.b))
-    return CrashImpacts(times=times, vel=vel, speed=np.hypot(vel[..., 0], vel[..., 1]), yaw=yaw, pos=pos,
-                        mass=np.asarray(L.mass, float), impacts=out,
-                        identical=bool(np.array_equal(q_end, np.asarray(d["final_qpos"], float))))
+    def finish(q_end) -> CrashImpacts:
+        times = np.arange(nstep + 1) * dt
+        w, x, y, z = np.moveaxis(quat, -1, 0)
+        yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)), axis=0)
+        gap = max(0, int(round(CONTACT_GAP / dt)))
+        out = []
+        for p, (a, b) in enumerate(L.pairs):
+            for k0, k1 in episodes(found[:, p], gap):
+                # the pair sensor's net force acts on its second subtree (b): a takes -J
+                J = -(force[k0:k1 + 1, p] * found[k0:k1 + 1, p, None]).sum(axis=0) * dt
+                out.append(pair_impact(a, b, k0, k1, times, vel, yaw, L.mass, J, cpos[k0, p]))
+        out.sort(key=lambda m: (m.t, m.a, m.b))
+        return CrashImpacts(times=times, vel=vel, speed=np.hypot(vel[..., 0], vel[..., 1]), yaw=yaw, pos=pos,
+                            mass=np.asarray(L.mass, float), impacts=out,
+                            identical=bool(np.array_equal(q_end, np.asarray(d["final_qpos"], float))))
+
+    return on_step, finish

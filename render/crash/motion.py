@@ -196,7 +196,10 @@ def record(d: dict, script, model) -> CrashMotion:
     strikes: dict = {}                       # (vehicle, what) -> [(t, pos)]
     vel6 = np.zeros(6)
 
+    impacts_step, impacts_of = impact_mod.impact_recorder(d, script, model)   # the report's reading, same replay
+
     def on_step(k: int, md) -> None:
+        impacts_step(k, md)
         j = slot.get(k)
         if j is not None:
             Q[j] = md.qpos
@@ -252,7 +255,7 @@ def record(d: dict, script, model) -> CrashMotion:
     yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)), axis=0)
     marks = _runs(samples, half_width, mark_stride * dt)
     times = np.array(keep, float) * dt
-    found = impact_mod.crash_impacts(d, script, model)
+    found = impacts_of(q_end)
     impacts = [impact_vectors(im, found) for im in _impacts(outcome, od, script, strikes)]
     return CrashMotion(times=times, qpos=Q, speed=V, vel=W, pos=pos, quat=quat, roll=roll, yaw=yaw,
                        marks=marks, impacts=impacts, outcome=outcome, outcome_dict=od,
