@@ -103,7 +103,8 @@ class CrashMotion:
     pos (S, n, 3) CoM; quat (S, n, 4) attitude (w, x, y, z); roll, yaw (S, n) unwrapped rad;
     marks, impacts; outcome: the replay's judged :class:`nbst.models.crash.outcome.Outcome`;
     outcome_dict: the same in the file's units; same_state: the replay ended in the file's final
-    state bit for bit; same_outcome: and read the file's outcome."""
+    state bit for bit; same_outcome: and read the file's outcome; reading: the vehicle impacts as
+    :func:`nbst.models.crash.impact.crash_impacts` reads them, from the same replay."""
 
     times: np.ndarray
     qpos: np.ndarray
@@ -120,6 +121,8 @@ class CrashMotion:
     same_state: bool
     same_outcome: bool
     duration: float
+    #: every vehicle impact as the crash room reads it (:func:`nbst.models.crash.impact.crash_impacts`)
+    reading: CrashImpacts | None = None
 
     @property
     def identical(self) -> bool:
@@ -259,7 +262,7 @@ def record(d: dict, script, model) -> CrashMotion:
     impacts = [impact_vectors(im, found) for im in _impacts(outcome, od, script, strikes)]
     return CrashMotion(times=times, qpos=Q, speed=V, vel=W, pos=pos, quat=quat, roll=roll, yaw=yaw,
                        marks=marks, impacts=impacts, outcome=outcome, outcome_dict=od,
-                       same_state=same_state, same_outcome=od == d["outcome"], duration=nstep * dt)
+                       same_state=same_state, same_outcome=od == d["outcome"], duration=nstep * dt, reading=found)
 
 
 #: A scrape's half width (m): a body corner or edge dragged over the road.

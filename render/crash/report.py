@@ -141,8 +141,8 @@ def crash_report(d: dict, script, model, *, source: str = "") -> CrashReport:
     Returns:
         The :class:`CrashReport`.
     """
-    return CrashReport(d=d, script=script, model=model, impacts=impact_mod.crash_impacts(d, script, model),
-                       motion=motion_mod.record(d, script, model), source=source)
+    motion = motion_mod.record(d, script, model)
+    return CrashReport(d=d, script=script, model=model, impacts=motion.reading, motion=motion, source=source)
 
 
 # --------------------------------------------------------------------------- helpers
