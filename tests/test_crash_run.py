@@ -442,3 +442,30 @@ def test_chain3s_crash_file_marks_no_moving_vehicles_rest_as_met():
                 assert v["fates"]["rest"] is False and v["fates"]["heading"] is False
     assert moving >= 3  # chain3's 6 s leaves many vehicles moving (the case this guards)
     R.close()
+
+
+@pytest.mark.slow
+def test_solve_exits_1_when_the_crash_found_does_not_hold_on_the_ladder(tmp_path, capsys, monkeypatch):
+    """Exit 0 means met at the script's step and at 1 and 0.5 ms (the ladder asked by default): a
+    crash whose ladder check fails is written, said "met at the script's step only", and exits 1."""
+    from nbst.cli.main import main
+    from nbst.models.crash import robust
+
+    real = robust.ladder
+
+    def lost(*args, **kwargs):  # the CLI's check of the crash written, made to fail
+        lad = real(*args, **kwargs)
+        lad.outcomes[-1] = ("lost", False, ())  # the finest rung gives another outcome
+        assert not lad.holds
+        return lad
+
+    f = tmp_path / "short.json"
+    f.write_text(json.dumps(SHORT))
+    out = tmp_path / "crash.json"
+    monkeypatch.setattr(robust, "ladder", lost)
+    assert main(["crash", "solve", str(f), "-o", str(out), "--seed", "1", "--max-rollouts", "64",
+                 "--jobs", "1", "--samples", "0"]) == 1
+    d = json.loads(out.read_text())
+    assert d["outcome"]["solved"] and d["ladder"]["holds"] is False  # written, and the file says why
+    err = capsys.readouterr().err
+    assert "met at the script's step only" in err and "ladder does not hold" in err

@@ -73,8 +73,9 @@ def register(sub) -> None:
                                   "initial state, the realised controls, the outcome) that `nbst crash replay` and "
                                   "`nbst render` read. Ctrl-C writes the best crash so far (exit 130). The same "
                                   "--seed gives the same crash for any --jobs.",
-                      epilog="Example: nbst crash solve t-bone -o tbone.json --seed 1. Exit 0: met; 1: not met "
-                             "within --max-rollouts (the nearest crash is written); 2: bad input; 130: interrupted.")
+                      epilog="Example: nbst crash solve t-bone -o tbone.json --seed 1. Exit 0: met (and, unless "
+                             "--no-ladder, met at 1 and 0.5 ms too); 1: not met within --max-rollouts (the nearest "
+                             "crash is written); 2: bad input; 130: interrupted.")
     v.add_argument("script", metavar="SCRIPT", help="built-in name (see `nbst crash scripts`) or a JSON file")
     v.add_argument("-o", "--output", required=True, metavar="CRASH.json", help="where to write the crash")
     add_seed(v, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")

@@ -73,8 +73,8 @@ def register(sub) -> None:
                                   "state, the controls, every fate's verdict, the seed, the versions) that `nbst "
                                   "scene replay` reads. Ctrl-C writes the best solution so far (exit 130). The same "
                                   "--seed gives the same solution for any --jobs.",
-                      epilog="Example: nbst scene solve snake-eyes -o dice.json --seed 1. Exit 0: met; 1: not met "
-                             "within --max-rollouts (the nearest solution is written); 2: bad input; 130: "
+                      epilog="Example: nbst scene solve snake-eyes -o dice.json --seed 1. Exit 0: met (and, unless "
+                             "--no-ladder, at h/2 and h/4 too); 1: not met within --max-rollouts (the nearest solution is written); 2: bad input; 130: "
                              "interrupted.")
     v.add_argument("fates", metavar="FATES", help=_FATES_HELP)
     v.add_argument("-o", "--output", required=True, metavar="SOL.json", help="where to write the solution")

@@ -107,7 +107,9 @@ def cmd_solve(args) -> int:
     write_json_atomic(args.output, solution_dict(res))
     if not args.quiet:
         b = res.best
-        met = "met" if res.met else f"not met (cost {b.cost:.3g})"
+        # res.met holds the ladder too where it was asked (exit 0 only then)
+        met = ("met" if res.met else "met at the scene's step only" if b.judgement.met and not b.warnings
+               else f"not met (cost {b.cost:.3g})")
         took = seconds_text(bar[0].seconds if bar else res.wall_time)
         warn = f"; MuJoCo warned: {', '.join(b.warnings)}" if b.warnings else ""
         if res.probability is not None:
