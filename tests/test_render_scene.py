@@ -232,3 +232,17 @@ def test_the_framing_camera_tracks_the_bodies(gl, solutions):
                 assert front and 0 <= col < 640 and 0 <= row < 360, (t, f.body)
     finally:
         r.release()
+
+
+def test_the_readout_colours_body_lines_only_never_a_title_named_like_a_body():
+    """A scene file may share a fated body's name (coin.xml with a body "coin"): the title line
+    stays uncoloured; the body's own line and its fates' lines carry its colour."""
+    from nbst.render.scene import readout as ro
+    from nbst.scene.scenefile import load_fates
+
+    fates, _ = load_fates("snake-eyes")
+    body = fates.fates[0].body
+    lines = [body, "t =  0.00 s", body, "  rest_in: ...", "other"]
+    rows = ro.body_rows(lines, fates)
+    assert rows[0] == (-1, 0) and rows[1] == (-1, 0)  # the title and the time
+    assert rows[2] == (0, len(body)) and rows[4] == (-1, 0)

@@ -83,9 +83,10 @@ def readout(title: str, t: float, fates: Fates, judgement: Judgement, *, final: 
 
 def body_rows(lines: list[str], fates: Fates) -> list[tuple[int, int]]:
     """Per line, (the index of the fated body whose name it starts with, the name's length), drawn
-    in the body's mark colour; (-1, 0) for the others."""
-    out = []
-    for s in lines:
+    in the body's mark colour; (-1, 0) for the others (the title and the time, the first two lines,
+    never: a scene file may share a body's name)."""
+    out = [(-1, 0)] * min(2, len(lines))
+    for s in lines[2:]:
         hit = next(((i, len(f.body)) for i, f in enumerate(fates.fates) if s == f.body or s.startswith(f.body + " ")),
                    (-1, 0))
         out.append(hit)

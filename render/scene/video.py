@@ -438,7 +438,7 @@ def render_scene(path: str | os.PathLike, output: str | os.PathLike, *, still: f
     # a still records the whole motion too: the framing camera frames the same paths as the video's
     motion, fates, model = record(path, times if still is None else np.union1d(times, frame_times(duration, 30.0)))
     size = tuple(size or style.DEFAULT_SIZE)
-    title = fates.scene.stem
+    title = fates.scene.name  # the MJCF's file name (its stem may be a body's name)
     return render_output(lambda ctx: SceneRenderer(ctx, motion, fates, model, size=size, camera=camera, clean=clean,
                                                    title=title),
                          output, still=None if still is None else float(times[0]),
