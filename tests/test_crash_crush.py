@@ -90,13 +90,43 @@ def test_the_pulse_holds_across_timesteps(pulse):
         assert r.mean_g == pytest.approx(pulse.mean_g, rel=0.08), (h, r)
 
 
-def test_momentum_is_conserved_through_a_crushing_impact():
-    # a crushing sedan into the back of a standing one: crush bodies are internal, so the two
-    # vehicles' momentum along the impact is conserved within 5 % (wheels free, as for the rigid ones)
+def _falls_inside_the_band(curve, rise=0.02, drop=0.1):
+    """Each point inside checks.restitution_band; falling: from 15 to 60 km/h by at least
+    ``drop``, and no point more than ``rise`` above the one before (the staircase: where the
+    crush enters a new step, the force the elastic elements unload from jumps)."""
+    for v, e in curve:
+        lo, hi = checks.restitution_band(v)
+        assert lo <= e <= hi, (v, e, lo, hi, curve)
+    e = curve[:, 1]
+    assert (e[1:] <= e[:-1] + rise).all(), curve
+    assert e[0] - e[-1] >= drop, curve
 
-    r = checks.impact("sedan-crush", 40.0)
-    assert r.momentum_after == pytest.approx(r.momentum_before, rel=0.05)
-    assert 0.0 < r.restitution < 0.4, r
+
+def test_car_to_car_restitution_falls_inside_the_published_band():
+    # a sedan-crush into the back of a standing one at 15-60 km/h closing speed: 0.2-0.4 at low
+    # speed, about 0.1 at medium and high speed (SAE 931842), falling (SAE 1999-01-0097): the
+    # band at most 0.4, at least 0.05, at most 0.2 from 40 km/h up. What comes back is what the
+    # two elastic elements of each zone held (the slab contact and the steps' limits are dampers)
+    _falls_inside_the_band(checks.restitution_curve("sedan-crush", checks.RESTITUTION_SPEEDS))
+
+
+def test_car_to_car_restitution_holds_across_steps_and_impacts():
+    # the same band at h/2 and h/4 (the soft constraints once returned twice the energy at 2 ms
+    # as at 0.5 ms), an SUV into a sedan's back, and a sedan square into a sedan's side
+    for h in (0.001, 0.0005):
+        _falls_inside_the_band(checks.restitution_curve("sedan-crush", checks.RESTITUTION_SPEEDS, timestep=h))
+    _falls_inside_the_band(checks.restitution_curve("suv-crush", checks.RESTITUTION_SPEEDS, other="sedan-crush"))
+    _falls_inside_the_band(checks.restitution_curve("sedan-crush", (15.0, 30.0, 50.0), struck="side"), drop=0.05)
+
+
+def test_momentum_is_conserved_through_a_crushing_impact():
+    # a crushing car into the back of a standing one: crush bodies are internal, so the two
+    # vehicles' momentum along the impact is conserved within 1 % (wheels free, as for the rigid
+    # ones; the bodies' velocities leave out the crush links' own motion: 0.2-0.4 % measured)
+    for a in ("sedan-crush", "suv-crush"):
+        for v in (15.0, 60.0):
+            r = checks.impact(a, v, other="sedan-crush")
+            assert r.momentum_after == pytest.approx(r.momentum_before, rel=0.01), (a, v, r)
 
 
 def test_the_crash_file_records_residual_crush_and_ees():

@@ -7,8 +7,9 @@ and their sources):
 
 * :func:`braking_distance`: a car on locked wheels from ``v`` m/s, against v^2 / (2 mu g);
 * :func:`tilt_angle`: the tilt-table angle at which the uphill wheels lift, against atan(SSF);
-* :func:`impact`: a car into the back of a standing car of the same type (collinear, full
-  overlap): restitution, contact time, momentum before and after the contact window;
+* :func:`impact`: a car into the back (collinear, full overlap) or the side of a standing car:
+  restitution, contact time, momentum before and after the contact window;
+  :func:`restitution_curve` the restitution over closing speed;
 * :func:`barrier`: a car into a rigid wall (the NHTSA NCAP frontal test is 56 km/h): contact
   time, mean deceleration, restitution, largest penetration (what stands in for crush).
 
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nbst.errors import SolveError
+from nbst.errors import InputError, SolveError
 from nbst.models.crash import crush as crush_mod
 from nbst.models.crash import road as road_mod
 from nbst.models.crash import scene as scene_mod
@@ -187,16 +188,39 @@ class Impact:
     delta_v_kmh: float
 
 
-def impact(type_name: str, speed_kmh: float, *, timestep: float = TIMESTEP, other: str | None = None) -> Impact:
-    """A vehicle of ``type_name`` at ``speed_kmh`` into the back of a standing ``other`` (default the
-    same type), wheels free, on a dry road. The contact window is read from the pair's contact
-    sensor; restitution = separation speed / closing speed along x."""
+def impact(type_name: str, speed_kmh: float, *, timestep: float = TIMESTEP, other: str | None = None,
+           struck: str = "rear") -> Impact:
+    """A vehicle of ``type_name`` at ``speed_kmh`` into a standing ``other`` (default the same
+    type), wheels free, on a dry road: into its back (``struck`` "rear": collinear, full overlap)
+    or square into its left side at its centre of mass (``struck`` "side": the struck car's tyres
+    take a sideways impulse, so the pair's momentum along x is not kept there). The contact window
+    is read from the pair's contact sensor; restitution = separation speed / closing speed along x.
+
+    Args:
+        type_name: the striking vehicle's registered type.
+        speed_kmh: its speed (km/h); the other stands.
+        timestep: the step (s).
+        other: the struck vehicle's type (default ``type_name``).
+        struck: "rear" or "side".
+
+    Returns:
+        the :class:`Impact`.
+
+    Raises:
+        InputError: ``struck`` is neither "rear" nor "side".
+        SolveError: the vehicles never touched and parted within 3 s.
+    """
     import mujoco
 
     road = road_mod.Road(layout="straight", width=12.0, length=200.0)
     a, b = veh.VEHICLE_TYPES[type_name], veh.VEHICLE_TYPES[other or type_name]
-    gap = (a.a + a.front_overhang) + (b.length - b.a - b.front_overhang) + 0.5  # CoM to CoM: 0.5 m between bumpers
-    vs = [scene_mod.SceneVehicle("v0", a, -gap, 0.0, 0.0), scene_mod.SceneVehicle("v1", b, 0.0, 0.0, 0.0)]
+    if struck == "rear":  # CoM to CoM: 0.5 m between the bumpers
+        gap, heading = (a.a + a.front_overhang) + (b.length - b.a - b.front_overhang) + 0.5, 0.0
+    elif struck == "side":  # the other turned 90 degrees, its left side 0.5 m ahead of the front
+        gap, heading = (a.a + a.front_overhang) + b.width / 2 + 0.5, math.pi / 2
+    else:
+        raise InputError(f"impact: struck: {struck!r} is neither 'rear' nor 'side'")
+    vs = [scene_mod.SceneVehicle("v0", a, -gap, 0.0, 0.0), scene_mod.SceneVehicle("v1", b, 0.0, 0.0, heading)]
     _, m = _model(road, vs, timestep)
     d = mujoco.MjData(m)
     v0 = speed_kmh / 3.6
@@ -277,9 +301,11 @@ def barrier(type_name: str, speed_kmh: float = 56.0, *, timestep: float = TIMEST
 
 
 def restitution_curve(type_name: str = "sedan", speeds_kmh=(15, 20, 30, 40, 50, 60), *,
-                      timestep: float = TIMESTEP) -> np.ndarray:
-    """(k, 2): closing speed (km/h) and restitution of :func:`impact` at each speed."""
-    return np.array([[v, impact(type_name, v, timestep=timestep).restitution] for v in speeds_kmh])
+                      timestep: float = TIMESTEP, other: str | None = None, struck: str = "rear") -> np.ndarray:
+    """(k, 2): closing speed (km/h) and restitution of :func:`impact` at each speed (``other``
+    and ``struck`` as there)."""
+    return np.array([[v, impact(type_name, v, timestep=timestep, other=other, struck=struck).restitution]
+                     for v in speeds_kmh])
 
 
 #: SAE J211's channel frequency class for vehicle-structure accelerations (integration to

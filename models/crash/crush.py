@@ -9,8 +9,12 @@ joints ``{prefix}_crush_{zone}_{k}`` (:func:`add_crush`):
   F / w = A + B C (Campbell's linear model as NHTSA's CRASH3 uses it), its travel one step's
   depth; a joint keeps what it crushed, so the sum of a zone's joints is its residual crush
   (:func:`crush_residual`);
-* **elastic**: a damped joint spring between the body and the steps gives the structure's
-  spring-back (:data:`CRUSH_ELASTIC_DEFLECTION` at the first yield force);
+* **elastic**: the unloading law, two springs in series between the body and the steps: a
+  stiff one (:data:`CRUSH_ELASTIC_DEFLECTION` at the first yield force: its energy grows with
+  the square of the force reached) and a soft one with a stop, full at the first yield force,
+  that holds ½ m v_b² (:data:`CRUSH_BUMPER_SPEED`: a bumper's elastic range). What they hold is
+  all that comes back (the slab contact and the steps' travel limits are dampers), so
+  restitution falls with speed: the soft element's energy is fixed while the crush energy grows;
 * **energy**: CRASH3's crush energy of a residual crush, w (A C + B C^2 / 2 + A^2 / (2 B)) per
   zone (:meth:`CrushZone.energy`), and the energy-equivalent speed EES = sqrt(2 E / m)
   (:func:`crush_ees`); the crash file's ``crush`` entry (:func:`crush_record`).
@@ -28,8 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["CRUSH_ZONES", "CRUSH_STEPS", "CRUSH_LINK_MASS", "CRUSH_SLAB_MASS", "CRUSH_SOLREF", "CRUSH_SOLIMP",
-           "CRUSH_ELASTIC_DEFLECTION", "CRUSH_ELASTIC_ZETA", "CRUSH_ELASTIC_MASS", "CRUSH_MIN_RESIDUAL",
-           "CRUSH_JOINT_SOLREF", "CRUSH_JOINT_SOLIMP", "CrushZone", "crush_zones", "crush_masses", "crush_joint_names",
+           "CRUSH_ELASTIC_DEFLECTION", "CRUSH_ELASTIC_ZETA", "CRUSH_ELASTIC_SHARE", "CRUSH_BUMPER_SPEED",
+           "CRUSH_BUMPER_ZETA", "CRUSH_BUMPER_SHARE", "CRUSH_MIN_RESIDUAL", "CRUSH_JOINT_SOLREF", "CRUSH_LIMIT_SOLREF",
+           "CRUSH_JOINT_SOLIMP", "CrushZone", "crush_zones", "crush_masses", "crush_joint_names",
            "add_crush", "crush_residual", "crush_energy", "crush_ees", "crush_record"]
 
 
@@ -47,28 +52,44 @@ CRUSH_STEPS = {"front": 6, "rear": 6, "left": 4, "right": 4}
 #: sprung mass: the vehicle's mass, CoM and inertia stay those of its type).
 CRUSH_LINK_MASS = 5.0
 CRUSH_SLAB_MASS = {"front": 30.0, "rear": 25.0, "left": 15.0, "right": 15.0}
-#: The slabs' contact (time constant s, damping ratio) and solimp: hard (impedance 0.99) so
-#: that the slab, not the penetration, takes the crush; its elastic give (a few cm) is the
-#: structure's spring-back (restitution ~0.06-0.09 at 16-56 km/h); critically damped, so that
-#: a slab does not bounce off what it hits (0.5 did: the contact broke for a step at 12 ms).
-CRUSH_SOLREF = (0.02, 1.0)
+#: The slabs' contact: MuJoCo's direct reference (negative solref: stiffness 400 s^-2, damping
+#: 250 s^-1, so the reference acceleration is -250 v - 400 r), heavily overdamped (ratio 6): it
+#: stops a slab in ~4 ms and would recover its penetration over ~0.6 s, so through an impact it
+#: gives back next to nothing and the rebound is the elastic elements'. Its rates are the same at
+#: every step (a time constant of 20 ms critically damped gave back its penetration under load:
+#: 1-2 kJ in a car-to-car rebound, twice as much at 2 ms as at 0.5 ms). Impedance 0.99.
+CRUSH_SOLREF = (-400.0, -250.0)
 CRUSH_SOLIMP = (0.99, 0.99, 0.001, 0.5, 2.0)
-#: The elastic element between the body and each zone's plastic steps (the structure's
-#: spring-back): a joint spring deflecting ``CRUSH_ELASTIC_DEFLECTION`` m at the zone's first
-#: yield force, damped at ``CRUSH_ELASTIC_ZETA`` of critical for the vehicle's mass, on a link of
-#: ``CRUSH_ELASTIC_MASS`` kg (heavy enough that the explicit spring is stable at 2 ms steps).
-#: 0 deflection: no elastic element.
-CRUSH_ELASTIC_DEFLECTION = 0.02
-CRUSH_ELASTIC_ZETA = 2.0
-CRUSH_ELASTIC_MASS = {"front": 40.0, "rear": 40.0, "left": 20.0, "right": 20.0}
+#: The stiff elastic element: a joint spring deflecting ``CRUSH_ELASTIC_DEFLECTION`` m at the
+#: zone's first yield force (the unloading line's slope: it holds F^2 / 2k at the force F
+#: reached), damped at ``CRUSH_ELASTIC_ZETA`` of critical for the vehicle's mass, on a link of
+#: ``CRUSH_ELASTIC_SHARE`` of the vehicle's mass. 0 deflection: no elastic elements.
+CRUSH_ELASTIC_DEFLECTION = 0.007
+CRUSH_ELASTIC_ZETA = 0.2
+CRUSH_ELASTIC_SHARE = {"front": 0.052, "rear": 0.052, "left": 0.026, "right": 0.026}
+#: The soft elastic element: a joint spring with a stop, reaching the stop at the zone's first
+#: yield force and holding then ½ m v_b² with v_b = ``CRUSH_BUMPER_SPEED`` m/s (3 km/h: the
+#: elastic range of a bumper system; 49 CFR 581 tests bumpers at 2.5 mph, 4 km/h), damped at
+#: ``CRUSH_BUMPER_ZETA`` of critical for the vehicle's mass, on a link of ``CRUSH_BUMPER_SHARE`` of
+#: the vehicle's mass. Heavy links (the sedan's: 75 kg each on a full-width zone; in proportion to
+#: the mass, as the springs' stiffness is to the yield force) keep the restitution close at 2, 1
+#: and 0.5 ms steps: with a 40 kg link and 5 kg steps the 2 ms step gave back twice the 0.5 ms
+#: step's energy through the steps' soft friction and limits.
+CRUSH_BUMPER_SPEED = 3.0 / 3.6
+CRUSH_BUMPER_ZETA = 0.3
+CRUSH_BUMPER_SHARE = {"front": 0.052, "rear": 0.052, "left": 0.026, "right": 0.026}
 #: Residual crush below this (m) is no damage: a loaded zone's joints creep by a millimetre or
 #: two (braking, a blow on another zone), which CRASH3's energy must not read as crush (its
 #: A^2 / 2B term alone is 4 kJ for the sedan's rear).
 CRUSH_MIN_RESIDUAL = 0.005
-#: The plastic joints' dry friction and travel limits: as hard as MuJoCo's constraints go
-#: (impedance 0.9999), so that a joint loaded below its yield force creeps by at most ~1 cm
-#: through a crash (a softer one slides like a damper: every step yields at once).
+#: The plastic joints' dry friction (and the elastic elements' travel limits): as hard as
+#: MuJoCo's constraints go (impedance 0.9999), so that a joint loaded below its yield force creeps
+#: by at most ~1 cm through a crash (a softer one slides like a damper: every step yields at once).
 CRUSH_JOINT_SOLREF = (0.004, 1.0)
+#: The plastic steps' travel limits: a damper (reference -500 v - r), so that a step that
+#: reaches its end stops in ~2 ms and no spring pushes it back (with the friction's 4 ms time
+#: constant, critically damped, a full step pushed back under load and returned up to 2 kJ).
+CRUSH_LIMIT_SOLREF = (-1.0, -500.0)
 CRUSH_JOINT_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 
@@ -131,7 +152,8 @@ def crush_masses(vt) -> list[tuple[float, np.ndarray]]:
     """(mass, position) of every crush body (links and slab) of ``vt``, body frame."""
     out = []
     for z in crush_zones(vt):
-        el = CRUSH_ELASTIC_MASS[z.name] if CRUSH_ELASTIC_DEFLECTION > 0 else 0.0
+        el = _six(CRUSH_ELASTIC_SHARE[z.name] * vt.mass) if CRUSH_ELASTIC_DEFLECTION > 0 else 0.0
+        el += _six(CRUSH_BUMPER_SHARE[z.name] * vt.mass) if CRUSH_BUMPER_SPEED > 0 else 0.0
         out.append(((z.steps - 1) * CRUSH_LINK_MASS + CRUSH_SLAB_MASS[z.name] + el, np.array(z.centre)))
     return out
 
@@ -166,7 +188,24 @@ def add_crush(spec, body, vt, prefix: str, rgba, *, contype: int, conaffinity: i
             j.solref_limit = list(CRUSH_JOINT_SOLREF)
             j.solimp_limit = list(CRUSH_JOINT_SOLIMP)
             g = parent.add_geom(name=f"{prefix}_crush_{z.name}_elastic_mass", type=GT.mjGEOM_SPHERE, size=[0.02, 0, 0],
-                                mass=_six(CRUSH_ELASTIC_MASS[z.name]), rgba=[0.3, 0.3, 0.3, 1.0], group=3)
+                                mass=_six(CRUSH_ELASTIC_SHARE[z.name] * vt.mass), rgba=[0.3, 0.3, 0.3, 1.0], group=3)
+            g.contype = g.conaffinity = 0
+        if CRUSH_BUMPER_SPEED > 0:  # the soft element: at its stop at the first yield force, holding 1/2 m v_b^2
+            travel = vt.mass * CRUSH_BUMPER_SPEED ** 2 / forces[0]
+            k_b = forces[0] / travel
+            prev = parent
+            parent = prev.add_body(name=f"{prefix}_crush_{z.name}_bumper_link",
+                                   pos=[_six(c) for c in z.centre] if prev is body else [0.0, 0.0, 0.0])
+            j = parent.add_joint(name=f"{prefix}_crush_{z.name}_bumper", type=mujoco.mjtJoint.mjJNT_SLIDE,
+                                 axis=list(z.axis))
+            j.stiffness = [_six(k_b), 0.0, 0.0]
+            j.damping = [_six(2 * CRUSH_BUMPER_ZETA * math.sqrt(k_b * vt.mass)), 0.0, 0.0]
+            j.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            j.range = [-0.01, _six(travel)]
+            j.solref_limit = list(CRUSH_JOINT_SOLREF)
+            j.solimp_limit = list(CRUSH_JOINT_SOLIMP)
+            g = parent.add_geom(name=f"{prefix}_crush_{z.name}_bumper_mass", type=GT.mjGEOM_SPHERE, size=[0.02, 0, 0],
+                                mass=_six(CRUSH_BUMPER_SHARE[z.name] * vt.mass), rgba=[0.3, 0.3, 0.3, 1.0], group=3)
             g.contype = g.conaffinity = 0
         for k, name in enumerate(crush_joint_names(prefix, z)):  # the plastic steps, links of CRUSH_LINK_MASS
             last = k == z.steps - 1
@@ -178,7 +217,7 @@ def add_crush(spec, body, vt, prefix: str, rgba, *, contype: int, conaffinity: i
             j.range = [0.0, _six(step)]
             j.solref_friction = list(CRUSH_JOINT_SOLREF)
             j.solimp_friction = list(CRUSH_JOINT_SOLIMP)
-            j.solref_limit = list(CRUSH_JOINT_SOLREF)
+            j.solref_limit = list(CRUSH_LIMIT_SOLREF)
             j.solimp_limit = list(CRUSH_JOINT_SOLIMP)
             if not last:  # a link's mass on a small sphere that touches nothing (see the hubs)
                 g = link.add_geom(name=f"{name}_mass", type=GT.mjGEOM_SPHERE, size=[0.02, 0, 0],
