@@ -17,7 +17,8 @@ same run.
 ``cars``: restitution at 15-60 km/h closing speed (``checks.restitution_curve``) at each step
 of the ladder: a sedan-crush into the back of a standing one, an suv-crush into a sedan-crush's
 back, a sedan-crush square into a sedan-crush's side; each against the published band
-(``checks.restitution_band``) and whether it falls; the momentum kept through the rear impacts.
+(``checks.restitution_band``) and whether it falls; the momentum kept through the rear impacts;
+the residual crush of the striking front and the struck zone at the highest speed (at separation).
 ``energy``: where the rebound comes from, a sedan-crush into a standing one at 15 and 50 km/h:
 from the deepest compression to separation, the kinetic energy regained (relative motion)
 beside the work of each kind of force (the slab contact, the plastic steps' friction and
@@ -106,7 +107,10 @@ def _cars(checks) -> bool:
             ok_all &= inside
             print(f"{a:12} {b:12} {how:5} {h * 1e3:5.2f}  " + "  ".join(f"{v:g}: {x:.3f}" for v, x in zip(speeds, e))
                   + f"  | band {'in' if inside else 'OUT'}, {'falling' if falling else 'NOT falling'}"
-                  + (f", momentum within {mom:.2%}" if how == "rear" else "") + f" ({time.process_time() - c0:.1f} s CPU)")
+                  + (f", momentum within {mom:.2%}" if how == "rear" else "")
+                  + f"; residual crush at {speeds[-1]:g}: front {rs[-1].residual[0]['front']:.2f} m, "
+                  + f"{'left' if how == 'side' else 'rear'} {rs[-1].residual[1]['left' if how == 'side' else 'rear']:.2f} m"
+                  + f" ({time.process_time() - c0:.1f} s CPU)")
     lo, hi = checks.restitution_band(15.0)
     print(f"band: {lo:g}-{hi:g}, at most {checks.RESTITUTION_HIGH_SPEED[1]:g} from "
           f"{checks.RESTITUTION_HIGH_SPEED[0]:g} km/h up (SAE 931842, SAE 1999-01-0097)")

@@ -176,8 +176,9 @@ def tilt_angle(type_name: str, *, timestep: float = TIMESTEP, table_friction: fl
 @dataclass(frozen=True)
 class Impact:
     """A collinear impact: closing speed (km/h), restitution, contact time (s), momentum before and
-    after the contact window (kg m/s), and the struck vehicle's delta-V from the sensor's impulse
-    (km/h) beside its measured velocity change (km/h)."""
+    after the contact window (kg m/s), the struck vehicle's delta-V from the sensor's impulse
+    (km/h) beside its measured velocity change (km/h), and each vehicle's residual crush at
+    separation ({zone: m}; {} for a rigid type)."""
 
     speed_kmh: float
     restitution: float
@@ -186,6 +187,7 @@ class Impact:
     momentum_after: float
     delta_v_impulse_kmh: float
     delta_v_kmh: float
+    residual: tuple = ({}, {})
 
 
 def impact(type_name: str, speed_kmh: float, *, timestep: float = TIMESTEP, other: str | None = None,
@@ -245,7 +247,8 @@ def impact(type_name: str, speed_kmh: float, *, timestep: float = TIMESTEP, othe
             return Impact(speed_kmh=speed_kmh, restitution=float(e), duration=float(d.time - timestep - t0),
                           momentum_before=float(mass[0] * before[0] + mass[1] * before[1]),
                           momentum_after=float(mass[0] * after[0] + mass[1] * after[1]),
-                          delta_v_impulse_kmh=float(J / mass[1] * 3.6), delta_v_kmh=float((after[1] - before[1]) * 3.6))
+                          delta_v_impulse_kmh=float(J / mass[1] * 3.6), delta_v_kmh=float((after[1] - before[1]) * 3.6),
+                          residual=(crush_mod.crush_residual(m, "v0", a, d.qpos), crush_mod.crush_residual(m, "v1", b, d.qpos)))
     raise SolveError(f"restitution check at {speed_kmh:g} km/h: the vehicles never touched")
 
 
