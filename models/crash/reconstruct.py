@@ -21,9 +21,17 @@ built-in crossing-case in 2,400 rollouts, docs/results/crash.md). Here:
   CMA-ES, :data:`DRAW_ROLLOUTS` rollouts at most, every rollout with the draw's friction,
   masses and contact);
 * the draw is **accepted** when its fit meets the *stated* evidence, every piece within its
-  tolerance; the accepted draws are the sample. Meeds and Welling weight each optimum by its
-  prior over the Jacobian's volume; the weights here are equal (the Jacobian would cost one
-  rollout per coordinate a draw, and the prior is uniform): an approximation, said so.
+  tolerance;
+* each accepted draw's **local set** (:func:`_local`): the draw is linearised by forward
+  differences in every coordinate of the intents and of the unknowns (one rollout each), and the
+  set where every piece of the stated evidence stays within its tolerance, in that linear model,
+  is sampled by hit-and-run (R. L. Smith, Operations Research 32, 1984); the intervals are over
+  these samples. With a uniform kernel and uniform priors the posterior near a draw is uniform
+  on that set; a fit stops where it first meets the evidence, so the accepted draws bunch at one
+  end of it, and a dozen draws sample the unknowns' ranges thinly (the planted cases' pinned
+  intervals held the truth in 7 of 11 without the sets: docs/results/crash.md). Meeds and
+  Welling weight each optimum by its prior over the Jacobian's volume; the weights here are
+  equal (each set's volume is not estimated): an approximation, said so.
 
 The fits start near a **pilot** fit (the intents and the unknowns together): for two vehicles
 with impact and rest positions, the classic reconstructionist's **momentum Monte Carlo**
@@ -41,7 +49,7 @@ the draws did not spread along.
 
 Each vehicle's impact speed (just before its first vehicle contact), delta-V (that contact's
 impulse over the drawn mass) and PDOF (principal direction of force, a clock: 12 from straight
-ahead, 3 from the right) are summarised over the accepted draws as a 90 % interval
+ahead, 3 from the right) are summarised over the local sets' samples as a 90 % interval
 (:data:`LEVEL`: 5th to 95th percentile). A quantity whose interval spans at least :data:`WEAK`
 of its prior interval (the same quantity over the pilot's exploring rollouts that hit as the
 evidence says, or the driver's speed range), a speed a profile probe moves, or one that fewer
@@ -75,6 +83,7 @@ from nbst.models.crash import evidence as ev_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import search as search_mod
 from nbst.models.crash import crush as crush_mod
+from nbst.models.crash.outcome import _wrap
 from nbst.models.crash.run import BATCH, CrashRollouts, CrashRunner, scene_vehicles
 from nbst.models.crash.script import Range
 from nbst.models.crash.space import space_of
@@ -83,7 +92,8 @@ from nbst.seeds import check_seed
 
 __all__ = ["MAX_ROLLOUTS", "DRAWS", "DRAW_ROLLOUTS", "DRAW_PARALLEL", "DRAW_UNIFORM", "PILOT_SHARE", "PILOT_APPROACH", "EXPLORE",
            "POPSIZE", "STALL", "SIGMA_PILOT", "SIGMA_FIT", "SIGMA_DRAW", "PILOT_DONE", "DRAW_DONE", "JITTER", "LEVEL",
-           "WEAK", "MIN_ACCEPTED", "SCREEN_SAMPLES", "SCREEN_SPEED_TOL", "PARALLEL_DEG", "ROUNDS", "GAIN", "PROFILE_ROLLOUTS", "PROFILE_SHARE", "METHOD", "Progress",
+           "WEAK", "MIN_ACCEPTED", "SCREEN_SAMPLES", "SCREEN_SPEED_TOL", "PARALLEL_DEG", "ROUNDS", "GAIN", "PROFILE_ROLLOUTS", "PROFILE_SHARE",
+           "LOCAL_SHARE", "LOCAL_DRAWS", "LOCAL_STEP", "LOCAL_TRUST", "LOCAL_SAMPLES", "LOCAL_BURN", "METHOD", "Progress",
            "PhysRunner", "Reconstruction", "reconstruct", "best_trial", "slide_speed", "momentum_speeds",
            "momentum_applies", "momentum_screen", "pdof_clock", "phys_coords", "scene_xml_of"]
 
@@ -110,7 +120,13 @@ JITTER = 0.7
 #: accepted draws' and the prior's ends, each a fit of at most PROFILE_ROLLOUTS rollouts; a probe
 #: that meets the evidence makes the speed not identifiable (the profile likelihood's test:
 #: Raue et al., Bioinformatics 25, 2009). PROFILE_SHARE of the budget is kept for them.
-PROFILE_ROLLOUTS, PROFILE_SHARE = 40, 0.15
+PROFILE_ROLLOUTS, PROFILE_SHARE = 40, 0.1
+#: The local sets (:func:`_local`): each of up to LOCAL_DRAWS accepted draws linearised by
+#: forward differences of LOCAL_STEP (unit cube) in every coordinate, at its own unknowns; the
+#: set where every piece of the stated evidence stays within its tolerance, in that linear model
+#: and within LOCAL_TRUST of the draw, sampled by LOCAL_SAMPLES steps of hit-and-run after
+#: LOCAL_BURN; LOCAL_SHARE of the budget is kept for the differences.
+LOCAL_SHARE, LOCAL_DRAWS, LOCAL_STEP, LOCAL_TRUST, LOCAL_SAMPLES, LOCAL_BURN = 0.08, 16, 0.03, 0.15, 400, 100
 #: The intervals' level; an interval spanning WEAK of its prior's is not identifiable; fewer
 #: accepted draws than MIN_ACCEPTED pin nothing (every interval widened to the prior's).
 LEVEL, WEAK, MIN_ACCEPTED = 0.90, 0.3, 8
@@ -125,8 +141,10 @@ ROUNDS, GAIN = 3, 0.7
 METHOD = ("Optimisation Monte Carlo (Meeds and Welling, NeurIPS 2015): each draw takes the road friction, the loads "
           "and the contact's stiffness and damping from their ranges and an error of the evidence within its "
           "tolerances, fits the drivers' intents to it on the rollout engine, and is accepted when the fit meets "
-          "every piece of the stated evidence within its tolerance; equal weights; 90 % intervals over the accepted "
-          "draws; the pilot fit starts from the momentum Monte Carlo screen (Brach and Brach)")
+          "every piece of the stated evidence within its tolerance; each accepted draw linearised in the intents and "
+          "unknowns by finite differences and the set meeting the evidence about it sampled by hit-and-run (Smith "
+          "1984); equal weights; 90 % intervals over those samples; the pilot fit starts from the momentum Monte "
+          "Carlo screen (Brach and Brach)")
 
 
 # --------------------------------------------------------------------------- the runner
@@ -576,6 +594,7 @@ class Reconstruction:
     verdicts: list = field(default_factory=list)
     not_identifiable: list = field(default_factory=list)
     profile: dict = field(default_factory=dict)  # vehicle index -> impact speeds (m/s) of probe fits that met the evidence
+    moves: list = field(default_factory=list)    # per draw linearised: (LOCAL_SAMPLES, 3 n + 1) quantities on its local set
     best: _Told | None = None    # the accepted draw of least squares (else the pilot's best)
     interrupted: bool = False
     method: str = METHOD
@@ -660,6 +679,8 @@ def _judge(rec: Reconstruction) -> None:
     Q = np.array([t.q for t in rec.accepted]) if rec.accepted else np.zeros((0, 3 * n + 1))
     P = rec.prior_q
     few = len(Q) < MIN_ACCEPTED
+    if rec.moves:
+        Q = np.concatenate(rec.moves)  # the draws spread over their local sets (_local)
     if not rec.accepted:
         rec.verdicts.append("no draw met every piece of evidence within its tolerance in the budget: every interval "
                             "is the prior's (not identifiable here); a larger budget, or looser tolerances")
@@ -810,6 +831,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
     out_draws: list = []
     accepted: list = []
     profile: dict = {}
+    moves: list = []
     try:
         start = None
         if screen is not None and not screen["degenerate"] and S.dim:  # stage A: the approach at momentum speeds
@@ -859,7 +881,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
         pilot_best = min((t for t, _ in pilot_told), key=lambda t: float(np.sum(t.dist ** 2)))
         pilot_used = P.used
         # the OMC draws, DRAW_PARALLEL at a time in shared batches
-        draw_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
+        slice_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
+        draw_end = slice_end - int(LOCAL_SHARE * max_rollouts)
         per = max(BATCH // 2, min(DRAW_ROLLOUTS, (draw_end - P.used) // max(1, int(draws))))
         pcs = phys_coords(case)
         specs = []
@@ -884,6 +907,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
                     accepted.append(t)
             P.accepted = len(accepted)
             k += DRAW_PARALLEL
+        moves = _local(P, S, accepted, rng, slice_end)
         profile = _profile(P, S, accepted, rng, max_rollouts)
     except KeyboardInterrupt:
         interrupted = True
@@ -897,10 +921,152 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
     rec = Reconstruction(names=case.script.names(), labels=ev_mod.labels(case), draws=out_draws, accepted=accepted,
                          prior_q=np.array(explore_q) if explore_q else np.zeros((0, 3 * case.n + 1)),
                          speed_prior=speed_prior, screen=screen, rollouts=P.used, pilot_rollouts=pilot_used,
-                         seed=int(seed), interrupted=interrupted, profile=profile)
+                         seed=int(seed), interrupted=interrupted, profile=profile, moves=moves)
     rec.best = min(accepted, key=lambda t: float(np.sum(t.dist ** 2))) if accepted else pilot_best
     _judge(rec)
     return rec
+
+
+def _residual(ps: list, o, d: np.ndarray) -> tuple[np.ndarray, list]:
+    """The evidence's signed residuals of one rollout in units of the tolerances, and their
+    constraints: a position (rest, impact) two components within the unit disc, a heading one
+    within [-1, 1]; any other piece its distance (at most 1: a half-space once linearised)."""
+    r: list = []
+    kinds: list = []
+    for j, p in enumerate(ps):
+        vo = o.vehicles[p.vehicle] if p.vehicle is not None else None
+        if p.kind in ("rest", "impact_at") and vo is not None:
+            x = vo.rest if p.kind == "rest" else vo.impact_pos
+            if np.all(np.isfinite(x[:2])):
+                kinds.append(("disc", len(r)))
+                r += [(x[0] - p.value[0]) / p.tol, (x[1] - p.value[1]) / p.tol]
+                continue
+        if p.kind == "heading" and vo is not None:
+            kinds.append(("slab", len(r)))
+            r.append(float(_wrap(vo.rest[2] - p.value[0])) / p.tol)
+            continue
+        kinds.append(("half", len(r)))
+        r.append(float(d[j]))
+    return np.array(r), kinds
+
+
+def _chord(kinds: list, c: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """The t with every constraint of residuals c + t w met (an interval: the set is convex)."""
+    lo, hi = -math.inf, math.inf
+    for kind, j in kinds:
+        if kind == "disc":
+            cc, ww = c[j:j + 2], w[j:j + 2]
+            A, B, C = float(ww @ ww), float(cc @ ww), float(cc @ cc) - 1.0
+            if A < 1e-12:
+                continue
+            disc = B * B - A * C
+            if disc < 0:
+                return 0.0, 0.0
+            r = math.sqrt(disc)
+            lo, hi = max(lo, (-B - r) / A), min(hi, (-B + r) / A)
+        elif abs(w[j]) > 1e-12:
+            if kind == "slab":
+                a1, a2 = (-1.0 - c[j]) / w[j], (1.0 - c[j]) / w[j]
+                lo, hi = max(lo, min(a1, a2)), min(hi, max(a1, a2))
+            elif w[j] > 0:
+                hi = min(hi, (1.0 - c[j]) / w[j])
+            else:
+                lo = max(lo, (1.0 - c[j]) / w[j])
+    return lo, hi
+
+
+def _phys_unit(case: ev_mod.Case, phys: dict) -> np.ndarray:
+    """One rollout's unknowns (``_Told.phys``) as unit coordinates of :func:`phys_coords`."""
+    out = []
+    for nm, i, lo, hi in phys_coords(case):
+        v = np.atleast_1d(phys[nm])
+        out.append((float(v[0] if i is None else v[i]) - lo) / (hi - lo))
+    return np.array(out)
+
+
+def _local(P: _Problem, S, accepted: list, rng, end: int) -> list:
+    """The local sets (:data:`LOCAL_SHARE`): up to :data:`LOCAL_DRAWS` accepted draws (evenly
+    spread in draw order), each linearised by forward differences of :data:`LOCAL_STEP` in every
+    coordinate of the intents and of the unknowns (:func:`phys_coords`, as unit coordinates of
+    their ranges), one rollout each, the draws' in shared batches: the evidence's signed
+    residuals (:func:`_residual`) and the quantities (impact speed, delta-V, PDOF, closing speed)
+    as linear functions about the draw. In that model the set of intents and unknowns that meets
+    every piece of the stated evidence within its tolerance (within the ranges, the intents within
+    :data:`LOCAL_TRUST` of the draw) is convex; :data:`LOCAL_SAMPLES` points of a hit-and-run
+    chain on it (R. L. Smith, Operations Research 32, 1984: a random direction, a uniform point on
+    the chord; uniform on the set in the limit), after :data:`LOCAL_BURN`, give their quantities.
+    A coordinate whose step changes whom the vehicles hit is held.
+
+    With a uniform kernel (met or not) and uniform priors, the posterior near a draw is uniform on
+    that set. The fits stop where they first meet the evidence, bunched at one end of it, and a
+    few draws sample the unknowns' ranges thinly; the sets spread both (the finite differences of
+    W. Bartlett and A. Fonda, SAE 2003-01-0489; Meeds and Welling's Jacobian about each optimum).
+
+    Returns:
+        [(LOCAL_SAMPLES, 3 n + 1) quantities] per draw linearised (empty: none)."""
+    case = P.case
+    dim, npc = S.dim, len(phys_coords(case))
+    nd = dim + npc
+    room = max(0, end - P.used)
+    m = min(len(accepted), LOCAL_DRAWS, room // max(nd, 1))
+    if m < 1 or nd < 1:
+        return []
+    pick = sorted({int(round(x)) for x in np.linspace(0, len(accepted) - 1, m)})
+    base = [accepted[a] for a in pick]
+    x0s = [np.concatenate([t.u, _phys_unit(case, t.phys)]) for t in base]
+    steps = [np.where(x0 + LOCAL_STEP <= 1.0, LOCAL_STEP, -LOCAL_STEP) for x0 in x0s]
+    X = np.array([x0 + np.eye(nd)[k] * h[k] for x0, h in zip(x0s, steps) for k in range(nd)])
+    phys = _phys_values(case, X[:, dim:])
+    told = []
+    for j in range(0, len(X), BATCH):
+        told += P.run(X[j:j + BATCH, :dim], {key: v[j:j + BATCH] for key, v in phys.items()},
+                      [P.ps] * len(X[j:j + BATCH]))
+    out = []
+    for a, (t, x0, h) in enumerate(zip(base, x0s, steps)):
+        r0, kinds = _residual(P.ps, t.o, t.dist)
+        J = np.zeros((len(r0), nd))
+        Jq = np.zeros((len(t.q), nd))
+        free = np.ones(nd, bool)
+        for k in range(nd):
+            tk = told[a * nd + k][0]
+            rk, kk = _residual(P.ps, tk.o, tk.dist)
+            if any(float(tk.dist[j]) != 0.0 for j in P.hit_rows) or [x[0] for x in kk] != [x[0] for x in kinds]:
+                free[k] = False
+                continue
+            J[:, k] = (rk - r0) / h[k]
+            dq = tk.q - t.q
+            for c in range(2, len(dq) - 1, 3):  # a PDOF: the nearer way round the clock
+                dq[c] = (dq[c] + 6.0) % 12.0 - 6.0
+            Jq[:, k] = np.where(np.isfinite(dq), dq, 0.0) / h[k]
+        trust = np.r_[np.full(dim, LOCAL_TRUST), np.full(npc, 1.0)]
+        lo_box, hi_box = np.maximum(-x0, -trust), np.minimum(1.0 - x0, trust)
+        x = np.zeros(nd)
+        idx = np.flatnonzero(free)
+        samples = []
+        if len(idx):
+            # directions shaped like the set (the linear model's, the trust region's): a symmetric
+            # law of directions keeps hit-and-run uniform on the set, and a long thin set mixes
+            Ji = J[:, idx]
+            M = Ji.T @ Ji + np.diag(1.0 / np.maximum(hi_box[idx] - lo_box[idx], 1e-6) ** 2)
+            L = np.linalg.cholesky(np.linalg.inv(M))
+            for it in range(LOCAL_BURN + LOCAL_SAMPLES):
+                v = np.zeros(nd)
+                v[idx] = L @ rng.standard_normal(len(idx))
+                lo, hi = _chord(kinds, r0 + J @ x, J @ v)
+                for k in idx:  # the ranges and the trust region
+                    if abs(v[k]) > 1e-12:
+                        a1, a2 = (lo_box[k] - x[k]) / v[k], (hi_box[k] - x[k]) / v[k]
+                        lo, hi = max(lo, min(a1, a2)), min(hi, max(a1, a2))
+                if hi > lo:
+                    x = x + float(rng.uniform(lo, hi)) * v
+                if it >= LOCAL_BURN:
+                    samples.append(x.copy())
+        Xs = np.array(samples) if samples else np.zeros((1, nd))
+        q = t.q[None] + Xs @ Jq.T
+        for c in range(2, q.shape[1] - 1, 3):
+            q[:, c] = (q[:, c] - 1e-9) % 12.0 + 1e-9
+        out.append(q)
+    return out
 
 
 def _profile(P: _Problem, S, accepted: list, rng, max_rollouts: int) -> dict:
