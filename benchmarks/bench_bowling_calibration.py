@@ -40,8 +40,10 @@ whether those seeds were used to fit anything (**fit**) or never (**held out**):
   releases from seed ``GAME_HELDOUT_SEEDS[b]`` (``--seeds fit``: :data:`GAME_FIT_SEEDS`), with the
   automatic "2 and 1" mover and standing still on the same releases (``--moves``). Prints each
   profile's average with a 95 % interval over the block averages (t), its strikes, pocket hits and
-  spares (Wilson), the mover's paired gain per block, and the leave mix of all the profiles' first
-  balls together (a population of bowlers, not one) against ESPN's ranking.
+  spares (Wilson), the mover's paired gain per block, each profile's figures by game of the block
+  (the strike balls' board at the head pin's line and its spread, pocket hits, strikes, spares,
+  open frames) and its spares by leave against PBA television, and the leave mix of all the
+  profiles' first balls together (a population of bowlers, not one) against ESPN's ranking.
 
 The pin deck is replayed from each throw's deck start (``frame.deck_start``; the lane phase once per
 throw, as ``bench_carry_fit.py``), so ``--setting`` (the keys of ``bench_carry_fit.DEFAULTS``: ``pp_mu``,
@@ -341,7 +343,11 @@ def game_block(name: str, seed: int, move: str, cache: Path) -> dict:
         rec = {"games": [g[-1] for g in d["scores"]["0"]], "moves": len(d["moves"]),
                "first": [[b["game"], b["board_at_pins"], b["entry_angle_deg"], list(b["leave"])]
                          for b in d["balls"] if len(b["standing"]) == 10],
-               "spare": [[list(b["standing"]), list(b["leave"])] for b in d["balls"] if len(b["standing"]) < 10]}
+               "spare": [[list(b["standing"]), list(b["leave"]), b["game"]] for b in d["balls"]
+                         if len(b["standing"]) < 10],
+               # an open frame: a second ball at a leave that leaves pins (the tenth's fill balls are not)
+               "opens": [sum(1 for b in d["balls"] if b["game"] == g + 1 and b["roll"] == 2
+                             and len(b["standing"]) < 10 and b["leave"]) for g in range(3)]}
         done = _store(cache, "games.json")[1]
         done[k] = rec
         _save(path, done)
@@ -384,10 +390,46 @@ def part_games(seeds, names, moves, cache) -> None:
             print(f"| {n} | {dd.mean():+.1f} pins ({dd.mean() - half:+.1f} to {dd.mean() + half:+.1f}) | "
                   f"{int((dd > 0).sum())} / {int((dd == 0).sum())} / {int((dd < 0).sum())} |")
     m0 = "auto" if "auto" in moves else moves[0]
+    for n in names:
+        _by_game(n, m0, out[(n, m0)])
     recs = [[x[1], x[2], x[3], False] for n in names for r in out[(n, m0)] for x in r["first"]]
     print(f"\nThe leave mix of all {len(recs)} first balls of {', '.join(names)} (mover {m0}): a population "
           f"of bowlers.")
     part_leaves({"records": recs, "n": len(recs)})
+
+
+def _by_game(name: str, move: str, rs: list) -> None:
+    """Where a profile's pins go, by game of its blocks (1: the fresh lane): its strike balls at the head
+    pin's line (mean board and spread, pocket hits, light and high), strikes, spares and open frames,
+    then its spares by leave, against PBA television (ESPN's study)."""
+    print(f"\n**`{name}`, mover {move}, by game of its {len(rs)} blocks** (light: below board 16.5 at the head "
+          f"pin's line; high: above 18.5)\n")
+    print("| game | strike balls: board at the pins, mean (sd) | pocket hits | light / high | strikes | spares | "
+          "open frames a game |")
+    print("|---|---|---|---|---|---|---|")
+    for g in (1, 2, 3):
+        first = [x for r in rs for x in r["first"] if x[0] == g]
+        b = np.array([x[1] for x in first if x[1] is not None])
+        pk = sum(1 for x in first if x[1] is not None and POCKET[0] <= x[1] <= POCKET[1])
+        lo = sum(1 for x in first if x[1] is not None and x[1] < POCKET[0])
+        hi = sum(1 for x in first if x[1] is not None and x[1] > POCKET[1])
+        sp = [x for r in rs for x in r["spare"] if len(x) > 2 and x[2] == g]
+        op = [r["opens"][g - 1] for r in rs if "opens" in r]
+        print(f"| {g} | {b.mean():.2f} ({b.std():.2f}) | {ci(pk, len(first))} | {lo} / {hi} | "
+              f"{ci(sum(1 for x in first if not x[3]), len(first))} | {ci(sum(1 for x in sp if not x[1]), len(sp))} | "
+              f"{np.mean(op) if op else float('nan'):.1f} |")
+    by: dict = {}
+    for r in rs:
+        for x in r["spare"]:
+            k = "-".join(map(str, x[0]))
+            by.setdefault(k, [0, 0])
+            by[k][0] += not x[1]
+            by[k][1] += 1
+    pba = {"10": "95.9 %", "7": "95.5 %", "9": "98.9 %", "3-10": "48.6 %", "7-10": "0 %", "4-6-7-10": "3.3 %"}
+    print(f"\n| `{name}`'s spare leave | converted (95 % CI) | PBA television |")
+    print("|---|---|---|")
+    for k, (c, m) in sorted(by.items(), key=lambda kv: -kv[1][1])[:10]:
+        print(f"| {k} | {ci(c, m)} | {pba.get(k, '')} |")
 
 
 def _seeds(text: str, fit, held) -> tuple:
