@@ -112,3 +112,40 @@ def test_the_example_is_solved_at_seed_1_and_replays(name, tmp_path):
     p = tmp_path / "sol.json"
     p.write_text(json.dumps(solution_dict(res)))
     assert replay_solution(p).same and res.ladder_held
+
+
+def test_billiards_fixed_coordinates_are_not_searched_and_the_cue_is_not_aimed_in_flight():
+    """The cue's vertical speed and spin about z are fixed ([0, 0]): the engine's cube has the 4
+    live coordinates, every trial keeps the fixed ones at their value, and the cue (which rolls:
+    no flight with a vertical speed of 0) is never aimed ballistically, whose velocity would be
+    clipped to the ranges' edges: of 400 exploring trials none lies on an edge of the cube."""
+    from nbst.models.mjsearch.engine import Engine
+    from nbst.scene.rollout import SceneSim
+    from nbst.scene.scenefile import load_fates
+    from nbst.scene.search import _Scene
+
+    fates, model = load_fates("billiards")
+    with SceneSim(fates, model) as sim:
+        S = _Scene(sim, 1, ())
+        assert S.live.tolist() == [0, 1, 3, 4] and S.engine_blocks == [[0, 1, 2, 3]]
+        assert S.free_flight == [False]
+        eng = Engine(len(S.live), seed=1, max_rollouts=10**6)
+        V = np.array([S.init(eng) for _ in range(400)])
+    assert V.shape == (400, 4)
+    assert not np.any((V <= 0.0) | (V >= 1.0))
+    X = np.array([S.x_of(v) for v in V])
+    assert np.all(X[:, [2, 5]] == 0.0)
+
+
+def test_a_scene_without_fixed_coordinates_searches_every_one():
+    """Egg-in-cup (every range wider than one value): the engine's point is the whole unit point."""
+    from nbst.scene.rollout import SceneSim
+    from nbst.scene.scenefile import load_fates
+    from nbst.scene.search import _Scene
+
+    fates, model = load_fates("egg-in-cup")
+    with SceneSim(fates, model) as sim:
+        S = _Scene(sim, 1, ())
+    v = np.linspace(0.1, 0.9, fates.dim)
+    assert S.live.tolist() == list(range(fates.dim)) and S.free_flight == [True]
+    assert np.array_equal(S.full(v), v)

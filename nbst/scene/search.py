@@ -19,7 +19,13 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
 * **one controlled body** (one block: crossover has nothing to swap, and the GA's uniform
   randomize of the only block is a fresh random trial): no GA; :data:`ONE_BODY_EXPLORE` exploring
   trials, then the engine's CMA-ES restarts (population :data:`ONE_BODY_POPSIZE`) from the best
-  trial, each generation ranked by (distance, cost) (the engine's ``cma_by_key``);
+  trial, each generation ranked by (distance, cost) (the engine's ``cma_by_key``); a trial that
+  meets every fate at h is *fine* (only the ladder is left): restarts then polish the best, and
+  once three in a row leave its cost as it was, start from the cheapest other such trial in
+  another funnel (the engine's polishing, ``hold_distance=0``: a best met at h but not kept on
+  the ladder is not polished for ever);
+* **fixed coordinates** (a range of one value, as a rolling ball's vertical speed ``[0, 0]``) are
+  not searched: the engine's cube has one dimension per live coordinate;
 * the engine's **distance** of a trial is 3 per unmet bit plus, with a ladder (finer timesteps,
   h/2 and h/4), 1 when a trial that meets every fate misses them there (:func:`ladder_check`: h/2,
   then h/4 only if it held at h/2; those rollouts counted); its **cost** the judge's graded cost
@@ -31,10 +37,12 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
   rollouts meet every fate (and hold), each with a contact sequence of its own (Chenney & Forsyth
   2000: the animator chooses).
 
-*Directed randomize* aims a body that has a place to be (``rest_in`` or ``at``): the velocity that
-would carry its origin ballistically (the model's gravity, no contacts) to a point of the region in a
-random flight time (``at``: its time); half the time (and always for a body with no place) it
-instead takes the block of the member whose body is nearest its fates and creeps it (sigma 0.04).
+*Directed randomize* aims a body that has a place to be (``rest_in`` or ``at``) and may fly (no
+component of its ``linvel`` held fixed): the velocity that would carry its origin ballistically
+(the model's gravity, no contacts) to a point of the region in a random flight time (``at``: its
+time); half the time (and always for a body with no place, or one that may not fly) it instead
+takes the block of the member whose body is nearest its fates and creeps it (sigma 0.04), or,
+with no members yet, draws the block uniformly.
 
 Children are made :data:`BATCH` at a time from one generator stream (``nbst.seeds``) and rolled out
 on ``jobs`` threads: the result depends on the seed alone, never on ``jobs``. Ctrl-C stops the
@@ -155,9 +163,23 @@ class _Scene:
         self.lo, self.hi = f.bounds()
         self.span = self.hi - self.lo
         self.blocks = f.blocks()
+        #: the coordinates searched: those whose range is more than one value (the engine's unit
+        #: cube has one dimension per live coordinate; a fixed one, as a planar shot's vertical
+        #: speed ``[0, 0]``, is its value in every trial)
+        self.live = np.flatnonzero(self.span > 0)
+        pos = {int(k): j for j, k in enumerate(self.live)}
+        #: per block: its live coordinates, as indices of the engine's cube
+        self.engine_blocks = [[pos[k] for k in range(b.start, b.stop) if k in pos] for b in self.blocks]
         fated = [fa.body for fa in f.fates]
         #: per block: the signature bit of its body (None: the body has no fates)
         self.bit = [fated.index(c.body) if c.body in fated else None for c in f.controls]
+        #: per block: its body may be aimed ballistically (every component of its linvel has a
+        #: range: one held fixed, as a rolling ball's vertical speed [0, 0], forbids a flight)
+        self.free_flight = []
+        for c, b in zip(f.controls, self.blocks):
+            parts = [p for p, _ in c.parts()]
+            a = b.start + 3 * parts.index("linvel") if "linvel" in parts else None
+            self.free_flight.append(a is not None and bool(np.all(self.span[a:a + 3] > 0)))
         self.answers: dict[tuple[str, ...], SceneRollout] = {}
         self.held: dict[int, bool] = {}  # id(rollout) -> kept on the ladder
         self.seen: set[tuple[bool, ...]] = set()
@@ -166,8 +188,15 @@ class _Scene:
         self.origin = [q0[qa:qa + 3].copy() for qa, _da in sim.adr]  # (the middle of a pos range is added)
         self.gravity = np.array(sim.model.opt.gravity, dtype=float)
 
-    def x_of(self, u: np.ndarray) -> np.ndarray:
-        return self.lo + np.clip(u, 0.0, 1.0) * self.span
+    def full(self, v: np.ndarray) -> np.ndarray:
+        """The whole unit point of an engine point (a fixed coordinate at 0.5: its one value)."""
+        u = np.full(len(self.lo), 0.5)
+        u[self.live] = v
+        return u
+
+    def x_of(self, v: np.ndarray) -> np.ndarray:
+        """The controls vector of an engine point (its live coordinates)."""
+        return self.lo + np.clip(self.full(v), 0.0, 1.0) * self.span
 
     def u_of(self, x: np.ndarray) -> np.ndarray:
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -175,12 +204,19 @@ class _Scene:
         return np.asarray(np.clip(u, 0.0, 1.0))
 
     # -- the moves --------------------------------------------------------------------
-    def directed(self, eng: Engine, u: np.ndarray, i: int) -> None:
-        """Directed randomize of block ``i`` of ``u`` (in place; the module docstring)."""
+    def directed(self, eng: Engine, v: np.ndarray, i: int) -> None:
+        """Directed randomize of block ``i`` of the engine point ``v`` (in place; the module docstring)."""
+        u = self.full(v)
+        self._directed(eng, u, i)
+        v[:] = u[self.live]
+
+    def _directed(self, eng: Engine, u: np.ndarray, i: int) -> None:
+        """Directed randomize of block ``i`` of the whole unit point ``u`` (in place)."""
         rng: np.random.Generator = eng.rng  # type: ignore[has-type]
         c, b = self.fates.controls[i], self.bit[i]
         fate = None if b is None else self.fates.fates[b]
-        aimable = fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
+        aimable = (fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
+                   and self.free_flight[i])
         sl = self.blocks[i]
         pop = eng.population
         if pop and (not aimable or rng.random() < 0.5):
@@ -188,7 +224,7 @@ class _Scene:
                 donor = min(pop, key=lambda m: m.payload.judgement.bodies[b].cost)
             else:
                 donor = min(pop, key=lambda m: m.key)
-            u[sl] = donor.u[sl]
+            u[sl] = self.full(donor.u)[sl]
             u[sl] = np.clip(u[sl] + 0.04 * rng.standard_normal(sl.stop - sl.start), 0.0, 1.0)
             return
         u[sl] = rng.random(sl.stop - sl.start)
@@ -210,7 +246,7 @@ class _Scene:
         v = (target - self.origin[i] - 0.5 * self.gravity * t * t) / t
         k = [p for p, _ in c.parts()].index("linvel")
         a = sl.start + 3 * k
-        x = self.x_of(u)
+        x = self.lo + np.clip(u, 0.0, 1.0) * self.span
         x[a:a + 3] = v
         u[a:a + 3] = self.u_of(x)[a:a + 3]
 
@@ -220,8 +256,8 @@ class _Scene:
         u = rng.random(len(self.lo))
         for i in range(len(self.blocks)):
             if rng.random() < 0.5:
-                self.directed(eng, u, i)
-        return u
+                self._directed(eng, u, i)
+        return u[self.live]
 
     def init_done(self, eng: Engine) -> bool:
         return all(sum(1 for m in eng.population if m.signature >> b & 1) >= INIT_PER_BIT
@@ -245,7 +281,9 @@ class _Scene:
             dist.append(distance_of(r, misses))
             cost.append(r.cost + LADDER_PENALTY * misses + far)
         sigs = [sum(1 << k for k, b in enumerate(r.signature) if b) for r in outs]
-        return {"signatures": sigs, "distances": dist, "costs": cost, "payloads": outs, "rollouts": spent}
+        fine = [bool(r.judgement.met and not r.warnings) for r in outs]  # met at h: the ladder left
+        return {"signatures": sigs, "distances": dist, "costs": cost, "payloads": outs, "rollouts": spent,
+                "fine": fine}
 
     def done(self, eng: Engine) -> bool:
         if self.want > 1:
@@ -275,14 +313,14 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         the :class:`SceneSearchResult` (the best rollout, also when interrupted).
     """
     S = _Scene(sim, answers, ladder)
-    fates = sim.fates
-    blocks = [list(range(b.start, b.stop)) for b in S.blocks]
+    blocks = S.engine_blocks
     if len(blocks) > 1:  # the paper's GA: crossover of whole per-body blocks
         how: dict[str, Any] = dict(explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init_done=S.init_done,
                                    ga_batches=1, ga_fine=1, cma=False)
     else:  # one controlled body: nothing to cross over; CMA-ES restarts after one exploring batch or two
-        how = dict(explore=ONE_BODY_EXPLORE, ga_batches=0, cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True)
-    eng = Engine(fates.dim, seed=rng, max_rollouts=max_rollouts, blocks=blocks, bits=S.bit, batch=BATCH, init=S.init,
+        how = dict(explore=ONE_BODY_EXPLORE, ga_batches=0, cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True,
+                   hold_distance=0)  # a trial met at h but not kept on the ladder: polished, then other funnels
+    eng = Engine(len(S.live), seed=rng, max_rollouts=max_rollouts, blocks=blocks, bits=S.bit, batch=BATCH, init=S.init,
                  moves={"directed": S.directed}, creep=CREEP, prefer_unmet=True, population=POPULATION,
                  per_signature=PER_SIGNATURE, done=S.done, tournament=2, **how)
     t0 = time.perf_counter()
@@ -304,7 +342,7 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
     reasons = eng.stop()
     stopped = "met" if "solved" in reasons else "interrupted" if "interrupted" in reasons else "budget"
     if eng.best is None:  # interrupted before the first batch came back: roll out the middle of the ranges
-        best = sim.rollout(S.x_of(np.full(fates.dim, 0.5)))
+        best = sim.rollout(S.x_of(np.full(len(S.live), 0.5)))
     else:
         best = eng.best.payload
     return SceneSearchResult(best=best, rollouts=int(eng.rollouts),  # type: ignore[has-type]
