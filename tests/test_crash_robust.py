@@ -77,3 +77,54 @@ def test_gathering_finds_other_crashes_that_meet_the_script_at_every_timestep():
             assert holds and rows[0][2]  # met at 2 ms and kept at 1 and 0.5 ms
     finally:
         R.close()
+
+
+def _tbone_outcome(heading_deg=140.0, rest=(5.0, 10.0), moving=False, impact_kmh=52.5, dv_kmh=25.0):
+    """A t-bone outcome built by hand: A (the sedan) hit B (the SUV) at ``impact_kmh``; B's
+    delta-v ``dv_kmh``, at rest (unless ``moving``) at ``rest`` facing ``heading_deg``, upright."""
+    from nbst.models.crash.outcome import Outcome, VehicleOutcome
+
+    def vo(name, hits, speed, dv, pos, hd):
+        return VehicleOutcome(name=name, hits=hits, impact_speed=speed / 3.6, impact_heading=0.0,
+                              impact_pos=(1.0, -1.75), delta_v=dv / 3.6, rest=(pos[0], pos[1], np.radians(hd)),
+                              quarter_turns=0, roll=0.0, attitude="upright", spin=0.0, curb=np.nan,
+                              barrier=np.nan, moving=moving and name == "B", end_speed=2.0 if moving else 0.0)
+
+    return Outcome(vehicles=[vo("A", [(1, 3.0)], impact_kmh, 30.0, (8.0, -1.0), 10.0),
+                             vo("B", [(0, 3.0)], 50.0, dv_kmh, rest, heading_deg)],
+                   contacts=[(0, 1, 3.0, 3.1, np.zeros(3), np.zeros(3))])
+
+
+@pytest.mark.parametrize("heading, rest, moving, want", [
+    (140.0, (5.0, 10.0), False, 1.0),      # every fate in the middle of its tolerance: 1
+    (155.0, (5.0, 10.0), False, 0.5),      # heading half-way to its edge (140 +- 30): 0.5
+    (170.0, (5.0, 10.0), False, 0.0),      # at the heading's edge: 0
+    (185.0, (5.0, 10.0), False, -0.5),     # beyond it by half its tolerance
+    (140.0, (6.5, 10.0), False, 0.5),      # 1.5 m off the rest region's centre (radius 3)
+    (140.0, (5.0, 10.0), True, -0.25),     # still moving: no rest, whatever the pose
+])
+def test_the_slack_is_the_worst_fate_in_half_widths_of_its_tolerance(heading, rest, moving, want):
+    """The worst fate's slack: the impact speed (45-60 km/h) and delta-v (15-35) sit at their
+    bands' middles, so B's heading or rest decides; it agrees with the judge's verdict (met
+    exactly when the slack is >= 0)."""
+    from nbst.models.crash.outcome import judge
+
+    sc = script.load_script("t-bone")
+    o = judge(_tbone_outcome(heading, rest, moving), sc)
+    s = robust.slack(o, sc)
+    assert s == pytest.approx(want, abs=1e-9)
+    assert o.solved == (s >= 0.0)
+    assert robust.soft(o, sc) == pytest.approx(1 / (1 + np.exp(-want / robust.SOFT_TEMP)), abs=1e-12)
+
+
+def test_a_missed_contact_or_a_band_missed_is_a_negative_slack():
+    from nbst.models.crash.outcome import judge
+
+    sc = script.load_script("t-bone")
+    o = _tbone_outcome(impact_kmh=67.5)  # 7.5 km/h above the 45-60 band: one half-width outside
+    assert robust.slack(judge(o, sc), sc) == pytest.approx(-1.0, abs=1e-9)
+    o = _tbone_outcome(impact_kmh=56.25)
+    assert robust.slack(judge(o, sc), sc) == pytest.approx(0.5, abs=1e-9)
+    o = _tbone_outcome()
+    o.vehicles[1].hits = []
+    assert robust.slack(judge(o, sc), sc) == -1.0
