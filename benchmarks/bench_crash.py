@@ -304,8 +304,9 @@ def robust_part() -> None:
             print(f"  {name}, seed {seed}: solution {plain.text()}; robust pick {pick.text()} "
                   f"({rc.get('members', 1)} crashes raced from {rc.get('searches', 0)} searches"
                   f"{', the pick a raced one (the maximiser lost the ladder)' if rc.get('fell_back') else ''}; "
-                  f"race {rc.get('table')}; centring {mx.centre['start']}->{mx.centre['centred']} of "
-                  f"{mx.centre['copies']}; ladder "
+                  f"race {rc.get('table')}; soft climb {mx.climb['start']}->{mx.climb['climbed']} of "
+                  f"{mx.climb['copies']} (soft {mx.climb['soft_start']}->{mx.climb['soft_climbed']}, "
+                  f"{mx.climb['generations']} generations); ladder "
                   f"{'holds' if mx.ladder_holds else 'LOST' if mx.ladder_holds is False else 'not asked'}, "
                   f"{mx.frames} rollouts, {rw:.0f} s wall): {why}", flush=True)
     print(f"robust stunts: {met} of {total} (script, seed) pairs with the pick's P >= 50 %, or >= 2x the solution's "

@@ -128,3 +128,32 @@ def test_a_missed_contact_or_a_band_missed_is_a_negative_slack():
     o = _tbone_outcome()
     o.vehicles[1].hits = []
     assert robust.slack(judge(o, sc), sc) == -1.0
+
+
+@pytest.mark.slow
+def test_the_soft_climb_keeps_its_budget_and_the_ranges_and_repeats_from_its_seed(monkeypatch):
+    """A small soft climb on the short crossing (4 copies per candidate, 4 per generation, an
+    8-copy confirming screen): it runs no more than its budget, its pick sits inside the script's
+    ranges with a valid after-impact choice, meets its screen at least as often as the start,
+    and the same seed gives the same pick."""
+    monkeypatch.setattr(robust, "SOFT_COPIES", 4)
+    monkeypatch.setattr(robust, "SOFT_POP", 4)
+    monkeypatch.setattr(robust, "SOFT_CONFIRM", 8)
+    s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
+    S = space.space_of(s)
+    R = run.CrashRunner(s, jobs=1)
+    try:
+        start = S.intents(np.full((1, S.dim), 0.5))[0]
+        P = robust.RobustCrashProblem(S, R, R.xml, ref=start)
+        pick, rec = robust._soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
+        assert rec["generations"] == 2 and rec["rollouts"] <= 2 * 16 + 3 * 8
+        assert (rec["climbed"], rec["soft_climbed"]) >= (rec["start"], rec["soft_start"])
+        for i, f, r in S.coords:
+            if hasattr(r, "lo"):
+                assert r.lo <= pick[i, f] <= r.hi
+            else:
+                assert pick[i, f] in (0.0, 1.0)  # brake or coast, the script's choices
+        again, rec2 = robust._soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
+        assert np.array_equal(np.nan_to_num(again), np.nan_to_num(pick)) and rec2 == rec
+    finally:
+        R.close()

@@ -39,8 +39,7 @@ from nbst.models.mjsearch.probability import Probability, counts, normal_draws, 
 
 __all__ = ["DEFAULT_SAMPLES", "SOLVE_SAMPLES", "DEFAULT_ROBUST_BUDGET", "NOISE", "POPULATION", "RELATIVE",
            "NOISE_KINDS", "DEFAULT_NOISE", "CLIP", "check_noise", "sigma_row", "noisy", "label", "CrashEstimate",
-           "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem", "CENTRE_COPIES",
-           "CENTRE_SHARE", "POOL_SHARE", "POOL_SEARCHES", "POOL_ROLLOUTS", "RACE_SHARE",
+           "estimate_of", "probability", "ladder", "ladder_rows", "RobustCrashProblem", "POOL_SHARE", "POOL_SEARCHES", "POOL_ROLLOUTS", "RACE_SHARE",
            "RACE_COPIES", "SOFT_SHARE", "SOFT_COPIES", "SOFT_POP", "SOFT_SIGMA0", "SOFT_TEMP", "SOFT_CONFIRM",
            "slack", "soft", "RobustPick", "robust_pick"]
 
@@ -271,11 +270,10 @@ class RobustCrashProblem:
 #: other crashes that meet the script, from short searches of the crash (:func:`.search.solve`)
 #: from seeds derived from the pick's (at most POOL_SEARCHES, each at most POOL_ROLLOUTS, all
 #: within POOL_SHARE of the budget); **racing** them (successive halving from RACE_COPIES common
-#: copies each, within RACE_SHARE); **centring** the winner (CENTRE_COPIES copies per screen,
-#: within CENTRE_SHARE of what is left); the room's **maximiser** (the rest).
+#: copies each, within RACE_SHARE); the **soft climb** of the winner (:data:`SOFT_SHARE` of what
+#: is left); the room's **maximiser** (the rest).
 POOL_SHARE, POOL_SEARCHES, POOL_ROLLOUTS = 0.4, 6, 400
 RACE_SHARE, RACE_COPIES = 0.3, 12
-CENTRE_COPIES, CENTRE_SHARE = 48, 0.5
 
 
 #: The soft climb (:func:`_soft_climb`, the stage after the race): CMA-ES (Hansen 2016, "The CMA
@@ -434,49 +432,6 @@ def _race(P: RobustCrashProblem, members: list, budget: int, seed: int):
     return order, [[i, int(sum(g[0] for g in got[i])), len(got[i])] for i in range(len(members))], used
 
 
-def _centre(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int):
-    """Move ``start`` to the centroid of its noisy copies that meet the script (fewer than a
-    quarter meeting it: of the quarter nearest to it), while that raises how many of the same
-    copies (common random numbers; then the partial credit) meet it: (the candidate, [k, m] before,
-    [k, m] after, rollouts run). Every copy that meets the script is itself an intent set that
-    does; their centroid is the cross-entropy method's new mean (Rubinstein and Kroese, *The
-    Cross-Entropy Method*, 2004), the point the noise carries most often into the met region."""
-    m = CENTRE_COPIES
-    cs = _derived(seed, 47)
-    frames = 0
-
-    def screen(cand):
-        nonlocal frames
-        copies = P.noisy(cand, m, cs)
-        got = [P.judge(o) for o in P.run(copies)]
-        frames += m
-        y = np.array([g[0] for g in got])
-        # the elite: the copies that met the script, or, fewer than a quarter meeting it, the
-        # quarter nearest to it (met first, then partial credit: the cross-entropy method's elite)
-        order = sorted(range(m), key=lambda i: (got[i][0], got[i][1]), reverse=True)
-        elite = np.zeros(m, bool)
-        elite[order[:max(int(y.sum()), m // 4)]] = True
-        return y, elite, sum(g[1] for g in got), np.array([P.point(c) for c in copies])
-
-    if budget < 2 * m:  # not even a screen and one step: leave it to the maximiser
-        return start, [0, 0], [0, 0], 0
-    cand = start
-    y, elite, credit, Z = screen(cand)
-    k0 = k = int(y.sum())
-    x = P.point(cand)
-    step = 1.0
-    while k < m and frames + m <= budget and step >= 0.25:
-        d = (Z[elite].mean(axis=0) - x) * P.moved
-        x_new = P.project(x + step * d)
-        c_new = P.make(x_new)
-        y2, elite2, credit2, Z2 = screen(c_new)
-        if (int(y2.sum()), credit2) > (k, credit):
-            cand, x, y, elite, credit, Z, k = c_new, P.point(c_new), y2, elite2, credit2, Z2, int(y2.sum())
-        else:
-            step /= 2
-    return cand, [k0, m], [k, m], frames
-
-
 def _soft_climb(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int):
     """CMA-ES from ``start`` on the mean :func:`soft` success of its noisy copies (module
     constants SOFT_*): the moved coordinates in noise sigmas and the after-impact choices as
@@ -493,7 +448,7 @@ def _soft_climb(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int
     free = np.flatnonzero((P.moved > 0) | (choice > 0))
     rec = {"copies": C, "start": 0, "climbed": 0, "soft_start": 0.0, "soft_climbed": 0.0, "generations": 0,
            "rollouts": 0}
-    if len(free) == 0 or budget < 2 * C + K * lam:
+    if len(free) == 0 or budget < 3 * C + K * lam:  # not one generation and the confirming screens
         return start, rec
     x0 = P.point(start)
 
@@ -513,10 +468,10 @@ def _soft_climb(P: RobustCrashProblem, start: np.ndarray, budget: int, seed: int
         return got
 
     stds = np.where(choice[free] > 0, 0.5, 1.0)
-    es = cma.CMAEvolutionStrategy(x0[free], SOFT_SIGMA0, {"popsize": lam, "seed": _derived(seed, 49) % (2 ** 31 - 1) + 1,
-                                                          "CMA_stds": stds, "verbose": -9})
+    opts = {"popsize": lam, "seed": _derived(seed, 49) % (2 ** 31 - 1) + 1, "CMA_stds": stds, "verbose": -9}
+    es = cma.CMAEvolutionStrategy(x0[free], SOFT_SIGMA0, opts)
     used, gen, best = 0, 0, (-1.0, None)
-    while used + K * lam + 2 * C <= budget:
+    while used + K * lam + 3 * C <= budget:
         zs = es.ask()
         cands = [P.make(full(z)) for z in zs]
         got = scores(cands, K, _derived(seed, 49, gen))
@@ -541,8 +496,9 @@ def robust_pick(space: CrashSpace, runner: CrashRunner, intents: np.ndarray, *, 
     crashes that meet it, and near the best of them. Four stages on one ``budget`` of noisy
     rollouts (:data:`POOL_SHARE` and the rest): other crashes gathered by short searches
     (:func:`_gather`: not only the neighbourhood of ``intents``), raced on common copies
-    (:func:`_race`), the winner centred (:func:`_centre`), then the room's robust maximiser from
-    the centred winner and the winner (the rest). The pick keeps its outcome on the ladder (the
+    (:func:`_race`), the winner climbed by CMA-ES on the mean soft success of common copies
+    (:func:`_soft_climb`), then the room's robust maximiser from the climbed winner (when its
+    screen is better) and the winner (the rest). The pick keeps its outcome on the ladder (the
     maximiser's, else the best-raced member that does) and its probability is measured afresh on
     ``n`` copies of ``seed`` (copies no stage ran).
 
@@ -559,7 +515,7 @@ def robust_pick(space: CrashSpace, runner: CrashRunner, intents: np.ndarray, *, 
 
     Returns:
         A :class:`RobustPick`: the room's ``Maximum`` (``best``: the pick; ``fresh``: its
-        :class:`CrashEstimate`; ``frames`` counting every stage), ``centre`` and ``race``.
+        :class:`CrashEstimate`; ``frames`` counting every stage), ``climb`` and ``race``.
 
     Raises:
         InputError: an unknown noise kind.
@@ -574,10 +530,11 @@ def robust_pick(space: CrashSpace, runner: CrashRunner, intents: np.ndarray, *, 
     order, rows, used_race = _race(P, [c for c, _ in members], int(budget * RACE_SHARE), seed)
     win = members[order[0]][0]
     left = budget - used_pool - used_race
-    centred, before, after, used_c = _centre(P, win, int(left * CENTRE_SHARE), seed)
-    starts = [centred, win] if after[0] > before[0] else [win]
-    mx = room.maximise(P, starts, budget=max(1, left - used_c), seed=seed, n=n, ladder=ladder)
-    mx.frames += used_pool + used_race + used_c
+    climbed, climb = _soft_climb(P, win, int(left * SOFT_SHARE), seed)
+    better = (climb["climbed"], climb["soft_climbed"]) > (climb["start"], climb["soft_start"])
+    starts = [climbed, win] if better else [win]
+    mx = room.maximise(P, starts, budget=max(1, left - climb["rollouts"]), seed=seed, n=n, ladder=ladder)
+    mx.frames += used_pool + used_race + climb["rollouts"]
     fell_back = False
     if ladder and mx.ladder_holds is False:
         # the maximiser's steps left the ladder: the best-raced member that keeps it instead
@@ -591,25 +548,25 @@ def robust_pick(space: CrashSpace, runner: CrashRunner, intents: np.ndarray, *, 
     race = {"members": len(members), "searches": runs, "search_rollouts": used_pool, "rollouts": used_race,
             "table": [[r[0], str(members[r[0]][1]), r[1], r[2]] for r in rows], "winner": int(order[0]),
             "fell_back": fell_back}
-    return RobustPick(mx=mx, centre={"copies": before[1], "start": before[0], "centred": after[0],
-                                     "rollouts": used_c}, race=race)
+    return RobustPick(mx=mx, climb=climb, race=race)
 
 
 @dataclass
 class RobustPick:
     """What :func:`robust_pick` found: the room's ``Maximum`` (its fields read through: best,
-    fresh, frames, ladder, ...), the centring stage's ``centre`` ({copies, start, centred,
-    rollouts}: how many of the centring screen's copies the winner and the centred intents met)
-    and the gathering and race's ``race`` ({members, searches, search_rollouts, rollouts, table:
+    fresh, frames, ladder, ...), the soft climb's ``climb`` ({copies, start, climbed, soft_start,
+    soft_climbed, generations, rollouts}: how many of its confirming screen's copies the winner and
+    the climbed intents met, and their mean soft success there) and the gathering and race's
+    ``race`` ({members, searches, search_rollouts, rollouts, table:
     [[member, from (``start`` or the search's seed), met, copies run]], winner, fell_back: the
     pick is the race's best member that keeps the ladder, the maximiser's having lost it})."""
 
     mx: object
-    centre: dict
+    climb: dict
     race: dict | None = None
 
     def __getattr__(self, name):
-        if name in ("mx", "centre", "race"):
+        if name in ("mx", "climb", "race"):
             raise AttributeError(name)
         return getattr(self.mx, name)
 

@@ -85,8 +85,9 @@ def register(sub) -> None:
     v.add_argument("--robust", type=ROBUST, nargs="?", const=DEFAULT_ROBUST_BUDGET, default=None, metavar="BUDGET",
                    help=with_limits("after the search, look for the crash that meets the script most often under "
                                     "driver noise: short searches gather other crashes that meet it, they race on "
-                                    "common noisy re-drives, the winner is centred and climbed by the rollout room's "
-                                    f"robust maximiser (BUDGET noisy rollouts, default {DEFAULT_ROBUST_BUDGET}); the "
+                                    "common noisy re-drives, the winner is climbed on their smoothed success (CMA-ES) "
+                                    "and by the rollout room's robust maximiser (BUDGET noisy rollouts, default "
+                                    f"{DEFAULT_ROBUST_BUDGET}); the "
                                     "pick written keeps its outcome at 2, 1 and 0.5 ms", ROBUST))
     v.add_argument("--samples", type=SOLVE_SAMPLES_FLAG, default=None, metavar="N",
                    help=with_limits("estimate the probability that the crash written meets the script under "

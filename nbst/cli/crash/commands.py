@@ -206,7 +206,7 @@ def _after_search(args, script, runner, S, best, intents, seed):
                      qvel0=r.qvel0[0], final_qpos=r.final_qpos[0])
         extra["robust"] = {"budget": args.robust, "rollouts": mx.frames, "screen": [mx.screen.k, mx.screen.n],
                            "start_screen": [mx.start_screen.k, mx.start_screen.n], "screen_seed": mx.screen_seed,
-                           "centre": mx.centre, "race": mx.race}
+                           "climb": mx.climb, "race": mx.race}
         extra["probability"] = mx.fresh.to_dict()
         if mx.ladder:
             extra["ladder"] = {"rows": mx.ladder, "holds": bool(mx.ladder_holds)}
