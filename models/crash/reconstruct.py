@@ -881,8 +881,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
         pilot_best = min((t for t, _ in pilot_told), key=lambda t: float(np.sum(t.dist ** 2)))
         pilot_used = P.used
         # the OMC draws, DRAW_PARALLEL at a time in shared batches
-        slice_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
-        draw_end = slice_end - int(LOCAL_SHARE * max_rollouts)
+        local_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
+        draw_end = local_end - int(LOCAL_SHARE * max_rollouts)
         per = max(BATCH // 2, min(DRAW_ROLLOUTS, (draw_end - P.used) // max(1, int(draws))))
         pcs = phys_coords(case)
         specs = []
@@ -907,7 +907,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
                     accepted.append(t)
             P.accepted = len(accepted)
             k += DRAW_PARALLEL
-        moves = _local(P, S, accepted, rng, slice_end)
+        moves = _local(P, S, accepted, rng, local_end)
         profile = _profile(P, S, accepted, rng, max_rollouts)
     except KeyboardInterrupt:
         interrupted = True
@@ -1030,7 +1030,8 @@ def _local(P: _Problem, S, accepted: list, rng, end: int) -> list:
         for k in range(nd):
             tk = told[a * nd + k][0]
             rk, kk = _residual(P.ps, tk.o, tk.dist)
-            if any(float(tk.dist[j]) != 0.0 for j in P.hit_rows) or [x[0] for x in kk] != [x[0] for x in kinds]:
+            if (any(float(tk.dist[j]) != 0.0 for j in P.hit_rows) or [x[0] for x in kk] != [x[0] for x in kinds]
+                    or not np.all(np.isfinite(rk))):
                 free[k] = False
                 continue
             J[:, k] = (rk - r0) / h[k]
