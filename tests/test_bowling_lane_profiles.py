@@ -125,6 +125,24 @@ def test_a_profile_carries_its_board_and_scale_and_is_one_registry_entry_and_one
         profiles.load_profile(f)
 
 
+def test_reading_the_lane_is_a_profile_option_off_unless_its_file_says_true(tmp_path):
+    """``"reads_lane"`` (issue 48): optional, false where a file leaves it out, a boolean or refused
+    naming the file and the field; the lineup's bowlers carry it."""
+    from nbst.models.bowling.lane import transition as T
+
+    doc = json.loads((profiles.PROFILES_DIR / "pro.json").read_text())
+    f = tmp_path / "reader.json"
+    f.write_text(json.dumps({**doc, "reads_lane": True}))
+    assert profiles.load_profile(f).reads_lane is True
+    f.write_text(json.dumps({**doc, "reads_lane": "yes"}))
+    with pytest.raises(lane.LaneError, match="reader.json: reads_lane"):
+        profiles.load_profile(f)
+    for name in profiles.NAMES:
+        raw = json.loads((profiles.PROFILES_DIR / f"{name}.json").read_text())
+        assert profiles.PROFILES[name].reads_lane is raw.get("reads_lane", False)
+        assert T.lineup(name)[0].reads_lane is profiles.PROFILES[name].reads_lane
+
+
 def test_the_cranker_is_a_registered_profile_read_from_its_file():
     """Issue 48's one-handed cranker is a profile like the others: registered, its file's numbers,
     the pro's noise sizes, and the CLI's ``--bowler`` knows it."""

@@ -80,7 +80,9 @@ class Profile:
 
     ``foul_board`` is the strike ball's board at the foul line; ``noise_scale`` and
     ``spare_noise_scale`` are its sigmas as multiples of :data:`NOISE_SHAPE` (the strike ball's,
-    and the spare throws', None: the strike ball's), as its data file states them.
+    and the spare throws', None: the strike ball's), as its data file states them. ``reads_lane``
+    (the file's optional ``"reads_lane"``, default false): with moves on, the bowler picks its line
+    by reading the worn lane (:func:`.transition.read_line`) instead of the "2 and 1" mover.
     """
 
     name: str
@@ -91,6 +93,7 @@ class Profile:
     foul_board: float = 0.0
     noise_scale: float = 1.0
     spare_noise_scale: float | None = None
+    reads_lane: bool = False
 
     def delivery(self, hand: str = "right") -> lane.Delivery:
         """The strike ball thrown with ``hand`` (a left-hander's is the mirror image).
@@ -137,6 +140,9 @@ def load_profile(path) -> Profile:
         if k in _NUMBERS and (isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)):
             raise lane.LaneError(f"{p}: {k}: must be a finite number, got {v!r}")
     spare_k = doc.get("spare_noise_scale")
+    reads = doc.get("reads_lane", False)
+    if not isinstance(reads, bool):
+        raise lane.LaneError(f"{p}: reads_lane: must be true or false, got {reads!r}")
     try:
         strike = lane.Delivery(board=doc["foul_board"], at="foul", angle=doc["angle"], mph=doc["mph"], rpm=doc["rpm"],
                                rotation=doc["rotation"], tilt=doc["tilt"]).check()
@@ -145,7 +151,7 @@ def load_profile(path) -> Profile:
     except lane.LaneError as e:
         raise lane.LaneError(f"{p}: {e}") from None
     return Profile(doc["name"], doc["description"], strike, nz, spare, foul_board=doc["foul_board"],
-                   noise_scale=doc["noise_scale"], spare_noise_scale=spare_k)
+                   noise_scale=doc["noise_scale"], spare_noise_scale=spare_k, reads_lane=reads)
 
 
 #: The bowler profiles by name, registered once each from its data file, in this order. Adding one

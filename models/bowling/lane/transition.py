@@ -23,6 +23,11 @@
   direction (in when high, out when light), one step per :data:`MOVE_BOARDS` boards of miss in
   half steps (:func:`move_for`). One such move shifts the pro's ball at the pins by about 2 boards (1.6-2.7,
   measured on the house shot fresh and after 10-30 identical balls, 2026-12-03; docs/bowling.md).
+  A profile that ``reads_lane`` (off for every shipped profile) does not make the "2 and 1" step
+  when the mover would move: it reads the lane as it is (:func:`read_line`: candidate lines with the
+  feet moved -4..+4 boards, each re-aimed to the pocket, judged by the strikes its own release noise
+  would give on :data:`STRIKE_BY_BOARD`) and takes the best. Tried for the pro (issue 48,
+  2026-12-07; docs/results/bowling.md): it does not gain.
 * **Readings**: each ball's board and entry angle at the pins (the frame's), its breakpoint
   (the ball alone, :func:`.phases.throw`, on a copy of the lane as it was: the same ball path),
   whether a strike ball hit the pocket (:data:`POCKET`: boards 16.5-18.5, issue 34's window),
@@ -47,7 +52,8 @@ from nbst.models.bowling.lane.noise import Noise
 from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
-           "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
+           "MAX_GAMES", "MAX_LINEUP", "STRIKE_BY_BOARD", "READ_FEET", "READ_BALLS", "READ_SHIFTS", "READ_MARGIN",
+           "TransitionError", "Bowler", "lineup", "moved", "move_for", "strike_chance", "read_line",
            "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws",
            "lay_band", "track_width", "depleted_share", "strike_wear"]
 
@@ -64,6 +70,22 @@ MOVE_FEET, MOVE_TARGET = 2.0, 1.0
 MOVE_AFTER, MOVE_MISS = 4, 0.5
 MOVE_BOARDS = 2.0
 MAX_GAMES, MAX_LINEUP = 30, 8
+#: A reading bowler's (``reads_lane``) strike chance by board at the head pin's line: (board, share)
+#: at the middle of each quarter board, the pro's first balls on the fresh house shot (1,300 balls
+#: of fit seeds 11-13, entering at 4.9 deg; docs/results/bowling.md, "The pro's games"); 0 outside.
+STRIKE_BY_BOARD = ((15.125, 0.0), (15.375, 0.29), (15.625, 0.25), (15.875, 0.15), (16.125, 0.07),
+                   (16.375, 0.0), (16.625, 0.12), (16.875, 0.35), (17.125, 0.51), (17.375, 0.97),
+                   (17.625, 1.0), (17.875, 1.0), (18.125, 0.88), (18.375, 0.84), (18.625, 0.12),
+                   (18.875, 0.0))
+#: The lines a reading bowler tries (:func:`read_line`): its feet moved these boards (+: in) from
+#: where they stand, each re-aimed on the lane as it is; READ_BALLS noisy balls a line (the same
+#: draws for every line); the aim's fine-tuning at the pins (boards) tried on those balls.
+READ_FEET = (-4.0, -2.0, 0.0, 2.0, 4.0)
+READ_BALLS = 16
+READ_SHIFTS = tuple(np.arange(-1.0, 1.001, 0.25).round(2))
+#: A reading bowler leaves its feet where they are unless another line's expected strike chance beats
+#: it by this much (0: the best line; 0.10 was tried, 2026-12-07: no gain).
+READ_MARGIN = 0.0
 #: Paths are kept every PATH_FT ft; oil maps rounded to MAP_DECIMALS (um).
 PATH_FT = 0.5
 MAP_DECIMALS = 6
@@ -86,6 +108,7 @@ class Bowler:
     strike: lane.Delivery
     noise: Noise
     spare_noise: Noise | None = None
+    reads_lane: bool = False
 
 
 def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0, oil="house",
@@ -109,8 +132,8 @@ def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: floa
     ball = (ball or lane.Ball()).check()
     same = pattern(oil) == pattern("house") and ball == lane.Ball()
     line = {h: p.delivery(h) if same else profiles.strike_ball(profile, oil, ball, h) for h in {"right", "left"}}
-    return [Bowler(i, "left" if i >= n - k else "right", line["left" if i >= n - k else "right"], nz, nzs)
-            for i in range(n)]
+    return [Bowler(i, "left" if i >= n - k else "right", line["left" if i >= n - k else "right"], nz, nzs,
+                   reads_lane=p.reads_lane) for i in range(n)]
 
 
 def _arrow_board(d: lane.Delivery) -> float:
@@ -142,6 +165,94 @@ def move_for(boards) -> float:
     if abs(miss) <= max(MOVE_MISS, se):
         return 0
     return float(math.copysign(max(0.5, round(2 * abs(miss) / MOVE_BOARDS) / 2), miss))
+
+
+def strike_chance(boards) -> np.ndarray:
+    """The strike chance (:data:`STRIKE_BY_BOARD`, interpolated; 0 outside it and for None) of
+    strike balls that crossed the head pin's line on ``boards``."""
+    b = np.array([np.nan if v is None else float(v) for v in np.atleast_1d(np.asarray(boards, dtype=object))])
+    x, y = np.array(STRIKE_BY_BOARD).T
+    return np.where(np.isfinite(b), np.interp(np.nan_to_num(b, nan=0.0), x, y, left=0.0, right=0.0), 0.0)
+
+
+def read_line(strike: lane.Delivery, nz: Noise, field: OilField, oil="house", ball: lane.Ball | None = None, *,
+              law: OilLaw = lane.LAW, feet=None, balls: int | None = None, margin: float | None = None,
+              seed=0) -> dict:
+    """A bowler reading the lane as it is now: the line with the most strikes under its own release noise.
+
+    Each candidate line stands ``feet`` boards in (+) or out from ``strike``'s foul-line board and is
+    re-aimed (:func:`.phases.aim_angle`) to board 17.5 at the head pin on ``field``; ``balls`` noisy
+    releases of it (``nz``; the same draws for every line: common random numbers) run the ball alone
+    on copies of ``field``. A line's worth is its expected strike chance (:func:`strike_chance`) at
+    the best fine-tuning of the aim (the balls' boards shifted by one of :data:`READ_SHIFTS`: a
+    bowler's small target adjustment); the best line is taken when it beats staying (a move of 0) by
+    ``margin``, and is aimed again at 17.5 plus its shift.
+
+    Args:
+        strike: the line the bowler stands on now (its hand, release and foul-line board).
+        nz: the bowler's release noise.
+        field: the lane's oil now (not worn: copies are thrown on).
+        oil: the pattern (for the ball's phases).
+        ball: the ball (None: the default ball).
+        law: the film-to-friction law.
+        feet: the candidate moves of the feet (boards, + in; None: :data:`READ_FEET`).
+        balls: noisy balls a candidate (None: :data:`READ_BALLS`).
+        margin: how much more expected strike chance a move must promise than staying (None:
+            :data:`READ_MARGIN`).
+        seed: the draws' seed (a sequence of ints is accepted, as numpy's).
+
+    Returns:
+        a dict: ``delivery`` (the chosen, aimed line), ``feet`` (its move), ``shift`` and per candidate
+        ``lines`` (feet, angle, mean and sd of the boards at the pins, expected strike chance).
+
+    Raises:
+        TransitionError: no candidate line can be aimed on ``field``.
+    """
+    feet = READ_FEET if feet is None else tuple(float(f) for f in feet)
+    balls = READ_BALLS if balls is None else int(balls)
+    rows = nz.mix(np.random.default_rng(seed).standard_normal((balls, len(noise.KEYS))))
+    lo = [noise.CLIP[k][0] for k in noise.KEYS]
+    hi = [noise.CLIP[k][1] for k in noise.KEYS]
+    shifts = np.array(READ_SHIFTS)
+    lines, best, stay = [], None, None
+    for f in feet:
+        base = replace(strike, board=strike.foul_board() + float(f), at="foul")
+        try:
+            d, _ = phases.aim_angle(base, TARGET_BOARD, oil, ball, law=law, field=field)
+        except lane.LaneError:
+            continue
+        x = noise.perturb([getattr(d, k) for k in noise.KEYS], [getattr(nz, k) for k in noise.KEYS], rows, lo, hi)
+        bs = []
+        for r in x:
+            try:
+                t = phases.throw(replace(d, **{k: float(v) for k, v in zip(noise.KEYS, r)}), oil, ball, law=law,
+                                 field=field.copy())
+                bs.append(t.board_at_pins)
+            except lane.LaneError:
+                bs.append(None)
+        got = np.array([np.nan if v is None else v for v in bs], dtype=float)
+        worth = [float(strike_chance([None if not np.isfinite(v) else v + s for v in got]).mean()) for s in shifts]
+        k = int(np.argmax(worth))
+        ok = got[np.isfinite(got)]
+        rec = {"feet": float(f), "angle": d.angle, "mean": float(ok.mean()) if len(ok) else None,
+               "sd": float(ok.std(ddof=1)) if len(ok) > 1 else None, "strike": worth[k], "shift": float(shifts[k])}
+        lines.append(rec)
+        if best is None or rec["strike"] > best[0]["strike"] + 1e-12:
+            best = (rec, d)
+        if f == 0.0:
+            stay = (rec, d)
+    margin = READ_MARGIN if margin is None else float(margin)
+    if best is not None and stay is not None and best[0]["strike"] < stay[0]["strike"] + margin:
+        best = stay
+    if best is None:
+        raise TransitionError("read_line: no candidate line reaches the pocket on this lane")
+    rec, d = best
+    if rec["shift"]:
+        try:
+            d, _ = phases.aim_angle(d, TARGET_BOARD + rec["shift"], oil, ball, law=law, field=field)
+        except lane.LaneError:
+            pass
+    return {"delivery": d, "feet": rec["feet"], "shift": rec["shift"], "lines": lines}
 
 
 def spare_line(pins, hand: str, oil, ball: lane.Ball | None = None) -> lane.Delivery:
@@ -280,6 +391,7 @@ class Run:
         self.lines = {b.index: [0.0, 0.0] for b in bowlers}  # feet, target
         self.readings: dict = {b.index: [] for b in bowlers}
         self.moves: list[dict] = []
+        self._reads = {b.index: 0 for b in bowlers}
         self.games_oil: list[dict] = []  # the lane after each game: its oil, past the pattern's end, and its map
         self._spares: dict = {}
         self._draws = {}
@@ -329,7 +441,11 @@ class Run:
         self.balls.append(rec)
         self.rolls[(b.index, game)].append(len(r.down))
         self._done = self.field.h.copy()
-        if full and self.move == "auto":
+        if full and self.move == "auto" and b.reads_lane:
+            self.readings[b.index].append(board)
+            if move_for(self.readings[b.index]):
+                self._read(b, rec["n"])
+        elif full and self.move == "auto":
             self.readings[b.index].append(board)
             m = move_for(self.readings[b.index])
             if m:
@@ -339,6 +455,22 @@ class Run:
                 self.readings[b.index] = []
                 self.moves.append({"after_ball": rec["n"], "bowler": b.index, "feet": ln[0], "target": ln[1]})
         return rec
+
+    def _read(self, b: Bowler, after: int) -> None:
+        """A reading bowler's move (:func:`read_line`) on the lane as it is, after ball ``after``."""
+        self._reads[b.index] += 1
+        now = moved(b.strike, *self.lines[b.index])
+        try:
+            got = read_line(now, b.noise, self.field, self.pattern, self.ball, law=self.law,
+                            seed=[self.seed, b.index, self._reads[b.index]])
+        except TransitionError:
+            return
+        d = got["delivery"]
+        ln = [float(d.foul_board() - b.strike.foul_board()), float(_arrow_board(d) - _arrow_board(b.strike))]
+        self.readings[b.index] = []
+        if max(abs(ln[0] - self.lines[b.index][0]), abs(ln[1] - self.lines[b.index][1])) > 1e-6:
+            self.lines[b.index] = ln
+            self.moves.append({"after_ball": after, "bowler": b.index, "feet": ln[0], "target": ln[1], "read": True})
 
     def _frame(self, b: Bowler, game: int, k: int, on_ball) -> None:
         standing = list(range(1, 11))
