@@ -214,7 +214,9 @@ def read_line(strike: lane.Delivery, nz: Noise, field: OilField, oil="house", ba
     lo = [noise.CLIP[k][0] for k in noise.KEYS]
     hi = [noise.CLIP[k][1] for k in noise.KEYS]
     shifts = np.array(READ_SHIFTS)
-    lines, best, stay = [], None, None
+    lines: list[dict] = []
+    best: tuple[float, dict, lane.Delivery] | None = None
+    stay: tuple[float, dict, lane.Delivery] | None = None
     for f in feet:
         base = replace(strike, board=strike.foul_board() + float(f), at="foul")
         try:
@@ -222,11 +224,11 @@ def read_line(strike: lane.Delivery, nz: Noise, field: OilField, oil="house", ba
         except lane.LaneError:
             continue
         x = noise.perturb([getattr(d, k) for k in noise.KEYS], [getattr(nz, k) for k in noise.KEYS], rows, lo, hi)
-        bs = []
+        bs: list[float | None] = []
         for r in x:
+            fields: dict[str, Any] = {k: float(v) for k, v in zip(noise.KEYS, r)}
             try:
-                t = phases.throw(replace(d, **{k: float(v) for k, v in zip(noise.KEYS, r)}), oil, ball, law=law,
-                                 field=field.copy())
+                t = phases.throw(replace(d, **fields), oil, ball, law=law, field=field.copy())
                 bs.append(t.board_at_pins)
             except lane.LaneError:
                 bs.append(None)
@@ -237,16 +239,16 @@ def read_line(strike: lane.Delivery, nz: Noise, field: OilField, oil="house", ba
         rec = {"feet": float(f), "angle": d.angle, "mean": float(ok.mean()) if len(ok) else None,
                "sd": float(ok.std(ddof=1)) if len(ok) > 1 else None, "strike": worth[k], "shift": float(shifts[k])}
         lines.append(rec)
-        if best is None or rec["strike"] > best[0]["strike"] + 1e-12:
-            best = (rec, d)
+        if best is None or worth[k] > best[0] + 1e-12:
+            best = (worth[k], rec, d)
         if f == 0.0:
-            stay = (rec, d)
+            stay = (worth[k], rec, d)
     margin = READ_MARGIN if margin is None else float(margin)
-    if best is not None and stay is not None and best[0]["strike"] < stay[0]["strike"] + margin:
+    if best is not None and stay is not None and best[0] < stay[0] + margin:
         best = stay
     if best is None:
         raise TransitionError("read_line: no candidate line reaches the pocket on this lane")
-    rec, d = best
+    _, rec, d = best
     if rec["shift"]:
         try:
             d, _ = phases.aim_angle(d, TARGET_BOARD + rec["shift"], oil, ball, law=law, field=field)
@@ -444,7 +446,7 @@ class Run:
         if full and self.move == "auto" and b.reads_lane:
             self.readings[b.index].append(board)
             if move_for(self.readings[b.index]):
-                self._read(b, rec["n"])
+                self._read(b, len(self.balls))
         elif full and self.move == "auto":
             self.readings[b.index].append(board)
             m = move_for(self.readings[b.index])
