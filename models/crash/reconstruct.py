@@ -1054,9 +1054,9 @@ def _local(P: _Problem, S, accepted: list, rng, end: int) -> list:
                 v = np.zeros(nd)
                 v[idx] = L @ rng.standard_normal(len(idx))
                 lo, hi = _chord(kinds, r0 + J @ x, J @ v)
-                for k in idx:  # the ranges and the trust region
-                    if abs(v[k]) > 1e-12:
-                        a1, a2 = (lo_box[k] - x[k]) / v[k], (hi_box[k] - x[k]) / v[k]
+                for kb in idx.tolist():  # the ranges and the trust region
+                    if abs(v[kb]) > 1e-12:
+                        a1, a2 = (lo_box[kb] - x[kb]) / v[kb], (hi_box[kb] - x[kb]) / v[kb]
                         lo, hi = max(lo, min(a1, a2)), min(hi, max(a1, a2))
                 if hi > lo:
                     x = x + float(rng.uniform(lo, hi)) * v
