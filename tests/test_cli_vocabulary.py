@@ -103,3 +103,10 @@ def test_a_bowling_file_given_as_a_problem_says_what_it_is(kind, what, tmp_path)
     f.write_text(json.dumps({"kind": kind, "scene": "scene.xml"}))
     with pytest.raises(ProblemError, match=f"kind: this is {what}, not a problem"):
         load_problem(str(f))
+
+
+def test_descriptions_and_epilogs_print_percent_signs_once():
+    """argparse expands %-escapes in argument help only: a description or epilog says "%" as
+    written, so a "%%" there prints doubled in --help."""
+    bad = [" ".join(cmd) for cmd, p in _subcommands() if "%%" in (p.description or "") + (p.epilog or "")]
+    assert not bad, f"'%%' in the description of: {bad}"

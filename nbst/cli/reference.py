@@ -60,7 +60,7 @@ def _rows(parser: argparse.ArgumentParser) -> list[str]:
                                                                "{" + ",".join(map(str, a.choices)) + "}"))
         else:
             name, arg = str(a.metavar or a.dest), ""
-        rows.append(f"| `{name}` | {('`' + _cell(arg) + '`') if arg else ''} | {_cell(a.help or '')} |")
+        rows.append(f"| `{name}` | {('`' + _cell(arg) + '`') if arg else ''} | {_cell((a.help or '').replace('%%', '%'))} |")  # as --help prints it
     return rows
 
 

@@ -75,7 +75,7 @@ def register_advise(bowl) -> None:
                         description="A coach's advice in a bowler's units. --leave PINS: the spare tool's best line "
                                     "at the leave (bowl spares, under the --bowler's release noise), said as the "
                                     "stance board and the target at the arrows (where the ball's real path crosses "
-                                    "them), with the conversion probability and its 95%% Wilson interval. --after "
+                                    "them), with the conversion probability and its 95 % Wilson interval. --after "
                                     "THROW.json (a frame's throw file, bowl frame -o): the hit and the leave named, "
                                     "and the move: in the direction of the miss, feet 2 boards and eyes 1 per step "
                                     "(the 2-and-1 move), the moved line thrown (the ball alone) to show where it "

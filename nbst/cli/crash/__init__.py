@@ -108,7 +108,7 @@ def register(sub) -> None:
                       description="Run N noisy copies of CRASH.json's driver intents (--noise retake: speed "
                                   "+-0.5 m/s, aim +-0.2 m, times +-0.1 s, steering +-1 deg; population: published "
                                   "spreads of real drivers; docs/crash.md) and print the share "
-                                  "that meets the script with its 95 %% Wilson interval, and the outcomes seen. "
+                                  "that meets the script with its 95 % Wilson interval, and the outcomes seen. "
                                   "The same --seed gives the same copies (common random numbers).")
     b.add_argument("crash", metavar="CRASH.json", help="a crash file (nbst crash solve -o)")
     b.add_argument("--samples", type=SAMPLES, default=DEFAULT_SAMPLES, metavar="N",
