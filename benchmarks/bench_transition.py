@@ -35,7 +35,7 @@ it (the area of play: its width is our choice, and the table gives all three); t
 distances, per seed, and the share of the whole pattern taken.
 
 ``--part wear`` (issue 48: the track and the carry-down): for each profile, ``--games`` x 12 strike balls
-under the profile's noise, the ball alone (:func:`.transition.strike_wear`), on one lane of ``--oil``, per
+under the profile's noise, the ball alone (:func:`.wear.strike_wear`), on one lane of ``--oil``, per
 seed: after each game, the track's width at 10, 20 and 30 ft (the run of boards around the driest that lost
 at least 10 % of their film), the driest board's loss there, the oil past the pattern's end, and the
 oil's account (initial minus removed, carried and remaining).
@@ -51,7 +51,7 @@ import numpy as np
 from dataclasses import replace
 
 from nbst.models.bowling import lane
-from nbst.models.bowling.lane import noise, transition as T
+from nbst.models.bowling.lane import noise, transition as T, wear as W
 from nbst.models.bowling.lane.oil import CELL_AREA
 
 
@@ -92,7 +92,7 @@ def sensitivity(n: int) -> None:
                              ("absorb 0.5 s", lane.LAW, replace(b0, absorb_s=0.5)),
                              ("absorb 2 s", lane.LAW, replace(b0, absorb_s=2.0))):
         t0 = time.time()
-        out = T.identical_throws(TYPICAL, n, "house", ball, law=law)
+        out = W.identical_throws(TYPICAL, n, "house", ball, law=law)
         b = [o["board_at_pins"] for o in out]
         print(f"| {label} | {1e3 * out[0]['oil']['taken']:.1f} / {1e3 * out[-1]['oil']['taken']:.1f} | "
               f"{out[0]['film_um']:.2f} -> {out[-1]['film_um']:.2f} | {b[0]:.2f}, {b[min(9, n - 1)]:.2f}, {b[-1]:.2f} | "
@@ -144,7 +144,7 @@ def wear(seeds: list[int], games: int, oil: str) -> None:
     for prof in profiles.PROFILES.names():
         for seed in seeds:
             t0 = time.time()
-            w = T.strike_wear(prof, games, seed, oil)
+            w = W.strike_wear(prof, games, seed, oil)
             b = w["before"]
             widths = "; ".join("/".join(str(T.track_width(b, g["map"], ft)) for ft in (10, 20, 30)) for g in w["games"])
             dry = " / ".join(f"{100 * T.depleted_share(b, w['games'][-1]['map'], ft):.0f} %" for ft in (10, 20, 30))

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from nbst.models.bowling import lane, scene
-from nbst.models.bowling.lane import frame, profiles, transition as T
+from nbst.models.bowling.lane import frame, profiles, transition as T, wear as W
 
 ROOT = Path(__file__).resolve().parents[1]
 NBST = [sys.executable, "-m", "nbst.cli"]
@@ -27,7 +27,7 @@ TYPICAL = lane.Delivery(board=23.0, at="foul", angle=3.627, mph=17.0, rpm=400.0,
 
 @pytest.fixture(scope="module")
 def ten():
-    return T.identical_throws(TYPICAL, 10, "house")
+    return W.identical_throws(TYPICAL, 10, "house")
 
 
 def test_ten_identical_throws_dry_the_track_and_the_ball_hits_higher(ten):
@@ -96,7 +96,7 @@ def test_the_band_lays_a_balls_change_across_the_boards_it_covers_and_keeps_ever
 
 @pytest.fixture(scope="module")
 def wear3():
-    return T.strike_wear("pro", 3, seed=1)  # 36 strike balls of the pro, the ball alone (~5 s)
+    return W.strike_wear("pro", 3, seed=1)  # 36 strike balls of the pro, the ball alone (~5 s)
 
 
 @pytest.mark.slow

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from nbst.models.crash import robust, run, script, space
+from nbst.models.crash import robust, run, script, slack, space
 from nbst.models.mjsearch.probability import normal_draws
 
 
@@ -111,10 +111,10 @@ def test_the_slack_is_the_worst_fate_in_half_widths_of_its_tolerance(heading, re
 
     sc = script.load_script("t-bone")
     o = judge(_tbone_outcome(heading, rest, moving), sc)
-    s = robust.slack(o, sc)
+    s = slack.slack(o, sc)
     assert s == pytest.approx(want, abs=1e-9)
     assert o.solved == (s >= 0.0)
-    assert robust.soft(o, sc) == pytest.approx(1 / (1 + np.exp(-want / robust.SOFT_TEMP)), abs=1e-12)
+    assert slack.soft(o, sc) == pytest.approx(1 / (1 + np.exp(-want / slack.SOFT_TEMP)), abs=1e-12)
 
 
 def test_a_missed_contact_or_a_band_missed_is_a_negative_slack():
@@ -122,12 +122,12 @@ def test_a_missed_contact_or_a_band_missed_is_a_negative_slack():
 
     sc = script.load_script("t-bone")
     o = _tbone_outcome(impact_kmh=67.5)  # 7.5 km/h above the 45-60 band: one half-width outside
-    assert robust.slack(judge(o, sc), sc) == pytest.approx(-1.0, abs=1e-9)
+    assert slack.slack(judge(o, sc), sc) == pytest.approx(-1.0, abs=1e-9)
     o = _tbone_outcome(impact_kmh=56.25)
-    assert robust.slack(judge(o, sc), sc) == pytest.approx(0.5, abs=1e-9)
+    assert slack.slack(judge(o, sc), sc) == pytest.approx(0.5, abs=1e-9)
     o = _tbone_outcome()
     o.vehicles[1].hits = []
-    assert robust.slack(judge(o, sc), sc) == -1.0
+    assert slack.slack(judge(o, sc), sc) == -1.0
 
 
 @pytest.mark.slow
@@ -136,16 +136,16 @@ def test_the_soft_climb_keeps_its_budget_and_the_ranges_and_repeats_from_its_see
     8-copy confirming screen): it runs no more than its budget, its pick sits inside the script's
     ranges with a valid after-impact choice, meets its screen at least as often as the start,
     and the same seed gives the same pick."""
-    monkeypatch.setattr(robust, "SOFT_COPIES", 4)
-    monkeypatch.setattr(robust, "SOFT_POP", 4)
-    monkeypatch.setattr(robust, "SOFT_CONFIRM", 8)
+    monkeypatch.setattr(slack, "SOFT_COPIES", 4)
+    monkeypatch.setattr(slack, "SOFT_POP", 4)
+    monkeypatch.setattr(slack, "SOFT_CONFIRM", 8)
     s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
     S = space.space_of(s)
     R = run.CrashRunner(s, jobs=1)
     try:
         start = S.intents(np.full((1, S.dim), 0.5))[0]
         P = robust.RobustCrashProblem(S, R, R.xml, ref=start)
-        pick, rec = robust._soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
+        pick, rec = slack.soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
         assert rec["generations"] == 2 and rec["rollouts"] <= 2 * 16 + 3 * 8
         assert (rec["climbed"], rec["soft_climbed"]) >= (rec["start"], rec["soft_start"])
         for i, f, r in S.coords:
@@ -153,7 +153,7 @@ def test_the_soft_climb_keeps_its_budget_and_the_ranges_and_repeats_from_its_see
                 assert r.lo <= pick[i, f] <= r.hi
             else:
                 assert pick[i, f] in (0.0, 1.0)  # brake or coast, the script's choices
-        again, rec2 = robust._soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
+        again, rec2 = slack.soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
         assert np.array_equal(np.nan_to_num(again), np.nan_to_num(pick)) and rec2 == rec
     finally:
         R.close()

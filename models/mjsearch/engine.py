@@ -96,7 +96,7 @@ from nbst.errors import InputError, SolveError
 from nbst.seeds import check_random_state
 
 __all__ = ["BATCH", "EXPLORE", "GA_BATCHES", "GA_FINE", "POPULATION", "PER_SIGNATURE", "CREEP", "SIGMA0", "STALL",
-           "SCHEDULE", "POLISH", "SPENT", "RIGHT_KEPT", "Member", "EngineResult", "Engine"]
+           "SCHEDULE", "POLISH", "SPENT", "RIGHT_KEPT", "Member", "EngineResult", "Engine", "evolution_strategy"]
 
 #: Points per batch (fixed: results do not depend on the threads that run them).
 BATCH = 16
@@ -117,6 +117,29 @@ POLISH = (1.0, 1.0 / 3.0, 1.0 / 9.0)
 #: Polishing restarts in a row that leave the best's cost as it was before one starts in another
 #: funnel, and the fine points kept as such starts (the cheapest).
 SPENT, RIGHT_KEPT = 3, 256
+
+
+def evolution_strategy(x0, sigma0: float, *, popsize: int, seed: int, stds=None):
+    """A CMA-ES in pycma's ask/tell shape (``ask``, ``tell``, ``result``), started as the rooms'
+    stages that climb a noisy score start it (the crash's soft climb, :mod:`.crash.slack`): pycma
+    is imported here, in the engine, and nowhere else in the rollout rooms.
+
+    Args:
+        x0: the starting mean.
+        sigma0: the initial step.
+        popsize: candidates per generation.
+        seed: pycma's seed (a whole number >= 1).
+        stds: per-coordinate scales of the step (pycma's ``CMA_stds``), or None.
+
+    Returns:
+        A ``cma.CMAEvolutionStrategy``.
+    """
+    import cma
+
+    opts = {"popsize": int(popsize), "seed": int(seed), "verbose": -9}
+    if stds is not None:
+        opts["CMA_stds"] = stds
+    return cma.CMAEvolutionStrategy(x0, sigma0, opts)
 
 
 def _order(sig: int) -> int:

@@ -82,7 +82,7 @@ class Profile:
     ``spare_noise_scale`` are its sigmas as multiples of :data:`NOISE_SHAPE` (the strike ball's,
     and the spare throws', None: the strike ball's), as its data file states them. ``reads_lane``
     (the file's optional ``"reads_lane"``, default false): with moves on, the bowler picks its line
-    by reading the worn lane (:func:`.transition.read_line`) instead of the "2 and 1" mover.
+    by reading the worn lane (:func:`.reading.read_line`) instead of the "2 and 1" mover.
     """
 
     name: str

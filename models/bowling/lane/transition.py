@@ -24,9 +24,9 @@
   half steps (:func:`move_for`). One such move shifts the pro's ball at the pins by about 2 boards (1.6-2.7,
   measured on the house shot fresh and after 10-30 identical balls, 2026-12-03; docs/bowling.md).
   A profile that ``reads_lane`` (off for every shipped profile) does not make the "2 and 1" step
-  when the mover would move: it reads the lane as it is (:func:`read_line`: candidate lines with the
+  when the mover would move: it reads the lane as it is (:func:`.reading.read_line`: candidate lines with the
   feet moved -4..+4 boards, each re-aimed to the pocket, judged by the strikes its own release noise
-  would give on :data:`STRIKE_BY_BOARD`) and takes the best. Tried for the pro (issue 48,
+  would give on lane's :data:`.reading.STRIKE_BY_BOARD`) and takes the best. Tried for the pro (issue 48,
   2026-12-07; docs/results/bowling.md): it does not gain.
 * **Readings**: each ball's board and entry angle at the pins (the frame's), its breakpoint
   (the ball alone, :func:`.phases.throw`, on a copy of the lane as it was: the same ball path),
@@ -48,21 +48,22 @@ import numpy as np
 
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
+from nbst.models.bowling.lane.reading import (READ_BALLS, READ_FEET, READ_MARGIN, READ_SHIFTS, STRIKE_BY_BOARD,
+                                              TARGET_BOARD, read_line, strike_chance)
 from nbst.models.bowling.lane.noise import Noise
 from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
            "MAX_GAMES", "MAX_LINEUP", "STRIKE_BY_BOARD", "READ_FEET", "READ_BALLS", "READ_SHIFTS", "READ_MARGIN",
            "TransitionError", "Bowler", "lineup", "moved", "move_for", "strike_chance", "read_line",
-           "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along", "identical_throws",
-           "lay_band", "track_width", "depleted_share", "strike_wear"]
+           "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along",
+           "lay_band", "track_width", "depleted_share"]
 
 FORMAT = "nbst-bowling-series"
 VERSION = 1
 MOVES = ("none", "auto")
 #: A strike ball hits the pocket when it crosses the head pin's line on these boards (issue 34's window).
 POCKET = (16.5, 18.5)
-TARGET_BOARD = 17.5
 #: "2 and 1": feet and target boards of one move.
 MOVE_FEET, MOVE_TARGET = 2.0, 1.0
 #: A move follows the mean of the last MOVE_AFTER strike balls missing by more than MOVE_MISS boards and
@@ -70,22 +71,6 @@ MOVE_FEET, MOVE_TARGET = 2.0, 1.0
 MOVE_AFTER, MOVE_MISS = 4, 0.5
 MOVE_BOARDS = 2.0
 MAX_GAMES, MAX_LINEUP = 30, 8
-#: A reading bowler's (``reads_lane``) strike chance by board at the head pin's line: (board, share)
-#: at the middle of each quarter board, the pro's first balls on the fresh house shot (1,300 balls
-#: of fit seeds 11-13, entering at 4.9 deg; docs/results/bowling.md, "The pro's games"); 0 outside.
-STRIKE_BY_BOARD = ((15.125, 0.0), (15.375, 0.29), (15.625, 0.25), (15.875, 0.15), (16.125, 0.07),
-                   (16.375, 0.0), (16.625, 0.12), (16.875, 0.35), (17.125, 0.51), (17.375, 0.97),
-                   (17.625, 1.0), (17.875, 1.0), (18.125, 0.88), (18.375, 0.84), (18.625, 0.12),
-                   (18.875, 0.0))
-#: The lines a reading bowler tries (:func:`read_line`): its feet moved these boards (+: in) from
-#: where they stand, each re-aimed on the lane as it is; READ_BALLS noisy balls a line (the same
-#: draws for every line); the aim's fine-tuning at the pins (boards) tried on those balls.
-READ_FEET = (-4.0, -2.0, 0.0, 2.0, 4.0)
-READ_BALLS = 16
-READ_SHIFTS = tuple(np.arange(-1.0, 1.001, 0.25).round(2))
-#: A reading bowler leaves its feet where they are unless another line's expected strike chance beats
-#: it by this much (0: the best line; 0.10 was tried, 2026-12-07: no gain).
-READ_MARGIN = 0.0
 #: Paths are kept every PATH_FT ft; oil maps rounded to MAP_DECIMALS (um).
 PATH_FT = 0.5
 MAP_DECIMALS = 6
@@ -165,96 +150,6 @@ def move_for(boards) -> float:
     if abs(miss) <= max(MOVE_MISS, se):
         return 0
     return float(math.copysign(max(0.5, round(2 * abs(miss) / MOVE_BOARDS) / 2), miss))
-
-
-def strike_chance(boards) -> np.ndarray:
-    """The strike chance (:data:`STRIKE_BY_BOARD`, interpolated; 0 outside it and for None) of
-    strike balls that crossed the head pin's line on ``boards``."""
-    b = np.array([np.nan if v is None else float(v) for v in np.atleast_1d(np.asarray(boards, dtype=object))])
-    x, y = np.array(STRIKE_BY_BOARD).T
-    return np.where(np.isfinite(b), np.interp(np.nan_to_num(b, nan=0.0), x, y, left=0.0, right=0.0), 0.0)
-
-
-def read_line(strike: lane.Delivery, nz: Noise, field: OilField, oil="house", ball: lane.Ball | None = None, *,
-              law: OilLaw = lane.LAW, feet=None, balls: int | None = None, margin: float | None = None,
-              seed=0) -> dict:
-    """A bowler reading the lane as it is now: the line with the most strikes under its own release noise.
-
-    Each candidate line stands ``feet`` boards in (+) or out from ``strike``'s foul-line board and is
-    re-aimed (:func:`.phases.aim_angle`) to board 17.5 at the head pin on ``field``; ``balls`` noisy
-    releases of it (``nz``; the same draws for every line: common random numbers) run the ball alone
-    on copies of ``field``. A line's worth is its expected strike chance (:func:`strike_chance`) at
-    the best fine-tuning of the aim (the balls' boards shifted by one of :data:`READ_SHIFTS`: a
-    bowler's small target adjustment); the best line is taken when it beats staying (a move of 0) by
-    ``margin``, and is aimed again at 17.5 plus its shift.
-
-    Args:
-        strike: the line the bowler stands on now (its hand, release and foul-line board).
-        nz: the bowler's release noise.
-        field: the lane's oil now (not worn: copies are thrown on).
-        oil: the pattern (for the ball's phases).
-        ball: the ball (None: the default ball).
-        law: the film-to-friction law.
-        feet: the candidate moves of the feet (boards, + in; None: :data:`READ_FEET`).
-        balls: noisy balls a candidate (None: :data:`READ_BALLS`).
-        margin: how much more expected strike chance a move must promise than staying (None:
-            :data:`READ_MARGIN`).
-        seed: the draws' seed (a sequence of ints is accepted, as numpy's).
-
-    Returns:
-        a dict: ``delivery`` (the chosen, aimed line), ``feet`` (its move), ``shift`` and per candidate
-        ``lines`` (feet, angle, mean and sd of the boards at the pins, expected strike chance).
-
-    Raises:
-        TransitionError: no candidate line can be aimed on ``field``.
-    """
-    feet = READ_FEET if feet is None else tuple(float(f) for f in feet)
-    balls = READ_BALLS if balls is None else int(balls)
-    rows = nz.mix(np.random.default_rng(seed).standard_normal((balls, len(noise.KEYS))))
-    lo = [noise.CLIP[k][0] for k in noise.KEYS]
-    hi = [noise.CLIP[k][1] for k in noise.KEYS]
-    shifts = np.array(READ_SHIFTS)
-    lines: list[dict] = []
-    best: tuple[float, dict, lane.Delivery] | None = None
-    stay: tuple[float, dict, lane.Delivery] | None = None
-    for f in feet:
-        base = replace(strike, board=strike.foul_board() + float(f), at="foul")
-        try:
-            d, _ = phases.aim_angle(base, TARGET_BOARD, oil, ball, law=law, field=field)
-        except lane.LaneError:
-            continue
-        x = noise.perturb([getattr(d, k) for k in noise.KEYS], [getattr(nz, k) for k in noise.KEYS], rows, lo, hi)
-        bs: list[float | None] = []
-        for r in x:
-            fields: dict[str, Any] = {k: float(v) for k, v in zip(noise.KEYS, r)}
-            try:
-                t = phases.throw(replace(d, **fields), oil, ball, law=law, field=field.copy())
-                bs.append(t.board_at_pins)
-            except lane.LaneError:
-                bs.append(None)
-        got = np.array([np.nan if v is None else v for v in bs], dtype=float)
-        worth = [float(strike_chance([None if not np.isfinite(v) else v + s for v in got]).mean()) for s in shifts]
-        k = int(np.argmax(worth))
-        ok = got[np.isfinite(got)]
-        rec = {"feet": float(f), "angle": d.angle, "mean": float(ok.mean()) if len(ok) else None,
-               "sd": float(ok.std(ddof=1)) if len(ok) > 1 else None, "strike": worth[k], "shift": float(shifts[k])}
-        lines.append(rec)
-        if best is None or worth[k] > best[0] + 1e-12:
-            best = (worth[k], rec, d)
-        if f == 0.0:
-            stay = (worth[k], rec, d)
-    margin = READ_MARGIN if margin is None else float(margin)
-    if best is not None and stay is not None and best[0] < stay[0] + margin:
-        best = stay
-    if best is None:
-        raise TransitionError("read_line: no candidate line reaches the pocket on this lane")
-    _, rec, d = best
-    if rec["shift"]:
-        try:
-            d, _ = phases.aim_angle(d, TARGET_BOARD + rec["shift"], oil, ball, law=law, field=field)
-        except lane.LaneError:
-            pass
-    return {"delivery": d, "feet": rec["feet"], "shift": rec["shift"], "lines": lines}
 
 
 def spare_line(pins, hand: str, oil, ball: lane.Ball | None = None) -> lane.Delivery:
@@ -578,58 +473,3 @@ def check_series(doc, src: str = "<series>") -> dict:
         if any(np.shape(x) != (lane.N_BOARDS, NX) for x in m):
             raise TransitionError(f"{src}: runs[{k}].oil: before and after must be {lane.N_BOARDS} x {NX} films")
     return doc
-
-
-def strike_wear(profile: str, games: int = 3, seed: int = 1, oil="house", *, per_game: int = 12,
-                law: OilLaw = lane.LAW) -> dict:
-    """``games`` x ``per_game`` strike balls of ``profile`` (its line and noise, right-handed), the ball
-    alone, on one lane of ``oil`` that they wear: the lane after each game (map, ml on it, ml past the
-    pattern's end) and the oil's account (``initial`` = ``removed`` (taken by the covers: absorbed or
-    wiped off before the next ball) + ``carried`` (on the lane past the pattern's end) + ``remaining``
-    (on the lane up to it)). Quick (the ball alone, ~0.03 s a ball): the tests' and figures' transition."""
-    b = lineup(profile, 1, 0.0, oil=oil)[0]
-    pat = pattern(oil)
-    field = OilField.fresh(pat)
-    rng = np.random.default_rng([int(seed), 0])
-    rows = b.noise.mix(rng.standard_normal((games * per_game, len(noise.KEYS))))
-    lo = [noise.CLIP[k][0] for k in noise.KEYS]
-    hi = [noise.CLIP[k][1] for k in noise.KEYS]
-    out: dict[str, Any] = {"before": pat.grid(), "games": [], "initial": field.total_ml(), "removed": 0.0, "balls": 0}
-    for g in range(games):
-        for k in range(per_game):
-            x = noise.perturb([getattr(b.strike, q) for q in noise.KEYS], [getattr(b.noise, q) for q in noise.KEYS],
-                              rows[g * per_game + k][None], lo, hi)[0]
-            fields: dict[str, Any] = {q: float(v) for q, v in zip(noise.KEYS, x)}
-            d = replace(b.strike, **fields)
-            h0 = field.h.copy()
-            try:
-                r = phases.throw(d, pat, law=law, field=field)
-            except lane.LaneError:  # a gutter ball: what it took is still taken
-                out["removed"] += float(h0.sum() - field.h.sum()) * CELL_AREA
-                continue
-            lay_band(field.h, h0, r.path["ft"], r.path["y"], law.band_in)
-            out["removed"] += r.path["oil"]["taken"]
-            out["balls"] += 1
-        out["games"].append({"game": g + 1, "map": field.h.copy(), "lane_ml": field.total_ml(),
-                             "past_end_ml": field.ml_past(pat.length_ft)})
-    out["carried"] = field.ml_past(pat.length_ft)
-    out["remaining"] = field.total_ml() - out["carried"]
-    return out
-
-
-def identical_throws(delivery: lane.Delivery, n: int, oil="house", ball: lane.Ball | None = None, *,
-                     law: OilLaw = lane.LAW, at_ft: float = 20.0) -> list[dict]:
-    """``n`` identical throws of ``delivery``, the ball alone, on one lane that they wear: per throw
-    the film (um) under its track at ``at_ft`` before it ran, its board and entry angle at the pins,
-    and the oil (ml) past the pattern's end after it."""
-    pat = pattern(oil)
-    field = OilField.fresh(pat)
-    out = []
-    for _ in range(n):
-        before = field.copy()
-        r = phases.throw(delivery, pat, ball, law=law, field=field)
-        lay_band(field.h, before.h, r.path["ft"], r.path["y"], law.band_in)
-        out.append({"film_um": film_along(before, r.path["ft"], r.path["board"], delivery.hand, at_ft),
-                    "board_at_pins": r.board_at_pins, "entry_angle_deg": r.entry_angle_deg,
-                    "past_ml": field.ml_past(pat.length_ft), "lane_ml": field.total_ml(), "oil": r.path["oil"]})
-    return out
