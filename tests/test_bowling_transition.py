@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from nbst.models.bowling import lane, scene
-from nbst.models.bowling.lane import frame, profiles, transition as T, wear as W
+from nbst.models.bowling.lane import frame, profiles, reading as R, transition as T, wear as W
 
 ROOT = Path(__file__).resolve().parents[1]
 NBST = [sys.executable, "-m", "nbst.cli"]
@@ -282,9 +282,9 @@ def test_ctrl_c_writes_the_balls_bowled_so_far(tmp_path):
 
 def test_the_strike_chance_by_board_peaks_in_the_pocket():
     """The reading bowler's table: near-sure strikes at boards 17.4-17.9, none well outside the pocket."""
-    assert T.strike_chance([17.5, 17.75])[0] >= 0.95 and T.strike_chance([17.75])[0] >= 0.95
-    assert T.strike_chance([19.0, 14.0, None]).tolist() == [0.0, 0.0, 0.0] and T.strike_chance(16.4)[0] < 0.05
-    assert T.strike_chance(17.0)[0] < T.strike_chance(17.5)[0] > T.strike_chance(18.6)[0]
+    assert R.strike_chance([17.5, 17.75])[0] >= 0.95 and R.strike_chance([17.75])[0] >= 0.95
+    assert R.strike_chance([19.0, 14.0, None]).tolist() == [0.0, 0.0, 0.0] and R.strike_chance(16.4)[0] < 0.05
+    assert R.strike_chance(17.0)[0] < R.strike_chance(17.5)[0] > R.strike_chance(18.6)[0]
 
 
 @pytest.mark.slow
@@ -295,8 +295,8 @@ def test_reading_a_worn_lane_picks_a_line_that_strikes_more_than_standing_still(
     (2026-12-07: feet 4 boards out, sd 0.70 board and 62 % against 2.3 and 21 %)."""
     pro = T.lineup("pro")[0]
     field = lane.OilField(wear3["games"][-1]["map"].copy())
-    got = T.read_line(pro.strike, pro.noise, field, "house", margin=0.0, seed=11)
-    stay, _ = lane.aim_angle(pro.strike, T.TARGET_BOARD, "house", field=field)
+    got = R.read_line(pro.strike, pro.noise, field, "house", margin=0.0, seed=11)
+    stay, _ = lane.aim_angle(pro.strike, R.TARGET_BOARD, "house", field=field)
     rows = pro.noise.mix(np.random.default_rng(12).standard_normal((32, len(T.noise.KEYS))))
 
     def balls(d):
@@ -312,6 +312,6 @@ def test_reading_a_worn_lane_picks_a_line_that_strikes_more_than_standing_still(
         return out
 
     chosen, still = balls(got["delivery"]), balls(stay)
-    assert T.strike_chance(chosen).mean() > T.strike_chance(still).mean() + 0.05
+    assert R.strike_chance(chosen).mean() > R.strike_chance(still).mean() + 0.05
     sd = [np.std([b for b in v if b is not None]) for v in (chosen, still)]
     assert sd[0] < sd[1], sd

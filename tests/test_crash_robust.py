@@ -59,24 +59,31 @@ SHORT = {
 }
 
 
-@pytest.mark.slow
-def test_gathering_finds_other_crashes_that_meet_the_script_at_every_timestep():
-    """A short search from a derived seed brings crashes other than the start, each meeting the
-    script at 2, 1 and 0.5 ms, within the rollouts it was given."""
+@pytest.fixture
+def short_problem():
+    """(space, the middle of its ranges as intents, the robust problem about them) of the short
+    crossing, its runner closed after the test."""
     s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
     S = space.space_of(s)
     R = run.CrashRunner(s, jobs=1)
     try:
         start = S.intents(np.full((1, S.dim), 0.5))[0]
-        P = robust.RobustCrashProblem(S, R, R.xml, ref=start)
-        members, used, runs = robust._gather(P, start, 4 * run.BATCH, seed=2, ladder=True)
-        assert runs == 1 and 0 < used <= 4 * run.BATCH and len(members) >= 2 and members[0][1] == "start"
-        for cand, origin in members[1:]:
-            assert origin != "start" and not np.allclose(np.nan_to_num(cand), np.nan_to_num(start))
-            rows, holds, _ = P.ladder(cand)
-            assert holds and rows[0][2]  # met at 2 ms and kept at 1 and 0.5 ms
+        yield S, start, robust.RobustCrashProblem(S, R, R.xml, ref=start)
     finally:
         R.close()
+
+
+@pytest.mark.slow
+def test_gathering_finds_other_crashes_that_meet_the_script_at_every_timestep(short_problem):
+    """A short search from a derived seed brings crashes other than the start, each meeting the
+    script at 2, 1 and 0.5 ms, within the rollouts it was given."""
+    S, start, P = short_problem
+    members, used, runs = robust._gather(P, start, 4 * run.BATCH, seed=2, ladder=True)
+    assert runs == 1 and 0 < used <= 4 * run.BATCH and len(members) >= 2 and members[0][1] == "start"
+    for cand, origin in members[1:]:
+        assert origin != "start" and not np.allclose(np.nan_to_num(cand), np.nan_to_num(start))
+        rows, holds, _ = P.ladder(cand)
+        assert holds and rows[0][2]  # met at 2 ms and kept at 1 and 0.5 ms
 
 
 def _tbone_outcome(heading_deg=140.0, rest=(5.0, 10.0), moving=False, impact_kmh=52.5, dv_kmh=25.0):
@@ -131,7 +138,7 @@ def test_a_missed_contact_or_a_band_missed_is_a_negative_slack():
 
 
 @pytest.mark.slow
-def test_the_soft_climb_keeps_its_budget_and_the_ranges_and_repeats_from_its_seed(monkeypatch):
+def test_the_soft_climb_keeps_its_budget_and_the_ranges_and_repeats_from_its_seed(monkeypatch, short_problem):
     """A small soft climb on the short crossing (4 copies per candidate, 4 per generation, an
     8-copy confirming screen): it runs no more than its budget, its pick sits inside the script's
     ranges with a valid after-impact choice, meets its screen at least as often as the start,
@@ -139,21 +146,14 @@ def test_the_soft_climb_keeps_its_budget_and_the_ranges_and_repeats_from_its_see
     monkeypatch.setattr(slack, "SOFT_COPIES", 4)
     monkeypatch.setattr(slack, "SOFT_POP", 4)
     monkeypatch.setattr(slack, "SOFT_CONFIRM", 8)
-    s = script.script_from_dict(json.loads(json.dumps(SHORT)), source="short")
-    S = space.space_of(s)
-    R = run.CrashRunner(s, jobs=1)
-    try:
-        start = S.intents(np.full((1, S.dim), 0.5))[0]
-        P = robust.RobustCrashProblem(S, R, R.xml, ref=start)
-        pick, rec = slack.soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
-        assert rec["generations"] == 2 and rec["rollouts"] <= 2 * 16 + 3 * 8
-        assert (rec["climbed"], rec["soft_climbed"]) >= (rec["start"], rec["soft_start"])
-        for i, f, r in S.coords:
-            if hasattr(r, "lo"):
-                assert r.lo <= pick[i, f] <= r.hi
-            else:
-                assert pick[i, f] in (0.0, 1.0)  # brake or coast, the script's choices
-        again, rec2 = slack.soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
-        assert np.array_equal(np.nan_to_num(again), np.nan_to_num(pick)) and rec2 == rec
-    finally:
-        R.close()
+    S, start, P = short_problem
+    pick, rec = slack.soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
+    assert rec["generations"] == 2 and rec["rollouts"] <= 2 * 16 + 3 * 8
+    assert (rec["climbed"], rec["soft_climbed"]) >= (rec["start"], rec["soft_start"])
+    for i, f, r in S.coords:
+        if hasattr(r, "lo"):
+            assert r.lo <= pick[i, f] <= r.hi
+        else:
+            assert pick[i, f] in (0.0, 1.0)  # brake or coast, the script's choices
+    again, rec2 = slack.soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
+    assert np.array_equal(np.nan_to_num(again), np.nan_to_num(pick)) and rec2 == rec

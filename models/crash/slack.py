@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from nbst.models.crash.outcome import _wrap
 from nbst.models.crash.script import Range
 from nbst.models.mjsearch.engine import evolution_strategy
 
@@ -100,13 +101,11 @@ def soft(o, script, temp: float = SOFT_TEMP) -> float:
     """
     return float(1.0 / (1.0 + math.exp(-slack(o, script) / temp)))
 
-def _wrap(a: float) -> float:
-    """An angle in (-pi, pi]."""
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 def derived_seed(seed: int, *salt: int) -> int:
     """A seed in [0, 2^63) derived from ``seed`` and ``salt`` (one stream per stage)."""
     return int(np.random.SeedSequence([int(seed), *salt]).generate_state(1, np.uint64)[0] >> 1)
+
 
 def soft_climb(P, start: np.ndarray, budget: int, seed: int):
     """CMA-ES from ``start`` on the mean :func:`soft` success of its noisy copies (module

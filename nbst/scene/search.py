@@ -196,7 +196,11 @@ class _Scene:
 
     def x_of(self, v: np.ndarray) -> np.ndarray:
         """The controls vector of an engine point (its live coordinates)."""
-        return self.lo + np.clip(self.full(v), 0.0, 1.0) * self.span
+        return self.x_full(self.full(v))
+
+    def x_full(self, u: np.ndarray) -> np.ndarray:
+        """The controls vector of a whole unit point."""
+        return self.lo + np.clip(u, 0.0, 1.0) * self.span
 
     def u_of(self, x: np.ndarray) -> np.ndarray:
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -246,7 +250,7 @@ class _Scene:
         v = (target - self.origin[i] - 0.5 * self.gravity * t * t) / t
         k = [p for p, _ in c.parts()].index("linvel")
         a = sl.start + 3 * k
-        x = self.lo + np.clip(u, 0.0, 1.0) * self.span
+        x = self.x_full(u)
         x[a:a + 3] = v
         u[a:a + 3] = self.u_of(x)[a:a + 3]
 

@@ -48,14 +48,12 @@ import numpy as np
 
 from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
-from nbst.models.bowling.lane.reading import (READ_BALLS, READ_FEET, READ_MARGIN, READ_SHIFTS, STRIKE_BY_BOARD,
-                                              TARGET_BOARD, read_line, strike_chance)
+from nbst.models.bowling.lane.reading import TARGET_BOARD, read_line
 from nbst.models.bowling.lane.noise import Noise
 from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
-           "MAX_GAMES", "MAX_LINEUP", "STRIKE_BY_BOARD", "READ_FEET", "READ_BALLS", "READ_SHIFTS", "READ_MARGIN",
-           "TransitionError", "Bowler", "lineup", "moved", "move_for", "strike_chance", "read_line",
+           "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
            "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along",
            "lay_band", "track_width", "depleted_share"]
 
@@ -360,7 +358,7 @@ class Run:
         try:
             got = read_line(now, b.noise, self.field, self.pattern, self.ball, law=self.law,
                             seed=[self.seed, b.index, self._reads[b.index]])
-        except TransitionError:
+        except lane.LaneError:  # no candidate line reaches the pocket: stay
             return
         d = got["delivery"]
         ln = [float(d.foul_board() - b.strike.foul_board()), float(_arrow_board(d) - _arrow_board(b.strike))]
