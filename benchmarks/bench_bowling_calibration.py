@@ -324,7 +324,7 @@ def _game_tag(name: str) -> str:
     p = profiles.profile(name)
     s = p.strike
     return (f"{name}-b{s.board:g}a{s.angle:g}m{s.mph:g}r{s.rpm:g}o{s.rotation:g}t{s.tilt:g}"
-            f"x{p.noise_scale:g}s{p.spare_noise_scale}")
+            f"x{p.noise_scale:g}s{p.spare_noise_scale}" + ("-reads" if p.reads_lane else ""))
 
 
 def game_block(name: str, seed: int, move: str, cache: Path) -> dict:
@@ -355,6 +355,13 @@ def game_block(name: str, seed: int, move: str, cache: Path) -> dict:
     return done[k]
 
 
+def _t_half(x: np.ndarray) -> float:
+    """The half-width of the 95 % t interval of the mean of ``x`` (nan for fewer than 2)."""
+    if len(x) < 2:
+        return float("nan")
+    return float(T95[min(len(x) - 1, len(T95)) - 1] * x.std(ddof=1) / np.sqrt(len(x)))
+
+
 def part_games(seeds, names, moves, cache) -> None:
     print(f"\n## games: {len(seeds)} blocks of 3 games per profile on a fresh house shot (transition, moves "
           f"{', '.join(moves)}), {_which(seeds, GAME_FIT_SEEDS)}\n")
@@ -371,7 +378,7 @@ def part_games(seeds, names, moves, cache) -> None:
             rs = out[(n, m)]
             g = np.array([x for r in rs for x in r["games"]], float)
             b = np.array([np.mean(r["games"]) for r in rs])
-            half = T95[min(len(b) - 1, len(T95)) - 1] * b.std(ddof=1) / np.sqrt(len(b)) if len(b) > 1 else float("nan")
+            half = _t_half(b)
             first = [x for r in rs for x in r["first"]]
             pk = [x for x in first if x[1] is not None and POCKET[0] <= x[1] <= POCKET[1]]
             spare = [x for r in rs for x in r["spare"]]
@@ -386,7 +393,7 @@ def part_games(seeds, names, moves, cache) -> None:
         print("|---|---|---|")
         for n in names:
             dd = np.array([sum(a["games"]) - sum(z["games"]) for a, z in zip(out[(n, "auto")], out[(n, "none")])], float)
-            half = T95[min(len(dd) - 1, len(T95)) - 1] * dd.std(ddof=1) / np.sqrt(len(dd)) if len(dd) > 1 else float("nan")
+            half = _t_half(dd)
             print(f"| {n} | {dd.mean():+.1f} pins ({dd.mean() - half:+.1f} to {dd.mean() + half:+.1f}) | "
                   f"{int((dd > 0).sum())} / {int((dd == 0).sum())} / {int((dd < 0).sum())} |")
     m0 = "auto" if "auto" in moves else moves[0]
