@@ -47,6 +47,7 @@ from nbst.render.core.shaders import SOLID_FS, SOLID_VS
 from nbst.render.core.shapes import Rect, Text, text_cell
 from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
+from nbst.models.crash.crush import CRUSH_ZONES
 from nbst.render.crash import readout as ro
 from nbst.render.crash import scene as cs
 from nbst.render.crash.motion import SLOW, record, slow_windows, slowed
@@ -652,7 +653,7 @@ def _crush_slabs(model, i: int) -> list[int]:
     """The geoms of vehicle ``i``'s crush zones' slabs (a crushing type: docs/crash.md "Crush"),
     which ride their plastic joints: [] for a rigid type."""
     out = []
-    for z in ("front", "rear", "left", "right"):
+    for z in CRUSH_ZONES:
         try:
             out.append(int(model.geom(f"v{i}_crush_{z}").id))
         except KeyError:
