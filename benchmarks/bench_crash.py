@@ -301,6 +301,8 @@ def robust_part() -> None:
             total += 1
             rc = mx.race or {}
             why = ("met (>= 50 %)" if pick.p >= 0.5 else "met (doubled, the intervals apart)") if ok else "NOT met"
+            if robust.lottery(pick.prob):
+                why += f" (the pick a LOTTERY: under {100 * robust.LOTTERY_P:.0f} % of its re-drives meet the script)"
             print(f"  {name}, seed {seed}: solution {plain.text()}; robust pick {pick.text()} "
                   f"({rc.get('members', 1)} crashes raced from {rc.get('searches', 0)} searches"
                   f"{', the pick a raced one (the maximiser lost the ladder)' if rc.get('fell_back') else ''}; "

@@ -157,3 +157,25 @@ def test_the_soft_climb_keeps_its_budget_and_the_ranges_and_repeats_from_its_see
             assert pick[i, f] in (0.0, 1.0)  # brake or coast, the script's choices
     again, rec2 = slack.soft_climb(P, start, 2 * 16 + 3 * 8, seed=4)
     assert np.array_equal(np.nan_to_num(again), np.nan_to_num(pick)) and rec2 == rec
+
+
+class _Met:
+    """An outcome as the probability counts it: met or not, one vehicle."""
+
+    def __init__(self, met):
+        self.solved, self.order_ok, self.vehicles = met, True, [None]
+
+    def signature_text(self, n):
+        return "1"
+
+
+def test_a_crash_its_drivers_repeat_in_under_one_take_in_ten_is_marked_and_printed_a_lottery():
+    """9 of 100 re-drives: a lottery (the file's probability.lottery, the summary says LOTTERY); 10 of
+    100 is not; a file written before the mark (no key) is not called one."""
+    from nbst.cli.crash.commands import _p_text
+
+    rare = robust.estimate_of([_Met(k < 9) for k in range(100)], seed=1).to_dict()
+    common = robust.estimate_of([_Met(k < 10) for k in range(100)], seed=1).to_dict()
+    assert rare["lottery"] is True and common["lottery"] is False and robust.LOTTERY_P == 0.10
+    assert "LOTTERY" in _p_text(rare) and "9/100" in _p_text(rare) and "LOTTERY" not in _p_text(common)
+    assert "LOTTERY" not in _p_text({k: v for k, v in rare.items() if k != "lottery"})

@@ -183,8 +183,15 @@ def cmd_solve(args) -> int:
 
 def _p_text(p: dict) -> str:
     """A crash file's probability in one phrase: P, k/n, the interval, the noise."""
-    return (f"P(fates) {100 * p['p']:.0f} % ({p['k']}/{p['n']} noisy re-drives, 95 % CI {100 * p['lo']:.0f}-"
+    text = (f"P(fates) {100 * p['p']:.0f} % ({p['k']}/{p['n']} noisy re-drives, 95 % CI {100 * p['lo']:.0f}-"
             f"{100 * p['hi']:.0f} %, {p.get('noise_kind', 'retake')} noise)")
+    return text + _lottery_text(p)
+
+
+def _lottery_text(p: dict) -> str:
+    """': a LOTTERY ...' for a probability under robust.LOTTERY_P (fewer than 1 take in 10), else ''."""
+    return ": a LOTTERY, not a script (its drivers repeat it in under 1 take in 10; docs/crash.md)" if p.get(
+        "lottery") else ""
 
 
 def _after_search(args, script, runner, S, best, intents, seed):
@@ -241,7 +248,8 @@ def cmd_probability(args) -> int:
     if args.json:
         print_json(est.to_dict())
     else:
-        print(f"{args.crash}: P(script met) = {est.text()} under {args.noise} noise (docs/crash.md), seed {args.seed}")
+        print(f"{args.crash}: P(script met) = {est.text()} under {args.noise} noise (docs/crash.md), seed {args.seed}"
+              f"{_lottery_text(est.to_dict())}")
         for lab, k in est.outcomes.items():
             print(f"  {lab:12s} {k}")
     return 0
