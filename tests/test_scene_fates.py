@@ -89,6 +89,11 @@ BAD = [
     (_bad(fates__ball__rest=True), "fates.ball.rest", "unknown key"),
     (_bad(noise={"ball": {"linvel": -1}}), "noise.ball.linvel", ">= 0"),
     (_bad(noise={"cube": {"linvel": 1}}), "noise.cube", "unknown key"),
+    # noise on a part the search does not choose would be silently ignored: refused by name
+    (_bad(noise={"ball": {"pos": 0.01}}), "noise.ball.pos", "chooses no pos"),
+    # what the file is comes first: another version, or another of nbst's files, is told so
+    ({"format": "nbst-fates", "version": 2}, "version", "must be 1"),
+    ({"format": "nbst-scene-solution", "version": 1, "fates_file": "f.json", "x": []}, "format", "fates_file"),
 ]
 
 
@@ -135,6 +140,11 @@ def test_mjcf_that_does_not_compile_gives_mujocos_message_with_the_line(tmp_path
     ({"controls": {"arm": {"linvel": [[0, 1], [0, 1], [0, 1]]}}}, "controls.arm", "no free joint"),
     ({"fates": {"ball": {"hits": ["pots"]}}}, "fates.ball.hits", "no body or geom 'pots'"),
     ({"fates": {"ball": {"never_hits": ["ball"]}}}, "fates.ball.never_hits", "the body itself"),
+    # a new user's slips: a typo of a body or geom name gets the nearest name; a geom of the body
+    # itself can never be touched by it (MuJoCo does not collide a body with itself)
+    ({"fates": {"ball": {"hits": ["pst"]}}}, "fates.ball.hits", "did you mean 'post'"),
+    ({"fates": {"ball": {"hits": ["post_gg"]}}}, "fates.ball.hits", "did you mean 'post_g'"),
+    ({"fates": {"ball": {"hits": ["post", "ball_g"]}}}, "fates.ball.hits", "a geom of 'ball' itself"),
     ({"fates": {"nobody": {"still": True}}}, "fates.nobody", "no body"),
     ({"keyframe": "low"}, "keyframe", "no key 'low'"),
     ({"duration": 5000.0}, "duration", "steps"),

@@ -391,6 +391,10 @@ def _noise(src: _Src, body: str, parts: list[str], given: Any) -> tuple[float, .
     if given is None:
         given = {}
     _keys(src, given, f, _CONTROL)
+    for k in given:
+        if k not in parts:  # noise is on what the search chooses: a part not chosen would be ignored
+            raise src.fail(f"{f}.{k}", f"controls.{body} chooses no {k} (it chooses {', '.join(parts)}); noise is "
+                                       f"on what the search chooses")
     out: list[float] = []
     for k in parts:
         s = given.get(k, DEFAULT_NOISE[k])
@@ -419,12 +423,16 @@ def parse_fates(doc: Any, source: str, *, folder: Path, scene: str | os.PathLike
         FatesError: a field is missing, unknown, of the wrong type or out of its domain.
     """
     src = _Src(source)
-    _keys(src, doc, "", _TOP, ("format", "version", "duration", "controls", "fates")
-          + (() if scene is not None else ("scene",)))
+    # what the file is comes first: another kind of file, or another version, is told so by name
+    # (not by the first of its keys that this version does not know)
+    _keys(src, doc, "", tuple(doc) if isinstance(doc, dict) else (), ("format", "version"))
     if doc["format"] != FORMAT:
-        raise src.fail("format", f"must be {FORMAT!r}, got {doc['format']!r}")
+        other = (f"; this is a {doc['format']!r} file, give its fates file (a solution keeps it under \"fates_file\")"
+                 if isinstance(doc["format"], str) and doc["format"].startswith("nbst") else "")
+        raise src.fail("format", f"must be {FORMAT!r}, got {doc['format']!r}{other}")
     if isinstance(doc["version"], bool) or doc["version"] != VERSION:
         raise src.fail("version", f"must be {VERSION}, got {doc['version']!r}")
+    _keys(src, doc, "", _TOP, ("duration", "controls", "fates") + (() if scene is not None else ("scene",)))
     if scene is not None:
         path = Path(scene)
     else:

@@ -171,11 +171,16 @@ def check_against_model(fates: Fates, model: Any) -> None:
         body_id(fa.body, f"fates.{fa.body}")
         for key, names in (("hits", fa.hits), ("never_hits", fa.never_hits)):
             for n in names:
-                if (mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) < 0
-                        and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n) < 0):
-                    raise src.fail(f"fates.{fa.body}.{key}", f"no body or geom {n!r} in {fates.scene.name}")
-                if n == fa.body:
-                    raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} is the body itself")
+                g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n)
+                if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) < 0 and g < 0:
+                    known = [model.body(k).name for k in range(model.nbody)] + [model.geom(k).name
+                                                                               for k in range(model.ngeom)]
+                    near = difflib.get_close_matches(n, [k for k in known if k], n=1)
+                    raise src.fail(f"fates.{fa.body}.{key}", f"no body or geom {n!r} in {fates.scene.name}"
+                                   + (f" (did you mean {near[0]!r}?)" if near else ""))
+                if n == fa.body or (g >= 0 and model.body(int(model.geom_bodyid[g])).name == fa.body):
+                    raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} is the body itself" if n == fa.body
+                                   else f"{n!r} is a geom of {fa.body!r} itself: a body never touches its own geoms")
 
 
 def load_fates(path: str | os.PathLike, *, scene: str | os.PathLike | None = None) -> tuple[Fates, Any]:
