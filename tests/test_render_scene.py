@@ -246,3 +246,13 @@ def test_the_readout_colours_body_lines_only_never_a_title_named_like_a_body():
     rows = ro.body_rows(lines, fates)
     assert rows[0] == (-1, 0) and rows[1] == (-1, 0)  # the title and the time
     assert rows[2] == (0, len(body)) and rows[4] == (-1, 0)
+
+
+def test_the_readout_writes_a_millimetre_region_in_its_own_digits():
+    """Two decimals of a metre turned a 7 mm box 2 cm away into (0.02, -0.00, 0.00)-(0.02, 0.00, 0.01)."""
+    from nbst.render.scene.readout import region_text
+    from nbst.scene.fates import Region
+
+    assert (region_text(Region(lo=(0.0165, -0.0035, 0.0), hi=(0.0235, 0.0035, 0.005)))
+            == "box (0.0165, -0.0035, 0)-(0.0235, 0.0035, 0.005)")
+    assert region_text(Region(center=(2.0, 0.0, 1.62), radius=0.06)) == "ball r 0.06 at (2, 0, 1.62)"

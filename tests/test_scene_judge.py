@@ -99,3 +99,22 @@ def test_the_signature_has_one_bit_per_body_with_fates():
                                   ((-3.0, -4.0, 0.5), 5.0)])
 def test_box_distance_is_exact(p, d):
     assert abs(float(Region(lo=(0.0, 0.0, 0.0), hi=(1.0, 1.0, 1.0)).distance(np.array(p))) - d) < TOL
+
+
+def test_a_millimetre_scene_reads_in_its_own_digits():
+    """A bead 2 cm away ending 0.4 mm outside its 7 mm box: what happened is readable at that scale
+    (three decimals of a metre would say 0.000 m from the region and round the ends to whole mm)."""
+    box = Region(lo=(0.0165, -0.0035, 0.0), hi=(0.0235, 0.0035, 0.005))
+    v = one(Fate("bead", rest_in=box), line([0, 0, 0.0025], [0.0239, 0.0012, 0.0025]))
+    assert not v.met and abs(v.cost - 0.0004) < TOL
+    assert v.fates[0].happened == "ends at (0.0239, 0.0012, 0.0025) m, 0.0004 m from the region"
+    v = one(Fate("pin", still=True), line(Z, [0.0019, 0, 0]))
+    assert v.met and v.fates[0].happened == "moved at most 0.0019 m"
+
+
+def test_a_never_hits_touch_at_the_start_says_so():
+    """A body that starts resting on what it must never hit can not meet the fate whatever its velocity:
+    the verdict says the touch was there at the start (a new user's bead on the table), not just 'touched'."""
+    v = one(Fate("bead", never_hits=("table", "wall")), line(Z, Z), touches={"table": 0.0, "wall": 0.5})
+    assert not v.met and v.cost == 2.0
+    assert v.fates[0].happened == "touched table (already touching at the start), wall"

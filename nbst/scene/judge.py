@@ -32,8 +32,15 @@ import numpy as np
 
 from nbst.scene.fates import AT_REST_SPEED, AT_REST_SPIN, STILL_DISTANCE, Fate, Fates
 
-__all__ = ["Recording", "FateVerdict", "BodyVerdict", "Judgement", "judge", "judge_body", "rotate",
+__all__ = ["Recording", "FateVerdict", "BodyVerdict", "Judgement", "judge", "judge_body", "length_text", "rotate",
            "signature_text"]
+
+
+def length_text(v: float) -> str:
+    """A length (m) or coordinate in words: four significant digits, so that a millimetre scene reads as well
+    as a metre one (``0.0165``, not ``0.017``; ``1.864``); below 1 nm, ``0`` (rounding noise)."""
+    v = float(v)
+    return "0" if abs(v) < 1e-9 else f"{v:.4g}"
 
 
 @dataclass(frozen=True)
@@ -155,8 +162,8 @@ def judge_body(fate: Fate, times: np.ndarray, path: np.ndarray, quat: np.ndarray
     end = path[-1]
     if fate.rest_in is not None:
         d = float(fate.rest_in.distance(end))
-        out.append(FateVerdict("rest_in", d == 0.0, d, f"ends at ({end[0]:.3f}, {end[1]:.3f}, {end[2]:.3f}) m, "
-                                                       f"{d:.3f} m from the region"))
+        out.append(FateVerdict("rest_in", d == 0.0, d, f"ends at ({', '.join(length_text(c) for c in end)}) m, "
+                                                       f"{length_text(d)} m from the region"))
     if fate.at:
         cost, met, said = 0.0, True, []
         for t, r in fate.at:
@@ -164,7 +171,7 @@ def judge_body(fate: Fate, times: np.ndarray, path: np.ndarray, quat: np.ndarray
             d = float(r.distance(path[k]))
             cost += d
             met = met and d == 0.0
-            said.append(f"{d:.3f} m from it at {times[k]:.3f} s")
+            said.append(f"{length_text(d)} m from it at {times[k]:.3f} s")
         out.append(FateVerdict("at", met, cost, "; ".join(said)))
     if fate.through:
         out.append(_through(fate, path))
@@ -178,8 +185,11 @@ def judge_body(fate: Fate, times: np.ndarray, path: np.ndarray, quat: np.ndarray
         out.append(_hits(fate, touches))
     if fate.never_hits:
         hit = [n for n in fate.never_hits if n in touches]
-        out.append(FateVerdict("never_hits", not hit, float(len(hit)),
-                               "touched " + (", ".join(hit) if hit else "none of them")))
+        # a touch at the first step: the scene starts with the two in contact (a body resting on the floor it
+        # must never hit), which no velocity can undo; said so, as it is easily missed
+        said = ", ".join(n + (" (already touching at the start)" if touches[n] <= times[0]
+                              else "") for n in hit)
+        out.append(FateVerdict("never_hits", not hit, float(len(hit)), "touched " + (said or "none of them")))
     if fate.at_rest:
         v, w = float(np.linalg.norm(linvel)), float(np.linalg.norm(angvel))
         met = v <= AT_REST_SPEED and w <= AT_REST_SPIN
@@ -188,7 +198,7 @@ def judge_body(fate: Fate, times: np.ndarray, path: np.ndarray, quat: np.ndarray
     if fate.still:
         far = float(np.linalg.norm(path - path[0], axis=-1).max())
         out.append(FateVerdict("still", far <= STILL_DISTANCE, max(0.0, far - STILL_DISTANCE),
-                               f"moved at most {far:.4f} m"))
+                               f"moved at most {length_text(far)} m"))
     return BodyVerdict(fate.body, all(f.met for f in out), float(sum(f.cost for f in out)), tuple(out))
 
 

@@ -11,7 +11,7 @@ Compute only: :func:`readout` returns text lines; :func:`marks` splits the marks
 from __future__ import annotations
 
 from nbst.scene.fates import AT_REST_SPEED, STILL_DISTANCE, Fate, Fates, Region
-from nbst.scene.judge import Judgement, signature_text
+from nbst.scene.judge import Judgement, length_text, signature_text
 
 __all__ = ["OK", "NO", "COMPACT_AFTER", "region_text", "asked", "readout", "widest", "marks", "body_rows"]
 
@@ -22,13 +22,13 @@ COMPACT_AFTER = 3
 
 
 def _v(p) -> str:
-    return "(" + ", ".join(f"{float(c):.2f}" for c in p) + ")"
+    return "(" + ", ".join(length_text(c) for c in p) + ")"
 
 
 def region_text(r: Region) -> str:
-    """A region in a few words: ``ball r 0.06 at (2.00, 0.00, 1.62)`` or ``box (lo)-(hi)``."""
+    """A region in a few words: ``ball r 0.06 at (2, 0, 1.62)`` or ``box (lo)-(hi)``."""
     if r.center is not None:
-        return f"ball r {r.radius:.3g} at {_v(r.center)}"
+        return f"ball r {length_text(r.radius)} at {_v(r.center)}"
     return f"box {_v(r.lo)}-{_v(r.hi)}"
 
 
