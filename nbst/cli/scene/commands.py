@@ -114,14 +114,15 @@ def cmd_solve(args) -> int:
         warn = f"; MuJoCo warned: {', '.join(b.warnings)}" if b.warnings else ""
         if res.probability is not None:
             warn += f"; P {res.probability.text()} under the fates' noise"
-        if not args.no_ladder:
+        if not args.no_ladder and b.judgement.met:  # (a motion that misses at h is not rolled out finer)
             warn += "; kept at h/2 and h/4" if res.ladder_held else "; not kept at h/2 and h/4"
         if res.robust is not None:
             warn += (f"; robust: {res.robust['start_screen'][0]} -> {res.robust['screen'][0]} of "
                      f"{res.robust['screen'][1]} noisy copies in {count_text(res.robust['rollouts'])} rollouts")
         if args.answers > 1:
             warn += f"; {len(res.answers)} of {args.answers} answers with contact sequences of their own"
-        print(f"scene {name}: {met}, signature {res.judgement.to_dict()['signature']} after "
+        stop = "interrupted; best so far written: " if res.stopped == "interrupted" else ""
+        print(f"scene {name}: {stop}{met}, signature {res.judgement.to_dict()['signature']} after "
               f"{count_text(res.rollouts)} rollouts in {took}, seed {seed}{warn}; wrote {args.output}",
               file=sys.stderr)
     if res.stopped == "interrupted":
