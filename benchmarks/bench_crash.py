@@ -37,6 +37,10 @@ Parts (default: all, in this order; each prints its figures and its target, met 
   ``--robust-samples`` noisy re-drives (default 100, noise seed = the seed; ``--noise``): both
   with their Wilson intervals (target: the pick's P >= 50 %, or at least twice the solution's with
   the two Wilson intervals apart, at every seed, the pick keeping its outcome at 1 and 0.5 ms);
+* ``sources``: ``--robust-scripts`` solved at ``--robust-seeds`` as in ``robust``, the solution
+  re-driven 64 times with one intent's noise at a time (the others exact; common draws), then
+  with all: how often each meets the script, which fates the failed re-drives missed, and the
+  quarter turns seen where a fate counts them: which noise makes a crash a lottery;
 * ``sensitivity``: the solved chain3 (seed 1) rerun with each assumed parameter changed (body
   friction, road friction, yaw and roll inertia, the body contact's damping): its signature and
   how far each vehicle's rest position moves.
@@ -52,7 +56,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 PARTS = ("physics", "speed", "chain", "planted", "hidden", "funnels", "builtins", "probability", "robust",
-         "sensitivity")
+         "sources", "sensitivity")
 ARGS = None
 
 
@@ -313,6 +317,44 @@ def robust_part() -> None:
                   f"{mx.frames} rollouts, {rw:.0f} s wall): {why}", flush=True)
     print(f"robust stunts: {met} of {total} (script, seed) pairs with the pick's P >= 50 %, or >= 2x the solution's "
           f"with the Wilson intervals apart, on the ladder (target: all)")
+
+
+def sources() -> None:
+    from collections import Counter
+
+    import numpy as np
+
+    from nbst.models.crash import driver, robust, run, script, space
+
+    m = 64
+    print(f"  P(fates) of the solution on {m} re-drives ({ARGS.noise} noise, noise seed = search seed) with one "
+          "intent's noise at a time, then all; the fates the failed re-drives missed")
+    for name in ARGS.robust_scripts.split(","):
+        sc = script.load_script(name)
+        counted = [v.name for v in sc.vehicles if v.fate.quarter_turns is not None]
+        for seed in ARGS.robust_seeds:
+            r, _, _ = _solve(sc, seed, 3000)
+            if not r.best.accepted:
+                print(f"  {name}, seed {seed}: not solved on the ladder: no re-drives", flush=True)
+                continue
+            R = run.CrashRunner(sc, jobs=ARGS.jobs)
+            intents = space.space_of(sc).intents(r.best.u[None])[0]
+            copies = robust.noisy(intents, m, seed, ARGS.noise)
+            sig = robust.sigma_row(ARGS.noise)
+            noisy_cols = [k for k in driver.INTENT if sig[driver.IX[k]] > 0 and np.isfinite(intents[:, driver.IX[k]]).any()]
+            for k in noisy_cols + ["all"]:
+                c = copies.copy()
+                if k != "all":
+                    keep = [j for j in range(len(driver.INTENT)) if j != driver.IX[k]]
+                    c[..., keep] = intents[None][..., keep]
+                outs = R.run(c).outcomes
+                missed = Counter(f"{v.name}.{f}" for o in outs if not o.solved for v in o.vehicles
+                                 for f, held in v.fates.items() if not held)
+                turns = Counter(min(v.quarter_turns, 5) for o in outs for v in o.vehicles if v.name in counted)
+                more = f"; quarter turns {dict(sorted(turns.items()))} (5: 5 or more)" if counted else ""
+                print(f"  {name}, seed {seed}, noise of {k:11s}: met {sum(o.solved for o in outs):2d}/{m}; missed "
+                      f"{dict(missed.most_common(4))}{more}", flush=True)
+            R.close()
 
 
 def sensitivity() -> None:
