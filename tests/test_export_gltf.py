@@ -282,10 +282,15 @@ def test_every_geom_type_becomes_a_mesh_in_its_bodys_frame():
         <geom type="mesh" mesh="tet"/>
         <geom type="box" size="1 1 1" rgba="0 0 0 0"/>
         <geom type="box" size="1 1 1" group="4"/>
-      </body></worldbody></mujoco>"""
+      </body>
+      <body name="post" pos="3 0 0"><geom type="box" size=".1 .1 .5"/>
+        <body name="arm"><joint type="hinge"/><geom type="capsule" size=".02 .2"/></body></body>
+      <body name="hand" mocap="true"><geom type="sphere" size=".1"/></body></worldbody></mujoco>"""
     m = mujoco.MjModel.from_xml_string(xml)
-    world, b = model_bodies(m)
+    world, b, post, arm, hand = model_bodies(m)
     assert len(world.solids) == 2 and not world.moves and b.moves and len(b.solids) == 6
+    # a body welded to the world (a post) never moves: no channel; a jointed child and a mocap body do
+    assert not post.moves and arm.moves and hand.moves
 
     def bounds(solid):
         return np.array([solid.rows[:, :3].min(axis=0), solid.rows[:, :3].max(axis=0)])

@@ -61,10 +61,13 @@ def model_bodies(model: Any) -> list[Body]:
         model: a compiled ``mujoco.MjModel``.
 
     Returns:
-        ``nbody`` bodies (the world, id 0, static; the others moving); a body without a visible
-        geom has no solids.
+        ``nbody`` bodies; a body without a visible geom has no solids. Static: the world (id 0) and
+        every body welded to it (no joint between it and the world, not a mocap body: a post, a
+        bin, a hoop), which never moves and gets no animation channel.
     """
-    bodies = [Body(name=model.body(b).name or f"body{b}", solids=[], moves=b > 0) for b in range(model.nbody)]
+    bodies = [Body(name=model.body(b).name or f"body{b}", solids=[],
+                   moves=int(model.body_weldid[b]) != 0 or int(model.body_mocapid[b]) >= 0)
+              for b in range(model.nbody)]
     for g in visible_geoms(model):
         rows = geom_body_rows(model, g)
         if rows is not None:
