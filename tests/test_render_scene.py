@@ -256,3 +256,28 @@ def test_the_readout_writes_a_millimetre_region_in_its_own_digits():
     assert (region_text(Region(lo=(0.0165, -0.0035, 0.0), hi=(0.0235, 0.0035, 0.005)))
             == "box (0.0165, -0.0035, 0)-(0.0235, 0.0035, 0.005)")
     assert region_text(Region(center=(2.0, 0.0, 1.62), radius=0.06)) == "ball r 0.06 at (2, 0, 1.62)"
+
+
+def test_the_framing_holds_a_long_thin_target_tightly():
+    """A wall 2 m long and 10 cm thick that a body must hit is framed by its own box, not by the cube
+    of its bounding sphere (2 m of empty air each side of it, which shrank a three-body scene to a
+    quarter of the frame); turned 90 degrees, its box turns with it."""
+    import types
+
+    import mujoco
+
+    from nbst.render.scene.framing import focus_points
+    from nbst.scene.fates import Fate, Fates
+
+    xml = """<mujoco><worldbody><geom name="wall" type="box" pos="2 0 0.3" size="0.05 1 0.3"/>
+      <geom name="turned" type="box" pos="0 3 0.3" size="0.05 1 0.3" euler="0 0 90"/>
+      <body name="ball"><freejoint/><geom size="0.05"/></body></worldbody></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    motion = types.SimpleNamespace(geom_xpos=d.geom_xpos[None].copy(), geom_xmat=d.geom_xmat[None].copy())
+    for name, (lo, hi) in (("wall", ([1.95, -1, 0], [2.05, 1, 0.6])), ("turned", ([-1, 2.95, 0], [1, 3.05, 0.6]))):
+        fates = Fates(source="mem", scene=None, keyframe=None, timestep=None, duration=1.0,  # type: ignore[arg-type]
+                      controls=(), fates=(Fate("ball", hits=(name,)),))
+        pts = focus_points(motion, fates, m, bodies=False)  # type: ignore[arg-type]
+        assert np.allclose(pts.min(axis=0), lo, atol=1e-9) and np.allclose(pts.max(axis=0), hi, atol=1e-9), name

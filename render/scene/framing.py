@@ -25,7 +25,7 @@ from nbst.render.scene.motion import SceneMotion
 from nbst.scene.fates import Fates
 
 __all__ = ["AZIMUTH", "DISTANCE", "ELEVATION", "FILL", "FOV", "TRACK_TAU", "TRACK_WINDOW", "box_corners",
-           "focus_points", "default_camera", "regions_of", "tracking_boxes"]
+           "focus_points", "geom_box_points", "default_camera", "regions_of", "tracking_boxes"]
 
 #: The framing camera looks at the bodies from this azimuth (degrees from +x, about +z; -90: from
 #: -y, the front) and elevation (degrees above the horizon), with this vertical field of view.
@@ -85,6 +85,15 @@ def tracking_boxes(motion: SceneMotion, fates: Fates, model: Any) -> tuple[np.nd
     return lo, hi
 
 
+def geom_box_points(motion: SceneMotion, model: Any, g: int, frame: int = 0) -> np.ndarray:
+    """(8, 3) the corners of geom ``g``'s own bounding box (MuJoCo's ``geom_aabb``, in the geom's frame)
+    at ``frame``: tight about a long thin geom (a wall 2 m long and 10 cm thick), where the cube of its
+    bounding sphere's radius would frame 2 m of empty air on each side of it."""
+    aabb = np.asarray(model.geom_aabb[g], float)
+    R = np.asarray(motion.geom_xmat[frame, g], float).reshape(3, 3)
+    return motion.geom_xpos[frame, g] + (aabb[:3] + aabb[3:] * _CUBE) @ R.T
+
+
 def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """(8, 3) the corners of the box lo..hi."""
     return (lo + hi) / 2 + (hi - lo) / 2 * _CUBE
@@ -106,7 +115,7 @@ def focus_points(motion: SceneMotion, fates: Fates, model: Any, *, bodies: bool 
                   else [int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n))])
             for g in gs:
                 if g >= 0 and int(model.geom_type[g]) != sg.PLANE:
-                    pts.append(motion.geom_xpos[0, g] + float(model.geom_rbound[g]) * _CUBE)
+                    pts.append(geom_box_points(motion, model, g))
     for b in (moving if bodies else ()):
         gs = [g for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) == b]
         r = max((float(model.geom_rbound[g]) + float(np.linalg.norm(model.geom_pos[g])) for g in gs), default=0.05)
