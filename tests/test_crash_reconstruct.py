@@ -214,24 +214,22 @@ def test_skid_and_edr_evidence_read_the_track_as_a_reconstructionist_would():
     assert ev.distances(case, off, o, track, 0)[0] == pytest.approx(1.0 / 0.2, abs=0.3)
 
 
-def test_the_local_sets_spread_fits_bunched_at_one_end_over_the_set_that_meets_the_evidence():
-    """A linear world: vehicle A's rest lies 20 m further per unit of its speed coordinate (30-80
-    km/h), the evidence its true rest within 1.5 m, so the speeds that meet it span 7.5 km/h about
-    the true 55; every accepted fit stopped near one end (56.5-57.7 km/h). The fits' own 90 %
-    interval misses the truth; spread over their linearised sets (rc._local: hit-and-run on the
-    set that meets every piece within its tolerance), the interval holds it and spans the central
-    90 % of that set (within 10 %: a uniform's 5th-95th percentile is 90 % of it; the chain is
-    finite), called identifiable."""
+def _linear_world(lo, hi, true_u, b_fails_past=None):
+    """A linear world for the local sets: vehicle A's rest lies 20 m further per unit of its speed
+    coordinate, the evidence its true rest within 1.5 m; B's speed coordinate moves nothing the
+    evidence sees (with ``b_fails_past``, B's rest jumps 10 m once its coordinate passes it: the
+    linear model holds only so far). (evidence pieces, told(u), a fake problem)."""
     from types import SimpleNamespace
 
-    lo, hi, true_u = 30 / 3.6, 80 / 3.6, 0.5
-    ps = [ev.Piece("A.rest", 0, "rest", (10.0 + 20.0 * true_u, 0.0), 1.5)]
+    ps = [ev.Piece("A.rest", 0, "rest", (10.0 + 20.0 * true_u, 0.0), 1.5),
+          ev.Piece("B.rest", 1, "rest", (0.0, 0.0), 1.5)]
 
     def told(u):
+        jump = 10.0 if b_fails_past is not None and u[1] > b_fails_past else 0.0
         o = SimpleNamespace(vehicles=[SimpleNamespace(rest=(10.0 + 20.0 * u[0], 0.1 * u[1], 0.0), impact_pos=(0.0, 0.0),
-                                                      hits=[(1, 1.0)], impact_speed=1.0),
-                                      SimpleNamespace(rest=(0.0, 0.0, 0.0), impact_pos=(0.0, 0.0), hits=[(0, 1.0)],
-                                                      impact_speed=1.0)])
+                                                      hits=[(1, 1.0)], impact_speed=1.0, impact_heading=0.0),
+                                      SimpleNamespace(rest=(jump, 0.0, 0.0), impact_pos=(0.0, 0.0), hits=[(0, 1.0)],
+                                                      impact_speed=1.0, impact_heading=math.pi)])
         d = ev.distances(SimpleNamespace(script=SimpleNamespace(n=2)), ps, o, None, 0)
         v = lo + (hi - lo) * np.asarray(u, float)
         q = np.array([v[0], 0.5 * v[0], 12.0, v[1], 0.5 * v[1], 12.0, v[0] + v[1]])
@@ -251,6 +249,21 @@ def test_the_local_sets_spread_fits_bunched_at_one_end_over_the_set_that_meets_t
             self.used += len(U)
             return [(told(u), None) for u in U]
 
+    return ps, told, Fake
+
+
+def test_the_local_sets_spread_fits_bunched_at_one_end_over_the_set_that_meets_the_evidence():
+    """Vehicle A's rest lies 20 m further per unit of its speed coordinate (30-80 km/h), the
+    evidence its true rest within 1.5 m, so the speeds that meet it span 7.5 km/h about the true
+    55; every accepted fit stopped near one end (56.5-57.7 km/h). The fits' own 90 % interval
+    misses the truth; spread over their linearised sets (rc._local: hit-and-run on the set that
+    meets every piece within its tolerance), the interval holds it and spans the central 90 % of
+    that set (within 10 %: a uniform's 5th-95th percentile is 90 % of it; the chain is finite),
+    called identifiable."""
+    from types import SimpleNamespace
+
+    lo, hi, true_u = 30 / 3.6, 80 / 3.6, 0.5
+    ps, told, Fake = _linear_world(lo, hi, true_u)
     acc = [told((true_u + 0.06 + 0.002 * k, 0.3)) for k in range(8)]
     assert all(float(np.max(t.dist)) <= 1.0 for t in acc)
     S = SimpleNamespace(dim=2)
@@ -269,3 +282,47 @@ def test_the_local_sets_spread_fits_bunched_at_one_end_over_the_set_that_meets_t
     met = 0.15 * (hi - lo)  # the speeds that meet the evidence: +- 0.075 of the cube about the truth
     assert a["identifiable"] and a["lo"] <= truth <= a["hi"], a
     assert 0.8 * 0.9 * met <= a["hi"] - a["lo"] <= met * 1.0 + 1e-9, (a, met)
+
+
+def test_a_local_set_reaches_as_far_as_the_engine_confirms():
+    """B's speed coordinate moves nothing the evidence sees. Its sets, bounded at first by the
+    trust region (0.15 of the range about the draws at 0.3), grow while their ends, rolled out,
+    meet the evidence (rc.LOCAL_GROW doublings): B's interval then spans over rc.WEAK of its prior
+    and is not identifiable. Where the evidence fails past 0.5 (the linear model holds only so
+    far), the sets keep the reach last confirmed: B's samples stay at or under 0.6 of the range."""
+    from types import SimpleNamespace
+
+    lo, hi, true_u = 30 / 3.6, 80 / 3.6, 0.5
+    S = SimpleNamespace(dim=2)
+    for fails in (None, 0.5):
+        ps, told, Fake = _linear_world(lo, hi, true_u, b_fails_past=fails)
+        acc = [told((true_u + 0.06 + 0.002 * k, 0.3)) for k in range(8)]
+        P = Fake()
+        moves = rc._local(P, S, acc, np.random.default_rng(1), 2 * 8, 10 ** 6)
+        assert P.used > 2 * 8  # the differences, then the checks of the sets' ends
+        b = np.concatenate(moves)[:, 3]
+        reach = (b.max() - b.min()) / (hi - lo)
+        if fails is None:
+            assert reach > 0.5, reach  # 0.15 -> 0.3 -> 0.6 about 0.3: 0-0.9 of the range
+            rec = rc.Reconstruction(names=["A", "B"], labels=["A.rest"], draws=acc, accepted=acc,
+                                    prior_q=np.zeros((0, 7)), speed_prior=[(lo, hi), (lo, hi)], screen=None,
+                                    rollouts=1, pilot_rollouts=1, seed=1, moves=moves)
+            rc._judge(rec)
+            assert not rec.intervals[1]["impact_speed"]["identifiable"]
+            assert rec.intervals[0]["impact_speed"]["identifiable"]
+        else:
+            assert b.max() <= lo + 0.45 * (hi - lo) + 1e-9, 3.6 * b.max()  # 0.3 + 0.15: the 0.3 reach failed
+            assert b.min() < lo + 0.1 * (hi - lo), 3.6 * b.min()  # the low side met the evidence: it grew
+
+
+def test_an_interval_near_the_drivers_range_end_reaches_it():
+    """A pinned interval whose end lies within rc.EDGE of the driver's range's width of its end is
+    taken to that end (the truth at the edge); one further in is left alone."""
+    lo, hi = 30 / 3.6, 70 / 3.6
+    near = _rec(np.linspace(lo + 0.2, lo + 1.5, 20), prior=(lo, hi))
+    rc._judge(near)
+    a = near.intervals[0]["impact_speed"]
+    assert a["identifiable"] and a["lo"] == pytest.approx(lo) and a["hi"] < lo + 1.5 + 1e-9
+    far = _rec(np.linspace(lo + 1.0, lo + 2.5, 20), prior=(lo, hi))  # 1 m/s in: 9 % of the range's 11.1
+    rc._judge(far)
+    assert far.intervals[0]["impact_speed"]["lo"] > lo + 0.9

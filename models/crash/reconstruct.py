@@ -26,7 +26,11 @@ built-in crossing-case in 2,400 rollouts, docs/results/crash.md). Here:
   differences in every coordinate of the intents and of the unknowns (one rollout each), and the
   set where every piece of the stated evidence stays within its tolerance, in that linear model,
   is sampled by hit-and-run (R. L. Smith, Operations Research 32, 1984); the intervals are over
-  these samples. With a uniform kernel and uniform priors the posterior near a draw is uniform
+  these samples. A set held in by its trust region (the intents within :data:`LOCAL_TRUST` of
+  the draw) has its ends (each vehicle's lowest and highest impact speed) rolled out: while they
+  meet the evidence its reach doubles (:data:`LOCAL_GROW` times at most), as a trust-region
+  method grows its region where the model predicts well; where they do not, it keeps the reach
+  last confirmed. With a uniform kernel and uniform priors the posterior near a draw is uniform
   on that set; a fit stops where it first meets the evidence, so the accepted draws bunch at one
   end of it, and a dozen draws sample the unknowns' ranges thinly (the planted cases' pinned
   intervals held the truth in 7 of 11 without the sets: docs/results/crash.md). Meeds and
@@ -54,7 +58,9 @@ ahead, 3 from the right) are summarised over the local sets' samples as a 90 % i
 of its prior interval (the same quantity over the pilot's exploring rollouts that hit as the
 evidence says, or the driver's speed range), a speed a profile probe moves, or one that fewer
 than :data:`MIN_ACCEPTED` draws pin, is **not identifiable** from this evidence: its interval is reported at least as wide as
-the prior's, never narrow.
+the prior's, never narrow. A pinned speed whose interval ends within :data:`EDGE` of its driver's
+range's width of that range's end is taken to the end (a posterior piled against the range's
+end, the truth at the edge).
 
 The rollouts run on :class:`PhysRunner`: the case's :class:`~.run.CrashRunner` whose batch
 gives each simulation its own friction, masses and contact (``mujoco.batch.Batch.expand``) and
@@ -93,7 +99,8 @@ from nbst.seeds import check_seed
 __all__ = ["MAX_ROLLOUTS", "DRAWS", "DRAW_ROLLOUTS", "DRAW_PARALLEL", "DRAW_UNIFORM", "PILOT_SHARE", "PILOT_APPROACH", "EXPLORE",
            "POPSIZE", "STALL", "SIGMA_PILOT", "SIGMA_FIT", "SIGMA_DRAW", "PILOT_DONE", "DRAW_DONE", "JITTER", "LEVEL",
            "WEAK", "MIN_ACCEPTED", "SCREEN_SAMPLES", "SCREEN_SPEED_TOL", "PARALLEL_DEG", "ROUNDS", "GAIN", "PROFILE_ROLLOUTS", "PROFILE_SHARE",
-           "LOCAL_SHARE", "LOCAL_DRAWS", "LOCAL_STEP", "LOCAL_TRUST", "LOCAL_SAMPLES", "LOCAL_BURN", "METHOD", "Progress",
+           "LOCAL_SHARE", "LOCAL_DRAWS", "LOCAL_STEP", "LOCAL_TRUST", "LOCAL_SAMPLES", "LOCAL_BURN", "LOCAL_GROW",
+           "LOCAL_CHECK_SHARE", "EDGE", "METHOD", "Progress",
            "PhysRunner", "Reconstruction", "reconstruct", "best_trial", "slide_speed", "momentum_speeds",
            "momentum_applies", "momentum_screen", "pdof_clock", "phys_coords", "scene_xml_of"]
 
@@ -127,6 +134,15 @@ PROFILE_ROLLOUTS, PROFILE_SHARE = 40, 0.1
 #: and within LOCAL_TRUST of the draw, sampled by LOCAL_SAMPLES steps of hit-and-run after
 #: LOCAL_BURN; LOCAL_SHARE of the budget is kept for the differences.
 LOCAL_SHARE, LOCAL_DRAWS, LOCAL_STEP, LOCAL_TRUST, LOCAL_SAMPLES, LOCAL_BURN = 0.08, 16, 0.03, 0.15, 400, 100
+#: The local sets' reach, checked on the engine (:func:`_local`): a set that its trust region
+#: bounds has its extreme samples (each vehicle's lowest and highest impact speed) rolled out;
+#: when every one meets the stated evidence the trust doubles (up to 1: the ranges) and the set
+#: is sampled again, at most LOCAL_GROW times; LOCAL_CHECK_SHARE of the budget is kept for it.
+LOCAL_GROW, LOCAL_CHECK_SHARE = 2, 0.04
+#: An interval's end within EDGE of its prior's width of the prior's end is taken to that end:
+#: a posterior piled against a range's end (the truth at the edge) is cut there by a central
+#: interval only by convention.
+EDGE = 0.05
 #: The intervals' level; an interval spanning WEAK of its prior's is not identifiable; fewer
 #: accepted draws than MIN_ACCEPTED pin nothing (every interval widened to the prior's).
 LEVEL, WEAK, MIN_ACCEPTED = 0.90, 0.3, 8
@@ -143,7 +159,7 @@ METHOD = ("Optimisation Monte Carlo (Meeds and Welling, NeurIPS 2015): each draw
           "tolerances, fits the drivers' intents to it on the rollout engine, and is accepted when the fit meets "
           "every piece of the stated evidence within its tolerance; each accepted draw linearised in the intents and "
           "unknowns by finite differences and the set meeting the evidence about it sampled by hit-and-run (Smith "
-          "1984); equal weights; 90 % intervals over those samples; the pilot fit starts from the momentum Monte "
+          "1984), its reach doubled while its ends, rolled out, meet the evidence; equal weights; 90 % intervals over those samples; the pilot fit starts from the momentum Monte "
           "Carlo screen (Brach and Brach)")
 
 
@@ -712,6 +728,12 @@ def _judge(rec: Reconstruction) -> None:
                 rec.verdicts.append(f"profile: fits with {nm}'s speed held at {3.6 * min(v):.0f}-{3.6 * max(v):.0f} "
                                     "km/h meet the evidence too")
             ok = has and not few and not wide
+            if ok and key == "impact_speed":  # the truth at the driver's range's end: the interval reaches it
+                lo, hi = rec.speed_prior[i]
+                if lo < x["lo"] <= lo + EDGE * (hi - lo):
+                    x["lo"] = lo
+                if hi - EDGE * (hi - lo) <= x["hi"] < hi:
+                    x["hi"] = hi
             if not ok:
                 if not has:
                     x["median"] = math.nan
@@ -882,6 +904,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
         pilot_used = P.used
         # the OMC draws, DRAW_PARALLEL at a time in shared batches
         local_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
+        check_end = local_end
+        local_end = check_end - int(LOCAL_CHECK_SHARE * max_rollouts)
         draw_end = local_end - int(LOCAL_SHARE * max_rollouts)
         per = max(BATCH // 2, min(DRAW_ROLLOUTS, (draw_end - P.used) // max(1, int(draws))))
         pcs = phys_coords(case)
@@ -907,7 +931,7 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
                     accepted.append(t)
             P.accepted = len(accepted)
             k += DRAW_PARALLEL
-        moves = _local(P, S, accepted, rng, local_end)
+        moves = _local(P, S, accepted, rng, local_end, check_end)
         profile = _profile(P, S, accepted, rng, max_rollouts)
     except KeyboardInterrupt:
         interrupted = True
@@ -984,7 +1008,7 @@ def _phys_unit(case: ev_mod.Case, phys: dict) -> np.ndarray:
     return np.array(out)
 
 
-def _local(P: _Problem, S, accepted: list, rng, end: int) -> list:
+def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None = None) -> list:
     """The local sets (:data:`LOCAL_SHARE`): up to :data:`LOCAL_DRAWS` accepted draws (evenly
     spread in draw order), each linearised by forward differences of :data:`LOCAL_STEP` in every
     coordinate of the intents and of the unknowns (:func:`phys_coords`, as unit coordinates of
@@ -1021,7 +1045,7 @@ def _local(P: _Problem, S, accepted: list, rng, end: int) -> list:
     for j in range(0, len(X), BATCH):
         told += P.run(X[j:j + BATCH, :dim], {key: v[j:j + BATCH] for key, v in phys.items()},
                       [P.ps] * len(X[j:j + BATCH]))
-    out = []
+    models = []
     for a, (t, x0, h) in enumerate(zip(base, x0s, steps)):
         r0, kinds = _residual(P.ps, t.o, t.dist)
         J = np.zeros((len(r0), nd))
@@ -1039,35 +1063,101 @@ def _local(P: _Problem, S, accepted: list, rng, end: int) -> list:
             for c in range(2, len(dq) - 1, 3):  # a PDOF: the nearer way round the clock
                 dq[c] = (dq[c] + 6.0) % 12.0 - 6.0
             Jq[:, k] = np.where(np.isfinite(dq), dq, 0.0) / h[k]
-        trust = np.r_[np.full(dim, LOCAL_TRUST), np.full(npc, 1.0)]
-        lo_box, hi_box = np.maximum(-x0, -trust), np.minimum(1.0 - x0, trust)
-        x = np.zeros(nd)
-        idx = np.flatnonzero(free)
-        samples = []
-        if len(idx):
-            # directions shaped like the set (the linear model's, the trust region's): a symmetric
-            # law of directions keeps hit-and-run uniform on the set, and a long thin set mixes
-            Ji = J[:, idx]
-            M = Ji.T @ Ji + np.diag(1.0 / np.maximum(hi_box[idx] - lo_box[idx], 1e-6) ** 2)
-            L = np.linalg.cholesky(np.linalg.inv(M))
-            for it in range(LOCAL_BURN + LOCAL_SAMPLES):
-                v = np.zeros(nd)
-                v[idx] = L @ rng.standard_normal(len(idx))
-                lo, hi = _chord(kinds, r0 + J @ x, J @ v)
-                for kb in idx.tolist():  # the ranges and the trust region
-                    if abs(v[kb]) > 1e-12:
-                        a1, a2 = (lo_box[kb] - x[kb]) / v[kb], (hi_box[kb] - x[kb]) / v[kb]
-                        lo, hi = max(lo, min(a1, a2)), min(hi, max(a1, a2))
-                if hi > lo:
-                    x = x + float(rng.uniform(lo, hi)) * v
-                if it >= LOCAL_BURN:
-                    samples.append(x.copy())
-        Xs = np.array(samples) if samples else np.zeros((1, nd))
-        q = t.q[None] + Xs @ Jq.T
-        for c in range(2, q.shape[1] - 1, 3):
-            q[:, c] = (q[:, c] - 1e-9) % 12.0 + 1e-9
-        out.append(q)
-    return out
+        models.append({"q": t.q, "x0": x0, "dim": dim, "r0": r0, "kinds": kinds, "J": J, "Jq": Jq, "free": free,
+                       "trust": LOCAL_TRUST})
+    sets = [_sample_set(m, rng) for m in models]
+    for _ in range(LOCAL_GROW):  # the reach: a set its trust region bounds grows where its ends meet the evidence
+        grow = {}
+        for a, (m, (_, _, bound)) in enumerate(zip(models, sets)):
+            if bound:
+                g = _cut(_sample_set({**m, "trust": min(1.0, 2.0 * m["trust"])}, rng), m.get("cuts", []))
+                if len(g[1]) >= LOCAL_SAMPLES // 4:
+                    grow[a] = g
+        checks = []  # (draw, quantity column, side, point)
+        for a, (X, q, _) in grow.items():
+            for c in range(0, q.shape[1] - 1, 3):
+                for side, f in ((-1, np.argmin), (1, np.argmax)):
+                    checks.append((a, c, side, models[a]["x0"] + X[int(f(q[:, c]))]))
+        if not checks or len(checks) > (end if check_end is None else check_end) - P.used:
+            break
+        Xc = np.clip(np.array([x for *_, x in checks]), 0.0, 1.0)
+        phys = _phys_values(case, Xc[:, dim:])
+        told = []
+        for j in range(0, len(Xc), BATCH):
+            told += P.run(Xc[j:j + BATCH, :dim], {key: v[j:j + BATCH] for key, v in phys.items()},
+                          [P.ps] * len(Xc[j:j + BATCH]))
+        cuts: dict = {a: [] for a in grow}
+        confirmed: dict = {a: False for a in grow}
+        for (a, c, side, _), (tc, _) in zip(checks, told):
+            if bool(len(tc.dist)) and float(np.max(tc.dist)) <= 1.0:
+                confirmed[a] = True
+            else:  # this end does not meet the evidence: the quantity keeps its former reach on that side
+                old = sets[a][1][:, c]
+                cuts[a].append((c, side, float(old.min() if side < 0 else old.max())))
+        if os.environ.get("NBST_RECON_DEBUG"):
+            print("reach", [(a, c, side, models[a]["trust"], round(float(np.max(tc.dist)), 2))
+                            for (a, c, side, _), (tc, _) in zip(checks, told)], file=sys.stderr)
+        for a, g in grow.items():
+            g = _cut(g, cuts[a])
+            if confirmed[a] and len(g[1]) >= LOCAL_SAMPLES // 4:
+                models[a]["trust"] = min(1.0, 2.0 * models[a]["trust"])
+                models[a]["cuts"] = models[a].get("cuts", []) + cuts[a]
+                sets[a] = g
+            else:  # the linear model does not hold that far: the set keeps its reach
+                sets[a] = (sets[a][0], sets[a][1], False)
+    return [q for _, q, _ in sets]
+
+
+def _cut(sample: tuple, cuts: list) -> tuple:
+    """A set's samples (:func:`_sample_set`) within the half-spaces ``cuts`` [(quantity column,
+    side, limit)]: side -1 keeps the quantity at or above the limit, +1 at or below (a quantity
+    is linear on the set, so the cut set is convex and the kept samples uniform on it)."""
+    X, q, bound = sample
+    keep = np.ones(len(q), bool)
+    for c, side, limit in cuts:
+        keep &= (q[:, c] >= limit - 1e-12) if side < 0 else (q[:, c] <= limit + 1e-12)
+    return X[keep], q[keep], bound
+
+
+def _sample_set(m: dict, rng) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Hit-and-run on one draw's local set (:func:`_local`'s linear model ``m``, its intents
+    within ``m["trust"]`` of the draw): (the samples' steps from the draw (LOCAL_SAMPLES, nd),
+    their quantities (LOCAL_SAMPLES, 3 n + 1), whether the trust region bounds the set: a sample
+    within 2 % of the trust's face where that face lies inside the ranges)."""
+    x0, dim, r0, kinds, J, Jq, free = m["x0"], m["dim"], m["r0"], m["kinds"], m["J"], m["Jq"], m["free"]
+    nd = len(x0)
+    trust = float(m.get("trust", LOCAL_TRUST))
+    tr = np.r_[np.full(dim, trust), np.full(nd - dim, 1.0)]
+    lo_box, hi_box = np.maximum(-x0, -tr), np.minimum(1.0 - x0, tr)
+    x = np.zeros(nd)
+    idx = np.flatnonzero(free)
+    samples = []
+    if len(idx):
+        # directions shaped like the set (the linear model's, the trust region's): a symmetric
+        # law of directions keeps hit-and-run uniform on the set, and a long thin set mixes
+        Ji = J[:, idx]
+        M = Ji.T @ Ji + np.diag(1.0 / np.maximum(hi_box[idx] - lo_box[idx], 1e-6) ** 2)
+        L = np.linalg.cholesky(np.linalg.inv(M))
+        for it in range(LOCAL_BURN + LOCAL_SAMPLES):
+            v = np.zeros(nd)
+            v[idx] = L @ rng.standard_normal(len(idx))
+            lo, hi = _chord(kinds, r0 + J @ x, J @ v)
+            for kb in idx.tolist():  # the ranges and the trust region
+                if abs(v[kb]) > 1e-12:
+                    a1, a2 = (lo_box[kb] - x[kb]) / v[kb], (hi_box[kb] - x[kb]) / v[kb]
+                    lo, hi = max(lo, min(a1, a2)), min(hi, max(a1, a2))
+            if hi > lo:
+                x = x + float(rng.uniform(lo, hi)) * v
+            if it >= LOCAL_BURN:
+                samples.append(x.copy())
+    Xs = np.array(samples) if samples else np.zeros((1, nd))
+    q = m["q"][None] + Xs @ Jq.T
+    for c in range(2, q.shape[1] - 1, 3):
+        q[:, c] = (q[:, c] - 1e-9) % 12.0 + 1e-9
+    near = 0.02 * trust
+    bound = bool(trust < 1.0 and np.any(((Xs[:, :dim] <= -trust + near) & (-trust > -x0[:dim] + 1e-9))
+                                        | ((Xs[:, :dim] >= trust - near) & (trust < 1.0 - x0[:dim] - 1e-9))))
+    return Xs, q, bound
 
 
 def _profile(P: _Problem, S, accepted: list, rng, max_rollouts: int) -> dict:
