@@ -278,6 +278,8 @@ FIRST_CHAR, LAST_CHAR = 32, 126  # printable ASCII
 #: Beyond ASCII, the few signs the readouts write (a crash's delta-V, degrees, tolerances, a fate's
 #: check mark and cross); DejaVu Sans Mono has each. Their glyphs follow ASCII's in the atlas.
 EXTRA_CHARS = "\u00b0\u00b1\u00d7\u00b7\u0394\u2713\u2717\u2192"   # ° ± × · Δ ✓ ✗ →
+#: ... and Latin-1's letters (a user's body named "würfel" or "pièce" lost its "ü" and "è").
+EXTRA_CHARS += "".join(chr(k) for k in range(0xC0, 0x100) if chr(k) not in EXTRA_CHARS)
 ATLAS_COLS = 16
 
 
