@@ -53,3 +53,18 @@ def test_a_motion_missed_at_h_is_not_said_to_miss_the_ladder(tmp_path, capsys):
                  "--max-rollouts", "16"]) == 1
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert "not met (cost" in err and "h/2" not in err, err
+
+
+def test_the_fates_example_in_formats_md_is_a_good_fates_file(tmp_path):
+    """docs/formats.md's example is what a user copies first: it must pass the fates file's checks."""
+    import re
+    from pathlib import Path
+
+    from nbst.scene.fates import parse_fates
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "formats.md").read_text()
+    section = text.split("## Fates file (JSON)", 1)[1].split("\n## ", 1)[0]
+    block = re.search(r"```json\n(.*?)```", section, re.S)
+    assert block, "no JSON example in the fates section"
+    f = parse_fates(json.loads(block.group(1)), "formats.md", folder=tmp_path)
+    assert f.fates[0].asks() == ["rest_in", "through", "never_hits", "at_rest"]
