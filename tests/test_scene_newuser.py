@@ -68,3 +68,10 @@ def test_the_fates_example_in_formats_md_is_a_good_fates_file(tmp_path):
     assert block, "no JSON example in the fates section"
     f = parse_fates(json.loads(block.group(1)), "formats.md", folder=tmp_path)
     assert f.fates[0].asks() == ["rest_in", "through", "never_hits", "at_rest"]
+
+
+def test_a_misspelt_built_in_is_told_its_name(capsys):
+    """`nbst scene check snake-eye` said only "snake-eye: no such file"."""
+    assert main(["scene", "check", "snake-eye"]) == 2
+    err = capsys.readouterr().err
+    assert "did you mean 'snake-eyes'" in err and len(err.strip().splitlines()) == 1, err
