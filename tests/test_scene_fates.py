@@ -89,6 +89,9 @@ BAD = [
     (_bad(fates__ball__rest=True), "fates.ball.rest", "unknown key"),
     (_bad(noise={"ball": {"linvel": -1}}), "noise.ball.linvel", ">= 0"),
     (_bad(noise={"cube": {"linvel": 1}}), "noise.cube", "unknown key"),
+    # an empty list asks nothing (as an empty "through" or "at", refused); a name both hit and never hit
+    (_bad(fates__ball__hits=[]), "fates.ball.hits", "non-empty list"),
+    (_bad(fates__ball__hits=["post"]), "fates.ball.never_hits", "'post' is in hits too"),
     # noise on a part the search does not choose would be silently ignored: refused by name
     (_bad(noise={"ball": {"pos": 0.01}}), "noise.ball.pos", "chooses no pos"),
     # what the file is comes first: another version, or another of nbst's files, is told so

@@ -336,8 +336,8 @@ def _region(src: _Src, x: Any, field: str) -> Region:
 
 
 def _names(src: _Src, x: Any, field: str) -> tuple[str, ...]:
-    if not isinstance(x, list) or not all(isinstance(n, str) and n for n in x):
-        raise src.fail(field, "must be a list of body or geom names")
+    if not isinstance(x, list) or not x or not all(isinstance(n, str) and n for n in x):
+        raise src.fail(field, "must be a non-empty list of body or geom names")
     if len(set(x)) != len(x):
         raise src.fail(field, "names a body or geom twice")
     return tuple(x)
@@ -378,10 +378,12 @@ def _fate(src: _Src, body: str, x: Any) -> Fate:
             raise src.fail(f"{f}.up.within_deg", f"must be in (0, 180], got {x['up']['within_deg']!r}")
         u = axis / n
         up = ((float(u[0]), float(u[1]), float(u[2])), d)
+    hits = _names(src, x["hits"], f"{f}.hits") if "hits" in x else ()
+    never = _names(src, x["never_hits"], f"{f}.never_hits") if "never_hits" in x else ()
+    if both := [n for n in never if n in hits]:
+        raise src.fail(f"{f}.never_hits", f"{both[0]!r} is in hits too: no motion can both touch it and not")
     return Fate(body=body, rest_in=_region(src, x["rest_in"], f"{f}.rest_in") if "rest_in" in x else None,
-                at=tuple(at), through=through, up=up,
-                hits=_names(src, x["hits"], f"{f}.hits") if "hits" in x else (),
-                never_hits=_names(src, x["never_hits"], f"{f}.never_hits") if "never_hits" in x else (),
+                at=tuple(at), through=through, up=up, hits=hits, never_hits=never,
                 at_rest=_flag(src, x["at_rest"], f"{f}.at_rest") if "at_rest" in x else False,
                 still=_flag(src, x["still"], f"{f}.still") if "still" in x else False)
 
