@@ -75,3 +75,25 @@ def test_a_misspelt_built_in_is_told_its_name(capsys):
     assert main(["scene", "check", "snake-eye"]) == 2
     err = capsys.readouterr().err
     assert "did you mean 'snake-eyes'" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_check_notes_a_touch_already_there_at_the_start(tmp_path, capsys):
+    """A bead resting on the table it must never hit can not meet never_hits whatever the search
+    chooses: 3,000 rollouts ran before the verdict said so; `nbst scene check` now notes it up front
+    (and a hits name touched from the start, whose first touch is then at 0 s)."""
+    xml = BALL.replace('pos="0 0 0.3"', 'pos="0 0 0.05"').replace(
+        "</worldbody>", '<body name="post" pos="1 0 0.2"><geom type="box" size="0.05 0.05 0.2"/></body></worldbody>')
+    (tmp_path / "far.xml").write_text(xml)
+    doc = {**FAR, "fates": {"ball": {"never_hits": ["floor"], "hits": ["post"]}}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
+    out = capsys.readouterr().out
+    assert "note: ball already touches floor at the start" in out and "can not be met" in out, out
+    assert "post" not in out.split("note:", 1)[1]          # the post is 1 m away: no note of it
+    doc["fates"] = {"ball": {"hits": ["floor"]}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
+    assert "its first touch of floor is at 0 s" in capsys.readouterr().out
+    (tmp_path / "far.xml").write_text(BALL)                # 25 cm up: nothing noted
+    assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
+    assert "note:" not in capsys.readouterr().out

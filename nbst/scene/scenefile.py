@@ -22,7 +22,7 @@ from nbst.files import FileRefused, read_regular
 from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
                               read_fates_json)
 
-__all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates"]
+__all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "start_touches"]
 
 #: The MJCF elements whose attributes name files, and the <compiler> folder each resolves under.
 _FILE_ATTRS = {"include": (("file",), None), "mesh": (("file",), "meshdir"), "skin": (("file",), "meshdir"),
@@ -181,6 +181,34 @@ def check_against_model(fates: Fates, model: Any) -> None:
                 if n == fa.body or (g >= 0 and model.body(int(model.geom_bodyid[g])).name == fa.body):
                     raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} is the body itself" if n == fa.body
                                    else f"{n!r} is a geom of {fa.body!r} itself: a body never touches its own geoms")
+
+
+def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:
+    """The touches already there at the start (the model's or key's pose, before any control): each
+    ``(body, "hits" | "never_hits", name)`` whose body and name are in contact (distance <= 0, as the
+    rollout counts a touch). A ``never_hits`` among them can not be met by any velocity; a ``hits``
+    one is met at 0 s. Compute only (``nbst scene check`` prints them)."""
+    import mujoco
+
+    d = mujoco.MjData(model)
+    if fates.keyframe is not None:
+        mujoco.mj_resetDataKeyframe(model, d, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe))
+    mujoco.mj_forward(model, d)
+    pairs = set()
+    for c in d.contact[:d.ncon]:
+        if c.dist <= 0:
+            pairs.add((int(c.geom1), int(c.geom2)))
+            pairs.add((int(c.geom2), int(c.geom1)))
+    out = []
+    for fa in fates.fates:
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fa.body)
+        for key, names in (("hits", fa.hits), ("never_hits", fa.never_hits)):
+            for n in names:
+                nb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n)
+                if any(int(model.geom_bodyid[g1]) == b and (int(model.geom_bodyid[g2]) == nb if nb >= 0 else
+                                                            model.geom(g2).name == n) for g1, g2 in pairs):
+                    out.append((fa.body, key, n))
+    return out
 
 
 def load_fates(path: str | os.PathLike, *, scene: str | os.PathLike | None = None) -> tuple[Fates, Any]:

@@ -60,7 +60,7 @@ def cmd_examples(args) -> int:
 
 
 def cmd_check(args) -> int:
-    from nbst.scene.scenefile import load_fates
+    from nbst.scene.scenefile import load_fates, start_touches
 
     f, model = load_fates(args.fates, scene=args.scene)
     steps = int(round(f.duration / model.opt.timestep))
@@ -72,6 +72,10 @@ def cmd_check(args) -> int:
         print(f"  controls {c.body}: {ranges}")
     for fa in f.fates:
         print(f"  fates {fa.body}: {asks_text(fa)}")
+    for body, key, name in start_touches(f, model):
+        print(f"  note: {body} already touches {name} at the start" + (
+            f" (the model's pose, before any control): its never_hits {name} can not be met; start it apart"
+            if key == "never_hits" else f": its first touch of {name} is at 0 s"))
     return 0
 
 
