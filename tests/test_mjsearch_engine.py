@@ -127,6 +127,37 @@ def test_polishing_restarts_leave_a_spent_funnel_for_a_far_fine_point():
     assert e.restart_point()[2] is best  # every fine point is near a start now
 
 
+def test_a_spent_funnel_with_no_other_fine_point_wanders_and_spent_gain_counts_small_gains_as_spent():
+    """``wander``: the best's funnel spent and no other fine point far from every start, the next
+    restart starts from the cheapest point told that is not fine and lies one sigma0 step
+    (sigma0 sqrt(dim)) from every start, at sigma0, and with no member (a point near a start is
+    passed over); without ``wander`` the best is polished again. ``spent_gain`` g: a polishing
+    restart that lowered the best's cost by less than the fraction g counts as spent. No rollout."""
+    X = np.array([[0.5] * 4, [0.51] * 4, [0.55] * 4, [0.9] * 4, [0.1] * 4])
+    for wander in (False, True):
+        e = Engine(4, seed=0, max_rollouts=100, sigma0=0.1, spent=1, hold_distance=0, wander=wander)
+        e.tell(X, [3, 3, 1, 1, 0], [1, 1, 3, 3, 6], [10.0, 11.0, 0.5, 2.0, 1.0],
+               fine=[True, True, False, False, False])
+        assert e.restart_point()[2] is e.best
+        e._spent = 1
+        u, sigma, m = e.restart_point()
+        if wander:  # [0.55]*4 is the cheaper but near the start; [0.9]*4 is far (distance 3 < 6)
+            assert m is None and sigma == pytest.approx(0.1) and np.array_equal(u, X[3])
+            assert np.array_equal(e.restart_point()[0], X[4])  # the next far one (it costs more)
+            assert e.restart_point()[2] is e.best  # every point is near a start now
+        else:
+            assert m is e.best and sigma == pytest.approx(0.1 / 3)
+    for gain, spent in ((0.0, 0), (0.5, 1)):
+        e = Engine(4, seed=0, max_rollouts=100, spent_gain=gain)
+        e.tell(X[:1], [3], [1], [10.0], fine=[True])
+        e._es_state = {"polishing": True, "before": 10.0}
+        e.best.cost = 9.0  # 10 % lower
+        e._end_restart()
+        assert e._spent == spent
+    with pytest.raises(InputError):
+        Engine(4, seed=0, max_rollouts=100, spent_gain=1.5)
+
+
 def test_nothing_to_search_is_one_point_and_bad_settings_are_refused():
     e = Engine(0, seed=1, max_rollouts=10)
     U = e.ask()

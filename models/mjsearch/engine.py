@@ -56,7 +56,11 @@ What the engine does with them, in a fixed cycle:
      the best is farther than ``hold_distance`` (a best that near is polished where it is: the
      crash's met-but-fragile trial), from the cheapest other fine point at least one ``sigma0``
      step (``sigma0 sqrt(dim)``) from every polishing start so far (another funnel), at
-     ``sigma0``;
+     ``sigma0``; with none and ``wander``, from the cheapest point told that is not fine and
+     lies that far from every polishing start (a new funnel is looked for), at ``sigma0``.
+     With ``spent_gain`` g, a polishing restart counts as spent unless it lowered the best's
+     cost below (1 - g) times what it was (g = 0: any lowering is progress; g = 1: only a
+     solution is);
    * else ``schedule[k]`` in turn, each ``(source, factor)``: source ``"best"`` (the best
      point) or ``"cell"`` (the elite, lowest (distance, cost), of the archive's cell nearest
      the goal and not a start yet; once every cell has been one, the cycle begins again),
@@ -252,8 +256,9 @@ class Engine:
         population, per_signature: the GA's limits.
         cma: CMA-ES restarts (pycma) in each cycle.
         popsize: the CMA-ES population (default ``batch``).
-        sigma0, stall, schedule, polish, spent, right_kept, hold_distance: the restarts
-            (module docstring).
+        sigma0, stall, schedule, polish, spent, right_kept, hold_distance, spent_gain, wander:
+            the restarts (module docstring; ``spent_gain`` 0 and ``wander`` False: a spent
+            funnel with no other fine point is polished again).
         explore_between: uniform points after each restart.
         rank: ``rank(cell) -> float``: how far a cell is from the goal (lower first), or None.
         done: ``done(engine) -> bool``: the search is over (default: the best's distance is 0).
@@ -281,7 +286,7 @@ class Engine:
                  per_signature: int = PER_SIGNATURE, cma: bool = True, popsize: int | None = None,
                  sigma0: float = SIGMA0, stall: int = STALL, schedule: Sequence[tuple[str, float]] = SCHEDULE,
                  polish: Sequence[float] = POLISH, spent: int = SPENT, right_kept: int = RIGHT_KEPT,
-                 hold_distance: int = 1, explore_between: int = 0,
+                 hold_distance: int = 1, spent_gain: float = 0.0, wander: bool = False, explore_between: int = 0,
                  rank: Callable[[Hashable], float] | None = None,
                  done: Callable[[Engine], bool] | None = None, tournament: int = 1, cma_by_key: bool = False):
         if isinstance(max_rollouts, bool) or not isinstance(max_rollouts, (int, np.integer)) or max_rollouts < 1:
@@ -313,6 +318,9 @@ class Engine:
         self.sigma0, self.stall = float(sigma0), int(stall)
         self.schedule, self.polish = [(s, float(f)) for s, f in schedule], [float(f) for f in polish]
         self.spent_max, self.right_kept, self.hold_distance = int(spent), int(right_kept), int(hold_distance)
+        if not 0.0 <= float(spent_gain) <= 1.0:
+            raise InputError(f"spent_gain must be in [0, 1], got {spent_gain!r}")
+        self.spent_gain, self.wander = float(spent_gain), bool(wander)
         self.explore_between = int(explore_between)
         self.rank, self.done = rank, done
         self.tournament = max(1, int(tournament))
@@ -328,6 +336,7 @@ class Engine:
         self.order: dict[Hashable, int] = {}          # cell -> discovery index
         self.history: list[tuple[int, int, float]] = []
         self.right: list[Member] = []                 # fine points (the cheapest right_kept)
+        self.wrong: list[tuple[tuple, np.ndarray]] = []  # with wander: (key, unit point) of every point not fine
         self._starts: list[np.ndarray] = []           # polishing restarts' starts
         self._spent = 0
         self._polishes = 0
@@ -556,6 +565,13 @@ class Engine:
                        if all(np.linalg.norm(m.u - p) >= spread for p in self._starts)]
                 if far:
                     start, sigma = far[0], self.sigma0
+                elif self.wander:  # no other funnel known: look for one from the cheapest point far from them
+                    out = [(k, u) for k, u in self.wrong if all(np.linalg.norm(u - p) >= spread for p in self._starts)]
+                    if out:
+                        u = min(out, key=lambda t: t[0])[1]
+                        self._starts.append(u)
+                        self._polishes += 1
+                        return u, self.sigma0, None
             assert start is not None
             self._starts.append(start.u)
             self._polishes += 1
@@ -593,7 +609,8 @@ class Engine:
     def _end_restart(self) -> None:
         st = self._es_state
         if st.get("polishing") and self.best is not None:
-            self._spent = 0 if self.best.cost < st["before"] - 1e-9 else self._spent + 1
+            lowered = self.best.cost < (1.0 - self.spent_gain) * st["before"] - 1e-9 if self.spent_gain < 1.0 else False
+            self._spent = 0 if lowered else self._spent + 1
         self._es = None
         self._phase = "between"
         self._between_left = self.explore_between
@@ -650,6 +667,8 @@ class Engine:
                 self.archive[c] = m
             if m.fine:
                 self.right.append(m)
+            elif self.wander:
+                self.wrong.append((m.key, m.u))
             if self.best is None or m.key < self.best.key:
                 self.best = m
         self.rollouts += spent

@@ -21,9 +21,12 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
   trials, then the engine's CMA-ES restarts (population :data:`ONE_BODY_POPSIZE`) from the best
   trial, each generation ranked by (distance, cost) (the engine's ``cma_by_key``); a trial that
   meets every fate at h is *fine* (only the ladder is left): restarts then polish the best, and
-  once three in a row leave its cost as it was, start from the cheapest other such trial in
-  another funnel (the engine's polishing, ``hold_distance=0``: a best met at h but not kept on
-  the ladder is not polished for ever);
+  once three in a row leave it not kept on the ladder (:data:`ONE_BODY_SPENT_GAIN`: a lower
+  graded cost of its rungs is not progress), start from the cheapest other such trial in
+  another funnel, or, with none, from the cheapest trial not met at h that lies one step
+  from every polishing start (a new funnel looked for; the engine's polishing,
+  ``hold_distance=0``, ``wander``: a best met at h but not kept on the ladder is not polished
+  for ever);
 * **fixed coordinates** (a range of one value, as a rolling ball's vertical speed ``[0, 0]``) are
   not searched: the engine's cube has one dimension per live coordinate;
 * the engine's **distance** of a trial is 3 per unmet bit plus, with a ladder (finer timesteps,
@@ -61,7 +64,8 @@ from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
 from nbst.scene.rollout import SceneRollout, SceneSim
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "CREEP",
-           "LADDER_PENALTY", "LADDER_FAR", "ONE_BODY_EXPLORE", "ONE_BODY_POPSIZE", "SceneProgress",
+           "LADDER_PENALTY", "LADDER_FAR", "ONE_BODY_EXPLORE", "ONE_BODY_POPSIZE", "ONE_BODY_SPENT_GAIN",
+           "SceneProgress",
            "SceneSearchResult", "signature_search", "noisy_probability",
            "distance_of", "ladder_check"]
 
@@ -86,6 +90,10 @@ CREEP = (0.01, 0.04, 0.15)
 #: One controlled body (one block: crossover has nothing to swap): exploring trials before the
 #: engine's CMA-ES restarts, and their population.
 ONE_BODY_EXPLORE, ONE_BODY_POPSIZE = 16, 12
+#: One controlled body: a polishing restart that does not make the best hold on the ladder counts
+#: as spent (the engine's ``spent_gain``: 1, only a solution is progress; the rungs' graded costs
+#: fall by a few percent from restart to restart without a trial that holds).
+ONE_BODY_SPENT_GAIN = 1.0
 
 
 @dataclass(frozen=True)
@@ -323,7 +331,8 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
                                    ga_batches=1, ga_fine=1, cma=False)
     else:  # one controlled body: nothing to cross over; CMA-ES restarts after one exploring batch or two
         how = dict(explore=ONE_BODY_EXPLORE, ga_batches=0, cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True,
-                   hold_distance=0)  # a trial met at h but not kept on the ladder: polished, then other funnels
+                   hold_distance=0,  # a trial met at h but not kept on the ladder: polished, then other funnels
+                   spent_gain=ONE_BODY_SPENT_GAIN, wander=True)  # ... and new funnels looked for
     eng = Engine(len(S.live), seed=rng, max_rollouts=max_rollouts, blocks=blocks, bits=S.bit, batch=BATCH, init=S.init,
                  moves={"directed": S.directed}, creep=CREEP, prefer_unmet=True, population=POPULATION,
                  per_signature=PER_SIGNATURE, done=S.done, tournament=2, **how)
