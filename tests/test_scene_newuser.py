@@ -97,3 +97,21 @@ def test_check_notes_a_touch_already_there_at_the_start(tmp_path, capsys):
     (tmp_path / "far.xml").write_text(BALL)                # 25 cm up: nothing noted
     assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
     assert "note:" not in capsys.readouterr().out
+
+
+def test_replay_says_when_the_fates_file_changed_since_the_solve(tmp_path, capsys):
+    """A solution names its fates file, which replay, render and validate read again: a user who moved
+    a region after solving saw 'not met' for a motion solve had called met, with no word of why."""
+    (tmp_path / "far.xml").write_text(BALL)
+    doc = {**FAR, "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.5}}}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    out = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(tmp_path / "f.json"), "-o", str(out), "--seed", "1", "--jobs", "1",
+                 "--max-rollouts", "40", "--no-ladder", "-q"]) == 0
+    assert main(["scene", "replay", str(out)]) == 0
+    assert "changed" not in capsys.readouterr().out
+    doc["fates"]["ball"]["rest_in"]["center"] = [3, 0, 0.05]        # moved after the solve
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    assert main(["scene", "replay", str(out)]) == 0                   # the motion is the same, bit for bit
+    said = capsys.readouterr().out
+    assert "the fates file changed since it was solved" in said and "not met" in said, said

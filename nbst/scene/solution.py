@@ -137,6 +137,7 @@ def solution_dict(res: SceneResult) -> dict:
         "format": SOLUTION_FORMAT, "version": SOLUTION_VERSION,
         "fates": f.source,
         "fates_file": str(src.resolve()) if src.is_file() else None,
+        "fates_sha256": file_sha256(src) if src.is_file() else None,
         "scene": str(f.scene.resolve()),
         "scene_sha256": file_sha256(f.scene),
         "keyframe": f.keyframe,
@@ -220,6 +221,8 @@ class SceneReplay:
         judgement: the fates judged again on the replayed motion.
         qpos: (nq,) the replayed final qpos; qvel: (nv,) its qvel.
         scene_changed: the scene's SHA-256 differs from the file's.
+        fates_changed: the fates file's SHA-256 differs from the one it was solved with (the fates
+            are read again from that file: edited since, they judge the motion anew).
     """
 
     same: bool
@@ -227,6 +230,7 @@ class SceneReplay:
     qpos: np.ndarray
     qvel: np.ndarray
     scene_changed: bool
+    fates_changed: bool = False
 
 
 def replay_solution(path: str | os.PathLike) -> SceneReplay:
@@ -256,7 +260,10 @@ def replay_solution(path: str | os.PathLike) -> SceneReplay:
     same = (q.tobytes() == qf.tobytes() and v.tobytes() == vf.tobytes()
             and judged.qpos0.tobytes() == q0.tobytes() and judged.qvel0.tobytes() == v0.tobytes())
     changed = doc.get("scene_sha256") not in (None, file_sha256(fates.scene))
-    return SceneReplay(same=same, judgement=judged.judgement, qpos=q, qvel=v, scene_changed=changed)
+    fates_changed = (doc.get("fates_sha256") is not None and doc.get("fates_file") is not None
+                     and Path(fates_path).is_file() and doc["fates_sha256"] != file_sha256(Path(fates_path)))
+    return SceneReplay(same=same, judgement=judged.judgement, qpos=q, qvel=v, scene_changed=changed,
+                       fates_changed=fates_changed)
 
 
 def ladder_solution(path: str | os.PathLike, *, divisors: tuple[int, ...] = (1, 2, 4)) -> Ladder:

@@ -142,7 +142,8 @@ def cmd_replay(args) -> int:
     lad = ladder_solution(args.solution) if args.ladder else None
     ok = r.same and (lad is None or lad.holds)
     if args.json:
-        out = {"identical": r.same, "scene_changed": r.scene_changed, "met": d["met"], "signature": d["signature"],
+        out = {"identical": r.same, "scene_changed": r.scene_changed, "fates_changed": r.fates_changed,
+               "met": d["met"], "signature": d["signature"],
                "bodies": d["bodies"]}
         if lad is not None:
             out["ladder"] = {"holds": lad.holds, "rungs": [{"timestep": h, "met": o, "signature":
@@ -152,6 +153,8 @@ def cmd_replay(args) -> int:
         print_json(out)
         return 0 if ok else 1
     changed = "; the scene file changed since it was solved" if r.scene_changed else ""
+    if r.fates_changed:
+        changed += "; the fates file changed since it was solved (judged here by the file as it is now)"
     print(f"{args.solution}: {'reproduced bit for bit' if r.same else 'DIFFERS'} (plain mj_step loop); "
           f"{'met' if d['met'] else 'not met'}, signature {d['signature']}{changed}")
     for b in r.judgement.bodies:
