@@ -156,6 +156,9 @@ def prepare_output(path, *, directory: bool = False, option: str = "-o", inputs=
         folder = p
         for name in files:
             refuse_not_a_file(p / name, option=option)
+    if directory and p.is_symlink() and not p.exists():
+        raise OutputError(f"{option} {path}: is a symbolic link to nothing (to {os.readlink(p)}); give a folder, "
+                          f"or a link to one")
     try:
         if p.exists() and directory and not p.is_dir():
             raise OutputError(f"{option} {path}: is {_special_kind(p) or 'a file'}; expected a folder")

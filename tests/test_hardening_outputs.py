@@ -302,3 +302,18 @@ def test_a_full_disk_while_encoding_keeps_the_previous_video(tmp_path, ext):
     assert "previous file is unchanged" in err[0]
     assert out.read_bytes() == old
     assert not [f.name for f in tmp_path.iterdir() if ".partial-" in f.name]
+
+
+def test_out_dir_may_be_a_link_to_a_folder_but_not_to_nothing(tmp_path):
+    """An --out-dir that is a link to a folder is a folder on the way (written in the folder it
+    leads to, as docs/formats.md says); a link to nothing is refused by name, not as 'File exists'."""
+    from nbst.errors import OutputError
+    from nbst.outputs import prepare_output
+    real = tmp_path / "real"
+    real.mkdir()
+    (tmp_path / "good").symlink_to(real)
+    assert prepare_output(tmp_path / "good", directory=True, option="--out-dir").samefile(real)
+    (tmp_path / "bad").symlink_to(tmp_path / "gone")
+    with pytest.raises(OutputError, match=r"--out-dir .*bad: is a symbolic link to nothing"):
+        prepare_output(tmp_path / "bad", directory=True, option="--out-dir")
+    assert not (tmp_path / "gone").exists()
