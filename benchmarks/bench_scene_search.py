@@ -7,6 +7,10 @@ seeds solved and the median (a miss counted as the budget). Asserts nothing (not
     python benchmarks/bench_scene_search.py billiards 11-20                 # the search as it is
     python benchmarks/bench_scene_search.py billiards 11-20 --variant before
     python benchmarks/bench_scene_search.py egg-in-cup 11-20 --variant before+pop8
+    python benchmarks/bench_scene_search.py dominoes 1-1 --uniform 100   # how often a uniform trial holds
+
+``--uniform N`` instead: N uniform trials (``numpy.random.default_rng(1)``) and the middle of the
+ranges, each met at h rolled out at h/2 and h/4 (``ladder_check``): how many are met, and kept.
 
 Variants (joined with ``+``), each patched onto the module for the run:
 
@@ -86,13 +90,34 @@ VARIANTS = {
 }
 
 
+def uniform(name: str, n: int) -> None:
+    f, model = load_fates(name)
+    finer = []
+    for k in (2, 4):
+        mk = copy.copy(model)
+        mk.opt.timestep = model.opt.timestep / k
+        finer.append(SceneSim(f, mk))
+    with quiet_mujoco_warnings(), SceneSim(f, model) as sim:
+        sc = S._Scene(sim, 1, ())
+        U = np.vstack([np.random.default_rng(1).random((n, len(sc.live))), np.full((1, len(sc.live)), 0.5)])
+        outs = sim.run(np.array([sc.x_of(u) for u in U]))
+        met = [r.judgement.met and not r.warnings for r in outs]
+        held = [m and S.ladder_check(r.x, tuple(finer))[0] == 0 for m, r in zip(met, outs)]
+    print(f"{name}: {n} uniform trials: met at h {sum(met[:n])}, kept at h/2 and h/4 {sum(held[:n])}; "
+          f"the middle of the ranges: met at h {met[n]}, kept {held[n]}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], allow_abbrev=False)
     ap.add_argument("scene")
     ap.add_argument("seeds", help="e.g. 11-20")
     ap.add_argument("--variant", default="", help=f"'+'-joined, of: {', '.join(VARIANTS)}")
     ap.add_argument("--budget", type=int, default=2000)
+    ap.add_argument("--uniform", type=int, default=0, help="N uniform trials instead of searches")
     a = ap.parse_args()
+    if a.uniform:
+        uniform(a.scene, a.uniform)
+        return
     lo, hi = map(int, a.seeds.split("-"))
     for v in filter(None, a.variant.split("+")):
         VARIANTS[v]()
