@@ -187,9 +187,9 @@ def judge_body(fate: Fate, times: np.ndarray, path: np.ndarray, quat: np.ndarray
         hit = [n for n in fate.never_hits if n in touches]
         # a touch at the first step: the scene starts with the two in contact (a body resting on the floor it
         # must never hit), which no velocity can undo; said so, as it is easily missed
-        said = ", ".join(n + (" (already touching at the start)" if touches[n] <= times[0]
-                              else "") for n in hit)
-        out.append(FateVerdict("never_hits", not hit, float(len(hit)), "touched " + (said or "none of them")))
+        named = ", ".join(n + (" (already touching at the start)" if touches[n] <= times[0]
+                               else "") for n in hit)
+        out.append(FateVerdict("never_hits", not hit, float(len(hit)), "touched " + (named or "none of them")))
     if fate.at_rest:
         v, w = float(np.linalg.norm(linvel)), float(np.linalg.norm(angvel))
         met = v <= AT_REST_SPEED and w <= AT_REST_SPIN
