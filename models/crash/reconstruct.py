@@ -71,7 +71,8 @@ again on a scene whose XML holds that draw's unknowns, so that it replays bit fo
 Compute only.
 
 Length: one method in one place: the runner with per-simulation physics, the momentum screen,
-the pilot and the draws on the engine, the intervals and their identifiability verdicts.
+the pilot and the draws on the engine, the intervals and their identifiability verdicts (the
+local sets' geometry, which needs no rollout, is :mod:`.localsets`).
 """
 from __future__ import annotations
 
@@ -89,7 +90,7 @@ from nbst.models.crash import evidence as ev_mod
 from nbst.models.crash import scene as scene_mod
 from nbst.models.crash import search as search_mod
 from nbst.models.crash import crush as crush_mod
-from nbst.models.crash.outcome import _wrap
+from nbst.models.crash.localsets import LOCAL_BURN, LOCAL_SAMPLES, LOCAL_TRUST, cut, residual, sample_set
 from nbst.models.crash.run import BATCH, CrashRollouts, CrashRunner, scene_vehicles
 from nbst.models.crash.script import Range
 from nbst.models.crash.space import space_of
@@ -133,7 +134,7 @@ PROFILE_ROLLOUTS, PROFILE_SHARE = 40, 0.1
 #: set where every piece of the stated evidence stays within its tolerance, in that linear model
 #: and within LOCAL_TRUST of the draw, sampled by LOCAL_SAMPLES steps of hit-and-run after
 #: LOCAL_BURN; LOCAL_SHARE of the budget is kept for the differences.
-LOCAL_SHARE, LOCAL_DRAWS, LOCAL_STEP, LOCAL_TRUST, LOCAL_SAMPLES, LOCAL_BURN = 0.08, 16, 0.03, 0.15, 400, 100
+LOCAL_SHARE, LOCAL_DRAWS, LOCAL_STEP = 0.08, 16, 0.03  # (LOCAL_TRUST, LOCAL_SAMPLES, LOCAL_BURN: .localsets)
 #: The local sets' reach, checked on the engine (:func:`_local`): a set that its trust region
 #: bounds has its extreme samples (each vehicle's lowest and highest impact speed) rolled out;
 #: when every one meets the stated evidence the trust doubles (up to 1: the ranges) and the set
@@ -951,54 +952,6 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
     return rec
 
 
-def _residual(ps: list, o, d: np.ndarray) -> tuple[np.ndarray, list]:
-    """The evidence's signed residuals of one rollout in units of the tolerances, and their
-    constraints: a position (rest, impact) two components within the unit disc, a heading one
-    within [-1, 1]; any other piece its distance (at most 1: a half-space once linearised)."""
-    r: list = []
-    kinds: list = []
-    for j, p in enumerate(ps):
-        vo = o.vehicles[p.vehicle] if p.vehicle is not None else None
-        if p.kind in ("rest", "impact_at") and vo is not None:
-            x = vo.rest if p.kind == "rest" else vo.impact_pos
-            if np.all(np.isfinite(x[:2])):
-                kinds.append(("disc", len(r)))
-                r += [(x[0] - p.value[0]) / p.tol, (x[1] - p.value[1]) / p.tol]
-                continue
-        if p.kind == "heading" and vo is not None:
-            kinds.append(("slab", len(r)))
-            r.append(float(_wrap(vo.rest[2] - p.value[0])) / p.tol)
-            continue
-        kinds.append(("half", len(r)))
-        r.append(float(d[j]))
-    return np.array(r), kinds
-
-
-def _chord(kinds: list, c: np.ndarray, w: np.ndarray) -> tuple[float, float]:
-    """The t with every constraint of residuals c + t w met (an interval: the set is convex)."""
-    lo, hi = -math.inf, math.inf
-    for kind, j in kinds:
-        if kind == "disc":
-            cc, ww = c[j:j + 2], w[j:j + 2]
-            A, B, C = float(ww @ ww), float(cc @ ww), float(cc @ cc) - 1.0
-            if A < 1e-12:
-                continue
-            disc = B * B - A * C
-            if disc < 0:
-                return 0.0, 0.0
-            r = math.sqrt(disc)
-            lo, hi = max(lo, (-B - r) / A), min(hi, (-B + r) / A)
-        elif abs(w[j]) > 1e-12:
-            if kind == "slab":
-                a1, a2 = (-1.0 - c[j]) / w[j], (1.0 - c[j]) / w[j]
-                lo, hi = max(lo, min(a1, a2)), min(hi, max(a1, a2))
-            elif w[j] > 0:
-                hi = min(hi, (1.0 - c[j]) / w[j])
-            else:
-                lo = max(lo, (1.0 - c[j]) / w[j])
-    return lo, hi
-
-
 def _phys_unit(case: ev_mod.Case, phys: dict) -> np.ndarray:
     """One rollout's unknowns (``_Told.phys``) as unit coordinates of :func:`phys_coords`."""
     out = []
@@ -1013,7 +966,7 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
     spread in draw order), each linearised by forward differences of :data:`LOCAL_STEP` in every
     coordinate of the intents and of the unknowns (:func:`phys_coords`, as unit coordinates of
     their ranges), one rollout each, the draws' in shared batches: the evidence's signed
-    residuals (:func:`_residual`) and the quantities (impact speed, delta-V, PDOF, closing speed)
+    residuals (:func:`residual`) and the quantities (impact speed, delta-V, PDOF, closing speed)
     as linear functions about the draw. In that model the set of intents and unknowns that meets
     every piece of the stated evidence within its tolerance (within the ranges, the intents within
     :data:`LOCAL_TRUST` of the draw) is convex; :data:`LOCAL_SAMPLES` points of a hit-and-run
@@ -1047,13 +1000,13 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
                       [P.ps] * len(X[j:j + BATCH]))
     models = []
     for a, (t, x0, h) in enumerate(zip(base, x0s, steps)):
-        r0, kinds = _residual(P.ps, t.o, t.dist)
+        r0, kinds = residual(P.ps, t.o, t.dist)
         J = np.zeros((len(r0), nd))
         Jq = np.zeros((len(t.q), nd))
         free = np.ones(nd, bool)
         for k in range(nd):
             tk = told[a * nd + k][0]
-            rk, kk = _residual(P.ps, tk.o, tk.dist)
+            rk, kk = residual(P.ps, tk.o, tk.dist)
             if (any(float(tk.dist[j]) != 0.0 for j in P.hit_rows) or [x[0] for x in kk] != [x[0] for x in kinds]
                     or not np.all(np.isfinite(rk))):
                 free[k] = False
@@ -1065,12 +1018,12 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
             Jq[:, k] = np.where(np.isfinite(dq), dq, 0.0) / h[k]
         models.append({"q": t.q, "x0": x0, "dim": dim, "r0": r0, "kinds": kinds, "J": J, "Jq": Jq, "free": free,
                        "trust": LOCAL_TRUST})
-    sets = [_sample_set(m, rng) for m in models]
+    sets = [sample_set(m, rng) for m in models]
     for _ in range(LOCAL_GROW):  # the reach: a set its trust region bounds grows where its ends meet the evidence
         grow = {}
         for a, (m, (_, _, bound)) in enumerate(zip(models, sets)):
             if bound:
-                g = _cut(_sample_set({**m, "trust": min(1.0, 2.0 * m["trust"])}, rng), m.get("cuts", []))
+                g = cut(sample_set({**m, "trust": min(1.0, 2.0 * m["trust"])}, rng), m.get("cuts", []))
                 if len(g[1]) >= LOCAL_SAMPLES // 4:
                     grow[a] = g
         checks = []  # (draw, quantity column, side, point)
@@ -1098,7 +1051,7 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
             print("reach", [(a, c, side, models[a]["trust"], round(float(np.max(tc.dist)), 2))
                             for (a, c, side, _), (tc, _) in zip(checks, told)], file=sys.stderr)
         for a, g in grow.items():
-            g = _cut(g, cuts[a])
+            g = cut(g, cuts[a])
             if confirmed[a] and len(g[1]) >= LOCAL_SAMPLES // 4:
                 models[a]["trust"] = min(1.0, 2.0 * models[a]["trust"])
                 models[a]["cuts"] = models[a].get("cuts", []) + cuts[a]
@@ -1106,58 +1059,6 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
             else:  # the linear model does not hold that far: the set keeps its reach
                 sets[a] = (sets[a][0], sets[a][1], False)
     return [q for _, q, _ in sets]
-
-
-def _cut(sample: tuple, cuts: list) -> tuple:
-    """A set's samples (:func:`_sample_set`) within the half-spaces ``cuts`` [(quantity column,
-    side, limit)]: side -1 keeps the quantity at or above the limit, +1 at or below (a quantity
-    is linear on the set, so the cut set is convex and the kept samples uniform on it)."""
-    X, q, bound = sample
-    keep = np.ones(len(q), bool)
-    for c, side, limit in cuts:
-        keep &= (q[:, c] >= limit - 1e-12) if side < 0 else (q[:, c] <= limit + 1e-12)
-    return X[keep], q[keep], bound
-
-
-def _sample_set(m: dict, rng) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Hit-and-run on one draw's local set (:func:`_local`'s linear model ``m``, its intents
-    within ``m["trust"]`` of the draw): (the samples' steps from the draw (LOCAL_SAMPLES, nd),
-    their quantities (LOCAL_SAMPLES, 3 n + 1), whether the trust region bounds the set: a sample
-    within 2 % of the trust's face where that face lies inside the ranges)."""
-    x0, dim, r0, kinds, J, Jq, free = m["x0"], m["dim"], m["r0"], m["kinds"], m["J"], m["Jq"], m["free"]
-    nd = len(x0)
-    trust = float(m.get("trust", LOCAL_TRUST))
-    tr = np.r_[np.full(dim, trust), np.full(nd - dim, 1.0)]
-    lo_box, hi_box = np.maximum(-x0, -tr), np.minimum(1.0 - x0, tr)
-    x = np.zeros(nd)
-    idx = np.flatnonzero(free)
-    samples = []
-    if len(idx):
-        # directions shaped like the set (the linear model's, the trust region's): a symmetric
-        # law of directions keeps hit-and-run uniform on the set, and a long thin set mixes
-        Ji = J[:, idx]
-        M = Ji.T @ Ji + np.diag(1.0 / np.maximum(hi_box[idx] - lo_box[idx], 1e-6) ** 2)
-        L = np.linalg.cholesky(np.linalg.inv(M))
-        for it in range(LOCAL_BURN + LOCAL_SAMPLES):
-            v = np.zeros(nd)
-            v[idx] = L @ rng.standard_normal(len(idx))
-            lo, hi = _chord(kinds, r0 + J @ x, J @ v)
-            for kb in idx.tolist():  # the ranges and the trust region
-                if abs(v[kb]) > 1e-12:
-                    a1, a2 = (lo_box[kb] - x[kb]) / v[kb], (hi_box[kb] - x[kb]) / v[kb]
-                    lo, hi = max(lo, min(a1, a2)), min(hi, max(a1, a2))
-            if hi > lo:
-                x = x + float(rng.uniform(lo, hi)) * v
-            if it >= LOCAL_BURN:
-                samples.append(x.copy())
-    Xs = np.array(samples) if samples else np.zeros((1, nd))
-    q = m["q"][None] + Xs @ Jq.T
-    for c in range(2, q.shape[1] - 1, 3):
-        q[:, c] = (q[:, c] - 1e-9) % 12.0 + 1e-9
-    near = 0.02 * trust
-    bound = bool(trust < 1.0 and np.any(((Xs[:, :dim] <= -trust + near) & (-trust > -x0[:dim] + 1e-9))
-                                        | ((Xs[:, :dim] >= trust - near) & (trust < 1.0 - x0[:dim] - 1e-9))))
-    return Xs, q, bound
 
 
 def _profile(P: _Problem, S, accepted: list, rng, max_rollouts: int) -> dict:
