@@ -115,3 +115,15 @@ def test_replay_says_when_the_fates_file_changed_since_the_solve(tmp_path, capsy
     assert main(["scene", "replay", str(out)]) == 0                   # the motion is the same, bit for bit
     said = capsys.readouterr().out
     assert "the fates file changed since it was solved" in said and "not met" in said, said
+
+
+def test_a_solve_says_when_its_search_is_over_and_the_samples_begin(tmp_path):
+    """--samples' noisy rollouts ran after the search's last batch with nothing said: the bar sat
+    still for seconds. The callback now hears the phase after the search, before the samples."""
+    from nbst.scene.scenefile import load_fates
+    fates, _ = load_fates(str(_far(tmp_path)))
+    seen = []
+    res = scene_api.solve(None, fates, seed=1, max_rollouts=16, jobs=1, samples=4, callback=seen.append)
+    assert res.probability is not None and res.probability.n == 4
+    assert [p.phase for p in seen if p.phase != "search"] == ["P from 4 noisy rollouts"]
+    assert seen[-1].phase != "search" and seen[-1].rollouts == res.rollouts

@@ -106,8 +106,14 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
                              ladder=tuple(finer), callback=callback)
         stopped = r.stopped
         best, held = r.best, r.best_held
+
+        def say(phase: str) -> None:  # the search is over: what comes next, for a progress bar
+            if callback is not None:
+                callback(SceneProgress(r.rollouts, best.cost, best.judgement.to_dict()["signature"], 0, r.signatures,
+                                       phase))
         try:
             if robust is not None and stopped == "met":
+                say(f"robust: up to {robust} noisy rollouts")
                 from nbst.models.mjsearch.robust import Interrupted, maximise
 
                 P: Any = SceneRobustProblem(sim, tuple(finer))  # the maximiser's RobustProblem (credit a float)
@@ -124,8 +130,10 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
                          "start_screen": [mx.start_screen.k, mx.start_screen.n], "screen_seed": mx.screen_seed,
                          **({"ladder": mx.ladder} if mx.ladder else {})}
             elif samples and stopped != "interrupted":
+                say(f"P from {samples} noisy rollouts")
                 p = noisy_probability(sim, best.x, n=samples, seed=s)
             if samples and answers > 1 and stopped != "interrupted":
+                say(f"P of {len(r.answers)} answers from {samples} noisy rollouts each")
                 ps = [p if a is r.best else noisy_probability(sim, a.x, n=samples, seed=s) for a in r.answers]
         except KeyboardInterrupt:
             stopped = "interrupted"

@@ -98,13 +98,16 @@ ONE_BODY_SPENT_GAIN = 1.0
 
 @dataclass(frozen=True)
 class SceneProgress:
-    """Where a search stands: rollouts so far, the best cost and signature, the population."""
+    """Where a search stands: rollouts so far, the best cost and signature, the population, and
+    the phase (``"search"``; after it, what :func:`nbst.scene.solve` does next, in words: the
+    probability's noisy rollouts, the robust maximiser)."""
 
     rollouts: int
     best_cost: float
     best_signature: str
     population: int
     signatures: int
+    phase: str = "search"
 
 
 @dataclass(frozen=True)

@@ -98,6 +98,9 @@ def cmd_solve(args) -> int:
             bar.append(progress_bar(total=args.max_rollouts, unit="rollout", file=sys.stderr, bound=True,
                                     start=command_start(), desc=f"scene {name}"))
         bar[0].update(p.rollouts - bar[0].n)
+        if p.phase != "search":  # the search is over; the bar says what the wait is for
+            bar[0].set_postfix_str(f"search done; {p.phase}", refresh=True)
+            return
         cost = f"{p.best_cost:.3g}" if math.isfinite(p.best_cost) else "inf"
         bar[0].set_postfix_str(f"best cost {cost}, signature {p.best_signature}, {p.signatures} signatures",
                                refresh=False)
