@@ -25,7 +25,7 @@ import numpy as np
 
 from nbst.errors import InputError
 
-__all__ = ["SEED_MAX", "SeedLike", "check_seed", "draw_seed", "resolve_seed", "check_random_state"]
+__all__ = ["SEED_MAX", "SeedLike", "check_seed", "draw_seed", "derived_seed", "resolve_seed", "check_random_state"]
 
 #: The largest seed nbst takes: numpy's SeedSequence and the kernels' int64 state take any seed
 #: from 0 up to this. Every drawn seed lies in the same range.
@@ -62,6 +62,12 @@ def draw_seed() -> int:
         the seed, to be recorded with whatever it drives so the run can be repeated.
     """
     return int(np.random.SeedSequence().generate_state(1, np.uint64)[0] & np.uint64(SEED_MAX))
+
+
+def derived_seed(seed: int, *salt: int) -> int:
+    """A seed in [0, 2^63) derived from ``seed`` and ``salt``: one stream per stage of a search
+    (numpy's ``SeedSequence([seed, *salt])``), the same for the same ``seed`` and ``salt``."""
+    return int(np.random.SeedSequence([int(seed), *salt]).generate_state(1, np.uint64)[0] >> 1)
 
 
 def resolve_seed(seed: object = None, *, what: str = "seed") -> int:

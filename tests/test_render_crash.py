@@ -238,8 +238,10 @@ def test_the_atlas_writes_the_readout_signs(gl):
     t = Text(gl, 20)
     try:
         cw, ch = t.cell
-        for c in "\u2713\u2717\u0394\u00b0\u00b1\u00d7":
+        # the readout's signs, and Latin-1's letters (a user's die named "w\u00fcrfel" was written "w rfel")
+        for c in "\u2713\u2717\u0394\u00b0\u00b1\u00d7" "\u00fc\u00e8\u00f1\u00df\u00c5":
             g = glyph_index(c)
+            assert g is not None, c
             r, k = divmod(g, 16)
             assert t._atlas[r * ch:(r + 1) * ch, k * cw:(k + 1) * cw].max() > 200, c   # ink in its cell
         assert glyph_index(" ") is None and glyph_index("\u2603") is None and glyph_index("A") == ord("A") - 32

@@ -281,19 +281,3 @@ def test_the_framing_holds_a_long_thin_target_tightly():
                       controls=(), fates=(Fate("ball", hits=(name,)),))
         pts = focus_points(motion, fates, m, bodies=False)  # type: ignore[arg-type]
         assert np.allclose(pts.min(axis=0), lo, atol=1e-9) and np.allclose(pts.max(axis=0), hi, atol=1e-9), name
-
-
-def test_the_atlas_writes_a_latin_1_body_name(gl):
-    """A user's die named "würfel" was written "w rfel" in the readout: the atlas had ASCII and a few signs."""
-    from nbst.render.core.shapes import Text, glyph_index
-
-    t = Text(gl, 20)
-    try:
-        cw, ch = t.cell
-        for c in "üèñßÅ":
-            g = glyph_index(c)
-            assert g is not None, c
-            r, k = divmod(g, 16)
-            assert t._atlas[r * ch:(r + 1) * ch, k * cw:(k + 1) * cw].max() > 200, c   # ink in its cell
-    finally:
-        t.release()

@@ -904,8 +904,8 @@ def reconstruct(case, *, seed: int, max_rollouts: int = MAX_ROLLOUTS, draws: int
         pilot_best = min((t for t, _ in pilot_told), key=lambda t: float(np.sum(t.dist ** 2)))
         pilot_used = P.used
         # the OMC draws, DRAW_PARALLEL at a time in shared batches
-        local_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
-        check_end = local_end
+        # the budget's ends, last stage first: the profile probes, the sets' reach checks, the sets, the draws
+        check_end = max_rollouts - int(PROFILE_SHARE * max_rollouts)
         local_end = check_end - int(LOCAL_CHECK_SHARE * max_rollouts)
         draw_end = local_end - int(LOCAL_SHARE * max_rollouts)
         per = max(BATCH // 2, min(DRAW_ROLLOUTS, (draw_end - P.used) // max(1, int(draws))))
@@ -961,6 +961,17 @@ def _phys_unit(case: ev_mod.Case, phys: dict) -> np.ndarray:
     return np.array(out)
 
 
+def _run_points(P: _Problem, X: np.ndarray, dim: int) -> list:
+    """Roll out points of the intents' cube and the unknowns' (X (s, dim + unknowns), unit
+    coordinates) against the stated evidence, :data:`BATCH` at a time: per row (told, distances)."""
+    phys = _phys_values(P.case, X[:, dim:])
+    told: list = []
+    for j in range(0, len(X), BATCH):
+        told += P.run(X[j:j + BATCH, :dim], {key: v[j:j + BATCH] for key, v in phys.items()},
+                      [P.ps] * len(X[j:j + BATCH]))
+    return told
+
+
 def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None = None) -> list:
     """The local sets (:data:`LOCAL_SHARE`): up to :data:`LOCAL_DRAWS` accepted draws (evenly
     spread in draw order), each linearised by forward differences of :data:`LOCAL_STEP` in every
@@ -982,6 +993,7 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
     Returns:
         [(LOCAL_SAMPLES, 3 n + 1) quantities] per draw linearised (empty: none)."""
     case = P.case
+    check_end = end if check_end is None else check_end
     dim, npc = S.dim, len(phys_coords(case))
     nd = dim + npc
     room = max(0, end - P.used)
@@ -993,11 +1005,7 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
     x0s = [np.concatenate([t.u, _phys_unit(case, t.phys)]) for t in base]
     steps = [np.where(x0 + LOCAL_STEP <= 1.0, LOCAL_STEP, -LOCAL_STEP) for x0 in x0s]
     X = np.array([x0 + np.eye(nd)[k] * h[k] for x0, h in zip(x0s, steps) for k in range(nd)])
-    phys = _phys_values(case, X[:, dim:])
-    told = []
-    for j in range(0, len(X), BATCH):
-        told += P.run(X[j:j + BATCH, :dim], {key: v[j:j + BATCH] for key, v in phys.items()},
-                      [P.ps] * len(X[j:j + BATCH]))
+    told = _run_points(P, X, dim)
     models = []
     for a, (t, x0, h) in enumerate(zip(base, x0s, steps)):
         r0, kinds = residual(P.ps, t.o, t.dist)
@@ -1031,14 +1039,9 @@ def _local(P: _Problem, S, accepted: list, rng, end: int, check_end: int | None 
             for c in range(0, q.shape[1] - 1, 3):
                 for side, f in ((-1, np.argmin), (1, np.argmax)):
                     checks.append((a, c, side, models[a]["x0"] + X[int(f(q[:, c]))]))
-        if not checks or len(checks) > (end if check_end is None else check_end) - P.used:
+        if not checks or len(checks) > check_end - P.used:
             break
-        Xc = np.clip(np.array([x for *_, x in checks]), 0.0, 1.0)
-        phys = _phys_values(case, Xc[:, dim:])
-        told = []
-        for j in range(0, len(Xc), BATCH):
-            told += P.run(Xc[j:j + BATCH, :dim], {key: v[j:j + BATCH] for key, v in phys.items()},
-                          [P.ps] * len(Xc[j:j + BATCH]))
+        told = _run_points(P, np.clip(np.array([x for *_, x in checks]), 0.0, 1.0), dim)
         cuts: dict = {a: [] for a in grow}
         confirmed: dict = {a: False for a in grow}
         for (a, c, side, _), (tc, _) in zip(checks, told):

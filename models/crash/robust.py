@@ -33,10 +33,11 @@ from nbst.errors import InputError
 from nbst.models.crash import driver as drv
 from nbst.models.crash.run import BATCH, TIMESTEP_LADDER, CrashRunner
 from nbst.models.crash.script import AFTER_IMPACT, Range
-from nbst.models.crash.slack import derived_seed, soft_climb
+from nbst.models.crash.slack import soft_climb
 from nbst.models.crash.space import CrashSpace
 from nbst.models.mjsearch.ladder import climb
 from nbst.models.mjsearch.probability import Probability, counts, normal_draws, perturb
+from nbst.seeds import derived_seed
 
 __all__ = ["DEFAULT_SAMPLES", "SOLVE_SAMPLES", "DEFAULT_ROBUST_BUDGET", "NOISE", "POPULATION", "RELATIVE",
            "NOISE_KINDS", "DEFAULT_NOISE", "CLIP", "check_noise", "sigma_row", "noisy", "label", "CrashEstimate",

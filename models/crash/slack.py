@@ -18,9 +18,9 @@ import numpy as np
 from nbst.models.crash.outcome import _wrap
 from nbst.models.crash.script import Range
 from nbst.models.mjsearch.engine import evolution_strategy
+from nbst.seeds import derived_seed
 
-__all__ = ["SOFT_COPIES", "SOFT_POP", "SOFT_SIGMA0", "SOFT_TEMP", "SOFT_CONFIRM", "slack", "soft", "soft_climb",
-           "derived_seed"]
+__all__ = ["SOFT_COPIES", "SOFT_POP", "SOFT_SIGMA0", "SOFT_TEMP", "SOFT_CONFIRM", "slack", "soft", "soft_climb"]
 
 #: The soft climb (:func:`soft_climb`, the robust pick's stage after the race): CMA-ES (Hansen 2016, "The CMA
 #: Evolution Strategy: A Tutorial", arXiv:1604.00772) on the mean soft success of SOFT_COPIES common
@@ -102,11 +102,6 @@ def soft(o, script, temp: float = SOFT_TEMP) -> float:
     return float(1.0 / (1.0 + math.exp(-slack(o, script) / temp)))
 
 
-def derived_seed(seed: int, *salt: int) -> int:
-    """A seed in [0, 2^63) derived from ``seed`` and ``salt`` (one stream per stage)."""
-    return int(np.random.SeedSequence([int(seed), *salt]).generate_state(1, np.uint64)[0] >> 1)
-
-
 def soft_climb(P, start: np.ndarray, budget: int, seed: int):
     """CMA-ES from ``start`` on the mean :func:`soft` success of its noisy copies (module
     constants SOFT_*): the moved coordinates in noise sigmas and the after-impact choices as
@@ -142,7 +137,7 @@ def soft_climb(P, start: np.ndarray, budget: int, seed: int):
 
     stds = np.where(choice[free] > 0, 0.5, 1.0)
     es = evolution_strategy(x0[free], SOFT_SIGMA0, popsize=lam, seed=derived_seed(seed, 49) % (2 ** 31 - 1) + 1,
-                      stds=stds)
+                            stds=stds)
     used, gen, best = 0, 0, (-1.0, None)
     while used + K * lam + 3 * C <= budget:
         zs = es.ask()

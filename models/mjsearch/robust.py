@@ -49,6 +49,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from nbst.errors import SolveError
+from nbst.seeds import derived_seed
 
 __all__ = ["ALONG", "GAUSS", "STEP0", "STEP_MIN", "STEP_MAX", "WIDEN", "NARROW", "SCREEN_DIV", "SCREEN_MIN",
            "SCREEN_MAX", "SECOND_RUNG", "LADDER_TRIES", "SALT", "RobustProblem", "Interrupted", "Screen", "Maximum",
@@ -210,9 +211,8 @@ def maximise(problem: RobustProblem, starts: list, *, budget: int, seed: int, n:
     if not starts:
         raise SolveError("starts: give at least one")
     moved = np.asarray(problem.moved, dtype=float)
-    ss = np.random.SeedSequence([int(seed), SALT])
-    screen_seed = int(ss.generate_state(1, np.uint64)[0] >> 1)
-    rng = np.random.default_rng(ss.spawn(1)[0])
+    screen_seed = derived_seed(seed, SALT)
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), SALT]).spawn(1)[0])
     S = _Search(problem, screen_seed)
     m = int(np.clip(budget // SCREEN_DIV, SCREEN_MIN, SCREEN_MAX))
     history: list = []

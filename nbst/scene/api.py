@@ -18,6 +18,7 @@ from typing import Any, Callable
 from nbst.errors import SolveError
 from nbst.scene.cluster import ClusterSceneSim
 from nbst.scene.fates import Fates
+from nbst.scene.judge import signature_text
 from nbst.scene.robust import DEFAULT_ROBUST_SAMPLES, SceneRobustProblem
 from nbst.scene.scenefile import check_against_model, compile_scene, load_fates
 from nbst.scene.rollout import SceneSim, quiet_mujoco_warnings
@@ -109,8 +110,7 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
 
         def say(phase: str) -> None:  # the search is over: what comes next, for a progress bar
             if callback is not None:
-                callback(SceneProgress(r.rollouts, best.cost, best.judgement.to_dict()["signature"], 0, r.signatures,
-                                       phase))
+                callback(SceneProgress(r.rollouts, best.cost, signature_text(best.signature), 0, r.signatures, phase))
         try:
             if robust is not None and stopped == "met":
                 say(f"robust: up to {robust} noisy rollouts")

@@ -61,6 +61,7 @@ import numpy as np
 
 from nbst.models.mjsearch.engine import Engine
 from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
+from nbst.scene.judge import signature_text
 from nbst.scene.rollout import SceneRollout, SceneSim
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "CREEP",
@@ -345,8 +346,7 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         b = eng.best
         if callback is not None and b is not None:
             callback(SceneProgress(int(eng.rollouts), b.cost,  # type: ignore[has-type]
-                                   "".join("1" if k else "0" for k in b.payload.signature),
-                                   len(eng.population), len(S.seen)))
+                                   signature_text(b.payload.signature), len(eng.population), len(S.seen)))
 
     try:
         while not eng.stop():
