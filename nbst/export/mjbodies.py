@@ -75,12 +75,15 @@ def model_bodies(model: Any) -> list[Body]:
     return bodies
 
 
-def body_poses(model: Any, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def body_poses(model: Any, qpos: np.ndarray, mocap: tuple[np.ndarray, np.ndarray] | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Every body's world pose at each recorded state (``mj_kinematics``).
 
     Args:
         model: a compiled ``mujoco.MjModel``.
         qpos: (T, nq) float64 array, recorded states.
+        mocap: ``(mocap_pos (nmocap, 3), mocap_quat (nmocap, 4))`` the mocap bodies are held at (a
+            key's ``mpos``/``mquat``); default the model's own (``body_pos``/``body_quat``).
 
     Returns:
         ``(pos (T, nbody, 3), quat (T, nbody, 4))`` float64 arrays, quaternions (w, x, y, z).
@@ -88,6 +91,8 @@ def body_poses(model: Any, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     import mujoco
 
     d = mujoco.MjData(model)
+    if mocap is not None:
+        d.mocap_pos[:], d.mocap_quat[:] = mocap
     pos = np.empty((len(qpos), model.nbody, 3))
     quat = np.empty((len(qpos), model.nbody, 4))
     for k, q in enumerate(qpos):
@@ -117,7 +122,8 @@ def sampled_steps(times: np.ndarray, fps: float) -> np.ndarray:
     return idx.astype(int)
 
 
-def qpos_motion(model: Any, qpos: np.ndarray, times: np.ndarray, fps: float) -> BodyMotion:
+def qpos_motion(model: Any, qpos: np.ndarray, times: np.ndarray, fps: float,
+                mocap: tuple[np.ndarray, np.ndarray] | None = None) -> BodyMotion:
     """The motion of recorded states: every body of ``model`` at the states nearest the keyframes
     (:func:`sampled_steps`); the keyframe times are those states' own times.
 
@@ -126,10 +132,11 @@ def qpos_motion(model: Any, qpos: np.ndarray, times: np.ndarray, fps: float) -> 
         qpos: (S, nq) float64 array, recorded states.
         times: (S,) float64 array, their times in s, increasing from 0.
         fps: keyframes per second.
+        mocap: the mocap bodies' pose (:func:`body_poses`); default the model's.
 
     Returns:
         the :class:`~nbst.export.gltf.BodyMotion`.
     """
     idx = sampled_steps(times, fps)
-    pos, quat = body_poses(model, np.asarray(qpos)[idx])
+    pos, quat = body_poses(model, np.asarray(qpos)[idx], mocap)
     return BodyMotion(bodies=model_bodies(model), times=np.asarray(times, float)[idx], pos=pos, quat=quat)

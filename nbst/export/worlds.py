@@ -267,7 +267,9 @@ def scene_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMo
         for k in range(n):
             mujoco.mj_step(model, d)
             q[k + 1] = d.qpos
-    return qpos_motion(model, q, np.arange(n + 1) * float(model.opt.timestep), fps)
+    # a mocap body stays where the key put it (its mpos/mquat), as in the replay
+    return qpos_motion(model, q, np.arange(n + 1) * float(model.opt.timestep), fps,
+                       mocap=(d.mocap_pos.copy(), d.mocap_quat.copy()))
 
 
 def file_motion(path: str | os.PathLike, *, problem: str | Path | None = None,

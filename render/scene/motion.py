@@ -118,6 +118,7 @@ def record(path: str | os.PathLike, times: np.ndarray) -> tuple[SceneMotion, Fat
         mujoco.mj_resetDataKeyframe(m, d, key)
     d.qpos[:] = q0
     d.qvel[:] = v0
+    s.mocap_pos[:], s.mocap_quat[:] = d.mocap_pos, d.mocap_quat  # drawn where the key holds them
     # the fated bodies' geoms, and the name each other geom goes by (its body's; a world geom's own)
     fated = {int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, f.body)): f.body for f in fates.fates}
     owner = [fated.get(int(m.geom_bodyid[g])) for g in range(G)]
