@@ -57,6 +57,7 @@ import argparse
 import importlib.util
 import json
 import os
+import pickle
 import time
 from pathlib import Path
 
@@ -114,9 +115,13 @@ def _store(cache: Path, name: str) -> tuple[Path, dict]:
 
 
 def _save(path: Path, doc: dict) -> None:
+    _save_bytes(path, json.dumps(doc).encode())
+
+
+def _save_bytes(path: Path, data: bytes) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(doc))
+    tmp.write_bytes(data)
     os.replace(tmp, path)
 
 
@@ -136,12 +141,9 @@ def first_balls(seed: int, n: int, prm: dict, cache: Path) -> list:
     k = f"{bcf.key(prm)}|seed{seed}|n{n}"
     if k not in done:
         t0 = time.time()
-        pro = profiles.profile("pro")
-        m = frame.frame_model()
         bcf._init(prm)
         recs = []
-        for i, dv in enumerate(noise.sample(pro.strike, n, seed, pro.noise)):
-            st = frame.deck_start(dv, model=m)
+        for i, (dv, st) in enumerate(_deck_starts(seed, n, cache)):
             lv, cap = bcf._replay(dv, st, i)
             recs.append([st.board, st.angle, list(lv), cap])
         done = _store(cache, f"first_{_profile_tag()}.json")[1]  # another run may have written
@@ -149,6 +151,16 @@ def first_balls(seed: int, n: int, prm: dict, cache: Path) -> list:
         _save(path, done)
         print(f"  ({k}: {time.time() - t0:.0f} s)", flush=True)
     return done[k]
+
+
+def _deck_starts(seed: int, n: int, cache: Path) -> list:
+    """The pro's ``n`` first balls of ``seed`` and their deck starts (kept in ``cache``: every setting meets them)."""
+    path = cache / f"starts_{_profile_tag()}_seed{seed}_n{n}.pkl"
+    if not path.exists():
+        pro, m = profiles.profile("pro"), frame.frame_model()
+        _save_bytes(path, pickle.dumps([(dv, frame.deck_start(dv, model=m))
+                                        for dv in noise.sample(pro.strike, n, seed, pro.noise)]))
+    return pickle.loads(path.read_bytes())
 
 
 def spare_throws(name: str, seed: int, n: int, prm: dict, cache: Path) -> list:

@@ -5,6 +5,7 @@
     python benchmarks/bench_pocket_angle.py --restitution [--setting kick_zeta=0.2]
     python benchmarks/bench_pocket_angle.py --two-pin [--setting spot_mm=6]
     python benchmarks/bench_pocket_angle.py --collision-segments 32 [--two-pin]   # the pins as 32-gons (probe)
+    python benchmarks/bench_pocket_angle.py --by-board 16,19.5,0.25 --n 40 [--seed 11] [--setting h=0.0005]
 
 Bowlers' lore (a right-hander): a ball that comes in too strong, too high or at too much angle
 leaves the 4 (the 2 pin goes round the 4, or drives behind it), the 4-7, the 4-9 or worse: "a
@@ -31,10 +32,21 @@ them, the 4 left alone (``names``' solid 4 on a pocket hit), and the leaves with
 (4-7, 4-9, 4-7-10 ...), with Wilson 95 % intervals. Results go to ``--cache`` as they come
 (resumable). ``--two-pin``: on the flush hits, the first body to touch the 4 and the line the 2 pin
 is sent along (:func:`two_pin_paths`).
+
+**By board** (``--by-board LO,HI,STEP``, issue 48: where the pocket's high side falls off). ``--n`` of
+the ``pro``'s first balls (its strike ball under its own noise, ``profiles.profile("pro").noise``,
+seed ``--seed``; by default 11, a seed the calibration bench calls "fit"), each carried sideways on
+the deck (:func:`shifted`: the same speed, spin and entry angle, the ball moved along y where it
+crosses the deck front; the deck's friction is the same on every board, so this is the ball arriving
+on another board) onto every bin of boards LO..HI: throw i enters bin b on board
+``lo_b + STEP * u_i``, u_i uniform from ``derived_seed(seed, 48)`` (the same u_i in every bin and
+setting). Per bin: strikes, the 10 alone, splits (``names.is_split``) and the commonest leaves, with
+Wilson 95 % intervals; ``--setting h=0.0005`` runs the pin deck at half the step.
 """
 from __future__ import annotations
 
 import argparse
+import copy
 import importlib.util
 import json
 import os
@@ -46,6 +58,8 @@ import numpy as np
 
 from nbst.models.bowling import pin, scene
 from nbst.models.bowling.lane import frame, names, noise, profiles, spares
+from nbst.models.bowling.lane.units import BOARD_WIDTH, hand_sign
+from nbst.seeds import derived_seed
 
 
 def _carry_fit():
@@ -112,15 +126,78 @@ def replay(starts: dict, buckets: list, prm: dict, jobs: int) -> list:
             if st.board is not None and REPLAYED[0] <= st.board <= REPLAYED[1]:
                 calls.append((dv, st, SPOT_SEED * (b + 1) + i))  # each throw its own pin scatter
                 tags.append((f"{name}@{ang:g}", st.board, st.angle))
+    return [(*t, list(lv), cap) for t, (lv, cap) in zip(tags, _run(calls, prm, jobs))]
+
+
+def board_starts(cache: Path, n: int, seed: int) -> list:
+    """``n`` of the pro's first balls (its strike ball and noise, seed ``seed``): (delivery, deck start) each,
+    those that reached the deck (cached)."""
+    path = cache / f"board_starts_n{n}_seed{seed}.pkl"
+    if path.exists():
+        return pickle.loads(path.read_bytes())
+    pro, m = profiles.profile("pro"), frame.frame_model()
+    out = [(dv, st) for dv in noise.sample(pro.strike, n, seed, pro.noise)
+           for st in [frame.deck_start(dv, model=m)] if st.board is not None]
+    cache.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_bytes(pickle.dumps(out))
+    os.replace(tmp, path)
+    return out
+
+
+def shifted(start, board: float, qadr: int, hand: str = "right"):
+    """A copy of the deck start ``start`` with the ball moved sideways (y) so that it crosses the head
+    pin's line on ``board``: its velocity, spin and height kept, the pins where they stand."""
+    dy = (board - start.board) * BOARD_WIDTH * hand_sign(hand)
+    qpos = start.qpos.copy()
+    qpos[qadr + 1] += dy
+    pos = start.prev[0].copy()
+    pos[1] += dy
+    out = copy.copy(start)
+    out.qpos, out.prev, out.board = qpos, (pos, start.prev[1]), float(board)
+    return out
+
+
+def _run(calls: list, prm: dict, jobs: int) -> list:
     if jobs <= 1:
         CF._init(prm)
-        res = [CF._replay(*c) for c in calls]
-    else:
-        from nbst.models.mjsearch.pool import WorkerPool
+        return [CF._replay(*c) for c in calls]
+    from nbst.models.mjsearch.pool import WorkerPool
 
-        with WorkerPool(jobs, CF._init, (prm,)) as pool:
-            res = pool.map(CF._replay, calls)
-    return [(*t, list(lv), cap) for t, (lv, cap) in zip(tags, res)]
+    with WorkerPool(jobs, CF._init, (prm,)) as pool:
+        return pool.map(CF._replay, calls)
+
+
+def by_board(throws: list, bins: np.ndarray, step: float, seed: int, prm: dict, jobs: int) -> list:
+    """(bin's low board, board, entry angle, leave, cap) of every throw of ``throws`` carried onto every bin."""
+    qadr = int(frame.frame_model().joint("ball_free").qposadr[0])
+    u = np.random.default_rng(derived_seed(seed, 48)).random(len(throws))
+    calls, tags = [], []
+    for b, lo in enumerate(bins):
+        for i, (dv, st) in enumerate(throws):
+            board = float(lo + step * u[i])
+            calls.append((dv, shifted(st, board, qadr, dv.hand), SPOT_SEED * (b + 1) + i))
+            tags.append((float(lo), board, st.angle))
+    return [(*t, list(lv), cap) for t, (lv, cap) in zip(tags, _run(calls, prm, jobs))]
+
+
+def board_table(rows: list, step: float) -> None:
+    """Per bin of boards: strikes, the 10 alone, splits, the commonest leaves (Wilson 95 % intervals)."""
+    print("| boards at the head pin's line | balls | strikes (95 % CI) | the 10 alone | splits | caps | "
+          "commonest leaves |")
+    print("|---|---|---|---|---|---|---|")
+    for lo in sorted({r[0] for r in rows}):
+        bin_ = [r for r in rows if r[0] == lo]
+        n, c = len(bin_), {}
+        for r in bin_:
+            if r[3]:
+                c["-".join(map(str, r[3]))] = c.get("-".join(map(str, r[3])), 0) + 1
+        top = ", ".join(f"{s} {v}" for s, v in sorted(c.items(), key=lambda kv: -kv[1])[:5])
+        k = sum(not r[3] for r in bin_)
+        lo_, hi_ = noise.wilson(k, n)
+        print(f"| {lo:g}-{lo + step:g} | {n} | {k}, {100 * k / n:.0f} % ({100 * lo_:.0f}-{100 * hi_:.0f} %) | "
+              f"{sum(r[3] == [10] for r in bin_)} | {_ci(sum(names.is_split(r[3]) for r in bin_ if r[3]), n)} | "
+              f"{sum(r[4] for r in bin_)} | {top} |")
 
 
 def kickback_restitution(prm: dict, speed: float = 3.0, phases: int = 8) -> tuple:
@@ -252,6 +329,8 @@ def main() -> None:
     ap.add_argument("--collision-segments", type=int, default=None, metavar="N",
                     help="probe: the pins' collision pieces as N-gons instead of the scene's "
                          f"{pin.COLLISION_SEGMENTS} (one process: --jobs 1)")
+    ap.add_argument("--by-board", default=None, metavar="LO,HI,STEP",
+                    help="the pro's first balls carried onto every bin of boards LO..HI (issue 48)")
     ap.add_argument("--two-pin", action="store_true",
                     help="on the flush hits: what touches the 4 first, and the line the 2 pin is sent along")
     args = ap.parse_args()
@@ -268,6 +347,26 @@ def main() -> None:
         e, lo, hi = kickback_restitution(prm)
         print(f"setting {CF.key(prm)}: a pin into the kickback at 3 m/s rebounds at {e:.2f} ({lo:.2f}-{hi:.2f} "
               "over 8 phases of a step)")
+        return
+    if args.by_board:
+        lo, hi, step = (float(x) for x in args.by_board.split(","))
+        bins = np.round(np.arange(lo, hi - 1e-9, step), 6)
+        throws = board_starts(args.cache, args.n, args.seed)
+        path = args.cache / "board_results.json"
+        done = json.loads(path.read_text()) if path.exists() else {}
+        k = f"{CF.key(prm)}{segments}|{args.by_board}|n{args.n}|seed{args.seed}"
+        if k not in done:
+            t0 = time.time()
+            done[k] = by_board(throws, bins, step, args.seed, prm, args.jobs)
+            print(f"pin decks ({CF.key(prm)}): {len(done[k])} in {time.time() - t0:.0f} s", flush=True)
+            done = {**(json.loads(path.read_text()) if path.exists() else {}), k: done[k]}
+            tmp = path.with_suffix(".tmp")
+            tmp.write_text(json.dumps(done))
+            os.replace(tmp, path)
+        ang = np.array([st.angle for _, st in throws])
+        print(f"\nsetting: {CF.key(prm)}{segments}; the pro's first balls of seed {args.seed}: {len(throws)}, "
+              f"entry {ang.mean():.2f} deg (sd {ang.std():.2f}), each carried onto every bin\n")
+        board_table(done[k], step)
         return
     starts = capture(args.cache, buckets, args.n, args.seed)
     if args.two_pin:
