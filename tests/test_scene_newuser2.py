@@ -60,3 +60,32 @@ def test_the_video_draws_a_mocap_body_where_the_key_puts_it(mocap_solution):
     assert np.allclose(motion.body_xpos[:, b], [1.2, 0.1, 0.3], atol=1e-9), motion.body_xpos[:, b]
     # the box's x axis turned 30 degrees about z
     assert np.allclose(motion.body_xmat[0, b][:, 0], [np.cos(np.pi / 6), np.sin(np.pi / 6), 0], atol=1e-6)
+
+
+#: a bystander box placed 4 cm above the floor: it falls by itself, whatever the ball does
+AIR = """<mujoco model="air">
+  <option timestep="0.005"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="3 3 0.1"/>
+    <body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
+    <body name="crate" pos="1 1 0.12"><freejoint/><geom type="box" size="0.1 0.1 0.08"/></body>
+  </worldbody>
+</mujoco>
+"""
+AIR_FATES = {"format": "nbst-fates", "version": 1, "scene": "air.xml", "duration": 1.0,
+             "controls": {"ball": {"linvel": [[0, 0.1], [0, 0], [0, 0]]}},
+             "fates": {"crate": {"still": True}}}
+
+
+def test_check_notes_a_still_body_that_moves_by_itself(tmp_path, capsys):
+    """A `still` bystander that falls (placed in the air) or rolls away (a ping-pong ball in the
+    scene's wind) can not be met by any control: 2,000 rollouts later the search said only 'moved at
+    most 0.04265 m'. `nbst scene check` now says so first; a bystander at rest gets no note."""
+    fates = _write(tmp_path, "air", AIR, AIR_FATES)
+    assert main(["scene", "check", str(fates)]) == 0
+    notes = [ln for ln in capsys.readouterr().out.splitlines() if "note:" in ln]
+    assert len(notes) == 1 and "crate moves 0.04" in notes[0] and "by itself" in notes[0], notes
+    # the box falls the 4 cm gap (12 cm - 8 cm half height), within MuJoCo's contact softness of 2 mm
+    (tmp_path / "air.xml").write_text(AIR.replace('pos="1 1 0.12"', 'pos="1 1 0.08"'))
+    assert main(["scene", "check", str(fates)]) == 0
+    assert "note:" not in capsys.readouterr().out

@@ -22,7 +22,8 @@ from nbst.files import FileRefused, read_regular
 from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
                               read_fates_json)
 
-__all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "start_touches"]
+__all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "start_touches",
+           "unforced_still_moves"]
 
 #: The MJCF elements whose attributes name files, and the <compiler> folder each resolves under.
 _FILE_ATTRS = {"include": (("file",), None), "mesh": (("file",), "meshdir"), "skin": (("file",), "meshdir"),
@@ -209,6 +210,32 @@ def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:
                                                             model.geom(g2).name == n) for g1, g2 in pairs):
                     out.append((fa.body, key, n))
     return out
+
+
+def unforced_still_moves(fates: Fates, model: Any) -> list[tuple[str, float]]:
+    """The ``still`` bodies that move by themselves: the scene as written (the model's or key's state,
+    no control applied) stepped for the fates' duration, each ``(body, farthest)`` whose origin went
+    farther than :data:`~nbst.scene.fates.STILL_DISTANCE` from its start (a body placed in the air,
+    a ball in a wind, a pendulum let go). Such a ``still`` is met only if some control holds the body
+    in place. Compute only (``nbst scene check`` prints them)."""
+    import mujoco
+    import numpy as np
+
+    from nbst.scene.fates import STILL_DISTANCE
+
+    ids = {f.body: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body) for f in fates.fates if f.still}
+    if not ids:
+        return []
+    d = mujoco.MjData(model)
+    if fates.keyframe is not None:
+        mujoco.mj_resetDataKeyframe(model, d, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe))
+    mujoco.mj_kinematics(model, d)
+    b = list(ids.values())
+    start, far = d.xpos[b].copy(), np.zeros(len(b))
+    for _ in range(int(round(fates.duration / model.opt.timestep))):
+        mujoco.mj_step(model, d)
+        far = np.maximum(far, np.linalg.norm(d.xpos[b] - start, axis=1))
+    return [(name, float(x)) for name, x in zip(ids, far) if x > STILL_DISTANCE]
 
 
 def load_fates(path: str | os.PathLike, *, scene: str | os.PathLike | None = None) -> tuple[Fates, Any]:

@@ -60,7 +60,8 @@ def cmd_examples(args) -> int:
 
 
 def cmd_check(args) -> int:
-    from nbst.scene.scenefile import load_fates, start_touches
+    from nbst.scene.fates import STILL_DISTANCE
+    from nbst.scene.scenefile import load_fates, start_touches, unforced_still_moves
 
     f, model = load_fates(args.fates, scene=args.scene)
     steps = int(round(f.duration / model.opt.timestep))
@@ -76,6 +77,9 @@ def cmd_check(args) -> int:
         print(f"  note: {body} already touches {name} at the start" + (
             f" (the model's pose, before any control): its never_hits {name} can not be met; start it apart"
             if key == "never_hits" else f": its first touch of {name} is at 0 s"))
+    for body, far in unforced_still_moves(f, model):
+        print(f"  note: {body} moves {far:.3g} m by itself (the scene as written, no control, over the duration): "
+              f"its still (at most {STILL_DISTANCE:g} m) is met only if a control holds it; start it at rest")
     return 0
 
 
