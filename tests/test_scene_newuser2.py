@@ -89,3 +89,15 @@ def test_check_notes_a_still_body_that_moves_by_itself(tmp_path, capsys):
     (tmp_path / "air.xml").write_text(AIR.replace('pos="1 1 0.12"', 'pos="1 1 0.08"'))
     assert main(["scene", "check", str(fates)]) == 0
     assert "note:" not in capsys.readouterr().out
+
+
+def test_the_readout_gives_a_kilometre_region_as_written():
+    """A crate that must rest past x = 1,000.5 m read `box (1000, -30, 0)-(1100, 30, 20)` in the video
+    (four significant digits), beside a verdict '0.5 m from the region'; 12 km read `1.2e+04`."""
+    from nbst.render.scene.readout import region_text
+    from nbst.scene.fates import Region
+
+    box = Region(lo=(1000.5, -30.0, 0.0), hi=(12000.0, 30.0, 20.0))
+    assert region_text(box) == "box (1000.5, -30, 0)-(12000, 30, 20)"
+    ball = Region(center=(0.0165, 0.0, 0.002), radius=0.004)   # millimetres, as before
+    assert region_text(ball) == "ball r 0.004 at (0.0165, 0, 0.002)"

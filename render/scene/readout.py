@@ -10,6 +10,8 @@ Compute only: :func:`readout` returns text lines; :func:`marks` splits the marks
 """
 from __future__ import annotations
 
+import numpy as np
+
 from nbst.scene.fates import AT_REST_SPEED, STILL_DISTANCE, Fate, Fates, Region
 from nbst.scene.judge import Judgement, length_text, signature_text
 
@@ -25,11 +27,20 @@ def _v(p) -> str:
     return "(" + ", ".join(length_text(c) for c in p) + ")"
 
 
+def _given(v: float) -> str:
+    """A number of the fates file as its user wrote it (the shortest text that reads back as it): a
+    region 1,000.5 m away reads ``1000.5``, not ``1000``; 12 km ``12000``, not ``1.2e+04``."""
+    return np.format_float_positional(float(v), trim="-")
+
+
 def region_text(r: Region) -> str:
-    """A region in a few words: ``ball r 0.06 at (2, 0, 1.62)`` or ``box (lo)-(hi)``."""
+    """A region in a few words, its numbers as given: ``ball r 0.06 at (2, 0, 1.62)`` or ``box (lo)-(hi)``."""
+    def vec(p) -> str:
+        return "(" + ", ".join(_given(c) for c in p) + ")"
+
     if r.center is not None:
-        return f"ball r {length_text(r.radius)} at {_v(r.center)}"
-    return f"box {_v(r.lo)}-{_v(r.hi)}"
+        return f"ball r {_given(r.radius)} at {vec(r.center)}"
+    return f"box {vec(r.lo)}-{vec(r.hi)}"
 
 
 def asked(f: Fate) -> list[tuple[str, str]]:
