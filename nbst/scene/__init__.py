@@ -29,6 +29,19 @@ when they run.
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:   # what a type checker sees: the lazy names' own signatures, not `object`
+    from nbst.scene import api, builtin, fates, judge, rollout, scenefile, search, solution, validate
+    from nbst.scene.api import solve
+    from nbst.scene.builtin import example_names
+    from nbst.scene.fates import Fates, FatesError
+    from nbst.scene.rollout import SceneSim
+    from nbst.scene.scenefile import load_fates
+    from nbst.scene.search import DEFAULT_MAX_ROLLOUTS, signature_search
+    from nbst.scene.solution import (SceneReplay, SceneResult, export_scene, read_solution, replay_solution,
+                                     solution_dict)
+    from nbst.scene.validate import validate_solution
 
 __all__ = ["solve", "SceneResult", "SceneReplay", "replay_solution", "solution_dict", "read_solution", "export_scene",
            "load_fates", "Fates", "FatesError", "SceneSim", "signature_search", "example_names",
