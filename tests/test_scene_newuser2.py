@@ -120,3 +120,66 @@ def test_a_type_checker_sees_solve_and_the_other_lazy_names():
                 if isinstance(imp, ast.ImportFrom):
                     seen |= {a.asname or a.name for a in imp.names}
     assert set(pkg.__all__) <= seen, sorted(set(pkg.__all__) - seen)
+
+
+#: a ball and what it may be asked to hit: a ghost (contype 0), a post excluded from the ball, its own
+#: child (a parent-child pair), a bell (touchable), and a ghost made touchable by an explicit <pair>
+FILTERS = """<mujoco model="filters">
+  <worldbody>
+    <geom name="floor" type="plane" size="3 3 0.1"/>
+    <body name="ball" pos="0 0 0.1"><freejoint/><geom name="ball_geom" type="sphere" size="0.05"/>
+      <body name="tail" pos="0 0 0.2"><joint type="hinge"/><geom name="tail_geom" type="capsule" size="0.01 0.05"/></body>
+    </body>
+    <body name="ghost" pos="1 0 0.1"><geom name="ghost_geom" type="sphere" size="0.05" contype="0" conaffinity="0"/></body>
+    <body name="ghost2" pos="1 1 0.1"><geom name="ghost2_geom" type="sphere" size="0.05" contype="0" conaffinity="0"/></body>
+    <body name="post" pos="2 0 0.1"><freejoint/><geom type="box" size="0.05 0.05 0.1"/></body>
+    <body name="bell" pos="3 0 0.1"><geom type="sphere" size="0.05"/></body>
+  </worldbody>
+  <contact><exclude body1="post" body2="ball"/><pair geom1="ball_geom" geom2="ghost2_geom"/></contact>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("name, refused", [("ghost", True), ("ghost_geom", True), ("post", True), ("tail", True),
+                                           ("bell", False), ("ghost2", False), ("floor", False)])
+def test_a_hits_name_the_body_can_never_touch_is_refused(tmp_path, capsys, name, refused):
+    """`"hits": ["lamp"]` of a lamp with contype 0 was accepted: 2,000 rollouts for a touch MuJoCo's
+    collision filter never makes. It is refused by name; what the filter lets through is kept."""
+    fates = {"format": "nbst-fates", "version": 1, "scene": "filters.xml", "duration": 0.1,
+             "controls": {"ball": {"linvel": [[0, 1], [0, 0], [0, 0]]}}, "fates": {"ball": {"hits": [name]}}}
+    assert main(["scene", "check", str(_write(tmp_path, "filters", FILTERS, fates))]) == (2 if refused else 0)
+    err = capsys.readouterr().err
+    assert ("can never touch" in err and f"fates.ball.hits: 'ball' can never touch {name!r}" in err) == refused, err
+
+
+def test_the_collision_filter_agrees_with_mujoco():
+    """The refusal's filter is MuJoCo's: the ball dropped on each neighbour in turn touches exactly
+    those the filter lets through (a physical check of the exclude signature and parent filter)."""
+    import mujoco
+
+    from nbst.scene.scenefile import _can_touch
+
+    m = mujoco.MjModel.from_xml_string(FILTERS)
+    ball = m.body("ball").id
+    for name in ("ghost", "ghost2", "post", "bell"):
+        d = mujoco.MjData(m)
+        d.qpos[:3] = m.body(name).pos + [0, 0, 0.09]    # the ball 9 cm over its centre, overlapping it
+        mujoco.mj_forward(m, d)
+        other = m.body(name).id
+        touched = any({int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])} == {ball, other}
+                      for c in d.contact[:d.ncon])
+        assert touched == _can_touch(m, ball, name), name
+
+
+def test_a_fate_of_false_flags_alone_asks_nothing(tmp_path):
+    """`{"lamp": {"still": false}}` was accepted and gave the lamp a signature bit always set, though
+    `{"lamp": {}}` is refused as asking nothing."""
+    from nbst.scene.fates import FatesError, parse_fates
+
+    doc = {"format": "nbst-fates", "version": 1, "scene": "x.xml", "duration": 1,
+           "controls": {"ball": {"linvel": [[0, 1], [0, 0], [0, 0]]}},
+           "fates": {"ball": {"at_rest": True}, "lamp": {"still": False, "at_rest": False}}}
+    with pytest.raises(FatesError, match=r"fates\.lamp: asks nothing \(every flag false\)"):
+        parse_fates(doc, "f.json", folder=tmp_path)
+    doc["fates"]["lamp"]["still"] = True
+    assert [f.body for f in parse_fates(doc, "f.json", folder=tmp_path).fates] == ["ball", "lamp"]

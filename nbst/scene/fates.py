@@ -382,10 +382,13 @@ def _fate(src: _Src, body: str, x: Any) -> Fate:
     never = _names(src, x["never_hits"], f"{f}.never_hits") if "never_hits" in x else ()
     if both := [n for n in never if n in hits]:
         raise src.fail(f"{f}.never_hits", f"{both[0]!r} is in hits too: no motion can both touch it and not")
-    return Fate(body=body, rest_in=_region(src, x["rest_in"], f"{f}.rest_in") if "rest_in" in x else None,
+    fate = Fate(body=body, rest_in=_region(src, x["rest_in"], f"{f}.rest_in") if "rest_in" in x else None,
                 at=tuple(at), through=through, up=up, hits=hits, never_hits=never,
                 at_rest=_flag(src, x["at_rest"], f"{f}.at_rest") if "at_rest" in x else False,
                 still=_flag(src, x["still"], f"{f}.still") if "still" in x else False)
+    if not fate.asks():   # {"still": false}: a bit that is always set
+        raise src.fail(f, f"asks nothing (every flag false); give one of {', '.join(_FATE)}")
+    return fate
 
 
 def _noise(src: _Src, body: str, parts: list[str], given: Any) -> tuple[float, ...]:

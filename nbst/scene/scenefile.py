@@ -134,6 +134,43 @@ def compile_scene(fates: Fates) -> Any:
     return model
 
 
+def _collides(model: Any, g1: int, g2: int) -> bool:
+    """Whether MuJoCo's collision filter lets geoms ``g1`` and ``g2`` touch at all (any pose): an explicit
+    ``<pair>``, else contype/conaffinity, ``<exclude>``, both fixed to the world, one rigid body, a
+    parent and its child (mj_collision's filters)."""
+    import mujoco
+
+    if model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT:
+        return False
+    pairs = set(zip(model.pair_geom1.tolist(), model.pair_geom2.tolist()))
+    if (g1, g2) in pairs or (g2, g1) in pairs:
+        return True
+    if not (model.geom_contype[g1] & model.geom_conaffinity[g2] or model.geom_contype[g2] & model.geom_conaffinity[g1]):
+        return False
+    b1, b2 = int(model.geom_bodyid[g1]), int(model.geom_bodyid[g2])
+    w1, w2 = int(model.body_weldid[b1]), int(model.body_weldid[b2])
+    if w1 == w2:   # one rigid body, or both fixed to the world
+        return False
+    excluded = set(model.exclude_signature.tolist())
+    if (b1 << 16) + b2 in excluded or (b2 << 16) + b1 in excluded:
+        return False
+    if not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_FILTERPARENT and w1 and w2:
+        if w1 == int(model.body_weldid[model.body_parentid[w2]]) or w2 == int(model.body_weldid[model.body_parentid[w1]]):
+            return False
+    return True
+
+
+def _can_touch(model: Any, body: int, name: str) -> bool:
+    """Whether some geom of ``body`` may ever touch the body (its own geoms) or geom named ``name``."""
+    import mujoco
+
+    nb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+    others = ([g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == nb] if nb >= 0
+              else [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)])
+    mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == body]
+    return any(_collides(model, g1, g2) for g1 in mine for g2 in others)
+
+
 def check_against_model(fates: Fates, model: Any) -> None:
     """Refuse names the model does not have, and a controlled body without a free joint.
 
@@ -169,7 +206,7 @@ def check_against_model(fates: Fates, model: Any) -> None:
             raise src.fail(f"controls.{c.body}", f"body {c.body!r} has no free joint; only free bodies can be "
                                                  f"given velocities")
     for fa in fates.fates:
-        body_id(fa.body, f"fates.{fa.body}")
+        b = body_id(fa.body, f"fates.{fa.body}")
         for key, names in (("hits", fa.hits), ("never_hits", fa.never_hits)):
             for n in names:
                 g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n)
@@ -182,6 +219,11 @@ def check_against_model(fates: Fates, model: Any) -> None:
                 if n == fa.body or (g >= 0 and model.body(int(model.geom_bodyid[g])).name == fa.body):
                     raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} is the body itself" if n == fa.body
                                    else f"{n!r} is a geom of {fa.body!r} itself: a body never touches its own geoms")
+                if key == "hits" and not _can_touch(model, b, n):
+                    raise src.fail(f"fates.{fa.body}.{key}", f"{fa.body!r} can never touch {n!r} in "
+                                   f"{fates.scene.name}: MuJoCo collides no geom of one with one of the other "
+                                   f"(contype/conaffinity, <exclude>, contacts disabled, both fixed to the world, "
+                                   f"one rigid body, or a parent and its child)")
 
 
 def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:
