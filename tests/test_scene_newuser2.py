@@ -183,3 +183,36 @@ def test_a_fate_of_false_flags_alone_asks_nothing(tmp_path):
         parse_fates(doc, "f.json", folder=tmp_path)
     doc["fates"]["lamp"]["still"] = True
     assert [f.body for f in parse_fates(doc, "f.json", folder=tmp_path).fates] == ["ball", "lamp"]
+
+
+def test_solve_and_export_never_write_over_the_scenes_own_files(tmp_path, capsys):
+    """`nbst scene solve FATES -o scene.xml` wrote the solution's JSON over the user's MJCF (exit 0,
+    the scene lost); `nbst scene export SOL -o part.xml` would write over a file the scene includes.
+    Both now refuse in one line, exit 2, the file untouched."""
+    (tmp_path / "part.xml").write_text('<mujoco><worldbody><geom name="floor" type="plane" size="3 3 0.1"/>'
+                                       '</worldbody></mujoco>')
+    xml = BALL_INCLUDING
+    fates = _write(tmp_path, "inc", xml, {"format": "nbst-fates", "version": 1, "scene": "inc.xml", "duration": 0.1,
+                                          "controls": {"ball": {"linvel": [[0, 0.1], [0, 0], [0, 0]]}},
+                                          "fates": {"ball": {"never_hits": ["floor"]}}})
+    before = {p: (tmp_path / p).read_text() for p in ("inc.xml", "part.xml")}
+    for target in ("inc.xml", "part.xml"):
+        assert main(["scene", "solve", str(fates), "-o", str(tmp_path / target), "--seed", "1", "--jobs", "1",
+                     "--max-rollouts", "4", "-q", "--no-ladder"]) == 2
+        assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    sol = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(fates), "-o", str(sol), "--seed", "1", "--jobs", "1", "--max-rollouts", "4",
+                 "-q", "--no-ladder"]) == 0
+    assert main(["scene", "export", str(sol), "-o", str(tmp_path / "part.xml")]) == 2
+    assert "a file the scene reads" in capsys.readouterr().err
+    assert {p: (tmp_path / p).read_text() for p in before} == before
+
+
+BALL_INCLUDING = """<mujoco model="inc">
+  <option timestep="0.01"/>
+  <include file="part.xml"/>
+  <worldbody>
+    <body name="ball" pos="0 0 0.3"><freejoint/><geom type="sphere" size="0.05"/></body>
+  </worldbody>
+</mujoco>
+"""

@@ -339,6 +339,8 @@ def export_scene(path: str | os.PathLike, out: str | os.PathLike) -> str:
     model.opt.timestep = float(doc["timestep"])
     files = check_scene_files(fates.scene, source=fates.source)
     outp = Path(out)
+    if (same := [f for f in files if os.path.realpath(f) == os.path.realpath(outp)]):
+        raise SceneSolutionError(f"{out}: is {same[0]}, a file the scene reads; give another file name")
     if len(files) > 1 and outp.resolve().parent != fates.scene.resolve().parent:
         raise SceneSolutionError(f"{out}: the scene reads other files ({files[1].name}, ...) found relative to its "
                                  f"folder: write the exported scene in {fates.scene.resolve().parent}")

@@ -85,12 +85,12 @@ def cmd_check(args) -> int:
 
 def cmd_solve(args) -> int:
     from nbst.scene.api import solve
-    from nbst.scene.scenefile import load_fates
+    from nbst.scene.scenefile import check_scene_files, load_fates
     from nbst.scene.search import SceneProgress
     from nbst.scene.solution import solution_dict
 
     fates, _ = load_fates(args.fates, scene=args.scene)  # bad input: exit 2 before anything is written
-    prepare_output(args.output, inputs=[args.fates])
+    prepare_output(args.output, inputs=[args.fates, *check_scene_files(fates.scene)])  # never the scene's files
     seed = resolve_seed(args.seed, what="--seed")
     bar: list = []
     name = fates.source
