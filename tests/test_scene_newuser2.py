@@ -216,3 +216,39 @@ BALL_INCLUDING = """<mujoco model="inc">
   </worldbody>
 </mujoco>
 """
+
+
+def test_a_solution_moved_with_its_folder_finds_its_fates_and_scene(tmp_path, capsys):
+    """A solution sent with its folder (fates, scene, solution) to a colleague read `weld.json:
+    scene: /old/place/weld.xml: no such file` in replay, render, export and validate, the files
+    beside it. Now each is taken from beside it when its SHA-256 is the one recorded, and only then."""
+    import shutil
+
+    old = tmp_path / "old"
+    old.mkdir()
+    fates = _write(old, "far", BALL, {"format": "nbst-fates", "version": 1, "scene": "far.xml", "duration": 0.5,
+                                     "controls": {"ball": {"linvel": [[0, 0.1], [0, 0], [0, 0]]}},
+                                     "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.2}}}})
+    assert main(["scene", "solve", str(fates), "-o", str(old / "sol.json"), "--seed", "1", "--jobs", "1",
+                 "--max-rollouts", "8", "-q", "--no-ladder"]) == 0
+    new = tmp_path / "new"
+    shutil.copytree(old, new)
+    shutil.rmtree(old)
+    capsys.readouterr()
+    assert main(["scene", "replay", str(new / "sol.json")]) == 0
+    assert "reproduced bit for bit" in capsys.readouterr().out
+    assert main(["export", str(new / "sol.json"), "--gltf", str(tmp_path / "x.glb")]) == 0
+    # an edited fates file is not the one solved: the recorded path is said, as before
+    (new / "far.json").write_text((new / "far.json").read_text().replace('"radius": 0.2', '"radius": 0.3'))
+    assert main(["scene", "replay", str(new / "sol.json")]) == 2
+    assert "no such file" in capsys.readouterr().err
+
+
+BALL = """<mujoco model="far">
+  <option timestep="0.01"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="3 3 0.1"/>
+    <body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
+  </worldbody>
+</mujoco>
+"""

@@ -209,7 +209,27 @@ def read_solution(path: str | os.PathLike) -> dict:
             raise SceneSolutionError(f"{path}: {key}: missing or not a {kind.__name__}")
     if doc.get("fates_file") is None and not isinstance(doc.get("fates"), str):
         raise SceneSolutionError(f"{path}: fates: missing")
+    _found_beside(doc, Path(path))
     return doc
+
+
+def _found_beside(doc: dict, path: Path) -> None:
+    """A solution moved (or sent) with its folder: where the recorded fates file or scene is gone,
+    the file of the same name at the same place relative to the solution (the scene: relative to the
+    fates file, as its ``"scene"`` says) is taken instead, only when its SHA-256 is the one recorded."""
+    def same(p: Path, digest: Any) -> bool:
+        return isinstance(digest, str) and p.is_file() and file_sha256(p) == digest
+
+    old_fates = doc.get("fates_file")
+    if isinstance(old_fates, str) and not os.path.exists(old_fates):
+        here = path.resolve().parent / Path(old_fates).name
+        if same(here, doc.get("fates_sha256")):
+            doc["fates_file"] = str(here)
+            if not os.path.exists(doc["scene"]):
+                rel = os.path.relpath(doc["scene"], Path(old_fates).parent)
+                moved = (here.parent / rel).resolve()
+                if same(moved, doc.get("scene_sha256")):
+                    doc["scene"] = str(moved)
 
 
 @dataclass(frozen=True)
