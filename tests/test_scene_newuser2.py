@@ -252,3 +252,31 @@ BALL = """<mujoco model="far">
   </worldbody>
 </mujoco>
 """
+
+
+def test_a_height_field_is_drawn_where_mujoco_collides_with_it():
+    """A terrain of `type="hfield"` was not drawn at all (the video showed a ball over the sky, the glTF
+    had no ground). Its surface is now drawn as MuJoCo's grid: a vertical ray (mj_ray, MuJoCo's own
+    geometry) meets it at each grid point at the drawn height, within 1e-6 m."""
+    import mujoco
+
+    from nbst.render.core.geoms import geom_rows
+
+    n = 9
+    x = np.linspace(-1, 1, n)
+    z = (0.5 + 0.5 * np.sin(3 * x)[None, :] * np.cos(2 * x)[:, None]).ravel()   # rows along y
+    xml = f"""<mujoco><asset><hfield name="hill" nrow="{n}" ncol="{n}" size="2 1.5 0.4 0.05"
+      elevation="{' '.join(f'{v:.4f}' for v in z)}"/></asset>
+      <worldbody><geom name="terrain" type="hfield" hfield="hill" pos="0.3 -0.2 0.1"/></worldbody></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    rows = geom_rows(m, 0).astype(float)
+    assert rows is not None and np.all(rows[:, 5] > 0)          # every facet faces up
+    drawn = {(round(px, 6), round(py, 6)): pz for px, py, pz in rows[:, :3]}
+    gid = np.zeros(1, np.int32)
+    for px, py in [(-1.5, -0.75), (0.0, 0.0), (1.0, 1.125), (0.5, -1.125)]:   # interior grid points
+        top = np.array([px + 0.3, py - 0.2, 5.0])
+        dist = mujoco.mj_ray(m, d, top, np.array([0.0, 0.0, -1.0]), None, 1, -1, gid)
+        assert gid[0] == 0
+        assert abs((5.0 - dist) - (drawn[(px, py)] + 0.1)) < 1e-6, (px, py)

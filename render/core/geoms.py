@@ -64,7 +64,8 @@ def sphere_rows(radius: float, level: int = _SPHERE_LEVEL) -> np.ndarray:
 
 
 def geom_rows(model: Any, g: int, *, extent: float = 10.0, plane_at_least: float = 0.0) -> np.ndarray | None:
-    """(V, 6) float32 geom ``g`` of ``model`` in its own frame, or None (a type not drawn: a height field).
+    """(V, 6) float32 geom ``g`` of ``model`` in its own frame, or None (a type not drawn). A height field is
+    its top surface (no sides or base).
 
     Args:
         model: the compiled ``mujoco.MjModel``.
@@ -99,6 +100,19 @@ def geom_rows(model: Any, g: int, *, extent: float = 10.0, plane_at_least: float
     if t == BOX:
         b = trimesh.creation.box(extents=[2 * sx, 2 * sy, 2 * sz])
         return _flat(np.asarray(b.vertices, float), np.asarray(b.faces))
+    if t == HFIELD:   # the top surface, MuJoCo's grid: row r at y = -hy + 2 hy r / (nrow - 1), column c along x
+        h = int(model.geom_dataid[g])
+        if h < 0:
+            return None
+        nr, nc = int(model.hfield_nrow[h]), int(model.hfield_ncol[h])
+        hx, hy, hz = (float(c) for c in model.hfield_size[h][:3])
+        adr = int(model.hfield_adr[h])
+        X, Y = np.meshgrid(np.linspace(-hx, hx, nc), np.linspace(-hy, hy, nr))
+        Z = np.asarray(model.hfield_data[adr:adr + nr * nc], float).reshape(nr, nc) * hz
+        v = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+        k = np.arange(nr * nc).reshape(nr, nc)
+        a, b, c, d = k[:-1, :-1].ravel(), k[:-1, 1:].ravel(), k[1:, 1:].ravel(), k[1:, :-1].ravel()
+        return _flat(v, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]))
     if t == MESH:
         m = int(model.geom_dataid[g])
         if m < 0:
