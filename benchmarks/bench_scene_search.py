@@ -19,7 +19,13 @@ Variants (joined with ``+``), each patched onto the module for the run:
 * ``centre``: the first exploring trial is the middle of the ranges (the model's nominal);
 * ``uni``: exploring trials uniform (no directed aim); ``lhs``: a Latin hypercube of
   ``ONE_BODY_EXPLORE`` points (scipy), no aim; ``lhsdir``: the same, half of them aimed;
-* ``pop8``, ``pop16``: the CMA-ES population of one body; ``ex8``, ``ex32``: its exploring trials.
+* ``pop8``, ``pop16``: the CMA-ES population of one body; ``ex8``, ``ex32``: its exploring trials;
+* ``aim1``: an aimed body's searching restarts at the engine's step (``ONE_BODY_AIMED_STEP`` 1: the
+  search before e3195ae).
+
+``--engine K=V`` (repeatable) sets an option of the one-body search's engine for the run
+(``sigma0=0.06``, ``"schedule=(('best', 5/3), ('cell', 5/9))"``, ``"polish=(1/3, 1/9, 1)"``,
+``stall=3``, ``spent=1``), V a Python literal or arithmetic.
 """
 from __future__ import annotations
 
@@ -87,7 +93,23 @@ VARIANTS = {
     "pop16": lambda: setattr(S, "ONE_BODY_POPSIZE", 16),
     "ex8": lambda: setattr(S, "ONE_BODY_EXPLORE", 8),
     "ex32": lambda: setattr(S, "ONE_BODY_EXPLORE", 32),
+    "aim1": lambda: setattr(S, "ONE_BODY_AIMED_STEP", 1.0),
 }
+
+
+def _engine_options(pairs: list[str]) -> None:
+    """``--engine K=V``: the one-body search's engine (``cma_by_key``) gets these options."""
+    over = {}
+    for kv in pairs:
+        k, v = kv.split("=", 1)
+        over[k.strip()] = eval(v, {"__builtins__": {}}, {})  # a literal or arithmetic (a benchmark's flag)
+    init = E.Engine.__init__
+
+    def patched(self, *a, **kw):
+        if kw.get("cma_by_key"):
+            kw.update(over)
+        init(self, *a, **kw)
+    E.Engine.__init__ = patched
 
 
 def uniform(name: str, n: int) -> None:
@@ -114,6 +136,8 @@ def main() -> None:
     ap.add_argument("--variant", default="", help=f"'+'-joined, of: {', '.join(VARIANTS)}")
     ap.add_argument("--budget", type=int, default=2000)
     ap.add_argument("--uniform", type=int, default=0, help="N uniform trials instead of searches")
+    ap.add_argument("--engine", action="append", default=[], metavar="K=V",
+                    help="an engine option of the one-body search (repeatable)")
     a = ap.parse_args()
     if a.uniform:
         uniform(a.scene, a.uniform)
@@ -121,6 +145,8 @@ def main() -> None:
     lo, hi = map(int, a.seeds.split("-"))
     for v in filter(None, a.variant.split("+")):
         VARIANTS[v]()
+    _engine_options(a.engine)
+    label = "+".join(filter(None, [a.variant, *a.engine])) or "as is"
     S._Scene.init = _explore_init
     f, model = load_fates(a.scene)
     finer = []
@@ -147,10 +173,10 @@ def main() -> None:
             r = S.signature_search(sim, rng=check_random_state(s), max_rollouts=a.budget, ladder=tuple(finer))
             S._Scene.evaluate = evaluate
             out.append(r.rollouts if r.stopped == "met" else -1)
-            print(f"{a.scene} {a.variant or 'as is'} seed {s}: {out[-1]} first_fine={info['first_fine']} "
+            print(f"{a.scene} {label} seed {s}: {out[-1]} first_fine={info['first_fine']} "
                   f"fine={info['fine']} [{time.perf_counter() - t0:.0f} s]", flush=True)
     med = statistics.median([n if n > 0 else a.budget for n in out])
-    print(f"{a.scene} {a.variant or 'as is'} seeds {a.seeds}: {sum(n > 0 for n in out)}/{len(out)} solved, "
+    print(f"{a.scene} {label} seeds {a.seeds}: {sum(n > 0 for n in out)}/{len(out)} solved, "
           f"median {med:g}; per seed {out}")
 
 
