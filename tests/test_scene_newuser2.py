@@ -280,3 +280,45 @@ def test_a_height_field_is_drawn_where_mujoco_collides_with_it():
         dist = mujoco.mj_ray(m, d, top, np.array([0.0, 0.0, -1.0]), None, 1, -1, gid)
         assert gid[0] == 0
         assert abs((5.0 - dist) - (drawn[(px, py)] + 0.1)) < 1e-6, (px, py)
+
+
+LEASH = """<mujoco model="leash">
+  <option timestep="0.005"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="3 3 0.1"/>
+    <body name="post" pos="-0.5 0 0.2"><geom type="box" size="0.02 0.02 0.2"/><site name="top" pos="0 0 0.2"/></body>
+    <body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/><site name="s"/></body>
+  </worldbody>
+  <tendon><spatial name="leash" limited="true" range="0 1.2" width="0.004" rgba="1 1 0 1">
+    <site site="top"/><site site="s"/></spatial></tendon>
+</mujoco>
+"""
+
+
+def test_the_video_draws_a_spatial_tendon_as_mujoco_lays_it(tmp_path):
+    """A leash (a spatial tendon with a width, which MuJoCo's viewer draws) was not drawn. Each frame
+    now holds its segment between the wrap points: its length is MuJoCo's own ten_length at that
+    state, within 1e-9 m, and the ball's end is where the ball's site is."""
+    import mujoco
+
+    from nbst.render.scene.motion import record
+
+    fates = _write(tmp_path, "leash", LEASH, {"format": "nbst-fates", "version": 1, "scene": "leash.xml",
+                                              "duration": 0.5, "controls": {"ball": {"linvel": [[1, 2], [0, 1], [0, 1]]}},
+                                              "fates": {"ball": {"rest_in": {"center": [0, 0, 0], "radius": 3}}}})
+    sol = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(fates), "-o", str(sol), "--seed", "1", "--jobs", "1", "--max-rollouts", "8",
+                 "-q", "--no-ladder"]) == 0
+    times = np.array([0.0, 0.25, 0.5])
+    motion, _, m = record(sol, times)
+    assert motion.tendon_segs is not None and motion.tendon_slots[0] == (0, 0.004)
+    doc = json.loads(sol.read_text())
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = doc["qpos0"], doc["qvel0"]
+    for k in range(101):   # the frames at 0, 0.25 and 0.5 s: steps 0, 50 and 100 of 5 ms
+        if k in (0, 50, 100):
+            mujoco.mj_forward(m, d)
+            a, b = motion.tendon_segs[(0, 50, 100).index(k), 0]
+            assert abs(np.linalg.norm(b - a) - d.ten_length[0]) < 1e-9
+            assert np.allclose(b, d.site_xpos[m.site("s").id], atol=1e-12)
+        mujoco.mj_step(m, d)

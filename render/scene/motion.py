@@ -50,6 +50,9 @@ class SceneMotion:
         duration: the motion's seconds (nstep x h).
         same: the loop ended in the solution's final state bit for bit.
         judgement: the fates judged on the replay (``nbst.scene.solution.replay_solution``'s).
+        tendon_segs: (F, S, 2, 3) the spatial tendons' segments between wrap points (NaN: none in
+            that slot at that frame), or None without a spatial tendon of width > 0.
+        tendon_slots: (tendon index, width) of each of the S slots.
     """
 
     times: np.ndarray
@@ -63,6 +66,8 @@ class SceneMotion:
     duration: float
     same: bool
     judgement: Judgement
+    tendon_segs: np.ndarray | None = None
+    tendon_slots: tuple[tuple[int, float], ...] = ()
 
     def index(self, t: float) -> int:
         """The frame nearest time ``t``."""
@@ -126,6 +131,12 @@ def record(path: str | os.PathLike, times: np.ndarray) -> tuple[SceneMotion, Fat
              for g in range(G)]
     seen: set[tuple[str, str]] = set()
     touches: list[Touch] = []
+    # the spatial tendons MuJoCo's viewer draws: each has up to 2 wrap points per wrap object
+    spatial = [i for i in range(int(m.ntendon)) if float(m.tendon_width[i]) > 0
+               and any(int(m.wrap_type[j]) != mujoco.mjtWrap.mjWRAP_JOINT
+                       for j in range(int(m.tendon_adr[i]), int(m.tendon_adr[i]) + int(m.tendon_num[i])))]
+    slots = tuple((i, float(m.tendon_width[i])) for i in spatial for _ in range(2 * int(m.tendon_num[i])))
+    tseg = np.full((F, len(slots), 2, 3), np.nan) if slots else None
 
     def grab(k: int) -> None:
         rows = np.flatnonzero(steps == k)
@@ -138,6 +149,16 @@ def record(path: str | os.PathLike, times: np.ndarray) -> tuple[SceneMotion, Fat
         gx[rows], gm[rows] = s.geom_xpos, s.geom_xmat.reshape(G, 3, 3)
         bx[rows], bm[rows] = s.xpos, s.xmat.reshape(B, 3, 3)
         cx[rows], cm[rows] = s.cam_xpos, s.cam_xmat.reshape(C, 3, 3)
+        if tseg is not None:
+            mujoco.mj_tendon(m, s)
+            obj, xp = np.asarray(s.wrap_obj).ravel(), np.asarray(s.wrap_xpos).reshape(-1, 3)   # the points in order
+            at = 0
+            for i in spatial:
+                a, n = int(s.ten_wrapadr[i]), int(s.ten_wrapnum[i])
+                for j in range(a, a + n - 1):   # as mjv_updateScene: no segment across a pulley (-2)
+                    if obj[j] != -2 and obj[j + 1] != -2 and at + j - a < len(slots):
+                        tseg[rows, at + j - a] = xp[j], xp[j + 1]
+                at += 2 * int(m.tendon_num[i])
 
     with quiet_mujoco_warnings():
         grab(0)
@@ -156,5 +177,6 @@ def record(path: str | os.PathLike, times: np.ndarray) -> tuple[SceneMotion, Fat
     same = d.qpos.tobytes() == qf.tobytes() and d.qvel.tobytes() == vf.tobytes()
     judged = replay_solution(path).judgement
     return (SceneMotion(times=times, geom_xpos=gx, geom_xmat=gm, body_xpos=bx, body_xmat=bm, cam_xpos=cx,
-                        cam_xmat=cm, touches=tuple(touches), duration=nstep * h, same=same, judgement=judged),
+                        cam_xmat=cm, touches=tuple(touches), duration=nstep * h, same=same, judgement=judged,
+                        tendon_segs=tseg, tendon_slots=slots),
             fates, m)

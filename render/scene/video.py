@@ -61,6 +61,26 @@ SHADOW_PX = 2048
 #: Regions are drawn this opaque; their outlines this.
 REGION_ALPHA, OUTLINE_ALPHA = 0.16, 0.9
 
+def _unit_cylinder() -> np.ndarray:
+    """(V, 6) a cylinder of radius 1 along z from 0 to 1 (a tendon's segment, stretched by :func:`_stretch`)."""
+    import trimesh
+
+    from nbst.render.core.camera import mesh_arrays
+
+    rows = mesh_arrays(trimesh.creation.cylinder(radius=1.0, height=1.0, sections=16)).astype(float)
+    rows[:, 2] += 0.5
+    return rows
+
+
+def _stretch(a: np.ndarray, b: np.ndarray, width: float) -> np.ndarray:
+    """The 3x3 taking the unit cylinder (radius 1, z from 0 to 1) to the segment a-b of radius ``width``."""
+    z = b - a
+    u = z / np.linalg.norm(z)
+    x = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.9 else [0.0, 1.0, 0.0])
+    x /= np.linalg.norm(x)
+    return np.column_stack([x * width, np.cross(u, x) * width, z])
+
+
 def is_scene_solution(path: str | os.PathLike) -> bool:
     """Whether ``path`` is a regular .json file whose first bytes name the scene solution format
     (``nbst.files.sniff_kind``; the solution's reader checks it)."""
@@ -129,13 +149,15 @@ class SceneRenderer(FrameRenderer):
         extent = max(3.0 * span, 1.0)
         for g in sg.visible_geoms(model):
             t = int(model.geom_type[g])
-            key = (t, tuple(np.round(model.geom_size[g], 9)), int(model.geom_dataid[g]) if t == sg.MESH else -1)
+            key = (t, tuple(np.round(model.geom_size[g], 9)), int(model.geom_dataid[g]) if t in (sg.MESH, sg.HFIELD) else -1)
             if key not in cache:
                 rows = sg.geom_rows(model, g, extent=extent)
                 cache[key] = None if rows is None else self._vaos(rows)
             if cache[key] is not None:
                 vao, dvao = cache[key]
                 self.items.append((g, vao, dvao, sg.geom_rgba(model, g), t == sg.PLANE))
+        # the spatial tendons' segments (a unit cylinder, scaled to each one's width and length)
+        self.tendon_vao = self._vaos(_unit_cylinder())[0] if motion.tendon_segs is not None else None
         # the fates' marks
         self.marks: list[tuple[Any, Any, tuple[float, ...]]] = []   # (solid vao, outline vao, rgb)
         self.hoops: list[tuple[np.ndarray, str, tuple[float, ...]]] = []   # (centre, label, rgb)
@@ -303,6 +325,10 @@ class SceneRenderer(FrameRenderer):
         for g, vao, _, rgba, plane in self.items:
             if rgba[3] >= 1.0:
                 self._solid(vao, gm[g], gx[g], rgba, checker=self.checker if plane else 0.0)
+        if self.tendon_vao is not None:   # each segment between two wrap points, as MuJoCo's viewer
+            for (a, b), (i, w) in zip(self.motion.tendon_segs[k], self.motion.tendon_slots):
+                if np.isfinite(a[0]) and np.linalg.norm(b - a) > 0:
+                    self._solid(self.tendon_vao, _stretch(a, b, w), a, tuple(self.model.tendon_rgba[i]))
         for b, axis, vao, rgb in self.arrows:   # an up-axis: along the body-frame axis
             z = bm[b] @ axis
             z = z / max(float(np.linalg.norm(z)), 1e-12)
