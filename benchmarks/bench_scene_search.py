@@ -19,9 +19,7 @@ Variants (joined with ``+``), each patched onto the module for the run:
 * ``centre``: the first exploring trial is the middle of the ranges (the model's nominal);
 * ``uni``: exploring trials uniform (no directed aim); ``lhs``: a Latin hypercube of
   ``ONE_BODY_EXPLORE`` points (scipy), no aim; ``lhsdir``: the same, half of them aimed;
-* ``pop8``, ``pop16``: the CMA-ES population of one body; ``ex8``, ``ex32``: its exploring trials;
-* ``aim1``: an aimed body's searching restarts at the engine's step (``ONE_BODY_AIMED_STEP`` 1: the
-  search before e3195ae).
+* ``pop8``, ``pop16``: the CMA-ES population of one body; ``ex8``, ``ex32``: its exploring trials.
 
 ``--engine K=V`` (repeatable) sets an option of the one-body search's engine for the run
 (``sigma0=0.06``, ``"schedule=(('best', 5/3), ('cell', 5/9))"``, ``"polish=(1/3, 1/9, 1)"``,
@@ -93,7 +91,6 @@ VARIANTS = {
     "pop16": lambda: setattr(S, "ONE_BODY_POPSIZE", 16),
     "ex8": lambda: setattr(S, "ONE_BODY_EXPLORE", 8),
     "ex32": lambda: setattr(S, "ONE_BODY_EXPLORE", 32),
-    "aim1": lambda: setattr(S, "ONE_BODY_AIMED_STEP", 1.0),
 }
 
 

@@ -26,9 +26,7 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
   another funnel, or, with none, from the cheapest trial not met at h that lies one step
   from every polishing start (a new funnel looked for; the engine's polishing,
   ``hold_distance=0``, ``wander``: a best met at h but not kept on the ladder is not polished
-  for ever); a body that is aimed (it has a place and may fly) starts its searching restarts at
-  :data:`ONE_BODY_AIMED_STEP` of the engine's step (the aim already lands its trials near the
-  region; polishing keeps the engine's steps);
+  for ever);
 * **fixed coordinates** (a range of one value, as a rolling ball's vertical speed ``[0, 0]``) are
   not searched: the engine's cube has one dimension per live coordinate;
 * the engine's **distance** of a trial is 3 per unmet bit plus, with a ladder (finer timesteps,
@@ -61,14 +59,14 @@ from typing import Any, Callable
 
 import numpy as np
 
-from nbst.models.mjsearch.engine import SCHEDULE, Engine
+from nbst.models.mjsearch.engine import Engine
 from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
 from nbst.scene.judge import signature_text
 from nbst.scene.rollout import SceneRollout, SceneSim
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "CREEP",
            "LADDER_PENALTY", "LADDER_FAR", "ONE_BODY_EXPLORE", "ONE_BODY_POPSIZE", "ONE_BODY_SPENT_GAIN",
-           "ONE_BODY_AIMED_STEP", "SceneProgress",
+           "SceneProgress",
            "SceneSearchResult", "signature_search", "noisy_probability",
            "distance_of", "ladder_check"]
 
@@ -97,12 +95,6 @@ ONE_BODY_EXPLORE, ONE_BODY_POPSIZE = 16, 12
 #: as spent (the engine's ``spent_gain``: 1, only a solution is progress; the rungs' graded costs
 #: fall by a few percent from restart to restart without a trial that holds).
 ONE_BODY_SPENT_GAIN = 1.0
-#: One controlled body that is aimed (a place to be, ``rest_in`` or ``at``, and a linvel free in all
-#: three components): its CMA-ES restarts before a trial meets every fate at h step this fraction of
-#: the engine's (``sigma0`` 0.12: 0.08 from the best, 0.027 from a cell), as its exploring trials,
-#: flown to the region, start near it; polishing keeps the engine's steps. Chosen on egg-in-cup's
-#: dev seeds 11-30 (docs/results/scene.md).
-ONE_BODY_AIMED_STEP = 2.0 / 3.0
 
 
 @dataclass(frozen=True)
@@ -227,13 +219,6 @@ class _Scene:
             u = np.where(self.span > 0, (x - self.lo) / np.where(self.span > 0, self.span, 1.0), 0.5)
         return np.asarray(np.clip(u, 0.0, 1.0))
 
-    def aimable(self, i: int) -> bool:
-        """Whether directed randomize flies block ``i``'s body to a place (``rest_in`` or ``at``)."""
-        c, b = self.fates.controls[i], self.bit[i]
-        fate = None if b is None else self.fates.fates[b]
-        return bool(fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
-                    and self.free_flight[i])
-
     # -- the moves --------------------------------------------------------------------
     def directed(self, eng: Engine, v: np.ndarray, i: int) -> None:
         """Directed randomize of block ``i`` of the engine point ``v`` (in place; the module docstring)."""
@@ -246,7 +231,8 @@ class _Scene:
         rng: np.random.Generator = eng.rng  # type: ignore[has-type]
         c, b = self.fates.controls[i], self.bit[i]
         fate = None if b is None else self.fates.fates[b]
-        aimable = self.aimable(i)
+        aimable = (fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
+                   and self.free_flight[i])
         sl = self.blocks[i]
         pop = eng.population
         if pop and (not aimable or rng.random() < 0.5):
@@ -351,8 +337,6 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         how = dict(explore=ONE_BODY_EXPLORE, ga_batches=0, cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True,
                    hold_distance=0,  # a trial met at h but not kept on the ladder: polished, then other funnels
                    spent_gain=ONE_BODY_SPENT_GAIN, wander=True)  # ... and new funnels looked for
-        if S.aimable(0):  # flown to its place: the searching restarts start near it
-            how["schedule"] = tuple((src, f * ONE_BODY_AIMED_STEP) for src, f in SCHEDULE)
     eng = Engine(len(S.live), seed=rng, max_rollouts=max_rollouts, blocks=blocks, bits=S.bit, batch=BATCH, init=S.init,
                  moves={"directed": S.directed}, creep=CREEP, prefer_unmet=True, population=POPULATION,
                  per_signature=PER_SIGNATURE, done=S.done, tournament=2, **how)
