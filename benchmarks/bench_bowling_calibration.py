@@ -64,7 +64,7 @@ from pathlib import Path
 import numpy as np
 
 from nbst.models.bowling import lane, pin
-from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
+from nbst.models.bowling.lane import frame, names, noise, phases, profiles, spares
 from nbst.models.bowling.lane.ball import Ball
 
 #: Seeds of the pro's first balls used to fit (issue 48), and those held out (never used to fit).
@@ -263,11 +263,11 @@ def part_leaves(rec: dict) -> None:
         print(f"| {r} | {k} | {v} | {100 * v / ns:.1f} % ({100 * lo:.0f}-{100 * hi:.0f} %) | "
               f"{'' if e is None else f'{100 * e / ESPN_SPARE_ATTEMPTS:.1f} %'} |")
     single = sum(v for k, v in leaves.items() if "-" not in k)
-    splits = sum(v for k, v in leaves.items() if k in ("7-10", "4-6", "4-7-10", "6-7-10", "4-6-7-10", "3-10", "2-7",
-                                                       "4-10", "6-7", "8-10", "5-7", "4-9", "6-8", "4-6-10", "4-6-7"))
-    print(f"\nSingle pins {single} of {ns} ({100 * single / max(ns, 1):.0f} %); common splits {splits}. "
-          f"ESPN: the 10 and the 7 are {100 * (710 + 333) / ESPN_SPARE_ATTEMPTS:.1f} % of all spare attempts "
-          f"(right- and left-handers together).")
+    splits = sum(v for k, v in leaves.items() if names.is_split([int(p) for p in k.split("-")]))
+    wide = leaves.get("7-10", 0) + leaves.get("4-6-7-10", 0)
+    print(f"\nSingle pins {single} of {ns} ({100 * single / max(ns, 1):.0f} %); splits (USBC) {ci(splits, ns)}; the 7-10 "
+          f"and the big four {ci(wide, ns)}, ESPN {100 * (53 + 30) / ESPN_SPARE_ATTEMPTS:.1f} % of spare attempts; the "
+          f"10 and the 7 {100 * (710 + 333) / ESPN_SPARE_ATTEMPTS:.1f} % (right- and left-handers together).")
 
 
 def part_angles() -> None:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from nbst.models.bowling import pin, pinfall, scene
-from nbst.models.bowling.lane import frame, spares
+from nbst.models.bowling.lane import frame, profiles, spares
 
 INCH = 0.0254
 
@@ -121,3 +121,29 @@ def test_the_pin_scatter_moves_each_pin_on_the_deck_and_leaves_it_standing_still
     p2 = pinfall.poses(model, d.qpos)
     assert fastest < 1e-3  # m/s: a pin set on the deck does not slide or rock
     assert np.abs(p2[:, :3] - p1[:, :3]).max() < 1e-4 and not pinfall.tilted(p2).any()
+
+
+def test_a_ball_carried_sideways_on_the_deck_runs_the_same_path_a_board_over(model):
+    # bench_pocket_angle --by-board (issue 48): the pro's ball moved onto another board where it reaches
+    # the deck; the deck's friction is the same on every board, so the ball must run the same path,
+    # moved sideways by exactly that many boards (to the bowler's left for a right-hander: board up)
+    from nbst.models.bowling.lane.units import y_to_board
+
+    bench = _bench("bench_pocket_angle")
+    d = profiles.profile("pro").strike
+    st = frame.deck_start(d, model=model, standing=(7,))  # the 7 alone: the pocket's line meets no pin
+    bq = int(model.joint("ball_free").qposadr[0])
+
+    def path(start):
+        out = []
+        frame.run_frame(d, model=model, start=start, record=lambda dd: out.append(dd.qpos[bq:bq + 2].copy()))
+        return np.array(out[:400])  # the deck and the pit edge: 0.4 s
+
+    for dboard in (1.0, -0.6):
+        moved = bench.shifted(st, st.board + dboard, bq, d.hand)
+        assert moved.board == st.board + dboard and np.array_equal(st.qpos[bq + 2:], moved.qpos[bq + 2:])
+        a, b = path(st), path(moved)
+        a, b = a[:len(b)], b[:len(a)]
+        assert len(a) > 200
+        assert np.abs(a[:, 0] - b[:, 0]).max() < 1e-9  # the same run down the deck
+        assert np.abs(y_to_board(b[:, 1]) - y_to_board(a[:, 1]) - dboard).max() < 1e-6  # a board over
