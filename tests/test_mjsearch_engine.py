@@ -158,6 +158,31 @@ def test_a_spent_funnel_with_no_other_fine_point_wanders_and_spent_gain_counts_s
         Engine(4, seed=0, max_rollouts=100, spent_gain=1.5)
 
 
+def _changed_blocks(u, parent, blocks):
+    return tuple(i for i, b in enumerate(blocks) if not np.array_equal(u[b], parent[b]))
+
+
+@pytest.mark.parametrize("redraw", [0.0, 1.0])
+def test_redraw_unmet_redraws_every_unmet_block_of_the_parent_and_no_met_one(redraw):
+    """A population of one, P, meeting block 0 of three. The paper's children change one block;
+    with ``redraw_unmet=1`` the randomizing ones redraw blocks 1 and 2 together (independent bodies
+    searched side by side) and never touch block 0, which only creep may move, alone."""
+    blocks = [[0, 1], [2, 3], [4, 5]]
+    e = Engine(6, seed=5, max_rollouts=10_000, blocks=blocks, batch=1, explore=1, cma=False, redraw_unmet=redraw)
+    U = e.ask()
+    e.tell(U, [0b001], [2], [1.0])
+    P = U[0]
+    kinds = set()
+    for _ in range(300):
+        for u in e.ask():  # not told: the population stays P
+            kinds.add(_changed_blocks(u, P, blocks))
+    if redraw:
+        assert (1, 2) in kinds
+        assert all(k == (1, 2) or len(k) <= 1 for k in kinds), kinds
+    else:
+        assert all(len(k) <= 1 for k in kinds) and {(0,), (1,), (2,)} <= kinds, kinds
+
+
 def test_nothing_to_search_is_one_point_and_bad_settings_are_refused():
     e = Engine(0, seed=1, max_rollouts=10)
     U = e.ask()
@@ -165,7 +190,7 @@ def test_nothing_to_search_is_one_point_and_bad_settings_are_refused():
     e.tell(U, [0], [1], [0.5])
     assert e.stop() == {"nothing_to_search": True} and e.result.rollouts == 1
     for kw in ({"max_rollouts": 0}, {"max_rollouts": 5, "blocks": [[0, 7]]}, {"max_rollouts": 5, "bits": [0, 1]},
-               {"max_rollouts": 5, "schedule": (("nowhere", 1.0),)}):
+               {"max_rollouts": 5, "schedule": (("nowhere", 1.0),)}, {"max_rollouts": 5, "redraw_unmet": 1.5}):
         with pytest.raises(InputError):
             Engine(3, seed=1, **kw)
     e = Engine(3, seed=1, max_rollouts=5)

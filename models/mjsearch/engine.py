@@ -253,6 +253,10 @@ class Engine:
             the block of the (dim,) unit point ``u`` in place (the paper's directed randomize).
         creep: the creep's Gaussian steps (unit cube), one drawn per child.
         prefer_unmet: a child changes a block whose bit its parent misses, half the time.
+        redraw_unmet: the share of randomizing children (directed or uniform) that redraw every
+            block whose bit their parent misses, when it misses two or more, instead of one block:
+            bodies that do not meet each other are then searched side by side, each rollout a
+            try for each (default 0: one block, the paper's rule).
         population, per_signature: the GA's limits.
         cma: CMA-ES restarts (pycma) in each cycle.
         popsize: the CMA-ES population (default ``batch``).
@@ -282,7 +286,8 @@ class Engine:
                  batch: int = BATCH, explore: int = EXPLORE, init: Callable[[Engine], np.ndarray] | None = None,
                  init_done: Callable[[Engine], bool] | None = None, ga_batches: int = GA_BATCHES,
                  ga_fine: int = GA_FINE, moves: dict[str, Callable] | None = None,
-                 creep: Sequence[float] = CREEP, prefer_unmet: bool = False, population: int = POPULATION,
+                 creep: Sequence[float] = CREEP, prefer_unmet: bool = False, redraw_unmet: float = 0.0,
+                 population: int = POPULATION,
                  per_signature: int = PER_SIGNATURE, cma: bool = True, popsize: int | None = None,
                  sigma0: float = SIGMA0, stall: int = STALL, schedule: Sequence[tuple[str, float]] = SCHEDULE,
                  polish: Sequence[float] = POLISH, spent: int = SPENT, right_kept: int = RIGHT_KEPT,
@@ -313,6 +318,9 @@ class Engine:
         self.ga_batches, self.ga_fine = int(ga_batches), int(ga_fine)
         self.moves = dict(moves or {})
         self.creep, self.prefer_unmet = tuple(float(c) for c in creep), bool(prefer_unmet)
+        if not 0.0 <= float(redraw_unmet) <= 1.0:
+            raise InputError(f"redraw_unmet must be in [0, 1], got {redraw_unmet!r}")
+        self.redraw_unmet = float(redraw_unmet)
         self.population_max, self.per_signature = int(population), int(per_signature)
         self.use_cma, self.popsize = bool(cma), int(popsize or batch)
         self.sigma0, self.stall = float(sigma0), int(stall)
@@ -485,16 +493,29 @@ class Engine:
                 src = a if ma and not mb else b if mb and not ma else (a if self.rng.random() < 0.5 else b)
                 u[blk] = src.u[blk]
             return u, [a, b]
+        if op in (1, 2) and self.redraw_unmet > 0.0:
+            unmet = [i for i in range(len(self.blocks)) if self.bits[i] is not None and not self._met(a, i)]
+            if len(unmet) > 1 and self.rng.random() < self.redraw_unmet:
+                for i in unmet:
+                    self._randomize(u, i, op)
+                return np.clip(u, 0.0, 1.0), [a]
         i = self._block_to_change(a)
-        blk = self.blocks[i]
-        if op == 1 and "directed" in self.moves:
-            self.moves["directed"](self, u, i)
-        elif op == 2 or op == 1:
-            u[blk] = self.rng.random(len(blk))
+        if op in (1, 2):
+            self._randomize(u, i, op)
         else:  # creep (and crossover with one member)
+            blk = self.blocks[i]
             s = self.creep[int(self.rng.integers(len(self.creep)))] if len(self.creep) > 1 else self.creep[0]
             u[blk] += s * self.rng.standard_normal(len(blk))
         return np.clip(u, 0.0, 1.0), [a]
+
+    def _randomize(self, u: np.ndarray, i: int, op: int) -> None:
+        """Block ``i`` of ``u`` in place: the problem's directed randomize (op 1, where it has one), else
+        uniform randomize."""
+        if op == 1 and "directed" in self.moves:
+            self.moves["directed"](self, u, i)
+        else:
+            blk = self.blocks[i]
+            u[blk] = self.rng.random(len(blk))
 
     def _insert(self, child: Member, parents: list[Member]) -> None:
         same = [p for p in parents if p.signature == child.signature and any(p is m for m in self.population)]

@@ -13,7 +13,9 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
   0.04 or 0.15 of the range), *directed randomize* (this module's aim), *uniform randomize*,
   *crossover* of whole per-body blocks; Senate-like parents (the better of two members drawn from
   the signature chosen); a changed block is an unmet body's
-  half the time;
+  half the time, and a randomizing child of a parent that misses two or more bodies redraws all of
+  them (:data:`REDRAW_UNMET`; the paper changes one disk: independent bodies are searched side by
+  side, each rollout a try for each);
 * **insert**: the paper's elitism, :data:`PER_SIGNATURE` members per signature, subsumed signatures
   culled past :data:`POPULATION`;
 * **one controlled body** (one block: crossover has nothing to swap, and the GA's uniform
@@ -88,6 +90,10 @@ INIT_PER_BIT = 3
 INIT_MAX = 160
 #: The creep's normal steps (unit cube), one drawn per child.
 CREEP = (0.01, 0.04, 0.15)
+#: Of the GA's randomizing children (directed or uniform), the share that redraw every block of an
+#: unmet body of their parent, where it has two or more, in place of one (the paper changes one disk):
+#: bodies that do not meet each other are searched side by side (the engine's ``redraw_unmet``).
+REDRAW_UNMET = 1.0
 #: One controlled body (one block: crossover has nothing to swap): exploring trials before the
 #: engine's CMA-ES restarts, and their population.
 ONE_BODY_EXPLORE, ONE_BODY_POPSIZE = 16, 12
@@ -332,7 +338,7 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
     blocks = S.engine_blocks
     if len(blocks) > 1:  # the paper's GA: crossover of whole per-body blocks
         how: dict[str, Any] = dict(explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init_done=S.init_done,
-                                   ga_batches=1, ga_fine=1, cma=False)
+                                   ga_batches=1, ga_fine=1, cma=False, redraw_unmet=REDRAW_UNMET)
     else:  # one controlled body: nothing to cross over; CMA-ES restarts after one exploring batch or two
         how = dict(explore=ONE_BODY_EXPLORE, ga_batches=0, cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True,
                    hold_distance=0,  # a trial met at h but not kept on the ladder: polished, then other funnels
