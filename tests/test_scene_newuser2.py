@@ -322,3 +322,14 @@ def test_the_video_draws_a_spatial_tendon_as_mujoco_lays_it(tmp_path):
             assert abs(np.linalg.norm(b - a) - d.ten_length[0]) < 1e-9
             assert np.allclose(b, d.site_xpos[m.site("s").id], atol=1e-12)
         mujoco.mj_step(m, d)
+
+
+def test_the_verdicts_give_a_kilometre_scene_to_the_millimetre():
+    """A crate at x = 1,000.2 m read 'ends at (1000, ...), 0.5 m from the region' (four significant
+    digits: the 0.2 m lost beside a 0.5 m miss) and 12 km read '1e+04'; a millimetre scene keeps its
+    four digits."""
+    from nbst.scene.judge import length_text
+
+    assert length_text(1000.2341) == "1000.234" and length_text(12000.0) == "12000"
+    assert length_text(-25.5) == "-25.5" and length_text(1.8642) == "1.864"
+    assert length_text(0.0165) == "0.0165" and length_text(3e-12) == "0"

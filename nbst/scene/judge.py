@@ -38,9 +38,13 @@ __all__ = ["Recording", "FateVerdict", "BodyVerdict", "Judgement", "judge", "jud
 
 def length_text(v: float) -> str:
     """A length (m) or coordinate in words: four significant digits, so that a millimetre scene reads as well
-    as a metre one (``0.0165``, not ``0.017``; ``1.864``); below 1 nm, ``0`` (rounding noise)."""
+    as a metre one (``0.0165``, not ``0.017``; ``1.864``), and from 1 m on to the millimetre, never in
+    powers of ten (``1000.234``, not ``1000``; ``12000``, not ``1.2e+04``); below 1 nm, ``0`` (rounding
+    noise)."""
     v = float(v)
-    return "0" if abs(v) < 1e-9 else f"{v:.4g}"
+    if abs(v) < 1e-9:
+        return "0"
+    return np.format_float_positional(round(v, 3), trim="-") if abs(v) >= 1.0 else f"{v:.4g}"
 
 
 @dataclass(frozen=True)
