@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+import test_scene_newuser
 from nbst.cli.main import main
 
 #: a ball thrown at a mocap paddle that the key moves and turns (mpos, mquat) from the model's pose
@@ -244,14 +245,8 @@ def test_a_solution_moved_with_its_folder_finds_its_fates_and_scene(tmp_path, ca
     assert "no such file" in capsys.readouterr().err
 
 
-BALL = """<mujoco model="far">
-  <option timestep="0.01"/>
-  <worldbody>
-    <geom name="floor" type="plane" size="3 3 0.1"/>
-    <body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
-  </worldbody>
-</mujoco>
-"""
+#: the first new user's ball (test_scene_newuser), resting on the floor
+BALL = test_scene_newuser.BALL.replace('pos="0 0 0.3"', 'pos="0 0 0.05"')
 
 
 def test_a_height_field_is_drawn_where_mujoco_collides_with_it():
