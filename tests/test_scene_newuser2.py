@@ -328,3 +328,26 @@ def test_the_verdicts_give_a_kilometre_scene_to_the_millimetre():
     assert length_text(1000.2341) == "1000.234" and length_text(12000.0) == "12000"
     assert length_text(-25.5) == "-25.5" and length_text(1.8642) == "1.864"
     assert length_text(0.0165) == "0.0165" and length_text(3e-12) == "0"
+
+
+@pytest.mark.parametrize("second, refused", [
+    ({"center": [1.0, 0, 0.5], "radius": 0.2}, True),     # two balls apart
+    ({"center": [0.25, 0, 0.5], "radius": 0.2}, False),   # two balls that overlap
+    ({"min": [0.5, -1, 0], "max": [2, 1, 1]}, True),       # a ball and a box apart
+    ({"min": [0.05, -1, 0], "max": [2, 1, 1]}, False),     # a ball reaching into the box
+])
+def test_two_at_regions_at_one_time_that_share_no_point_are_refused(tmp_path, second, refused):
+    """Two `at` entries at the same time in regions apart can never both be met: they were accepted,
+    and the search spent its budget on them."""
+    from nbst.scene.fates import FatesError, parse_fates
+
+    at = [{"t": 0.5, "in": {"center": [0, 0, 0.5], "radius": 0.1}}, {"t": 0.5, "in": second}]
+    doc = {"format": "nbst-fates", "version": 1, "scene": "x.xml", "duration": 1,
+           "controls": {"ball": {"linvel": [[0, 1], [0, 0], [0, 0]]}}, "fates": {"ball": {"at": at}}}
+    if refused:
+        with pytest.raises(FatesError, match=r"fates\.ball\.at\[1\]: .*apart from at\[0\]'s at the same time"):
+            parse_fates(doc, "f.json", folder=tmp_path)
+    else:
+        assert parse_fates(doc, "f.json", folder=tmp_path).fates[0].at[1][0] == 0.5
+    at[1]["t"] = 0.6  # at another time, anything goes
+    assert len(parse_fates(doc, "f.json", folder=tmp_path).fates[0].at) == 2

@@ -109,6 +109,16 @@ class Region:
         return {"min": list(self.lo or ()), "max": list(self.hi or ())}
 
 
+def _apart(a: Region, b: Region) -> bool:
+    """Whether two regions share no point (touching is sharing)."""
+    if a.center is not None and b.center is not None:
+        return float(np.linalg.norm(np.subtract(a.center, b.center))) > a.radius + b.radius
+    if a.center is not None or b.center is not None:  # a ball and a box
+        return float((b if a.center is not None else a).distance(np.asarray(a.center if a.center is not None
+                                                                              else b.center))) > max(a.radius, b.radius)
+    return bool(np.any(np.asarray(a.lo) > np.asarray(b.hi)) or np.any(np.asarray(b.lo) > np.asarray(a.hi)))
+
+
 @dataclass(frozen=True)
 class Range3:
     """Three closed ranges ``[lo[k], hi[k]]`` (lo == hi fixes that coordinate)."""
@@ -361,6 +371,10 @@ def _fate(src: _Src, body: str, x: Any) -> Fate:
         for k, a in enumerate(x["at"]):
             _keys(src, a, f"{f}.at[{k}]", ("t", "in"), ("t", "in"))
             at.append((_num(src, a["t"], f"{f}.at[{k}].t", nonneg=True), _region(src, a["in"], f"{f}.at[{k}].in")))
+            for j, (t, r) in enumerate(at[:-1]):
+                if t == at[-1][0] and _apart(r, at[-1][1]):
+                    raise src.fail(f"{f}.at[{k}]", f"asks the body at t = {t:g} s in a region apart from at[{j}]'s "
+                                   "at the same time: both can never be met")
     through: tuple[Region, ...] = ()
     if "through" in x:
         if not isinstance(x["through"], list) or not x["through"]:
