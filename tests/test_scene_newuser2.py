@@ -351,3 +351,33 @@ def test_two_at_regions_at_one_time_that_share_no_point_are_refused(tmp_path, se
         assert parse_fates(doc, "f.json", folder=tmp_path).fates[0].at[1][0] == 0.5
     at[1]["t"] = 0.6  # at another time, anything goes
     assert len(parse_fates(doc, "f.json", folder=tmp_path).fates[0].at) == 2
+
+
+PAIR = """<mujoco model="pair">
+  <option timestep="0.005"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="3 3 0.1"/>
+    <body name="coin" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
+    <body name="totem" pos="0.5 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("loop", [False, True])
+def test_a_touch_of_two_fated_bodies_is_said_once_in_the_contact_sequence(tmp_path, loop):
+    """`--answers` listed `coin-totem` and `totem-coin` for one touch when both bodies had fates;
+    the touch is said once, from the side that sorts first, on both rollout paths."""
+    from nbst.scene.rollout import SceneSim
+    from nbst.scene.scenefile import load_fates
+
+    fates = _write(tmp_path, "pair", PAIR, {
+        "format": "nbst-fates", "version": 1, "scene": "pair.xml", "duration": 0.5,
+        "controls": {"coin": {"linvel": [[2, 3], [0, 0], [0, 0]]}},
+        "fates": {"coin": {"hits": ["totem"]}, "totem": {"rest_in": {"center": [1, 0, 0.05], "radius": 0.5}}}})
+    f, model = load_fates(fates)
+    with SceneSim(f, model, sequences=True, loop=loop) as sim:
+        (r,) = sim.run(np.array([[2.5, 0, 0]]))
+    assert r.judgement.bodies[0].fates[0].met  # the coin did hit the totem
+    said = [t for t in r.sequence if set(t.split("-")) == {"coin", "totem"}]
+    assert said == ["coin-totem"], r.sequence

@@ -84,6 +84,18 @@ def conjugate(quat: np.ndarray) -> np.ndarray:
     return np.array([q[0], -q[1], -q[2], -q[3]])
 
 
+def contact_sequence(firsts: list[tuple[int, str, str]]) -> list[str]:
+    """The contact sequence from first touches ``(step, body, other)``: in time order, ``"BODY-OTHER"``,
+    a touch of two fated bodies said once (from the side that sorts first), not from each."""
+    out: list[str] = []
+    said: set[frozenset[str]] = set()
+    for _, body, other in sorted(firsts):
+        if (pair := frozenset((body, other))) not in said:
+            said.add(pair)
+            out.append(f"{body}-{other}")
+    return out
+
+
 @dataclass(frozen=True)
 class SceneRollout:
     """One rollout: its controls, initial and final state, the judge's verdict.
@@ -96,7 +108,8 @@ class SceneRollout:
         warnings: MuJoCo's warnings during the rollout (a diverging state), by name.
         sequence: the contact sequence, when the sim records it (``sequences=True``): each fated
             body's first touch of each other body, in time order, as ``"BODY-OTHER"`` (a geom of
-            the world body goes by its own name, when it has one: ``"die1-floor"``).
+            the world body goes by its own name, when it has one: ``"die1-floor"``); two fated
+            bodies' touch once (:func:`contact_sequence`).
     """
 
     x: np.ndarray
@@ -282,7 +295,7 @@ class SceneSim:
         ids, pairs, n = self.bodies, self.pairs, self.nstep
         touches: list[dict[str, float]] = [{} for _ in ids]
         h = float(m.opt.timestep)
-        seq: list[tuple[int, str]] = []
+        seq: list[tuple[int, str, str]] = []
         if not (self.per_step or pairs or self.sequences):  # only the end is judged: one call, the same steps in C
             s.qpos[:] = qpos0
             mujoco.mj_kinematics(m, s)
@@ -306,7 +319,7 @@ class SceneSim:
                             i = int(fated_of[a])
                             if i >= 0 and (i, names[b]) not in seen and names[b] != self.fates.fates[i].body:
                                 seen.add((i, names[b]))
-                                seq.append((k, f"{self.fates.fates[i].body}-{names[b]}"))
+                                seq.append((k, self.fates.fates[i].body, names[b]))
                 if left and d.ncon:
                     con = d.contact
                     geom = con.geom[:d.ncon]
@@ -318,7 +331,7 @@ class SceneSim:
                                 touches[i][name] = k * h
                                 left -= 1
         return self._finish(x, qpos0, qvel0, d.qpos.copy(), d.qvel.copy(), d.time, pos, touches,
-                            [t for _, t in sorted(seq)], data_warnings(d))
+                            contact_sequence(seq), data_warnings(d))
 
     def run(self, xs: np.ndarray) -> list[SceneRollout]:
         """Roll out (B, D) controls vectors on ``jobs`` threads: B rollouts, in input order."""
@@ -492,15 +505,15 @@ class _Recorder:
                 k = np.flatnonzero(hit[:, j])
                 if len(k):
                     touches[i][name] = int(k[0]) * h
-        seq: list[tuple[int, str]] = []
+        seq: list[tuple[int, str, str]] = []
         if self.seq:
             a = np.array([s for _, _, s in self.seq], dtype=int)
             hit = (sd[0][:, a] > 0) & (sd[0][:, a + 1] <= 0)
             first = np.where(hit.any(axis=0), hit.argmax(axis=0), -1)
             for (i, other, _), k in zip(self.seq, first):
                 if k >= 0:
-                    seq.append((int(k), f"{sim.fates.fates[i].body}-{other}"))
-        return d.qpos.copy(), d.qvel.copy(), d.time, pos, touches, [t for _, t in sorted(seq)]
+                    seq.append((int(k), sim.fates.fates[i].body, other))
+        return d.qpos.copy(), d.qvel.copy(), d.time, pos, touches, contact_sequence(seq)
 
 
 #: The contact sensor's data "found dist" (mjCONDATA_FOUND, mjCONDATA_DIST bits) and reduce "mindist".
