@@ -353,15 +353,10 @@ def test_two_at_regions_at_one_time_that_share_no_point_are_refused(tmp_path, se
     assert len(parse_fates(doc, "f.json", folder=tmp_path).fates[0].at) == 2
 
 
-PAIR = """<mujoco model="pair">
-  <option timestep="0.005"/>
-  <worldbody>
-    <geom name="floor" type="plane" size="3 3 0.1"/>
-    <body name="coin" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
-    <body name="totem" pos="0.5 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
-  </worldbody>
-</mujoco>
-"""
+#: the crate's scene with two balls: the coin, and the totem where the crate stood
+PAIR = AIR.replace('name="ball"', 'name="coin"').replace(
+    '<body name="crate" pos="1 1 0.12"><freejoint/><geom type="box" size="0.1 0.1 0.08"/>',
+    '<body name="totem" pos="0.5 0 0.05"><freejoint/><geom type="sphere" size="0.05"/>')
 
 
 @pytest.mark.parametrize("loop", [False, True])
