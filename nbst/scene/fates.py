@@ -110,13 +110,12 @@ class Region:
 
 
 def _apart(a: Region, b: Region) -> bool:
-    """Whether two regions share no point (touching is sharing)."""
-    if a.center is not None and b.center is not None:
-        return float(np.linalg.norm(np.subtract(a.center, b.center))) > a.radius + b.radius
-    if a.center is not None or b.center is not None:  # a ball and a box
-        return float((b if a.center is not None else a).distance(np.asarray(a.center if a.center is not None
-                                                                              else b.center))) > max(a.radius, b.radius)
-    return bool(np.any(np.asarray(a.lo) > np.asarray(b.hi)) or np.any(np.asarray(b.lo) > np.asarray(a.hi)))
+    """Whether two regions share no point (touching is sharing): a ball is apart from the other region
+    when its centre lies farther than its radius from it; two boxes when apart along some axis."""
+    if a.center is None and b.center is None:
+        return bool(np.any(np.asarray(a.lo) > np.asarray(b.hi)) or np.any(np.asarray(b.lo) > np.asarray(a.hi)))
+    ball, other = (a, b) if a.center is not None else (b, a)
+    return float(other.distance(np.asarray(ball.center))) > ball.radius
 
 
 @dataclass(frozen=True)

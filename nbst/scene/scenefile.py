@@ -134,15 +134,15 @@ def compile_scene(fates: Fates) -> Any:
     return model
 
 
-def _collides(model: Any, g1: int, g2: int) -> bool:
+def _collides(model: Any, g1: int, g2: int, pairs: set[tuple[int, int]], excluded: set[int]) -> bool:
     """Whether MuJoCo's collision filter lets geoms ``g1`` and ``g2`` touch at all (any pose): an explicit
     ``<pair>``, else contype/conaffinity, ``<exclude>``, both fixed to the world, one rigid body, a
-    parent and its child (mj_collision's filters)."""
+    parent and its child (mj_collision's filters). ``pairs``: the model's ``<pair>`` geoms;
+    ``excluded``: its ``exclude_signature`` (:func:`_can_touch` gives both)."""
     import mujoco
 
     if model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT:
         return False
-    pairs = set(zip(model.pair_geom1.tolist(), model.pair_geom2.tolist()))
     if (g1, g2) in pairs or (g2, g1) in pairs:
         return True
     if not (model.geom_contype[g1] & model.geom_conaffinity[g2] or model.geom_contype[g2] & model.geom_conaffinity[g1]):
@@ -151,7 +151,6 @@ def _collides(model: Any, g1: int, g2: int) -> bool:
     w1, w2 = int(model.body_weldid[b1]), int(model.body_weldid[b2])
     if w1 == w2:   # one rigid body, or both fixed to the world
         return False
-    excluded = set(model.exclude_signature.tolist())
     if (b1 << 16) + b2 in excluded or (b2 << 16) + b1 in excluded:
         return False
     if not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_FILTERPARENT and w1 and w2:
@@ -168,7 +167,9 @@ def _can_touch(model: Any, body: int, name: str) -> bool:
     others = ([g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == nb] if nb >= 0
               else [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)])
     mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == body]
-    return any(_collides(model, g1, g2) for g1 in mine for g2 in others)
+    pairs = set(zip(model.pair_geom1.tolist(), model.pair_geom2.tolist()))
+    excluded = set(model.exclude_signature.tolist())
+    return any(_collides(model, g1, g2, pairs, excluded) for g1 in mine for g2 in others)
 
 
 def check_against_model(fates: Fates, model: Any) -> None:

@@ -23,8 +23,8 @@ _DEG = "\u00b0"
 COMPACT_AFTER = 3
 
 
-def _v(p) -> str:
-    return "(" + ", ".join(length_text(c) for c in p) + ")"
+def _v(p, text=length_text) -> str:
+    return "(" + ", ".join(text(c) for c in p) + ")"
 
 
 def _given(v: float) -> str:
@@ -35,12 +35,9 @@ def _given(v: float) -> str:
 
 def region_text(r: Region) -> str:
     """A region in a few words, its numbers as given: ``ball r 0.06 at (2, 0, 1.62)`` or ``box (lo)-(hi)``."""
-    def vec(p) -> str:
-        return "(" + ", ".join(_given(c) for c in p) + ")"
-
     if r.center is not None:
-        return f"ball r {_given(r.radius)} at {vec(r.center)}"
-    return f"box {vec(r.lo)}-{vec(r.hi)}"
+        return f"ball r {_given(r.radius)} at {_v(r.center, _given)}"
+    return f"box {_v(r.lo, _given)}-{_v(r.hi, _given)}"
 
 
 def asked(f: Fate) -> list[tuple[str, str]]:

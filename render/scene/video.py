@@ -73,7 +73,8 @@ def _unit_cylinder() -> np.ndarray:
 
 
 def _stretch(a: np.ndarray, b: np.ndarray, width: float) -> np.ndarray:
-    """The 3x3 taking the unit cylinder (radius 1, z from 0 to 1) to the segment a-b of radius ``width``."""
+    """The 3x3 taking the unit cylinder (radius 1, z from 0 to 1) to the segment a-b of radius ``width``
+    (a tendon's segment; with a unit b - a and width 1, a rotation taking z to b - a: an up-arrow)."""
     z = b - a
     u = z / np.linalg.norm(z)
     x = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.9 else [0.0, 1.0, 0.0])
@@ -330,11 +331,8 @@ class SceneRenderer(FrameRenderer):
                 if np.isfinite(a[0]) and np.linalg.norm(b - a) > 0:
                     self._solid(self.tendon_vao, _stretch(a, b, w), a, tuple(self.model.tendon_rgba[i]))
         for b, axis, vao, rgb in self.arrows:   # an up-axis: along the body-frame axis
-            z = bm[b] @ axis
-            z = z / max(float(np.linalg.norm(z)), 1e-12)
-            x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
-            x /= np.linalg.norm(x)
-            self._solid(vao, np.column_stack([x, np.cross(z, x), z]), bx[b], (*rgb, 1.0))
+            z = bm[b] @ axis   # a unit vector: a rotation of the unit axis
+            self._solid(vao, _stretch(np.zeros(3), z / np.linalg.norm(z), 1.0), bx[b], (*rgb, 1.0))
         for im in self.impacts:
             if im.t <= t_now:
                 self._solid(self.impact_vao, np.eye(3), np.asarray(im.pos), (*IMPACT, 1.0))
