@@ -26,13 +26,14 @@ from nbst.models.bowling.lane.units import (ARROW_BOARDS, ARROWS_FT, BOARD_WIDTH
 
 __all__ = ["SCENE", "EARLIER_SCENES", "LANE_GEOM", "PIN_LANE_GEOM", "layout", "lane_spec", "build_model", "ball_quat"]
 
-#: The lane half's scene, as throw and atlas files name it: "lane-3" is this one (lane-2's lane with
-#: the pins fitted to carry, ``scene.LANE_PINS``, issue 34); "lane-2" had a frictionless lane contact
+#: The lane half's scene, as throw and atlas files name it: "lane-4" is this one (lane-3's with the pin
+#: deck's friction 0.1, ``scene.LANE_PINS``, issue 48); "lane-3" had the pin deck at 0.2 (lane-2's lane
+#: with the pins fitted to carry, issue 34); "lane-2" had a frictionless lane contact
 #: with Coulomb friction from the oil film and issue 22's pins; "lane-1" (files without a scene) was
 #: issue 22's (MuJoCo's soft friction on boxes of relative oil).
-SCENE = "lane-3"
+SCENE = "lane-4"
 #: The scenes before it, oldest first (throw files name them; they replay only on their own).
-EARLIER_SCENES = ("lane-1", "lane-2")
+EARLIER_SCENES = ("lane-1", "lane-2", "lane-3")
 LANE_GEOM = "lane_surface"
 PIN_LANE_GEOM = "lane_surface_pins"
 
