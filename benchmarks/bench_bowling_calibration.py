@@ -49,7 +49,8 @@ The pin deck is replayed from each throw's deck start (``frame.deck_start``; the
 throw, as ``bench_carry_fit.py``), so ``--setting`` (the keys of ``bench_carry_fit.DEFAULTS``: ``pp_mu``,
 ``bp_mu``, ``pp_zeta``, ``bp_zeta``, ``deck_mu``, ``pin_mass``, ``pin_com_in``, ...) moves the pins from
 the scene's on the same throws. Results are kept in ``--cache`` (default ``~/.cache/nbst/calibration``)
-as they come: a rerun prints them without running anything (delete the folder to measure again).
+as they come, keyed by the lane scene (``lane.SCENE``: its pins), the profile and the setting: a rerun
+prints them without running anything (delete the folder to measure again).
 """
 from __future__ import annotations
 
@@ -126,11 +127,11 @@ def _save_bytes(path: Path, data: bytes) -> None:
 
 
 def _profile_tag() -> str:
-    """The pro's strike ball and noises and the pins' collision polygon, so that a changed profile or
-    pin is measured afresh."""
+    """The lane scene, the pro's strike ball and noises and the pins' collision polygon, so that a changed
+    scene (its pins: ``scene.LANE_PINS``), profile or pin is measured afresh."""
     p = profiles.profile("pro")
     s = p.strike
-    return (f"b{s.board:g}a{s.angle:g}m{s.mph:g}r{s.rpm:g}o{s.rotation:g}t{s.tilt:g}"
+    return (f"{lane.SCENE}-b{s.board:g}a{s.angle:g}m{s.mph:g}r{s.rpm:g}o{s.rotation:g}t{s.tilt:g}"
             f"x{p.noise_scale:g}s{p.spare_noise_scale:g}g{pin.COLLISION_SEGMENTS}")
 
 
@@ -332,10 +333,11 @@ def _same_breakpoint(base: lane.Delivery, ball: Ball, bp_board: float) -> str:
 
 
 def _game_tag(name: str) -> str:
-    """A profile's strike ball and noises, so that a changed profile's games are bowled afresh."""
+    """The lane scene and a profile's strike ball and noises, so that a changed scene's or profile's games
+    are bowled afresh."""
     p = profiles.profile(name)
     s = p.strike
-    return (f"{name}-b{s.board:g}a{s.angle:g}m{s.mph:g}r{s.rpm:g}o{s.rotation:g}t{s.tilt:g}"
+    return (f"{lane.SCENE}-{name}-b{s.board:g}a{s.angle:g}m{s.mph:g}r{s.rpm:g}o{s.rotation:g}t{s.tilt:g}"
             f"x{p.noise_scale:g}s{p.spare_noise_scale}" + ("-reads" if p.reads_lane else ""))
 
 

@@ -30,7 +30,7 @@ head pin's line, the deck start's): flush hits (boards 17-18) and high pocket hi
 whole-degree bin of entry angle; per bin the strikes, the solid 10s as ``names.leave_names`` names
 them, the 4 left alone (``names``' solid 4 on a pocket hit), and the leaves with the 4 in them
 (4-7, 4-9, 4-7-10 ...), with Wilson 95 % intervals. Results go to ``--cache`` as they come
-(resumable). ``--two-pin``: on the flush hits, the first body to touch the 4 and the line the 2 pin
+(resumable; keyed by the lane scene, ``lane.SCENE``, and the setting). ``--two-pin``: on the flush hits, the first body to touch the 4 and the line the 2 pin
 is sent along (:func:`two_pin_paths`).
 
 **By board** (``--by-board LO,HI,STEP``, issue 48: where the pocket's high side falls off). ``--n`` of
@@ -56,7 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nbst.models.bowling import pin, scene
+from nbst.models.bowling import lane, pin, scene
 from nbst.models.bowling.lane import frame, names, noise, profiles, spares
 from nbst.models.bowling.lane.units import BOARD_WIDTH, hand_sign
 from nbst.seeds import derived_seed
@@ -354,7 +354,7 @@ def main() -> None:
         throws = board_starts(args.cache, args.n, args.seed)
         path = args.cache / "board_results.json"
         done = json.loads(path.read_text()) if path.exists() else {}
-        k = f"{CF.key(prm)}{segments}|{args.by_board}|n{args.n}|seed{args.seed}"
+        k = f"{lane.SCENE}|{CF.key(prm)}{segments}|{args.by_board}|n{args.n}|seed{args.seed}"
         if k not in done:
             t0 = time.time()
             done[k] = by_board(throws, bins, step, args.seed, prm, args.jobs)
@@ -364,7 +364,7 @@ def main() -> None:
             tmp.write_text(json.dumps(done))
             os.replace(tmp, path)
         ang = np.array([st.angle for _, st in throws])
-        print(f"\nsetting: {CF.key(prm)}{segments}; the pro's first balls of seed {args.seed}: {len(throws)}, "
+        print(f"\nscene {lane.SCENE}, setting: {CF.key(prm)}{segments}; the pro's first balls of seed {args.seed}: {len(throws)}, "
               f"entry {ang.mean():.2f} deg (sd {ang.std():.2f}), each carried onto every bin\n")
         board_table(done[k], step)
         return
@@ -387,7 +387,7 @@ def main() -> None:
         return
     path = args.cache / f"angle_results_n{args.n}_seed{args.seed}.json"
     done = json.loads(path.read_text()) if path.exists() else {}
-    k = f"{CF.key(prm)}|{args.releases}{segments}"
+    k = f"{lane.SCENE}|{CF.key(prm)}|{args.releases}{segments}"
     if k not in done:
         t0 = time.time()
         done[k] = replay(starts, buckets, prm, args.jobs)
