@@ -6,6 +6,7 @@
     python benchmarks/bench_pocket_angle.py --two-pin [--setting spot_mm=6]
     python benchmarks/bench_pocket_angle.py --collision-segments 32 [--two-pin]   # the pins as 32-gons (probe)
     python benchmarks/bench_pocket_angle.py --by-board 16,19.5,0.25 --n 40 [--seed 11] [--setting h=0.0005]
+                                            [--profile league150]
 
 Bowlers' lore (a right-hander): a ball that comes in too strong, too high or at too much angle
 leaves the 4 (the 2 pin goes round the 4, or drives behind it), the 4-7, the 4-9 or worse: "a
@@ -28,20 +29,21 @@ normal with that sigma, drawn anew for every throw of every bucket, the same dra
 **Figures.** Every throw is binned by where its ball actually entered (board and angle at the
 head pin's line, the deck start's): flush hits (boards 17-18) and high pocket hits (18-19) per
 whole-degree bin of entry angle; per bin the strikes, the solid 10s as ``names.leave_names`` names
-them, the 4 left alone (``names``' solid 4 on a pocket hit), and the leaves with the 4 in them
-(4-7, 4-9, 4-7-10 ...), with Wilson 95 % intervals. Results go to ``--cache`` as they come
-(resumable; keyed by the lane scene, ``lane.SCENE``, and the setting). ``--two-pin``: on the flush hits, the first body to touch the 4 and the line the 2 pin
-is sent along (:func:`two_pin_paths`).
+them, the 4 left alone (``names``' solid 4 on a pocket hit), the leaves with the 4 in them
+(4-7, 4-9, 4-7-10 ...) and those with the 9, with Wilson 95 % intervals. Results go to ``--cache``
+as they come (resumable; keyed by the lane scene, ``lane.SCENE``, and the setting). ``--two-pin``: on
+the flush hits, the first body to touch the 4 and the line the 2 pin is sent along
+(:func:`two_pin_paths`).
 
 **By board** (``--by-board LO,HI,STEP``, issue 48: where the pocket's high side falls off). ``--n`` of
-the ``pro``'s first balls (its strike ball under its own noise, ``profiles.profile("pro").noise``,
-seed ``--seed``; by default 11, a seed the calibration bench calls "fit"), each carried sideways on
-the deck (:func:`shifted`: the same speed, spin and entry angle, the ball moved along y where it
-crosses the deck front; the deck's friction is the same on every board, so this is the ball arriving
-on another board) onto every bin of boards LO..HI: throw i enters bin b on board
-``lo_b + STEP * u_i``, u_i uniform from ``derived_seed(seed, 48)`` (the same u_i in every bin and
-setting). Per bin: strikes, the 10 alone, splits (``names.is_split``) and the commonest leaves, with
-Wilson 95 % intervals; ``--setting h=0.0005`` runs the pin deck at half the step.
+the ``pro``'s first balls (or ``--profile``'s: its strike ball under its own noise,
+``profiles.profile(name).noise``), seed ``--seed`` (by default 11, a seed the calibration bench calls
+"fit"), each carried sideways on the deck (:func:`shifted`: the same speed, spin and entry angle, the
+ball moved along y where it crosses the deck front; the deck's friction is the same on every board, so
+this is the ball arriving on another board) onto every bin of boards LO..HI: throw i enters bin b on
+board ``lo_b + STEP * u_i``, u_i uniform from ``derived_seed(seed, 48)`` (the same u_i in every bin and
+setting). Per bin: strikes, the 10 alone, splits (``names.is_split``), leaves with the 9 and the
+commonest leaves, with Wilson 95 % intervals; ``--setting h=0.0005`` runs the pin deck at half the step.
 """
 from __future__ import annotations
 
@@ -129,13 +131,13 @@ def replay(starts: dict, buckets: list, prm: dict, jobs: int) -> list:
     return [(*t, list(lv), cap) for t, (lv, cap) in zip(tags, _run(calls, prm, jobs))]
 
 
-def board_starts(cache: Path, n: int, seed: int) -> list:
-    """``n`` of the pro's first balls (its strike ball and noise, seed ``seed``): (delivery, deck start) each,
-    those that reached the deck (cached)."""
-    path = cache / f"board_starts_n{n}_seed{seed}.pkl"
+def board_starts(cache: Path, n: int, seed: int, name: str = "pro") -> list:
+    """``n`` of profile ``name``'s first balls (its strike ball and noise, seed ``seed``): (delivery, deck
+    start) each, those that reached the deck (cached)."""
+    path = cache / f"board_starts{'' if name == 'pro' else '_' + name}_n{n}_seed{seed}.pkl"
     if path.exists():
         return pickle.loads(path.read_bytes())
-    pro, m = profiles.profile("pro"), frame.frame_model()
+    pro, m = profiles.profile(name), frame.frame_model()
     out = [(dv, st) for dv in noise.sample(pro.strike, n, seed, pro.noise)
            for st in [frame.deck_start(dv, model=m)] if st.board is not None]
     cache.mkdir(parents=True, exist_ok=True)
@@ -184,8 +186,8 @@ def by_board(throws: list, bins: np.ndarray, step: float, seed: int, prm: dict, 
 def board_table(rows: list, step: float) -> None:
     """Per bin of boards: strikes, the 10 alone, splits, the commonest leaves (Wilson 95 % intervals)."""
     print("| boards at the head pin's line | balls | strikes (95 % CI) | the 10 alone | splits | caps | "
-          "commonest leaves |")
-    print("|---|---|---|---|---|---|---|")
+          "leaves with the 9 | commonest leaves |")
+    print("|---|---|---|---|---|---|---|---|")
     for lo in sorted({r[0] for r in rows}):
         bin_ = [r for r in rows if r[0] == lo]
         n, c = len(bin_), {}
@@ -197,7 +199,7 @@ def board_table(rows: list, step: float) -> None:
         lo_, hi_ = noise.wilson(k, n)
         print(f"| {lo:g}-{lo + step:g} | {n} | {k}, {100 * k / n:.0f} % ({100 * lo_:.0f}-{100 * hi_:.0f} %) | "
               f"{sum(r[3] == [10] for r in bin_)} | {_ci(sum(names.is_split(r[3]) for r in bin_ if r[3]), n)} | "
-              f"{sum(r[4] for r in bin_)} | {top} |")
+              f"{sum(r[4] for r in bin_)} | {sum(9 in r[3] for r in bin_)} | {top} |")
 
 
 def kickback_restitution(prm: dict, speed: float = 3.0, phases: int = 8) -> tuple:
@@ -289,19 +291,20 @@ def _ci(k: int, n: int) -> str:
 
 def table(rows: list, boards: tuple, label: str) -> None:
     """Per whole-degree bin of actual entry angle: hits on ``boards``, strikes, solid 10s (``names``), the
-    4 alone (named a solid 4 on a pocket hit), leaves with the 4, the commonest leaves."""
+    4 alone (named a solid 4 on a pocket hit), leaves with the 4, leaves with the 9, the commonest leaves."""
     print(f"\n### {label}: boards {boards[0]:g}-{boards[1]:g} at the head pin's line, binned by actual entry angle\n")
-    print("| entry angle | hits | strikes | solid 10 | the 4 alone | leaves with the 4 | commonest leaves |")
-    print("|---|---|---|---|---|---|---|")
+    print("| entry angle | hits | strikes | solid 10 | the 4 alone | leaves with the 4 | leaves with the 9 | "
+          "commonest leaves |")
+    print("|---|---|---|---|---|---|---|---|")
     sel = [r for r in rows if boards[0] <= r[1] <= boards[1]]
-    tot = np.zeros(5, dtype=int)
+    tot = np.zeros(6, dtype=int)
     for a in range(3, 10):
         bin_ = [r for r in sel if a - 0.5 <= r[2] < a + 0.5]
         if not bin_:
             continue
         nm = [names.leave_names(range(1, 11), r[3], r[1], r[2]) for r in bin_]
         k = np.array([len(bin_), sum(not r[3] for r in bin_), sum("solid 10" in x for x in nm),
-                      sum(r[3] == [4] for r in bin_), sum(4 in r[3] for r in bin_)])
+                      sum(r[3] == [4] for r in bin_), sum(4 in r[3] for r in bin_), sum(9 in r[3] for r in bin_)])
         tot += k
         c: dict = {}
         for r in bin_:
@@ -310,9 +313,9 @@ def table(rows: list, boards: tuple, label: str) -> None:
                 c[s] = c.get(s, 0) + 1
         top = ", ".join(f"{s} {v}" for s, v in sorted(c.items(), key=lambda kv: -kv[1])[:5])
         print(f"| {a - 0.5:g}-{a + 0.5:g} deg | {k[0]} | {_ci(k[1], k[0])} | {_ci(k[2], k[0])} | {_ci(k[3], k[0])} "
-              f"| {_ci(k[4], k[0])} | {top} |")
+              f"| {_ci(k[4], k[0])} | {_ci(k[5], k[0])} | {top} |")
     print(f"| all | {tot[0]} | {_ci(tot[1], tot[0])} | {_ci(tot[2], tot[0])} | {_ci(tot[3], tot[0])} "
-          f"| {_ci(tot[4], tot[0])} | |")
+          f"| {_ci(tot[4], tot[0])} | {_ci(tot[5], tot[0])} | |")
 
 
 def main() -> None:
@@ -331,6 +334,7 @@ def main() -> None:
                          f"{pin.COLLISION_SEGMENTS} (one process: --jobs 1)")
     ap.add_argument("--by-board", default=None, metavar="LO,HI,STEP",
                     help="the pro's first balls carried onto every bin of boards LO..HI (issue 48)")
+    ap.add_argument("--profile", default="pro", help="--by-board: whose first balls (default pro)")
     ap.add_argument("--two-pin", action="store_true",
                     help="on the flush hits: what touches the 4 first, and the line the 2 pin is sent along")
     args = ap.parse_args()
@@ -351,10 +355,11 @@ def main() -> None:
     if args.by_board:
         lo, hi, step = (float(x) for x in args.by_board.split(","))
         bins = np.round(np.arange(lo, hi - 1e-9, step), 6)
-        throws = board_starts(args.cache, args.n, args.seed)
+        throws = board_starts(args.cache, args.n, args.seed, args.profile)
         path = args.cache / "board_results.json"
         done = json.loads(path.read_text()) if path.exists() else {}
-        k = f"{lane.SCENE}|{CF.key(prm)}{segments}|{args.by_board}|n{args.n}|seed{args.seed}"
+        who = "" if args.profile == "pro" else f"|{args.profile}"
+        k = f"{lane.SCENE}|{CF.key(prm)}{segments}{who}|{args.by_board}|n{args.n}|seed{args.seed}"
         if k not in done:
             t0 = time.time()
             done[k] = by_board(throws, bins, step, args.seed, prm, args.jobs)
@@ -364,7 +369,8 @@ def main() -> None:
             tmp.write_text(json.dumps(done))
             os.replace(tmp, path)
         ang = np.array([st.angle for _, st in throws])
-        print(f"\nscene {lane.SCENE}, setting: {CF.key(prm)}{segments}; the pro's first balls of seed {args.seed}: {len(throws)}, "
+        print(f"\nscene {lane.SCENE}, setting: {CF.key(prm)}{segments}; {args.profile}'s first balls of seed "
+              f"{args.seed}: {len(throws)}, "
               f"entry {ang.mean():.2f} deg (sd {ang.std():.2f}), each carried onto every bin\n")
         board_table(done[k], step)
         return
