@@ -216,3 +216,37 @@ def test_cma_by_key_follows_the_distance_where_the_cost_misleads():
         by_cost = Engine(4, **kw).run(misleading)
         assert "solved" in by_key.stopped and np.linalg.norm(by_key.x - c) < 0.05
         assert by_cost.stopped == {"budget": 300} and by_cost.distance > 0
+
+
+def test_explore_batches_ask_small_first_batches_of_the_same_points_and_stop_at_the_first_that_solves():
+    """``explore_batches=(1, 1, 2, 4)``: the exploring phase asks 1, 1, 2, 4, then ``batch`` points,
+    the same points in the same order as batches of 8 (no population is drawn from while
+    exploring); a problem whose third uniform point solves it stops after the batch of 2 that
+    holds it (4 rollouts), where batches of 8 roll out 8. Sizes under 1 are refused."""
+    def sizes_and_points(**kw):
+        e = Engine(2, seed=4, max_rollouts=100, batch=8, explore=16, ga_batches=0, cma=True, **kw)
+        sizes, pts = [], []
+        while e._phase == "explore" and not e.stop():
+            U = e.ask()
+            if e._pending[1] != "explore":
+                break
+            sizes.append(len(U))
+            pts.append(U)
+            e.tell(U, [0] * len(U), [1] * len(U), [1.0] * len(U))
+        return sizes, np.vstack(pts)
+
+    small, p_small = sizes_and_points(explore_batches=(1, 1, 2, 4))
+    eight, p_eight = sizes_and_points()
+    assert small == [1, 1, 2, 4, 8] and eight == [8, 8]
+    assert np.array_equal(p_small, p_eight)
+    third = p_eight[2]
+
+    def solved_at_third(U):
+        hit = np.all(np.isclose(np.atleast_2d(U), third), axis=1)
+        return np.zeros(len(hit), dtype=int), np.where(hit, 0, 1), np.where(hit, 0.0, 1.0)
+
+    kw = dict(seed=4, max_rollouts=100, batch=8, explore=16, ga_batches=0, cma=True)
+    assert Engine(2, explore_batches=(1, 1, 2, 4), **kw).run(solved_at_third).rollouts == 4
+    assert Engine(2, **kw).run(solved_at_third).rollouts == 8
+    with pytest.raises(InputError):
+        Engine(2, seed=1, max_rollouts=5, explore_batches=(1, 0))

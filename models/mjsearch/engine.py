@@ -30,7 +30,9 @@ What the engine does with them, in a fixed cycle:
 
 1. **explore**: ``explore`` points (at most a quarter of the budget, at least one batch when the
    GA is on), each from ``init(engine)`` (default: uniform in the cube), in batches of
-   ``batch``; ``init_done(engine)`` may end this phase early.
+   ``batch`` (the first ones of ``explore_batches`` points each, when given: a problem whose
+   first random point often solves it asks for one); ``init_done(engine)`` may end this phase
+   early.
 2. **the paper's GA** (when ``ga_batches`` > 0): ``ga_batches`` batches of children
    (``ga_fine`` when the best point is fine). A child comes from one of four operations,
    equally likely: *creep* (one block moved by a Gaussian step, its sigma drawn from
@@ -245,6 +247,8 @@ class Engine:
             i for block i.
         batch: points per batch.
         explore: points of the exploring phase (capped at a quarter of the budget).
+        explore_batches: the sizes of the exploring phase's first batches, in turn (each at most
+            ``batch``), then ``batch`` (default (): every batch ``batch``).
         init: ``init(engine) -> (dim,) unit point`` for the exploring phase (default: uniform).
         init_done: ``init_done(engine) -> bool`` ends the exploring phase early (default: never).
         ga_batches, ga_fine: GA batches per cycle (0: no GA, no population), and when the best
@@ -283,7 +287,8 @@ class Engine:
 
     def __init__(self, dim: int, *, seed: int | np.random.Generator, max_rollouts: int,
                  blocks: Sequence[Sequence[int]] | None = None, bits: Sequence[int | None] | None = None,
-                 batch: int = BATCH, explore: int = EXPLORE, init: Callable[[Engine], np.ndarray] | None = None,
+                 batch: int = BATCH, explore: int = EXPLORE, explore_batches: Sequence[int] = (),
+                 init: Callable[[Engine], np.ndarray] | None = None,
                  init_done: Callable[[Engine], bool] | None = None, ga_batches: int = GA_BATCHES,
                  ga_fine: int = GA_FINE, moves: dict[str, Callable] | None = None,
                  creep: Sequence[float] = CREEP, prefer_unmet: bool = False, redraw_unmet: float = 0.0,
@@ -314,6 +319,9 @@ class Engine:
             if src not in ("best", "cell"):
                 raise InputError(f"a schedule's source must be 'best' or 'cell', got {src!r}")
         self.batch, self.explore = int(batch), int(explore)
+        if any(int(k) < 1 for k in explore_batches):
+            raise InputError(f"explore_batches must be whole numbers of at least 1, got {list(explore_batches)!r}")
+        self._explore_sizes = [min(int(k), self.batch) for k in explore_batches]
         self.init, self.init_done = init, init_done
         self.ga_batches, self.ga_fine = int(ga_batches), int(ga_fine)
         self.moves = dict(moves or {})
@@ -405,7 +413,7 @@ class Engine:
         while True:
             if self._phase == "explore":
                 if self._explore_left > 0:
-                    k = min(n, self._explore_left)
+                    k = min(self._explore_sizes.pop(0) if self._explore_sizes else n, n, self._explore_left)
                     U = np.array([self._init_point() for _ in range(k)]) if self.init is not None \
                         else self.rng.random((k, self.dim))
                     return self._asked(U, "explore", [None] * k)

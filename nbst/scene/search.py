@@ -20,7 +20,10 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
   culled past :data:`POPULATION`;
 * **one controlled body** (one block: crossover has nothing to swap, and the GA's uniform
   randomize of the only block is a fresh random trial): no GA; :data:`ONE_BODY_EXPLORE` exploring
-  trials, then the engine's CMA-ES restarts (population :data:`ONE_BODY_POPSIZE`) from the best
+  trials (the first in batches of :data:`ONE_BODY_EXPLORE_BATCHES`: the search stops at the
+  first batch that holds a solution, and a scene whose random trial often solves it, as
+  dominoes, should not roll out 8 to find one), then the engine's CMA-ES restarts (population
+  :data:`ONE_BODY_POPSIZE`) from the best
   trial, each generation ranked by (distance, cost) (the engine's ``cma_by_key``); a trial that
   meets every fate at h is *fine* (only the ladder is left): restarts then polish the best, and
   once three in a row leave it not kept on the ladder (:data:`ONE_BODY_SPENT_GAIN`: a lower
@@ -67,7 +70,8 @@ from nbst.scene.judge import signature_text
 from nbst.scene.rollout import SceneRollout, SceneSim
 
 __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT_PER_BIT", "INIT_MAX", "CREEP",
-           "LADDER_PENALTY", "LADDER_FAR", "ONE_BODY_EXPLORE", "ONE_BODY_POPSIZE", "ONE_BODY_SPENT_GAIN",
+           "LADDER_PENALTY", "LADDER_FAR", "ONE_BODY_EXPLORE", "ONE_BODY_EXPLORE_BATCHES", "ONE_BODY_POPSIZE",
+           "ONE_BODY_SPENT_GAIN",
            "SceneProgress",
            "SceneSearchResult", "signature_search", "noisy_probability",
            "distance_of", "ladder_check"]
@@ -97,6 +101,10 @@ REDRAW_UNMET = 1.0
 #: One controlled body (one block: crossover has nothing to swap): exploring trials before the
 #: engine's CMA-ES restarts, and their population.
 ONE_BODY_EXPLORE, ONE_BODY_POPSIZE = 16, 12
+#: One controlled body: the sizes of the first exploring batches (then :data:`BATCH`). The search
+#: has no population to draw from while it explores, so the trials are those of batches of 8, in
+#: the same order: a search not solved among them rolls out the same trials as with batches of 8.
+ONE_BODY_EXPLORE_BATCHES = (1, 1, 2, 4)
 #: One controlled body: a polishing restart that does not make the best hold on the ladder counts
 #: as spent (the engine's ``spent_gain``: 1, only a solution is progress; the rungs' graded costs
 #: fall by a few percent from restart to restart without a trial that holds).
@@ -340,7 +348,8 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
         how: dict[str, Any] = dict(explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init_done=S.init_done,
                                    ga_batches=1, ga_fine=1, cma=False, redraw_unmet=REDRAW_UNMET)
     else:  # one controlled body: nothing to cross over; CMA-ES restarts after one exploring batch or two
-        how = dict(explore=ONE_BODY_EXPLORE, ga_batches=0, cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True,
+        how = dict(explore=ONE_BODY_EXPLORE, explore_batches=ONE_BODY_EXPLORE_BATCHES, ga_batches=0, cma=True,
+                   popsize=ONE_BODY_POPSIZE, cma_by_key=True,
                    hold_distance=0,  # a trial met at h but not kept on the ladder: polished, then other funnels
                    spent_gain=ONE_BODY_SPENT_GAIN, wander=True)  # ... and new funnels looked for
     eng = Engine(len(S.live), seed=rng, max_rollouts=max_rollouts, blocks=blocks, bits=S.bit, batch=BATCH, init=S.init,
