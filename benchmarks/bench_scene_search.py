@@ -19,7 +19,10 @@ Variants (joined with ``+``), each patched onto the module for the run:
 * ``centre``: the first exploring trial is the middle of the ranges (the model's nominal);
 * ``uni``: exploring trials uniform (no directed aim); ``lhs``: a Latin hypercube of
   ``ONE_BODY_EXPLORE`` points (scipy), no aim; ``lhsdir``: the same, half of them aimed;
-* ``pop8``, ``pop16``: the CMA-ES population of one body; ``ex8``, ``ex32``: its exploring trials.
+* ``pop8``, ``pop16``: the CMA-ES population of one body; ``ex8``, ``ex32``: its exploring trials;
+* ``batch8``: one body's exploring trials in batches of 8 (before ``ONE_BODY_EXPLORE_BATCHES``);
+* ``near0``, ``near3``: a ``hits`` name never touched costs 1 however near it came (before
+  ``nbst.scene.judge.HITS_NEAR``), or 1 plus three times its nearness.
 
 ``--engine K=V`` (repeatable) sets an option of the one-body search's engine for the run
 (``sigma0=0.06``, ``"schedule=(('best', 5/3), ('cell', 5/9))"``, ``"polish=(1/3, 1/9, 1)"``,
@@ -34,6 +37,7 @@ import time
 
 import numpy as np
 
+import nbst.scene.judge as J
 import nbst.scene.search as S
 from nbst.models.mjsearch import engine as E
 from nbst.scene.rollout import SceneSim, quiet_mujoco_warnings
@@ -91,6 +95,9 @@ VARIANTS = {
     "pop16": lambda: setattr(S, "ONE_BODY_POPSIZE", 16),
     "ex8": lambda: setattr(S, "ONE_BODY_EXPLORE", 8),
     "ex32": lambda: setattr(S, "ONE_BODY_EXPLORE", 32),
+    "near0": lambda: setattr(J, "HITS_NEAR", 0.0),
+    "near3": lambda: setattr(J, "HITS_NEAR", 3.0),
+    "batch8": lambda: setattr(S, "ONE_BODY_EXPLORE_BATCHES", ()),
 }
 
 

@@ -118,3 +118,23 @@ def test_a_never_hits_touch_at_the_start_says_so():
     v = one(Fate("bead", never_hits=("table", "wall")), line(Z, Z), touches={"table": 0.0, "wall": 0.5})
     assert not v.met and v.cost == 2.0
     assert v.fates[0].happened == "touched table (already touching at the start), wall"
+
+
+def test_a_hits_name_never_touched_costs_1_plus_its_nearness_and_a_touched_one_nothing():
+    """``hits`` of a name never touched: 1 plus its least gap over its gap at the start (here 0.1 m
+    of 0.5 m: 1.2; 0.4 of 0.5: 1.8), so a near miss is cheaper than a far one; with no nearness
+    recorded (or none for that name, or a start already touching) it is 1, flat; a name touched
+    adds nothing, whatever its nearness says."""
+    fate = Fate("b", hits=("x", "y"))
+    path = line(Z, Z)
+
+    def cost(touches, near):
+        return judge_body(fate, T, path, Q0, Z, Z, touches, near).cost
+
+    assert abs(cost({"x": 0.1}, {"y": (0.1, 0.5)}) - 1.2) < TOL
+    assert abs(cost({"x": 0.1}, {"y": (0.4, 0.5)}) - 1.8) < TOL
+    assert abs(cost({"x": 0.1}, {"x": (0.3, 0.5)}) - 1.0) < TOL  # y has no nearness: flat
+    assert abs(cost({"x": 0.1}, {"y": (0.0, 0.0)}) - 1.0) < TOL  # touching at the start: flat
+    assert abs(cost({}, {"x": (0.1, 0.5), "y": (0.0, 0.5)}) - 2.2) < TOL
+    assert cost({"x": 0.1, "y": 0.2}, {"x": (0.3, 0.5), "y": (0.3, 0.5)}) == 0.0
+    assert abs(one(fate, path, touches={"x": 0.1}).cost - 1.0) < TOL  # nothing recorded: flat

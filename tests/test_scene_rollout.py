@@ -452,3 +452,40 @@ def test_a_dask_cluster_gives_the_same_solution_as_threads(toss):
         b = solve(None, toss, seed=7, max_rollouts=300, cluster=lc.scheduler_address)
     assert a.rollouts == b.rollouts and a.best.x.tobytes() == b.best.x.tobytes()
     assert a.best.qpos.tobytes() == b.best.qpos.tobytes() and a.met == b.met
+
+
+FLYBY = """<mujoco model="flyby">
+  <option timestep="0.005" gravity="0 0 0"/>
+  <worldbody>
+    <geom name="post" type="sphere" pos="0.5 -0.25 0" size="0.05"/>
+    <body name="a" pos="0 0 0"><freejoint/><geom type="sphere" size="0.05"/></body>
+    <body name="b" pos="1 0.3 0"><freejoint/><geom type="sphere" size="0.05"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("loop", [False, True])
+def test_a_hits_miss_is_graded_by_the_closest_approach_of_the_two_spheres(tmp_path, loop):
+    """No gravity: ball a (r 5 cm) flies along +x at 1 m/s past ball b, whose centre is 0.3 m off
+    its line at x = 1, and past a world sphere (r 5 cm) 0.25 m off it at x = 0.5: it touches
+    neither. The least gaps are 0.3 - 0.1 = 0.2 m and 0.25 - 0.1 = 0.15 m (at x = 1 and 0.5, on
+    recorded steps), the gaps at the start sqrt(1.09) - 0.1 and sqrt(0.3125) - 0.1 m (within
+    1e-9 m), on either rollout path; the judge's ``hits`` cost is 2 plus their ratios."""
+    (tmp_path / "flyby.xml").write_text(FLYBY)
+    doc = {"format": "nbst-fates", "version": 1, "scene": "flyby.xml", "duration": 2.0,
+           "controls": {"a": {"linvel": [[1, 1], [0, 0], [0, 0]]}},
+           "fates": {"a": {"hits": ["b", "post"]}}}
+    (tmp_path / "flyby.json").write_text(json.dumps(doc))
+    f, model = load_fates(tmp_path / "flyby.json")
+    with SceneSim(f, model, loop=loop) as sim:
+        r = sim.rollout(np.array([1.0, 0.0, 0.0]))
+    near = dict(zip(("b", "post"), ((0.2, math.sqrt(1.09) - 0.1), (0.15, math.sqrt(0.3125) - 0.1))))
+    hits = r.judgement.bodies[0].fates[0]
+    assert hits.fate == "hits" and not hits.met and hits.happened == "first touches: none"
+    from nbst.scene.rollout import closest_approach
+    assert sim.engine == ("mj_step loop" if loop else "mujoco.rollout")
+    got = closest_approach(sim, np.array([[[t, 0, 0], [1, 0.3, 0]] for t in np.arange(400) * 0.005]))[0]
+    for name, (least, start) in near.items():
+        assert abs(got[name][0] - least) < 1e-9 and abs(got[name][1] - start) < 1e-9
+    assert abs(hits.cost - (2 + sum(a / b for a, b in near.values()))) < 1e-9

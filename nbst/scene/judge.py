@@ -15,7 +15,10 @@ The costs (metres and radians, 1 rad counting as 1 m; a contact count as 1 m):
   the next looked for from then on); the cost sums, for each region not passed, the trajectory's
   nearest approach to it after the last region passed;
 * ``up``: the angle (rad) by which the body-frame axis misses world +z beyond ``within_deg``;
-* ``hits``: 1 per name never touched plus 1 per pair of first touches out of order;
+* ``hits``: 1 per name never touched plus 1 per pair of first touches out of order, plus, per name
+  never touched whose nearness was recorded, how near it came: the least gap over the run over
+  the gap at the start (0 to 1; the rollout's ``closest_approach``) times :data:`HITS_NEAR`, so
+  that a near miss costs less than a far one;
 * ``never_hits``: 1 per name touched;
 * ``at_rest``: the final speed above :data:`~nbst.scene.fates.AT_REST_SPEED` plus 0.1 s times the
   final spin above :data:`~nbst.scene.fates.AT_REST_SPIN`;
@@ -32,8 +35,13 @@ import numpy as np
 
 from nbst.scene.fates import AT_REST_SPEED, AT_REST_SPIN, STILL_DISTANCE, Fate, Fates
 
-__all__ = ["Recording", "FateVerdict", "BodyVerdict", "Judgement", "judge", "judge_body", "length_text", "rotate",
+__all__ = ["HITS_NEAR", "Recording", "FateVerdict", "BodyVerdict", "Judgement", "judge", "judge_body", "length_text", "rotate",
            "signature_text"]
+
+
+#: The weight of a ``hits`` name's nearness (its least gap over its gap at the start, 0 to 1) in the
+#: cost of a name never touched (0: 1 per name, flat, however near it came).
+HITS_NEAR = 1.0
 
 
 def length_text(v: float) -> str:
@@ -59,6 +67,8 @@ class Recording:
         angvel: (B, 3) final world angular velocities (rad/s).
         touches: per body, ``{name: time of its first touch}`` for the names of its ``hits`` and
             ``never_hits`` that it touched.
+        near: per body, ``{name: (least gap, gap at the start)}`` (m) for names of its ``hits``
+            (those whose nearness the rollout records; () or a missing name: not graded).
     """
 
     times: np.ndarray
@@ -67,6 +77,7 @@ class Recording:
     linvel: np.ndarray
     angvel: np.ndarray
     touches: tuple[dict[str, float], ...]
+    near: tuple[dict[str, tuple[float, float]], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -148,19 +159,23 @@ def _through(fate: Fate, path: np.ndarray) -> FateVerdict:
     return FateVerdict("through", passed == n, cost, f"passed {passed} of {n} in order")
 
 
-def _hits(fate: Fate, touches: dict[str, float]) -> FateVerdict:
+def _hits(fate: Fate, touches: dict[str, float], near: dict[str, tuple[float, float]]) -> FateVerdict:
     got = [touches.get(n) for n in fate.hits]
     missing = sum(t is None for t in got)
+    # a name never touched: how near it came, the least gap over the gap at the start (0 to 1)
+    nearness = sum(near[n][0] / near[n][1] for n, t in zip(fate.hits, got) if t is None and n in near
+                   and near[n][1] > 0)
     times = [t for t in got if t is not None]
     inversions = sum(1 for i in range(len(times)) for j in range(i + 1, len(times)) if times[j] < times[i])
     order = sorted((t, n) for n, t in zip(fate.hits, got) if t is not None)
     said = ", ".join(f"{n} at {t:.3f} s" for t, n in order) or "none"
-    return FateVerdict("hits", missing == 0 and inversions == 0, float(missing + inversions),
+    return FateVerdict("hits", missing == 0 and inversions == 0, float(missing + inversions + HITS_NEAR * nearness),
                        f"first touches: {said}")
 
 
 def judge_body(fate: Fate, times: np.ndarray, path: np.ndarray, quat: np.ndarray, linvel: np.ndarray,
-               angvel: np.ndarray, touches: dict[str, float]) -> BodyVerdict:
+               angvel: np.ndarray, touches: dict[str, float],
+               near: dict[str, tuple[float, float]] | None = None) -> BodyVerdict:
     """Judge one body's fates from its own record (``path``: (T+1, 3); the rest as in :class:`Recording`)."""
     out: list[FateVerdict] = []
     end = path[-1]
@@ -186,7 +201,7 @@ def judge_body(fate: Fate, times: np.ndarray, path: np.ndarray, quat: np.ndarray
         out.append(FateVerdict("up", ang <= within, math.radians(max(0.0, ang - within)),
                                f"the axis ends {ang:.1f} deg from up"))
     if fate.hits:
-        out.append(_hits(fate, touches))
+        out.append(_hits(fate, touches, near or {}))
     if fate.never_hits:
         hit = [n for n in fate.never_hits if n in touches]
         # a touch at the first step: the scene starts with the two in contact (a body resting on the floor it
@@ -217,4 +232,5 @@ def judge(fates: Fates, rec: Recording) -> Judgement:
         the :class:`Judgement`: per body its verdicts, the signature, the total cost.
     """
     return Judgement(tuple(judge_body(f, rec.times, rec.pos[:, i], rec.quat[i], rec.linvel[i], rec.angvel[i],
-                                      rec.touches[i]) for i, f in enumerate(fates.fates)))
+                                      rec.touches[i], rec.near[i] if rec.near else None)
+                            for i, f in enumerate(fates.fates)))

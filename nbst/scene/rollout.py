@@ -24,7 +24,10 @@ again, the model's ``opt`` copied over) and written by the rollout at every step
   touch is a matching contact of distance <= 0 (found > 0, smallest distance <= 0); its time is
   the first step it shows in;
 * with ``sequences=True``, such a sensor per fated body and each other named body (a geom of the
-  world body by its own name): the contact sequence.
+  world body by its own name): the contact sequence;
+* a ``framepos`` sensor of each body in a ``hits`` pair (the fated body and each named body): how
+  near a name never touched came (:func:`closest_approach`: the gap between the two bodies'
+  bounding spheres, its least over the run and at the start), which the judge grades by.
 
 The final pose and velocities are read from a second ``MjData``. Sensors only read the state, so
 the copy steps as the scene does: when it is made, every array of the two models outside the
@@ -94,6 +97,22 @@ def contact_sequence(firsts: list[tuple[int, str, str]]) -> list[str]:
             said.add(pair)
             out.append(f"{body}-{other}")
     return out
+
+
+def closest_approach(sim: SceneSim, npos: np.ndarray | None) -> tuple[dict[str, tuple[float, float]], ...]:
+    """Per fated body, ``{name: (least gap, gap at the start)}`` (m) for each name of its ``hits``
+    that is a body or a geom of the world (not a plane): the gap is the distance between the two
+    origins less both bounding radii (a body's about its origin: each geom's offset plus its
+    ``geom_rbound``; a world geom's about its centre), never below 0, over the steps recorded
+    (``npos``: (T, K, 3), the origins of ``sim.near_bodies``)."""
+    out: list[dict[str, tuple[float, float]]] = [{} for _ in sim.bodies]
+    if npos is None or not len(npos):
+        return tuple(out)
+    for i, name, a, b, centre, ra, rb in sim.near:
+        other = npos[:, b] if b >= 0 else centre
+        gap = np.maximum(np.linalg.norm(npos[:, a] - other, axis=-1) - ra - rb, 0.0)
+        out[i][name] = (float(gap.min()), float(gap[0]))
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -188,6 +207,33 @@ class SceneSim:
             self.fated_of[m.geom_bodyid == b] = i
         self.touch_name = [m.body(int(m.geom_bodyid[g])).name if m.geom_bodyid[g] != 0 or not m.geom(g).name
                            else m.geom(g).name for g in range(m.ngeom)]
+        #: per ``hits`` name: (fated body index, name, slot of the fated body, slot of the other or -1
+        #: for a static geom, the other's fixed centre, the two bounding radii) with ``near_bodies``
+        #: the bodies whose origins are recorded at every step (:func:`closest_approach`)
+        self.near: list[tuple[int, str, int, int, np.ndarray, float, float]] = []
+        self.near_bodies: list[int] = []
+
+        def slot(b: int) -> int:
+            if b not in self.near_bodies:
+                self.near_bodies.append(b)
+            return self.near_bodies.index(b)
+
+        def rbound(geoms: Any) -> float:  # the bounding sphere about the body's origin
+            return float(max((np.linalg.norm(m.geom_pos[g]) + m.geom_rbound[g] for g in geoms), default=0.0))
+
+        for i, f in enumerate(fates.fates):
+            me = int(self.bodies[i])
+            for name in dict.fromkeys(f.hits):
+                b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
+                if b > 0:
+                    self.near.append((i, name, slot(me), slot(b), np.zeros(3),
+                                      rbound(np.flatnonzero(m.geom_bodyid == me)),
+                                      rbound(np.flatnonzero(m.geom_bodyid == b))))
+                elif b < 0:
+                    g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)
+                    if m.geom_bodyid[g] == 0 and m.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE:
+                        self.near.append((i, name, slot(me), -1, np.array(m.geom_pos[g], dtype=float),
+                                          rbound(np.flatnonzero(m.geom_bodyid == me)), float(m.geom_rbound[g])))
         #: the judge needs the path at every step (``at``, ``through``, ``still``), not only the end
         self.per_step = any(f.at or f.through or f.still for f in fates.fates)
         self._local = threading.local()
@@ -255,10 +301,10 @@ class SceneSim:
         got = self._rec.run(qpos0, qvel0)
         if got is None:  # MuJoCo warned: the loop's final state, its warnings
             return self._loop(x)
-        qpos, qvel, time, pos, touches, seq = got
-        return self._finish(x, qpos0, qvel0, qpos, qvel, time, pos, touches, seq, ())
+        qpos, qvel, time, pos, touches, seq, npos = got
+        return self._finish(x, qpos0, qvel0, qpos, qvel, time, pos, touches, seq, (), npos)
 
-    def _finish(self, x, qpos0, qvel0, qpos, qvel, time, pos, touches, seq, warned) -> SceneRollout:
+    def _finish(self, x, qpos0, qvel0, qpos, qvel, time, pos, touches, seq, warned, npos=None) -> SceneRollout:
         """Judge a rollout: ``pos`` (T+1, B, 3) with its last row filled here from the final state."""
         import mujoco
 
@@ -277,7 +323,7 @@ class SceneSim:
             mujoco.mj_objectVelocity(m, s, mujoco.mjtObj.mjOBJ_BODY, int(b), vel, 0)
             ang[i], lin[i] = vel[:3], vel[3:]
         rec = Recording(times=times, pos=pos, quat=s.xquat[ids].copy(), linvel=lin, angvel=ang,
-                        touches=tuple(touches))
+                        touches=tuple(touches), near=closest_approach(self, npos))
         return SceneRollout(x=np.array(x, dtype=float), qpos0=qpos0, qvel0=qvel0, qpos=np.array(qpos, dtype=float),
                             qvel=np.array(qvel, dtype=float), judgement=judge(self.fates, rec),
                             warnings=tuple(warned), sequence=tuple(seq))
@@ -296,7 +342,8 @@ class SceneSim:
         touches: list[dict[str, float]] = [{} for _ in ids]
         h = float(m.opt.timestep)
         seq: list[tuple[int, str, str]] = []
-        if not (self.per_step or pairs or self.sequences):  # only the end is judged: one call, the same steps in C
+        npos = np.empty((n, len(self.near_bodies), 3))
+        if not (self.per_step or pairs or self.sequences or self.near):  # only the end is judged: one call, in C
             s.qpos[:] = qpos0
             mujoco.mj_kinematics(m, s)
             first = s.xpos[ids].copy()
@@ -310,6 +357,7 @@ class SceneSim:
             for k in range(n):
                 mujoco.mj_step(m, d)
                 pos[k] = d.xpos[ids]  # the state this step started from
+                npos[k] = d.xpos[self.near_bodies]
                 if self.sequences and d.ncon:
                     con = d.contact
                     geom = con.geom[:d.ncon]
@@ -331,7 +379,7 @@ class SceneSim:
                                 touches[i][name] = k * h
                                 left -= 1
         return self._finish(x, qpos0, qvel0, d.qpos.copy(), d.qvel.copy(), d.time, pos, touches,
-                            contact_sequence(seq), data_warnings(d))
+                            contact_sequence(seq), data_warnings(d), npos)
 
     def run(self, xs: np.ndarray) -> list[SceneRollout]:
         """Roll out (B, D) controls vectors on ``jobs`` threads: B rollouts, in input order."""
@@ -349,11 +397,12 @@ class _Recorder:
     """The scene's copy with the sensors of the judge, rolled out by ``mujoco.rollout`` (module docstring)."""
 
     def __init__(self, sim: SceneSim, model: Any, pos_adr: np.ndarray | None, named_adr: list[int],
-                 seq: list[tuple[int, str, int]]):
+                 seq: list[tuple[int, str, int]], near_adr: np.ndarray | None = None):
         import mujoco
 
         self.sim, self.model = sim, model
         self.pos_adr, self.named_adr, self.seq = pos_adr, np.array(named_adr, dtype=int), seq
+        self.near_adr = near_adr
         self.spec = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
         self.nstate = mujoco.mj_stateSize(model, self.spec)
         # what a key sets beyond the physics state (controls, mocap, equality activity), which
@@ -404,6 +453,8 @@ class _Recorder:
 
             named_names = [touch(f.fates[i].body, name, mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name) >= 0)
                            for i, name in sim.named]
+            near_names = [add(type=mujoco.mjtSensor.mjSENS_FRAMEPOS, objtype=mujoco.mjtObj.mjOBJ_XBODY,
+                              objname=m.body(b).name) for b in sim.near_bodies]
             others = []
             if sim.sequences:
                 # every other named body (the world's geoms by their own names)
@@ -426,7 +477,10 @@ class _Recorder:
             return int(copy.sensor_adr[copy.sensor(name).id])
 
         pos_adr = np.array([[adr(n) + k for k in range(3)] for n in pos_names], dtype=int) if need_pos else None
-        rec = _Recorder(sim, copy, pos_adr, [adr(n) for n in named_names], [(i, o, adr(n)) for i, o, n in others])
+        near_adr = (np.array([[adr(n) + k for k in range(3)] for n in near_names], dtype=int) if near_names
+                    else None)
+        rec = _Recorder(sim, copy, pos_adr, [adr(n) for n in named_names], [(i, o, adr(n)) for i, o, n in others],
+                        near_adr)
         # one rollout of each, compared bit for bit (the middle of the ranges, at most 200 steps)
         if not rec.agrees():
             return None
@@ -478,8 +532,8 @@ class _Recorder:
         return bool(d.qpos.tobytes() == ref.qpos.tobytes() and d.qvel.tobytes() == ref.qvel.tobytes())
 
     def run(self, qpos0: np.ndarray, qvel0: np.ndarray) -> tuple | None:
-        """(final qpos, qvel, time, pos (T+1, B, 3) or (2, B, 3), touches, sequence) of one rollout,
-        or None when MuJoCo warned."""
+        """(final qpos, qvel, time, pos (T+1, B, 3) or (2, B, 3), touches, sequence, the origins of
+        ``sim.near_bodies`` (T, K, 3) or None) of one rollout, or None when MuJoCo warned."""
         import mujoco
 
         sim = self.sim
@@ -513,7 +567,8 @@ class _Recorder:
             for (i, other, _), k in zip(self.seq, first):
                 if k >= 0:
                     seq.append((int(k), sim.fates.fates[i].body, other))
-        return d.qpos.copy(), d.qvel.copy(), d.time, pos, touches, contact_sequence(seq)
+        npos = None if self.near_adr is None else sd[0][:, self.near_adr]
+        return d.qpos.copy(), d.qvel.copy(), d.time, pos, touches, contact_sequence(seq), npos
 
 
 #: The contact sensor's data "found dist" (mjCONDATA_FOUND, mjCONDATA_DIST bits) and reduce "mindist".
