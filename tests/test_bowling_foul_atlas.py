@@ -183,8 +183,9 @@ def test_throws_that_hold_at_three_timesteps_replay_their_subset():
 
 
 def test_a_throw_of_an_earlier_scene_is_refused_in_one_line(tmp_path):
-    """Throws of lane-1 (issue 22's soft friction) and lane-2 (the pins before the carry fit) do not
-    replay on today's scene: nbst says so in one line rather than reporting a different outcome."""
+    """Throws of lane-1 (issue 22's soft friction), lane-2 (the pins before the carry fit) and lane-3 (the
+    pin deck at 0.2) do not replay on today's scene: nbst says so in one line, naming what the scene was,
+    rather than reporting a different outcome."""
     a = throwfile.load_atlas(foul_atlas.SHIPPED)
     t = {k: v for k, v in a["throws"][0].items() if k != "scene"}  # a file without a scene is lane-1's
     with pytest.raises(throwfile.ThrowFileError) as e:
@@ -197,6 +198,9 @@ def test_a_throw_of_an_earlier_scene_is_refused_in_one_line(tmp_path):
     with pytest.raises(throwfile.ThrowFileError) as e:
         throwfile.replay({**t, "scene": "lane-2"})
     assert "lane-2" in str(e.value) and "carry fit" in str(e.value) and "\n" not in str(e.value)
+    with pytest.raises(throwfile.ThrowFileError) as e:  # lane-3: the fitted pins on a pin deck at 0.2
+        throwfile.replay({**t, "scene": "lane-3"})
+    assert "lane-3" in str(e.value) and "deck at friction 0.2" in str(e.value) and "carry fit" not in str(e.value)
 
 
 def _nbst(*argv):

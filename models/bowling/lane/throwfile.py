@@ -567,11 +567,11 @@ def replayable(d: dict, src="throw") -> None:
     one line: a throw replays only on the scene it names."""
     sc = d.get("scene", SCENES[0])
     if sc != lane.SCENE:
-        what = ("issue 22's soft-contact friction on relative oil" if sc == "lane-1" else
-                "issue 22's pins, before the carry fit")
+        what = {"lane-1": "issue 22's soft-contact friction on relative oil",
+                "lane-2": "issue 22's pins, before the carry fit"}.get(sc, "the pin deck at friction 0.2")
         _fail(src, "scene", f"thrown on the {sc} lane scene ({what}); this nbst runs {lane.SCENE} (Coulomb "
-                            f"friction from the oil film, pins fitted to carry) and does not replay it: its "
-                            f"outcome stands as recorded")
+                            f"friction from the oil film, pins fitted to carry, the pin deck at 0.1) and does "
+                            f"not replay it: its outcome stands as recorded")
 
 
 def oil_of(d: dict) -> lane.Pattern:
