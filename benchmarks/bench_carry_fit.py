@@ -87,7 +87,7 @@ def pin_deck_model(base, prm: dict):
 
     p = {**DEFAULTS, **{k: v for k, v in prm.items() if k != "h"}}
     m = _contacts().contact_model(base, bp_mu=p["bp_mu"], pp_mu=p["pp_mu"], bp_zeta=p["bp_zeta"], pp_zeta=p["pp_zeta"])
-    for name in ("lane_deck", "lane_surface_pins"):
+    for name in (lane.PIN_DECK_GEOM, lane.PIN_LANE_GEOM):  # the pins' surfaces (the ball's deck: scene.MU_DECK)
         m.geom_friction[m.geom(name).id, 0] = p["deck_mu"]
     for name in ("wall_left", "wall_right"):  # the kickbacks (the walls run the lane's length)
         m.geom_solref[m.geom(name).id, 1] = p["kick_zeta"]

@@ -200,7 +200,7 @@ def test_a_throw_of_an_earlier_scene_is_refused_in_one_line(tmp_path):
     assert "lane-2" in str(e.value) and "carry fit" in str(e.value) and "\n" not in str(e.value)
     with pytest.raises(throwfile.ThrowFileError) as e:  # lane-3: the fitted pins on a pin deck at 0.2
         throwfile.replay({**t, "scene": "lane-3"})
-    assert "lane-3" in str(e.value) and "deck at friction 0.2" in str(e.value) and "carry fit" not in str(e.value)
+    assert "lane-3" in str(e.value) and "pin deck at friction 0.2" in str(e.value) and "carry fit" not in str(e.value)
 
 
 def _nbst(*argv):

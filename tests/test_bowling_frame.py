@@ -64,7 +64,10 @@ def test_dead_wood_a_pin_leaning_on_the_kickback_counts_as_down():
     half = scene.LANE_WIDTH / 2
     spot = scene.pin_spots()[6]  # pin 7, back left
     q = _pin_qpos(m, 7, spot[0], half - 0.006, 0.0, 40.0, +1)
-    d = _settle(m, q)
+    # on lane-4's pin deck (the pins' friction 0.1) its base slides off the deck's edge into the gutter
+    # and the pin falls back onto the kickback: still rocking at 0.6 s (tilt 10.9, 6.5 mm/s, off the
+    # wall), at rest on it from 0.8 s (tilt 14.2-14.6 up to 3 s)
+    d = _settle(m, q, seconds=1.0)
     adr = pinfall.pin_addresses(m)[6]
     p = d.qpos[adr:adr + 7]
     tilt = math.degrees(math.acos(1 - 2 * (p[4] ** 2 + p[5] ** 2)))

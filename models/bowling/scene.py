@@ -91,7 +91,8 @@ class Pins:
     """The pins' physical parameters: mass (kg) and centre of gravity (inches above the base; None:
     the uniform solid's, :func:`.pin.geometry`), both inside USBC's limits; sliding friction and
     contact damping ratio (``solref = (0.008, zeta)``) of ball-pin and pin-pin contacts; the pin
-    deck's friction (pins and ball on the deck)."""
+    deck's friction (the deck half: pins and ball on the deck; the lane half: the pins, the ball
+    meeting the deck at ``MU_DECK``, :func:`nbst.models.bowling.lane.scene.lane_spec`)."""
 
     mass: float
     com_in: float | None
@@ -114,7 +115,7 @@ DECK_PINS = Pins(mass=pinmod.MASS, com_in=None, mu_ball_pin=MU_BALL_PIN, mu_pin_
 #: USBC's lowest, 5 40/64 in (the uniform solid's is 5.80 in), the rest as the deck half's. The pro's 213
 #: pocket hits carry 158 (74 %) with it, 191 (90 %) with the uniform pin (benchmarks/bench_carry_fit.py,
 #: docs/results/bowling.md "Pin carry, fitted"). The pin deck's friction is 0.1 (issue 48; the deck half's
-#: 0.2 is the literature's pin-on-wood figure): with 0.2 the deck's high side fell off a cliff a quarter
+#: 0.2 is the literature's pin-on-wood figure; the ball still meets the deck at MU_DECK): with 0.2 the deck's high side fell off a cliff a quarter
 #: board wide (18.5 -> 18.75: 0-5 % strikes) and the pro's high hits left 7-10s and big fours at 8 % of
 #: its spare attempts (ESPN: 3.0 %); chosen on fit seeds, held out in docs/results/bowling.md
 #: "The pocket's high side, board by board".

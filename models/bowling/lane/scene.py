@@ -8,7 +8,8 @@ its principal axes placed for the delivery (:func:`.delivery.principal_axes`). T
 and :func:`lane_spec` makes the ball's contact with the lane **frictionless** (``condim 1``: the
 lane carries the ball; its friction is Coulomb's, applied at the contact point by
 :mod:`.friction` from the oil under it), while the pins meet a second, coincident surface with
-the deck's friction (collision bits: ball-lane 2, pin-lane 4, everything else 1). The oil is no
+the deck's friction (collision bits: ball-lane 2, pin-lane 4, everything else 1); the pin deck is
+split the same way (the ball at ``scene.MU_DECK``, the pins at ``scene.LANE_PINS.mu_deck``). The oil is no
 longer in the model: it is the :class:`.oil.OilField` the step loops carry, so one compiled
 model serves every pattern. :func:`build_model` compiles and caches it.
 
@@ -24,10 +25,12 @@ from nbst.models.bowling.lane.delivery import Delivery, principal_axes, quat_of_
 from nbst.models.bowling.lane.units import (ARROW_BOARDS, ARROWS_FT, BOARD_WIDTH, FOUL_LINE_X, LANE_START_X,
                                             board_to_y, ft_to_x)
 
-__all__ = ["SCENE", "EARLIER_SCENES", "LANE_GEOM", "PIN_LANE_GEOM", "layout", "lane_spec", "build_model", "ball_quat"]
+__all__ = ["SCENE", "EARLIER_SCENES", "LANE_GEOM", "PIN_LANE_GEOM", "DECK_GEOM", "PIN_DECK_GEOM", "layout",
+           "lane_spec", "build_model", "ball_quat"]
 
-#: The lane half's scene, as throw and atlas files name it: "lane-4" is this one (lane-3's with the pin
-#: deck's friction 0.1, ``scene.LANE_PINS``, issue 48); "lane-3" had the pin deck at 0.2 (lane-2's lane
+#: The lane half's scene, as throw and atlas files name it: "lane-4" is this one (lane-3's with the pins'
+#: friction on the deck 0.1, ``scene.LANE_PINS``, issue 48; the ball meets the deck at lane-3's 0.2, so a
+#: ball's path to the pins is lane-3's); "lane-3" had the pin deck at 0.2 for both (lane-2's lane
 #: with the pins fitted to carry, issue 34); "lane-2" had a frictionless lane contact
 #: with Coulomb friction from the oil film and issue 22's pins; "lane-1" (files without a scene) was
 #: issue 22's (MuJoCo's soft friction on boxes of relative oil).
@@ -36,6 +39,9 @@ SCENE = "lane-4"
 EARLIER_SCENES = ("lane-1", "lane-2", "lane-3")
 LANE_GEOM = "lane_surface"
 PIN_LANE_GEOM = "lane_surface_pins"
+#: The pin deck as the ball meets it (``scene.MU_DECK``) and as the pins meet it (``scene.LANE_PINS.mu_deck``).
+DECK_GEOM = "lane_deck"
+PIN_DECK_GEOM = "lane_deck_pins"
 
 
 def ball_quat(delivery: Delivery, ball: Ball):
@@ -75,7 +81,8 @@ def layout(ball: Ball | None = None, delivery: Delivery | None = None) -> scene.
 def lane_spec(ball: Ball | None = None, delivery: Delivery | None = None, *, pins: bool = True):
     """The shared :func:`nbst.models.bowling.scene.build_spec` of :func:`layout` (``pins=False``:
     the ball alone), with the lane's contacts split: frictionless for the ball, the deck's
-    friction for the pins (see the module docstring)."""
+    friction for the pins (see the module docstring); and the pin deck's split: ``scene.MU_DECK`` for
+    the ball, ``scene.LANE_PINS.mu_deck`` for the pins."""
     import mujoco
 
     spec = scene.build_spec(layout(ball, delivery), pins=pins)
@@ -89,6 +96,17 @@ def lane_spec(ball: Ball | None = None, delivery: Delivery | None = None, *, pin
     p.condim = 3
     p.friction = [scene.LANE_PINS.mu_deck, 0.0, 0.0]
     p.solref = list(scene.SOLREF_STATIC)
+    deck = spec.geom(DECK_GEOM)
+    deck.contype = deck.conaffinity = 2
+    deck.friction = [scene.MU_DECK, 0.0, 0.0]
+    q = spec.worldbody.add_geom(name=PIN_DECK_GEOM, type=mujoco.mjtGeom.mjGEOM_BOX, pos=list(deck.pos),
+                                size=list(deck.size), rgba=list(deck.rgba), group=3)
+    q.contype = q.conaffinity = 4
+    q.priority = deck.priority
+    q.condim = 3
+    q.friction = [scene.LANE_PINS.mu_deck, 0.0, 0.0]
+    q.solref = list(deck.solref)
+    q.solimp = list(deck.solimp)
     b = spec.geom("ball")
     b.contype = b.conaffinity = 1 | 2
     if pins:

@@ -568,9 +568,9 @@ def replayable(d: dict, src="throw") -> None:
     sc = d.get("scene", SCENES[0])
     if sc != lane.SCENE:
         what = {"lane-1": "issue 22's soft-contact friction on relative oil",
-                "lane-2": "issue 22's pins, before the carry fit"}.get(sc, "the pin deck at friction 0.2")
+                "lane-2": "issue 22's pins, before the carry fit"}.get(sc, "the pins on a pin deck at friction 0.2")
         _fail(src, "scene", f"thrown on the {sc} lane scene ({what}); this nbst runs {lane.SCENE} (Coulomb "
-                            f"friction from the oil film, pins fitted to carry, the pin deck at 0.1) and does "
+                            f"friction from the oil film, pins fitted to carry, the pins on the pin deck at 0.1) and does "
                             f"not replay it: its outcome stands as recorded")
 
 
