@@ -25,15 +25,15 @@ __all__ = ["TARGET_BOARD", "STRIKE_BY_BOARD", "READ_FEET", "READ_BALLS", "READ_S
 #: mover's target too, :func:`.transition.move_for`).
 TARGET_BOARD = 17.5
 #: A reading bowler's (``reads_lane``) strike chance by board at the head pin's line: (board, share)
-#: at the middle of each quarter board, on lane-4's pins (``scene.LANE_PINS``, the pin deck's friction
-#: 0.1): the pro's 80 first balls of fit seed 11 on the fresh house shot (entering at 4.89 deg, sd
-#: 0.38), each carried onto every quarter board of 15-19.5, 1,440 pin decks
-#: (``python benchmarks/bench_pocket_angle.py --by-board 15,19.5,0.25 --n 80 --seed 11``, 2026-12-07;
-#: docs/results/bowling.md, "The pin deck at 0.1, shipped"); 0 outside.
-STRIKE_BY_BOARD = ((15.125, 0.0), (15.375, 0.05), (15.625, 0.2), (15.875, 0.28), (16.125, 0.35),
-                   (16.375, 0.06), (16.625, 0.18), (16.875, 0.5), (17.125, 0.79), (17.375, 0.99),
-                   (17.625, 1.0), (17.875, 0.96), (18.125, 0.78), (18.375, 0.58), (18.625, 0.19),
-                   (18.875, 0.01), (19.125, 0.0))
+#: at the middle of each quarter board, on lane-4's pins (``scene.LANE_PINS``: the pins on the pin deck
+#: at friction 0.1, the ball on it at 0.2): the pro's 80 first balls of fit seed 11 on the fresh house
+#: shot (entering at 4.89 deg, sd 0.38), each carried onto every quarter board of 15-19.5, 1,440 pin
+#: decks (``python benchmarks/bench_pocket_angle.py --by-board 15,19.5,0.25 --n 80 --seed 11``,
+#: 2026-12-07; docs/results/bowling.md, "Lane-4 as shipped"); 0 outside.
+STRIKE_BY_BOARD = ((15.125, 0.01), (15.375, 0.04), (15.625, 0.12), (15.875, 0.26), (16.125, 0.28),
+                   (16.375, 0.08), (16.625, 0.14), (16.875, 0.51), (17.125, 0.76), (17.375, 0.99),
+                   (17.625, 1.0), (17.875, 0.98), (18.125, 0.82), (18.375, 0.61), (18.625, 0.18),
+                   (18.875, 0.01), (19.125, 0.0), (19.375, 0.01))
 #: The lines a reading bowler tries (:func:`read_line`): its feet moved these boards (+: in) from
 #: where they stand, each re-aimed on the lane as it is; READ_BALLS noisy balls a line (the same
 #: draws for every line); the aim's fine-tuning at the pins (boards) tried on those balls.
