@@ -48,9 +48,11 @@ scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
 *Directed randomize* aims a body that has a place to be (``rest_in`` or ``at``) and may fly (no
 component of its ``linvel`` held fixed): the velocity that would carry its origin ballistically
 (the model's gravity, no contacts) to a point of the region in a random flight time (``at``: its
-time); half the time (and always for a body with no place, or one that may not fly) it instead
-takes the block of the member whose body is nearest its fates and creeps it (sigma 0.04), or,
-with no members yet, draws the block uniformly.
+time). A body that may not fly (a ball rolling on a table, a pushed domino) and must hit something
+is aimed in a straight line through its free components at a point within the two bounding radii
+of its first ``hits`` name, at a speed its ranges allow. Half the time (and always for a body with
+neither aim) it instead takes the block of the member whose body is nearest its fates and creeps it
+(sigma 0.04), or, with no members yet, draws the block uniformly.
 
 Children are made :data:`BATCH` at a time from one generator stream (``nbst.seeds``) and rolled out
 on ``jobs`` threads: the result depends on the seed alone, never on ``jobs``. Ctrl-C stops the
@@ -213,6 +215,23 @@ class _Scene:
         q0, _ = sim.initial_state(mid)
         self.origin = [q0[qa:qa + 3].copy() for qa, _da in sim.adr]  # (the middle of a pos range is added)
         self.gravity = np.array(sim.model.opt.gravity, dtype=float)
+        #: per block of a body that may not fly (a ball rolling on a table, a pushed domino): where the first
+        #: name of its ``hits`` is at the start, and the sum of the two bounding radii (None: no ``hits``, a
+        #: plane, or a body that may fly): the aim of directed randomize
+        self.hit_target: list[tuple[np.ndarray, float] | None] = [None] * len(self.blocks)
+        if sim.near:
+            import mujoco
+
+            d = mujoco.MjData(sim.model)
+            d.qpos[:] = q0
+            mujoco.mj_kinematics(sim.model, d)
+            for i, bit in enumerate(self.bit):
+                if bit is None or not f.fates[bit].hits or f.controls[i].linvel is None or self.free_flight[i]:
+                    continue
+                for j, name, _a, other, centre, ra, rb in sim.near:
+                    if j == bit and name == f.fates[bit].hits[0]:
+                        at = d.xpos[sim.near_bodies[other]] if other >= 0 else centre
+                        self.hit_target[i] = (np.array(at, dtype=float), float(ra + rb))
 
     def full(self, v: np.ndarray) -> np.ndarray:
         """The whole unit point of an engine point (a fixed coordinate at 0.5: its one value)."""
@@ -245,8 +264,10 @@ class _Scene:
         rng: np.random.Generator = eng.rng  # type: ignore[has-type]
         c, b = self.fates.controls[i], self.bit[i]
         fate = None if b is None else self.fates.fates[b]
-        aimable = (fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
-                   and self.free_flight[i])
+        place = (fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
+                 and self.free_flight[i])
+        hit = self.hit_target[i]
+        aimable = place or hit is not None
         sl = self.blocks[i]
         pop = eng.population
         if pop and (not aimable or rng.random() < 0.5):
@@ -261,6 +282,45 @@ class _Scene:
         if not aimable:
             return
         assert fate is not None
+        k = [p for p, _ in c.parts()].index("linvel")
+        a = sl.start + 3 * k
+        if hit is not None and (not place or rng.random() < 0.5):
+            v = self._aim_hit(rng, i, a, *hit)
+            if v is None:
+                return
+        else:
+            v = self._aim_place(rng, i, fate)
+        x = self.x_full(u)
+        x[a:a + 3] = v
+        u[a:a + 3] = self.u_of(x)[a:a + 3]
+
+    def _aim_hit(self, rng: np.random.Generator, i: int, a: int, at: np.ndarray, radii: float) -> np.ndarray | None:
+        """A velocity of block ``i`` (its linvel at ``a``; a body that may not fly) that carries its origin
+        in a straight line through its free components towards a point within the two bounding radii of
+        its first ``hits`` name (at ``at``), at a speed drawn from those its ranges allow in that direction
+        (None: no such speed)."""
+        point = at + 0.8 * radii * rng.uniform(-1, 1, 3)
+        lo, hi = self.lo[a:a + 3], self.hi[a:a + 3]
+        live = hi > lo
+        d = np.where(live, point - self.origin[i], 0.0)
+        n = float(np.linalg.norm(d))
+        if n == 0.0:
+            return None
+        d = d / n
+        s_lo, s_hi = 0.0, np.inf
+        for j in np.flatnonzero(live):
+            if d[j] == 0.0:
+                if not lo[j] <= 0.0 <= hi[j]:
+                    return None
+                continue
+            e1, e2 = sorted((lo[j] / d[j], hi[j] / d[j]))
+            s_lo, s_hi = max(s_lo, e1), min(s_hi, e2)
+        if not s_lo < s_hi:
+            return None
+        return np.where(live, float(rng.uniform(s_lo, s_hi)) * d, lo)
+
+    def _aim_place(self, rng: np.random.Generator, i: int, fate: Any) -> np.ndarray:
+        """The ballistic velocity of block ``i`` to a point of its region (``at`` or ``rest_in``)."""
         if fate.at and (fate.rest_in is None or rng.random() < 0.5):
             t, region = fate.at[int(rng.integers(len(fate.at)))]
             t = max(t, 1e-3)
@@ -273,12 +333,7 @@ class _Scene:
             target = target + region.radius * 0.5 * rng.uniform(-1, 1, 3)
         else:
             target = target + 0.25 * (np.asarray(region.hi) - np.asarray(region.lo)) * rng.uniform(-1, 1, 3)
-        v = (target - self.origin[i] - 0.5 * self.gravity * t * t) / t
-        k = [p for p, _ in c.parts()].index("linvel")
-        a = sl.start + 3 * k
-        x = self.x_full(u)
-        x[a:a + 3] = v
-        u[a:a + 3] = self.u_of(x)[a:a + 3]
+        return (target - self.origin[i] - 0.5 * self.gravity * t * t) / t
 
     def init(self, eng: Engine) -> np.ndarray:
         """A random trial: each block by directed or uniform randomize, even odds."""
