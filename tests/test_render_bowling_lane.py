@@ -360,6 +360,12 @@ def test_cli_replay_films_a_throw_file_and_refuses_a_shot_file_in_one_line(spare
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--video" in err[0] and "use a .mp4 or .gif file" in err[0]
     assert not (tmp_path / "s.mp4").exists() and not (tmp_path / "x.png").exists()
+    # `nbst render` given a foul-line throw file names the command that films it (it used to say "is a
+    # problem: give its SOLUTION too"), in one line, writing nothing
+    assert main(["render", str(spare_file), "-o", str(tmp_path / "t.mp4")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a foul-line throw file" in err[0] and f"nbst bowl replay {spare_file} --video" in err[0]
+    assert not (tmp_path / "t.mp4").exists()
 
 
 @pytest.mark.parametrize("oil", ["house", lane.pattern("house")])

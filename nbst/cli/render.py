@@ -216,6 +216,12 @@ def cmd_render(args) -> int:
         return _err("render", "--follow applies to crash files only (from `nbst crash solve`)")
     if is_throw_file(args.problem):  # sniffs the first bytes only; the throw loader reads it, capped
         return cmd_render_throw(args)  # disk-only flags (--trails, --view, ...) are an error there
+    from nbst.files import sniff_kind
+    from nbst.models.bowling.lane.throwfile import FORMAT as LANE_FORMAT
+
+    if sniff_kind(args.problem, (("lane", LANE_FORMAT),)) == "lane":  # a foul-line throw: its own command films it
+        return _err("render", f"{args.problem} is a foul-line throw file: film it with `nbst bowl replay "
+                              f"{args.problem} --video OUT.mp4` (or --still OUT.png; --camera, --clean as here)")
     args.view, args.source = args.view or "2d", args.source or "analytic"
     args.speed = 1.0 if args.speed is None else args.speed
     if args.solution is None:
