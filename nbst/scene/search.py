@@ -223,6 +223,7 @@ class _Scene:
             import mujoco
 
             d = mujoco.MjData(sim.model)
+            sim._reset(d)  # the keyframe's mocap poses too
             d.qpos[:] = q0
             mujoco.mj_kinematics(sim.model, d)
             for i, bit in enumerate(self.bit):
