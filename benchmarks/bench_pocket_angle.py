@@ -239,7 +239,7 @@ def two_pin_paths(starts: dict, buckets: list, prm: dict) -> list:
     m = CF._W["m"]
     pins = {m.body(f"pin{n}").id: f"pin{n}" for n in scene.PIN_NUMBERS}
     ball = int(m.jnt_bodyid[m.joint("ball_free").id])
-    deck = {m.geom(g).id for g in ("lane_deck", "lane_deck_pins", "lane_surface_pins")}
+    deck = {m.geom(g).id for g in (lane.DECK_GEOM, lane.PIN_DECK_GEOM, lane.PIN_LANE_GEOM)}
     b2, b4 = m.body("pin2").id, m.body("pin4").id
 
     def who(g: int) -> str:

@@ -83,30 +83,9 @@ def lane_spec(ball: Ball | None = None, delivery: Delivery | None = None, *, pin
     the ball alone), with the lane's contacts split: frictionless for the ball, the deck's
     friction for the pins (see the module docstring); and the pin deck's split: ``scene.MU_DECK`` for
     the ball, ``scene.LANE_PINS.mu_deck`` for the pins."""
-    import mujoco
-
     spec = scene.build_spec(layout(ball, delivery), pins=pins)
-    g = spec.geom(LANE_GEOM)
-    g.contype = g.conaffinity = 2
-    g.condim = 1
-    p = spec.worldbody.add_geom(name=PIN_LANE_GEOM, type=mujoco.mjtGeom.mjGEOM_BOX, pos=list(g.pos),
-                                size=list(g.size), rgba=list(g.rgba), group=3)
-    p.contype = p.conaffinity = 4
-    p.priority = 1
-    p.condim = 3
-    p.friction = [scene.LANE_PINS.mu_deck, 0.0, 0.0]
-    p.solref = list(scene.SOLREF_STATIC)
-    deck = spec.geom(DECK_GEOM)
-    deck.contype = deck.conaffinity = 2
-    deck.friction = [scene.MU_DECK, 0.0, 0.0]
-    q = spec.worldbody.add_geom(name=PIN_DECK_GEOM, type=mujoco.mjtGeom.mjGEOM_BOX, pos=list(deck.pos),
-                                size=list(deck.size), rgba=list(deck.rgba), group=3)
-    q.contype = q.conaffinity = 4
-    q.priority = deck.priority
-    q.condim = 3
-    q.friction = [scene.LANE_PINS.mu_deck, 0.0, 0.0]
-    q.solref = list(deck.solref)
-    q.solimp = list(deck.solimp)
+    _pins_twin(spec, LANE_GEOM, PIN_LANE_GEOM).condim = 1  # the ball's friction is applied by hand
+    _pins_twin(spec, DECK_GEOM, PIN_DECK_GEOM).friction = [scene.MU_DECK, 0.0, 0.0]
     b = spec.geom("ball")
     b.contype = b.conaffinity = 1 | 2
     if pins:
@@ -114,6 +93,24 @@ def lane_spec(ball: Ball | None = None, delivery: Delivery | None = None, *, pin
             if geom.name.startswith("pin") and "_c" in geom.name:
                 geom.contype = geom.conaffinity = 1 | 4
     return spec
+
+
+def _pins_twin(spec, name: str, twin: str):
+    """Make the static box ``name`` the ball's (collision bit 2) and add ``twin``, coincident and hidden,
+    for the pins (bit 4) at ``scene.LANE_PINS.mu_deck``, its contact otherwise ``name``'s. Returns ``name``'s geom."""
+    import mujoco
+
+    g = spec.geom(name)
+    g.contype = g.conaffinity = 2
+    p = spec.worldbody.add_geom(name=twin, type=mujoco.mjtGeom.mjGEOM_BOX, pos=list(g.pos), size=list(g.size),
+                                rgba=list(g.rgba), group=3)
+    p.contype = p.conaffinity = 4
+    p.priority = g.priority
+    p.condim = 3
+    p.friction = [scene.LANE_PINS.mu_deck, 0.0, 0.0]
+    p.solref = list(g.solref)
+    p.solimp = list(g.solimp)
+    return g
 
 
 @lru_cache(maxsize=32)
