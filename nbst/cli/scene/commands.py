@@ -61,7 +61,7 @@ def cmd_examples(args) -> int:
 
 def cmd_check(args) -> int:
     from nbst.scene.fates import STILL_DISTANCE
-    from nbst.scene.scenefile import load_fates, start_touches, unforced_still_moves
+    from nbst.scene.scenefile import MIN_CONTACT_STEPS, load_fates, short_contacts, start_touches, unforced_still_moves
 
     f, model = load_fates(args.fates, scene=args.scene)
     steps = int(round(f.duration / model.opt.timestep))
@@ -80,6 +80,17 @@ def cmd_check(args) -> int:
     for body, far in unforced_still_moves(f, model):
         print(f"  note: {body} moves {far:.3g} m by itself (the scene as written, no control, over the duration): "
               f"its still (at most {STILL_DISTANCE:g} m) is met only if a control holds it; start it at rest")
+    h = model.opt.timestep
+    groups: dict[tuple[str, float, float, float], list[str]] = {}
+    for body, other, t, tau, zeta in short_contacts(f, model):
+        groups.setdefault((body, t, tau, zeta), []).append(other)
+    for (body, t, tau, zeta), others in groups.items():
+        named = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
+        print(f"  note: {body}'s contacts with {named} last {t * 1e3:.2g} ms (solref {tau:g} {zeta:g}), "
+              f"{t / h:.2g} steps of {h * 1e3:g} ms: a bounce resolved in under {MIN_CONTACT_STEPS:g} steps changes "
+              f"with the step and with where in a step it begins, so h/2 and h/4 (the ladder) often disagree with h; "
+              f"a step of at most {t / MIN_CONTACT_STEPS * 1e3:.2g} ms gives it {MIN_CONTACT_STEPS:g} (or a longer time constant, "
+              f"or more damping)")
     return 0
 
 

@@ -1,0 +1,135 @@
+"""``nbst scene check``'s note on a contact that the step does not resolve
+(``nbst.scene.scenefile.short_contacts``): the rebound time it computes from a solref is MuJoCo's
+own, and the built-ins as shipped have no such contact."""
+import json
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from nbst.cli.main import main
+from nbst.scene.builtin import example_names, example_path
+from nbst.scene.scenefile import MIN_CONTACT_STEPS, contact_time, load_fates, short_contacts
+
+_DROP = """<mujoco><option timestep="{h}" gravity="0 0 0"/>
+<worldbody><geom type="plane" size="1 1 0.1" solref="{tau} {zeta}"/>
+<body pos="0 0 0.101"><freejoint/><geom type="sphere" size="0.1" mass="1" solref="{tau} {zeta}"/></body>
+</worldbody></mujoco>"""
+
+
+def _rebound_time(tau: float, zeta: float, h: float) -> float:
+    """A ball thrown down at 1 m/s onto a plane (no gravity): how long it pushes on the plane (s)."""
+    m = mujoco.MjModel.from_xml_string(_DROP.format(h=h, tau=tau, zeta=zeta))
+    d = mujoco.MjData(m)
+    d.qvel[2] = -1.0
+    on = []
+    for k in range(int(0.5 / h)):
+        mujoco.mj_step(m, d)
+        on.append(bool(d.nefc) and float(d.efc_force[:d.nefc].max()) > 0.0)
+    idx = np.flatnonzero(on)
+    assert len(idx) and idx[-1] < len(on) - 1, "the ball left the plane"
+    return float((idx[-1] - idx[0] + 1) * h)
+
+
+@pytest.mark.parametrize("tau,zeta", [(0.005, 0.3), (0.01, 0.1), (0.02, 0.5), (0.02, 0.8), (0.01, 1.0), (0.01, 1.5), (0.004, 3.0)])
+def test_the_contact_time_is_mujocos_to_five_percent(tau, zeta):
+    """The linear spring-dashpot's time to zero force against MuJoCo's own contact at a step 75 to
+    500 times shorter than it: within 5 % (MuJoCo's impedance, 0.9 to 0.95 over the contact, moves
+    the stiffness a little; the step adds at most one)."""
+    h = 2e-5
+    assert _rebound_time(tau, zeta, h) == pytest.approx(contact_time(tau, zeta, h), rel=0.05)
+
+
+def test_refsafe_holds_the_time_constant_at_two_steps():
+    assert contact_time(0.001, 0.3, 0.002) == pytest.approx(contact_time(0.004, 0.3, 0.0))
+    assert contact_time(0.001, 0.3, 0.002, refsafe=False) == pytest.approx(contact_time(0.001, 0.3, 0.0))
+    assert contact_time(0.02, 1.0, 0.002) == 0.04  # critically damped: 2 tau, the limit of both sides
+    assert contact_time(0.02, 1.0 - 1e-7, 0.0) == pytest.approx(0.04, rel=1e-4)
+    assert contact_time(0.02, 1.0 + 1e-7, 0.0) == pytest.approx(0.04, rel=1e-4)
+    # no damping: the spring's half-period, pi / w
+    assert contact_time(0.01, 1e-9, 0.0) == pytest.approx(math.pi * 0.01 * 1e-9, rel=1e-6)
+
+
+@pytest.mark.parametrize("name", example_names())
+def test_no_built_in_has_a_contact_its_step_does_not_resolve(name):
+    fates, model = load_fates(name)
+    assert short_contacts(fates, model) == [], name
+
+
+def test_check_notes_the_bank_shot_at_2_ms(tmp_path, capsys):
+    """bank-shot's backboard (solref 0.005 0.3) pushes for 4.0 ms: at a step of 2 ms that is 2 steps, the
+    note names the contact, the steps and the step that would give it 4."""
+    src = json.loads(example_path("bank-shot").read_text())
+    src["scene"] = str(example_path("bank-shot").with_suffix(".xml"))
+    src["timestep"] = 0.002
+    p = tmp_path / "coarse.json"
+    p.write_text(json.dumps(src))
+    coarse, cm = load_fates(p)
+    rows = short_contacts(coarse, cm)
+    assert rows and rows[0][0] == "ball" and rows[0][2] == pytest.approx(contact_time(0.005, 0.3, 0.002))
+    assert {r[1] for r in rows} >= {"backboard_g", "floor"}
+    assert rows[0][2] < MIN_CONTACT_STEPS * 0.002
+    assert main(["scene", "check", str(p)]) == 0
+    out = capsys.readouterr().out
+    assert "note: ball's contacts with backboard_g" in out and "2 steps of 2 ms" in out, out
+    assert "a step of at most 1 ms gives it 4" in out, out
+
+
+def _phases(model, setup, read, h: float, n: int = 11, span: float = 0.004, t: float = 0.05) -> list[float]:
+    """``read(data)`` after ``t`` s from ``n`` starts whose contact begins at points spread over ``span`` s
+    (``setup(data, lead)`` places the bodies ``lead`` s of flight further back), no gravity, step ``h``."""
+    m = model
+    m.opt.timestep, m.opt.gravity[:] = h, 0.0
+    out = []
+    for lead in np.linspace(0.0, span, n):
+        d = mujoco.MjData(m)
+        setup(d, lead)
+        for _ in range(int(round(t / h))):
+            mujoco.mj_step(m, d)
+        out.append(read(d))
+    return out
+
+
+def test_the_bank_shots_board_bounce_holds_at_its_step():
+    """A ball at 4 m/s square on to the backboard (5 rad/s of back spin): at the scene's step it comes off
+    within 15 % of the bounce at a step 16 times finer, wherever in a step it strikes (at 2 ms, the
+    scene's step before, it came off at 0.4 to 6.4 m/s)."""
+    fates, model = load_fates("bank-shot")
+    h = model.opt.timestep
+    j = model.body("ball").jntadr[0]
+    qa, va = model.jnt_qposadr[j], model.jnt_dofadr[j]
+
+    def setup(d, lead):
+        d.qpos[qa:qa + 3] = [2.24 - 0.06 - 0.05 - 4.0 * lead, 0.0, 1.85]
+        d.qvel[va:va + 6] = [4.0, 0, 0, 0, 5.0, 0]
+
+    def read(d):
+        return -float(d.qvel[va])
+
+    fine = np.mean(_phases(model, setup, read, h / 16))
+    out = _phases(model, setup, read, h)
+    assert 1.0 < fine < 4.0  # it bounces, and loses speed
+    assert max(abs(v - fine) for v in out) < 0.15 * fine, (out, fine)
+
+
+def test_the_billiard_balls_restitution_holds_at_the_scenes_step():
+    """Two balls in the air, the cue at 2 m/s head on into the 3: the restitution at the scene's step is
+    within 10 % of that at a step 16 times finer, wherever in a step they meet."""
+    fates, model = load_fates("billiards")
+    h = model.opt.timestep
+    c, b = model.body("cue").jntadr[0], model.body("ball3").jntadr[0]
+    qc, q3, vc, v3 = model.jnt_qposadr[c], model.jnt_qposadr[b], model.jnt_dofadr[c], model.jnt_dofadr[b]
+
+    def setup(d, lead):
+        d.qpos[q3:q3 + 3] = [0.0, 0.0, 0.5]
+        d.qpos[qc:qc + 3] = [-0.0572 - 0.01 - 2.0 * lead, 0.0, 0.5]
+        d.qvel[vc] = 2.0
+
+    def read(d):
+        return float(d.qvel[v3] - d.qvel[vc]) / 2.0
+
+    fine = np.mean(_phases(model, setup, read, h / 16, span=0.002, t=0.03))
+    out = _phases(model, setup, read, h, span=0.002, t=0.03)
+    assert 0.5 < fine < 1.0
+    assert max(abs(e - fine) for e in out) < 0.10 * fine, (out, fine)
