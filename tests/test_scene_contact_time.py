@@ -133,3 +133,17 @@ def test_the_billiard_balls_restitution_holds_at_the_scenes_step():
     out = _phases(model, setup, read, h, span=0.002, t=0.03)
     assert 0.5 < fine < 1.0
     assert max(abs(e - fine) for e in out) < 0.10 * fine, (out, fine)
+
+
+def test_solve_says_so_before_the_search(tmp_path, capsys):
+    """``scene solve`` on a scene with such a contact says so on stderr before it searches (not with -q)."""
+    src = json.loads(example_path("bank-shot").read_text())
+    src["scene"] = str(example_path("bank-shot").with_suffix(".xml"))
+    src["timestep"] = 0.002
+    p = tmp_path / "coarse.json"
+    p.write_text(json.dumps(src))
+    main(["scene", "solve", str(p), "-o", str(tmp_path / "a.json"), "--seed", "1", "--max-rollouts", "2"])
+    err = capsys.readouterr().err
+    assert "pair(s) of geoms touch for fewer than 4 steps (the shortest, ball with backboard_g, 2 steps of 2 ms)" in err, err
+    main(["scene", "solve", str(p), "-o", str(tmp_path / "b.json"), "--seed", "1", "--max-rollouts", "2", "-q"])
+    assert "fewer than 4 steps" not in capsys.readouterr().err

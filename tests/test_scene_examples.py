@@ -42,7 +42,7 @@ def test_billiards_pool_balls_and_six_holes():
 
 
 def test_billiards_a_ball_at_rest_stays_within_a_tenth_of_a_millimetre():
-    """Measured: 1.5e-7 m over 1 s at 2 ms (tolerance 1e-4 m)."""
+    """Measured: 1.5e-7 m over 1 s at the scene's 0.5 ms (tolerance 1e-4 m)."""
     m = _model("billiards")
     d = mujoco.MjData(m)
     q0 = d.qpos.copy()
@@ -54,7 +54,7 @@ def test_billiards_a_ball_at_rest_stays_within_a_tenth_of_a_millimetre():
 
 def test_billiards_a_rolling_ball_slows_at_the_stated_rolling_resistance():
     """Rolling resistance 0.01 (MuJoCo's rolling friction 0.01 r) slows a rolling solid ball by
-    0.01 g / 1.4 = 0.070 m/s^2; measured 0.0694 m/s^2 between 0.5 s and 1.5 s (tolerance 10 %)."""
+    0.01 g / 1.4 = 0.070 m/s^2; measured 0.0696 m/s^2 between 0.5 s and 1.5 s at 0.5 ms (tolerance 10 %)."""
     m = _model("billiards")
     d = mujoco.MjData(m)
     d.qpos[0:2] = -1.0, -0.4  # the cue ball, with 1.5 m of clear cloth ahead along +x

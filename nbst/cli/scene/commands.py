@@ -96,13 +96,20 @@ def cmd_check(args) -> int:
 
 def cmd_solve(args) -> int:
     from nbst.scene.api import solve
-    from nbst.scene.scenefile import check_scene_files, load_fates
+    from nbst.scene.scenefile import MIN_CONTACT_STEPS, check_scene_files, load_fates, short_contacts
     from nbst.scene.search import SceneProgress
     from nbst.scene.solution import solution_dict
 
-    fates, _ = load_fates(args.fates, scene=args.scene)  # bad input: exit 2 before anything is written
+    fates, model = load_fates(args.fates, scene=args.scene)  # bad input: exit 2 before anything is written
     prepare_output(args.output, inputs=[args.fates, *check_scene_files(fates.scene)])  # never the scene's files
     seed = resolve_seed(args.seed, what="--seed")
+    short = short_contacts(fates, model) if not (args.quiet or args.no_ladder) else []
+    if short:  # the ladder will be hard: said before the search, where a user can stop it
+        body, other, t, _tau, _zeta = short[0]
+        h = model.opt.timestep
+        print(f"note: {count_text(len(short))} pair(s) of geoms touch for fewer than {MIN_CONTACT_STEPS:g} steps (the shortest, "
+              f"{body} with {other}, {t / h:.2g} steps of {h * 1e3:g} ms): h/2 and h/4 will often disagree with h; "
+              f"nbst scene check {args.fates} says more", file=sys.stderr)
     bar: list = []
     name = fates.source
 
