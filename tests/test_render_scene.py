@@ -179,6 +179,30 @@ def test_each_builtin_renders(solutions, tmp_path, name):
     _frames(solutions, tmp_path, name)
 
 
+def test_render_says_when_the_scene_changed_since_the_solve(solutions, tmp_path, capsys):
+    """A third new user (issue 46) edited a scene after solving, and `nbst render` drew the motion in
+    the edited scene with no word; now it notes the change on stderr (not with -q) and draws."""
+    import shutil
+
+    for f in solutions["shapes"].parent.iterdir():
+        if f.suffix in (".xml", ".json", ".stl"):
+            shutil.copy(f, tmp_path / f.name)
+    sol = json.loads((tmp_path / solutions["shapes"].name).read_text())
+    sol["scene"] = str(tmp_path / "shapes.xml")
+    sol["fates_file"] = str(tmp_path / "shapes.json")
+    (tmp_path / "sol.json").write_text(json.dumps(sol))
+    png = tmp_path / "a.png"
+    assert main(["render", str(tmp_path / "sol.json"), "-o", str(png), "--still", "0.1", "--size", "64x36"]) == 0
+    assert "changed since" not in capsys.readouterr().err
+    (tmp_path / "shapes.xml").write_text((tmp_path / "shapes.xml").read_text() + "\n<!-- edited -->\n")
+    assert main(["render", str(tmp_path / "sol.json"), "-o", str(png), "--still", "0.1", "--size", "64x36"]) == 0
+    err = capsys.readouterr().err
+    assert "note: shapes.xml changed since sol.json was solved" in err, err
+    assert main(["render", str(tmp_path / "sol.json"), "-o", str(png), "--still", "0.1", "--size", "64x36",
+                 "-q"]) == 0
+    assert "changed since" not in capsys.readouterr().err
+
+
 def test_cli_camera_by_name_and_a_bad_one(solutions, tmp_path, capsys):
     """`nbst render SOL.json --camera NAME`: a model camera's name draws; another is refused in one
     line (exit 2) naming the cameras there are, and nothing is written; --clean is for scenes."""

@@ -127,3 +127,94 @@ def test_a_solve_says_when_its_search_is_over_and_the_samples_begin(tmp_path):
     assert res.probability is not None and res.probability.n == 4
     assert [p.phase for p in seen if p.phase != "search"] == ["P from 4 noisy rollouts"]
     assert seen[-1].phase != "search" and seen[-1].rollouts == res.rollouts
+
+
+def _solved_then_edited(tmp_path):
+    """A solution of the far ball, then its scene edited (the ball twice as heavy)."""
+    (tmp_path / "far.xml").write_text(BALL)
+    doc = {**FAR, "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.5}}}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    out = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(tmp_path / "f.json"), "-o", str(out), "--seed", "1", "--jobs", "1",
+                 "--max-rollouts", "8", "--no-ladder", "-q"]) == 0
+    (tmp_path / "far.xml").write_text(BALL.replace('size="0.05"/>', 'size="0.05" mass="9"/>'))
+    return out
+
+
+def test_export_after_the_scene_changed_says_so(tmp_path, capsys):
+    """A third new user (issue 46) edited the scene after solving: export said 'the written file is
+    damaged', where the cause is the scene's change (replay said so). Now export says it, exit 2."""
+    out = _solved_then_edited(tmp_path)
+    capsys.readouterr()
+    assert main(["scene", "export", str(out), "-o", str(tmp_path / "e.xml")]) == 2
+    err = capsys.readouterr().err
+    assert "the scene file changed since it was solved" in err and "damaged" not in err, err
+    assert not (tmp_path / "e.xml").exists()
+
+
+def test_export_names_the_one_other_file_without_dots(tmp_path, capsys):
+    """A scene reading one mesh, exported into another folder: the refusal named 'gem.stl, ...'."""
+    import struct
+
+    stl = b"\0" * 80 + struct.pack("<I", 4) + b"".join(
+        struct.pack("<12fH", 0, 0, 0, *a, *b, *c, 0) for a, b, c in
+        [((0, 0, 0), (0.1, 0, 0), (0, 0.1, 0)), ((0, 0, 0), (0, 0.1, 0), (0, 0, 0.1)),
+         ((0, 0, 0), (0, 0, 0.1), (0.1, 0, 0)), ((0.1, 0, 0), (0, 0.1, 0), (0, 0, 0.1))])
+    (tmp_path / "gem.stl").write_bytes(stl)
+    xml = BALL.replace("<worldbody>", '<asset><mesh name="gem" file="gem.stl"/></asset>\n  <worldbody>').replace(
+        '<geom type="sphere" size="0.05"/>', '<geom type="mesh" mesh="gem"/>')
+    (tmp_path / "far.xml").write_text(xml)
+    doc = {**FAR, "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.5}}}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    out = tmp_path / "sol.json"
+    main(["scene", "solve", str(tmp_path / "f.json"), "-o", str(out), "--seed", "1", "--jobs", "1",
+          "--max-rollouts", "4", "--no-ladder", "-q"])
+    other = tmp_path / "elsewhere"
+    other.mkdir()
+    capsys.readouterr()
+    assert main(["scene", "export", str(out), "-o", str(other / "e.xml")]) == 2
+    err = capsys.readouterr().err
+    assert "reads other files (gem.stl) found relative to its folder" in err, err
+
+
+def test_check_notes_rolling_friction_that_condim_3_ignores(tmp_path, capsys):
+    """A third new user gave the floor rolling friction, left the ball at condim 3 (MuJoCo ignores
+    it there) and searched 1,000 rollouts for a ball that could never come to rest. `check` notes
+    it; not at condim 6, nor for MuJoCo's default friction, which every geom carries."""
+    def check(xml: str) -> str:
+        (tmp_path / "far.xml").write_text(xml)
+        (tmp_path / "f.json").write_text(json.dumps(FAR))
+        assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
+        return capsys.readouterr().out
+
+    rough = BALL.replace('size="3 3 0.1"/>', 'size="3 3 0.1" friction="1 0.05 0.03"/>')
+    out = check(rough)
+    assert "note: ball's contact with floor has rolling friction 0.03 but condim 3: MuJoCo ignores it" in out, out
+    assert "torsional friction 0.05 but condim 3" in out, out
+    assert "condim 3" not in check(rough.replace('<geom type="sphere" size="0.05"/>',
+                                                 '<geom type="sphere" size="0.05" condim="6"/>'))
+    assert "note:" not in check(BALL)
+
+
+def test_a_touch_already_there_at_the_start_is_not_in_the_contact_sequence():
+    """A third new user's two answers both began 'bystander-floor', 'top-b2': blocks resting where the
+    scene put them, not choices. A first touch in the first step is left out; a later one stays."""
+    from nbst.scene.rollout import contact_sequence
+
+    assert contact_sequence([(0, "top", "b2"), (0, "bystander", "floor"), (7, "ball", "top"), (3, "ball", "floor"),
+                             (9, "top", "floor")]) == ["ball-floor", "ball-top", "top-floor"]
+
+
+def test_check_advises_a_step_that_resolves_a_contact_mujoco_held_at_two_steps(tmp_path, capsys):
+    """A third new user's stiff coin (solref 0.004 0.1 at a 4 ms step): MuJoCo holds the time constant
+    at 2 steps (8 ms), and the note said 'a step of at most 0.59 ms', where at 0.59 ms the contact
+    lasts its own 1.2 ms, 2 steps. The step advised is the unheld contact's over 4: 0.3 ms."""
+    xml = BALL.replace('timestep="0.01"', 'timestep="0.004"').replace(
+        '<geom type="sphere" size="0.05"/>', '<geom type="sphere" size="0.05" solref="0.004 0.1"/>').replace(
+        'size="3 3 0.1"/>', 'size="3 3 0.1" solref="0.004 0.1"/>')
+    (tmp_path / "far.xml").write_text(xml)
+    (tmp_path / "f.json").write_text(json.dumps(FAR))
+    assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
+    out = capsys.readouterr().out
+    assert "MuJoCo holds its time constant at 2 steps, 8 ms" in out, out
+    assert "a step of at most 0.3 ms gives it 4" in out, out

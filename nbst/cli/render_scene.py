@@ -36,6 +36,7 @@ def cmd_render_scene(args) -> int:
     argument is a scene solution; the frames are :mod:`nbst.render.scene.video`'s)."""
     from nbst.render.scene.motion import load_solution_scene
     from nbst.render.scene.video import camera_names, render_scene
+    from nbst.scene.solution import file_sha256
 
     given = [flag for attr, default, flag in SCENE_REFUSED if getattr(args, attr, default) not in (default, None, False)]
     if given:
@@ -57,7 +58,11 @@ def cmd_render_scene(args) -> int:
         return _err(f"--size {size[0]}x{size[1]}: H.264 (yuv420p) needs an even width and height")
     fps = args.fps if args.fps is not None else (style.GIF_FPS if kind == "gif" else style.DEFAULT_FPS)
     speed = 1.0 if args.speed is None else float(args.speed)
-    doc, _, model = load_solution_scene(args.problem)  # one line if the file, its fates or scene is refused
+    doc, fates, model = load_solution_scene(args.problem)  # one line if the file, its fates or scene is refused
+    if not args.quiet and doc.get("scene_sha256") not in (None, file_sha256(fates.scene)):
+        print(f"note: {fates.scene.name} changed since {Path(args.problem).name} was solved: this draws the motion in "
+              f"the scene as it is now (nbst scene replay {args.problem} says whether it is the solved one)",
+              file=sys.stderr)
     if args.camera is not None and args.camera not in camera_names(model):
         have = ", ".join(camera_names(model)) or "none"
         return _err(f"--camera {args.camera}: the scene has no camera of that name (its cameras: {have})")

@@ -327,6 +327,9 @@ def _range3(src: _Src, x: Any, field: str) -> Range3:
 
 
 def _region(src: _Src, x: Any, field: str) -> Region:
+    if isinstance(x, dict) and ({"center", "radius"} & set(x)) and ({"min", "max"} & set(x)):
+        raise src.fail(field, 'a region is a ball {"center": [x, y, z], "radius": r} or a box {"min": [x, y, z], '
+                              '"max": [x, y, z]}, not both')
     if isinstance(x, dict) and "center" in x:
         _keys(src, x, field, ("center", "radius"), ("center", "radius"))
         r = _num(src, x["radius"], f"{field}.radius")

@@ -89,10 +89,14 @@ def conjugate(quat: np.ndarray) -> np.ndarray:
 
 def contact_sequence(firsts: list[tuple[int, str, str]]) -> list[str]:
     """The contact sequence from first touches ``(step, body, other)``: in time order, ``"BODY-OTHER"``,
-    a touch of two fated bodies said once (from the side that sorts first), not from each."""
+    a touch of two fated bodies said once (from the side that sorts first), not from each; a touch in
+    the first step (step 0: already there at the start, a die on the table, a stacked block on the
+    one below) is not in it, as no choice of the search made it."""
     out: list[str] = []
     said: set[frozenset[str]] = set()
-    for _, body, other in sorted(firsts):
+    for k, body, other in sorted(firsts):
+        if k == 0:
+            continue
         if (pair := frozenset((body, other))) not in said:
             said.add(pair)
             out.append(f"{body}-{other}")

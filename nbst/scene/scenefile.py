@@ -19,12 +19,14 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from nbst.files import FileRefused, read_regular
 from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
                               read_fates_json)
 
 __all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "start_touches",
-           "unforced_still_moves", "MIN_CONTACT_STEPS", "short_contacts"]
+           "unforced_still_moves", "MIN_CONTACT_STEPS", "short_contacts", "ignored_friction"]
 
 #: The MJCF elements whose attributes name files, and the <compiler> folder each resolves under.
 _FILE_ATTRS = {"include": (("file",), None), "mesh": (("file",), "meshdir"), "skin": (("file",), "meshdir"),
@@ -365,6 +367,55 @@ def short_contacts(fates: Fates, model: Any, *, steps: float = MIN_CONTACT_STEPS
                 if (name, other) not in out or t < out[(name, other)][0]:
                     out[(name, other)] = (t, tau, zeta)
     return sorted(((b, o, *v) for (b, o), v in out.items()), key=lambda r: (r[2], r[0], r[1]))
+
+
+def _pair_condim_friction(model: Any, g1: int, g2: int, pairs: dict[tuple[int, int], int]) -> tuple[int, np.ndarray]:
+    """The condim and the (sliding, torsional, rolling) friction MuJoCo gives a contact of ``g1`` and
+    ``g2`` (mj_contactParam: a ``<pair>``'s own; else the higher priority's; else the larger of each)."""
+    k = pairs.get((g1, g2), pairs.get((g2, g1)))
+    if k is not None:
+        f = model.pair_friction[k]
+        return int(model.pair_dim[k]), np.array([f[0], f[2], f[3]], dtype=float)
+    p1, p2 = int(model.geom_priority[g1]), int(model.geom_priority[g2])
+    if p1 != p2:
+        g = g1 if p1 > p2 else g2
+        return int(model.geom_condim[g]), np.array(model.geom_friction[g], dtype=float)
+    return (max(int(model.geom_condim[g1]), int(model.geom_condim[g2])),
+            np.maximum(model.geom_friction[g1], model.geom_friction[g2]).astype(float))
+
+
+#: MuJoCo's default geom friction (sliding, torsional, rolling): every geom carries it, ignored at the
+#: default condim 3; a value other than these was written by someone who meant it.
+_MJ_FRICTION = (1.0, 0.005, 0.0001)
+
+
+def ignored_friction(fates: Fates, model: Any) -> list[tuple[str, str, str, float, int]]:
+    """The contacts of a controlled or fated body whose torsional or rolling friction MuJoCo ignores:
+    each ``(body, other, "rolling" | "torsional", value, condim)`` where the pair's condim is under 6
+    (rolling) or 4 (torsional) while that friction is above 0 and not MuJoCo's default (every geom
+    carries 0.005 and 0.0001, unused at the default condim 3: not noted) (a ball given rolling resistance in
+    ``friction`` rolls on for ever at condim 3, the default: ``at_rest`` then can not be met), the
+    first such other per body and kind. Compute only (``nbst scene check`` prints them)."""
+    import mujoco
+
+    pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
+    excluded = set(model.exclude_signature.tolist())
+    names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
+    out: dict[tuple[str, str], tuple[str, float, int]] = {}
+    for name in names:
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
+        for g1 in mine:
+            for g2 in range(model.ngeom):
+                if g2 in mine or not _collides(model, g1, g2, set(pairs), excluded):
+                    continue
+                condim, fr = _pair_condim_friction(model, g1, g2, pairs)
+                other = model.geom(g2).name or model.body(int(model.geom_bodyid[g2])).name or f"geom {g2}"
+                for kind, value, need, default in (("torsional", fr[1], 4, _MJ_FRICTION[1]),
+                                                   ("rolling", fr[2], 6, _MJ_FRICTION[2])):
+                    if value > 0 and not math.isclose(value, default) and condim < need and (name, kind) not in out:
+                        out[(name, kind)] = (other, float(value), condim)
+    return [(b, o, kind, v, c) for (b, kind), (o, v, c) in out.items()]
 
 
 def load_fates(path: str | os.PathLike, *, scene: str | os.PathLike | None = None) -> tuple[Fates, Any]:

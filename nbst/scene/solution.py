@@ -362,11 +362,19 @@ def export_scene(path: str | os.PathLike, out: str | os.PathLike) -> str:
     if (same := [f for f in files if os.path.realpath(f) == os.path.realpath(outp)]):
         raise SceneSolutionError(f"{out}: is {same[0]}, a file the scene reads; give another file name")
     if len(files) > 1 and outp.resolve().parent != fates.scene.resolve().parent:
-        raise SceneSolutionError(f"{out}: the scene reads other files ({files[1].name}, ...) found relative to its "
+        others = ", ".join(f.name for f in files[1:4]) + (", ..." if len(files) > 4 else "")
+        raise SceneSolutionError(f"{out}: the scene reads other files ({others}) found relative to its "
                                  f"folder: write the exported scene in {fates.scene.resolve().parent}")
     nq, nv = int(model.nq), int(model.nv)
     q0, v0 = _floats(doc, "qpos0", nq, str(path)), _floats(doc, "qvel0", nv, str(path))
     qf, vf = _floats(doc, "final.qpos", nq, str(path)), _floats(doc, "final.qvel", nv, str(path))
+    with quiet_mujoco_warnings(), SceneSim(fates, model) as sim:  # the scene as it is now: the motion still its?
+        q, v = replay(model, q0, v0, int(doc["nstep"]), key=sim.key)
+    if q.tobytes() != qf.tobytes() or v.tobytes() != vf.tobytes():
+        why = ("the scene file changed since it was solved (solve it again)"
+               if doc.get("scene_sha256") not in (None, file_sha256(fates.scene)) else "nbst scene replay says more")
+        raise SceneSolutionError(f"{path}: replayed in the scene as it is now, it does not end in the solution's final "
+                                 f"state bit for bit: {why}; nothing was written")
     d = mujoco.MjData(model)
     with SceneSim(fates, model) as sim:
         sim._reset(d)

@@ -81,7 +81,9 @@ def register(sub) -> None:
     v.add_argument("--scene", default=None, metavar="SCENE.xml", help="use this MJCF instead of the fates' \"scene\"")
     add_seed(v, type=SEED, resumable=False, what=f"random seed [{SEED.limits}]")
     v.add_argument("--max-rollouts", type=ROLLOUTS, default=DEFAULT_MAX_ROLLOUTS, metavar="N",
-                   help=with_limits(f"rollout budget of the search (default {DEFAULT_MAX_ROLLOUTS})", ROLLOUTS))
+                   help=with_limits(f"rollout budget of the search (default {DEFAULT_MAX_ROLLOUTS}); the finer steps' "
+                                   "rollouts of the last batch's motions met at h may pass it, by 2 each at most",
+                                   ROLLOUTS))
     g = v.add_mutually_exclusive_group()
     g.add_argument("--jobs", type=JOBS, default=None, metavar="K",
                    help=with_limits("threads running the rollouts (default: all cores); any K gives the same "
@@ -93,8 +95,9 @@ def register(sub) -> None:
                    help=with_limits("after a search that meets every fate, maximise the probability that they are "
                                     "met under the fates' noise (the rollout room's robust maximiser: common random "
                                     f"numbers, successive halving; BUDGET noisy rollouts, default "
-                                    f"{DEFAULT_ROBUST_BUDGET}) and write the pick, the latest that keeps every fate "
-                                    "at h, h/2 and h/4, with its probability measured afresh", ROBUST))
+                                    f"{DEFAULT_ROBUST_BUDGET}, and 3 more for each pick's ladder) and write the pick, "
+                                    "the latest that keeps every fate at h, h/2 and h/4, with its probability measured "
+                                    "afresh", ROBUST))
     v.add_argument("--samples", type=SAMPLES, default=None, metavar="N",
                    help=with_limits("also estimate how often the solution written meets every fate under the "
                                     "fates' noise (\"noise\", or the defaults of docs/scene.md) from N noisy "

@@ -61,7 +61,8 @@ def cmd_examples(args) -> int:
 
 def cmd_check(args) -> int:
     from nbst.scene.fates import STILL_DISTANCE
-    from nbst.scene.scenefile import MIN_CONTACT_STEPS, load_fates, short_contacts, start_touches, unforced_still_moves
+    from nbst.scene.scenefile import (MIN_CONTACT_STEPS, contact_time, ignored_friction, load_fates, short_contacts, start_touches,
+                                      unforced_still_moves)
 
     f, model = load_fates(args.fates, scene=args.scene)
     steps = int(round(f.duration / model.opt.timestep))
@@ -80,16 +81,23 @@ def cmd_check(args) -> int:
     for body, far in unforced_still_moves(f, model):
         print(f"  note: {body} moves {far:.3g} m by itself (the scene as written, no control, over the duration): "
               f"its still (at most {STILL_DISTANCE:g} m) is met only if a control holds it; start it at rest")
+    for body, other, kind, value, condim in ignored_friction(f, model):
+        print(f"  note: {body}'s contact with {other} has {kind} friction {value:g} but condim {condim}: MuJoCo ignores "
+              f"it (condim {6 if kind == 'rolling' else 4} applies it), so "
+              + ("a rolling body is not slowed by it and may never come to rest" if kind == "rolling"
+                 else "a spinning body is not slowed by it"))
     h = model.opt.timestep
     groups: dict[tuple[str, float, float, float], list[str]] = {}
     for body, other, t, tau, zeta in short_contacts(f, model):
         groups.setdefault((body, t, tau, zeta), []).append(other)
     for (body, t, tau, zeta), others in groups.items():
         named = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
-        print(f"  note: {body}'s contacts with {named} last {t * 1e3:.2g} ms (solref {tau:g} {zeta:g}), "
+        held = f"; MuJoCo holds its time constant at 2 steps, {2 * h * 1e3:g} ms" if tau < 2 * h else ""
+        print(f"  note: {body}'s contacts with {named} last {t * 1e3:.2g} ms (solref {tau:g} {zeta:g}{held}), "
               f"{t / h:.2g} steps of {h * 1e3:g} ms: a bounce resolved in under {MIN_CONTACT_STEPS:g} steps changes "
               f"with the step and with where in a step it begins, so h/2 and h/4 (the ladder) often disagree with h; "
-              f"a step of at most {t / MIN_CONTACT_STEPS * 1e3:.2g} ms gives it {MIN_CONTACT_STEPS:g} (or a longer time constant, "
+              f"a step of at most {contact_time(tau, zeta, 0.0, refsafe=False) / MIN_CONTACT_STEPS * 1e3:.2g} ms gives it "
+              f"{MIN_CONTACT_STEPS:g} (or a longer time constant, "
               f"or more damping)")
     return 0
 
