@@ -159,6 +159,30 @@ def test_clean_differs_only_under_the_readout(gl, solutions):
     assert lines[-1].startswith("signature ")
 
 
+def test_a_small_frame_gets_the_brief_readout_and_it_fits(gl, solutions):
+    """A third new user rendered at 320x180 and the readout, at its least legible size, covered the
+    frame and ran off its right edge. Where the whole one does not fit, the brief one: per body one
+    line, its fates' names with their marks at the end, and the signature. At 640x360 and 1280x720
+    the readout is the whole one."""
+    path = solutions["snake-eyes"]
+    doc = json.loads(path.read_text())
+    end = doc["nstep"] * doc["timestep"]
+    r, _, _, motion, _ = _frame(gl, path, end, size=(320, 180))
+    assert r.brief
+    lines = r.readout(end)
+    fates = [f for b in motion.judgement.bodies for f in b.fates]
+    assert len(lines) == 2 + len(motion.judgement.bodies) + 1
+    assert sum(s.count("\u2713") + s.count("\u2717") for s in lines) == len(fates)
+    assert lines[2].startswith("die1: ") and lines[-1].startswith("signature ")
+    from nbst.render.scene import readout as ro
+    narrow = ro.readout("t", end, r.fates, motion.judgement, final=True, brief=True, width=22)
+    assert len(narrow) > len(lines) and all(len(s) <= 22 for s in narrow[2:-1]), narrow   # goes on under the name
+    assert sum(s.count("\u2713") + s.count("\u2717") for s in narrow) == len(fates)
+    for size in ((640, 360), (1280, 720)):
+        big, _, _, _, _ = _frame(gl, path, end, size=size)
+        assert not big.brief and len(big.readout(end)) > len(lines)
+
+
 def _frames(solutions, tmp_path, name):
     doc = json.loads(solutions[name].read_text())
     duration = doc["nstep"] * doc["timestep"]

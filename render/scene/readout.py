@@ -64,12 +64,31 @@ def asked(f: Fate) -> list[tuple[str, str]]:
     return out
 
 
-def readout(title: str, t: float, fates: Fates, judgement: Judgement, *, final: bool) -> list[str]:
+def readout(title: str, t: float, fates: Fates, judgement: Judgement, *, final: bool,
+            brief: bool = False, width: int | None = None) -> list[str]:
     """The readout's lines at time ``t``: the title and time, then per body its fates asked and,
     when ``final``, what happened with a mark, and the signature. Past :data:`COMPACT_AFTER`
-    bodies, one line per fate (the body's name first, what happened after what was asked)."""
+    bodies, one line per fate (the body's name first, what happened after what was asked).
+    ``brief`` (a frame too small for the rest at a legible size): one line per body, its fates'
+    names, each with its mark when ``final`` (``gem: ✓ rest_in ✓ at_rest``), then the signature; a
+    line past ``width`` characters goes on under the first name."""
     lines = [title, f"t = {t:5.2f} s"]
     verdicts = {b.body: {v.fate: v for v in b.fates} for b in judgement.bodies}
+    if brief:
+        for f in fates.fates:
+            names = [name for name, _ in asked(f)]
+            got = [verdicts.get(f.body, {}).get(n) for n in names]
+            items = [f"{OK if v.met else NO} {n}" if final and v is not None else n for n, v in zip(names, got)]
+            line = f"{f.body}:"
+            for it in items:
+                if width is not None and len(line) > len(f.body) + 1 and len(line) + 1 + len(it) > width:
+                    lines.append(line)
+                    line = " " * (len(f.body) + 1)
+                line += " " + it
+            lines.append(line)
+        if final:
+            lines.append(f"signature {signature_text(judgement.signature)}")
+        return lines
     compact = len(fates.fates) > COMPACT_AFTER
     for f in fates.fates:
         if not compact:
@@ -95,15 +114,17 @@ def body_rows(lines: list[str], fates: Fates) -> list[tuple[int, int]]:
     never: a scene file may share a body's name)."""
     out = [(-1, 0)] * min(2, len(lines))
     for s in lines[2:]:
-        hit = next(((i, len(f.body)) for i, f in enumerate(fates.fates) if s == f.body or s.startswith(f.body + " ")),
+        hit = next(((i, len(f.body)) for i, f in enumerate(fates.fates)
+                    if s == f.body or s.startswith(f.body + " ") or s.startswith(f.body + ": ")),
                    (-1, 0))
         out.append(hit)
     return out
 
 
-def widest(title: str, fates: Fates, judgement: Judgement, duration: float) -> tuple[int, int]:
+def widest(title: str, fates: Fates, judgement: Judgement, duration: float, *, brief: bool = False,
+           width: int | None = None) -> tuple[int, int]:
     """(characters, lines) of the longest readout: the final one."""
-    lines = readout(title, duration, fates, judgement, final=True)
+    lines = readout(title, duration, fates, judgement, final=True, brief=brief, width=width)
     return max(len(s) for s in lines), len(lines)
 
 

@@ -215,11 +215,21 @@ class SceneRenderer(FrameRenderer):
         # text: the readout in the frame's top left, as large as READOUT_FRAC of the frame where
         # its longest (final) lines fit; the framing camera frames the bodies beside or below it,
         # whichever leaves more room (also with ``clean``: the same view, with or without text)
-        chars, rows_ = ro.widest(title, fates, motion.judgement, motion.duration)
-        px = max(style.MIN_READOUT_PX, int(round(READOUT_FRAC * min(self.size))))
-        while px > style.MIN_READOUT_PX and ((chars + 2) * text_cell(px)[0] > 0.6 * w or
-                                             (rows_ + 1) * text_cell(px)[1] > 0.95 * h):
-            px -= 1
+        def fits(px: int, chars: int, rows_: int, wide: float) -> bool:
+            return (chars + 2) * text_cell(px)[0] <= wide * w and (rows_ + 1) * text_cell(px)[1] <= 0.95 * h
+
+        #: a frame too small for the whole readout at a legible size (it would leave the frame) gets
+        #: the brief one (ro.readout)
+        self.brief, self.brief_width = False, int(0.95 * w / text_cell(style.MIN_READOUT_PX)[0]) - 2
+        for brief in (False, True):
+            self.brief = brief
+            chars, rows_ = ro.widest(title, fates, motion.judgement, motion.duration, brief=brief,
+                                     width=self.brief_width if brief else None)
+            px = max(style.MIN_READOUT_PX, int(round(READOUT_FRAC * min(self.size))))
+            while px > style.MIN_READOUT_PX and not fits(px, chars, rows_, 0.6):
+                px -= 1
+            if fits(px, chars, rows_, 0.95):
+                break
         cw, ch = text_cell(px)
         fw, fh = min((chars + 1.5) * cw / w, 0.6), min((rows_ + 1) * ch / h, 0.6)
         # the framing camera: beside the readout or below it, whichever shows the bodies larger
@@ -364,7 +374,8 @@ class SceneRenderer(FrameRenderer):
 
     def readout(self, t: float) -> list[str]:  # type: ignore[override]  # the disks' readout counts insides
         final = t >= self.motion.duration - 1e-9
-        return ro.readout(self.title, t, self.fates, self.motion.judgement, final=final)
+        return ro.readout(self.title, t, self.fates, self.motion.judgement, final=final, brief=self.brief,
+                          width=self.brief_width if self.brief else None)
 
     def _overlay(self, t: float, t_now: float, vpm: np.ndarray) -> None:
         """The labels (hoops in order, ``at`` regions, impacts: each where it leaves the readout and
