@@ -53,6 +53,8 @@ def test_a_motion_missed_at_h_is_not_said_to_miss_the_ladder(tmp_path, capsys):
                  "--max-rollouts", "16"]) == 1
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert "not met (cost" in err and "h/2" not in err, err
+    # a third new user: which fates the best misses, named (there, the one that could not be met)
+    assert "the best misses ball's rest_in" in err, err
 
 
 def test_the_fates_example_in_formats_md_is_a_good_fates_file(tmp_path):

@@ -145,8 +145,9 @@ def cmd_solve(args) -> int:
     if not args.quiet:
         b = res.best
         # res.met holds the ladder too where it was asked (exit 0 only then)
+        unmet = ", ".join(f"{bv.body}'s {fv.fate}" for bv in b.judgement.bodies for fv in bv.fates if not fv.met)
         met = ("met" if res.met else "met at the scene's step only" if b.judgement.met and not b.warnings
-               else f"not met (cost {b.cost:.3g})")
+               else f"not met (cost {b.cost:.3g}; the best misses {unmet})" if unmet else f"not met (cost {b.cost:.3g})")
         took = seconds_text(bar[0].seconds if bar else res.wall_time)
         warn = f"; MuJoCo warned: {', '.join(b.warnings)}" if b.warnings else ""
         if res.probability is not None:
