@@ -347,7 +347,7 @@ def short_contacts(fates: Fates, model: Any, *, steps: float = MIN_CONTACT_STEPS
     h = float(model.opt.timestep)
     refsafe = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE
     pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
-    excluded = set(model.exclude_signature.tolist())
+    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
     names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
     out: dict[tuple[str, str], tuple[float, float, float]] = {}
     for name in names:
@@ -355,7 +355,7 @@ def short_contacts(fates: Fates, model: Any, *, steps: float = MIN_CONTACT_STEPS
         mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
         for g1 in mine:
             for g2 in range(model.ngeom):
-                if g2 in mine or not _collides(model, g1, g2, set(pairs), excluded):
+                if g2 in mine or not _collides(model, g1, g2, pairset, excluded):
                     continue
                 tau, zeta = _pair_solref(model, g1, g2, pairs)
                 if tau <= 0 or zeta <= 0:
@@ -399,7 +399,7 @@ def ignored_friction(fates: Fates, model: Any) -> list[tuple[str, str, str, floa
     import mujoco
 
     pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
-    excluded = set(model.exclude_signature.tolist())
+    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
     names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
     out: dict[tuple[str, str], tuple[str, float, int]] = {}
     for name in names:
@@ -407,7 +407,7 @@ def ignored_friction(fates: Fates, model: Any) -> list[tuple[str, str, str, floa
         mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
         for g1 in mine:
             for g2 in range(model.ngeom):
-                if g2 in mine or not _collides(model, g1, g2, set(pairs), excluded):
+                if g2 in mine or not _collides(model, g1, g2, pairset, excluded):
                     continue
                 condim, fr = _pair_condim_friction(model, g1, g2, pairs)
                 other = model.geom(g2).name or model.body(int(model.geom_bodyid[g2])).name or f"geom {g2}"
