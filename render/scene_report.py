@@ -127,8 +127,12 @@ def _regions(ax: Any, val: SceneValidation) -> None:
 
 
 def _png(fig: Any) -> bytes:
+    import warnings
+
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    with warnings.catch_warnings():  # a name in a script DejaVu lacks (球) draws as a box; not a warning on stderr
+        warnings.filterwarnings("ignore", message="Glyph .* missing from font", category=UserWarning)
+        fig.savefig(buf, format="png", dpi=110)
     return buf.getvalue()
 
 

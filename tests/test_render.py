@@ -984,3 +984,19 @@ def test_crowded_numbers_never_run_together(gl):
     boxes = np.array([[0, 0, 10, 10], [5, 5, 15, 15], [20, 0, 30, 10], [0, 0, 2, 2]], float)
     assert keep_apart(boxes).tolist() == [True, False, True, False]
     assert keep_apart(boxes, taken=[[0, 0, 3, 3]]).tolist() == [False, True, True, False]
+
+
+def test_a_character_the_font_lacks_is_drawn_as_a_mark_not_a_gap(gl):
+    """A demanding user's body named 球 vanished from the scene readout (DejaVu Sans Mono has no CJK):
+    such a character lays out as '?' in its cell; spaces and Latin-1 letters as before."""
+    from nbst.render.core.shapes import FIRST_CHAR, Text, glyph_index
+
+    t = Text(gl, 12)
+    try:
+        inst = t.layout(["球 ü-x"], 0, 0)
+    finally:
+        t.release()
+    cw = t.cell[0]
+    assert [int(g) for g in inst["glyph"]] == [ord("?") - FIRST_CHAR, glyph_index("ü"), ord("-") - FIRST_CHAR,
+                                                ord("x") - FIRST_CHAR]
+    assert [int(p[0]) for p in inst["pos"]] == [0, 2 * cw, 3 * cw, 4 * cw]

@@ -150,7 +150,8 @@ def test_mjcf_that_does_not_compile_gives_mujocos_message_with_the_line(tmp_path
     ({"fates": {"ball": {"hits": ["post_gg"]}}}, "fates.ball.hits", "did you mean 'post_g'"),
     ({"fates": {"ball": {"hits": ["post", "ball_g"]}}}, "fates.ball.hits", "a geom of 'ball' itself"),
     ({"fates": {"nobody": {"still": True}}}, "fates.nobody", "no body"),
-    ({"keyframe": "low"}, "keyframe", "no key 'low'"),
+    ({"keyframe": "low"}, "keyframe", "no key 'low' in t.xml (its keys: high)"),
+    ({"keyframe": "hihg"}, "keyframe", "did you mean 'high'"),   # a demanding user's typo
     ({"duration": 5000.0}, "duration", "steps"),
 ])
 def test_names_the_model_lacks_and_bodies_without_free_joint_are_refused(tmp_path, change, field, why):

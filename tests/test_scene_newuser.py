@@ -210,7 +210,7 @@ def test_a_touch_already_there_at_the_start_is_not_in_the_contact_sequence():
 def test_check_advises_a_step_that_resolves_a_contact_mujoco_held_at_two_steps(tmp_path, capsys):
     """A third new user's stiff coin (solref 0.004 0.1 at a 4 ms step): MuJoCo holds the time constant
     at 2 steps (8 ms), and the note said 'a step of at most 0.59 ms', where at 0.59 ms the contact
-    lasts its own 1.2 ms, 2 steps. The step advised is the unheld contact's over 4: 0.3 ms."""
+    lasts its own 1.2 ms, 2 steps. The step advised is the unheld contact's over 4: 0.296 ms."""
     xml = BALL.replace('timestep="0.01"', 'timestep="0.004"').replace(
         '<geom type="sphere" size="0.05"/>', '<geom type="sphere" size="0.05" solref="0.004 0.1"/>').replace(
         'size="3 3 0.1"/>', 'size="3 3 0.1" solref="0.004 0.1"/>')
@@ -219,4 +219,4 @@ def test_check_advises_a_step_that_resolves_a_contact_mujoco_held_at_two_steps(t
     assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
     out = capsys.readouterr().out
     assert "MuJoCo holds its time constant at 2 steps, 8 ms" in out, out
-    assert "a step of at most 0.3 ms gives it 4" in out, out
+    assert "a step of at most 0.296 ms gives it 4" in out, out

@@ -346,6 +346,41 @@ def test_answers_have_contact_sequences_of_their_own_and_each_replays(toss, tmp_
     assert d["answers"][0]["probability"]["n"] == 4
 
 
+BANK = """<mujoco><option timestep="0.002"/><worldbody>
+  <geom name="floor" type="plane" size="3 3 0.1"/>
+  <geom name="wall_n" type="box" pos="1 0.6 0.15" size="1.2 0.02 0.15"/>
+  <geom name="wall_s" type="box" pos="1 -0.6 0.15" size="1.2 0.02 0.15"/>
+  <geom name="wall_e" type="box" pos="2.2 0 0.15" size="0.02 0.6 0.15"/>
+  <body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05" solref="0.005 0.3"/></body>
+  <body name="target" pos="1.0 0 0.05"><freejoint/><geom type="sphere" size="0.05" solref="0.005 0.3"/></body>
+</worldbody></mujoco>"""
+BANK_FATES = {"format": "nbst-fates", "version": 1, "scene": "bank.xml", "timestep": 0.001, "duration": 2.0,
+              "controls": {"ball": {"linvel": [[0.5, 4], [-3, 3], [0, 0]]}},
+              "fates": {"ball": {"hits": ["target"], "rest_in": {"min": [1.6, 0.2, 0], "max": [2.2, 0.6, 0.2]}},
+                        "target": {"never_hits": ["wall_e"]}},
+              "noise": {"ball": {"linvel": 0.02}}}
+
+
+@pytest.mark.slow
+def test_with_robust_the_first_answer_is_the_robust_pick(tmp_path):
+    """A demanding user (issue 46; this scene is theirs): with --robust and --answers, answers[0] kept
+    the search's motion (its x, final state and sequence) beside the robust pick's probability. The
+    first answer is the file's own: the pick, with its own state and probability; no sequence twice."""
+    (tmp_path / "bank.xml").write_text(BANK)
+    (tmp_path / "bank.json").write_text(json.dumps(BANK_FATES))
+    plain = solve(None, tmp_path / "bank.json", seed=2, max_rollouts=1000, answers=3)
+    res = solve(None, tmp_path / "bank.json", seed=2, max_rollouts=1000, answers=3, samples=50, robust=100)
+    assert res.robust is not None and res.answers
+    assert res.best.x.tobytes() != plain.best.x.tobytes()   # the robust pick moved the motion
+    first = res.answers[0]
+    assert first is res.best and first.x.tobytes() == res.best.x.tobytes()
+    assert first.qpos.tobytes() == res.best.qpos.tobytes()
+    assert res.answer_probabilities[0] is res.probability
+    assert len({a.sequence for a in res.answers}) == len(res.answers)
+    d = solution_dict(res)
+    assert d["answers"][0]["x"] == d["x"] and d["answers"][0]["sequence"] == list(first.sequence)
+
+
 def test_replay_ladder_rolls_the_same_state_out_at_h_2_and_h_4(toss, tmp_path, capsys):
     from nbst.scene.solution import ladder_solution
 

@@ -107,6 +107,7 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
                              ladder=tuple(finer), callback=callback)
         stopped = r.stopped
         best, held = r.best, r.best_held
+        found = list(r.answers) if answers > 1 else []
 
         def say(phase: str) -> None:  # the search is over: what comes next, for a progress bar
             if callback is not None:
@@ -132,9 +133,12 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
             elif samples and stopped != "interrupted":
                 say(f"P from {samples} noisy rollouts")
                 p = noisy_probability(sim, best.x, n=samples, seed=s)
+            if best is not r.best and found:  # the robust pick is the file's own motion: the answer it moved
+                found = [best if a is r.best else a for a in found]
+                found = [a for a in found if a is best or a.sequence != best.sequence]  # a sequence once
             if samples and answers > 1 and stopped != "interrupted":
-                say(f"P of {len(r.answers)} answers from {samples} noisy rollouts each")
-                ps = [p if a is r.best else noisy_probability(sim, a.x, n=samples, seed=s) for a in r.answers]
+                say(f"P of {len(found)} answers from {samples} noisy rollouts each")
+                ps = [p if a is best else noisy_probability(sim, a.x, n=samples, seed=s) for a in found]
         except KeyboardInterrupt:
             stopped = "interrupted"
             p, ps = None, []
@@ -143,6 +147,6 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     return SceneResult(fates=f, model=model, best=best, met=met,
                        rollouts=r.rollouts, stopped=stopped, seed=s, max_rollouts=max_rollouts,
                        wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p,
-                       answers=r.answers if answers > 1 else (), answer_probabilities=tuple(ps),
+                       answers=tuple(found), answer_probabilities=tuple(ps),
                        ladder=tuple(float(model.opt.timestep) / k for k in (1, *LADDER)) if ladder else (),
                        ladder_held=held, robust=extra)

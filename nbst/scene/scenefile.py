@@ -196,7 +196,11 @@ def check_against_model(fates: Fates, model: Any) -> None:
         return i
 
     if fates.keyframe is not None and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe) < 0:
-        raise src.fail("keyframe", f"no key {fates.keyframe!r} in {fates.scene.name}")
+        keys = [model.key(k).name for k in range(model.nkey)]
+        near = difflib.get_close_matches(fates.keyframe, keys, n=1)
+        have = f" (did you mean {near[0]!r}?)" if near else (f" (its keys: {', '.join(keys)})" if any(keys) else
+                                                             " (it has no named key)")
+        raise src.fail("keyframe", f"no key {fates.keyframe!r} in {fates.scene.name}{have}")
     steps = int(round(fates.duration / model.opt.timestep))
     if steps > MAX_STEPS:
         raise src.fail("duration", f"{fates.duration:g} s at a {model.opt.timestep:g} s timestep is {steps:,} steps, "
@@ -350,13 +354,15 @@ def short_contacts(fates: Fates, model: Any, *, steps: float = MIN_CONTACT_STEPS
     excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
     names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
     out: dict[tuple[str, str], tuple[float, float, float]] = {}
+    done: set[frozenset[int]] = set()   # a pair of two such bodies' geoms, said once
     for name in names:
         b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
         mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
         for g1 in mine:
             for g2 in range(model.ngeom):
-                if g2 in mine or not _collides(model, g1, g2, pairset, excluded):
+                if g2 in mine or frozenset((g1, g2)) in done or not _collides(model, g1, g2, pairset, excluded):
                     continue
+                done.add(frozenset((g1, g2)))
                 tau, zeta = _pair_solref(model, g1, g2, pairs)
                 if tau <= 0 or zeta <= 0:
                     continue

@@ -403,7 +403,9 @@ class Text:
             for ci, c in enumerate(s):
                 g = glyph_index(c)
                 if g is None:
-                    continue
+                    if c.isspace() or not c.isprintable():
+                        continue
+                    g = glyph_index("?")   # a script the font lacks (a body named 球): a mark, not a gap
                 out.append(((round(x + ci * cw), round(y + li * ch)), g))
         data = np.zeros(len(out), TEXT_DTYPE)
         for i, (pos, g) in enumerate(out):

@@ -93,10 +93,10 @@ def cmd_check(args) -> int:
     for (body, t, tau, zeta), others in groups.items():
         named = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
         held = f"; MuJoCo holds its time constant at 2 steps, {2 * h * 1e3:g} ms" if tau < 2 * h else ""
-        print(f"  note: {body}'s contacts with {named} last {t * 1e3:.2g} ms (solref {tau:g} {zeta:g}{held}), "
-              f"{t / h:.2g} steps of {h * 1e3:g} ms: a bounce resolved in under {MIN_CONTACT_STEPS:g} steps changes "
+        print(f"  note: {body}'s contacts with {named} last {t * 1e3:.3g} ms (solref {tau:g} {zeta:g}{held}), "
+              f"{t / h:.3g} steps of {h * 1e3:g} ms: a bounce resolved in under {MIN_CONTACT_STEPS:g} steps changes "
               f"with the step and with where in a step it begins, so h/2 and h/4 (the ladder) often disagree with h; "
-              f"a step of at most {contact_time(tau, zeta, 0.0, refsafe=False) / MIN_CONTACT_STEPS * 1e3:.2g} ms gives it "
+              f"a step of at most {contact_time(tau, zeta, 0.0, refsafe=False) / MIN_CONTACT_STEPS * 1e3:.3g} ms gives it "
               f"{MIN_CONTACT_STEPS:g} (or a longer time constant, "
               f"or more damping)")
     return 0
@@ -116,7 +116,7 @@ def cmd_solve(args) -> int:
         body, other, t, _tau, _zeta = short[0]
         h = model.opt.timestep
         print(f"note: {count_text(len(short))} pair(s) of geoms touch for fewer than {MIN_CONTACT_STEPS:g} steps (the shortest, "
-              f"{body} with {other}, {t / h:.2g} steps of {h * 1e3:g} ms): h/2 and h/4 will often disagree with h; "
+              f"{body} with {other}, {t / h:.3g} steps of {h * 1e3:g} ms): h/2 and h/4 will often disagree with h; "
               f"nbst scene check {args.fates} says more", file=sys.stderr)
     bar: list = []
     name = fates.source
@@ -132,7 +132,8 @@ def cmd_solve(args) -> int:
             bar[0].set_postfix_str(f"search done; {p.phase}", refresh=True)
             return
         cost = f"{p.best_cost:.3g}" if math.isfinite(p.best_cost) else "inf"
-        bar[0].set_postfix_str(f"best cost {cost}, signature {p.best_signature}, {p.signatures} signatures",
+        seen = f"{p.signatures} signature{'' if p.signatures == 1 else 's'}"
+        bar[0].set_postfix_str(f"best cost {cost}, signature {p.best_signature}, {seen}",
                                refresh=False)
 
     with sigterm_as_interrupt():
@@ -227,7 +228,8 @@ def cmd_validate(args) -> int:
                 f"{b.body} {v.fate} ({v.happened})" for b in r.rollout.judgement.bodies for v in b.fates if not v.met)
             warn = f"; MuJoCo warned: {', '.join(r.rollout.warnings)}" if r.rollout.warnings else ""
             print(f"  {r.group:10s} {r.setting:13s} {r.timestep * 1e3:7g} ms  {'met' if r.met else 'NOT met':7s} "
-                  f"cost {r.rollout.cost:.3g}{worst}{warn}")
+                  f"cost {r.rollout.cost:.3g}{worst}{warn}"
+                  + (" (the scene's)" if r.same_as_scene and r.group != "scene" else ""))
         print(f"  {'noise':10s} {p.n} samples  P(every fate) {p.p:.3g} [{p.lo:.3g}, {p.hi:.3g}] (95 % Wilson, seed "
               f"{val.noise_seed})")
         if args.out_dir:
