@@ -36,6 +36,10 @@ _TITLES = {"integrator": "Integrators", "solver": "Constraint solvers", "cone": 
 _COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 
 
+#: The fixed geoms' footprints from above: fill and edge.
+_STATIC_FILL, _STATIC_EDGE = "#dcdcdc", "#9a9a9a"
+
+
 def _fates_columns(val: SceneValidation) -> list[tuple[str, str]]:
     """(body, fate) of each fate, in the judgement's order."""
     return [(b.body, v.fate) for b in val.scene_row.rollout.judgement.bodies for v in b.fates]
@@ -106,8 +110,36 @@ def scene_report_html(val: SceneValidation) -> str:
     return "\n".join(parts)
 
 
+def _statics(ax: Any, val: SceneValidation) -> None:
+    """The geoms fixed to the world, from above, in light grey under the paths."""
+    from matplotlib.patches import Polygon
+
+    for poly in val.statics:
+        if len(poly) >= 3:
+            ax.add_patch(Polygon(poly, closed=True, fc=_STATIC_FILL, ec=_STATIC_EDGE, lw=0.6, zorder=0))
+
+
+def _kinds(val: SceneValidation) -> list[Any]:
+    """The legend's entries for what the plots draw besides the paths: the region kinds the fates have,
+    the fixed geoms when there are some."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    fs = val.fates.fates
+    out: list[Any] = []
+    for ls, name, has in (("-", "rest_in", any(f.rest_in is not None for f in fs)), ("--", "at", any(f.at for f in fs)),
+                          (":", "through", any(f.through for f in fs))):
+        if has:
+            out.append(Line2D([], [], color="grey", ls=ls, label=name))
+    if val.statics:
+        out.append(Patch(fc=_STATIC_FILL, ec=_STATIC_EDGE, lw=0.6, label="fixed geoms"))
+    return out
+
+
 def _regions(ax: Any, val: SceneValidation) -> None:
     from matplotlib.patches import Circle, Rectangle
+
+    _statics(ax, val)
 
     def draw(r: Any, ls: str, colour: str) -> None:
         if r.center is not None:
@@ -181,8 +213,7 @@ def _group_png(val: SceneValidation, group: str) -> bytes:
     axes[0].set_ylabel("y (m)", fontsize=8)
     handles = [Line2D([], [], color=_COLOURS[i % len(_COLOURS)], lw=1.2, label=f.body)
                for i, f in enumerate(val.fates.fates)]
-    handles += [Line2D([], [], color="grey", ls="-", label="rest_in"), Line2D([], [], color="grey", ls="--", label="at"),
-                Line2D([], [], color="grey", ls=":", label="through"),
+    handles += [*_kinds(val),
                 Line2D([], [], color="grey", marker="o", ls="", label="start"),
                 Line2D([], [], color="grey", marker="x", ls="", label="end")]
     fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 8), fontsize=7, frameon=False)

@@ -149,3 +149,30 @@ def test_the_page_opens_in_headless_chromium(solved, tmp_path):
     run = subprocess.run([*cmd, f"--screenshot={shot}", (out / "index.html").as_uri()], capture_output=True,
                          timeout=120)
     assert run.returncode == 0 and shot.stat().st_size > 10_000
+
+
+def test_the_report_draws_the_fixed_geoms_from_above():
+    """A demanding user's ball bounced off a wall the report's path plots did not draw: each geom
+    fixed to the world that collides is a footprint from above (a box's turned with it, a sphere's a
+    circle); planes, free bodies and geoms that collide with nothing are not."""
+    import mujoco
+
+    from nbst.scene.validate import static_footprints
+
+    xml = """<mujoco><worldbody><geom type="plane" size="3 3 0.1"/>
+      <geom name="wall" type="box" pos="1 0.6 0.15" size="1.2 0.02 0.15"/>
+      <geom name="turned" type="box" pos="-1 0 0.15" size="1.2 0.02 0.15" euler="0 0 90"/>
+      <geom name="post" type="sphere" pos="0 -1 0.1" size="0.1"/>
+      <geom name="ghost" type="box" pos="0 2 0" size="0.1 0.1 0.1" contype="0" conaffinity="0"/>
+      <body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
+    </worldbody></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    polys = static_footprints(m, d)
+    assert len(polys) == 3
+    boxes = sorted((tuple(np.round(p.min(axis=0), 6)), tuple(np.round(p.max(axis=0), 6))) for p in polys)
+    assert ((-1.02, -1.2), (-0.98, 1.2)) in boxes          # turned 90 degrees about z
+    assert ((-0.2, 0.58), (2.2, 0.62)) in boxes
+    circle = [p for p in polys if len(p) == 24][0]
+    assert np.allclose(np.linalg.norm(circle - [0, -1], axis=1), 0.1)

@@ -126,6 +126,9 @@ class SceneValidation:
     noisy_ends: np.ndarray = field(repr=False, compare=False)
     noisy_met: np.ndarray = field(repr=False, compare=False)
     mujoco: str = ""
+    #: the footprints from above, (N, 2) polygons (m), of the geoms fixed to the world that bodies can
+    #: touch (walls, a backboard, a bin; planes left out): drawn under the paths (:func:`static_footprints`)
+    statics: tuple[np.ndarray, ...] = field(default=(), repr=False, compare=False)
 
     @property
     def scene_row(self) -> SettingRow:
@@ -252,6 +255,59 @@ def validate_solution(path: str, *, samples: int = DEFAULT_VALIDATE_SAMPLES, see
                 d.qpos[:] = o.qpos
                 mujoco.mj_kinematics(model, d)
                 ends[i] = d.xpos[sim.bodies]
+        d = mujoco.MjData(model)
+        with SceneSim(fates, model) as sim:
+            sim._reset(d)  # the keyframe's mocap poses too
+        mujoco.mj_kinematics(model, d)
+        statics = static_footprints(model, d)
     return SceneValidation(solution=str(path), fates=fates, doc=doc, rows=tuple(rows),
                            probability=Probability.of(int(met.sum()), samples), noise_seed=s, samples=samples,
-                           noisy_ends=ends, noisy_met=met, mujoco=mujoco.__version__)
+                           noisy_ends=ends, noisy_met=met, mujoco=mujoco.__version__, statics=statics)
+
+
+def _hull(p: np.ndarray) -> np.ndarray:
+    """The convex hull of 2D points (Andrew's monotone chain), counter-clockwise."""
+    pts = sorted(set(map(tuple, np.round(p, 12))))
+    if len(pts) < 3:
+        return np.array(pts, dtype=float)
+
+    def half(seq: list) -> list:
+        out: list = []
+        for q in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (q[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (q[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(q)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def static_footprints(model: Any, data: Any) -> tuple[np.ndarray, ...]:
+    """The footprint from above of each geom fixed to the world (its body welded to the world, or a
+    mocap body at its pose in ``data``) that collides with something (contype or conaffinity set),
+    planes and height fields left out: a sphere's circle (24 sides), else the hull of its bounding
+    box's 8 corners (MuJoCo's ``geom_aabb``, turned by its pose), each an (N, 2) polygon in metres."""
+    import mujoco
+
+    out = []
+    for g in range(int(model.ngeom)):
+        t = int(model.geom_type[g])
+        if t in (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD):
+            continue
+        if not (model.geom_contype[g] or model.geom_conaffinity[g]):
+            continue
+        b = int(model.geom_bodyid[g])
+        if int(model.body_weldid[b]) != 0 and int(model.body_mocapid[b]) < 0:
+            continue
+        c, R = np.asarray(data.geom_xpos[g], float), np.asarray(data.geom_xmat[g], float).reshape(3, 3)
+        if t == mujoco.mjtGeom.mjGEOM_SPHERE:
+            a = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+            r = float(model.geom_size[g, 0])
+            out.append(c[:2] + r * np.stack([np.cos(a), np.sin(a)], axis=1))
+            continue
+        box = np.asarray(model.geom_aabb[g], float)   # centre (3), half sizes (3), in the geom's frame
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * box[3:] + box[:3]
+        out.append(_hull((c + corners @ R.T)[:, :2]))
+    return tuple(out)
