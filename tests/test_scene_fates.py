@@ -83,6 +83,7 @@ BAD = [
     (_bad(fates__ball__rest_in={"center": [1, 0, 0], "radius": -1}), "fates.ball.rest_in.radius", "positive size"),
     (_bad(fates__ball__rest_in={"min": [0, 0, 0], "max": [1, 0, 1]}), "fates.ball.rest_in.max[1]", "positive size"),
     (_bad(fates__ball__rest_in={"center": [1, 0, 0], "min": [0, 0, 0]}), "fates.ball.rest_in", "not both"),
+    (_bad(fates__ball__rest_in={"min": [0, 0, 0], "max": [1, 1, 1], "radius": 1}), "fates.ball.rest_in", "not both"),
     (_bad(fates__ball__rest_in={"min": [0, 0, 0], "max": [1, 1, 1], "mid": 1}), "fates.ball.rest_in.mid", "unknown"),
     (_bad(fates__ball__at=[{"t": 9, "in": {"center": [0, 0, 0], "radius": 1}}]), "fates.ball.at[0].t", "after"),
     (_bad(fates__ball__up={"axis": [0, 0, 0], "within_deg": 10}), "fates.ball.up.axis", "zero"),

@@ -58,11 +58,10 @@ def register(sub) -> None:
                     "light up while their disk is inside, a time readout. Positions are exact at every\n"
                     "frame (the event-driven simulator). The output's extension picks the format:\n"
                     ".mp4 (H.264, yuv420p, plays everywhere) or .gif; with --still T, a .png of the\n"
-                    "frame at time T. Headless: OpenGL through EGL, no display or GPU needed.\n\n"
-                    "PROBLEM alone may instead be a crash file (nbst crash solve), a bowling 5 m throw\n"
-                    "file (nbst bowl solve) or a scene solution (nbst scene solve: any MJCF, every geom in its\n"
-                    "colours, the fates' regions and a readout of asked and happened; docs/scene.md), each\n"
-                    "drawn in 3D.",
+                    "frame at time T. Headless: OpenGL through EGL, no display or GPU needed.\n\nPROBLEM alone may "
+                    "instead be a crash file (nbst crash solve), a bowling 5 m throw\nfile (nbst bowl solve) or a scene "
+                    "solution (nbst scene solve: any MJCF, every geom in its\ncolours, the fates' regions and a readout "
+                    "of asked and happened; docs/scene.md), each\ndrawn in 3D.",
         epilog="examples:\n  nbst render diamond-s14 sol.json -o out/diamond.mp4 --trails\n"
                "  nbst render tbone.json -o tbone.mp4 --follow A         # a crash file (nbst crash solve)\n"
                "  nbst render over5 sol.json -o out/over5.gif\n"

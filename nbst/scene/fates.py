@@ -327,24 +327,22 @@ def _range3(src: _Src, x: Any, field: str) -> Range3:
 
 
 def _region(src: _Src, x: Any, field: str) -> Region:
-    if isinstance(x, dict) and ({"center", "radius"} & set(x)) and ({"min", "max"} & set(x)):
-        raise src.fail(field, 'a region is a ball {"center": [x, y, z], "radius": r} or a box {"min": [x, y, z], '
-                              '"max": [x, y, z]}, not both')
-    if isinstance(x, dict) and "center" in x:
+    both = isinstance(x, dict) and bool({"center", "radius"} & set(x)) and bool({"min", "max"} & set(x))
+    if isinstance(x, dict) and "center" in x and not both:
         _keys(src, x, field, ("center", "radius"), ("center", "radius"))
         r = _num(src, x["radius"], f"{field}.radius")
         if not r > 0:
             raise src.fail(f"{field}.radius", f"a region must have a positive size, got radius {x['radius']!r}")
         return Region(center=_vec3(src, x["center"], f"{field}.center"), radius=r)
-    if isinstance(x, dict) and ("min" in x or "max" in x):
+    if isinstance(x, dict) and ("min" in x or "max" in x) and not both:
         _keys(src, x, field, ("min", "max"), ("min", "max"))
         lo, hi = _vec3(src, x["min"], f"{field}.min"), _vec3(src, x["max"], f"{field}.max")
         for k in range(3):
             if not hi[k] > lo[k]:
-                raise src.fail(f"{field}.max[{k}]", f"a region must have a positive size: max {hi[k]!r} is not "
-                                                    f"above min {lo[k]!r}")
+                raise src.fail(f"{field}.max[{k}]", f"a region must have a positive size: max {hi[k]!r} is not above min {lo[k]!r}")
         return Region(lo=lo, hi=hi)
-    raise src.fail(field, 'a region is {"center": [x, y, z], "radius": r} or {"min": [x, y, z], "max": [x, y, z]}')
+    raise src.fail(field, 'a region is a ball {"center": [x, y, z], "radius": r} or a box {"min": [x, y, z], '
+                          '"max": [x, y, z]}' + (", not both" if both else ""))
 
 
 def _names(src: _Src, x: Any, field: str) -> tuple[str, ...]:
