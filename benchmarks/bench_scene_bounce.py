@@ -1,7 +1,7 @@
 """Is a built-in's bounce resolved by its step? One contact of bank-shot and two of billiards, each
 started at 11 points spread over a few steps of flight (so that the contact begins at every phase of
 a step), no gravity, at a ladder of steps: the mean and the range of what comes out, and how long
-the contact pushes (``nbst.scene.scenefile.contact_time``). A bounce the step does not resolve
+the contact pushes (``nbst.scene.contacts.contact_time``). A bounce the step does not resolve
 changes with where in a step it begins. Prints; asserts nothing (the tests hold the shipped steps).
 
     python benchmarks/bench_scene_bounce.py
@@ -11,7 +11,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from nbst.scene.scenefile import contact_time, load_fates
+from nbst.scene.contacts import contact_time
+from nbst.scene.scenefile import load_fates
 
 STEPS_MS = (2.0, 1.0, 0.5, 0.25, 0.0625)
 

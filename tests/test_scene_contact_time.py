@@ -1,5 +1,5 @@
 """``nbst scene check``'s note on a contact that the step does not resolve
-(``nbst.scene.scenefile.short_contacts``): the rebound time it computes from a solref is MuJoCo's
+(``nbst.scene.contacts.short_contacts``): the rebound time it computes from a solref is MuJoCo's
 own, and the built-ins as shipped have no such contact."""
 import json
 import math
@@ -10,7 +10,8 @@ import pytest
 
 from nbst.cli.main import main
 from nbst.scene.builtin import example_names, example_path
-from nbst.scene.scenefile import MIN_CONTACT_STEPS, contact_time, load_fates, short_contacts
+from nbst.scene.contacts import MIN_CONTACT_STEPS, contact_time, short_contacts
+from nbst.scene.scenefile import load_fates
 
 _DROP = """<mujoco><option timestep="{h}" gravity="0 0 0"/>
 <worldbody><geom type="plane" size="1 1 0.1" solref="{tau} {zeta}"/>
@@ -165,3 +166,47 @@ def test_a_pair_of_two_fated_bodies_is_noted_once(tmp_path):
     rows = short_contacts(f, m)
     assert [(r[0], r[1]) for r in rows] == [("a", "b_g")], rows
     assert rows[0][2] / 0.001 == pytest.approx(3.98, abs=0.01)
+
+
+@pytest.mark.parametrize("solref,solimp", [("0.02 1", "0.9 0.95 0.001"), ("0.005 1", "0.9 0.95 0.001"),
+                                           ("0.02 1", "0.99 0.99 0.001"), ("0.01 0.5", "0.8 0.95 0.002 0.3 3")])
+def test_the_resting_depth_is_mujocos(solref, solimp):
+    """A ball settled on a plane (both with this solref and solimp): its depth in the plane is
+    ``resting_depth``'s to 2 % (MuJoCo's soft contact at rest, 2 s at 0.5 ms)."""
+    from nbst.scene.contacts import resting_depth
+
+    xml = f"""<mujoco><option timestep="0.0005"/><worldbody>
+      <geom type="plane" size="1 1 .1" solref="{solref}" solimp="{solimp}"/>
+      <body pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05" solref="{solref}" solimp="{solimp}"/></body>
+    </worldbody></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    for _ in range(4000):
+        mujoco.mj_step(m, d)
+    depth = 0.05 - float(d.qpos[2])
+    want = resting_depth(tuple(map(float, solref.split())), list(map(float, solimp.split())), 9.81, 0.0005)
+    assert depth == pytest.approx(want, rel=0.02)
+
+
+def test_check_notes_a_millimetre_bead_that_sinks(tmp_path, capsys):
+    """A demanding user's 1 mm bead sank 37 % of its radius into the floor in MuJoCo's default contact
+    with no word; `check` notes a body that would rest deeper than a tenth of its smallest half-size."""
+    from nbst.scene.contacts import deep_rests
+
+    xml = """<mujoco><option timestep="0.0002"/><worldbody><geom name="floor" type="plane" size="0.1 0.1 0.01"/>
+      <body name="bead" pos="0 0 0.001"><freejoint/><geom type="sphere" size="0.001"/></body>
+    </worldbody></mujoco>"""
+    (tmp_path / "bead.xml").write_text(xml)
+    doc = {"format": "nbst-fates", "version": 1, "scene": "bead.xml", "duration": 0.2,
+           "controls": {"bead": {"linvel": [[0, 0.1], [0, 0.1], [0, 0]]}},
+           "fates": {"bead": {"rest_in": {"center": [0.01, 0, 0], "radius": 0.005}}}}
+    (tmp_path / "bead.json").write_text(json.dumps(doc))
+    f, m = load_fates(tmp_path / "bead.json")
+    rows = deep_rests(f, m)
+    assert len(rows) == 1 and rows[0][:2] == ("bead", "floor") and 0.3e-3 < rows[0][2] < 0.45e-3, rows
+    assert main(["scene", "check", str(tmp_path / "bead.json")]) == 0
+    assert "note: bead would rest 0.3" in capsys.readouterr().out
+    xml_big = xml.replace('size="0.001"', 'size="0.05"').replace('pos="0 0 0.001"', 'pos="0 0 0.05"')
+    (tmp_path / "bead.xml").write_text(xml_big)
+    f, m = load_fates(tmp_path / "bead.json")
+    assert deep_rests(f, m) == []

@@ -13,20 +13,17 @@ mujoco is imported only inside the functions that need it.
 from __future__ import annotations
 
 import difflib
-import math
 import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from nbst.files import FileRefused, read_regular
 from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
                               read_fates_json)
 
 __all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "start_touches",
-           "unforced_still_moves", "MIN_CONTACT_STEPS", "short_contacts", "ignored_friction"]
+           "unforced_still_moves"]
 
 #: The MJCF elements whose attributes name files, and the <compiler> folder each resolves under.
 _FILE_ATTRS = {"include": (("file",), None), "mesh": (("file",), "meshdir"), "skin": (("file",), "meshdir"),
@@ -286,142 +283,6 @@ def unforced_still_moves(fates: Fates, model: Any) -> list[tuple[str, float]]:
         mujoco.mj_step(model, d)
         far = np.maximum(far, np.linalg.norm(d.xpos[b] - start, axis=1))
     return [(name, float(x)) for name, x in zip(ids, far) if x > STILL_DISTANCE]
-
-
-#: A contact that rebounds in fewer steps than this is noted by ``nbst scene check`` (:func:`short_contacts`).
-MIN_CONTACT_STEPS = 4.0
-
-
-def _pair_solref(model: Any, g1: int, g2: int, pairs: dict[tuple[int, int], int]) -> tuple[float, float]:
-    """The solref MuJoCo gives a contact of geoms ``g1`` and ``g2`` (mj_contactParam: an explicit
-    ``<pair>``'s own; else the higher priority's; else the solmix-weighted mean of two standard
-    (positive) references, the least of each entry otherwise; the model's override when enabled)."""
-    import mujoco
-
-    if model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_OVERRIDE:
-        return float(model.opt.o_solref[0]), float(model.opt.o_solref[1])
-    k = pairs.get((g1, g2), pairs.get((g2, g1)))
-    if k is not None:
-        return float(model.pair_solref[k, 0]), float(model.pair_solref[k, 1])
-    p1, p2 = int(model.geom_priority[g1]), int(model.geom_priority[g2])
-    r1, r2 = model.geom_solref[g1], model.geom_solref[g2]
-    if p1 != p2:
-        r = r1 if p1 > p2 else r2
-        return float(r[0]), float(r[1])
-    m1, m2 = float(model.geom_solmix[g1]), float(model.geom_solmix[g2])
-    tiny = mujoco.mjMINVAL
-    mix = (m1 / (m1 + m2) if m1 >= tiny and m2 >= tiny else 0.5 if m1 < tiny and m2 < tiny
-           else 0.0 if m1 < tiny else 1.0)
-    if r1[0] > 0 and r2[0] > 0:
-        return float(mix * r1[0] + (1 - mix) * r2[0]), float(mix * r1[1] + (1 - mix) * r2[1])
-    return float(min(r1[0], r2[0])), float(min(r1[1], r2[1]))
-
-
-def contact_time(timeconst: float, dampratio: float, timestep: float, refsafe: bool = True) -> float:
-    """How long a contact of this ``solref`` (standard: a time constant and a damping ratio, both
-    > 0) pushes before the bodies part, s. MuJoCo makes of it a linear spring and dashpot of
-    stiffness ``1 / (tau zeta)^2`` and damping ``2 / tau`` per unit mass at full impedance: a
-    damping ratio ``zeta`` and a natural frequency ``w = 1 / (tau zeta)``, with ``tau`` at least two
-    steps (MuJoCo's ``refsafe``). Such a contact ends when its force is zero, before the spring's
-    half-period: at ``(pi - atan2(2 zeta sqrt(1 - zeta^2), 1 - 2 zeta^2)) / (w sqrt(1 - zeta^2))``
-    (Schwager & Pöschel 2007, "Coefficient of restitution and linear-dashpot model revisited",
-    Granular Matter 9: 465); critically damped, ``2 tau``; overdamped (``s = sqrt(zeta^2 - 1)``),
-    ``ln((2 zeta^2 - 1 + 2 zeta s) / (2 zeta^2 - 1 - 2 zeta s)) / (2 w s)``."""
-    tau = max(timeconst, 2.0 * timestep) if refsafe else timeconst
-    z = float(dampratio)
-    w = 1.0 / (tau * z)
-    if z == 1.0:
-        return 2.0 * tau
-    if z > 1.0:
-        s = math.sqrt(z * z - 1.0)
-        return math.log((2.0 * z * z - 1.0 + 2.0 * z * s) / (2.0 * z * z - 1.0 - 2.0 * z * s)) / (2.0 * w * s)
-    s = math.sqrt(1.0 - z * z)
-    return (math.pi - math.atan2(2.0 * z * s, 1.0 - 2.0 * z * z)) / (w * s)
-
-
-def short_contacts(fates: Fates, model: Any, *, steps: float = MIN_CONTACT_STEPS) -> list[tuple[str, str, float, float, float]]:
-    """The contacts of a controlled or fated body that last fewer than ``steps`` steps
-    (:func:`contact_time` of the solref MuJoCo gives the pair): such a bounce is not resolved by the
-    step, so it changes with the step and with where in a step the contact begins (the ladder's h/2
-    and h/4 then seldom agree with h). Each ``(body, other, seconds, timeconst, dampratio)``, the
-    shortest per body and other (a geom's name, else its body's), shortest first; a direct
-    (negative) solref is not judged. Compute only (``nbst scene check`` prints them)."""
-    import mujoco
-
-    h = float(model.opt.timestep)
-    refsafe = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE
-    pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
-    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
-    names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
-    out: dict[tuple[str, str], tuple[float, float, float]] = {}
-    done: set[frozenset[int]] = set()   # a pair of two such bodies' geoms, said once
-    for name in names:
-        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
-        for g1 in mine:
-            for g2 in range(model.ngeom):
-                if g2 in mine or frozenset((g1, g2)) in done or not _collides(model, g1, g2, pairset, excluded):
-                    continue
-                done.add(frozenset((g1, g2)))
-                tau, zeta = _pair_solref(model, g1, g2, pairs)
-                if tau <= 0 or zeta <= 0:
-                    continue
-                t = contact_time(tau, zeta, h, refsafe)
-                if t >= steps * h:
-                    continue
-                other = model.geom(g2).name or model.body(int(model.geom_bodyid[g2])).name or f"geom {g2}"
-                if (name, other) not in out or t < out[(name, other)][0]:
-                    out[(name, other)] = (t, tau, zeta)
-    return sorted(((b, o, *v) for (b, o), v in out.items()), key=lambda r: (r[2], r[0], r[1]))
-
-
-def _pair_condim_friction(model: Any, g1: int, g2: int, pairs: dict[tuple[int, int], int]) -> tuple[int, np.ndarray]:
-    """The condim and the (sliding, torsional, rolling) friction MuJoCo gives a contact of ``g1`` and
-    ``g2`` (mj_contactParam: a ``<pair>``'s own; else the higher priority's; else the larger of each)."""
-    k = pairs.get((g1, g2), pairs.get((g2, g1)))
-    if k is not None:
-        f = model.pair_friction[k]
-        return int(model.pair_dim[k]), np.array([f[0], f[2], f[3]], dtype=float)
-    p1, p2 = int(model.geom_priority[g1]), int(model.geom_priority[g2])
-    if p1 != p2:
-        g = g1 if p1 > p2 else g2
-        return int(model.geom_condim[g]), np.array(model.geom_friction[g], dtype=float)
-    return (max(int(model.geom_condim[g1]), int(model.geom_condim[g2])),
-            np.maximum(model.geom_friction[g1], model.geom_friction[g2]).astype(float))
-
-
-#: MuJoCo's default geom friction (sliding, torsional, rolling): every geom carries it, ignored at the
-#: default condim 3; a value other than these was written by someone who meant it.
-_MJ_FRICTION = (1.0, 0.005, 0.0001)
-
-
-def ignored_friction(fates: Fates, model: Any) -> list[tuple[str, str, str, float, int]]:
-    """The contacts of a controlled or fated body whose torsional or rolling friction MuJoCo ignores:
-    each ``(body, other, "rolling" | "torsional", value, condim)`` where the pair's condim is under 6
-    (rolling) or 4 (torsional) while that friction is above 0 and not MuJoCo's default (every geom
-    carries 0.005 and 0.0001, unused at the default condim 3: not noted) (a ball given rolling resistance in
-    ``friction`` rolls on for ever at condim 3, the default: ``at_rest`` then can not be met), the
-    first such other per body and kind. Compute only (``nbst scene check`` prints them)."""
-    import mujoco
-
-    pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
-    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
-    names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
-    out: dict[tuple[str, str], tuple[str, float, int]] = {}
-    for name in names:
-        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
-        for g1 in mine:
-            for g2 in range(model.ngeom):
-                if g2 in mine or not _collides(model, g1, g2, pairset, excluded):
-                    continue
-                condim, fr = _pair_condim_friction(model, g1, g2, pairs)
-                other = model.geom(g2).name or model.body(int(model.geom_bodyid[g2])).name or f"geom {g2}"
-                for kind, value, need, default in (("torsional", fr[1], 4, _MJ_FRICTION[1]),
-                                                   ("rolling", fr[2], 6, _MJ_FRICTION[2])):
-                    if value > 0 and not math.isclose(value, default) and condim < need and (name, kind) not in out:
-                        out[(name, kind)] = (other, float(value), condim)
-    return [(b, o, kind, v, c) for (b, kind), (o, v, c) in out.items()]
 
 
 def load_fates(path: str | os.PathLike, *, scene: str | os.PathLike | None = None) -> tuple[Fates, Any]:

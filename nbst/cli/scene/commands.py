@@ -61,8 +61,8 @@ def cmd_examples(args) -> int:
 
 def cmd_check(args) -> int:
     from nbst.scene.fates import STILL_DISTANCE
-    from nbst.scene.scenefile import (MIN_CONTACT_STEPS, contact_time, ignored_friction, load_fates, short_contacts, start_touches,
-                                      unforced_still_moves)
+    from nbst.scene.contacts import MIN_CONTACT_STEPS, contact_time, deep_rests, ignored_friction, short_contacts
+    from nbst.scene.scenefile import load_fates, start_touches, unforced_still_moves
 
     f, model = load_fates(args.fates, scene=args.scene)
     steps = int(round(f.duration / model.opt.timestep))
@@ -81,6 +81,10 @@ def cmd_check(args) -> int:
     for body, far in unforced_still_moves(f, model):
         print(f"  note: {body} moves {far:.3g} m by itself (the scene as written, no control, over the duration): "
               f"its still (at most {STILL_DISTANCE:g} m) is met only if a control holds it; start it at rest")
+    for body, other, depth, half in deep_rests(f, model):
+        print(f"  note: {body} would rest {depth * 1e3:.3g} mm deep in {other} ({100 * depth / half:.0f} % of its "
+              f"smallest half-size, {half * 1e3:.3g} mm: MuJoCo's soft contact at rest under gravity); a shorter "
+              f"time constant in solref, or solimp nearer 1, sinks it less")
     for body, other, kind, value, condim in ignored_friction(f, model):
         print(f"  note: {body}'s contact with {other} has {kind} friction {value:g} but condim {condim}: MuJoCo ignores "
               f"it (condim {6 if kind == 'rolling' else 4} applies it), so "
@@ -104,7 +108,8 @@ def cmd_check(args) -> int:
 
 def cmd_solve(args) -> int:
     from nbst.scene.api import solve
-    from nbst.scene.scenefile import MIN_CONTACT_STEPS, check_scene_files, load_fates, short_contacts
+    from nbst.scene.contacts import MIN_CONTACT_STEPS, short_contacts
+    from nbst.scene.scenefile import check_scene_files, load_fates
     from nbst.scene.search import SceneProgress
     from nbst.scene.solution import solution_dict
 
