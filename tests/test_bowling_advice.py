@@ -114,3 +114,17 @@ def test_the_stance_at_the_far_edge_stays_on_the_numbered_boards():
     assert advise.stance_text(20.0) == f"stand on {20 + advise.STANCE_SEP:.1f}"
     t = advise.stance_text(34.0)
     assert t.startswith("stand on 39 ") and "5.0 boards" in t
+
+
+@pytest.mark.slow
+def test_the_advice_json_stands_on_the_numbered_boards_as_its_text(capsys):
+    """A coach's 10-pin advice read 'stand on 39 (the last board; ...)' while its JSON said
+    stance_board 41, off the approach; the JSON now stands where the text does."""
+    import json
+
+    from nbst.cli.main import main
+
+    assert main(["bowl", "advise", "--leave", "10", "--samples", "2", "--screen", "1", "--polish", "0", "--jobs", "1",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["stance_board"] <= lane.N_BOARDS and d["text"].startswith("leave 10 (10 pin): stand on 39 ")

@@ -206,6 +206,19 @@ def test_a_bad_leave_names_its_flag_once(capsys):
     assert "pins must be numbers 1..10" in err
 
 
+@pytest.mark.parametrize("argv", [["bowl", "frame", "--leave", "10,10", "-o", "x.json"],
+                                  ["bowl", "frame", "--leave", "10,7,10", "-o", "x.json"]])
+def test_a_pin_named_twice_is_refused_as_advise_refuses_it(argv, capsys):
+    """A coach's `bowl frame --leave 10,10` ran as the 10 alone and 10,7,10 as the 7-10, where
+    `bowl advise` refused them; every pin list now refuses a pin named twice, in one line."""
+    rc, _, err = _main(argv, capsys)
+    _one_line(rc, err, "pin 10 named twice")
+    rc, _, err = _main(["bowl", "advise", "--leave", "10,10"], capsys)
+    _one_line(rc, err, "pin 10 named twice")
+    rc, _, err = _main(["bowl", "advise", "--leave", "11"], capsys)
+    _one_line(rc, err, "pins must be numbers 1..10, each once")
+
+
 def test_bowl_help_describes_both_halves_in_their_units(capsys):
     with pytest.raises(SystemExit):
         _main(["bowl", "--help"], capsys)

@@ -236,7 +236,8 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
     e = res.estimate
     standing = spares.leave_pins(leave)
     nm = _names.leave_names(range(1, 11), standing)
-    stance, target = stance_of(r.board_at_foul_line), float(r.board_at_arrows)
+    # on the numbered boards, as the text says it (stance_text; a demanding coach's JSON read 41)
+    stance, target = min(stance_of(r.board_at_foul_line), float(lane.N_BOARDS)), float(r.board_at_arrows)
     head = f"leave {leave}{' (' + ', '.join(nm) + ')' if nm else ''}"
     screened = sum(c[2] for c in res.candidates)
     most = res.most_pins
@@ -248,6 +249,11 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
             dm = lane.Delivery(**most["delivery"])
             count_text = (f"for the count: {_line_text(dm, lane.throw(dm, runner.oil, runner.ball), most['label'])}: "
                           f"{pins_text(most['pins'])}")
+            cleared = int(most["pins"]["counts"].get(str(most["pins"]["of"]), 0))
+            if cleared > int(e["k"]):  # measured on the same throws: the pick was ranked on the screening alone
+                count_text += (f"; it converted more of these same {e['n']} throws ({cleared} against {e['k']}): "
+                               f"the pick was ranked on the screening (--screen {screen}; a larger one ranks on more "
+                               f"throws)")
     else:
         txt = (f"{head}: no line converts: none of {len(res.candidates)} lines converted any of their {screened} "
                f"screening throws (95% CI of a line's rate 0-{100 * _noise.wilson(0, screen)[1]:.0f}% each); the most "

@@ -41,7 +41,7 @@ def register(bowl) -> None:
     which.add_argument("--leaves", default=None, metavar="L1,L2",
                        help="leaves to shoot, '-' joining pins, ',' between leaves, any leave (default: "
                             f"{', '.join(spares.LEAVES)})")
-    bowler_flag(s, "shoot")
+    bowler_flag(s, "shoot", hand=False)
     s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=spares.SCREEN, metavar="M",
                    help=f"noisy throws per candidate in the screening (default {spares.SCREEN})")
     s.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=None, metavar="N",
@@ -61,7 +61,7 @@ def register(bowl) -> None:
     p.add_argument("-o", "--output", required=True, metavar="MAP.png", help="the heatmap (PNG)")
     p.add_argument("--boards", default="15.5:19.5:1", metavar="A:B:STEP", help="boards (default 15.5:19.5:1)")
     p.add_argument("--angles", default="2:7:1", metavar="A:B:STEP", help="entry angles, deg (default 2:7:1)")
-    bowler_flag(p, "aim")
+    bowler_flag(p, "aim", hand=False)
     mc_flags(p, 40, "cell")
     p.set_defaults(func=cmd_pocket)
     register_advise(bowl)
@@ -85,7 +85,7 @@ def register_advise(bowl) -> None:
     what = a.add_mutually_exclusive_group(required=True)
     what.add_argument("--leave", default=None, metavar="PINS", help="the leave: pins standing, e.g. 10 or 3,10")
     what.add_argument("--after", default=None, metavar="THROW.json", help="a frame's throw file (bowl frame -o)")
-    bowler_flag(a, "advise")
+    bowler_flag(a, "advise", hand=False)
     a.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=spares.SCREEN, metavar="M",
                    help=f"--leave: noisy throws per candidate line in the screening (default {spares.SCREEN})")
     a.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=0, metavar="N",
@@ -245,7 +245,12 @@ def leaves_of(args) -> list[str]:
         try:
             pins = spares.leave_pins(t.replace(",", "-") if flag == "--leave" else t)
         except lane.LaneError:   # the library names its parameter (leave); here the flag is named
-            raise InputError(f"{flag}: pins must be distinct numbers 1..10, got {nm.strip()!r}") from None
+            words = [w for w in t.replace(",", "-").split("-") if w.strip()]
+            nums = [int(w) for w in words if w.strip().isdigit()]
+            why = (f"pin {', '.join(sorted({str(p) for p in nums if nums.count(p) > 1}, key=int))} named twice"
+                   if len(nums) == len(words) and all(1 <= p <= 10 for p in nums) and len(set(nums)) < len(nums)
+                   else "pins must be numbers 1..10, each once")
+            raise InputError(f"{flag}: {why}, got {nm.strip()!r}") from None
         if len(pins) == 10:
             raise InputError(f"{flag}: {nm.strip()!r} is all ten pins standing: a first ball, not a spare")
         out.append("-".join(map(str, pins)))

@@ -54,7 +54,11 @@ def pin_list(text: str, flag: str | None = None) -> int:
     bad = [p for p in pins if not 1 <= p <= 10]
     if bad or not pins:
         raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 (at least one), got {text!r}")
-    return sum(1 << (p - 1) for p in set(pins))
+    twice = sorted({p for p in pins if pins.count(p) > 1})
+    if twice:   # a coach's "10,10" ran as the 10 alone; "10,7,10" as the 7-10
+        raise argparse.ArgumentTypeError(f"{pre}pin {', '.join(map(str, twice))} named twice in {text!r}: "
+                                         "name each pin once")
+    return sum(1 << (p - 1) for p in pins)
 
 
 def pins_down(text: str) -> int:
@@ -166,12 +170,16 @@ def bowlers_text() -> str:
     return ", ".join(f"{e.name} {e.value.strike.mph:g} mph {e.value.strike.rpm:g} rpm" for e in PROFILES.entries())
 
 
-def bowler_flag(t, what: str = "throw") -> None:
-    """--bowler P: a profile's release as the default release and its correlated noise."""
+def bowler_flag(t, what: str = "throw", *, hand: bool = True) -> None:
+    """--bowler P: a profile's release as the default release and its correlated noise (``hand``:
+    the command has --hand; else its lines are a right-hander's, and the help says how a
+    left-hander reads them)."""
+    mirror = ("--hand mirrors it" if hand else "right-handed: a left-hander's lane is its mirror image (boards "
+              "counted from the left; the 7 for the 10, the 4-10 for the 6-7)")
     t.add_argument("--bowler", default=None, choices=bowlers(),
                    help=f"{what} as this bowler profile: its strike ball (release and line, aimed at board 17.5 on the "
                         "fresh house shot) is the default release and its correlated release noise gives the "
-                        f"probabilities: {bowlers_text()} (docs/bowling.md); --hand mirrors it; a delivery flag given "
+                        f"probabilities: {bowlers_text()} (docs/bowling.md); {mirror}; a delivery flag given "
                         "beside it overrides that part of the release; recorded in the output")
 
 
