@@ -128,3 +128,9 @@ def test_the_advice_json_stands_on_the_numbered_boards_as_its_text(capsys):
                  "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["stance_board"] <= lane.N_BOARDS and d["text"].startswith("leave 10 (10 pin): stand on 39 ")
+
+
+def test_a_straight_line_is_labelled_with_boards_not_a_bare_number():
+    """'straight 17 mph from 34.0 at 3.1' read to a coach as an angle of 3.1; the label names boards."""
+    labels = [lbl for lbl, _ in spares.candidates("10")][1:]
+    assert labels and all(" from board " in s and " aimed at board " in s for s in labels), labels

@@ -404,7 +404,7 @@ def candidates(name: str, *, oil: str = "house", ball=None, strike: lane.Deliver
     out = [("3-6-9", system_369(name, strike))]
     for kind, x, y, foul, mph in _plan(name):
         d = straight_at(x, y, oil=oil, ball=ball, foul=foul, mph=mph)
-        at = f"from {d.board:.1f} at {lane.y_to_board(y):.1f}"
+        at = f"from board {d.board:.1f} aimed at board {lane.y_to_board(y):.1f}"
         out.append((f"straight {mph:g} mph {at}" if kind == "straight" else f"{kind}: straight {at}", d))
     return out
 
