@@ -138,7 +138,7 @@ def register(sub) -> None:
                                   "its graded cost); and estimate P(every fate met) under the fates' noise from "
                                   "--samples noisy rollouts, with its 95 % Wilson interval. Prints a line per "
                                   "setting; --out-dir DIR writes index.html (a table per setting group, each fated "
-                                  "body's path from above under each setting over the fates' regions), its PNGs "
+                                  "body's path from above under each setting over the fates' regions and the fixed geoms), its PNGs "
                                   "and report.json (the same table).",
                       epilog="Exit status: 0, or 1 with --strict when a setting misses a fate (the noise row "
                              "apart: it is a probability); 2 on bad input. Example: nbst scene validate dice.json "
