@@ -77,61 +77,40 @@ def test_check_notes_the_bank_shot_at_2_ms(tmp_path, capsys):
     assert "a step of at most 0.995 ms gives it 4" in out, out
 
 
-def _phases(model, setup, read, h: float, n: int = 11, span: float = 0.004, t: float = 0.05) -> list[float]:
-    """``read(data)`` after ``t`` s from ``n`` starts whose contact begins at points spread over ``span`` s
-    (``setup(data, lead)`` places the bodies ``lead`` s of flight further back), no gravity, step ``h``."""
-    m = model
-    m.opt.timestep, m.opt.gravity[:] = h, 0.0
-    out = []
-    for lead in np.linspace(0.0, span, n):
-        d = mujoco.MjData(m)
-        setup(d, lead)
-        for _ in range(int(round(t / h))):
-            mujoco.mj_step(m, d)
-        out.append(read(d))
-    return out
+@pytest.fixture(scope="module")
+def bounce():
+    """benchmarks/bench_scene_bounce.py: its phases and its three contacts (one set-up for both)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_scene_bounce.py"
+    spec = importlib.util.spec_from_file_location("bench_scene_bounce", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
-def test_the_bank_shots_board_bounce_holds_at_its_step():
+def test_the_bank_shots_board_bounce_holds_at_its_step(bounce):
     """A ball at 4 m/s square on to the backboard (5 rad/s of back spin): at the scene's step it comes off
     within 15 % of the bounce at a step 16 times finer, wherever in a step it strikes (at 2 ms, the
     scene's step before, it came off at 0.4 to 6.4 m/s)."""
     fates, model = load_fates("bank-shot")
     h = model.opt.timestep
-    j = model.body("ball").jntadr[0]
-    qa, va = model.jnt_qposadr[j], model.jnt_dofadr[j]
-
-    def setup(d, lead):
-        d.qpos[qa:qa + 3] = [2.24 - 0.06 - 0.05 - 4.0 * lead, 0.0, 1.85]
-        d.qvel[va:va + 6] = [4.0, 0, 0, 0, 5.0, 0]
-
-    def read(d):
-        return -float(d.qvel[va])
-
-    fine = np.mean(_phases(model, setup, read, h / 16))
-    out = _phases(model, setup, read, h)
+    setup, read, span, t = bounce.board_bounce(model)
+    fine = np.mean(bounce.phases(model, setup, read, h / 16, span, t))
+    out = bounce.phases(model, setup, read, h, span, t)
     assert 1.0 < fine < 4.0  # it bounces, and loses speed
     assert max(abs(v - fine) for v in out) < 0.15 * fine, (out, fine)
 
 
-def test_the_billiard_balls_restitution_holds_at_the_scenes_step():
+def test_the_billiard_balls_restitution_holds_at_the_scenes_step(bounce):
     """Two balls in the air, the cue at 2 m/s head on into the 3: the restitution at the scene's step is
     within 10 % of that at a step 16 times finer, wherever in a step they meet."""
     fates, model = load_fates("billiards")
     h = model.opt.timestep
-    c, b = model.body("cue").jntadr[0], model.body("ball3").jntadr[0]
-    qc, q3, vc, v3 = model.jnt_qposadr[c], model.jnt_qposadr[b], model.jnt_dofadr[c], model.jnt_dofadr[b]
-
-    def setup(d, lead):
-        d.qpos[q3:q3 + 3] = [0.0, 0.0, 0.5]
-        d.qpos[qc:qc + 3] = [-0.0572 - 0.01 - 2.0 * lead, 0.0, 0.5]
-        d.qvel[vc] = 2.0
-
-    def read(d):
-        return float(d.qvel[v3] - d.qvel[vc]) / 2.0
-
-    fine = np.mean(_phases(model, setup, read, h / 16, span=0.002, t=0.03))
-    out = _phases(model, setup, read, h, span=0.002, t=0.03)
+    setup, read, span, t = bounce.ball_on_ball(model)
+    fine = np.mean(bounce.phases(model, setup, read, h / 16, span, t))
+    out = bounce.phases(model, setup, read, h, span, t)
     assert 0.5 < fine < 1.0
     assert max(abs(e - fine) for e in out) < 0.10 * fine, (out, fine)
 

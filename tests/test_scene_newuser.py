@@ -101,15 +101,21 @@ def test_check_notes_a_touch_already_there_at_the_start(tmp_path, capsys):
     assert "note:" not in capsys.readouterr().out
 
 
-def test_replay_says_when_the_fates_file_changed_since_the_solve(tmp_path, capsys):
-    """A solution names its fates file, which replay, render and validate read again: a user who moved
-    a region after solving saw 'not met' for a motion solve had called met, with no word of why."""
+def _solved(tmp_path, budget: int):
+    """The ball with a region it can reach (f.json), solved at seed 1 without the ladder: (sol.json, the fates)."""
     (tmp_path / "far.xml").write_text(BALL)
     doc = {**FAR, "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.5}}}}
     (tmp_path / "f.json").write_text(json.dumps(doc))
     out = tmp_path / "sol.json"
     assert main(["scene", "solve", str(tmp_path / "f.json"), "-o", str(out), "--seed", "1", "--jobs", "1",
-                 "--max-rollouts", "40", "--no-ladder", "-q"]) == 0
+                 "--max-rollouts", str(budget), "--no-ladder", "-q"]) == 0
+    return out, doc
+
+
+def test_replay_says_when_the_fates_file_changed_since_the_solve(tmp_path, capsys):
+    """A solution names its fates file, which replay, render and validate read again: a user who moved
+    a region after solving saw 'not met' for a motion solve had called met, with no word of why."""
+    out, doc = _solved(tmp_path, 40)
     assert main(["scene", "replay", str(out)]) == 0
     assert "changed" not in capsys.readouterr().out
     doc["fates"]["ball"]["rest_in"]["center"] = [3, 0, 0.05]        # moved after the solve
@@ -133,12 +139,7 @@ def test_a_solve_says_when_its_search_is_over_and_the_samples_begin(tmp_path):
 
 def _solved_then_edited(tmp_path):
     """A solution of the far ball, then its scene edited (the ball twice as heavy)."""
-    (tmp_path / "far.xml").write_text(BALL)
-    doc = {**FAR, "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.5}}}}
-    (tmp_path / "f.json").write_text(json.dumps(doc))
-    out = tmp_path / "sol.json"
-    assert main(["scene", "solve", str(tmp_path / "f.json"), "-o", str(out), "--seed", "1", "--jobs", "1",
-                 "--max-rollouts", "8", "--no-ladder", "-q"]) == 0
+    out, _ = _solved(tmp_path, 8)
     (tmp_path / "far.xml").write_text(BALL.replace('size="0.05"/>', 'size="0.05" mass="9"/>'))
     return out
 

@@ -36,7 +36,7 @@ def cmd_render_scene(args) -> int:
     argument is a scene solution; the frames are :mod:`nbst.render.scene.video`'s)."""
     from nbst.render.scene.motion import load_solution_scene
     from nbst.render.scene.video import camera_names, render_scene
-    from nbst.scene.solution import file_sha256
+    from nbst.scene.solution import scene_changed
 
     given = [flag for attr, default, flag in SCENE_REFUSED if getattr(args, attr, default) not in (default, None, False)]
     if given:
@@ -59,7 +59,7 @@ def cmd_render_scene(args) -> int:
     fps = args.fps if args.fps is not None else (style.GIF_FPS if kind == "gif" else style.DEFAULT_FPS)
     speed = 1.0 if args.speed is None else float(args.speed)
     doc, fates, model = load_solution_scene(args.problem)  # one line if the file, its fates or scene is refused
-    if not args.quiet and doc.get("scene_sha256") not in (None, file_sha256(fates.scene)):
+    if not args.quiet and scene_changed(doc, fates):
         print(f"note: {fates.scene.name} changed since {Path(args.problem).name} was solved: this draws the motion in "
               f"the scene as it is now (nbst scene replay {args.problem} says whether it is the solved one)",
               file=sys.stderr)

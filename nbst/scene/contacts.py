@@ -32,52 +32,47 @@ __all__ = ["MIN_CONTACT_STEPS", "SINK_SHARE", "contact_time", "short_contacts", 
 MIN_CONTACT_STEPS = 4.0
 
 
-def _pair_solref(model: Any, g1: int, g2: int, pairs: dict[tuple[int, int], int]) -> tuple[float, float]:
-    """The solref MuJoCo gives a contact of geoms ``g1`` and ``g2`` (mj_contactParam: an explicit
-    ``<pair>``'s own; else the higher priority's; else the solmix-weighted mean of two standard
-    (positive) references, the least of each entry otherwise; the model's override when enabled)."""
+def _pair_sol(model: Any, g1: int, g2: int, pairs: dict[tuple[int, int], int]) -> tuple[tuple[float, float], np.ndarray]:
+    """The solref and solimp MuJoCo gives a contact of geoms ``g1`` and ``g2`` (mj_contactParam: the
+    model's override when enabled; an explicit ``<pair>``'s own; else the higher priority's; else the
+    solmix-weighted mean, of a solref only where both are standard (positive), the least of each entry
+    otherwise)."""
     import mujoco
 
     if model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_OVERRIDE:
-        return float(model.opt.o_solref[0]), float(model.opt.o_solref[1])
+        return (float(model.opt.o_solref[0]), float(model.opt.o_solref[1])), np.asarray(model.opt.o_solimp, float)
     k = pairs.get((g1, g2), pairs.get((g2, g1)))
     if k is not None:
-        return float(model.pair_solref[k, 0]), float(model.pair_solref[k, 1])
+        return (float(model.pair_solref[k, 0]), float(model.pair_solref[k, 1])), np.asarray(model.pair_solimp[k], float)
     p1, p2 = int(model.geom_priority[g1]), int(model.geom_priority[g2])
-    r1, r2 = model.geom_solref[g1], model.geom_solref[g2]
     if p1 != p2:
-        r = r1 if p1 > p2 else r2
-        return float(r[0]), float(r[1])
-    mix = _mix(model, g1, g2)
-    if r1[0] > 0 and r2[0] > 0:
-        return float(mix * r1[0] + (1 - mix) * r2[0]), float(mix * r1[1] + (1 - mix) * r2[1])
-    return float(min(r1[0], r2[0])), float(min(r1[1], r2[1]))
-
-
-def _mix(model: Any, g1: int, g2: int) -> float:
-    """MuJoCo's solmix weight of ``g1`` in a contact of two geoms of one priority."""
-    import mujoco
-
+        g = g1 if p1 > p2 else g2
+        return (float(model.geom_solref[g, 0]), float(model.geom_solref[g, 1])), np.asarray(model.geom_solimp[g], float)
     m1, m2, tiny = float(model.geom_solmix[g1]), float(model.geom_solmix[g2]), mujoco.mjMINVAL
-    return (m1 / (m1 + m2) if m1 >= tiny and m2 >= tiny else 0.5 if m1 < tiny and m2 < tiny
-            else 0.0 if m1 < tiny else 1.0)
+    mix = (m1 / (m1 + m2) if m1 >= tiny and m2 >= tiny else 0.5 if m1 < tiny and m2 < tiny
+           else 0.0 if m1 < tiny else 1.0)
+    r1, r2 = np.asarray(model.geom_solref[g1], float), np.asarray(model.geom_solref[g2], float)
+    ref = mix * r1 + (1 - mix) * r2 if r1[0] > 0 and r2[0] > 0 else np.minimum(r1, r2)
+    imp = mix * np.asarray(model.geom_solimp[g1], float) + (1 - mix) * np.asarray(model.geom_solimp[g2], float)
+    return (float(ref[0]), float(ref[1])), imp
 
 
-def _pair_solimp(model: Any, g1: int, g2: int, pairs: dict[tuple[int, int], int]) -> np.ndarray:
-    """The solimp MuJoCo gives a contact of ``g1`` and ``g2`` (a ``<pair>``'s; the higher priority's;
-    else the solmix-weighted mean; the model's override when enabled)."""
+def _touching(fates: Fates, model: Any):
+    """Each pair of geoms that may touch (MuJoCo's collision filter), a controlled or fated body's
+    first, for each such body in turn: ``(body, g1, g2, the other's name, pairs)`` (a geom's own
+    name, else its body's; ``pairs``: the model's ``<pair>`` geoms, to their index)."""
     import mujoco
 
-    if model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_OVERRIDE:
-        return np.asarray(model.opt.o_solimp, float)
-    k = pairs.get((g1, g2), pairs.get((g2, g1)))
-    if k is not None:
-        return np.asarray(model.pair_solimp[k], float)
-    p1, p2 = int(model.geom_priority[g1]), int(model.geom_priority[g2])
-    if p1 != p2:
-        return np.asarray(model.geom_solimp[g1 if p1 > p2 else g2], float)
-    mix = _mix(model, g1, g2)
-    return mix * np.asarray(model.geom_solimp[g1], float) + (1 - mix) * np.asarray(model.geom_solimp[g2], float)
+    pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
+    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
+    for name in dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]):
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
+        for g1 in mine:
+            for g2 in range(model.ngeom):
+                if g2 not in mine and _collides(model, g1, g2, pairset, excluded):
+                    other = model.geom(g2).name or model.body(int(model.geom_bodyid[g2])).name or f"geom {g2}"
+                    yield name, g1, g2, other, pairs
 
 
 def contact_time(timeconst: float, dampratio: float, timestep: float, refsafe: bool = True) -> float:
@@ -113,28 +108,18 @@ def short_contacts(fates: Fates, model: Any, *, steps: float = MIN_CONTACT_STEPS
 
     h = float(model.opt.timestep)
     refsafe = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE
-    pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
-    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
-    names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
     out: dict[tuple[str, str], tuple[float, float, float]] = {}
     done: set[frozenset[int]] = set()   # a pair of two such bodies' geoms, said once
-    for name in names:
-        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
-        for g1 in mine:
-            for g2 in range(model.ngeom):
-                if g2 in mine or frozenset((g1, g2)) in done or not _collides(model, g1, g2, pairset, excluded):
-                    continue
-                done.add(frozenset((g1, g2)))
-                tau, zeta = _pair_solref(model, g1, g2, pairs)
-                if tau <= 0 or zeta <= 0:
-                    continue
-                t = contact_time(tau, zeta, h, refsafe)
-                if t >= steps * h:
-                    continue
-                other = model.geom(g2).name or model.body(int(model.geom_bodyid[g2])).name or f"geom {g2}"
-                if (name, other) not in out or t < out[(name, other)][0]:
-                    out[(name, other)] = (t, tau, zeta)
+    for name, g1, g2, other, pairs in _touching(fates, model):
+        if frozenset((g1, g2)) in done:
+            continue
+        done.add(frozenset((g1, g2)))
+        (tau, zeta), _ = _pair_sol(model, g1, g2, pairs)
+        if tau <= 0 or zeta <= 0:
+            continue
+        t = contact_time(tau, zeta, h, refsafe)
+        if t < steps * h and ((name, other) not in out or t < out[(name, other)][0]):
+            out[(name, other)] = (t, tau, zeta)
     return sorted(((b, o, *v) for (b, o), v in out.items()), key=lambda r: (r[2], r[0], r[1]))
 
 
@@ -165,25 +150,13 @@ def ignored_friction(fates: Fates, model: Any) -> list[tuple[str, str, str, floa
     carries 0.005 and 0.0001, unused at the default condim 3: not noted) (a ball given rolling resistance in
     ``friction`` rolls on for ever at condim 3, the default: ``at_rest`` then can not be met), the
     first such other per body and kind. Compute only (``nbst scene check`` prints them)."""
-    import mujoco
-
-    pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
-    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
-    names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
     out: dict[tuple[str, str], tuple[str, float, int]] = {}
-    for name in names:
-        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
-        for g1 in mine:
-            for g2 in range(model.ngeom):
-                if g2 in mine or not _collides(model, g1, g2, pairset, excluded):
-                    continue
-                condim, fr = _pair_condim_friction(model, g1, g2, pairs)
-                other = model.geom(g2).name or model.body(int(model.geom_bodyid[g2])).name or f"geom {g2}"
-                for kind, value, need, default in (("torsional", fr[1], 4, _MJ_FRICTION[1]),
-                                                   ("rolling", fr[2], 6, _MJ_FRICTION[2])):
-                    if value > 0 and not math.isclose(value, default) and condim < need and (name, kind) not in out:
-                        out[(name, kind)] = (other, float(value), condim)
+    for name, g1, g2, other, pairs in _touching(fates, model):
+        condim, fr = _pair_condim_friction(model, g1, g2, pairs)
+        for kind, value, need, default in (("torsional", fr[1], 4, _MJ_FRICTION[1]),
+                                           ("rolling", fr[2], 6, _MJ_FRICTION[2])):
+            if value > 0 and not math.isclose(value, default) and condim < need and (name, kind) not in out:
+                out[(name, kind)] = (other, float(value), condim)
     return [(b, o, kind, v, c) for (b, kind), (o, v, c) in out.items()]
 
 
@@ -230,26 +203,17 @@ def deep_rests(fates: Fates, model: Any, *, share: float = SINK_SHARE) -> list[t
     solref and solimp; a small scene in MuJoCo's default contact sinks: 0.37 mm). Compute only."""
     import mujoco
 
-    g = float(np.linalg.norm(model.opt.gravity))
-    pairs = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(model.pair_geom1, model.pair_geom2))}
-    excluded, pairset = set(model.exclude_signature.tolist()), set(pairs)
-    names = list(dict.fromkeys([c.body for c in fates.controls] + [f.body for f in fates.fates]))
-    out = []
-    for name in names:
-        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-        worst = None
-        for g1 in (g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b):
-            size = np.asarray(model.geom_size[g1], float)
-            half = float(size[size > 0].min()) if (size > 0).any() else float(model.geom_rbound[g1])
-            for g2 in range(model.ngeom):
-                if int(model.body_weldid[int(model.geom_bodyid[g2])]) != 0 or \
-                        not _collides(model, g1, g2, pairset, excluded):
-                    continue
-                depth = resting_depth(_pair_solref(model, g1, g2, pairs), _pair_solimp(model, g1, g2, pairs), g,
-                                      float(model.opt.timestep))
-                if depth > share * half and (worst is None or depth / half > worst[2] / worst[3]):
-                    other = model.geom(g2).name or f"geom {g2}"
-                    worst = (name, other, depth, half)
-        if worst is not None:
-            out.append(worst)
+    gravity = float(np.linalg.norm(model.opt.gravity))
+    # refsafe holds a time constant at two steps (resting_depth's timestep; none when it is off)
+    h = 0.0 if model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE else float(model.opt.timestep)
+    worst: dict[str, tuple[str, str, float, float]] = {}
+    for name, g1, g2, other, pairs in _touching(fates, model):
+        if int(model.body_weldid[int(model.geom_bodyid[g2])]) != 0:   # on what is fixed to the world
+            continue
+        size = np.asarray(model.geom_size[g1], float)
+        half = float(size[size > 0].min()) if (size > 0).any() else float(model.geom_rbound[g1])
+        depth = resting_depth(*_pair_sol(model, g1, g2, pairs), gravity, h)
+        if depth > share * half and (name not in worst or depth / half > worst[name][2] / worst[name][3]):
+            worst[name] = (name, other, depth, half)
+    out = list(worst.values())
     return out

@@ -36,7 +36,7 @@ from nbst.scene.judge import Judgement, signature_text
 from nbst.scene.rollout import SceneRollout, SceneSim, quiet_mujoco_warnings, replay
 
 __all__ = ["SOLUTION_FORMAT", "SOLUTION_VERSION", "EXPORT_KEY", "SceneSolutionError", "SceneResult", "SceneReplay",
-           "solution_dict", "read_solution", "replay_solution", "ladder_solution", "file_sha256",
+           "solution_dict", "read_solution", "replay_solution", "ladder_solution", "file_sha256", "scene_changed",
            "export_scene"]
 
 #: The name of the keyframe :func:`export_scene` adds (``nbst_1``, ... if the scene has one by that name).
@@ -106,6 +106,12 @@ class SceneResult:
 def file_sha256(path: str | os.PathLike) -> str:
     """The SHA-256 of a file's bytes, in hex."""
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def scene_changed(doc: dict, fates: Fates) -> bool:
+    """Whether the solution's scene file changed since it was solved (its SHA-256 is not the one the
+    file recorded; a file without one is not said to have changed)."""
+    return doc.get("scene_sha256") not in (None, file_sha256(fates.scene))
 
 
 def _controls(fates: Fates, x: np.ndarray) -> dict:
@@ -279,7 +285,7 @@ def replay_solution(path: str | os.PathLike) -> SceneReplay:
         judged = sim.rollout(x)
     same = (q.tobytes() == qf.tobytes() and v.tobytes() == vf.tobytes()
             and judged.qpos0.tobytes() == q0.tobytes() and judged.qvel0.tobytes() == v0.tobytes())
-    changed = doc.get("scene_sha256") not in (None, file_sha256(fates.scene))
+    changed = scene_changed(doc, fates)
     fates_changed = (doc.get("fates_sha256") is not None and doc.get("fates_file") is not None
                      and Path(fates_path).is_file() and doc["fates_sha256"] != file_sha256(Path(fates_path)))
     return SceneReplay(same=same, judgement=judged.judgement, qpos=q, qvel=v, scene_changed=changed,
@@ -368,13 +374,13 @@ def export_scene(path: str | os.PathLike, out: str | os.PathLike) -> str:
     nq, nv = int(model.nq), int(model.nv)
     q0, v0 = _floats(doc, "qpos0", nq, str(path)), _floats(doc, "qvel0", nv, str(path))
     qf, vf = _floats(doc, "final.qpos", nq, str(path)), _floats(doc, "final.qvel", nv, str(path))
-    with quiet_mujoco_warnings(), SceneSim(fates, model) as sim:  # the scene as it is now: the motion still its?
-        q, v = replay(model, q0, v0, int(doc["nstep"]), key=sim.key)
-    if q.tobytes() != qf.tobytes() or v.tobytes() != vf.tobytes():
-        why = ("the scene file changed since it was solved (solve it again)"
-               if doc.get("scene_sha256") not in (None, file_sha256(fates.scene)) else "nbst scene replay says more")
-        raise SceneSolutionError(f"{path}: replayed in the scene as it is now, it does not end in the solution's final "
-                                 f"state bit for bit: {why}; nothing was written")
+    if scene_changed(doc, fates):  # edited since the solve: is the motion still its? (else the written file's check)
+        with quiet_mujoco_warnings(), SceneSim(fates, model) as sim:
+            q, v = replay(model, q0, v0, int(doc["nstep"]), key=sim.key)
+        if q.tobytes() != qf.tobytes() or v.tobytes() != vf.tobytes():
+            raise SceneSolutionError(f"{path}: replayed in the scene as it is now, it does not end in the solution's "
+                                     "final state bit for bit: the scene file changed since it was solved (solve it "
+                                     "again); nothing was written")
     d = mujoco.MjData(model)
     with SceneSim(fates, model) as sim:
         sim._reset(d)

@@ -7,10 +7,11 @@ throw's outcome is a sample and its probability the result.
 """
 from __future__ import annotations
 
+import argparse
 import sys
 
 from nbst.cli.args import Bounded, print_json
-from nbst.cli.bowl.args import bowler_flag, bowler_of, mc_flags, number
+from nbst.cli.bowl.args import bowler_flag, bowler_of, mc_flags, number, pin_list
 from nbst.errors import InputError
 from nbst.cli.bowl.lane import _bar
 from nbst.parallel import default_jobs
@@ -244,13 +245,12 @@ def leaves_of(args) -> list[str]:
                              "pins standing, e.g. 3,10")
         try:
             pins = spares.leave_pins(t.replace(",", "-") if flag == "--leave" else t)
-        except lane.LaneError:   # the library names its parameter (leave); here the flag is named
-            words = [w for w in t.replace(",", "-").split("-") if w.strip()]
-            nums = [int(w) for w in words if w.strip().isdigit()]
-            why = (f"pin {', '.join(sorted({str(p) for p in nums if nums.count(p) > 1}, key=int))} named twice"
-                   if len(nums) == len(words) and all(1 <= p <= 10 for p in nums) and len(set(nums)) < len(nums)
-                   else "pins must be numbers 1..10, each once")
-            raise InputError(f"{flag}: {why}, got {nm.strip()!r}") from None
+        except lane.LaneError:   # the library names its parameter (leave); the pin list's own words name the flag
+            try:
+                pin_list(t.replace("-", ","), flag)
+            except argparse.ArgumentTypeError as e:
+                raise InputError(str(e)) from None
+            raise InputError(f"{flag}: pins must be numbers 1..10, each once, got {nm.strip()!r}") from None
         if len(pins) == 10:
             raise InputError(f"{flag}: {nm.strip()!r} is all ten pins standing: a first ball, not a spare")
         out.append("-".join(map(str, pins)))

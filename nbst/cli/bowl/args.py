@@ -53,7 +53,7 @@ def pin_list(text: str, flag: str | None = None) -> int:
     pins = [int(p) for p in words]
     bad = [p for p in pins if not 1 <= p <= 10]
     if bad or not pins:
-        raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 (at least one), got {text!r}")
+        raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10, each once (at least one), got {text!r}")
     twice = sorted({p for p in pins if pins.count(p) > 1})
     if twice:   # a coach's "10,10" ran as the 10 alone; "10,7,10" as the 7-10
         raise argparse.ArgumentTypeError(f"{pre}pin {', '.join(map(str, twice))} named twice in {text!r}: "
