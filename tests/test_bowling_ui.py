@@ -252,3 +252,26 @@ def test_spare_commands_throw_with_the_profiles_spare_noise():
     assert bowler_of(args)[1] == pro.noise
     assert bowler_of(args, spare=True)[1] == pro.spare()
     assert pro.spare() != pro.noise  # the pro's spare noise is fitted on its own
+
+
+# --------------------------------------------------------------------------- a gutter ball is a result
+
+
+def test_a_gutter_ball_is_a_result_not_an_error(tmp_path, capsys):
+    """Released on board 3 angled out, the ball leaves the lane within the first feet: ``throw``
+    says so (exit 0, no phases) and ``frame`` counts it as USBC does, all ten pins standing and
+    no pinfall (rule 6b.1), in a throw file that replays."""
+    out = tmp_path / "t.json"
+    rc, text, err = _main(["bowl", "throw", "--board", "3", "--at", "foul", "--angle", "3", "-o", out], capsys)
+    assert rc == 0, err
+    assert "gutter ball" in text and "right gutter" in text and "Traceback" not in err
+    doc = json.loads(out.read_text())
+    assert doc["gutter"]["side"] == "right" and 0.0 < doc["gutter"]["ft"] < 60.0
+    f = tmp_path / "f.json"
+    rc, text, err = _main(["bowl", "frame", "--board", "3", "--at", "foul", "--angle", "3", "-o", f, "--json"], capsys)
+    assert rc == 0, err
+    fr = json.loads(text)["frame"]
+    assert fr["ball_left_lane"] and fr["down"] == [] and fr["leave"] == FULL
+    assert json.loads(text)["line"] is None          # no line to the pins: none is made up
+    rc, text, err = _main(["bowl", "replay", f], capsys)
+    assert rc == 0 and "match" in text, (text, err)

@@ -26,7 +26,7 @@ from nbst.models.bowling.lane.ball import Ball
 from nbst.models.bowling.lane.delivery import Delivery, initial_state, quat_to_mat
 from nbst.models.bowling.lane.oil import LAW, OilField, OilLaw, oil_name, pattern
 from nbst.models.bowling.lane.scene import ball_quat, lane_spec
-from nbst.models.bowling.lane.units import ARROWS_FT, MPH, LaneError, hand_sign, x_to_ft, y_to_board
+from nbst.models.bowling.lane.units import ARROWS_FT, MPH, GutterBall, LaneError, hand_sign, x_to_ft, y_to_board
 from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
 __all__ = ["TIMESTEP", "MAX_SECONDS", "ROLL_SLIP", "HOOK_SHARE", "BREAKPOINT_MIN", "FLARE_FT", "AIM_TOL", "ThrowResult",
@@ -221,6 +221,7 @@ def throw(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: Oil
         foul line, boards), the entry angle (degrees), the board at the pins and the track flare.
 
     Raises:
+        GutterBall: the ball left the lane before the pins (a result: no phases past it).
         LaneError: the delivery, the ball or the oil is refused (one line naming the field).
     """
     delivery = delivery.check()
@@ -229,8 +230,7 @@ def throw(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: Oil
     h = float(t[1] - t[0]) if len(t) > 1 else timestep
     if abs(p[-1, 1]) >= scene.LANE_WIDTH / 2:
         side = "left" if p[-1, 1] > 0 else "right"
-        raise LaneError(f"delivery: a gutter ball: it left the lane into the {side} gutter "
-                        f"{float(x_to_ft(p[-1, 0])):.1f} ft past the foul line; no phases to report")
+        raise GutterBall(side, float(x_to_ft(p[-1, 0])))
     if p[-1, 0] < 0.0:
         raise LaneError(f"delivery: the ball did not reach the pins within {MAX_SECONDS:g} s "
                         f"(it was {-p[-1, 0]:.2f} m short, on board {float(y_to_board(p[-1, 1], delivery.hand)):.1f})")

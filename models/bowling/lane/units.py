@@ -22,7 +22,7 @@ from nbst.errors import InputError
 from nbst.models.bowling import scene
 
 __all__ = ["FT", "MPH", "LB", "LANE_LENGTH_FT", "FOUL_LINE_X", "ARROWS_FT", "ARROW_BOARDS", "N_BOARDS", "BOARD_WIDTH",
-           "APPROACH", "LANE_START_X", "LaneError", "hand_sign", "board_to_y", "y_to_board", "ft_to_x", "x_to_ft"]
+           "APPROACH", "LANE_START_X", "LaneError", "GutterBall", "hand_sign", "board_to_y", "y_to_board", "ft_to_x", "x_to_ft"]
 
 FT = 0.3048
 MPH = 0.44704
@@ -41,6 +41,17 @@ LANE_START_X = FOUL_LINE_X - APPROACH
 
 class LaneError(InputError):
     """Bad input to the lane (a pattern, a ball, a delivery): one line naming the field."""
+
+
+class GutterBall(LaneError):
+    """The ball left the lane before the pins: a result (no pinfall, USBC rule 6b.1), not bad input;
+    raised where phases are asked for (there are none past the gutter). ``side``: "left" or
+    "right" (the bowler's view); ``ft``: feet past the foul line where it left."""
+
+    def __init__(self, side: str, ft: float) -> None:
+        self.side, self.ft = side, float(ft)
+        super().__init__(f"delivery: a gutter ball: it left the lane into the {side} gutter "
+                         f"{self.ft:.1f} ft past the foul line; no phases to report")
 
 
 def hand_sign(hand: str) -> int:

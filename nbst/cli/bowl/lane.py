@@ -53,7 +53,7 @@ def register_throw(bowl) -> None:
     ball_flags(t)
     t.add_argument("-o", "--output", default=None, metavar="THROW.json",
                    help="also write the phases as JSON, with the line (stance, target, breakpoint, entry), the hit's "
-                        "name and the --bowler")
+                        "name and the --bowler (a gutter ball: its delivery and where it left the lane)")
     t.add_argument("--json", action="store_true", help="print the phases as one JSON object")
     path_plot_flag(t)
     picture_flags(t, "the throw's frame on all ten pins (as bowl frame runs it)")
@@ -133,7 +133,10 @@ def cmd_throw(args) -> int:
         return err("throw", bad)
     ball = ball_of(args)
     d, _ = the_delivery(args, args.oil, ball)
-    r = lane.throw(d, args.oil, ball)
+    try:
+        r = lane.throw(d, args.oil, ball)
+    except lane.GutterBall as g:   # a result, not bad input: said as one, nothing written (no phases)
+        return gutter_throw(args, d, g)
     if wants_picture(args):
         bad = picture_from_args(args, d, ball)
         if bad:
@@ -150,6 +153,29 @@ def cmd_throw(args) -> int:
         return 0
     for line in throw_lines(r, bowler=args.bowler):
         print(line)
+    return 0
+
+
+def gutter_throw(args, d, g) -> int:
+    """``bowl throw`` of a ball that leaves the lane before the pins: the delivery and where it
+    left, as a result (exit 0). -o writes that as JSON; a still, video or path plot is not drawn
+    (there are no phases), and stderr says so."""
+    from dataclasses import asdict
+
+    doc = {"delivery": asdict(d), "oil": str(args.oil), "gutter": {"side": g.side, "ft": round(g.ft, 2)},
+           "bowler": args.bowler}
+    if args.output:
+        write_text_atomic(Path(args.output), dumps_strict(doc, indent=1) + "\n")
+    if wants_picture(args) or args.path_plot:
+        print("nbst bowl throw: a gutter ball has no phases: no still, video or path plot drawn", file=sys.stderr)
+    if args.json:
+        print_json(doc)
+        return 0
+    dd = doc["delivery"]
+    print(f"delivery     {dd['hand']}-handed, {dd['mph']:g} mph, {dd['rpm']:g} rpm, board {dd['board']:g} at the "
+          f"{'foul line' if dd['at'] == 'foul' else dd['at']}, angle {dd['angle']:.2f} deg; oil {args.oil}" + (f"; bowler {args.bowler}" if args.bowler else ""))
+    print(f"gutter ball  it left the lane into the {g.side} gutter {g.ft:.1f} ft past the foul line: no breakpoint "
+          "and no pinfall (USBC 6b.1; bowl frame counts it)")
     return 0
 
 
@@ -203,7 +229,10 @@ def cmd_frame(args) -> int:
             n for n in range(1, 11) if pin_list(args.leave, "--leave") >> (n - 1) & 1)
         if args.output:
             prepare_output(args.output)
-        ball_line = advise.line_of(lane.throw(d, args.oil, ball))   # the ball alone: stance, target, breakpoint
+        try:
+            ball_line = advise.line_of(lane.throw(d, args.oil, ball))   # the ball alone: stance, target, breakpoint
+        except lane.GutterBall:
+            ball_line = None   # no line to the pins: the frame below counts it (no pinfall, USBC 6b.1)
     except argparse.ArgumentTypeError as e:  # --leave's pins (pin_list words it as argparse would)
         return err("frame", str(e))
     r = lad = est = None
@@ -283,7 +312,8 @@ def frame_lines(doc: dict) -> list[str]:
     if r["board_at_pins"] is not None:
         out.append(f"entry         board {r['board_at_pins']:.1f} at {r['entry_angle_deg']:.1f} deg")
     out.append(f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: counted at the sweep, %.2f s' % r['seconds']}"
-               f" (ball at the head pin {r['ball_at_pins_s']:.2f} s)" if r["ball_at_pins_s"] is not None else
+               + (f" (the ball passed the pins in the gutter at {r['ball_at_pins_s']:.2f} s)" if r["ball_left_lane"]
+                  else f" (ball at the head pin {r['ball_at_pins_s']:.2f} s)") if r["ball_at_pins_s"] is not None else
                f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: counted at the sweep'}")
     if "longer" in doc:
         g = doc["longer"]
