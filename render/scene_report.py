@@ -169,7 +169,7 @@ def _png(fig: Any) -> bytes:
 
 
 def _limits(val: SceneValidation, points: list[np.ndarray]) -> tuple[tuple[float, float], tuple[float, float]]:
-    xy = [p.reshape(-1, 3)[:, :2] for p in points]
+    xy = [p.reshape(-1, 3)[:, :2] for p in points] + [np.asarray(a, float) for a in val.aims]  # a wall hit
     for f in val.fates.fates:
         for r in (f.rest_in, *(r for _, r in f.at), *f.through):
             if r is None:

@@ -142,7 +142,12 @@ def _read(gl, acc_i: int) -> np.ndarray:
 
 def _check_structure(gl, motion) -> dict:
     """The spec's structure; returns {node index: {path: (times, values)}}."""
-    assert gl.asset.version == "2.0" and gl.scene == 0 and len(gl.scenes[0].nodes) == len(motion.bodies)
+    assert gl.asset.version == "2.0" and gl.scene == 0 and len(gl.scenes[0].nodes) == 1
+    root = gl.nodes[gl.scenes[0].nodes[0]]             # the bodies under one root that stands z-up as y-up
+    assert root.children == list(range(len(motion.bodies))) and root.mesh is None
+    x, y, z, w = root.rotation
+    up = 2 * np.array([x * z + w * y, y * z - w * x, 0.5 - x * x - y * y])  # the rotation's image of +z
+    assert np.allclose(up, [0.0, 1.0, 0.0], atol=1e-12)                  # glTF's up (spec 3.4: +Y up)
     for mesh in gl.meshes:
         for prim in mesh.primitives:
             pos_acc = gl.accessors[prim.attributes.POSITION]

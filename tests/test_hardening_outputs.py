@@ -317,3 +317,19 @@ def test_out_dir_may_be_a_link_to_a_folder_but_not_to_nothing(tmp_path):
     with pytest.raises(OutputError, match=r"--out-dir .*bad: is a symbolic link to nothing"):
         prepare_output(tmp_path / "bad", directory=True, option="--out-dir")
     assert not (tmp_path / "gone").exists()
+
+
+def test_an_output_name_ending_in_a_slash_is_refused_and_the_file_beside_it_kept(tmp_path, capsys):
+    """``-o sol.json/`` names a folder: Path() would drop the slash and replace sol.json (a tester
+    lost a solution so). Refused in one line before any work; the existing file is untouched."""
+    keep = tmp_path / "sol.json"
+    keep.write_text("the solution\n")
+    for name in (f"{keep}/", f"{tmp_path / 'new.json'}/"):
+        rc = main(["solve", "diamond-s14", "-o", name, "--seed", "1", "-q"])
+        err = capsys.readouterr().err
+        assert rc == 2 and "ends in a slash" in err and len(err.strip().splitlines()) == 1, err
+    assert keep.read_text() == "the solution\n" and not (tmp_path / "new.json").exists()
+    with pytest.raises(OutputError, match="ends in a slash"):
+        from nbst.outputs import prepare_output
+
+        prepare_output(f"{tmp_path}/x.mp4/", option="--video")

@@ -176,3 +176,36 @@ def test_the_report_draws_the_fixed_geoms_from_above():
     assert ((-0.2, 0.58), (2.2, 0.62)) in boxes
     circle = [p for p in polys if len(p) == 24][0]
     assert np.allclose(np.linalg.norm(circle - [0, -1], axis=1), 0.1)
+
+
+def test_a_fixed_mesh_is_its_hull_and_a_named_fixed_geom_stays_inside_the_axes():
+    """A fourth new user's tetrahedral rock was drawn as its bounding rectangle, and the stopper a
+    door had to hit fell outside the plots' axes. A fixed mesh is now the hull of its vertices (a
+    triangle from above, area within 1e-9 m^2 of the exact 0.5 x 0.3 x 0.4 / 2); a fixed geom a fate
+    names is kept inside the axes."""
+    import mujoco
+
+    from render.scene_report import _limits
+    from nbst.scene.validate import static_footprints
+
+    xml = """<mujoco><asset><mesh name="tet" vertex="0 0 0  0.3 0 0  0 0.4 0  0 0 0.2"/></asset>
+      <worldbody><geom type="plane" size="3 3 0.1"/>
+      <geom name="rock" type="mesh" mesh="tet" pos="0.5 0.5 0"/>
+      <geom name="stopper" type="box" pos="4 0 0.1" size="0.05 0.05 0.1"/>
+      <body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>
+    </worldbody></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    (rock,) = static_footprints(m, d, names={"rock"})
+    x, y = rock[:, 0], rock[:, 1]
+    assert len(rock) == 3 and abs(0.5 * abs(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1))) - 0.06) < 1e-9
+    (stop,) = static_footprints(m, d, names={"stopper"})
+
+    class Val:   # what _limits reads of a validation: the fates' regions and the named fixed geoms
+        class fates:
+            fates = ()
+        aims = (stop,)
+
+    xlim, _ = _limits(Val, [np.zeros((2, 3))])
+    assert xlim[1] >= 4.05

@@ -59,6 +59,14 @@ def cmd_export(args) -> int:
         raise InputError(f"{args.file}: no such file")
     prepare_output(args.gltf, inputs=[p for p in (args.file, args.problem) if p is not None], option="--gltf")
     kind, motion = file_motion(args.file, problem=args.problem, fps=float(args.fps))
+    if kind == "scene" and not args.quiet:
+        from nbst.scene.solution import read_solution, scene_changed_at
+
+        doc = read_solution(args.file)
+        if scene_changed_at(doc):   # as render notes it: the motion is the scene's as it is now
+            print(f"note: {Path(doc['scene']).name} changed since {Path(args.file).name} was solved: this writes the "
+                  f"motion in the scene as it is now (nbst scene replay {args.file} says whether it is the solved one)",
+                  file=sys.stderr)
     n = write_glb(args.gltf, motion, name=Path(args.file).stem)
     if not args.quiet:
         moving = sum(b.moves for b in motion.bodies)

@@ -228,6 +228,12 @@ def cmd_render(args) -> int:
     args.view, args.source = args.view or "2d", args.source or "analytic"
     args.speed = 1.0 if args.speed is None else args.speed
     if args.solution is None:
+        if sniff_kind(args.problem, (("fates", "nbst-fates"),)) == "fates":
+            return _err("render", f"{args.problem} is a fates file: solve it first (`nbst scene solve {args.problem} "
+                                  f"-o sol.json`), then render the solution")
+        if Path(args.problem).suffix.lower() == ".xml":
+            return _err("render", f"{args.problem} is a MuJoCo scene: write a fates file for it and solve it (`nbst "
+                                  f"scene solve FATES.json -o sol.json`, docs/scene.md), then render the solution")
         return _err("render", f"{args.problem} is a problem: give its SOLUTION too; {TAKES}")
     if args.camera is not None:
         return _err("render", "--camera applies to 5 m bowling throw files only")

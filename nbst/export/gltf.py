@@ -12,7 +12,9 @@ Storage is float32, as glTF requires for these accessors: positions, rotations a
 to float32's precision (relative 6e-8; a keyframe read back matches the replay's pose within
 1e-6 of the motion's extent). Rotations are MuJoCo's (w, x, y, z) written as glTF's (x, y, z, w),
 renormalised and made sign-continuous from keyframe to keyframe (q and -q are one rotation; a
-flip would make the LINEAR (slerp) interpolation take the long way round). Every accessor that
+flip would make the LINEAR (slerp) interpolation take the long way round). The bodies' nodes are
+the children of one root node, last in the node list, that turns the worlds' +z up into glTF's +y
+up (a rotation of -90 degrees about x); the bodies' own transforms stay MuJoCo's world frame. Every accessor that
 the specification requires it of (POSITION, the animation's input) carries ``min`` and ``max``.
 
 Compute apart from I/O: :func:`gltf_document` builds the pygltflib document and its binary blob;
@@ -184,7 +186,11 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
             node.mesh = len(gl.meshes) - 1
         gl.nodes.append(node)
         nodes.append(len(gl.nodes) - 1)
-    gl.scenes.append(pg.Scene(name=name, nodes=nodes))
+    # glTF's up is +y; MuJoCo's (and every nbst world's) +z: one root node turns the world -90 deg about
+    # x, so (x, y, z) shows as (x, z, -y) and a floor lies flat (Blender's importer turns it z-up again)
+    h = float(np.sqrt(0.5))
+    gl.nodes.append(pg.Node(name=f"{name} (z-up)", rotation=[-h, 0.0, 0.0, h], children=nodes))
+    gl.scenes.append(pg.Scene(name=name, nodes=[len(gl.nodes) - 1]))
     gl.scene = 0
     moving = [b for b, body in enumerate(motion.bodies) if body.moves]
     if moving and len(motion.times) > 1:

@@ -96,7 +96,9 @@ def check_scene_files(scene: Path, *, source: str = "") -> list[Path]:
                 f = Path(name) if os.path.isabs(name) else folder / sub / name
                 what = f"scene: <{el.tag} {a}=\"{name}\">"
                 if not _inside(f, folder):
-                    raise FatesError(where, what, f"{f} is outside the scene's folder {folder}; a scene reads "
+                    real = os.path.realpath(f)
+                    via = f" (a link to {real})" if real != os.path.abspath(f) else ""
+                    raise FatesError(where, what, f"{f}{via} is outside the scene's folder {folder}; a scene reads "
                                                   f"only files under its folder")
                 if el.tag == "include":
                     walk(f, what, depth + 1)
@@ -163,9 +165,7 @@ def _can_touch(model: Any, body: int, name: str) -> bool:
     """Whether some geom of ``body`` may ever touch the body (its own geoms) or geom named ``name``."""
     import mujoco
 
-    nb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-    others = ([g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == nb] if nb >= 0
-              else [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)])
+    others = _geoms_named(model, name)
     mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == body]
     pairs = set(zip(model.pair_geom1.tolist(), model.pair_geom2.tolist()))
     excluded = set(model.exclude_signature.tolist())
@@ -229,6 +229,21 @@ def check_against_model(fates: Fates, model: Any) -> None:
                                    f"{fates.scene.name}: MuJoCo collides no geom of one with one of the other "
                                    f"(contype/conaffinity, <exclude>, contacts disabled, both fixed to the world, "
                                    f"one rigid body, or a parent and its child)")
+        never = set().union(*(_geoms_named(model, n) for n in fa.never_hits))
+        for n in fa.hits:   # "hits b" with every geom of b in never_hits (by the geom's own name): a tester's
+            if _geoms_named(model, n) <= never:
+                raise src.fail(f"fates.{fa.body}.never_hits", f"every geom of {n!r}, which it hits, is in never_hits: "
+                                                              f"no motion can both touch it and not")
+
+
+def _geoms_named(model: Any, name: str) -> set[int]:
+    """The geoms a ``hits`` name stands for: a body's own geoms, or the geom of that name."""
+    import mujoco
+
+    nb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+    if nb >= 0:
+        return {g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == nb}
+    return {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)}
 
 
 def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:

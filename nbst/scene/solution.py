@@ -111,7 +111,13 @@ def file_sha256(path: str | os.PathLike) -> str:
 def scene_changed(doc: dict, fates: Fates) -> bool:
     """Whether the solution's scene file changed since it was solved (its SHA-256 is not the one the
     file recorded; a file without one is not said to have changed)."""
-    return doc.get("scene_sha256") not in (None, file_sha256(fates.scene))
+    return scene_changed_at(doc, fates.scene)
+
+
+def scene_changed_at(doc: dict, scene: str | os.PathLike | None = None) -> bool:
+    """:func:`scene_changed` of the scene file ``scene`` (default the one ``doc`` names)."""
+    p = Path(doc["scene"] if scene is None else scene)
+    return doc.get("scene_sha256") is not None and p.is_file() and doc["scene_sha256"] != file_sha256(p)
 
 
 def _controls(fates: Fates, x: np.ndarray) -> dict:
@@ -217,6 +223,14 @@ def read_solution(path: str | os.PathLike) -> dict:
         raise SceneSolutionError(f"{path}: fates: missing")
     _found_beside(doc, Path(path))
     return doc
+
+
+def solution_reads(path: str | os.PathLike, doc: dict) -> list[str]:
+    """The files that reading the solution ``path`` (``doc``, from :func:`read_solution`) reads
+    again: itself, its fates file and its scene (the files the scene reads are :func:`export_scene`'s
+    to refuse, by name). An output that is one of them would leave the solution unusable (a tester
+    exported into the fates file)."""
+    return [str(path), *(str(doc[k]) for k in ("fates_file", "scene") if isinstance(doc.get(k), str))]
 
 
 def _found_beside(doc: dict, path: Path) -> None:
@@ -368,7 +382,9 @@ def export_scene(path: str | os.PathLike, out: str | os.PathLike) -> str:
     if (same := [f for f in files if os.path.realpath(f) == os.path.realpath(outp)]):
         raise SceneSolutionError(f"{out}: is {same[0]}, a file the scene reads; give another file name")
     if len(files) > 1 and outp.resolve().parent != fates.scene.resolve().parent:
-        others = ", ".join(f.name for f in files[1:4]) + (", ..." if len(files) > 4 else "")
+        home = fates.scene.resolve().parent
+        others = ", ".join(os.path.relpath(os.path.realpath(f), home) for f in files[1:4]) + (
+            ", ..." if len(files) > 4 else "")   # as the scene names them: parts/props.xml
         raise SceneSolutionError(f"{out}: the scene reads other files ({others}) found relative to its "
                                  f"folder: write the exported scene in {fates.scene.resolve().parent}")
     nq, nv = int(model.nq), int(model.nv)
@@ -403,7 +419,9 @@ def export_scene(path: str | os.PathLike, out: str | os.PathLike) -> str:
         if options:
             options[-1].set("timestep", repr(float(doc["timestep"])))
         else:
-            root.insert(0, ET.Element("option", {"timestep": repr(float(doc["timestep"]))}))
+            opt = ET.Element("option", {"timestep": repr(float(doc["timestep"]))})
+            opt.tail = root.text if root.text and not root.text.strip() else "\n  "   # on its own line
+            root.insert(0, opt)
     if len(root):
         root[-1].tail = "\n  "
     keyframe = ET.SubElement(root, "keyframe")

@@ -129,6 +129,8 @@ class SceneValidation:
     #: the footprints from above, (N, 2) polygons (m), of the geoms fixed to the world that bodies can
     #: touch (walls, a backboard, a bin; planes left out): drawn under the paths (:func:`static_footprints`)
     statics: tuple[np.ndarray, ...] = field(default=(), repr=False, compare=False)
+    #: those of them a fate names (``hits``, ``never_hits``): kept inside the plots' axes
+    aims: tuple[np.ndarray, ...] = field(default=(), repr=False, compare=False)
 
     @property
     def scene_row(self) -> SettingRow:
@@ -260,14 +262,17 @@ def validate_solution(path: str, *, samples: int = DEFAULT_VALIDATE_SAMPLES, see
             sim._reset(d)  # the keyframe's mocap poses too
         mujoco.mj_kinematics(model, d)
         statics = static_footprints(model, d)
+        named = {n for f in fates.fates for n in (*f.hits, *f.never_hits)}
+        aims = static_footprints(model, d, names=named) if named else ()
     return SceneValidation(solution=str(path), fates=fates, doc=doc, rows=tuple(rows),
                            probability=Probability.of(int(met.sum()), samples), noise_seed=s, samples=samples,
-                           noisy_ends=ends, noisy_met=met, mujoco=mujoco.__version__, statics=statics)
+                           noisy_ends=ends, noisy_met=met, mujoco=mujoco.__version__, statics=statics,
+                           aims=aims)
 
 
 def _hull(p: np.ndarray) -> np.ndarray:
     """The convex hull of 2D points (Andrew's monotone chain), counter-clockwise."""
-    pts = sorted(set(map(tuple, np.round(p, 12))))
+    pts = sorted(set(map(tuple, np.round(p, 6))))   # to the micrometre: mesh vertices are float32
     if len(pts) < 3:
         return np.array(pts, dtype=float)
 
@@ -284,15 +289,19 @@ def _hull(p: np.ndarray) -> np.ndarray:
     return np.array(lower[:-1] + upper[:-1], dtype=float)
 
 
-def static_footprints(model: Any, data: Any) -> tuple[np.ndarray, ...]:
+def static_footprints(model: Any, data: Any, names: Any = None) -> tuple[np.ndarray, ...]:
     """The footprint from above of each geom fixed to the world (its body welded to the world, or a
     mocap body at its pose in ``data``) that collides with something (contype or conaffinity set),
-    planes and height fields left out: a sphere's circle (24 sides), else the hull of its bounding
-    box's 8 corners (MuJoCo's ``geom_aabb``, turned by its pose), each an (N, 2) polygon in metres."""
+    planes and height fields left out: a sphere's circle (24 sides), a mesh's hull, else the hull of
+    its bounding box's 8 corners (MuJoCo's ``geom_aabb``, turned by its pose), each an (N, 2) polygon
+    in metres. ``names``: only the geoms of these names or of bodies of these names."""
     import mujoco
 
     out = []
     for g in range(int(model.ngeom)):
+        if names is not None and model.geom(g).name not in names and model.body(
+                int(model.geom_bodyid[g])).name not in names:
+            continue
         t = int(model.geom_type[g])
         if t in (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD):
             continue
@@ -307,7 +316,13 @@ def static_footprints(model: Any, data: Any) -> tuple[np.ndarray, ...]:
             r = float(model.geom_size[g, 0])
             out.append(c[:2] + r * np.stack([np.cos(a), np.sin(a)], axis=1))
             continue
-        box = np.asarray(model.geom_aabb[g], float)   # centre (3), half sizes (3), in the geom's frame
-        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * box[3:] + box[:3]
+        if t == mujoco.mjtGeom.mjGEOM_MESH:   # its vertices, in the geom's frame once compiled
+            m = int(model.geom_dataid[g])
+            a = int(model.mesh_vertadr[m])
+            corners = np.asarray(model.mesh_vert[a:a + int(model.mesh_vertnum[m])], float)
+        else:
+            box = np.asarray(model.geom_aabb[g], float)   # centre (3), half sizes (3), in the geom's frame
+            corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
+                                for sz in (-1, 1)]) * box[3:] + box[:3]
         out.append(_hull((c + corners @ R.T)[:, :2]))
     return tuple(out)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import sys
+from pathlib import Path
 
 from nbst.cli.args import print_json
 from nbst.outputs import prepare_output, sigterm_as_interrupt, write_json_atomic
@@ -48,14 +49,16 @@ def asks_text(fate) -> str:
 
 
 def cmd_examples(args) -> int:
-    from nbst.scene.builtin import example_description, example_names
+    from nbst.scene.builtin import example_description, example_names, example_path
 
-    rows = [{"name": n, "description": example_description(n)} for n in example_names()]
+    rows = [{"name": n, "description": example_description(n), "fates": str(example_path(n))}
+            for n in example_names()]
     if args.json:
         print_json(rows)
         return 0
     for r in rows:
         print(f"{r['name']:14s} {r['description']}")
+    print(f"\nthe fates files and their scenes (copy the folder to change one): {Path(rows[0]['fates']).parent}")
     return 0
 
 
@@ -247,10 +250,10 @@ def cmd_validate(args) -> int:
 
 
 def cmd_export(args) -> int:
-    from nbst.scene.solution import export_scene, read_solution
+    from nbst.scene.solution import export_scene, read_solution, solution_reads
 
     doc = read_solution(args.solution)
-    prepare_output(args.output, inputs=[args.solution, doc["scene"]])
+    prepare_output(args.output, inputs=solution_reads(args.solution, doc))  # never the files it replays from
     key = export_scene(args.solution, args.output)
     print(f"wrote {args.output}: {doc['scene']} with keyframe {key!r} (the solution's initial state); play it with "
           f"python -m mujoco.viewer --mjcf={args.output}, then load key {key!r}")
