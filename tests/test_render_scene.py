@@ -329,3 +329,38 @@ def test_the_framing_holds_a_long_thin_target_tightly():
                       controls=(), fates=(Fate("ball", hits=(name,)),))
         pts = focus_points(motion, fates, m, bodies=False)  # type: ignore[arg-type]
         assert np.allclose(pts.min(axis=0), lo, atol=1e-9) and np.allclose(pts.max(axis=0), hi, atol=1e-9), name
+
+
+def test_the_framing_camera_looks_from_a_side_where_no_wall_hides_the_body():
+    """A fourth new user's ball hit a door's knob behind the door, seen from the front: the framing
+    camera now takes the first of its azimuths with the fewest blocked sightlines. A ball behind a
+    tall wall on the front side (-y) is hidden from the three front azimuths (-70, -110 and -30 deg)
+    and seen from every side the wall is not on; with the wall gone the front (-70) is kept."""
+    from types import SimpleNamespace
+
+    import mujoco
+
+    from nbst.render.scene.framing import AZIMUTH, AZIMUTHS, clear_azimuth, hidden_count
+
+    def motion_of(xml):
+        m = mujoco.MjModel.from_xml_string(xml)
+        d = mujoco.MjData(m)
+        mujoco.mj_kinematics(m, d)
+        two = lambda a: np.repeat(np.asarray(a, float)[None], 2, axis=0)  # noqa: E731
+        mo = sm.SceneMotion(times=np.array([0.0, 1.0]), geom_xpos=two(d.geom_xpos),
+                            geom_xmat=two(d.geom_xmat).reshape(2, -1, 3, 3), body_xpos=two(d.xpos),
+                            body_xmat=two(d.xmat).reshape(2, -1, 3, 3), cam_xpos=np.zeros((2, 0, 3)),
+                            cam_xmat=np.zeros((2, 0, 3, 3)), touches=(), duration=1.0, same=True, judgement=None)
+        return mo, m
+
+    ball = '<body name="ball" pos="0 0 0.05"><freejoint/><geom type="sphere" size="0.05"/></body>'
+    wall = '<geom name="wall" type="box" pos="0 -0.3 1" size="1 0.02 1"/>'
+    fates = SimpleNamespace(controls=[SimpleNamespace(body="ball")], fates=[])
+    boxes = (np.full((2, 3), -0.1), np.full((2, 3), 0.1))
+    mo, m = motion_of(f'<mujoco><worldbody><geom type="plane" size="3 3 .1"/>{wall}{ball}</worldbody></mujoco>')
+    hidden = {a: hidden_count(mo, fates, m, boxes, a) for a in AZIMUTHS}
+    assert hidden[-70.0] == hidden[-110.0] == hidden[-30.0] == 2               # both frames, from the front
+    assert hidden[10.0] == hidden[170.0] == hidden[50.0] == hidden[130.0] == 0
+    assert clear_azimuth(mo, fates, m, boxes) == 10.0
+    mo, m = motion_of(f'<mujoco><worldbody><geom type="plane" size="3 3 .1"/>{ball}</worldbody></mujoco>')
+    assert clear_azimuth(mo, fates, m, boxes) == AZIMUTH

@@ -24,12 +24,17 @@ from nbst.render.core import geoms as sg
 from nbst.render.scene.motion import SceneMotion
 from nbst.scene.fates import Fates
 
-__all__ = ["AZIMUTH", "DISTANCE", "ELEVATION", "FILL", "FOV", "TRACK_TAU", "TRACK_WINDOW", "box_corners",
-           "focus_points", "geom_box_points", "default_camera", "regions_of", "tracking_boxes"]
+__all__ = ["AZIMUTH", "AZIMUTHS", "DISTANCE", "ELEVATION", "FILL", "FOV", "TRACK_TAU", "TRACK_WINDOW", "box_corners",
+           "focus_points", "geom_box_points", "default_camera", "hidden_count", "clear_azimuth", "regions_of",
+           "tracking_boxes"]
 
 #: The framing camera looks at the bodies from this azimuth (degrees from +x, about +z; -90: from
 #: -y, the front) and elevation (degrees above the horizon), with this vertical field of view.
 AZIMUTH, ELEVATION, FOV = -70.0, 35.0, 40.0
+#: The azimuths the tracking camera may look from, the first preferred: it takes the first from
+#: which the fewest of the fated bodies and their touches hide behind other geoms
+#: (:func:`clear_azimuth`: a door's far side hid the knob a ball hit).
+AZIMUTHS = (AZIMUTH, -110.0, -30.0, -150.0, 10.0, 170.0, 50.0, 130.0)
 #: ... from this many times the framed points' extent (a longer lens: the near side of a table does
 #: not dwarf the dice on the floor beside it) ...
 DISTANCE = 2.5
@@ -135,9 +140,69 @@ def regions_of(f: Any) -> list[Any]:
     return ([f.rest_in] if f.rest_in is not None else []) + [r for _, r in f.at] + list(f.through)
 
 
-def default_camera(points: np.ndarray, aspect: float, free: tuple[float, float, float, float]
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The camera that frames ``points`` (N, 3) from :data:`AZIMUTH` and :data:`ELEVATION`.
+def _eye(lo: np.ndarray, hi: np.ndarray, azimuth: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """(eye, the box's centre, the distance) of the camera that frames the box lo..hi from ``azimuth``."""
+    c = (lo + hi) / 2
+    az, el = math.radians(azimuth), math.radians(ELEVATION)
+    d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    dist = DISTANCE * max(float(np.linalg.norm(hi - lo)), 0.05)
+    return c + d * dist, c, dist
+
+
+def hidden_count(motion: SceneMotion, fates: Fates, model: Any, boxes: tuple[np.ndarray, np.ndarray],
+                 azimuth: float, *, frames: int = 24) -> int:
+    """How many sightlines the tracking camera (its ``boxes``, :func:`tracking_boxes`) from ``azimuth``
+    has blocked: to each fated or controlled body's origin at ``frames`` frames spread over the
+    motion, and to each first touch's point at its time. A sightline is blocked when it crosses the
+    bounding box (MuJoCo's ``geom_aabb``, turned with the geom) of a visible geom (groups 0-2, not
+    transparent, no plane) other than the body's own and the touched one's, before 98 % of its length."""
+    import mujoco
+
+    F = len(motion.times)
+    ids = {int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n))
+           for n in [c.body for c in fates.controls] + [f.body for f in fates.fates]}
+    seen = [g for g in range(int(model.ngeom)) if int(model.geom_group[g]) <= 2 and model.geom_rgba[g, 3] > 0
+            and int(model.geom_type[g]) not in (sg.PLANE, int(mujoco.mjtGeom.mjGEOM_HFIELD))]
+    if not seen:
+        return 0
+    gbody = np.asarray(model.geom_bodyid)[seen]
+    aabb = np.asarray(model.geom_aabb, float)[seen]
+    sights: list[tuple[int, np.ndarray, set[int]]] = []   # (frame, target, bodies whose geoms may be in the way)
+    for k in sorted({int(round(x)) for x in np.linspace(0, F - 1, min(frames, F))}):
+        sights += [(k, motion.body_xpos[k, b], {b}) for b in ids]
+    for tc in motion.touches:
+        k = int(np.clip(np.searchsorted(motion.times, tc.t), 0, F - 1))
+        mine = set()
+        for n in (tc.body, tc.other):
+            b = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n))
+            g = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n))
+            mine.add(b if b >= 0 else (int(model.geom_bodyid[g]) if g >= 0 else -1))
+        sights.append((k, np.asarray(tc.pos, float), mine))
+    hidden = 0
+    for k, target, mine in sights:
+        eye, _, _ = _eye(boxes[0][k], boxes[1][k], azimuth)
+        R = np.asarray(motion.geom_xmat[k], float)[seen].reshape(-1, 3, 3)
+        e = np.einsum("gji,gj->gi", R, eye - motion.geom_xpos[k][seen]) - aabb[:, :3]   # in each geom's frame
+        v = np.einsum("gji,j->gi", R, target - eye)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t1, t2 = (-aabb[:, 3:] - e) / v, (aabb[:, 3:] - e) / v
+        inside = np.abs(e) <= aabb[:, 3:]
+        lo = np.where(v == 0, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2)).max(axis=1)
+        hi = np.where(v == 0, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2)).min(axis=1)
+        block = (hi >= np.maximum(lo, 0.0)) & (lo < 0.98) & ~np.isin(gbody, list(mine))
+        hidden += int(block.any())
+    return hidden
+
+
+def clear_azimuth(motion: SceneMotion, fates: Fates, model: Any, boxes: tuple[np.ndarray, np.ndarray]) -> float:
+    """The first of :data:`AZIMUTHS` with the fewest blocked sightlines (:func:`hidden_count`)."""
+    counts = [hidden_count(motion, fates, model, boxes, a) for a in AZIMUTHS]
+    return float(AZIMUTHS[int(np.argmin(counts))])
+
+
+def default_camera(points: np.ndarray, aspect: float, free: tuple[float, float, float, float],
+                   azimuth: float = AZIMUTH) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The camera that frames ``points`` (N, 3) from ``azimuth`` and :data:`ELEVATION`.
 
     It stands :data:`DISTANCE` times the points' extent from their box's centre and looks at it with a
     :data:`FOV` lens; then the picture is scaled and moved (an off-axis frustum) so that the
@@ -147,12 +212,7 @@ def default_camera(points: np.ndarray, aspect: float, free: tuple[float, float, 
     Returns:
         (eye (3,), target (3,), the (4, 4) view-projection, image row 0 at the top).
     """
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    c = (lo + hi) / 2
-    az, el = math.radians(AZIMUTH), math.radians(ELEVATION)
-    d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    dist = DISTANCE * max(float(np.linalg.norm(hi - lo)), 0.05)
-    eye = c + d * dist
+    eye, c, dist = _eye(points.min(axis=0), points.max(axis=0), azimuth)
     flip = np.diag([1.0, -1.0, 1.0, 1.0])
     vp = flip @ perspective(FOV, aspect, dist / 100, dist * 50) @ look_at(eye, c, np.array([0.0, 0.0, 1.0]))
     p = vp @ np.c_[points, np.ones(len(points))].T

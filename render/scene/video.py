@@ -37,7 +37,8 @@ from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
 from nbst.render.core import geoms as sg
 from nbst.render.scene import readout as ro
-from nbst.render.scene.framing import box_corners, default_camera, focus_points, regions_of, tracking_boxes
+from nbst.render.scene.framing import (AZIMUTH, box_corners, clear_azimuth, default_camera, focus_points, regions_of,
+                                      tracking_boxes)
 from nbst.render.core.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
 from nbst.render.scene.motion import SceneMotion, Touch, record
 from nbst.scene.fates import Fates
@@ -233,16 +234,18 @@ class SceneRenderer(FrameRenderer):
         cw, ch = text_cell(px)
         fw, fh = min((chars + 1.5) * cw / w, 0.6), min((rows_ + 1) * ch / h, 0.6)
         # the framing camera: beside the readout or below it, whichever shows the bodies larger
+        # the framing camera tracks the bodies (nbst.render.scene.framing.tracking_boxes) from the side
+        # that hides the fewest of them and their touches
+        self.track = tracking_boxes(motion, fates, model) if self.cam < 0 else None
+        self.azimuth = clear_azimuth(motion, fates, model, self.track) if self.track is not None else AZIMUTH
         best = None
         for free in ((-1 + 2 * fw, -1.0, 1.0, 1.0), (-1.0, -1 + 2 * fh, 1.0, 1.0)):
-            eye, look, vpm = default_camera(points, w / h, free)
+            eye, look, vpm = default_camera(points, w / h, free, self.azimuth)
             if best is None or abs(vpm[0, 0]) > abs(best[2][0, 0]):
                 best = (eye, look, vpm)
                 self.free = free
         assert best is not None
         self.eye, self.look, self.vpm = best
-        # the framing camera tracks the bodies (nbst.render.scene.framing.tracking_boxes)
-        self.track = tracking_boxes(motion, fates, model) if self.cam < 0 else None
         self.text = self.small = None
         self.rect = None
         if not self.clean:
@@ -284,7 +287,8 @@ class SceneRenderer(FrameRenderer):
             return flip @ perspective(fov, w / h, near, 1e3 * near + 100.0 * self.span) @ v, p
         if self.track is not None:
             k = self.motion.index(t)
-            eye, _, vpm = default_camera(box_corners(self.track[0][k], self.track[1][k]), w / h, self.free)
+            eye, _, vpm = default_camera(box_corners(self.track[0][k], self.track[1][k]), w / h, self.free,
+                                         self.azimuth)
             return vpm, eye
         return self.vpm, self.eye
 
