@@ -181,7 +181,6 @@ CAMERAS = ("behind", "overhead", "both")
 def check_render_args(args) -> int | None:
     """Exit status 2 (after one line) when the input file is missing or the output is not a file
     ``nbst render`` writes, else None; before any work, for every kind of input."""
-
     if not Path(args.problem).exists() and args.problem not in builtin_names():
         return _err("render", f"{args.problem}: no such file, and no built-in problem of that name; {TAKES}")
     if args.output is None:
@@ -194,7 +193,6 @@ def check_render_args(args) -> int | None:
 
 
 def cmd_render(args) -> int:
-
     bad = check_render_args(args)
     if bad is not None:
         return bad
@@ -227,14 +225,9 @@ def cmd_render(args) -> int:
                               f"{args.problem} --video OUT.mp4` (or --still OUT.png; --camera, --clean as here)")
     args.view, args.source = args.view or "2d", args.source or "analytic"
     args.speed = 1.0 if args.speed is None else args.speed
-    if args.solution is None:
-        if sniff_kind(args.problem, (("fates", "nbst-fates"),)) == "fates":
-            return _err("render", f"{args.problem} is a fates file: solve it first (`nbst scene solve {args.problem} "
-                                  f"-o sol.json`), then render the solution")
-        if Path(args.problem).suffix.lower() == ".xml":
-            return _err("render", f"{args.problem} is a MuJoCo scene: write a fates file for it and solve it (`nbst "
-                                  f"scene solve FATES.json -o sol.json`, docs/scene.md), then render the solution")
-        return _err("render", f"{args.problem} is a problem: give its SOLUTION too; {TAKES}")
+    if args.solution is None:   # a fates file or an MJCF gets its own line: solve it first
+        from nbst.cli.render_scene import unsolved_scene
+        return _err("render", unsolved_scene(args.problem) or f"{args.problem} is a problem: give its SOLUTION; {TAKES}")
     if args.camera is not None:
         return _err("render", "--camera applies to 5 m bowling throw files only")
 

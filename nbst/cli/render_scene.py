@@ -93,3 +93,15 @@ def cmd_render_scene(args) -> int:
         what = f"t = {args.still:g} s" if kind == "png" else f"{count_text(wrote)} frames, {fps:g} fps"
         print(f"nbst render: wrote {out} ({size[0]}x{size[1]}, {what})", file=sys.stderr)
     return 0
+
+
+def unsolved_scene(path: str) -> str | None:
+    """What to say of ``nbst render`` given a fates file or an MJCF (no motion yet), else None."""
+    from nbst.files import sniff_kind
+
+    if sniff_kind(path, (("fates", "nbst-fates"),)) == "fates":
+        return f"{path} is a fates file: solve it first (`nbst scene solve {path} -o sol.json`), then render the solution"
+    if Path(path).suffix.lower() == ".xml":
+        return (f"{path} is a MuJoCo scene: write a fates file for it and solve it (`nbst scene solve FATES.json -o "
+                f"sol.json`, docs/scene.md), then render the solution")
+    return None

@@ -318,8 +318,8 @@ def static_footprints(model: Any, data: Any, names: Any = None) -> tuple[np.ndar
             continue
         if t == mujoco.mjtGeom.mjGEOM_MESH:   # its vertices, in the geom's frame once compiled
             m = int(model.geom_dataid[g])
-            a = int(model.mesh_vertadr[m])
-            corners = np.asarray(model.mesh_vert[a:a + int(model.mesh_vertnum[m])], float)
+            v0 = int(model.mesh_vertadr[m])
+            corners = np.asarray(model.mesh_vert[v0:v0 + int(model.mesh_vertnum[m])], float)
         else:
             box = np.asarray(model.geom_aabb[g], float)   # centre (3), half sizes (3), in the geom's frame
             corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)
