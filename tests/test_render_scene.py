@@ -364,3 +364,34 @@ def test_the_framing_camera_looks_from_a_side_where_no_wall_hides_the_body():
     assert clear_azimuth(mo, fates, m, boxes) == 10.0
     mo, m = motion_of(f'<mujoco><worldbody><geom type="plane" size="3 3 .1"/>{ball}</worldbody></mujoco>')
     assert clear_azimuth(mo, fates, m, boxes) == AZIMUTH
+
+
+def test_a_still_at_t_is_framed_as_the_videos_frame_at_t(gl, solutions):
+    """A fifth new user's still at t = 0 differed from the video's first frame by 13 grey levels a
+    pixel: the framing was worked out on the frames recorded, 5 fps for the video and 30 for the
+    still. It is now worked out on its own 30 fps clock: the view at each of a 5 fps video's frame
+    times is the still's at that time, to round-off (1e-9 of each matrix entry's scale)."""
+    from nbst.render.scene.framing import track_grid
+
+    path = solutions["snake-eyes"]
+    doc = json.loads(path.read_text())
+    T = doc["nstep"] * doc["timestep"]
+    video = frame_times(T, 5.0)
+    views = {}
+    for name, times in (("video", video), ("fine", frame_times(T, 60.0))):
+        motion, fates, model = sm.record(path, np.union1d(times, track_grid(T)))
+        r = sv.SceneRenderer(gl, motion, fates, model, size=(640, 360), title="t")
+        try:
+            views[name] = [r.view(float(t))[0] for t in video]
+        finally:
+            r.release()
+    for t in video[::4]:   # a still records only its time with the framing's clock
+        motion, fates, model = sm.record(path, np.union1d([t], track_grid(T)))
+        r = sv.SceneRenderer(gl, motion, fates, model, size=(640, 360), title="t")
+        try:
+            still = r.view(float(t))[0]
+        finally:
+            r.release()
+        k = int(np.argmin(np.abs(video - t)))
+        for other in (views["video"][k], views["fine"][k]):
+            assert np.allclose(still, other, rtol=1e-9, atol=1e-9 * np.abs(still).max())

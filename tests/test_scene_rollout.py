@@ -524,3 +524,31 @@ def test_a_hits_miss_is_graded_by_the_closest_approach_of_the_two_spheres(tmp_pa
     for name, (least, start) in near.items():
         assert abs(got[name][0] - least) < 1e-9 and abs(got[name][1] - start) < 1e-9
     assert abs(hits.cost - (2 + sum(a / b for a, b in near.values()))) < 1e-9
+
+
+def test_pick_writes_an_answer_as_a_solution_every_command_takes(toss, tmp_path, capsys):
+    """A fifth new user could not use answer 1 or 2 (replay, render and export read the file's own
+    state only). `nbst scene pick SOL N` writes answer N as a solution: its states replay bit for
+    bit in the plain loop, its fates are judged anew (met), its ladder holds, its probability is the
+    answer's, and export plays it from its key; N past the answers is one line, exit 2."""
+    doc = json.loads(toss.read_text())
+    doc["fates"]["ball"] = {"never_hits": ["cube"]}
+    toss.write_text(json.dumps(doc))
+    sol = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(toss), "-o", str(sol), "--seed", "7", "--max-rollouts", "600", "--jobs", "1",
+                 "--answers", "3", "--samples", "4", "-q"]) == 0
+    answers = json.loads(sol.read_text())["answers"]
+    for n in (1, 2):
+        out = tmp_path / f"a{n}.json"
+        assert main(["scene", "pick", str(sol), str(n), "-o", str(out)]) == 0
+        d = json.loads(out.read_text())
+        assert d["qpos0"] == answers[n]["qpos0"] and d["final"] == answers[n]["final"]
+        assert d["met"] and d["ladder"]["holds"] and d["probability"] == answers[n]["probability"]
+        assert d["picked"]["answer"] == n and d["picked"]["sequence"] == answers[n]["sequence"]
+        assert main(["scene", "replay", str(out), "--ladder"]) == 0
+        assert main(["scene", "export", str(out), "-o", str(tmp_path / f"a{n}.xml")]) == 0
+    capsys.readouterr()
+    assert main(["scene", "pick", str(sol), "3", "-o", str(tmp_path / "a3.json")]) == 2
+    err = capsys.readouterr().err
+    assert "no answer 3; it has 3 (0 to 2)" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "a3.json").exists()

@@ -322,12 +322,13 @@ def ladder_solution(path: str | os.PathLike, *, divisors: tuple[int, ...] = (1, 
         SceneSolutionError: the solution is refused.
         FatesError: its fates file or scene is refused (or a rung's steps pass the cap).
     """
-    from nbst.scene.scenefile import check_against_model
-
     doc = read_solution(path)
     fates, model = load_fates(doc.get("fates_file") or doc["fates"], scene=doc["scene"])
-    h = float(doc["timestep"])
-    x = _floats(doc, "x", fates.dim, str(path))
+    return _ladder(fates, model, float(doc["timestep"]), _floats(doc, "x", fates.dim, str(path)), divisors)
+
+
+def _ladder(fates: Fates, model: Any, h: float, x: np.ndarray, divisors: tuple[int, ...]) -> Ladder:
+    from nbst.scene.scenefile import check_against_model
 
     def run(step: float) -> SceneRollout:
         model.opt.timestep = step
@@ -337,6 +338,53 @@ def ladder_solution(path: str | os.PathLike, *, divisors: tuple[int, ...] = (1, 
 
     return climb(run, [h / k for k in divisors], outcome=lambda r: bool(r.judgement.met and not r.warnings),
                  wanted=True)
+
+
+def pick_answer(path: str | os.PathLike, n: int) -> dict:
+    """Answer ``n`` of a solution solved with ``--answers`` (0-based, as in its ``"answers"``) as a
+    solution file of its own, which replay, validate, export and render take as they take any.
+
+    Its controls, initial and final states are the answer's; it is rolled out again (its initial
+    state and final state must come back bit for bit) and judged anew (verdicts, signature, cost),
+    and its ladder is climbed again (h/2, h/4); its probability is the answer's. ``"picked"``
+    records the file and the answer it came from, and its contact sequence.
+
+    Raises:
+        SceneSolutionError: the file is refused, has no answer ``n``, or the answer does not replay.
+        FatesError: its fates file or scene is refused.
+    """
+    doc = read_solution(path)
+    answers = doc.get("answers")
+    if not isinstance(answers, list) or not answers:
+        raise SceneSolutionError(f"{path}: answers: none (solve with --answers K to have several)")
+    if not (isinstance(n, int) and 0 <= n < len(answers)) or not isinstance(answers[n], dict):
+        raise SceneSolutionError(f"{path}: answers: no answer {n}; it has {len(answers)} (0 to {len(answers) - 1})")
+    a = answers[n]
+    fates, model = load_fates(doc.get("fates_file") or doc["fates"], scene=doc["scene"])
+    model.opt.timestep = float(doc["timestep"])
+    where = f"{path}: answers[{n}]"
+    x = _floats(a, "x", fates.dim, where)
+    q0, v0 = _floats(a, "qpos0", int(model.nq), where), _floats(a, "qvel0", int(model.nv), where)
+    qf, vf = _floats(a, "final.qpos", int(model.nq), where), _floats(a, "final.qvel", int(model.nv), where)
+    with quiet_mujoco_warnings(), SceneSim(fates, model) as sim:
+        r = sim.rollout(x)
+    if not all(u.tobytes() == w.tobytes() for u, w in ((r.qpos0, q0), (r.qvel0, v0), (r.qpos, qf), (r.qvel, vf))):
+        raise SceneSolutionError(f"{where}: does not replay to its own states (the scene or MuJoCo changed since "
+                                 f"the solve)")
+    out = {k: v for k, v in doc.items() if k not in ("answers", "robust", "probability", "ladder")}
+    out.update(met=bool(r.judgement.met and not r.warnings), signature=signature_text(r.signature), cost=r.cost,
+               controls=a.get("controls", _controls(fates, x)), x=[float(v) for v in x],
+               qpos0=[float(v) for v in q0], qvel0=[float(v) for v in v0],
+               final={"qpos": [float(v) for v in qf], "qvel": [float(v) for v in vf]},
+               verdicts=r.judgement.to_dict()["bodies"], warnings=list(r.warnings),
+               picked={"from": str(Path(path).resolve()), "answer": n, "sequence": a.get("sequence", [])})
+    if isinstance(a.get("probability"), dict):
+        out["probability"] = a["probability"]
+    if isinstance(doc.get("ladder"), dict):   # climbed again for this answer's controls
+        ladder = _ladder(fates, model, float(doc["timestep"]), x, (1, 2, 4))
+        out["ladder"] = {"timesteps": [float(doc["timestep"]) / k for k in (1, 2, 4)], "holds": bool(ladder.holds)}
+        out["met"] = out["met"] and bool(ladder.holds)
+    return out
 
 
 def _key_text(values: np.ndarray) -> str:

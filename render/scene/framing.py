@@ -24,7 +24,7 @@ from nbst.render.core import geoms as sg
 from nbst.render.scene.motion import SceneMotion
 from nbst.scene.fates import Fates
 
-__all__ = ["AZIMUTH", "AZIMUTHS", "DISTANCE", "ELEVATION", "FILL", "FOV", "TRACK_TAU", "TRACK_WINDOW", "box_corners",
+__all__ = ["AZIMUTH", "AZIMUTHS", "DISTANCE", "TRACK_FPS", "track_grid", "on_track_grid", "ELEVATION", "FILL", "FOV", "TRACK_TAU", "TRACK_WINDOW", "box_corners",
            "focus_points", "geom_box_points", "default_camera", "hidden_count", "clear_azimuth", "regions_of",
            "tracking_boxes"]
 
@@ -45,6 +45,11 @@ FILL = 0.8
 #: with this time constant (s), forwards and backwards.
 TRACK_WINDOW, TRACK_TAU = 0.35, 0.25
 
+#: The tracking camera's own clock: its boxes are worked out on the frames of this many per second
+#: of motion (:func:`on_track_grid`), whatever the video's fps, and read between them linearly, so a
+#: still at t is the video's frame at t.
+TRACK_FPS = 30.0
+
 _CUBE = np.array([[(-1.0, 1.0)[(k >> i) & 1] for i in range(3)] for k in range(8)])
 
 
@@ -62,6 +67,24 @@ def _fixed_and_bodies(motion: SceneMotion, fates: Fates, model: Any) -> tuple[np
         out.append((b, max((float(model.geom_rbound[g]) + float(np.linalg.norm(model.geom_pos[g])) for g in gs),
                            default=0.05)))
     return pts, out
+
+
+def track_grid(duration: float) -> np.ndarray:
+    """The times of the frames the framing is worked out on (:data:`TRACK_FPS`)."""
+    from nbst.render.core.times import frame_times
+
+    return frame_times(duration, TRACK_FPS)
+
+
+def on_track_grid(motion: SceneMotion) -> SceneMotion:
+    """``motion``'s frames nearest the :func:`track_grid` times (recorded exactly by the renderer)."""
+    from dataclasses import replace
+
+    idx = np.unique([motion.index(t) for t in track_grid(motion.duration)])
+    segs = None if motion.tendon_segs is None else motion.tendon_segs[idx]
+    return replace(motion, times=motion.times[idx], geom_xpos=motion.geom_xpos[idx], geom_xmat=motion.geom_xmat[idx],
+                   body_xpos=motion.body_xpos[idx], body_xmat=motion.body_xmat[idx], cam_xpos=motion.cam_xpos[idx],
+                   cam_xmat=motion.cam_xmat[idx], tendon_segs=segs)
 
 
 def tracking_boxes(motion: SceneMotion, fates: Fates, model: Any) -> tuple[np.ndarray, np.ndarray]:

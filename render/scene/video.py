@@ -37,8 +37,8 @@ from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
 from nbst.render.core import geoms as sg
 from nbst.render.scene import readout as ro
-from nbst.render.scene.framing import (AZIMUTH, box_corners, clear_azimuth, default_camera, focus_points, regions_of,
-                                      tracking_boxes)
+from nbst.render.scene.framing import (AZIMUTH, box_corners, clear_azimuth, default_camera, focus_points, on_track_grid,
+                                      regions_of, track_grid, tracking_boxes)
 from nbst.render.core.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
 from nbst.render.scene.motion import SceneMotion, Touch, record
 from nbst.scene.fates import Fates
@@ -133,7 +133,10 @@ class SceneRenderer(FrameRenderer):
         if np.linalg.norm(L) < 1e-9:
             L = np.asarray(LIGHT, float)
         self.light = L / np.linalg.norm(L)
-        points = focus_points(motion, fates, model)
+        # the framing (its points, the checker's size, the tracking boxes) on the frames of its own
+        # clock, whatever the video's fps: a still at t is the video's frame at t
+        self.grid = on_track_grid(motion)
+        points = focus_points(self.grid, fates, model)
         self.lo, self.hi = points.min(axis=0), points.max(axis=0)
         span = float(np.linalg.norm(self.hi - self.lo))
         self.span = span
@@ -236,8 +239,8 @@ class SceneRenderer(FrameRenderer):
         # the framing camera: beside the readout or below it, whichever shows the bodies larger
         # the framing camera tracks the bodies (nbst.render.scene.framing.tracking_boxes) from the side
         # that hides the fewest of them and their touches
-        self.track = tracking_boxes(motion, fates, model) if self.cam < 0 else None
-        self.azimuth = clear_azimuth(motion, fates, model, self.track) if self.track is not None else AZIMUTH
+        self.track = tracking_boxes(self.grid, fates, model) if self.cam < 0 else None
+        self.azimuth = clear_azimuth(self.grid, fates, model, self.track) if self.track is not None else AZIMUTH
         best = None
         for free in ((-1 + 2 * fw, -1.0, 1.0, 1.0), (-1.0, -1 + 2 * fh, 1.0, 1.0)):
             eye, look, vpm = default_camera(points, w / h, free, self.azimuth)
@@ -285,10 +288,9 @@ class SceneRenderer(FrameRenderer):
             fov = float(self.model.cam_fovy[self.cam])
             near = max(float(self.model.vis.map.znear) * float(self.model.stat.extent), 1e-3)
             return flip @ perspective(fov, w / h, near, 1e3 * near + 100.0 * self.span) @ v, p
-        if self.track is not None:
-            k = self.motion.index(t)
-            eye, _, vpm = default_camera(box_corners(self.track[0][k], self.track[1][k]), w / h, self.free,
-                                         self.azimuth)
+        if self.track is not None:   # the boxes read between the grid's frames
+            lo, hi = (np.array([np.interp(t, self.grid.times, b[:, i]) for i in range(3)]) for b in self.track)
+            eye, _, vpm = default_camera(box_corners(lo, hi), w / h, self.free, self.azimuth)
             return vpm, eye
         return self.vpm, self.eye
 
@@ -474,8 +476,8 @@ def render_scene(path: str | os.PathLike, output: str | os.PathLike, *, still: f
     fps_ = float(fps or style.DEFAULT_FPS)
     times = (np.array([min(max(float(still), 0.0), duration)]) if still is not None
              else frame_times(duration, fps_, speed=speed, hold=hold))
-    # a still records the whole motion too: the framing camera frames the same paths as the video's
-    motion, fates, model = record(path, times if still is None else np.union1d(times, frame_times(duration, 30.0)))
+    # the framing camera's own frames recorded too (a still: the whole motion): it frames the same paths
+    motion, fates, model = record(path, np.union1d(times, track_grid(duration)))
     size = tuple(size or style.DEFAULT_SIZE)
     title = fates.scene.name  # the MJCF's file name (its stem may be a body's name)
     return render_output(lambda ctx: SceneRenderer(ctx, motion, fates, model, size=size, camera=camera, clean=clean,

@@ -15,7 +15,8 @@ import sys
 
 from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.cli.flags import add_out_dir, add_quiet, add_seed
-from nbst.cli.scene.commands import cmd_check, cmd_examples, cmd_export, cmd_replay, cmd_solve, cmd_validate
+from nbst.cli.scene.commands import (cmd_check, cmd_examples, cmd_export, cmd_pick, cmd_replay, cmd_solve,
+                                     cmd_validate)
 
 __all__ = ["COMMANDS", "register", "ROLLOUTS", "SAMPLES", "ANSWERS", "ROBUST"]
 
@@ -157,6 +158,17 @@ def register(sub) -> None:
     w.add_argument("--json", action="store_true", help="print report.json's content instead of the summary")
     add_quiet(w, "no summary (the report files and the exit code still tell)")
     w.set_defaults(func=cmd_validate)
+
+    k = sc.add_parser("pick", help="write one of a solution's --answers as a solution file of its own",
+                      description="Write answer N of SOL.json (solved with --answers K; 0 is the first, the "
+                                  "solution's own) as a solution file of its own: its controls and states, rolled "
+                                  "out again bit for bit, its fates judged anew, its ladder climbed again (when the "
+                                  "solution had one) and its probability. replay, validate, export, render and "
+                                  "`nbst export --gltf` take it as any solution. Exit 0, or 1 if it misses a fate.")
+    k.add_argument("solution", metavar="SOL.json", help="a solution file written by `nbst scene solve --answers K`")
+    k.add_argument("answer", type=int, metavar="N", help="the answer's index in the file's \"answers\" (0..K-1)")
+    k.add_argument("-o", "--output", required=True, metavar="OUT.json", help="the solution file to write")
+    k.set_defaults(func=cmd_pick)
 
     x = sc.add_parser("export", help="write the scene with a keyframe holding the solution's initial state",
                       description="Write the solution's MJCF (its own text, comments and numbers as written) with "

@@ -258,3 +258,18 @@ def cmd_export(args) -> int:
     print(f"wrote {args.output}: {doc['scene']} with keyframe {key!r} (the solution's initial state); play it with "
           f"python -m mujoco.viewer --mjcf={args.output}, then load key {key!r}")
     return 0
+
+
+def cmd_pick(args) -> int:
+    from nbst.scene.solution import pick_answer, read_solution, solution_reads
+
+    doc = read_solution(args.solution)
+    prepare_output(args.output, inputs=solution_reads(args.solution, doc))
+    out = pick_answer(args.solution, args.answer)
+    write_json_atomic(args.output, out)
+    seq = ", ".join("-".join(map(str, s)) if isinstance(s, list) else str(s) for s in out["picked"]["sequence"])
+    p = out.get("probability")
+    print(f"wrote {args.output}: answer {args.answer} of {args.solution} ({seq or 'no touches'}); "
+          f"{'met' if out['met'] else 'NOT met'}" + (f", P(every fate) {p['p']:.3g}" if p else "")
+          + f"; replay, validate, export and render take it as any solution")
+    return 0 if out["met"] else 1
