@@ -5,7 +5,10 @@ from __future__ import annotations
 import os
 
 
-__all__ = ["default_jobs"]
+__all__ = ["JOBS_MAX", "default_jobs"]
+
+#: The most threads or processes one command or call may ask for (each a full search or worker).
+JOBS_MAX = 256
 
 
 def default_jobs() -> int:

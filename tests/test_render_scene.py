@@ -304,6 +304,10 @@ def test_the_readout_writes_a_millimetre_region_in_its_own_digits():
     assert (region_text(Region(lo=(0.0165, -0.0035, 0.0), hi=(0.0235, 0.0035, 0.005)))
             == "box (0.0165, -0.0035, 0)-(0.0235, 0.0035, 0.005)")
     assert region_text(Region(center=(2.0, 0.0, 1.62), radius=0.06)) == "ball r 0.06 at (2, 0, 1.62)"
+    # a fifth new user's file held 0.35 - 0.06 as Python writes it: to the nanometre, as check prints it
+    assert (region_text(Region(lo=(1.09, 0.29000000000000004, 0.0), hi=(1.4, 0.5, 0.1)))
+            == "box (1.09, 0.29, 0)-(1.4, 0.5, 0.1)")
+    assert region_text(Region(center=(1000.5, 0.0, 2e-9), radius=3e-7)) == "ball r 0.0000003 at (1000.5, 0, 0.000000002)"
 
 
 def test_the_framing_holds_a_long_thin_target_tightly():

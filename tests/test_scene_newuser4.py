@@ -99,3 +99,85 @@ def test_exported_option_has_its_own_line_and_the_examples_say_where_they_are(tm
     assert main(["scene", "examples"]) == 0
     folder = capsys.readouterr().out.strip().splitlines()[-1].split(": ")[-1]
     assert os.path.isfile(os.path.join(folder, "snake-eyes.json")), folder
+
+
+def test_replay_says_at_which_step_it_judged_and_when_the_file_says_the_ladder_fails(tmp_path, capsys):
+    """`scene replay` printed 'met' for a file recorded `met: false` (its ladder failed), with no word
+    of the ladder unless --ladder was given."""
+    out, _ = _solved(tmp_path, 8)
+    doc = json.loads(out.read_text())
+    doc["ladder"] = {"timesteps": [doc["timestep"], doc["timestep"] / 2, doc["timestep"] / 4], "holds": False}
+    out.write_text(json.dumps(doc))
+    capsys.readouterr()
+    main(["scene", "replay", str(out)])
+    head = capsys.readouterr().out.splitlines()[0]
+    assert f"at h = {doc['timestep'] * 1e3:g} ms" in head and "does not hold at h/2 and h/4" in head, head
+
+
+def test_an_interrupt_while_sampling_keeps_the_searchs_own_stop(tmp_path, monkeypatch, capsys):
+    """A fifth new user's search met every fate, then Ctrl-C during --samples: the file said
+    `"stopped": "interrupted"`, as if the search had been cut short. The search's stop is kept
+    ("met"), `"interrupted"` names the phase cut short, the probability is absent, exit 130."""
+    from nbst.scene import api as scene_api
+
+    (tmp_path / "far.xml").write_text(BALL)
+    doc = {"format": "nbst-fates", "version": 1, "scene": "far.xml", "duration": 0.3,
+           "controls": {"ball": {"linvel": [[0, 0.1], [0, 0.1], [0, 0.1]]}},
+           "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.5}}}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+
+    def cut(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(scene_api, "noisy_probability", cut)
+    out = tmp_path / "sol.json"
+    assert main(["scene", "solve", str(tmp_path / "f.json"), "-o", str(out), "--seed", "1", "--jobs", "1",
+                 "--samples", "50", "--no-ladder"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "interrupted during the samples after the search (no probability): met" in err, err
+    d = json.loads(out.read_text())
+    assert d["search"]["stopped"] == "met" and d["interrupted"] == "samples" and "probability" not in d
+
+
+def test_the_python_api_refuses_wrong_types_in_one_line_of_its_own_errors(tmp_path):
+    """A fifth new user's `solve(None, None)` raised a TypeError from pathlib, `solution_dict(None)`
+    an AttributeError, `max_rollouts=np.int64(30)` was refused while `seed=np.int64(7)` was taken,
+    and `jobs=300` passed the CLI's cap of 256."""
+    import numpy as np
+
+    from nbst.errors import NbstError, SolveError
+    from nbst.scene import solution_dict, solve
+
+    (tmp_path / "far.xml").write_text(BALL)
+    doc = {"format": "nbst-fates", "version": 1, "scene": "far.xml", "duration": 0.2,
+           "controls": {"ball": {"linvel": [[0, 0.1], [0, 0.1], [0, 0.1]]}},
+           "fates": {"ball": {"rest_in": {"center": [0, 0, 0.05], "radius": 0.5}}}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    for args, kw, words in (((None, None), {}, "fates must be"), ((3, tmp_path / "f.json"), {}, "scene must be"),
+                            ((None, tmp_path / "f.json"), {"jobs": 300}, "<= 256")):
+        with pytest.raises(SolveError, match=words):
+            solve(*args, **kw)
+    with pytest.raises(NbstError, match="SceneResult"):
+        solution_dict(None)
+    res = solve(None, tmp_path / "f.json", seed=np.int64(7), max_rollouts=np.int64(4), ladder=False)
+    assert res.max_rollouts == 4 and type(res.max_rollouts) is int and res.rollouts >= 1
+
+
+def test_check_notes_a_through_passed_at_the_start_and_up_asked_of_a_sphere(tmp_path, capsys):
+    """A fifth new user's `through` whose first region held the start was judged passed at 0 s, and
+    `up` on a ping-pong ball (a sphere: no face) was searched; `check` said nothing of either."""
+    (tmp_path / "far.xml").write_text(BALL)
+    doc = {"format": "nbst-fates", "version": 1, "scene": "far.xml", "duration": 0.2,
+           "controls": {"ball": {"linvel": [[0, 0.1], [0, 0.1], [0, 0.1]]}},
+           "fates": {"ball": {"through": [{"center": [0, 0, 0.3], "radius": 0.2}, {"center": [2, 0, 0.3], "radius": 0.2}],
+                              "up": {"axis": [0, 0, 1], "within_deg": 10}}}}
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
+    notes = [ln for ln in capsys.readouterr().out.splitlines() if "note:" in ln]
+    assert any("starts inside through's first region" in ln for ln in notes), notes
+    assert any("every geom is a sphere" in ln for ln in notes), notes
+    doc["fates"]["ball"]["through"][0]["center"] = [1, 0, 0.3]          # apart from the start: no note
+    doc["fates"]["ball"].pop("up")
+    (tmp_path / "f.json").write_text(json.dumps(doc))
+    assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
+    assert "note:" not in capsys.readouterr().out

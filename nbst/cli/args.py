@@ -11,6 +11,7 @@ from nbst.errors import InputError
 from nbst.problem import ProblemError
 from nbst.seeds import SEED_MAX
 from nbst.solution import dumps_strict
+from nbst import parallel
 
 
 __all__ = ["TRIALS_MAX", "JOBS_MAX", "RUNS_MAX", "Bounded", "int_at_least", "with_limits", "SEED", "MAX_TRIALS",
@@ -18,7 +19,7 @@ __all__ = ["TRIALS_MAX", "JOBS_MAX", "RUNS_MAX", "Bounded", "int_at_least", "wit
 
 #: Limits shared by several commands' flags (each flag's --help states its range).
 TRIALS_MAX = 10**12  # a trillion trials: days of search, far past any budget nbst has needed
-JOBS_MAX = 256  # processes on this machine (each a full search or worker)
+JOBS_MAX = parallel.JOBS_MAX  # processes on this machine (each a full search or worker)
 RUNS_MAX = 100_000  # runs per entry of an experiment
 
 

@@ -11,11 +11,13 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import numbers
 import os
 from pathlib import Path
 from typing import Any, Callable
 
 from nbst.errors import SolveError
+from nbst.parallel import JOBS_MAX
 from nbst.scene.cluster import ClusterSceneSim
 from nbst.scene.fates import Fates
 from nbst.scene.judge import signature_text
@@ -71,16 +73,25 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     Raises:
         FatesError: the fates file or its scene is refused (one line naming the file and field).
         InputError: the seed is not an integer in range.
-        SolveError: ``max_rollouts``, ``jobs`` or ``answers`` is not an integer >= 1, ``samples``
-            one >= 0, or ``robust`` one >= 12.
+        SolveError: ``max_rollouts``, ``jobs`` (at most ``nbst.parallel.JOBS_MAX``) or ``answers``
+            is not an integer >= 1 (numpy's too), ``samples`` one >= 0, or ``robust`` one >= 12; ``fates``
+            or ``scene`` is of another type.
         InputError: the cluster cannot be reached (one line).
     """
-    for name, v, least in (("max_rollouts", max_rollouts, 1), ("jobs", jobs, 1), ("samples", samples, 0),
-                           ("answers", answers, 1)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < least:
-            raise SolveError(f"{name} must be an integer >= {least}, got {v!r}")
-    if robust is not None and (isinstance(robust, bool) or not isinstance(robust, int) or robust < 12):
+    for name, v, least, most in (("max_rollouts", max_rollouts, 1, None), ("jobs", jobs, 1, JOBS_MAX),
+                                 ("samples", samples, 0, None), ("answers", answers, 1, None)):
+        if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < least or (most and v > most):
+            raise SolveError(f"{name} must be an integer >= {least}" + (f" and <= {most}" if most else "")
+                             + f", got {v!r}")
+    max_rollouts, jobs, samples, answers = int(max_rollouts), int(jobs), int(samples), int(answers)
+    if robust is not None and (isinstance(robust, bool) or not isinstance(robust, numbers.Integral) or robust < 12):
         raise SolveError(f"robust must be None or an integer >= 12 (noisy rollouts), got {robust!r}")
+    robust = None if robust is None else int(robust)
+    if not isinstance(fates, (str, os.PathLike, Fates)):
+        raise SolveError(f"fates must be a fates file's path, a built-in's name or a checked Fates (the first of "
+                         f"load_fates' pair), got {type(fates).__name__}")
+    if scene is not None and not isinstance(scene, (str, os.PathLike)):
+        raise SolveError(f"scene must be None or an MJCF file's path, got {type(scene).__name__}")
     s = resolve_seed(seed)
     if isinstance(fates, Fates):
         f = fates if scene is None else dataclasses.replace(fates, scene=Path(scene))
@@ -112,8 +123,10 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
         def say(phase: str) -> None:  # the search is over: what comes next, for a progress bar
             if callback is not None:
                 callback(SceneProgress(r.rollouts, best.cost, signature_text(best.signature), 0, r.signatures, phase))
+        cut: str | None = None   # the phase after the search an interrupt would cut short
         try:
             if robust is not None and stopped == "met":
+                cut = "robust"
                 say(f"robust: up to {robust} noisy rollouts")
                 from nbst.models.mjsearch.robust import Interrupted, maximise
 
@@ -131,17 +144,22 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
                          "start_screen": [mx.start_screen.k, mx.start_screen.n], "screen_seed": mx.screen_seed,
                          **({"ladder": mx.ladder} if mx.ladder else {})}
             elif samples and stopped != "interrupted":
+                cut = "samples"
                 say(f"P from {samples} noisy rollouts")
                 p = noisy_probability(sim, best.x, n=samples, seed=s)
             if best is not r.best and found:  # the robust pick is the file's own motion: the answer it moved
                 found = [best if a is r.best else a for a in found]
                 found = [a for a in found if a is best or a.sequence != best.sequence]  # a sequence once
             if samples and answers > 1 and stopped != "interrupted":
+                cut = "answers' samples"
                 say(f"P of {len(found)} answers from {samples} noisy rollouts each")
                 ps = [p if a is best else noisy_probability(sim, a.x, n=samples, seed=s) for a in found]
-        except KeyboardInterrupt:
-            stopped = "interrupted"
+        except KeyboardInterrupt:   # after the search: its own stop is kept, what was cut short said
+            interrupted = cut if stopped != "interrupted" else None
+            stopped = stopped if interrupted else "interrupted"
             p, ps = None, []
+        else:
+            interrupted = None
         nstep, key = sim.nstep, sim.key
     met = best.judgement.met and not best.warnings and (not ladder or held is True)
     return SceneResult(fates=f, model=model, best=best, met=met,
@@ -149,4 +167,4 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
                        wall_time=r.wall_time, signatures=r.signatures, nstep=nstep, key=key, probability=p,
                        answers=tuple(found), answer_probabilities=tuple(ps),
                        ladder=tuple(float(model.opt.timestep) / k for k in (1, *LADDER)) if ladder else (),
-                       ladder_held=held, robust=extra)
+                       ladder_held=held, robust=extra, interrupted=interrupted)

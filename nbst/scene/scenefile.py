@@ -18,6 +18,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from nbst.files import FileRefused, read_regular
 from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
                               read_fates_json)
@@ -271,6 +273,30 @@ def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:
                 if any(int(model.geom_bodyid[g1]) == b and (int(model.geom_bodyid[g2]) == nb if nb >= 0 else
                                                             model.geom(g2).name == n) for g1, g2 in pairs):
                     out.append((fa.body, key, n))
+    return out
+
+
+def idle_fates(fates: Fates, model: Any) -> list[tuple[str, str]]:
+    """Fates met or meaningless before any motion (``nbst scene check`` notes them): ``(body, why)``
+    for a ``through`` whose first region holds the body's origin at the start (the model's or key's
+    pose; passed at 0 s), and an ``up`` on a body whose every geom is a sphere (no face marks which
+    way is up). Compute only."""
+    import mujoco
+
+    d = mujoco.MjData(model)
+    if fates.keyframe is not None:
+        mujoco.mj_resetDataKeyframe(model, d, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe))
+    mujoco.mj_kinematics(model, d)
+    out = []
+    for fa in fates.fates:
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fa.body)
+        if fa.through and float(fa.through[0].distance(np.asarray(d.xpos[b])[None])[0]) <= 0.0:
+            out.append((fa.body, "its origin starts inside through's first region, so it is passed at 0 s "
+                                 "(the model's pose, before any control)"))
+        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
+        if fa.up is not None and mine and all(int(model.geom_type[g]) == mujoco.mjtGeom.mjGEOM_SPHERE for g in mine):
+            out.append((fa.body, "asks up of a body whose every geom is a sphere: no face shows which way is up "
+                                 "(only its frame's turn does)"))
     return out
 
 

@@ -77,6 +77,9 @@ class SceneResult:
         ladder_held: whether the best meets every fate at each of them (None: not asked or not met).
         robust: with ``robust``: the maximiser's budget, rollouts, screens (k of m before and
             after), its screen's seed and the pick's ladder rows (None: not asked).
+        interrupted: what an interrupt cut short after the search ended by itself (``"robust"``,
+            ``"samples"``, ``"answers' samples"``): ``stopped`` keeps the search's own reason, and
+            the probabilities are None (None: nothing was cut short after the search).
     """
 
     fates: Fates
@@ -97,6 +100,7 @@ class SceneResult:
     ladder: tuple[float, ...] = ()
     ladder_held: bool | None = None
     robust: dict | None = None
+    interrupted: str | None = None
 
     @property
     def judgement(self) -> Judgement:
@@ -140,9 +144,15 @@ def _answer(r: SceneRollout, f: Fates, p: Probability | None, seed: int) -> dict
 
 
 def solution_dict(res: SceneResult) -> dict:
-    """The solution file's JSON object for a result (see the module docstring)."""
+    """The solution file's JSON object for a result (see the module docstring).
+
+    Raises:
+        SceneSolutionError: ``res`` is not a :class:`SceneResult`.
+    """
     import mujoco
 
+    if not isinstance(res, SceneResult):
+        raise SceneSolutionError(f"solution_dict takes the SceneResult that solve returns, got {type(res).__name__}")
     f, b = res.fates, res.best
     src = Path(f.source)
     return {
@@ -173,6 +183,7 @@ def solution_dict(res: SceneResult) -> dict:
         **({} if res.probability is None else {"probability": _probability(res.probability, f, res.seed)}),
         **({} if not res.ladder else {"ladder": {"timesteps": list(res.ladder), "holds": bool(res.ladder_held)}}),
         **({} if res.robust is None else {"robust": res.robust}),
+        **({} if res.interrupted is None else {"interrupted": res.interrupted}),
         **({} if not res.answers else {"answers": [
             _answer(a, f, res.answer_probabilities[k] if k < len(res.answer_probabilities) else None, res.seed)
             for k, a in enumerate(res.answers)]}),

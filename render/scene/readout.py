@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nbst.scene.fates import AT_REST_SPEED, STILL_DISTANCE, Fate, Fates, Region
+from nbst.scene.fates import AT_REST_SPEED, AT_REST_SPIN, STILL_DISTANCE, Fate, Fates, Region
 from nbst.scene.judge import Judgement, length_text, signature_text
 
 __all__ = ["OK", "NO", "COMPACT_AFTER", "region_text", "asked", "readout", "widest", "marks", "body_rows"]
@@ -28,9 +28,13 @@ def _v(p, text=length_text) -> str:
 
 
 def _given(v: float) -> str:
-    """A number of the fates file as its user wrote it (the shortest text that reads back as it): a
-    region 1,000.5 m away reads ``1000.5``, not ``1000``; 12 km ``12000``, not ``1.2e+04``."""
-    return np.format_float_positional(float(v), trim="-")
+    """A number of the fates file as its user wrote it, to the nanometre (the shortest text that
+    reads back as it at 9 decimals): a region 1,000.5 m away reads ``1000.5``, not ``1000``; 12 km
+    ``12000``, not ``1.2e+04``; a file's ``0.29000000000000004`` (0.35 - 0.06 in Python) ``0.29``."""
+    v = float(v)
+    if v and abs(v) < 1e-6:   # below a micrometre: every digit it has
+        return np.format_float_positional(v, trim="-")
+    return np.format_float_positional(v, precision=9, unique=True, trim="-")
 
 
 def region_text(r: Region) -> str:
@@ -58,7 +62,7 @@ def asked(f: Fate) -> list[tuple[str, str]]:
     if f.never_hits:
         out.append(("never_hits", "never touches " + ", ".join(f.never_hits)))
     if f.at_rest:
-        out.append(("at_rest", f"ends at rest (under {AT_REST_SPEED:g} m/s)"))
+        out.append(("at_rest", f"ends at rest (under {AT_REST_SPEED:g} m/s and {AT_REST_SPIN:g} rad/s)"))
     if f.still:
         out.append(("still", f"never moves over {STILL_DISTANCE * 100:g} cm"))
     return out

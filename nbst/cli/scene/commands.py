@@ -65,7 +65,7 @@ def cmd_examples(args) -> int:
 def cmd_check(args) -> int:
     from nbst.scene.fates import STILL_DISTANCE
     from nbst.scene.contacts import MIN_CONTACT_STEPS, contact_time, deep_rests, ignored_friction, short_contacts
-    from nbst.scene.scenefile import load_fates, start_touches, unforced_still_moves
+    from nbst.scene.scenefile import idle_fates, load_fates, start_touches, unforced_still_moves
 
     f, model = load_fates(args.fates, scene=args.scene)
     steps = int(round(f.duration / model.opt.timestep))
@@ -81,6 +81,8 @@ def cmd_check(args) -> int:
         print(f"  note: {body} already touches {name} at the start" + (
             f" (the model's pose, before any control): its never_hits {name} can not be met; start it apart"
             if key == "never_hits" else f": its first touch of {name} is at 0 s"))
+    for body, why in idle_fates(f, model):
+        print(f"  note: {body} {why}")
     for body, far in unforced_still_moves(f, model):
         print(f"  note: {body} moves {far:.3g} m by itself (the scene as written, no control, over the duration): "
               f"its still (at most {STILL_DISTANCE:g} m) is met only if a control holds it; start it at rest")
@@ -168,18 +170,21 @@ def cmd_solve(args) -> int:
                      f"{res.robust['screen'][1]} noisy copies in {count_text(res.robust['rollouts'])} rollouts")
         if args.answers > 1:
             warn += f"; {len(res.answers)} of {args.answers} answers with contact sequences of their own"
-        stop = "interrupted; best so far written: " if res.stopped == "interrupted" else ""
+        stop = ("interrupted; best so far written: " if res.stopped == "interrupted" else
+                f"interrupted during the {res.interrupted} after the search (no probability): " if res.interrupted
+                else "")
         print(f"scene {name}: {stop}{met}, signature {res.judgement.to_dict()['signature']} after "
               f"{count_text(res.rollouts)} rollouts in {took}, seed {seed}{warn}; wrote {args.output}",
               file=sys.stderr)
-    if res.stopped == "interrupted":
+    if res.stopped == "interrupted" or res.interrupted:
         return 130
     return 0 if res.met else 1
 
 
 def cmd_replay(args) -> int:
-    from nbst.scene.solution import ladder_solution, replay_solution
+    from nbst.scene.solution import ladder_solution, read_solution, replay_solution
 
+    doc = read_solution(args.solution)
     r = replay_solution(args.solution)
     d = r.judgement.to_dict()
     lad = ladder_solution(args.solution) if args.ladder else None
@@ -198,8 +203,11 @@ def cmd_replay(args) -> int:
     changed = "; the scene file changed since it was solved" if r.scene_changed else ""
     if r.fates_changed:
         changed += "; the fates file changed since it was solved (judged here by the file as it is now)"
+    if lad is None and isinstance(doc.get("ladder"), dict) and doc["ladder"].get("holds") is False:
+        changed += "; the file says it does not hold at h/2 and h/4 (--ladder rolls them out)"
     print(f"{args.solution}: {'reproduced bit for bit' if r.same else 'DIFFERS'} (plain mj_step loop); "
-          f"{'met' if d['met'] else 'not met'}, signature {d['signature']}{changed}")
+          f"{'met' if d['met'] else 'not met'} at h = {float(doc['timestep']) * 1e3:g} ms, signature "
+          f"{d['signature']}{changed}")
     for b in r.judgement.bodies:
         for v in b.fates:
             print(f"  {b.body} {v.fate}: {'met' if v.met else 'NOT met'} ({v.happened})")
