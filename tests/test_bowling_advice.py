@@ -134,3 +134,30 @@ def test_a_straight_line_is_labelled_with_boards_not_a_bare_number():
     """'straight 17 mph from 34.0 at 3.1' read to a coach as an angle of 3.1; the label names boards."""
     labels = [lbl for lbl, _ in spares.candidates("10")][1:]
     assert labels and all(" from board " in s and " aimed at board " in s for s in labels), labels
+
+
+def test_a_pick_the_fresh_throws_find_weaker_than_a_sure_pin_gets_the_count_line(monkeypatch):
+    """A coach's 4-9: the slide converted 9 of 12 screening throws, then 8 of 20 fresh ones, taking
+    0.95 pins a throw, where the 4 alone and the 9 alone each took 1.0 in the screening; no count
+    line was given (the pick had taken the most pins in the screening). Its fresh throws taking
+    fewer than the next line's screening did, that line is measured on the same fresh throws."""
+    lines = [("3-6-9", 1.0), ("the 4 alone", 2.0), ("slide", 3.0)]
+    monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, lane.Delivery(board=b, at="foul"))
+                                                                   for lbl, b in lines])
+    estimate, default = noise.estimate, noise.DEFAULT
+
+    def probability(d, n, seed, *, runner, standing, noise=None, on_done=None, want=None):
+        fresh = seed < 1000                         # the screening's seeds are seed + 1000 + c and seed + 2000 + c
+        seq = {1.0: [[]], 2.0: [[4]], 3.0: [[4, 9], [], [], []] if fresh else [[4, 9], [4, 9], [4, 9], []]}[d.board]
+        rs = [SimpleNamespace(down=seq[i % len(seq)], leave=[p for p in standing if p not in seq[i % len(seq)]],
+                              converted=set(seq[i % len(seq)]) == set(standing), timestep=0.001) for i in range(n)]
+        return estimate(rs, seed, noise or default), rs
+
+    monkeypatch.setattr(noise, "probability", probability)
+    monkeypatch.setattr(frame, "ladder", lambda d, oil, ball, standing: probability(d, 3, 0, runner=None,
+                                                                                    standing=standing)[1])
+    monkeypatch.setattr(frame, "run_frame", lambda d, oil, ball, standing, extra_s=0.0: probability(
+        d, 1, 0, runner=None, standing=standing)[1][0])
+    res = spares.best_spare("4-9", 8, 1, runner=SimpleNamespace(oil="house", ball=None), screen=4, polish=0)
+    assert res.converts and res.best_label == "slide" and res.pins["mean"] == pytest.approx(0.5)
+    assert res.most_pins["label"] == "the 4 alone" and res.most_pins["pins"]["mean"] == 1.0

@@ -275,3 +275,27 @@ def test_a_gutter_ball_is_a_result_not_an_error(tmp_path, capsys):
     assert json.loads(text)["line"] is None          # no line to the pins: none is made up
     rc, text, err = _main(["bowl", "replay", f], capsys)
     assert rc == 0 and "match" in text, (text, err)
+
+
+def test_an_unknown_flag_points_at_the_commands_own_help(capsys):
+    """A coach's `bowl advise --leave 10 --mph 19` was told to see `nbst --help`, which lists
+    commands, not advise's flags; and the --bowler help promised delivery flags advise has not."""
+    with pytest.raises(SystemExit) as ex:    # argparse's usage error: exit 2
+        _main(["bowl", "advise", "--leave", "10", "--mph", "19"], capsys)
+    _one_line(ex.value.code, capsys.readouterr().err, "unrecognized arguments: --mph 19",
+              "(see `nbst bowl advise --help`)")
+    from nbst.cli.main import build_parser
+
+    adv = build_parser()._subparsers._group_actions[0].choices["bowl"]._subparsers._group_actions[0].choices["advise"]
+    bowler = next(a for a in adv._actions if "--bowler" in a.option_strings)
+    assert "overrides that part of the release" not in bowler.help and "takes no delivery flags" in bowler.help
+
+
+def test_a_leave_is_taken_as_bowlers_write_it_with_dashes():
+    """A coach's `frame --leave 10-7` was refused where advise and spares take it."""
+    from nbst.cli.bowl.args import pin_list
+
+    assert pin_list("10-7") == pin_list("7,10") and pin_list("4-7-10") == pin_list("4,7,10")
+    for bad in ("4--7", "4-7,10", "10-10", "-3"):
+        with pytest.raises(Exception):
+            pin_list(bad, "--leave")

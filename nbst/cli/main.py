@@ -76,6 +76,15 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _innermost(parser: argparse.ArgumentParser, words: list[str]) -> argparse.ArgumentParser:
+    """The (sub)parser of the command ``words`` name: each word in turn that names a subcommand."""
+    for w in words:
+        subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        if subs and w in subs[0].choices:
+            parser = subs[0].choices[w]
+    return parser
+
+
 def asked_command(argv: list[str]) -> str:
     """The command named in ``argv`` (the first word that is not an option: the top-level
     options take no value), or "" when there is none."""
@@ -95,7 +104,9 @@ def main(argv=None) -> int:
     try:
         words = sys.argv[1:] if argv is None else list(argv)
         parser = build_parser(only=asked_command(words))
-        args = parser.parse_args(words)
+        args, extra = parser.parse_known_args(words)
+        if extra:   # named by the command that took the rest (`nbst bowl advise --help`, not `nbst --help`)
+            _innermost(parser, words).error(f"unrecognized arguments: {' '.join(extra)}")
         if not getattr(args, "func", None):
             parser.print_help(sys.stderr)
             return 2

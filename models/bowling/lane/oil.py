@@ -266,7 +266,7 @@ class Pattern:
                                  f"{r.start_ft:>6g} {r.end_ft:>6g} {r.volume_ml:>6.2f}")
         fw, rv = self.applied_ml("forward"), self.applied_ml("reverse")
         lines.append(f"volume: forward {fw:.2f} ml, reverse {rv:.2f} ml, laid {fw + rv:.2f} ml; on the lane "
-                     f"{self.volume_ml:.2f} ml (the brush lifted {fw + rv - self.volume_ml:.2f} ml)")
+                     f"{self.volume_ml:.2f} ml (the brush lifted {max(fw + rv - self.volume_ml, 0.0):.2f} ml)")
         at = {self.ratio_ft, 10.0, 22.0}
         for k, v in self.published:
             if k == "ratio" and isinstance(v, tuple):

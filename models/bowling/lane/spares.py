@@ -459,7 +459,9 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     seeds), as is the 3-6-9 line's, and so are the pins it takes (:func:`pins_estimate`). Where
     no candidate converted a screening throw, the pick is the line taking the most pins
     (``converts`` False). The line that took the most pins in the screening is measured on the
-    same ``n`` throws (``most_pins``; the pick's own where it is the pick).
+    same ``n`` throws (``most_pins``; the pick's own where it is the pick); where that is the pick
+    and its fresh throws took fewer pins than the next line took in the screening (a coach's 4-9:
+    0.95 pins a throw against the 9 alone's 1.0), the next line is measured on them too.
 
     **Polish**: :func:`.robust.maximise` from the pick, ``polish`` noisy frames (default
     ``POLISH_PER_SCREEN * screen``; 0: none), fresh estimate on ``n`` throws of seed ``seed``
@@ -515,7 +517,14 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
                                    on_done=on_done)
     pins = pins_estimate(rb, standing)
     # the count: most pins in the screening (ties to a line at one pin alone, then the first)
-    most_i = max(k, key=lambda c: (float(np.mean(took[c])), " alone: " in cands[c][0], -c))
+    def most_key(c):
+        return float(np.mean(took[c])), " alone: " in cands[c][0], -c
+
+    most_i = max(k, key=most_key)
+    if most_i == best_i and len(k) > 1:   # the pick's fresh throws took fewer than another line's screening did
+        alt = max((c for c in k if c != best_i), key=most_key)   # (the screening flatters the line it picks):
+        if float(np.mean(took[alt])) > pins["mean"]:             # that line on the same fresh throws too
+            most_i = alt
     if most_i == best_i:
         most = {"label": cands[best_i][0], "delivery": cands[best_i][1].to_dict(), "pins": pins}
     else:

@@ -253,7 +253,9 @@ def leaves_of(args) -> list[str]:
             raise InputError(f"{flag}: pins must be numbers 1..10, each once, got {nm.strip()!r}") from None
         if len(pins) == 10:
             raise InputError(f"{flag}: {nm.strip()!r} is all ten pins standing: a first ball, not a spare")
-        out.append("-".join(map(str, pins)))
+        key = "-".join(map(str, pins))
+        if key not in out:   # "10,7-10,10": the 10 measured once
+            out.append(key)
     return out
 
 

@@ -46,10 +46,12 @@ def pin_list(text: str, flag: str | None = None) -> int:
     """Pin numbers "1,2,4,7" -> 10-bit mask (bit n-1 = pin n). ``flag`` names the option in the
     message (argparse names it itself for a ``type=``: then leave it out, so it is said once)."""
     pre = f"{flag}: " if flag else ""
-    words = [p for p in text.strip().replace(" ", "").split(",") if p]
+    t = text.strip().replace(" ", "")
+    dashed = all(_INT.fullmatch(p) for p in t.split("-")) and "-" in t   # a bowler's "4-7-10", as advise takes it
+    words = t.split("-") if dashed else [p for p in t.split(",") if p]
     if not all(_INT.fullmatch(p) for p in words):
-        raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 separated by commas (e.g. 1,2,4,7), "
-                                         f"got {text!r}")
+        raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 separated by commas or dashes (e.g. "
+                                         f"1,2,4,7 or 4-7-10), got {text!r}")
     pins = [int(p) for p in words]
     bad = [p for p in pins if not 1 <= p <= 10]
     if bad or not pins:
@@ -179,8 +181,10 @@ def bowler_flag(t, what: str = "throw", *, hand: bool = True) -> None:
     t.add_argument("--bowler", default=None, choices=bowlers(),
                    help=f"{what} as this bowler profile: its strike ball (release and line, aimed at board 17.5 on the "
                         "fresh house shot) is the default release and its correlated release noise gives the "
-                        f"probabilities: {bowlers_text()} (docs/bowling.md); {mirror}; a delivery flag given "
-                        "beside it overrides that part of the release; recorded in the output")
+                        f"probabilities: {bowlers_text()} (docs/bowling.md); {mirror}"
+                        + ("; a delivery flag given beside it overrides that part of the release" if hand else
+                           " (this command takes no delivery flags: the release is the profile's)")
+                        + "; recorded in the output")
 
 
 def delivery_flags(t, *, bowler: bool = True) -> None:

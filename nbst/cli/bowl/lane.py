@@ -151,7 +151,7 @@ def cmd_throw(args) -> int:
     if args.json:
         print_json(doc)
         return 0
-    for line in throw_lines(r, bowler=args.bowler):
+    for line in throw_lines(r, bowler=args.bowler, oil=args.oil):
         print(line)
     return 0
 
@@ -193,8 +193,10 @@ def line_lines(ln: dict) -> list[str]:
             + (f": {ln['hit']}" if ln.get("hit") else "")]
 
 
-def throw_lines(r, bowler: str | None = None) -> list[str]:
-    """The phases of a throw (lane.ThrowResult) as lines, in bowler's units."""
+def throw_lines(r, bowler: str | None = None, oil=None) -> list[str]:
+    """The phases of a throw (lane.ThrowResult) as lines, in bowler's units; ``oil`` (the pattern
+    thrown on) adds its computed length, volume and ratio."""
+    from nbst.models.bowling import lane
     from nbst.models.bowling.lane import advise
 
     d = r.delivery
@@ -205,7 +207,8 @@ def throw_lines(r, bowler: str | None = None) -> list[str]:
     ln = advise.line_of(r)
     return [
         f"delivery     {d['hand']}-handed, {d['mph']:g} mph, {d['rpm']:g} rpm, rotation {d['rotation']:g} deg, "
-        f"tilt {d['tilt']:g} deg, angle {d['angle']:.2f} deg; oil {r.oil}" + (f"; bowler {bowler}" if bowler else ""),
+        f"tilt {d['tilt']:g} deg, angle {d['angle']:.2f} deg; oil {r.oil}"
+        + ("" if oil is None else f" ({lane.pattern(oil).summary()})") + (f"; bowler {bowler}" if bowler else ""),
         f"ball         {r.ball['weight_lb']:g} lb, RG {r.ball['rg']:g} in, diff {r.ball['diff']:g} in, "
         f"cover {r.ball['friction']:g}",
         *line_lines(ln),
