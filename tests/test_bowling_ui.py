@@ -299,3 +299,12 @@ def test_a_leave_is_taken_as_bowlers_write_it_with_dashes():
     for bad in ("4--7", "4-7,10", "10-10", "-3"):
         with pytest.raises(Exception):
             pin_list(bad, "--leave")
+
+
+def test_the_target_is_said_as_boards_inside_or_outside_an_arrow():
+    """A coach read '3rd arrow -1.6' as signed arithmetic; a coach says '1.6 boards outside the 3rd arrow'."""
+    from nbst.models.bowling.lane.advise import arrow_text
+
+    assert arrow_text(13.4) == "board 13.4 (1.6 boards outside the 3rd arrow)"
+    assert arrow_text(11.0) == "board 11.0 (1.0 board inside the 2nd arrow)"
+    assert arrow_text(15.02) == "board 15.0 (3rd arrow)"

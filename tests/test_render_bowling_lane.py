@@ -303,7 +303,7 @@ def test_a_spare_draws_only_the_pins_in_play_and_its_readout_names_rack_ask_resu
     try:
         text = "\n".join(r.readout(float(th.motion.times[-1])))
         assert "rack    10 standing before the throw" in text
-        assert "asked   nothing recorded (the file's requested is null)" in text     # bowl frame asks nothing
+        assert "asked   no pins named (a throw filmed as it fell)" in text     # bowl frame asks nothing
         assert "result  down 10 (the spare)" in text and "this run differs" not in text
         assert (f"chance  {100 * e['p']:.0f}% (the spare; {e['k']}/{e['n']}, 95% CI {100 * e['lo']:.0f}-"
                 f"{100 * e['hi']:.0f}%)") in text

@@ -273,7 +273,7 @@ class LaneRenderer(FrameRenderer):
         if self.asked is not None:
             lines.append(f"asked   down {pins(self.asked)}{leave_of(self.asked)}")
         elif self.no_request:
-            lines.append("asked   nothing recorded (the file's requested is null)")
+            lines.append("asked   no pins named (a throw filmed as it fell)")
         if m.down_masks is not None:
             now = pinfall.pins_of(int(m.down_masks[k]))
             if k == len(m.times) - 1:

@@ -63,11 +63,15 @@ def stance_of(foul_board: float) -> float:
 
 
 def arrow_text(board: float) -> str:
-    """``board 10.3 (2nd arrow +0.3)``: a board at the arrows and its nearest arrow."""
+    """``board 13.4 (1.6 boards outside the 3rd arrow)``: a board at the arrows and its nearest arrow,
+    as a coach says it (boards count from the bowling hand's gutter: fewer is outside, more inside)."""
     i = min(range(len(ARROW_BOARDS)), key=lambda k: abs(ARROW_BOARDS[k] - board))
     nth = ("1st", "2nd", "3rd", "4th", "5th", "6th", "7th")[i]
     off = board - ARROW_BOARDS[i]
-    return f"board {board:.1f} ({nth} arrow{'' if abs(off) < 0.05 else f' {off:+.1f}'})"
+    if abs(off) < 0.05:
+        return f"board {board:.1f} ({nth} arrow)"
+    return (f"board {board:.1f} ({abs(off):.1f} board{'' if round(abs(off), 1) == 1 else 's'} "
+            f"{'inside' if off > 0 else 'outside'} the {nth} arrow)")
 
 
 def line_of(r) -> dict:

@@ -313,7 +313,8 @@ def frame_lines(doc: dict) -> list[str]:
     if r["ball_left_lane"]:
         out.append("gutter ball   the ball left the lane before the pins: no pinfall (USBC 6b.1)")
     if r["board_at_pins"] is not None:
-        out.append(f"entry         board {r['board_at_pins']:.1f} at {r['entry_angle_deg']:.1f} deg")
+        out.append(f"entry         board {r['board_at_pins']:.1f} at {r['entry_angle_deg']:.1f} deg (at the deck front, among the pins; "
+                   "bowl throw gives the ball alone's at the head pin's line)")
     out.append(f"settled       {'at %.2f s' % r['settle_s'] if r['settled'] else 'no: counted at the sweep, %.2f s' % r['seconds']}"
                + (f" (the ball passed the pins in the gutter at {r['ball_at_pins_s']:.2f} s)" if r["ball_left_lane"]
                   else f" (ball at the head pin {r['ball_at_pins_s']:.2f} s)") if r["ball_at_pins_s"] is not None else
