@@ -136,6 +136,25 @@ def test_two_and_one_moves_feet_two_boards_and_the_target_one():
     assert T.move_for([19.0] * n) == 1 and T.move_for([16.0] * n) == -1 and T.move_for([17.0] + [19.0] * n) == 1
     assert T.move_for([19.0, 17.5, 16.9] + [17.5] * (n - 3)) == 0 and T.move_for([19.0] * (n - 1)) == 0
     assert T.move_for([19.0] * (n - 1) + [None]) == 0
+    # a bowler's own scatter explains a miss of under 2 standard errors of it: no move (issue 48)
+    assert T.move_for([19.0] * n, spread=1.0) == 1             # 1.5 boards high > 2 x 1.0 / 2
+    assert T.move_for([19.0] * n, spread=2.0) == 0             # 1.5 <= 2 x 2.0 / 2
+    assert T.move_for([21.0] * n, spread=2.0) == 2             # 3.5 > 2: two steps (one per 2 boards)
+
+
+def test_a_bowlers_spread_at_the_pins_grows_with_its_release_noise():
+    """pin_spread: 40 noisy ball-alone throws on the fresh house shot. No noise, no spread; the
+    league150's noise (1.65 x the shape) spreads its ball wider than the pro's (0.5 x) at the pins,
+    and doubling a profile's noise roughly doubles it (within 35 %: the hook is not linear)."""
+    from nbst.models.bowling.lane.noise import Noise
+
+    pro = profiles.profile("pro")
+    zero = Noise(board=0.0, angle=0.0, mph=0.0, rpm=0.0, rotation=0.0, tilt=0.0)
+    assert T.pin_spread(pro.delivery(), zero) == 0.0
+    a = T.pin_spread(pro.delivery(), pro.noise)
+    b = T.pin_spread(pro.delivery(), profiles.scaled(pro.noise, 2.0))
+    c = T.pin_spread(profiles.profile("league150").delivery(), profiles.profile("league150").noise)
+    assert 0.2 < a < c and 1.3 < b / a < 2.7, (a, b, c)
 
 
 def test_two_and_one_in_brings_a_high_ball_back_towards_the_pocket():

@@ -53,6 +53,7 @@ from nbst.models.bowling.lane.noise import Noise
 from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
+           "MOVE_SPREAD_SE", "PIN_SPREAD_THROWS", "PIN_SPREAD_SEED", "pin_spread",
            "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
            "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along",
            "lay_band", "track_width", "depleted_share"]
@@ -68,6 +69,11 @@ MOVE_FEET, MOVE_TARGET = 2.0, 1.0
 #: more than its standard error; one "2 and 1" step per MOVE_BOARDS boards of miss, in half steps (issue 48).
 MOVE_AFTER, MOVE_MISS = 4, 0.5
 MOVE_BOARDS = 2.0
+#: ... and more than this many standard errors of the bowler's own spread at the pins (:func:`pin_spread`):
+#: a coach's "don't move until you repeat shots" (the league150's 4.0 boards against the pro's 0.64).
+MOVE_SPREAD_SE = 2.0
+#: :func:`pin_spread`'s noisy ball-alone throws and their seed.
+PIN_SPREAD_THROWS, PIN_SPREAD_SEED = 40, 0
 MAX_GAMES, MAX_LINEUP = 30, 8
 #: Paths are kept every PATH_FT ft; oil maps rounded to MAP_DECIMALS (um).
 PATH_FT = 0.5
@@ -92,6 +98,7 @@ class Bowler:
     noise: Noise
     spare_noise: Noise | None = None
     reads_lane: bool = False
+    spread: float = 0.0   # boards: the sd of the strike ball at the head pin's line under its noise (pin_spread)
 
 
 def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0, oil="house",
@@ -115,8 +122,25 @@ def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: floa
     ball = (ball or lane.Ball()).check()
     same = pattern(oil) == pattern("house") and ball == lane.Ball()
     line = {h: p.delivery(h) if same else profiles.strike_ball(profile, oil, ball, h) for h in {"right", "left"}}
+    spread = pin_spread(line["right"], nz, oil, ball)   # a left-hander's is the mirror image: the same
     return [Bowler(i, "left" if i >= n - k else "right", line["left" if i >= n - k else "right"], nz, nzs,
-                   reads_lane=p.reads_lane) for i in range(n)]
+                   reads_lane=p.reads_lane, spread=spread) for i in range(n)]
+
+
+def pin_spread(strike: lane.Delivery, noise: Noise, oil="house", ball: lane.Ball | None = None) -> float:
+    """The bowler's own scatter at the pins: the standard deviation (boards) of the board where
+    ``strike`` crosses the head pin's line under ``noise`` on the fresh ``oil``, over
+    :data:`PIN_SPREAD_THROWS` noisy ball-alone throws of seed :data:`PIN_SPREAD_SEED` (gutter balls
+    left out; 0 when fewer than 2 reach the pins). About a second of one core."""
+    from nbst.models.bowling.lane import noise as _noise
+
+    boards = []
+    for d in _noise.sample(strike, PIN_SPREAD_THROWS, PIN_SPREAD_SEED, noise):
+        try:
+            boards.append(lane.throw(d, oil, ball).board_at_pins)
+        except lane.LaneError:
+            continue
+    return float(np.std(boards, ddof=1)) if len(boards) >= 2 else 0.0
 
 
 def _arrow_board(d: lane.Delivery) -> float:
@@ -133,19 +157,21 @@ def moved(strike: lane.Delivery, feet: float, target: float) -> lane.Delivery:
     return replace(strike, board=float(fb), at="foul", angle=float(angle))
 
 
-def move_for(boards) -> float:
+def move_for(boards, spread: float = 0.0) -> float:
     """The bowler's move after strike balls that crossed the head pin's line on ``boards`` (the
     latest last; None for a ball that never got there), in "2 and 1" steps: + in (the last
     MOVE_AFTER hit high on average), - out (light), 0 stay. A move needs the mean miss to exceed
-    MOVE_MISS and its standard error (a miss the bowler's own spread explains is not read as the
-    lane's; issue 48: noise-driven moves cost a league bowler a game); its size is one step per
-    MOVE_BOARDS boards of miss, rounded to a half step (feet 1 board, target 1/2), at least a half."""
+    MOVE_MISS, its standard error, and MOVE_SPREAD_SE standard errors of the bowler's own
+    ``spread`` at the pins (boards, :func:`pin_spread`): a miss the bowler's own scatter explains is
+    not read as the lane's (issue 48: noise-driven moves cost a league bowler a game); its size is
+    one step per MOVE_BOARDS boards of miss, rounded to a half step (feet 1 board, target 1/2), at
+    least a half."""
     last = [b for b in list(boards)[-MOVE_AFTER:] if b is not None]
     if len(last) < MOVE_AFTER:
         return 0
     miss = float(np.mean(last)) - TARGET_BOARD
     se = float(np.std(last, ddof=1)) / math.sqrt(len(last))
-    if abs(miss) <= max(MOVE_MISS, se):
+    if abs(miss) <= max(MOVE_MISS, se, MOVE_SPREAD_SE * float(spread) / math.sqrt(len(last))):
         return 0
     return float(math.copysign(max(0.5, round(2 * abs(miss) / MOVE_BOARDS) / 2), miss))
 
@@ -338,11 +364,11 @@ class Run:
         self._done = self.field.h.copy()
         if full and self.move == "auto" and b.reads_lane:
             self.readings[b.index].append(board)
-            if move_for(self.readings[b.index]):
+            if move_for(self.readings[b.index], b.spread):
                 self._read(b, len(self.balls))
         elif full and self.move == "auto":
             self.readings[b.index].append(board)
-            m = move_for(self.readings[b.index])
+            m = move_for(self.readings[b.index], b.spread)
             if m:
                 ln = self.lines[b.index]
                 ln[0] += m * MOVE_FEET
@@ -407,7 +433,8 @@ class Run:
         scores = {f"{b.index}": [score(self.rolls[(b.index, g)]) for g in range(self.games)] for b in self.bowlers}
         d = {"move": self.move, "seed": self.seed, "games": self.games,
              "bowlers": [{"index": b.index, "hand": b.hand, "strike": b.strike.to_dict(), "noise": b.noise.to_dict(),
-                          "spare_noise": (b.spare_noise or b.noise).to_dict()} for b in self.bowlers],
+                          "spare_noise": (b.spare_noise or b.noise).to_dict(), "spread_boards": b.spread}
+                         for b in self.bowlers],
              "balls": self.balls, "moves": self.moves, "scores": scores,
              "oil": {"pattern": self.pattern.name, "length_ft": self.pattern.length_ft, "dx_ft": DX_FT,
                      "before": self.before, "after": _map(OilField(self._done)), "games": self.games_oil}}

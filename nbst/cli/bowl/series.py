@@ -33,8 +33,10 @@ def register(bowl) -> None:
                     "some down past the pattern's end, and the next ball meets the lane as it left it. --lineup "
                     "bowlers alternate frames (--lefty-share of them left-handed: their side of the lane is fresh). "
                     "With --move auto each bowler makes the coach's '2 and 1' move (feet 2 boards, target 1 board, in "
-                    "when the last 4 strike balls hit high on average by more than half a board and their standard "
-                    "error, out when light; half steps, one step per 2 boards); --move both bowls the same releases "
+                    "when the last 4 strike balls hit high on average by more than half a board, their standard "
+                    "error and 2 standard errors of the bowler's own spread at the pins (its release noise on the "
+                    "fresh lane: a coach's 'don't move until you repeat shots'), out when light; half steps, one step "
+                    "per 2 boards); --move both bowls the same releases "
                     "twice, without and with moves. Prints, per game: pocket hits (boards 16.5-18.5), strikes, the "
                     "mean breakpoint, entry angle and board at the pins, and the scores; writes the series file "
                     "(every ball, the moves, the oil before and after). Ctrl-C writes the balls bowled so far "
@@ -49,8 +51,8 @@ def register(bowl) -> None:
     s.add_argument("--games", type=GAMES, default=3, metavar="N", help="games per bowler (default 3; 1..30)")
     s.add_argument("--move", choices=("none", "auto", "both"), default="none",
                    help="none: keep the line (default); auto: '2 and 1' moves after 4 strike balls high or light on "
-                        "average (more than half a board from 17.5, and more than their standard error); both: the "
-                        "series twice, the same releases")
+                        "average (more than half a board from 17.5, their standard error, and 2 standard errors of "
+                        "the bowler's own spread at the pins); both: the series twice, the same releases")
     s.add_argument("--lineup", type=LINEUP, default=1, metavar="N",
                    help="bowlers on the lane, alternating frames as in league play (default 1; 1..8)")
     s.add_argument("--lefty-share", type=Bounded("lefty-share", 0, 1), default=0.0, metavar="F",
