@@ -308,3 +308,23 @@ def test_the_target_is_said_as_boards_inside_or_outside_an_arrow():
     assert arrow_text(13.4) == "board 13.4 (1.6 boards outside the 3rd arrow)"
     assert arrow_text(11.0) == "board 11.0 (1.0 board inside the 2nd arrow)"
     assert arrow_text(15.02) == "board 15.0 (3rd arrow)"
+
+
+def test_a_3_6_9_line_that_goes_in_the_gutter_says_so():
+    """A second coach read the 3-6-9 line's '0%' at the 10 (league200's release) as a line that
+    misses the pin: its noise-free ball went in the right gutter at 27 ft. The line now says so."""
+    from types import SimpleNamespace
+
+    from nbst.cli.bowl.advise import spare_doc, spare_line
+    from nbst.models.bowling import lane
+
+    gutter = lane.Delivery(board=3, at="foul", angle=3.0).to_dict()
+    est = {"p": 0.0, "k": 0, "n": 4, "lo": 0.0, "hi": 0.49}
+    doc = {"leave": "10", "system_369": gutter, "system_369_estimate": est, "estimate": est,
+           "best": gutter, "best_label": "straight", "ladder": [[0.001, [10]]], "converts": True}
+    d = spare_doc(SimpleNamespace(leave="10", to_dict=lambda: dict(doc)), oil="house")
+    assert d["system_369_gutter"]["side"] == "right" and 0 < d["system_369_gutter"]["ft"] < 60
+    assert "a gutter ball without noise: the right gutter at" in spare_line(d)
+    d = spare_doc(SimpleNamespace(leave="10", to_dict=lambda: {**doc, "system_369": lane.Delivery().to_dict()}),
+                  oil="house")
+    assert "system_369_gutter" not in d

@@ -399,3 +399,28 @@ def test_a_still_at_t_is_framed_as_the_videos_frame_at_t(gl, solutions):
         k = int(np.argmin(np.abs(video - t)))
         for other in (views["video"][k], views["fine"][k]):
             assert np.allclose(still, other, rtol=1e-9, atol=1e-9 * np.abs(still).max())
+
+
+def test_a_body_is_marked_in_its_own_vivid_colour():
+    """A fifth new user's ball named `green`, green in the model, was labelled and its bin outlined
+    in the palette's blue. A vivid colour of the body's own marks it; a white die, or a second body
+    of the same red, takes the palette's."""
+    from types import SimpleNamespace
+
+    import mujoco
+
+    xml = """<mujoco><asset><material name="m" rgba="0.1 0.8 0.2 1"/></asset><worldbody>
+      <body name="green" pos="0 0 1"><freejoint/><geom type="sphere" size="0.1" material="m"/></body>
+      <body name="die" pos="1 0 1"><freejoint/><geom type="box" size="0.1 0.1 0.1" rgba="0.95 0.95 0.95 1"/></body>
+      <body name="red1" pos="2 0 1"><freejoint/><geom type="sphere" size="0.1" rgba="0.9 0.1 0.1 1"/></body>
+      <body name="red2" pos="3 0 1"><freejoint/><geom type="sphere" size="0.1" rgba="0.9 0.12 0.1 1"/></body>
+    </worldbody></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    fates = SimpleNamespace(fates=[SimpleNamespace(body=n) for n in ("green", "die", "red1", "red2")])
+    c = sv.mark_colours(m, fates)
+    assert np.allclose(c[0], (0.1, 0.8, 0.2), atol=1e-6) and c[1] == sv.MARKS[1]
+    assert np.allclose(c[2], (0.9, 0.1, 0.1), atol=1e-6) and c[3] == sv.MARKS[3]
+    # a dark blue body's name is lightened for the dark panel, its hue kept: luminance 0.4, blue the most
+    lit = sv.legible((0.1, 0.1, 0.8))
+    assert abs(float(np.dot(lit, (0.2126, 0.7152, 0.0722))) - 0.4) < 1e-9 and lit[2] > lit[0] == lit[1]
+    assert sv.legible((0.95, 0.45, 0.10)) == (0.95, 0.45, 0.10)

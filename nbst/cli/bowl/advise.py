@@ -200,7 +200,7 @@ def cmd_spares(args) -> int:
             for nm in names:
                 res = spares.best_spare(nm, args.samples, args.seed, runner=R, screen=args.screen,
                                         on_done=lambda: bar.update(1), polish=polish, nz=nz, strike=strike)
-                out.append(spare_doc(res))
+                out.append(spare_doc(res, oil=args.oil))
                 if not args.json:
                     bar.clear() if hasattr(bar, "clear") else None
                     print(spare_line(out[-1]), flush=True)
@@ -259,12 +259,22 @@ def leaves_of(args) -> list[str]:
     return out
 
 
-def spare_doc(res) -> dict:
-    """A spare result (spares.SpareResult) as a dict, with its leave's names."""
+def spare_doc(res, oil=None) -> dict:
+    """A spare result (spares.SpareResult) as a dict, with its leave's names; with ``oil`` (the
+    pattern thrown on), ``system_369_gutter`` says where the 3-6-9 line's noise-free ball leaves the
+    lane when it does (a coach read its 0 % as a line that misses the pins)."""
+    from nbst.models.bowling import lane
     from nbst.models.bowling.lane import names, spares
 
     d = res.to_dict()
     d["names"] = names.leave_names(range(1, 11), spares.leave_pins(res.leave))
+    if oil is not None:
+        try:
+            lane.throw(lane.Delivery(**d["system_369"]), oil)
+        except lane.GutterBall as g:
+            d["system_369_gutter"] = {"side": g.side, "ft": round(g.ft, 2)}
+        except lane.LaneError:
+            pass
     return d
 
 
@@ -282,6 +292,8 @@ def spare_line(r: dict) -> str:
             f"{b['mph']:.1f} mph, {b['rpm']:.0f} rpm, rotation {b['rotation']:.0f})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
             f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%{took})   3-6-9 line (board {r['system_369']['board']:.1f}): "
             f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
+            + (f" (a gutter ball without noise: the {g['side']} gutter at {g['ft']:.1f} ft)"
+               if (g := r.get("system_369_gutter")) else "")
             + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(_left(x[1]) for x in r["ladder"]))
 
 
