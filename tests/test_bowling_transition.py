@@ -142,6 +142,7 @@ def test_two_and_one_moves_feet_two_boards_and_the_target_one():
     assert T.move_for([21.0] * n, spread=2.0) == 2             # 3.5 > 2: two steps (one per 2 boards)
 
 
+@pytest.mark.slow
 def test_a_bowlers_spread_at_the_pins_grows_with_its_release_noise():
     """pin_spread: 40 noisy ball-alone throws on the fresh house shot. No noise, no spread; the
     league150's noise (1.65 x the shape) spreads its ball wider than the pro's (0.5 x) at the pins,

@@ -181,3 +181,15 @@ def test_check_notes_a_through_passed_at_the_start_and_up_asked_of_a_sphere(tmp_
     (tmp_path / "f.json").write_text(json.dumps(doc))
     assert main(["scene", "check", str(tmp_path / "f.json")]) == 0
     assert "note:" not in capsys.readouterr().out
+
+
+def test_another_of_nbsts_files_given_as_fates_is_told_by_its_kind(tmp_path, capsys):
+    """An audit's crash file and bowling throw got 'format: missing' from `scene check`, and a
+    validation report was told to give 'its fates file (a solution keeps it under fates_file)'."""
+    for doc, word, hint in (({"kind": "nbst-crash", "schema_version": 1}, "'nbst-crash' file", False),
+                            ({"format": "nbst-scene-validation", "version": 1}, "'nbst-scene-validation' file", False),
+                            ({"format": "nbst-scene-solution", "version": 1}, "'nbst-scene-solution' file", True)):
+        (tmp_path / "x.json").write_text(json.dumps(doc))
+        assert main(["scene", "check", str(tmp_path / "x.json")]) == 2
+        err = _one_line(capsys, "format: must be 'nbst-fates'", word, "not a fates file")
+        assert ("fates_file" in err) == hint, err

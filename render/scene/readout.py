@@ -6,16 +6,20 @@ line under each saying what happened (the judge's own words, ``nbst.scene.judge`
 mark (met) or a cross (not met), and the signature line: one bit per body, 1 when every fate of
 that body is met (the search's signature). The fates are judged on the replay, at the end.
 
-Compute only: :func:`readout` returns text lines; :func:`marks` splits the marks out for colour.
+Compute only: :func:`readout` returns text lines; :func:`marks` splits the marks out for colour;
+:func:`mark_colours` gives each fated body its mark colour.
 """
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 
 from nbst.scene.fates import AT_REST_SPEED, AT_REST_SPIN, STILL_DISTANCE, Fate, Fates, Region
 from nbst.scene.judge import Judgement, length_text, signature_text
 
-__all__ = ["OK", "NO", "COMPACT_AFTER", "region_text", "asked", "readout", "widest", "marks", "body_rows"]
+__all__ = ["OK", "NO", "COMPACT_AFTER", "MARKS", "VIVID_SAT", "VIVID_MAX", "legible", "mark_colours", "region_text",
+           "asked", "readout", "widest", "marks", "body_rows"]
 
 OK, NO = "\u2713", "\u2717"
 _DEG = "\u00b0"
@@ -140,3 +144,43 @@ def marks(lines: list[str]) -> tuple[list[str], list[str], list[str]]:
 
     return ([s.replace(OK, " ").replace(NO, " ") for s in lines], [keep(s, OK) for s in lines],
             [keep(s, NO) for s in lines])
+
+
+#: The fated bodies' mark colours (regions, arrows, names), in the fates' order, repeated, for a body
+#: whose own colour is not vivid (:func:`mark_colours`).
+MARKS = ((0.95, 0.45, 0.10), (0.15, 0.55, 0.95), (0.85, 0.20, 0.60), (0.25, 0.70, 0.30), (0.55, 0.35, 0.85))
+#: A body's own colour marks it when its saturation (max - min of RGB) and brightness reach these.
+VIVID_SAT, VIVID_MAX = 0.35, 0.5
+
+
+def legible(rgb, least: float = 0.4) -> tuple[float, float, float]:
+    """``rgb`` mixed with white until its luminance (Rec. 709) reaches ``least``: a dark blue body's
+    name readable on the readout's dark panel, its hue kept."""
+    c = np.asarray(rgb, float)[:3]
+    lum = float(c @ (0.2126, 0.7152, 0.0722))
+    if lum >= least:
+        return tuple(float(v) for v in c)   # type: ignore[return-value]
+    k = (least - lum) / (1.0 - lum)
+    return tuple(float(v) for v in c + (1.0 - c) * k)   # type: ignore[return-value]
+
+
+def mark_colours(model: Any, fates: Fates) -> list[tuple[float, float, float]]:
+    """Each fated body's mark colour: its first visible geom's colour (its material's, else its own)
+    when vivid and not another body's already, else :data:`MARKS` in turn (a ball named `green`,
+    green in the model, is marked green, not in the palette's blue)."""
+    import mujoco
+
+    out: list[tuple[float, float, float]] = []
+    for i, f in enumerate(fates.fates):
+        b = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body))
+        rgb = None
+        for g in range(int(model.ngeom)):
+            if int(model.geom_bodyid[g]) == b and int(model.geom_group[g]) <= 2 and model.geom_rgba[g, 3] > 0:
+                m = int(model.geom_matid[g])
+                c = np.asarray(model.mat_rgba[m] if m >= 0 else model.geom_rgba[g], float)[:3]
+                if c.max() - c.min() >= VIVID_SAT and c.max() >= VIVID_MAX:
+                    rgb = tuple(float(v) for v in c)
+                break
+        close = rgb is not None and any(np.abs(np.subtract(rgb, o)).max() < 0.15 for o in out)
+        out.append(MARKS[i % len(MARKS)] if rgb is None or close else rgb)   # type: ignore[arg-type]
+    return out

@@ -37,6 +37,7 @@ from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
 from nbst.render.core import geoms as sg
 from nbst.render.scene import readout as ro
+from nbst.render.scene.readout import MARKS, legible, mark_colours
 from nbst.render.scene.framing import (AZIMUTH, box_corners, clear_azimuth, default_camera, focus_points, on_track_grid,
                                       regions_of, track_grid, tracking_boxes)
 from nbst.render.core.shaders import DEPTH_FS, DEPTH_VS, SCENE_FS, SCENE_VS
@@ -50,44 +51,6 @@ __all__ = ["LIGHT", "MARKS", "READOUT_FRAC", "SKY", "IMPACT", "SHADOW_PX", "Scen
 #: Towards the light when the model has none (world frame).
 LIGHT = (0.35, -0.5, 1.0)
 SKY = (0.78, 0.84, 0.90)
-#: The fated bodies' mark colours (regions, arrows, names), in the fates' order, repeated, for a body
-#: whose own colour is not vivid (:func:`mark_colours`).
-MARKS = ((0.95, 0.45, 0.10), (0.15, 0.55, 0.95), (0.85, 0.20, 0.60), (0.25, 0.70, 0.30), (0.55, 0.35, 0.85))
-#: A body's own colour marks it when its saturation (max - min of RGB) and brightness reach these.
-VIVID_SAT, VIVID_MAX = 0.35, 0.5
-
-
-def legible(rgb, least: float = 0.4) -> tuple[float, float, float]:
-    """``rgb`` mixed with white until its luminance (Rec. 709) reaches ``least``: a dark blue body's
-    name readable on the readout's dark panel, its hue kept."""
-    c = np.asarray(rgb, float)[:3]
-    lum = float(c @ (0.2126, 0.7152, 0.0722))
-    if lum >= least:
-        return tuple(float(v) for v in c)   # type: ignore[return-value]
-    k = (least - lum) / (1.0 - lum)
-    return tuple(float(v) for v in c + (1.0 - c) * k)   # type: ignore[return-value]
-
-
-def mark_colours(model: Any, fates: Fates) -> list[tuple[float, float, float]]:
-    """Each fated body's mark colour: its first visible geom's colour (its material's, else its own)
-    when vivid and not another body's already, else :data:`MARKS` in turn (a ball named `green`,
-    green in the model, is marked green, not in the palette's blue)."""
-    import mujoco
-
-    out: list[tuple[float, float, float]] = []
-    for i, f in enumerate(fates.fates):
-        b = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body))
-        rgb = None
-        for g in range(int(model.ngeom)):
-            if int(model.geom_bodyid[g]) == b and int(model.geom_group[g]) <= 2 and model.geom_rgba[g, 3] > 0:
-                m = int(model.geom_matid[g])
-                c = np.asarray(model.mat_rgba[m] if m >= 0 else model.geom_rgba[g], float)[:3]
-                if c.max() - c.min() >= VIVID_SAT and c.max() >= VIVID_MAX:
-                    rgb = tuple(float(v) for v in c)
-                break
-        close = rgb is not None and any(np.abs(np.subtract(rgb, o)).max() < 0.15 for o in out)
-        out.append(MARKS[i % len(MARKS)] if rgb is None or close else rgb)   # type: ignore[arg-type]
-    return out
 IMPACT = (1.0, 0.82, 0.15)
 OK_RGB, NO_RGB = (0.35, 0.85, 0.40), (0.95, 0.32, 0.26)
 PANEL_RGBA = (0.08, 0.09, 0.11, 0.72)

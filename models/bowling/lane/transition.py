@@ -36,7 +36,8 @@
 
 A run is a plain dict (the series file's ``runs`` entries, :func:`series_dict`); :class:`Run`
 builds it ball by ball, so an interrupted run keeps every finished ball. Compute only: no files
-written, no printing.
+written, no printing. Length: the series is one state machine (the lineup, its balls, moves and
+the lane they wear) whose parts share the run's state; about 515 lines.
 """
 from __future__ import annotations
 
@@ -50,7 +51,7 @@ from nbst.models.bowling import lane, scene
 from nbst.models.bowling.lane import frame, noise, phases, profiles, spares
 from nbst.models.bowling.lane.reading import TARGET_BOARD, read_line
 from nbst.models.bowling.lane.noise import Noise
-from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, pattern
+from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, Pattern, pattern
 
 __all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
            "MOVE_SPREAD_SE", "PIN_SPREAD_THROWS", "PIN_SPREAD_SEED", "pin_spread",
@@ -98,7 +99,6 @@ class Bowler:
     noise: Noise
     spare_noise: Noise | None = None
     reads_lane: bool = False
-    spread: float = 0.0   # boards: the sd of the strike ball at the head pin's line under its noise (pin_spread)
 
 
 def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: float = 1.0, oil="house",
@@ -122,25 +122,38 @@ def lineup(profile: str, n: int = 1, lefty_share: float = 0.0, noise_scale: floa
     ball = (ball or lane.Ball()).check()
     same = pattern(oil) == pattern("house") and ball == lane.Ball()
     line = {h: p.delivery(h) if same else profiles.strike_ball(profile, oil, ball, h) for h in {"right", "left"}}
-    spread = pin_spread(line["right"], nz, oil, ball)   # a left-hander's is the mirror image: the same
     return [Bowler(i, "left" if i >= n - k else "right", line["left" if i >= n - k else "right"], nz, nzs,
-                   reads_lane=p.reads_lane, spread=spread) for i in range(n)]
+                   reads_lane=p.reads_lane) for i in range(n)]
 
 
 def pin_spread(strike: lane.Delivery, noise: Noise, oil="house", ball: lane.Ball | None = None) -> float:
     """The bowler's own scatter at the pins: the standard deviation (boards) of the board where
     ``strike`` crosses the head pin's line under ``noise`` on the fresh ``oil``, over
     :data:`PIN_SPREAD_THROWS` noisy ball-alone throws of seed :data:`PIN_SPREAD_SEED` (gutter balls
-    left out; 0 when fewer than 2 reach the pins). About a second of one core."""
+    left out; 0 when fewer than 2 reach the pins). About a second of one core; a left-hander's is
+    the right-hander's mirror image (the same), and each is worked out once per process."""
     from nbst.models.bowling.lane import noise as _noise
 
+    key: tuple | None = (replace(strike, hand="right"), noise, oil if isinstance(oil, (str, Pattern)) else str(oil),
+                         ball)
+    try:
+        if key in _SPREADS:
+            return _SPREADS[key]
+    except TypeError:   # an unhashable oil: worked out each time
+        key = None
     boards = []
     for d in _noise.sample(strike, PIN_SPREAD_THROWS, PIN_SPREAD_SEED, noise):
         try:
             boards.append(lane.throw(d, oil, ball).board_at_pins)
         except lane.LaneError:
             continue
-    return float(np.std(boards, ddof=1)) if len(boards) >= 2 else 0.0
+    out = float(np.std(boards, ddof=1)) if len(boards) >= 2 else 0.0
+    if key is not None:
+        _SPREADS[key] = out
+    return out
+
+
+_SPREADS: dict = {}
 
 
 def _arrow_board(d: lane.Delivery) -> float:
@@ -312,6 +325,9 @@ class Run:
         self.lines = {b.index: [0.0, 0.0] for b in bowlers}  # feet, target
         self.readings: dict = {b.index: [] for b in bowlers}
         self.moves: list[dict] = []
+        # each bowler's own scatter at the pins, which a move must pass (move_for): only a mover needs it
+        self.spread = {b.index: pin_spread(b.strike, b.noise, self.pattern, self.ball) if move == "auto" else 0.0
+                       for b in bowlers}
         self._reads = {b.index: 0 for b in bowlers}
         self.games_oil: list[dict] = []  # the lane after each game: its oil, past the pattern's end, and its map
         self._spares: dict = {}
@@ -364,11 +380,11 @@ class Run:
         self._done = self.field.h.copy()
         if full and self.move == "auto" and b.reads_lane:
             self.readings[b.index].append(board)
-            if move_for(self.readings[b.index], b.spread):
+            if move_for(self.readings[b.index], self.spread[b.index]):
                 self._read(b, len(self.balls))
         elif full and self.move == "auto":
             self.readings[b.index].append(board)
-            m = move_for(self.readings[b.index], b.spread)
+            m = move_for(self.readings[b.index], self.spread[b.index])
             if m:
                 ln = self.lines[b.index]
                 ln[0] += m * MOVE_FEET
@@ -433,7 +449,7 @@ class Run:
         scores = {f"{b.index}": [score(self.rolls[(b.index, g)]) for g in range(self.games)] for b in self.bowlers}
         d = {"move": self.move, "seed": self.seed, "games": self.games,
              "bowlers": [{"index": b.index, "hand": b.hand, "strike": b.strike.to_dict(), "noise": b.noise.to_dict(),
-                          "spare_noise": (b.spare_noise or b.noise).to_dict(), "spread_boards": b.spread}
+                          "spare_noise": (b.spare_noise or b.noise).to_dict(), "spread_boards": self.spread[b.index]}
                          for b in self.bowlers],
              "balls": self.balls, "moves": self.moves, "scores": scores,
              "oil": {"pattern": self.pattern.name, "length_ft": self.pattern.length_ft, "dx_ft": DX_FT,
