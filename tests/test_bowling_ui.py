@@ -328,3 +328,49 @@ def test_a_3_6_9_line_that_goes_in_the_gutter_says_so():
     d = spare_doc(SimpleNamespace(leave="10", to_dict=lambda: {**doc, "system_369": lane.Delivery().to_dict()}),
                   oil="house")
     assert "system_369_gutter" not in d
+
+
+def test_a_left_handers_spare_lines_are_the_right_handers_mirrored():
+    """Two coaches asked for --hand on advise and spares. A left-hander's leave is worked out as its
+    mirror image on the mirrored lane: the 6-8 as the 4-9, its labels in the left-hander's pins, its
+    deliveries left-handed (the same boards, counted from the left-hander's gutter)."""
+    from nbst.models.bowling.lane import spares
+
+    assert spares.mirrored("6-8") == "4-9" and spares.mirrored("7") == "10" and spares.mirrored("1-2-4-7") == "1-3-6-10"
+    right = [lbl for lbl, *_ in spares._plan("4-9")]
+    left = [lbl for lbl, *_ in spares._plan("4-9", mirror=True)]
+    assert "slide the 4 into the 9" in right and "slide the 6 into the 8" in left and "the 8 alone" in left
+    assert len(left) == len(right)
+    d = {"leave": "4-9", "ladder": [[0.001, [9]], ["+2 s", [4, 9]]], "best": {"hand": "right", "board": 30.0},
+         "system_369": {"hand": "right", "board": 20.0}, "screened": {"label": "x", "delivery": {"hand": "right"}},
+         "most_pins": None}
+    m = spares.mirror_doc(d)
+    assert m["leave"] == "6-8" and m["ladder"] == [[0.001, [8]], ["+2 s", [6, 8]]]
+    assert m["best"] == {"hand": "left", "board": 30.0} and m["screened"]["delivery"]["hand"] == "left"
+
+
+def test_hand_left_is_refused_on_a_pattern_that_is_not_mirror_symmetric(tmp_path, capsys):
+    """On a lopsided sheet a left-hander's lane is not a right-hander's mirrored: one line, exit 2."""
+    sheet = {"format": "nbst-oil-pattern", "version": 2, "name": "lopsided", "description": "oil on the left only",
+             "rows": [{"pass": "forward", "boards": "2L-15L", "loads": 3, "ul": 50, "speed": 14, "start_ft": 0,
+                       "end_ft": 35}]}
+    f = tmp_path / "lopsided.json"
+    f.write_text(json.dumps(sheet))
+    rc, _, err = _main(["bowl", "advise", "--leave", "7", "--hand", "left", "--oil", f, "--samples", "2"], capsys)
+    _one_line(rc, err, "--hand left", "not mirror-symmetric")
+
+
+@pytest.mark.slow
+def test_advise_a_left_handers_7_as_a_right_handers_10(capsys):
+    """`advise --leave 7 --hand left` stands and looks where `--leave 10` does (boards from the
+    bowler's own gutter), with the same probability, its delivery left-handed."""
+    out = {}
+    for hand, leave in (("left", "7"), ("right", "10")):
+        rc, text, err = _main(["bowl", "advise", "--leave", leave, "--hand", hand, "--samples", "4", "--screen", "1",
+                               "--polish", "0", "--jobs", "1", "--json"], capsys)
+        assert rc == 0, err
+        out[hand] = json.loads(text)
+    L, R = out["left"], out["right"]
+    assert L["leave"] == "7" and R["leave"] == "10" and L["hand"] == "left" and L["delivery"]["hand"] == "left"
+    assert (L["stance_board"], L["target_board"], L["estimate"]["k"]) == (R["stance_board"], R["target_board"],
+                                                                         R["estimate"]["k"])

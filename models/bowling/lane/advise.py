@@ -208,7 +208,7 @@ def _line_text(d: lane.Delivery, r, label: str) -> str:
 
 
 def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=None, screen: int = spares.SCREEN,
-                 polish: int | None = None, on_done=None) -> LeaveAdvice:
+                 polish: int | None = None, on_done=None, mirror: bool = False) -> LeaveAdvice:
     """The advice at ``leave`` ('-' joined pins): :func:`.spares.best_spare` under ``noise`` (a
     bowler's), said as stance and target (the real path's crossing of the arrows), with the pins
     it takes. Where no line converted a screening throw the advice says so and gives the line
@@ -225,6 +225,9 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
         screen: noisy throws per candidate in the screening.
         polish: noisy frames of the polish (None: the spare tool's default; 0: none).
         on_done: called after each frame.
+        mirror: advise a left-hander: ``leave`` is its right-handed mirror image (:func:`.spares.mirrored`),
+            worked out on the mirrored lane; the advice names the left-hander's pins and its boards
+            (counted from its own gutter, as a right-hander's from its), and its delivery is left-handed.
 
     Returns:
         a :class:`LeaveAdvice`.
@@ -234,12 +237,14 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
     """
     nz = noise if noise is not None else _noise.DEFAULT
     res = spares.best_spare(leave, n, seed, runner=runner, screen=screen, nz=nz, on_done=on_done, polish=polish,
-                            strike=strike)
+                            strike=strike, mirror=mirror)
     d = lane.Delivery(**res.best)
     r = lane.throw(d, runner.oil, runner.ball)
     e = res.estimate
-    standing = spares.leave_pins(leave)
+    shown = spares.mirrored(leave) if mirror else leave   # the bowler's own pins
+    standing = spares.leave_pins(shown)
     nm = _names.leave_names(range(1, 11), standing)
+    leave = shown
     # on the numbered boards, as the text says it (stance_text; a demanding coach's JSON read 41)
     stance, target = min(stance_of(r.board_at_foul_line), float(lane.N_BOARDS)), float(r.board_at_arrows)
     head = f"leave {leave}{' (' + ', '.join(nm) + ')' if nm else ''}"
@@ -262,6 +267,7 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
         txt = (f"{head}: no line converts: none of {len(res.candidates)} lines converted any of their {screened} "
                f"screening throws (95% CI of a line's rate 0-{100 * _noise.wilson(0, screen)[1]:.0f}% each); the most "
                f"pins: {_line_text(d, r, res.best_label)}: " + (pins_text(res.pins) if res.pins else ""))
+    spare = spares.mirror_doc(res.to_dict()) if mirror else res.to_dict()
     return LeaveAdvice(leave=leave, names=nm, stance_board=stance, target_board=target, target=arrow_text(target),
-                       delivery=res.best, estimate=e, label=res.best_label, spare=res.to_dict(), text=txt,
-                       converts=res.converts, pins=res.pins, most_pins=most, count_text=count_text)
+                       delivery=spare["best"], estimate=e, label=res.best_label, spare=spare, text=txt,
+                       converts=res.converts, pins=res.pins, most_pins=spare["most_pins"], count_text=count_text)

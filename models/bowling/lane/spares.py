@@ -59,7 +59,7 @@ from nbst.models.bowling.lane import frame, noise, robust
 __all__ = ["STRIKE", "STRIKE_FOUL", "STRIKE_ARROW", "SPARE_BALL", "POCKET_BOARDS", "POCKET_PEAK", "POCKET_CELL",
            "LEAVES", "leave_spec", "leave_pins", "TABLE_FOUL", "TABLE_ROTATION", "TABLE_ANGLE", "aim_table",
            "aim_entry", "PocketMap", "pocket_map", "system_369", "aim_point", "straight_at", "SpareResult",
-           "candidates", "candidate_count", "SCREEN", "POLISH_PER_SCREEN", "best_spare", "pocket_figure", "CONTACT_REACH", "slide_at",
+           "MIRROR", "mirrored", "mirror_doc", "candidates", "candidate_count", "SCREEN", "POLISH_PER_SCREEN", "best_spare", "pocket_figure", "CONTACT_REACH", "slide_at",
            "pins_estimate"]
 
 #: The strike line: the typical (league-200) release, 17 mph, 350 rpm, 45 deg rotation, 12 deg tilt,
@@ -359,9 +359,35 @@ def _slides(pins) -> list[tuple[int, int]]:
     return out
 
 
-def _plan(name: str) -> list[tuple[str, float, float, float | None, float]]:
+#: A left-hander's pins as a right-hander's on the mirror-image lane (the 7 for the 10, the 4 for the 6).
+MIRROR = {1: 1, 2: 3, 3: 2, 4: 6, 5: 5, 6: 4, 7: 10, 8: 9, 9: 8, 10: 7}
+
+
+def mirrored(name: str) -> str:
+    """Leave ``name`` ('-' joined pins) seen from the other hand: the mirror image's pins, sorted."""
+    return "-".join(map(str, sorted(MIRROR[p] for p in leave_pins(name))))
+
+
+def mirror_doc(d: dict) -> dict:
+    """A :class:`SpareResult`'s dict (worked out on the mirrored lane with ``mirror``) as the
+    left-hander's: its leave and every leave of its ladder in the left-hander's pins, its
+    deliveries left-handed (the same boards and angles, counted from the left-hander's gutter)."""
+    out = dict(d)
+    out["leave"] = mirrored(d["leave"])
+    out["ladder"] = [[t, sorted(MIRROR[p] for p in lv)] for t, lv in d["ladder"]]
+    for k in ("best", "system_369"):
+        out[k] = {**d[k], "hand": "left"}
+    for k in ("screened", "most_pins"):
+        if isinstance(d.get(k), dict):
+            out[k] = {**d[k], "delivery": {**d[k]["delivery"], "hand": "left"}}
+    return out
+
+
+def _plan(name: str, mirror: bool = False) -> list[tuple[str, float, float, float | None, float]]:
     """(kind, x, y, foul or None: cross-lane, mph) of every straight ball :func:`candidates` throws at
-    leave ``name``, after the 3-6-9 line (no throw run: :func:`candidate_count` counts them)."""
+    leave ``name``, after the 3-6-9 line (no throw run: :func:`candidate_count` counts them);
+    ``mirror``: the labels name the pins as a left-hander sees them (the lane mirrored)."""
+    say = MIRROR if mirror else {p: p for p in MIRROR}
     key, _ = leave_spec(name)
     pins = leave_pins(name)
     x, y = aim_point(key)
@@ -383,10 +409,10 @@ def _plan(name: str) -> list[tuple[str, float, float, float | None, float]]:
                     for off in (0.0, -0.5, 0.5):
                         yy = sy + off * lane.BOARD_WIDTH
                         if abs(yy) < edge:
-                            out.append((f"slide the {a} into the {b}", sx, yy, foul2, SPARE_BALL["mph"]))
+                            out.append((f"slide the {say[a]} into the {say[b]}", sx, yy, foul2, SPARE_BALL["mph"]))
         for p in pins:
             px, py = aim_point((p,))
-            out.append((f"the {p} alone", px, py, None, SPARE_BALL["mph"]))
+            out.append((f"the {say[p]} alone", px, py, None, SPARE_BALL["mph"]))
     return out
 
 
@@ -395,14 +421,15 @@ def candidate_count(name: str) -> int:
     return 1 + len(_plan(name))
 
 
-def candidates(name: str, *, oil: str = "house", ball=None, strike: lane.Delivery = STRIKE) -> list:
+def candidates(name: str, *, oil: str = "house", ball=None, strike: lane.Delivery = STRIKE,
+               mirror: bool = False) -> list:
     """(label, delivery) of every throw :func:`best_spare` tries at leave ``name``: the 3-6-9 line
     (from ``strike``) first, then the straight spare balls (aim offsets up to 2 boards, 3 on a
     multi-pin leave); on a multi-pin leave also the slides (:func:`slide_at`, from across the lane
     and straight down the boards, on the spot and 1/2 board either side; leaves of at most
     :data:`SLIDE_MAX_PINS` pins) and the straight ball at each pin alone (for the count)."""
     out = [("3-6-9", system_369(name, strike))]
-    for kind, x, y, foul, mph in _plan(name):
+    for kind, x, y, foul, mph in _plan(name, mirror):
         d = straight_at(x, y, oil=oil, ball=ball, foul=foul, mph=mph)
         at = f"from board {d.board:.1f} aimed at board {lane.y_to_board(y):.1f}"
         out.append((f"straight {mph:g} mph {at}" if kind == "straight" else f"{kind}: straight {at}", d))
@@ -450,7 +477,7 @@ POLISH_PER_SCREEN = 40
 
 def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, screen: int = SCREEN,
                nz: noise.Noise = noise.DEFAULT, on_done=None, polish: int | None = None,
-               strike: lane.Delivery | None = None) -> SpareResult:
+               strike: lane.Delivery | None = None, mirror: bool = False) -> SpareResult:
     """The candidate of :func:`candidates` that converts leave ``name`` best. Screening: ``screen``
     noisy throws each; the best three get ``2 * screen`` more and their noise-free throw is run
     at h = 1, 0.5 and 0.25 ms; the pick is the most conversions among those three whose ladder
@@ -490,7 +517,8 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     standing = leave_pins(name)
     if len(standing) == 10:
         raise lane.LaneError(f"leave: {name!r} is all ten pins: a first ball, not a spare")
-    cands = candidates(name, oil=runner.oil, ball=runner.ball, strike=STRIKE if strike is None else strike)
+    cands = candidates(name, oil=runner.oil, ball=runner.ball, strike=STRIKE if strike is None else strike,
+                       mirror=mirror)
     k, took = {}, {}
     for c, (label, d) in enumerate(cands):
         est, rs = noise.probability(d, screen, seed + 1000 + c, runner=runner, standing=standing, noise=nz,

@@ -42,7 +42,8 @@ def register(bowl) -> None:
     which.add_argument("--leaves", default=None, metavar="L1,L2",
                        help="leaves to shoot, '-' joining pins, ',' between leaves, any leave (default: "
                             f"{', '.join(spares.LEAVES)})")
-    bowler_flag(s, "shoot", hand=False)
+    bowler_flag(s, "shoot", hand=True, delivery=False)
+    hand_flag(s)
     s.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=spares.SCREEN, metavar="M",
                    help=f"noisy throws per candidate in the screening (default {spares.SCREEN})")
     s.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=None, metavar="N",
@@ -68,6 +69,28 @@ def register(bowl) -> None:
     register_advise(bowl)
 
 
+def hand_flag(p) -> None:
+    """--hand of ``spares`` and ``advise --leave``: a left-hander's lines, worked out on the mirror-image
+    lane (the oil pattern must be mirror-symmetric)."""
+    p.add_argument("--hand", choices=("right", "left"), default="right",
+                   help="the bowling hand (default right); left: the leave in a left-hander's pins (the 7 its "
+                        "corner pin), its lines worked out on the mirror-image lane and said in its boards, "
+                        "counted from its own gutter (the oil pattern must be mirror-symmetric)")
+
+
+def _mirror(args) -> bool:
+    """Whether ``args`` asks a left-hander's lines; refused (one line) on a pattern that is not
+    mirror-symmetric, where a left-hander's lane is not a right-hander's mirrored."""
+    from nbst.models.bowling import lane
+
+    if getattr(args, "hand", "right") != "left":
+        return False
+    if not lane.pattern(args.oil).symmetric():
+        raise InputError(f"--hand left: the oil pattern {args.oil} is not mirror-symmetric, so a left-hander's "
+                         f"lines are not a right-hander's mirrored; give a symmetric pattern")
+    return True
+
+
 def register_advise(bowl) -> None:
     """``advise`` on ``nbst bowl``'s subparsers."""
     from nbst.models.bowling.lane import spares
@@ -86,7 +109,8 @@ def register_advise(bowl) -> None:
     what = a.add_mutually_exclusive_group(required=True)
     what.add_argument("--leave", default=None, metavar="PINS", help="the leave: pins standing, e.g. 10 or 3,10")
     what.add_argument("--after", default=None, metavar="THROW.json", help="a frame's throw file (bowl frame -o)")
-    bowler_flag(a, "advise", hand=False)
+    bowler_flag(a, "advise", hand=True, delivery=False)
+    hand_flag(a)
     a.add_argument("--screen", type=Bounded("screen", 1, 10_000, integer=True), default=spares.SCREEN, metavar="M",
                    help=f"--leave: noisy throws per candidate line in the screening (default {spares.SCREEN})")
     a.add_argument("--polish", type=Bounded("polish", 0, 1_000_000, integer=True), default=0, metavar="N",
@@ -120,13 +144,19 @@ def cmd_advise(args) -> int:
     args.leaves = None
     (leave,) = leaves_of(args)
     lane.pattern(args.oil)
+    mirror = _mirror(args)
+    if mirror:
+        from nbst.models.bowling.lane import spares as _spares
+
+        leave = _spares.mirrored(leave)   # the right-hander's mirror image, worked out on the mirrored lane
     strike, nz = bowler_of(args, spare=True)
     nz = noise.DEFAULT if nz is None else nz
     bar = _bar(args, spare_frames(leave, args.screen, args.samples, args.polish), "advise frames")
     try:
         with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
             adv = advise.advise_leave(leave, args.samples, args.seed, runner=R, noise=nz, strike=strike,
-                                      screen=args.screen, polish=args.polish, on_done=lambda: bar.update(1))
+                                      screen=args.screen, polish=args.polish, on_done=lambda: bar.update(1),
+                                      mirror=mirror)
     except KeyboardInterrupt:
         bar.close()
         print("nbst bowl advise: interrupted; no advice", file=sys.stderr)
@@ -135,7 +165,7 @@ def cmd_advise(args) -> int:
         bar.close()
         raise
     bar.close()
-    doc = {**adv.to_dict(), "bowler": args.bowler, "noise": nz.to_dict(), "noise_of": noise_line(args.bowler, nz),
+    doc = {**adv.to_dict(), "hand": args.hand, "bowler": args.bowler, "noise": nz.to_dict(), "noise_of": noise_line(args.bowler, nz),
            "seed": args.seed, "note": _note()}
     if args.json:
         print_json(doc)
@@ -185,6 +215,7 @@ def cmd_spares(args) -> int:
 
     names = leaves_of(args)
     lane.pattern(args.oil)
+    mirror = _mirror(args)
     strike, nz = bowler_of(args, spare=True)
     from nbst.models.bowling.lane import noise
 
@@ -198,9 +229,10 @@ def cmd_spares(args) -> int:
     try:
         with frame.FrameRunner(args.oil, jobs=args.jobs or default_jobs()) as R:
             for nm in names:
-                res = spares.best_spare(nm, args.samples, args.seed, runner=R, screen=args.screen,
-                                        on_done=lambda: bar.update(1), polish=polish, nz=nz, strike=strike)
-                out.append(spare_doc(res, oil=args.oil))
+                res = spares.best_spare(spares.mirrored(nm) if mirror else nm, args.samples, args.seed, runner=R,
+                                        screen=args.screen, on_done=lambda: bar.update(1), polish=polish, nz=nz,
+                                        strike=strike, mirror=mirror)
+                out.append(spare_doc(res, oil=args.oil, mirror=mirror))
                 if not args.json:
                     bar.clear() if hasattr(bar, "clear") else None
                     print(spare_line(out[-1]), flush=True)
@@ -259,15 +291,15 @@ def leaves_of(args) -> list[str]:
     return out
 
 
-def spare_doc(res, oil=None) -> dict:
+def spare_doc(res, oil=None, mirror: bool = False) -> dict:
     """A spare result (spares.SpareResult) as a dict, with its leave's names; with ``oil`` (the
     pattern thrown on), ``system_369_gutter`` says where the 3-6-9 line's noise-free ball leaves the
     lane when it does (a coach read its 0 % as a line that misses the pins)."""
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import names, spares
 
-    d = res.to_dict()
-    d["names"] = names.leave_names(range(1, 11), spares.leave_pins(res.leave))
+    d = spares.mirror_doc(res.to_dict()) if mirror else res.to_dict()   # a left-hander's pins and hand
+    d["names"] = names.leave_names(range(1, 11), spares.leave_pins(d["leave"]))
     if oil is not None:
         try:
             lane.throw(lane.Delivery(**d["system_369"]), oil)

@@ -172,17 +172,18 @@ def bowlers_text() -> str:
     return ", ".join(f"{e.name} {e.value.strike.mph:g} mph {e.value.strike.rpm:g} rpm" for e in PROFILES.entries())
 
 
-def bowler_flag(t, what: str = "throw", *, hand: bool = True) -> None:
+def bowler_flag(t, what: str = "throw", *, hand: bool = True, delivery: bool | None = None) -> None:
     """--bowler P: a profile's release as the default release and its correlated noise (``hand``:
     the command has --hand; else its lines are a right-hander's, and the help says how a
-    left-hander reads them)."""
+    left-hander reads them; ``delivery``: it has the delivery flags, by default as ``hand``)."""
+    delivery = hand if delivery is None else delivery
     mirror = ("--hand mirrors it" if hand else "right-handed: a left-hander's lane is its mirror image (boards "
               "counted from the left; the 7 for the 10, the 4-10 for the 6-7)")
     t.add_argument("--bowler", default=None, choices=bowlers(),
                    help=f"{what} as this bowler profile: its strike ball (release and line, aimed at board 17.5 on the "
                         "fresh house shot) is the default release and its correlated release noise gives the "
                         f"probabilities: {bowlers_text()} (docs/bowling.md); {mirror}"
-                        + ("; a delivery flag given beside it overrides that part of the release" if hand else
+                        + ("; a delivery flag given beside it overrides that part of the release" if delivery else
                            " (this command takes no delivery flags: the release is the profile's)")
                         + "; recorded in the output")
 
