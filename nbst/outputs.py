@@ -96,11 +96,17 @@ def not_a_file(path) -> str | None:
     return None
 
 
+def _refuse_slash(path, option: str) -> None:
+    """OutputError if the name ``path`` ends in a slash (a folder's name; ``Path()`` would drop the
+    slash and write the file it names)."""
+    if isinstance(path, str) and path.endswith(("/", os.sep)):
+        raise OutputError(f"{option} {path}: ends in a slash, which names a folder; expected a file name")
+
+
 def refuse_not_a_file(path, *, option: str = "-o") -> None:
     """OutputError (one line) if ``path`` is a symbolic link, a FIFO, device or socket, or a folder:
     nbst writes regular files only, and never through a link. Every writer of nbst calls it."""
-    if isinstance(path, str) and path.endswith(("/", os.sep)):   # Path() drops it and would write the file
-        raise OutputError(f"{option} {path}: ends in a slash, which names a folder; expected a file name")
+    _refuse_slash(path, option)
     kind = not_a_file(path)
     if kind is None:
         return
@@ -151,8 +157,7 @@ def prepare_output(path, *, directory: bool = False, option: str = "-o", inputs=
     """
     p = Path(path)
     if not directory:
-        if isinstance(path, str) and path.endswith(("/", os.sep)):
-            refuse_not_a_file(path, option=option)   # "sol.json/": a folder's name, not a file's
+        _refuse_slash(path, option)   # before Path() drops it: "sol.json/" names a folder, not a file
         refuse_same_file(p, inputs, option=option, outputs=outputs)  # first: "the same file as the input" says more
         refuse_not_a_file(p, option=option)
         folder = p.parent

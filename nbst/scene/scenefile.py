@@ -248,6 +248,16 @@ def _geoms_named(model: Any, name: str) -> set[int]:
     return {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)}
 
 
+def _start_data(fates: Fates, model: Any) -> Any:
+    """A fresh ``mujoco.MjData`` at the start the fates name: the model's pose, or its keyframe's."""
+    import mujoco
+
+    d = mujoco.MjData(model)
+    if fates.keyframe is not None:
+        mujoco.mj_resetDataKeyframe(model, d, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe))
+    return d
+
+
 def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:
     """The touches already there at the start (the model's or key's pose, before any control): each
     ``(body, "hits" | "never_hits", name)`` whose body and name are in contact (distance <= 0, as the
@@ -255,9 +265,7 @@ def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:
     one is met at 0 s. Compute only (``nbst scene check`` prints them)."""
     import mujoco
 
-    d = mujoco.MjData(model)
-    if fates.keyframe is not None:
-        mujoco.mj_resetDataKeyframe(model, d, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe))
+    d = _start_data(fates, model)
     mujoco.mj_forward(model, d)
     pairs = set()
     for c in d.contact[:d.ncon]:
@@ -283,9 +291,7 @@ def idle_fates(fates: Fates, model: Any) -> list[tuple[str, str]]:
     way is up). Compute only."""
     import mujoco
 
-    d = mujoco.MjData(model)
-    if fates.keyframe is not None:
-        mujoco.mj_resetDataKeyframe(model, d, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe))
+    d = _start_data(fates, model)
     mujoco.mj_kinematics(model, d)
     out = []
     for fa in fates.fates:
@@ -293,7 +299,7 @@ def idle_fates(fates: Fates, model: Any) -> list[tuple[str, str]]:
         if fa.through and float(fa.through[0].distance(np.asarray(d.xpos[b])[None])[0]) <= 0.0:
             out.append((fa.body, "its origin starts inside through's first region, so it is passed at 0 s "
                                  "(the model's pose, before any control)"))
-        mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == b]
+        mine = _geoms_named(model, fa.body)
         if fa.up is not None and mine and all(int(model.geom_type[g]) == mujoco.mjtGeom.mjGEOM_SPHERE for g in mine):
             out.append((fa.body, "asks up of a body whose every geom is a sphere: no face shows which way is up "
                                  "(only its frame's turn does)"))
@@ -314,9 +320,7 @@ def unforced_still_moves(fates: Fates, model: Any) -> list[tuple[str, float]]:
     ids = {f.body: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body) for f in fates.fates if f.still}
     if not ids:
         return []
-    d = mujoco.MjData(model)
-    if fates.keyframe is not None:
-        mujoco.mj_resetDataKeyframe(model, d, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe))
+    d = _start_data(fates, model)
     mujoco.mj_kinematics(model, d)
     b = list(ids.values())
     start, far = d.xpos[b].copy(), np.zeros(len(b))
