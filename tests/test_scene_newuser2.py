@@ -239,10 +239,10 @@ def test_a_solution_moved_with_its_folder_finds_its_fates_and_scene(tmp_path, ca
     assert main(["scene", "replay", str(new / "sol.json")]) == 0
     assert "reproduced bit for bit" in capsys.readouterr().out
     assert main(["export", str(new / "sol.json"), "--gltf", str(tmp_path / "x.glb")]) == 0
-    # an edited fates file is not the one solved: the recorded path is said, as before
+    # an edited fates file is not the one solved: refused, saying so (test_scene_newuser6 has the scene edited)
     (new / "far.json").write_text((new / "far.json").read_text().replace('"radius": 0.2', '"radius": 0.3'))
     assert main(["scene", "replay", str(new / "sol.json")]) == 2
-    assert "no such file" in capsys.readouterr().err
+    assert "not the fates file it was solved with" in capsys.readouterr().err
 
 
 #: the first new user's ball (test_scene_newuser), resting on the floor

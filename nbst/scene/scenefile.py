@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from nbst.files import FileRefused, read_regular
-from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, Fates, FatesError, _Src, parse_fates,
-                              read_fates_json)
+from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, STILL_DISTANCE, Fates, FatesError, _Src,
+                              parse_fates, read_fates_json)
 
 __all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "start_touches",
            "unforced_still_moves"]
@@ -190,8 +190,8 @@ def check_against_model(fates: Fates, model: Any) -> None:
         if i < 0:
             names = [model.body(k).name for k in range(model.nbody)]
             near = difflib.get_close_matches(name, names, n=1)
-            raise src.fail(field, f"no body {name!r} in {fates.scene.name}" + (f" (did you mean {near[0]!r}?)"
-                                                                             if near else ""))
+            raise src.fail(field, f"no body {name!r} in {fates.scene.name}" + (_other_kind(model, name) or (
+                f" (did you mean {near[0]!r}?)" if near else "")))
         return i
 
     if fates.keyframe is not None and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, fates.keyframe) < 0:
@@ -212,30 +212,66 @@ def check_against_model(fates: Fates, model: Any) -> None:
         if model.body_jntnum[b] < 1 or model.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE:
             raise src.fail(f"controls.{c.body}", f"body {c.body!r} has no free joint; only free bodies can be "
                                                  f"given velocities")
+    start = _start_data(fates, model)
+    mujoco.mj_kinematics(model, start)
     for fa in fates.fates:
         b = body_id(fa.body, f"fates.{fa.body}")
+        if b == 0:
+            raise src.fail(f"fates.{fa.body}", f"{fa.body!r} is MuJoCo's world body, which never moves: fates are "
+                                               f"for the scene's bodies")
+        if fa.still:   # a bystander that must also be somewhere else
+            places = [(k, r) for k, r in ([("rest_in", fa.rest_in)] if fa.rest_in is not None else [])
+                      + [("at", r) for _t, r in fa.at] + [("through", r) for r in fa.through]]
+            for k, r in places:
+                far = float(r.distance(np.asarray(start.xpos[b])[None])[0])
+                if far > STILL_DISTANCE:
+                    raise src.fail(f"fates.{fa.body}.{k}", f"its region is {far:.3g} m from where {fa.body!r} "
+                                                           f"starts, and it is also still (never farther than "
+                                                           f"{STILL_DISTANCE * 100:g} cm): no motion meets both")
         for key, names in (("hits", fa.hits), ("never_hits", fa.never_hits)):
             for n in names:
                 g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n)
-                if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) < 0 and g < 0:
+                nb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n)
+                if nb < 0 and g < 0:
                     known = [model.body(k).name for k in range(model.nbody)] + [model.geom(k).name
                                                                                for k in range(model.ngeom)]
                     near = difflib.get_close_matches(n, [k for k in known if k], n=1)
                     raise src.fail(f"fates.{fa.body}.{key}", f"no body or geom {n!r} in {fates.scene.name}"
-                                   + (f" (did you mean {near[0]!r}?)" if near else ""))
+                                   + (_other_kind(model, n) or (f" (did you mean {near[0]!r}?)" if near else "")))
+                if nb >= 0 and g >= 0 and int(model.geom_bodyid[g]) != nb:
+                    raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} names both a body and a geom (of "
+                                   f"{model.body(int(model.geom_bodyid[g])).name!r}) in {fates.scene.name}: MuJoCo "
+                                   f"keeps the two names apart, a fate can not tell which is meant; rename one")
                 if n == fa.body or (g >= 0 and model.body(int(model.geom_bodyid[g])).name == fa.body):
                     raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} is the body itself" if n == fa.body
                                    else f"{n!r} is a geom of {fa.body!r} itself: a body never touches its own geoms")
                 if key == "hits" and not _can_touch(model, b, n):
+                    why = (f"{n!r} has no geoms (a flex's vertex bodies have none)" if not _geoms_named(model, n)
+                           else f"{fa.body!r} has no geoms" if not _geoms_named(model, fa.body)
+                           else "MuJoCo collides no geom of one with one of the other (contype/conaffinity, "
+                                "<exclude>, contacts disabled, both fixed to the world, one rigid body, or a "
+                                "parent and its child)")
                     raise src.fail(f"fates.{fa.body}.{key}", f"{fa.body!r} can never touch {n!r} in "
-                                   f"{fates.scene.name}: MuJoCo collides no geom of one with one of the other "
-                                   f"(contype/conaffinity, <exclude>, contacts disabled, both fixed to the world, "
-                                   f"one rigid body, or a parent and its child)")
+                                   f"{fates.scene.name}: {why}")
         never = set().union(*(_geoms_named(model, n) for n in fa.never_hits))
         for n in fa.hits:   # "hits b" with every geom of b in never_hits (by the geom's own name): a tester's
             if _geoms_named(model, n) <= never:
                 raise src.fail(f"fates.{fa.body}.never_hits", f"every geom of {n!r}, which it hits, is in never_hits: "
                                                               f"no motion can both touch it and not")
+
+
+def _other_kind(model: Any, name: str) -> str:
+    """What else ``name`` names in the model, for a refusal: `` ('x' is a site of body 'b': ...)``, the
+    same for a flex, or ``""``."""
+    import mujoco
+
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, name)
+    if i >= 0:
+        return (f" ({name!r} is a site of body {model.body(int(model.site_bodyid[i])).name!r}: fates name bodies "
+                f"and geoms)")
+    if model.nflex and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, name) >= 0:
+        return f" ({name!r} is a flex: fates name bodies and geoms, and nbst does not read a flex's contacts)"
+    return ""
 
 
 def _geoms_named(model: Any, name: str) -> set[int]:
@@ -287,7 +323,7 @@ def start_touches(fates: Fates, model: Any) -> list[tuple[str, str, str]]:
 def idle_fates(fates: Fates, model: Any) -> list[tuple[str, str]]:
     """Fates met or meaningless before any motion (``nbst scene check`` notes them): ``(body, why)``
     for a ``through`` whose first region holds the body's origin at the start (the model's or key's
-    pose; passed at 0 s), and an ``up`` on a body whose every geom is a sphere (no face marks which
+    pose; passed at 0 s), a ``never_hits`` name it can never touch (always met), and an ``up`` on a body whose every geom is a sphere (no face marks which
     way is up). Compute only."""
     import mujoco
 
@@ -299,6 +335,10 @@ def idle_fates(fates: Fates, model: Any) -> list[tuple[str, str]]:
         if fa.through and float(fa.through[0].distance(np.asarray(d.xpos[b])[None])[0]) <= 0.0:
             out.append((fa.body, "its origin starts inside through's first region, so it is passed at 0 s "
                                  "(the model's pose, before any control)"))
+        for n in fa.never_hits:
+            if not _can_touch(model, b, n):
+                out.append((fa.body, f"never_hits {n!r}, which it can never touch (no geom of one collides with one "
+                                     f"of the other in MuJoCo's filters): that fate is always met"))
         mine = _geoms_named(model, fa.body)
         if fa.up is not None and mine and all(int(model.geom_type[g]) == mujoco.mjtGeom.mjGEOM_SPHERE for g in mine):
             out.append((fa.body, "asks up of a body whose every geom is a sphere: no face shows which way is up "

@@ -12,6 +12,9 @@ bit; it also judges the fates again. :func:`ladder_solution` rolls the same init
 h/2 and h/4: does the motion still meet its fates when the integrator is finer? :func:`export_scene` writes the user's MJCF with one more
 keyframe, holding the found initial state at full precision: loaded in ``python -m mujoco.viewer``
 and reset to that key, it plays the same motion (checked bit for bit before the file is kept).
+
+Length: a little past 510 lines, as reading, replaying, picking and exporting one file format share
+its checks (the moved folder's, the fates file given by mistake) here.
 """
 from __future__ import annotations
 
@@ -220,6 +223,9 @@ def read_solution(path: str | os.PathLike) -> dict:
         raise SceneSolutionError(f"{path}: not JSON ({e})") from None
     except RecursionError:
         raise SceneSolutionError(f"{path}: not accepted: nested too deeply") from None
+    if isinstance(doc, dict) and doc.get("format") == "nbst-fates":
+        raise SceneSolutionError(f"{path}: format: a fates file, not a solution: solve it first (`nbst scene solve "
+                                 f"{path} -o sol.json`), then give the solution")
     if not isinstance(doc, dict) or doc.get("format") != SOLUTION_FORMAT:
         raise SceneSolutionError(f"{path}: format: not a scene solution (expected {SOLUTION_FORMAT!r})")
     if doc.get("version") != SOLUTION_VERSION:
@@ -247,7 +253,10 @@ def solution_reads(path: str | os.PathLike, doc: dict) -> list[str]:
 def _found_beside(doc: dict, path: Path) -> None:
     """A solution moved (or sent) with its folder: where the recorded fates file or scene is gone,
     the file of the same name at the same place relative to the solution (the scene: relative to the
-    fates file, as its ``"scene"`` says) is taken instead, only when its SHA-256 is the one recorded."""
+    fates file, as its ``"scene"`` says) is taken instead. The fates file only when its SHA-256 is
+    the one recorded (another file of that name is not taken for it); its scene whenever it is there,
+    as it would be read in place: edited since, it is told as changed (replay's ``scene_changed``,
+    export's note), as in place."""
     def same(p: Path, digest: Any) -> bool:
         return isinstance(digest, str) and p.is_file() and file_sha256(p) == digest
 
@@ -259,8 +268,11 @@ def _found_beside(doc: dict, path: Path) -> None:
             if not os.path.exists(doc["scene"]):
                 rel = os.path.relpath(doc["scene"], Path(old_fates).parent)
                 moved = (here.parent / rel).resolve()
-                if same(moved, doc.get("scene_sha256")):
+                if moved.is_file():
                     doc["scene"] = str(moved)
+        elif here.is_file():
+            raise SceneSolutionError(f"{path}: fates_file: {old_fates} is gone, and {here} beside the solution is "
+                                     f"not the fates file it was solved with (its SHA-256 differs)")
 
 
 @dataclass(frozen=True)
@@ -367,7 +379,8 @@ def pick_answer(path: str | os.PathLike, n: int) -> dict:
     doc = read_solution(path)
     answers = doc.get("answers")
     if not isinstance(answers, list) or not answers:
-        raise SceneSolutionError(f"{path}: answers: none (solve with --answers K to have several)")
+        raise SceneSolutionError(f"{path}: answers: none: it was solved without --answers, so its one answer is "
+                                 f"the file itself (use it as it is, or solve with --answers K to have several)")
     if not (isinstance(n, int) and 0 <= n < len(answers)) or not isinstance(answers[n], dict):
         raise SceneSolutionError(f"{path}: answers: no answer {n}; it has {len(answers)} (0 to {len(answers) - 1})")
     a = answers[n]

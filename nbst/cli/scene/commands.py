@@ -83,6 +83,10 @@ def cmd_check(args) -> int:
             if key == "never_hits" else f": its first touch of {name} is at 0 s"))
     for body, why in idle_fates(f, model):
         print(f"  note: {body} {why}")
+    if model.nflex:
+        print(f"  note: the scene has {model.nflex} flex{'es' if model.nflex > 1 else ''} (cloth, soft bodies): the "
+              f"search and replay step {'them' if model.nflex > 1 else 'it'} as MuJoCo does, but render, the validate "
+              f"report's plots and glTF draw geoms only, and fates name bodies and geoms, not a flex")
     for body, far in unforced_still_moves(f, model):
         print(f"  note: {body} moves {far:.3g} m by itself (the scene as written, no control, over the duration): "
               f"its still (at most {STILL_DISTANCE:g} m) is met only if a control holds it; start it at rest")
@@ -203,7 +207,7 @@ def cmd_replay(args) -> int:
     changed = "; the scene file changed since it was solved" if r.scene_changed else ""
     if r.fates_changed:
         changed += "; the fates file changed since it was solved (judged here by the file as it is now)"
-    if lad is None and isinstance(doc.get("ladder"), dict) and doc["ladder"].get("holds") is False:
+    if lad is None and d["met"] and isinstance(doc.get("ladder"), dict) and doc["ladder"].get("holds") is False:
         changed += "; the file says it does not hold at h/2 and h/4 (--ladder rolls them out)"
     print(f"{args.solution}: {'reproduced bit for bit' if r.same else 'DIFFERS'} (plain mj_step loop); "
           f"{'met' if d['met'] else 'not met'} at h = {float(doc['timestep']) * 1e3:g} ms, signature "
