@@ -396,10 +396,13 @@ def part_games(seeds, names, moves, cache) -> None:
             first = [x for r in rs for x in r["first"]]
             pk = [x for x in first if x[1] is not None and POCKET[0] <= x[1] <= POCKET[1]]
             spare = [x for r in rs for x in r["spare"]]
-            lo_t, hi_t = GAME_TARGETS.get(n, (float("nan"), float("nan")))
-            met = "met" if lo_t <= g.mean() <= hi_t else "not met"
+            if n in GAME_TARGETS:
+                lo_t, hi_t = GAME_TARGETS[n]
+                target = f"{lo_t:g}-{hi_t:g} ({'met' if lo_t <= g.mean() <= hi_t else 'not met'})"
+            else:
+                target = "- (none named)"
             print(f"| {n} | {m} | {len(g)} | **{g.mean():.1f}** ({g.mean() - half:.1f}-{g.mean() + half:.1f}) | "
-                  f"{lo_t:g}-{hi_t:g} ({met}) | {ci(sum(1 for x in first if not x[3]), len(first))} | "
+                  f"{target} | {ci(sum(1 for x in first if not x[3]), len(first))} | "
                   f"{ci(len(pk), len(first))} | {ci(sum(1 for x in pk if not x[3]), len(pk))} | "
                   f"{ci(sum(1 for x in spare if not x[1]), len(spare))} | {sum(r['moves'] for r in rs)} |")
     if {"auto", "none"} <= set(moves):
