@@ -50,7 +50,7 @@ def register(sub) -> None:
 
 def cmd_export(args) -> int:
     """Replay ``args.file`` and write ``args.gltf``; exit 0, or 2 after one line (nothing written)."""
-    from nbst.export.gltf import write_glb
+    from nbst.export.gltf import empty_note, write_glb
     from nbst.export.worlds import file_motion
 
     if Path(args.gltf).suffix.lower() != ".glb":
@@ -72,4 +72,6 @@ def cmd_export(args) -> int:
         moving = sum(b.moves for b in motion.bodies)
         print(f"nbst export: wrote {args.gltf} ({kind}: {len(motion.bodies)} bodies, {moving} moving, "
               f"{len(motion.times)} keyframes over {motion.times[-1]:g} s, {n:,} bytes)", file=sys.stderr)
+        if note := empty_note(motion):
+            print(f"note: {note}", file=sys.stderr)
     return 0

@@ -35,6 +35,7 @@ def cmd_render_scene(args) -> int:
     [--speed S] [--hold S] [--max-frames N] [-q]`` (``cmd_render`` dispatches here when its first
     argument is a scene solution; the frames are :mod:`nbst.render.scene.video`'s)."""
     from nbst.render.scene.motion import load_solution_scene
+    from nbst.render.scene.readout import not_drawn
     from nbst.render.scene.video import camera_names, render_scene
     from nbst.scene.solution import scene_changed
 
@@ -62,6 +63,9 @@ def cmd_render_scene(args) -> int:
     if not args.quiet and scene_changed(doc, fates):
         print(f"note: {fates.scene.name} changed since {Path(args.problem).name} was solved: this draws the motion in "
               f"the scene as it is now (nbst scene replay {args.problem} says whether it is the solved one)",
+              file=sys.stderr)
+    if not args.quiet and (missing := not_drawn(model)):
+        print(f"note: not drawn: the scene's {missing}: nbst draws geoms (and spatial tendons) only",
               file=sys.stderr)
     if args.camera is not None and args.camera not in camera_names(model):
         have = ", ".join(camera_names(model)) or "none"

@@ -5,8 +5,13 @@ rows of position and normal, and an RGBA colour). :func:`write_glb` writes one n
 solid, each with a material whose ``baseColorFactor`` is the solid's RGBA; ``alphaMode`` BLEND
 below alpha 1), and one animation whose channels move each moving body: a ``translation`` and a
 ``rotation`` sampler per body, LINEAR interpolation, over one shared time accessor. Bodies that
-never move (the floor, a road) are nodes without channels. The file is written with pygltflib (the
-binary container, one buffer) and atomically (:func:`nbst.outputs.write_bytes_atomic`).
+never move (the floor, a road) are nodes without channels: a body moves only where its pose changes
+(:func:`still_bodies`; a :class:`BodyMotion` makes a body given as moving static where its keyframes,
+as the file stores them, are all one pose: a mocap paddle nothing moves). A body with nothing to
+draw (no solid: a flex's vertex bodies, the cloth nbst does not export) is a node without a mesh
+whose ``extras`` say so, and the scene's ``extras`` name them all (:func:`empty_note`). The file is
+written with pygltflib (the binary container, one buffer) and atomically
+(:func:`nbst.outputs.write_bytes_atomic`).
 
 Storage is float32, as glTF requires for these accessors: positions, rotations and times are kept
 to float32's precision (relative 6e-8; a keyframe read back matches the replay's pose within
@@ -23,7 +28,7 @@ Compute apart from I/O: :func:`gltf_document` builds the pygltflib document and 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -31,7 +36,11 @@ import numpy as np
 from nbst.errors import InputError
 from nbst.outputs import write_bytes_atomic
 
-__all__ = ["Solid", "Body", "BodyMotion", "continuous_quaternions", "gltf_document", "write_glb"]
+__all__ = ["Solid", "Body", "BodyMotion", "EMPTY", "continuous_quaternions", "still_bodies", "empty_note",
+           "gltf_document", "write_glb"]
+
+#: The ``extras`` of a body's node that has no mesh.
+EMPTY = {"nbst": "no geoms: nothing drawn (nbst exports geoms only)"}
 
 
 @dataclass(frozen=True)
@@ -51,8 +60,9 @@ class Solid:
 
 @dataclass(frozen=True)
 class Body:
-    """A body to write: its name, its solids, and whether it moves (a static body keeps the pose
-    of the motion's first keyframe and gets no animation channel)."""
+    """A body to write: its name, its solids, and whether it may move (a static body keeps the pose
+    of the motion's first keyframe and gets no animation channel; a :class:`BodyMotion` makes static
+    a body whose pose never changes)."""
 
     name: str
     solids: list[Solid] = field(default_factory=list)
@@ -68,12 +78,24 @@ class BodyMotion:
         times: (T,) float64 array, keyframe times in s, strictly increasing, from 0.
         pos: (T, nbody, 3) float64 array, each body's origin in the world frame.
         quat: (T, nbody, 4) float64 array, each body's orientation (w, x, y, z), MuJoCo's order.
+
+    A body given as moving whose keyframes are all one pose (:func:`still_bodies`) is made static
+    here: ``bodies`` then holds it with ``moves`` False (a mocap paddle the motion never moves).
     """
 
     bodies: list[Body]
     times: np.ndarray
     pos: np.ndarray
     quat: np.ndarray
+
+    def __post_init__(self) -> None:
+        t, n = len(self.times), len(self.bodies)
+        if t < 1 or np.shape(self.pos) != (t, n, 3) or np.shape(self.quat) != (t, n, 4):
+            return   # check() refuses it
+        still = still_bodies(self.pos, self.quat)
+        if any(b.moves and s for b, s in zip(self.bodies, still)):
+            object.__setattr__(self, "bodies", [replace(b, moves=False) if b.moves and s else b
+                                                for b, s in zip(self.bodies, still)])
 
     def check(self) -> BodyMotion:
         """This motion if its shapes and values are usable, else :class:`~nbst.errors.InputError`."""
@@ -104,6 +126,39 @@ def continuous_quaternions(quat: np.ndarray) -> np.ndarray:
         flip = np.sum(q[k] * q[k - 1], axis=-1) < 0
         q[k][flip] *= -1.0
     return q
+
+
+def still_bodies(pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    """Per body, whether its pose never changes: every keyframe's position and rotation, as the file
+    stores them (float32; the rotation unit and sign-continuous), equal to its first's.
+
+    Args:
+        pos: (T, nbody, 3) float64 array; quat: (T, nbody, 4) float64 array (w, x, y, z).
+
+    Returns:
+        (nbody,) bool array; False for a body with a pose not finite (refused by ``check``).
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        q = continuous_quaternions(quat).astype(np.float32)
+    p = np.asarray(pos, np.float32)
+    return ((p == p[:1]).all(axis=(0, 2)) & (q == q[:1]).all(axis=(0, 2))
+            & np.isfinite(p).all(axis=(0, 2)) & np.isfinite(q).all(axis=(0, 2)))
+
+
+def _drawn(body: Body) -> bool:
+    return any(len(s.rows) >= 3 for s in body.solids)
+
+
+def empty_note(motion: BodyMotion) -> str:
+    """What to say of the bodies with nothing to draw (no solid), in one line, or "" when there are
+    none: ``36 bodies have no geoms (cloth_0, cloth_1, cloth_2, ...): nodes without a mesh; nbst
+    exports geoms only (a flex, such as cloth, or a skin is not in the file)``."""
+    names = [b.name for b in motion.bodies if not _drawn(b)]
+    if not names:
+        return ""
+    said = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    return (f"{len(names)} bod{'ies have' if len(names) > 1 else 'y has'} no geoms ({said}): nodes without a mesh; "
+            f"nbst exports geoms only (a flex, such as cloth, or a skin is not in the file)")
 
 
 class _Blob:
@@ -184,13 +239,16 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
         if prims:
             gl.meshes.append(pg.Mesh(name=body.name, primitives=prims))
             node.mesh = len(gl.meshes) - 1
+        else:   # said, not left out: its node index is its body's, its keyframes its body's
+            node.extras = dict(EMPTY)
         gl.nodes.append(node)
         nodes.append(len(gl.nodes) - 1)
     # glTF's up is +y; MuJoCo's (and every nbst world's) +z: one root node turns the world -90 deg about
     # x, so (x, y, z) shows as (x, z, -y) and a floor lies flat (Blender's importer turns it z-up again)
     h = float(np.sqrt(0.5))
     gl.nodes.append(pg.Node(name=f"{name} (z-up)", rotation=[-h, 0.0, 0.0, h], children=nodes))
-    gl.scenes.append(pg.Scene(name=name, nodes=[len(gl.nodes) - 1]))
+    note = empty_note(motion)
+    gl.scenes.append(pg.Scene(name=name, nodes=[len(gl.nodes) - 1], extras={"nbst": note} if note else {}))
     gl.scene = 0
     moving = [b for b, body in enumerate(motion.bodies) if body.moves]
     if moving and len(motion.times) > 1:

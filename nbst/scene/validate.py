@@ -127,7 +127,8 @@ class SceneValidation:
     noisy_met: np.ndarray = field(repr=False, compare=False)
     mujoco: str = ""
     #: the footprints from above, (N, 2) polygons (m), of the geoms fixed to the world that bodies can
-    #: touch (walls, a backboard, a bin; planes left out): drawn under the paths (:func:`static_footprints`)
+    #: touch (walls, a backboard, a bin, a height field; planes left out): drawn under the paths
+    #: (:func:`static_footprints`)
     statics: tuple[np.ndarray, ...] = field(default=(), repr=False, compare=False)
     #: those of them a fate names (``hits``, ``never_hits``): kept inside the plots' axes
     aims: tuple[np.ndarray, ...] = field(default=(), repr=False, compare=False)
@@ -292,7 +293,8 @@ def _hull(p: np.ndarray) -> np.ndarray:
 def static_footprints(model: Any, data: Any, names: Any = None) -> tuple[np.ndarray, ...]:
     """The footprint from above of each geom fixed to the world (its body welded to the world, or a
     mocap body at its pose in ``data``) that collides with something (contype or conaffinity set),
-    planes and height fields left out: a sphere's circle (24 sides), a mesh's hull, else the hull of
+    planes left out: a sphere's circle (24 sides), a mesh's hull, a height field's rectangle (its
+    ``hfield_size`` radii x and y, from its base to its top, turned by its pose), else the hull of
     its bounding box's 8 corners (MuJoCo's ``geom_aabb``, turned by its pose), each an (N, 2) polygon
     in metres. ``names``: only the geoms of these names or of bodies of these names."""
     import mujoco
@@ -303,7 +305,7 @@ def static_footprints(model: Any, data: Any, names: Any = None) -> tuple[np.ndar
                 int(model.geom_bodyid[g])).name not in names:
             continue
         t = int(model.geom_type[g])
-        if t in (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD):
+        if t == mujoco.mjtGeom.mjGEOM_PLANE:
             continue
         if not (model.geom_contype[g] or model.geom_conaffinity[g]):
             continue
@@ -320,6 +322,9 @@ def static_footprints(model: Any, data: Any, names: Any = None) -> tuple[np.ndar
             m = int(model.geom_dataid[g])
             v0 = int(model.mesh_vertadr[m])
             corners = np.asarray(model.mesh_vert[v0:v0 + int(model.mesh_vertnum[m])], float)
+        elif t == mujoco.mjtGeom.mjGEOM_HFIELD:   # x and y radii, top, base: the grid's box in the geom's frame
+            rx, ry, top, base = (float(v) for v in model.hfield_size[int(model.geom_dataid[g])])
+            corners = np.array([[sx * rx, sy * ry, z] for sx in (-1, 1) for sy in (-1, 1) for z in (-base, top)])
         else:
             box = np.asarray(model.geom_aabb[g], float)   # centre (3), half sizes (3), in the geom's frame
             corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1)

@@ -7,7 +7,8 @@ the fates name one) out with the plain ``mj_step`` loop of docs/scene.md (``nbst
 state bit for bit (:attr:`SceneMotion.same` says whether it did). A frame at time t shows the state
 after round(t / h) steps. A first touch is what the rollout's contact record counts (a contact of
 distance <= 0 between a fated body's geom and another body, or a named geom of the world), at
-the state its step started from; its point is MuJoCo's contact position.
+the state its step started from; its point is MuJoCo's contact position; the other goes by the
+name the body's ``hits`` or ``never_hits`` gives it (a geom's own name there), else its body's.
 
 Compute only (MuJoCo, numpy).
 """
@@ -124,11 +125,19 @@ def record(path: str | os.PathLike, times: np.ndarray) -> tuple[SceneMotion, Fat
     d.qpos[:] = q0
     d.qvel[:] = v0
     s.mocap_pos[:], s.mocap_quat[:] = d.mocap_pos, d.mocap_quat  # drawn where the key holds them
-    # the fated bodies' geoms, and the name each other geom goes by (its body's; a world geom's own)
+    # the fated bodies' geoms, and the name each other geom goes by (its body's; a world geom's own),
+    # or, to a fated body, the name its hits or never_hits gives it (a body's, else a geom's: "tg")
     fated = {int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, f.body)): f.body for f in fates.fates}
     owner = [fated.get(int(m.geom_bodyid[g])) for g in range(G)]
     names = [m.body(int(m.geom_bodyid[g])).name if m.geom_bodyid[g] != 0 or not m.geom(g).name else m.geom(g).name
              for g in range(G)]
+    called: dict[tuple[str, int], str] = {}
+    for f in fates.fates:
+        for n in (*f.hits, *f.never_hits):
+            b = int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n))
+            gs = np.flatnonzero(m.geom_bodyid == b) if b >= 0 else [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)]
+            for g in gs:
+                called[(f.body, int(g))] = n
     seen: set[tuple[str, str]] = set()
     touches: list[Touch] = []
     # the spatial tendons MuJoCo's viewer draws: each has up to 2 wrap points per wrap object
@@ -170,9 +179,10 @@ def record(path: str | os.PathLike, times: np.ndarray) -> tuple[SceneMotion, Fat
                     continue
                 for a, b in ((int(con.geom[0]), int(con.geom[1])), (int(con.geom[1]), int(con.geom[0]))):
                     who = owner[a]
-                    if who is not None and names[b] != who and (who, names[b]) not in seen:
-                        seen.add((who, names[b]))
-                        touches.append(Touch(k * h, tuple(float(p) for p in con.pos), who, names[b]))  # type: ignore[arg-type]
+                    other = called.get((who, b), names[b]) if who is not None else ""
+                    if who is not None and names[b] != who and (who, other) not in seen:
+                        seen.add((who, other))
+                        touches.append(Touch(k * h, tuple(float(p) for p in con.pos), who, other))  # type: ignore[arg-type]
             grab(k + 1)
     same = d.qpos.tobytes() == qf.tobytes() and d.qvel.tobytes() == vf.tobytes()
     judged = replay_solution(path).judgement

@@ -8,10 +8,13 @@
   light; planes carry a faint checker so the floor reads.
 * **The fates**: each region (``rest_in``, ``at``, ``through``, the hoops numbered in order) as a
   translucent solid with its outline in its body's mark colour; an ``up`` axis as an arrow on the
-  body; each first touch after the start (an impact; each pair once) as a yellow ball from its
-  time on, labelled with the pair where the fates name what was touched (all, where none do).
-* **The readout** (:mod:`nbst.render.scene.readout`), top left: asked vs happened. ``clean``
-  draws no text at all.
+  body; each first touch after the start (an impact; each pair once) that the fates name (all,
+  where none do) as a yellow ball from its time on, each labelled with the body and what it
+  touched (``cube-block2 0.24 s``); a body marked in a colour that nothing else in the frame
+  carries (the palette's, no region or arrow: a ``still`` block) is tagged with its name in it.
+* **The readout** (:mod:`nbst.render.scene.readout`), top left: asked vs happened (the brief one
+  where the whole one would cover more than :data:`READOUT_WIDE` of the frame's width), and what
+  nbst does not draw (a flex). ``clean`` draws no text at all.
 * **Cameras**: a model camera by name, else one that frames the fated and controlled bodies and
   their regions from the front and above, tracking the bodies as they move (a box over where they
   are within a fraction of a second, smoothed: :mod:`nbst.render.scene.framing`).
@@ -45,7 +48,7 @@ from nbst.render.scene.motion import SceneMotion, Touch, record
 from nbst.scene.fates import Fates
 from nbst.scene.solution import SOLUTION_FORMAT
 
-__all__ = ["LIGHT", "MARKS", "READOUT_FRAC", "SKY", "IMPACT", "SHADOW_PX", "SceneRenderer",
+__all__ = ["LIGHT", "MARKS", "READOUT_FRAC", "READOUT_WIDE", "SKY", "IMPACT", "SHADOW_PX", "SceneRenderer",
            "is_scene_solution", "render_scene", "camera_names"]
 
 #: Towards the light when the model has none (world frame).
@@ -56,6 +59,9 @@ OK_RGB, NO_RGB = (0.35, 0.85, 0.40), (0.95, 0.32, 0.26)
 PANEL_RGBA = (0.08, 0.09, 0.11, 0.72)
 #: The readout's text height as a share of the frame's smaller side (smaller where it does not fit).
 READOUT_FRAC = 0.02
+#: The whole readout covers at most this share of the frame's width (its text shrinking to the least
+#: legible size); past it, the brief one (at 320x180 the whole one hid the ball).
+READOUT_WIDE = 0.6
 #: The shadow map's side (px).
 SHADOW_PX = 2048
 #: Regions are drawn this opaque; their outlines this.
@@ -166,21 +172,13 @@ class SceneRenderer(FrameRenderer):
         self.marks: list[tuple[Any, Any, tuple[float, ...]]] = []   # (solid vao, outline vao, rgb)
         self.hoops: list[tuple[np.ndarray, str, tuple[float, ...]]] = []   # (centre, label, rgb)
         self.arrows: list[tuple[int, np.ndarray, Any, tuple[float, ...]]] = []  # (body, axis, vao, rgb)
-        # the impacts: first touches after the start (a contact there at t = 0 is a body at rest),
-        # each pair once; labelled where the fates name what was touched (all of them where none do)
-        seen: set[frozenset[str]] = set()
-        self.impacts: list[Touch] = []
-        for im in motion.touches:
-            pair = frozenset((im.body, im.other))
-            if im.t > 0 and pair not in seen:
-                seen.add(pair)
-                self.impacts.append(im)
-        asked = {f.body: {*f.hits, *f.never_hits} for f in fates.fates}
-        self.named = [im for im in self.impacts if im.other in asked.get(im.body, ())
-                      or im.body in asked.get(im.other, ())] if any(asked.values()) else list(self.impacts)
-        one = len(fates.fates) == 1   # the labels name the body when there are several
-        self.one = one
+        # the impacts: the first touches the fates name (ro.drawn_touches), each labelled; the bodies
+        # whose mark colour nothing else in the frame carries, named beside them in it (ro.name_tags)
+        self.impacts: list[Touch] = ro.drawn_touches(motion.touches, fates)
+        one = len(fates.fates) == 1   # the regions' labels name the body when there are several
         self.mark_rgb = mark_colours(model, fates)
+        self.tags = ro.name_tags(model, fates, self.mark_rgb)
+        self.note = ro.not_drawn(model)   # what is not drawn (a flex): the readout's last line
         for i, f in enumerate(fates.fates):
             rgb = self.mark_rgb[i]
             for r in regions_of(f):
@@ -199,9 +197,8 @@ class SceneRenderer(FrameRenderer):
                             default=0.05)
                 vao, _ = self._vaos(sg.arrow_solid(2.2 * reach, 0.05 * reach))
                 self.arrows.append((b, np.asarray(f.up[0], float), vao, rgb))
-        rb = [float(model.geom_rbound[g]) for g in range(int(model.ngeom))
-              if fates.fates and int(model.geom_bodyid[g]) in
-              {int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body)) for f in fates.fates}]
+        ids = {int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.body)) for f in fates.fates}
+        rb = [float(model.geom_rbound[g]) for g in range(int(model.ngeom)) if int(model.geom_bodyid[g]) in ids]
         self.impact_vao, _ = self._vaos(sg.sphere_rows(0.3 * (min(rb) if rb else 0.02)))
         # the shadow map: an orthographic view from the light over the focus (and a margin)
         self.shadow_tex = ctx.depth_texture((SHADOW_PX, SHADOW_PX))
@@ -222,17 +219,17 @@ class SceneRenderer(FrameRenderer):
         def fits(px: int, chars: int, rows_: int, wide: float) -> bool:
             return (chars + 2) * text_cell(px)[0] <= wide * w and (rows_ + 1) * text_cell(px)[1] <= 0.95 * h
 
-        #: a frame too small for the whole readout at a legible size (it would leave the frame) gets
-        #: the brief one (ro.readout)
+        #: a frame where the whole readout at a legible size would cover more than READOUT_WIDE of its
+        #: width gets the brief one (ro.readout)
         self.brief, self.brief_width = False, int(0.95 * w / text_cell(style.MIN_READOUT_PX)[0]) - 2
         for brief in (False, True):
             self.brief = brief
             chars, rows_ = ro.widest(title, fates, motion.judgement, motion.duration, brief=brief,
-                                     width=self.brief_width if brief else None)
+                                     width=self.brief_width if brief else None, note=self.note)
             px = max(style.MIN_READOUT_PX, int(round(READOUT_FRAC * min(self.size))))
-            while px > style.MIN_READOUT_PX and not fits(px, chars, rows_, 0.6):
+            while px > style.MIN_READOUT_PX and not fits(px, chars, rows_, READOUT_WIDE):
                 px -= 1
-            if fits(px, chars, rows_, 0.95):
+            if fits(px, chars, rows_, READOUT_WIDE):
                 break
         cw, ch = text_cell(px)
         fw, fh = min((chars + 1.5) * cw / w, 0.6), min((rows_ + 1) * ch / h, 0.6)
@@ -381,11 +378,12 @@ class SceneRenderer(FrameRenderer):
     def readout(self, t: float) -> list[str]:  # type: ignore[override]  # the disks' readout counts insides
         final = t >= self.motion.duration - 1e-9
         return ro.readout(self.title, t, self.fates, self.motion.judgement, final=final, brief=self.brief,
-                          width=self.brief_width if self.brief else None)
+                          width=self.brief_width if self.brief else None, note=self.note)
 
     def _overlay(self, t: float, t_now: float, vpm: np.ndarray) -> None:
-        """The labels (hoops in order, ``at`` regions, impacts: each where it leaves the readout and
-        the labels before it clear) and the readout over its panel."""
+        """The labels (hoops in order, ``at`` regions, impacts, tags: each where it leaves the readout
+        and the labels before it clear, else where it leaves the readout clear) and the readout over
+        its panel."""
         assert self.text is not None and self.small is not None and self.rect is not None
         size = self.size
         scw, sch = self.small.cell
@@ -396,8 +394,9 @@ class SceneRenderer(FrameRenderer):
         box = (0.0, 0.0, x0 + (max(len(s) for s in lines) + 0.6) * cw, y0 + (len(lines) + 0.3) * ch)
         placed = [box]
         labels = [(c, lab, rgb, False) for c, lab, rgb in self.hoops]
-        labels += [(np.asarray(im.pos), f"{'' if self.one else im.body + '-'}{im.other} {im.t:.2f} s", IMPACT, True)
-                   for im in self.impacts if im.t <= t_now and im in self.named]
+        labels += [(np.asarray(im.pos), ro.touch_label(im), IMPACT, True) for im in self.impacts if im.t <= t_now]
+        k = self.motion.index(t)
+        labels += [(self.motion.body_xpos[k, b], name, rgb, False) for b, name, rgb in self.tags]
         for centre, label, rgb, impact in labels:
             col, row, front = self.to_pixel(vpm, centre)
             if not (front and 0 <= col < size[0] and 0 <= row < size[1]):
@@ -408,12 +407,16 @@ class SceneRenderer(FrameRenderer):
                       (col - wl / 2, row + 1.2 * sch), (col - wl / 2, row - 2.2 * sch)] if impact else
                      [(col - wl / 2, row - 1.4 * sch), (col + 0.8 * scw, row - 0.5 * sch),
                       (col - 0.8 * scw - wl, row - 0.5 * sch)])
-            for x, y in spots:
-                x = float(np.clip(x, 0, max(0, size[0] - wl)))
-                y = float(np.clip(y, 0, max(0, size[1] - sch)))
-                bx = (x - 1, y - 1, x + wl + 1, y + sch + 1)
-                if not any(bx[0] < q[2] and q[0] < bx[2] and bx[1] < q[3] and q[1] < bx[3] for q in placed):
-                    self._label(label, x, y, rgb)
+            # clear of every label (else a row or more further up or down), else of the readout alone
+            far = spots + [(x, y + j * sch) for j in (-1.2, 1.2, -2.4, 2.4, -3.6, 3.6) for x, y in spots[:3]]
+            for clear, where in ((placed, far), (placed[:1], spots)):
+                at = [(float(np.clip(x, 0, max(0, size[0] - wl))), float(np.clip(y, 0, max(0, size[1] - sch))))
+                      for x, y in where]
+                boxes = [(x - 1, y - 1, x + wl + 1, y + sch + 1) for x, y in at]
+                bx = next((b for b in boxes if not any(b[0] < q[2] and q[0] < b[2] and b[1] < q[3] and q[1] < b[3]
+                                                       for q in clear)), None)
+                if bx is not None:
+                    self._label(label, bx[0] + 1, bx[1] + 1, rgb)
                     placed.append(bx)
                     self.overlay_boxes.append(bx)
                     break
