@@ -161,3 +161,31 @@ def test_a_pick_the_fresh_throws_find_weaker_than_a_sure_pin_gets_the_count_line
     res = spares.best_spare("4-9", 8, 1, runner=SimpleNamespace(oil="house", ball=None), screen=4, polish=0)
     assert res.converts and res.best_label == "slide" and res.pins["mean"] == pytest.approx(0.5)
     assert res.most_pins["label"] == "the 4 alone" and res.most_pins["pins"]["mean"] == 1.0
+
+
+def test_a_line_lucky_in_a_short_screening_does_not_hide_the_sure_pin(monkeypatch):
+    """A third coach's 4-10 at --screen 2: a second slide took 1.5 pins a throw over its 6 screening
+    throws and 0.2 on the 20 fresh ones, fewer than the pick's 0.4; it was the one line measured for
+    the count, so no count line was given, where the 4 alone takes 1.0 every throw. Now the two best
+    other lines and the best one-pin line are all measured on the fresh throws."""
+    lines = [("3-6-9", 1.0), ("slide", 2.0), ("the 4 alone", 3.0), ("lucky", 4.0)]
+    monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, lane.Delivery(board=b, at="foul"))
+                                                                   for lbl, b in lines])
+    estimate, default = noise.estimate, noise.DEFAULT
+
+    def probability(d, n, seed, *, runner, standing, noise=None, on_done=None, want=None):
+        fresh = seed < 1000
+        seq = {1.0: [[]], 2.0: [[4, 10], [], [4], [], []], 3.0: [[4]],
+               4.0: [[4], [], [], [], []] if fresh else [[4], [4], [4], [4, 10], [4], [4]]}[d.board]
+        rs = [SimpleNamespace(down=seq[i % len(seq)], leave=[p for p in standing if p not in seq[i % len(seq)]],
+                              converted=set(seq[i % len(seq)]) == set(standing), timestep=0.001) for i in range(n)]
+        return estimate(rs, seed, noise or default), rs
+
+    monkeypatch.setattr(noise, "probability", probability)
+    monkeypatch.setattr(frame, "ladder", lambda d, oil, ball, standing: probability(d, 3, 0, runner=None,
+                                                                                    standing=standing)[1])
+    monkeypatch.setattr(frame, "run_frame", lambda d, oil, ball, standing, extra_s=0.0: probability(
+        d, 1, 0, runner=None, standing=standing)[1][0])
+    res = spares.best_spare("4-10", 20, 1, runner=SimpleNamespace(oil="house", ball=None), screen=2, polish=0)
+    assert res.converts and res.best_label == "slide" and res.pins["mean"] == pytest.approx(0.6)
+    assert res.most_pins["label"] == "the 4 alone" and res.most_pins["pins"]["mean"] == 1.0

@@ -232,8 +232,8 @@ def test_bowl_throw_prints_the_phases_and_writes_json(tmp_path):
     assert abs(lane.throw(AT_ARROWS, "house").board_at_arrows - 10.0) > lane.AIM_TOL
 
 
-@pytest.mark.parametrize("args, says", [(["--rg", "2.9"], "ball.rg"), (["--diff", "0.08"], "ball.diff"),
-                                        (["--cover", "0.5"], "ball.friction"), (["--oil", "wet"], "oil"),
+@pytest.mark.parametrize("args, says", [(["--rg", "2.9"], "--rg 2.9: "), (["--diff", "0.08"], "--diff 0.08: "),
+                                        (["--cover", "0.5"], "--cover 0.5: "), (["--oil", "wet"], "oil"),
                                         (["--oil", "nothere.json"], "nothere.json"),
                                         (["--mph", "40"], "--mph"),
                                         (["--board", "39", "--at", "arrows", "--angle", "5"], "off the lane")])

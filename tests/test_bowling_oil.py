@@ -127,3 +127,25 @@ def test_the_command_refuses_a_bad_sheet_in_one_line_with_exit_2(tmp_path):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "bad.json: rows[0].ul" in lines[0] and "Traceback" not in out.stderr, out.stderr
     assert math.isfinite(lane.PATTERNS["kegel-boardwalk"].ratio(33))
+
+
+def test_a_sheet_with_the_outside_dry_is_not_called_flat():
+    """A lane man's sheet with row 0 at 2L-2L left boards 3 and 37 dry at 10 ft: the throw's header
+    read "flat at 10 ft" (flat is 1:1); all the oil there is inside."""
+    pat = oil.pattern_from_dict(_sheet([_row("10L-10R", 3, 50, 0, 35)]))
+    assert math.isinf(pat.ratio()) and "flat" not in pat.summary()
+    assert "no oil on boards 3 and 37 (ratio infinite)" in pat.summary()
+    assert "1.00:1" in oil.pattern_from_dict(_sheet([_row("2L-2R", 2, 50, 0, 35)])).summary()
+
+
+def test_a_sheet_field_misspelt_missing_or_a_lane_drowned_is_refused():
+    """`ratio_fit` and `lenght` at the top were taken silently; a row without end_ft read "must be a
+    number, got None"; 100 loads of 500 ul (1,842 ml) were taken as a lane's oil."""
+    with pytest.raises(lane.LaneError, match=r"ratio_fit: not a pattern field \(did you mean 'ratio_ft'\?\)"):
+        oil.pattern_from_dict(_sheet([_row()], ratio_fit=10))
+    with pytest.raises(lane.LaneError, match=r"rows\[0\]\.end_ft: missing"):
+        oil.pattern_from_dict(_sheet([{k: v for k, v in _row().items() if k != "end_ft"}]))
+    with pytest.raises(lane.LaneError, match=r"rows: lay 1,\d{3} ml on one lane, more than 100 ml"):
+        oil.pattern_from_dict(_sheet([_row("2L-2R", 100, 500, 0, 40)]))
+    shipped = [oil.PATTERNS[n].volume_ml for n in oil.PATTERNS.names()]
+    assert max(shipped) < oil.MAX_VOLUME_ML   # every shipped pattern is read

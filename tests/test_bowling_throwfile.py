@@ -303,7 +303,7 @@ def test_bowl_frame_throws_the_ball_of_its_flags_and_the_file_records_it(tmp_pat
     assert throwfile.load(out)["ball"] == lane.Ball(rg=2.70, diff=0.055, friction=0.30).to_dict()
     rc, stdout, _ = _main(["bowl", "replay", out, "--json"], capsys)
     assert rc == 0 and json.loads(stdout)["match"]
-    _refused(argv + ["--rg", "2.9"], capsys, "ball.rg", "2.46")
+    _refused(argv + ["--rg", "2.9"], capsys, "--rg 2.9", "2.46")
 
 
 def test_bowl_frame_o_refuses_a_folder_before_throwing(tmp_path, capsys):

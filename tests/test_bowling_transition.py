@@ -241,7 +241,7 @@ def _cli(*argv, timeout=120):
     (["--bowler", "nobody"], ["--bowler", "pro"]),
     (["--figure", "f.jpg"], ["--figure", "f.jpg: use a .png file"]),
     (["--move", "sometimes"], ["--move"]),
-    (["--rg", "3.5"], ["ball.rg"]),
+    (["--rg", "3.5"], ["--rg 3.5: "]),
 ])
 def test_bad_flags_exit_2_with_one_line(tmp_path, capsys, argv, words):
     rc, err = _main(["bowl", "series", "-o", tmp_path / "s.json", *argv], capsys)
@@ -342,3 +342,23 @@ def test_reading_a_worn_lane_picks_a_line_that_strikes_more_than_standing_still(
     assert R.strike_chance(chosen).mean() > R.strike_chance(still).mean() + 0.05
     sd = [np.std([b for b in v if b is not None]) for v in (chosen, still)]
     assert sd[0] < sd[1], sd
+
+
+def test_the_series_spare_ball_takes_a_pin_at_a_split_whose_middle_is_bare_wood():
+    """A third coach's series: at the 4-10 the spare ball went through the middle of the leave, board
+    16.8, between pins 0.91 m apart, and took none; at the 4-6-7 through their mean, taking the 4
+    alone. The ball now goes through the middle of the pins it can reach most of (the ball's
+    radius plus a pin's from its line): the whole leave where a pin stands there."""
+    from nbst.models.bowling import scene
+    from nbst.models.bowling.lane import transition as tr
+
+    ys = {p: float(scene.pin_spots()[p - 1][1]) for p in range(1, 11)}
+    reach = scene.BALL_RADIUS + 0.5 * 4.766 * 0.0254
+    assert tr.SPARE_REACH == pytest.approx(reach)
+    for leave, right, left in (([4, 10], (4,), (4,)), ([4, 6, 7], (4, 7), (4, 7)), ([7, 10], (7,), (10,)),
+                               ([3, 10], (3, 10), (3, 10)), ([4, 7], (4, 7), (4, 7)), ([2, 4, 5], (2, 4, 5), (2, 4, 5)),
+                               ([4, 6, 7, 10], (4, 7), (6, 10)), ([10], (10,), (10,))):
+        assert tr.spare_target(leave, "right") == right and tr.spare_target(leave, "left") == left, leave
+        mid = sum(ys[p] for p in right) / len(right)
+        assert any(abs(ys[p] - mid) <= reach for p in leave)   # the ball's line reaches a pin of the leave
+    assert all(abs(ys[p] - (ys[4] + ys[10]) / 2) > reach for p in (4, 10))   # the 4-10's middle is bare wood

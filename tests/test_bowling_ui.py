@@ -374,3 +374,18 @@ def test_advise_a_left_handers_7_as_a_right_handers_10(capsys):
     assert L["leave"] == "7" and R["leave"] == "10" and L["hand"] == "left" and L["delivery"]["hand"] == "left"
     assert (L["stance_board"], L["target_board"], L["estimate"]["k"]) == (R["stance_board"], R["target_board"],
                                                                          R["estimate"]["k"])
+
+
+def test_a_release_speed_no_bowler_throws_gets_a_note_of_km_per_hour(capsys):
+    """`--mph 30` ran silently into the gutter; 30 is most likely km/h (18.6 mph). Now a note says so;
+    a typical speed gets none."""
+    from nbst.cli.bowl.args import FAST_MPH, delivery_of
+    from types import SimpleNamespace
+
+    keys = dict(hand=None, board=None, at=None, angle=None, rpm=None, rotation=None, tilt=None, stance=None, target=None)
+    delivery_of(SimpleNamespace(mph=30.0, **keys))
+    err = capsys.readouterr().err
+    assert "--mph 30" in err and "30 km/h is 18.6 mph" in err, err
+    delivery_of(SimpleNamespace(mph=FAST_MPH, **keys))
+    delivery_of(SimpleNamespace(mph=30.0, quiet=True, **keys))
+    assert capsys.readouterr().err == ""

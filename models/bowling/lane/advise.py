@@ -254,19 +254,21 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
     if res.converts:
         txt = (f"{head}: {_line_text(d, r, res.best_label)}: converts {100 * e['p']:.0f}% ({e['k']}/{e['n']}; 95% CI "
                f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)" + (f"; {pins_text(res.pins)}" if res.pins else ""))
-        if most is not None and res.pins is not None and most["label"] != res.best_label                 and most["pins"]["mean"] > res.pins["mean"]:
-            dm = lane.Delivery(**most["delivery"])
-            count_text = (f"for the count: {_line_text(dm, lane.throw(dm, runner.oil, runner.ball), most['label'])}: "
-                          f"{pins_text(most['pins'])}")
-            cleared = int(most["pins"]["counts"].get(str(most["pins"]["of"]), 0))
-            if cleared > int(e["k"]):  # measured on the same throws: the pick was ranked on the screening alone
-                count_text += (f"; it converted more of these same {e['n']} throws ({cleared} against {e['k']}): "
-                               f"the pick was ranked on the screening (--screen {screen}; a larger one ranks on more "
-                               f"throws)")
     else:
         txt = (f"{head}: no line converts: none of {len(res.candidates)} lines converted any of their {screened} "
                f"screening throws (95% CI of a line's rate 0-{100 * _noise.wilson(0, screen)[1]:.0f}% each); the most "
                f"pins: {_line_text(d, r, res.best_label)}: " + (pins_text(res.pins) if res.pins else ""))
+    # another line took more pins on the same fresh throws (spares.best_spare's count lines): given for the count
+    if most is not None and res.pins is not None and most["label"] != res.best_label \
+            and most["pins"]["mean"] > res.pins["mean"]:
+        dm = lane.Delivery(**most["delivery"])
+        count_text = (f"for the count: {_line_text(dm, lane.throw(dm, runner.oil, runner.ball), most['label'])}: "
+                      f"{pins_text(most['pins'])}")
+        cleared = int(most["pins"]["counts"].get(str(most["pins"]["of"]), 0))
+        if cleared > int(e["k"]):  # measured on the same throws: the pick was ranked on the screening alone
+            count_text += (f"; it converted more of these same {e['n']} throws ({cleared} against {e['k']}): "
+                           f"the pick was ranked on the screening (--screen {screen}; a larger one ranks on more "
+                           f"throws)")
     spare = spares.mirror_doc(res.to_dict()) if mirror else res.to_dict()
     return LeaveAdvice(leave=leave, names=nm, stance_board=stance, target_board=target, target=arrow_text(target),
                        delivery=spare["best"], estimate=e, label=res.best_label, spare=spare, text=txt,

@@ -247,8 +247,12 @@ class Pattern:
     def summary(self) -> str:
         """One line: length, volume and ratio, as computed."""
         r = self.ratio()
-        return (f"{self.length_ft:g} ft, {self.volume_ml:.2f} ml, "
-                f"{'flat' if not math.isfinite(r) else f'{r:.2f}:1'} at {self.ratio_ft:g} ft")
+        if math.isfinite(r):
+            said = f"{r:.2f}:1"
+        else:   # nothing on boards 3 and 37: all the oil inside (or none at all), never "flat" (1:1)
+            g = _grid(self)[:, min(int(self.ratio_ft / DX_FT), NX - 1)]
+            said = "no oil on boards 3 and 37 (ratio infinite)" if g[17:22].mean() > 0 else "dry"
+        return f"{self.length_ft:g} ft, {self.volume_ml:.2f} ml, {said} at {self.ratio_ft:g} ft"
 
     def sheet(self) -> str:
         """The pattern as a sheet: its rows with the oil each lays, the totals, the length and the ratios,
@@ -382,6 +386,8 @@ class OilField:
 
 
 def _num(v, where: str, lo: float, hi: float, *, open_lo: bool = False) -> float:
+    if v is None:
+        raise LaneError(f"{where}: missing (a number in [{lo:g}, {hi:g}])")
     if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
         raise LaneError(f"{where}: must be a number, got {v!r}")
     if v < lo or v > hi or (open_lo and v == lo):
@@ -467,6 +473,13 @@ def _row(d, where: str) -> Row:
     return Row(direction, a, b, text.strip().upper(), min(x, y), max(x, y), loads, ul, speed)
 
 
+#: A pattern file's fields (version 2 gives rows, version 1 forward/reverse passes); another is refused.
+_TOP_KEYS = frozenset({"format", "version", "name", "description", "source", "published", "ratio_ft", "rows",
+                       "forward", "reverse"})
+#: The most oil (ml) a pattern file may lay on one lane: four times the published sheets shipped (21-25 ml).
+MAX_VOLUME_ML = 100.0
+
+
 def _frozen(v):
     return tuple(_frozen(x) for x in v) if isinstance(v, list) else v
 
@@ -492,6 +505,9 @@ def _rows_pattern(doc: dict, src: str, name: str, desc: str) -> Pattern:
                   ratio_ft=ratio_ft)
     if pat.volume_ml <= 0:
         raise LaneError(f"{src}: rows: the brush leaves no oil on the lane")
+    if pat.volume_ml > MAX_VOLUME_ML:
+        raise LaneError(f"{src}: rows: lay {pat.volume_ml:,.0f} ml on one lane, more than {MAX_VOLUME_ML:g} ml (the "
+                        f"published sheets shipped lay 21-25 ml): check each row's loads and ul (microlitres a board)")
     return pat
 
 
@@ -510,6 +526,13 @@ def pattern_from_dict(doc, src: str = "<pattern>") -> Pattern:
     """
     if not isinstance(doc, dict):
         raise LaneError(f"{src}: a pattern file must be a JSON object")
+    extra = sorted(set(doc) - _TOP_KEYS)
+    if extra:
+        import difflib
+
+        near = difflib.get_close_matches(extra[0], sorted(_TOP_KEYS), n=1)
+        raise LaneError(f"{src}: {extra[0]}: not a pattern field" + (f" (did you mean {near[0]!r}?)" if near else
+                                                                    f" (fields: {', '.join(sorted(_TOP_KEYS))})"))
     if doc.get("format") != FORMAT:
         raise LaneError(f"{src}: format: must be {FORMAT!r}, got {doc.get('format')!r}")
     if doc.get("version") not in VERSIONS or isinstance(doc.get("version"), bool):

@@ -189,10 +189,37 @@ def move_for(boards, spread: float = 0.0) -> float:
     return float(math.copysign(max(0.5, round(2 * abs(miss) / MOVE_BOARDS) / 2), miss))
 
 
+#: How far to either side of a straight spare ball's line (its centre) a pin's spot may stand and
+#: still be struck (m): the ball's radius plus the pin's widest (4.766 in across, USBC).
+SPARE_REACH = scene.BALL_RADIUS + 0.5 * 4.766 * 0.0254
+
+
+def spare_target(pins, hand: str) -> tuple[int, ...]:
+    """The pins of a leave the series' spare ball is aimed through (its middle: :func:`spare_line`):
+    of the leave's pins and every group of them, the one whose middle has the most pins within
+    :data:`SPARE_REACH` of it, across the lane (ties: the whole leave, then the larger group, then
+    the one nearer the lane's middle, then the one on the side away from the bowler's hand, which
+    a cross-lane ball reaches best). A leave whose middle a ball can reach with a pin keeps it (the
+    3-10, the 4-7; a slide of one pin into another can come of it); at a wide split, whose middle
+    is bare wood (the 4-10, the 7-10), the ball takes a pin for the count, as a coach would."""
+    pins = sorted(int(p) for p in pins)
+    ys = {p: float(scene.pin_spots()[p - 1][1]) for p in pins}
+    s = lane.hand_sign(hand)
+    groups = [tuple(p for k, p in enumerate(pins) if m >> k & 1) for m in range(1, 1 << min(len(pins), 10))]
+
+    def rank(g: tuple[int, ...]) -> tuple:
+        mid = float(np.mean([ys[p] for p in g]))
+        reached = sum(1 for p in pins if abs(ys[p] - mid) <= SPARE_REACH)
+        return (reached, len(g) == len(pins), len(g), -round(abs(mid), 6), s * mid)
+
+    return max(groups, key=rank)
+
+
 def spare_line(pins, hand: str, oil, ball: lane.Ball | None = None) -> lane.Delivery:
     """The straight spare ball (:data:`.spares.SPARE_BALL`: 17 mph, 200 rpm) through the middle of
-    ``pins``, from across the lane, aimed on the fresh ``oil`` (:func:`.spares.straight_at`)."""
-    x, y = spares.aim_point(pins)
+    the pins of ``pins`` it can reach most of (:func:`spare_target`: the whole leave unless its
+    middle is bare wood), from across the lane, aimed on the fresh ``oil`` (:func:`.spares.straight_at`)."""
+    x, y = spares.aim_point(spare_target(pins, hand))
     return spares.straight_at(x, y, hand=hand, oil=oil, ball=ball)
 
 

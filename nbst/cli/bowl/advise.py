@@ -190,11 +190,12 @@ def noise_line(bowler, nz) -> str:
 
 def spare_frames(leave: str, screen: int, samples: int, polish: int) -> int:
     """Frames :func:`.spares.best_spare` runs at ``leave`` at most (its candidates screened, three
-    screened more, the measures: the 3-6-9 line, the pick, the line taking the most pins, the
-    polish and its measures)."""
+    screened more, the measures: the 3-6-9 line, the pick, the lines for the count, the polish and
+    its measures)."""
     from nbst.models.bowling.lane import spares
 
-    return 3 * samples + spares.candidate_count(leave) * screen + 3 * 2 * screen + 9 + (polish + 2 * samples) * (polish > 0)
+    return ((3 + spares.COUNT_LINES) * samples + spares.candidate_count(leave) * screen + 3 * 2 * screen + 9
+            + (polish + 2 * samples) * (polish > 0))
 
 
 def _grid(text: str, flag: str, lo: float, hi: float) -> list:

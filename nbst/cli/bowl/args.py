@@ -143,6 +143,8 @@ def oil_flag(t) -> None:
 
 #: The delivery flags (their defaults: :func:`delivery_defaults`).
 DELIVERY_KEYS = ("hand", "board", "at", "angle", "mph", "rpm", "rotation", "tilt")
+#: A release speed above this (mph) gets a note: no bowler's, and most likely km/h (30 km/h is 18.6 mph).
+FAST_MPH = 24.0
 #: Where a --board given without --at is: at the arrows.
 BOARD_AT = "arrows"
 
@@ -287,6 +289,12 @@ def delivery_of(args, base=None):
     from nbst.models.bowling import lane
 
     g = given(args)
+    if g.get("mph", 0) > FAST_MPH and not getattr(args, "quiet", False):   # km/h given for mph, most likely
+        import sys
+
+        print(f"note: --mph {g['mph']:g} is far faster than bowlers release (the pro profile's 18.6 mph is PBA League "
+              f"2020's men's mean); if you meant km/h, {g['mph']:g} km/h is {g['mph'] / 1.609344:.1f} mph",
+              file=sys.stderr)
     st = stance_target(args)
     d = lane.Delivery(**delivery_defaults()) if base is None else base
     over = {k: v for k, v in g.items() if k in DELIVERY_KEYS}
@@ -324,10 +332,19 @@ def ball_of(args):
 
     from nbst.models.bowling.lane.ball import BALLS, DEFAULT_BALL
 
+    from nbst.models.bowling.lane import LaneError
+
     base = BALLS[getattr(args, "ball", None) or DEFAULT_BALL]
-    over = {k: getattr(args, a) for k, a in (("weight_lb", "weight"), ("rg", "rg"), ("diff", "diff"),
-                                              ("friction", "cover")) if getattr(args, a, None) is not None}
-    return replace(base, **over).check()
+    flags = (("weight_lb", "weight"), ("rg", "rg"), ("diff", "diff"), ("friction", "cover"))
+    over = {k: getattr(args, a) for k, a in flags if getattr(args, a, None) is not None}
+    try:
+        return replace(base, **over).check()
+    except LaneError as e:   # the flag given, by its name on the command line (not the ball's field)
+        text = str(e)
+        for k, a in flags:
+            if k in over and text.startswith(f"ball.{k}:"):
+                raise InputError(f"--{a} {over[k]:g}:{text[len(f'ball.{k}:'):]}") from None
+        raise
 
 
 def mc_flags(t, samples: int, what: str) -> None:

@@ -328,9 +328,10 @@ def frame_lines(doc: dict) -> list[str]:
     if "probability" in doc:
         e = doc["probability"]
         top = ", ".join(f"{k or 'none'} {v}" for k, v in list(e["leaves"].items())[:5])
-        out.append(f"probability   {100 * e['p']:.0f}% converted ({e['k']}/{e['n']}; 95% CI {100 * e['lo']:.0f}-"
+        done = "strikes" if len(r["in_play"]) == 10 else "converted"   # a full rack's every pin down is a strike
+        out.append(f"probability   {100 * e['p']:.0f}% {done} ({e['k']}/{e['n']}; 95% CI {100 * e['lo']:.0f}-"
                    f"{100 * e['hi']:.0f}%), seed {e['seed']}; leaves: {top}")
-        out.append(f"note          {advise.SAMPLE_NOTE}: the probability above is the result")
+        out.append(f"note          {advise.SAMPLE_NOTE}, as above")
     else:
         out.append(f"note          {advise.SAMPLE_NOTE}: run --probability N for it")
     return out

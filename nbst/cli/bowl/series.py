@@ -153,6 +153,7 @@ def series_lines(doc: dict) -> list[str]:
            f"pocket: boards {doc['pocket_boards'][0]:g}-{doc['pocket_boards'][1]:g} at the head pin"]
     for run in doc["runs"]:
         out.append(f"move {run['move']}" + (f": {len(run['moves'])} moves" if run["move"] != "none" else ""))
+        out += _move_lines(run)
         for s in run["summary"]:
             bp = "none" if s["breakpoint_ft"] is None else f"{s['breakpoint_ft']:.1f} ft, board {s['breakpoint_board']:.1f}"
             ent = "none" if s["entry_angle_deg"] is None else f"{s['entry_angle_deg']:.2f} deg"
@@ -162,6 +163,29 @@ def series_lines(doc: dict) -> list[str]:
                        f"  strikes {s['strikes']:>2}  breakpoint {bp}  entry {ent}  at the pins board {at}")
         sc = "; ".join(f"bowler {k}: " + ", ".join(str(g[-1]) if g else "-" for g in v) for k, v in run["scores"].items())
         out.append(f"  scores  {sc}")
+    return out
+
+
+def _move_lines(run: dict) -> list[str]:
+    """Each move of a run in a bowler's words: after which ball, where the bowler now stands and looks
+    (the strike line's stance and arrows board plus the move's feet and target, in the bowler's own
+    boards)."""
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import advise, transition
+
+    base = {}
+    for b in run.get("bowlers", []):
+        d = lane.Delivery(**b["strike"])
+        base[b["index"]] = (advise.stance_of(d.foul_board()), transition._arrow_board(d))
+    out = []
+    for m in run.get("moves", []):
+        if m["bowler"] not in base:
+            continue
+        stance, arrow = base[m["bowler"]]
+        who = f"bowler {m['bowler']} " if len(base) > 1 else ""
+        out.append(f"  after ball {m['after_ball']}: {who}stands on {stance + m['feet']:.1f} and looks at "
+                   f"{advise.arrow_text(arrow + m['target'])} (in all, feet {m['feet']:+g}, target {m['target']:+g} "
+                   f"boards; + is in)")
     return out
 
 
