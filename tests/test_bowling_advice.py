@@ -64,15 +64,16 @@ def test_the_big_four_is_shot_for_the_count_two_pins_a_side():
 # --------------------------------------------------------------------------- the pick
 
 
-def _fake(monkeypatch, outcomes: dict):
-    """best_spare over three stand-in lines whose noisy frames take the pins ``outcomes[board]``
-    (one list of pins down per throw, cycled); no physics."""
-    lines = [("3-6-9", 1.0), ("the 7 alone", 2.0), ("slide", 3.0)]
+def _fake(monkeypatch, outcomes: dict, lines=(("3-6-9", 1.0), ("the 7 alone", 2.0), ("slide", 3.0)),
+          screening: dict | None = None):
+    """best_spare over stand-in ``lines`` (label, board) whose noisy frames take the pins
+    ``outcomes[board]`` (one list of pins down per throw, cycled), or in the screening (its seeds
+    are seed + 1000 + c and seed + 2000 + c) ``screening[board]`` where given; no physics."""
     monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, lane.Delivery(board=b, at="foul"))
                                                                    for lbl, b in lines])
 
     def probability(d, n, seed, *, runner, standing, noise=None, on_done=None, want=None):
-        seq = outcomes[d.board]
+        seq = (screening or {}).get(d.board, outcomes[d.board]) if seed >= 1000 else outcomes[d.board]
         rs = [SimpleNamespace(down=seq[i % len(seq)], leave=[p for p in standing if p not in seq[i % len(seq)]],
                               converted=set(seq[i % len(seq)]) == set(standing), timestep=0.001) for i in range(n)]
         return estimate(rs, seed, noise or default), rs
@@ -141,24 +142,9 @@ def test_a_pick_the_fresh_throws_find_weaker_than_a_sure_pin_gets_the_count_line
     0.95 pins a throw, where the 4 alone and the 9 alone each took 1.0 in the screening; no count
     line was given (the pick had taken the most pins in the screening). Its fresh throws taking
     fewer than the next line's screening did, that line is measured on the same fresh throws."""
-    lines = [("3-6-9", 1.0), ("the 4 alone", 2.0), ("slide", 3.0)]
-    monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, lane.Delivery(board=b, at="foul"))
-                                                                   for lbl, b in lines])
-    estimate, default = noise.estimate, noise.DEFAULT
-
-    def probability(d, n, seed, *, runner, standing, noise=None, on_done=None, want=None):
-        fresh = seed < 1000                         # the screening's seeds are seed + 1000 + c and seed + 2000 + c
-        seq = {1.0: [[]], 2.0: [[4]], 3.0: [[4, 9], [], [], []] if fresh else [[4, 9], [4, 9], [4, 9], []]}[d.board]
-        rs = [SimpleNamespace(down=seq[i % len(seq)], leave=[p for p in standing if p not in seq[i % len(seq)]],
-                              converted=set(seq[i % len(seq)]) == set(standing), timestep=0.001) for i in range(n)]
-        return estimate(rs, seed, noise or default), rs
-
-    monkeypatch.setattr(noise, "probability", probability)
-    monkeypatch.setattr(frame, "ladder", lambda d, oil, ball, standing: probability(d, 3, 0, runner=None,
-                                                                                    standing=standing)[1])
-    monkeypatch.setattr(frame, "run_frame", lambda d, oil, ball, standing, extra_s=0.0: probability(
-        d, 1, 0, runner=None, standing=standing)[1][0])
-    res = spares.best_spare("4-9", 8, 1, runner=SimpleNamespace(oil="house", ball=None), screen=4, polish=0)
+    R = _fake(monkeypatch, {1.0: [[]], 2.0: [[4]], 3.0: [[4, 9], [], [], []]},
+              lines=[("3-6-9", 1.0), ("the 4 alone", 2.0), ("slide", 3.0)], screening={3.0: [[4, 9], [4, 9], [4, 9], []]})
+    res = spares.best_spare("4-9", 8, 1, runner=R, screen=4, polish=0)
     assert res.converts and res.best_label == "slide" and res.pins["mean"] == pytest.approx(0.5)
     assert res.most_pins["label"] == "the 4 alone" and res.most_pins["pins"]["mean"] == 1.0
 
@@ -168,24 +154,9 @@ def test_a_line_lucky_in_a_short_screening_does_not_hide_the_sure_pin(monkeypatc
     throws and 0.2 on the 20 fresh ones, fewer than the pick's 0.4; it was the one line measured for
     the count, so no count line was given, where the 4 alone takes 1.0 every throw. Now the two best
     other lines and the best one-pin line are all measured on the fresh throws."""
-    lines = [("3-6-9", 1.0), ("slide", 2.0), ("the 4 alone", 3.0), ("lucky", 4.0)]
-    monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, lane.Delivery(board=b, at="foul"))
-                                                                   for lbl, b in lines])
-    estimate, default = noise.estimate, noise.DEFAULT
-
-    def probability(d, n, seed, *, runner, standing, noise=None, on_done=None, want=None):
-        fresh = seed < 1000
-        seq = {1.0: [[]], 2.0: [[4, 10], [], [4], [], []], 3.0: [[4]],
-               4.0: [[4], [], [], [], []] if fresh else [[4], [4], [4], [4, 10], [4], [4]]}[d.board]
-        rs = [SimpleNamespace(down=seq[i % len(seq)], leave=[p for p in standing if p not in seq[i % len(seq)]],
-                              converted=set(seq[i % len(seq)]) == set(standing), timestep=0.001) for i in range(n)]
-        return estimate(rs, seed, noise or default), rs
-
-    monkeypatch.setattr(noise, "probability", probability)
-    monkeypatch.setattr(frame, "ladder", lambda d, oil, ball, standing: probability(d, 3, 0, runner=None,
-                                                                                    standing=standing)[1])
-    monkeypatch.setattr(frame, "run_frame", lambda d, oil, ball, standing, extra_s=0.0: probability(
-        d, 1, 0, runner=None, standing=standing)[1][0])
-    res = spares.best_spare("4-10", 20, 1, runner=SimpleNamespace(oil="house", ball=None), screen=2, polish=0)
+    R = _fake(monkeypatch, {1.0: [[]], 2.0: [[4, 10], [], [4], [], []], 3.0: [[4]], 4.0: [[4], [], [], [], []]},
+              lines=[("3-6-9", 1.0), ("slide", 2.0), ("the 4 alone", 3.0), ("lucky", 4.0)],
+              screening={4.0: [[4], [4], [4], [4, 10], [4], [4]]})
+    res = spares.best_spare("4-10", 20, 1, runner=R, screen=2, polish=0)
     assert res.converts and res.best_label == "slide" and res.pins["mean"] == pytest.approx(0.6)
     assert res.most_pins["label"] == "the 4 alone" and res.most_pins["pins"]["mean"] == 1.0
