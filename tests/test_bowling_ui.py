@@ -389,3 +389,13 @@ def test_a_release_speed_no_bowler_throws_gets_a_note_of_km_per_hour(capsys):
     delivery_of(SimpleNamespace(mph=FAST_MPH, **keys))
     delivery_of(SimpleNamespace(mph=30.0, quiet=True, **keys))
     assert capsys.readouterr().err == ""
+
+
+def test_bowl_frame_has_no_samples_flag_it_never_read(capsys):
+    """`bowl frame --samples 5` was taken and ignored (its throws are --probability N's): a coach
+    thought 5 noisy throws were run. The flag is gone from frame, and refused in one line."""
+    from nbst.cli.main import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["bowl", "frame", "--samples", "5"])
+    assert e.value.code == 2 and "unrecognized arguments: --samples 5" in capsys.readouterr().err

@@ -347,14 +347,16 @@ def ball_of(args):
         raise
 
 
-def mc_flags(t, samples: int, what: str) -> None:
-    """--oil, --seed, --jobs, --samples, --json, -q: the Monte Carlo subcommands' flags."""
+def mc_flags(t, samples: int | None, what: str) -> None:
+    """--oil, --seed, --jobs, --samples, --json, -q: the Monte Carlo subcommands' flags (``samples``
+    None: no --samples, the command counting its throws another way, as frame's --probability N)."""
     oil_flag(t)
     t.add_argument("--seed", type=SEED, default=1, help="seed of the release noise (default 1: same command, "
                                                          "same numbers)")
     t.add_argument("--jobs", type=JOBS, default=None, metavar="K", help="processes running frames (default: all cores)")
-    t.add_argument("--samples", type=Bounded("samples", 1, 100_000, integer=True), default=samples, metavar="N",
-                   help=f"noisy throws per {what} (default {samples})")
+    if samples is not None:
+        t.add_argument("--samples", type=Bounded("samples", 1, 100_000, integer=True), default=samples, metavar="N",
+                       help=f"noisy throws per {what} (default {samples})")
     t.add_argument("--json", action="store_true", help="print the result as one JSON object")
     t.add_argument("-q", "--quiet", action="store_true", help="no progress")
 

@@ -88,7 +88,7 @@ def register_frame(bowl) -> None:
     f.add_argument("-o", "--output", default=None, metavar="THROW.json",
                    help="also write the throw file: delivery, ball, oil, pins standing, the settled outcome, and the "
                         "--probability estimate and --timesteps ladder when given; bowl replay runs it again")
-    mc_flags(f, 40, "estimate")
+    mc_flags(f, None, "estimate")   # its throws are --probability N's (a --samples here was never read)
     f.set_defaults(func=cmd_frame)
 
 
