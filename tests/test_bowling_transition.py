@@ -129,7 +129,7 @@ def test_two_and_one_moves_feet_two_boards_and_the_target_one():
     d = profiles.profile("pro").delivery()
     m = T.moved(d, T.MOVE_FEET, T.MOVE_TARGET)
     assert m.foul_board() - d.foul_board() == pytest.approx(2.0, abs=1e-12)
-    assert T._arrow_board(m) - T._arrow_board(d) == pytest.approx(1.0, abs=1e-9)
+    assert T.arrow_board(m) - T.arrow_board(d) == pytest.approx(1.0, abs=1e-9)
     assert m.angle > d.angle  # more angle out: the line opens
     assert T.moved(d, 0.0, 0.0).angle == pytest.approx(d.angle, abs=1e-9)
     n = T.MOVE_AFTER

@@ -145,8 +145,13 @@ def still_bodies(pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
             & np.isfinite(p).all(axis=(0, 2)) & np.isfinite(q).all(axis=(0, 2)))
 
 
+def _drawable(s: Solid) -> bool:
+    """Whether a solid has a triangle to write (three rows at least)."""
+    return len(s.rows) >= 3
+
+
 def _drawn(body: Body) -> bool:
-    return any(len(s.rows) >= 3 for s in body.solids)
+    return any(_drawable(s) for s in body.solids)
 
 
 def empty_note(motion: BodyMotion) -> str:
@@ -223,9 +228,7 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
         node = pg.Node(name=body.name, translation=[float(x) for x in motion.pos[0, b]],
                        rotation=[float(q0[1]), float(q0[2]), float(q0[3]), float(q0[0])])
         prims = []
-        for s in body.solids:
-            if len(s.rows) < 3:
-                continue
+        for s in filter(_drawable, body.solids):
             # corners shared by triangles (same position and normal) stored once, and indexed
             corners, inverse = np.unique(np.asarray(s.rows, np.float32), axis=0, return_inverse=True)
             v, nrm = np.ascontiguousarray(corners[:, :3]), corners[:, 3:]

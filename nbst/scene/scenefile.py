@@ -24,7 +24,7 @@ from nbst.files import FileRefused, read_regular
 from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, STILL_DISTANCE, Fates, FatesError, _Src,
                               parse_fates, read_fates_json)
 
-__all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "start_touches",
+__all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "geoms_named", "start_touches",
            "unforced_still_moves"]
 
 #: The MJCF elements whose attributes name files, and the <compiler> folder each resolves under.
@@ -167,7 +167,7 @@ def _can_touch(model: Any, body: int, name: str) -> bool:
     """Whether some geom of ``body`` may ever touch the body (its own geoms) or geom named ``name``."""
     import mujoco
 
-    others = _geoms_named(model, name)
+    others = geoms_named(model, name)
     mine = [g for g in range(model.ngeom) if int(model.geom_bodyid[g]) == body]
     pairs = set(zip(model.pair_geom1.tolist(), model.pair_geom2.tolist()))
     excluded = set(model.exclude_signature.tolist())
@@ -246,16 +246,16 @@ def check_against_model(fates: Fates, model: Any) -> None:
                     raise src.fail(f"fates.{fa.body}.{key}", f"{n!r} is the body itself" if n == fa.body
                                    else f"{n!r} is a geom of {fa.body!r} itself: a body never touches its own geoms")
                 if key == "hits" and not _can_touch(model, b, n):
-                    why = (f"{n!r} has no geoms (a flex's vertex bodies have none)" if not _geoms_named(model, n)
-                           else f"{fa.body!r} has no geoms" if not _geoms_named(model, fa.body)
+                    why = (f"{n!r} has no geoms (a flex's vertex bodies have none)" if not geoms_named(model, n)
+                           else f"{fa.body!r} has no geoms" if not geoms_named(model, fa.body)
                            else "MuJoCo collides no geom of one with one of the other (contype/conaffinity, "
                                 "<exclude>, contacts disabled, both fixed to the world, one rigid body, or a "
                                 "parent and its child)")
                     raise src.fail(f"fates.{fa.body}.{key}", f"{fa.body!r} can never touch {n!r} in "
                                    f"{fates.scene.name}: {why}")
-        never = set().union(*(_geoms_named(model, n) for n in fa.never_hits))
+        never = set().union(*(geoms_named(model, n) for n in fa.never_hits))
         for n in fa.hits:   # "hits b" with every geom of b in never_hits (by the geom's own name): a tester's
-            if _geoms_named(model, n) <= never:
+            if geoms_named(model, n) <= never:
                 raise src.fail(f"fates.{fa.body}.never_hits", f"every geom of {n!r}, which it hits, is in never_hits: "
                                                               f"no motion can both touch it and not")
 
@@ -274,7 +274,7 @@ def _other_kind(model: Any, name: str) -> str:
     return ""
 
 
-def _geoms_named(model: Any, name: str) -> set[int]:
+def geoms_named(model: Any, name: str) -> set[int]:
     """The geoms a ``hits`` name stands for: a body's own geoms, or the geom of that name."""
     import mujoco
 
@@ -339,7 +339,7 @@ def idle_fates(fates: Fates, model: Any) -> list[tuple[str, str]]:
             if not _can_touch(model, b, n):
                 out.append((fa.body, f"never_hits {n!r}, which it can never touch (no geom of one collides with one "
                                      f"of the other in MuJoCo's filters): that fate is always met"))
-        mine = _geoms_named(model, fa.body)
+        mine = geoms_named(model, fa.body)
         if fa.up is not None and mine and all(int(model.geom_type[g]) == mujoco.mjtGeom.mjGEOM_SPHERE for g in mine):
             out.append((fa.body, "asks up of a body whose every geom is a sphere: no face shows which way is up "
                                  "(only its frame's turn does)"))

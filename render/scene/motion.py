@@ -22,7 +22,7 @@ import numpy as np
 
 from nbst.scene.fates import Fates
 from nbst.scene.judge import Judgement
-from nbst.scene.scenefile import load_fates
+from nbst.scene.scenefile import geoms_named, load_fates
 from nbst.scene.solution import _floats, read_solution, replay_solution
 
 __all__ = ["Touch", "SceneMotion", "record", "load_solution_scene"]
@@ -134,9 +134,7 @@ def record(path: str | os.PathLike, times: np.ndarray) -> tuple[SceneMotion, Fat
     called: dict[tuple[str, int], str] = {}
     for f in fates.fates:
         for n in (*f.hits, *f.never_hits):
-            b = int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n))
-            gs = np.flatnonzero(m.geom_bodyid == b) if b >= 0 else [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)]
-            for g in gs:
+            for g in geoms_named(m, n):
                 called[(f.body, int(g))] = n
     seen: set[tuple[str, str]] = set()
     touches: list[Touch] = []

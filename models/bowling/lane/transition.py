@@ -53,7 +53,7 @@ from nbst.models.bowling.lane.reading import TARGET_BOARD, read_line
 from nbst.models.bowling.lane.noise import Noise
 from nbst.models.bowling.lane.oil import CELL_AREA, DX_FT, NX, OilField, OilLaw, Pattern, pattern
 
-__all__ = ["FORMAT", "VERSION", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
+__all__ = ["FORMAT", "VERSION", "arrow_board", "MOVES", "POCKET", "TARGET_BOARD", "MOVE_FEET", "MOVE_TARGET", "MOVE_AFTER", "MOVE_MISS", "MOVE_BOARDS",
            "MOVE_SPREAD_SE", "PIN_SPREAD_THROWS", "PIN_SPREAD_SEED", "pin_spread",
            "MAX_GAMES", "MAX_LINEUP", "TransitionError", "Bowler", "lineup", "moved", "move_for",
            "spare_line", "score", "Run", "summary", "series_dict", "check_series", "film_along",
@@ -156,7 +156,8 @@ def pin_spread(strike: lane.Delivery, noise: Noise, oil="house", ball: lane.Ball
 _SPREADS: dict = {}
 
 
-def _arrow_board(d: lane.Delivery) -> float:
+def arrow_board(d: lane.Delivery) -> float:
+    """The board ``d``'s straight line crosses at the arrows (its foul-line board and launch angle)."""
     return d.foul_board() - math.tan(math.radians(d.angle)) * lane.ARROWS_FT * lane.FT / lane.BOARD_WIDTH
 
 
@@ -165,7 +166,7 @@ def moved(strike: lane.Delivery, feet: float, target: float) -> lane.Delivery:
     bowler's own boards (+: in, away from the hand's gutter): the foul-line board and the launch
     angle of the line through the two."""
     fb = strike.foul_board() + feet
-    ab = _arrow_board(strike) + target
+    ab = arrow_board(strike) + target
     angle = math.degrees(math.atan((fb - ab) * lane.BOARD_WIDTH / (lane.ARROWS_FT * lane.FT)))
     return replace(strike, board=float(fb), at="foul", angle=float(angle))
 
@@ -203,7 +204,8 @@ def spare_target(pins, hand: str) -> tuple[int, ...]:
     3-10, the 4-7; a slide of one pin into another can come of it); at a wide split, whose middle
     is bare wood (the 4-10, the 7-10), the ball takes a pin for the count, as a coach would."""
     pins = sorted(int(p) for p in pins)
-    ys = {p: float(scene.pin_spots()[p - 1][1]) for p in pins}
+    spots = scene.pin_spots()
+    ys = {p: float(spots[p - 1][1]) for p in pins}
     s = lane.hand_sign(hand)
     groups = [tuple(p for k, p in enumerate(pins) if m >> k & 1) for m in range(1, 1 << min(len(pins), 10))]
 
@@ -430,7 +432,7 @@ class Run:
         except lane.LaneError:  # no candidate line reaches the pocket: stay
             return
         d = got["delivery"]
-        ln = [float(d.foul_board() - b.strike.foul_board()), float(_arrow_board(d) - _arrow_board(b.strike))]
+        ln = [float(d.foul_board() - b.strike.foul_board()), float(arrow_board(d) - arrow_board(b.strike))]
         self.readings[b.index] = []
         if max(abs(ln[0] - self.lines[b.index][0]), abs(ln[1] - self.lines[b.index][1])) > 1e-6:
             self.lines[b.index] = ln

@@ -176,7 +176,7 @@ def _move_lines(run: dict) -> list[str]:
     base = {}
     for b in run.get("bowlers", []):
         d = lane.Delivery(**b["strike"])
-        base[b["index"]] = (advise.stance_of(d.foul_board()), transition._arrow_board(d))
+        base[b["index"]] = (advise.stance_of(d.foul_board()), transition.arrow_board(d))
     out = []
     for m in run.get("moves", []):
         if m["bowler"] not in base:
