@@ -16,6 +16,8 @@ import os
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
+
 from nbst.errors import SolveError
 from nbst.parallel import JOBS_MAX
 from nbst.scene.cluster import ClusterSceneSim
@@ -28,10 +30,12 @@ from nbst.scene.search import DEFAULT_MAX_ROLLOUTS, SceneProgress, noisy_probabi
 from nbst.scene.solution import SceneResult
 from nbst.seeds import check_random_state, resolve_seed
 
-__all__ = ["solve", "LADDER"]
+__all__ = ["solve", "LADDER", "ANSWERS_MAX"]
 
 #: The finer steps of ``ladder=True``: h/2 and h/4.
 LADDER = (2, 4)
+#: The most answers one search looks for (``answers``; ``nbst scene solve --answers``).
+ANSWERS_MAX = 100
 
 
 def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, seed: int | None = None,
@@ -74,12 +78,14 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
         FatesError: the fates file or its scene is refused (one line naming the file and field).
         InputError: the seed is not an integer in range.
         SolveError: ``max_rollouts``, ``jobs`` (at most ``nbst.parallel.JOBS_MAX``) or ``answers``
-            is not an integer >= 1 (numpy's too), ``samples`` one >= 0, or ``robust`` one >= 12; ``fates``
-            or ``scene`` is of another type.
+            (at most :data:`ANSWERS_MAX`) is not an integer >= 1 (numpy's too), ``samples`` one >= 0,
+            or ``robust`` one >= 12; ``ladder`` is not a bool (numpy's too); ``callback`` is not
+            callable; ``cluster`` is not an address (a string) or a ``dask.distributed.Client``;
+            ``fates`` or ``scene`` is of another type.
         InputError: the cluster cannot be reached (one line).
     """
     for name, v, least, most in (("max_rollouts", max_rollouts, 1, None), ("jobs", jobs, 1, JOBS_MAX),
-                                 ("samples", samples, 0, None), ("answers", answers, 1, None)):
+                                 ("samples", samples, 0, None), ("answers", answers, 1, ANSWERS_MAX)):
         if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < least or (most and v > most):
             raise SolveError(f"{name} must be an integer >= {least}" + (f" and <= {most}" if most else "")
                              + f", got {v!r}")
@@ -87,6 +93,14 @@ def solve(scene: str | os.PathLike | None, fates: str | os.PathLike | Fates, *, 
     if robust is not None and (isinstance(robust, bool) or not isinstance(robust, numbers.Integral) or robust < 12):
         raise SolveError(f"robust must be None or an integer >= 12 (noisy rollouts), got {robust!r}")
     robust = None if robust is None else int(robust)
+    if not isinstance(ladder, (bool, np.bool_)):  # "false" or None read as truth would turn it on or off unasked
+        raise SolveError(f"ladder must be True or False, got {ladder!r}")
+    ladder = bool(ladder)
+    if callback is not None and not callable(callback):
+        raise SolveError(f"callback must be None or a function of a SceneProgress, got {type(callback).__name__}")
+    if cluster is not None and not isinstance(cluster, str) and not hasattr(cluster, "scheduler_info"):
+        raise SolveError(f"cluster must be None, a Dask scheduler's address (a string) or a "
+                         f"dask.distributed.Client, got {type(cluster).__name__}")
     if not isinstance(fates, (str, os.PathLike, Fates)):
         raise SolveError(f"fates must be a fates file's path, a built-in's name or a checked Fates (the first of "
                          f"load_fates' pair), got {type(fates).__name__}")

@@ -16,7 +16,7 @@ and :data:`AT_REST_SPIN` (``"at_rest"``), :data:`STILL_DISTANCE` (``"still"``), 
 (duration / timestep), :data:`MAX_MESH_BYTES`, :data:`DEFAULT_NOISE` (``"noise"``).
 
 No MuJoCo here. Length: the schema is read in one place, each field's check beside its parse
-(a second module would split one format's rules); about 510 lines.
+(a second module would split one format's rules); about 550 lines.
 """
 from __future__ import annotations
 
@@ -252,27 +252,58 @@ class _Src:
         return FatesError(self.source, field, why)
 
 
-class _Refused(Exception):
-    """Raised by the JSON parser's hooks; the loader turns it into a FatesError."""
+class _Bad:
+    """A number the parser read and refuses (NaN, Infinity, an integer of over 15 digits): kept in
+    place so that the loader names its field."""
+
+    def __init__(self, why: str):
+        self.why = why
 
 
-def _reject_constant(s: str) -> float:
-    raise _Refused(f"{s} is not a finite number")
+class _Twice(dict):
+    """An object with a key given twice (the last kept): kept so that the loader names its field."""
+
+    why = ""
+
+
+def _reject_constant(s: str) -> _Bad:
+    return _Bad(f"{s} is not a finite number")
 
 
 def _unique_keys(pairs: list[tuple[str, Any]]) -> dict:
     out: dict = {}
+    twice = None
     for k, v in pairs:
-        if k in out:
-            raise _Refused(f"the key {k!r} appears twice in one object")
+        if k in out and twice is None:
+            twice = k
         out[k] = v
-    return out
+    if twice is None:
+        return out
+    marked = _Twice(out)
+    marked.why = f"the key {twice!r} appears twice in one object"
+    return marked
 
 
-def _parse_int(s: str) -> int:
+def _parse_int(s: str) -> int | _Bad:
     if len(s.lstrip("-")) > 15:
-        raise _Refused(f"the integer {s[:20]}... has more than 15 digits")
+        return _Bad(f"the integer {s[:20]}... has more than 15 digits")
     return int(s)
+
+
+def _first_refused(obj: Any, field: str = "") -> tuple[str, str] | None:
+    """(the field, why) of the first value the parser refused in ``obj``, depth first, or None."""
+    if isinstance(obj, _Bad):
+        return field, obj.why
+    if isinstance(obj, _Twice):
+        return field, obj.why
+    items = (obj.items() if isinstance(obj, dict) else
+             ((f"[{i}]", v) for i, v in enumerate(obj)) if isinstance(obj, list) else ())
+    for k, v in items:
+        sub = (f"{field}{k}" if k.startswith("[") and isinstance(obj, list) else f"{field}.{k}" if field else k)
+        found = _first_refused(v, sub)
+        if found is not None:
+            return found
+    return None
 
 
 def _keys(src: _Src, obj: Any, field: str, allowed: tuple[str, ...], required: tuple[str, ...] = ()) -> dict:
@@ -501,13 +532,20 @@ def read_fates_json(path: Path) -> Any:
     """The JSON document of a fates file, read through nbst's bounded reader (FatesError if it is not JSON)."""
     data = read_regular(path, max_bytes=MAX_FATES_BYTES, what="fates file", allow_empty=False)
     try:
-        return json.loads(data.decode("utf-8"), parse_constant=_reject_constant, parse_int=_parse_int,
-                          object_pairs_hook=_unique_keys)
+        doc = json.loads(data.decode("utf-8"), parse_constant=_reject_constant, parse_int=_parse_int,
+                         object_pairs_hook=_unique_keys)
     except UnicodeDecodeError:
         raise FatesError(path, "", "not a text file (not UTF-8)") from None
     except json.JSONDecodeError as e:
         raise FatesError(path, "", f"not JSON: {e.msg} at line {e.lineno}, column {e.colno}") from None
-    except (_Refused, ValueError) as e:
+    except ValueError as e:
         raise FatesError(path, "", f"not accepted: {e}") from None
     except RecursionError:
         raise FatesError(path, "", "not accepted: nested too deeply") from None
+    try:
+        found = _first_refused(doc)
+    except RecursionError:
+        raise FatesError(path, "", "not accepted: nested too deeply") from None
+    if found is not None:
+        raise FatesError(path, found[0], f"not accepted: {found[1]}")
+    return doc

@@ -385,15 +385,18 @@ def load_fates(path: str | os.PathLike, *, scene: str | os.PathLike | None = Non
     """
     from nbst.scene.builtin import example_names, example_path
 
-    p = Path(path)
-    if not p.exists() and (ex := example_path(str(path))) is not None:
-        p = ex
-    elif not p.exists() and not p.is_symlink():  # a misspelt built-in is told its name
-        near = difflib.get_close_matches(str(path), example_names(), n=1)
-        if near:
-            raise FileRefused(path, f"no such file, nor a built-in example by that name (did you mean {near[0]!r}?)")
-    doc = read_fates_json(p)
-    fates = parse_fates(doc, str(path), folder=p.resolve().parent, scene=scene)
-    model = compile_scene(fates)
+    try:  # a file that cannot be read (missing, empty, a folder, a FIFO) is the fates' refusal too
+        p = Path(path)
+        if not p.exists() and (ex := example_path(str(path))) is not None:
+            p = ex
+        elif not p.exists() and not p.is_symlink():  # a misspelt built-in is told its name
+            near = difflib.get_close_matches(str(path), example_names(), n=1)
+            if near:
+                raise FileRefused(path, f"no such file, nor a built-in example by that name (did you mean {near[0]!r}?)")
+        doc = read_fates_json(p)
+        fates = parse_fates(doc, str(path), folder=p.resolve().parent, scene=scene)
+        model = compile_scene(fates)
+    except FileRefused as e:
+        raise FatesError(e.path, "", e.reason) from None
     check_against_model(fates, model)
     return fates, model

@@ -50,7 +50,9 @@ component of its ``linvel`` held fixed): the velocity that would carry its origi
 (the model's gravity, no contacts) to a point of the region in a random flight time (``at``: its
 time). A body that may not fly (a ball rolling on a table, a pushed domino) and must hit something
 is aimed in a straight line through its free components at a point within the two bounding radii
-of its first ``hits`` name, at a speed its ranges allow. Half the time (and always for a body with
+of its first ``hits`` name, at a speed its ranges allow. A body that may fly and must first hit
+another body that may fly is aimed with it: both blocks redrawn, the two origins carried
+ballistically to one point at one time (:meth:`_Scene._aim_meet`). Half the time (and always for a body with
 neither aim) it instead takes the block of the member whose body is nearest its fates and creeps it
 (sigma 0.04), or, with no members yet, draws the block uniformly.
 
@@ -78,6 +80,8 @@ __all__ = ["DEFAULT_MAX_ROLLOUTS", "BATCH", "POPULATION", "PER_SIGNATURE", "INIT
            "SceneSearchResult", "signature_search", "noisy_probability",
            "distance_of", "ladder_check"]
 
+#: Draws of a meeting point and time for two bodies that must hit each other (``_Scene._aim_meet``).
+MEET_DRAWS = 20
 #: The rollout budget when none is given (the CLI's --max-rollouts default too).
 DEFAULT_MAX_ROLLOUTS = 3000
 #: Children made and rolled out together (fixed, so the result does not depend on the threads).
@@ -219,6 +223,15 @@ class _Scene:
         #: name of its ``hits`` is at the start, and the sum of the two bounding radii (None: no ``hits``, a
         #: plane, or a body that may fly): the aim of directed randomize
         self.hit_target: list[tuple[np.ndarray, float] | None] = [None] * len(self.blocks)
+        #: per block of a body that may fly whose first ``hits`` name is another body that may fly: that
+        #: body's block (None: not so): directed randomize aims the two at one point at one time
+        self.meet: list[int | None] = [None] * len(self.blocks)
+        block_of = {c.body: k for k, c in enumerate(f.controls)}
+        for i, bit in enumerate(self.bit):
+            if bit is not None and f.fates[bit].hits and self.free_flight[i]:
+                j = block_of.get(f.fates[bit].hits[0])
+                if j is not None and j != i and self.free_flight[j]:
+                    self.meet[i] = j
         if sim.near:
             import mujoco
 
@@ -268,7 +281,8 @@ class _Scene:
         place = (fate is not None and c.linvel is not None and (fate.rest_in is not None or fate.at)
                  and self.free_flight[i])
         hit = self.hit_target[i]
-        aimable = place or hit is not None
+        meet = self.meet[i]
+        aimable = place or hit is not None or meet is not None
         sl = self.blocks[i]
         pop = eng.population
         if pop and (not aimable or rng.random() < 0.5):
@@ -285,6 +299,9 @@ class _Scene:
         assert fate is not None
         k = [p for p, _ in c.parts()].index("linvel")
         a = sl.start + 3 * k
+        if meet is not None and (not place or rng.random() < 0.5):
+            self._aim_meet(rng, u, i, a, meet)
+            return
         if hit is not None and (not place or rng.random() < 0.5):
             v = self._aim_hit(rng, i, a, *hit)
             if v is None:
@@ -319,6 +336,28 @@ class _Scene:
         if not s_lo < s_hi:
             return None
         return np.where(live, float(rng.uniform(s_lo, s_hi)) * d, lo)
+
+    def _aim_meet(self, rng: np.random.Generator, u: np.ndarray, i: int, a: int, j: int) -> None:
+        """Blocks ``i`` (its linvel at ``a``) and ``j`` of the whole unit point ``u`` (in place): the
+        ballistic velocities (the model's gravity, no contacts) that bring both origins to one point at
+        one time, drawn: a point between the two starts (a random fraction of the way, 0.25-0.75),
+        moved across by up to half their distance apart and raised by up to all of it, the time as :meth:`_aim_place`'s; the first of
+        :data:`MEET_DRAWS` draws whose two velocities lie in their ranges (else the last, clipped)."""
+        oi, oj = self.origin[i], self.origin[j]
+        gap = float(np.linalg.norm(oj - oi))
+        b = self.blocks[j].start + 3 * [p for p, _ in self.fates.controls[j].parts()].index("linvel")
+        u[self.blocks[j]] = rng.random(self.blocks[j].stop - self.blocks[j].start)
+        x = self.x_full(u)
+        for _ in range(MEET_DRAWS):
+            point = (oi + rng.uniform(0.25, 0.75) * (oj - oi)
+                     + gap * np.array([rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(0.0, 1.0)]))
+            t = float(rng.uniform(0.1, max(0.2, min(1.0, 0.5 * self.fates.duration))))
+            for at, o in ((a, oi), (b, oj)):
+                x[at:at + 3] = (point - o - 0.5 * self.gravity * t * t) / t
+            if all(np.all((self.lo[k:k + 3] <= x[k:k + 3]) & (x[k:k + 3] <= self.hi[k:k + 3])) for k in (a, b)):
+                break
+        u[a:a + 3] = self.u_of(x)[a:a + 3]
+        u[b:b + 3] = self.u_of(x)[b:b + 3]
 
     def _aim_place(self, rng: np.random.Generator, i: int, fate: Any) -> np.ndarray:
         """The ballistic velocity of block ``i`` to a point of its region (``at`` or ``rest_in``)."""
