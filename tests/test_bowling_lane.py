@@ -241,3 +241,14 @@ def test_bowl_throw_refuses_bad_input_in_one_line(args, says):
     out = _nbst(*args)
     assert out.returncode == 2
     assert len(out.stderr.strip().splitlines()) == 1 and says in out.stderr and "Traceback" not in out.stderr
+
+
+def test_a_ball_that_drifts_out_all_the_way_has_no_breakpoint():
+    """A stroker's weak ball (14 mph, 300 rpm, rotation 20, tilt 15) thrown out at 3.17 deg from board 18
+    goes out to the pins' line (board 3.8): it never comes back a quarter board, so it has no
+    breakpoint (a fourth coach read "breakpoint 59.2 ft" on it, at 0.0 deg of entry)."""
+    d = lane.Delivery(board=18.0, at="foul", angle=3.17, mph=14, rpm=300, rotation=20, tilt=15)
+    r = lane.throw(d, "house")
+    board = r.path["board"]
+    assert board[-1] - board.min() < lane.BREAKPOINT_MIN  # the path itself: it did not come back
+    assert r.breakpoint_ft is None and r.breakpoint_board is None

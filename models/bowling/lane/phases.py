@@ -42,7 +42,8 @@ FLARE_FT = 40.0
 #: The hook starts (the skid ends) where the ball's sideways acceleration towards the pocket
 #: first reaches this share of its peak.
 HOOK_SHARE = 0.5
-#: A breakpoint needs the ball to move out at least this many boards from its release.
+#: A breakpoint needs the ball to move out at least this many boards from its release, and to come
+#: back at least as many by the pins (a ball that drifts out all the way has none).
 BREAKPOINT_MIN = 0.25
 
 
@@ -52,7 +53,7 @@ class ThrowResult:
 
     ``skid_ft``: where the hook starts (sideways acceleration towards the pocket first reaches
     HOOK_SHARE of its peak); ``breakpoint_ft``/``breakpoint_board``: where the ball is farthest
-    out (its board stops falling; None when it never moves out), or, where it got there before the
+    out (its board stops falling; None when it never moves out, or never comes back), or, where it got there before the
     hook started (a slow, low-rev ball curling on the oil, then drifting back), the hook start:
     where it turns, so the breakpoint never comes before the hook; ``roll_ft``: where the contact
     point's slip first drops below ROLL_SLIP (None if it never rolls before the pins);
@@ -251,7 +252,7 @@ def throw(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: Oil
     # breakpoint: the ball's farthest board out, if it went out at least BREAKPOINT_MIN boards; where it got
     # there still skidding (before the hook starts) it drifted back on the oil and turns at the hook start
     far = int(np.argmin(board))
-    bp_i = far if board[0] - board[far] >= BREAKPOINT_MIN and far < len(board) - 1 else None
+    bp_i = far if board[0] - board[far] >= BREAKPOINT_MIN and board[-1] - board[far] >= BREAKPOINT_MIN else None
     if bp_i is not None and skid_i is not None and skid_i > bp_i:
         bp_i = skid_i
     rolled = np.flatnonzero(slip_h < ROLL_SLIP)

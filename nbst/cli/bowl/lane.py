@@ -183,7 +183,7 @@ def line_lines(ln: dict) -> list[str]:
     """The line (advise.line_of) as readout lines: stance and target, breakpoint, entry and the hit."""
     from nbst.models.bowling.lane.advise import arrow_text
 
-    bp = ("none (the ball never moved out)" if ln["breakpoint_ft"] is None
+    bp = ("none (the ball never moved out and came back)" if ln["breakpoint_ft"] is None
           else f"{ln['breakpoint_ft']:.1f} ft, board {ln['breakpoint_board']:.1f}")
     return [f"stance       board {ln['stance_board']:.1f} (the ball released on board {ln['foul_board']:.1f}, "
             f"{ln['separation_boards']:g} boards from the slide foot)",
