@@ -13,8 +13,9 @@
 * **Spare advice** (:func:`advise_leave`): the spare tool's best line at the leave
   (:func:`.spares.best_spare` under the bowler's noise), said as stance and target, with the
   conversion probability and its 95 % Wilson interval and the pins it takes (mean, counts, 95 %
-  interval). Where no line converts (a 7-9, a big four) it says so and gives the line that takes
-  the most pins; a slide (the 4 driven into the 9) is among the lines tried.
+  interval). Where no line converts (a 7-9, a big four), or the pick converts none of its
+  measured throws, it says so and gives the line that takes the most pins on the measured
+  throws; a slide (the 4 driven into the 9) is among the lines tried.
 * **The stance at the edge**: boards are numbered 1-39 on the approach as on the lane; a ball
   released within :data:`STANCE_SEP` boards of the far edge would need the slide foot off the
   numbered boards, so the advice stands the bowler on board 39 and says how close to the foot
@@ -26,7 +27,17 @@
   the same way: "The fundamentals of target line adjustments", Bowling This Month,
   2017-03-20), one step per :data:`BOARDS_PER_STEP` boards the ball missed the pocket's middle
   by (at least one). The advice is checked on the lane: the moved line is thrown (the ball
-  alone, no noise) and its board at the pins reported beside the old one.
+  alone, no noise) and its board at the pins reported beside the old one. After a **gutter
+  ball** at a full rack the move is the same 2-and-1 the way the ball went (the hand's gutter:
+  towards the hand, so the ball stays away from it), as many steps as bring the moved line,
+  thrown, nearest the pocket (up to :data:`GUTTER_STEPS`).
+* **Spare advice after a frame**: never the pocket. A converted spare: stay. A missed one (or
+  a gutter ball): where the ball passed the leave's aim point (:func:`spare_aim`: the spare
+  tool's, the mean of the leave's key pins; the ball's heading at the head pin's line carried
+  straight on to the aim's row) against the aim's board, and the eyes
+  moved with the feet kept (a spare ball's stance is often at the lane's edge, where a 2-and-1
+  move of the feet has no room): the target whose line, the ball alone, passes the aim point
+  (:func:`aim_through`), checked on the lane.
 
 Compute only: no files, no printing.
 """
@@ -39,8 +50,8 @@ from nbst.models.bowling import lane
 from nbst.models.bowling.lane import names as _names, spares, noise as _noise
 
 __all__ = ["STANCE_SEP", "ARROW_BOARDS", "BOARDS_PER_STEP", "POCKET_MIDDLE", "stance_of", "arrow_text", "line_of",
-           "aim_target", "Move", "move_after", "LeaveAdvice", "advise_leave", "SAMPLE_NOTE", "stance_text",
-           "pins_text"]
+           "aim_target", "Move", "GUTTER_STEPS", "board_past", "spare_aim", "aim_through", "move_after",
+           "LeaveAdvice", "advise_leave", "SAMPLE_NOTE", "stance_text", "pins_text", "pins_rate"]
 
 #: Boards from the slide foot to the ball at release (assumed; see the module docstring).
 STANCE_SEP = 7.0
@@ -82,7 +93,8 @@ def line_of(r) -> dict:
             "foul_board": float(r.board_at_foul_line), "target_board": float(r.board_at_arrows),
             "target": arrow_text(r.board_at_arrows), "breakpoint_ft": r.breakpoint_ft,
             "breakpoint_board": r.breakpoint_board, "entry_board": float(r.board_at_pins),
-            "entry_angle_deg": float(r.entry_angle_deg), "hit": _names.hit_name(r.board_at_pins)}
+            "entry_angle_deg": float(r.entry_angle_deg),
+            "hit": _names.hit_name(r.board_at_pins, (r.delivery or {}).get("hand", "right"))}
 
 
 def aim_target(delivery: lane.Delivery, target: float, oil="house", ball=None, *, tol: float = 0.05,
@@ -107,9 +119,13 @@ def aim_target(delivery: lane.Delivery, target: float, oil="house", ball=None, *
 
 @dataclass
 class Move:
-    """A strike-line move after a frame: the names of the hit and leave, the steps (2-and-1, +
-    left: towards higher boards, away from the hand), the new stance and target, and the moved
-    line's board at the pins (the ball alone) beside the old one."""
+    """A move after a frame: the names of the hit and leave, the steps (2-and-1, + left: towards
+    higher boards, away from the hand; 0 for a spare's move of the eyes alone), the direction
+    ("stay" where nothing is to move), the new stance and target, and the moved line's board at the
+    pins (the ball alone) beside the old one; ``aim``: what the ball had to meet (the pocket, or a
+    spare's aim point, :func:`spare_aim`) on board ``aim_board`` at ``aim_ft`` past the head pin's
+    line, ``board_at_aim``/``new_board_at_aim`` the frame's ball and the moved line's there (their
+    heading at the head pin's line carried straight on); ``gutter``: side and ft of a gutter ball."""
 
     names: dict
     steps: int
@@ -122,9 +138,85 @@ class Move:
     new_board_at_pins: float | None
     delivery: dict
     text: str
+    aim: str = "the pocket 17-18"
+    aim_board: float = POCKET_MIDDLE
+    aim_ft: float = 0.0
+    board_at_aim: float | None = None
+    new_board_at_aim: float | None = None
+    gutter: dict | None = None
+    check_text: str = ""
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+#: The most 2-and-1 steps tried after a gutter ball (:func:`move_after`): 10 steps move the feet 20 boards.
+GUTTER_STEPS = 10
+
+
+def board_past(board: float, entry_deg: float, x: float) -> float:
+    """The board ``x`` m past the head pin's line of a ball on ``board`` there heading ``entry_deg``
+    (+ towards higher boards), carried straight on."""
+    return float(board) + math.tan(math.radians(entry_deg)) * x / lane.BOARD_WIDTH
+
+
+def spare_aim(standing, hand: str = "right") -> tuple[tuple, float, float]:
+    """(pins aimed through, x m past the head pin's line, board) of a spare ball at the pins
+    ``standing``: the spare tool's aim point (``bowl spares``, ``advise --leave``: the mean of the
+    leave's key pins, :func:`.spares.leave_spec` and :func:`.spares.aim_point`; a left-hander's
+    leave looked up as its mirror image), boards counted from ``hand``'s gutter."""
+    name = "-".join(str(p) for p in sorted(int(p) for p in standing))
+    if hand == "left":
+        key = tuple(sorted(spares.MIRROR[p] for p in spares.leave_spec(spares.mirrored(name))[0]))
+    else:
+        key = tuple(spares.leave_spec(name)[0])
+    x, y = spares.aim_point(key)
+    return key, x, float(lane.y_to_board(y, hand))
+
+
+def aim_through(delivery: lane.Delivery, board: float, x: float, oil="house", ball=None, *, tol: float = 0.25,
+                iters: int = 8):
+    """(delivery, ThrowResult): ``delivery`` (its board at the foul line kept) with the launch angle
+    whose ball, alone, is on ``board`` ``x`` m past the head pin's line (:func:`board_past`): Newton's
+    step with the straight-line slope, halving back from a gutter ball; LaneError (one line) otherwise."""
+    d = replace(delivery.check(), board=delivery.foul_board(), at="foul")
+    dist = x - lane.FOUL_LINE_X
+    per_deg = dist * math.radians(1.0) / lane.BOARD_WIDTH   # boards per degree there, straight
+    a, prev = math.degrees(math.atan((d.board - board) * lane.BOARD_WIDTH / dist)), None
+    for _ in range(iters):
+        d = replace(d, angle=float(min(10.0, max(-10.0, a)))).check()
+        try:
+            r = lane.throw(d, oil, ball)
+        except lane.GutterBall:
+            if prev is None:
+                break
+            a = (a + prev) / 2
+            continue
+        off = board_past(r.board_at_pins, r.entry_angle_deg, x) - board
+        if abs(off) <= tol:
+            return d, r
+        prev, a = a, a + off / per_deg
+    raise lane.LaneError(f"target: no launch angle from board {d.board:.1f} puts the ball on board {board:.1f} "
+                         f"at the aim")
+
+
+def _here(d: lane.Delivery, oil, ball):
+    """(stance, target at the arrows, gutter dict or None) of the frame's line, the ball alone: a
+    gutter ball's target is where its path crossed the arrows (the straight line's, gone before)."""
+    try:
+        r = lane.throw(d, oil, ball)
+        return stance_of(r.board_at_foul_line), float(r.board_at_arrows), None
+    except lane.GutterBall as g:
+        _, p, _, _, _ = lane.run(d, oil, ball)
+        ft, foul = lane.x_to_ft(p[:, 0]), d.foul_board()
+        t = (lane.board_at(ft, lane.y_to_board(p[:, 1], d.hand), lane.ARROWS_FT) if ft[-1] >= lane.ARROWS_FT
+             else foul - math.tan(math.radians(d.angle)) * lane.ARROWS_FT * lane.FT / lane.BOARD_WIDTH)
+        return stance_of(foul), float(t), {"side": g.side, "ft": round(g.ft, 2)}
+
+
+def _way(sign: float, hand: str) -> str:
+    """The bowler's word for a move towards higher boards (sign > 0: away from the hand) or lower."""
+    return ("left" if sign > 0 else "right") if hand == "right" else ("right" if sign > 0 else "left")
 
 
 def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -> Move:
@@ -132,13 +224,19 @@ def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -
     ``check``: throw the moved line (the ball alone) and report its board at the pins."""
     d = lane.Delivery(**frame_doc["delivery"])
     o = frame_doc["outcome"]
-    nm = _names.names(frame_doc["standing"], o["leave"], o["board_at_pins"], o["entry_angle_deg"], d.hand)
+    standing = frame_doc["standing"]
+    nm = _names.names(standing, o["leave"], o["board_at_pins"], o["entry_angle_deg"], d.hand)
     b = o["board_at_pins"]
+    stance, target, gutter = _here(d, oil, ball)
+    phrase = (_names.text(nm) if gutter is None
+              else f"a gutter ball (the {gutter['side']} gutter at {gutter['ft']:.1f} ft)")
+    if len(set(standing)) < 10:
+        return _spare_move(d, frame_doc, nm, phrase, stance, target, gutter, oil, ball, check)
+    if gutter is not None:
+        return _gutter_move(d, nm, phrase, stance, target, gutter, oil, ball)
     miss = 0.0 if b is None else float(b) - POCKET_MIDDLE   # + high (left of the pocket for a right-hander)
     steps = 0 if nm["hit"] == "pocket" or b is None else max(1, int(round(abs(miss) / BOARDS_PER_STEP)))
     sign = 1.0 if miss > 0 else -1.0    # high: left (higher boards); light: right (towards the hand)
-    here = lane.throw(d, oil, ball)
-    stance, target = stance_of(here.board_at_foul_line), float(here.board_at_arrows)
     ns, nt = stance + sign * 2 * steps, target + sign * steps
     nd = d
     new_b = None
@@ -146,8 +244,7 @@ def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -
         nd = aim_target(replace(d, board=ns - STANCE_SEP, at="foul"), nt, oil, ball)
         if check:
             new_b = float(lane.throw(nd, oil, ball).board_at_pins)
-    way = ("left" if sign > 0 else "right") if d.hand == "right" else ("right" if sign > 0 else "left")
-    phrase = _names.text(nm)
+    way = _way(sign, d.hand)
     if steps:
         txt = (f"{phrase}: move {steps} {way} (feet {2 * steps} boards, eyes {steps}: "
                f"{stance_text(ns - STANCE_SEP, 0)}, look at {arrow_text(nt)})")
@@ -155,7 +252,85 @@ def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -
         txt = f"{phrase}: stay ({stance_text(stance - STANCE_SEP, 0)}, look at {arrow_text(target)})"
     return Move(names=nm, steps=steps, direction=way if steps else "stay", stance_board=stance, target_board=target,
                 new_stance_board=ns, new_target_board=nt, board_at_pins=None if b is None else float(b),
-                new_board_at_pins=new_b, delivery=nd.to_dict(), text=txt)
+                new_board_at_pins=new_b, delivery=nd.to_dict(), text=txt,
+                board_at_aim=None if b is None else float(b), new_board_at_aim=new_b,
+                check_text="" if new_b is None else (f"the moved line, the ball alone, meets the pins on board "
+                                                     f"{new_b:.1f} (this frame's: {float(b):.1f}; the pocket 17-18)"))
+
+
+def _gutter_move(d, nm, phrase, stance, target, gutter, oil, ball) -> Move:
+    """After a gutter ball at a full rack: the 2-and-1 move the way the ball went (into the hand's
+    gutter: towards the hand, so the ball stays away from it), as many steps (up to
+    :data:`GUTTER_STEPS`, the stance and target on the lane) as bring the moved line, the ball alone
+    and thrown, nearest the pocket's middle; where none reaches the pins, said so."""
+    sign = -1.0 if gutter["side"] == ("right" if d.hand == "right" else "left") else 1.0
+    best = None   # (miss, steps, delivery, board at the pins)
+    for k in range(1, GUTTER_STEPS + 1):
+        ns, nt = stance + sign * 2 * k, target + sign * k
+        if not (1.0 <= ns - STANCE_SEP <= lane.N_BOARDS and 1.0 <= nt <= lane.N_BOARDS):
+            break
+        try:
+            nd = aim_target(replace(d, board=ns - STANCE_SEP, at="foul"), nt, oil, ball)
+            nb = float(lane.throw(nd, oil, ball).board_at_pins)
+        except lane.LaneError:   # gutter again (or no angle crosses the target): a bigger move
+            continue
+        if best is not None and abs(nb - POCKET_MIDDLE) >= best[0]:
+            break   # past the pocket: the previous step was nearest
+        best = (abs(nb - POCKET_MIDDLE), k, nd, nb)
+    way = _way(sign, d.hand)
+    common = dict(names=nm, stance_board=stance, target_board=target, board_at_pins=None, gutter=gutter)
+    if best is None:
+        txt = (f"{phrase}: no 2-and-1 move {way} of up to {GUTTER_STEPS} steps keeps the ball alone on the lane "
+               f"to the pins: change the release ({stance_text(stance - STANCE_SEP, 0)}, look at {arrow_text(target)})")
+        return Move(steps=0, direction="stay", new_stance_board=stance, new_target_board=target,
+                    new_board_at_pins=None, delivery=d.to_dict(), text=txt, **common)
+    _, k, nd, nb = best
+    ns, nt = stance + sign * 2 * k, target + sign * k
+    txt = (f"{phrase}: move {k} {way} (feet {2 * k} boards, eyes {k}: {stance_text(ns - STANCE_SEP, 0)}, "
+           f"look at {arrow_text(nt)})")
+    return Move(steps=k, direction=way, new_stance_board=ns, new_target_board=nt, new_board_at_pins=nb,
+                delivery=nd.to_dict(), text=txt, new_board_at_aim=nb,
+                check_text=(f"the moved line, the ball alone, meets the pins on board {nb:.1f} (this frame's: the "
+                            f"{gutter['side']} gutter; the pocket 17-18)"), **common)
+
+
+def _spare_move(d, frame_doc, nm, phrase, stance, target, gutter, oil, ball, check) -> Move:
+    """After a spare ball: converted, stay; missed (or a gutter ball), the eyes moved with the feet
+    kept, to the target whose line, the ball alone, meets the leave's aim point (:func:`spare_aim`),
+    never the pocket; the frame's ball and the moved line's said at the aim point's row."""
+    o = frame_doc["outcome"]
+    b, e = o["board_at_pins"], o["entry_angle_deg"]
+    key, x, aim_b = spare_aim(frame_doc["standing"], d.hand)
+    where = f"the {key[0]} pin" if len(key) == 1 else f"the middle of the {'-'.join(map(str, key))}"
+    aim = f"{where}, board {aim_b:.1f}"
+    at = None if b is None or e is None else board_past(b, e, x)
+    common = dict(names=nm, steps=0, stance_board=stance, target_board=target, new_stance_board=stance,
+                  board_at_pins=None if b is None else float(b), aim=aim, aim_board=aim_b, aim_ft=x / lane.FT,
+                  board_at_aim=at, gutter=gutter)
+    if not o["leave"]:
+        txt = f"{phrase}: stay ({stance_text(stance - STANCE_SEP, 0)}, look at {arrow_text(target)})"
+        return Move(direction="stay", new_target_board=target, new_board_at_pins=None, delivery=d.to_dict(),
+                    text=txt, **common)
+    there = (f"the ball passed {where} on board {at:.1f}, {abs(at - aim_b):.1f} boards {_way(at - aim_b, d.hand)} "
+             f"of its board {aim_b:.1f}" if at is not None else f"the ball must pass {aim}")
+    try:
+        nd, r = aim_through(d, aim_b, x, oil, ball)
+    except lane.LaneError:
+        txt = (f"{phrase}: {there}; no launch angle from this stance ({stance_text(stance - STANCE_SEP, 0)}) "
+               f"reaches it: move the feet")
+        return Move(direction="stay", new_target_board=target, new_board_at_pins=None, delivery=d.to_dict(),
+                    text=txt, **common)
+    nt = float(r.board_at_arrows)
+    way = _way(nt - target, d.hand)
+    new_b = float(r.board_at_pins) if check else None
+    new_at = board_past(r.board_at_pins, r.entry_angle_deg, x) if check else None
+    txt = (f"{phrase}: {there}: keep the feet ({stance_text(stance - STANCE_SEP, 0)}), move the eyes "
+           f"{abs(nt - target):.1f} boards {way}: look at {arrow_text(nt)}")
+    chk = "" if new_at is None else (
+        f"the moved line, the ball alone, passes {where} on board {new_at:.1f} (this frame's: "
+        + (f"{at:.1f}" if at is not None else f"the {gutter['side']} gutter") + f"; {aim})")
+    return Move(direction=way, new_target_board=nt, new_board_at_pins=new_b, delivery=nd.to_dict(), text=txt,
+                new_board_at_aim=new_at, check_text=chk, **common)
 
 
 @dataclass
@@ -211,9 +386,11 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
                  polish: int | None = None, on_done=None, mirror: bool = False) -> LeaveAdvice:
     """The advice at ``leave`` ('-' joined pins): :func:`.spares.best_spare` under ``noise`` (a
     bowler's), said as stance and target (the real path's crossing of the arrows), with the pins
-    it takes. Where no line converted a screening throw the advice says so and gives the line
-    that takes the most pins, with that figure; where the best converting line takes fewer pins
-    than another, that line is given too, for the count.
+    it takes. Where no line converted a screening throw, or the screening's pick converts none of
+    its measured throws, the advice says so and gives the line that takes the most pins on the
+    measured throws (:attr:`.spares.SpareResult.most_pins`, ranked on the figure printed, never the
+    screening's), with that figure; where the best converting line takes fewer pins than another,
+    that line is given too, for the count.
 
     Args:
         leave: the pins standing, '-' joined ("4-9").
@@ -238,28 +415,46 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
     nz = noise if noise is not None else _noise.DEFAULT
     res = spares.best_spare(leave, n, seed, runner=runner, screen=screen, nz=nz, on_done=on_done, polish=polish,
                             strike=strike, mirror=mirror)
-    d = lane.Delivery(**res.best)
-    r = lane.throw(d, runner.oil, runner.ball)
-    e = res.estimate
+    spare = spares.mirror_doc(res.to_dict()) if mirror else res.to_dict()
+    e, most = res.estimate, res.most_pins
     shown = spares.mirrored(leave) if mirror else leave   # the bowler's own pins
     standing = spares.leave_pins(shown)
     nm = _names.leave_names(range(1, 11), standing)
     leave = shown
-    # on the numbered boards, as the text says it (stance_text; a demanding coach's JSON read 41)
-    stance, target = min(stance_of(r.board_at_foul_line), float(lane.N_BOARDS)), float(r.board_at_arrows)
     head = f"leave {leave}{' (' + ', '.join(nm) + ')' if nm else ''}"
     screened = sum(c[2] for c in res.candidates)
-    most = res.most_pins
-    count_text = ""
-    if res.converts:
-        txt = (f"{head}: {_line_text(d, r, res.best_label)}: converts {100 * e['p']:.0f}% ({e['k']}/{e['n']}; 95% CI "
-               f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)" + (f"; {pins_text(res.pins)}" if res.pins else ""))
+    # nothing converted (the screening, or the pick's measured throws): the line said is the one that took the
+    # most pins on the measured throws (spares.best_spare's most_pins), the figure printed, not the screening's
+    lead = most if most is not None and (not res.converts or int(e["k"]) == 0) else None
+    if lead is not None and lead["label"] != res.best_label:
+        d, label, pins, delivery = lane.Delivery(**lead["delivery"]), lead["label"], lead["pins"], \
+            spare["most_pins"]["delivery"]
+        e = pins_rate(pins, e)
     else:
+        d, label, pins, delivery = lane.Delivery(**res.best), res.best_label, res.pins, spare["best"]
+    r = lane.throw(d, runner.oil, runner.ball)
+    # on the numbered boards, as the text says it (stance_text; a demanding coach's JSON read 41)
+    stance, target = min(stance_of(r.board_at_foul_line), float(lane.N_BOARDS)), float(r.board_at_arrows)
+    line = f"{_line_text(d, r, label)}: " + (pins_text(pins) if pins else "")
+    count_text, converts = "", res.converts
+    if lead is None:
+        txt = (f"{head}: {_line_text(d, r, label)}: converts {100 * e['p']:.0f}% ({e['k']}/{e['n']}; 95% CI "
+               f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%)" + (f"; {pins_text(pins)}" if pins else ""))
+    elif not res.converts:
         txt = (f"{head}: no line converts: none of {len(res.candidates)} lines converted any of their {screened} "
                f"screening throws (95% CI of a line's rate 0-{100 * _noise.wilson(0, screen)[1]:.0f}% each); the most "
-               f"pins: {_line_text(d, r, res.best_label)}: " + (pins_text(res.pins) if res.pins else ""))
+               f"pins on the {res.estimate['n']} measured throws: {line}")
+    else:   # the screening's pick converted none of the measured throws
+        n0, hi0 = int(res.estimate["n"]), 100 * res.estimate["hi"]
+        pick = f"the screening's pick ({res.best_label}) converted 0 of the {n0} (95% CI 0-{hi0:.0f}%)"
+        if int(e["k"]) == 0 and int(res.system_369_estimate["k"]) == 0:
+            converts = False
+            txt = f"{head}: no line converted in the {n0} measured throws: {pick}; the most pins: {line}"
+        else:
+            txt = (f"{head}: {pick}; the most pins, converting {e['k']} of the same {n0}: {line}"
+                   if int(e["k"]) else f"{head}: {pick}; the most pins: {line}")
     # another line took more pins on the same fresh throws (spares.best_spare's count lines): given for the count
-    if most is not None and res.pins is not None and most["label"] != res.best_label \
+    if lead is None and most is not None and res.pins is not None and most["label"] != res.best_label \
             and most["pins"]["mean"] > res.pins["mean"]:
         dm = lane.Delivery(**most["delivery"])
         count_text = (f"for the count: {_line_text(dm, lane.throw(dm, runner.oil, runner.ball), most['label'])}: "
@@ -269,7 +464,14 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
             count_text += (f"; it converted more of these same {e['n']} throws ({cleared} against {e['k']}): "
                            f"the pick was ranked on the screening (--screen {screen}; a larger one ranks on more "
                            f"throws)")
-    spare = spares.mirror_doc(res.to_dict()) if mirror else res.to_dict()
     return LeaveAdvice(leave=leave, names=nm, stance_board=stance, target_board=target, target=arrow_text(target),
-                       delivery=spare["best"], estimate=e, label=res.best_label, spare=spare, text=txt,
-                       converts=res.converts, pins=res.pins, most_pins=spare["most_pins"], count_text=count_text)
+                       delivery=delivery, estimate=e, label=label, spare=spare, text=txt,
+                       converts=converts, pins=pins, most_pins=spare["most_pins"], count_text=count_text)
+
+
+def pins_rate(p: dict, e: dict) -> dict:
+    """The conversion estimate (``e``'s form) of a line from its :func:`.spares.pins_estimate` on the
+    measured throws: the throws that took every pin standing (``leaves`` not kept: None)."""
+    k, n = int(p["counts"].get(str(p["of"]), 0)), int(p["n"])
+    lo, hi = _noise.wilson(k, n)
+    return {**e, "k": k, "n": n, "p": k / n, "lo": float(lo), "hi": float(hi), "leaves": None}

@@ -6,7 +6,14 @@ on board 20): ``pocket`` on boards 17-18 (the USBC pocket, docs/bowling.md), ``l
 it (more 3 pin than head pin), ``high`` between the pocket and the nose, ``nose`` within a
 board of the head pin's centre, ``Brooklyn`` across it (the 1-2 pocket of a right-hander);
 ``missed the head pin`` beyond :data:`HEAD_PIN_REACH` boards, where the ball passes the head pin
-without touching it (ball radius + the pin's widest radius). Bowlers' usage: "more 3 pin than
+without touching it (ball radius + the pin's widest radius). Beyond :data:`FRONT_REACH` boards
+(6.2 past the head pin's reach: half a pin spacing more) a ball heading down the lane misses
+the 2 or 3 pin too and meets only the side of the rack behind it (the 4-7 or the 6-10):
+``wide left`` / ``wide right`` (the hand's side is the right of a right-hander), "missed the
+head pin and the 2 pin" (the 3 on the right); beyond :data:`PINS_REACH` (the corner pin's
+spot, three half spacings out, plus the reach: off the lane) it misses the rack: ``missed the
+pins``. A ball on board 38 meets the 7 pin alone, not the 1-2 pocket (a coach read
+"Brooklyn" there); one on board 1 the 10, not the 3 ("light"). Bowlers' usage: "more 3 pin than
 head pin: light; more head pin: high; only the head pin: through the nose; the left side of the
 head pin: Brooklyn". The entry angle is ``flat`` below :data:`FLAT_DEG` (the low edge of the 4-6
 deg window of the USBC pocket).
@@ -39,7 +46,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["POCKET", "FLAT_DEG", "HEAD_PIN_REACH", "LATTICE", "MIRROR", "is_split", "is_washout", "hit_name",
+__all__ = ["POCKET", "FLAT_DEG", "HEAD_PIN_REACH", "FRONT_REACH", "PINS_REACH", "LATTICE", "MIRROR", "is_split", "is_washout", "hit_name",
            "leave_names", "names", "text"]
 
 #: The USBC pocket (right-hander's boards at the head pin's line).
@@ -51,6 +58,12 @@ FLAT_DEG = 4.0
 #: of 41.5/39 in.
 HEAD_PIN_BOARD = 20.0
 HEAD_PIN_REACH = (4.25 + 4.766 / 2) / (41.5 / 39)
+#: Beyond this many boards from the head pin's a ball heading down the lane misses the 2 or 3 pin
+#: too (their spots half a pin spacing, 6 in, further out): ~11.9 boards.
+FRONT_REACH = HEAD_PIN_REACH + 6.0 / (41.5 / 39)
+#: Beyond this many boards it misses the corner pin (7 or 10, 18 in out) and so every pin: ~23.2
+#: boards, off the lane (a ball on the lane at the pins always meets one).
+PINS_REACH = HEAD_PIN_REACH + 18.0 / (41.5 / 39)
 #: Pin spots on the lattice: (sideways, in half pin spacings, + towards board 1 of a right-hander
 #: (the 3 pin's side); row, 0 = the head pin).
 LATTICE = {1: (0, 0), 2: (-1, 1), 3: (1, 1), 4: (-2, 2), 5: (0, 2), 6: (2, 2), 7: (-3, 3), 8: (-1, 3), 9: (1, 3),
@@ -118,12 +131,20 @@ NAMED = {
 
 def hit_name(board: float | None, hand: str = "right") -> str | None:
     """The hit, from the ball's board at the head pin's line (boards counted from the bowling hand's
-    edge, so a left-hander's pocket is on boards 17-18 too); None without a board."""
+    edge, so a left-hander's pocket is on boards 17-18 too; ``hand`` names the sides of a wide
+    ball); None without a board."""
     if board is None or not math.isfinite(board):
         return None
     b = float(board)
-    if abs(b - HEAD_PIN_BOARD) > HEAD_PIN_REACH:
-        return "light, missed the head pin" if b < HEAD_PIN_BOARD else "Brooklyn, missed the head pin"
+    off = abs(b - HEAD_PIN_BOARD)
+    near = b < HEAD_PIN_BOARD   # the bowling hand's side (a right-hander's right)
+    side = ("right" if hand == "right" else "left") if near else ("left" if hand == "right" else "right")
+    if off > PINS_REACH:
+        return f"missed the pins {side}"
+    if off > FRONT_REACH:   # past the 2/3 pin: only the 4-7 or 6-10 side of the rack (the pins as numbered)
+        return f"wide {side}, missed the head pin and the {3 if side == 'right' else 2} pin"
+    if off > HEAD_PIN_REACH:
+        return "light, missed the head pin" if near else "Brooklyn, missed the head pin"
     if b < POCKET[0]:
         return "light"
     if b <= POCKET[1]:

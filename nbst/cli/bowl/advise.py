@@ -7,11 +7,10 @@ throw's outcome is a sample and its probability the result.
 """
 from __future__ import annotations
 
-import argparse
 import sys
 
 from nbst.cli.args import Bounded, print_json
-from nbst.cli.bowl.args import bowler_flag, bowler_of, mc_flags, number, pin_list
+from nbst.cli.bowl.args import bowler_flag, bowler_of, mc_flags, number, standing_pins
 from nbst.errors import InputError
 from nbst.cli.bowl.lane import _bar
 from nbst.parallel import default_jobs
@@ -101,9 +100,12 @@ def register_advise(bowl) -> None:
                                     "stance board and the target at the arrows (where the ball's real path crosses "
                                     "them), with the conversion probability and its 95 % Wilson interval. --after "
                                     "THROW.json (a frame's throw file, bowl frame -o): the hit and the leave named, "
-                                    "and the move: in the direction of the miss, feet 2 boards and eyes 1 per step "
-                                    "(the 2-and-1 move), the moved line thrown (the ball alone) to show where it "
-                                    "now meets the pins (docs/bowling.md).",
+                                    "and the move: after a strike ball, in the direction of the miss, feet 2 boards "
+                                    "and eyes 1 per step (the 2-and-1 move; after a gutter ball, towards that "
+                                    "gutter); after a spare ball, stay if it converted, else the feet kept and the "
+                                    "eyes moved so that the ball passes the leave's aim point; the moved line thrown "
+                                    "(the ball alone) to show where it now meets the pins or passes the aim "
+                                    "(docs/bowling.md).",
                         epilog="Examples: nbst bowl advise --bowler league200 --leave 10 --samples 40; "
                                "nbst bowl frame --bowler pro -o f.json && nbst bowl advise --after f.json")
     what = a.add_mutually_exclusive_group(required=True)
@@ -132,11 +134,10 @@ def cmd_advise(args) -> int:
             print_json(doc)
             return 0
         print(mv.text)
-        if mv.steps:
-            print(f"check: the moved line, the ball alone, meets the pins on board {mv.new_board_at_pins:.1f} "
-                  f"(this frame's: {mv.board_at_pins:.1f}; the pocket 17-18)")
+        if mv.check_text:
+            print(f"check: {mv.check_text}")
         lv = d["outcome"]["leave"]
-        if lv:
+        if lv and len(lv) < 10:   # all ten standing (a gutter ball at a full rack): no spare to shoot
             print(f"spare: nbst bowl advise --leave {','.join(map(str, lv))}"
                   + (f" --bowler {args.bowler}" if args.bowler else ""))
         print(f"note: {_note()}")
@@ -150,6 +151,7 @@ def cmd_advise(args) -> int:
 
         leave = _spares.mirrored(leave)   # the right-hander's mirror image, worked out on the mirrored lane
     strike, nz = bowler_of(args, spare=True)
+    strike = _strike(strike)
     nz = noise.DEFAULT if nz is None else nz
     bar = _bar(args, spare_frames(leave, args.screen, args.samples, args.polish), "advise frames")
     try:
@@ -176,6 +178,17 @@ def cmd_advise(args) -> int:
     print(noise_line(args.bowler, nz))
     print(f"note: {_note()}")
     return 0
+
+
+def _strike(strike):
+    """The strike ball of the 3-6-9 line: the --bowler's, or without one the default release every
+    command throws (:func:`.args.delivery_defaults`: league200's strike ball, docs/bowling.md), not
+    issue 22's older line (:data:`.spares.STRIKE`)."""
+    if strike is not None:
+        return strike
+    from nbst.models.bowling.lane import profiles
+
+    return profiles.house_release()
 
 
 def noise_line(bowler, nz) -> str:
@@ -218,6 +231,7 @@ def cmd_spares(args) -> int:
     lane.pattern(args.oil)
     mirror = _mirror(args)
     strike, nz = bowler_of(args, spare=True)
+    strike = _strike(strike)
     from nbst.models.bowling.lane import noise
 
     nz = noise.DEFAULT if nz is None else nz
@@ -258,10 +272,11 @@ def _note() -> str:
 
 
 def leaves_of(args) -> list[str]:
-    """The leaves of ``bowl spares`` ('-' joined pins): --leave (one, pins by commas), --leaves
-    (several), or the common ones; InputError (one line) for a pin outside 1..10, an empty leave
+    """The leaves of ``bowl spares`` and ``advise`` ('-' joined pins): --leave (one: its pins by the
+    one parser of every --leave, :func:`.args.standing_pins`, as ``bowl frame`` reads them: commas
+    and/or blanks, or dashes), --leaves (several, ',' between them, '-' joining a leave's pins), or
+    the common ones; InputError (one line naming the flag) for a pin outside 1..10, an empty leave
     (a strike: nothing to shoot) or all ten standing (a first ball)."""
-    from nbst.models.bowling import lane
     from nbst.models.bowling.lane import spares
 
     if args.leave is not None:
@@ -272,18 +287,10 @@ def leaves_of(args) -> list[str]:
         return list(spares.LEAVES)
     out = []
     for nm in raw:
-        t = nm.strip().lower()
-        if t in ("", "none", "strike", "x"):
-            raise InputError(f"{flag}: {nm.strip() or 'an empty leave'!r} leaves nothing standing (a strike): name the "
-                             "pins standing, e.g. 3,10")
-        try:
-            pins = spares.leave_pins(t.replace(",", "-") if flag == "--leave" else t)
-        except lane.LaneError:   # the library names its parameter (leave); the pin list's own words name the flag
-            try:
-                pin_list(t.replace("-", ","), flag)
-            except argparse.ArgumentTypeError as e:
-                raise InputError(str(e)) from None
-            raise InputError(f"{flag}: pins must be numbers 1..10, each once, got {nm.strip()!r}") from None
+        if not nm.strip():
+            raise InputError(f"{flag}: an empty leave is a strike, nothing standing: name the pins standing, "
+                             "numbers 1..10 (e.g. 3,10)")
+        pins = standing_pins(nm, flag)
         if len(pins) == 10:
             raise InputError(f"{flag}: {nm.strip()!r} is all ten pins standing: a first ball, not a spare")
         key = "-".join(map(str, pins))
@@ -316,18 +323,35 @@ def _left(leave) -> str:
 
 
 def spare_line(r: dict) -> str:
-    e, s, b = r["estimate"], r["system_369_estimate"], r["best"]
+    """One leave's row of ``bowl spares``: the pick (where no line converts, the line that took the most
+    pins on the measured throws, as ``advise`` says it), the 3-6-9 line, the pick's ladder."""
+    from nbst.models.bowling.lane.advise import pins_rate
+
+    e, s, b, label = r["estimate"], r["system_369_estimate"], r["best"], r["best_label"]
     nm = f" ({', '.join(r['names'])})" if r.get("names") else ""
-    pins = r.get("pins")
+    pins, most = r.get("pins"), r.get("most_pins")
+    if not r.get("converts", True) and most:   # ranked on the measured pins, the figure printed
+        b, label, pins = most["delivery"], most["label"], most["pins"]
+        e = pins_rate(pins, e)
     took = f", {pins['mean']:.2f} of {pins['of']} pins a throw" if pins else ""
     best = "best" if r.get("converts", True) else "no line converts; the most pins"
-    return (f"{r['leave']:>8}{nm}  {best}: {r['best_label']:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
+    return (f"{r['leave']:>8}{nm}  {best}: {label:<18} (board {b['board']:.1f}, {b['angle']:+.2f} deg, "
             f"{b['mph']:.1f} mph, {b['rpm']:.0f} rpm, rotation {b['rotation']:.0f})  {100 * e['p']:3.0f}% ({e['k']}/{e['n']}, CI "
             f"{100 * e['lo']:.0f}-{100 * e['hi']:.0f}%{took})   3-6-9 line (board {r['system_369']['board']:.1f}): "
-            f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
-            + (f" (a gutter ball without noise: the {g['side']} gutter at {g['ft']:.1f} ft)"
-               if (g := r.get("system_369_gutter")) else "")
-            + "   ladder 1/0.5/0.25 ms, +2 s: " + " / ".join(_left(x[1]) for x in r["ladder"]))
+            + _line_369(s, r.get("system_369_gutter"))
+            + "   ladder 1/0.5/0.25 ms, +2 s" + (f" (the screening's pick, {r['best_label']})"
+                                                if label != r["best_label"] else "")
+            + ": " + " / ".join(_left(x[1]) for x in r["ladder"]))
+
+
+def _line_369(s: dict, g: dict | None) -> str:
+    """The 3-6-9 line's column: its conversion, or, where its noise-free ball is a gutter ball, that
+    said first and plainly (a 0 % row read as a line that reaches the pins and misses)."""
+    rate = f"{100 * s['p']:.0f}% ({s['k']}/{s['n']}, CI {100 * s['lo']:.0f}-{100 * s['hi']:.0f}%)"
+    if not g:
+        return rate
+    return (f"a gutter ball without noise: the {g['side']} gutter at {g['ft']:.1f} ft, no line to the pins (its "
+            f"noisy throws converted {s['k']} of {s['n']})")
 
 
 def cmd_pocket(args) -> int:

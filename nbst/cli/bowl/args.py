@@ -14,7 +14,7 @@ from nbst.cli.args import JOBS, SEED, Bounded, with_limits
 from nbst.errors import InputError
 from nbst.domain import plain
 
-__all__ = ["number", "size_of", "err", "pin_list", "pins_down", "leave", "pins_text", "asked_text", "runner_args",
+__all__ = ["number", "size_of", "err", "STRIKE_WORDS", "pin_list", "standing_pins", "pins_down", "leave", "pins_text", "asked_text", "runner_args",
            "picture_flags", "oil_flag", "DELIVERY_KEYS", "BOARD_AT", "delivery_defaults", "bowlers", "bowlers_text", "bowler_flag",
            "delivery_flags", "arrows", "target_board", "ball_flags", "given", "delivery_of", "stance_target",
            "ball_of", "mc_flags", "check_picture_args", "wants_picture", "bowler_of"]
@@ -42,16 +42,27 @@ def err(cmd: str, msg: str) -> int:
     return 2
 
 
+#: What a bowler writes for nothing standing: a strike to ``solve --leave`` (:func:`leave`), refused in
+#: one line by the --leave of frame, advise and spares (:func:`pin_list`), which want pins to throw at.
+STRIKE_WORDS = ("x", "none", "strike")
+
+
 def pin_list(text: str, flag: str | None = None) -> int:
-    """Pin numbers "1,2,4,7" -> 10-bit mask (bit n-1 = pin n). ``flag`` names the option in the
-    message (argparse names it itself for a ``type=``: then leave it out, so it is said once)."""
+    """Pin numbers "1,2,4,7" -> 10-bit mask (bit n-1 = pin n): the one parser of every --leave
+    (``bowl frame``, ``advise``, ``spares``, ``solve``). Pins are separated by commas and/or blanks
+    ("4, 9", "3 10") or joined by dashes as bowlers write a leave ("4-7-10"). ``flag`` names the
+    option in the message (argparse names it itself for a ``type=``: then leave it out, so it is
+    said once)."""
     pre = f"{flag}: " if flag else ""
-    t = text.strip().replace(" ", "")
-    dashed = all(_INT.fullmatch(p) for p in t.split("-")) and "-" in t   # a bowler's "4-7-10", as advise takes it
-    words = t.split("-") if dashed else [p for p in t.split(",") if p]
+    t = text.strip()
+    if t.lower() in STRIKE_WORDS and flag in ("--leave", "--leaves"):   # a coach's "x": the strike it is, alike
+        raise argparse.ArgumentTypeError(f"{pre}{text.strip()!r} is a strike, nothing standing: name the pins "
+                                         "standing, numbers 1..10 (e.g. 3,10)")
+    dashed = "-" in t and all(_INT.fullmatch(p) for p in t.replace(" ", "").split("-"))   # "4-7-10"
+    words = t.replace(" ", "").split("-") if dashed else [p for p in re.split(r"[,\s]+", t) if p]
     if not all(_INT.fullmatch(p) for p in words):
-        raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 separated by commas or dashes (e.g. "
-                                         f"1,2,4,7 or 4-7-10), got {text!r}")
+        raise argparse.ArgumentTypeError(f"{pre}pins must be numbers 1..10 separated by commas or spaces, or "
+                                         f"joined by dashes (e.g. 1,2,4,7 or 3 10 or 4-7-10), got {text!r}")
     pins = [int(p) for p in words]
     bad = [p for p in pins if not 1 <= p <= 10]
     if bad or not pins:
@@ -61,6 +72,15 @@ def pin_list(text: str, flag: str | None = None) -> int:
         raise argparse.ArgumentTypeError(f"{pre}pin {', '.join(map(str, twice))} named twice in {text!r}: "
                                          "name each pin once")
     return sum(1 << (p - 1) for p in pins)
+
+
+def standing_pins(text: str, flag: str = "--leave") -> list[int]:
+    """The pins of a --leave (:func:`pin_list`), sorted; InputError (one line naming ``flag``)."""
+    try:
+        mask = pin_list(text, flag)
+    except argparse.ArgumentTypeError as e:
+        raise InputError(str(e)) from None
+    return [n for n in range(1, 11) if mask >> (n - 1) & 1]
 
 
 def pins_down(text: str) -> int:
@@ -77,7 +97,7 @@ def leave(text: str) -> int:
     "none" is a strike) -> 10-bit mask of the pins DOWN (every other pin)."""
     from nbst.models.bowling.geometry import ALL_DOWN
 
-    if text.strip().lower() in ("none", "strike"):
+    if text.strip().lower() in STRIKE_WORDS:
         return ALL_DOWN
     down = ALL_DOWN & ~pin_list(text)
     if not down:
