@@ -128,6 +128,8 @@ def test_two_bodies_that_must_hit_each_other_are_aimed_at_one_point_at_one_time(
     def touches(rollouts):
         return sum("blue" in next(v.happened for v in r.judgement.bodies[0].fates if v.fate == "hits") for r in rollouts)
 
+    # the pair is one block of the engine's: a creep or a redraw of one moves both
+    assert sc.engine_blocks[0] is sc.engine_blocks[1] and sorted(sc.engine_blocks[0]) == list(range(6))
     touched = touches(sim.run(np.array(xs)))
     uniform = [sc.x_full(np.random.default_rng(100 + k).random(len(sc.lo))) for k in range(16)]
     by_chance = touches(sim.run(np.array(uniform)))

@@ -52,7 +52,9 @@ time). A body that may not fly (a ball rolling on a table, a pushed domino) and 
 is aimed in a straight line through its free components at a point within the two bounding radii
 of its first ``hits`` name, at a speed its ranges allow. A body that may fly and must first hit
 another body that may fly is aimed with it: both blocks redrawn, the two origins carried
-ballistically to one point at one time (:meth:`_Scene._aim_meet`). Half the time (and always for a body with
+ballistically to one point at one time (:meth:`_Scene._aim_meet`); such a pair is one block of the
+engine's for creep, randomize and crossover (a nudge to one moves where both go after the touch),
+and the GA's batches alternate with CMA-ES restarts from the best (ranked by distance, then cost). Half the time (and always for a body with
 neither aim) it instead takes the block of the member whose body is nearest its fates and creeps it
 (sigma 0.04), or, with no members yet, draws the block uniformly.
 
@@ -232,6 +234,10 @@ class _Scene:
                 j = block_of.get(f.fates[bit].hits[0])
                 if j is not None and j != i and self.free_flight[j]:
                     self.meet[i] = j
+        for i, j in enumerate(self.meet):  # a pair that must meet is crept, redrawn and crossed over together
+            if j is not None:
+                both = sorted(set(self.engine_blocks[i]) | set(self.engine_blocks[j]))
+                self.engine_blocks[i] = self.engine_blocks[j] = both
         if sim.near:
             import mujoco
 
@@ -442,6 +448,8 @@ def signature_search(sim: SceneSim, *, rng: np.random.Generator, max_rollouts: i
     if len(blocks) > 1:  # the paper's GA: crossover of whole per-body blocks
         how: dict[str, Any] = dict(explore=max(2 * BATCH, min(max_rollouts // 10, INIT_MAX)), init_done=S.init_done,
                                    ga_batches=1, ga_fine=1, cma=False, redraw_unmet=REDRAW_UNMET)
+        if any(j is not None for j in S.meet):  # bodies that must meet: CMA-ES restarts between GA batches too
+            how.update(cma=True, popsize=ONE_BODY_POPSIZE, cma_by_key=True)
     else:  # one controlled body: nothing to cross over; CMA-ES restarts after one exploring batch or two
         how = dict(explore=ONE_BODY_EXPLORE, explore_batches=ONE_BODY_EXPLORE_BATCHES, ga_batches=0, cma=True,
                    popsize=ONE_BODY_POPSIZE, cma_by_key=True,
