@@ -15,7 +15,7 @@ from types import SimpleNamespace
 import pytest
 
 from nbst.models.bowling import lane
-from nbst.models.bowling.lane import advise, frame, names, noise, spares
+from nbst.models.bowling.lane import advise, frame, names, spares
 
 SPARE = dict(board=34.0, at="foul", mph=17.0, rpm=200.0, rotation=0.0, tilt=0.0)
 GUTTER = lane.Delivery(board=20.0, at="foul", angle=3.179, mph=17.0, rpm=150.0, rotation=55.0, tilt=12.0)
@@ -133,27 +133,14 @@ def test_a_strike_written_x_is_refused_in_the_same_words_by_frame_and_advise(cap
 
 
 def _fake(monkeypatch, lines, measured: dict, screening: dict):
-    """best_spare over stand-in ``lines`` (label, board), their noisy frames taking the pins of
-    ``measured[board]`` (cycled), or in the screening (seeds >= 1000) ``screening[board]``; the ball
-    alone a stub. No physics."""
-    monkeypatch.setattr(spares, "candidates", lambda name, **kw: [(lbl, lane.Delivery(board=b, at="foul"))
-                                                                   for lbl, b in lines])
+    """test_bowling_advice's stand-in lines (their noisy frames take the pins of ``measured[board]``,
+    the screening's ``screening[board]``), the ball alone a stub too. No physics."""
+    from tests.test_bowling_advice import _fake as stand_in
 
-    def probability(d, n, seed, *, runner, standing, noise=None, on_done=None, want=None):
-        seq = screening.get(d.board, measured[d.board]) if seed >= 1000 else measured[d.board]
-        rs = [SimpleNamespace(down=seq[i % len(seq)], leave=[p for p in standing if p not in seq[i % len(seq)]],
-                              converted=set(seq[i % len(seq)]) == set(standing), timestep=0.001) for i in range(n)]
-        return estimate(rs, seed, noise or default), rs
-
-    estimate, default = noise.estimate, noise.DEFAULT
-    monkeypatch.setattr(noise, "probability", probability)
-    monkeypatch.setattr(frame, "ladder", lambda d, oil, ball, standing: probability(d, 3, 0, runner=None,
-                                                                                    standing=standing)[1])
-    monkeypatch.setattr(frame, "run_frame", lambda d, oil, ball, standing, extra_s=0.0: probability(
-        d, 1, 0, runner=None, standing=standing)[1][0])
+    runner = stand_in(monkeypatch, measured, lines=tuple(lines), screening=screening)
     monkeypatch.setattr(lane, "throw", lambda d, oil="house", ball=None: SimpleNamespace(
         board_at_foul_line=d.board, board_at_arrows=d.board))
-    return SimpleNamespace(oil="house", ball=None)
+    return runner
 
 
 def test_the_most_pins_is_ranked_on_the_measured_throws_it_prints(monkeypatch):
