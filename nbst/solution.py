@@ -19,7 +19,7 @@ from nbst.errors import InputError
 from nbst.outputs import dumps_strict, json_safe, write_json_atomic  # noqa: F401 - dumps_strict re-exported
 from nbst.problem import Problem, ProblemError, _Checker, box_crossings, read_json
 
-__all__ = ["SCHEMA_VERSION", "Solution", "HistoryPoint", "RESULT_KEYS", "SolveResult", "signature_string",
+__all__ = ["SCHEMA_VERSION", "named_problem", "Solution", "HistoryPoint", "RESULT_KEYS", "SolveResult", "signature_string",
            "solution_from_dict", "load_solution", "make_solution", "checked_velocities", "save_solution"]
 
 SCHEMA_VERSION = 1
@@ -250,6 +250,20 @@ def solution_from_dict(d: Any, problem: Problem, *, source: str = "<dict>") -> S
     v.setflags(write=False)
     meta = {k: val for k, val in d.items() if k not in ("velocities", "problem", "schema_version")}
     return Solution(problem=problem.name, velocities=v, meta=meta)
+
+
+def named_problem(path: str | Path) -> str | None:
+    """The problem a solution file names (``nbst solve -o``: ``"problem"`` beside ``"velocities"``), or None
+    for any other file, one that cannot be read included (its own reader says why)."""
+    p = Path(str(path))
+    if p.suffix.lower() != ".json" or not p.is_file():
+        return None
+    try:
+        doc = read_json(p)
+    except InputError:
+        return None
+    named = doc.get("problem") if isinstance(doc, dict) and "velocities" in doc else None
+    return named if isinstance(named, str) else None
 
 
 def load_solution(path: str | Path, problem: Problem) -> Solution:

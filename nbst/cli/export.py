@@ -29,8 +29,8 @@ def register(sub) -> None:
         description="Replay FILE with its own world's replay and write every body's motion as glTF 2.0 node\n"
                     "animation (translation and rotation, LINEAR, keyframes at --fps), with each body's\n"
                     "geometry and colours, for Blender or any glTF viewer. FILE is a 2D solution (`nbst\n"
-                    "solve`; disks as pucks on the box's floor), a 5 m or foul-line bowling throw (`nbst bowl\n"
-                    "solve`, `nbst bowl throw`), a crash file (`nbst crash solve`) or a scene solution (`nbst\n"
+                    "solve`; disks as pucks on the box's floor), a 5 m or foul-line bowling throw file (`nbst\n"
+                    "bowl solve`, `nbst bowl frame -o`), a crash file (`nbst crash solve`) or a scene solution (`nbst\n"
                     "scene solve`).",
         epilog="examples:\n  nbst export sol.json --gltf out/over5.glb            # the problem named in sol.json\n"
                "  nbst export sol.json --problem my.json --gltf out.glb\n"
@@ -50,7 +50,7 @@ def register(sub) -> None:
 
 def cmd_export(args) -> int:
     """Replay ``args.file`` and write ``args.gltf``; exit 0, or 2 after one line (nothing written)."""
-    from nbst.export.gltf import empty_note, write_glb
+    from nbst.export.gltf import empty_note, turn_note, write_glb
     from nbst.export.worlds import file_motion
 
     if Path(args.gltf).suffix.lower() != ".glb":
@@ -72,6 +72,7 @@ def cmd_export(args) -> int:
         moving = sum(b.moves for b in motion.bodies)
         print(f"nbst export: wrote {args.gltf} ({kind}: {len(motion.bodies)} bodies, {moving} moving, "
               f"{len(motion.times)} keyframes over {motion.times[-1]:g} s, {n:,} bytes)", file=sys.stderr)
-        if note := empty_note(motion):
-            print(f"note: {note}", file=sys.stderr)
+        for note in (empty_note(motion), turn_note(motion, float(args.fps))):
+            if note:
+                print(f"note: {note}", file=sys.stderr)
     return 0

@@ -29,7 +29,7 @@ from nbst.render import figures
 from nbst.render.motion2d import SampledMotion
 from nbst.render.scene2d import Renderer2D, auto_labels
 from nbst.render.scene3d import Renderer3D
-from nbst.solution import load_solution
+from nbst.solution import load_solution, named_problem
 
 __all__ = ["CAMERAS", "COMMANDS", "OUTPUT_SUFFIXES", "TAKES", "check_render_args", "cmd_plot_problem",
            "cmd_plot_trajectories", "cmd_render", "cmd_render_throw", "make_renderer", "mujoco_positions", "parse_size", "register"]
@@ -41,7 +41,6 @@ STILL = Bounded("still time", 0.0, 1e6, unit="s")
 MAX_FRAMES_FLAG = Bounded("max frames", 1, 10_000_000, integer=True)
 DPI = Bounded("dpi", 10, 1200, integer=True)
 SIZE = Size()
-
 
 #: The top-level commands this module registers, with their help lines: ``nbst --help`` lists
 #: them without building their arguments (nbst.cli.main builds only the command asked for).
@@ -171,9 +170,9 @@ def parse_size(s: str) -> tuple[int, int]:
 #: The files ``nbst render`` writes, by extension (the help lists them; anything else is refused).
 OUTPUT_SUFFIXES = (".mp4", ".gif", ".png")
 #: What ``nbst render`` takes, said when it is given something else.
-TAKES = ("nbst render takes a problem (a built-in name or a problem .json) and its solution, a crash file "
-         "(`nbst crash solve`), a 5 m bowling throw file (`nbst bowl solve`), or a scene solution (`nbst scene "
-         "solve`)")
+TAKES = ("nbst render takes a problem (a built-in name or a problem .json) and its solution (or the solution "
+         "alone: the problem it names), a crash file (`nbst crash solve`), a 5 m bowling throw file (`nbst bowl "
+         "solve`), or a scene solution (`nbst scene solve`)")
 #: The cameras of the crash and the 5 m throw videos (a scene solution's are its model's, by name).
 CAMERAS = ("behind", "overhead", "both")
 
@@ -225,6 +224,8 @@ def cmd_render(args) -> int:
                               f"{args.problem} --video OUT.mp4` (or --still OUT.png; --camera, --clean as here)")
     args.view, args.source = args.view or "2d", args.source or "analytic"
     args.speed = 1.0 if args.speed is None else args.speed
+    if args.solution is None and (named := named_problem(args.problem)) is not None:
+        args.problem, args.solution = named, args.problem  # a 2D solution alone: the problem it names, as export
     if args.solution is None:   # a fates file or an MJCF gets its own line: solve it first
         from nbst.cli.render_scene import unsolved_scene
         return _err("render", unsolved_scene(args.problem) or f"{args.problem} is a problem: give its SOLUTION; {TAKES}")

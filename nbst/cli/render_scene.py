@@ -100,11 +100,16 @@ def cmd_render_scene(args) -> int:
 
 
 def unsolved_scene(path: str) -> str | None:
-    """What to say of ``nbst render`` given a fates file or an MJCF (no motion yet), else None."""
+    """What to say of ``nbst render`` given a fates file, an MJCF or a throw's phases (no motion yet), else None."""
     from nbst.files import sniff_kind
 
-    if sniff_kind(path, (("fates", "nbst-fates"),)) == "fates":
+    kind = sniff_kind(path, (("fates", "nbst-fates"), ("phases", "board_at_foul_line")))
+    if kind == "fates":
         return f"{path} is a fates file: solve it first (`nbst scene solve {path} -o sol.json`), then render the solution"
+    if kind == "phases":
+        return (f"{path} holds a throw's phases (`nbst bowl throw -o`), no motion: film the throw with `nbst bowl "
+                f"throw ... --video OUT.mp4`, or `nbst bowl frame ... -o THROW.json` then `nbst bowl replay "
+                f"THROW.json --video OUT.mp4`")
     if Path(path).suffix.lower() == ".xml":
         return (f"{path} is a MuJoCo scene: write a fates file for it and solve it (`nbst scene solve FATES.json -o "
                 f"sol.json`, docs/scene.md), then render the solution")

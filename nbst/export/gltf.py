@@ -27,6 +27,7 @@ Compute apart from I/O: :func:`gltf_document` builds the pygltflib document and 
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -36,8 +37,8 @@ import numpy as np
 from nbst.errors import InputError
 from nbst.outputs import write_bytes_atomic
 
-__all__ = ["Solid", "Body", "BodyMotion", "EMPTY", "continuous_quaternions", "still_bodies", "empty_note",
-           "gltf_document", "write_glb"]
+__all__ = ["Solid", "Body", "BodyMotion", "EMPTY", "TURN_NOTE_DEG", "continuous_quaternions", "still_bodies",
+           "empty_note", "turn_note", "gltf_document", "write_glb"]
 
 #: The ``extras`` of a body's node that has no mesh.
 EMPTY = {"nbst": "no geoms: nothing drawn (nbst exports geoms only)"}
@@ -164,6 +165,28 @@ def empty_note(motion: BodyMotion) -> str:
     said = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
     return (f"{len(names)} bod{'ies have' if len(names) > 1 else 'y has'} no geoms ({said}): nodes without a mesh; "
             f"nbst exports geoms only (a flex, such as cloth, or a skin is not in the file)")
+
+
+#: A turn between two keyframes past this (degrees) is noted: a viewer interpolates a rotation the
+#: short way, so a true turn past 180 degrees plays backwards, and one near 180 in either way.
+TURN_NOTE_DEG = 90.0
+
+
+def turn_note(motion: BodyMotion, fps: float) -> str:
+    """What to say when a moving body turns more than :data:`TURN_NOTE_DEG` between two keyframes (a
+    spinning ball or wheel at a low ``fps``), in one line, or "" when none does."""
+    q = continuous_quaternions(motion.quat)
+    if len(q) < 2:
+        return ""
+    with np.errstate(invalid="ignore"):
+        turn = np.degrees(2 * np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=2)), 0.0, 1.0))).max(axis=0)
+    turn = np.where([b.moves for b in motion.bodies], np.nan_to_num(turn), 0.0)
+    k = int(np.argmax(turn))
+    if turn[k] <= TURN_NOTE_DEG:
+        return ""
+    need = fps * turn[k] / (TURN_NOTE_DEG / 2)
+    return (f"{motion.bodies[k].name} turns {turn[k]:.0f} deg or more between two keyframes at {fps:g} fps: a viewer "
+            f"turns it the short way, so a spin past 180 deg plays backwards; export with --fps {math.ceil(need)} or more")
 
 
 class _Blob:

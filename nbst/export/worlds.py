@@ -21,12 +21,14 @@ times; :func:`nbst.export.mjbodies.sampled_steps`); the 2D world is exact at eve
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from nbst import palette
+from nbst.domain import plain
 from nbst.errors import InputError
 from nbst.export.gltf import Body, BodyMotion, Solid
 from nbst.files import sniff_kind
@@ -49,7 +51,10 @@ KINDS = (("scene", "nbst-scene-solution"), ("crash", "nbst-crash"), ("deck", "nb
 NOT_MOTIONS = {"nbst-crash-script": "a crash script: solve it first (`nbst crash solve`) and export the crash file",
                "nbst-fates": "a fates file: solve it first (`nbst scene solve`) and export the solution",
                "nbst-bowling-atlas": "an atlas of 5 m throws: export one throw file",
-               "nbst-bowling-throw-atlas": "an atlas of foul-line throws: export one throw file"}
+               "nbst-bowling-throw-atlas": "an atlas of foul-line throws: export one throw file",
+               # `bowl throw -o` writes the ball's phases (no "format": its first key is "oil")
+               "board_at_foul_line": "the ball's phases from `nbst bowl throw -o`, no motion: throw it into the "
+                                     "pins with `nbst bowl frame ... -o THROW.json` (the same flags) and export that"}
 _SNIFF_BYTES = 4096
 
 
@@ -98,16 +103,21 @@ def disks_motion(path: str | os.PathLike, *, problem: str | Path | None = None,
 
     from nbst.problem import ProblemError, load_problem, read_json
     from nbst.sim import simulate
-    from nbst.solution import load_solution
+    from nbst.solution import load_solution, named_problem
 
     fps = _check_fps(fps)
     if problem is None:
-        doc = read_json(Path(path))
-        name = doc.get("problem") if isinstance(doc, dict) else None
-        if not isinstance(name, str):
+        read_json(Path(path))  # a file that cannot be read is refused as itself
+        problem = named_problem(path)
+        if problem is None:
             raise ProblemError(str(path), "problem", "names no problem; give the problem (a built-in name or file)")
-        problem = name
-    prob = load_problem(problem)
+        try:
+            prob = load_problem(problem)
+        except InputError as e:  # the name the solution gives: say whose, and what to do
+            raise ProblemError(str(path), "problem", f"names {problem!r}, which nbst cannot load ({plain(e)}); give "
+                                                     f"it with --problem FILE") from None
+    else:
+        prob = load_problem(problem)
     sol = load_solution(Path(path), prob)
     tr = simulate(prob, sol.velocities)
     if tr.truncated:
@@ -223,8 +233,16 @@ def crash_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMo
     from nbst.render.crash.video import load
 
     fps = _check_fps(fps)
-    _, _, model, m = load(path)
-    return qpos_motion(model, m.qpos, m.times, fps)
+    d, _, model, m = load(path)
+    motion = qpos_motion(model, m.qpos, m.times, fps)
+    # the vehicles' bodies by the names the crash file, its replay and its video give them (A, A_wheel_fl)
+    own = [(str(v["body"]), str(v["name"])) for v in d["vehicles"]]
+    renamed = [next((name + b.name[len(body):] for body, name in own
+                     if b.name == body or b.name.startswith(body + "_")), b.name) for b in motion.bodies]
+    if len(set(renamed)) < len(renamed):  # a static body already called so: the model's names kept
+        return motion
+    return BodyMotion([replace(b, name=n) for b, n in zip(motion.bodies, renamed)], motion.times, motion.pos,
+                      motion.quat)
 
 
 def scene_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMotion:

@@ -354,6 +354,9 @@ def replay_throw(args) -> int:
         bad = check_picture_args(args)
         if bad:
             return err("replay", bad)
+        for option, path in (("--video", args.video), ("--still", args.still)):
+            if path:  # before the replay: a link, a FIFO or a folder is refused in one line
+                prepare_output(path, option=option)
         d = throwfile.load(args.file)
         throwfile.replayable(d, args.file)  # another scene's throw: one line
         try:   # the replay of throwfile.replay, recorded: its model, oil, ball, pins standing and timestep
