@@ -7,6 +7,7 @@ Keys nbst does not know are kept in ``Solution.meta`` and written back.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -252,7 +253,7 @@ def solution_from_dict(d: Any, problem: Problem, *, source: str = "<dict>") -> S
     return Solution(problem=problem.name, velocities=v, meta=meta)
 
 
-def named_problem(path: str | Path) -> str | None:
+def named_problem(path: str | os.PathLike) -> str | None:
     """The problem a solution file names (``nbst solve -o``: ``"problem"`` beside ``"velocities"``), or None
     for any other file, one that cannot be read included (its own reader says why)."""
     p = Path(str(path))
