@@ -74,3 +74,23 @@ def test_bowl_replay_refuses_a_video_path_before_it_replays(files, tmp_path, cap
     assert main(["bowl", "replay", str(files["lane"]), "--video", str(tmp_path / "v.mp4")]) == 2
     out = capsys.readouterr()
     assert "is a folder" in out.err and "pins down" not in out.out
+
+
+def test_realtime_videos_line_up_with_the_gltfs_keyframes(files, tmp_path, capsys):  # noqa: F811
+    """A crash video slows 4x at its impacts, `--clean` too: a clean plate did not line up with the glTF."""
+    import imageio.v3 as iio
+
+    from nbst.render.crash.video import load
+
+    duration = load(files["crash"])[3].duration
+    counts = {}
+    for flags in ((), ("--realtime",)):
+        out = tmp_path / f"c{len(flags)}.mp4"
+        assert main(["render", str(files["crash"]), "-o", str(out), "--clean", "--size", "64x48", "--fps", "10",
+                     "--hold", "0", "-q", *flags]) == 0
+        counts[flags] = sum(1 for _ in iio.imiter(out))
+    glb = tmp_path / "c.glb"
+    assert main(["export", str(files["crash"]), "--gltf", str(glb), "--fps", "10", "-q"]) == 0
+    keys = len(file_motion(files["crash"], fps=10)[1].times)
+    assert counts[("--realtime",)] == keys == int(np.floor(duration * 10 + 1e-9)) + 1  # one frame per keyframe
+    assert counts[()] > keys  # slowed at the impacts

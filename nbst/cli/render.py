@@ -1,7 +1,8 @@
 """``nbst render`` (video or still) and ``nbst plot`` (the paper's figures).
 
 Registration is light: moderngl, imageio, matplotlib and the simulator load
-inside the command functions.
+inside the command functions. Length: one command's flags and its dispatch to every kind of
+file (2D, crash, 5 m throw, scene); split, a flag's kinds would be read in two places.
 """
 from __future__ import annotations
 
@@ -83,6 +84,10 @@ def register(sub) -> None:
     p.add_argument("--clean", action="store_true",
                    help="no overlay text (no readout, legend, titles, names or labels): the picture alone, for "
                         "compositing; every kind of input")
+    p.add_argument("--realtime", action="store_true",
+                   help="crash and 5 m throw files: no slow motion at the impacts (each frame 1/fps of the motion, "
+                        "as `nbst export --gltf` keys it: a clean plate that lines up with the glTF); the other "
+                        "kinds' videos are real time already (--speed slows a 2D one)")
     p.add_argument("--follow", default=None, metavar="NAME",
                    help="crash files only: a chase camera behind vehicle NAME, beside the overhead view")
     p.add_argument("--fps", type=FPS, default=None,
@@ -433,7 +438,7 @@ def _check_throw_flags(args, duration: float | None = None) -> str | None:
              if getattr(args, attr, default) not in (default, None, False)]
     if given:
         return (f"{', '.join(given)} draw{'s' if len(given) == 1 else ''} disk problems only; a 5 m throw file "
-                f"takes -o, --still, --camera, --clean, --size, --fps, --hold, --max-frames and -q")
+                f"takes -o, --still, --camera, --clean, --realtime, --size, --fps, --hold, --max-frames and -q")
     fps = getattr(args, "fps", None)
     if fps is not None and not (0 < fps <= FPS_MAX):
         return f"--fps {fps:g}: must be in (0, {FPS_MAX:g}] frames per second"
@@ -487,7 +492,8 @@ def cmd_render_throw(args) -> int:
         return err(bad)
     fps = float(getattr(args, "fps", None) or style.DEFAULT_FPS)
     hold = getattr(args, "hold", None)
-    times = motion_times(motion, fps, hold=1.0 if hold is None else float(hold))
+    realtime = bool(getattr(args, "realtime", False))
+    times = motion_times(motion, fps, hold=1.0 if hold is None else float(hold), realtime=realtime)
 
     limit = getattr(args, "max_frames", None) or MAX_FRAMES
     if still is None and len(times) > limit:
@@ -498,7 +504,8 @@ def cmd_render_throw(args) -> int:
         bar = progress_bar(total=len(times), unit="frame", file=sys.stderr, dynamic_ncols=True, desc="render")
     try:
         n = render_motion(throw, motion, out, still=still, camera=getattr(args, "camera", None) or "both",
-                          size=size, times=times, fps=fps, progress=bar, clean=bool(getattr(args, "clean", False)))
+                          size=size, times=times, fps=fps, progress=bar, clean=bool(getattr(args, "clean", False)),
+                          realtime=realtime)
     except RenderError as e:
         return err(str(e))
     finally:

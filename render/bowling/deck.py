@@ -115,11 +115,13 @@ def slow_window(motion: Motion) -> tuple[float, float]:
     return max(0.0, motion.impact - IMPACT_WINDOW[0]), min(T, motion.impact + IMPACT_WINDOW[1])
 
 
-def motion_times(motion: Motion, fps: float, *, hold: float = 1.0) -> np.ndarray:
+def motion_times(motion: Motion, fps: float, *, hold: float = 1.0, realtime: bool = False) -> np.ndarray:
     """Simulated time of each video frame (:func:`nbst.render.core.times.frame_times`): real time,
-    slowed SLOW x in :func:`slow_window`, the last frame at the motion's end, then ``hold`` s."""
+    slowed SLOW x in :func:`slow_window` (not with ``realtime``: each frame 1/fps of the motion, as
+    ``nbst export --gltf`` keys it), the last frame at the motion's end, then ``hold`` s."""
     a, b = slow_window(motion)
-    return frame_times(float(motion.times[-1]), fps, windows=[(a, b)] if b > a else [], slow=SLOW, hold=hold)
+    return frame_times(float(motion.times[-1]), fps, windows=[(a, b)] if b > a and not realtime else [], slow=SLOW,
+                       hold=hold)
 
 
 def _pose(p7) -> np.ndarray:
@@ -180,6 +182,7 @@ class BowlingRenderer(FrameRenderer):
         if camera not in ("behind", "overhead", "both"):
             raise InputError(f"camera must be behind, overhead or both, got {camera!r}")
         self.ctx, self.motion, self.camera = ctx, motion, camera
+        self.realtime = False  # set by render_motion: no "slow motion" in the readout
         self.size = tuple(size)
         self.throw = throw or {}
         self.clean = bool(clean)
@@ -257,7 +260,7 @@ class BowlingRenderer(FrameRenderer):
             lines.append(f"delivery {la['speed']:.2f} m/s, spin {la['spin']:+.1f} rad/s")
             lines.append(f"         angle {la['angle']:+.2f} deg, from y = {la['y']:+.3f} m")
         a, b = slow_window(m)
-        slow = f"   slow motion x{SLOW:g}" if a <= t < b else ""
+        slow = f"   slow motion x{SLOW:g}" if a <= t < b and not self.realtime else ""
         lines.append(f"t = {t:4.2f} s{slow}")
         return lines
 
@@ -344,7 +347,7 @@ def load_motion(path):
 
 
 def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: str = "both", size=None,
-                  times=None, fps=None, progress=None, clean: bool = False) -> int:
+                  times=None, fps=None, progress=None, clean: bool = False, realtime: bool = False) -> int:
     """Render a recorded 5 m throw to ``output`` (.mp4/.gif video of ``times`` at ``fps``, or .png at
     time ``still``).
 
@@ -359,6 +362,7 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
         fps: frames per second (default 60).
         progress: None, or an object whose ``update(1)`` is called after each frame.
         clean: no overlay text (no readout, titles or pin numbers).
+        realtime: no slow motion at the impact (default ``times``), none said in the readout.
 
     Returns:
         The number of frames written (1 for a still).
@@ -369,10 +373,14 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
     """
 
     size = tuple(size or style.DEFAULT_SIZE)
-    return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw, clean=clean),
-                         output,
-                         still=None if still is None else np.clip(still, 0.0, motion.times[-1]),
-                         times=lambda r, fps: motion_times(motion, fps) if times is None else times,
+
+    def make(ctx):
+        r = BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw, clean=clean)
+        r.realtime = realtime
+        return r
+
+    return render_output(make, output, still=None if still is None else np.clip(still, 0.0, motion.times[-1]),
+                         times=lambda r, fps: motion_times(motion, fps, realtime=realtime) if times is None else times,
                          fps=fps, progress=progress)
 
 

@@ -614,7 +614,8 @@ def load(path):
 
 
 def render_crash(d: dict, script, model, motion, output, *, still=None, camera: str = "overhead", follow: int = 0,
-                 size=None, fps=None, hold: float = 1.0, times=None, progress=None, clean: bool = False) -> int:
+                 size=None, fps=None, hold: float = 1.0, times=None, progress=None, clean: bool = False,
+                 realtime: bool = False) -> int:
     """Render a recorded crash to ``output`` (.mp4/.gif at ``fps``, slowed around each impact, or a
     .png at time ``still``).
 
@@ -631,6 +632,7 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
         times: the frames' times (default :func:`nbst.render.core.times.frame_times`: slowed at impacts).
         progress: None, or an object whose ``update(1)`` is called after each frame.
         clean: no overlay text (no readout, titles, names or labels): the views fill the frame.
+        realtime: no slow motion at the impacts (default ``times``), none said in the titles.
 
     Returns:
         The number of frames written (1 for a still).
@@ -641,9 +643,13 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
     """
 
     size = tuple(size or style.DEFAULT_SIZE)
-    return render_output(lambda ctx: CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera,
-                                                   follow=follow, clean=clean),
-                         output, still=None if still is None else np.clip(still, 0.0, motion.duration),
+    def make(ctx):
+        r = CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera, follow=follow, clean=clean)
+        if realtime:
+            r.windows = []
+        return r
+
+    return render_output(make, output, still=None if still is None else np.clip(still, 0.0, motion.duration),
                          times=lambda r, fps: (frame_times(motion.duration, fps, windows=r.windows, slow=SLOW, hold=hold)
                                                if times is None else times),
                          fps=fps, progress=progress)

@@ -91,7 +91,9 @@ def cmd_render_crash(args) -> int:
     size = tuple(args.size) if args.size else (style.GIF_SIZE if kind == "gif" else style.DEFAULT_SIZE)
     fps = float(args.fps) if args.fps is not None else float(style.GIF_FPS if kind == "gif" else style.DEFAULT_FPS)
     # the frames, from the file's impacts (the replay's, when it reproduces the file)
-    times = frame_times(script.duration, fps, windows=slow_windows(impact_times(d["outcome"]), script.duration),
+    realtime = bool(getattr(args, "realtime", False))
+    times = frame_times(script.duration, fps, windows=[] if realtime else slow_windows(impact_times(d["outcome"]),
+                                                                                       script.duration),
                         slow=SLOW, hold=args.hold)
     limit = args.max_frames or MAX_FRAMES
     if kind != "png" and len(times) > limit:
@@ -104,14 +106,15 @@ def cmd_render_crash(args) -> int:
         bar.note(f"replaying {script.n} vehicles for {script.duration:g} s")
     try:
         motion = record(d, script, model)
-        windows = slow_windows([im.t for im in motion.impacts], motion.duration)
+        windows = [] if realtime else slow_windows([im.t for im in motion.impacts], motion.duration)
         if bar is not None:  # a video
             times = frame_times(motion.duration, fps, windows=windows, slow=SLOW, hold=args.hold)
             bar.total = len(times)
             bar.note("")
         with sigterm_as_interrupt():   # kill: the partial video is removed as on Ctrl-C
             n = render_crash(d, script, model, motion, out, still=args.still, camera=camera, follow=follow,
-                             size=size, fps=fps, times=times, progress=bar, clean=bool(getattr(args, "clean", False)))
+                             size=size, fps=fps, times=times, progress=bar, clean=bool(getattr(args, "clean", False)),
+                             realtime=realtime)
     except BaseException:
         if bar is not None:
             bar.close()
