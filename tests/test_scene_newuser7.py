@@ -122,7 +122,7 @@ def test_two_bodies_that_must_hit_each_other_are_aimed_at_one_point_at_one_time(
     xs = []
     for k in range(16):
         u = np.random.default_rng(k).random(len(sc.lo))
-        sc._aim_meet(eng.rng, u, 0, 0, 1)
+        sc._aim_meet(eng.rng, u, 0, 1)
         xs.append(sc.x_full(u))
 
     def touches(rollouts):

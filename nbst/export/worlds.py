@@ -107,9 +107,9 @@ def disks_motion(path: str | os.PathLike, *, problem: str | Path | None = None,
 
     fps = _check_fps(fps)
     if problem is None:
-        read_json(Path(path))  # a file that cannot be read is refused as itself
         problem = named_problem(path)
         if problem is None:
+            read_json(Path(path))  # a file that cannot be read is refused as itself
             raise ProblemError(str(path), "problem", "names no problem; give the problem (a built-in name or file)")
         try:
             prob = load_problem(problem)

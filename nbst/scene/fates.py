@@ -292,18 +292,15 @@ def _parse_int(s: str) -> int | _Bad:
 
 def _first_refused(obj: Any, field: str = "") -> tuple[str, str] | None:
     """(the field, why) of the first value the parser refused in ``obj``, depth first, or None."""
-    if isinstance(obj, _Bad):
+    if isinstance(obj, (_Bad, _Twice)):
         return field, obj.why
-    if isinstance(obj, _Twice):
-        return field, obj.why
-    items = (obj.items() if isinstance(obj, dict) else
-             ((f"[{i}]", v) for i, v in enumerate(obj)) if isinstance(obj, list) else ())
-    for k, v in items:
-        sub = (f"{field}{k}" if k.startswith("[") and isinstance(obj, list) else f"{field}.{k}" if field else k)
-        found = _first_refused(v, sub)
-        if found is not None:
-            return found
-    return None
+    if isinstance(obj, dict):
+        subs = ((f"{field}.{k}" if field else k, v) for k, v in obj.items())
+    elif isinstance(obj, list):
+        subs = ((f"{field}[{i}]", v) for i, v in enumerate(obj))
+    else:
+        return None
+    return next((found for sub, v in subs if (found := _first_refused(v, sub)) is not None), None)
 
 
 def _keys(src: _Src, obj: Any, field: str, allowed: tuple[str, ...], required: tuple[str, ...] = ()) -> dict:
@@ -534,16 +531,13 @@ def read_fates_json(path: Path) -> Any:
     try:
         doc = json.loads(data.decode("utf-8"), parse_constant=_reject_constant, parse_int=_parse_int,
                          object_pairs_hook=_unique_keys)
+        found = _first_refused(doc)
     except UnicodeDecodeError:
         raise FatesError(path, "", "not a text file (not UTF-8)") from None
     except json.JSONDecodeError as e:
         raise FatesError(path, "", f"not JSON: {e.msg} at line {e.lineno}, column {e.colno}") from None
     except ValueError as e:
         raise FatesError(path, "", f"not accepted: {e}") from None
-    except RecursionError:
-        raise FatesError(path, "", "not accepted: nested too deeply") from None
-    try:
-        found = _first_refused(doc)
     except RecursionError:
         raise FatesError(path, "", "not accepted: nested too deeply") from None
     if found is not None:

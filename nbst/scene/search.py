@@ -4,7 +4,9 @@ rollout-search engine (``nbst.models.mjsearch.engine.Engine``: pycma's ask/tell)
 A trial is a controls vector, kept in the unit cube (coordinate k maps to ``lo[k] + u[k] (hi[k] -
 lo[k])``), cut into **blocks**, one per controlled body. Its **signature** holds one bit per body
 with fates: set when all of that body's fates are met (``nbst.scene.judge``). This module knows the
-scene; the engine does the rest, as in the paper (docs/scene.md, "The search"):
+scene; the engine does the rest, as in the paper (docs/scene.md, "The search"). Length: the scene's
+moves (each aim beside the others) and the search's set-up are one account of the paper's algorithm
+on a scene; split, an aim would be read apart from the move that draws it.
 
 * **initialize** (the engine's exploring phase): random trials (each block by *directed* or
   *uniform randomize*, even odds) until every bit is set in at least :data:`INIT_PER_BIT` members,
@@ -210,9 +212,12 @@ class _Scene:
         #: per block: its body may be aimed ballistically (every component of its linvel has a
         #: range: one held fixed, as a rolling ball's vertical speed [0, 0], forbids a flight)
         self.free_flight = []
+        #: per block: where its linvel starts in the controls vector (None: no linvel controlled)
+        self.linvel_at: list[int | None] = []
         for c, b in zip(f.controls, self.blocks):
             parts = [p for p, _ in c.parts()]
             a = b.start + 3 * parts.index("linvel") if "linvel" in parts else None
+            self.linvel_at.append(a)
             self.free_flight.append(a is not None and bool(np.all(self.span[a:a + 3] > 0)))
         self.answers: dict[tuple[str, ...], SceneRollout] = {}
         self.held: dict[int, bool] = {}  # id(rollout) -> kept on the ladder
@@ -303,10 +308,10 @@ class _Scene:
         if not aimable:
             return
         assert fate is not None
-        k = [p for p, _ in c.parts()].index("linvel")
-        a = sl.start + 3 * k
+        a = self.linvel_at[i]
+        assert a is not None
         if meet is not None and (not place or rng.random() < 0.5):
-            self._aim_meet(rng, u, i, a, meet)
+            self._aim_meet(rng, u, i, meet)
             return
         if hit is not None and (not place or rng.random() < 0.5):
             v = self._aim_hit(rng, i, a, *hit)
@@ -343,27 +348,35 @@ class _Scene:
             return None
         return np.where(live, float(rng.uniform(s_lo, s_hi)) * d, lo)
 
-    def _aim_meet(self, rng: np.random.Generator, u: np.ndarray, i: int, a: int, j: int) -> None:
-        """Blocks ``i`` (its linvel at ``a``) and ``j`` of the whole unit point ``u`` (in place): the
-        ballistic velocities (the model's gravity, no contacts) that bring both origins to one point at
-        one time, drawn: a point between the two starts (a random fraction of the way, 0.25-0.75),
-        moved across by up to half their distance apart and raised by up to all of it, the time as :meth:`_aim_place`'s; the first of
+    def _aim_meet(self, rng: np.random.Generator, u: np.ndarray, i: int, j: int) -> None:
+        """Blocks ``i`` and ``j`` of the whole unit point ``u`` (in place): the ballistic velocities
+        (:meth:`_ballistic`) that bring both origins to one point at one time, drawn: a point between
+        the two starts (a random fraction of the way, 0.25-0.75), moved across by up to half their
+        distance apart and raised by up to all of it, the time :meth:`_flight_time`'s; the first of
         :data:`MEET_DRAWS` draws whose two velocities lie in their ranges (else the last, clipped)."""
         oi, oj = self.origin[i], self.origin[j]
         gap = float(np.linalg.norm(oj - oi))
-        b = self.blocks[j].start + 3 * [p for p, _ in self.fates.controls[j].parts()].index("linvel")
+        a, b = self.linvel_at[i], self.linvel_at[j]
+        assert a is not None and b is not None
         u[self.blocks[j]] = rng.random(self.blocks[j].stop - self.blocks[j].start)
         x = self.x_full(u)
         for _ in range(MEET_DRAWS):
             point = (oi + rng.uniform(0.25, 0.75) * (oj - oi)
                      + gap * np.array([rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(0.0, 1.0)]))
-            t = float(rng.uniform(0.1, max(0.2, min(1.0, 0.5 * self.fates.duration))))
-            for at, o in ((a, oi), (b, oj)):
-                x[at:at + 3] = (point - o - 0.5 * self.gravity * t * t) / t
+            t = self._flight_time(rng)
+            x[a:a + 3], x[b:b + 3] = self._ballistic(i, point, t), self._ballistic(j, point, t)
             if all(np.all((self.lo[k:k + 3] <= x[k:k + 3]) & (x[k:k + 3] <= self.hi[k:k + 3])) for k in (a, b)):
                 break
         u[a:a + 3] = self.u_of(x)[a:a + 3]
         u[b:b + 3] = self.u_of(x)[b:b + 3]
+
+    def _flight_time(self, rng: np.random.Generator) -> float:
+        """A random flight time (s) for a ballistic aim: 0.1 s to half the duration, at most 1 s."""
+        return float(rng.uniform(0.1, max(0.2, min(1.0, 0.5 * self.fates.duration))))
+
+    def _ballistic(self, i: int, point: np.ndarray, t: float) -> np.ndarray:
+        """The velocity carrying block ``i``'s origin to ``point`` in ``t`` s (the model's gravity, no contacts)."""
+        return (point - self.origin[i] - 0.5 * self.gravity * t * t) / t
 
     def _aim_place(self, rng: np.random.Generator, i: int, fate: Any) -> np.ndarray:
         """The ballistic velocity of block ``i`` to a point of its region (``at`` or ``rest_in``)."""
@@ -373,13 +386,13 @@ class _Scene:
         else:
             assert fate.rest_in is not None
             region = fate.rest_in
-            t = float(rng.uniform(0.1, max(0.2, min(1.0, 0.5 * self.fates.duration))))
+            t = self._flight_time(rng)
         target = region.mid()
         if region.center is not None:
             target = target + region.radius * 0.5 * rng.uniform(-1, 1, 3)
         else:
             target = target + 0.25 * (np.asarray(region.hi) - np.asarray(region.lo)) * rng.uniform(-1, 1, 3)
-        return (target - self.origin[i] - 0.5 * self.gravity * t * t) / t
+        return self._ballistic(i, target, t)
 
     def init(self, eng: Engine) -> np.ndarray:
         """A random trial: each block by directed or uniform randomize, even odds."""

@@ -173,16 +173,16 @@ def static_solids(model) -> np.ndarray:
 
 class BowlingRenderer(FrameRenderer):
     """Frames of a recorded 5 m throw: ``render(t)`` -> (H, W, 3) uint8; ``camera``: behind | overhead | both;
-    ``clean``: no text (no readout, titles or pin numbers)."""
+    ``clean``: no text (no readout, titles or pin numbers); ``realtime``: no "slow motion" said in the readout."""
 
     def __init__(self, ctx, motion: Motion, *, size=style.DEFAULT_SIZE, camera: str = "both", throw: dict | None = None,
-                 clean: bool = False):
+                 clean: bool = False, realtime: bool = False):
         import moderngl
 
         if camera not in ("behind", "overhead", "both"):
             raise InputError(f"camera must be behind, overhead or both, got {camera!r}")
         self.ctx, self.motion, self.camera = ctx, motion, camera
-        self.realtime = False  # set by render_motion: no "slow motion" in the readout
+        self.realtime = realtime  # no slow motion: none said in the readout
         self.size = tuple(size)
         self.throw = throw or {}
         self.clean = bool(clean)
@@ -374,12 +374,9 @@ def render_motion(throw: dict, motion: Motion, output, *, still=None, camera: st
 
     size = tuple(size or style.DEFAULT_SIZE)
 
-    def make(ctx):
-        r = BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw, clean=clean)
-        r.realtime = realtime
-        return r
-
-    return render_output(make, output, still=None if still is None else np.clip(still, 0.0, motion.times[-1]),
+    return render_output(lambda ctx: BowlingRenderer(ctx, motion, size=size, camera=camera, throw=throw, clean=clean,
+                                                     realtime=realtime),
+                         output, still=None if still is None else np.clip(still, 0.0, motion.times[-1]),
                          times=lambda r, fps: motion_times(motion, fps, realtime=realtime) if times is None else times,
                          fps=fps, progress=progress)
 

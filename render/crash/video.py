@@ -228,10 +228,10 @@ class CrashRenderer(FrameRenderer):
 
     d, script, model: ``crashfile.load``'s; motion: ``nbst.render.crash.motion.record``'s; camera: overhead |
     behind | both; follow: the chased vehicle's index (behind and both); clean: no text (the views
-    fill the frame)."""
+    fill the frame); realtime: no slow motion at the impacts (no windows, none said in the titles)."""
 
     def __init__(self, ctx, d: dict, script, model, motion, *, size=style.DEFAULT_SIZE, camera: str = "overhead",
-                 follow: int = 0, clean: bool = False):
+                 follow: int = 0, clean: bool = False, realtime: bool = False):
         import moderngl
         import mujoco
 
@@ -249,7 +249,7 @@ class CrashRenderer(FrameRenderer):
         self.colours = [tuple(float(c) for c in model.geom_rgba[model.geom(f"v{i}_lower").id][:3]) for i in range(n)]
         self.fates = [crashfile.fate_dict(script, i) for i in range(n)]
         self.labels = [v.vtype.label for v in script.vehicles]
-        self.windows = slow_windows([im.t for im in motion.impacts], motion.duration)
+        self.windows = [] if realtime else slow_windows([im.t for im in motion.impacts], motion.duration)
         w, h = self.size
         # the readout: text as large as TEXT_FRAC of the frame, in a column COLUMN_SHARE wide;
         # where its lines do not fit, the text shrinks (to MIN_READOUT_PX), then the column widens
@@ -643,13 +643,9 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
     """
 
     size = tuple(size or style.DEFAULT_SIZE)
-    def make(ctx):
-        r = CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera, follow=follow, clean=clean)
-        if realtime:
-            r.windows = []
-        return r
-
-    return render_output(make, output, still=None if still is None else np.clip(still, 0.0, motion.duration),
+    return render_output(lambda ctx: CrashRenderer(ctx, d, script, model, motion, size=size, camera=camera,
+                                                   follow=follow, clean=clean, realtime=realtime),
+                         output, still=None if still is None else np.clip(still, 0.0, motion.duration),
                          times=lambda r, fps: (frame_times(motion.duration, fps, windows=r.windows, slow=SLOW, hold=hold)
                                                if times is None else times),
                          fps=fps, progress=progress)
