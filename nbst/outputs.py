@@ -52,7 +52,7 @@ from nbst.errors import OutputError  # re-exported here
 __all__ = ["not_a_file", "refuse_not_a_file", "refuse_special", "refuse_same_file", "prepare_output", "partial_path",
            "remove_stale_partials", "PartialFile", "atomic_path", "write_bytes_atomic", "write_text_atomic",
            "json_safe", "dumps_strict", "write_json_atomic", "STOP_SIGNALS", "INSIST_S", "interrupt_once",
-           "ignore_stop_signals", "sigterm_as_interrupt", "signals_deferred", "signals_blocked", "PARENT_POLL_S",
+           "ignore_stop_signals", "stop_requested", "sigterm_as_interrupt", "signals_deferred", "signals_blocked", "PARENT_POLL_S",
            "die_with_parent"]
 
 _SPECIAL = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
@@ -447,13 +447,22 @@ def interrupt_once() -> Iterator[None]:
         _say_finishing()
 
     old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
-    _Once.active, _Once.received, _Once.told = True, 0, False
+    _Once.active, _Once.received, _Once.told, _Once.stopped_at = True, 0, False, 0.0
     try:
         yield
     finally:
         for s, h in old.items():
             signal.signal(s, h)
         _Once.active = False
+
+
+def stop_requested() -> bool:
+    """True once a stop signal has raised KeyboardInterrupt in this ``interrupt_once`` block. A loop
+    that must end on Ctrl-C checks it each round and raises KeyboardInterrupt itself: Python drops
+    an exception raised while a finalizer (``__del__``) or a weakref callback runs ("Exception
+    ignored in ..."), so a signal that lands there stops nothing, and the ones after it within
+    INSIST_S are only noted. False outside such a block."""
+    return _Once.active and _Once.stopped_at > 0.0 and _Once.received > 0
 
 
 def ignore_stop_signals() -> None:

@@ -214,15 +214,61 @@ def _wait_for(cond, timeout):
 def test_render_sigterm_removes_its_partial_video(tmp_path):
     p, s = _files(tmp_path, t_final=2.0, speed=20.0)
     proc = subprocess.Popen([*NBST, "render", p, s, "-o", "v.mp4", "--speed", "0.002", "--size", "32x32", "-q"],
-                            cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+                            cwd=tmp_path, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, PYTHONFAULTHANDLER="1"))  # a crash says where
     started = _wait_for(lambda: list(tmp_path.glob(".v.partial-*.mp4")) or proc.poll() is not None, 60)
     if proc.poll() is not None:
         pytest.skip(f"render did not start here (no OpenGL?): {proc.stderr.read()[-300:]}")
     assert started
     proc.send_signal(signal.SIGTERM)
-    assert proc.wait(30) == 130
-    assert "interrupted" in proc.stderr.read()
+    rc = proc.wait(30)
+    err = proc.stderr.read()
+    assert rc == 130, err[-3000:]
+    assert "interrupted" in err
     assert not list(tmp_path.glob(".v.*")) and not (tmp_path / "v.mp4").exists()
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_stop_signal_dropped_in_a_finalizer_still_ends_the_video(tmp_path):
+    """Python drops a KeyboardInterrupt raised while a ``__del__`` runs ("Exception ignored"): a
+    signal that lands there must still end the render, with no video and no partial file."""
+    import gc
+
+    from nbst.outputs import interrupt_once, stop_requested
+    from nbst.render.core.video import VideoWriter, encode
+
+    class Finalized:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)  # the handler runs here; its exception is dropped
+
+    out = tmp_path / "v.mp4"
+    frames = []
+    with interrupt_once():
+        with pytest.raises(KeyboardInterrupt):
+            with VideoWriter(out, (16, 16), 10) as w:
+                def draw(k, buf):
+                    if k == 3:
+                        Finalized()
+                        gc.collect()
+                    buf[:] = k
+                    frames.append(k)
+                    return None if k > 200 else buf
+                encode(draw, w)
+        assert stop_requested()
+    assert frames == [0, 1, 2, 3]  # the next frame is not drawn
+    assert not stop_requested() and list(tmp_path.iterdir()) == []
+
+
+def test_ffmpeg_runs_in_its_own_process_group(tmp_path):
+    """A Ctrl-C at the terminal goes to the foreground process group: it reaches nbst, which stops
+    ffmpeg itself (and keeps a finished video's last write), not ffmpeg behind its back."""
+    from nbst.render.core.video import VideoWriter
+
+    with VideoWriter(tmp_path / "v.mp4", (16, 16), 10) as w:
+        w.submit(np.zeros((16, 16, 3), np.uint8))
+        pid = w._proc.pid
+        assert os.getpgid(pid) == pid != os.getpgid(0)
+    assert w._proc.returncode == 0 and (tmp_path / "v.mp4").stat().st_size > 0
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the process table from /proc")

@@ -68,8 +68,9 @@ class Run:
 
         self.master, slave = pty.openpty()
         fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 160, 0, 0))
+        # a crash prints Python's stack (faulthandler), so a rare one says where it happened
         self.proc = subprocess.Popen([*NBST, *argv], cwd=cwd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=slave)
+                                     stderr=slave, env=dict(os.environ, PYTHONFAULTHANDLER="1"))
         os.close(slave)
         self.err = b""
 
@@ -114,9 +115,14 @@ class Run:
         while self.proc.poll() is None and time.monotonic() - t0 < timeout:
             self.read(0.1)
         if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait()
-            pytest.fail(f"still running {timeout} s after the signals")
+            self.proc.send_signal(signal.SIGABRT)  # faulthandler prints where every thread is
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+            self.read(0.5)
+            pytest.fail(f"still running {timeout} s after the signals; stderr: {self.err.decode(errors='replace')[-3000:]}")
         self.read(0)
         os.close(self.master)
         return self.proc.returncode, self.err.decode("utf-8", "replace")

@@ -1,5 +1,5 @@
 """Writers: frames in, files out. MP4 (H.264, yuv420p) and GIF through
-imageio-ffmpeg on a background thread; PNG stills through Pillow.
+imageio-ffmpeg's ffmpeg on a background thread; PNG stills through Pillow.
 
 Frames travel in reusable buffers: ``VideoWriter.acquire()`` hands out one of a
 few preallocated arrays, the renderer reads the GL frame into it, ``submit``
@@ -19,7 +19,7 @@ import numpy as np
 
 from nbst.render.core import style
 from nbst.errors import InputError, RenderError
-from nbst.outputs import OutputError, PartialFile, atomic_path, signals_deferred
+from nbst.outputs import OutputError, PartialFile, atomic_path, signals_deferred, stop_requested
 from nbst.render.core.gl import create_context
 
 __all__ = ["VIDEO_SUFFIXES", "VideoWriter", "check_video", "encode", "render_output", "render_video", "video_kind",
@@ -71,11 +71,11 @@ class VideoWriter:
         self.path = self._part.path
         self.frame_shape = (h, w, 4 if rgba else 3)
         if self.kind == "mp4":
-            kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None,
+            kw = dict(codec="libx264", pix_fmt_out="yuv420p",
                       output_params=["-sws_flags", style.SWS_FLAGS, "-preset", preset, "-crf", str(int(crf)),
                                      "-movflags", "+faststart"])
         else:  # palette from all frames (a static floor must be in it exactly), ordered dither: no flicker
-            kw = dict(codec="gif", pix_fmt_out="pal8", quality=None,
+            kw = dict(codec="gif", pix_fmt_out="pal8",
                       output_params=["-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse=dither=bayer:bayer_scale=4",
                                      "-loop", "0"])
 
@@ -92,12 +92,7 @@ class VideoWriter:
             raise
 
     def _start(self, rgba: bool, buffers: int, kw: dict) -> None:
-        import imageio_ffmpeg
-
-        self._gen = imageio_ffmpeg.write_frames(self.path, self.size, fps=self.fps,
-                                                pix_fmt_in="rgba" if rgba else "rgb24",
-                                                macro_block_size=1, ffmpeg_log_level="error", **kw)
-        self._log = _start_quietly(self._gen)  # ffmpeg's stderr, read back for a one-line reason
+        self._proc, self._log = _start_ffmpeg(self.path, self.size, self.fps, "rgba" if rgba else "rgb24", **kw)
         self._pool = [np.empty(self.frame_shape, np.uint8) for _ in range(max(1, buffers))]
         self._ids = {id(b) for b in self._pool}
         self._free: queue.Queue = queue.Queue()
@@ -117,7 +112,7 @@ class VideoWriter:
                 return
             try:
                 if self._error is None:
-                    self._gen.send(buf)
+                    self._proc.stdin.write(memoryview(buf).cast("B"))
             except BaseException as e:  # ffmpeg died: report on the next call
                 self._error = e
             finally:
@@ -175,11 +170,9 @@ class VideoWriter:
         self._todo.put(None)
         self._thread.join()
         try:
-            self._gen.close()
-        except Exception as e:
-            if self._error is None:
-                self._error = e
-        try:
+            _stop_ffmpeg(self._proc, kill=discard or self._error is not None)
+            if self._proc.returncode and not discard and self._error is None:
+                self._error = RuntimeError(f"ffmpeg exited with status {self._proc.returncode}")
             if discard or self._error is not None:
                 self._part.discard()
             if not discard:
@@ -328,28 +321,57 @@ def _check_gif(data: bytes) -> str | None:
     return None
 
 
-def _start_quietly(gen):
-    """Start imageio-ffmpeg's writer (its first ``send``) with ffmpeg's stderr going to a
-    temporary file instead of ours: ffmpeg reports a failure (a full disk) in several lines
-    of its own; ``_ffmpeg_reason`` turns them into one. Returns the file (None if it could
-    not be made: then ffmpeg writes to our stderr as before)."""
-    import sys
+def _start_ffmpeg(path: str, size, fps: float, pix_fmt_in: str, *, codec: str, pix_fmt_out: str,
+                  output_params: list):
+    """Start ffmpeg (imageio-ffmpeg's binary) reading raw frames on its stdin and writing ``path``:
+    (the process, its stderr log or None). The command is ``imageio_ffmpeg.write_frames``'s, started
+    here for three reasons. Its own process group by ``process_group=0`` (set in C between fork and
+    exec; imageio-ffmpeg runs ``os.setpgrp`` as ``preexec_fn``, Python in the forked child, which
+    ``subprocess``'s docs warn can deadlock beside other threads: Mesa's llvmpipe runs 6 here. A
+    render under the signal tests hung once in seven full test runs; 2,300 forks beside a drawing
+    llvmpipe did not hang here: a suspect removed, not a cause shown). ffmpeg's stderr goes to a
+    temporary file (``_ffmpeg_reason`` makes a failure one line) without pointing our fd 2 there
+    while other threads write. And its exit status is read (``write_frames`` drops it). A Ctrl-C
+    at the terminal reaches only nbst, which stops ffmpeg itself."""
+    import subprocess
     import tempfile
+    from fractions import Fraction
 
+    import imageio_ffmpeg
+
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo",
+           "-s", f"{int(size[0])}x{int(size[1])}", "-pix_fmt", pix_fmt_in,
+           "-r", str(Fraction(fps).limit_denominator()), "-i", "-", "-an",
+           "-vcodec", codec, "-pix_fmt", pix_fmt_out, "-v", "error", *output_params, str(path)]
     try:
         log = tempfile.TemporaryFile()
-        saved = os.dup(2)
     except OSError:
-        gen.send(None)
-        return None
+        log = None
     try:
-        sys.stderr.flush()
-        os.dup2(log.fileno(), 2)
-        gen.send(None)  # starts ffmpeg, which inherits fd 2
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-    return log
+        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                                stderr=log if log is not None else None, process_group=0)
+    except OSError as e:
+        if log is not None:
+            log.close()
+        raise RenderError(f"{path}: cannot start ffmpeg ({e.strerror or e})") from None
+    return proc, log
+
+
+def _stop_ffmpeg(proc, *, kill: bool) -> None:
+    """End ffmpeg: close its stdin and wait for it to finish the file, or (``kill``: the video is
+    discarded) kill it. Always reaps it."""
+    if kill:
+        proc.kill()
+    try:
+        proc.stdin.close()
+    except OSError:  # a broken pipe: ffmpeg has gone; its status tells
+        pass
+    try:
+        proc.wait()
+    except BaseException:  # (signals are held here; a KeyboardInterrupt from a library) do not leave it running
+        proc.kill()
+        proc.wait()
+        raise
 
 
 def _ffmpeg_reason(log) -> list[str]:
@@ -376,11 +398,14 @@ def _ffmpeg_reason(log) -> list[str]:
 def encode(frames, writer: VideoWriter, *, progress=None) -> int:
     """Render-and-encode loop: ``frames`` is a callable ``f(k, out) -> frame``
     drawing frame k into the buffer ``out``, or an iterable of arrays.
-    Returns the number of frames written."""
+    Returns the number of frames written. A stop signal ends it (KeyboardInterrupt) even when its
+    exception was dropped in a finalizer (``nbst.outputs.stop_requested``)."""
     n = 0
     if callable(frames):
         k = 0
         while True:
+            if stop_requested():
+                raise KeyboardInterrupt
             buf = writer.acquire()
             fr = frames(k, buf)
             if fr is None:
@@ -393,6 +418,8 @@ def encode(frames, writer: VideoWriter, *, progress=None) -> int:
                 progress.update(1)
     else:
         for fr in frames:
+            if stop_requested():
+                raise KeyboardInterrupt
             writer.submit(fr)
             n += 1
             if progress is not None:
