@@ -207,6 +207,37 @@ def test_the_glb_holds_the_replays_keyframes(files, kind, tmp_path, capsys):
     assert np.diff(motion.times).max() <= 1 / 50 + 2e-3 and motion.times[0] == 0.0
 
 
+@pytest.mark.parametrize("kind", ["disks", "scene", "crash"])
+def test_bodies_alike_share_a_mesh_and_each_node_draws_its_own_solids(files, kind):
+    """A mesh is shared only by bodies whose solids are alike to the float32 byte: every node's mesh,
+    read back and unrolled by its indices, is its own body's triangles in its own colours, and there
+    are as many meshes as distinct bodies (over5's four amber pucks share one, its blue one not)."""
+    from nbst.export.gltf import _drawable
+
+    _, motion = file_motion(files[kind], fps=10)
+    gl, data = gltf_document(motion)
+    gl.set_binary_blob(data)
+    kinds = set()
+    for b, body in enumerate(motion.bodies):
+        solids = [sd for sd in body.solids if _drawable(sd)]
+        node = gl.nodes[b]
+        assert node.name == body.name
+        if not solids:
+            assert node.mesh is None
+            continue
+        kinds.add(tuple((np.asarray(sd.rows, np.float32).tobytes(), tuple(np.round(sd.rgba, 6))) for sd in solids))
+        prims = gl.meshes[node.mesh].primitives
+        assert len(prims) == len(solids)
+        for prim, sd in zip(prims, solids):
+            corners = _read(gl, prim.attributes.POSITION)[_read(gl, prim.indices)[:, 0].astype(int)]
+            assert np.array_equal(corners, np.asarray(sd.rows, np.float32)[:, :3].astype(np.float64))
+            rgba = gl.materials[prim.material].pbrMetallicRoughness.baseColorFactor
+            assert np.allclose(rgba, sd.rgba, atol=1e-6)
+    assert len(gl.meshes) == len(kinds)
+    if kind == "disks":   # the floor, the amber puck, the blue puck
+        assert len(gl.meshes) == 3 < len(motion.bodies) == 6
+
+
 def test_mujoco_worlds_key_the_replays_own_states(files):
     """The scene's keyframes are the plain mj_step loop's states: its last is replay_solution's
     final state, bit for bit; the crash's are the renderer's recording."""

@@ -3,7 +3,8 @@
 A body is a name and its solids (a :class:`Solid`: triangles in the body's frame, as the renderer's
 rows of position and normal, and an RGBA colour). :func:`write_glb` writes one node per body carrying one glTF mesh (a primitive per
 solid, each with a material whose ``baseColorFactor`` is the solid's RGBA; ``alphaMode`` BLEND
-below alpha 1), and one animation whose channels move each moving body: a ``translation`` and a
+below alpha 1; bodies whose solids are alike to the byte share one mesh: 1,000 equal pucks are
+one mesh and 1,000 nodes), and one animation whose channels move each moving body: a ``translation`` and a
 ``rotation`` sampler per body, LINEAR interpolation, over one shared time accessor. Bodies that
 never move (the floor, a road) are nodes without channels: a body moves only where its pose changes
 (:func:`still_bodies`; a :class:`BodyMotion` makes a body given as moving static where its keyframes,
@@ -246,10 +247,20 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
     materials: dict = {}
     quat = continuous_quaternions(motion.quat)
     nodes = []
+    shared: dict = {}   # a body's solids (their bytes) -> its mesh: bodies alike share one
+    users: list[list[str]] = []   # each mesh's bodies
     for b, body in enumerate(motion.bodies):
         q0 = quat[0, b]
         node = pg.Node(name=body.name, translation=[float(x) for x in motion.pos[0, b]],
                        rotation=[float(q0[1]), float(q0[2]), float(q0[3]), float(q0[0])])
+        key = tuple((np.asarray(s.rows, np.float32).tobytes(), tuple(round(float(c), 6) for c in s.rgba))
+                    for s in filter(_drawable, body.solids))
+        if key and key in shared:
+            node.mesh = shared[key]
+            users[node.mesh].append(body.name)
+            gl.nodes.append(node)
+            nodes.append(len(gl.nodes) - 1)
+            continue
         prims = []
         for s in filter(_drawable, body.solids):
             # corners shared by triangles (same position and normal) stored once, and indexed
@@ -264,11 +275,15 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
                 material=_material(gl, pg, materials, s.rgba)))
         if prims:
             gl.meshes.append(pg.Mesh(name=body.name, primitives=prims))
-            node.mesh = len(gl.meshes) - 1
+            node.mesh = shared[key] = len(gl.meshes) - 1
+            users.append([body.name])
         else:   # said, not left out: its node index is its body's, its keyframes its body's
             node.extras = dict(EMPTY)
         gl.nodes.append(node)
         nodes.append(len(gl.nodes) - 1)
+    for mesh, names in zip(gl.meshes, users):
+        if len(names) > 1:
+            mesh.name = f"{names[0]} and {len(names) - 1} more alike"
     # glTF's up is +y; MuJoCo's (and every nbst world's) +z: one root node turns the world -90 deg about
     # x, so (x, y, z) shows as (x, z, -y) and a floor lies flat (Blender's importer turns it z-up again)
     h = float(np.sqrt(0.5))
