@@ -272,9 +272,9 @@ class BowlingRenderer(FrameRenderer):
         cw, ch = self.text.cell
         titles = {"behind": "behind the ball", "overhead": "overhead: the pin deck (USBC pin numbers)"}
         for (vx, _, vw, _), _, _, cam in views:
-            title = titles[cam]
-            self.text.draw_halo(size, self.text.layout([title], vx + (vw - cw * len(title)) / 2, 0.4 * ch),
-                                style.TEXT, style.TEXT_HALO)
+            for title in self.text.fit([titles[cam]], vw - 8):   # never into the next panel's
+                self.text.draw_halo(size, self.text.layout([title], vx + (vw - cw * len(title)) / 2, 0.4 * ch),
+                                    style.TEXT, style.TEXT_HALO)
             if cam == "overhead":
                 vpm = next(v[1] for v in views if v[3] == "overhead")
                 pcw, pch = self.pin_text.cell
@@ -287,7 +287,8 @@ class BowlingRenderer(FrameRenderer):
                     parts.append(self.pin_text.layout([label], col - pcw * len(label) / 2, row - pch / 2))
                 self.pin_text.draw_halo(size, np.concatenate(parts), style.LABEL, PIN_WHITE)
         x0 = views[0][0][0] + 0.6 * cw
-        self.text.draw_halo(size, self.text.layout(self.readout(t), x0, 1.8 * ch), style.TEXT, style.TEXT_HALO)
+        lines = self.text.fit(self.readout(t), views[0][0][2] - 1.2 * cw, size[1] - 1.8 * ch)  # within its panel
+        self.text.draw_halo(size, self.text.layout(lines, x0, 1.8 * ch), style.TEXT, style.TEXT_HALO)
 
     def draw(self, t: float) -> None:
         ctx = self.ctx

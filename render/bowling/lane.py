@@ -315,16 +315,18 @@ class LaneRenderer(FrameRenderer):
             title = titles[cam]
             if len(title) * cw > vp[2] - 8:
                 title = title.split(":")[0]
-            self.text.draw_halo(size, self.text.layout([title], vp[0] + (vp[2] - cw * len(title)) / 2, 0.3 * ch),
-                                style.TEXT, style.TEXT_HALO)
+            for title in self.text.fit([title], vp[2] - 8):   # never into the next panel's
+                self.text.draw_halo(size, self.text.layout([title], vp[0] + (vp[2] - cw * len(title)) / 2, 0.3 * ch),
+                                    style.TEXT, style.TEXT_HALO)
             if cam in ("behind", "deck"):
                 self._behind_labels(vp, vpm, k, down)
             else:
                 self._overhead_labels(vp, vpm, down)
         vp = self.panels.get("behind", next(iter(self.panels.values())))
-        y0 = 1.5 * ch if ("behind" in self.panels or "deck" in self.panels) else H - (len(self.readout(t)) + 0.5) * ch
-        self.text.draw_halo(size, self.text.layout(self.readout(t), vp[0] + 0.6 * cw, y0), style.TEXT,
-                            style.TEXT_HALO)
+        lines = self.readout(t)
+        y0 = 1.5 * ch if ("behind" in self.panels or "deck" in self.panels) else max(1.5 * ch, H - (len(lines) + 0.5) * ch)
+        lines = self.text.fit(lines, vp[2] - 1.2 * cw, H - y0)   # within its panel (a small --size)
+        self.text.draw_halo(size, self.text.layout(lines, vp[0] + 0.6 * cw, y0), style.TEXT, style.TEXT_HALO)
 
     def pin_label_points(self, k: int) -> np.ndarray:
         """(10, 3) world points just above each pin's head at step k (where the behind view writes

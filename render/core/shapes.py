@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from nbst.render.core.textfit import fit_lines
+
 __all__ = ["ATLAS_COLS", "CAPSULE_DTYPE", "CAPSULE_FS", "CAPSULE_FS_IO", "CAPSULE_VS", "CAPSULE_VS_IO",
            "CIRCLE_DTYPE", "CIRCLE_FS", "CIRCLE_VS", "EXTRA_CHARS", "RECT_FS", "RECT_VS", "TEXT_DTYPE", "TEXT_FS",
            "TEXT_VS", "Capsules", "Circles", "GlyphRuns", "Rect", "Text", "digit_height", "glyph_atlas",
@@ -470,6 +472,13 @@ class Text:
 
     def width(self, s: str) -> int:
         return len(s) * self.cell[0]
+
+    def fit(self, lines: list[str], width: float, height: float | None = None) -> list[str]:
+        """``lines`` cut to a box of ``width`` x ``height`` px in this text's cell (:func:`fit_lines`;
+        ``height`` None: one row per line, cut in width only)."""
+        cw, ch = self.cell
+        rows = len(lines) if height is None else int(height // ch)
+        return fit_lines(lines, int(width // cw), rows)
 
     def numbers(self, n: int) -> GlyphRuns:
         """The strings "0" .. str(n - 1) in this text's cell, made once per n (disk numbers)."""

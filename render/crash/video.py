@@ -45,6 +45,7 @@ from nbst.render.core.camera import look_at, perspective
 from nbst.render.core.gl import FrameRenderer, FrameTarget
 from nbst.render.core.shaders import SOLID_FS, SOLID_VS
 from nbst.render.core.shapes import Rect, Text, text_cell
+from nbst.render.core.textfit import CUT
 from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
 from nbst.models.crash.crush import CRUSH_ZONES
@@ -470,8 +471,12 @@ class CrashRenderer(FrameRenderer):
             title = ("overhead, true scale" if cam == "overhead" else f"chase: {self.names[self.follow]}")
             if cam == "behind" and slowed(t, self.windows):
                 title += f"   slow motion \u00d7{ro.SLOW:g}"
-            sm.draw_halo(size, sm.layout([title], vp[0] + 0.6 * scw, vp[1] + 0.3 * sch), style.TEXT, style.TEXT_HALO)
-            placed = []        # label boxes (x0, y0, x1, y1) px drawn in this panel
+            placed = []        # label boxes (x0, y0, x1, y1) px drawn in this panel, the title's first
+            for title in sm.fit([title], vp[2] - 1.2 * scw):   # never into the next panel (a small --size)
+                sm.draw_halo(size, sm.layout([title], vp[0] + 0.6 * scw, vp[1] + 0.3 * sch), style.TEXT,
+                             style.TEXT_HALO)
+                placed.append((vp[0] + 0.6 * scw, vp[1] + 0.3 * sch, vp[0] + 0.6 * scw + scw * len(title),
+                               vp[1] + 1.3 * sch))
             for i, nm in enumerate(self.names):
                 p = self.motion.pos[k, i].copy()
                 p[2] += self.heights[i]
@@ -483,12 +488,16 @@ class CrashRenderer(FrameRenderer):
                     continue
                 else:
                     row -= 0.5 * sch
+                    box = (col - scw * len(nm) / 2, row, col + scw * len(nm) / 2, row + sch)
+                    if not keep_apart([box], placed[:1])[0]:   # under the panel's title: the title stays
+                        continue
                 placed.append(self._label(vp, nm, col - scw * len(nm) / 2, row, self.colours[i]))
                 if cam == "overhead" and "rest" in self.fates[i]:
                     f = self.fates[i]["rest"]
                     col, row, _ = self.to_pixel(vp, vpm, (f["x"], f["y"] + f["radius"], 0.0))
-                    if self._inside(vp, col, row):
-                        placed.append(self._label(vp, nm, col - scw * len(nm) / 2, row - 1.1 * sch, self.colours[i]))
+                    x, y = col - scw * len(nm) / 2, row - 1.1 * sch
+                    if self._inside(vp, col, row) and keep_apart([(x, y, x + scw * len(nm), y + sch)], placed)[0]:
+                        placed.append(self._label(vp, nm, x, y, self.colours[i]))
 
             for im in self.motion.impacts:
                 if im.t > t or not all(math.isfinite(c) for c in im.pos[:2]):
@@ -570,6 +579,14 @@ class CrashRenderer(FrameRenderer):
         cw, ch = self.text.cell
         x0, y0 = self.text_box[0] + 0.7 * cw, self.text_box[1] + 0.5 * ch
         size = self.size
+        # within its panel (a small --size): the marks cut where their line is
+        fitted = self.text.fit(plain, self.text_box[2] - 1.4 * cw, self.text_box[3] - 0.5 * ch)
+        cut = [None if a == b else len(a) - len(CUT) * a.endswith(CUT) for a, b in zip(fitted, plain)]
+        keep = len(fitted) - (len(fitted) < len(plain))
+        oks = [m[:cut[j]] if cut[j] is not None else m for j, m in enumerate(oks[:keep])]
+        nos = [m[:cut[j]] if cut[j] is not None else m for j, m in enumerate(nos[:keep])]
+        owner = [o if j < keep else -1 for j, o in enumerate(owner[:len(fitted)])]
+        plain = fitted
         base = [s if owner[j] < 0 else "" for j, s in enumerate(plain)]
         self.text.draw(size, self.text.layout(base, x0, y0), style.TEXT)
         for j, s in enumerate(plain):
