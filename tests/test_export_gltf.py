@@ -130,7 +130,7 @@ def _read(gl, acc_i: int) -> np.ndarray:
     view = gl.bufferViews[acc.bufferView]
     blob = gl.binary_blob()
     assert view.buffer == 0 and view.byteOffset + view.byteLength <= gl.buffers[0].byteLength == len(blob)
-    k = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[acc.type]
+    k = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}[acc.type]
     dtype = {pygltflib.FLOAT: np.float32, pygltflib.UNSIGNED_INT: np.uint32}[acc.componentType]
     assert view.byteOffset % 4 == 0 and view.byteLength == acc.count * k * 4
     a = np.frombuffer(blob, dtype=dtype, count=acc.count * k, offset=view.byteOffset).reshape(acc.count, k)
@@ -233,9 +233,75 @@ def test_bodies_alike_share_a_mesh_and_each_node_draws_its_own_solids(files, kin
             assert np.array_equal(corners, np.asarray(sd.rows, np.float32)[:, :3].astype(np.float64))
             rgba = gl.materials[prim.material].pbrMetallicRoughness.baseColorFactor
             assert np.allclose(rgba, sd.rgba, atol=1e-6)
+            if sd.colors is None:
+                assert prim.attributes.COLOR_0 is None
+            else:   # the renderer's colour of every corner
+                col = _read(gl, prim.attributes.COLOR_0)[_read(gl, prim.indices)[:, 0].astype(int)]
+                assert np.array_equal(col, np.asarray(sd.colors, np.float32).astype(np.float64))
     assert len(gl.meshes) == len(kinds)
     if kind == "disks":   # the floor, the amber puck, the blue puck
         assert len(gl.meshes) == 3 < len(motion.bodies) == 6
+
+
+def test_spin_shows_in_the_glb_as_in_the_videos(files):
+    """What makes a turn visible in the videos is in the file: a crash's tyres carry the video's two
+    light spokes a face (per-corner COLOR_0) and its cabins their glass; the pins their red neck
+    stripes (the animator's 'no spin cues')."""
+    from nbst.export.worlds import _pin_skins
+    from nbst.models.bowling import scene
+    from nbst.render.bowling.deck import PIN_RED, PIN_WHITE
+    from nbst.render.crash import scene as cs
+
+    _, motion = file_motion(files["crash"], fps=10)
+    gl, data = gltf_document(motion)
+    gl.set_binary_blob(data)
+
+    def key(rgb):   # a colour to the thousandth (float32 in the file)
+        return tuple(int(round(float(c) * 1000)) for c in rgb)
+
+    def colours(name):
+        node = next(n for n in gl.nodes if n.name == name)
+        return {key(c) for prim in gl.meshes[node.mesh].primitives if prim.attributes.COLOR_0 is not None
+                for c in _read(gl, prim.attributes.COLOR_0)}
+
+    for wheel in ("A_wheel_fl", "A_wheel_rr", "B_wheel_fl"):
+        assert {key(cs.SPOKE), key(cs.HUB), key(cs.TYRE)} <= colours(wheel), wheel
+    assert key(cs.GLASS) in colours("A")
+    (pin,) = _pin_skins(scene.build_model())[1]
+    assert {key(PIN_RED), key(PIN_WHITE)} <= {key(c) for c in pin.colors}
+
+
+@pytest.mark.slow
+def test_the_foul_line_ball_wears_its_videos_texture(files, tmp_path):
+    """The ball's grip holes, pin dot and track are in the file as in the video: a PNG texture on a
+    sphere whose every corner's TEXCOORD_0 is its direction's equirectangular place, and the texel
+    at each grip hole's direction (the video's assumed layout) is the hole's colour."""
+    import io
+
+    from PIL import Image
+
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import throwfile
+    from nbst.render.bowling.throw import HOLE_RGB, grip_holes
+
+    out = tmp_path / "lane.glb"
+    assert main(["export", str(files["lane"]), "--gltf", str(out), "--fps", "20"]) == 0
+    gl = pygltflib.GLTF2().load(str(out))
+    (prim,) = gl.meshes[next(n for n in gl.nodes if n.name == "ball").mesh].primitives
+    pos, uv = _read(gl, prim.attributes.POSITION), _read(gl, prim.attributes.TEXCOORD_0)
+    d = pos / np.linalg.norm(pos, axis=1, keepdims=True)
+    inner = (np.abs(d[:, 2]) < 0.999) & (uv[:, 0] > 1e-6) & (uv[:, 0] < 1 - 1e-6)   # not on a pole or the seam
+    assert inner.sum() > 1000
+    assert np.allclose(uv[inner, 0], np.arctan2(d[inner, 1], d[inner, 0]) / (2 * np.pi) + 0.5, atol=1e-5)
+    assert np.allclose(uv[inner, 1], np.arccos(np.clip(d[inner, 2], -1, 1)) / np.pi, atol=1e-5)
+    tex = gl.textures[gl.materials[prim.material].pbrMetallicRoughness.baseColorTexture.index]
+    view = gl.bufferViews[gl.images[tex.source].bufferView]
+    img = np.asarray(Image.open(io.BytesIO(gl.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength])))
+    h, w = img.shape[:2]
+    delivery = lane.Delivery(**throwfile.load(files["lane"])["delivery"])
+    for p, _ in grip_holes(delivery):
+        u, v = np.arctan2(p[1], p[0]) / (2 * np.pi) + 0.5, np.arccos(np.clip(p[2], -1, 1)) / np.pi
+        assert np.abs(img[int(v * h), int(u * w) % w].astype(int) - np.round(np.array(HOLE_RGB) * 255)).max() <= 1
 
 
 def test_mujoco_worlds_key_the_replays_own_states(files):

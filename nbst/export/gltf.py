@@ -3,8 +3,9 @@
 A body is a name and its solids (a :class:`Solid`: triangles in the body's frame, as the renderer's
 rows of position and normal, and an RGBA colour). :func:`write_glb` writes one node per body carrying one glTF mesh (a primitive per
 solid, each with a material whose ``baseColorFactor`` is the solid's RGBA; ``alphaMode`` BLEND
-below alpha 1; bodies whose solids are alike to the byte share one mesh: 1,000 equal pucks are
-one mesh and 1,000 nodes), and one animation whose channels move each moving body: a ``translation`` and a
+below alpha 1; a solid coloured per corner as a renderer colours it carries ``COLOR_0``, a textured
+one ``TEXCOORD_0`` and its PNG; bodies whose solids are alike to the byte share one mesh: 1,000
+equal pucks are one mesh and 1,000 nodes), and one animation whose channels move each moving body: a ``translation`` and a
 ``rotation`` sampler per body, LINEAR interpolation, over one shared time accessor. Bodies that
 never move (the floor, a road) are nodes without channels: a body moves only where its pose changes
 (:func:`still_bodies`; a :class:`BodyMotion` makes a body given as moving static where its keyframes,
@@ -54,10 +55,29 @@ class Solid:
             units) and unit normal, as the renderer's geometry gives them
             (:func:`nbst.render.core.geoms.geom_rows`).
         rgba: (4,) colour, each channel in [0, 1].
+        colors: None, or (3 x ntriangle, 3) RGB in [0, 1] per corner, as a renderer colours a solid
+            (a tyre's spokes, a pin's neck stripes): written as the mesh's ``COLOR_0``, which glTF
+            multiplies into ``rgba`` (then white, with the solid's alpha).
     """
 
     rows: np.ndarray
     rgba: tuple[float, float, float, float]
+    colors: np.ndarray | None = None
+    #: None, or (3 x ntriangle, 2) texture coordinates per corner (glTF's: (0, 0) the image's first
+    #: row's first texel) and the (H, W, 3) uint8 image they map, written as a PNG, repeated across u
+    #: and clamped in v (an equirectangular ball: the foul-line ball's grip holes, pin dot and track).
+    uv: np.ndarray | None = None
+    texture: np.ndarray | None = None
+
+    @classmethod
+    def coloured(cls, rows9: np.ndarray, alpha: float = 1.0) -> Solid:
+        """A solid from a renderer's (V, 9) rows (position, normal, RGB): one colour when every
+        corner has the same, else per-corner colours."""
+        rows9 = np.asarray(rows9, float)
+        col = rows9[:, 6:9]
+        if len(col) and (col == col[0]).all():
+            return cls(rows9[:, :6], (*(float(c) for c in col[0]), float(alpha)))
+        return cls(rows9[:, :6], (1.0, 1.0, 1.0, float(alpha)), np.clip(col, 0.0, 1.0))
 
 
 @dataclass(frozen=True)
@@ -213,6 +233,13 @@ class _Blob:
         self.gl.accessors.append(acc)
         return len(self.gl.accessors) - 1
 
+    def add_bytes(self, raw: bytes) -> int:
+        """A buffer view of ``raw`` (an image): its index."""
+        self.data.extend(b"\0" * (-len(self.data) % 4))
+        self.gl.bufferViews.append(self.pg.BufferView(buffer=0, byteOffset=len(self.data), byteLength=len(raw)))
+        self.data.extend(raw)
+        return len(self.gl.bufferViews) - 1
+
 
 def _material(gl: Any, pg: Any, cache: dict, rgba: tuple[float, ...]) -> int:
     key = tuple(round(float(c), 6) for c in rgba)
@@ -224,6 +251,25 @@ def _material(gl: Any, pg: Any, cache: dict, rgba: tuple[float, ...]) -> int:
                                                          roughnessFactor=0.8)))
         cache[key] = len(gl.materials) - 1
     return int(cache[key])
+
+
+def _textured(gl: Any, pg: Any, blob: _Blob, image: np.ndarray, rgba: tuple[float, ...]) -> int:
+    """A material whose base colour is ``image`` (embedded as a PNG), repeated in u, clamped in v."""
+    import io
+
+    from PIL import Image
+
+    png = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(image, np.uint8)).save(png, format="PNG")
+    gl.images.append(pg.Image(bufferView=blob.add_bytes(png.getvalue()), mimeType="image/png"))
+    gl.samplers.append(pg.Sampler(magFilter=pg.LINEAR, minFilter=pg.LINEAR, wrapS=pg.REPEAT, wrapT=pg.CLAMP_TO_EDGE))
+    gl.textures.append(pg.Texture(source=len(gl.images) - 1, sampler=len(gl.samplers) - 1))
+    gl.materials.append(pg.Material(
+        name="texture", doubleSided=True, alphaMode=pg.BLEND if rgba[3] < 1.0 else pg.OPAQUE,
+        pbrMetallicRoughness=pg.PbrMetallicRoughness(baseColorFactor=[float(c) for c in rgba], metallicFactor=0.0,
+                                                     roughnessFactor=0.8,
+                                                     baseColorTexture=pg.TextureInfo(index=len(gl.textures) - 1))))
+    return len(gl.materials) - 1
 
 
 def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes]:
@@ -253,7 +299,9 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
         q0 = quat[0, b]
         node = pg.Node(name=body.name, translation=[float(x) for x in motion.pos[0, b]],
                        rotation=[float(q0[1]), float(q0[2]), float(q0[3]), float(q0[0])])
-        key = tuple((np.asarray(s.rows, np.float32).tobytes(), tuple(round(float(c), 6) for c in s.rgba))
+        key = tuple((np.asarray(s.rows, np.float32).tobytes(), tuple(round(float(c), 6) for c in s.rgba),
+                     None if s.colors is None else np.asarray(s.colors, np.float32).tobytes(),
+                     None if s.texture is None else (np.asarray(s.uv, np.float32).tobytes(), s.texture.tobytes()))
                     for s in filter(_drawable, body.solids))
         if key and key in shared:
             node.mesh = shared[key]
@@ -263,16 +311,26 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
             continue
         prims = []
         for s in filter(_drawable, body.solids):
-            # corners shared by triangles (same position and normal) stored once, and indexed
-            corners, inverse = np.unique(np.asarray(s.rows, np.float32), axis=0, return_inverse=True)
-            v, nrm = np.ascontiguousarray(corners[:, :3]), corners[:, 3:]
+            # corners shared by triangles (same position, normal and colour) stored once, and indexed
+            rows = np.asarray(s.rows, np.float32)
+            if s.colors is not None:
+                rows = np.concatenate([rows, np.asarray(s.colors, np.float32)], axis=1)
+            if s.texture is not None:
+                rows = np.concatenate([rows, np.asarray(s.uv, np.float32)], axis=1)
+            corners, inverse = np.unique(rows, axis=0, return_inverse=True)
+            v, nrm = np.ascontiguousarray(corners[:, :3]), corners[:, 3:6]
             nrm = np.ascontiguousarray(nrm / np.linalg.norm(nrm, axis=1, keepdims=True))
             idx = np.asarray(inverse, dtype=np.uint32).reshape(-1)
-            prims.append(pg.Primitive(
-                attributes=pg.Attributes(POSITION=blob.add(v, pg.VEC3, target=pg.ARRAY_BUFFER, bounds=True),
-                                         NORMAL=blob.add(nrm, pg.VEC3, target=pg.ARRAY_BUFFER)),
-                indices=blob.add(idx, pg.SCALAR, target=pg.ELEMENT_ARRAY_BUFFER),
-                material=_material(gl, pg, materials, s.rgba)))
+            att = pg.Attributes(POSITION=blob.add(v, pg.VEC3, target=pg.ARRAY_BUFFER, bounds=True),
+                                NORMAL=blob.add(nrm, pg.VEC3, target=pg.ARRAY_BUFFER))
+            if s.colors is not None:
+                att.COLOR_0 = blob.add(np.ascontiguousarray(corners[:, 6:9]), pg.VEC3, target=pg.ARRAY_BUFFER)
+            if s.texture is not None:
+                att.TEXCOORD_0 = blob.add(np.ascontiguousarray(corners[:, -2:]), pg.VEC2, target=pg.ARRAY_BUFFER)
+            material = (_material(gl, pg, materials, s.rgba) if s.texture is None
+                        else _textured(gl, pg, blob, s.texture, s.rgba))
+            prims.append(pg.Primitive(attributes=att, indices=blob.add(idx, pg.SCALAR, target=pg.ELEMENT_ARRAY_BUFFER),
+                                      material=material))
         if prims:
             gl.meshes.append(pg.Mesh(name=body.name, primitives=prims))
             node.mesh = shared[key] = len(gl.meshes) - 1

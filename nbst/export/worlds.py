@@ -9,10 +9,13 @@ One function per kind of file, each replaying it with its own room's replay (no 
 * a 5 m bowling throw (``nbst bowl solve``): :func:`nbst.render.bowling.deck.record`;
 * a foul-line bowling throw (``nbst bowl throw``/``replay``): :func:`nbst.render.bowling.throw.record_throw`,
   the frame as ``nbst bowl replay`` runs it (the ball's rotation is relative to its release, as in
-  the video; the ball is round, so its shape is the same);
+  the video, and the ball wears the video's texture: :func:`uv_sphere`);
 * a crash file (``nbst crash solve``): :func:`nbst.render.crash.motion.record`;
 * a scene solution (``nbst scene solve``): the plain ``mj_step`` loop of docs/scene.md from the
   file's initial state (the same loop as :func:`nbst.scene.rollout.replay`, its states kept).
+
+The pins and a crash's vehicles are written as their videos draw them (the pins' neck stripes, the
+tyres' spokes; per-corner colours), so that a spin shows in a viewer as it does in the video.
 
 MuJoCo worlds keep the recorded states nearest each keyframe (exact replayed states at their own
 times; :func:`nbst.export.mjbodies.sampled_steps`); the 2D world is exact at every keyframe.
@@ -34,8 +37,8 @@ from nbst.export.gltf import Body, BodyMotion, Solid
 from nbst.files import sniff_kind
 from nbst.render.core.camera import mesh_arrays
 
-__all__ = ["DEFAULT_FPS", "FPS_MAX", "PUCK_HEIGHT_FRAC", "FLOOR_RGBA", "KINDS", "NOT_MOTIONS", "file_kind", "disks_motion",
-           "deck_motion", "lane_motion", "crash_motion", "scene_motion", "file_motion"]
+__all__ = ["BALL_RINGS", "BALL_SECTORS", "DEFAULT_FPS", "FPS_MAX", "PUCK_HEIGHT_FRAC", "FLOOR_RGBA", "KINDS", "NOT_MOTIONS", "file_kind", "disks_motion",
+           "deck_motion", "lane_motion", "crash_motion", "scene_motion", "file_motion", "uv_sphere"]
 
 #: Keyframes per second unless asked otherwise, and the most accepted.
 DEFAULT_FPS = 60.0
@@ -156,6 +159,21 @@ def _free_qpos(model: Any, ball: np.ndarray, pins: np.ndarray, pin_adr: np.ndarr
     return q
 
 
+def _skinned(motion: BodyMotion, skins: dict[int, list[Solid]]) -> BodyMotion:
+    """``motion`` with the solids of the bodies in ``skins`` (body index -> solids) replaced: what a
+    world's video draws for them (a pin's neck stripes, a tyre's spokes) instead of their plain geoms."""
+    bodies = [replace(b, solids=skins[k]) if k in skins else b for k, b in enumerate(motion.bodies)]
+    return BodyMotion(bodies, motion.times, motion.pos, motion.quat)
+
+
+def _pin_skins(model: Any) -> dict[int, list[Solid]]:
+    """Each pin body's solid as the bowling videos draw it: white maple with the red neck stripes."""
+    from nbst.render.bowling.deck import pin_solid
+
+    solid = Solid.coloured(pin_solid(model))
+    return {int(model.body(f"pin{n}").id): [solid] for n in range(1, 11)}
+
+
 def deck_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMotion:
     """A 5 m bowling throw file replayed (``nbst render``'s recording): the lane, the ball and the pins.
 
@@ -182,7 +200,46 @@ def deck_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMot
     except MujocoError as e:
         raise throwfile.ThrowFileError(f"{path}: qpos0/qvel0: {e}") from None
     q = _free_qpos(model, m.ball, m.pins, pinfall.pin_addresses(model))
-    return qpos_motion(model, q, m.times, fps)
+    return _skinned(qpos_motion(model, q, m.times, fps), _pin_skins(model))
+
+
+#: The textured ball's sphere: rings from pole to pole and sectors round the axis (a texel of the
+#: video's 1024 x 512 texture is 0.35 deg; a sector 2.8 deg, a 1 in finger hole is 13 deg across).
+BALL_RINGS, BALL_SECTORS = 64, 128
+
+
+def uv_sphere(radius: float, rings: int = BALL_RINGS, sectors: int = BALL_SECTORS) -> tuple[np.ndarray, np.ndarray]:
+    """A sphere about the origin whose texture coordinates are the video's equirectangular mapping
+    (``nbst.render.bowling.throw.ball_texture``): u = azimuth / 2 pi + 1/2, v = polar angle / pi, v = 0
+    at +z. The seam's corners are doubled (u = 0 and u = 1), so no triangle wraps round.
+
+    Returns:
+        rows (V, 6) position and unit normal, and uv (V, 2), three corners a triangle, wound
+        counter-clockwise seen from outside.
+    """
+    th = np.linspace(0.0, np.pi, rings + 1)
+    ph = np.linspace(-np.pi, np.pi, sectors + 1)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    n = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1)
+    uv = np.stack([P / (2 * np.pi) + 0.5, T / np.pi], -1)
+    i, j = (k.ravel() for k in np.meshgrid(np.arange(rings), np.arange(sectors), indexing="ij"))
+    # each quad's two triangles (a b c) and (a c d), a = (i, j), b = (i+1, j), c = (i+1, j+1), d = (i, j+1);
+    # at a pole one of them has two corners on the pole: left out
+    I = np.concatenate([np.stack([i, i + 1, i + 1], 1)[i != rings - 1], np.stack([i, i + 1, i], 1)[i != 0]])
+    J = np.concatenate([np.stack([j, j, j + 1], 1)[i != rings - 1], np.stack([j, j + 1, j + 1], 1)[i != 0]])
+    corner = np.stack([I.ravel(), J.ravel()], 1)
+    nrm = n[corner[:, 0], corner[:, 1]]
+    return np.concatenate([radius * nrm, nrm], axis=1), uv[corner[:, 0], corner[:, 1]]
+
+
+def _ball_skin(model: Any, throw: Any) -> dict[int, list[Solid]]:
+    """The foul-line ball as its video draws it: its texture (grip holes, pin dot, track) on a sphere."""
+    from nbst.render.bowling.throw import ball_texture
+
+    g = model.geom("ball").id
+    rows, uv = uv_sphere(float(model.geom_size[g][0]))
+    rows[:, :3] += np.asarray(model.geom_pos[g], float)
+    return {int(model.geom_bodyid[g]): [Solid(rows, (1.0, 1.0, 1.0, 1.0), uv=uv, texture=ball_texture(throw))]}
 
 
 def lane_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMotion:
@@ -213,7 +270,30 @@ def lane_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMot
                       standing=d["standing"], timestep=step, model=model)
     m = th.motion
     q = _free_qpos(model, m.ball, m.pins, pinfall.pin_addresses(model))
-    return qpos_motion(model, q, m.times, fps)
+    return _skinned(qpos_motion(model, q, m.times, fps), {**_pin_skins(model), **_ball_skin(model, th)})
+
+
+def _vehicle_skins(model: Any, qpos0: np.ndarray, n: int) -> dict[int, list[Solid]]:
+    """Each vehicle body's solids as the crash video draws them (``nbst.render.crash.scene.geom_solid``:
+    the lower body with its wheel arches, the glazed cabin and its windscreen strip, tyres with two
+    light spokes a face, the crush slabs), in the body's frame; a geom the video does not draw (a
+    hub) is left out."""
+    import mujoco
+
+    from nbst.render.core import geoms as cg
+    from nbst.render.crash import scene as cs
+
+    data = mujoco.MjData(model)
+    data.qpos[:] = qpos0   # the start: the arches sit over the wheels there, as in the video
+    mujoco.mj_kinematics(model, data)
+    out: dict[int, list[Solid]] = {}
+    for i in range(n):
+        for g in cs.vehicle_geoms(model, i):
+            rows = cs.geom_solid(model, g, cs.vehicle_arches(model, data, i, g))
+            if rows is not None:
+                rows = cg.posed(np.asarray(rows, float), cg.quat_mat(model.geom_quat[g]), model.geom_pos[g])
+                out.setdefault(int(model.geom_bodyid[g]), []).append(Solid.coloured(rows, float(model.geom_rgba[g][3])))
+    return out
 
 
 def crash_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMotion:
@@ -234,7 +314,7 @@ def crash_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMo
 
     fps = _check_fps(fps)
     d, _, model, m = load(path)
-    motion = qpos_motion(model, m.qpos, m.times, fps)
+    motion = _skinned(qpos_motion(model, m.qpos, m.times, fps), _vehicle_skins(model, m.qpos[0], len(d["vehicles"])))
     # the vehicles' bodies by the names the crash file, its replay and its video give them (A, A_wheel_fl)
     own = [(str(v["body"]), str(v["name"])) for v in d["vehicles"]]
     renamed = [next((name + b.name[len(body):] for body, name in own

@@ -25,7 +25,7 @@ from nbst.render.core.solids import box as _box, flat_poly as _flat_poly, ribbon
 __all__ = ["ARROW_MIN", "PDOF", "PDOF_LENGTH", "VELOCITY_SECONDS", "GLASS", "GROUND_DRAWN", "IMPACT", "MARKING", "SCRAPE", "SKID", "STRIKE", "TYRE", "WELL",
            "arrow_xy", "body_box", "disc_xy", "geom_solid", "impact_arrows", "impact_marks", "lane_marks", "motion_marks",
            "polyline_distance", "ribbon_marks", "static_solids", "strip_triangles", "target_marks", "tyre_solid",
-           "wedge_xy"]
+           "vehicle_arches", "vehicle_geoms", "wedge_xy"]
 
 #: Colours.
 GLASS = (0.16, 0.20, 0.26)
@@ -267,6 +267,39 @@ def _vehicles(model) -> int:
         except KeyError:
             return n
         n += 1
+
+
+def vehicle_geoms(model, i: int) -> list[int]:
+    """The geoms of vehicle ``i`` (body ``v{i}``) that the video draws with :func:`geom_solid`: its body's
+    geoms, its four tyres, and its crush zones' slabs (a crushing type: docs/crash.md "Crush"), which
+    ride their plastic joints."""
+    from nbst.models.crash.crush import CRUSH_ZONES
+
+    body = model.body(f"v{i}").id
+    out = np.nonzero(model.geom_bodyid == body)[0].tolist() + [model.geom(f"v{i}_tyre_{c}").id
+                                                              for c in ("fl", "fr", "rl", "rr")]
+    for z in CRUSH_ZONES:
+        try:
+            out.append(int(model.geom(f"v{i}_crush_{z}").id))
+        except KeyError:
+            pass
+    return [int(g) for g in out]
+
+
+def vehicle_arches(model, data, i: int, g: int) -> list[tuple[float, float, float]]:
+    """Wheel arches of vehicle ``i``'s lower body box ``g`` (none for another geom): (x, half length,
+    top z) in the box's frame, over its tyres where ``data``'s kinematics put them (the start)."""
+    if not model.geom(g).name.endswith("_lower"):
+        return []
+    R, p = data.geom_xmat[g].reshape(3, 3), data.geom_xpos[g]
+    out: list[tuple[float, float, float]] = []
+    for c in ("fl", "fr", "rl", "rr"):
+        t = model.geom(f"v{i}_tyre_{c}").id
+        x, _, z = R.T @ (data.geom_xpos[t] - p)
+        r = float(model.geom_size[t][0]) + ARCH_CLEAR
+        if not any(abs(a[0] - x) < 1e-6 for a in out):
+            out.append((float(x), r, float(z) + r))
+    return out
 
 
 def geom_solid(model, g: int, arches=()) -> np.ndarray | None:

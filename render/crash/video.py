@@ -48,7 +48,6 @@ from nbst.render.core.shapes import Rect, Text, text_cell
 from nbst.render.core.textfit import CUT
 from nbst.render.core.times import frame_times
 from nbst.render.core.video import render_output
-from nbst.models.crash.crush import CRUSH_ZONES
 from nbst.render.crash import readout as ro
 from nbst.render.crash import scene as cs
 from nbst.render.crash.motion import SLOW, record, slow_windows, slowed
@@ -306,11 +305,9 @@ class CrashRenderer(FrameRenderer):
         self.heights = []
         cache: dict = {}
         for i in range(n):
-            body = model.body(f"v{i}").id
-            for g in np.nonzero(model.geom_bodyid == body)[0].tolist() + [
-                    model.geom(f"v{i}_tyre_{c}").id for c in ("fl", "fr", "rl", "rr")] + _crush_slabs(model, i):
+            for g in cs.vehicle_geoms(model, i):
                 nm = model.geom(g).name
-                arches = self._arches(i, g) if nm.endswith("_lower") else ()
+                arches = cs.vehicle_arches(model, self.data, i, g)
                 key = (int(model.geom_type[g]), tuple(np.round(model.geom_size[g], 6)), tuple(model.geom_rgba[g]),
                        nm.endswith("_cabin"), "_tyre_" in nm, tuple(np.round(np.ravel(arches), 6)))
                 if key not in cache:
@@ -338,18 +335,6 @@ class CrashRenderer(FrameRenderer):
             vao = self.ctx.vertex_array(self.prog, [(buf, "3f 3f 3f", "in_pos", "in_normal", "in_color")])
         self._objs += [vao, buf]
         return vao
-
-    def _arches(self, i: int, g: int) -> list[tuple[float, float, float]]:
-        """Wheel arches of vehicle ``i``'s body box ``g``: (x, half length, top z) in the box's frame."""
-        R, p = self.data.geom_xmat[g].reshape(3, 3), self.data.geom_xpos[g]
-        out: list[tuple[float, float, float]] = []
-        for c in ("fl", "fr", "rl", "rr"):
-            t = self.model.geom(f"v{i}_tyre_{c}").id
-            x, _, z = R.T @ (self.data.geom_xpos[t] - p)
-            r = float(self.model.geom_size[t][0]) + cs.ARCH_CLEAR
-            if not any(abs(a[0] - x) < 1e-6 for a in out):
-                out.append((float(x), r, float(z) + r))
-        return out
 
     def _overhead_bounds(self) -> tuple[float, float, float, float]:
         """(x0, y0, x1, y1) m the overhead view shows: the crash's places (every impact, rest pose
@@ -668,13 +653,3 @@ def render_crash(d: dict, script, model, motion, output, *, still=None, camera: 
                          fps=fps, progress=progress)
 
 
-def _crush_slabs(model, i: int) -> list[int]:
-    """The geoms of vehicle ``i``'s crush zones' slabs (a crushing type: docs/crash.md "Crush"),
-    which ride their plastic joints: [] for a rigid type."""
-    out = []
-    for z in CRUSH_ZONES:
-        try:
-            out.append(int(model.geom(f"v{i}_crush_{z}").id))
-        except KeyError:
-            pass
-    return out
