@@ -76,7 +76,7 @@ class Solid:
         rows9 = np.asarray(rows9, float)
         col = rows9[:, 6:9]
         if len(col) and (col == col[0]).all():
-            return cls(rows9[:, :6], (*(float(c) for c in col[0]), float(alpha)))
+            return cls(rows9[:, :6], (float(col[0, 0]), float(col[0, 1]), float(col[0, 2]), float(alpha)))
         return cls(rows9[:, :6], (1.0, 1.0, 1.0, float(alpha)), np.clip(col, 0.0, 1.0))
 
 

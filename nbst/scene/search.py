@@ -74,6 +74,7 @@ import numpy as np
 
 from nbst.models.mjsearch.engine import Engine
 from nbst.models.mjsearch.probability import Probability, normal_draws, perturb
+from nbst.scene.aim import Pair, land_pair, pair_of
 from nbst.scene.judge import signature_text
 from nbst.scene.rollout import SceneRollout, SceneSim
 
@@ -220,6 +221,7 @@ class _Scene:
             self.linvel_at.append(a)
             self.free_flight.append(a is not None and bool(np.all(self.span[a:a + 3] > 0)))
         self.answers: dict[tuple[str, ...], SceneRollout] = {}
+        self.pairs: dict[tuple[int, int], Pair] = {}  # (block, block) -> the pair that must meet
         self.held: dict[int, bool] = {}  # id(rollout) -> kept on the ladder
         self.seen: set[tuple[bool, ...]] = set()
         mid = (self.lo + self.hi) / 2
@@ -367,8 +369,32 @@ class _Scene:
             x[a:a + 3], x[b:b + 3] = self._ballistic(i, point, t), self._ballistic(j, point, t)
             if all(np.all((self.lo[k:k + 3] <= x[k:k + 3]) & (x[k:k + 3] <= self.hi[k:k + 3])) for k in (a, b)):
                 break
+        fi, fj = (self.fates.fates[self.bit[k]] for k in (i, j))  # type: ignore[index]
+        if fi.rest_in is not None and fj.rest_in is not None and rng.random() < 0.5:
+            # half the time each then falls into its own region: the landing aim (nbst.scene.aim)
+            ta, tb = (self._region_point(rng, f.rest_in) for f in (fi, fj))
+            lo, hi = np.r_[self.lo[a:a + 3], self.lo[b:b + 3]], np.r_[self.hi[a:a + 3], self.hi[b:b + 3]]
+            v = land_pair(self._pair(i, j), x[a:a + 3], x[b:b + 3], (ta, tb), lo, hi)
+            x[a:a + 3], x[b:b + 3] = v[:3], v[3:]
         u[a:a + 3] = self.u_of(x)[a:a + 3]
         u[b:b + 3] = self.u_of(x)[b:b + 3]
+
+    def _pair(self, i: int, j: int) -> Pair:
+        """Blocks ``i`` and ``j``'s bodies as a :class:`~nbst.scene.aim.Pair` (their restitution measured
+        once, on first use)."""
+        if (i, j) not in self.pairs:
+            m = self.sim.model
+            bi, bj = (m.body(self.fates.controls[k].body).id for k in (i, j))
+            self.pairs[(i, j)] = pair_of(m, bi, bj, self.origin[i], self.origin[j], self.fates.duration)
+        return self.pairs[(i, j)]
+
+    @staticmethod
+    def _region_point(rng: np.random.Generator, region: Any) -> np.ndarray:
+        """A point of ``region`` near its middle: a ball's within half its radius, a box's within a
+        quarter of its size, each way."""
+        if region.center is not None:
+            return region.mid() + region.radius * 0.5 * rng.uniform(-1, 1, 3)
+        return region.mid() + 0.25 * (np.asarray(region.hi) - np.asarray(region.lo)) * rng.uniform(-1, 1, 3)
 
     def _flight_time(self, rng: np.random.Generator) -> float:
         """A random flight time (s) for a ballistic aim: 0.1 s to half the duration, at most 1 s."""
@@ -387,12 +413,7 @@ class _Scene:
             assert fate.rest_in is not None
             region = fate.rest_in
             t = self._flight_time(rng)
-        target = region.mid()
-        if region.center is not None:
-            target = target + region.radius * 0.5 * rng.uniform(-1, 1, 3)
-        else:
-            target = target + 0.25 * (np.asarray(region.hi) - np.asarray(region.lo)) * rng.uniform(-1, 1, 3)
-        return self._ballistic(i, target, t)
+        return self._ballistic(i, self._region_point(rng, region), t)
 
     def init(self, eng: Engine) -> np.ndarray:
         """A random trial: each block by directed or uniform randomize, even odds."""
