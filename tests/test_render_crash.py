@@ -232,6 +232,19 @@ def test_the_readout_fits_its_box_and_labels_stay_in_their_panels(gl, loaded, si
         r.release()
 
 
+@pytest.mark.parametrize("size", [(16, 16), (32, 18), (1000, 20), (16, 400), (48, 27)])
+@pytest.mark.parametrize("camera", ["overhead", "both"])
+def test_any_size_the_cli_takes_draws(gl, loaded, size, camera):
+    """Every frame size ``--size`` accepts (16 to 8192 a side) draws a crash, however little of the
+    readout fits (an audit's 16x16 raised IndexError where no line fitted)."""
+    r = crash.CrashRenderer(gl, *loaded, size=size, camera=camera, follow=0)
+    try:
+        frame = r.render(r.motion.duration / 2)
+        assert frame.shape == (size[1], size[0], 3)
+    finally:
+        r.release()
+
+
 def test_the_atlas_writes_the_readout_signs(gl):
     from nbst.render.core.shapes import Text, glyph_index
 

@@ -567,7 +567,7 @@ class CrashRenderer(FrameRenderer):
         # within its panel (a small --size): the marks cut where their line is
         fitted = self.text.fit(plain, self.text_box[2] - 1.4 * cw, self.text_box[3] - 0.5 * ch)
         cut = [None if a == b else len(a) - len(CUT) * a.endswith(CUT) for a, b in zip(fitted, plain)]
-        keep = len(fitted) - (len(fitted) < len(plain))
+        keep = max(0, len(fitted) - (len(fitted) < len(plain)))   # lines kept whole (the last may be the marker)
         oks = [m[:cut[j]] if cut[j] is not None else m for j, m in enumerate(oks[:keep])]
         nos = [m[:cut[j]] if cut[j] is not None else m for j, m in enumerate(nos[:keep])]
         owner = [o if j < keep else -1 for j, o in enumerate(owner[:len(fitted)])]
