@@ -304,6 +304,34 @@ def test_the_foul_line_ball_wears_its_videos_texture(files, tmp_path):
         assert np.abs(img[int(v * h), int(u * w) % w].astype(int) - np.round(np.array(HOLE_RGB) * 255)).max() <= 1
 
 
+def test_the_pins_wear_two_neck_stripes_cut_exactly():
+    """The pin's mesh has rings of vertices wider apart than a stripe: its triangles are cut at each
+    stripe's edges (``split_at_height``: no triangle crosses a cut, the surface area kept to 1e-6)
+    and coloured whole, so the video and the glTF show the two red stripes of STRIPES_IN, no red
+    elsewhere (an audit saw one pink band 3.5 cm wide)."""
+    from nbst.models.bowling import scene
+    from nbst.render.bowling.deck import PIN_RED, STRIPES_IN, _visible_of, pin_solid, split_at_height
+    from nbst.render.core import geoms as cg
+
+    model = scene.build_model()
+    tri = pin_solid(model).reshape(-1, 3, 9).astype(float)
+    red = np.all(np.abs(tri[:, :, 6:9] - np.array(PIN_RED)) < 1e-6, axis=(1, 2))
+    z = tri[:, :, 2] / scene.INCH
+    for lo, hi in STRIPES_IN:   # each stripe wholly red, bounded by its edges
+        inside = (z.mean(axis=1) > lo) & (z.mean(axis=1) < hi)
+        assert inside.any() and red[inside].all()
+    assert all(any(lo - 1e-4 <= zz.min() and zz.max() <= hi + 1e-4 for lo, hi in STRIPES_IN) for zz in z[red])
+
+    def area(t):
+        return 0.5 * np.linalg.norm(np.cross(t[:, 1, :3] - t[:, 0, :3], t[:, 2, :3] - t[:, 0, :3]), axis=1).sum()
+
+    rows = np.concatenate([cg.body_rows(model, g) for g in _visible_of(model, "pin1")])
+    cut = split_at_height(rows, 9.4 * scene.INCH).reshape(-1, 3, 6)
+    zc = cut[:, :, 2] - 9.4 * scene.INCH
+    assert not ((zc > 1e-9).any(axis=1) & (zc < -1e-9).any(axis=1)).any()
+    assert area(cut) == pytest.approx(area(rows.reshape(-1, 3, 6)), rel=1e-6)
+
+
 def test_mujoco_worlds_key_the_replays_own_states(files):
     """The scene's keyframes are the plain mj_step loop's states: its last is replay_solution's
     final state, bit for bit; the crash's are the renderer's recording."""

@@ -36,6 +36,7 @@ from nbst.render.core.video import render_output
 
 __all__ = ["BACKGROUND", "BALL_RGB", "DISK_ONLY_FLAGS", "FPS_MAX", "IMPACT_WINDOW", "PIN_LABEL_BACK", "PIN_RED",
            "PIN_WHITE", "SLOW", "SNIFF_BYTES", "STRIPES_IN", "BowlingRenderer", "Motion", "ball_solid", "bowling_kind",
+           "split_at_height",
            "is_throw_file", "load_motion", "motion_times", "pin_colour", "pin_solid", "record", "render_file",
            "render_motion", "slow_window", "static_solids"]
 
@@ -144,10 +145,43 @@ def _visible_of(model, body: str) -> list[int]:
     return [g for g in cg.visible_geoms(model) if int(model.geom_bodyid[g]) == b]
 
 
+def split_at_height(rows: np.ndarray, z: float) -> np.ndarray:
+    """Triangle rows (V, 6+: position, normal, ...) with every triangle that crosses the plane of
+    height ``z`` cut there into three (the corners where its edges cross the plane interpolated,
+    normals renormalised), so that a colour can change exactly at ``z``; the others unchanged."""
+    tri = np.asarray(rows, float).reshape(-1, 3, rows.shape[1])
+    side = tri[:, :, 2] > z
+    cross = side.any(axis=1) & ~side.all(axis=1)
+    out = [tri[~cross]]
+    for t, sd in zip(tri[cross], side[cross]):
+        # the lone corner (the one on its own side) first, the order of the other two kept
+        k = int(np.flatnonzero(sd == (sd.sum() == 1))[0])
+        a, b, c = t[k], t[(k + 1) % 3], t[(k + 2) % 3]
+
+        def at(p, q):
+            f = (z - p[2]) / (q[2] - p[2])
+            v = p + f * (q - p)
+            v[3:6] /= max(float(np.linalg.norm(v[3:6])), 1e-12)
+            return v
+        ab, ac = at(a, b), at(a, c)
+        out.append(np.stack([np.stack([a, ab, ac]), np.stack([ab, b, c]), np.stack([ab, c, ac])]))
+    return np.concatenate(out).reshape(-1, rows.shape[1])
+
+
 def pin_solid(model) -> np.ndarray:
-    """(V, 9) a pin in its body's frame: the first pin's visible geoms (its visual mesh), striped."""
+    """(V, 9) a pin in its body's frame: the first pin's visible geoms (its visual mesh), its
+    triangles cut at the stripes' edges (the mesh's rings of vertices are 0.6-0.9 in apart, wider
+    than a stripe) and each coloured whole by its centre's height: the two red neck stripes."""
+    from nbst.models.bowling import scene
+
     parts = [r for g in _visible_of(model, "pin1") if (r := cg.body_rows(model, g)) is not None]
-    return np.concatenate([cg.coloured(r, pin_colour) for r in parts])
+    out = []
+    for r in parts:
+        for lo, hi in STRIPES_IN:
+            r = split_at_height(split_at_height(r, lo * scene.INCH), hi * scene.INCH)
+        col = np.repeat([pin_colour(c) for c in np.asarray(r, float)[:, :3].reshape(-1, 3, 3).mean(axis=1)], 3, axis=0)
+        out.append(cg.coloured(r, col))
+    return np.concatenate(out)
 
 
 def ball_solid(model, rgb=BALL_RGB, level: int = 3) -> np.ndarray:
