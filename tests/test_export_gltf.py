@@ -195,6 +195,10 @@ def test_the_glb_holds_the_replays_keyframes(files, kind, tmp_path, capsys):
     quat = continuous_quaternions(motion.quat)
     for b in moving:
         assert gl.nodes[b].name == motion.bodies[b].name
+        node = gl.nodes[b]
+        for path, held in (("translation", node.translation), ("rotation", node.rotation)):
+            if path not in anim[b]:   # no channel: a value that never changes, the node's own
+                anim[b][path] = (np.asarray(motion.times), np.tile(np.asarray(held, float), (len(motion.times), 1)))
         t, y = anim[b]["translation"]
         assert np.allclose(t, motion.times, rtol=1e-6, atol=1e-7)
         assert np.abs(y - motion.pos[:, b]).max() <= 1e-6 * extent

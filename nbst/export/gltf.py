@@ -9,7 +9,8 @@ equal pucks are one mesh and 1,000 nodes), and one animation whose channels move
 ``rotation`` sampler per body, LINEAR interpolation, over one shared time accessor. Bodies that
 never move (the floor, a road) are nodes without channels: a body moves only where its pose changes
 (:func:`still_bodies`; a :class:`BodyMotion` makes a body given as moving static where its keyframes,
-as the file stores them, are all one pose: a mocap paddle nothing moves). A body with nothing to
+as the file stores them, are all one pose: a mocap paddle nothing moves); a moving body's translation or
+rotation that never changes as stored (a sliding disk's rotation) gets no channel, its node's value holding. A body with nothing to
 draw (no solid: a flex's vertex bodies, the cloth nbst does not export) is a node without a mesh
 whose ``extras`` say so, and the scene's ``extras`` name them all (:func:`empty_note`). The file is
 written with pygltflib (the binary container, one buffer) and atomically
@@ -356,6 +357,8 @@ def gltf_document(motion: BodyMotion, *, name: str = "nbst") -> tuple[Any, bytes
         for b in moving:
             xyzw = quat[:, b][:, [1, 2, 3, 0]]
             for path, values, kind in ((pg.TRANSLATION, motion.pos[:, b], pg.VEC3), (pg.ROTATION, xyzw, pg.VEC4)):
+                if not np.ptp(np.asarray(values, np.float32), axis=0).any():
+                    continue   # never changes as stored (a disk's rotation): the node's own value holds
                 anim.samplers.append(pg.AnimationSampler(input=t_acc, interpolation=pg.ANIM_LINEAR,
                                                          output=blob.add(np.asarray(values, np.float32), kind)))
                 anim.channels.append(pg.AnimationChannel(sampler=len(anim.samplers) - 1,
