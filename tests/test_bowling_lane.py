@@ -252,3 +252,24 @@ def test_a_ball_that_drifts_out_all_the_way_has_no_breakpoint():
     board = r.path["board"]
     assert board[-1] - board.min() < lane.BREAKPOINT_MIN  # the path itself: it did not come back
     assert r.breakpoint_ft is None and r.breakpoint_board is None
+
+
+@pytest.mark.parametrize("delivery, oil", [
+    (lane.Delivery(board=17.0, at="foul", angle=1.0), "house"),            # turns at ~20 ft in the oil
+    (lane.Delivery(board=17.0, at="foul", angle=1.0, mph=15.5, rpm=250), "house"),
+    (lane.Delivery(), "uniform"),                                           # oil to the pins: no rise of the pull
+    (lane.Delivery(), "sport")])
+def test_the_breakpoint_is_where_the_ball_turns_and_the_skid_never_ends_after_it(delivery, oil):
+    """The breakpoint is the path's farthest board out, and the hook starts no later (a coach saw
+    "breakpoint 43.6 ft, board 20.8" and "skid 43.6 ft" on a ball that turned at 16 ft on board 15.4,
+    and "skid 0.2 ft" on oil to 59 ft, where the ball curls alike all the way and skids to where
+    it turns)."""
+    r = lane.throw(delivery, oil)
+    ft, board = np.asarray(r.path["ft"]), np.asarray(r.path["board"])
+    far = int(np.argmin(board))
+    assert r.breakpoint_ft == pytest.approx(float(ft[far]), abs=0.05)
+    assert r.breakpoint_board == pytest.approx(float(board[far]), abs=0.01)
+    assert r.skid_ft is not None and r.skid_ft <= r.breakpoint_ft + 1e-9
+    assert r.skid_ft > 10.0   # not the release's transient
+    if r.roll_ft is not None:
+        assert r.roll_ft >= r.skid_ft

@@ -29,7 +29,7 @@ from nbst.models.bowling.lane.scene import ball_quat, lane_spec
 from nbst.models.bowling.lane.units import ARROWS_FT, MPH, GutterBall, LaneError, hand_sign, x_to_ft, y_to_board
 from nbst.models.mjsearch.runner import mujoco_warnings_raise
 
-__all__ = ["TIMESTEP", "MAX_SECONDS", "ROLL_SLIP", "HOOK_SHARE", "BREAKPOINT_MIN", "FLARE_FT", "AIM_TOL", "ThrowResult",
+__all__ = ["TIMESTEP", "MAX_SECONDS", "ROLL_SLIP", "HOOK_SHARE", "BREAKPOINT_MIN", "HOOK_RISE", "FRONT_FT", "FLARE_FT", "AIM_TOL", "ThrowResult",
            "release_state", "ball_model", "run", "throw", "flare_in", "aim_angle", "board_at", "aim_at_arrows"]
 
 #: Step and the longest run (s): a ball released at 5 mph (the slowest Delivery) takes ~11 s.
@@ -45,6 +45,10 @@ HOOK_SHARE = 0.5
 #: A breakpoint needs the ball to move out at least this many boards from its release, and to come
 #: back at least as many by the pins (a ball that drifts out all the way has none).
 BREAKPOINT_MIN = 0.25
+#: A hook needs the peak sideways acceleration to reach this many times its level (median) over the
+#: front of the lane, FRONT_FT ft past the foul line (the house shot's profiles: 6.1-8.7 times; on
+#: oil to the pins, 1.25: no hook).
+HOOK_RISE, FRONT_FT = 2.0, (1.0, 10.0)
 
 
 @dataclass
@@ -52,10 +56,11 @@ class ThrowResult:
     """The phases of a throw in bowler's units (feet past the foul line, boards, mph, degrees).
 
     ``skid_ft``: where the hook starts (sideways acceleration towards the pocket first reaches
-    HOOK_SHARE of its peak); ``breakpoint_ft``/``breakpoint_board``: where the ball is farthest
-    out (its board stops falling; None when it never moves out, or never comes back), or, where it got there before the
-    hook started (a slow, low-rev ball curling on the oil, then drifting back), the hook start:
-    where it turns, so the breakpoint never comes before the hook; ``roll_ft``: where the contact
+    HOOK_SHARE of its peak, where the peak is HOOK_RISE times its level on the front of the lane at
+    least; None: no hook), or the breakpoint where the ball turns before that (it curls back in
+    the oil): the skid never ends after the ball has come back; ``breakpoint_ft``/``breakpoint_board``:
+    where the ball is farthest out (its board stops falling; None when it never moves out BREAKPOINT_MIN
+    boards, or never comes back as many); ``roll_ft``: where the contact
     point's slip first drops below ROLL_SLIP (None if it never rolls before the pins);
     ``entry_angle_deg``: the ball's heading where its centre crosses the head pin's line,
     + towards the pocket side; ``board_at_pins``: its board there. ``flare_in``: track flare,
@@ -248,13 +253,19 @@ def throw(delivery: Delivery, oil="house", ball: Ball | None = None, *, law: Oil
     a[k:-k] = (v[2 * k:] - v[:-2 * k]) / (2 * k * h)
     a_perp = s * (v[:, 0] * a[:, 1] - v[:, 1] * a[:, 0]) / np.maximum(speed, 1e-9)
     peak = a_perp.max()
-    skid_i: int | None = int(np.argmax(a_perp >= HOOK_SHARE * peak)) if peak > 0.05 else None
-    # breakpoint: the ball's farthest board out, if it went out at least BREAKPOINT_MIN boards; where it got
-    # there still skidding (before the hook starts) it drifted back on the oil and turns at the hook start
+    # a hook is a rise of the sideways acceleration: to HOOK_RISE times its level over the front of the
+    # lane at least (on oil to the pins the ball curls alike all the way: no hook, it skids to the pins)
+    front = (ft > FRONT_FT[0]) & (ft < FRONT_FT[1])
+    base = float(np.median(a_perp[front])) if front.any() else 0.0
+    hooked = peak > 0.05 and peak >= HOOK_RISE * base
+    skid_i: int | None = int(np.argmax(a_perp >= HOOK_SHARE * peak)) if hooked else None
+    # breakpoint: the ball's farthest board out, if it went out at least BREAKPOINT_MIN boards and came back
+    # as many; where it turns there before the acceleration's rise (a ball curling back in the oil), the hook
+    # starts where it turns: the skid never ends after the ball has come back
     far = int(np.argmin(board))
     bp_i = far if board[0] - board[far] >= BREAKPOINT_MIN and board[-1] - board[far] >= BREAKPOINT_MIN else None
-    if bp_i is not None and skid_i is not None and skid_i > bp_i:
-        bp_i = skid_i
+    if bp_i is not None and (skid_i is None or skid_i > bp_i):
+        skid_i = bp_i
     rolled = np.flatnonzero(slip_h < ROLL_SLIP)
     roll_i = int(rolled[0]) if len(rolled) else None
     # at the head pin's line: interpolate between the last two steps
