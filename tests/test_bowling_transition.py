@@ -362,3 +362,25 @@ def test_the_series_spare_ball_takes_a_pin_at_a_split_whose_middle_is_bare_wood(
         mid = sum(ys[p] for p in right) / len(right)
         assert any(abs(ys[p] - mid) <= reach for p in leave)   # the ball's line reaches a pin of the leave
     assert all(abs(ys[p] - (ys[4] + ys[10]) / 2) > reach for p in (4, 10))   # the 4-10's middle is bare wood
+
+
+def test_a_moves_target_is_where_the_path_crosses_the_arrows_as_bowl_throw_says():
+    """``bowl series`` said "looks at board 14.0" for the pro's own line, where ``bowl throw`` says
+    15.3 (the ball's path at 15 ft, not the straight line from the launch angle); a move of the
+    target by -0.5 reads 0.5 board from the line's own (a coach expected 14.8, not 13.5)."""
+    import re
+
+    from nbst.cli.bowl.series import _move_lines
+    from nbst.models.bowling import lane
+    from nbst.models.bowling.lane import advise, profiles
+
+    d = profiles.profile("pro").delivery("right")
+    want = advise.line_of(lane.throw(d, "house"))["target_board"]
+    run = {"bowlers": [{"index": 0, "strike": d.to_dict()}],
+           "moves": [{"after_ball": 5, "bowler": 0, "feet": 0, "target": 0},
+                     {"after_ball": 9, "bowler": 0, "feet": -1, "target": -0.5}]}
+    lines = _move_lines(run, {"oil": "house", "ball": lane.Ball().to_dict()})
+    said = [advise.arrow_text(want), advise.arrow_text(want - 0.5)]
+    assert [said[k] in lines[k] for k in range(2)] == [True, True], (lines, said)
+    got = [float(re.search(r"looks at board ([0-9.]+)", x).group(1)) for x in lines]
+    assert got[0] == pytest.approx(want, abs=0.05) and got[1] - got[0] == pytest.approx(-0.5, abs=0.05)

@@ -153,7 +153,7 @@ def series_lines(doc: dict) -> list[str]:
            f"pocket: boards {doc['pocket_boards'][0]:g}-{doc['pocket_boards'][1]:g} at the head pin"]
     for run in doc["runs"]:
         out.append(f"move {run['move']}" + (f": {len(run['moves'])} moves" if run["move"] != "none" else ""))
-        out += _move_lines(run)
+        out += _move_lines(run, doc)
         for s in run["summary"]:
             bp = "none" if s["breakpoint_ft"] is None else f"{s['breakpoint_ft']:.1f} ft, board {s['breakpoint_board']:.1f}"
             ent = "none" if s["entry_angle_deg"] is None else f"{s['entry_angle_deg']:.2f} deg"
@@ -166,17 +166,26 @@ def series_lines(doc: dict) -> list[str]:
     return out
 
 
-def _move_lines(run: dict) -> list[str]:
+def _move_lines(run: dict, doc: dict | None = None) -> list[str]:
     """Each move of a run in a bowler's words: after which ball, where the bowler now stands and looks
-    (the strike line's stance and arrows board plus the move's feet and target, in the bowler's own
-    boards)."""
+    (the strike line's stance and target plus the move's feet and target, in the bowler's own
+    boards). The target is where the ball's path crosses the arrows, as ``bowl throw`` and
+    ``bowl advise`` give it: the strike line's, thrown alone on a fresh lane of the run's pattern,
+    plus the move (a move shifts the line's board at the arrows; the skid is straight there), or,
+    where the pattern cannot be read again by its name (a sheet of one's own), the straight line's."""
     from nbst.models.bowling import lane
     from nbst.models.bowling.lane import advise, transition
 
     base = {}
+    oil = (doc or {}).get("oil", "house")
+    ball = lane.Ball(**doc["ball"]) if doc and isinstance(doc.get("ball"), dict) else None
     for b in run.get("bowlers", []):
         d = lane.Delivery(**b["strike"])
-        base[b["index"]] = (advise.stance_of(d.foul_board()), transition.arrow_board(d))
+        try:
+            arrow = float(lane.throw(d, oil, ball).board_at_arrows)
+        except (lane.LaneError, TypeError, ValueError):
+            arrow = transition.arrow_board(d)
+        base[b["index"]] = (advise.stance_of(d.foul_board()), arrow)
     out = []
     for m in run.get("moves", []):
         if m["bowler"] not in base:
