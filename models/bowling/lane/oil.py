@@ -5,7 +5,8 @@
   machine runs them, each ``{"pass": "forward"|"reverse", "boards": "2L-2R", "loads": n,
   "ul": microlitres per board per load, "speed": in/s, "start_ft": a, "end_ft": b}`` (``n`` loads
   of ``ul`` on every board from ``2L`` (board 2 counted from the left edge) to ``2R`` (board 2
-  from the right), laid evenly from ``a`` to ``b`` ft past the foul line), or a **buff** row
+  from the right; written left to right, as the machine lays it: ``2R-2L`` is refused), laid evenly
+  from ``a`` to ``b`` ft past the foul line), or a **buff** row
   ``{"pass": ..., "buff": true, "start_ft": a, "end_ft": b}``: the brush alone over ``a``-``b``,
   in the pass's direction (:func:`buffed`). The volume (``loads x boards x ul``, less what the
   brush lifts off), the length and the ratio are **computed** from the rows, never entered:
@@ -29,17 +30,19 @@
 
 The shipped patterns (``patterns/*.json`` beside this module) are registered once in
 :data:`PATTERNS` (an :class:`nbst.registry.Registry`); :func:`pattern` resolves a registered
-name or a pattern file's path.
+name or a pattern file's path (any suffix); ``--oil`` (:func:`argtype`) reads a value that names an
+existing path as that file, even one named like a shipped pattern.
 
 Pure Python and numpy; reading a pattern file goes through :mod:`nbst.models.bowling.files`.
 
-Length: ~630 lines, past the house's ~500: one file format in two versions (a sheet's rows and the
+Length: ~700 lines, past the house's ~500: one file format in two versions (a sheet's rows and the
 passes of version 1), each field checked with its own one-line refusal, the film each lays, the
 brush, the sheet's printout, and the law from film to friction that reads that film.
 """
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -77,8 +80,16 @@ BUFF_CARRY_FT = 2.0
 RATIO_FT = 10.0
 #: A lane machine's travel speeds a sheet may give (in/s).
 SPEED_RANGE = (1.0, 60.0)
+
+
+class _Shipped(str):
+    """A shipped pattern's name that :func:`argtype` never reads as a path: argparse passes a text
+    default through ``type=``, and a file named ``house`` in the working folder must not replace
+    the pattern of a throw whose ``--oil`` was not given."""
+
+
 #: The pattern a throw is bowled on when none is named (``--oil``'s default).
-DEFAULT_OIL = "house"
+DEFAULT_OIL = _Shipped("house")
 
 
 @dataclass(frozen=True)
@@ -385,13 +396,20 @@ class OilField:
 # --------------------------------------------------------------------------- files
 
 
+#: A field the file does not give (``d.get(key, _MISSING)``): refused as "missing", where a ``null`` is "got None".
+_MISSING = object()
+
+
 def _num(v, where: str, lo: float, hi: float, *, open_lo: bool = False) -> float:
-    if v is None:
-        raise LaneError(f"{where}: missing (a number in [{lo:g}, {hi:g}])")
+    """``v`` as a float in [lo, hi] (``(lo, hi]`` with ``open_lo``); missing, not a number and out of
+    range each refused in one line that states the same domain."""
+    dom = f"{'(' if open_lo else '['}{lo:g}, {hi:g}]"
+    if v is _MISSING:
+        raise LaneError(f"{where}: missing (a number in {dom})")
     if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
-        raise LaneError(f"{where}: must be a number, got {v!r}")
+        raise LaneError(f"{where}: must be a number in {dom}, got {v!r}")
     if v < lo or v > hi or (open_lo and v == lo):
-        raise LaneError(f"{where}: must be in {'(' if open_lo else '['}{lo:g}, {hi:g}], got {v!r}")
+        raise LaneError(f"{where}: must be in {dom}, got {v!r}")
     return float(v)
 
 
@@ -433,8 +451,8 @@ def _pass(d, where: str) -> Pass:
     if not isinstance(d, dict):
         raise LaneError(f"{where}: must be an object (length_ft, volume_ml, units or loads)")
     deck_ft = NX * DX_FT
-    length = _num(d.get("length_ft"), f"{where}.length_ft", 0.0, deck_ft, open_lo=True)
-    vol = _num(d.get("volume_ml"), f"{where}.volume_ml", 0.0, 200.0)
+    length = _num(d.get("length_ft", _MISSING), f"{where}.length_ft", 0.0, deck_ft, open_lo=True)
+    vol = _num(d.get("volume_ml", _MISSING), f"{where}.volume_ml", 0.0, 200.0)
     taper = _num(d.get("taper_ft", 0.0), f"{where}.taper_ft", 0.0, length)
     to = _num(d.get("taper_to", 1.0), f"{where}.taper_to", 0.0, 1.0)
     return Pass(length, vol, _units(d, where), taper, to)
@@ -448,11 +466,13 @@ def _row(d, where: str) -> Row:
     extra = sorted(set(d) - known)
     if extra:
         raise LaneError(f"{where}.{extra[0]}: not a row field (fields: {', '.join(sorted(known))})")
-    direction = d.get("pass")
+    direction = d.get("pass", _MISSING)
+    if direction is _MISSING:
+        raise LaneError(f"{where}.pass: missing ('forward' or 'reverse')")
     if direction not in ("forward", "reverse"):
         raise LaneError(f"{where}.pass: must be 'forward' or 'reverse', got {direction!r}")
-    a = _num(d.get("start_ft"), f"{where}.start_ft", 0.0, deck_ft)
-    b = _num(d.get("end_ft"), f"{where}.end_ft", 0.0, deck_ft)
+    a = _num(d.get("start_ft", _MISSING), f"{where}.start_ft", 0.0, deck_ft)
+    b = _num(d.get("end_ft", _MISSING), f"{where}.end_ft", 0.0, deck_ft)
     if a == b:
         raise LaneError(f"{where}.end_ft: must differ from start_ft ({a:g} ft): a row covers a distance")
     buff = d.get("buff", False)
@@ -463,14 +483,22 @@ def _row(d, where: str) -> Row:
             if k in d:
                 raise LaneError(f"{where}.{k}: a buff row is the brush alone (pass, start_ft, end_ft), no {k}")
         return Row(direction, a, b, buff=True)
-    text = d.get("boards")
+    text = d.get("boards", _MISSING)
+    form = "'FROM-TO' as a sheet writes it, left to right: e.g. '2L-2R', '10L-10R', '2L-15L'"
+    if text is _MISSING:
+        raise LaneError(f"{where}.boards: missing ({form})")
     if not isinstance(text, str) or text.count("-") != 1:
-        raise LaneError(f"{where}.boards: must be 'FROM-TO' as a sheet writes it (e.g. '2L-2R', '10L-10R'), got {text!r}")
-    x, y = (board_of(t, f"{where}.boards") for t in text.split("-"))
-    loads = _num(d.get("loads"), f"{where}.loads", 0.0, 100.0, open_lo=True)
-    ul = _num(d.get("ul"), f"{where}.ul", 0.0, 500.0, open_lo=True)
-    speed = _num(d.get("speed"), f"{where}.speed", *SPEED_RANGE)
-    return Row(direction, a, b, text.strip().upper(), min(x, y), max(x, y), loads, ul, speed)
+        raise LaneError(f"{where}.boards: must be {form}, got {text!r}")
+    first, last = text.split("-")
+    x, y = (board_of(t, f"{where}.boards") for t in (first, last))
+    if x < y:  # the lane's boards count from the right edge: the first board is right of the last
+        raise LaneError(f"{where}.boards: must run left to right, as a sheet writes it and the machine lays it "
+                        f"(e.g. '2L-2R', '2L-15L'), got {text!r}: its first board is right of its last (for "
+                        f"these boards write '{last.strip().upper()}-{first.strip().upper()}')")
+    loads = _num(d.get("loads", _MISSING), f"{where}.loads", 0.0, 100.0, open_lo=True)
+    ul = _num(d.get("ul", _MISSING), f"{where}.ul", 0.0, 500.0, open_lo=True)
+    speed = _num(d.get("speed", _MISSING), f"{where}.speed", *SPEED_RANGE)
+    return Row(direction, a, b, text.strip().upper(), y, x, loads, ul, speed)
 
 
 #: A pattern file's fields (version 2 gives rows, version 1 forward/reverse passes); another is refused.
@@ -576,8 +604,6 @@ def load_pattern(path) -> Pattern:
     Raises:
         LaneError: the file cannot be read, or a field is refused (one line naming the file and field).
     """
-    import os
-
     p = str(path)
     try:
         files.regular_file(p)
@@ -588,11 +614,21 @@ def load_pattern(path) -> Pattern:
         raise LaneError(f"{p}: cannot read ({e.strerror or e})") from None
 
 
+def _is_path(text: str) -> bool:
+    """Whether ``text`` is read as a pattern file's path: it names something that exists (whatever its
+    suffix: a folder, FIFO or device is then refused by :func:`load_pattern`), or it is written as
+    a path (``*.json``, or with a folder in it), so that one missing is "no such file"."""
+    seps = [c for c in (os.sep, os.altsep) if c]
+    return os.path.lexists(text) or text.lower().endswith(".json") or any(c in text for c in seps)
+
+
 def pattern(oil) -> Pattern:
-    """A Pattern from a Pattern, a registered name, or a pattern file's path (``*.json``).
+    """A Pattern from a Pattern, a registered name, or a pattern file's path (any suffix).
 
     Args:
-        oil: a :class:`Pattern`, a name of :data:`PATTERNS` (any case), or a pattern file's path.
+        oil: a :class:`Pattern`, a name of :data:`PATTERNS` (any case: a registered name wins here, as
+            the library's callers name patterns; ``--oil`` reads a typed path first, see :func:`argtype`),
+            or a pattern file's path (one that exists, ends ``.json`` or has a folder in it).
 
     Returns:
         the :class:`Pattern`.
@@ -602,28 +638,34 @@ def pattern(oil) -> Pattern:
     """
     if isinstance(oil, Pattern):
         return oil
+    if isinstance(oil, os.PathLike):
+        oil = os.fspath(oil)
     if isinstance(oil, str) and oil in PATTERNS:
         return PATTERNS[oil]
-    if isinstance(oil, str) and oil.lower().endswith(".json"):
+    if isinstance(oil, str) and _is_path(oil):
         return load_pattern(oil)
-    raise LaneError(f"oil: no pattern {oil!r}; patterns: {', '.join(PATTERNS.names())}, or a pattern file (.json)")
+    raise LaneError(f"oil: no pattern {oil!r}; patterns: {', '.join(PATTERNS.names())}, or a pattern file's path")
 
 
 def argtype(flag: str = "--oil"):
-    """An argparse ``type=``: a registered pattern's name (any case) or a pattern file (``*.json``,
-    read and checked here: one line naming the file and field)."""
+    """An argparse ``type=``: a pattern file's path, read and checked here (one line naming the file and
+    field), or a registered pattern's name (any case). A value that names an existing path is that
+    file whatever its suffix, even one named like a shipped pattern (the user typed a path; it is
+    returned as ``./NAME`` for :func:`pattern` to read it so); ``--oil``'s default is the name."""
     names = PATTERNS.argtype(flag)
 
     def parse(text: str):
         import argparse
 
-        if text.lower().endswith(".json"):
-            try:
-                load_pattern(text)
-            except LaneError as e:
-                raise argparse.ArgumentTypeError(str(e)) from None
-            return text
-        return names(text)
+        if isinstance(text, _Shipped) or not _is_path(text):
+            return names(text)
+        try:
+            load_pattern(text)
+        except LaneError as e:
+            clash = (f" (a path wins over the shipped pattern of that name: for {PATTERNS.entry(text).name!r}, "
+                     f"run from another folder)") if text in PATTERNS else ""
+            raise argparse.ArgumentTypeError(str(e) + clash) from None
+        return os.path.join(os.curdir, text) if text in PATTERNS else text
 
     parse.__name__ = "oil pattern"
     return parse
