@@ -30,6 +30,33 @@ def test_a_spin_near_half_a_turn_between_keyframes_is_noted_with_the_fps_that_pl
     assert turn_note(_spin(30.0), 24.0) == ""
 
 
+def test_a_spin_the_keyframes_alias_is_noted_from_the_whole_recording():
+    """A wheel at a full turn (360 deg) between keyframes looks still in them; at 350 deg it looks
+    like 10 deg back. The recording's fastest turn (every step) is what the note reads (an animator
+    saw a foul-line ball's 4,289 deg/s noted only as pin6's 154 deg at 12 fps)."""
+    from dataclasses import replace
+
+    import mujoco
+
+    from nbst.export.mjbodies import qpos_motion
+
+    aliased = _spin(350.0)   # between keyframes it reads as a 10 deg turn
+    assert turn_note(aliased, 24.0) == ""
+    rate = np.array([0.0, 350.0 * 24.0])
+    note = turn_note(replace(aliased, turn_rate=rate), 24.0)
+    assert note.startswith("wheel turns 350 deg or more") and "--fps 187 or more" in note
+    # from recorded states: a free body spun at 10 turns a second, recorded every 1 ms, keyed at 10 fps
+    m = mujoco.MjModel.from_xml_string('<mujoco><worldbody><body name="wheel"><freejoint/>'
+                                       '<geom type="cylinder" size="0.3 0.1"/></body></worldbody></mujoco>')
+    t = np.arange(1001) * 1e-3
+    a = 2 * np.pi * 10 * t
+    q = np.zeros((len(t), 7))
+    q[:, 3], q[:, 6] = np.cos(a / 2), np.sin(a / 2)
+    motion = qpos_motion(m, q, t, 10.0)
+    assert motion.turn_rate is not None and motion.turn_rate[1] == pytest.approx(3600.0, rel=1e-3)
+    assert turn_note(motion, 10.0).startswith("wheel turns 360 deg or more")
+
+
 def test_a_crashs_vehicles_are_nodes_by_the_names_its_file_gives_them(files):  # noqa: F811
     d = json.loads(files["crash"].read_text())
     names = [b.name for b in file_motion(files["crash"], fps=10)[1].bodies]

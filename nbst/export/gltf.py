@@ -110,6 +110,9 @@ class BodyMotion:
     times: np.ndarray
     pos: np.ndarray
     quat: np.ndarray
+    #: None, or (nbody,) each body's fastest turn (deg/s) over the whole recording, every step, not only
+    #: the keyframes: a spin of a full turn between two keyframes looks like none in them (:func:`turn_note`).
+    turn_rate: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t, n = len(self.times), len(self.bodies)
@@ -196,13 +199,18 @@ TURN_NOTE_DEG = 90.0
 
 def turn_note(motion: BodyMotion, fps: float) -> str:
     """What to say when a moving body turns more than :data:`TURN_NOTE_DEG` between two keyframes (a
-    spinning ball or wheel at a low ``fps``), in one line, or "" when none does."""
+    spinning ball or wheel at a low ``fps``), in one line, or "" when none does: the turn read between
+    the keyframes, or the body's fastest turn over the whole recording (``motion.turn_rate``) times the
+    keyframes' widest gap, whichever is larger."""
     q = continuous_quaternions(motion.quat)
     if len(q) < 2:
         return ""
     with np.errstate(invalid="ignore"):
         turn = np.degrees(2 * np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=2)), 0.0, 1.0))).max(axis=0)
-    turn = np.where([b.moves for b in motion.bodies], np.nan_to_num(turn), 0.0)
+    turn = np.nan_to_num(turn)
+    if motion.turn_rate is not None:   # a spin aliased by the keyframes (a full turn between two reads as none)
+        turn = np.maximum(turn, np.asarray(motion.turn_rate, float) * float(np.diff(motion.times).max()))
+    turn = np.where([b.moves for b in motion.bodies], turn, 0.0)
     k = int(np.argmax(turn))
     if turn[k] <= TURN_NOTE_DEG:
         return ""

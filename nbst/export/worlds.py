@@ -163,7 +163,7 @@ def _skinned(motion: BodyMotion, skins: dict[int, list[Solid]]) -> BodyMotion:
     """``motion`` with the solids of the bodies in ``skins`` (body index -> solids) replaced: what a
     world's video draws for them (a pin's neck stripes, a tyre's spokes) instead of their plain geoms."""
     bodies = [replace(b, solids=skins[k]) if k in skins else b for k, b in enumerate(motion.bodies)]
-    return BodyMotion(bodies, motion.times, motion.pos, motion.quat)
+    return replace(motion, bodies=bodies)
 
 
 def _pin_skins(model: Any) -> dict[int, list[Solid]]:
@@ -321,8 +321,7 @@ def crash_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMo
                      if b.name == body or b.name.startswith(body + "_")), b.name) for b in motion.bodies]
     if len(set(renamed)) < len(renamed):  # a static body already called so: the model's names kept
         return motion
-    return BodyMotion([replace(b, name=n) for b, n in zip(motion.bodies, renamed)], motion.times, motion.pos,
-                      motion.quat)
+    return replace(motion, bodies=[replace(b, name=n) for b, n in zip(motion.bodies, renamed)])
 
 
 def scene_motion(path: str | os.PathLike, *, fps: float = DEFAULT_FPS) -> BodyMotion:
