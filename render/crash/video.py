@@ -497,8 +497,10 @@ class CrashRenderer(FrameRenderer):
                          (col - 0.8 * scw - w, row + 0.3 * sch), (col - 0.8 * scw - w, row - 1.3 * sch),
                          (col - w / 2, row + 1.2 * sch), (col - w / 2, row - 2.2 * sch),
                          (col - w / 2, row + 2.2 * sch), (col - w / 2, row - 3.2 * sch)]
-                x, y = next(((x, y) for x, y in spots if keep_apart([(x, y, x + w, y + sch)], placed)[0]), spots[0])
-                placed.append(self._label(vp, label, x, y, IMPACT_TEXT))
+                boxes = [self._box(vp, label, x, y) for x, y in spots]   # where _label would draw each
+                free = next((b for b in boxes if keep_apart([b], placed)[0]), None)
+                if free is not None:   # no room (a small frame, labels crowded): the ring speaks alone
+                    placed.append(self._label(vp, label, free[0], free[1], IMPACT_TEXT))
                 if cam == "overhead":
                     self._pdof_labels(vp, vpm, im, placed)
             if cam == "overhead":
@@ -526,18 +528,23 @@ class CrashRenderer(FrameRenderer):
             spots = [(col - w / 2, row - 0.5 * sch), (col - w / 2, row - 1.6 * sch), (col - w / 2, row + 0.6 * sch),
                      (col + 0.8 * scw, row - 0.5 * sch), (col - 0.8 * scw - w, row - 0.5 * sch)]
             spot = next(((a, b) for a, b in spots if vp[0] <= a and a + w <= vp[0] + vp[2]
-                         and keep_apart([(a, b, a + w, b + sch)], placed)[0]), None)
+                         and keep_apart([self._box(vp, label, a, b)], placed)[0]), None)
             if spot is not None:   # no room (a small frame): the arrow speaks alone
                 placed.append(self._label(vp, label, spot[0], spot[1], cs.PDOF[:3]))
 
-    def _label(self, vp, text: str, x: float, y: float, colour) -> tuple:
-        """Draw ``text`` in the small size with its top-left at (x, y) px, moved into the panel ``vp``
-        where it would cross its edge; its box (x0, y0, x1, y1)."""
+    def _box(self, vp, text: str, x: float, y: float) -> tuple:
+        """The box (x0, y0, x1, y1) px of ``text`` in the small size with its top-left at (x, y), moved
+        into the panel ``vp`` where it would cross its edge."""
         sm = self.small
         x = float(np.clip(x, vp[0], max(vp[0], vp[0] + vp[2] - sm.cell[0] * len(text))))
         y = float(np.clip(y, vp[1], max(vp[1], vp[1] + vp[3] - sm.cell[1])))
-        sm.draw_halo(self.size, sm.layout([text], x, y), colour, style.TEXT_HALO)
         return (x, y, x + sm.cell[0] * len(text), y + sm.cell[1])
+
+    def _label(self, vp, text: str, x: float, y: float, colour) -> tuple:
+        """Draw ``text`` in the small size at :meth:`_box`'s place; its box."""
+        box = self._box(vp, text, x, y)
+        self.small.draw_halo(self.size, self.small.layout([text], box[0], box[1]), colour, style.TEXT_HALO)
+        return box
 
     @staticmethod
     def _inside(vp, col, row) -> bool:
