@@ -25,7 +25,7 @@ from nbst.render.core.shapes import CIRCLE_DTYPE, Capsules, Circles, Rect, Text,
 
 __all__ = ["Labels", "Layout", "Renderer2D", "auto_labels", "covered_by_own_disk", "draw_legend",
            "ghost_label_instances", "keep_apart", "labels_legible", "legend_entries", "marker_radii",
-           "markers_outside", "target_label_boxes", "target_label_instances", "target_label_px"]
+           "markers_outside", "overlaps", "target_label_boxes", "target_label_instances", "target_label_px"]
 
 
 class Layout:
@@ -110,15 +110,19 @@ class Labels:
         x, y = self._origins(centers_px)
         return np.stack([x, y, x + self.runs.width, y + self.text.cell[1]], axis=1)
 
-    def drawn(self, centers_px) -> np.ndarray:
+    def drawn(self, centers_px, taken=None) -> np.ndarray:
         """Which numbers are drawn at ``centers_px``: every one written on its disk (disks do not
         overlap, so neither do they), and each one beside its disk that covers no number drawn
-        before it (lower disk numbers first): crowded disks never run their numbers together."""
+        before it (lower disk numbers first): crowded disks never run their numbers together.
+        ``taken``: boxes (M, 4) px (x0, y0, x1, y1) of other text (the readout) that no number
+        covers, on its disk or beside it."""
         keep = self.on_disk.copy()
+        boxes = self._all_boxes(centers_px)
+        taken = np.asarray(taken if taken is not None else (), float).reshape(-1, 4)
+        keep &= ~overlaps(boxes, taken)
         beside = np.flatnonzero(~self.on_disk)
         if beside.size:
-            boxes = self._all_boxes(centers_px)
-            keep[beside] = keep_apart(boxes[beside], taken=boxes[self.on_disk])
+            keep[beside] = keep_apart(boxes[beside], taken=np.concatenate([boxes[keep], taken]))
         return keep
 
     def boxes(self, centers_px, drawn=None) -> np.ndarray:
@@ -128,7 +132,7 @@ class Labels:
 
     def draw(self, size, centers_px, drawn=None) -> None:
         drawn = self.drawn(centers_px) if drawn is None else drawn
-        self.text.draw(size, self.instances(centers_px, self.on_disk), style.LABEL)
+        self.text.draw(size, self.instances(centers_px, self.on_disk & drawn), style.LABEL)
         beside = ~self.on_disk & drawn
         if beside.any():  # one draw per class colour
             for col in np.unique(self.colors[beside], axis=0):
@@ -137,6 +141,14 @@ class Labels:
 
     def release(self) -> None:
         self.text.release()
+
+
+def overlaps(boxes, taken, gap: float = 1.0) -> np.ndarray:
+    """Which of ``boxes`` (M, 4) px (x0, y0, x1, y1) come within ``gap`` px of a box of ``taken`` (K, 4)."""
+    b = np.asarray(boxes, float).reshape(-1, 1, 4)
+    t = np.asarray(taken, float).reshape(1, -1, 4)
+    return np.asarray(((b[..., 0] < t[..., 2] + gap) & (t[..., 0] < b[..., 2] + gap)
+                       & (b[..., 1] < t[..., 3] + gap) & (t[..., 1] < b[..., 3] + gap)).any(axis=1), dtype=bool)
 
 
 def keep_apart(boxes, taken=None, gap: float = 1.0) -> np.ndarray:
@@ -256,13 +268,17 @@ def covered_by_own_disk(problem, pos) -> np.ndarray:
     return ((np.asarray(pos, float) - problem.target) ** 2).sum(axis=1) < problem.radius ** 2
 
 
-def ghost_label_instances(text, centers_px, ring_px) -> np.ndarray:
+def ghost_label_instances(text, centers_px, ring_px, avoid=None) -> np.ndarray:
     """Text instances numbering each ghost ring (``--source both --labels``) with its
-    disk's index, just below and right of the ring (centres (N, 2) px, radii (N,) px)."""
+    disk's index, just below and right of the ring (centres (N, 2) px, radii (N,) px);
+    none that covers a box of ``avoid`` (M, 4) px (the readout)."""
     cw, ch = text.cell
     c = np.asarray(centers_px, float)
     ring_px = np.broadcast_to(np.asarray(ring_px, float), (len(c),))
-    return text.numbers(len(c)).layout(c[:, 0] + 0.72 * ring_px + 1.0, c[:, 1] + 0.72 * ring_px - 0.2 * ch)
+    runs = text.numbers(len(c))
+    x, y = c[:, 0] + 0.72 * ring_px + 1.0, c[:, 1] + 0.72 * ring_px - 0.2 * ch
+    which = None if avoid is None else ~overlaps(np.stack([x, y, x + runs.width, y + ch], axis=1), avoid)
+    return runs.layout(x, y, which)
 
 
 def legend_entries(problem, *, ghost: bool, labels: bool, long: bool = True, ghost_name: str = "MuJoCo",
@@ -486,6 +502,14 @@ class Renderer2D(FrameRenderer):
             self.circles.draw(marks)
         self._draw_legend()
 
+    def readout_box(self) -> tuple[float, float, float, float]:
+        """The readout's box (x0, y0, x1, y1) px at its widest (its lines at t_final), made once."""
+        if getattr(self, "_readout_box", None) is None:
+            x, y = self._readout_origin()
+            cw, ch = self.text.cell
+            self._readout_box = (x, y, x + self.readout_width() * cw, y + self.readout_lines() * ch)
+        return self._readout_box
+
     def readout_lines(self) -> int:
         """Lines of the readout (the legend starts below them)."""
         return len(self.readout(0.0, np.zeros(self.problem.n, bool),
@@ -554,15 +578,18 @@ class Renderer2D(FrameRenderer):
             self._ghosts["center"] = self.layout.to_image(g)
             self.circles.draw(self._ghosts)
         if self.labels is not None and self.target_text is not None:  # set together
-            drawn = self.labels.drawn(self._disks["center"])
+            # no number in the readout's box (a small frame's readout overlaps the box's corner)
+            readout = np.zeros((0, 4)) if self.clean else np.array([self.readout_box()])
+            drawn = self.labels.drawn(self._disks["center"], taken=readout)
             self.labels.draw(self.size, self._disks["center"], drawn)
             numbers = target_label_instances(self.target_text, self.target_px, self.marker_px,
-                                             avoid=self.labels.boxes(self._disks["center"], drawn),
+                                             avoid=np.concatenate([self.labels.boxes(self._disks["center"], drawn),
+                                                                   readout]),
                                              skip=covered_by_own_disk(p, pos))
             self.target_text.draw_halo(self.size, numbers, style.TARGET_LABEL, style.TEXT_HALO)
             if self.ghost is not None:
                 self.target_text.draw_halo(self.size, ghost_label_instances(self.target_text, self._ghosts["center"],
-                                                                            self.rpx), style.GHOST_LABEL,
+                                                                            self.rpx, avoid=readout), style.GHOST_LABEL,
                                            style.TEXT_HALO)
         x, y = self._readout_origin()
         if not self.clean:

@@ -478,10 +478,10 @@ def cmd_render_throw(args) -> int:
     if bad:
         return err(bad)
     size = getattr(args, "size", None)
-    if isinstance(size, str):
-        w, h = parse_size(size)  # InputError, main's one line
+    if size:   # a text from a caller, else argparse's (W, H): refused here, before the throw is read
+        w, h = parse_size(size) if isinstance(size, str) else size  # InputError, main's one line
         if out.lower().endswith(".mp4") and (w % 2 or h % 2):
-            return err(f"--size {size}: H.264 (yuv420p) needs an even width and height")
+            return err(f"--size {w}x{h}: H.264 (yuv420p) needs an even width and height")
         size = (w, h)
     try:
         throw, motion = load_motion(args.problem)

@@ -17,8 +17,8 @@ this module draws them.
 Compute apart from I/O: :class:`LaneRenderer` returns frames; :func:`render_throw` is the thin
 writer the CLI calls (``nbst.cli.bowl.lane`` checks the flags and prints what was written).
 
-Length: the full-lane video's cameras, oil shading and overlay share one frame loop; a few lines
-over the house's 500.
+Length: the full-lane video's cameras, oil shading and overlay (labels placed clear of the readout,
+:meth:`LaneRenderer._place`) share one frame loop; past the house's 500.
 """
 from __future__ import annotations
 
@@ -301,32 +301,52 @@ class LaneRenderer(FrameRenderer):
         return lines
 
     def _overlay(self, t: float, views) -> None:
+        """The titles, the labels and the readout: the readout laid out first, then each title and
+        label only where it stays in its panel and the frame and clear of the readout's lines and the
+        text placed before it (:meth:`_place`): at a small ``--size`` labels are left out, never drawn
+        over other text."""
 
         size = self.size
         H = size[1]
         cw, ch = self.text.cell
-        scw, sch = self.small.cell
         titles = {"behind": "behind the bowler: the full lane, 60 ft to the head pin",
                   "overhead": f"overhead from {lane.x_to_ft(self.overhead_x[0] + 0.3):.0f} ft",
                   "deck": "the pin deck, close up"}
         k = self.step_at(t)
         down = (pinfall.pins_of(int(self.motion.down_masks[k])) if self.motion.down_masks is not None else [])
-        for vp, vpm, _, cam in views:
-            title = titles[cam]
-            if len(title) * cw > vp[2] - 8:
-                title = title.split(":")[0]
-            for title in self.text.fit([title], vp[2] - 8):   # never into the next panel's
-                self.text.draw_halo(size, self.text.layout([title], vp[0] + (vp[2] - cw * len(title)) / 2, 0.3 * ch),
-                                    style.TEXT, style.TEXT_HALO)
-            if cam in ("behind", "deck"):
-                self._behind_labels(vp, vpm, k, down)
-            else:
-                self._overhead_labels(vp, vpm, down)
         vp = self.panels.get("behind", next(iter(self.panels.values())))
         lines = self.readout(t)
         y0 = 1.5 * ch if ("behind" in self.panels or "deck" in self.panels) else max(1.5 * ch, H - (len(lines) + 0.5) * ch)
         lines = self.text.fit(lines, vp[2] - 1.2 * cw, H - y0)   # within its panel (a small --size)
-        self.text.draw_halo(size, self.text.layout(lines, vp[0] + 0.6 * cw, y0), style.TEXT, style.TEXT_HALO)
+        x0 = vp[0] + 0.6 * cw
+        self._taken = [(x0 - 0.5 * cw, y0 + j * ch, x0 + (len(s.rstrip()) + 0.5) * cw, y0 + (j + 1) * ch)
+                       for j, s in enumerate(lines) if s.strip()]
+        for pvp, vpm, _, cam in views:
+            title = titles[cam]
+            if len(title) * cw > pvp[2] - 8:
+                title = title.split(":")[0]
+            for title in self.text.fit([title], pvp[2] - 8):   # never into the next panel's
+                tx = pvp[0] + (pvp[2] - cw * len(title)) / 2
+                self._taken.append((tx, 0.3 * ch, tx + cw * len(title), 1.3 * ch))
+                self.text.draw_halo(size, self.text.layout([title], tx, 0.3 * ch), style.TEXT, style.TEXT_HALO)
+        for pvp, vpm, _, cam in views:
+            if cam in ("behind", "deck"):
+                self._behind_labels(pvp, vpm, k, down)
+            else:
+                self._overhead_labels(pvp, vpm, down)
+        self.text.draw_halo(size, self.text.layout(lines, x0, y0), style.TEXT, style.TEXT_HALO)
+
+    def _place(self, vp, boxes) -> bool:
+        """Whether labels in ``boxes`` [(x0, y0, x1, y1)] px all lie in the panel ``vp`` and the frame
+        and clear of the readout's lines and the text placed before them (then they take their place)."""
+        taken = self.__dict__.setdefault("_taken", [])
+        for x0, y0, x1, y1 in boxes:
+            if x0 < vp[0] or x1 > vp[0] + vp[2] or y0 < 0 or y1 > self.size[1]:
+                return False
+            if any(x0 < b[2] and b[0] < x1 and y0 < b[3] and b[1] < y1 for b in taken):
+                return False
+        taken.extend(boxes)
+        return True
 
     def pin_label_points(self, k: int) -> np.ndarray:
         """(10, 3) world points just above each pin's head at step k (where the behind view writes
@@ -349,7 +369,6 @@ class LaneRenderer(FrameRenderer):
         if abs(a[0] - b[0]) < 3.5 * scw:
             return
         parts: list = []
-        boxes: list = []
         for n, p in zip(scene.PIN_NUMBERS, self.pin_label_points(k)):   # front rows first: they keep theirs
             if n in down or n not in self.in_play:
                 continue
@@ -357,12 +376,9 @@ class LaneRenderer(FrameRenderer):
             label = str(n)
             x0, y0 = col - scw * len(label) / 2, row - sch
             box = (x0 - scw / 2, y0, x0 + scw * (len(label) + 0.5), y0 + sch)
-            if not front or x0 < vp[0] or box[2] > vp[0] + vp[2]:
-                continue
-            if any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in boxes):
-                continue   # a label nearer the camera is there (rows overlap when seen from low behind)
-            boxes.append(box)
-            parts.append(self.small.layout([label], x0, y0))
+            # the readout, a title or a label nearer the camera is there (rows overlap seen from low behind)
+            if front and self._place(vp, [box]):
+                parts.append(self.small.layout([label], x0, y0))
         if parts:
             self.small.draw_halo(self.size, np.concatenate(parts), style.LABEL, PIN_WHITE)
 
@@ -389,34 +405,36 @@ class LaneRenderer(FrameRenderer):
         scw, sch = self.small.cell
         y_edge = scene.LANE_WIDTH / 2 + scene.GUTTER_WIDTH
         ticks = [(f"{ft:.0f} ft", ft) for ft in range(0, 61, 10)] + [("arrows", lane.ARROWS_FT)]
+        diag = self.pin_diagram(vp)
+        head = "pins"
+        c0, r0 = min(c for _, c, _ in diag), 1.5 * self.text.cell[1]
+        # the pin diagram whole or not at all (a small --size: under the readout, or past the frame)
+        if self._place(vp, [(c0, r0, c0 + scw * len(head), r0 + sch)]
+                       + [(c, r, c + scw * len(str(n)), r + sch) for n, c, r in diag]):
+            self.small.draw_halo(self.size, self.small.layout([head], c0, r0), style.TEXT_DIM, style.TEXT_HALO)
+            for standing, colour in ((True, style.TEXT), (False, (0.35, 0.37, 0.42))):
+                parts = [self.small.layout([str(n)], c, r) for n, c, r in diag
+                         if (n not in down and n in self.in_play) == standing]
+                if parts:
+                    self.small.draw_halo(self.size, np.concatenate(parts), colour, style.TEXT_HALO)
         parts = []
         for label, ft in ticks:
             x = float(lane.ft_to_x(ft))
             if not self.overhead_x[0] <= x <= self.overhead_x[1]:
                 continue
             col, row, _ = self.to_pixel(vp, vpm, [x, y_edge, 0.0], H)
-            parts.append(self.small.layout([label], col - scw * (len(label) + 0.6), row - sch / 2))
+            x0, y0 = col - scw * (len(label) + 0.6), row - sch / 2
+            if self._place(vp, [(x0, y0, x0 + scw * len(label), y0 + sch)]):
+                parts.append(self.small.layout([label], x0, y0))
         if parts:
             self.small.draw_halo(self.size, np.concatenate(parts), style.TEXT_DIM, style.TEXT_HALO)
-        diag = self.pin_diagram(vp)
-        head = "pins"
-        c0 = min(c for _, c, _ in diag)
-        self.small.draw_halo(self.size, self.small.layout([head], c0, 1.5 * self.text.cell[1]), style.TEXT_DIM,
-                             style.TEXT_HALO)
-        for standing, colour in ((True, style.TEXT), (False, (0.35, 0.37, 0.42))):
-            parts = [self.small.layout([str(n)], c, r) for n, c, r in diag
-                     if (n not in down and n in self.in_play) == standing]
-            if parts:
-                self.small.draw_halo(self.size, np.concatenate(parts), colour, style.TEXT_HALO)
         # a key under the diagram, where it fits beside the lane
-        right_of_lane = self.to_pixel(vp, vpm, [0.0, -y_edge, 0.0], H)[0] + scw
-        key = [(line, rgb) for line, rgb in LEGEND]
-        width = max(len(line) for line, _ in key) * scw
-        if right_of_lane + width <= vp[0] + vp[2]:
-            row = max(r for _, _, r in diag) + 2.5 * sch
-            for i, (line, rgb) in enumerate(key):
-                self.small.draw_halo(self.size, self.small.layout([line], right_of_lane, row + i * sch), rgb,
-                                     style.TEXT_HALO)
+        x0 = self.to_pixel(vp, vpm, [0.0, -y_edge, 0.0], H)[0] + scw
+        row = max(r for _, _, r in diag) + 2.5 * sch
+        if self._place(vp, [(x0, row + i * sch, x0 + len(line) * scw, row + (i + 1) * sch)
+                            for i, (line, _) in enumerate(LEGEND)]):
+            for i, (line, rgb) in enumerate(LEGEND):
+                self.small.draw_halo(self.size, self.small.layout([line], x0, row + i * sch), rgb, style.TEXT_HALO)
 
     # ---------------------------------------------------------------- drawing
 

@@ -382,16 +382,20 @@ class SceneRenderer(FrameRenderer):
 
     def _overlay(self, t: float, t_now: float, vpm: np.ndarray) -> None:
         """The labels (hoops in order, ``at`` regions, impacts, tags: each where it leaves the readout
-        and the labels before it clear, else where it leaves the readout clear) and the readout over
-        its panel."""
+        and the labels before it clear, else left out; each inside the frame, cut to it where wider)
+        and the readout over its panel, cut to the frame (``Text.fit``)."""
         assert self.text is not None and self.small is not None and self.rect is not None
         size = self.size
         scw, sch = self.small.cell
-        lines = self.readout(min(t, self.motion.duration))
         tx = self.text
         cw, ch = tx.cell
         x0, y0 = 0.6 * cw, 0.4 * ch
-        box = (0.0, 0.0, x0 + (max(len(s) for s in lines) + 0.6) * cw, y0 + (len(lines) + 0.3) * ch)
+        # cut to the frame (a small --size): a line too long ends in "..", the last row kept counts the rest
+        # (in no more than the widest line's width: the panel never grows for it)
+        lines = self.readout(min(t, self.motion.duration))
+        wide = min(size[0] - x0 - 0.6 * cw, max(len(s) for s in lines) * cw)
+        lines = tx.fit(lines, wide, size[1] - y0 - 0.3 * ch)
+        box = (0.0, 0.0, x0 + (max((len(s) for s in lines), default=0) + 0.6) * cw, y0 + (len(lines) + 0.3) * ch)
         placed = [box]
         labels = [(c, lab, rgb, False) for c, lab, rgb in self.hoops]
         labels += [(np.asarray(im.pos), ro.touch_label(im), IMPACT, True) for im in self.impacts if im.t <= t_now]
@@ -401,25 +405,27 @@ class SceneRenderer(FrameRenderer):
             col, row, front = self.to_pixel(vpm, centre)
             if not (front and 0 <= col < size[0] and 0 <= row < size[1]):
                 continue
+            label = next(iter(self.small.fit([label], size[0] - 4)), "")   # a frame too narrow: cut
+            if not label.strip():
+                continue
             wl = scw * len(label)
             spots = ([(col + 0.8 * scw, row + 0.2 * sch), (col + 0.8 * scw, row - 1.2 * sch),
                       (col - 0.8 * scw - wl, row + 0.2 * sch), (col - 0.8 * scw - wl, row - 1.2 * sch),
                       (col - wl / 2, row + 1.2 * sch), (col - wl / 2, row - 2.2 * sch)] if impact else
                      [(col - wl / 2, row - 1.4 * sch), (col + 0.8 * scw, row - 0.5 * sch),
                       (col - 0.8 * scw - wl, row - 0.5 * sch)])
-            # clear of every label (else a row or more further up or down), else of the readout alone
+            # clear of the readout and every label (else a row or more further up or down; else left out:
+            # a crowded small frame never writes one label over another), its halo inside the frame
             far = spots + [(x, y + j * sch) for j in (-1.2, 1.2, -2.4, 2.4, -3.6, 3.6) for x, y in spots[:3]]
-            for clear, where in ((placed, far), (placed[:1], spots)):
-                at = [(float(np.clip(x, 0, max(0, size[0] - wl))), float(np.clip(y, 0, max(0, size[1] - sch))))
-                      for x, y in where]
-                boxes = [(x - 1, y - 1, x + wl + 1, y + sch + 1) for x, y in at]
-                bx = next((b for b in boxes if not any(b[0] < q[2] and q[0] < b[2] and b[1] < q[3] and q[1] < b[3]
-                                                       for q in clear)), None)
-                if bx is not None:
-                    self._label(label, bx[0] + 1, bx[1] + 1, rgb)
-                    placed.append(bx)
-                    self.overlay_boxes.append(bx)
-                    break
+            at = [(float(np.clip(x, 2, max(2, size[0] - wl - 2))), float(np.clip(y, 2, max(2, size[1] - sch - 2))))
+                  for x, y in far]
+            boxes = [(x - 1, y - 1, x + wl + 1, y + sch + 1) for x, y in at]
+            bx = next((b for b in boxes if not any(b[0] < q[2] and q[0] < b[2] and b[1] < q[3] and q[1] < b[3]
+                                                   for q in placed)), None)
+            if bx is not None:
+                self._label(label, bx[0] + 1, bx[1] + 1, rgb)
+                placed.append(bx)
+                self.overlay_boxes.append(bx)
         self.rect.draw(size, box, fill=PANEL_RGBA, rim=PANEL_RGBA, stroke=0.0)
         self.overlay_boxes.append(box)
         plain, oks, nos = ro.marks(lines)
