@@ -20,17 +20,17 @@
   released within :data:`STANCE_SEP` boards of the far edge would need the slide foot off the
   numbered boards, so the advice stands the bowler on board 39 and says how close to the foot
   the ball is released (:func:`stance_text`).
-* **Strike advice after a frame** (:func:`move_after`): the hit named (:mod:`.names`), and the
-  move the coaching rule gives: *move in the direction of the miss* -- a light hit (the ball
-  right of the pocket, for a right-hander) moves feet and eyes right, towards the hand; a high
-  or Brooklyn hit moves them left -- in the **2-and-1** ratio (feet 2 boards, target 1 board,
-  the same way: "The fundamentals of target line adjustments", Bowling This Month,
-  2017-03-20), one step per :data:`BOARDS_PER_STEP` boards the ball missed the pocket's middle
-  by (at least one). The advice is checked on the lane: the moved line is thrown (the ball
-  alone, no noise) and its board at the pins reported beside the old one. After a **gutter
-  ball** at a full rack the move is the same 2-and-1 the way the ball went (the hand's gutter:
-  towards the hand, so the ball stays away from it), as many steps as bring the moved line,
-  thrown, nearest the pocket (up to :data:`GUTTER_STEPS`).
+* **Strike advice after a frame** (:func:`move_after`): the hit named (:mod:`.names`); a strike
+  stays (one ball is no reason to move). Else *move in the direction of the miss* -- light (right
+  of the pocket, for a right-hander): feet and eyes right; high or Brooklyn: left -- by **2-and-1**
+  (feet 2 boards, target 1, the same way: "The fundamentals of target line adjustments", Bowling
+  This Month, 2017-03-20), in half steps up to one step per :data:`BOARDS_PER_STEP` boards of miss
+  (at least one), each checked on the lane (thrown, the ball alone, no noise): the one meeting the
+  pins nearest the pocket, where nearer than the frame's ball, else stay. After a **gutter ball**
+  at a full rack, 2-and-1 the way the ball went (the hand's gutter: towards the hand), the steps
+  on the lane whose line, thrown, ends nearest the pocket (up to :data:`GUTTER_STEPS`); where none
+  reaches the pins, the feet kept (else moved away from that gutter) and the eyes on the board, on
+  the lane, whose line meets the pocket (:func:`aim_through`).
 * **Spare advice after a frame**: never the pocket. A converted spare: stay. A missed one (or
   a gutter ball): where the ball passed the leave's aim point (:func:`spare_aim`: the spare
   tool's, the mean of the leave's key pins; the ball's heading at the head pin's line carried
@@ -119,8 +119,8 @@ def aim_target(delivery: lane.Delivery, target: float, oil="house", ball=None, *
 
 @dataclass
 class Move:
-    """A move after a frame: the names of the hit and leave, the steps (2-and-1, + left: towards
-    higher boards, away from the hand; 0 for a spare's move of the eyes alone), the direction
+    """A move after a frame: the names of the hit and leave, the steps (2-and-1, in half steps; 0
+    for a move of the eyes alone, or of the feet away from a gutter), the direction
     ("stay" where nothing is to move), the new stance and target, and the moved line's board at the
     pins (the ball alone) beside the old one; ``aim``: what the ball had to meet (the pocket, or a
     spare's aim point, :func:`spare_aim`) on board ``aim_board`` at ``aim_ft`` past the head pin's
@@ -128,12 +128,12 @@ class Move:
     heading at the head pin's line carried straight on); ``gutter``: side and ft of a gutter ball."""
 
     names: dict
-    steps: int
+    steps: float   # 2-and-1 steps: 0.5 is half a step (feet 1 board, eyes 0.5)
     direction: str
     stance_board: float
     target_board: float
-    new_stance_board: float
-    new_target_board: float
+    new_stance_board: float | None   # None: no line on the lane to advise
+    new_target_board: float | None
     board_at_pins: float | None
     new_board_at_pins: float | None
     delivery: dict
@@ -152,6 +152,8 @@ class Move:
 
 #: The most 2-and-1 steps tried after a gutter ball (:func:`move_after`): 10 steps move the feet 20 boards.
 GUTTER_STEPS = 10
+#: What the check after a frame says of the moved line, before its board at the pins.
+CHECKED = "the moved line, the ball alone, meets the pins on board"
 
 
 def board_past(board: float, entry_deg: float, x: float) -> float:
@@ -187,10 +189,8 @@ def aim_through(delivery: lane.Delivery, board: float, x: float, oil="house", ba
         d = replace(d, angle=float(min(10.0, max(-10.0, a)))).check()
         try:
             r = lane.throw(d, oil, ball)
-        except lane.GutterBall:
-            if prev is None:
-                break
-            a = (a + prev) / 2
+        except lane.GutterBall as g:   # halving back; with no line on the lane yet, half a degree off that gutter
+            a = (a + prev) / 2 if prev is not None else a + (-0.5 if g.side == d.hand else 0.5)
             continue
         off = board_past(r.board_at_pins, r.entry_angle_deg, x) - board
         if abs(off) <= tol:
@@ -226,7 +226,7 @@ def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -
     o = frame_doc["outcome"]
     standing = frame_doc["standing"]
     nm = _names.names(standing, o["leave"], o["board_at_pins"], o["entry_angle_deg"], d.hand)
-    b = o["board_at_pins"]
+    b = None if o["board_at_pins"] is None else float(o["board_at_pins"])
     stance, target, gutter = _here(d, oil, ball)
     phrase = (_names.text(nm) if gutter is None
               else f"a gutter ball (the {gutter['side']} gutter at {gutter['ft']:.1f} ft)")
@@ -234,41 +234,61 @@ def move_after(frame_doc: dict, oil="house", ball=None, *, check: bool = True) -
         return _spare_move(d, frame_doc, nm, phrase, stance, target, gutter, oil, ball, check)
     if gutter is not None:
         return _gutter_move(d, nm, phrase, stance, target, gutter, oil, ball)
-    miss = 0.0 if b is None else float(b) - POCKET_MIDDLE   # + high (left of the pocket for a right-hander)
-    steps = 0 if nm["hit"] == "pocket" or b is None else max(1, int(round(abs(miss) / BOARDS_PER_STEP)))
-    sign = 1.0 if miss > 0 else -1.0    # high: left (higher boards); light: right (towards the hand)
-    ns, nt = stance + sign * 2 * steps, target + sign * steps
-    nd = d
-    new_b = None
-    if steps:
-        nd = aim_target(replace(d, board=ns - STANCE_SEP, at="foul"), nt, oil, ball)
-        if check:
-            new_b = float(lane.throw(nd, oil, ball).board_at_pins)
-    way = _way(sign, d.hand)
-    if steps:
-        txt = (f"{phrase}: move {steps} {way} (feet {2 * steps} boards, eyes {steps}: "
-               f"{stance_text(ns - STANCE_SEP, 0)}, look at {arrow_text(nt)})")
-    else:
-        txt = f"{phrase}: stay ({stance_text(stance - STANCE_SEP, 0)}, look at {arrow_text(target)})"
-    return Move(names=nm, steps=steps, direction=way if steps else "stay", stance_board=stance, target_board=target,
-                new_stance_board=ns, new_target_board=nt, board_at_pins=None if b is None else float(b),
-                new_board_at_pins=new_b, delivery=nd.to_dict(), text=txt,
-                board_at_aim=None if b is None else float(b), new_board_at_aim=new_b,
-                check_text="" if new_b is None else (f"the moved line, the ball alone, meets the pins on board "
-                                                     f"{new_b:.1f} (this frame's: {float(b):.1f}; the pocket 17-18)"))
+    common = dict(names=nm, stance_board=stance, target_board=target, board_at_pins=b, board_at_aim=b)
+    here = f"{stance_text(stance - STANCE_SEP, 0)}, look at {arrow_text(target)}"
+    miss = 0.0 if b is None else b - POCKET_MIDDLE   # + high (left of the pocket for a right-hander)
+    strike = not o["leave"]   # one ball is no reason to move
+    rule = 0 if strike or nm["hit"] == "pocket" or b is None else max(1, int(round(abs(miss) / BOARDS_PER_STEP)))
+    sign, near = (1.0 if miss > 0 else -1.0), None   # high: left (higher boards); light: right (towards the hand)
+    # half steps up to the rule's, each thrown (the ball alone): the one nearest the pocket, if nearer than the frame
+    for k in ([i / 2 for i in range(1, 2 * rule + 1)] if check else [rule] if rule else []):
+        ns, nt = stance + sign * 2 * k, target + sign * k
+        if not _on_lane(ns, nt):
+            break
+        try:
+            kd = aim_target(replace(d, board=ns - STANCE_SEP, at="foul"), nt, oil, ball)
+            kb = float(lane.throw(kd, oil, ball).board_at_pins) if check else None
+        except lane.LaneError:
+            continue
+        if kb is None or near is None or near[1] is None or abs(kb - POCKET_MIDDLE) < abs(near[1] - POCKET_MIDDLE):
+            near = (k, kb, kd)
+    way, of = _way(sign, d.hand), f"(this frame's: {b or 0:.1f}; the pocket 17-18)"
+    if near is None or (near[1] is not None and abs(near[1] - POCKET_MIDDLE) >= abs(miss)):
+        chk = "" if near is None else (f"no 2-and-1 move {way} of half a step to {rule} checks nearer the pocket: the "
+                                       f"nearest, {near[0]:g}, meets the pins on board {near[1]:.1f} {of}")
+        return Move(steps=0, direction="stay", new_stance_board=stance, new_target_board=target, new_board_at_pins=None,
+                    delivery=d.to_dict(), text=f"{phrase}: stay{': a strike; one ball is no reason to move' * strike} "
+                    f"({here})", check_text=chk, **common)
+    k, new_b, nd = near
+    ns, nt = stance + sign * 2 * k, target + sign * k
+    return Move(steps=k, direction=way, new_stance_board=ns, new_target_board=nt, new_board_at_pins=new_b,
+                delivery=nd.to_dict(), text=_move_text(phrase, k, way, ns, nt), new_board_at_aim=new_b,
+                check_text="" if new_b is None else f"{CHECKED} {new_b:.1f} {of}", **common)
+
+
+def _on_lane(stance: float, target: float) -> bool:
+    """Whether a stance (its release :data:`STANCE_SEP` boards towards the hand) and a target are on boards 1..39."""
+    return 1.0 <= stance - STANCE_SEP <= lane.N_BOARDS and 1.0 <= target <= lane.N_BOARDS
+
+
+def _move_text(phrase: str, k: float, way: str, ns: float, nt: float) -> str:
+    """``high: move 1 left (feet 2 boards, eyes 1: stand on 29, look at ...)``: ``k`` 2-and-1 steps (0.5: half a step)."""
+    return (f"{phrase}: move {'half a step' if k == 0.5 else f'{k:g}'} {way} (feet {2 * k:g} board"
+            f"{'' if k == 0.5 else 's'}, eyes {k:g}: {stance_text(ns - STANCE_SEP, 0)}, look at {arrow_text(nt)})")
 
 
 def _gutter_move(d, nm, phrase, stance, target, gutter, oil, ball) -> Move:
     """After a gutter ball at a full rack: the 2-and-1 move the way the ball went (into the hand's
-    gutter: towards the hand, so the ball stays away from it), as many steps (up to
-    :data:`GUTTER_STEPS`, the stance and target on the lane) as bring the moved line, the ball alone
-    and thrown, nearest the pocket's middle; where none reaches the pins, said so."""
+    gutter: towards the hand), as many steps (up to :data:`GUTTER_STEPS`, on the lane) as bring the
+    moved line, the ball alone and thrown, nearest the pocket's middle; where none does, the thrown
+    line said as thrown and the eyes aimed through the pocket (see the module docstring)."""
     sign = -1.0 if gutter["side"] == ("right" if d.hand == "right" else "left") else 1.0
-    best = None   # (miss, steps, delivery, board at the pins)
+    best, fit = None, 0   # (miss, steps, delivery, board at the pins); the steps on the lane from this stance
     for k in range(1, GUTTER_STEPS + 1):
         ns, nt = stance + sign * 2 * k, target + sign * k
-        if not (1.0 <= ns - STANCE_SEP <= lane.N_BOARDS and 1.0 <= nt <= lane.N_BOARDS):
+        if not _on_lane(ns, nt):
             break
+        fit = k
         try:
             nd = aim_target(replace(d, board=ns - STANCE_SEP, at="foul"), nt, oil, ball)
             nb = float(lane.throw(nd, oil, ball).board_at_pins)
@@ -279,19 +299,36 @@ def _gutter_move(d, nm, phrase, stance, target, gutter, oil, ball) -> Move:
         best = (abs(nb - POCKET_MIDDLE), k, nd, nb)
     way = _way(sign, d.hand)
     common = dict(names=nm, stance_board=stance, target_board=target, board_at_pins=None, gutter=gutter)
-    if best is None:
-        txt = (f"{phrase}: no 2-and-1 move {way} of up to {GUTTER_STEPS} steps keeps the ball alone on the lane "
-               f"to the pins: change the release ({stance_text(stance - STANCE_SEP, 0)}, look at {arrow_text(target)})")
-        return Move(steps=0, direction="stay", new_stance_board=stance, new_target_board=target,
-                    new_board_at_pins=None, delivery=d.to_dict(), text=txt, **common)
-    _, k, nd, nb = best
-    ns, nt = stance + sign * 2 * k, target + sign * k
-    txt = (f"{phrase}: move {k} {way} (feet {2 * k} boards, eyes {k}: {stance_text(ns - STANCE_SEP, 0)}, "
-           f"look at {arrow_text(nt)})")
-    return Move(steps=k, direction=way, new_stance_board=ns, new_target_board=nt, new_board_at_pins=nb,
-                delivery=nd.to_dict(), text=txt, new_board_at_aim=nb,
-                check_text=(f"the moved line, the ball alone, meets the pins on board {nb:.1f} (this frame's: the "
-                            f"{gutter['side']} gutter; the pocket 17-18)"), **common)
+    frame_at = f"this frame's: the {gutter['side']} gutter; the pocket 17-18"
+    if best is not None:
+        _, k, nd, nb = best
+        ns, nt = stance + sign * 2 * k, target + sign * k
+        return Move(steps=k, direction=way, new_stance_board=ns, new_target_board=nt, new_board_at_pins=nb,
+                    delivery=nd.to_dict(), text=_move_text(phrase, k, way, ns, nt), new_board_at_aim=nb,
+                    check_text=f"{CHECKED} {nb:.1f} ({frame_at})", **common)
+    # no 2-and-1 step that fits keeps the ball on the lane: the feet kept (else moved away from the gutter, 2
+    # boards at a time) and the eyes on the target, on the lane, whose line, the ball alone, meets the pocket
+    foul, crossed, away = d.foul_board(), 1.0 <= target <= lane.N_BOARDS, _way(-sign, d.hand)
+    thrown = (f"thrown standing on board {min(stance, lane.N_BOARDS):.0f} (released on board {foul:.1f}, {abs(d.angle):.2f} "
+              f"deg {'out' if d.angle >= 0 else 'in'}), " + (f"over {arrow_text(target)}" if crossed else
+                                                              "off the lane before the arrows"))
+    room = (f"no 2-and-1 move {way} of up to {fit} step{'' if fit == 1 else 's'} (all that fit on the lane from there) "
+            f"keeps the ball alone on the lane to the pins" if fit else f"no 2-and-1 step {way} fits on the lane from there")
+    for rel in [f for f in (foul - sign * 2 * j for j in range(GUTTER_STEPS + 1)) if 1.0 <= f <= lane.N_BOARDS]:
+        try:
+            nd, r = aim_through(replace(d, board=rel, at="foul"), POCKET_MIDDLE, 0.0, oil, ball)
+        except lane.LaneError:
+            continue
+        if 1.0 <= r.board_at_arrows <= lane.N_BOARDS:
+            nt, nb, feet = float(r.board_at_arrows), float(r.board_at_pins), abs(rel - foul)
+            return Move(steps=0, direction=away if feet else _way(nt - target, d.hand), new_stance_board=stance_of(rel),
+                        new_target_board=nt, new_board_at_pins=nb, delivery=nd.to_dict(), new_board_at_aim=nb,
+                        text=(f"{phrase}: {thrown}; {room}: " + (f"move the feet {feet:g} boards {away}" if feet else
+                              "keep the feet") + f" ({stance_text(rel, 0)}), look at {arrow_text(nt)}"),
+                        check_text=f"{CHECKED} {nb:.1f} ({frame_at})", **common)
+    return Move(steps=0, direction="stay", new_stance_board=None, new_target_board=None, new_board_at_pins=None,
+                delivery=d.to_dict(), text=f"{phrase}: {thrown}; {room}, nor does a line to the pocket: change the "
+                f"release", **common)
 
 
 def _spare_move(d, frame_doc, nm, phrase, stance, target, gutter, oil, ball, check) -> Move:
@@ -459,11 +496,6 @@ def advise_leave(leave: str, n: int, seed: int, *, runner, noise=None, strike=No
         dm = lane.Delivery(**most["delivery"])
         count_text = (f"for the count: {_line_text(dm, lane.throw(dm, runner.oil, runner.ball), most['label'])}: "
                       f"{pins_text(most['pins'])}")
-        cleared = int(most["pins"]["counts"].get(str(most["pins"]["of"]), 0))
-        if cleared > int(e["k"]):  # measured on the same throws: the pick was ranked on the screening alone
-            count_text += (f"; it converted more of these same {e['n']} throws ({cleared} against {e['k']}): "
-                           f"the pick was ranked on the screening (--screen {screen}; a larger one ranks on more "
-                           f"throws)")
     return LeaveAdvice(leave=leave, names=nm, stance_board=stance, target_board=target, target=arrow_text(target),
                        delivery=delivery, estimate=e, label=label, spare=spare, text=txt,
                        converts=converts, pins=pins, most_pins=spare["most_pins"], count_text=count_text)

@@ -29,7 +29,9 @@
   pin, the line of centres points at a pin behind it, so the front pin is driven into the back
   one: the 4 into the 9) and, for the count, the straight ball at **each pin alone**. Every
   candidate is ranked by its conversions, then by the **pins it takes** (the mean over its
-  noisy throws, :func:`pins_estimate`). Where no candidate converts a single screening throw the
+  noisy throws, :func:`pins_estimate`), and the final pick on the measured throws, the same for
+  each line measured (the screening's best three, the 3-6-9 line, the lines for the count).
+  Where no candidate converts a single screening throw the
   pick is the line that takes the most pins, and :class:`SpareResult` says so (``converts``
   False); the line taking the most pins is also measured beside the pick (``most_pins``).
 
@@ -318,6 +320,7 @@ class SpareResult:
     converts: bool = True  # some candidate converted a screening throw (False: the pick is for the count)
     pins: dict | None = None  # the pick's pins taken on the fresh measure (:func:`pins_estimate`)
     most_pins: dict | None = None  # the line taking the most pins: label, delivery, pins (fresh measure)
+    ranked_note: str = ""  # where the measured throws ranked another line over the screening's pick
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -488,20 +491,24 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     at h = 1, 0.5 and 0.25 ms; the pick is the most conversions among those three whose ladder
     converts at every step (any of the three if none does), ties going to the most pins taken.
     Its probability is then measured afresh on ``n`` throws (seed ``seed``; screening used other
-    seeds), as is the 3-6-9 line's, and so are the pins it takes (:func:`pins_estimate`). Where
-    no candidate converted a screening throw, the pick is the line taking the most pins
-    (``converts`` False). For the count, the :data:`COUNT_LINES` other lines that took the most
-    pins in the screening and the best line at one pin alone are measured on the same ``n`` throws
-    as the pick; ``most_pins`` is the one of them, or the pick, that takes the most there (a
-    coach's 4-9: the slide 0.95 pins a throw against the 9 alone's 1.0; a 4-10 whose slide took 1.5
-    pins over 6 screening throws and 0.2 on 20 fresh ones, against the 4 alone's 1.0).
+    seeds), as are the 3-6-9 line's and the other two of the three, and so are the pins each takes
+    (:func:`pins_estimate`). Where no candidate converted a screening throw, the pick is the line
+    taking the most pins (``converts`` False). For the count, the :data:`COUNT_LINES` other lines
+    that took the most pins in the screening and the best line at one pin alone are measured on the
+    same ``n`` throws; ``most_pins`` is the measured line that takes the most there (a coach's 4-9:
+    the slide 0.95 pins a throw against the 9 alone's 1.0; a 4-10 whose slide took 1.5 pins over 6
+    screening throws and 0.2 on 20 fresh ones, against the 4 alone's 1.0). Where any measured line
+    converted, the pick is the measured line that converts the most of those same throws, then
+    takes the most pins (``ranked_note`` says when that is not the screening's pick: a coach's 4-9
+    at ``--screen 12``, 19 of 40 against a second slide's 22), so no line measured beside it
+    converts more.
 
     **Polish**: :func:`.robust.maximise` from the pick, ``polish`` noisy frames (default
     ``POLISH_PER_SCREEN * screen``; 0: none), fresh estimate on ``n`` throws of seed ``seed``
     (the same throws' noise as the pick's measurement: a paired before/after). Skipped when the
     pick converted all of its ``3 * screen`` screening throws, or no candidate converted any.
     The polished throw replaces the pick when its noise-free throw converts at every timestep
-    of the ladder (it is never worse than the pick on the polish's own screen).
+    of the ladder and it ranks no lower on the measured throws (conversions, then pins).
 
     Args:
         name: the leave, pins standing joined by '-' ("3-10").
@@ -543,27 +550,38 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
     converts = any(k[c][0] for c in k)
     holds = [c for c in top if all(not lv for _, lv in ladders[c])]
     best_i = max(holds or top, key=lambda c: (k[c][0], float(np.mean(took[c])), -c))
-    e369, r369 = noise.probability(cands[0][1], n, seed, runner=runner, standing=standing, noise=nz, on_done=on_done)
-    if best_i == 0:
-        eb, rb = e369, r369
-    else:
-        eb, rb = noise.probability(cands[best_i][1], n, seed, runner=runner, standing=standing, noise=nz,
-                                   on_done=on_done)
-    pins = pins_estimate(rb, standing)
-    # the count: the lines that took the most pins in the screening, measured on the same fresh throws as
-    # the pick (a screening of a few throws flatters a lucky line: a slide at 1.5 pins over 6 throws took
-    # 0.2 on 20): the two best others and the best line at one pin alone (a sure pin); the most fresh pins
-    # wins (ties to the pick, then a line at one pin alone, then the first)
+    # the measured throws (the same n throws of seed ``seed`` for each line): the 3-6-9 line, the screening's
+    # top three, and for the count the lines that took the most pins in the screening (a screening of a few
+    # throws flatters a lucky line: a slide at 1.5 pins over 6 throws took 0.2 on 20): the two best others and
+    # the best line at one pin alone (a sure pin)
     def most_key(c):
         return float(np.mean(took[c])), " alone: " in cands[c][0], -c
 
     others = sorted((c for c in k if c != best_i), key=most_key, reverse=True)
     alone = [c for c in others if " alone: " in cands[c][0]]
     tried = list(dict.fromkeys(others[:COUNT_LINES] + alone[:1]))
-    fresh = {best_i: pins}
-    for c in tried:
-        _, rm = noise.probability(cands[c][1], n, seed, runner=runner, standing=standing, noise=nz, on_done=on_done)
-        fresh[c] = pins_estimate(rm, standing)
+    measured = {}
+    for c in dict.fromkeys([0, best_i, *top, *tried]):
+        measured[c] = noise.probability(cands[c][1], n, seed, runner=runner, standing=standing, noise=nz,
+                                        on_done=on_done)
+    e369 = measured[0][0]
+    fresh = {c: pins_estimate(rs, standing) for c, (_, rs) in measured.items()}
+    # the pick is ranked on those throws, conversions then pins (docs/bowling.md), where any converted: the
+    # screening's pick is kept only when no measured line beats it (a coach's 4-9: 19/40 against 22/40)
+    ranked_note = ""
+    if any(measured[c][0].k for c in measured):
+        pick = max(measured, key=lambda c: (measured[c][0].k, fresh[c]["mean"], c == best_i, c in holds, -c))
+        if pick != best_i:
+            ranked_note = (f"ranked on the same {n} measured throws: {cands[pick][0]} converted {measured[pick][0].k} "
+                           f"({fresh[pick]['mean']:.2f} pins a throw) against {measured[best_i][0].k} "
+                           f"({fresh[best_i]['mean']:.2f}) for the screening's pick, {cands[best_i][0]}")
+            best_i = pick
+            if pick not in ladders:
+                ladders[pick] = [[r.timestep, r.leave] for r in frame.ladder(cands[pick][1], runner.oil, runner.ball,
+                                                                             standing=standing)]
+    converts = converts or any(measured[c][0].k for c in measured)
+    eb, pins = measured[best_i][0], fresh[best_i]
+    # the count: the most fresh pins (ties to the pick, then a line at one pin alone, then the first)
     most_i = max(fresh, key=lambda c: (fresh[c]["mean"], c == best_i, " alone: " in cands[c][0], -c))
     most = {"label": cands[most_i][0], "delivery": cands[most_i][1].to_dict(), "pins": fresh[most_i]}
     best, label, lad0 = cands[best_i][1], cands[best_i][0], ladders[best_i]
@@ -583,22 +601,26 @@ def best_spare(name: str, n: int, seed: int, *, runner: frame.FrameRunner, scree
                "screen": rr.screen.to_dict(), "ladder_holds": rr.ladder_holds,
                "generations": len(rr.history) - 1, "accepted": sum(1 for h in rr.history[1:] if h["accepted"])}
         moved = rr.delivery != rr.start
-        if moved and rr.ladder_holds:
-            best, label, lad0, eb = rr.delivery, f"polished {label}", [x[:2] for x in rr.ladder], rr.estimate
-            note = "polished: the pick of robust.maximise replaces the screening's"
+        if moved and rr.ladder_holds:   # kept where it ranks no lower on the same measured throws
+            ep, rp = noise.probability(rr.delivery, n, seed, runner=runner, standing=standing, noise=nz,
+                                       on_done=on_done)
+            pp = pins_estimate(rp, standing)
+            if (ep.k, pp["mean"]) >= (eb.k, pins["mean"]):
+                best, label, lad0, eb, pins = rr.delivery, f"polished {label}", [x[:2] for x in rr.ladder], ep, pp
+                note = "polished: the pick of robust.maximise replaces the screening's"
+            else:
+                note = (f"polished: the polished release converted {ep.k} of the {n} measured throws "
+                        f"({pp['mean']:.2f} pins a throw) against the pick's {eb.k}; the pick stays")
         elif moved:
             note = "polished: no better release kept its outcome on the ladder; the screening's pick stays"
         else:
             note = "polished: no better release found on the polish's screen; the screening's pick stays"
     lad = lad0 + [["+2 s", frame.run_frame(best, runner.oil, runner.ball, standing=standing, extra_s=2.0).leave]]
-    if pol is not None and label.startswith("polished"):   # the polished pick's pins, on the same fresh throws
-        _, rp = noise.probability(best, n, seed, runner=runner, standing=standing, noise=nz, on_done=on_done)
-        pins = pins_estimate(rp, standing)
     return SpareResult(leave=name, system_369=cands[0][1].to_dict(), system_369_estimate=e369.to_dict(),
                        best=best.to_dict(), best_label=label, estimate=eb.to_dict(),
                        candidates=[[cands[c][0], *k[c], float(np.mean(took[c]))] for c in range(len(cands))],
                        ladder=lad, screened=screened, polish=pol, polish_note=note, converts=converts, pins=pins,
-                       most_pins=most)
+                       most_pins=most, ranked_note=ranked_note)
 
 
 # --------------------------------------------------------------------------- the picture

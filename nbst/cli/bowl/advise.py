@@ -175,6 +175,8 @@ def cmd_advise(args) -> int:
     print(adv.text)
     if adv.count_text:
         print(adv.count_text)
+    if adv.spare.get("ranked_note"):   # the measured throws ranked another line over the screening's pick
+        print(f"pick: {adv.spare['ranked_note']}")
     print(noise_line(args.bowler, nz))
     print(f"note: {_note()}")
     return 0
@@ -203,11 +205,11 @@ def noise_line(bowler, nz) -> str:
 
 def spare_frames(leave: str, screen: int, samples: int, polish: int) -> int:
     """Frames :func:`.spares.best_spare` runs at ``leave`` at most (its candidates screened, three
-    screened more, the measures: the 3-6-9 line, the pick, the lines for the count, the polish and
-    its measures)."""
+    screened more and their ladders, the measures: the 3-6-9 line, the three, the lines for the
+    count, a measured pick's ladder, the polish and its measures)."""
     from nbst.models.bowling.lane import spares
 
-    return ((3 + spares.COUNT_LINES) * samples + spares.candidate_count(leave) * screen + 3 * 2 * screen + 9
+    return ((5 + spares.COUNT_LINES) * samples + spares.candidate_count(leave) * screen + 3 * 2 * screen + 13
             + (polish + 2 * samples) * (polish > 0))
 
 
@@ -236,7 +238,7 @@ def cmd_spares(args) -> int:
 
     nz = noise.DEFAULT if nz is None else nz
     out = []
-    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, 2 measures,
+    # frames per leave: 17 candidates (19 on a multi-pin leave) screened, 3 x 2 more screens, the measures,
     # then at most the polish's budget and its measure (a skipped polish leaves the bar short of its total)
     polish = spares.POLISH_PER_SCREEN * args.screen if args.polish is None else args.polish
     total = sum(spare_frames(nm, args.screen, args.samples, polish) for nm in names)
