@@ -183,7 +183,7 @@ def _move_lines(run: dict, doc: dict | None = None) -> list[str]:
         d = lane.Delivery(**b["strike"])
         try:
             arrow = float(lane.throw(d, oil, ball).board_at_arrows)
-        except (lane.LaneError, TypeError, ValueError):
+        except lane.LaneError:   # a pattern not read again by its name (a sheet of one's own), a gutter ball
             arrow = transition.arrow_board(d)
         base[b["index"]] = (advise.stance_of(d.foul_board()), arrow)
     out = []
