@@ -363,17 +363,24 @@ class Renderer3D(FrameRenderer):
         ctx.blend_equation = mgl.FUNC_ADD
         # target markers (and numbers) over everything, in a dark halo, as in 2D: a puck never hides one
         self.circles.draw(self._marker_overlay)
+        pad = style.MARGIN_FRAC * min(self.size) * 0.5
         if self.labels is not None and self.target_text is not None:  # set together
+            # no number in the readout's box (a small frame's readout lies over the table), as in 2D
+            cw, ch = self.text.cell
+            readout = (np.zeros((0, 4)) if self.clean else
+                       np.array([[pad, pad, pad + self.readout_width() * cw,
+                                  pad + len(self.readout(t, inside, ghost_inside)) * ch]]))
             tops = self.to_pixels(pos, z=self.puck_h)
-            self.labels.draw(self.size, tops)
+            drawn = self.labels.drawn(tops, taken=readout)
+            self.labels.draw(self.size, tops, drawn)
             numbers = target_label_instances(self.target_text, self._target_centre_px, self._target_marker_px,
-                                             avoid=self.labels.boxes(tops), skip=covered_by_own_disk(p, pos))
+                                             avoid=np.concatenate([self.labels.boxes(tops, drawn), readout]),
+                                             skip=covered_by_own_disk(p, pos))
             self.target_text.draw_halo(self.size, numbers, style.TARGET_LABEL, style.TEXT_HALO)
             if self.ghost is not None:
                 self.target_text.draw_halo(self.size, ghost_label_instances(
-                    self.target_text, self.to_pixels(g, z=self.puck_h), self.labels.rpx), style.GHOST_LABEL,
-                    style.TEXT_HALO)
-        pad = style.MARGIN_FRAC * min(self.size) * 0.5
+                    self.target_text, self.to_pixels(g, z=self.puck_h), self.labels.rpx, avoid=readout),
+                    style.GHOST_LABEL, style.TEXT_HALO)
         if not self.clean:
             self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
 

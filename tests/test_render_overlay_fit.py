@@ -210,8 +210,8 @@ def test_an_odd_size_mp4_of_a_5m_throw_is_refused_before_any_work(worlds_dir, tm
     assert not out.exists()
 
 
-@pytest.mark.parametrize("n", [1000, 200])
-def test_forced_disk_numbers_keep_out_of_the_readout(n, tmp_path, watched):
+@pytest.mark.parametrize("n, view", [(1000, "2d"), (200, "2d"), (200, "3d")])
+def test_forced_disk_numbers_keep_out_of_the_readout(n, view, tmp_path, watched):
     """The animator: ``--labels`` at 200x120 on 1,000 disks drew "105" across the readout's title
     (a small frame's readout overlaps the box's corner; with 200 disks a "1" under its last letters).
     No number, the disks' or the targets', in the readout's box."""
@@ -220,7 +220,7 @@ def test_forced_disk_numbers_keep_out_of_the_readout(n, tmp_path, watched):
                  str(sol), "-q"]) == 0
     watched.clear()
     assert main(["render", str(p), str(sol), "--still", "5", "-o", str(tmp_path / "x.png"), "--size", "200x120",
-                 "--labels", "-q"]) == 0
+                 "--labels", "--view", view, "-q"]) == 0
     _check(watched, 200, 120)
     face, call = next((f, c) for f, c, lines in watched.texts if lines and lines[0].startswith("planted-"))
     x0, y0, x1, y1 = watched.box(call)
