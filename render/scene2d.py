@@ -81,6 +81,8 @@ class Labels:
         self.px = px = int(np.clip(np.median(rpx) * style.LABEL_FRAC, style.MIN_LABEL_PX, style.MAX_LABEL_PX))
         self.text = Text(ctx, px)
         self.runs = self.text.numbers(problem.n)
+        #: px kept between two numbers: half a character, so two numbers side by side never read as one ("67")
+        self.gap = 0.5 * self.text.cell[0]
         self.strings = self.runs.strings
         cw, ch = self.text.cell
         self.digit_px = digit_height(px)
@@ -111,18 +113,22 @@ class Labels:
         return np.stack([x, y, x + self.runs.width, y + self.text.cell[1]], axis=1)
 
     def drawn(self, centers_px, taken=None) -> np.ndarray:
-        """Which numbers are drawn at ``centers_px``: every one written on its disk (disks do not
-        overlap, so neither do they), and each one beside its disk that covers no number drawn
-        before it (lower disk numbers first): crowded disks never run their numbers together.
+        """Which numbers are drawn at ``centers_px``: each one written on its disk that covers no number
+        drawn before it (disks do not overlap, but a number forced onto a disk narrower than it can
+        reach the next one's), and each one beside its disk that covers no number drawn before it
+        (lower disk numbers first): crowded disks never run their numbers together.
         ``taken``: boxes (M, 4) px (x0, y0, x1, y1) of other text (the readout) that no number
         covers, on its disk or beside it."""
         keep = self.on_disk.copy()
         boxes = self._all_boxes(centers_px)
         taken = np.asarray(taken if taken is not None else (), float).reshape(-1, 4)
         keep &= ~overlaps(boxes, taken)
+        on = np.flatnonzero(keep)
+        if on.size:   # a number wider than its disk (forced --labels on small disks) may reach the next one's
+            keep[on] = keep_apart(boxes[on], taken=taken, gap=self.gap)
         beside = np.flatnonzero(~self.on_disk)
         if beside.size:
-            keep[beside] = keep_apart(boxes[beside], taken=np.concatenate([boxes[keep], taken]))
+            keep[beside] = keep_apart(boxes[beside], taken=np.concatenate([boxes[keep], taken]), gap=self.gap)
         return keep
 
     def boxes(self, centers_px, drawn=None) -> np.ndarray:

@@ -382,7 +382,9 @@ class Renderer3D(FrameRenderer):
                     self.target_text, self.to_pixels(g, z=self.puck_h), self.labels.rpx, avoid=readout),
                     style.GHOST_LABEL, style.TEXT_HALO)
         if not self.clean:
-            self.text.draw(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT)
+            # in a halo: a small frame's readout lies over the table, its markers and pucks
+            self.text.draw_halo(self.size, self.text.layout(self.readout(t, inside, ghost_inside), pad, pad), style.TEXT,
+                                style.TEXT_HALO)
 
     def _trail_instances(self, t: float) -> np.ndarray:
         return trail_capsules(self.motion, t, self.trail_half, self.colors, min_step=np.sqrt(1e-9))  # world units

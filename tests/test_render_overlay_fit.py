@@ -226,3 +226,33 @@ def test_forced_disk_numbers_keep_out_of_the_readout(n, view, tmp_path, watched)
     x0, y0, x1, y1 = watched.box(call)
     inside = [c for c in watched if c[0] != face and c[2] < x1 and x0 < c[2] + c[4] and c[3] < y1 and y0 < c[3] + c[5]]
     assert not inside, ("a number in the readout's box", (x0, y0, x1, y1), inside[:3])
+
+
+@pytest.mark.parametrize("view", ["2d", "3d"])
+def test_forced_numbers_on_small_disks_never_run_together(view, tmp_path, monkeypatch):
+    """Forced ``--labels`` at 200x120 on diamond-s14 read "67" for disks 6 and 7: two numbers a pixel
+    apart read as one. Every two numbers drawn, on or beside their disks, are half a character apart
+    at least (docs/render.md: "Numbers never run together")."""
+    from nbst.render import scene2d
+
+    seen = []
+    draw = scene2d.Labels.draw
+
+    def spy(self, size, centers_px, drawn=None):
+        d = self.drawn(centers_px) if drawn is None else drawn
+        seen.append((self._all_boxes(centers_px)[d], 0.5 * self.text.cell[0]))
+        return draw(self, size, centers_px, drawn)
+
+    monkeypatch.setattr(scene2d.Labels, "draw", spy)
+    sol = tmp_path / "sol.json"
+    assert main(["solve", "diamond-s14", "--seed", "1", "-o", str(sol), "-q", "--max-trials", "200"]) in (0, 1)
+    for t in ("0", "1", "2", "3", "4", "5"):
+        assert main(["render", "diamond-s14", str(sol), "--still", t, "-o", str(tmp_path / "x.png"), "--size",
+                     "200x120", "--labels", "--view", view, "-q"]) == 0
+    assert len(seen) == 6
+    for boxes, gap in seen:
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                a, b = boxes[i], boxes[j]
+                apart = max(b[0] - a[2], a[0] - b[2], b[1] - a[3], a[1] - b[3])
+                assert apart >= gap - 1e-6, (i, j, a, b, gap)

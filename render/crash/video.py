@@ -468,15 +468,18 @@ class CrashRenderer(FrameRenderer):
                 col, row, front = self.to_pixel(vp, vpm, p)
                 if cam == "overhead":   # above the vehicle; at the panel's edge while it is outside
                     col = float(np.clip(col, vp[0] + scw * (len(nm) / 2 + 0.5), vp[0] + vp[2] - scw * (len(nm) / 2 + 0.5)))
-                    row = float(np.clip(row - 1.6 * sch, vp[1] + 1.5 * sch, vp[1] + vp[3] - 1.2 * sch))
+                    rows = [float(np.clip(r, vp[1] + 1.5 * sch, vp[1] + vp[3] - 1.2 * sch))
+                            for r in (row - 1.6 * sch, row + 0.6 * sch)]   # above it, else below it
                 elif not (front and self._inside(vp, col, row)):
                     continue
                 else:
-                    row -= 0.5 * sch
-                    box = (col - scw * len(nm) / 2, row, col + scw * len(nm) / 2, row + sch)
-                    if not keep_apart([box], placed[:1])[0]:   # under the panel's title: the title stays
-                        continue
-                placed.append(self._label(vp, nm, col - scw * len(nm) / 2, row, self.colours[i]))
+                    rows = [row - 0.5 * sch, row - 1.6 * sch]
+                # clear of the title and the names and labels placed (two vehicles side by side at a touch)
+                spot = next((b for b in (self._box(vp, nm, col - scw * len(nm) / 2, r) for r in rows)
+                             if keep_apart([b], placed)[0]), None)
+                if spot is None:
+                    continue
+                placed.append(self._label(vp, nm, spot[0], spot[1], self.colours[i]))
                 if cam == "overhead" and "rest" in self.fates[i]:
                     f = self.fates[i]["rest"]
                     col, row, _ = self.to_pixel(vp, vpm, (f["x"], f["y"] + f["radius"], 0.0))
