@@ -297,14 +297,15 @@ class SceneSim:
         return qpos, qvel
 
     # -- rolling out -----------------------------------------------------------------------
-    def rollout(self, x: np.ndarray) -> SceneRollout:
-        """Roll the controls vector ``x`` (D,) out and judge it."""
+    def rollout(self, x: np.ndarray, state: tuple[np.ndarray, np.ndarray] | None = None) -> SceneRollout:
+        """Roll the controls vector ``x`` (D,) out and judge it; from ``state`` (qpos0, qvel0) when given (a
+        solution file's stored state, which an edited scene would not give again from ``x``)."""
         if self._rec is None:
-            return self._loop(x)
-        qpos0, qvel0 = self.initial_state(x)
+            return self._loop(x, state)
+        qpos0, qvel0 = self.initial_state(x) if state is None else (np.array(state[0], float), np.array(state[1], float))
         got = self._rec.run(qpos0, qvel0)
         if got is None:  # MuJoCo warned: the loop's final state, its warnings
-            return self._loop(x)
+            return self._loop(x, state)
         qpos, qvel, time, pos, touches, seq, npos = got
         return self._finish(x, qpos0, qvel0, qpos, qvel, time, pos, touches, seq, (), npos)
 
@@ -332,13 +333,13 @@ class SceneSim:
                             qvel=np.array(qvel, dtype=float), judgement=judge(self.fates, rec),
                             warnings=tuple(warned), sequence=tuple(seq))
 
-    def _loop(self, x: np.ndarray) -> SceneRollout:
+    def _loop(self, x: np.ndarray, state: tuple[np.ndarray, np.ndarray] | None = None) -> SceneRollout:
         """The rollout as a plain ``mj_step`` loop in Python, reading between the steps."""
         import mujoco
 
         m = self.model
         d, s = self._data()
-        qpos0, qvel0 = self.initial_state(x)
+        qpos0, qvel0 = self.initial_state(x) if state is None else (np.array(state[0], float), np.array(state[1], float))
         self._reset(d)
         d.qpos[:] = qpos0
         d.qvel[:] = qvel0

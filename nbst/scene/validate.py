@@ -215,6 +215,8 @@ def validate_solution(path: str, *, samples: int = DEFAULT_VALIDATE_SAMPLES, see
     h = float(doc["timestep"])
     model.opt.timestep = h
     x = _floats(doc, "x", fates.dim, str(path))
+    # the file's state, under each setting (an edited scene would not give it again from x)
+    state = (_floats(doc, "qpos0", int(model.nq), str(path)), _floats(doc, "qvel0", int(model.nv), str(path)))
     s = resolve_seed(doc.get("seed") if seed is None else seed, what="seed")
     base = {"integrator": model.opt.integrator, "solver": model.opt.solver, "cone": model.opt.cone, "timestep": h}
     wanted: list[tuple[str, str, dict]] = [("scene", "as the scene", {})]
@@ -238,7 +240,7 @@ def validate_solution(path: str, *, samples: int = DEFAULT_VALIDATE_SAMPLES, see
                 m.opt.timestep = opts["timestep"]
                 check_against_model(fates, m)  # the step cap, at this timestep
                 with SceneSim(fates, m) as sim:
-                    r = sim.rollout(x)
+                    r = sim.rollout(x, state=state)
                     p = _paths(m, sim, r.qpos0, r.qvel0)
                     done[key] = (r, {f.body: p[:, i] for i, f in enumerate(fates.fates)}, sim.nstep)
             r, paths, nstep = done[key]

@@ -1,0 +1,46 @@
+"""An eighth new user's findings (issue 46): a solution replays, validates and is drawn from its own
+stored state, also after the scene file is edited in a way that state ignores."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco")
+
+from nbst.scene import solve  # noqa: E402
+from nbst.scene.solution import replay_solution, solution_dict  # noqa: E402
+
+SCENE = """<mujoco><option timestep="0.002"/><worldbody>
+<geom name="floor" type="plane" size="3 3 0.1"/>
+<body name="ball" pos="0 0 {z}"><freejoint/><geom type="sphere" size="0.05" mass="0.2"/></body>
+</worldbody></mujoco>"""
+FATES = {"format": "nbst-fates", "version": 1, "scene": "scene.xml", "duration": 1.0,
+         "controls": {"ball": {"linvel": [[0.5, 2.0], [-0.5, 0.5], [1.0, 3.0]]}},
+         "fates": {"ball": {"rest_in": {"center": [1.0, 0.0, 0.05], "radius": 0.3}}}}
+
+
+def test_an_edited_scene_replays_and_validates_the_files_own_state(tmp_path):
+    """The user moved a free body's ``<body pos>`` 5 mm after solving: a free joint's stored qpos0
+    ignores it, so the file's motion is the same, and the docs' hand loop plays it bit for bit. Replay,
+    validate and the render's readout judged another motion (the controls' state on the edited
+    scene): the ball ended 4 cm elsewhere in the readout than in the picture."""
+    from nbst.scene.validate import validate_solution
+
+    (tmp_path / "scene.xml").write_text(SCENE.format(z="0.05"))
+    (tmp_path / "fates.json").write_text(json.dumps(FATES))
+    res = solve(None, tmp_path / "fates.json", seed=1, max_rollouts=40, ladder=False)
+    sol = tmp_path / "sol.json"
+    sol.write_text(json.dumps(solution_dict(res)))
+    before = replay_solution(sol)
+    assert before.same and not before.scene_changed
+    (tmp_path / "scene.xml").write_text(SCENE.format(z="0.055"))   # the body 5 mm higher in the file
+    after = replay_solution(sol)
+    assert after.scene_changed and after.same   # said, and the file's own motion, bit for bit
+    assert after.judgement.to_dict() == before.judgement.to_dict()
+    assert np.array_equal(after.qpos, before.qpos)
+    v = validate_solution(str(sol), samples=2)
+    row = v.rows[0]
+    assert row.setting == "as the scene" and row.rollout.judgement.to_dict() == before.judgement.to_dict()
+    assert np.array_equal(row.rollout.qpos, before.qpos)
