@@ -6,6 +6,8 @@ rollout (``nbst scene check`` prints what they say; ``nbst scene solve`` warns o
   resolved by the step: the bounce changes with where in a step it begins, and the ladder (h/2,
   h/4) seldom agrees with h;
 * :func:`ignored_friction`: torsional or rolling friction that the pair's condim ignores;
+* :func:`endless_rolls`: a round body that must end at rest, with a contact that applies no rolling
+  friction (it may roll for ever);
 * :func:`deep_rests`: a body that would rest deeper in the floor than :data:`SINK_SHARE` of its
   smallest half-size (:func:`resting_depth`: the soft contact's equilibrium), as a millimetre scene
   in MuJoCo's default contact does.
@@ -24,8 +26,8 @@ import numpy as np
 from nbst.scene.fates import Fates
 from nbst.scene.scenefile import _collides
 
-__all__ = ["MIN_CONTACT_STEPS", "SINK_SHARE", "contact_time", "short_contacts", "ignored_friction", "resting_depth",
-           "deep_rests"]
+__all__ = ["MIN_CONTACT_STEPS", "SINK_SHARE", "contact_time", "short_contacts", "ignored_friction", "endless_rolls",
+           "resting_depth", "deep_rests"]
 
 
 #: A contact that rebounds in fewer steps than this is noted by ``nbst scene check`` (:func:`short_contacts`).
@@ -158,6 +160,27 @@ def ignored_friction(fates: Fates, model: Any) -> list[tuple[str, str, str, floa
             if value > 0 and not math.isclose(value, default) and condim < need and (name, kind) not in out:
                 out[(name, kind)] = (other, float(value), condim)
     return [(b, o, kind, v, c) for (b, kind), (o, v, c) in out.items()]
+
+
+def endless_rolls(fates: Fates, model: Any) -> list[tuple[str, str, int]]:
+    """Bodies that must end ``at_rest`` and can roll (a sphere, capsule, cylinder or ellipsoid geom)
+    while a contact they may make applies no rolling friction (condim under 6, or rolling friction
+    0): MuJoCo then gives a rolling body no resistance at all, and it may roll for ever (an eighth
+    new user's ball in a cup and stick on a floor: 0 of 11 runs met; with condim 6 and rolling
+    friction, met). Each ``(body, the first such other, condim)``. Compute only."""
+    import mujoco
+
+    round_ = {int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE),
+              int(mujoco.mjtGeom.mjGEOM_CYLINDER), int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)}
+    resting = {f.body for f in fates.fates if f.at_rest}
+    out: dict[str, tuple[str, int]] = {}
+    for name, g1, g2, other, pairs in _touching(fates, model):
+        if name not in resting or name in out or int(model.geom_type[g1]) not in round_:
+            continue
+        condim, fr = _pair_condim_friction(model, g1, g2, pairs)
+        if condim < 6 or fr[2] <= 0:
+            out[name] = (other, condim)
+    return [(b, o, c) for b, (o, c) in out.items()]
 
 
 #: A body that would rest deeper than this share of its smallest half-size is noted (:func:`deep_rests`).

@@ -64,7 +64,8 @@ def cmd_examples(args) -> int:
 
 def cmd_check(args) -> int:
     from nbst.scene.fates import STILL_DISTANCE
-    from nbst.scene.contacts import MIN_CONTACT_STEPS, contact_time, deep_rests, ignored_friction, short_contacts
+    from nbst.scene.contacts import (MIN_CONTACT_STEPS, contact_time, deep_rests, endless_rolls, ignored_friction,
+                                     short_contacts)
     from nbst.scene.scenefile import idle_fates, load_fates, start_touches, unforced_still_moves
 
     f, model = load_fates(args.fates, scene=args.scene)
@@ -99,6 +100,11 @@ def cmd_check(args) -> int:
               f"it (condim {6 if kind == 'rolling' else 4} applies it), so "
               + ("a rolling body is not slowed by it and may never come to rest" if kind == "rolling"
                  else "a spinning body is not slowed by it"))
+    for body, other, condim in endless_rolls(f, model):
+        print(f"  note: {body} must end at rest and can roll, but its contact with {other} applies no rolling "
+              f"friction (condim {condim}{'' if condim < 6 else ', rolling friction 0'}): MuJoCo then slows a "
+              f"rolling body not at all, so it may roll for ever; condim 6 with rolling friction (the third "
+              f"friction) stops it")
     h = model.opt.timestep
     groups: dict[tuple[str, float, float, float], list[str]] = {}
     for body, other, t, tau, zeta in short_contacts(f, model):
