@@ -71,3 +71,28 @@ def test_check_notes_a_round_body_that_must_rest_but_cannot_stop_rolling(tmp_pat
     assert bool(got) == noted, got
     if noted:
         assert got[0][:2] == ("ball", "floor")
+
+
+def test_check_says_a_hits_order_the_start_already_breaks_can_not_be_met(tmp_path, capsys):
+    """A pebble resting on the floor must hit the brick, then the floor: its first touch of the floor
+    is at 0 s, so that order can never be met; ``check`` said only "its first touch of floor is at 0
+    s", and the solve spent its whole budget."""
+    from nbst.cli.main import main
+
+    xml = ('<mujoco><worldbody><geom name="floor" type="plane" size="3 3 0.1"/>'
+           '<body name="brick" pos="1 0 0.1"><freejoint/><geom type="box" size="0.1 0.1 0.1" mass="2"/></body>'
+           '<body name="pebble" pos="0 0 0.03"><freejoint/><geom type="sphere" size="0.03" mass="0.05"/></body>'
+           '</worldbody></mujoco>')
+    (tmp_path / "scene.xml").write_text(xml)
+    fates = {"format": "nbst-fates", "version": 1, "scene": "scene.xml", "duration": 1.0,
+             "controls": {"pebble": {"linvel": [[0.5, 3.0], [-0.5, 0.5], [0.5, 3.0]]}},
+             "fates": {"pebble": {"hits": ["brick", "floor"]}}}
+    (tmp_path / "fates.json").write_text(json.dumps(fates))
+    assert main(["scene", "check", str(tmp_path / "fates.json")]) == 0
+    out = capsys.readouterr().out
+    assert "pebble already touches floor at the start" in out
+    assert "its hits order (brick, then floor) can not be met" in out
+    fates["fates"]["pebble"]["hits"] = ["floor", "brick"]   # the floor first: met at the start, no such note
+    (tmp_path / "fates.json").write_text(json.dumps(fates))
+    assert main(["scene", "check", str(tmp_path / "fates.json")]) == 0
+    assert "can not be met" not in capsys.readouterr().out

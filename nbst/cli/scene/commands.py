@@ -78,10 +78,14 @@ def cmd_check(args) -> int:
         print(f"  controls {c.body}: {ranges}")
     for fa in f.fates:
         print(f"  fates {fa.body}: {asks_text(fa)}")
+    hits = {fa.body: fa.hits for fa in f.fates}
     for body, key, name in start_touches(f, model):
+        first = list(hits.get(body, ()))
         print(f"  note: {body} already touches {name} at the start" + (
             f" (the model's pose, before any control): its never_hits {name} can not be met; start it apart"
-            if key == "never_hits" else f": its first touch of {name} is at 0 s"))
+            if key == "never_hits" else f": its first touch of {name} is at 0 s" + (
+                f", so its hits order ({', then '.join(first)}) can not be met; start it apart, or put {name} first"
+                if name in first and first[0] != name else "")))
     for body, why in idle_fates(f, model):
         print(f"  note: {body} {why}")
     if model.nflex:
