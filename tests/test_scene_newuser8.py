@@ -96,3 +96,22 @@ def test_check_says_a_hits_order_the_start_already_breaks_can_not_be_met(tmp_pat
     (tmp_path / "fates.json").write_text(json.dumps(fates))
     assert main(["scene", "check", str(tmp_path / "fates.json")]) == 0
     assert "can not be met" not in capsys.readouterr().out
+
+
+def test_a_failed_solve_says_how_far_each_missed_fate_is(tmp_path, capsys):
+    """An unreachable region: the summary said only "cost 39.1", metres and touch counts added up;
+    it now says each missed fate's distance in its unit, the one replay prints."""
+    import re
+
+    from nbst.cli.main import main
+
+    (tmp_path / "scene.xml").write_text(SCENE.format(z="0.05"))
+    far = dict(FATES, fates={"ball": {"rest_in": {"center": [20.0, 0.0, 0.05], "radius": 0.3}}})
+    (tmp_path / "fates.json").write_text(json.dumps(far))
+    assert main(["scene", "solve", str(tmp_path / "fates.json"), "--seed", "1", "--max-rollouts", "30",
+                 "--jobs", "1", "--no-ladder", "-o", str(tmp_path / "sol.json")]) == 1
+    err = capsys.readouterr().err
+    said = float(re.search(r"the best misses ball's rest_in by ([0-9.]+) m", err).group(1))
+    doc = json.loads((tmp_path / "sol.json").read_text())
+    assert said == pytest.approx(doc["verdicts"]["ball"]["fates"]["rest_in"]["cost"], rel=1e-2)
+    assert said > 15.0

@@ -125,6 +125,18 @@ def cmd_check(args) -> int:
     return 0
 
 
+def _by(fv) -> str:
+    """How far a missed fate is, in its own unit (a region's metres, an axis's degrees), or "" for the
+    counted ones (touches): a solve's summary says each, not only the cost that adds them up."""
+    import math
+
+    if fv.fate in ("rest_in", "at", "through", "still"):
+        return f" by {fv.cost:.3g} m"
+    if fv.fate == "up":
+        return f" by {math.degrees(fv.cost):.3g} deg"
+    return ""
+
+
 def cmd_solve(args) -> int:
     from nbst.scene.api import solve
     from nbst.scene.contacts import MIN_CONTACT_STEPS, short_contacts
@@ -170,7 +182,8 @@ def cmd_solve(args) -> int:
     if not args.quiet:
         b = res.best
         # res.met holds the ladder too where it was asked (exit 0 only then)
-        unmet = ", ".join(f"{bv.body}'s {fv.fate}" for bv in b.judgement.bodies for fv in bv.fates if not fv.met)
+        unmet = ", ".join(f"{bv.body}'s {fv.fate}{_by(fv)}" for bv in b.judgement.bodies for fv in bv.fates
+                          if not fv.met)
         met = ("met" if res.met else "met at the scene's step only" if b.judgement.met and not b.warnings
                else f"not met (cost {b.cost:.3g}; the best misses {unmet})" if unmet else f"not met (cost {b.cost:.3g})")
         took = seconds_text(bar[0].seconds if bar else res.wall_time)
