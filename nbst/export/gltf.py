@@ -41,7 +41,7 @@ from nbst.errors import InputError
 from nbst.outputs import write_bytes_atomic
 
 __all__ = ["Solid", "Body", "BodyMotion", "EMPTY", "TURN_NOTE_DEG", "continuous_quaternions", "still_bodies",
-           "empty_note", "turn_note", "gltf_document", "write_glb"]
+           "empty_note", "turn_angles", "turn_note", "gltf_document", "write_glb"]
 
 #: The ``extras`` of a body's node that has no mesh.
 EMPTY = {"nbst": "no geoms: nothing drawn (nbst exports geoms only)"}
@@ -197,17 +197,22 @@ def empty_note(motion: BodyMotion) -> str:
 TURN_NOTE_DEG = 90.0
 
 
+def turn_angles(quat: np.ndarray) -> np.ndarray:
+    """(T-1, nbody) each body's turn (deg) from one pose to the next, of (T, nbody, 4) unit quaternions
+    (w, x, y, z): the short way, whatever their signs."""
+    q = np.asarray(quat, float)
+    with np.errstate(invalid="ignore"):
+        return np.nan_to_num(np.degrees(2 * np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=-1)), 0.0, 1.0))))
+
+
 def turn_note(motion: BodyMotion, fps: float) -> str:
     """What to say when a moving body turns more than :data:`TURN_NOTE_DEG` between two keyframes (a
     spinning ball or wheel at a low ``fps``), in one line, or "" when none does: the turn read between
     the keyframes, or the body's fastest turn over the whole recording (``motion.turn_rate``) times the
     keyframes' widest gap, whichever is larger."""
-    q = continuous_quaternions(motion.quat)
-    if len(q) < 2:
+    if len(motion.quat) < 2:
         return ""
-    with np.errstate(invalid="ignore"):
-        turn = np.degrees(2 * np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=2)), 0.0, 1.0))).max(axis=0)
-    turn = np.nan_to_num(turn)
+    turn = turn_angles(motion.quat).max(axis=0)
     if motion.turn_rate is not None:   # a spin aliased by the keyframes (a full turn between two reads as none)
         turn = np.maximum(turn, np.asarray(motion.turn_rate, float) * float(np.diff(motion.times).max()))
     turn = np.where([b.moves for b in motion.bodies], turn, 0.0)

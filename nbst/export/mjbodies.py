@@ -16,10 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from nbst.export.gltf import Body, BodyMotion, Solid
+from nbst.export.gltf import Body, BodyMotion, Solid, turn_angles
 from nbst.render.core.geoms import geom_rgba, geom_rows, visible_geoms
 
-__all__ = ["PLANE_HALF", "geom_body_rows", "model_bodies", "body_poses", "sampled_steps", "qpos_motion", "turn_rates"]
+__all__ = ["PLANE_HALF", "geom_body_rows", "model_bodies", "body_poses", "sampled_steps", "qpos_motion"]
 
 #: Half-size (m) of the quad drawn for an infinite plane (size 0 in MJCF).
 PLANE_HALF = 50.0
@@ -138,19 +138,7 @@ def qpos_motion(model: Any, qpos: np.ndarray, times: np.ndarray, fps: float,
         the :class:`~nbst.export.gltf.BodyMotion`.
     """
     idx = sampled_steps(times, fps)
-    pos, quat = body_poses(model, np.asarray(qpos)[idx], mocap)
-    return BodyMotion(bodies=model_bodies(model), times=np.asarray(times, float)[idx], pos=pos, quat=quat,
-                      turn_rate=turn_rates(model, qpos, times, mocap))
-
-
-def turn_rates(model: Any, qpos: np.ndarray, times: np.ndarray,
-               mocap: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
-    """(nbody,) each body's fastest turn (deg/s) between two recorded states, over them all: what a
-    spin does between keyframes that the keyframes alone alias (``nbst.export.gltf.turn_note``)."""
+    pos, quat = body_poses(model, np.asarray(qpos), mocap)   # every state once: the keyframes and the turn rates
     t = np.asarray(times, float)
-    if len(t) < 2:
-        return np.zeros(model.nbody)
-    _, q = body_poses(model, np.asarray(qpos), mocap)
-    with np.errstate(invalid="ignore"):
-        ang = np.degrees(2 * np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=2)), 0.0, 1.0)))
-    return np.asarray(np.nan_to_num(ang / np.maximum(np.diff(t), 1e-12)[:, None]).max(axis=0))
+    rate = (turn_angles(quat) / np.maximum(np.diff(t), 1e-12)[:, None]).max(axis=0) if len(t) > 1 else None
+    return BodyMotion(bodies=model_bodies(model), times=t[idx], pos=pos[idx], quat=quat[idx], turn_rate=rate)

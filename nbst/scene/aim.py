@@ -20,7 +20,7 @@ targets' heights plus a diameter (a touch that low would not fall in from above)
 scene (two bouncy balls, e = 0.73, that meet and fall into two boxes): 10 of 10 seeds met within
 3,000 rollouts, against 2 of 10 with the meeting aim alone (docs/results/scene.md).
 
-Pure numpy and scipy, but for :func:`restitution`.
+Pure numpy and scipy, but for :func:`restitution` (and the model's radii, read in :func:`pair_of`).
 """
 from __future__ import annotations
 
@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from nbst.scene.scenefile import body_radius
 
 __all__ = ["Pair", "RESTITUTION_GAP", "RESTITUTION_SPEED", "pair_of", "restitution", "pair_touch", "pair_flights",
            "land_pair"]
@@ -62,12 +64,6 @@ class Pair:
     horizon: float = np.inf
 
 
-def _rbound(model: Any, body: int) -> float:
-    """The bounding sphere of a body's geoms about its origin (each geom's offset plus its rbound)."""
-    gs = np.flatnonzero(model.geom_bodyid == body)
-    return float(max((np.linalg.norm(model.geom_pos[g]) + model.geom_rbound[g] for g in gs), default=0.0))
-
-
 def restitution(model: Any, bi: int, bj: int) -> float:
     """The coefficient of restitution of bodies ``bi`` and ``bj`` (each with a free joint), measured:
     in a copy of ``model`` without gravity and with every other geom's collisions off, the two are
@@ -82,7 +78,7 @@ def restitution(model: Any, bi: int, bj: int) -> float:
     m.geom_contype[~mine] = 0
     m.geom_conaffinity[~mine] = 0
     d = mujoco.MjData(m)
-    gap = _rbound(m, bi) + _rbound(m, bj) + RESTITUTION_GAP
+    gap = body_radius(m, bi) + body_radius(m, bj) + RESTITUTION_GAP
     for b, x, v in ((bi, 0.0, RESTITUTION_SPEED), (bj, gap, -RESTITUTION_SPEED)):
         jq, jv = int(m.jnt_qposadr[m.body_jntadr[b]]), int(m.jnt_dofadr[m.body_jntadr[b]])
         d.qpos[jq:jq + 7] = [x, 0.0, 1e3, 1.0, 0.0, 0.0, 0.0]
@@ -96,7 +92,7 @@ def restitution(model: Any, bi: int, bj: int) -> float:
 def pair_of(model: Any, bi: int, bj: int, oi: np.ndarray, oj: np.ndarray, horizon: float = np.inf) -> Pair:
     """The :class:`Pair` of bodies ``bi`` and ``bj`` of ``model`` starting at origins ``oi``, ``oj``,
     to touch within ``horizon`` s."""
-    return Pair(np.asarray(oi, float), np.asarray(oj, float), _rbound(model, bi), _rbound(model, bj),
+    return Pair(np.asarray(oi, float), np.asarray(oj, float), body_radius(model, bi), body_radius(model, bj),
                 float(model.body_subtreemass[bi]), float(model.body_subtreemass[bj]), restitution(model, bi, bj),
                 np.array(model.opt.gravity, dtype=float), float(horizon))
 

@@ -62,6 +62,7 @@ from nbst.errors import SolveError
 from nbst.models.mjsearch.runner import data_warnings
 from nbst.scene.fates import Fates
 from nbst.scene.judge import Judgement, Recording, judge, rotate
+from nbst.scene.scenefile import body_radius
 
 __all__ = ["SceneRollout", "SceneSim", "replay", "conjugate", "quiet_mujoco_warnings"]
 
@@ -222,22 +223,19 @@ class SceneSim:
                 self.near_bodies.append(b)
             return self.near_bodies.index(b)
 
-        def rbound(geoms: Any) -> float:  # the bounding sphere about the body's origin
-            return float(max((np.linalg.norm(m.geom_pos[g]) + m.geom_rbound[g] for g in geoms), default=0.0))
-
         for i, f in enumerate(fates.fates):
             me = int(self.bodies[i])
             for name in dict.fromkeys(f.hits):
                 b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
                 if b > 0:
                     self.near.append((i, name, slot(me), slot(b), np.zeros(3),
-                                      rbound(np.flatnonzero(m.geom_bodyid == me)),
-                                      rbound(np.flatnonzero(m.geom_bodyid == b))))
+                                      body_radius(m, me),
+                                      body_radius(m, b)))
                 elif b < 0:
                     g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)
                     if m.geom_bodyid[g] == 0 and m.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE:
                         self.near.append((i, name, slot(me), -1, np.array(m.geom_pos[g], dtype=float),
-                                          rbound(np.flatnonzero(m.geom_bodyid == me)), float(m.geom_rbound[g])))
+                                          body_radius(m, me), float(m.geom_rbound[g])))
         #: the judge needs the path at every step (``at``, ``through``, ``still``), not only the end
         self.per_step = any(f.at or f.through or f.still for f in fates.fates)
         self._local = threading.local()

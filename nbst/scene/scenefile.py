@@ -25,7 +25,7 @@ from nbst.scene.fates import (MAX_MESH_BYTES, MAX_SCENE_BYTES, MAX_STEPS, STILL_
                               parse_fates, read_fates_json)
 
 __all__ = ["check_scene_files", "compile_scene", "check_against_model", "load_fates", "geoms_named", "start_touches",
-           "unforced_still_moves"]
+           "unforced_still_moves", "body_radius"]
 
 #: The MJCF elements whose attributes name files, and the <compiler> folder each resolves under.
 _FILE_ATTRS = {"include": (("file",), None), "mesh": (("file",), "meshdir"), "skin": (("file",), "meshdir"),
@@ -136,6 +136,13 @@ def compile_scene(fates: Fates) -> Any:
     if fates.timestep is not None:
         model.opt.timestep = fates.timestep
     return model
+
+
+def body_radius(model: Any, body: int) -> float:
+    """The radius (m) of the sphere about ``body``'s origin that holds its geoms (each geom's offset
+    plus its ``geom_rbound``); 0 for a body with none."""
+    gs = np.flatnonzero(model.geom_bodyid == body)
+    return float(max((np.linalg.norm(model.geom_pos[g]) + model.geom_rbound[g] for g in gs), default=0.0))
 
 
 def _collides(model: Any, g1: int, g2: int, pairs: set[tuple[int, int]], excluded: set[int]) -> bool:
